@@ -1,0 +1,1333 @@
+/*
+ * design_json.c - the JSON design format (sagitta-design(5)): load, parse,
+ * write and save.
+ *
+ * cJSON does the parsing and string escaping.  Numbers are written here, in
+ * the shortest %.Ng form that reads back to the same double, because a design
+ * must survive any number of load/save cycles bit for bit.
+ */
+#include <ctype.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <locale.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <unistd.h>
+
+#include <cjson/cJSON.h>
+
+#include "internal.h"
+
+/* Larger inputs are refused before parsing: a design this big is a mistake,
+ * and cJSON's tree would need several times the text's size in memory. */
+#define DESIGN_MAX_BYTES ((size_t)64 * 1024 * 1024)
+
+#define FORMAT_NAME "sagitta-design"
+
+static const char *const units_names[] = {"mm", "cm", "in", "m"};
+static const char *const surf_type_names[] = {"standard", "even_asphere"};
+static const char *const field_type_names[] = {
+    "angle", "object_height", "paraxial_image_height", "real_image_height"};
+static const char *const field_norm_names[] = {"radial", "rectangular"};
+static const char *const aper_type_names[] = {
+    "epd", "image_fnum", "object_na", "float_by_stop", "paraxial_working_fnum"};
+static const char *const aim_names[] = {"off", "paraxial", "real"};
+
+#define NELEM(a) ((int)(sizeof(a) / sizeof((a)[0])))
+
+/* ------------------------------------------------------------------------
+ * Number formatting
+ * ------------------------------------------------------------------------ */
+
+/* Writes x in the shortest of %.15g, %.16g and %.17g that strtod reads back
+ * to the same bits; %.17g always does.  The locale's decimal point becomes
+ * '.', so a UI that called setlocale() still writes valid JSON. */
+static void fmt_double(char out[40], double x)
+{
+    const char *dp;
+    char *p;
+    int prec;
+    if (isnan(x)) {
+        strcpy(out, "nan");
+        return;
+    }
+    if (isinf(x)) {
+        strcpy(out, x < 0 ? "-inf" : "inf");
+        return;
+    }
+    for (prec = 15; prec <= 17; prec++) {
+        double back;
+        snprintf(out, 40, "%.*g", prec, x);
+        back = strtod(out, NULL);
+        if (memcmp(&back, &x, sizeof x) == 0)
+            break;
+    }
+    dp = localeconv()->decimal_point;
+    if (dp && dp[0] && strcmp(dp, ".") != 0 && (p = strstr(out, dp)) != NULL) {
+        size_t n = strlen(dp);
+        *p = '.';
+        memmove(p + 1, p + n, strlen(p + n) + 1);
+    }
+}
+
+/* ------------------------------------------------------------------------
+ * Messages
+ * ------------------------------------------------------------------------ */
+
+typedef struct jctx {
+    const char *name; /* file name or caller's label, for messages */
+    sg_diag *d;
+} jctx;
+
+/* Copies s for display in a message: control bytes become '?', and a long
+ * text is cut (on a UTF-8 character boundary) and marked with "...". */
+static void show_text(char *dst, size_t n, const char *s)
+{
+    size_t k = 0, max = n > 4 ? n - 4 : 0;
+    for (; *s && k < max; s++, k++) {
+        unsigned char ch = (unsigned char)*s;
+        dst[k] = (ch < 0x20 || ch == 0x7f) ? '?' : (char)ch;
+    }
+    if (*s) {
+        /* Drop a character the cut would split: its continuation bytes
+         * already copied, then its lead byte. */
+        if (((unsigned char)*s & 0xC0) == 0x80) {
+            while (k > 0 && ((unsigned char)dst[k - 1] & 0xC0) == 0x80)
+                k--;
+            if (k > 0)
+                k--;
+        }
+        memcpy(dst + k, "...", 3);
+        k += 3;
+    }
+    dst[k] = '\0';
+}
+
+/* A short description of a JSON value, for "expected X, got Y". */
+static void describe(const cJSON *v, char *buf, size_t n)
+{
+    char tmp[48];
+    if (cJSON_IsString(v)) {
+        show_text(tmp, sizeof tmp, v->valuestring ? v->valuestring : "");
+        snprintf(buf, n, "string \"%s\"", tmp);
+    } else if (cJSON_IsNumber(v)) {
+        if (isfinite(v->valuedouble)) {
+            fmt_double(tmp, v->valuedouble);
+            snprintf(buf, n, "number %s", tmp);
+        } else {
+            snprintf(buf, n, "a number too large for a double");
+        }
+    } else if (cJSON_IsTrue(v)) {
+        snprintf(buf, n, "true");
+    } else if (cJSON_IsFalse(v)) {
+        snprintf(buf, n, "false");
+    } else if (cJSON_IsNull(v)) {
+        snprintf(buf, n, "null");
+    } else if (cJSON_IsArray(v)) {
+        snprintf(buf, n, "an array");
+    } else if (cJSON_IsObject(v)) {
+        snprintf(buf, n, "an object");
+    } else {
+        snprintf(buf, n, "an invalid value");
+    }
+}
+
+/* Records "NAME: WHERE: message" and returns code. */
+static int perr(jctx *c, int code, const char *where, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 4, 5)))
+#endif
+    ;
+
+static int perr(jctx *c, int code, const char *where, const char *fmt, ...)
+{
+    char msg[SG_DIAG_MSG];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    if (where && where[0])
+        return sg_diag_set(c->d, code, "%s: %s: %s", c->name, where, msg);
+    return sg_diag_set(c->d, code, "%s: %s", c->name, msg);
+}
+
+static void pwarn(jctx *c, const char *where, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+static void pwarn(jctx *c, const char *where, const char *fmt, ...)
+{
+    char msg[SG_DIAG_MSG];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    if (where && where[0])
+        sg_diag_warn(c->d, "%s: %s: %s", c->name, where, msg);
+    else
+        sg_diag_warn(c->d, "%s: %s", c->name, msg);
+}
+
+/* Joins an object's place and a key: "surface 3" + "radius". */
+static const char *join(char *buf, size_t n, const char *where, const char *key)
+{
+    if (where && where[0])
+        snprintf(buf, n, "%s: %s", where, key);
+    else
+        snprintf(buf, n, "%s", key);
+    return buf;
+}
+
+/* ------------------------------------------------------------------------
+ * Reading values
+ * ------------------------------------------------------------------------ */
+
+/* The last member named key, matching the choice pick_keys() makes. */
+static const cJSON *last_item(const cJSON *obj, const char *key)
+{
+    const cJSON *it, *found = NULL;
+    cJSON_ArrayForEach(it, obj) {
+        if (it->string && strcmp(it->string, key) == 0)
+            found = it;
+    }
+    return found;
+}
+
+/* Fills out[i] with the member named names[i] (the last one when a key is
+ * repeated, as JavaScript does) and warns about unknown and repeated keys. */
+static void pick_keys(jctx *c, const cJSON *obj, const char *where,
+                      const char *const names[], int n, const cJSON *out[])
+{
+    const cJSON *it;
+    int i;
+    for (i = 0; i < n; i++)
+        out[i] = NULL;
+    cJSON_ArrayForEach(it, obj) {
+        const char *k = it->string ? it->string : "";
+        char shown[48];
+        for (i = 0; i < n && strcmp(k, names[i]) != 0; i++)
+            ;
+        show_text(shown, sizeof shown, k);
+        if (i == n) {
+            pwarn(c, where, "unknown key \"%s\" ignored", shown);
+        } else {
+            if (out[i])
+                pwarn(c, where, "duplicate key \"%s\"; the last one is used", shown);
+            out[i] = it;
+        }
+    }
+}
+
+static int expect_object(jctx *c, const cJSON *v, const char *where)
+{
+    char got[80];
+    if (cJSON_IsObject(v))
+        return SG_OK;
+    describe(v, got, sizeof got);
+    return perr(c, SG_EPARSE, where, "expected an object, got %s", got);
+}
+
+static int get_finite(jctx *c, const cJSON *v, const char *where, double *out)
+{
+    char got[80];
+    if (!cJSON_IsNumber(v)) {
+        describe(v, got, sizeof got);
+        return perr(c, SG_EPARSE, where, "expected a number, got %s", got);
+    }
+    if (!isfinite(v->valuedouble))
+        return perr(c, SG_EPARSE, where, "must be finite (the number is too large for a double)");
+    *out = v->valuedouble;
+    return SG_OK;
+}
+
+static int get_nonneg(jctx *c, const cJSON *v, const char *where, double *out)
+{
+    char got[80];
+    if (!cJSON_IsNumber(v)) {
+        describe(v, got, sizeof got);
+        return perr(c, SG_EPARSE, where, "expected a number, got %s", got);
+    }
+    if (!isfinite(v->valuedouble) || v->valuedouble < 0.0) {
+        describe(v, got, sizeof got);
+        return perr(c, SG_EPARSE, where, "must be finite and not negative, got %s", got);
+    }
+    *out = v->valuedouble;
+    return SG_OK;
+}
+
+static int get_positive(jctx *c, const cJSON *v, const char *where, double *out)
+{
+    char got[80];
+    if (!cJSON_IsNumber(v)) {
+        describe(v, got, sizeof got);
+        return perr(c, SG_EPARSE, where, "expected a number, got %s", got);
+    }
+    if (!isfinite(v->valuedouble) || !(v->valuedouble > 0.0)) {
+        describe(v, got, sizeof got);
+        return perr(c, SG_EPARSE, where, "must be positive and finite, got %s", got);
+    }
+    *out = v->valuedouble;
+    return SG_OK;
+}
+
+static int get_int(jctx *c, const cJSON *v, const char *where, int *out)
+{
+    char got[80];
+    double x;
+    if (!cJSON_IsNumber(v) || !isfinite(v->valuedouble) ||
+        floor(v->valuedouble) != v->valuedouble || fabs(v->valuedouble) > 1e9) {
+        describe(v, got, sizeof got);
+        return perr(c, SG_EPARSE, where, "expected an integer, got %s", got);
+    }
+    x = v->valuedouble;
+    *out = (int)x;
+    return SG_OK;
+}
+
+static int get_bool(jctx *c, const cJSON *v, const char *where, int *out)
+{
+    char got[80];
+    if (!cJSON_IsBool(v)) {
+        describe(v, got, sizeof got);
+        return perr(c, SG_EPARSE, where, "expected true or false, got %s", got);
+    }
+    *out = cJSON_IsTrue(v) ? 1 : 0;
+    return SG_OK;
+}
+
+/* A string that must fit a buffer of cap bytes with its terminator. */
+static int get_string(jctx *c, const cJSON *v, const char *where, char *dst, size_t cap)
+{
+    char got[80];
+    size_t len;
+    if (!cJSON_IsString(v) || !v->valuestring) {
+        describe(v, got, sizeof got);
+        return perr(c, SG_EPARSE, where, "expected a string, got %s", got);
+    }
+    len = strlen(v->valuestring);
+    if (len >= cap)
+        return perr(c, SG_EPARSE, where, "too long (%zu bytes; the limit is %zu)", len, cap - 1);
+    memcpy(dst, v->valuestring, len + 1);
+    return SG_OK;
+}
+
+static int ascii_casecmp(const char *a, const char *b)
+{
+    for (; *a && *b; a++, b++) {
+        int x = tolower((unsigned char)*a), y = tolower((unsigned char)*b);
+        if (x != y)
+            return x - y;
+    }
+    return (unsigned char)*a - (unsigned char)*b;
+}
+
+/* One of a fixed set of names (case-insensitive); *out is its index. */
+static int get_enum(jctx *c, const cJSON *v, const char *where,
+                    const char *const names[], int n, int *out)
+{
+    char got[80], allowed[256];
+    size_t k = 0;
+    int i;
+    if (cJSON_IsString(v) && v->valuestring) {
+        for (i = 0; i < n; i++) {
+            if (ascii_casecmp(v->valuestring, names[i]) == 0) {
+                *out = i;
+                return SG_OK;
+            }
+        }
+    }
+    allowed[0] = '\0';
+    for (i = 0; i < n && k < sizeof allowed; i++) {
+        int w = snprintf(allowed + k, sizeof allowed - k, "%s\"%s\"",
+                         i == 0 ? "" : (i == n - 1 ? " or " : ", "), names[i]);
+        if (w < 0)
+            break;
+        k += (size_t)w;
+    }
+    describe(v, got, sizeof got);
+    return perr(c, SG_EPARSE, where, "expected %s, got %s", allowed, got);
+}
+
+/* +1 for "inf", "+inf", "infinity", ...; -1 for the negative forms; else 0. */
+static int inf_word(const char *s)
+{
+    int sign = 1;
+    if (!s)
+        return 0;
+    if (*s == '+' || *s == '-') {
+        sign = *s == '-' ? -1 : 1;
+        s++;
+    }
+    if (ascii_casecmp(s, "inf") == 0 || ascii_casecmp(s, "infinity") == 0)
+        return sign;
+    return 0;
+}
+
+static int get_radius(jctx *c, const cJSON *v, const char *where, double *out)
+{
+    char got[80];
+    if (cJSON_IsNumber(v)) {
+        if (!isfinite(v->valuedouble))
+            return perr(c, SG_EPARSE, where,
+                        "the number is too large for a double; write \"inf\" for a flat surface");
+        /* Zemax writes 0 for a flat surface; it can only mean that. */
+        *out = v->valuedouble == 0.0 ? INFINITY : v->valuedouble;
+        return SG_OK;
+    }
+    if (cJSON_IsString(v) && inf_word(v->valuestring) != 0) {
+        *out = inf_word(v->valuestring) * INFINITY;
+        return SG_OK;
+    }
+    describe(v, got, sizeof got);
+    return perr(c, SG_EPARSE, where, "expected a number or \"inf\", got %s", got);
+}
+
+static int get_thickness(jctx *c, const cJSON *v, const char *where, int isurf, double *out)
+{
+    char got[80];
+    if (cJSON_IsNumber(v))
+        return get_finite(c, v, where, out);
+    if (cJSON_IsString(v) && inf_word(v->valuestring) > 0) {
+        if (isurf != 0)
+            return perr(c, SG_EPARSE, where,
+                        "\"inf\" is allowed only on the object surface (surface 0)");
+        *out = INFINITY;
+        return SG_OK;
+    }
+    describe(v, got, sizeof got);
+    if (isurf == 0)
+        return perr(c, SG_EPARSE, where, "expected a number or \"inf\", got %s", got);
+    return perr(c, SG_EPARSE, where, "expected a number, got %s", got);
+}
+
+static int get_material(jctx *c, const cJSON *v, const char *where, sg_material *m)
+{
+    char got[80];
+    memset(m, 0, sizeof *m);
+    if (cJSON_IsNumber(v)) {
+        m->kind = SG_MAT_INDEX;
+        return get_finite(c, v, where, &m->index);
+    }
+    if (cJSON_IsString(v) && v->valuestring) {
+        const char *s = v->valuestring;
+        size_t k, len = strlen(s);
+        if (len == 0 || ascii_casecmp(s, "AIR") == 0) {
+            m->kind = SG_MAT_AIR;
+            return SG_OK;
+        }
+        if (ascii_casecmp(s, "MIRROR") == 0) {
+            m->kind = SG_MAT_MIRROR;
+            return SG_OK;
+        }
+        if (len >= sizeof m->name) {
+            show_text(got, 48, s);
+            return perr(c, SG_EPARSE, where,
+                        "glass name \"%s\" is too long (%zu bytes; the limit is %zu)", got,
+                        len, sizeof m->name - 1);
+        }
+        m->kind = SG_MAT_GLASS;
+        /* Catalog names are upper case; ASCII only, so no locale matters. */
+        for (k = 0; k <= len; k++)
+            m->name[k] = (s[k] >= 'a' && s[k] <= 'z') ? (char)(s[k] - 'a' + 'A') : s[k];
+        return SG_OK;
+    }
+    describe(v, got, sizeof got);
+    return perr(c, SG_EPARSE, where,
+                "expected a glass name, \"AIR\", \"MIRROR\" or a number (a fixed index), got %s",
+                got);
+}
+
+/* ------------------------------------------------------------------------
+ * Reading sections
+ * ------------------------------------------------------------------------ */
+
+enum { W_PRIMARY, W_LIST, W_N };
+static const char *const wave_keys[] = {"primary", "list"};
+enum { WL_UM, WL_WEIGHT, WL_N };
+static const char *const wave_item_keys[] = {"um", "weight"};
+
+static int read_wavelengths(jctx *c, const cJSON *v, sg_system *sys)
+{
+    const cJSON *k[W_N], *kk[WL_N], *it;
+    char where[64], at[96];
+    int rc, n, i, primary = 1;
+    if ((rc = expect_object(c, v, "wavelengths")) != SG_OK)
+        return rc;
+    pick_keys(c, v, "wavelengths", wave_keys, W_N, k);
+    if (k[W_LIST]) {
+        if (!cJSON_IsArray(k[W_LIST])) {
+            describe(k[W_LIST], at, sizeof at);
+            return perr(c, SG_EPARSE, "wavelengths: list", "expected an array, got %s", at);
+        }
+        n = cJSON_GetArraySize(k[W_LIST]);
+        if (n == 0)
+            return perr(c, SG_EPARSE, "wavelengths: list",
+                        "is empty; at least one wavelength is needed");
+        if (n > SG_MAX_WAVES)
+            return perr(c, SG_ERANGE, "wavelengths: list",
+                        "%d wavelengths; the limit is %d", n, SG_MAX_WAVES);
+        i = 0;
+        cJSON_ArrayForEach(it, k[W_LIST]) {
+            sg_wave *w = &sys->wave[i];
+            snprintf(where, sizeof where, "wavelengths: list[%d]", i);
+            if ((rc = expect_object(c, it, where)) != SG_OK)
+                return rc;
+            pick_keys(c, it, where, wave_item_keys, WL_N, kk);
+            if (!kk[WL_UM])
+                return perr(c, SG_EPARSE, where, "required key \"um\" is missing");
+            snprintf(at, sizeof at, "wavelengths: list[%d].um", i);
+            if ((rc = get_positive(c, kk[WL_UM], at, &w->um)) != SG_OK)
+                return rc;
+            w->weight = 1.0;
+            snprintf(at, sizeof at, "wavelengths: list[%d].weight", i);
+            if (kk[WL_WEIGHT] && (rc = get_nonneg(c, kk[WL_WEIGHT], at, &w->weight)) != SG_OK)
+                return rc;
+            i++;
+        }
+        sys->nwave = n;
+    }
+    if (k[W_PRIMARY]) {
+        if ((rc = get_int(c, k[W_PRIMARY], "wavelengths: primary", &primary)) != SG_OK)
+            return rc;
+        if (primary < 1 || primary > sys->nwave)
+            return perr(c, SG_EPARSE, "wavelengths: primary",
+                        "%d is not one of the wavelengths 1 to %d", primary, sys->nwave);
+    }
+    sys->primary_wave = primary - 1;
+    return SG_OK;
+}
+
+enum { F_TYPE, F_NORM, F_LIST, F_N };
+static const char *const field_keys[] = {"type", "normalization", "list"};
+enum { FL_X, FL_Y, FL_WEIGHT, FL_N };
+static const char *const field_item_keys[] = {"x", "y", "weight"};
+
+static int read_fields(jctx *c, const cJSON *v, sg_system *sys)
+{
+    const cJSON *k[F_N], *kk[FL_N], *it;
+    char where[64], at[96];
+    int rc, n, i, e;
+    if ((rc = expect_object(c, v, "fields")) != SG_OK)
+        return rc;
+    pick_keys(c, v, "fields", field_keys, F_N, k);
+    if (k[F_TYPE]) {
+        if ((rc = get_enum(c, k[F_TYPE], "fields: type", field_type_names,
+                           NELEM(field_type_names), &e)) != SG_OK)
+            return rc;
+        sys->field_type = (sg_field_type)e;
+    }
+    if (k[F_NORM]) {
+        if ((rc = get_enum(c, k[F_NORM], "fields: normalization", field_norm_names,
+                           NELEM(field_norm_names), &e)) != SG_OK)
+            return rc;
+        sys->field_norm = (sg_field_norm)e;
+    }
+    if (!k[F_LIST])
+        return SG_OK;
+    if (!cJSON_IsArray(k[F_LIST])) {
+        describe(k[F_LIST], at, sizeof at);
+        return perr(c, SG_EPARSE, "fields: list", "expected an array, got %s", at);
+    }
+    n = cJSON_GetArraySize(k[F_LIST]);
+    if (n == 0)
+        return perr(c, SG_EPARSE, "fields: list", "is empty; at least one field is needed");
+    if (n > SG_MAX_FIELDS)
+        return perr(c, SG_ERANGE, "fields: list", "%d fields; the limit is %d", n,
+                    SG_MAX_FIELDS);
+    i = 0;
+    cJSON_ArrayForEach(it, k[F_LIST]) {
+        sg_field *f = &sys->field[i];
+        snprintf(where, sizeof where, "fields: list[%d]", i);
+        if ((rc = expect_object(c, it, where)) != SG_OK)
+            return rc;
+        pick_keys(c, it, where, field_item_keys, FL_N, kk);
+        f->x = 0.0;
+        f->y = 0.0;
+        f->weight = 1.0;
+        snprintf(at, sizeof at, "fields: list[%d].x", i);
+        if (kk[FL_X] && (rc = get_finite(c, kk[FL_X], at, &f->x)) != SG_OK)
+            return rc;
+        snprintf(at, sizeof at, "fields: list[%d].y", i);
+        if (kk[FL_Y] && (rc = get_finite(c, kk[FL_Y], at, &f->y)) != SG_OK)
+            return rc;
+        snprintf(at, sizeof at, "fields: list[%d].weight", i);
+        if (kk[FL_WEIGHT] && (rc = get_nonneg(c, kk[FL_WEIGHT], at, &f->weight)) != SG_OK)
+            return rc;
+        i++;
+    }
+    sys->nfield = n;
+    return SG_OK;
+}
+
+enum { A_TYPE, A_VALUE, A_N };
+static const char *const aper_keys[] = {"type", "value"};
+
+static int read_aperture(jctx *c, const cJSON *v, sg_system *sys)
+{
+    const cJSON *k[A_N];
+    int rc, e;
+    if ((rc = expect_object(c, v, "aperture")) != SG_OK)
+        return rc;
+    pick_keys(c, v, "aperture", aper_keys, A_N, k);
+    if (k[A_TYPE]) {
+        if ((rc = get_enum(c, k[A_TYPE], "aperture: type", aper_type_names,
+                           NELEM(aper_type_names), &e)) != SG_OK)
+            return rc;
+        sys->aper_type = (sg_aper_type)e;
+    }
+    if (k[A_VALUE] && (rc = get_nonneg(c, k[A_VALUE], "aperture: value", &sys->aper_value)) != SG_OK)
+        return rc;
+    return SG_OK;
+}
+
+enum {
+    S_TYPE, S_COMMENT, S_RADIUS, S_THICKNESS, S_MATERIAL, S_SD, S_SDFIXED,
+    S_CONIC, S_ASPHERE, S_STOP, S_N
+};
+static const char *const surf_keys[] = {
+    "type", "comment", "radius", "thickness", "material", "semi_diameter",
+    "sd_fixed", "conic", "asphere", "stop"};
+
+/* Reads surface i of n; *is_stop reports its "stop" flag. */
+static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, int *is_stop)
+{
+    const cJSON *k[S_N];
+    char where[32], at[64];
+    int rc, e;
+    snprintf(where, sizeof where, "surface %d", i);
+    if ((rc = expect_object(c, v, where)) != SG_OK)
+        return rc;
+    pick_keys(c, v, where, surf_keys, S_N, k);
+    sg_surface_init(s);
+    s->type = SG_SURF_STANDARD;
+    s->radius = INFINITY;
+    s->thickness = i == 0 ? INFINITY : 0.0;
+    s->mat.kind = SG_MAT_AIR;
+    *is_stop = 0;
+    if (k[S_TYPE]) {
+        if ((rc = get_enum(c, k[S_TYPE], join(at, sizeof at, where, "type"), surf_type_names,
+                           NELEM(surf_type_names), &e)) != SG_OK)
+            return rc;
+        s->type = (sg_surf_type)e;
+    }
+    if (k[S_COMMENT] && (rc = get_string(c, k[S_COMMENT], join(at, sizeof at, where, "comment"),
+                                         s->comment, sizeof s->comment)) != SG_OK)
+        return rc;
+    if (k[S_RADIUS] &&
+        (rc = get_radius(c, k[S_RADIUS], join(at, sizeof at, where, "radius"), &s->radius)) != SG_OK)
+        return rc;
+    if (k[S_THICKNESS] && (rc = get_thickness(c, k[S_THICKNESS],
+                                              join(at, sizeof at, where, "thickness"), i,
+                                              &s->thickness)) != SG_OK)
+        return rc;
+    if (k[S_MATERIAL] && (rc = get_material(c, k[S_MATERIAL],
+                                            join(at, sizeof at, where, "material"), &s->mat)) != SG_OK)
+        return rc;
+    if (k[S_SD] && (rc = get_nonneg(c, k[S_SD], join(at, sizeof at, where, "semi_diameter"),
+                                    &s->semi_diameter)) != SG_OK)
+        return rc;
+    if (k[S_SDFIXED] &&
+        (rc = get_bool(c, k[S_SDFIXED], join(at, sizeof at, where, "sd_fixed"), &s->sd_fixed)) != SG_OK)
+        return rc;
+    if (k[S_CONIC] &&
+        (rc = get_finite(c, k[S_CONIC], join(at, sizeof at, where, "conic"), &s->conic)) != SG_OK)
+        return rc;
+    if (k[S_ASPHERE]) {
+        const cJSON *it;
+        int j = 0, na;
+        join(at, sizeof at, where, "asphere");
+        if (!cJSON_IsArray(k[S_ASPHERE])) {
+            char got[80];
+            describe(k[S_ASPHERE], got, sizeof got);
+            return perr(c, SG_EPARSE, at, "expected an array of numbers, got %s", got);
+        }
+        na = cJSON_GetArraySize(k[S_ASPHERE]);
+        if (na > SG_NASPH)
+            return perr(c, SG_EPARSE, at, "%d terms; at most %d (r^2 to r^%d) are allowed", na,
+                        SG_NASPH, 2 * SG_NASPH);
+        cJSON_ArrayForEach(it, k[S_ASPHERE]) {
+            char el[80];
+            snprintf(el, sizeof el, "%s[%d]", at, j);
+            if ((rc = get_finite(c, it, el, &s->asph[j])) != SG_OK)
+                return rc;
+            j++;
+        }
+    }
+    if (k[S_STOP]) {
+        if ((rc = get_bool(c, k[S_STOP], join(at, sizeof at, where, "stop"), is_stop)) != SG_OK)
+            return rc;
+        if (*is_stop && (i == 0 || i == n - 1))
+            return perr(c, SG_EPARSE, at, "the %s surface cannot be the aperture stop",
+                        i == 0 ? "object" : "image");
+    }
+    return SG_OK;
+}
+
+enum {
+    T_FORMAT, T_VERSION, T_TITLE, T_UNITS, T_WAVES, T_FIELDS, T_APER, T_AIM, T_SURFS, T_N
+};
+static const char *const top_keys[] = {
+    "format", "version", "title", "units", "wavelengths", "fields", "aperture",
+    "ray_aiming", "surfaces"};
+
+/* Fills tmp from the document; the caller's system is not touched. */
+static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
+{
+    const cJSON *k[T_N], *it;
+    char got[80];
+    int rc, n, i, e, stop = -1;
+
+    if (!cJSON_IsObject(root)) {
+        describe(root, got, sizeof got);
+        return perr(c, SG_EPARSE, "", "the document must be a JSON object, got %s", got);
+    }
+
+    /* The version decides how the rest reads, so it is checked first. */
+    it = last_item(root, "format");
+    if (it && !(cJSON_IsString(it) && it->valuestring &&
+                strcmp(it->valuestring, FORMAT_NAME) == 0)) {
+        describe(it, got, sizeof got);
+        return perr(c, SG_EPARSE, "format", "expected \"%s\", got %s", FORMAT_NAME, got);
+    }
+    it = last_item(root, "version");
+    if (it) {
+        int version;
+        if ((rc = get_int(c, it, "version", &version)) != SG_OK)
+            return rc;
+        if (version > SG_DESIGN_FORMAT_VERSION)
+            return perr(c, SG_EUNSUPPORTED, "version",
+                        "this is format version %d; this program reads version %d and older",
+                        version, SG_DESIGN_FORMAT_VERSION);
+        if (version < 1)
+            return perr(c, SG_EPARSE, "version", "%d is not a valid format version", version);
+    }
+    pick_keys(c, root, "", top_keys, T_N, k);
+
+    if (!k[T_SURFS])
+        return perr(c, SG_EPARSE, "surfaces", "required key is missing");
+    if (!cJSON_IsArray(k[T_SURFS])) {
+        describe(k[T_SURFS], got, sizeof got);
+        return perr(c, SG_EPARSE, "surfaces", "expected an array of surface objects, got %s", got);
+    }
+    n = cJSON_GetArraySize(k[T_SURFS]);
+    if (n < 3)
+        return perr(c, SG_ENOSYS, "surfaces",
+                    "%d given; a design needs an object, at least one surface and an image", n);
+    if (n > SG_MAX_SURFACES)
+        return perr(c, SG_ERANGE, "surfaces", "%d given; the limit is %d", n, SG_MAX_SURFACES);
+    rc = sg_system_reset(tmp, n);
+    if (rc != SG_OK)
+        return perr(c, rc, "surfaces", "cannot hold %d surfaces: %s", n, sg_strerror(rc));
+
+    /* Every default is set here, so the file's meaning does not depend on
+     * what sg_system_reset() happens to choose. */
+    tmp->title[0] = '\0';
+    sg_strlcpy(tmp->units, "mm", sizeof tmp->units);
+    tmp->nwave = 1;
+    tmp->primary_wave = 0;
+    tmp->wave[0].um = 0.5875618;
+    tmp->wave[0].weight = 1.0;
+    tmp->field_type = SG_FIELD_ANGLE;
+    tmp->field_norm = SG_NORM_RADIAL;
+    tmp->nfield = 1;
+    tmp->field[0].x = 0.0;
+    tmp->field[0].y = 0.0;
+    tmp->field[0].weight = 1.0;
+    tmp->aper_type = SG_APER_EPD;
+    tmp->aper_value = 10.0;
+    tmp->aim = SG_AIM_OFF;
+
+    if (k[T_TITLE] && (rc = get_string(c, k[T_TITLE], "title", tmp->title, sizeof tmp->title)) != SG_OK)
+        return rc;
+    if (k[T_UNITS]) {
+        if ((rc = get_enum(c, k[T_UNITS], "units", units_names, NELEM(units_names), &e)) != SG_OK)
+            return rc;
+        sg_strlcpy(tmp->units, units_names[e], sizeof tmp->units);
+    }
+    if (k[T_WAVES] && (rc = read_wavelengths(c, k[T_WAVES], tmp)) != SG_OK)
+        return rc;
+    if (k[T_FIELDS] && (rc = read_fields(c, k[T_FIELDS], tmp)) != SG_OK)
+        return rc;
+    if (k[T_APER] && (rc = read_aperture(c, k[T_APER], tmp)) != SG_OK)
+        return rc;
+    if (k[T_AIM]) {
+        if ((rc = get_enum(c, k[T_AIM], "ray_aiming", aim_names, NELEM(aim_names), &e)) != SG_OK)
+            return rc;
+        tmp->aim = (sg_aim)e;
+    }
+
+    i = 0;
+    cJSON_ArrayForEach(it, k[T_SURFS]) {
+        int is_stop;
+        if ((rc = read_surface(c, it, i, n, &tmp->surf[i], &is_stop)) != SG_OK)
+            return rc;
+        if (is_stop) {
+            if (stop >= 0)
+                return perr(c, SG_ETWOSTOPS, "surfaces",
+                            "surface %d and surface %d both have \"stop\": true; "
+                            "a design has exactly one aperture stop",
+                            stop, i);
+            stop = i;
+        }
+        i++;
+    }
+    if (stop < 0)
+        return perr(c, SG_ENOSTOP, "surfaces",
+                    "no surface has \"stop\": true; mark the aperture stop");
+    tmp->stop = stop;
+    return SG_OK;
+}
+
+/* Line and column (both from 1, columns in bytes) of offset off. */
+static void line_col(const char *text, size_t off, long *line, long *col)
+{
+    size_t k, start = 0;
+    long ln = 1;
+    for (k = 0; k < off; k++) {
+        if (text[k] == '\n') {
+            ln++;
+            start = k + 1;
+        }
+    }
+    *line = ln;
+    *col = (long)(off - start) + 1;
+}
+
+int sg_design_parse(sg_system *sys, const char *text, size_t len, const char *name,
+                    sg_diag *d)
+{
+    jctx c;
+    char *buf;
+    const char *end = NULL, *nul;
+    cJSON *root;
+    sg_system *tmp;
+    int rc;
+
+    c.name = name ? name : "(memory)";
+    c.d = d;
+    if (!sys || (!text && len > 0))
+        return sg_diag_set(d, SG_EINVAL, "%s: no system or no text to parse", c.name);
+    if (len > DESIGN_MAX_BYTES)
+        return sg_diag_set(d, SG_ERANGE, "%s: the design is %zu bytes; the limit is %zu (64 MiB)",
+                           c.name, len, DESIGN_MAX_BYTES);
+    /* cJSON stops at a NUL byte and would silently ignore what follows. */
+    nul = len ? memchr(text, '\0', len) : NULL;
+    if (nul) {
+        long line, col;
+        line_col(text, (size_t)(nul - text), &line, &col);
+        return sg_diag_set(d, SG_EPARSE, "%s:%ld:%ld: JSON syntax error: NUL byte in the text",
+                           c.name, line, col);
+    }
+    /* cJSON wants the terminator inside the length to reject trailing text. */
+    buf = malloc(len + 1);
+    if (!buf)
+        return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", c.name);
+    if (len)
+        memcpy(buf, text, len);
+    buf[len] = '\0';
+    root = cJSON_ParseWithLengthOpts(buf, len + 1, &end, 1);
+    if (!root) {
+        long line, col;
+        size_t off = end ? (size_t)(end - buf) : 0;
+        char near[40];
+        if (off > len)
+            off = len;
+        line_col(buf, off, &line, &col);
+        if (off >= len) {
+            rc = sg_diag_set(d, SG_EPARSE, "%s:%ld:%ld: JSON syntax error near end of input",
+                             c.name, line, col);
+        } else {
+            size_t k;
+            for (k = 0; k < 24 && off + k < len && buf[off + k] != '\n' && buf[off + k] != '\r'; k++)
+                ;
+            buf[off + k] = '\0';
+            show_text(near, sizeof near, buf + off);
+            rc = sg_diag_set(d, SG_EPARSE, "%s:%ld:%ld: JSON syntax error near '%s'", c.name, line,
+                             col, near);
+        }
+        free(buf);
+        return rc;
+    }
+    free(buf);
+
+    tmp = sg_system_new();
+    if (!tmp) {
+        cJSON_Delete(root);
+        return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", c.name);
+    }
+    rc = read_design(&c, root, tmp);
+    cJSON_Delete(root);
+    if (rc == SG_OK) {
+        rc = sg_system_assign(sys, tmp);
+        if (rc != SG_OK)
+            sg_diag_set(d, rc, "%s: cannot store the design: %s", c.name, sg_strerror(rc));
+    }
+    sg_system_free(tmp);
+    return rc;
+}
+
+int sg_design_load(sg_system *sys, const char *path, sg_diag *d)
+{
+    FILE *f;
+    struct stat st;
+    char *buf = NULL;
+    size_t len = 0, cap = 0;
+    int rc, e;
+
+    if (!sys || !path)
+        return sg_diag_set(d, SG_EINVAL, "load: no system or no path");
+    f = fopen(path, "rb");
+    if (!f) {
+        e = errno;
+        return sg_diag_set(d, SG_EIO, "%s: cannot open: %s", path, strerror(e));
+    }
+    if (fstat(fileno(f), &st) == 0) {
+        if (S_ISDIR(st.st_mode)) {
+            fclose(f);
+            return sg_diag_set(d, SG_EIO, "%s: cannot read: %s", path, strerror(EISDIR));
+        }
+        if (S_ISREG(st.st_mode) && (unsigned long long)st.st_size > DESIGN_MAX_BYTES) {
+            fclose(f);
+            return sg_diag_set(d, SG_ERANGE, "%s: the file is %lld bytes; the limit is %zu (64 MiB)",
+                               path, (long long)st.st_size, DESIGN_MAX_BYTES);
+        }
+    }
+    /* Read in chunks: a pipe or a file that grows has no reliable size. */
+    for (;;) {
+        size_t got;
+        if (len == cap) {
+            size_t ncap = cap ? cap * 2 : 65536;
+            char *p;
+            if (ncap > DESIGN_MAX_BYTES + 1)
+                ncap = DESIGN_MAX_BYTES + 1;
+            if (ncap <= cap) {
+                free(buf);
+                fclose(f);
+                return sg_diag_set(d, SG_ERANGE, "%s: the file is larger than %zu bytes (64 MiB)",
+                                   path, DESIGN_MAX_BYTES);
+            }
+            p = realloc(buf, ncap);
+            if (!p) {
+                free(buf);
+                fclose(f);
+                return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", path);
+            }
+            buf = p;
+            cap = ncap;
+        }
+        got = fread(buf + len, 1, cap - len, f);
+        len += got;
+        if (got == 0)
+            break;
+    }
+    if (ferror(f)) {
+        e = errno;
+        free(buf);
+        fclose(f);
+        return sg_diag_set(d, SG_EIO, "%s: cannot read: %s", path, strerror(e));
+    }
+    fclose(f);
+    if (len > DESIGN_MAX_BYTES) {
+        free(buf);
+        return sg_diag_set(d, SG_ERANGE, "%s: the file is larger than %zu bytes (64 MiB)", path,
+                           DESIGN_MAX_BYTES);
+    }
+    rc = sg_design_parse(sys, buf ? buf : "", len, path, d);
+    free(buf);
+    return rc;
+}
+
+/* ------------------------------------------------------------------------
+ * Writing
+ * ------------------------------------------------------------------------ */
+
+typedef struct sbuf {
+    char *p;
+    size_t len, cap;
+    int oom;
+} sbuf;
+
+static void sb_add(sbuf *b, const char *s, size_t n)
+{
+    if (b->oom)
+        return;
+    if (b->len + n + 1 > b->cap) {
+        size_t ncap = b->cap ? b->cap : 4096;
+        char *p;
+        while (ncap < b->len + n + 1)
+            ncap *= 2;
+        p = realloc(b->p, ncap);
+        if (!p) {
+            b->oom = 1;
+            return;
+        }
+        b->p = p;
+        b->cap = ncap;
+    }
+    memcpy(b->p + b->len, s, n);
+    b->len += n;
+    b->p[b->len] = '\0';
+}
+
+static void sb_puts(sbuf *b, const char *s)
+{
+    sb_add(b, s, strlen(s));
+}
+
+static void sb_num(sbuf *b, double x)
+{
+    char t[40];
+    fmt_double(t, x);
+    sb_puts(b, t);
+}
+
+/* A radius or thickness: a number, or "inf"/"-inf". */
+static void sb_len(sbuf *b, double x)
+{
+    if (isinf(x))
+        sb_puts(b, x < 0 ? "\"-inf\"" : "\"inf\"");
+    else
+        sb_num(b, x);
+}
+
+/* A quoted, escaped JSON string; cJSON does the escaping. */
+static void sb_str(sbuf *b, const char *s)
+{
+    cJSON *item = cJSON_CreateString(s);
+    char *q = item ? cJSON_PrintUnformatted(item) : NULL;
+    if (q)
+        sb_puts(b, q);
+    else
+        b->oom = 1;
+    if (q)
+        cJSON_free(q);
+    cJSON_Delete(item);
+}
+
+static int terminated(const char *s, size_t cap)
+{
+    return memchr(s, '\0', cap) != NULL;
+}
+
+/* Refuses what the loader would refuse, so that every saved file loads. */
+static int check_writable(const sg_system *sys, sg_diag *d)
+{
+    int i, k;
+    if (!sys)
+        return sg_diag_set(d, SG_EINVAL, "save: no system");
+    if (!terminated(sys->title, sizeof sys->title))
+        return sg_diag_set(d, SG_EINVAL, "title: not a terminated string");
+    for (k = 0; k < NELEM(units_names); k++)
+        if (terminated(sys->units, sizeof sys->units) && strcmp(sys->units, units_names[k]) == 0)
+            break;
+    if (k == NELEM(units_names))
+        return sg_diag_set(d, SG_EINVAL, "units: must be mm, cm, in or m");
+    if (sys->nwave < 1 || sys->nwave > SG_MAX_WAVES)
+        return sg_diag_set(d, SG_EINVAL, "wavelengths: %d given, 1 to %d allowed", sys->nwave,
+                           SG_MAX_WAVES);
+    if (sys->primary_wave < 0 || sys->primary_wave >= sys->nwave)
+        return sg_diag_set(d, SG_EINVAL, "wavelengths: primary %d is not one of 1 to %d",
+                           sys->primary_wave + 1, sys->nwave);
+    for (k = 0; k < sys->nwave; k++) {
+        if (!isfinite(sys->wave[k].um) || !(sys->wave[k].um > 0.0))
+            return sg_diag_set(d, SG_EINVAL, "wavelength %d: um is %g; it must be positive and finite",
+                               k + 1, sys->wave[k].um);
+        if (!isfinite(sys->wave[k].weight) || !(sys->wave[k].weight >= 0.0))
+            return sg_diag_set(d, SG_EINVAL,
+                               "wavelength %d: weight is %g; it must be finite and not negative",
+                               k + 1, sys->wave[k].weight);
+    }
+    if ((unsigned)sys->field_type >= (unsigned)NELEM(field_type_names) ||
+        (unsigned)sys->field_norm >= (unsigned)NELEM(field_norm_names))
+        return sg_diag_set(d, SG_EINVAL, "fields: unknown field type or normalization");
+    if (sys->nfield < 1 || sys->nfield > SG_MAX_FIELDS)
+        return sg_diag_set(d, SG_EINVAL, "fields: %d given, 1 to %d allowed", sys->nfield,
+                           SG_MAX_FIELDS);
+    for (k = 0; k < sys->nfield; k++) {
+        const sg_field *f = &sys->field[k];
+        if (!isfinite(f->x) || !isfinite(f->y))
+            return sg_diag_set(d, SG_EINVAL, "field %d: x and y must be finite (x %g, y %g)", k + 1,
+                               f->x, f->y);
+        if (!isfinite(f->weight) || !(f->weight >= 0.0))
+            return sg_diag_set(d, SG_EINVAL,
+                               "field %d: weight is %g; it must be finite and not negative", k + 1,
+                               f->weight);
+    }
+    if ((unsigned)sys->aper_type >= (unsigned)NELEM(aper_type_names))
+        return sg_diag_set(d, SG_EINVAL, "aperture: unknown type %d", (int)sys->aper_type);
+    if (!isfinite(sys->aper_value) || !(sys->aper_value >= 0.0))
+        return sg_diag_set(d, SG_EINVAL, "aperture: value is %g; it must be finite and not negative",
+                           sys->aper_value);
+    if ((unsigned)sys->aim >= (unsigned)NELEM(aim_names))
+        return sg_diag_set(d, SG_EINVAL, "ray_aiming: unknown mode %d", (int)sys->aim);
+    if (sys->nsurf < 3 || sys->nsurf > SG_MAX_SURFACES || !sys->surf)
+        return sg_diag_set(d, SG_EINVAL, "surfaces: %d given, 3 to %d allowed", sys->nsurf,
+                           SG_MAX_SURFACES);
+    if (sys->stop < 1 || sys->stop > sys->nsurf - 2)
+        return sg_diag_set(d, SG_EINVAL, "surfaces: the stop (%d) must be one of surfaces 1 to %d",
+                           sys->stop, sys->nsurf - 2);
+    for (i = 0; i < sys->nsurf; i++) {
+        const sg_surface *s = &sys->surf[i];
+        if ((unsigned)s->type >= (unsigned)NELEM(surf_type_names))
+            return sg_diag_set(d, SG_EINVAL, "surface %d: unknown type %d", i, (int)s->type);
+        if (!terminated(s->comment, sizeof s->comment))
+            return sg_diag_set(d, SG_EINVAL, "surface %d: comment is not a terminated string", i);
+        if (isnan(s->radius))
+            return sg_diag_set(d, SG_EINVAL, "surface %d: radius is NaN", i);
+        if (isnan(s->thickness))
+            return sg_diag_set(d, SG_EINVAL, "surface %d: thickness is NaN", i);
+        if (isinf(s->thickness) && (i != 0 || s->thickness < 0))
+            return sg_diag_set(d, SG_EINVAL, "surface %d: thickness is %g; only the object's "
+                               "thickness may be +inf", i, s->thickness);
+        switch (s->mat.kind) {
+        case SG_MAT_AIR:
+        case SG_MAT_MIRROR:
+            break;
+        case SG_MAT_GLASS:
+            if (!terminated(s->mat.name, sizeof s->mat.name) || s->mat.name[0] == '\0')
+                return sg_diag_set(d, SG_EINVAL, "surface %d: material: glass has no name", i);
+            break;
+        case SG_MAT_INDEX:
+            if (!isfinite(s->mat.index))
+                return sg_diag_set(d, SG_EINVAL, "surface %d: material: index is %g", i,
+                                   s->mat.index);
+            break;
+        default:
+            return sg_diag_set(d, SG_EINVAL, "surface %d: material: unknown kind %d", i,
+                               (int)s->mat.kind);
+        }
+        if (!isfinite(s->semi_diameter) || !(s->semi_diameter >= 0.0))
+            return sg_diag_set(d, SG_EINVAL,
+                               "surface %d: semi_diameter is %g; it must be finite and not negative",
+                               i, s->semi_diameter);
+        if (!isfinite(s->conic))
+            return sg_diag_set(d, SG_EINVAL, "surface %d: conic is %g", i, s->conic);
+        for (k = 0; k < SG_NASPH; k++)
+            if (!isfinite(s->asph[k]))
+                return sg_diag_set(d, SG_EINVAL, "surface %d: asphere[%d] (r^%d) is %g", i, k,
+                                   2 * (k + 1), s->asph[k]);
+    }
+    return SG_OK;
+}
+
+/* The design's text, or NULL with *rc set to the reason. */
+static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
+{
+    sbuf b = {NULL, 0, 0, 0};
+    char t[96];
+    int i, k;
+
+    *rc = check_writable(sys, d);
+    if (*rc != SG_OK)
+        return NULL;
+    sb_puts(&b, "{\n  \"format\": \"" FORMAT_NAME "\",\n");
+    snprintf(t, sizeof t, "  \"version\": %d,\n", SG_DESIGN_FORMAT_VERSION);
+    sb_puts(&b, t);
+    sb_puts(&b, "  \"title\": ");
+    sb_str(&b, sys->title);
+    sb_puts(&b, ",\n  \"units\": ");
+    sb_str(&b, sys->units);
+
+    snprintf(t, sizeof t, ",\n  \"wavelengths\": {\n    \"primary\": %d,\n", sys->primary_wave + 1);
+    sb_puts(&b, t);
+    sb_puts(&b, "    \"list\": [\n");
+    for (k = 0; k < sys->nwave; k++) {
+        sb_puts(&b, "      { \"um\": ");
+        sb_num(&b, sys->wave[k].um);
+        sb_puts(&b, ", \"weight\": ");
+        sb_num(&b, sys->wave[k].weight);
+        sb_puts(&b, k + 1 < sys->nwave ? " },\n" : " }\n");
+    }
+    sb_puts(&b, "    ]\n  },\n");
+
+    sb_puts(&b, "  \"fields\": {\n    \"type\": ");
+    sb_str(&b, field_type_names[sys->field_type]);
+    sb_puts(&b, ",\n    \"normalization\": ");
+    sb_str(&b, field_norm_names[sys->field_norm]);
+    sb_puts(&b, ",\n    \"list\": [\n");
+    for (k = 0; k < sys->nfield; k++) {
+        sb_puts(&b, "      { \"x\": ");
+        sb_num(&b, sys->field[k].x);
+        sb_puts(&b, ", \"y\": ");
+        sb_num(&b, sys->field[k].y);
+        sb_puts(&b, ", \"weight\": ");
+        sb_num(&b, sys->field[k].weight);
+        sb_puts(&b, k + 1 < sys->nfield ? " },\n" : " }\n");
+    }
+    sb_puts(&b, "    ]\n  },\n");
+
+    sb_puts(&b, "  \"aperture\": { \"type\": ");
+    sb_str(&b, aper_type_names[sys->aper_type]);
+    sb_puts(&b, ", \"value\": ");
+    sb_num(&b, sys->aper_value);
+    sb_puts(&b, " },\n  \"ray_aiming\": ");
+    sb_str(&b, aim_names[sys->aim]);
+    sb_puts(&b, ",\n  \"surfaces\": [\n");
+
+    for (i = 0; i < sys->nsurf; i++) {
+        const sg_surface *s = &sys->surf[i];
+        sb_puts(&b, "    {\n      \"type\": ");
+        sb_str(&b, surf_type_names[s->type]);
+        sb_puts(&b, ",\n      \"comment\": ");
+        sb_str(&b, s->comment);
+        sb_puts(&b, ",\n      \"radius\": ");
+        /* 0 means flat in C as on input; write it the way it reads back. */
+        sb_len(&b, s->radius == 0.0 ? INFINITY : s->radius);
+        sb_puts(&b, ",\n      \"thickness\": ");
+        sb_len(&b, s->thickness);
+        sb_puts(&b, ",\n      \"material\": ");
+        switch (s->mat.kind) {
+        case SG_MAT_MIRROR:
+            sb_puts(&b, "\"MIRROR\"");
+            break;
+        case SG_MAT_GLASS:
+            sb_str(&b, s->mat.name);
+            break;
+        case SG_MAT_INDEX:
+            sb_num(&b, s->mat.index);
+            break;
+        default:
+            sb_puts(&b, "\"AIR\"");
+            break;
+        }
+        sb_puts(&b, ",\n      \"semi_diameter\": ");
+        sb_num(&b, s->semi_diameter);
+        sb_puts(&b, s->sd_fixed ? ",\n      \"sd_fixed\": true" : ",\n      \"sd_fixed\": false");
+        sb_puts(&b, ",\n      \"conic\": ");
+        sb_num(&b, s->conic);
+        sb_puts(&b, ",\n      \"asphere\": [");
+        for (k = 0; k < SG_NASPH; k++) {
+            if (k)
+                sb_puts(&b, ", ");
+            sb_num(&b, s->asph[k]);
+        }
+        sb_puts(&b, i == sys->stop ? "],\n      \"stop\": true\n" : "],\n      \"stop\": false\n");
+        sb_puts(&b, i + 1 < sys->nsurf ? "    },\n" : "    }\n");
+    }
+    sb_puts(&b, "  ]\n}\n");
+    if (b.oom) {
+        free(b.p);
+        *rc = sg_diag_set(d, SG_ENOMEM, "out of memory while writing the design");
+        return NULL;
+    }
+    return b.p;
+}
+
+char *sg_design_to_json(const sg_system *sys)
+{
+    int rc;
+    return build_json(sys, NULL, &rc);
+}
+
+/* The permissions a new file would get: 0666 less the umask.  The umask is
+ * read from /proc, since umask() can only be read by changing it, which
+ * would race with other threads creating files. */
+static mode_t new_file_mode(void)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    char line[128];
+    unsigned mask = 022;
+    if (f) {
+        while (fgets(line, sizeof line, f))
+            if (sscanf(line, "Umask: %o", &mask) == 1)
+                break;
+        fclose(f);
+    }
+    return (mode_t)(0666 & ~mask);
+}
+
+/* Makes the rename durable; failure here loses nothing already written. */
+static void sync_parent_dir(const char *path)
+{
+    char *dir = malloc(strlen(path) + 2);
+    char *slash;
+    int fd;
+    if (!dir)
+        return;
+    strcpy(dir, path);
+    slash = strrchr(dir, '/');
+    if (!slash)
+        strcpy(dir, ".");
+    else if (slash == dir)
+        dir[1] = '\0';
+    else
+        *slash = '\0';
+    fd = open(dir, O_RDONLY);
+    if (fd >= 0) {
+        (void)fsync(fd);
+        close(fd);
+    }
+    free(dir);
+}
+
+int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
+{
+    char *text, *tmp;
+    size_t len;
+    struct stat st;
+    FILE *f;
+    int fd, e, rc;
+
+    if (!sys || !path || !path[0])
+        return sg_diag_set(d, SG_EINVAL, "save: no system or no path");
+    text = build_json(sys, d, &rc);
+    if (!text)
+        return rc;
+    len = strlen(text);
+    tmp = malloc(strlen(path) + 8);
+    if (!tmp) {
+        free(text);
+        return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", path);
+    }
+    sprintf(tmp, "%s.XXXXXX", path);
+    fd = mkstemp(tmp);
+    if (fd < 0) {
+        e = errno;
+        free(tmp);
+        free(text);
+        return sg_diag_set(d, SG_EIO, "%s: cannot create a temporary file: %s", path, strerror(e));
+    }
+    /* mkstemp makes the file 0600; keep the old file's mode, or give a new
+     * file the mode open() would have. */
+    if (stat(path, &st) == 0 && S_ISREG(st.st_mode))
+        (void)fchmod(fd, st.st_mode & 07777);
+    else
+        (void)fchmod(fd, new_file_mode());
+    f = fdopen(fd, "w");
+    if (!f) {
+        e = errno;
+        close(fd);
+        goto fail;
+    }
+    errno = 0;
+    if (fwrite(text, 1, len, f) != len || fflush(f) != 0 || fsync(fileno(f)) != 0) {
+        e = errno ? errno : EIO;
+        fclose(f);
+        goto fail;
+    }
+    if (fclose(f) != 0) {
+        e = errno;
+        goto fail;
+    }
+    if (rename(tmp, path) != 0) {
+        e = errno;
+        goto fail;
+    }
+    sync_parent_dir(path);
+    free(tmp);
+    free(text);
+    return SG_OK;
+
+fail:
+    unlink(tmp);
+    free(tmp);
+    free(text);
+    return sg_diag_set(d, SG_EIO, "%s: cannot write: %s", path, strerror(e));
+}

@@ -1,0 +1,20 @@
+/*
+ * internal.h - declarations shared by the engine's source files.
+ * Nothing here is part of the public API.
+ */
+#ifndef SG_INTERNAL_H
+#define SG_INTERNAL_H
+
+#include <mpfr.h>
+
+#include "sagitta.h"
+
+/* Index of glass g at wavelength um (both MPFR), with out's precision.
+ * Returns SG_OK, or SG_ERANGE when n^2 is not positive, or SG_EINVAL for an
+ * unknown formula.  Every coefficient is taken exactly as its double. */
+int sg_glass_index_mpfr(const sg_glass *g, mpfr_t out, const mpfr_t um);
+
+/* Copies at most n-1 bytes and always terminates. */
+void sg_strlcpy(char *dst, const char *src, size_t n);
+
+#endif

@@ -1,0 +1,511 @@
+/*
+ * launch.c - rays from normalized field and pupil coordinates.
+ *
+ * A ray is launched as an object-space part (a direction for an object at
+ * infinity, an object point otherwise) and the point Q where it crosses
+ * surface 1's vertex tangent plane.  Carrying Q rather than a direction
+ * times a 5e8 mm path keeps a far object from costing digits at surface 1:
+ * the direction is derived from two exact points, not the other way round.
+ *
+ * Aiming off puts the ray through (Px, Py) times the paraxial entrance
+ * pupil radius.  Paraxial and real aiming solve for Q with a 2-D Newton
+ * iteration until the ray lands on (Px, Py) times the stop radius.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "trace_internal.h"
+
+static int inf_object(const sg_tracer *t)
+{
+    return !isfinite(t->sys->surf[0].thickness);
+}
+
+/* Object point or direction from object-space field values (vx, vy):
+ * tangents for an object at infinity (or degrees when deg is set), heights
+ * for a finite object. */
+static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
+{
+    memset(o, 0, sizeof *o);
+    if (inf_object(t)) {
+        dd tx = vx, ty = vy, len;
+        if (deg) {
+            mpfr_t a, pi, tmp;
+            mpfr_inits2(128, a, pi, tmp, (mpfr_ptr)0);
+            mpfr_const_pi(pi, MPFR_RNDN);
+            mpfr_set_d(a, vx.hi, MPFR_RNDN);
+            mpfr_add_d(a, a, vx.lo, MPFR_RNDN);
+            mpfr_mul(a, a, pi, MPFR_RNDN);
+            mpfr_div_ui(a, a, 180, MPFR_RNDN);
+            mpfr_tan(a, a, MPFR_RNDN);
+            tx = dd_from_mpfr(a, tmp);
+            mpfr_set_d(a, vy.hi, MPFR_RNDN);
+            mpfr_add_d(a, a, vy.lo, MPFR_RNDN);
+            mpfr_mul(a, a, pi, MPFR_RNDN);
+            mpfr_div_ui(a, a, 180, MPFR_RNDN);
+            mpfr_tan(a, a, MPFR_RNDN);
+            ty = dd_from_mpfr(a, tmp);
+            mpfr_clears(a, pi, tmp, (mpfr_ptr)0);
+        }
+        len = dd_sqrt(dd_add(dd_add(dd_sqr(tx), dd_sqr(ty)), dd_from(1.0)));
+        o->inf = 1;
+        o->dir.x = dd_div(tx, len);
+        o->dir.y = dd_div(ty, len);
+        o->dir.z = dd_div(dd_from(1.0), len);
+    } else {
+        const sg_surface *s0 = &t->sys->surf[0];
+        double R = s0->radius;
+        o->inf = 0;
+        o->obj.x = vx;
+        o->obj.y = vy;
+        o->obj.z = dd_neg(t->ln.T0);
+        if (R != 0.0 && isfinite(R)) {
+            /* A curved object surface: the point lies on its sag. */
+            double sag = sg_surface_sag(s0, vx.hi, vy.hi);
+            if (isfinite(sag))
+                o->obj.z = dd_add_d(o->obj.z, sag);
+        }
+    }
+}
+
+/* Q for aiming off: the line through the paraxial pupil point. */
+static void q_aim_off(const sg_tracer *t, const osp *o, double px, double py, dd q[2])
+{
+    dd ex = dd_mul_d(t->ln.epr, px), ey = dd_mul_d(t->ln.epr, py);
+    if (o->inf) {
+        dd f = dd_div(t->ln.enp, o->dir.z);
+        q[0] = dd_sub(ex, dd_mul(f, o->dir.x));
+        q[1] = dd_sub(ey, dd_mul(f, o->dir.y));
+    } else {
+        /* lambda = -Oz / (enp - Oz) along O -> E */
+        dd den = dd_sub(t->ln.enp, o->obj.z);
+        dd lam = dd_div(dd_neg(o->obj.z), den);
+        q[0] = dd_add(o->obj.x, dd_mul(lam, dd_sub(ex, o->obj.x)));
+        q[1] = dd_add(o->obj.y, dd_mul(lam, dd_sub(ey, o->obj.y)));
+    }
+}
+
+/* Precise ray state from the object-space part and Q. */
+static void pray_from(const osp *o, const dd q[2], sg_pray *r, double *path0)
+{
+    r->p.x = q[0];
+    r->p.y = q[1];
+    r->p.z = dd_from(0.0);
+    r->eP = DD_U * (fabs(q[0].hi) + fabs(q[1].hi));
+    if (o->inf) {
+        r->d = o->dir;
+        *path0 = 0.0;
+    } else {
+        dd3 v;
+        dd len;
+        v.x = dd_sub(q[0], o->obj.x);
+        v.y = dd_sub(q[1], o->obj.y);
+        v.z = dd_neg(o->obj.z);
+        len = dd_sqrt(dd_dot3(v, v));
+        r->d.x = dd_div(v.x, len);
+        r->d.y = dd_div(v.y, len);
+        r->d.z = dd_div(v.z, len);
+        *path0 = dd_to_d(len);
+        /* A relative error of the direction moves surface 1's point
+         * by nothing: the ray starts on Q itself. */
+    }
+    r->eD = 8.0 * DD_U;
+}
+
+static void object_row(const sg_tracer *t, const osp *o, const sg_pray *r, sg_ray_surface *out)
+{
+    double S[3], u[3];
+    u[0] = r->d.x.hi;
+    u[1] = r->d.y.hi;
+    u[2] = r->d.z.hi;
+    if (o->inf) {
+        /* The object point is at infinity back along the ray. */
+        S[0] = u[0] == 0.0 ? 0.0 : copysign(INFINITY, -u[0]);
+        S[1] = u[1] == 0.0 ? 0.0 : copysign(INFINITY, -u[1]);
+        S[2] = copysign(INFINITY, -u[2]);
+    } else {
+        S[0] = o->obj.x.hi;
+        S[1] = o->obj.y.hi;
+        S[2] = dd_to_d(dd_add(o->obj.z, t->ln.T0));
+    }
+    sg_set_start_row(out, S, u);
+}
+
+/* ------------------------------------------------------------------------
+ * Aiming: Newton on Q.
+ * ------------------------------------------------------------------------ */
+
+/* Lands the ray through Q on the stop; noise bounds the landing's own
+ * error, below which no aiming can go. */
+typedef int (*land_fn)(sg_tracer *t, const osp *o, const dd q[2], dd at[2], double *noise,
+                       sg_ray_surface *scratch);
+
+static int land_precise(sg_tracer *t, const osp *o, const dd q[2], dd at[2], double *noise,
+                        sg_ray_surface *scratch)
+{
+    sg_pray r;
+    double path0;
+    int rc;
+    pray_from(o, q, &r, &path0);
+    rc = sg_precise_run_to(t, &r, path0, scratch, t->sys->stop);
+    at[0] = r.p.x;
+    at[1] = r.p.y;
+    *noise = r.eP;
+    return rc;
+}
+
+static void classic_start(const osp *o, const dd q[2], double S[3], double D[3])
+{
+    if (o->inf) {
+        S[0] = q[0].hi;
+        S[1] = q[1].hi;
+        S[2] = 0.0;
+        D[0] = o->dir.x.hi;
+        D[1] = o->dir.y.hi;
+        D[2] = o->dir.z.hi;
+    } else {
+        /* The textbook launch: from the object point, with the unscaled
+         * difference vector as the direction. */
+        S[0] = o->obj.x.hi;
+        S[1] = o->obj.y.hi;
+        S[2] = o->obj.z.hi;
+        D[0] = q[0].hi - S[0];
+        D[1] = q[1].hi - S[1];
+        D[2] = -S[2];
+    }
+}
+
+static int land_classic(sg_tracer *t, const osp *o, const dd q[2], dd at[2], double *noise,
+                        sg_ray_surface *scratch)
+{
+    double S[3], D[3];
+    int rc, stop = t->sys->stop;
+    classic_start(o, q, S, D);
+    rc = sg_classic_run_to(t, S, D, scratch, stop);
+    at[0] = dd_from(scratch[stop].x);
+    at[1] = dd_from(scratch[stop].y);
+    *noise = scratch[stop].error_bound;
+    return rc;
+}
+
+/* Solves land(Q) = target.  Q starts at the aim-off point.  The Jacobian
+ * comes from central differences with a step far above rounding and far
+ * below the curvature of the landing map, which is enough for Newton: its
+ * own error only slows the last digits, and the residual, evaluated in
+ * full precision, decides when to stop. */
+static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
+                      const dd target[2], sg_ray_surface *scratch)
+{
+    double scale = fmax(t->ln.stop_r.hi, 1e-300);
+    double h = 1e-6 * fmax(t->ln.epr.hi, fmax(fabs(q[0].hi), fabs(q[1].hi)));
+    double J[2][2], det, best = INFINITY, tol = t->o.aim_rtol * scale, noise = 0.0;
+    dd at[2], res[2];
+    int it, k, rc;
+    for (k = 0; k < 2; k++) {
+        dd qp[2] = {q[0], q[1]}, qm[2] = {q[0], q[1]}, ap[2], am[2];
+        qp[k] = dd_add_d(qp[k], h);
+        qm[k] = dd_add_d(qm[k], -h);
+        rc = land(t, o, qp, ap, &noise, scratch);
+        if (rc != SG_OK && rc != SG_EVIGNETTED)
+            return SG_EAIM;
+        rc = land(t, o, qm, am, &noise, scratch);
+        if (rc != SG_OK && rc != SG_EVIGNETTED)
+            return SG_EAIM;
+        J[0][k] = (ap[0].hi - am[0].hi) / (2.0 * h);
+        J[1][k] = (ap[1].hi - am[1].hi) / (2.0 * h);
+    }
+    det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+    if (!(fabs(det) > 0.0) || !isfinite(det))
+        return SG_EAIM;
+    for (it = 0; it < t->o.aim_max_iter; it++) {
+        double r0, r1, dx, dy, nr;
+        rc = land(t, o, q, at, &noise, scratch);
+        if (rc != SG_OK && rc != SG_EVIGNETTED)
+            return SG_EAIM;
+        res[0] = dd_sub(at[0], target[0]);
+        res[1] = dd_sub(at[1], target[1]);
+        nr = fmax(fabs(res[0].hi), fabs(res[1].hi));
+        /* Stop once the residual no longer shrinks: the landing is then
+         * as exact as the arithmetic carrying it.  A method whose landing
+         * is noisier than the tolerance succeeds within its own noise. */
+        if (nr == 0.0 || (nr <= tol + noise && !(nr < 0.5 * best)))
+            return SG_OK;
+        best = fmin(best, nr);
+        r0 = res[0].hi + res[0].lo;
+        r1 = res[1].hi + res[1].lo;
+        dx = (J[1][1] * r0 - J[0][1] * r1) / det;
+        dy = (-J[1][0] * r0 + J[0][0] * r1) / det;
+        q[0] = dd_add_d(q[0], -dx);
+        q[1] = dd_add_d(q[1], -dy);
+        if (!isfinite(q[0].hi) || !isfinite(q[1].hi))
+            return SG_EAIM;
+    }
+    return best <= tol + noise ? SG_OK : SG_EAIM;
+}
+
+/* ------------------------------------------------------------------------
+ * Fields.
+ * ------------------------------------------------------------------------ */
+
+static int launch_q(sg_tracer *t, land_fn land, const osp *o, double px, double py,
+                    dd q[2], sg_ray_surface *scratch)
+{
+    int clip, rc;
+    q_aim_off(t, o, px, py, q);
+    if (t->sys->aim != SG_AIM_OFF) {
+        /* The target keeps every bit of Px times the stop radius. */
+        dd target[2];
+        target[0] = dd_mul_d(t->ln.stop_r, px);
+        target[1] = dd_mul_d(t->ln.stop_r, py);
+        /* Apertures do not bend rays, so the iteration ignores them; the
+         * final trace applies them. */
+        clip = t->o.clip;
+        t->o.clip = 0;
+        rc = aim_newton(t, land, o, q, target, scratch);
+        t->o.clip = clip;
+        if (rc != SG_OK)
+            return SG_EAIM;
+    }
+    return SG_OK;
+}
+
+/* Where the chief ray of object-space values v lands on the image. */
+static int chief_on_image(sg_tracer *t, land_fn land, const dd v[2], osp *o, double at[2],
+                          sg_ray_surface *scratch)
+{
+    dd q[2];
+    int last = t->n - 1, rc;
+    osp_from_values(t, v[0], v[1], 0, o);
+    if (launch_q(t, land, o, 0, 0, q, scratch) != SG_OK)
+        return SG_EAIM;
+    if (t->o.method == SG_METHOD_CLASSIC) {
+        double S[3], D[3];
+        classic_start(o, q, S, D);
+        rc = sg_classic_run_to(t, S, D, scratch, last);
+    } else {
+        sg_pray r;
+        double p0;
+        pray_from(o, q, &r, &p0);
+        rc = sg_precise_run_to(t, &r, p0, scratch, last);
+    }
+    at[0] = scratch[last].x;
+    at[1] = scratch[last].y;
+    return rc;
+}
+
+/* Object-space part of field (hx, hy), by the system's field type. */
+static int field_osp(sg_tracer *t, land_fn land, double hx, double hy, osp *o,
+                     sg_ray_surface *scratch)
+{
+    dd vx = dd_mul_d(t->ln.fx, hx), vy = dd_mul_d(t->ln.fy, hy);
+    switch (t->sys->field_type) {
+    case SG_FIELD_ANGLE:
+        osp_from_values(t, vx, vy, 1, o);
+        return SG_OK;
+    case SG_FIELD_OBJECT_HEIGHT:
+        osp_from_values(t, vx, vy, 0, o);
+        return SG_OK;
+    case SG_FIELD_PARAX_IMAGE_HEIGHT:
+        osp_from_values(t, dd_div(vx, t->ln.pimg_slope), dd_div(vy, t->ln.pimg_slope), 0, o);
+        return SG_OK;
+    case SG_FIELD_REAL_IMAGE_HEIGHT: {
+        /* Newton on the object-space value until the chief ray lands on
+         * the requested image height. */
+        dd v[2];
+        double J[2][2], det, h, at[2], ap[2], am[2];
+        double target[2] = {dd_to_d(vx), dd_to_d(vy)};
+        int it, k;
+        v[0] = dd_div(vx, t->ln.pimg_slope);
+        v[1] = dd_div(vy, t->ln.pimg_slope);
+        h = 1e-7 * (fabs(v[0].hi) + fabs(v[1].hi) + fabs(t->ln.fy.hi / t->ln.pimg_slope.hi) + 1e-12);
+        for (k = 0; k < 2; k++) {
+            dd vp[2] = {v[0], v[1]}, vm[2] = {v[0], v[1]};
+            vp[k] = dd_add_d(vp[k], h);
+            vm[k] = dd_add_d(vm[k], -h);
+            if (chief_on_image(t, land, vp, o, ap, scratch) != SG_OK ||
+                chief_on_image(t, land, vm, o, am, scratch) != SG_OK)
+                return SG_EAIM;
+            J[0][k] = (ap[0] - am[0]) / (2.0 * h);
+            J[1][k] = (ap[1] - am[1]) / (2.0 * h);
+        }
+        det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+        if (!(fabs(det) > 0.0))
+            return SG_EAIM;
+        for (it = 0; it < t->o.aim_max_iter; it++) {
+            double r0, r1;
+            if (chief_on_image(t, land, v, o, at, scratch) != SG_OK)
+                return SG_EAIM;
+            r0 = at[0] - target[0];
+            r1 = at[1] - target[1];
+            if (fabs(r0) + fabs(r1) <= 4e-16 * (fabs(target[0]) + fabs(target[1])) + 1e-300)
+                return SG_OK;
+            v[0] = dd_add_d(v[0], -(J[1][1] * r0 - J[0][1] * r1) / det);
+            v[1] = dd_add_d(v[1], -(-J[1][0] * r0 + J[0][0] * r1) / det);
+        }
+        return SG_EAIM;
+    }
+    }
+    return SG_EINVAL;
+}
+
+/* ------------------------------------------------------------------------
+ * Entry points.
+ * ------------------------------------------------------------------------ */
+
+int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
+                      sg_ray_surface *out)
+{
+    sg_pray r;
+    double path0;
+    dd q[2];
+    osp o;
+    int rc;
+    if (!t->have_field || t->last_hx != hx || t->last_hy != hy) {
+        rc = field_osp(t, land_precise, hx, hy, &o, t->scratch);
+        if (rc != SG_OK) {
+            sg_fail_rest(out, 0, t->n, SG_EAIM);
+            return SG_EAIM;
+        }
+        t->field = o;
+        t->have_field = 1;
+        t->last_hx = hx;
+        t->last_hy = hy;
+    }
+    o = t->field;
+    if (launch_q(t, land_precise, &o, px, py, q, t->scratch) != SG_OK) {
+        sg_fail_rest(out, 0, t->n, SG_EAIM);
+        return SG_EAIM;
+    }
+    pray_from(&o, q, &r, &path0);
+    object_row(t, &o, &r, &out[0]);
+    return sg_precise_run_to(t, &r, path0, out, t->n - 1);
+}
+
+int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
+                      sg_ray_surface *out)
+{
+    double S[3], D[3], u[3], len;
+    dd q[2];
+    osp o;
+    int rc;
+    if (!t->have_field || t->last_hx != hx || t->last_hy != hy) {
+        rc = field_osp(t, land_classic, hx, hy, &o, t->scratch);
+        if (rc != SG_OK) {
+            sg_fail_rest(out, 0, t->n, SG_EAIM);
+            return SG_EAIM;
+        }
+        t->field = o;
+        t->have_field = 1;
+        t->last_hx = hx;
+        t->last_hy = hy;
+    }
+    o = t->field;
+    if (launch_q(t, land_classic, &o, px, py, q, t->scratch) != SG_OK) {
+        sg_fail_rest(out, 0, t->n, SG_EAIM);
+        return SG_EAIM;
+    }
+    classic_start(&o, q, S, D);
+    len = sqrt(D[0] * D[0] + D[1] * D[1] + D[2] * D[2]);
+    u[0] = D[0] / len;
+    u[1] = D[1] / len;
+    u[2] = D[2] / len;
+    if (o.inf) {
+        sg_pray r;
+        r.d = o.dir;
+        object_row(t, &o, &r, &out[0]);
+    } else {
+        sg_set_start_row(&out[0], S, u);
+        out[0].z = S[2] + t->ln.T0.hi;
+    }
+    return sg_classic_run_to(t, S, D, out, t->n - 1);
+}
+
+/* Launch constants from a 128-bit paraxial trace. */
+int sg_launch_prepare(sg_tracer *t, sg_diag *d)
+{
+    const sg_system *sys = t->sys;
+    mpfr_t *idx, tmp, fx, fy, v;
+    sg_parax_mp p;
+    int i, k, rc;
+    idx = calloc((size_t)t->n, sizeof *idx);
+    t->scratch = calloc((size_t)t->n, sizeof *t->scratch);
+    if (!idx || !t->scratch) {
+        free(idx);
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    }
+    for (i = 0; i < t->n; i++)
+        mpfr_init2(idx[i], 128);
+    mpfr_inits2(128, tmp, fx, fy, v, (mpfr_ptr)0);
+    sg_parax_mp_init(&p, 128);
+    rc = sg_indices_mpfr(sys, t->cat, t->wave, idx, d);
+    if (rc == SG_OK)
+        rc = sg_paraxial_mpfr(sys, idx, 128, &p, d);
+    if (rc == SG_OK && inf_object(t) && sys->field_type == SG_FIELD_OBJECT_HEIGHT)
+        rc = sg_diag_set(d, SG_ENONPHYS,
+                         "fields: object heights need an object at a finite distance "
+                         "(surface 0 thickness is infinite)");
+    if (rc == SG_OK) {
+        sg_parax_to_double(&p, &t->px);
+        t->ln.obj_inf = inf_object(t);
+        if (!t->ln.obj_inf) {
+            mpfr_set_d(v, sys->surf[0].thickness, MPFR_RNDN);
+            t->ln.T0 = dd_from_mpfr(v, tmp);
+        }
+        t->ln.enp = dd_from_mpfr(p.enp, tmp);
+        mpfr_div_2ui(v, p.epd, 1, MPFR_RNDN);
+        t->ln.epr = dd_from_mpfr(v, tmp);
+        t->ln.stop_r = dd_from_mpfr(p.stop_r, tmp);
+        t->ln.pimg_slope = dd_from_mpfr(p.pimg_slope, tmp);
+        /* Field scales: the largest radius, or the largest |x| and |y|. */
+        mpfr_set_zero(fx, 1);
+        mpfr_set_zero(fy, 1);
+        for (k = 0; k < sys->nfield; k++) {
+            if (sys->field_norm == SG_NORM_RADIAL) {
+                mpfr_set_d(v, sys->field[k].x, MPFR_RNDN);
+                mpfr_sqr(v, v, MPFR_RNDN);
+                mpfr_set_d(tmp, sys->field[k].y, MPFR_RNDN);
+                mpfr_sqr(tmp, tmp, MPFR_RNDN);
+                mpfr_add(v, v, tmp, MPFR_RNDN);
+                mpfr_sqrt(v, v, MPFR_RNDN);
+                mpfr_max(fx, fx, v, MPFR_RNDN);
+                mpfr_max(fy, fy, v, MPFR_RNDN);
+            } else {
+                mpfr_set_d(v, fabs(sys->field[k].x), MPFR_RNDN);
+                mpfr_max(fx, fx, v, MPFR_RNDN);
+                mpfr_set_d(v, fabs(sys->field[k].y), MPFR_RNDN);
+                mpfr_max(fy, fy, v, MPFR_RNDN);
+            }
+        }
+        t->ln.fx = dd_from_mpfr(fx, tmp);
+        t->ln.fy = dd_from_mpfr(fy, tmp);
+    }
+    sg_parax_mp_clear(&p);
+    mpfr_clears(tmp, fx, fy, v, (mpfr_ptr)0);
+    for (i = 0; i < t->n; i++)
+        mpfr_clear(idx[i]);
+    free(idx);
+    if (rc != SG_OK)
+        return rc;
+
+    /* Real aiming with a pupil set by anything but the stop size lands the
+     * marginal ray where the real on-axis marginal ray meets the stop. */
+    if (sys->aim == SG_AIM_REAL && sys->aper_type != SG_APER_FLOAT_STOP) {
+        osp o;
+        dd q[2], at[2];
+        int saved = t->o.method == SG_METHOD_CLASSIC;
+        double noise;
+        osp_from_values(t, dd_from(0.0), dd_from(0.0), 0, &o);
+        if (sys->field_type == SG_FIELD_ANGLE && t->ln.obj_inf)
+            osp_from_values(t, dd_from(0.0), dd_from(0.0), 1, &o);
+        q_aim_off(t, &o, 0.0, 1.0, q);
+        rc = saved ? land_classic(t, &o, q, at, &noise, t->scratch)
+                   : land_precise(t, &o, q, at, &noise, t->scratch);
+        if (rc != SG_OK)
+            return sg_diag_set(d, SG_EAIM,
+                               "ray aiming: the on-axis marginal ray does not reach the stop "
+                               "(surface %d): %s", sys->stop, sg_strerror(rc));
+        t->ln.stop_r = dd_from(hypot(at[0].hi, at[1].hi));
+    }
+    return SG_OK;
+}

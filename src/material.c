@@ -1,0 +1,986 @@
+/*
+ * material.c - glass catalogs (Zemax AGF files) and dispersion formulas.
+ *
+ * The dispersion formulas follow the numbering and coefficient order of the
+ * Zemax OpticStudio glass catalog ("Using Material Catalogs" / "The Glass
+ * Dispersion Formulas" in the OpticStudio user guide); lambda is the vacuum
+ * wavelength in micrometres and n is relative to air at the catalog's
+ * reference temperature and pressure.
+ *
+ *   1 Schott        n^2 = a0 + a1 L^2 + a2 L^-2 + a3 L^-4 + a4 L^-6 + a5 L^-8
+ *   2 Sellmeier 1   n^2 - 1 = sum_{i=1..3} K_i L^2 / (L^2 - L_i)
+ *                   (CD order K1 L1 K2 L2 K3 L3)
+ *   3 Herzberger    n = A + B H + C H^2 + D L^2 + E L^4 + F L^6,
+ *                   H = 1 / (L^2 - 0.028)
+ *   4 Sellmeier 2   n^2 - 1 = A + B1 L^2 / (L^2 - l1^2) + B2 / (L^2 - l2^2)
+ *                   (CD order A B1 l1 B2 l2; l1, l2 are wavelengths)
+ *   5 Conrady       n = n0 + A / L + B / L^3.5
+ *   6 Sellmeier 3   as Sellmeier 1 with four terms (K1 L1 .. K4 L4)
+ *   7 Handbook 1    n^2 = A + B / (L^2 - C) - D L^2
+ *   8 Handbook 2    n^2 = A + B L^2 / (L^2 - C) - D L^2
+ *   9 Sellmeier 4   n^2 = A + B L^2 / (L^2 - C) + D L^2 / (L^2 - E)
+ *  10 Extended      n^2 = a0 + a1 L^2 + a2 L^-2 + ... + a7 L^-12
+ *  11 Sellmeier 5   as Sellmeier 1 with five terms (K1 L1 .. K5 L5)
+ *  12 Extended 2    n^2 = a0 + a1 L^2 + a2 L^-2 + a3 L^-4 + a4 L^-6
+ *                         + a5 L^-8 + a6 L^4 + a7 L^6
+ *  13 Extended 3    n^2 = a0 + a1 L^2 + a2 L^4 + a3 L^-2 + a4 L^-4
+ *                         + a5 L^-6 + a6 L^-8 + a7 L^-10 + a8 L^-12
+ *
+ * (L stands for lambda above.)  The same formulas are written out in the
+ * FRED "Formula Glass" reference and in the refractiveindex.info database
+ * documentation; src/material_mpfr.c evaluates them in MPFR.
+ */
+#include <ctype.h>
+#include <dirent.h>
+#include <errno.h>
+#include <locale.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "dd.h"
+#include "internal.h"
+#include "sg_config.h"
+
+/* Catalog files larger than this are refused: real catalogs are a few
+ * hundred kilobytes, and the limit bounds the memory a bad path can take. */
+#define AGF_MAX_BYTES ((size_t)16 << 20)
+/* Longest numeric token accepted; real catalogs use at most ~20 chars. */
+#define AGF_MAX_NUMBER 64
+
+/* More glasses than any real catalog file holds; the limit keeps a
+ * pathological file from taking gigabytes. */
+#define AGF_MAX_GLASSES 65536
+
+/* Glasses in load order, with an open-addressing hash of their names so
+ * that loading and lookup stay linear in the catalog size. */
+struct sg_catalog {
+    sg_glass *glass;
+    size_t n, cap;
+    size_t *slot; /* index + 1 into glass, 0 when empty */
+    size_t nslot; /* a power of two, at least twice n */
+    char *dir;    /* set by sg_catalog_load_default() */
+};
+
+/* ------------------------------------------------------------------------
+ * Catalog container
+ * ------------------------------------------------------------------------ */
+
+sg_catalog *sg_catalog_new(void)
+{
+    return calloc(1, sizeof(sg_catalog));
+}
+
+void sg_catalog_free(sg_catalog *cat)
+{
+    if (!cat)
+        return;
+    free(cat->glass);
+    free(cat->slot);
+    free(cat->dir);
+    free(cat);
+}
+
+const char *sg_catalog_dir(const sg_catalog *cat)
+{
+    return cat ? cat->dir : NULL;
+}
+
+size_t sg_catalog_count(const sg_catalog *cat)
+{
+    return cat ? cat->n : 0;
+}
+
+const sg_glass *sg_catalog_at(const sg_catalog *cat, size_t i)
+{
+    if (!cat || i >= cat->n)
+        return NULL;
+    return &cat->glass[i];
+}
+
+/* ASCII-only case folding, so glass names compare the same in any locale. */
+static int ascii_upper(int c)
+{
+    return (c >= 'a' && c <= 'z') ? c - 'a' + 'A' : c;
+}
+
+static int name_equal(const char *a, const char *b)
+{
+    for (; *a && *b; a++, b++)
+        if (ascii_upper((unsigned char)*a) != ascii_upper((unsigned char)*b))
+            return 0;
+    return *a == *b;
+}
+
+/* FNV-1a of the upper-cased name. */
+static size_t name_hash(const char *s)
+{
+    uint64_t h = 14695981039346656037ull;
+    for (; *s; s++) {
+        h ^= (uint64_t)ascii_upper((unsigned char)*s);
+        h *= 1099511628211ull;
+    }
+    return (size_t)h;
+}
+
+/* The slot holding name, or the empty slot where it would go. */
+static size_t *find_slot(const sg_catalog *cat, const char *name)
+{
+    size_t mask = cat->nslot - 1, i = name_hash(name) & mask;
+    while (cat->slot[i] && !name_equal(cat->glass[cat->slot[i] - 1].name, name))
+        i = (i + 1) & mask;
+    return &cat->slot[i];
+}
+
+const sg_glass *sg_catalog_find(const sg_catalog *cat, const char *name)
+{
+    size_t *s;
+    if (!cat || !name || cat->nslot == 0)
+        return NULL;
+    s = find_slot(cat, name);
+    return *s ? &cat->glass[*s - 1] : NULL;
+}
+
+static int rehash(sg_catalog *cat, size_t nslot)
+{
+    size_t *old = cat->slot, i;
+    if (nslot > SIZE_MAX / sizeof *old)
+        return SG_ENOMEM;
+    cat->slot = calloc(nslot, sizeof *old);
+    if (!cat->slot) {
+        cat->slot = old;
+        return SG_ENOMEM;
+    }
+    cat->nslot = nslot;
+    for (i = 0; i < cat->n; i++)
+        *find_slot(cat, cat->glass[i].name) = i + 1;
+    free(old);
+    return SG_OK;
+}
+
+/* Adds g, or overwrites the glass of the same name so that the last file
+ * loaded wins, as in Zemax. */
+static int catalog_put(sg_catalog *cat, const sg_glass *g)
+{
+    size_t *s;
+    if (2 * (cat->n + 1) > cat->nslot) {
+        int rc = rehash(cat, cat->nslot ? 2 * cat->nslot : 256);
+        if (rc)
+            return rc;
+    }
+    s = find_slot(cat, g->name);
+    if (*s) {
+        cat->glass[*s - 1] = *g;
+        return SG_OK;
+    }
+    if (cat->n == cat->cap) {
+        size_t ncap = cat->cap ? 2 * cat->cap : 64;
+        sg_glass *p;
+        if (ncap > SIZE_MAX / sizeof *p)
+            return SG_ENOMEM;
+        p = realloc(cat->glass, ncap * sizeof *p);
+        if (!p)
+            return SG_ENOMEM;
+        cat->glass = p;
+        cat->cap = ncap;
+    }
+    cat->glass[cat->n] = *g;
+    *s = ++cat->n;
+    return SG_OK;
+}
+
+/* ------------------------------------------------------------------------
+ * Dispersion formulas.  The index is evaluated in double-double (dd.h,
+ * about 106 bits) and rounded once, so the double result is within an ulp
+ * of the exact value of the formula for the stored coefficients.  fma() is
+ * correctly rounded whether or not the hardware has it, so results do not
+ * depend on -march.
+ * ------------------------------------------------------------------------ */
+
+/* a + b*c with the coefficient b taken exactly. */
+static dd dd_axpy(dd a, double b, dd c)
+{
+    return dd_add(a, dd_mul_d(c, b));
+}
+
+/* sum_{i} c[2i] * l2 / (l2 - c[2i+1]) over nterm terms. */
+static dd sellmeier_terms(const double *c, int nterm, dd l2)
+{
+    dd s = dd_from(0.0);
+    int i;
+    for (i = 0; i < nterm; i++) {
+        dd num = dd_mul_d(l2, c[2 * i]);
+        dd den = dd_sub(l2, dd_from(c[2 * i + 1]));
+        s = dd_add(s, dd_div(num, den));
+    }
+    return s;
+}
+
+/* c[0] x + c[1] x^2 + ... + c[n-1] x^n by Horner's rule. */
+static dd poly_no_const(const double *c, int n, dd x)
+{
+    dd t = dd_from(0.0);
+    int i;
+    for (i = n - 1; i >= 0; i--)
+        t = dd_mul(dd_add(t, dd_from(c[i])), x);
+    return t;
+}
+
+/* Computes n (when *is_n2 is 0) or n^2 (when 1) in double-double.  Returns
+ * 0 for an unknown formula. */
+static int glass_eval_dd(const sg_glass *g, double um, dd *out, int *is_n2)
+{
+    const double *c = g->c;
+    dd l2 = dd_two_prod(um, um); /* exact */
+    dd inv, t, h;
+
+    *is_n2 = 1;
+    switch (g->formula) {
+    case SG_FORMULA_SCHOTT:
+        inv = dd_div(dd_from(1.0), l2);
+        t = dd_add(dd_from(c[0]), poly_no_const(c + 2, 4, inv));
+        *out = dd_axpy(t, c[1], l2);
+        return 1;
+    case SG_FORMULA_SELLMEIER1:
+        *out = dd_add(dd_from(1.0), sellmeier_terms(c, 3, l2));
+        return 1;
+    case SG_FORMULA_HERZBERGER:
+        /* 0.028 is a decimal constant of the formula, so take it as the
+         * double-double nearest 28/1000 rather than as a double. */
+        h = dd_div_d(dd_from(28.0), 1000.0);
+        h = dd_div(dd_from(1.0), dd_sub(l2, h));
+        t = dd_add(dd_from(c[0]), poly_no_const(c + 1, 2, h));
+        *out = dd_add(t, poly_no_const(c + 3, 3, l2));
+        *is_n2 = 0;
+        return 1;
+    case SG_FORMULA_SELLMEIER2: {
+        dd a1 = dd_two_prod(c[2], c[2]), a2 = dd_two_prod(c[4], c[4]);
+        t = dd_add(dd_from(1.0), dd_from(c[0]));
+        t = dd_add(t, dd_div(dd_mul_d(l2, c[1]), dd_sub(l2, a1)));
+        *out = dd_add(t, dd_div(dd_from(c[3]), dd_sub(l2, a2)));
+        return 1;
+    }
+    case SG_FORMULA_CONRADY: {
+        /* lambda^3.5 = lambda^3 * sqrt(lambda). */
+        dd l = dd_from(um);
+        dd l35 = dd_mul(dd_mul(l2, l), dd_sqrt(l));
+        t = dd_add(dd_from(c[0]), dd_div(dd_from(c[1]), l));
+        *out = dd_add(t, dd_div(dd_from(c[2]), l35));
+        *is_n2 = 0;
+        return 1;
+    }
+    case SG_FORMULA_SELLMEIER3:
+        *out = dd_add(dd_from(1.0), sellmeier_terms(c, 4, l2));
+        return 1;
+    case SG_FORMULA_HANDBOOK1:
+        t = dd_div(dd_from(c[1]), dd_sub(l2, dd_from(c[2])));
+        t = dd_add(dd_from(c[0]), t);
+        *out = dd_sub(t, dd_mul_d(l2, c[3]));
+        return 1;
+    case SG_FORMULA_HANDBOOK2:
+        t = dd_div(dd_mul_d(l2, c[1]), dd_sub(l2, dd_from(c[2])));
+        t = dd_add(dd_from(c[0]), t);
+        *out = dd_sub(t, dd_mul_d(l2, c[3]));
+        return 1;
+    case SG_FORMULA_SELLMEIER4:
+        *out = dd_add(dd_from(c[0]), sellmeier_terms(c + 1, 2, l2));
+        return 1;
+    case SG_FORMULA_EXTENDED1:
+        inv = dd_div(dd_from(1.0), l2);
+        t = dd_add(dd_from(c[0]), poly_no_const(c + 2, 6, inv));
+        *out = dd_axpy(t, c[1], l2);
+        return 1;
+    case SG_FORMULA_SELLMEIER5:
+        *out = dd_add(dd_from(1.0), sellmeier_terms(c, 5, l2));
+        return 1;
+    case SG_FORMULA_EXTENDED2: {
+        /* The positive powers are a1 L^2 + a6 L^4 + a7 L^6. */
+        double pos[3];
+        pos[0] = c[1];
+        pos[1] = c[6];
+        pos[2] = c[7];
+        inv = dd_div(dd_from(1.0), l2);
+        t = dd_add(dd_from(c[0]), poly_no_const(c + 2, 4, inv));
+        *out = dd_add(t, poly_no_const(pos, 3, l2));
+        return 1;
+    }
+    case SG_FORMULA_EXTENDED3:
+        inv = dd_div(dd_from(1.0), l2);
+        t = dd_add(dd_from(c[0]), poly_no_const(c + 3, 6, inv));
+        *out = dd_add(t, poly_no_const(c + 1, 2, l2));
+        return 1;
+    default:
+        return 0;
+    }
+}
+
+double sg_glass_index(const sg_glass *g, double um)
+{
+    dd v;
+    int is_n2;
+    if (!g || !(um > 0.0) || !isfinite(um))
+        return NAN;
+    if (!glass_eval_dd(g, um, &v, &is_n2))
+        return NAN;
+    /* A pole of the formula gives an infinite or NaN sum; both are as
+     * unusable as a negative n^2. */
+    if (!isfinite(v.hi) || !isfinite(v.lo) || !(v.hi > 0.0))
+        return NAN;
+    if (is_n2)
+        v = dd_sqrt(v);
+    return v.hi + v.lo;
+}
+
+int sg_glass_in_range(const sg_glass *g, double um)
+{
+    if (!g)
+        return 0;
+    return um >= g->lmin && um <= g->lmax;
+}
+
+/* ------------------------------------------------------------------------
+ * AGF reader
+ * ------------------------------------------------------------------------ */
+
+/* One line split into whitespace-separated tokens (pointers into the
+ * decoded text, not NUL-terminated). */
+#define AGF_MAX_TOKENS 24
+
+typedef struct agf_line {
+    int ntok; /* may exceed AGF_MAX_TOKENS; only that many are stored */
+    const char *tok[AGF_MAX_TOKENS];
+    size_t len[AGF_MAX_TOKENS];
+} agf_line;
+
+typedef struct agf_ctx {
+    const char *path;
+    long line;
+    sg_diag *d;
+} agf_ctx;
+
+static int is_space(int c)
+{
+    return c == ' ' || c == '\t' || c == '\f' || c == '\v' || c == 0x1A;
+}
+
+static void split_line(const char *s, size_t n, agf_line *ln)
+{
+    size_t i = 0;
+    ln->ntok = 0;
+    while (i < n) {
+        size_t start;
+        while (i < n && is_space((unsigned char)s[i]))
+            i++;
+        if (i >= n)
+            break;
+        start = i;
+        while (i < n && !is_space((unsigned char)s[i]))
+            i++;
+        if (ln->ntok < AGF_MAX_TOKENS) {
+            ln->tok[ln->ntok] = s + start;
+            ln->len[ln->ntok] = i - start;
+        }
+        ln->ntok++;
+    }
+}
+
+static int tok_is(const agf_line *ln, int k, const char *kw)
+{
+    size_t n = strlen(kw), i;
+    if (k >= ln->ntok || ln->len[k] != n)
+        return 0;
+    for (i = 0; i < n; i++)
+        if (ascii_upper((unsigned char)ln->tok[k][i]) != kw[i])
+            return 0;
+    return 1;
+}
+
+/* Quotes at most 40 characters of a token for a message. */
+static void tok_quote(const agf_line *ln, int k, char *buf, size_t n)
+{
+    size_t len = ln->len[k], i, j = 0;
+    if (len > 40)
+        len = 40;
+    for (i = 0; i < len && j + 1 < n; i++) {
+        unsigned char c = (unsigned char)ln->tok[k][i];
+        buf[j++] = (c >= 0x20 && c < 0x7F) ? (char)c : '?';
+    }
+    buf[j] = '\0';
+    if (ln->len[k] > 40 && j + 4 < n)
+        strcat(buf, "...");
+}
+
+/* Strict decimal syntax: [+-]digits[.digits][(e|E)[+-]digits], at least one
+ * mantissa digit.  strtod alone would also take "nan", "inf" and hex. */
+static int decimal_syntax_ok(const char *s)
+{
+    int digits = 0;
+    if (*s == '+' || *s == '-')
+        s++;
+    while (isdigit((unsigned char)*s)) {
+        s++;
+        digits++;
+    }
+    if (*s == '.') {
+        s++;
+        while (isdigit((unsigned char)*s)) {
+            s++;
+            digits++;
+        }
+    }
+    if (!digits)
+        return 0;
+    if (*s == 'e' || *s == 'E') {
+        int ed = 0;
+        s++;
+        if (*s == '+' || *s == '-')
+            s++;
+        while (isdigit((unsigned char)*s)) {
+            s++;
+            ed++;
+        }
+        if (!ed)
+            return 0;
+    }
+    return *s == '\0';
+}
+
+static int agf_err(agf_ctx *cx, const char *what)
+{
+    return sg_diag_set(cx->d, SG_EPARSE, "%s:%ld: %s", cx->path, cx->line,
+                       what);
+}
+
+/* Parses token k as a finite decimal number; what names the field. */
+static int tok_number(agf_ctx *cx, const agf_line *ln, int k, const char *what,
+                      double *out)
+{
+    char buf[AGF_MAX_NUMBER + 1], q[48];
+    char *end;
+    double v;
+    if (k >= ln->ntok || k >= AGF_MAX_TOKENS)
+        return sg_diag_set(cx->d, SG_EPARSE, "%s:%ld: missing %s", cx->path,
+                           cx->line, what);
+    tok_quote(ln, k, q, sizeof q);
+    if (ln->len[k] > AGF_MAX_NUMBER)
+        return sg_diag_set(cx->d, SG_EPARSE, "%s:%ld: %s: number too long: %s",
+                           cx->path, cx->line, what, q);
+    memcpy(buf, ln->tok[k], ln->len[k]);
+    buf[ln->len[k]] = '\0';
+    if (!decimal_syntax_ok(buf))
+        return sg_diag_set(cx->d, SG_EPARSE, "%s:%ld: %s: not a number: '%s'",
+                           cx->path, cx->line, what, q);
+    v = strtod(buf, &end);
+    if (*end != '\0' || !isfinite(v))
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: %s: number out of range: %s", cx->path,
+                           cx->line, what, q);
+    *out = v;
+    return SG_OK;
+}
+
+/* A growable list of the glasses of one file, merged into the catalog only
+ * when the whole file has parsed. */
+typedef struct glass_list {
+    sg_glass *g;
+    size_t n, cap;
+    long *nm_line; /* NM line of each glass, for messages */
+} glass_list;
+
+static int list_push(glass_list *l)
+{
+    if (l->n >= AGF_MAX_GLASSES)
+        return SG_ERANGE;
+    if (l->n == l->cap) {
+        size_t ncap = l->cap ? 2 * l->cap : 64;
+        sg_glass *p;
+        long *q;
+        if (ncap > SIZE_MAX / sizeof *p)
+            return SG_ENOMEM;
+        p = realloc(l->g, ncap * sizeof *p);
+        if (!p)
+            return SG_ENOMEM;
+        l->g = p;
+        q = realloc(l->nm_line, ncap * sizeof *q);
+        if (!q)
+            return SG_ENOMEM;
+        l->nm_line = q;
+        l->cap = ncap;
+    }
+    memset(&l->g[l->n], 0, sizeof l->g[0]);
+    l->n++;
+    return SG_OK;
+}
+
+static int parse_nm(agf_ctx *cx, const agf_line *ln, glass_list *l,
+                    const char *catname, int *has_cd)
+{
+    sg_glass *g;
+    double f;
+    size_t i;
+    char q[48];
+    int rc;
+
+    if (ln->ntok < 2)
+        return agf_err(cx, "NM line without a glass name");
+    if (ln->len[1] >= SG_GLASS_NAME) {
+        tok_quote(ln, 1, q, sizeof q);
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: glass name longer than %d characters: %s",
+                           cx->path, cx->line, SG_GLASS_NAME - 1, q);
+    }
+    rc = list_push(l);
+    if (rc == SG_ERANGE)
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: more than %d glasses in one file",
+                           cx->path, cx->line, AGF_MAX_GLASSES);
+    if (rc)
+        return sg_diag_set(cx->d, rc, "%s: out of memory", cx->path);
+    g = &l->g[l->n - 1];
+    l->nm_line[l->n - 1] = cx->line;
+    for (i = 0; i < ln->len[1]; i++)
+        g->name[i] = (char)ascii_upper((unsigned char)ln->tok[1][i]);
+    g->name[i] = '\0';
+    sg_strlcpy(g->catalog, catname, sizeof g->catalog);
+    g->lmin = 0.0;
+    g->lmax = INFINITY;
+
+    rc = tok_number(cx, ln, 2, "formula number", &f);
+    if (rc)
+        return rc;
+    if (f != floor(f) || f < SG_FORMULA_SCHOTT || f > SG_FORMULA_EXTENDED3) {
+        tok_quote(ln, 2, q, sizeof q);
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: glass %s: unknown dispersion formula %s "
+                           "(expected 1..13)",
+                           cx->path, cx->line, g->name, q);
+    }
+    g->formula = (int)f;
+    /* Field 3 is the MIL code, which may carry text; it is not needed. */
+    if (ln->ntok < 4)
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: glass %s: missing MIL code", cx->path,
+                           cx->line, g->name);
+    rc = tok_number(cx, ln, 4, "nd", &g->nd);
+    if (rc)
+        return rc;
+    rc = tok_number(cx, ln, 5, "vd", &g->vd);
+    if (rc)
+        return rc;
+    *has_cd = 0;
+    return SG_OK;
+}
+
+static int parse_cd(agf_ctx *cx, const agf_line *ln, sg_glass *g)
+{
+    int k, rc;
+    if (ln->ntok - 1 > SG_GLASS_NCOEF)
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: glass %s: %d coefficients, at most %d "
+                           "allowed",
+                           cx->path, cx->line, g->name, ln->ntok - 1,
+                           SG_GLASS_NCOEF);
+    memset(g->c, 0, sizeof g->c);
+    for (k = 1; k < ln->ntok; k++) {
+        char what[40];
+        snprintf(what, sizeof what, "CD coefficient %d", k);
+        rc = tok_number(cx, ln, k, what, &g->c[k - 1]);
+        if (rc)
+            return rc;
+    }
+    return SG_OK;
+}
+
+static int parse_ld(agf_ctx *cx, const agf_line *ln, sg_glass *g)
+{
+    double a, b;
+    int rc;
+    if (ln->ntok != 3)
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: glass %s: LD line needs 2 numbers, has %d",
+                           cx->path, cx->line, g->name, ln->ntok - 1);
+    rc = tok_number(cx, ln, 1, "LD minimum wavelength", &a);
+    if (rc)
+        return rc;
+    rc = tok_number(cx, ln, 2, "LD maximum wavelength", &b);
+    if (rc)
+        return rc;
+    if (!(a > 0.0 && a <= b))
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: glass %s: LD range %g..%g is not a "
+                           "positive interval",
+                           cx->path, cx->line, g->name, a, b);
+    g->lmin = a;
+    g->lmax = b;
+    return SG_OK;
+}
+
+/* Rejects bytes that never occur in a text catalog.  Bytes >= 0x80 are
+ * allowed: comment lines often carry Latin-1 or UTF-8 text. */
+static int check_text(agf_ctx *cx, const char *s, size_t n)
+{
+    size_t i;
+    long line = 1;
+    for (i = 0; i < n; i++) {
+        unsigned char c = (unsigned char)s[i];
+        if (c == '\n' || (c == '\r' && (i + 1 >= n || s[i + 1] != '\n')))
+            line++;
+        else if (c < 0x20 && c != '\t' && c != '\r' && !is_space(c))
+            return sg_diag_set(cx->d, SG_EPARSE,
+                               "%s:%ld: binary byte 0x%02X: not a text AGF "
+                               "catalog",
+                               cx->path, line, c);
+        else if (c == 0x7F)
+            return sg_diag_set(cx->d, SG_EPARSE,
+                               "%s:%ld: binary byte 0x7F: not a text AGF "
+                               "catalog",
+                               cx->path, line);
+    }
+    return SG_OK;
+}
+
+/* Turns UTF-16 text (after its byte-order mark) into ASCII in place; code
+ * units outside ASCII become '?', which only comments contain. */
+static int utf16_to_ascii(agf_ctx *cx, char *buf, size_t *len, int little)
+{
+    size_t i, n = *len, j = 0;
+    if (n % 2)
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s: odd number of bytes in a UTF-16 file",
+                           cx->path);
+    for (i = 2; i + 1 < n; i += 2) {
+        unsigned lo = (unsigned char)buf[i + (little ? 0 : 1)];
+        unsigned hi = (unsigned char)buf[i + (little ? 1 : 0)];
+        unsigned u = lo | hi << 8;
+        buf[j++] = u < 0x80 ? (char)u : '?';
+    }
+    *len = j;
+    return SG_OK;
+}
+
+static int read_file(const char *path, char **out, size_t *outlen, sg_diag *d)
+{
+    FILE *f;
+    char *buf = NULL;
+    size_t len = 0, cap = 0;
+    int err;
+
+    *out = NULL;
+    *outlen = 0;
+    f = fopen(path, "rb");
+    if (!f)
+        return sg_diag_set(d, SG_EIO, "%s: cannot open: %s", path,
+                           strerror(errno));
+    for (;;) {
+        size_t got;
+        if (len == cap) {
+            /* The buffer stops one byte past the limit, so a file that
+             * fills it is too large without reading any further. */
+            size_t ncap = cap ? 2 * cap : 65536;
+            char *p;
+            if (ncap > AGF_MAX_BYTES + 1)
+                ncap = AGF_MAX_BYTES + 1;
+            if (cap > AGF_MAX_BYTES) {
+                free(buf);
+                fclose(f);
+                return sg_diag_set(d, SG_EIO,
+                                   "%s: larger than %zu MiB; not a glass "
+                                   "catalog",
+                                   path, AGF_MAX_BYTES >> 20);
+            }
+            p = realloc(buf, ncap + 1);
+            if (!p) {
+                free(buf);
+                fclose(f);
+                return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", path);
+            }
+            buf = p;
+            cap = ncap;
+        }
+        got = fread(buf + len, 1, cap - len, f);
+        len += got;
+        if (got == 0)
+            break;
+    }
+    err = ferror(f) ? errno : 0;
+    fclose(f);
+    if (err || len > AGF_MAX_BYTES) {
+        free(buf);
+        if (err)
+            return sg_diag_set(d, SG_EIO, "%s: read error: %s", path,
+                               strerror(err));
+        return sg_diag_set(d, SG_EIO,
+                           "%s: larger than %zu MiB; not a glass catalog",
+                           path, AGF_MAX_BYTES >> 20);
+    }
+    buf[len] = '\0';
+    *out = buf;
+    *outlen = len;
+    return SG_OK;
+}
+
+/* The file stem, upper-cased: "/x/Schott.agf" gives "SCHOTT". */
+static void catalog_name(const char *path, char *name, size_t n)
+{
+    const char *base = strrchr(path, '/');
+    const char *dot;
+    size_t len, i;
+    base = base ? base + 1 : path;
+    dot = strrchr(base, '.');
+    len = dot && dot != base ? (size_t)(dot - base) : strlen(base);
+    if (len >= n)
+        len = n - 1;
+    for (i = 0; i < len; i++)
+        name[i] = (char)ascii_upper((unsigned char)base[i]);
+    name[len] = '\0';
+}
+
+static int parse_text(agf_ctx *cx, const char *s, size_t n, glass_list *l,
+                      const char *catname)
+{
+    size_t pos = 0;
+    int has_cd = 0, rc;
+    agf_line ln;
+
+    cx->line = 0;
+    while (pos < n) {
+        size_t start = pos, end;
+        while (pos < n && s[pos] != '\n' && s[pos] != '\r')
+            pos++;
+        end = pos;
+        /* A line ends at LF, CRLF or a lone CR. */
+        if (pos < n && s[pos] == '\r') {
+            pos++;
+            if (pos < n && s[pos] == '\n')
+                pos++;
+        } else if (pos < n) {
+            pos++;
+        }
+        cx->line++;
+
+        split_line(s + start, end - start, &ln);
+        if (ln.ntok == 0)
+            continue;
+        if (tok_is(&ln, 0, "NM")) {
+            if (l->n > 0 && !has_cd)
+                return sg_diag_set(cx->d, SG_EPARSE,
+                                   "%s:%ld: glass %s has no CD line",
+                                   cx->path, l->nm_line[l->n - 1],
+                                   l->g[l->n - 1].name);
+            rc = parse_nm(cx, &ln, l, catname, &has_cd);
+        } else if (tok_is(&ln, 0, "CD")) {
+            if (l->n == 0)
+                return agf_err(cx, "CD line before any NM line");
+            rc = parse_cd(cx, &ln, &l->g[l->n - 1]);
+            has_cd = 1;
+        } else if (tok_is(&ln, 0, "LD")) {
+            if (l->n == 0)
+                return agf_err(cx, "LD line before any NM line");
+            rc = parse_ld(cx, &ln, &l->g[l->n - 1]);
+        } else {
+            /* CC, ED, TD, OD, IT, GC, BD and anything newer carry data
+             * the ray trace does not use. */
+            rc = SG_OK;
+        }
+        if (rc)
+            return rc;
+    }
+    if (l->n == 0)
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: no NM line: not an AGF glass catalog",
+                           cx->path, cx->line > 0 ? cx->line : 1L);
+    if (!has_cd)
+        return sg_diag_set(cx->d, SG_EPARSE, "%s:%ld: glass %s has no CD line",
+                           cx->path, l->nm_line[l->n - 1], l->g[l->n - 1].name);
+    return SG_OK;
+}
+
+int sg_catalog_load_agf(sg_catalog *cat, const char *path, sg_diag *d)
+{
+    char *buf = NULL;
+    size_t len = 0, i;
+    char catname[SG_GLASS_NAME];
+    glass_list l = {NULL, 0, 0, NULL};
+    agf_ctx cx;
+    const char *text;
+    locale_t cloc, old = (locale_t)0;
+    int rc;
+
+    if (!cat || !path)
+        return sg_diag_set(d, SG_EINVAL, "sg_catalog_load_agf: NULL argument");
+    cx.path = path;
+    cx.line = 0;
+    cx.d = d;
+
+    rc = read_file(path, &buf, &len, d);
+    if (rc)
+        return rc;
+    text = buf;
+    if (len >= 2 && (unsigned char)buf[0] == 0xFF &&
+        (unsigned char)buf[1] == 0xFE)
+        rc = utf16_to_ascii(&cx, buf, &len, 1);
+    else if (len >= 2 && (unsigned char)buf[0] == 0xFE &&
+             (unsigned char)buf[1] == 0xFF)
+        rc = utf16_to_ascii(&cx, buf, &len, 0);
+    else if (len >= 3 && (unsigned char)buf[0] == 0xEF &&
+             (unsigned char)buf[1] == 0xBB && (unsigned char)buf[2] == 0xBF) {
+        text = buf + 3;
+        len -= 3;
+    }
+    if (!rc)
+        rc = check_text(&cx, text, len);
+    if (rc) {
+        free(buf);
+        return rc;
+    }
+
+    /* Catalog numbers use '.', whatever LC_NUMERIC the program set; the
+     * C locale is installed for this thread only while parsing. */
+    cloc = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
+    if (cloc)
+        old = uselocale(cloc);
+    catalog_name(path, catname, sizeof catname);
+    rc = parse_text(&cx, text, len, &l, catname);
+    if (cloc) {
+        uselocale(old);
+        freelocale(cloc);
+    }
+    free(buf);
+
+    for (i = 0; rc == SG_OK && i < l.n; i++) {
+        rc = catalog_put(cat, &l.g[i]);
+        if (rc)
+            sg_diag_set(d, rc, "%s: out of memory", path);
+    }
+    free(l.g);
+    free(l.nm_line);
+    return rc;
+}
+
+static int has_agf_suffix(const char *name)
+{
+    size_t n = strlen(name);
+    return n > 4 && name[n - 4] == '.' &&
+           ascii_upper((unsigned char)name[n - 3]) == 'A' &&
+           ascii_upper((unsigned char)name[n - 2]) == 'G' &&
+           ascii_upper((unsigned char)name[n - 1]) == 'F';
+}
+
+static int cmp_names(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static char *dup_string(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *p = malloc(n);
+    if (p)
+        memcpy(p, s, n);
+    return p;
+}
+
+int sg_catalog_load_dir(sg_catalog *cat, const char *dir, sg_diag *d)
+{
+    DIR *dp;
+    struct dirent *e;
+    char **names = NULL;
+    size_t n = 0, cap = 0, i;
+    int rc = SG_OK;
+
+    if (!cat || !dir)
+        return sg_diag_set(d, SG_EINVAL, "sg_catalog_load_dir: NULL argument");
+    dp = opendir(dir);
+    if (!dp)
+        return sg_diag_set(d, SG_EIO, "%s: cannot open directory: %s", dir,
+                           strerror(errno));
+    while ((e = readdir(dp)) != NULL) {
+        if (!has_agf_suffix(e->d_name))
+            continue;
+        if (n == cap) {
+            size_t ncap = cap ? 2 * cap : 16;
+            char **p = realloc(names, ncap * sizeof *p);
+            if (!p) {
+                rc = SG_ENOMEM;
+                break;
+            }
+            names = p;
+            cap = ncap;
+        }
+        names[n] = dup_string(e->d_name);
+        if (!names[n]) {
+            rc = SG_ENOMEM;
+            break;
+        }
+        n++;
+    }
+    closedir(dp);
+    if (rc)
+        sg_diag_set(d, rc, "%s: out of memory", dir);
+    else
+        qsort(names, n, sizeof *names, cmp_names);
+
+    for (i = 0; rc == SG_OK && i < n; i++) {
+        size_t len = strlen(dir) + strlen(names[i]) + 2;
+        char *path = malloc(len);
+        struct stat st;
+        if (!path) {
+            rc = sg_diag_set(d, SG_ENOMEM, "%s: out of memory", dir);
+            break;
+        }
+        snprintf(path, len, "%s/%s", dir, names[i]);
+        /* A directory or device that happens to end in .agf is skipped. */
+        if (stat(path, &st) == 0 && S_ISREG(st.st_mode))
+            rc = sg_catalog_load_agf(cat, path, d);
+        free(path);
+    }
+    for (i = 0; i < n; i++)
+        free(names[i]);
+    free(names);
+    if (rc == SG_OK && n == 0)
+        sg_diag_warn(d, "%s: no .agf catalog files", dir);
+    return rc;
+}
+
+static int is_dir(const char *p)
+{
+    struct stat st;
+    return p && *p && stat(p, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+int sg_catalog_load_default(sg_catalog *cat, sg_diag *d)
+{
+    const char *env, *use = NULL;
+    char *copy;
+
+    if (!cat)
+        return sg_diag_set(d, SG_EINVAL,
+                           "sg_catalog_load_default: NULL catalog");
+    env = getenv("SAGITTA_LENSDB");
+    if (env && *env) {
+        if (is_dir(env))
+            use = env;
+        else
+            sg_diag_warn(d, "SAGITTA_LENSDB=%s is not a directory; ignored",
+                         env);
+    }
+    if (!use && is_dir(SG_SOURCE_LENSDB))
+        use = SG_SOURCE_LENSDB;
+    if (!use && is_dir(SG_INSTALL_LENSDB))
+        use = SG_INSTALL_LENSDB;
+    if (!use)
+        return sg_diag_set(d, SG_EIO,
+                           "no glass catalog directory found (tried "
+                           "$SAGITTA_LENSDB=%s, %s, %s)",
+                           env && *env ? env : "(unset)", SG_SOURCE_LENSDB,
+                           SG_INSTALL_LENSDB);
+    copy = dup_string(use);
+    if (!copy)
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    free(cat->dir);
+    cat->dir = copy;
+    return sg_catalog_load_dir(cat, use, d);
+}

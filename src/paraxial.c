@@ -1,0 +1,411 @@
+/*
+ * paraxial.c - the y-nu paraxial trace.
+ *
+ * It runs in MPFR at a chosen precision.  The launch of every real ray
+ * depends on the entrance pupil's place and size, so the precise method
+ * takes them from a 128-bit run and the mpfr method from a run at its own
+ * precision; a double y-nu trace would put a rounding error into the very
+ * first surface.  Mirrors follow the signed-index convention n' = -n, with
+ * negative thicknesses after them, so one set of formulas serves both.
+ */
+#include <math.h>
+#include <stdlib.h>
+
+#include "trace_internal.h"
+
+typedef struct yn {
+    mpfr_t y, w; /* height and reduced angle n u */
+} yn;
+
+typedef struct pctx {
+    const sg_system *sys;
+    mpfr_t *idx;
+    mpfr_t *phi; /* power of each surface */
+    mpfr_t a, b;
+} pctx;
+
+static void yn_init(yn *r, mpfr_prec_t p)
+{
+    mpfr_init2(r->y, p);
+    mpfr_init2(r->w, p);
+}
+
+static void yn_clear(yn *r)
+{
+    mpfr_clear(r->y);
+    mpfr_clear(r->w);
+}
+
+/* Refracts at surfaces first..last and transfers between them; the ray
+ * ends just after surface last, at its vertex plane. */
+static void trace(pctx *c, yn *r, int first, int last)
+{
+    int j;
+    for (j = first; j <= last; j++) {
+        if (j > first) {
+            /* y += t w / n over the gap from j-1 to j */
+            mpfr_mul_d(c->a, r->w, c->sys->surf[j - 1].thickness, MPFR_RNDN);
+            mpfr_div(c->a, c->a, c->idx[j - 1], MPFR_RNDN);
+            mpfr_add(r->y, r->y, c->a, MPFR_RNDN);
+        }
+        mpfr_mul(c->a, r->y, c->phi[j], MPFR_RNDN);
+        mpfr_sub(r->w, r->w, c->a, MPFR_RNDN);
+    }
+}
+
+/* Height after moving the ray that left surface j by distance dist. */
+static void transfer(pctx *c, mpfr_t out, const yn *r, int j, const mpfr_t dist)
+{
+    mpfr_mul(c->a, r->w, dist, MPFR_RNDN);
+    mpfr_div(c->a, c->a, c->idx[j], MPFR_RNDN);
+    mpfr_add(out, r->y, c->a, MPFR_RNDN);
+}
+
+void sg_parax_mp_init(sg_parax_mp *p, mpfr_prec_t prec)
+{
+    mpfr_inits2(prec, p->efl, p->bfl, p->image_dist, p->epd, p->enp, p->exp_diam,
+                p->exp_pos, p->image_fnum, p->working_fnum, p->object_na, p->pimg_h,
+                p->mag, p->track, p->stop_r, p->pimg_slope, (mpfr_ptr)0);
+}
+
+void sg_parax_mp_clear(sg_parax_mp *p)
+{
+    mpfr_clears(p->efl, p->bfl, p->image_dist, p->epd, p->enp, p->exp_diam, p->exp_pos,
+                p->image_fnum, p->working_fnum, p->object_na, p->pimg_h, p->mag, p->track,
+                p->stop_r, p->pimg_slope, (mpfr_ptr)0);
+}
+
+/* Largest field in the system's normalization, for the y direction. */
+static void field_max(const sg_system *sys, mpfr_t out)
+{
+    mpfr_t t;
+    int k;
+    mpfr_init2(t, mpfr_get_prec(out));
+    mpfr_set_zero(out, 1);
+    for (k = 0; k < sys->nfield; k++) {
+        if (sys->field_norm == SG_NORM_RADIAL) {
+            mpfr_set_d(t, sys->field[k].x, MPFR_RNDN);
+            mpfr_sqr(t, t, MPFR_RNDN);
+            {
+                mpfr_t v;
+                mpfr_init2(v, mpfr_get_prec(out));
+                mpfr_set_d(v, sys->field[k].y, MPFR_RNDN);
+                mpfr_sqr(v, v, MPFR_RNDN);
+                mpfr_add(t, t, v, MPFR_RNDN);
+                mpfr_sqrt(t, t, MPFR_RNDN);
+                mpfr_clear(v);
+            }
+        } else {
+            mpfr_set_d(t, fabs(sys->field[k].y), MPFR_RNDN);
+        }
+        mpfr_max(out, out, t, MPFR_RNDN);
+    }
+    mpfr_clear(t);
+}
+
+int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
+                     sg_parax_mp *o, sg_diag *d)
+{
+    pctx c;
+    yn r, m, ch;
+    mpfr_t A, B, T0, t1, t2, epr, u0;
+    int n = sys->nsurf, last = n - 2, stop = sys->stop, j, rc = SG_OK;
+    int inf_obj = !isfinite(sys->surf[0].thickness);
+    double tlast = sys->surf[n - 2].thickness;
+
+    c.sys = sys;
+    c.idx = idx;
+    c.phi = calloc((size_t)n, sizeof *c.phi);
+    if (!c.phi)
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    mpfr_inits2(prec, c.a, c.b, A, B, T0, t1, t2, epr, u0, (mpfr_ptr)0);
+    yn_init(&r, prec);
+    yn_init(&m, prec);
+    yn_init(&ch, prec);
+    for (j = 0; j < n; j++) {
+        double R = sys->surf[j].radius;
+        mpfr_init2(c.phi[j], prec);
+        if (j == 0 || R == 0.0 || isinf(R)) {
+            mpfr_set_zero(c.phi[j], 1);
+        } else {
+            mpfr_sub(c.phi[j], idx[j], idx[j - 1], MPFR_RNDN);
+            mpfr_div_d(c.phi[j], c.phi[j], R, MPFR_RNDN);
+        }
+    }
+    if (!inf_obj)
+        mpfr_set_d(T0, sys->surf[0].thickness, MPFR_RNDN);
+
+    /* A and B: stop heights of (y=1, u=0) and (y=0, u=1) from surface 1. */
+    mpfr_set_ui(r.y, 1, MPFR_RNDN);
+    mpfr_set_zero(r.w, 1);
+    trace(&c, &r, 1, stop);
+    mpfr_set(A, r.y, MPFR_RNDN);
+    mpfr_set_zero(r.y, 1);
+    mpfr_set(r.w, idx[0], MPFR_RNDN);
+    trace(&c, &r, 1, stop);
+    mpfr_set(B, r.y, MPFR_RNDN);
+    if (mpfr_zero_p(A)) {
+        rc = sg_diag_set(d, SG_ENONPHYS,
+                         "the entrance pupil is at infinity (the stop on surface %d is "
+                         "imaged to infinity in object space)", stop);
+        goto out;
+    }
+    mpfr_div(o->enp, B, A, MPFR_RNDN);
+
+    /* EFL and BFL from a unit parallel ray. */
+    mpfr_set_ui(r.y, 1, MPFR_RNDN);
+    mpfr_set_zero(r.w, 1);
+    trace(&c, &r, 1, last);
+    if (mpfr_zero_p(r.w)) {
+        mpfr_set_inf(o->efl, 1);
+        mpfr_set_inf(o->bfl, 1);
+    } else {
+        mpfr_ui_div(o->efl, 1, r.w, MPFR_RNDN);
+        mpfr_neg(o->efl, o->efl, MPFR_RNDN);
+        /* bfl = -y / u with u = w / n */
+        mpfr_mul(o->bfl, r.y, idx[last], MPFR_RNDN);
+        mpfr_div(o->bfl, o->bfl, r.w, MPFR_RNDN);
+        mpfr_neg(o->bfl, o->bfl, MPFR_RNDN);
+    }
+
+    /* Entrance pupil radius from the aperture definition. */
+    switch (sys->aper_type) {
+    case SG_APER_EPD:
+        mpfr_set_d(epr, sys->aper_value, MPFR_RNDN);
+        mpfr_div_2ui(epr, epr, 1, MPFR_RNDN);
+        break;
+    case SG_APER_IMAGE_FNUM:
+        if (!mpfr_number_p(o->efl)) {
+            rc = sg_diag_set(d, SG_ENONPHYS, "aperture: image F/# needs a finite focal length");
+            goto out;
+        }
+        mpfr_abs(epr, o->efl, MPFR_RNDN);
+        mpfr_div_d(epr, epr, 2.0 * sys->aper_value, MPFR_RNDN);
+        break;
+    case SG_APER_OBJECT_NA:
+        if (inf_obj) {
+            rc = sg_diag_set(d, SG_ENONPHYS,
+                             "aperture: object-space NA needs an object at a finite distance");
+            goto out;
+        }
+        /* epr = (enp + T0) tan(asin(NA / n0)) */
+        mpfr_set_d(t1, sys->aper_value, MPFR_RNDN);
+        mpfr_abs(t2, idx[0], MPFR_RNDN);
+        mpfr_div(t1, t1, t2, MPFR_RNDN);
+        if (mpfr_cmp_ui(t1, 1) >= 0) {
+            rc = sg_diag_set(d, SG_ERANGE, "aperture: object NA %g exceeds the object index",
+                             sys->aper_value);
+            goto out;
+        }
+        mpfr_asin(t1, t1, MPFR_RNDN);
+        mpfr_tan(t1, t1, MPFR_RNDN);
+        mpfr_add(t2, o->enp, T0, MPFR_RNDN);
+        mpfr_abs(t2, t2, MPFR_RNDN);
+        mpfr_mul(epr, t1, t2, MPFR_RNDN);
+        break;
+    case SG_APER_FLOAT_STOP:
+        if (!(sys->surf[stop].semi_diameter > 0.0)) {
+            rc = sg_diag_set(d, SG_ERANGE,
+                             "aperture: float by stop size needs a semi-diameter on the stop "
+                             "(surface %d)", stop);
+            goto out;
+        }
+        mpfr_set_d(epr, sys->surf[stop].semi_diameter, MPFR_RNDN);
+        mpfr_abs(t1, A, MPFR_RNDN);
+        mpfr_div(epr, epr, t1, MPFR_RNDN);
+        break;
+    case SG_APER_PARAX_WORKING_FNUM:
+        /* Working F/# is inversely proportional to the pupil radius. */
+        if (inf_obj) {
+            mpfr_set_ui(m.y, 1, MPFR_RNDN);
+            mpfr_set_zero(m.w, 1);
+        } else {
+            mpfr_add(t2, o->enp, T0, MPFR_RNDN);
+            mpfr_ui_div(u0, 1, t2, MPFR_RNDN);
+            mpfr_mul(m.y, u0, T0, MPFR_RNDN);
+            mpfr_mul(m.w, u0, idx[0], MPFR_RNDN);
+        }
+        trace(&c, &m, 1, last);
+        if (mpfr_zero_p(m.w)) {
+            rc = sg_diag_set(d, SG_ENONPHYS, "aperture: the system is afocal; working F/# "
+                                             "is undefined");
+            goto out;
+        }
+        mpfr_abs(t1, m.w, MPFR_RNDN);
+        mpfr_mul_2ui(t1, t1, 1, MPFR_RNDN);
+        mpfr_ui_div(t1, 1, t1, MPFR_RNDN); /* W at unit pupil radius */
+        mpfr_div_d(epr, t1, sys->aper_value, MPFR_RNDN);
+        break;
+    }
+    if (!(mpfr_number_p(epr) && mpfr_sgn(epr) > 0)) {
+        rc = sg_diag_set(d, SG_ENONPHYS, "aperture: the entrance pupil diameter is not "
+                                         "positive and finite");
+        goto out;
+    }
+    mpfr_mul_2ui(o->epd, epr, 1, MPFR_RNDN);
+    mpfr_mul(o->stop_r, epr, A, MPFR_RNDN);
+    mpfr_abs(o->stop_r, o->stop_r, MPFR_RNDN);
+
+    /* The marginal ray. */
+    if (inf_obj) {
+        mpfr_set(m.y, epr, MPFR_RNDN);
+        mpfr_set_zero(m.w, 1);
+        mpfr_set_zero(u0, 1);
+    } else {
+        mpfr_add(t2, o->enp, T0, MPFR_RNDN);
+        mpfr_div(u0, epr, t2, MPFR_RNDN);
+        mpfr_mul(m.y, u0, T0, MPFR_RNDN);
+        mpfr_mul(m.w, u0, idx[0], MPFR_RNDN);
+    }
+    {
+        mpfr_t w0;
+        mpfr_init2(w0, prec);
+        mpfr_set(w0, m.w, MPFR_RNDN);
+        trace(&c, &m, 1, last);
+        if (mpfr_zero_p(m.w)) {
+            mpfr_set_inf(o->image_dist, 1);
+            mpfr_set_inf(o->working_fnum, 1);
+            mpfr_set_zero(o->mag, 1);
+        } else {
+            mpfr_mul(o->image_dist, m.y, idx[last], MPFR_RNDN);
+            mpfr_div(o->image_dist, o->image_dist, m.w, MPFR_RNDN);
+            mpfr_neg(o->image_dist, o->image_dist, MPFR_RNDN);
+            mpfr_abs(t1, m.w, MPFR_RNDN);
+            mpfr_mul_2ui(t1, t1, 1, MPFR_RNDN);
+            mpfr_ui_div(o->working_fnum, 1, t1, MPFR_RNDN);
+            if (inf_obj)
+                mpfr_set_zero(o->mag, 1);
+            else
+                mpfr_div(o->mag, w0, m.w, MPFR_RNDN);
+        }
+        mpfr_clear(w0);
+    }
+    if (inf_obj) {
+        mpfr_set_zero(o->object_na, 1);
+    } else {
+        mpfr_atan(t1, u0, MPFR_RNDN);
+        mpfr_sin(t1, t1, MPFR_RNDN);
+        mpfr_abs(t1, t1, MPFR_RNDN);
+        mpfr_abs(t2, idx[0], MPFR_RNDN);
+        mpfr_mul(o->object_na, t1, t2, MPFR_RNDN);
+    }
+    if (mpfr_number_p(o->efl)) {
+        mpfr_abs(t1, o->efl, MPFR_RNDN);
+        mpfr_div(o->image_fnum, t1, o->epd, MPFR_RNDN);
+    } else {
+        mpfr_set_inf(o->image_fnum, 1);
+    }
+
+    /* The chief ray through the pupil centre with unit slope (or from a
+     * unit object height), for the exit pupil and image heights. */
+    if (inf_obj) {
+        mpfr_neg(ch.y, o->enp, MPFR_RNDN);
+        mpfr_set(ch.w, idx[0], MPFR_RNDN);
+    } else {
+        /* From (h = 1, z = -T0) towards (0, enp): slope -1 / (enp + T0). */
+        mpfr_add(t2, o->enp, T0, MPFR_RNDN);
+        mpfr_si_div(t1, -1, t2, MPFR_RNDN);
+        mpfr_mul(ch.y, t1, T0, MPFR_RNDN);
+        mpfr_add_ui(ch.y, ch.y, 1, MPFR_RNDN);
+        mpfr_mul(ch.w, t1, idx[0], MPFR_RNDN);
+    }
+    trace(&c, &ch, 1, last);
+    mpfr_set_d(t1, tlast, MPFR_RNDN);
+    transfer(&c, o->pimg_slope, &ch, last, t1);
+    if (mpfr_zero_p(ch.w)) {
+        mpfr_set_inf(o->exp_pos, 1);
+        mpfr_set_inf(o->exp_diam, 1);
+    } else {
+        /* z of the axis crossing after the last surface */
+        mpfr_mul(t2, ch.y, idx[last], MPFR_RNDN);
+        mpfr_div(t2, t2, ch.w, MPFR_RNDN);
+        mpfr_neg(t2, t2, MPFR_RNDN);
+        transfer(&c, o->exp_diam, &m, last, t2);
+        mpfr_abs(o->exp_diam, o->exp_diam, MPFR_RNDN);
+        mpfr_mul_2ui(o->exp_diam, o->exp_diam, 1, MPFR_RNDN);
+        mpfr_sub_d(o->exp_pos, t2, tlast, MPFR_RNDN);
+    }
+
+    /* Paraxial image height of the largest field. */
+    field_max(sys, t1);
+    switch (sys->field_type) {
+    case SG_FIELD_ANGLE:
+        mpfr_const_pi(t2, MPFR_RNDN);
+        mpfr_mul(t1, t1, t2, MPFR_RNDN);
+        mpfr_div_ui(t1, t1, 180, MPFR_RNDN);
+        mpfr_tan(t1, t1, MPFR_RNDN);
+        mpfr_mul(o->pimg_h, t1, o->pimg_slope, MPFR_RNDN);
+        break;
+    case SG_FIELD_OBJECT_HEIGHT:
+        mpfr_mul(o->pimg_h, t1, o->pimg_slope, MPFR_RNDN);
+        break;
+    default:
+        mpfr_set(o->pimg_h, t1, MPFR_RNDN);
+        break;
+    }
+
+    mpfr_set_zero(o->track, 1);
+    for (j = 1; j <= last; j++)
+        mpfr_add_d(o->track, o->track, sys->surf[j].thickness, MPFR_RNDN);
+
+out:
+    for (j = 0; j < n; j++)
+        mpfr_clear(c.phi[j]);
+    free(c.phi);
+    yn_clear(&r);
+    yn_clear(&m);
+    yn_clear(&ch);
+    mpfr_clears(c.a, c.b, A, B, T0, t1, t2, epr, u0, (mpfr_ptr)0);
+    return rc;
+}
+
+void sg_parax_to_double(const sg_parax_mp *p, sg_paraxial *o)
+{
+    o->efl = mpfr_get_d(p->efl, MPFR_RNDN);
+    o->bfl = mpfr_get_d(p->bfl, MPFR_RNDN);
+    o->image_dist = mpfr_get_d(p->image_dist, MPFR_RNDN);
+    o->epd = mpfr_get_d(p->epd, MPFR_RNDN);
+    o->enp_pos = mpfr_get_d(p->enp, MPFR_RNDN);
+    o->exp_diam = mpfr_get_d(p->exp_diam, MPFR_RNDN);
+    o->exp_pos = mpfr_get_d(p->exp_pos, MPFR_RNDN);
+    o->image_fnum = mpfr_get_d(p->image_fnum, MPFR_RNDN);
+    o->working_fnum = mpfr_get_d(p->working_fnum, MPFR_RNDN);
+    o->object_na = mpfr_get_d(p->object_na, MPFR_RNDN);
+    o->parax_image_height = mpfr_get_d(p->pimg_h, MPFR_RNDN);
+    o->magnification = mpfr_get_d(p->mag, MPFR_RNDN);
+    o->total_track = mpfr_get_d(p->track, MPFR_RNDN);
+    o->stop_radius = mpfr_get_d(p->stop_r, MPFR_RNDN);
+}
+
+int sg_paraxial_compute(const sg_system *sys, const sg_catalog *cat, int wave,
+                        sg_paraxial *out, sg_diag *d)
+{
+    mpfr_t *idx;
+    sg_parax_mp p;
+    int i, rc;
+    rc = sg_system_validate(sys, cat, d);
+    if (rc != SG_OK)
+        return rc;
+    if (wave < 0)
+        wave = sys->primary_wave;
+    if (wave >= sys->nwave)
+        return sg_diag_set(d, SG_ERANGE, "wavelength %d is not one of 1 to %d", wave + 1,
+                           sys->nwave);
+    idx = calloc((size_t)sys->nsurf, sizeof *idx);
+    if (!idx)
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    for (i = 0; i < sys->nsurf; i++)
+        mpfr_init2(idx[i], 128);
+    rc = sg_indices_mpfr(sys, cat, wave, idx, d);
+    if (rc == SG_OK) {
+        sg_parax_mp_init(&p, 128);
+        rc = sg_paraxial_mpfr(sys, idx, 128, &p, d);
+        if (rc == SG_OK)
+            sg_parax_to_double(&p, out);
+        sg_parax_mp_clear(&p);
+    }
+    for (i = 0; i < sys->nsurf; i++)
+        mpfr_clear(idx[i]);
+    free(idx);
+    return rc;
+}

@@ -1,0 +1,415 @@
+/*
+ * sagitta.h - the one public header of the sagitta ray-trace engine.
+ *
+ * The engine is a plain C11 library.  It never prints and never touches a
+ * terminal: every function that can fail returns an sg_err code, and where a
+ * message helps the user it also fills an sg_diag with text that names the
+ * file, line, column, surface or field at fault.
+ *
+ * Conventions follow Zemax sequential mode.  Surfaces are numbered 0 (object)
+ * to N (image).  Each surface has a local frame whose origin is its vertex and
+ * whose axes are parallel to the global frame; light enters travelling +z and
+ * thicknesses after a mirror are negative.  Lengths are in lens units (mm by
+ * default), wavelengths in micrometres.
+ */
+#ifndef SAGITTA_H
+#define SAGITTA_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SG_VERSION_MAJOR 0
+#define SG_VERSION_MINOR 1
+#define SG_VERSION_PATCH 0
+#define SG_VERSION_STRING "0.1.0"
+
+/* The JSON design format version this library reads and writes. */
+#define SG_DESIGN_FORMAT_VERSION 1
+
+/* ------------------------------------------------------------------------
+ * Errors.  One table yields the enum, the names and the messages, so the
+ * three can never drift apart.  Ray failures (a miss, TIR, vignetting) use
+ * the same codes because they are reported per surface as a status.
+ * ------------------------------------------------------------------------ */
+#define SG_ERRNO_MAP(X)                                                      \
+    X(OK, "success")                                                         \
+    X(NOMEM, "out of memory")                                                \
+    X(INVAL, "invalid argument")                                             \
+    X(IO, "input/output error")                                              \
+    X(PARSE, "malformed input")                                              \
+    X(RANGE, "value out of range")                                           \
+    X(NOGLASS, "unknown material")                                           \
+    X(NOSTOP, "no aperture stop")                                            \
+    X(TWOSTOPS, "more than one aperture stop")                               \
+    X(NOSYS, "system has too few surfaces")                                  \
+    X(NONPHYS, "nonphysical surface or system")                              \
+    X(MISS, "ray misses surface")                                            \
+    X(TIR, "total internal reflection")                                      \
+    X(VIGNETTED, "ray outside clear semi-diameter")                          \
+    X(NOCONV, "intersection did not converge")                               \
+    X(AIM, "ray aiming did not converge")                                    \
+    X(NOTREACHED, "surface not reached")                                     \
+    X(UNSUPPORTED, "unsupported feature")                                    \
+    X(WAVERANGE, "wavelength outside material range")
+
+typedef enum sg_err {
+#define SG_ERR_ENUM_(name, msg) SG_E##name,
+    SG_ERRNO_MAP(SG_ERR_ENUM_)
+#undef SG_ERR_ENUM_
+    SG_ERRNO_COUNT
+} sg_err;
+
+/* Success is not an error, so it reads without the E. */
+#define SG_OK SG_EOK
+
+/* Short message for a code; never NULL. */
+const char *sg_strerror(int err);
+/* Symbolic name for a code, e.g. "SG_EMISS"; never NULL. */
+const char *sg_err_name(int err);
+
+#define SG_DIAG_MSG 512
+#define SG_DIAG_MAXWARN 16
+
+/* Context for a failure: the first error, plus warnings that did not stop
+ * the operation (unknown keys, a wavelength outside a glass's range). */
+typedef struct sg_diag {
+    int code;                                 /* SG_OK or the error */
+    char msg[SG_DIAG_MSG];                    /* names file:line:col, surface or field */
+    int nwarn;                                /* warnings recorded (may exceed stored) */
+    char warn[SG_DIAG_MAXWARN][SG_DIAG_MSG];
+} sg_diag;
+
+void sg_diag_clear(sg_diag *d);
+/* Records an error (the first one wins) and returns code.  d may be NULL. */
+int sg_diag_set(sg_diag *d, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+/* Records a warning.  d may be NULL. */
+void sg_diag_warn(sg_diag *d, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* ------------------------------------------------------------------------
+ * Materials and catalogs
+ * ------------------------------------------------------------------------ */
+
+/* Dispersion formulas, numbered as Zemax AGF files number them. */
+typedef enum sg_formula {
+    SG_FORMULA_SCHOTT = 1,
+    SG_FORMULA_SELLMEIER1 = 2,
+    SG_FORMULA_HERZBERGER = 3,
+    SG_FORMULA_SELLMEIER2 = 4,
+    SG_FORMULA_CONRADY = 5,
+    SG_FORMULA_SELLMEIER3 = 6,
+    SG_FORMULA_HANDBOOK1 = 7,
+    SG_FORMULA_HANDBOOK2 = 8,
+    SG_FORMULA_SELLMEIER4 = 9,
+    SG_FORMULA_EXTENDED1 = 10,
+    SG_FORMULA_SELLMEIER5 = 11,
+    SG_FORMULA_EXTENDED2 = 12,
+    SG_FORMULA_EXTENDED3 = 13
+} sg_formula;
+
+#define SG_GLASS_NAME 32
+#define SG_GLASS_NCOEF 12
+
+typedef struct sg_glass {
+    char name[SG_GLASS_NAME];    /* upper case, e.g. "N-BK7" */
+    char catalog[SG_GLASS_NAME]; /* catalog file stem, e.g. "SCHOTT" */
+    int formula;                 /* sg_formula */
+    double c[SG_GLASS_NCOEF];    /* CD line coefficients, in file order */
+    double lmin, lmax;           /* valid range in um (LD line) */
+    double nd, vd;               /* catalog nd and Abbe number (NM line) */
+} sg_glass;
+
+typedef struct sg_catalog sg_catalog;
+
+sg_catalog *sg_catalog_new(void);
+void sg_catalog_free(sg_catalog *cat);
+/* Appends the glasses of one AGF file.  A later glass with the same name
+ * replaces an earlier one. */
+int sg_catalog_load_agf(sg_catalog *cat, const char *path, sg_diag *d);
+/* Loads every *.agf in a directory. */
+int sg_catalog_load_dir(sg_catalog *cat, const char *dir, sg_diag *d);
+/* Loads the bundled catalog: $SAGITTA_LENSDB, then the source tree's
+ * lensdb/ (so the program runs unbuilt and uninstalled), then the installed
+ * data directory.  The first directory that exists is used. */
+int sg_catalog_load_default(sg_catalog *cat, sg_diag *d);
+/* The directory sg_catalog_load_default() used, or NULL. */
+const char *sg_catalog_dir(const sg_catalog *cat);
+const sg_glass *sg_catalog_find(const sg_catalog *cat, const char *name);
+size_t sg_catalog_count(const sg_catalog *cat);
+const sg_glass *sg_catalog_at(const sg_catalog *cat, size_t i);
+
+/* Refractive index relative to air at wavelength um.  Returns NaN for an
+ * unknown formula or a non-positive n^2. */
+double sg_glass_index(const sg_glass *g, double um);
+int sg_glass_in_range(const sg_glass *g, double um);
+
+/* ------------------------------------------------------------------------
+ * The optical system
+ * ------------------------------------------------------------------------ */
+
+#define SG_NASPH 8        /* even asphere terms on r^2, r^4, ... r^16 */
+#define SG_MAX_WAVES 24
+#define SG_MAX_FIELDS 64
+#define SG_COMMENT 64
+#define SG_MAX_SURFACES 100000
+
+typedef enum sg_surf_type {
+    SG_SURF_STANDARD = 0, /* sphere, plane or conic */
+    SG_SURF_EVENASPH = 1  /* conic plus even polynomial in r */
+} sg_surf_type;
+
+typedef enum sg_mat_kind {
+    SG_MAT_AIR = 0,    /* index 1 (indices are relative to air) */
+    SG_MAT_MIRROR = 1, /* reflect; the medium after keeps the index before */
+    SG_MAT_GLASS = 2,  /* a catalog glass, by name */
+    SG_MAT_INDEX = 3   /* a fixed, non-dispersive index */
+} sg_mat_kind;
+
+typedef struct sg_material {
+    sg_mat_kind kind;
+    char name[SG_GLASS_NAME]; /* glass name for SG_MAT_GLASS */
+    double index;             /* for SG_MAT_INDEX */
+} sg_material;
+
+typedef struct sg_surface {
+    sg_surf_type type;
+    char comment[SG_COMMENT];
+    double radius;         /* +-inf (or 0 on input) means flat */
+    double thickness;      /* to the next vertex; +inf allowed on the object */
+    sg_material mat;       /* the medium after this surface */
+    double semi_diameter;  /* clear semi-diameter; 0 means not set */
+    int sd_fixed;          /* nonzero: rays beyond semi_diameter are vignetted */
+    double conic;
+    double asph[SG_NASPH]; /* coefficients of r^2, r^4, ..., r^16 */
+    /* Room for tilts and decenters: every frame change goes through one
+     * internal transfer function, which will read these once they exist. */
+} sg_surface;
+
+typedef enum sg_field_type {
+    SG_FIELD_ANGLE = 0,           /* degrees; direction ~ (tan x, tan y, 1) */
+    SG_FIELD_OBJECT_HEIGHT = 1,   /* lens units on the object surface */
+    SG_FIELD_PARAX_IMAGE_HEIGHT = 2,
+    SG_FIELD_REAL_IMAGE_HEIGHT = 3
+} sg_field_type;
+
+typedef enum sg_field_norm {
+    SG_NORM_RADIAL = 0,
+    SG_NORM_RECT = 1
+} sg_field_norm;
+
+typedef enum sg_aper_type {
+    SG_APER_EPD = 0,
+    SG_APER_IMAGE_FNUM = 1,
+    SG_APER_OBJECT_NA = 2,
+    SG_APER_FLOAT_STOP = 3,
+    SG_APER_PARAX_WORKING_FNUM = 4
+} sg_aper_type;
+
+typedef enum sg_aim {
+    SG_AIM_OFF = 0,      /* aim at the paraxial entrance pupil */
+    SG_AIM_PARAXIAL = 1, /* iterate onto the stop, paraxial stop size */
+    SG_AIM_REAL = 2      /* iterate onto the stop, real stop size */
+} sg_aim;
+
+typedef struct sg_wave {
+    double um;
+    double weight;
+} sg_wave;
+
+typedef struct sg_field {
+    double x, y;
+    double weight;
+} sg_field;
+
+typedef struct sg_system {
+    char title[128];
+    char units[8]; /* "mm", "cm", "in" or "m" */
+
+    int nwave;
+    int primary_wave; /* 0-based */
+    sg_wave wave[SG_MAX_WAVES];
+
+    sg_field_type field_type;
+    sg_field_norm field_norm;
+    int nfield;
+    sg_field field[SG_MAX_FIELDS];
+
+    sg_aper_type aper_type;
+    double aper_value;
+    sg_aim aim;
+
+    int stop; /* surface index of the aperture stop */
+    int nsurf;   /* surfaces 0..nsurf-1; object is 0, image is nsurf-1 */
+    int capsurf; /* allocated */
+    sg_surface *surf;
+} sg_system;
+
+/* A new system: object at infinity, stop on surface 1, image; one
+ * wavelength (0.5875618 um), one on-axis field, EPD 10. */
+sg_system *sg_system_new(void);
+void sg_system_free(sg_system *sys);
+/* A deep copy, or NULL when out of memory. */
+sg_system *sg_system_clone(const sg_system *sys);
+/* Copies src into dst, reusing dst's storage where it can. */
+int sg_system_assign(sg_system *dst, const sg_system *src);
+/* Sets every field to an empty system with n default surfaces (flat, air). */
+int sg_system_reset(sg_system *sys, int nsurf);
+/* Inserts a flat air surface before index at (1 <= at <= nsurf-1). */
+int sg_system_insert(sg_system *sys, int at);
+/* Deletes surface at (1 <= at <= nsurf-2); the stop moves with its rows. */
+int sg_system_delete(sg_system *sys, int at);
+void sg_surface_init(sg_surface *s);
+/* Checks what a trace needs: enough surfaces, one stop, finite values,
+ * known glasses (when cat is not NULL), wavelengths and fields.  The
+ * message names the surface and field at fault. */
+int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
+/* Curvature 1/R, 0 for a flat. */
+double sg_surface_curvature(const sg_surface *s);
+/* Sag z(x, y) in the surface's local frame; NaN outside the conic's domain. */
+double sg_surface_sag(const sg_surface *s, double x, double y);
+
+/* ------------------------------------------------------------------------
+ * JSON designs
+ * ------------------------------------------------------------------------ */
+
+/* Loads a design.  On failure the message reads "FILE:LINE:COL: ..." for
+ * syntax errors and "FILE: surface N: field: ..." for content errors. */
+int sg_design_load(sg_system *sys, const char *path, sg_diag *d);
+/* Parses a design held in memory; name is used in messages. */
+int sg_design_parse(sg_system *sys, const char *text, size_t len,
+                    const char *name, sg_diag *d);
+/* Writes a design atomically: a temporary file in the same directory,
+ * fsync, then rename.  A failure leaves any existing file intact. */
+int sg_design_save(const sg_system *sys, const char *path, sg_diag *d);
+/* The design as a NUL-terminated JSON text; free() it. */
+char *sg_design_to_json(const sg_system *sys);
+
+/* ------------------------------------------------------------------------
+ * Paraxial data (y-nu trace)
+ * ------------------------------------------------------------------------ */
+
+typedef struct sg_paraxial {
+    double efl;          /* effective focal length (image space) */
+    double bfl;          /* last surface to paraxial focus, for an infinite object */
+    double image_dist;   /* last surface to paraxial image of the object */
+    double epd;          /* entrance pupil diameter */
+    double enp_pos;      /* entrance pupil, measured from surface 1 */
+    double exp_diam;     /* exit pupil diameter */
+    double exp_pos;      /* exit pupil, measured from the image surface */
+    double image_fnum;   /* EFL / EPD */
+    double working_fnum; /* 1 / (2 n' |u'|) of the paraxial marginal ray */
+    double object_na;    /* n sin(U) of the paraxial marginal ray, finite object */
+    double parax_image_height; /* of the largest field */
+    double magnification;      /* paraxial lateral magnification; 0 at infinity */
+    double total_track;        /* surface 1 to image */
+    double stop_radius;        /* paraxial marginal height on the stop */
+} sg_paraxial;
+
+/* Paraxial data at wavelength index wave (0-based).  Mirrors follow the
+ * sign convention n' = -n. */
+int sg_paraxial_compute(const sg_system *sys, const sg_catalog *cat, int wave,
+                        sg_paraxial *out, sg_diag *d);
+
+/* ------------------------------------------------------------------------
+ * Ray tracing
+ * ------------------------------------------------------------------------ */
+
+typedef enum sg_method {
+    SG_METHOD_PRECISE = 0, /* the paper's four measures, carried in double-double */
+    SG_METHOD_CLASSIC = 1, /* textbook: global frame, direct quadratic formula */
+    SG_METHOD_MPFR = 2     /* every operation in MPFR; the reference */
+} sg_method;
+
+const char *sg_method_name(sg_method m);
+/* Parses "precise", "classic" or "mpfr"; returns -1 when unknown. */
+int sg_method_parse(const char *s);
+
+typedef struct sg_trace_opts {
+    sg_method method;
+    int mpfr_bits;      /* precision of the mpfr method; default 256 */
+    int wave;           /* 0-based wavelength index; -1 means primary */
+    int clip;           /* nonzero: flag rays beyond fixed semi-diameters */
+    double clip_rtol;   /* relative tolerance of that test; default 1e-9 */
+    int max_iter;       /* Newton iterations for aspheres; default 50 */
+    int aim_max_iter;   /* ray-aiming Newton iterations; default 50 */
+    double aim_rtol;    /* aiming tolerance relative to the stop radius; default 1e-13 */
+} sg_trace_opts;
+
+void sg_trace_opts_init(sg_trace_opts *o);
+
+/* The result at one surface, in that surface's local frame. */
+typedef struct sg_ray_surface {
+    double x, y, z;     /* intersection point */
+    double l, m, n;     /* direction cosines after the surface */
+    double residual;    /* |z - sag(x, y)| of the reported point */
+    double error_bound; /* bound on max |coordinate error| against exact arithmetic */
+    double dir_error_bound; /* the same for l, m, n */
+    double path;        /* geometric distance from the previous surface */
+    int status;         /* SG_OK or a ray failure: SG_EMISS, SG_ETIR, ... */
+} sg_ray_surface;
+
+/* A prepared system: indices, paraxial data and work buffers, computed
+ * once so the per-ray path allocates nothing.  A tracer is used by one
+ * thread at a time; make one per thread. */
+typedef struct sg_tracer sg_tracer;
+
+sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
+                         const sg_trace_opts *opts, sg_diag *d);
+void sg_tracer_free(sg_tracer *t);
+int sg_tracer_nsurf(const sg_tracer *t);
+const sg_paraxial *sg_tracer_paraxial(const sg_tracer *t);
+/* Index of the medium after surface i at the tracer's wavelength
+ * (negative after an odd number of mirrors, as in the paraxial trace). */
+double sg_tracer_index(const sg_tracer *t, int i);
+
+/* Traces a ray given in surface 1's local frame: start point and direction
+ * (any nonzero length).  out has nsurf entries; out[0] holds the start.
+ * Returns SG_OK when the ray reaches the image, else the failure, which is
+ * also the status of the surface where it happened; later surfaces get
+ * SG_ENOTREACHED. */
+int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
+                   sg_ray_surface *out);
+
+/* Traces the ray with normalized field (hx, hy) and pupil (px, py)
+ * coordinates, using the system's fields, aperture and ray aiming.
+ * Returns SG_EAIM (with every surface SG_ENOTREACHED) when aiming fails. */
+int sg_trace_normalized(sg_tracer *t, double hx, double hy, double px,
+                        double py, sg_ray_surface *out);
+
+/* Rays of a batch: either normalized, or start and direction. */
+typedef struct sg_ray_in {
+    double v[6]; /* hx, hy, px, py (normalized) or x, y, z, l, m, n */
+} sg_ray_in;
+
+typedef enum sg_ray_kind {
+    SG_RAYS_NORMALIZED = 0,
+    SG_RAYS_START_DIR = 1
+} sg_ray_kind;
+
+/* Traces nray rays into out (nray * nsurf entries) and status (nray
+ * entries), on nthreads threads (0 means every core).  Results equal the
+ * single-ray calls bit for bit. */
+int sg_trace_batch(const sg_system *sys, const sg_catalog *cat,
+                   const sg_trace_opts *opts, sg_ray_kind kind,
+                   const sg_ray_in *rays, size_t nray, int nthreads,
+                   sg_ray_surface *out, int *status, sg_diag *d);
+
+/* Significant decimal digits by which a agrees with the reference b:
+ * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */
+double sg_digits(double a, double b);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* SAGITTA_H */

@@ -1,0 +1,289 @@
+/* system.c - the optical system model: surfaces, edits, validation. */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "internal.h"
+
+void sg_surface_init(sg_surface *s)
+{
+    memset(s, 0, sizeof *s);
+    s->type = SG_SURF_STANDARD;
+    s->radius = INFINITY;
+    s->mat.kind = SG_MAT_AIR;
+}
+
+static int grow(sg_system *sys, int need)
+{
+    sg_surface *p;
+    int cap;
+    if (need <= sys->capsurf)
+        return SG_OK;
+    if (need > SG_MAX_SURFACES)
+        return SG_ERANGE;
+    cap = sys->capsurf ? sys->capsurf : 8;
+    while (cap < need)
+        cap *= 2;
+    if (cap > SG_MAX_SURFACES)
+        cap = SG_MAX_SURFACES;
+    p = realloc(sys->surf, (size_t)cap * sizeof *p);
+    if (!p)
+        return SG_ENOMEM;
+    sys->surf = p;
+    sys->capsurf = cap;
+    return SG_OK;
+}
+
+int sg_system_reset(sg_system *sys, int nsurf)
+{
+    sg_surface *keep = sys->surf;
+    int keepcap = sys->capsurf;
+    int rc, i;
+    if (nsurf < 0 || nsurf > SG_MAX_SURFACES)
+        return SG_ERANGE;
+    memset(sys, 0, sizeof *sys);
+    sys->surf = keep;
+    sys->capsurf = keepcap;
+    rc = grow(sys, nsurf < 3 ? 3 : nsurf);
+    if (rc != SG_OK)
+        return rc;
+    sg_strlcpy(sys->units, "mm", sizeof sys->units);
+    sys->nwave = 1;
+    sys->primary_wave = 0;
+    sys->wave[0].um = 0.5875618;
+    sys->wave[0].weight = 1.0;
+    sys->field_type = SG_FIELD_ANGLE;
+    sys->field_norm = SG_NORM_RADIAL;
+    sys->nfield = 1;
+    sys->field[0].weight = 1.0;
+    sys->aper_type = SG_APER_EPD;
+    sys->aper_value = 10.0;
+    sys->aim = SG_AIM_OFF;
+    sys->nsurf = nsurf;
+    for (i = 0; i < nsurf; i++)
+        sg_surface_init(&sys->surf[i]);
+    if (nsurf > 0)
+        sys->surf[0].thickness = INFINITY;
+    sys->stop = nsurf > 2 ? 1 : 0;
+    return SG_OK;
+}
+
+sg_system *sg_system_new(void)
+{
+    sg_system *sys = calloc(1, sizeof *sys);
+    if (!sys)
+        return NULL;
+    if (sg_system_reset(sys, 3) != SG_OK) {
+        free(sys);
+        return NULL;
+    }
+    sys->surf[1].thickness = 10.0;
+    return sys;
+}
+
+void sg_system_free(sg_system *sys)
+{
+    if (!sys)
+        return;
+    free(sys->surf);
+    free(sys);
+}
+
+int sg_system_assign(sg_system *dst, const sg_system *src)
+{
+    sg_surface *keep;
+    int keepcap, rc;
+    if (dst == src)
+        return SG_OK;
+    rc = grow(dst, src->nsurf);
+    if (rc != SG_OK)
+        return rc;
+    keep = dst->surf;
+    keepcap = dst->capsurf;
+    *dst = *src;
+    dst->surf = keep;
+    dst->capsurf = keepcap;
+    if (src->nsurf > 0)
+        memcpy(dst->surf, src->surf, (size_t)src->nsurf * sizeof *src->surf);
+    return SG_OK;
+}
+
+sg_system *sg_system_clone(const sg_system *sys)
+{
+    sg_system *c = calloc(1, sizeof *c);
+    if (!c)
+        return NULL;
+    if (sg_system_assign(c, sys) != SG_OK) {
+        free(c->surf);
+        free(c);
+        return NULL;
+    }
+    return c;
+}
+
+int sg_system_insert(sg_system *sys, int at)
+{
+    int rc;
+    if (at < 1 || at > sys->nsurf - 1)
+        return SG_EINVAL;
+    rc = grow(sys, sys->nsurf + 1);
+    if (rc != SG_OK)
+        return rc;
+    memmove(&sys->surf[at + 1], &sys->surf[at],
+            (size_t)(sys->nsurf - at) * sizeof *sys->surf);
+    sg_surface_init(&sys->surf[at]);
+    sys->nsurf++;
+    /* The stop is a property of a physical surface, so it follows it. */
+    if (sys->stop >= at)
+        sys->stop++;
+    return SG_OK;
+}
+
+int sg_system_delete(sg_system *sys, int at)
+{
+    if (at < 1 || at > sys->nsurf - 2 || sys->nsurf <= 3)
+        return SG_EINVAL;
+    memmove(&sys->surf[at], &sys->surf[at + 1],
+            (size_t)(sys->nsurf - at - 1) * sizeof *sys->surf);
+    sys->nsurf--;
+    /* Deleting the stop leaves the stop on the surface that took its row. */
+    if (sys->stop > at)
+        sys->stop--;
+    if (sys->stop > sys->nsurf - 2)
+        sys->stop = sys->nsurf - 2;
+    return SG_OK;
+}
+
+double sg_surface_curvature(const sg_surface *s)
+{
+    if (isinf(s->radius) || s->radius == 0.0)
+        return 0.0;
+    return 1.0 / s->radius;
+}
+
+double sg_surface_sag(const sg_surface *s, double x, double y)
+{
+    double c = sg_surface_curvature(s);
+    double r2 = x * x + y * y;
+    double arg = 1.0 - (1.0 + s->conic) * c * c * r2;
+    double z;
+    if (arg < 0.0)
+        return NAN;
+    z = c * r2 / (1.0 + sqrt(arg));
+    if (s->type == SG_SURF_EVENASPH) {
+        double p = 0.0;
+        int k;
+        for (k = SG_NASPH - 1; k >= 0; k--)
+            p = p * r2 + s->asph[k];
+        z += p * r2;
+    }
+    return z;
+}
+
+static int finite_or_inf_radius(double r)
+{
+    return !isnan(r);
+}
+
+int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
+{
+    int i, k;
+    if (sys->nsurf < 3)
+        return sg_diag_set(d, SG_ENOSYS,
+                           "the system has %d surfaces; it needs an object, "
+                           "at least one surface and an image",
+                           sys->nsurf);
+    if (sys->stop < 1 || sys->stop > sys->nsurf - 2)
+        return sg_diag_set(d, SG_ENOSTOP,
+                           "the stop must be one of surfaces 1 to %d",
+                           sys->nsurf - 2);
+    if (sys->nwave < 1 || sys->nwave > SG_MAX_WAVES)
+        return sg_diag_set(d, SG_ERANGE, "wavelengths: %d given, 1 to %d allowed",
+                           sys->nwave, SG_MAX_WAVES);
+    if (sys->primary_wave < 0 || sys->primary_wave >= sys->nwave)
+        return sg_diag_set(d, SG_ERANGE, "wavelengths: primary %d is not one of 1 to %d",
+                           sys->primary_wave + 1, sys->nwave);
+    for (k = 0; k < sys->nwave; k++)
+        if (!(sys->wave[k].um > 0.0) || !isfinite(sys->wave[k].um))
+            return sg_diag_set(d, SG_ERANGE,
+                               "wavelength %d: %g um is not a positive finite value",
+                               k + 1, sys->wave[k].um);
+    if (sys->nfield < 1 || sys->nfield > SG_MAX_FIELDS)
+        return sg_diag_set(d, SG_ERANGE, "fields: %d given, 1 to %d allowed",
+                           sys->nfield, SG_MAX_FIELDS);
+    for (k = 0; k < sys->nfield; k++) {
+        const sg_field *f = &sys->field[k];
+        if (!isfinite(f->x) || !isfinite(f->y))
+            return sg_diag_set(d, SG_ERANGE, "field %d: coordinates must be finite", k + 1);
+        if (sys->field_type == SG_FIELD_ANGLE && (fabs(f->x) >= 90.0 || fabs(f->y) >= 90.0))
+            return sg_diag_set(d, SG_ERANGE, "field %d: angle (%g, %g) must be below 90 degrees",
+                               k + 1, f->x, f->y);
+    }
+    if (!(sys->aper_value > 0.0) || !isfinite(sys->aper_value))
+        if (sys->aper_type != SG_APER_FLOAT_STOP)
+            return sg_diag_set(d, SG_ERANGE, "aperture: value %g must be positive and finite",
+                               sys->aper_value);
+    if (sys->aper_type == SG_APER_OBJECT_NA && !(sys->aper_value < 1.0))
+        return sg_diag_set(d, SG_ERANGE, "aperture: object NA %g must be below 1",
+                           sys->aper_value);
+    for (i = 0; i < sys->nsurf; i++) {
+        const sg_surface *s = &sys->surf[i];
+        if (!finite_or_inf_radius(s->radius))
+            return sg_diag_set(d, SG_ERANGE, "surface %d: radius is not a number", i);
+        if (i > 0 && i < sys->nsurf - 1 && !isfinite(s->thickness))
+            return sg_diag_set(d, SG_ERANGE, "surface %d: thickness must be finite", i);
+        if (i == 0 && isnan(s->thickness))
+            return sg_diag_set(d, SG_ERANGE, "surface 0: thickness is not a number");
+        if (i == 0 && !(fabs(s->thickness) > 0.0))
+            return sg_diag_set(d, SG_ENONPHYS,
+                               "surface 0: the object must lie away from surface 1 "
+                               "(thickness %g)", s->thickness);
+        if (!isfinite(s->conic))
+            return sg_diag_set(d, SG_ERANGE, "surface %d: conic must be finite", i);
+        for (k = 0; k < SG_NASPH; k++)
+            if (!isfinite(s->asph[k]))
+                return sg_diag_set(d, SG_ERANGE, "surface %d: asphere term r^%d must be finite",
+                                   i, 2 * (k + 1));
+        if (!(s->semi_diameter >= 0.0) || !isfinite(s->semi_diameter))
+            return sg_diag_set(d, SG_ERANGE,
+                               "surface %d: semi-diameter %g must be finite and not negative",
+                               i, s->semi_diameter);
+        if (s->mat.kind == SG_MAT_INDEX && !(s->mat.index >= 1e-3 && s->mat.index < 100.0))
+            return sg_diag_set(d, SG_ERANGE,
+                               "surface %d: material index %g is not physical", i, s->mat.index);
+        if (s->mat.kind == SG_MAT_MIRROR && (i == 0 || i == sys->nsurf - 1))
+            return sg_diag_set(d, SG_ENONPHYS,
+                               "surface %d: the %s cannot be a mirror", i,
+                               i == 0 ? "object" : "image");
+        if (s->mat.kind == SG_MAT_GLASS && cat) {
+            const sg_glass *g = sg_catalog_find(cat, s->mat.name);
+            if (!g)
+                return sg_diag_set(d, SG_ENOGLASS,
+                                   "surface %d: material \"%s\" is not in the catalog",
+                                   i, s->mat.name);
+            for (k = 0; k < sys->nwave; k++)
+                if (!sg_glass_in_range(g, sys->wave[k].um))
+                    sg_diag_warn(d,
+                                 "surface %d: wavelength %g um is outside the range "
+                                 "%g to %g um of %s",
+                                 i, sys->wave[k].um, g->lmin, g->lmax, g->name);
+        }
+    }
+    return SG_OK;
+}
+
+double sg_digits(double a, double b)
+{
+    double e;
+    if (a == b)
+        return 17.0;
+    if (isnan(a) || isnan(b))
+        return 0.0;
+    if (b == 0.0)
+        return fabs(a) < 1e-300 ? 17.0 : 0.0;
+    e = fabs(a - b) / fabs(b);
+    e = -log10(e);
+    if (e > 17.0)
+        e = 17.0;
+    return e < 0.0 ? 0.0 : e;
+}

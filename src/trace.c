@@ -1,0 +1,1039 @@
+/*
+ * trace.c - the precise and classic trace methods and the tracer.
+ *
+ * The precise method follows Wu et al. (Acta Phys. Sin. 72, 084201, 2023),
+ * section 3, and carries the ray in double-double between surfaces:
+ *   1. the ray moves into the next surface's vertex frame and onto its
+ *      vertex tangent plane before any equation is solved (sec. 3.3);
+ *   2. directions are unit vectors (sec. 3.2);
+ *   3. the intersection comes from the cancellation-free roots of eq. 27,
+ *      taking the root on the sheet through the vertex;
+ *   4. the point is then put back on the surface.  The paper scales the
+ *      point radially (eqs. 19, 21), which leaves it off the ray; here one
+ *      Newton step along the ray, with the surface equation evaluated in
+ *      double-double, lands on both the surface and the ray.
+ * Double-double is needed because a direction rounded to double moves the
+ * next intersection by about 1e-16 times the path, several ulp on a
+ * telescope; carrying 106 bits keeps every reported digit.
+ *
+ * The classic method is the textbook one the paper calls the original
+ * method: global coordinates, the direct quadratic formula, no reprojection.
+ */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "trace_internal.h"
+
+#define U53 1.1102230246251565e-16 /* unit roundoff of double */
+
+const char *sg_method_name(sg_method m)
+{
+    switch (m) {
+    case SG_METHOD_PRECISE: return "precise";
+    case SG_METHOD_CLASSIC: return "classic";
+    case SG_METHOD_MPFR: return "mpfr";
+    }
+    return "unknown";
+}
+
+int sg_method_parse(const char *s)
+{
+    if (!s)
+        return -1;
+    if (!strcmp(s, "precise"))
+        return SG_METHOD_PRECISE;
+    if (!strcmp(s, "classic"))
+        return SG_METHOD_CLASSIC;
+    if (!strcmp(s, "mpfr"))
+        return SG_METHOD_MPFR;
+    return -1;
+}
+
+void sg_trace_opts_init(sg_trace_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    o->method = SG_METHOD_PRECISE;
+    o->mpfr_bits = 256;
+    o->wave = -1;
+    o->clip = 1;
+    o->clip_rtol = 1e-9;
+    o->max_iter = 50;
+    o->aim_max_iter = 50;
+    o->aim_rtol = 1e-13;
+}
+
+static double ulp_of(double x)
+{
+    x = fabs(x);
+    if (!(x < DBL_MAX))
+        return x;
+    if (x < DBL_MIN)
+        return DBL_TRUE_MIN;
+    return nextafter(x, INFINITY) - x;
+}
+
+/* A bound computed in floating point must not round down past the error
+ * it bounds, so it is nudged up by more than its own rounding. */
+static double bound_up(double b)
+{
+    return b * (1.0 + 8.0 * U53);
+}
+
+/* ------------------------------------------------------------------------
+ * Surface functions in double-double.
+ * ------------------------------------------------------------------------ */
+
+/* Conic sag in the form r^2 / (R + sgn(R) sqrt(R^2 - k1 r^2)), which uses
+ * R itself rather than a rounded 1/R. */
+static dd conic_sag_dd(const sg_sprep *s, dd r2, int *ok)
+{
+    dd R = dd_from(s->R);
+    dd disc = dd_sub(dd_sqr(R), dd_mul(s->k1, r2));
+    dd root;
+    *ok = 1;
+    if (disc.hi < 0.0) {
+        *ok = 0;
+        return dd_from(NAN);
+    }
+    root = dd_sqrt(disc);
+    if (s->R < 0)
+        root = dd_neg(root);
+    return dd_div(r2, dd_add(R, root));
+}
+
+static dd poly_dd(const sg_sprep *s, dd r2)
+{
+    dd p = dd_from(0.0);
+    int k;
+    for (k = s->nasph - 1; k >= 0; k--)
+        p = dd_add_d(dd_mul(p, r2), s->a[k]);
+    return dd_mul(p, r2);
+}
+
+/* Sag of an even asphere (or plane/conic base) at r^2. */
+static dd sag_dd(const sg_sprep *s, dd r2, int *ok)
+{
+    dd z = dd_from(0.0);
+    *ok = 1;
+    if (isfinite(s->R))
+        z = conic_sag_dd(s, r2, ok);
+    if (s->nasph)
+        z = dd_add(z, poly_dd(s, r2));
+    return z;
+}
+
+/* w = sag'(r)/r in double, and a bound on |d w / d r^2| times r^2, used for
+ * Newton steps and for the normal's sensitivity. */
+static void slope_d(const sg_sprep *s, double r2, double *w, double *dw)
+{
+    double ww = 0.0, dd2 = 0.0;
+    int k;
+    if (isfinite(s->R)) {
+        double q = s->R * s->R - s->k1.hi * r2;
+        double sq = sqrt(fabs(q));
+        ww = (s->R < 0 ? -1.0 : 1.0) / sq;
+        dd2 = fabs(s->k1.hi) / (2.0 * fabs(q) * sq) * r2;
+    }
+    for (k = 1; k < s->nasph; k++) {
+        double p = (double)(2 * (k + 1)) * s->a[k] * pow(r2, k);
+        ww += p;
+        dd2 += fabs(p) * (double)(k);
+    }
+    if (s->nasph)
+        ww += 2.0 * s->a[0];
+    *w = ww;
+    *dw = dd2;
+}
+
+double sg_sprep_sag_resid(const sg_sprep *s, double x, double y, double z)
+{
+    dd r2, sag;
+    int ok;
+    if (s->shape == SHAPE_PLANE)
+        return fabs(z);
+    r2 = dd_add(dd_two_prod(x, x), dd_two_prod(y, y));
+    sag = sag_dd(s, r2, &ok);
+    if (!ok)
+        return NAN;
+    return fabs(dd_to_d(dd_sub(dd_from(z), sag)));
+}
+
+/* ------------------------------------------------------------------------
+ * Precise method.
+ * ------------------------------------------------------------------------ */
+
+/* Double estimate of the intersection from a point on the tangent plane:
+ * eq. 27 for the base conic.  Returns 0 when the ray misses. */
+static int conic_root_d(const sg_sprep *s, const double p[3], const double d[3],
+                        double *sout)
+{
+    double c = s->c, k1 = s->k1.hi;
+    double A = c * (d[0] * d[0] + d[1] * d[1] + k1 * d[2] * d[2]);
+    double b = c * (p[0] * d[0] + p[1] * d[1] + k1 * p[2] * d[2]) - d[2];
+    double C = c * (p[0] * p[0] + p[1] * p[1] + k1 * p[2] * p[2]) - 2.0 * p[2];
+    double disc = b * b - A * C;
+    double q, s1, s2;
+    int ok1, ok2;
+    if (c == 0.0) {
+        if (d[2] == 0.0)
+            return 0;
+        *sout = p[2] == 0.0 ? 0.0 : -p[2] / d[2];
+        return 1;
+    }
+    if (disc < 0.0)
+        return 0;
+    q = -(b + copysign(sqrt(disc), b));
+    /* The root C/q tends to the plane's root as the curvature vanishes, so
+     * it lies on the sheet through the vertex unless the ray only meets
+     * the other sheet. */
+    s1 = q != 0.0 ? C / q : 0.0;
+    s2 = A != 0.0 ? q / A : INFINITY;
+    ok1 = isfinite(s1) && k1 * c * (p[2] + s1 * d[2]) <= 1.0;
+    ok2 = isfinite(s2) && k1 * c * (p[2] + s2 * d[2]) <= 1.0;
+    if (ok1) {
+        *sout = s1;
+        return 1;
+    }
+    if (ok2) {
+        *sout = s2;
+        return 1;
+    }
+    return 0;
+}
+
+/* Newton in double on F(s) = z(s) - sag(r(s)) for an even asphere. */
+static int asph_root_d(const sg_sprep *s, const double p[3], const double d[3],
+                       double s0, int max_iter, double *sout)
+{
+    double sv = s0;
+    int it;
+    for (it = 0; it < max_iter; it++) {
+        double x = p[0] + sv * d[0], y = p[1] + sv * d[1], z = p[2] + sv * d[2];
+        double r2 = x * x + y * y;
+        double sag = 0.0, w, dw, F, Fp, step;
+        if (isfinite(s->R)) {
+            double q = s->R * s->R - s->k1.hi * r2;
+            if (q < 0.0)
+                return 0;
+            sag = r2 / (s->R + copysign(sqrt(q), s->R));
+        }
+        {
+            double pp = 0.0;
+            int k;
+            for (k = s->nasph - 1; k >= 0; k--)
+                pp = pp * r2 + s->a[k];
+            sag += pp * r2;
+        }
+        slope_d(s, r2, &w, &dw);
+        F = z - sag;
+        Fp = d[2] - w * (x * d[0] + y * d[1]);
+        if (Fp == 0.0 || !isfinite(Fp))
+            return 0;
+        step = F / Fp;
+        sv -= step;
+        if (!isfinite(sv))
+            return 0;
+        if (fabs(step) <= 4.0 * U53 * (fabs(sv) + fabs(x) + fabs(y) + fabs(z)))
+            break;
+    }
+    if (it == max_iter)
+        return -1;
+    *sout = sv;
+    return 1;
+}
+
+/* F and an evaluation-error bound at p (dd), for the surface equation used
+ * in the final Newton step: x^2 + y^2 + k1 z^2 - 2 R z for a conic (no
+ * rounded curvature), z - sag(r) for an asphere. */
+static dd surf_F_dd(const sg_sprep *s, dd3 p, double *err, int *ok)
+{
+    *ok = 1;
+    if (s->shape == SHAPE_CONIC) {
+        dd xx = dd_sqr(p.x), yy = dd_sqr(p.y), zz = dd_mul(s->k1, dd_sqr(p.z));
+        dd rz = dd_mul_d(p.z, 2.0 * s->R);
+        dd F = dd_sub(dd_add(dd_add(xx, yy), zz), rz);
+        *err = 8.0 * DD_U * (fabs(xx.hi) + fabs(yy.hi) + fabs(zz.hi) + fabs(rz.hi));
+        return F;
+    } else {
+        dd r2 = dd_add(dd_sqr(p.x), dd_sqr(p.y));
+        dd sag = sag_dd(s, r2, ok);
+        double mag = fabs(p.z.hi) + fabs(sag.hi);
+        int k;
+        for (k = 0; k < s->nasph; k++)
+            mag += fabs(s->a[k]) * pow(r2.hi, k + 1);
+        *err = (16.0 + 4.0 * s->nasph) * DD_U * mag;
+        return dd_sub(p.z, sag);
+    }
+}
+
+/* dF/ds along d, in double (only the Newton step's size depends on it),
+ * with the sum of the magnitudes of its terms for its rounding error. */
+static double surf_Fp_d(const sg_sprep *s, const double p[3], const double d[3],
+                        double *mag)
+{
+    if (s->shape == SHAPE_CONIC) {
+        double a = p[0] * d[0], b = p[1] * d[1], c = s->k1.hi * p[2] * d[2], e = s->R * d[2];
+        *mag = 2.0 * (fabs(a) + fabs(b) + fabs(c) + fabs(e));
+        return 2.0 * (a + b + c - e);
+    }
+    {
+        double w, dw, a = p[0] * d[0], b = p[1] * d[1];
+        slope_d(s, p[0] * p[0] + p[1] * p[1], &w, &dw);
+        *mag = fabs(d[2]) + fabs(w) * (fabs(a) + fabs(b)) * 2.0;
+        return d[2] - w * (a + b);
+    }
+}
+
+/* Cosine between a unit ray and the surface normal at p, in double. */
+static double surf_cos_d(const sg_sprep *s, const double p[3], const double d[3])
+{
+    double g[3], gn;
+    if (s->shape == SHAPE_PLANE)
+        return fabs(d[2]);
+    if (s->shape == SHAPE_CONIC) {
+        g[0] = p[0];
+        g[1] = p[1];
+        g[2] = s->k1.hi * p[2] - s->R;
+    } else {
+        double w, dw;
+        slope_d(s, p[0] * p[0] + p[1] * p[1], &w, &dw);
+        g[0] = -w * p[0];
+        g[1] = -w * p[1];
+        g[2] = 1.0;
+    }
+    gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    return gn > 0.0 ? fabs(g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn : 0.0;
+}
+
+/* |d^2F/ds^2| bound along a unit ray, for the Newton remainder. */
+static double surf_Fpp_bound(const sg_sprep *s, double r2)
+{
+    if (s->shape == SHAPE_CONIC)
+        return 2.0 * (1.0 + fabs(s->k1.hi));
+    {
+        double w, dw;
+        slope_d(s, r2, &w, &dw);
+        return fabs(w) + 2.0 * dw + 1e-300;
+    }
+}
+
+/* Surface gradient direction g (not unit) at p, and a bound on |dg/dp|. */
+static dd3 surf_grad_dd(const sg_sprep *s, dd3 p, double *gsens)
+{
+    dd3 g;
+    if (s->shape == SHAPE_PLANE) {
+        g.x = dd_from(0.0);
+        g.y = dd_from(0.0);
+        g.z = dd_from(-1.0);
+        *gsens = 0.0;
+    } else if (s->shape == SHAPE_CONIC) {
+        g.x = p.x;
+        g.y = p.y;
+        g.z = dd_sub(dd_mul(s->k1, p.z), dd_from(s->R));
+        *gsens = fmax(1.0, fabs(s->k1.hi));
+    } else {
+        /* w = sag'(r)/r in dd: sgn(R)/sqrt(R^2 - k1 r^2) + sum 2i a_i r^(2i-2). */
+        dd r2 = dd_add(dd_sqr(p.x), dd_sqr(p.y));
+        dd w = dd_from(0.0);
+        double wd, dwd;
+        int k;
+        if (isfinite(s->R)) {
+            dd q = dd_sub(dd_sqr(dd_from(s->R)), dd_mul(s->k1, r2));
+            w = dd_div(dd_from(s->R < 0 ? -1.0 : 1.0), dd_sqrt(q));
+        }
+        {
+            dd pp = dd_from(0.0);
+            for (k = s->nasph - 1; k >= 0; k--)
+                /* 2i a_i is formed exactly: a factor such as 6 rounds. */
+                pp = dd_add(dd_mul(pp, r2), dd_two_prod(s->a[k], (double)(2 * (k + 1))));
+            w = dd_add(w, pp);
+        }
+        g.x = dd_neg(dd_mul(w, p.x));
+        g.y = dd_neg(dd_mul(w, p.y));
+        g.z = dd_from(1.0);
+        slope_d(s, r2.hi, &wd, &dwd);
+        *gsens = fabs(wd) + 2.0 * dwd;
+    }
+    return g;
+}
+
+static int past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y)
+{
+    return t->o.clip && s->sd > 0.0 && hypot(x, y) > s->sd * (1.0 + t->o.clip_rtol);
+}
+
+void sg_fail_rest(sg_ray_surface *out, int from, int n, int status)
+{
+    int i;
+    for (i = from; i < n; i++) {
+        memset(&out[i], 0, sizeof out[i]);
+        out[i].x = out[i].y = out[i].z = NAN;
+        out[i].l = out[i].m = out[i].n = NAN;
+        out[i].residual = out[i].error_bound = out[i].dir_error_bound = NAN;
+        out[i].path = NAN;
+        out[i].status = i == from ? status : SG_ENOTREACHED;
+    }
+}
+
+/* Refracts or reflects r->d at the point r->p of surface s, in dd. */
+static int precise_bend(const sg_sprep *s, sg_pray *r)
+{
+    double gsens, gn, cosI_d, dN;
+    dd3 g = surf_grad_dd(s, r->p, &gsens);
+    dd gg = dd_dot3(g, g);
+    dd dg = dd_dot3(r->d, g);
+    dd3 nd;
+    if (gg.hi <= 0.0)
+        return SG_ENONPHYS;
+    gn = sqrt(gg.hi);
+    cosI_d = dg.hi / gn;
+    /* A normal error follows a point error through the surface's
+     * curvature; both feed the new direction. */
+    dN = gsens * r->eP / gn;
+    if (s->mirror) {
+        dd f = dd_div(dd_mul_d(dg, 2.0), gg);
+        nd.x = dd_sub(r->d.x, dd_mul(f, g.x));
+        nd.y = dd_sub(r->d.y, dd_mul(f, g.y));
+        nd.z = dd_sub(r->d.z, dd_mul(f, g.z));
+        /* Reflection is orthogonal, so it passes a direction error on
+         * unchanged; only the normal's error adds. */
+        r->eD = r->eD + 4.0 * dN + 40.0 * DD_U;
+    } else {
+        dd ng = dd_sqrt(gg);
+        dd cosI = dd_div(dg, ng);
+        dd mu2 = dd_sqr(s->mu);
+        dd sin2 = dd_sub(dd_from(1.0), dd_sqr(cosI));
+        dd k = dd_sub(dd_from(1.0), dd_mul(mu2, sin2));
+        dd sq, gam;
+        double J;
+        if (k.hi < 0.0)
+            return SG_ETIR;
+        if (dd_abs_hi(s->mu) == 1.0 && s->mu.lo == 0.0) {
+            /* Equal indices: the ray goes straight on, exactly. */
+            return SG_OK;
+        }
+        sq = dd_sqrt(k);
+        if (cosI.hi < 0.0)
+            sq = dd_neg(sq);
+        gam = dd_div(dd_sub(sq, dd_mul(s->mu, cosI)), ng);
+        nd.x = dd_add(dd_mul(s->mu, r->d.x), dd_mul(gam, g.x));
+        nd.y = dd_add(dd_mul(s->mu, r->d.y), dd_mul(gam, g.y));
+        nd.z = dd_add(dd_mul(s->mu, r->d.z), dd_mul(gam, g.z));
+        /* J = |d gamma / d cosI|, which grows without bound near TIR. */
+        J = s->mu.hi * fabs(s->mu.hi * cosI_d - copysign(sqrt(fmax(k.hi, 0.0)), cosI_d)) /
+            sqrt(fmax(k.hi, 1e-300));
+        r->eD = (s->mu.hi + J) * r->eD + (J + fabs(gam.hi) * gn) * dN +
+                60.0 * DD_U * (s->mu.hi + J + 1.0);
+    }
+    r->d = nd;
+    return SG_OK;
+}
+
+int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
+                      int upto)
+{
+    int i;
+    for (i = 1; i <= upto; i++) {
+        const sg_sprep *s = &t->sp[i];
+        sg_ray_surface *o = &out[i];
+        double dz = r->d.z.hi, ps[3], ds[3], sd = 0.0, eP0, dpath;
+        dd s0 = dd_from(0.0), sv;
+        dd3 p0;
+        int rc;
+
+        /* Measure 1: into this surface's vertex frame, then onto its
+         * tangent plane.  For surface 1 the ray is already in its frame. */
+        if (i > 1)
+            r->p.z = dd_add_d(r->p.z, -s->T);
+        p0 = r->p;
+        eP0 = r->eP + DD_U * fabs(r->p.z.hi);
+        if (dz != 0.0 && r->p.z.hi != 0.0) {
+            s0 = dd_neg(dd_div(r->p.z, r->d.z));
+            p0.x = dd_add(r->p.x, dd_mul(s0, r->d.x));
+            p0.y = dd_add(r->p.y, dd_mul(s0, r->d.y));
+            p0.z = dd_from(0.0);
+            /* Moving a line to a plane scales a perpendicular offset by
+             * 1/cos of the incidence; an offset along the ray does nothing. */
+            eP0 = (eP0 + fabs(s0.hi) * r->eD) / fabs(dz) +
+                  8.0 * DD_U * (fabs(r->p.x.hi) + fabs(r->p.y.hi) + fabs(s0.hi));
+        }
+
+        ps[0] = p0.x.hi;
+        ps[1] = p0.y.hi;
+        ps[2] = p0.z.hi;
+        ds[0] = r->d.x.hi;
+        ds[1] = r->d.y.hi;
+        ds[2] = r->d.z.hi;
+
+        /* Measure 3: the eq. 27 root (and Newton for aspheres) in double. */
+        if (s->shape == SHAPE_PLANE) {
+            if (p0.z.hi != 0.0) {
+                if (dz == 0.0) {
+                    sg_fail_rest(out, i, t->n, SG_EMISS);
+                    return SG_EMISS;
+                }
+                sd = -p0.z.hi / dz;
+            }
+        } else {
+            int ok = conic_root_d(s, ps, ds, &sd);
+            if (s->shape == SHAPE_ASPH) {
+                int rc2 = asph_root_d(s, ps, ds, ok ? sd : 0.0, t->o.max_iter, &sd);
+                if (rc2 < 0) {
+                    sg_fail_rest(out, i, t->n, SG_ENOCONV);
+                    return SG_ENOCONV;
+                }
+                ok = rc2 > 0;
+            }
+            if (!ok) {
+                sg_fail_rest(out, i, t->n, SG_EMISS);
+                return SG_EMISS;
+            }
+        }
+
+        /* Measure 4: Newton steps along the ray with F in double-double put
+         * the point on the surface without leaving the ray. */
+        sv = dd_from(sd);
+        {
+            double root_err = 0.0, kappa, pd[3];
+            int it;
+            if (s->shape != SHAPE_PLANE || p0.z.hi != 0.0) {
+                for (it = 0; it < 4; it++) {
+                    dd3 p = dd3_axpy(p0, sv, r->d);
+                    double ferr, step, Fp, Fmag, Fpp;
+                    int ok = 1;
+                    dd F;
+                    pd[0] = p.x.hi;
+                    pd[1] = p.y.hi;
+                    pd[2] = p.z.hi;
+                    if (s->shape == SHAPE_PLANE) {
+                        F = p.z;
+                        ferr = 0.0;
+                        Fp = dz;
+                        Fmag = fabs(dz);
+                        Fpp = 0.0;
+                    } else {
+                        F = surf_F_dd(s, p, &ferr, &ok);
+                        Fp = surf_Fp_d(s, pd, ds, &Fmag);
+                        Fpp = surf_Fpp_bound(s, pd[0] * pd[0] + pd[1] * pd[1]);
+                    }
+                    if (!ok || Fp == 0.0 || !isfinite(Fp)) {
+                        sg_fail_rest(out, i, t->n, SG_EMISS);
+                        return SG_EMISS;
+                    }
+                    step = F.hi / Fp;
+                    sv = dd_sub(sv, dd_div_d(F, Fp));
+                    /* What remains after this step: the Newton remainder,
+                     * the error of F, and the step times the relative
+                     * error of the slope, which was rounded in double. */
+                    root_err = Fpp / fabs(Fp) * step * step + ferr / fabs(Fp) +
+                               fabs(step) * 8.0 * U53 * Fmag / fabs(Fp) +
+                               4.0 * DD_U * fabs(sv.hi);
+                    if (fabs(step) <= 1e-18 * fabs(sv.hi) || step == 0.0)
+                        break;
+                }
+            }
+            r->p = dd3_axpy(p0, sv, r->d);
+            /* The intersection moves with the start point and the direction,
+             * amplified by the obliquity of the ray to the surface. */
+            pd[0] = r->p.x.hi;
+            pd[1] = r->p.y.hi;
+            pd[2] = r->p.z.hi;
+            {
+                double cg = surf_cos_d(s, pd, ds);
+                kappa = cg > 0.0 ? 1.0 / cg : 1e300;
+            }
+            r->eP = kappa * (eP0 + fabs(sv.hi) * r->eD) + root_err +
+                    8.0 * DD_U * (fabs(p0.x.hi) + fabs(p0.y.hi) + fabs(sv.hi));
+        }
+
+        dpath = dd_to_d(dd_add(s0, sv));
+        o->x = r->p.x.hi;
+        o->y = r->p.y.hi;
+        o->z = r->p.z.hi;
+        o->path = i == 1 ? path0 + dpath : dpath;
+        o->residual = sg_sprep_sag_resid(s, o->x, o->y, o->z);
+        o->error_bound = bound_up(r->eP + 0.5 * ulp_of(fmax(fabs(o->x), fmax(fabs(o->y), fabs(o->z)))));
+        o->status = SG_OK;
+
+        if (past_clip(t, s, o->x, o->y)) {
+            sg_fail_rest(out, i, t->n, SG_EVIGNETTED);
+            return SG_EVIGNETTED;
+        }
+        if (i < upto) {
+            rc = precise_bend(s, r);
+            if (rc != SG_OK) {
+                sg_fail_rest(out, i, t->n, rc);
+                return rc;
+            }
+        }
+        o->l = r->d.x.hi;
+        o->m = r->d.y.hi;
+        o->n = r->d.z.hi;
+        o->dir_error_bound = bound_up(r->eD + 0.5 * ulp_of(fmax(fabs(o->l), fmax(fabs(o->m), fabs(o->n)))));
+    }
+    return SG_OK;
+}
+
+/* ------------------------------------------------------------------------
+ * Classic method.
+ * ------------------------------------------------------------------------ */
+
+static int classic_bend(const sg_sprep *s, const double p[3], double d[3])
+{
+    double g[3], gg, cosI, nd[3], len;
+    len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    d[0] /= len;
+    d[1] /= len;
+    d[2] /= len;
+    if (s->shape == SHAPE_PLANE) {
+        g[0] = 0.0;
+        g[1] = 0.0;
+        g[2] = -1.0;
+    } else if (s->shape == SHAPE_CONIC) {
+        g[0] = s->c * p[0];
+        g[1] = s->c * p[1];
+        g[2] = s->c * s->k1.hi * p[2] - 1.0;
+    } else {
+        double w, dw;
+        slope_d(s, p[0] * p[0] + p[1] * p[1], &w, &dw);
+        g[0] = -w * p[0];
+        g[1] = -w * p[1];
+        g[2] = 1.0;
+    }
+    gg = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    g[0] /= gg;
+    g[1] /= gg;
+    g[2] /= gg;
+    cosI = d[0] * g[0] + d[1] * g[1] + d[2] * g[2];
+    if (s->mirror) {
+        nd[0] = d[0] - 2.0 * cosI * g[0];
+        nd[1] = d[1] - 2.0 * cosI * g[1];
+        nd[2] = d[2] - 2.0 * cosI * g[2];
+    } else {
+        double mu = s->mu.hi;
+        double k = 1.0 - mu * mu * (1.0 - cosI * cosI);
+        double gam;
+        if (k < 0.0)
+            return SG_ETIR;
+        gam = copysign(sqrt(k), cosI) - mu * cosI;
+        nd[0] = mu * d[0] + gam * g[0];
+        nd[1] = mu * d[1] + gam * g[1];
+        nd[2] = mu * d[2] + gam * g[2];
+    }
+    d[0] = nd[0];
+    d[1] = nd[1];
+    d[2] = nd[2];
+    return SG_OK;
+}
+
+int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
+                      sg_ray_surface *out, int upto)
+{
+    double P[3] = {S[0], S[1], S[2]}, d[3] = {D[0], D[1], D[2]};
+    double eP = 0.0, eD = 0.0;
+    int i;
+    for (i = 1; i <= upto; i++) {
+        const sg_sprep *s = &t->sp[i];
+        sg_ray_surface *o = &out[i];
+        double zl = P[2] - s->zg;
+        double c = s->c, k1 = s->k1.hi, tt, x, y, z, dn;
+        double A = c * (d[0] * d[0] + d[1] * d[1] + k1 * d[2] * d[2]);
+        double B = 2.0 * c * (P[0] * d[0] + P[1] * d[1] + k1 * zl * d[2]) - 2.0 * d[2];
+        double C = c * (P[0] * P[0] + P[1] * P[1] + k1 * zl * zl) - 2.0 * zl;
+        double sigA, sigB, sigC, eta_t, dlen;
+        if (A == 0.0) {
+            if (B == 0.0) {
+                sg_fail_rest(out, i, t->n, SG_EMISS);
+                return SG_EMISS;
+            }
+            tt = -C / B;
+        } else {
+            double disc = B * B - 4.0 * A * C;
+            double t1, t2, tl = B != 0.0 ? -C / B : 0.0;
+            int ok1, ok2;
+            if (disc < 0.0) {
+                sg_fail_rest(out, i, t->n, SG_EMISS);
+                return SG_EMISS;
+            }
+            t1 = (-B + sqrt(disc)) / (2.0 * A);
+            t2 = (-B - sqrt(disc)) / (2.0 * A);
+            ok1 = k1 * c * (zl + t1 * d[2]) <= 1.0;
+            ok2 = k1 * c * (zl + t2 * d[2]) <= 1.0;
+            if (ok1 && ok2)
+                tt = fabs(t1 - tl) <= fabs(t2 - tl) ? t1 : t2;
+            else if (ok1)
+                tt = t1;
+            else if (ok2)
+                tt = t2;
+            else {
+                sg_fail_rest(out, i, t->n, SG_EMISS);
+                return SG_EMISS;
+            }
+        }
+        if (s->shape == SHAPE_ASPH) {
+            double pl[3] = {P[0], P[1], zl};
+            int rc2 = asph_root_d(s, pl, d, tt, t->o.max_iter, &tt);
+            if (rc2 <= 0) {
+                sg_fail_rest(out, i, t->n, rc2 < 0 ? SG_ENOCONV : SG_EMISS);
+                return rc2 < 0 ? SG_ENOCONV : SG_EMISS;
+            }
+        }
+        /* The paper's eqs. 11 and 17 with the coefficients actually used;
+         * the root's relative error follows from the coefficient errors. */
+        sigA = 8.0 * U53 * fabs(c) * (d[0] * d[0] + d[1] * d[1]) + 9.0 * U53 * fabs(c) * d[2] * d[2] +
+               10.0 * U53 * fabs(c * (k1 - 1.0)) * d[2] * d[2];
+        sigB = 16.0 * U53 * fabs(c) * (fabs(P[0] * d[0]) + fabs(P[1] * d[1])) +
+               20.0 * U53 * fabs(c * zl * d[2]) + 22.0 * U53 * fabs(c * (k1 - 1.0) * zl * d[2]) +
+               6.0 * U53 * fabs(d[2]);
+        sigC = 8.0 * U53 * fabs(c) * (P[0] * P[0] + P[1] * P[1]) + 9.0 * U53 * fabs(c) * zl * zl +
+               10.0 * U53 * fabs(c * (k1 - 1.0)) * zl * zl + 6.0 * U53 * fabs(zl) +
+               3.0 * U53 * fabs(P[2]);
+        {
+            double slope = fabs(2.0 * A * tt + B);
+            double num = sigA * tt * tt + sigB * fabs(tt) + sigC;
+            eta_t = slope > 0.0 ? num / slope : INFINITY;
+            if (s->shape == SHAPE_ASPH)
+                eta_t += 8.0 * U53 * fabs(tt);
+        }
+        dlen = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        x = P[0] + tt * d[0];
+        y = P[1] + tt * d[1];
+        z = P[2] + tt * d[2];
+        {
+            double kappa, gx, gy, gz, gn, cg;
+            if (s->shape == SHAPE_ASPH) {
+                double w, dw;
+                slope_d(s, x * x + y * y, &w, &dw);
+                gx = -w * x;
+                gy = -w * y;
+                gz = 1.0;
+            } else {
+                gx = c * x;
+                gy = c * y;
+                gz = c * k1 * (z - s->zg) - 1.0;
+            }
+            gn = sqrt(gx * gx + gy * gy + gz * gz);
+            cg = gn > 0 ? fabs(gx * d[0] + gy * d[1] + gz * d[2]) / (gn * dlen) : 1.0;
+            kappa = cg > 0.0 ? 1.0 / cg : 1e300;
+            eP = kappa * (eP + fabs(tt) * dlen * eD) + eta_t * dlen +
+                 4.0 * U53 * (fabs(tt) * dlen + fmax(fabs(x), fmax(fabs(y), fabs(z)))) +
+                 3.0 * U53 * fmax(fabs(P[0]), fmax(fabs(P[1]), fabs(P[2])));
+        }
+        P[0] = x;
+        P[1] = y;
+        P[2] = z;
+        o->x = x;
+        o->y = y;
+        o->z = z - s->zg;
+        /* Converting to the local frame rounds once more. */
+        eP += U53 * fabs(o->z);
+        o->path = fabs(tt) * dlen;
+        o->residual = sg_sprep_sag_resid(s, o->x, o->y, o->z);
+        o->error_bound = bound_up(eP);
+        o->status = SG_OK;
+        if (past_clip(t, s, o->x, o->y)) {
+            sg_fail_rest(out, i, t->n, SG_EVIGNETTED);
+            return SG_EVIGNETTED;
+        }
+        if (i < upto) {
+            double pl[3] = {o->x, o->y, o->z};
+            double gsens = s->shape == SHAPE_CONIC ? fmax(1.0, fabs(k1)) * fabs(c) : 0.0;
+            int rc;
+            if (s->shape == SHAPE_ASPH) {
+                double w, dw;
+                slope_d(s, x * x + y * y, &w, &dw);
+                gsens = fabs(w) + 2.0 * dw;
+            }
+            rc = classic_bend(s, pl, d);
+            if (rc != SG_OK) {
+                sg_fail_rest(out, i, t->n, rc);
+                return rc;
+            }
+            dn = s->mirror ? 1.0 : 2.0 * s->mu.hi + 1.0;
+            eD = dn * (eD / (dlen > 0 ? dlen : 1.0)) + 4.0 * gsens * eP + 24.0 * U53 * (s->mu.hi + 2.0);
+        }
+        o->l = d[0];
+        o->m = d[1];
+        o->n = d[2];
+        o->dir_error_bound = bound_up(eD);
+    }
+    return SG_OK;
+}
+
+/* ------------------------------------------------------------------------
+ * The tracer.
+ * ------------------------------------------------------------------------ */
+
+int sg_indices_mpfr(const sg_system *sys, const sg_catalog *cat, int wave,
+                    mpfr_t *idx, sg_diag *d)
+{
+    mpfr_t um;
+    int i, sign = 1, rc = SG_OK;
+    mpfr_init2(um, mpfr_get_prec(idx[0]));
+    mpfr_set_d(um, sys->wave[wave].um, MPFR_RNDN);
+    for (i = 0; i < sys->nsurf; i++) {
+        const sg_surface *s = &sys->surf[i];
+        switch (s->mat.kind) {
+        case SG_MAT_AIR:
+            mpfr_set_si(idx[i], sign, MPFR_RNDN);
+            break;
+        case SG_MAT_INDEX:
+            mpfr_set_d(idx[i], s->mat.index, MPFR_RNDN);
+            if (sign < 0)
+                mpfr_neg(idx[i], idx[i], MPFR_RNDN);
+            break;
+        case SG_MAT_MIRROR:
+            /* The medium after a mirror is the one before it, travelled
+             * backwards, hence the sign flip. */
+            if (i == 0) {
+                rc = sg_diag_set(d, SG_ENONPHYS, "surface 0: the object cannot be a mirror");
+                goto out;
+            }
+            sign = -sign;
+            mpfr_neg(idx[i], idx[i - 1], MPFR_RNDN);
+            break;
+        case SG_MAT_GLASS: {
+            const sg_glass *g = cat ? sg_catalog_find(cat, s->mat.name) : NULL;
+            if (!g) {
+                rc = sg_diag_set(d, SG_ENOGLASS,
+                                 "surface %d: material \"%s\" is not in the catalog", i,
+                                 s->mat.name);
+                goto out;
+            }
+            if (sg_glass_index_mpfr(g, idx[i], um) != SG_OK) {
+                rc = sg_diag_set(d, SG_ERANGE,
+                                 "surface %d: glass %s has no real index at %g um", i,
+                                 g->name, sys->wave[wave].um);
+                goto out;
+            }
+            if (sign < 0)
+                mpfr_neg(idx[i], idx[i], MPFR_RNDN);
+            break;
+        }
+        }
+    }
+out:
+    mpfr_clear(um);
+    return rc;
+}
+
+static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
+{
+    const sg_system *sys = t->sys;
+    mpfr_t q, tmp;
+    double zg = 0.0;
+    int i, k;
+    mpfr_init2(q, 256);
+    mpfr_init2(tmp, 256);
+    for (i = 0; i < t->n; i++) {
+        const sg_surface *s = &sys->surf[i];
+        sg_sprep *p = &t->sp[i];
+        memset(p, 0, sizeof *p);
+        p->R = (s->radius == 0.0 || isinf(s->radius)) ? INFINITY : s->radius;
+        p->c = isfinite(p->R) ? 1.0 / p->R : 0.0;
+        p->k1 = dd_two_sum(1.0, s->conic);
+        p->T = i > 0 ? sys->surf[i - 1].thickness : 0.0;
+        p->nasph = 0;
+        if (s->type == SG_SURF_EVENASPH)
+            for (k = 0; k < SG_NASPH; k++) {
+                p->a[k] = s->asph[k];
+                if (s->asph[k] != 0.0)
+                    p->nasph = k + 1;
+            }
+        if (p->nasph)
+            p->shape = SHAPE_ASPH;
+        else if (isfinite(p->R))
+            p->shape = SHAPE_CONIC;
+        else
+            p->shape = SHAPE_PLANE;
+        p->mirror = s->mat.kind == SG_MAT_MIRROR;
+        p->sd = s->sd_fixed ? s->semi_diameter : 0.0;
+        if (i >= 2)
+            zg += p->T;
+        p->zg = i >= 1 ? zg : -p->T;
+        t->nsigned[i] = mpfr_get_d(idx[i], MPFR_RNDN);
+        if (i > 0) {
+            mpfr_abs(q, idx[i - 1], MPFR_RNDN);
+            mpfr_abs(tmp, idx[i], MPFR_RNDN);
+            if (mpfr_zero_p(tmp)) {
+                mpfr_clear(q);
+                mpfr_clear(tmp);
+                return sg_diag_set(d, SG_ENONPHYS, "surface %d: index is zero", i);
+            }
+            mpfr_div(q, q, tmp, MPFR_RNDN);
+            p->mu = dd_from_mpfr(q, tmp);
+        }
+    }
+    mpfr_clear(q);
+    mpfr_clear(tmp);
+    return SG_OK;
+}
+
+sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
+                         const sg_trace_opts *opts, sg_diag *d)
+{
+    sg_tracer *t;
+    mpfr_t *idx = NULL;
+    int i, rc, n;
+    rc = sg_system_validate(sys, cat, d);
+    if (rc != SG_OK)
+        return NULL;
+    t = calloc(1, sizeof *t);
+    if (!t) {
+        sg_diag_set(d, SG_ENOMEM, "out of memory");
+        return NULL;
+    }
+    if (opts)
+        t->o = *opts;
+    else
+        sg_trace_opts_init(&t->o);
+    if (t->o.mpfr_bits < 53 || t->o.mpfr_bits > 100000) {
+        sg_diag_set(d, SG_ERANGE, "mpfr bits %d outside 53..100000", t->o.mpfr_bits);
+        goto fail;
+    }
+    t->wave = t->o.wave < 0 ? sys->primary_wave : t->o.wave;
+    if (t->wave >= sys->nwave) {
+        sg_diag_set(d, SG_ERANGE, "wavelength %d is not one of 1 to %d", t->wave + 1,
+                    sys->nwave);
+        goto fail;
+    }
+    n = t->n = sys->nsurf;
+    t->cat = cat;
+    t->sys = sg_system_clone(sys);
+    t->sp = calloc((size_t)n, sizeof *t->sp);
+    t->nsigned = calloc((size_t)n, sizeof *t->nsigned);
+    idx = calloc((size_t)n, sizeof *idx);
+    if (!t->sys || !t->sp || !t->nsigned || !idx) {
+        sg_diag_set(d, SG_ENOMEM, "out of memory");
+        free(idx);
+        goto fail;
+    }
+    for (i = 0; i < n; i++)
+        mpfr_init2(idx[i], 256);
+    rc = sg_indices_mpfr(sys, cat, t->wave, idx, d);
+    if (rc == SG_OK)
+        rc = prepare_surfaces(t, idx, d);
+    for (i = 0; i < n; i++)
+        mpfr_clear(idx[i]);
+    free(idx);
+    if (rc != SG_OK)
+        goto fail;
+    if (sg_launch_prepare(t, d) != SG_OK)
+        goto fail;
+    if (t->o.method == SG_METHOD_MPFR && sg_mpfr_prepare(t, d) != SG_OK)
+        goto fail;
+    return t;
+fail:
+    sg_tracer_free(t);
+    return NULL;
+}
+
+void sg_tracer_free(sg_tracer *t)
+{
+    if (!t)
+        return;
+    if (t->mp)
+        sg_mpfr_free(t->mp);
+    sg_system_free(t->sys);
+    free(t->sp);
+    free(t->nsigned);
+    free(t->scratch);
+    free(t);
+}
+
+int sg_tracer_nsurf(const sg_tracer *t)
+{
+    return t->n;
+}
+
+const sg_paraxial *sg_tracer_paraxial(const sg_tracer *t)
+{
+    return &t->px;
+}
+
+double sg_tracer_index(const sg_tracer *t, int i)
+{
+    if (i < 0 || i >= t->n)
+        return NAN;
+    return t->nsigned[i];
+}
+
+void sg_set_start_row(sg_ray_surface *o, const double S[3], const double u[3])
+{
+    memset(o, 0, sizeof *o);
+    o->x = S[0];
+    o->y = S[1];
+    o->z = S[2];
+    o->l = u[0];
+    o->m = u[1];
+    o->n = u[2];
+    o->status = SG_OK;
+}
+
+int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
+                   sg_ray_surface *out)
+{
+    double len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
+    int k;
+    for (k = 0; k < 3; k++)
+        if (!isfinite(start[k]) || !isfinite(dir[k])) {
+            sg_fail_rest(out, 0, t->n, SG_EINVAL);
+            return SG_EINVAL;
+        }
+    if (!(len2 > 0.0) || !isfinite(len2)) {
+        sg_fail_rest(out, 0, t->n, SG_EINVAL);
+        return SG_EINVAL;
+    }
+    switch (t->o.method) {
+    case SG_METHOD_PRECISE: {
+        sg_pray r;
+        dd len = dd_sqrt(dd_add(dd_add(dd_sqr(dd_from(dir[0])), dd_sqr(dd_from(dir[1]))),
+                                dd_sqr(dd_from(dir[2]))));
+        double u[3];
+        r.p.x = dd_from(start[0]);
+        r.p.y = dd_from(start[1]);
+        r.p.z = dd_from(start[2]);
+        r.d.x = dd_div(dd_from(dir[0]), len);
+        r.d.y = dd_div(dd_from(dir[1]), len);
+        r.d.z = dd_div(dd_from(dir[2]), len);
+        r.eP = 0.0;
+        r.eD = 4.0 * DD_U;
+        u[0] = r.d.x.hi;
+        u[1] = r.d.y.hi;
+        u[2] = r.d.z.hi;
+        sg_set_start_row(&out[0], start, u);
+        return sg_precise_run_to(t, &r, 0.0, out, t->n - 1);
+    }
+    case SG_METHOD_CLASSIC: {
+        double len = sqrt(len2), u[3];
+        u[0] = dir[0] / len;
+        u[1] = dir[1] / len;
+        u[2] = dir[2] / len;
+        sg_set_start_row(&out[0], start, u);
+        return sg_classic_run_to(t, start, dir, out, t->n - 1);
+    }
+    case SG_METHOD_MPFR:
+        return sg_mpfr_trace_start(t, start, dir, out);
+    }
+    return SG_EINVAL;
+}
+
+int sg_trace_normalized(sg_tracer *t, double hx, double hy, double px, double py,
+                        sg_ray_surface *out)
+{
+    if (!isfinite(hx) || !isfinite(hy) || !isfinite(px) || !isfinite(py)) {
+        sg_fail_rest(out, 0, t->n, SG_EINVAL);
+        return SG_EINVAL;
+    }
+    switch (t->o.method) {
+    case SG_METHOD_PRECISE:
+        return sg_launch_precise(t, hx, hy, px, py, out);
+    case SG_METHOD_CLASSIC:
+        return sg_launch_classic(t, hx, hy, px, py, out);
+    case SG_METHOD_MPFR:
+        return sg_mpfr_trace_normalized(t, hx, hy, px, py, out);
+    }
+    return SG_EINVAL;
+}

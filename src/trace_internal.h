@@ -1,0 +1,140 @@
+/*
+ * trace_internal.h - the prepared system shared by the trace methods,
+ * the launch of normalized rays, aiming and the batch driver.
+ */
+#ifndef SG_TRACE_INTERNAL_H
+#define SG_TRACE_INTERNAL_H
+
+#include <mpfr.h>
+
+#include "dd.h"
+#include "internal.h"
+
+enum { SHAPE_PLANE = 0, SHAPE_CONIC = 1, SHAPE_ASPH = 2 };
+
+/* One surface, reduced to what the per-ray code reads. */
+typedef struct sg_sprep {
+    int shape;
+    double R;    /* vertex radius; inf for a flat base */
+    double c;    /* 1/R rounded, used only for double estimates */
+    dd k1;       /* 1 + conic, exact */
+    double T;    /* vertex distance from the previous surface along z */
+    int nasph;   /* asphere terms in use */
+    double a[SG_NASPH];
+    int mirror;
+    dd mu;       /* |n before| / |n after|, for refraction */
+    double sd;   /* clip radius, 0 for none */
+    double zg;   /* vertex z in the global frame (surface 1 at 0), classic only */
+} sg_sprep;
+
+/* Launch constants of normalized rays, for one precision. */
+typedef struct sg_launch {
+    int obj_inf;     /* object at infinity */
+    dd T0;           /* object vertex to surface 1 */
+    dd enp;          /* entrance pupil z in surface 1's frame */
+    dd epr;          /* entrance pupil radius */
+    dd stop_r;       /* stop radius that aiming lands Py = 1 on */
+    dd fx, fy;       /* field scale for Hx and Hy */
+    dd pimg_slope;   /* paraxial image height per unit object-space tan or height */
+} sg_launch;
+
+typedef struct sg_mpfr_ctx sg_mpfr_ctx;
+
+/* Object-space part of a launch: a direction for an object at infinity,
+ * else an object point in surface 1's frame. */
+typedef struct osp {
+    int inf;
+    dd3 dir;
+    dd3 obj;
+} osp;
+
+struct sg_tracer {
+    sg_system *sys;
+    sg_trace_opts o;
+    int wave;
+    int n;
+    sg_sprep *sp;
+    double *nsigned;   /* index after each surface, negative after odd mirrors */
+    sg_paraxial px;
+    sg_launch ln;
+    /* The last field point's object-space launch, so a grid over the pupil
+     * pays for the field's tangent once. */
+    int have_field;
+    double last_hx, last_hy;
+    osp field;
+    sg_ray_surface *scratch; /* nsurf entries for aiming traces */
+    const sg_catalog *cat;   /* must outlive the tracer */
+    sg_mpfr_ctx *mp;   /* only for the mpfr method */
+};
+
+/* Ray state of the precise method: position on the current surface in its
+ * frame, unit direction, and running bounds on both errors. */
+typedef struct sg_pray {
+    dd3 p, d;
+    double eP, eD;
+} sg_pray;
+
+/* Traces surfaces 1..n-1 from a ray on or before surface 1 (frame 1).
+ * path0 is the path already travelled before the start point.
+ * Fills out[1..upto]; returns the ray status.  The state r is left on
+ * surface upto, which is not bent when upto is not the image. */
+int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
+                      int upto);
+int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
+                      sg_ray_surface *out, int upto);
+
+/* Marks surface from as failed with status and the rest as not reached. */
+void sg_fail_rest(sg_ray_surface *out, int from, int n, int status);
+/* Fills the object row from a start point and a unit direction. */
+void sg_set_start_row(sg_ray_surface *o, const double S[3], const double u[3]);
+
+/* Surface evaluation shared by the methods. */
+double sg_sprep_sag_resid(const sg_sprep *s, double x, double y, double z);
+
+/* Launch of normalized rays, in launch.c. */
+int sg_launch_prepare(sg_tracer *t, sg_diag *d);
+int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
+                      sg_ray_surface *out);
+int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
+                      sg_ray_surface *out);
+
+/* The MPFR method, in trace_mpfr.c. */
+int sg_mpfr_prepare(sg_tracer *t, sg_diag *d);
+void sg_mpfr_free(sg_mpfr_ctx *m);
+int sg_mpfr_trace_start(sg_tracer *t, const double S[3], const double D[3],
+                        sg_ray_surface *out);
+int sg_mpfr_trace_normalized(sg_tracer *t, double hx, double hy, double px,
+                             double py, sg_ray_surface *out);
+
+/* Paraxial data at MPFR precision prec, in paraxial.c.  idx holds the
+ * signed index after every surface (n entries, at least prec bits). */
+typedef struct sg_parax_mp {
+    mpfr_t efl, bfl, image_dist, epd, enp, exp_diam, exp_pos, image_fnum,
+        working_fnum, object_na, pimg_h, mag, track, stop_r;
+    mpfr_t pimg_slope; /* paraxial image height per unit tan(field) or object height */
+} sg_parax_mp;
+
+void sg_parax_mp_init(sg_parax_mp *p, mpfr_prec_t prec);
+void sg_parax_mp_clear(sg_parax_mp *p);
+void sg_parax_to_double(const sg_parax_mp *p, sg_paraxial *o);
+int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
+                     sg_parax_mp *out, sg_diag *d);
+/* Signed indices after every surface at wavelength wave, into idx[0..n-1]. */
+int sg_indices_mpfr(const sg_system *sys, const sg_catalog *cat, int wave,
+                    mpfr_t *idx, sg_diag *d);
+
+static inline dd dd_from_mpfr(const mpfr_t x, mpfr_t tmp)
+{
+    dd r;
+    r.hi = mpfr_get_d(x, MPFR_RNDN);
+    mpfr_sub_d(tmp, x, r.hi, MPFR_RNDN);
+    r.lo = mpfr_get_d(tmp, MPFR_RNDN);
+    return r;
+}
+
+static inline double dd_to_d(dd a)
+{
+    return a.hi + a.lo;
+}
+
+#endif

@@ -1,0 +1,803 @@
+/*
+ * trace_mpfr.c - the reference method: every operation in MPFR.
+ *
+ * It follows the same geometry as the precise method (vertex frames,
+ * tangent-plane start, the vertex-sheet root, a Newton polish), because at
+ * 256 bits the formulas' own rounding is some 60 digits below anything a
+ * double can show.  Glass indices, the paraxial pupil, field tangents and
+ * ray aiming are all computed at the same precision, so the reference
+ * includes them.  All MPFR variables live in the context and are reused;
+ * nothing is allocated per ray.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "trace_internal.h"
+
+enum { NT = 32 };
+
+typedef struct msurf {
+    mpfr_t R, k1, T, mu;
+    mpfr_t a[SG_NASPH];
+} msurf;
+
+typedef struct mvec {
+    mpfr_t x, y, z;
+} mvec;
+
+struct sg_mpfr_ctx {
+    mpfr_prec_t prec;
+    int n;
+    msurf *s;
+    /* launch constants */
+    mpfr_t T0, enp, epr, stop_r, fx, fy, pimg_slope, pi;
+    /* ray state and scratch */
+    mvec P, D, G, obj, dir, sv_P, sv_D;
+    mpfr_t q[2], t[NT];
+    mpfr_t path;
+};
+
+static void mvec_init(mvec *v, mpfr_prec_t p)
+{
+    mpfr_inits2(p, v->x, v->y, v->z, (mpfr_ptr)0);
+}
+
+static void mvec_clear(mvec *v)
+{
+    mpfr_clears(v->x, v->y, v->z, (mpfr_ptr)0);
+}
+
+static void mvec_set(mvec *a, const mvec *b)
+{
+    mpfr_set(a->x, b->x, MPFR_RNDN);
+    mpfr_set(a->y, b->y, MPFR_RNDN);
+    mpfr_set(a->z, b->z, MPFR_RNDN);
+}
+
+static void dot(mpfr_t out, const mvec *a, const mvec *b, mpfr_t tmp)
+{
+    mpfr_mul(out, a->x, b->x, MPFR_RNDN);
+    mpfr_mul(tmp, a->y, b->y, MPFR_RNDN);
+    mpfr_add(out, out, tmp, MPFR_RNDN);
+    mpfr_mul(tmp, a->z, b->z, MPFR_RNDN);
+    mpfr_add(out, out, tmp, MPFR_RNDN);
+}
+
+/* v = v + s * d */
+static void axpy(mvec *v, const mpfr_t s, const mvec *d, mpfr_t tmp)
+{
+    mpfr_mul(tmp, s, d->x, MPFR_RNDN);
+    mpfr_add(v->x, v->x, tmp, MPFR_RNDN);
+    mpfr_mul(tmp, s, d->y, MPFR_RNDN);
+    mpfr_add(v->y, v->y, tmp, MPFR_RNDN);
+    mpfr_mul(tmp, s, d->z, MPFR_RNDN);
+    mpfr_add(v->z, v->z, tmp, MPFR_RNDN);
+}
+
+static void normalize(mvec *v, mpfr_t tmp, mpfr_t len)
+{
+    dot(len, v, v, tmp);
+    mpfr_sqrt(len, len, MPFR_RNDN);
+    mpfr_div(v->x, v->x, len, MPFR_RNDN);
+    mpfr_div(v->y, v->y, len, MPFR_RNDN);
+    mpfr_div(v->z, v->z, len, MPFR_RNDN);
+}
+
+void sg_mpfr_free(sg_mpfr_ctx *m)
+{
+    int i, k;
+    if (!m)
+        return;
+    if (m->s) {
+        for (i = 0; i < m->n; i++) {
+            mpfr_clears(m->s[i].R, m->s[i].k1, m->s[i].T, m->s[i].mu, (mpfr_ptr)0);
+            for (k = 0; k < SG_NASPH; k++)
+                mpfr_clear(m->s[i].a[k]);
+        }
+        free(m->s);
+    }
+    mpfr_clears(m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi,
+                m->q[0], m->q[1], m->path, (mpfr_ptr)0);
+    for (k = 0; k < NT; k++)
+        mpfr_clear(m->t[k]);
+    mvec_clear(&m->P);
+    mvec_clear(&m->D);
+    mvec_clear(&m->G);
+    mvec_clear(&m->obj);
+    mvec_clear(&m->dir);
+    mvec_clear(&m->sv_P);
+    mvec_clear(&m->sv_D);
+    free(m);
+}
+
+/* ------------------------------------------------------------------------
+ * Surfaces.
+ * ------------------------------------------------------------------------ */
+
+/* sag(r2) and w = sag'(r)/r at r2 into sag and w; returns 0 outside the
+ * conic's domain. */
+static int sag_w(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, const mpfr_t r2,
+                 mpfr_t sag, mpfr_t w)
+{
+    mpfr_t *t = m->t + 24;
+    int k;
+    mpfr_set_zero(sag, 1);
+    mpfr_set_zero(w, 1);
+    if (isfinite(sp->R)) {
+        mpfr_sqr(t[0], s->R, MPFR_RNDN);
+        mpfr_mul(t[1], s->k1, r2, MPFR_RNDN);
+        mpfr_sub(t[0], t[0], t[1], MPFR_RNDN);
+        if (mpfr_sgn(t[0]) < 0)
+            return 0;
+        mpfr_sqrt(t[0], t[0], MPFR_RNDN);
+        if (sp->R < 0)
+            mpfr_neg(t[0], t[0], MPFR_RNDN);
+        mpfr_add(t[1], s->R, t[0], MPFR_RNDN);
+        mpfr_div(sag, r2, t[1], MPFR_RNDN);
+        mpfr_ui_div(w, 1, t[0], MPFR_RNDN);
+    }
+    if (sp->nasph) {
+        mpfr_set_zero(t[2], 1);
+        mpfr_set_zero(t[3], 1);
+        for (k = sp->nasph - 1; k >= 0; k--) {
+            mpfr_mul(t[2], t[2], r2, MPFR_RNDN);
+            mpfr_add(t[2], t[2], s->a[k], MPFR_RNDN);
+            mpfr_mul(t[3], t[3], r2, MPFR_RNDN);
+            mpfr_mul_ui(t[1], s->a[k], (unsigned long)(2 * (k + 1)), MPFR_RNDN);
+            mpfr_add(t[3], t[3], t[1], MPFR_RNDN);
+        }
+        mpfr_mul(t[2], t[2], r2, MPFR_RNDN);
+        mpfr_add(sag, sag, t[2], MPFR_RNDN);
+        mpfr_add(w, w, t[3], MPFR_RNDN);
+    }
+    return 1;
+}
+
+/* F at P and dF/ds along D; returns 0 outside the domain. */
+static int eval_F(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, mpfr_t F, mpfr_t Fp)
+{
+    mpfr_t *t = m->t;
+    if (sp->shape == SHAPE_PLANE) {
+        mpfr_set(F, m->P.z, MPFR_RNDN);
+        mpfr_set(Fp, m->D.z, MPFR_RNDN);
+        return 1;
+    }
+    if (sp->shape == SHAPE_CONIC) {
+        /* x^2 + y^2 + k1 z^2 - 2 R z and its derivative */
+        mpfr_sqr(F, m->P.x, MPFR_RNDN);
+        mpfr_sqr(t[0], m->P.y, MPFR_RNDN);
+        mpfr_add(F, F, t[0], MPFR_RNDN);
+        mpfr_sqr(t[0], m->P.z, MPFR_RNDN);
+        mpfr_mul(t[0], t[0], s->k1, MPFR_RNDN);
+        mpfr_add(F, F, t[0], MPFR_RNDN);
+        mpfr_mul(t[0], m->P.z, s->R, MPFR_RNDN);
+        mpfr_mul_2ui(t[0], t[0], 1, MPFR_RNDN);
+        mpfr_sub(F, F, t[0], MPFR_RNDN);
+        mpfr_mul(Fp, m->P.x, m->D.x, MPFR_RNDN);
+        mpfr_mul(t[0], m->P.y, m->D.y, MPFR_RNDN);
+        mpfr_add(Fp, Fp, t[0], MPFR_RNDN);
+        mpfr_mul(t[0], s->k1, m->P.z, MPFR_RNDN);
+        mpfr_sub(t[0], t[0], s->R, MPFR_RNDN);
+        mpfr_mul(t[0], t[0], m->D.z, MPFR_RNDN);
+        mpfr_add(Fp, Fp, t[0], MPFR_RNDN);
+        mpfr_mul_2ui(Fp, Fp, 1, MPFR_RNDN);
+        return 1;
+    }
+    mpfr_sqr(t[1], m->P.x, MPFR_RNDN);
+    mpfr_sqr(t[0], m->P.y, MPFR_RNDN);
+    mpfr_add(t[1], t[1], t[0], MPFR_RNDN);
+    if (!sag_w(m, sp, s, t[1], t[2], t[3]))
+        return 0;
+    mpfr_sub(F, m->P.z, t[2], MPFR_RNDN);
+    mpfr_mul(Fp, m->P.x, m->D.x, MPFR_RNDN);
+    mpfr_mul(t[0], m->P.y, m->D.y, MPFR_RNDN);
+    mpfr_add(Fp, Fp, t[0], MPFR_RNDN);
+    mpfr_mul(Fp, Fp, t[3], MPFR_RNDN);
+    mpfr_sub(Fp, m->D.z, Fp, MPFR_RNDN);
+    return 1;
+}
+
+/* Moves P along D onto surface i, from P on (or near) its tangent plane.
+ * The step is added to m->path. */
+static int intersect(sg_tracer *tr, int i)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    const sg_sprep *sp = &tr->sp[i];
+    const msurf *s = &m->s[i];
+    mpfr_t *t = m->t;
+    mpfr_ptr sv = t[4], F = t[5], Fp = t[6], A = t[7], b = t[8], C = t[9];
+    int it, conv = 0;
+    mpfr_set_zero(sv, 1);
+    if (sp->shape == SHAPE_PLANE) {
+        if (mpfr_zero_p(m->P.z))
+            return SG_OK;
+        if (mpfr_zero_p(m->D.z))
+            return SG_EMISS;
+        mpfr_div(sv, m->P.z, m->D.z, MPFR_RNDN);
+        mpfr_neg(sv, sv, MPFR_RNDN);
+    } else {
+        /* Base conic: A s^2 + 2 b s + C = 0 in the R form. */
+        mpfr_sqr(A, m->D.x, MPFR_RNDN);
+        mpfr_sqr(t[0], m->D.y, MPFR_RNDN);
+        mpfr_add(A, A, t[0], MPFR_RNDN);
+        mpfr_sqr(t[0], m->D.z, MPFR_RNDN);
+        mpfr_mul(t[0], t[0], s->k1, MPFR_RNDN);
+        mpfr_add(A, A, t[0], MPFR_RNDN);
+        if (isfinite(sp->R)) {
+            eval_F(m, &(sg_sprep){.shape = SHAPE_CONIC, .R = sp->R, .k1 = sp->k1}, s, C, b);
+            mpfr_div_2ui(b, b, 1, MPFR_RNDN);
+            mpfr_sqr(t[0], b, MPFR_RNDN);
+            mpfr_mul(t[1], A, C, MPFR_RNDN);
+            mpfr_sub(t[0], t[0], t[1], MPFR_RNDN);
+            if (mpfr_sgn(t[0]) < 0) {
+                if (sp->shape == SHAPE_CONIC)
+                    return SG_EMISS;
+                mpfr_set_zero(sv, 1);
+            } else {
+                mpfr_sqrt(t[0], t[0], MPFR_RNDN);
+                if (mpfr_sgn(b) < 0)
+                    mpfr_neg(t[0], t[0], MPFR_RNDN);
+                mpfr_add(t[0], t[0], b, MPFR_RNDN);
+                mpfr_neg(t[0], t[0], MPFR_RNDN); /* q */
+                /* The root C/q lies on the vertex sheet unless the ray only
+                 * meets the other sheet; then q/A. */
+                if (!mpfr_zero_p(t[0]))
+                    mpfr_div(sv, C, t[0], MPFR_RNDN);
+                mpfr_mul(t[1], sv, m->D.z, MPFR_RNDN);
+                mpfr_add(t[1], t[1], m->P.z, MPFR_RNDN);
+                mpfr_mul(t[1], t[1], s->k1, MPFR_RNDN);
+                mpfr_div(t[1], t[1], s->R, MPFR_RNDN);
+                if (mpfr_cmp_ui(t[1], 1) > 0 || mpfr_zero_p(t[0])) {
+                    if (mpfr_zero_p(A))
+                        return SG_EMISS;
+                    mpfr_div(sv, t[0], A, MPFR_RNDN);
+                    mpfr_mul(t[1], sv, m->D.z, MPFR_RNDN);
+                    mpfr_add(t[1], t[1], m->P.z, MPFR_RNDN);
+                    mpfr_mul(t[1], t[1], s->k1, MPFR_RNDN);
+                    mpfr_div(t[1], t[1], s->R, MPFR_RNDN);
+                    if (mpfr_cmp_ui(t[1], 1) > 0 && sp->shape == SHAPE_CONIC)
+                        return SG_EMISS;
+                }
+            }
+        } else if (!mpfr_zero_p(m->D.z)) {
+            mpfr_div(sv, m->P.z, m->D.z, MPFR_RNDN);
+            mpfr_neg(sv, sv, MPFR_RNDN);
+        }
+    }
+    axpy(&m->P, sv, &m->D, t[0]);
+    mpfr_add(m->path, m->path, sv, MPFR_RNDN);
+    if (sp->shape == SHAPE_PLANE)
+        return SG_OK;
+    /* Newton along the ray until the step is below the precision. */
+    for (it = 0; it < tr->o.max_iter + 4; it++) {
+        if (!eval_F(m, sp, s, F, Fp))
+            return SG_EMISS;
+        if (mpfr_zero_p(F)) {
+            conv = 1;
+            break;
+        }
+        if (mpfr_zero_p(Fp))
+            return SG_EMISS;
+        mpfr_div(sv, F, Fp, MPFR_RNDN);
+        mpfr_neg(sv, sv, MPFR_RNDN);
+        axpy(&m->P, sv, &m->D, t[0]);
+        mpfr_add(m->path, m->path, sv, MPFR_RNDN);
+        if (!mpfr_number_p(sv))
+            return SG_EMISS;
+        /* Converged when the step is below 2^(8 - prec) of the path scale. */
+        {
+            mpfr_exp_t es = mpfr_zero_p(sv) ? mpfr_get_emin() : mpfr_get_exp(sv);
+            mpfr_exp_t ep = mpfr_get_exp(m->P.z);
+            mpfr_exp_t ex = mpfr_get_exp(m->P.x), ey = mpfr_get_exp(m->P.y);
+            if (mpfr_zero_p(m->P.z))
+                ep = mpfr_get_emin();
+            if (!mpfr_zero_p(m->P.x) && ex > ep)
+                ep = ex;
+            if (!mpfr_zero_p(m->P.y) && ey > ep)
+                ep = ey;
+            if (mpfr_zero_p(sv) || es < ep - (mpfr_exp_t)m->prec + 8) {
+                conv = 1;
+                break;
+            }
+        }
+    }
+    if (!conv)
+        return SG_ENOCONV;
+    return SG_OK;
+}
+
+/* Refraction or reflection at surface i, in place on D. */
+static int bend(sg_tracer *tr, int i)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    const sg_sprep *sp = &tr->sp[i];
+    const msurf *s = &m->s[i];
+    mpfr_t *t = m->t;
+    mpfr_ptr gg = t[4], dg = t[5], cosI = t[6], k = t[7], gam = t[8];
+    if (sp->shape == SHAPE_PLANE) {
+        mpfr_set_zero(m->G.x, 1);
+        mpfr_set_zero(m->G.y, 1);
+        mpfr_set_si(m->G.z, -1, MPFR_RNDN);
+    } else if (sp->shape == SHAPE_CONIC) {
+        mpfr_set(m->G.x, m->P.x, MPFR_RNDN);
+        mpfr_set(m->G.y, m->P.y, MPFR_RNDN);
+        mpfr_mul(m->G.z, s->k1, m->P.z, MPFR_RNDN);
+        mpfr_sub(m->G.z, m->G.z, s->R, MPFR_RNDN);
+    } else {
+        mpfr_sqr(t[1], m->P.x, MPFR_RNDN);
+        mpfr_sqr(t[0], m->P.y, MPFR_RNDN);
+        mpfr_add(t[1], t[1], t[0], MPFR_RNDN);
+        if (!sag_w(m, sp, s, t[1], t[2], t[3]))
+            return SG_EMISS;
+        mpfr_mul(m->G.x, t[3], m->P.x, MPFR_RNDN);
+        mpfr_neg(m->G.x, m->G.x, MPFR_RNDN);
+        mpfr_mul(m->G.y, t[3], m->P.y, MPFR_RNDN);
+        mpfr_neg(m->G.y, m->G.y, MPFR_RNDN);
+        mpfr_set_ui(m->G.z, 1, MPFR_RNDN);
+    }
+    dot(gg, &m->G, &m->G, t[0]);
+    dot(dg, &m->D, &m->G, t[0]);
+    if (sp->mirror) {
+        mpfr_div(t[1], dg, gg, MPFR_RNDN);
+        mpfr_mul_2ui(t[1], t[1], 1, MPFR_RNDN);
+        mpfr_neg(t[1], t[1], MPFR_RNDN);
+        axpy(&m->D, t[1], &m->G, t[0]);
+        return SG_OK;
+    }
+    mpfr_sqrt(gg, gg, MPFR_RNDN);
+    mpfr_div(cosI, dg, gg, MPFR_RNDN);
+    mpfr_sqr(k, cosI, MPFR_RNDN);
+    mpfr_ui_sub(k, 1, k, MPFR_RNDN);
+    mpfr_sqr(t[1], s->mu, MPFR_RNDN);
+    mpfr_mul(k, k, t[1], MPFR_RNDN);
+    mpfr_ui_sub(k, 1, k, MPFR_RNDN);
+    if (mpfr_sgn(k) < 0)
+        return SG_ETIR;
+    mpfr_sqrt(gam, k, MPFR_RNDN);
+    if (mpfr_sgn(cosI) < 0)
+        mpfr_neg(gam, gam, MPFR_RNDN);
+    mpfr_mul(t[1], s->mu, cosI, MPFR_RNDN);
+    mpfr_sub(gam, gam, t[1], MPFR_RNDN);
+    mpfr_div(gam, gam, gg, MPFR_RNDN);
+    mpfr_mul(m->D.x, m->D.x, s->mu, MPFR_RNDN);
+    mpfr_mul(m->D.y, m->D.y, s->mu, MPFR_RNDN);
+    mpfr_mul(m->D.z, m->D.z, s->mu, MPFR_RNDN);
+    axpy(&m->D, gam, &m->G, t[0]);
+    return SG_OK;
+}
+
+static double ulp_d(double x)
+{
+    x = fabs(x);
+    if (!(x > 0.0) || !isfinite(x))
+        return 0.0;
+    return nextafter(x, INFINITY) - x;
+}
+
+/* Traces surfaces 1..upto from P, D (unit) in frame 1; path is preset to
+ * the distance already travelled. */
+static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    mpfr_t *t = m->t;
+    int i, rc;
+    for (i = 1; i <= upto; i++) {
+        const sg_sprep *sp = &tr->sp[i];
+        sg_ray_surface *o = &out[i];
+        double big;
+        if (i > 1) {
+            mpfr_sub(m->P.z, m->P.z, m->s[i].T, MPFR_RNDN);
+            mpfr_set_zero(m->path, 1);
+        }
+        /* Onto the tangent plane first, as the precise method does. */
+        if (!mpfr_zero_p(m->D.z) && !mpfr_zero_p(m->P.z)) {
+            mpfr_div(t[11], m->P.z, m->D.z, MPFR_RNDN);
+            mpfr_neg(t[11], t[11], MPFR_RNDN);
+            axpy(&m->P, t[11], &m->D, t[0]);
+            mpfr_set_zero(m->P.z, 1);
+            mpfr_add(m->path, m->path, t[11], MPFR_RNDN);
+        }
+        rc = intersect(tr, i);
+        if (rc != SG_OK) {
+            sg_fail_rest(out, i, tr->n, rc);
+            return rc;
+        }
+        o->x = mpfr_get_d(m->P.x, MPFR_RNDN);
+        o->y = mpfr_get_d(m->P.y, MPFR_RNDN);
+        o->z = mpfr_get_d(m->P.z, MPFR_RNDN);
+        o->path = mpfr_get_d(m->path, MPFR_RNDN);
+        o->residual = sg_sprep_sag_resid(sp, o->x, o->y, o->z);
+        big = fmax(fabs(o->x), fmax(fabs(o->y), fabs(o->z)));
+        o->error_bound = 0.5 * ulp_d(big) + ldexp(big + fabs(o->path), 16 - (int)m->prec);
+        o->status = SG_OK;
+        if (tr->o.clip && sp->sd > 0.0 && hypot(o->x, o->y) > sp->sd * (1.0 + tr->o.clip_rtol)) {
+            sg_fail_rest(out, i, tr->n, SG_EVIGNETTED);
+            return SG_EVIGNETTED;
+        }
+        if (i < upto) {
+            rc = bend(tr, i);
+            if (rc != SG_OK) {
+                sg_fail_rest(out, i, tr->n, rc);
+                return rc;
+            }
+        }
+        o->l = mpfr_get_d(m->D.x, MPFR_RNDN);
+        o->m = mpfr_get_d(m->D.y, MPFR_RNDN);
+        o->n = mpfr_get_d(m->D.z, MPFR_RNDN);
+        o->dir_error_bound = 0.5 * ulp_d(fmax(fabs(o->l), fmax(fabs(o->m), fabs(o->n)))) +
+                             ldexp(1.0, 16 - (int)m->prec);
+    }
+    return SG_OK;
+}
+
+int sg_mpfr_trace_start(sg_tracer *tr, const double S[3], const double Dv[3],
+                        sg_ray_surface *out)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    double u[3];
+    mpfr_set_d(m->P.x, S[0], MPFR_RNDN);
+    mpfr_set_d(m->P.y, S[1], MPFR_RNDN);
+    mpfr_set_d(m->P.z, S[2], MPFR_RNDN);
+    mpfr_set_d(m->D.x, Dv[0], MPFR_RNDN);
+    mpfr_set_d(m->D.y, Dv[1], MPFR_RNDN);
+    mpfr_set_d(m->D.z, Dv[2], MPFR_RNDN);
+    normalize(&m->D, m->t[0], m->t[1]);
+    u[0] = mpfr_get_d(m->D.x, MPFR_RNDN);
+    u[1] = mpfr_get_d(m->D.y, MPFR_RNDN);
+    u[2] = mpfr_get_d(m->D.z, MPFR_RNDN);
+    sg_set_start_row(&out[0], S, u);
+    mpfr_set_zero(m->path, 1);
+    return run(tr, out, tr->n - 1);
+}
+
+/* ------------------------------------------------------------------------
+ * Normalized rays.
+ * ------------------------------------------------------------------------ */
+
+/* Object-space part from field values (vx, vy) in m->t[12], m->t[13]:
+ * tangents or degrees for an infinite object, heights otherwise. */
+static void m_osp(sg_tracer *tr, int deg)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    mpfr_t *t = m->t;
+    if (!isfinite(tr->sys->surf[0].thickness)) {
+        if (deg) {
+            mpfr_mul(t[12], t[12], m->pi, MPFR_RNDN);
+            mpfr_div_ui(t[12], t[12], 180, MPFR_RNDN);
+            mpfr_tan(t[12], t[12], MPFR_RNDN);
+            mpfr_mul(t[13], t[13], m->pi, MPFR_RNDN);
+            mpfr_div_ui(t[13], t[13], 180, MPFR_RNDN);
+            mpfr_tan(t[13], t[13], MPFR_RNDN);
+        }
+        mpfr_set(m->dir.x, t[12], MPFR_RNDN);
+        mpfr_set(m->dir.y, t[13], MPFR_RNDN);
+        mpfr_set_ui(m->dir.z, 1, MPFR_RNDN);
+        normalize(&m->dir, t[0], t[1]);
+    } else {
+        const sg_surface *s0 = &tr->sys->surf[0];
+        mpfr_set(m->obj.x, t[12], MPFR_RNDN);
+        mpfr_set(m->obj.y, t[13], MPFR_RNDN);
+        mpfr_neg(m->obj.z, m->T0, MPFR_RNDN);
+        if (s0->radius != 0.0 && isfinite(s0->radius)) {
+            double sag = sg_surface_sag(s0, mpfr_get_d(t[12], MPFR_RNDN),
+                                        mpfr_get_d(t[13], MPFR_RNDN));
+            if (isfinite(sag))
+                mpfr_add_d(m->obj.z, m->obj.z, sag, MPFR_RNDN);
+        }
+    }
+}
+
+/* P, D and path from the object-space part and Q = m->q. */
+static void m_start(sg_tracer *tr)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    mpfr_set(m->P.x, m->q[0], MPFR_RNDN);
+    mpfr_set(m->P.y, m->q[1], MPFR_RNDN);
+    mpfr_set_zero(m->P.z, 1);
+    if (!isfinite(tr->sys->surf[0].thickness)) {
+        mvec_set(&m->D, &m->dir);
+        mpfr_set_zero(m->path, 1);
+    } else {
+        mpfr_sub(m->D.x, m->q[0], m->obj.x, MPFR_RNDN);
+        mpfr_sub(m->D.y, m->q[1], m->obj.y, MPFR_RNDN);
+        mpfr_neg(m->D.z, m->obj.z, MPFR_RNDN);
+        normalize(&m->D, m->t[0], m->path);
+    }
+}
+
+/* Q for aiming off through pupil point (px, py). */
+static void m_q_off(sg_tracer *tr, double px, double py)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    mpfr_t *t = m->t;
+    mpfr_mul_d(t[14], m->epr, px, MPFR_RNDN);
+    mpfr_mul_d(t[15], m->epr, py, MPFR_RNDN);
+    if (!isfinite(tr->sys->surf[0].thickness)) {
+        mpfr_div(t[2], m->enp, m->dir.z, MPFR_RNDN);
+        mpfr_mul(t[3], t[2], m->dir.x, MPFR_RNDN);
+        mpfr_sub(m->q[0], t[14], t[3], MPFR_RNDN);
+        mpfr_mul(t[3], t[2], m->dir.y, MPFR_RNDN);
+        mpfr_sub(m->q[1], t[15], t[3], MPFR_RNDN);
+    } else {
+        mpfr_sub(t[2], m->enp, m->obj.z, MPFR_RNDN);
+        mpfr_neg(t[3], m->obj.z, MPFR_RNDN);
+        mpfr_div(t[2], t[3], t[2], MPFR_RNDN); /* lambda */
+        mpfr_sub(t[3], t[14], m->obj.x, MPFR_RNDN);
+        mpfr_mul(t[3], t[3], t[2], MPFR_RNDN);
+        mpfr_add(m->q[0], m->obj.x, t[3], MPFR_RNDN);
+        mpfr_sub(t[3], t[15], m->obj.y, MPFR_RNDN);
+        mpfr_mul(t[3], t[3], t[2], MPFR_RNDN);
+        mpfr_add(m->q[1], m->obj.y, t[3], MPFR_RNDN);
+    }
+}
+
+/* Landing (x, y) on surface `upto` of the ray through m->q; into a, b. */
+static int m_land(sg_tracer *tr, int upto, mpfr_t a, mpfr_t b)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    int rc, clip = tr->o.clip;
+    m_start(tr);
+    tr->o.clip = 0;
+    rc = run(tr, tr->scratch, upto);
+    tr->o.clip = clip;
+    mpfr_set(a, m->P.x, MPFR_RNDN);
+    mpfr_set(b, m->P.y, MPFR_RNDN);
+    return rc;
+}
+
+/* Newton on Q with an MPFR central-difference Jacobian; the step h is
+ * 2^(-prec/3) of the pupil, where difference and rounding errors balance. */
+static int m_aim(sg_tracer *tr, double px, double py)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    mpfr_t *t = m->t;
+    mpfr_ptr h = t[16], J00 = t[17], J01 = t[18], J10 = t[19], J11 = t[20], det = t[21];
+    mpfr_ptr ra = t[22], rb = t[23];
+    int k, it, stop = tr->sys->stop;
+    mpfr_t tgt[2], sa, sb;
+    int rc = SG_EAIM;
+    mpfr_inits2(m->prec, tgt[0], tgt[1], sa, sb, (mpfr_ptr)0);
+    mpfr_mul_d(tgt[0], m->stop_r, px, MPFR_RNDN);
+    mpfr_mul_d(tgt[1], m->stop_r, py, MPFR_RNDN);
+    mpfr_mul_2si(h, m->epr, -(long)(m->prec / 3), MPFR_RNDN);
+    for (k = 0; k < 2; k++) {
+        mpfr_add(m->q[k], m->q[k], h, MPFR_RNDN);
+        if (m_land(tr, stop, sa, sb) != SG_OK)
+            goto out;
+        mpfr_sub(m->q[k], m->q[k], h, MPFR_RNDN);
+        mpfr_sub(m->q[k], m->q[k], h, MPFR_RNDN);
+        if (m_land(tr, stop, ra, rb) != SG_OK)
+            goto out;
+        mpfr_add(m->q[k], m->q[k], h, MPFR_RNDN);
+        mpfr_sub(sa, sa, ra, MPFR_RNDN);
+        mpfr_sub(sb, sb, rb, MPFR_RNDN);
+        mpfr_div(sa, sa, h, MPFR_RNDN);
+        mpfr_div(sb, sb, h, MPFR_RNDN);
+        mpfr_div_2ui(k == 0 ? J00 : J01, sa, 1, MPFR_RNDN);
+        mpfr_div_2ui(k == 0 ? J10 : J11, sb, 1, MPFR_RNDN);
+    }
+    mpfr_mul(det, J00, J11, MPFR_RNDN);
+    mpfr_mul(sa, J01, J10, MPFR_RNDN);
+    mpfr_sub(det, det, sa, MPFR_RNDN);
+    if (mpfr_zero_p(det) || !mpfr_number_p(det))
+        goto out;
+    for (it = 0; it < tr->o.aim_max_iter; it++) {
+        if (m_land(tr, stop, ra, rb) != SG_OK)
+            goto out;
+        mpfr_sub(ra, ra, tgt[0], MPFR_RNDN);
+        mpfr_sub(rb, rb, tgt[1], MPFR_RNDN);
+        /* dq = J^-1 r */
+        mpfr_mul(sa, J11, ra, MPFR_RNDN);
+        mpfr_mul(sb, J01, rb, MPFR_RNDN);
+        mpfr_sub(sa, sa, sb, MPFR_RNDN);
+        mpfr_div(sa, sa, det, MPFR_RNDN);
+        mpfr_mul(sb, J00, rb, MPFR_RNDN);
+        mpfr_mul(h, J10, ra, MPFR_RNDN);
+        mpfr_sub(sb, sb, h, MPFR_RNDN);
+        mpfr_div(sb, sb, det, MPFR_RNDN);
+        mpfr_sub(m->q[0], m->q[0], sa, MPFR_RNDN);
+        mpfr_sub(m->q[1], m->q[1], sb, MPFR_RNDN);
+        /* Converged when the correction is below the precision of Q. */
+        {
+            mpfr_exp_t eq = mpfr_get_exp(m->epr);
+            int small_a = mpfr_zero_p(sa) || mpfr_get_exp(sa) < eq - (mpfr_exp_t)m->prec + 6;
+            int small_b = mpfr_zero_p(sb) || mpfr_get_exp(sb) < eq - (mpfr_exp_t)m->prec + 6;
+            if (small_a && small_b) {
+                rc = SG_OK;
+                goto out;
+            }
+        }
+    }
+out:
+    mpfr_clears(tgt[0], tgt[1], sa, sb, (mpfr_ptr)0);
+    return rc;
+}
+
+int sg_mpfr_trace_normalized(sg_tracer *tr, double hx, double hy, double px, double py,
+                             sg_ray_surface *out)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    mpfr_t *t = m->t;
+    int inf = !isfinite(tr->sys->surf[0].thickness), deg = 0;
+    double S[3], u[3];
+    mpfr_mul_d(t[12], m->fx, hx, MPFR_RNDN);
+    mpfr_mul_d(t[13], m->fy, hy, MPFR_RNDN);
+    switch (tr->sys->field_type) {
+    case SG_FIELD_ANGLE:
+        deg = 1;
+        break;
+    case SG_FIELD_OBJECT_HEIGHT:
+        break;
+    case SG_FIELD_PARAX_IMAGE_HEIGHT:
+        mpfr_div(t[12], t[12], m->pimg_slope, MPFR_RNDN);
+        mpfr_div(t[13], t[13], m->pimg_slope, MPFR_RNDN);
+        break;
+    case SG_FIELD_REAL_IMAGE_HEIGHT: {
+        /* The precise method finds the object-space value to double-double
+         * accuracy; the reference then traces that launch exactly. */
+        sg_ray_surface *o0 = tr->scratch;
+        sg_method keep = tr->o.method;
+        int rc;
+        tr->o.method = SG_METHOD_PRECISE;
+        tr->have_field = 0;
+        rc = sg_launch_precise(tr, hx, hy, 0.0, 0.0, o0);
+        tr->o.method = keep;
+        tr->have_field = 0;
+        if (rc == SG_EAIM) {
+            sg_fail_rest(out, 0, tr->n, SG_EAIM);
+            return SG_EAIM;
+        }
+        if (inf) {
+            mpfr_set_d(t[12], tr->field.dir.x.hi, MPFR_RNDN);
+            mpfr_add_d(t[12], t[12], tr->field.dir.x.lo, MPFR_RNDN);
+            mpfr_set_d(t[13], tr->field.dir.y.hi, MPFR_RNDN);
+            mpfr_add_d(t[13], t[13], tr->field.dir.y.lo, MPFR_RNDN);
+            mpfr_set_d(t[14], tr->field.dir.z.hi, MPFR_RNDN);
+            mpfr_add_d(t[14], t[14], tr->field.dir.z.lo, MPFR_RNDN);
+            mpfr_div(t[12], t[12], t[14], MPFR_RNDN);
+            mpfr_div(t[13], t[13], t[14], MPFR_RNDN);
+        } else {
+            mpfr_set_d(t[12], tr->field.obj.x.hi, MPFR_RNDN);
+            mpfr_add_d(t[12], t[12], tr->field.obj.x.lo, MPFR_RNDN);
+            mpfr_set_d(t[13], tr->field.obj.y.hi, MPFR_RNDN);
+            mpfr_add_d(t[13], t[13], tr->field.obj.y.lo, MPFR_RNDN);
+        }
+        break;
+    }
+    }
+    m_osp(tr, deg);
+    m_q_off(tr, px, py);
+    if (tr->sys->aim != SG_AIM_OFF && m_aim(tr, px, py) != SG_OK) {
+        sg_fail_rest(out, 0, tr->n, SG_EAIM);
+        return SG_EAIM;
+    }
+    m_start(tr);
+    u[0] = mpfr_get_d(m->D.x, MPFR_RNDN);
+    u[1] = mpfr_get_d(m->D.y, MPFR_RNDN);
+    u[2] = mpfr_get_d(m->D.z, MPFR_RNDN);
+    if (inf) {
+        S[0] = u[0] == 0.0 ? 0.0 : copysign(INFINITY, -u[0]);
+        S[1] = u[1] == 0.0 ? 0.0 : copysign(INFINITY, -u[1]);
+        S[2] = copysign(INFINITY, -u[2]);
+    } else {
+        S[0] = mpfr_get_d(m->obj.x, MPFR_RNDN);
+        S[1] = mpfr_get_d(m->obj.y, MPFR_RNDN);
+        mpfr_add(t[0], m->obj.z, m->T0, MPFR_RNDN);
+        S[2] = mpfr_get_d(t[0], MPFR_RNDN);
+    }
+    sg_set_start_row(&out[0], S, u);
+    return run(tr, out, tr->n - 1);
+}
+
+/* ------------------------------------------------------------------------
+ * Preparation.
+ * ------------------------------------------------------------------------ */
+
+int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
+{
+    const sg_system *sys = tr->sys;
+    mpfr_prec_t prec = tr->o.mpfr_bits;
+    sg_mpfr_ctx *m = calloc(1, sizeof *m);
+    mpfr_t *idx;
+    sg_parax_mp p;
+    int i, k, rc;
+    if (!m)
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    m->prec = prec;
+    m->n = tr->n;
+    m->s = calloc((size_t)tr->n, sizeof *m->s);
+    idx = calloc((size_t)tr->n, sizeof *idx);
+    mpfr_inits2(prec, m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi,
+                m->q[0], m->q[1], m->path, (mpfr_ptr)0);
+    for (k = 0; k < NT; k++)
+        mpfr_init2(m->t[k], prec);
+    mvec_init(&m->P, prec);
+    mvec_init(&m->D, prec);
+    mvec_init(&m->G, prec);
+    mvec_init(&m->obj, prec);
+    mvec_init(&m->dir, prec);
+    mvec_init(&m->sv_P, prec);
+    mvec_init(&m->sv_D, prec);
+    tr->mp = m;
+    if (!m->s || !idx) {
+        free(idx);
+        if (m->s) {
+            free(m->s);
+            m->s = NULL;
+        }
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    }
+    for (i = 0; i < tr->n; i++) {
+        msurf *s = &m->s[i];
+        mpfr_inits2(prec, s->R, s->k1, s->T, s->mu, (mpfr_ptr)0);
+        for (k = 0; k < SG_NASPH; k++)
+            mpfr_init2(s->a[k], prec);
+        mpfr_init2(idx[i], prec);
+        mpfr_set_d(s->R, tr->sp[i].R, MPFR_RNDN);
+        mpfr_set_d(s->k1, sys->surf[i].conic, MPFR_RNDN);
+        mpfr_add_ui(s->k1, s->k1, 1, MPFR_RNDN);
+        mpfr_set_d(s->T, tr->sp[i].T, MPFR_RNDN);
+        for (k = 0; k < SG_NASPH; k++)
+            mpfr_set_d(s->a[k], tr->sp[i].a[k], MPFR_RNDN);
+    }
+    mpfr_const_pi(m->pi, MPFR_RNDN);
+    rc = sg_indices_mpfr(sys, tr->cat, tr->wave, idx, d);
+    if (rc == SG_OK) {
+        for (i = 1; i < tr->n; i++) {
+            mpfr_abs(m->t[0], idx[i - 1], MPFR_RNDN);
+            mpfr_abs(m->t[1], idx[i], MPFR_RNDN);
+            mpfr_div(m->s[i].mu, m->t[0], m->t[1], MPFR_RNDN);
+        }
+        sg_parax_mp_init(&p, prec);
+        rc = sg_paraxial_mpfr(sys, idx, prec, &p, d);
+        if (rc == SG_OK) {
+            if (isfinite(sys->surf[0].thickness))
+                mpfr_set_d(m->T0, sys->surf[0].thickness, MPFR_RNDN);
+            mpfr_set(m->enp, p.enp, MPFR_RNDN);
+            mpfr_div_2ui(m->epr, p.epd, 1, MPFR_RNDN);
+            mpfr_set(m->stop_r, p.stop_r, MPFR_RNDN);
+            mpfr_set(m->pimg_slope, p.pimg_slope, MPFR_RNDN);
+        }
+        sg_parax_mp_clear(&p);
+    }
+    for (i = 0; i < tr->n; i++)
+        mpfr_clear(idx[i]);
+    free(idx);
+    if (rc != SG_OK)
+        return rc;
+    /* Field scales, as in the precise launch. */
+    mpfr_set_zero(m->fx, 1);
+    mpfr_set_zero(m->fy, 1);
+    for (k = 0; k < sys->nfield; k++) {
+        if (sys->field_norm == SG_NORM_RADIAL) {
+            mpfr_set_d(m->t[0], sys->field[k].x, MPFR_RNDN);
+            mpfr_sqr(m->t[0], m->t[0], MPFR_RNDN);
+            mpfr_set_d(m->t[1], sys->field[k].y, MPFR_RNDN);
+            mpfr_sqr(m->t[1], m->t[1], MPFR_RNDN);
+            mpfr_add(m->t[0], m->t[0], m->t[1], MPFR_RNDN);
+            mpfr_sqrt(m->t[0], m->t[0], MPFR_RNDN);
+            mpfr_max(m->fx, m->fx, m->t[0], MPFR_RNDN);
+            mpfr_max(m->fy, m->fy, m->t[0], MPFR_RNDN);
+        } else {
+            mpfr_set_d(m->t[0], fabs(sys->field[k].x), MPFR_RNDN);
+            mpfr_max(m->fx, m->fx, m->t[0], MPFR_RNDN);
+            mpfr_set_d(m->t[0], fabs(sys->field[k].y), MPFR_RNDN);
+            mpfr_max(m->fy, m->fy, m->t[0], MPFR_RNDN);
+        }
+    }
+    /* Real aiming with a pupil not set by the stop: the stop radius is
+     * where the real on-axis marginal ray meets the stop. */
+    if (sys->aim == SG_AIM_REAL && sys->aper_type != SG_APER_FLOAT_STOP) {
+        mpfr_set_zero(m->t[12], 1);
+        mpfr_set_zero(m->t[13], 1);
+        m_osp(tr, 0);
+        m_q_off(tr, 0.0, 1.0);
+        if (m_land(tr, sys->stop, m->t[14], m->t[15]) != SG_OK)
+            return sg_diag_set(d, SG_EAIM,
+                               "ray aiming: the on-axis marginal ray does not reach the stop "
+                               "(surface %d)", sys->stop);
+        mpfr_hypot(m->stop_r, m->t[14], m->t[15], MPFR_RNDN);
+    }
+    return SG_OK;
+}

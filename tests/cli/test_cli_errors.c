@@ -1,0 +1,226 @@
+/* test_cli_errors.c - exit statuses and messages of "sagitta", checked
+ * against the contract in man/sagitta.1 (EXIT STATUS): 2 for a bad command
+ * line, 3 for a file that cannot be read or parsed, 4 for a design that
+ * cannot be traced, and never a crash. */
+#include <ctype.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "clitest.h"
+#include "sagitta.h"
+
+static const char *const SINGLET =
+    "    {\"radius\": \"inf\", \"thickness\": \"inf\"},\n"
+    "    {\"radius\": 50, \"thickness\": 5, \"material\": 1.5, \"stop\": true},\n"
+    "    {\"radius\": -50, \"thickness\": 45},\n"
+    "    {\"radius\": \"inf\", \"thickness\": 0}";
+
+/* Runs the arguments and checks the exit status, that stderr starts with
+ * "sagitta: " and contains every needle given (NULL-terminated after the
+ * arguments' own NULL). */
+static void expect(int code, const char *const *args, const char *n1,
+                   const char *n2)
+{
+    ct_result r;
+    char cmd[512] = "";
+    int k;
+    for (k = 0; args[k]; k++) {
+        strncat(cmd, " ", sizeof cmd - strlen(cmd) - 1);
+        strncat(cmd, args[k], sizeof cmd - strlen(cmd) - 1);
+    }
+    ct_runv(&r, args);
+    if (r.code != code)
+        fail_msg("sagitta%s: exit %d, expected %d; stderr:\n%s", cmd, r.code, code,
+                 r.err);
+    if (code != 0) {
+        if (strncmp(r.err, "sagitta: ", 9) != 0)
+            fail_msg("sagitta%s: stderr lacks the \"sagitta: \" prefix:\n%s", cmd, r.err);
+        if (r.out[0])
+            fail_msg("sagitta%s: failed but wrote to stdout:\n%s", cmd, r.out);
+    }
+    if (n1 && !strstr(r.err, n1))
+        fail_msg("sagitta%s: stderr lacks \"%s\":\n%s", cmd, n1, r.err);
+    if (n2 && !strstr(r.err, n2))
+        fail_msg("sagitta%s: stderr lacks \"%s\":\n%s", cmd, n2, r.err);
+    print_message("# exit %d as expected:%s -> %.*s\n", code, cmd,
+                  (int)strcspn(r.err, "\n"), r.err);
+    ct_free(&r);
+}
+
+#define ARGS(...) ((const char *const[]){ __VA_ARGS__, NULL })
+
+static void test_missing_file(void **state)
+{
+    const char *path = ct_path("no-such-design.json");
+    (void)state;
+    expect(3, ARGS("trace", path, "--ray", "0,0,0,0"), path, NULL);
+    expect(3, ARGS("paraxial", path), path, NULL);
+}
+
+static void test_syntax_error(void **state)
+{
+    /* The stray comma is on line 3, after column 14. */
+    const char *path = ct_file("syntax.json",
+                               "{\n"
+                               "  \"format\": \"sagitta-design\",\n"
+                               "  \"version\": 1,,\n"
+                               "  \"surfaces\": []\n"
+                               "}\n");
+    ct_result r;
+    const char *p;
+    int found = 0;
+    (void)state;
+    ct_run(&r, "trace", path, "--ray", "0,0,0,0", NULL);
+    assert_int_equal(r.code, 3);
+    assert_non_null(strstr(r.err, path));
+    /* FILE:LINE:COL: with the line of the stray comma. */
+    for (p = strstr(r.err, ":3:"); p; p = strstr(p + 1, ":3:"))
+        if (isdigit((unsigned char)p[3])) {
+            found = 1;
+            break;
+        }
+    if (!found)
+        fail_msg("no \":3:COL\" in: %s", r.err);
+    print_message("# syntax error reported at line 3 with a column: %s", r.err);
+    ct_free(&r);
+
+    path = ct_file("garbage.json", "\x7f" "ELF\x01\x02\x03 not json at all");
+    expect(3, ARGS("trace", path, "--ray", "0,0,0,0"), path, NULL);
+}
+
+static void test_unknown_glass(void **state)
+{
+    const char *path = ct_design("glass.json",
+        "    {\"radius\": \"inf\", \"thickness\": \"inf\"},\n"
+        "    {\"radius\": 50, \"thickness\": 5, \"material\": \"NO-SUCH-GLASS-42\", \"stop\": true},\n"
+        "    {\"radius\": -50, \"thickness\": 45},\n"
+        "    {\"radius\": \"inf\", \"thickness\": 0}");
+    (void)state;
+    expect(4, ARGS("trace", path, "--ray", "0,0,0,0"), "surface 1", "NO-SUCH-GLASS-42");
+    expect(4, ARGS("paraxial", path), "surface 1", NULL);
+}
+
+static void test_bad_values(void **state)
+{
+    const char *d = ct_design("good.json", SINGLET);
+    (void)state;
+    expect(2, ARGS("trace", d, "--ray", "0,1,x"), "--ray",
+           "expected 4 comma-separated numbers Hx,Hy,Px,Py, got \"0,1,x\"");
+    expect(2, ARGS("trace", d, "--ray", "0,1,0,x"), "--ray", "Py");
+    expect(2, ARGS("trace", d, "--ray", "nan,0,0,0"), "--ray", NULL);
+    expect(2, ARGS("trace", d, "--ray", "0,0,0,1e999"), "--ray", NULL);
+    expect(2, ARGS("trace", d, "--frobnicate"), "--frobnicate", NULL);
+    expect(2, ARGS("trace", d, "--ray"), "--ray", NULL);
+    expect(2, ARGS("trace", d, "--ray", "0,0,0,0", "--bits", "52"), "--bits", NULL);
+    expect(2, ARGS("trace", d, "--ray", "0,0,0,0", "--method", "mpfr", "--bits", "100001"),
+           "--bits", NULL);
+    expect(2, ARGS("trace", d, "--ray", "0,0,0,0", "--bits", "64.5"), "--bits", NULL);
+    expect(2, ARGS("trace", d, "--ray", "0,0,0,0", "--method", "fast"), "--method", NULL);
+    expect(2, ARGS("trace", d, "--ray", "0,0,0,0", "--format", "xml"), "--format", NULL);
+    expect(2, ARGS("paraxial", d, "--format", "csv"), "--format", NULL);
+    expect(2, ARGS("trace", d, "--ray", "0,0,0,0", "--wave", "0"), "--wave", NULL);
+    expect(2, ARGS("trace", d, "--ray", "0,0,0,0", "--threads", "-1"), "--threads", NULL);
+    expect(2, ARGS("trace", d, "--start", "0,0", "--dir", "0,0,1"), "--start", NULL);
+    expect(2, ARGS("trace", d, "--start", "0,0,-1", "--dir", "0,0,0"), "--dir", NULL);
+    expect(2, ARGS("trace", d, "--start", "0,0,-1"), "--dir", NULL);
+    expect(2, ARGS("trace", d), "--ray", NULL);
+    expect(2, ARGS("trace", d, "--ray", "0,0,0,0", "--start", "0,0,-1", "--dir", "0,0,1"),
+           "only one", NULL);
+    expect(2, ARGS("trace", "--ray", "0,0,0,0"), "DESIGN", NULL);
+    expect(2, ARGS("trace", d, d, "--ray", "0,0,0,0"), "unexpected", NULL);
+    expect(2, ARGS("trace", d, "--no-clip=yes", "--ray", "0,0,0,0"), "--no-clip", NULL);
+    expect(2, ARGS("frobnicate"), "frobnicate", NULL);
+    expect(2, ARGS("--frobnicate"), "--frobnicate", NULL);
+    expect(2, ARGS("help", "frobnicate"), "frobnicate", NULL);
+}
+
+static void test_wave_beyond_design(void **state)
+{
+    const char *d = ct_design("good.json", SINGLET);
+    (void)state;
+    /* The design has one wavelength. */
+    expect(2, ARGS("trace", d, "--ray", "0,0,0,0", "--wave", "2"), "--wave", NULL);
+    expect(2, ARGS("paraxial", d, "--wave", "2"), "--wave", NULL);
+}
+
+static void test_help_version(void **state)
+{
+    ct_result r;
+    (void)state;
+    ct_run(&r, "--version", NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.out, SG_VERSION_STRING));
+    ct_free(&r);
+    ct_run(&r, "--help", NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.out, "trace"));
+    assert_non_null(strstr(r.out, "paraxial"));
+    ct_free(&r);
+    ct_run(&r, "help", "trace", NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.out, "--rays"));
+    ct_free(&r);
+    ct_run(&r, "trace", "-h", NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.out, "--start"));
+    ct_free(&r);
+    print_message("# --version prints %s; --help, help trace and trace -h exit 0\n",
+                  SG_VERSION_STRING);
+}
+
+static void test_csv_errors(void **state)
+{
+    const char *d = ct_design("good.json", SINGLET);
+    const char *c;
+    char where[1024];
+    (void)state;
+    c = ct_file("badhead.csv", "hx,hy,px,pz\n0,0,0,0\n");
+    snprintf(where, sizeof where, "%s:1:", c);
+    expect(3, ARGS("trace", d, "--rays", c), where, "\"pz\"");
+
+    c = ct_file("count.csv", "hx,hy,px,py\n0,0,0,0\n0,0,0\n");
+    snprintf(where, sizeof where, "%s:3:", c);
+    expect(3, ARGS("trace", d, "--rays", c), where, "got 3");
+
+    c = ct_file("nonnum.csv", "# rays\nhx,hy,px,py\n0,0,0,0\n0,0,zero,0\n");
+    snprintf(where, sizeof where, "%s:4: column \"px\"", c);
+    expect(3, ARGS("trace", d, "--rays", c), where, NULL);
+
+    c = ct_path("absent.csv");
+    expect(3, ARGS("trace", d, "--rays", c), c, NULL);
+}
+
+static void test_output_errors(void **state)
+{
+    const char *d = ct_design("good.json", SINGLET);
+    const char *o = ct_path("no-such-dir/out.csv");
+    FILE *f;
+    (void)state;
+    expect(3, ARGS("trace", d, "--ray", "0,0,0,0", "-o", o), o, NULL);
+    f = fopen("/dev/full", "w");
+    if (f) {
+        fclose(f);
+        expect(3, ARGS("trace", d, "--ray", "0,0,0,0", "--format", "csv", "-o", "/dev/full"),
+               "/dev/full", NULL);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_missing_file),
+        cmocka_unit_test(test_syntax_error),
+        cmocka_unit_test(test_unknown_glass),
+        cmocka_unit_test(test_bad_values),
+        cmocka_unit_test(test_wave_beyond_design),
+        cmocka_unit_test(test_help_version),
+        cmocka_unit_test(test_csv_errors),
+        cmocka_unit_test(test_output_errors),
+    };
+    int rc;
+    ct_init(argc, argv);
+    rc = cmocka_run_group_tests(tests, NULL, NULL);
+    ct_cleanup();
+    return rc;
+}

@@ -1,0 +1,52 @@
+/* testutil.c - helpers shared by the cmocka tests. */
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "testutil.h"
+
+const char *tu_path(const char *rel, char *buf, size_t n)
+{
+    const char *root = getenv("SAGITTA_SOURCE_ROOT");
+    snprintf(buf, n, "%s/%s", root ? root : ".", rel);
+    return buf;
+}
+
+sg_catalog *tu_catalog(void)
+{
+    sg_diag d;
+    sg_catalog *cat = sg_catalog_new();
+    sg_diag_clear(&d);
+    assert_non_null(cat);
+    if (sg_catalog_load_default(cat, &d) != SG_OK)
+        fail_msg("cannot load the catalog: %s", d.msg);
+    return cat;
+}
+
+sg_system *tu_example(const char *file)
+{
+    char rel[512], path[1024];
+    sg_diag d;
+    sg_system *sys = sg_system_new();
+    assert_non_null(sys);
+    sg_diag_clear(&d);
+    snprintf(rel, sizeof rel, "examples/%s", file);
+    if (sg_design_load(sys, tu_path(rel, path, sizeof path), &d) != SG_OK)
+        fail_msg("cannot load %s: %s", path, d.msg);
+    return sys;
+}
+
+double tu_ulp(double x)
+{
+    x = fabs(x);
+    if (x < DBL_MIN)
+        return DBL_TRUE_MIN;
+    return nextafter(x, INFINITY) - x;
+}
+
+double tu_ulps(double a, double b, double ref_scale)
+{
+    double s = fmax(fabs(ref_scale), fmax(fabs(a), fabs(b)));
+    return fabs(a - b) / tu_ulp(s);
+}

@@ -1,0 +1,30 @@
+/* testutil.h - small helpers shared by the cmocka tests. */
+#ifndef SG_TESTUTIL_H
+#define SG_TESTUTIL_H
+
+#include <stddef.h>
+#include <stdarg.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include "sagitta.h"
+
+/* Path of a file relative to the source tree ($SAGITTA_SOURCE_ROOT, set by
+ * meson test), written into buf. */
+const char *tu_path(const char *rel, char *buf, size_t n);
+
+/* Loads the bundled catalog or fails the test. */
+sg_catalog *tu_catalog(void);
+
+/* Loads an example design from examples/ or fails the test. */
+sg_system *tu_example(const char *file);
+
+/* Distance between two doubles in units in the last place of the larger
+ * magnitude of ref_scale (so a coordinate near zero is not judged by its
+ * own tiny ulp). */
+double tu_ulps(double a, double b, double ref_scale);
+
+/* ulp of |x| for a double (spacing of doubles at x). */
+double tu_ulp(double x);
+
+#endif

@@ -1,0 +1,700 @@
+/* cli.c - the "trace" and "paraxial" subcommands and the helpers that every
+ * subcommand shares. */
+#include "cli.h"
+
+#include <errno.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "args.h"
+#include "csvrays.h"
+#include "report.h"
+
+/* ---------------------------------------------------------------- messages */
+
+static void vmsg(const char *prefix, const char *fmt, va_list ap)
+{
+    fputs(prefix, stderr);
+    vfprintf(stderr, fmt, ap);
+    fputc('\n', stderr);
+}
+
+void cli_error(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vmsg("sagitta: ", fmt, ap);
+    va_end(ap);
+}
+
+void cli_warn(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vmsg("sagitta: warning: ", fmt, ap);
+    va_end(ap);
+}
+
+void cli_print_warnings(const sg_diag *d, const char *where)
+{
+    int k, n = d->nwarn < SG_DIAG_MAXWARN ? d->nwarn : SG_DIAG_MAXWARN;
+    for (k = 0; k < n; k++) {
+        if (where && !strstr(d->warn[k], where))
+            cli_warn("%s: %s", where, d->warn[k]);
+        else
+            cli_warn("%s", d->warn[k]);
+    }
+    if (d->nwarn > n)
+        cli_warn("%d more warnings not shown", d->nwarn - n);
+}
+
+int cli_usage_error(const char *cmd, const char *fmt, ...)
+{
+    va_list ap;
+    fputs("sagitta: ", stderr);
+    if (cmd)
+        fprintf(stderr, "%s: ", cmd);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    if (cmd)
+        fprintf(stderr, "\nTry 'sagitta %s --help'.\n", cmd);
+    else
+        fputs("\nTry 'sagitta --help'.\n", stderr);
+    return CLI_EXIT_USAGE;
+}
+
+/* ------------------------------------------------------------------ options */
+
+void cli_iter_init(cli_iter *it, const char *cmd, int argc, char **argv)
+{
+    memset(it, 0, sizeof *it);
+    it->argc = argc;
+    it->argv = argv;
+    it->i = 1;
+    it->cmd = cmd;
+}
+
+int cli_next_opt(cli_iter *it, const cli_opt *opts, const char **val)
+{
+    const char *a, *eq;
+    const cli_opt *o;
+    size_t nlen;
+
+    *val = NULL;
+    if (it->i >= it->argc)
+        return -1;
+    a = it->argv[it->i++];
+    if (!it->only_positional && strcmp(a, "--") == 0) {
+        it->only_positional = 1;
+        if (it->i >= it->argc)
+            return -1;
+        a = it->argv[it->i++];
+    }
+    /* "-" alone names standard input or output, so it is an argument. */
+    if (it->only_positional || a[0] != '-' || a[1] == '\0') {
+        *val = a;
+        return 0;
+    }
+    if (a[1] == '-') {
+        eq = strchr(a, '=');
+        nlen = eq ? (size_t)(eq - a) : strlen(a);
+        snprintf(it->opt, sizeof it->opt, "%.*s", (int)(nlen < 60 ? nlen : 60), a);
+        for (o = opts; o->name; o++)
+            if (strlen(o->name) == nlen && strncmp(o->name, a, nlen) == 0)
+                break;
+        if (!o->name)
+            return -cli_usage_error(it->cmd, "unknown option %s", it->opt);
+        if (!o->has_arg) {
+            if (eq)
+                return -cli_usage_error(it->cmd, "%s takes no value", o->name);
+            return o->id;
+        }
+        if (eq) {
+            *val = eq + 1;
+            return o->id;
+        }
+    } else {
+        snprintf(it->opt, sizeof it->opt, "-%c", a[1]);
+        for (o = opts; o->name; o++)
+            if (o->shortc && o->shortc == a[1])
+                break;
+        if (!o->name)
+            return -cli_usage_error(it->cmd, "unknown option %s", it->opt);
+        if (!o->has_arg) {
+            if (a[2])
+                return -cli_usage_error(it->cmd, "%s takes no value", it->opt);
+            return o->id;
+        }
+        if (a[2]) {
+            *val = a + 2;
+            return o->id;
+        }
+    }
+    if (it->i >= it->argc)
+        return -cli_usage_error(it->cmd, "%s needs a value", it->opt);
+    *val = it->argv[it->i++];
+    return o->id;
+}
+
+int cli_int_value(const char *opt, const char *s, int lo, int hi, int *out)
+{
+    if (args_int(s, lo, hi, out) != ARGS_OK) {
+        cli_error("%s: expected an integer from %d to %d, got \"%s\"", opt, lo, hi, s);
+        return CLI_EXIT_USAGE;
+    }
+    return CLI_EXIT_OK;
+}
+
+int cli_doubles_value(const char *opt, const char *s, int n, const char *what,
+                      double *out)
+{
+    int bad, rc = args_double_list(s, 0, out, n, &bad);
+    const char *p = what;
+    int k;
+
+    if (rc == ARGS_OK)
+        return CLI_EXIT_OK;
+    if (bad < 0) {
+        cli_error("%s: expected %d comma-separated numbers %s, got \"%s\"", opt, n,
+                  what, s);
+        return CLI_EXIT_USAGE;
+    }
+    /* Name the item at fault, taking its name from the list in what. */
+    for (k = 0; k < bad && p; k++) {
+        p = strchr(p, ',');
+        if (p)
+            p++;
+    }
+    cli_error("%s: expected %d comma-separated numbers %s, got \"%s\" (%.*s: %s)",
+              opt, n, what, s, p ? (int)strcspn(p, ",") : 1, p ? p : "?",
+              args_strerror(rc));
+    return CLI_EXIT_USAGE;
+}
+
+/* ------------------------------------------------------------------ designs */
+
+int cli_exit_for(int err)
+{
+    switch (err) {
+    case SG_OK:
+        return CLI_EXIT_OK;
+    case SG_ENOMEM:
+        return CLI_EXIT_INTERNAL;
+    case SG_EINVAL:
+    case SG_ERANGE:
+    case SG_ENOGLASS:
+    case SG_ENOSTOP:
+    case SG_ETWOSTOPS:
+    case SG_ENOSYS:
+    case SG_ENONPHYS:
+    case SG_EUNSUPPORTED:
+    case SG_EWAVERANGE:
+        return CLI_EXIT_DESIGN;
+    default:
+        return CLI_EXIT_INTERNAL;
+    }
+}
+
+/* Prints an engine failure, adding the file name when the message does not
+ * already carry it. */
+static void print_diag(const char *path, const sg_diag *d, int rc)
+{
+    const char *msg = d->msg[0] ? d->msg : sg_strerror(rc);
+    if (path && !strstr(msg, path))
+        cli_error("%s: %s", path, msg);
+    else
+        cli_error("%s", msg);
+}
+
+void cli_design_free(sg_catalog *cat, sg_system *sys)
+{
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
+int cli_load_design(const char *path, sg_catalog **catp, sg_system **sysp)
+{
+    sg_catalog *cat;
+    sg_system *sys;
+    sg_diag d;
+    int rc;
+
+    *catp = NULL;
+    *sysp = NULL;
+    cat = sg_catalog_new();
+    sys = sg_system_new();
+    if (!cat || !sys) {
+        cli_design_free(cat, sys);
+        cli_error("out of memory");
+        return CLI_EXIT_INTERNAL;
+    }
+    /* A design of fixed indices needs no catalog, so a missing or broken
+     * one is only a warning; a glass it lacks is reported by name below. */
+    sg_diag_clear(&d);
+    rc = sg_catalog_load_default(cat, &d);
+    if (rc == SG_ENOMEM) {
+        cli_design_free(cat, sys);
+        cli_error("out of memory loading the glass catalog");
+        return CLI_EXIT_INTERNAL;
+    }
+    if (rc != SG_OK) {
+        cli_warn("glass catalog: %s", d.msg[0] ? d.msg : sg_strerror(rc));
+        cli_print_warnings(&d, NULL);
+    }
+
+    sg_diag_clear(&d);
+    rc = sg_design_load(sys, path, &d);
+    if (rc != SG_OK) {
+        print_diag(path, &d, rc);
+        cli_design_free(cat, sys);
+        return rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_FILE;
+    }
+    cli_print_warnings(&d, path);
+
+    sg_diag_clear(&d);
+    rc = sg_system_validate(sys, cat, &d);
+    if (rc != SG_OK) {
+        print_diag(path, &d, rc);
+        cli_design_free(cat, sys);
+        return rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
+    }
+    cli_print_warnings(&d, path);
+    *catp = cat;
+    *sysp = sys;
+    return CLI_EXIT_OK;
+}
+
+int cli_check_wave(const char *path, const sg_system *sys, int wave1, int *wave0)
+{
+    if (wave1 == 0) {
+        *wave0 = sys->primary_wave;
+        return CLI_EXIT_OK;
+    }
+    if (wave1 > sys->nwave) {
+        cli_error("--wave %d: %s has %d wavelength%s", wave1, path, sys->nwave,
+                  sys->nwave == 1 ? "" : "s");
+        return CLI_EXIT_USAGE;
+    }
+    *wave0 = wave1 - 1;
+    return CLI_EXIT_OK;
+}
+
+FILE *cli_open_output(const char *path)
+{
+    FILE *f;
+    if (!path || strcmp(path, "-") == 0)
+        return stdout;
+    f = fopen(path, "w");
+    if (!f)
+        cli_error("%s: %s", path, strerror(errno));
+    return f;
+}
+
+int cli_close_output(FILE *f, const char *path)
+{
+    int failed;
+    if (f == stdout) {
+        failed = fflush(f) != 0 || ferror(f);
+        if (failed)
+            cli_error("standard output: %s", strerror(errno ? errno : EIO));
+        return failed ? CLI_EXIT_FILE : CLI_EXIT_OK;
+    }
+    failed = ferror(f) != 0;
+    if (fclose(f) != 0)
+        failed = 1;
+    if (failed) {
+        cli_error("%s: %s", path, strerror(errno ? errno : EIO));
+        return CLI_EXIT_FILE;
+    }
+    return CLI_EXIT_OK;
+}
+
+/* -------------------------------------------------------------------- trace */
+
+static void trace_help(FILE *f)
+{
+    fputs(
+"Usage: sagitta trace DESIGN.json RAY [OPTIONS]\n"
+"Trace rays through a design and print where they cross every surface.\n"
+"\n"
+"RAY is exactly one of:\n"
+"  --ray Hx,Hy,Px,Py        normalized field and pupil coordinates\n"
+"  --start X,Y,Z --dir L,M,N\n"
+"                           a start point and direction in surface 1's frame\n"
+"  --rays FILE.csv          many rays; the header names the columns hx,hy,px,py\n"
+"                           or x,y,z,l,m,n (\"-\" reads standard input)\n"
+"\n"
+"Options:\n"
+"  --method M               precise (default), classic or mpfr\n"
+"  --bits N                 precision of the mpfr method, 53 to 100000 (256)\n"
+"  --wave N                 wavelength number, from 1 (default: the primary)\n"
+"  --format F               text (default), csv or json\n"
+"  -o, --output FILE        write to FILE instead of standard output\n"
+"  --no-clip                do not vignette rays outside fixed semi-diameters\n"
+"  --threads N              threads for --rays; 0 (default) uses every core\n"
+"  -h, --help               show this help\n"
+"\n"
+"A ray that misses a surface or is totally internally reflected is a result:\n"
+"its status is printed and the exit status is 0.  See sagitta(1).\n", f);
+}
+
+enum {
+    OPT_HELP = 1, OPT_METHOD, OPT_BITS, OPT_WAVE, OPT_FORMAT, OPT_OUTPUT,
+    OPT_START, OPT_DIR, OPT_RAY, OPT_RAYS, OPT_NOCLIP, OPT_THREADS
+};
+
+static const cli_opt trace_opts[] = {
+    { "--help", 'h', 0, OPT_HELP },
+    { "--method", 0, 1, OPT_METHOD },
+    { "--bits", 0, 1, OPT_BITS },
+    { "--wave", 0, 1, OPT_WAVE },
+    { "--format", 0, 1, OPT_FORMAT },
+    { "--output", 'o', 1, OPT_OUTPUT },
+    { "--start", 0, 1, OPT_START },
+    { "--dir", 0, 1, OPT_DIR },
+    { "--ray", 0, 1, OPT_RAY },
+    { "--rays", 0, 1, OPT_RAYS },
+    { "--no-clip", 0, 0, OPT_NOCLIP },
+    { "--threads", 0, 1, OPT_THREADS },
+    { NULL, 0, 0, 0 }
+};
+
+/* Trace failures that describe the ray rather than the program. */
+static int is_ray_result(int rc)
+{
+    return rc == SG_OK || rc == SG_EMISS || rc == SG_ETIR || rc == SG_EVIGNETTED ||
+           rc == SG_ENOCONV || rc == SG_EAIM || rc == SG_ENOTREACHED;
+}
+
+int cmd_trace(int argc, char **argv)
+{
+    cli_iter it;
+    const char *val, *design = NULL, *output = NULL, *rays_path = NULL;
+    int id, rc, method = SG_METHOD_PRECISE, bits = 0, wave1 = 0, wave0 = 0;
+    int fmt = REPORT_TEXT, clip = 1, threads = 0;
+    int have_start = 0, have_dir = 0, have_ray = 0;
+    double start[3] = { 0 }, dir[3] = { 0 }, ray4[4] = { 0 };
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    sg_tracer *t = NULL;
+    sg_trace_opts opts;
+    sg_ray_in *rays = NULL, one;
+    sg_ray_kind kind = SG_RAYS_NORMALIZED;
+    size_t nray = 1;
+    sg_ray_surface *out = NULL;
+    int *status = NULL, nsurf;
+    report_meta meta;
+    sg_diag d;
+    FILE *f;
+
+    cli_iter_init(&it, "trace", argc, argv);
+    while ((id = cli_next_opt(&it, trace_opts, &val)) != -1) {
+        switch (id) {
+        case 0:
+            if (design)
+                return cli_usage_error("trace", "unexpected argument \"%s\"", val);
+            design = val;
+            break;
+        case OPT_HELP:
+            trace_help(stdout);
+            return CLI_EXIT_OK;
+        case OPT_METHOD:
+            method = sg_method_parse(val);
+            if (method < 0)
+            {
+                cli_error("--method: expected precise, classic or mpfr, got \"%s\"", val);
+                return CLI_EXIT_USAGE;
+            }
+            break;
+        case OPT_BITS:
+            if (cli_int_value("--bits", val, 53, 100000, &bits))
+                return CLI_EXIT_USAGE;
+            break;
+        case OPT_WAVE:
+            if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))
+                return CLI_EXIT_USAGE;
+            break;
+        case OPT_FORMAT:
+            fmt = report_parse_fmt(val);
+            if (fmt < 0)
+            {
+                cli_error("--format: expected text, csv or json, got \"%s\"", val);
+                return CLI_EXIT_USAGE;
+            }
+            break;
+        case OPT_OUTPUT:
+            output = val;
+            break;
+        case OPT_START:
+            if (cli_doubles_value("--start", val, 3, "X,Y,Z", start))
+                return CLI_EXIT_USAGE;
+            have_start = 1;
+            break;
+        case OPT_DIR:
+            if (cli_doubles_value("--dir", val, 3, "L,M,N", dir))
+                return CLI_EXIT_USAGE;
+            if (dir[0] == 0 && dir[1] == 0 && dir[2] == 0) {
+                cli_error("--dir: the direction %s is zero", val);
+                return CLI_EXIT_USAGE;
+            }
+            have_dir = 1;
+            break;
+        case OPT_RAY:
+            if (cli_doubles_value("--ray", val, 4, "Hx,Hy,Px,Py", ray4))
+                return CLI_EXIT_USAGE;
+            have_ray = 1;
+            break;
+        case OPT_RAYS:
+            rays_path = val;
+            break;
+        case OPT_NOCLIP:
+            clip = 0;
+            break;
+        case OPT_THREADS:
+            if (cli_int_value("--threads", val, 0, 4096, &threads))
+                return CLI_EXIT_USAGE;
+            break;
+        default:
+            return -id;
+        }
+    }
+    if (!design)
+        return cli_usage_error("trace", "missing DESIGN.json");
+    if (have_start != have_dir)
+        return cli_usage_error("trace", "--start and --dir go together");
+    if (have_ray + have_start + (rays_path != NULL) != 1)
+        return cli_usage_error("trace", have_ray || have_start || rays_path
+                               ? "give only one of --ray, --start/--dir and --rays"
+                               : "give a ray with --ray, --start/--dir or --rays");
+    if (bits && method != SG_METHOD_MPFR)
+        cli_warn("--bits only applies to --method mpfr; ignored");
+
+    /* The ray list is read first: it is cheaper than the catalog, and a
+     * typo in it is the likelier mistake. */
+    if (rays_path) {
+        sg_diag_clear(&d);
+        rc = csvrays_read(rays_path, &kind, &rays, &nray, &d);
+        if (rc != SG_OK) {
+            cli_error("%s", d.msg[0] ? d.msg : sg_strerror(rc));
+            return rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_FILE;
+        }
+    } else {
+        memset(&one, 0, sizeof one);
+        if (have_ray) {
+            kind = SG_RAYS_NORMALIZED;
+            memcpy(one.v, ray4, sizeof ray4);
+        } else {
+            kind = SG_RAYS_START_DIR;
+            memcpy(one.v, start, sizeof start);
+            memcpy(one.v + 3, dir, sizeof dir);
+        }
+        rays = &one;
+    }
+
+    rc = cli_load_design(design, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        goto done;
+    rc = cli_check_wave(design, sys, wave1, &wave0);
+    if (rc != CLI_EXIT_OK)
+        goto done;
+
+    sg_trace_opts_init(&opts);
+    opts.method = (sg_method)method;
+    if (bits)
+        opts.mpfr_bits = bits;
+    opts.wave = wave0;
+    opts.clip = clip;
+
+    /* The tracer is made even for a batch (which makes its own, one per
+     * thread) so that a design the tracer refuses fails here, once. */
+    sg_diag_clear(&d);
+    t = sg_tracer_new(sys, cat, &opts, &d);
+    if (!t) {
+        rc = d.code != SG_OK ? d.code : SG_ENOMEM;
+        print_diag(design, &d, rc);
+        rc = cli_exit_for(rc);
+        if (rc == CLI_EXIT_OK)
+            rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    cli_print_warnings(&d, design);
+    nsurf = sg_tracer_nsurf(t);
+
+    out = calloc(nray, (size_t)nsurf * sizeof *out);
+    status = calloc(nray, sizeof *status);
+    if (!out || !status) {
+        cli_error("out of memory for %zu rays of %d surfaces", nray, nsurf);
+        rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    if (rays_path) {
+        sg_tracer_free(t);
+        t = NULL;
+        sg_diag_clear(&d);
+        rc = sg_trace_batch(sys, cat, &opts, kind, rays, nray, threads, out,
+                            status, &d);
+    } else if (kind == SG_RAYS_NORMALIZED) {
+        rc = sg_trace_normalized(t, ray4[0], ray4[1], ray4[2], ray4[3], out);
+        status[0] = rc;
+        sg_diag_clear(&d);
+    } else {
+        rc = sg_trace_start(t, start, dir, out);
+        status[0] = rc;
+        sg_diag_clear(&d);
+    }
+    if (!is_ray_result(rc)) {
+        if (d.msg[0])
+            print_diag(design, &d, rc);
+        else
+            cli_error("%s: trace failed: %s", design, sg_strerror(rc));
+        rc = cli_exit_for(rc);
+        if (rc == CLI_EXIT_OK)
+            rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    cli_print_warnings(&d, design);
+
+    memset(&meta, 0, sizeof meta);
+    meta.design = design;
+    meta.method = sg_method_name((sg_method)method);
+    meta.bits = method == SG_METHOD_MPFR ? opts.mpfr_bits : 0;
+    meta.wave_um = sys->wave[wave0].um;
+    meta.wave_index = wave0 + 1;
+
+    /* The output is opened only now, so a failed trace leaves an existing
+     * file as it was. */
+    f = cli_open_output(output);
+    if (!f) {
+        rc = CLI_EXIT_FILE;
+        goto done;
+    }
+    if (report_write(f, (report_fmt)fmt, &meta, nsurf, out, status, nray, kind,
+                     rays) != 0) {
+        cli_error("%s: %s", output && strcmp(output, "-") ? output : "standard output",
+                  strerror(errno));
+        if (f != stdout)
+            fclose(f);
+        rc = CLI_EXIT_FILE;
+        goto done;
+    }
+    rc = cli_close_output(f, output);
+done:
+    free(out);
+    free(status);
+    if (rays != &one)
+        free(rays);
+    sg_tracer_free(t);
+    cli_design_free(cat, sys);
+    return rc;
+}
+
+/* ----------------------------------------------------------------- paraxial */
+
+static void paraxial_help(FILE *f)
+{
+    fputs(
+"Usage: sagitta paraxial DESIGN.json [OPTIONS]\n"
+"Print the first-order (paraxial) data of a design.\n"
+"\n"
+"Options:\n"
+"  --wave N                 wavelength number, from 1 (default: the primary)\n"
+"  --format F               text (default) or json\n"
+"  -o, --output FILE        write to FILE instead of standard output\n"
+"  -h, --help               show this help\n", f);
+}
+
+static const cli_opt paraxial_opts[] = {
+    { "--help", 'h', 0, OPT_HELP },
+    { "--wave", 0, 1, OPT_WAVE },
+    { "--format", 0, 1, OPT_FORMAT },
+    { "--output", 'o', 1, OPT_OUTPUT },
+    { NULL, 0, 0, 0 }
+};
+
+int cmd_paraxial(int argc, char **argv)
+{
+    cli_iter it;
+    const char *val, *design = NULL, *output = NULL;
+    int id, rc, wave1 = 0, wave0 = 0, fmt = REPORT_TEXT;
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    sg_paraxial p;
+    report_meta meta;
+    sg_diag d;
+    FILE *f;
+
+    cli_iter_init(&it, "paraxial", argc, argv);
+    while ((id = cli_next_opt(&it, paraxial_opts, &val)) != -1) {
+        switch (id) {
+        case 0:
+            if (design)
+                return cli_usage_error("paraxial", "unexpected argument \"%s\"", val);
+            design = val;
+            break;
+        case OPT_HELP:
+            paraxial_help(stdout);
+            return CLI_EXIT_OK;
+        case OPT_WAVE:
+            if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))
+                return CLI_EXIT_USAGE;
+            break;
+        case OPT_FORMAT:
+            fmt = report_parse_fmt(val);
+            if (fmt != REPORT_TEXT && fmt != REPORT_JSON)
+            {
+                cli_error("--format: expected text or json, got \"%s\"", val);
+                return CLI_EXIT_USAGE;
+            }
+            break;
+        case OPT_OUTPUT:
+            output = val;
+            break;
+        default:
+            return -id;
+        }
+    }
+    if (!design)
+        return cli_usage_error("paraxial", "missing DESIGN.json");
+
+    rc = cli_load_design(design, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    rc = cli_check_wave(design, sys, wave1, &wave0);
+    if (rc != CLI_EXIT_OK)
+        goto done;
+    sg_diag_clear(&d);
+    memset(&p, 0, sizeof p);
+    rc = sg_paraxial_compute(sys, cat, wave0, &p, &d);
+    if (rc != SG_OK) {
+        print_diag(design, &d, rc);
+        rc = cli_exit_for(rc);
+        if (rc == CLI_EXIT_OK)
+            rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    cli_print_warnings(&d, design);
+
+    memset(&meta, 0, sizeof meta);
+    meta.design = design;
+    meta.wave_um = sys->wave[wave0].um;
+    meta.wave_index = wave0 + 1;
+    f = cli_open_output(output);
+    if (!f) {
+        rc = CLI_EXIT_FILE;
+        goto done;
+    }
+    if (report_write_paraxial(f, (report_fmt)fmt, &meta, &p) != 0) {
+        cli_error("%s: %s", output && strcmp(output, "-") ? output : "standard output",
+                  strerror(errno));
+        if (f != stdout)
+            fclose(f);
+        rc = CLI_EXIT_FILE;
+        goto done;
+    }
+    rc = cli_close_output(f, output);
+done:
+    cli_design_free(cat, sys);
+    return rc;
+}

@@ -1,0 +1,112 @@
+/*
+ * cli.h - the command-line subcommands of sagitta and what they share.
+ *
+ * A subcommand is a function int cmd_NAME(int argc, char **argv) that gets
+ * argv[0] == "NAME" and returns the process exit status; main.c lists them
+ * in one table.  The helpers below give every subcommand the same option
+ * syntax, the same messages and the same exit codes.
+ */
+#ifndef SG_UI_CLI_H
+#define SG_UI_CLI_H
+
+#include <stdio.h>
+
+#include "sagitta.h"
+
+/* Exit statuses, documented in man/sagitta.1 (EXIT STATUS). */
+enum {
+    CLI_EXIT_OK = 0,       /* success; a ray that misses or TIRs is a result */
+    CLI_EXIT_USAGE = 2,    /* bad command line or option value */
+    CLI_EXIT_FILE = 3,     /* cannot read, parse or write a file */
+    CLI_EXIT_DESIGN = 4,   /* the design cannot be traced */
+    CLI_EXIT_INTERNAL = 5, /* out of memory or internal error */
+    CLI_EXIT_VERIFY = 6    /* reserved for "sagitta verify" */
+};
+
+typedef struct cli_command {
+    const char *name;
+    int (*run)(int argc, char **argv);
+    const char *summary; /* one line for "sagitta --help" */
+} cli_command;
+
+int cmd_trace(int argc, char **argv);
+int cmd_paraxial(int argc, char **argv);
+/* Further subcommands live in their own files. */
+int cmd_verify(int argc, char **argv);
+int cmd_bench(int argc, char **argv);
+
+/* "sagitta: " + message + newline on stderr. */
+void cli_error(const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+/* "sagitta: warning: " + message + newline on stderr. */
+void cli_warn(const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
+/* Prints the warnings an sg_diag collected, prefixed by where (may be NULL). */
+void cli_print_warnings(const sg_diag *d, const char *where);
+/* Prints "sagitta: CMD: MESSAGE" and the hint to run CMD --help; returns
+ * CLI_EXIT_USAGE. */
+int cli_usage_error(const char *cmd, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+/* ---- options ---------------------------------------------------------- */
+
+typedef struct cli_opt {
+    const char *name; /* "--ray", or NULL to end the table */
+    char shortc;      /* 'o' for -o, or 0 */
+    int has_arg;
+    int id;           /* positive; returned by cli_next_opt */
+} cli_opt;
+
+typedef struct cli_iter {
+    int argc;
+    char **argv;
+    int i;
+    int only_positional; /* after "--" */
+    const char *cmd;
+    char opt[64]; /* the last option as typed, for messages */
+} cli_iter;
+
+void cli_iter_init(cli_iter *it, const char *cmd, int argc, char **argv);
+/* Returns the id of the next option, with its value in *val when it takes
+ * one; 0 for a positional argument (in *val); -1 at the end; or
+ * -CLI_EXIT_USAGE after printing the error.  Accepts "--name value",
+ * "--name=value", "-x value", "-xvalue" and "--" before positionals. */
+int cli_next_opt(cli_iter *it, const cli_opt *opts, const char **val);
+
+/* Option values.  Each prints a message naming the option and returns
+ * CLI_EXIT_USAGE on a bad value, CLI_EXIT_OK otherwise. */
+int cli_int_value(const char *opt, const char *s, int lo, int hi, int *out);
+/* Exactly n comma-separated finite numbers; what names them, e.g.
+ * "Hx,Hy,Px,Py"; item names are taken from it for messages. */
+int cli_doubles_value(const char *opt, const char *s, int n, const char *what,
+                      double *out);
+
+/* ---- designs ---------------------------------------------------------- */
+
+/* Loads the default catalog, the design at path and validates it.  Returns
+ * the exit status; on success *cat and *sys are set (free them with
+ * cli_design_free), otherwise both are NULL and a message was printed. */
+int cli_load_design(const char *path, sg_catalog **cat, sg_system **sys);
+void cli_design_free(sg_catalog *cat, sg_system *sys);
+/* Exit status for an engine error while preparing or running a trace. */
+int cli_exit_for(int err);
+/* Checks a 1-based --wave against the design (0 means "not given") and
+ * returns the 0-based index in *wave0, or prints and returns CLI_EXIT_USAGE. */
+int cli_check_wave(const char *path, const sg_system *sys, int wave1, int *wave0);
+
+/* Opens the output ("-" or NULL is standard output).  Returns NULL after
+ * printing a message. */
+FILE *cli_open_output(const char *path);
+/* Closes an output opened by cli_open_output; returns the exit status. */
+int cli_close_output(FILE *f, const char *path);
+
+#endif

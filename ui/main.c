@@ -1,0 +1,135 @@
+/*
+ * main.c - the sagitta program: dispatches to a subcommand or the editor.
+ *
+ *   sagitta                     the editor, empty design
+ *   sagitta FILE.json           the editor on FILE.json
+ *   sagitta edit [FILE] [...]   the same, spelled out
+ *   sagitta COMMAND [ARGS]      a subcommand from the table below
+ *
+ * The editor gets an argv whose argv[1], if present, is the design file:
+ * "sagitta edit F" passes {argv[0], F}, and "sagitta F" passes argv as is.
+ */
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "cli.h"
+#ifdef SG_HAVE_EDITOR
+#include "editor/editor.h"
+#endif
+
+/* A new subcommand is one line here plus its cmd_NAME function, which
+ * handles its own --help (used by "sagitta help NAME"). */
+static const cli_command commands[] = {
+    { "trace", cmd_trace, "trace rays and print every surface crossing" },
+    { "paraxial", cmd_paraxial, "print first-order (paraxial) data" },
+};
+#define NCOMMANDS (sizeof commands / sizeof commands[0])
+
+static void usage(FILE *f)
+{
+    size_t k;
+    fputs("Usage: sagitta [FILE.json]\n"
+          "       sagitta edit [FILE.json]\n"
+          "       sagitta COMMAND [ARGS]\n"
+          "       sagitta help COMMAND | --help | --version\n"
+          "\n"
+          "Without a command, or with a design file, sagitta opens the lens data\n"
+          "editor.  Commands:\n", f);
+    fprintf(f, "  %-10s %s\n", "edit", "open the lens data editor");
+    for (k = 0; k < NCOMMANDS; k++)
+        fprintf(f, "  %-10s %s\n", commands[k].name, commands[k].summary);
+    fputs("\nRun 'sagitta help COMMAND' for a command's options; see sagitta(1).\n", f);
+}
+
+static const cli_command *find_command(const char *name)
+{
+    size_t k;
+    for (k = 0; k < NCOMMANDS; k++)
+        if (strcmp(commands[k].name, name) == 0)
+            return &commands[k];
+    return NULL;
+}
+
+static int run_editor(int argc, char **argv)
+{
+#ifdef SG_HAVE_EDITOR
+    return sg_editor_main(argc, argv);
+#else
+    (void)argc;
+    (void)argv;
+    fputs("sagitta: editor not built (it needs ncursesw); the commands still "
+          "work, see 'sagitta --help'\n", stderr);
+    return CLI_EXIT_USAGE;
+#endif
+}
+
+/* An argument that is not a command opens the editor when it looks like a
+ * design file; otherwise it is far more likely a mistyped command. */
+static int looks_like_file(const char *a)
+{
+    struct stat st;
+    size_t n = strlen(a);
+    return strchr(a, '/') != NULL || (n > 5 && strcmp(a + n - 5, ".json") == 0) ||
+           stat(a, &st) == 0;
+}
+
+int main(int argc, char **argv)
+{
+    const cli_command *c;
+    const char *a;
+
+    if (argc < 2)
+        return run_editor(argc, argv);
+    a = argv[1];
+    if (strcmp(a, "--help") == 0 || strcmp(a, "-h") == 0) {
+        usage(stdout);
+        return fflush(stdout) == 0 ? CLI_EXIT_OK : CLI_EXIT_FILE;
+    }
+    if (strcmp(a, "--version") == 0) {
+        printf("sagitta %s\n", SG_VERSION_STRING);
+        return fflush(stdout) == 0 ? CLI_EXIT_OK : CLI_EXIT_FILE;
+    }
+    if (strcmp(a, "help") == 0) {
+        char *hargv[3];
+        if (argc < 3) {
+            usage(stdout);
+            return CLI_EXIT_OK;
+        }
+        if (argc > 3)
+            return cli_usage_error(NULL, "help: expected one command name");
+        if (strcmp(argv[2], "edit") == 0) {
+#ifdef SG_HAVE_EDITOR
+            hargv[0] = argv[2];
+            hargv[1] = (char *)"--help";
+            hargv[2] = NULL;
+            return sg_editor_main(2, hargv);
+#endif
+            fputs("Usage: sagitta edit [FILE.json]\n"
+                  "Open the lens data editor on FILE.json, or on a new design.\n"
+                  "'sagitta FILE.json' does the same.  See sagitta(1), EDITOR.\n",
+                  stdout);
+            return CLI_EXIT_OK;
+        }
+        c = find_command(argv[2]);
+        if (!c)
+            return cli_usage_error(NULL, "help: unknown command \"%s\"", argv[2]);
+        hargv[0] = argv[2];
+        hargv[1] = (char *)"--help";
+        hargv[2] = NULL;
+        return c->run(2, hargv);
+    }
+    if (strcmp(a, "edit") == 0) {
+        /* Drop "edit" so that argv[1] is the file, as for "sagitta FILE". */
+        argv[1] = argv[0];
+        return run_editor(argc - 1, argv + 1);
+    }
+    c = find_command(a);
+    if (c)
+        return c->run(argc - 1, argv + 1);
+    if (a[0] == '-' && a[1] != '\0')
+        return cli_usage_error(NULL, "unknown option %s", a);
+    if (looks_like_file(a))
+        return run_editor(argc, argv);
+    return cli_usage_error(NULL, "unknown command \"%s\"", a);
+}

@@ -1,0 +1,46 @@
+/*
+ * report.h - ray-trace and paraxial results as text, CSV or JSON.
+ *
+ * Shared by "sagitta trace" and the editor's export, so a file written by
+ * either reads the same.  Numbers in CSV and JSON are printed with %.17g,
+ * which a reader converts back to the identical double.
+ */
+#ifndef SG_UI_REPORT_H
+#define SG_UI_REPORT_H
+
+#include <stdio.h>
+
+#include "sagitta.h"
+
+typedef enum { REPORT_TEXT = 0, REPORT_CSV = 1, REPORT_JSON = 2 } report_fmt;
+
+/* "text", "csv" or "json"; -1 if unknown. */
+int report_parse_fmt(const char *s);
+
+typedef struct report_meta {
+    const char *design; /* file name or title */
+    const char *method; /* "precise" | "classic" | "mpfr" */
+    int bits;           /* mpfr bits, 0 if not mpfr */
+    double wave_um;     /* wavelength used */
+    int wave_index;     /* 1-based */
+} report_meta;
+
+/* Writes nray rays (each nsurf consecutive sg_ray_surface entries in out;
+ * ray r's launch in rays[r], kind as in sg_trace_batch, may be NULL).
+ * status[r] is the sg_trace_* return of ray r (may be NULL when nray == 1).
+ * Returns 0, or -1 on a write error (errno set). */
+int report_write(FILE *f, report_fmt fmt, const report_meta *m, int nsurf,
+                 const sg_ray_surface *out, const int *status, size_t nray,
+                 sg_ray_kind kind, const sg_ray_in *rays);
+
+/* Writes every field of a paraxial computation.  Returns 0, or -1 on a
+ * write error (errno set). */
+int report_write_paraxial(FILE *f, report_fmt fmt, const report_meta *m,
+                          const sg_paraxial *p);
+
+/* The name a report gives a ray status: "OK", "MISS", "TIR", "VIGNETTED",
+ * "NOCONV", "NOT REACHED", "AIM FAILED", or the code's symbolic name
+ * without its "SG_E" prefix for any other code.  Never NULL. */
+const char *report_status_name(int status);
+
+#endif
