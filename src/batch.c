@@ -40,6 +40,8 @@ static void run_job(job *j)
 static void *thread_main(void *arg)
 {
     run_job(arg);
+    /* MPFR caches constants such as pi per thread; a worker frees its own. */
+    mpfr_free_cache2(MPFR_FREE_LOCAL_CACHE);
     return NULL;
 }
 

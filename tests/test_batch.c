@@ -1,0 +1,152 @@
+/*
+ * test_batch.c - the batch driver equals single-ray calls bit for bit, for
+ * every method and thread count.  The reference is the single-ray API.
+ */
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+
+/* Every field bit for bit (struct padding is not a result). */
+static void same_rows(const sg_ray_surface *a, const sg_ray_surface *b, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++) {
+        const double fa[10] = {a[i].x, a[i].y, a[i].z, a[i].l, a[i].m, a[i].n, a[i].residual,
+                               a[i].error_bound, a[i].dir_error_bound, a[i].path};
+        const double fb[10] = {b[i].x, b[i].y, b[i].z, b[i].l, b[i].m, b[i].n, b[i].residual,
+                               b[i].error_bound, b[i].dir_error_bound, b[i].path};
+        assert_memory_equal(fa, fb, sizeof fa);
+        assert_int_equal(a[i].status, b[i].status);
+    }
+}
+
+static void compare(const char *file, sg_method m, int nx)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = tu_example(file);
+    sg_trace_opts o;
+    sg_diag d;
+    sg_tracer *t;
+    size_t nray = 0, r, ns = (size_t)sys->nsurf;
+    sg_ray_in *rays = calloc((size_t)(3 * nx * nx), sizeof *rays);
+    sg_ray_surface *one = calloc((size_t)(3 * nx * nx) * ns, sizeof *one);
+    sg_ray_surface *many = calloc((size_t)(3 * nx * nx) * ns, sizeof *many);
+    int *st1 = calloc((size_t)(3 * nx * nx), sizeof *st1);
+    int *st2 = calloc((size_t)(3 * nx * nx), sizeof *st2);
+    int h, i, j, threads[3] = {1, 2, 3}, k, failed = 0;
+    assert_non_null(rays);
+    assert_non_null(one);
+    assert_non_null(many);
+    for (h = 0; h < 3; h++)
+        for (i = 0; i < nx; i++)
+            for (j = 0; j < nx; j++) {
+                /* Includes pupil corners beyond the unit circle, which may
+                 * fail, so failures are compared too. */
+                rays[nray].v[0] = 0.0;
+                rays[nray].v[1] = 0.5 * h;
+                rays[nray].v[2] = -1.2 + 2.4 * i / (nx - 1);
+                rays[nray].v[3] = -1.2 + 2.4 * j / (nx - 1);
+                nray++;
+            }
+    sg_trace_opts_init(&o);
+    o.method = m;
+    sg_diag_clear(&d);
+    t = sg_tracer_new(sys, cat, &o, &d);
+    assert_non_null(t);
+    for (r = 0; r < nray; r++) {
+        st1[r] = sg_trace_normalized(t, rays[r].v[0], rays[r].v[1], rays[r].v[2], rays[r].v[3],
+                                     one + r * ns);
+        failed += st1[r] != SG_OK;
+    }
+    sg_tracer_free(t);
+    for (k = 0; k < 3; k++) {
+        memset(many, 0xA5, nray * ns * sizeof *many);
+        assert_int_equal(sg_trace_batch(sys, cat, &o, SG_RAYS_NORMALIZED, rays, nray,
+                                        threads[k], many, st2, &d),
+                         SG_OK);
+        assert_memory_equal(st1, st2, nray * sizeof *st1);
+        same_rows(one, many, nray * ns);
+    }
+    print_message("# %s %s: %zu rays (%d failing) identical for 1, 2 and 3 threads\n", file,
+                  sg_method_name(m), nray, failed);
+    free(rays);
+    free(one);
+    free(many);
+    free(st1);
+    free(st2);
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
+static void precise(void **state)
+{
+    (void)state;
+    compare("cassegrain.json", SG_METHOD_PRECISE, 15);
+    compare("tma.json", SG_METHOD_PRECISE, 15);
+    compare("double_gauss.json", SG_METHOD_PRECISE, 15);
+}
+
+static void classic(void **state)
+{
+    (void)state;
+    compare("cassegrain.json", SG_METHOD_CLASSIC, 15);
+    compare("tma.json", SG_METHOD_CLASSIC, 15);
+}
+
+static void mpfr(void **state)
+{
+    (void)state;
+    compare("cassegrain.json", SG_METHOD_MPFR, 4);
+    compare("tma.json", SG_METHOD_MPFR, 4);
+}
+
+static void start_dir(void **state)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = tu_example("cooke_triplet.json");
+    sg_trace_opts o;
+    sg_diag d;
+    sg_tracer *t;
+    enum { N = 200 };
+    sg_ray_in rays[N];
+    size_t ns = (size_t)sys->nsurf;
+    sg_ray_surface *one = calloc(N * ns, sizeof *one), *many = calloc(N * ns, sizeof *many);
+    int st1[N], st2[N], r;
+    (void)state;
+    for (r = 0; r < N; r++) {
+        rays[r].v[0] = 0.1 * (r % 20) - 1.0;
+        rays[r].v[1] = 0.05 * (r / 20) - 0.25;
+        rays[r].v[2] = -5.0;
+        rays[r].v[3] = 0.01 * (r % 7);
+        rays[r].v[4] = -0.02 * (r % 5);
+        rays[r].v[5] = 1.0;
+    }
+    sg_trace_opts_init(&o);
+    sg_diag_clear(&d);
+    t = sg_tracer_new(sys, cat, &o, &d);
+    assert_non_null(t);
+    for (r = 0; r < N; r++)
+        st1[r] = sg_trace_start(t, rays[r].v, rays[r].v + 3, one + (size_t)r * ns);
+    assert_int_equal(sg_trace_batch(sys, cat, &o, SG_RAYS_START_DIR, rays, N, 2, many, st2, &d),
+                     SG_OK);
+    assert_memory_equal(st1, st2, sizeof st1);
+    same_rows(one, many, N * ns);
+    print_message("# cooke_triplet start/dir rays: %d identical on 2 threads\n", N);
+    sg_tracer_free(t);
+    free(one);
+    free(many);
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(precise),
+        cmocka_unit_test(classic),
+        cmocka_unit_test(mpfr),
+        cmocka_unit_test(start_dir),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
