@@ -97,11 +97,129 @@ static void impossible(void **state)
     sg_system_free(sys);
 }
 
+/* Paraxial aiming lands Py = 1 on the paraxial stop radius (the Cooke
+ * triplet's stop sits between its lenses). */
+static void paraxial_aiming(void **state)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = tu_example("cooke_triplet.json");
+    sg_paraxial p;
+    sg_diag d;
+    sg_tracer *t;
+    sg_ray_surface out[16];
+    double worst = 0.0;
+    int f;
+    (void)state;
+    sys->aim = SG_AIM_PARAXIAL;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_paraxial_compute(sys, cat, -1, &p, &d), SG_OK);
+    t = tracer(sys, cat, SG_METHOD_PRECISE);
+    for (f = 0; f <= 4; f++) {
+        double hy = 0.25 * f;
+        assert_int_equal(sg_trace_normalized(t, 0, hy, 0, 1, out), SG_OK);
+        worst = fmax(worst, fabs(out[sys->stop].y - p.stop_radius) / p.stop_radius);
+        assert_int_equal(sg_trace_normalized(t, 0, hy, -1, 0, out), SG_OK);
+        worst = fmax(worst, fabs(out[sys->stop].x + p.stop_radius) / p.stop_radius);
+    }
+    print_message("# Cooke triplet, paraxial aiming: worst landing error %.3g of the paraxial "
+                  "stop radius %.17g\n", worst, p.stop_radius);
+    assert_true(worst <= 1e-12);
+    sg_tracer_free(t);
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
+/* A real-image-height field puts the chief ray on the requested height. */
+static void real_image_height(void **state)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = tu_example("cooke_triplet.json");
+    sg_tracer *t;
+    sg_ray_surface out[16];
+    int last = sys->nsurf - 1;
+    (void)state;
+    sys->field_type = SG_FIELD_REAL_IMAGE_HEIGHT;
+    sys->field_norm = SG_NORM_RADIAL;
+    sys->nfield = 2;
+    sys->field[0].x = sys->field[0].y = 0.0;
+    sys->field[1].x = 0.0;
+    sys->field[1].y = 12.5;
+    t = tracer(sys, cat, SG_METHOD_PRECISE);
+    assert_int_equal(sg_trace_normalized(t, 0, 1, 0, 0, out), SG_OK);
+    print_message("# real image height 12.5: chief ray lands at y = %.17g\n", out[last].y);
+    assert_true(fabs(out[last].y - 12.5) <= 1e-12 * 12.5);
+    assert_true(fabs(out[last].x) <= 1e-12);
+    assert_int_equal(sg_trace_normalized(t, 0.6, 0.8, 0, 0, out), SG_OK);
+    print_message("# at (0.6, 0.8): (%.17g, %.17g)\n", out[last].x, out[last].y);
+    assert_true(fabs(out[last].x - 7.5) <= 1e-12 * 12.5);
+    assert_true(fabs(out[last].y - 10.0) <= 1e-12 * 12.5);
+    sg_tracer_free(t);
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
+/* The aperture types that derive the pupil: working F/# and object NA
+ * give back the value asked for; a paraxial image height field equals the
+ * paraxial chief ray's height. */
+static void aperture_types(void **state)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = tu_example("singlet.json");
+    sg_paraxial p;
+    sg_diag d;
+    (void)state;
+    sys->aper_type = SG_APER_PARAX_WORKING_FNUM;
+    sys->aper_value = 5.0;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_paraxial_compute(sys, cat, -1, &p, &d), SG_OK);
+    print_message("# working F/5: EPD %.17g, EFL/5 = %.17g, working F/# %.17g\n", p.epd,
+                  p.efl / 5.0, p.working_fnum);
+    assert_true(fabs(p.working_fnum - 5.0) <= 1e-14 * 5.0);
+    /* In air at infinity the paraxial working F/# is EFL / EPD. */
+    assert_true(fabs(p.epd - p.efl / 5.0) <= 1e-13 * p.epd);
+
+    sys->surf[0].thickness = 400.0;
+    sys->field_type = SG_FIELD_OBJECT_HEIGHT;
+    sys->aper_type = SG_APER_OBJECT_NA;
+    sys->aper_value = 0.02;
+    assert_int_equal(sg_paraxial_compute(sys, cat, -1, &p, &d), SG_OK);
+    print_message("# object NA 0.02: paraxial marginal ray NA %.17g\n", p.object_na);
+    assert_true(fabs(p.object_na - 0.02) <= 1e-15);
+
+    sys->surf[0].thickness = INFINITY;
+    sys->field_type = SG_FIELD_PARAX_IMAGE_HEIGHT;
+    sys->aper_type = SG_APER_EPD;
+    sys->aper_value = 10.0;
+    sys->nfield = 2;
+    sys->field[1].x = 0.0;
+    sys->field[1].y = 3.0;
+    assert_int_equal(sg_paraxial_compute(sys, cat, -1, &p, &d), SG_OK);
+    assert_true(p.parax_image_height == 3.0);
+    {
+        /* A tiny field is paraxial, so the real chief ray lands on it. */
+        sg_tracer *t;
+        sg_ray_surface out[8];
+        double h = 1e-6;
+        sys->field[1].y = h;
+        t = tracer(sys, cat, SG_METHOD_PRECISE);
+        assert_int_equal(sg_trace_normalized(t, 0, 1, 0, 0, out), SG_OK);
+        print_message("# paraxial image height %g: real chief ray at %.17g\n", h,
+                      out[sys->nsurf - 1].y);
+        assert_true(fabs(out[sys->nsurf - 1].y - h) <= 1e-9 * h);
+        sg_tracer_free(t);
+    }
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(stop_edge),
         cmocka_unit_test(impossible),
+        cmocka_unit_test(paraxial_aiming),
+        cmocka_unit_test(real_image_height),
+        cmocka_unit_test(aperture_types),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
