@@ -353,6 +353,26 @@ static int field_osp(sg_tracer *t, land_fn land, double hx, double hy, osp *o,
  * Entry points.
  * ------------------------------------------------------------------------ */
 
+/* The object-space part of field (hx, hy), cached for the next ray of the
+ * same field; on failure every surface is marked. */
+static int field_cached(sg_tracer *t, land_fn land, double hx, double hy, osp *o,
+                        sg_ray_surface *out)
+{
+    if (!t->have_field || t->last_hx != hx || t->last_hy != hy) {
+        if (field_osp(t, land, hx, hy, o, t->scratch) != SG_OK) {
+            t->have_field = 0;
+            sg_fail_rest(out, 0, t->n, SG_EAIM);
+            return SG_EAIM;
+        }
+        t->field = *o;
+        t->have_field = 1;
+        t->last_hx = hx;
+        t->last_hy = hy;
+    }
+    *o = t->field;
+    return SG_OK;
+}
+
 int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
                       sg_ray_surface *out)
 {
@@ -360,19 +380,8 @@ int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
     double path0;
     dd q[2];
     osp o;
-    int rc;
-    if (!t->have_field || t->last_hx != hx || t->last_hy != hy) {
-        rc = field_osp(t, land_precise, hx, hy, &o, t->scratch);
-        if (rc != SG_OK) {
-            sg_fail_rest(out, 0, t->n, SG_EAIM);
-            return SG_EAIM;
-        }
-        t->field = o;
-        t->have_field = 1;
-        t->last_hx = hx;
-        t->last_hy = hy;
-    }
-    o = t->field;
+    if (field_cached(t, land_precise, hx, hy, &o, out) != SG_OK)
+        return SG_EAIM;
     if (launch_q(t, land_precise, &o, px, py, q, t->scratch) != SG_OK) {
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;
@@ -388,19 +397,8 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
     double S[3], D[3], u[3], len;
     dd q[2];
     osp o;
-    int rc;
-    if (!t->have_field || t->last_hx != hx || t->last_hy != hy) {
-        rc = field_osp(t, land_classic, hx, hy, &o, t->scratch);
-        if (rc != SG_OK) {
-            sg_fail_rest(out, 0, t->n, SG_EAIM);
-            return SG_EAIM;
-        }
-        t->field = o;
-        t->have_field = 1;
-        t->last_hx = hx;
-        t->last_hy = hy;
-    }
-    o = t->field;
+    if (field_cached(t, land_classic, hx, hy, &o, out) != SG_OK)
+        return SG_EAIM;
     if (launch_q(t, land_classic, &o, px, py, q, t->scratch) != SG_OK) {
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;

@@ -286,13 +286,15 @@ static double surf_Fp_d(const sg_sprep *s, const double p[3], const double d[3],
     }
 }
 
-/* Cosine between a unit ray and the surface normal at p, in double. */
-static double surf_cos_d(const sg_sprep *s, const double p[3], const double d[3])
+/* Surface gradient direction at p, in double: (x, y, k1 z - R) for a
+ * conic, (-w x, -w y, 1) for an asphere, -z for a plane. */
+static void grad_d(const sg_sprep *s, const double p[3], double g[3])
 {
-    double g[3], gn;
-    if (s->shape == SHAPE_PLANE)
-        return fabs(d[2]);
-    if (s->shape == SHAPE_CONIC) {
+    if (s->shape == SHAPE_PLANE) {
+        g[0] = 0.0;
+        g[1] = 0.0;
+        g[2] = -1.0;
+    } else if (s->shape == SHAPE_CONIC) {
         g[0] = p[0];
         g[1] = p[1];
         g[2] = s->k1.hi * p[2] - s->R;
@@ -303,6 +305,13 @@ static double surf_cos_d(const sg_sprep *s, const double p[3], const double d[3]
         g[1] = -w * p[1];
         g[2] = 1.0;
     }
+}
+
+/* Cosine between a unit ray and the surface normal at p, in double. */
+static double surf_cos_d(const sg_sprep *s, const double p[3], const double d[3])
+{
+    double g[3], gn;
+    grad_d(s, p, g);
     gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
     return gn > 0.0 ? fabs(g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn : 0.0;
 }
@@ -587,21 +596,7 @@ static int classic_bend(const sg_sprep *s, const double p[3], double d[3])
     d[0] /= len;
     d[1] /= len;
     d[2] /= len;
-    if (s->shape == SHAPE_PLANE) {
-        g[0] = 0.0;
-        g[1] = 0.0;
-        g[2] = -1.0;
-    } else if (s->shape == SHAPE_CONIC) {
-        g[0] = s->c * p[0];
-        g[1] = s->c * p[1];
-        g[2] = s->c * s->k1.hi * p[2] - 1.0;
-    } else {
-        double w, dw;
-        slope_d(s, p[0] * p[0] + p[1] * p[1], &w, &dw);
-        g[0] = -w * p[0];
-        g[1] = -w * p[1];
-        g[2] = 1.0;
-    }
+    grad_d(s, p, g);
     gg = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
     g[0] /= gg;
     g[1] /= gg;
@@ -702,20 +697,8 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
         y = P[1] + tt * d[1];
         z = P[2] + tt * d[2];
         {
-            double kappa, gx, gy, gz, gn, cg;
-            if (s->shape == SHAPE_ASPH) {
-                double w, dw;
-                slope_d(s, x * x + y * y, &w, &dw);
-                gx = -w * x;
-                gy = -w * y;
-                gz = 1.0;
-            } else {
-                gx = c * x;
-                gy = c * y;
-                gz = c * k1 * (z - s->zg) - 1.0;
-            }
-            gn = sqrt(gx * gx + gy * gy + gz * gz);
-            cg = gn > 0 ? fabs(gx * d[0] + gy * d[1] + gz * d[2]) / (gn * dlen) : 1.0;
+            double kappa, pl[3] = {x, y, z - s->zg}, dl[3] = {d[0] / dlen, d[1] / dlen, d[2] / dlen};
+            double cg = surf_cos_d(s, pl, dl);
             kappa = cg > 0.0 ? 1.0 / cg : 1e300;
             eP = kappa * (eP + fabs(tt) * dlen * eD) + eta_t * dlen +
                  4.0 * U53 * (fabs(tt) * dlen + fmax(fabs(x), fmax(fabs(y), fabs(z)))) +
