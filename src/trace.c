@@ -71,7 +71,7 @@ static double ulp_of(double x)
         return x;
     if (x < DBL_MIN)
         return DBL_TRUE_MIN;
-    return nextafter(x, INFINITY) - x;
+    return ldexp(1.0, ilogb(x) - (DBL_MANT_DIG - 1));
 }
 
 /* A bound computed in floating point must not round down past the error
@@ -154,6 +154,15 @@ double sg_sprep_sag_resid(const sg_sprep *s, double x, double y, double z)
     if (s->shape == SHAPE_PLANE)
         return fabs(z);
     r2 = dd_add(dd_two_prod(x, x), dd_two_prod(y, y));
+    if (s->shape == SHAPE_CONIC) {
+        /* G = r^2 + k1 z^2 - 2 R z is exact enough in double-double, and
+         * z - sag = G / dG/dz to first order; the second-order term is the
+         * residual squared over R, far below what is reported. */
+        dd G = dd_add(r2, dd_mul(s->k1, dd_two_prod(z, z)));
+        double gz = 2.0 * (s->k1.hi * z - s->R);
+        G = dd_sub(G, dd_two_prod(z, 2.0 * s->R));
+        return gz != 0.0 ? fabs(dd_to_d(G) / gz) : NAN;
+    }
     sag = sag_dd(s, r2, &ok);
     if (!ok)
         return NAN;
@@ -410,29 +419,31 @@ static int precise_bend(const sg_sprep *s, sg_pray *r)
          * unchanged; only the normal's error adds. */
         r->eD = r->eD + 4.0 * dN + 40.0 * DD_U;
     } else {
-        dd ng = dd_sqrt(gg);
-        dd cosI = dd_div(dg, ng);
+        /* With a = d.g and b = g.g, the unit-normal formula becomes
+         * d' = mu d + (sgn(a) sqrt(b - mu^2 (b - a^2)) - mu a) / b g,
+         * one square root and one division. */
         dd mu2 = dd_sqr(s->mu);
-        dd sin2 = dd_sub(dd_from(1.0), dd_sqr(cosI));
-        dd k = dd_sub(dd_from(1.0), dd_mul(mu2, sin2));
+        dd kb = dd_sub(gg, dd_mul(mu2, dd_sub(gg, dd_sqr(dg))));
         dd sq, gam;
-        double J;
-        if (k.hi < 0.0)
+        double J, k;
+        if (kb.hi < 0.0)
             return SG_ETIR;
         if (dd_abs_hi(s->mu) == 1.0 && s->mu.lo == 0.0) {
             /* Equal indices: the ray goes straight on, exactly. */
             return SG_OK;
         }
-        sq = dd_sqrt(k);
-        if (cosI.hi < 0.0)
+        sq = dd_sqrt(kb);
+        if (dg.hi < 0.0)
             sq = dd_neg(sq);
-        gam = dd_div(dd_sub(sq, dd_mul(s->mu, cosI)), ng);
+        gam = dd_div(dd_sub(sq, dd_mul(s->mu, dg)), gg);
         nd.x = dd_add(dd_mul(s->mu, r->d.x), dd_mul(gam, g.x));
         nd.y = dd_add(dd_mul(s->mu, r->d.y), dd_mul(gam, g.y));
         nd.z = dd_add(dd_mul(s->mu, r->d.z), dd_mul(gam, g.z));
-        /* J = |d gamma / d cosI|, which grows without bound near TIR. */
-        J = s->mu.hi * fabs(s->mu.hi * cosI_d - copysign(sqrt(fmax(k.hi, 0.0)), cosI_d)) /
-            sqrt(fmax(k.hi, 1e-300));
+        /* J = |d gamma / d cosI| for the unit normal, which grows without
+         * bound near TIR; k = cos^2 of the refracted angle. */
+        k = kb.hi / gg.hi;
+        J = s->mu.hi * fabs(s->mu.hi * cosI_d - copysign(sqrt(fmax(k, 0.0)), cosI_d)) /
+            sqrt(fmax(k, 1e-300));
         r->eD = (s->mu.hi + J) * r->eD + (J + fabs(gam.hi) * gn) * dN +
                 60.0 * DD_U * (s->mu.hi + J + 1.0);
     }
@@ -539,7 +550,9 @@ int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surfa
                     root_err = Fpp / fabs(Fp) * step * step + ferr / fabs(Fp) +
                                fabs(step) * 8.0 * U53 * Fmag / fabs(Fp) +
                                4.0 * DD_U * fabs(sv.hi);
-                    if (fabs(step) <= 1e-18 * fabs(sv.hi) || step == 0.0)
+                    /* One step from the double root usually leaves less
+                     * than double-double can show; a poor start takes more. */
+                    if (root_err <= 0x1p-100 * (fabs(sv.hi) + fabs(p0.x.hi) + fabs(p0.y.hi)))
                         break;
                 }
             }
