@@ -23,6 +23,8 @@
 static const cli_command commands[] = {
     { "trace", cmd_trace, "trace rays and print every surface crossing" },
     { "paraxial", cmd_paraxial, "print first-order (paraxial) data" },
+    { "verify", cmd_verify, "check a design's traces against the MPFR reference" },
+    { "bench", cmd_bench, "measure trace throughput" },
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
 

@@ -1,0 +1,1050 @@
+/*
+ * bench.c - "sagitta bench": trace throughput, the cost of one MPFR ray and
+ * of one live recompute of the editor, as figures to read, never to assert.
+ *
+ * Throughput is measured through sg_trace_batch(), the call a spot diagram
+ * or the editor makes, so it includes what such a caller pays: one tracer
+ * per thread and the thread start-up.  Output arrays are allocated and
+ * touched before the clock starts, so page faults are not counted.
+ *
+ * Ray sets are field-major: every pupil point of one field point, then the
+ * next field point.  The tracer keeps the last field point's object-space
+ * launch (and, with ray aiming, its aimed chief ray), so this order is what
+ * a real spot diagram costs; a pupil-major order would pay for the field on
+ * every ray.
+ */
+#include <dirent.h>
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include <cjson/cJSON.h>
+
+#include "cli.h"
+#include "sg_config.h"
+
+/* Short measurements (one ray, one recompute) take at least this many
+ * samples, since each lasts only milliseconds. */
+#define SHORT_MIN_SAMPLES 25
+/* The editor's ray and the single MPFR ray: top of the field, top of the
+ * pupil, the ray that usually has the largest angles. */
+static const double edge_ray[4] = { 0.0, 1.0, 0.0, 1.0 };
+
+enum { BENCH_TEXT = 0, BENCH_JSON = 1 };
+enum { NMETHOD = 2, NTHR = 2, MAXSIZES = 3 };
+static const sg_method methods[NMETHOD] = { SG_METHOD_PRECISE, SG_METHOD_CLASSIC };
+
+typedef struct stat3 {
+    double med, min, max;
+} stat3;
+
+/* One throughput measurement: a method, a thread count, a ray-set size. */
+typedef struct tp_cell {
+    int done;         /* measured */
+    int rc;           /* sg_trace_batch's return */
+    char msg[SG_DIAG_MSG];
+    int threads;      /* threads used */
+    size_t nok;       /* rays that reached the image */
+    stat3 sec;        /* wall time of one batch */
+    stat3 rs;         /* ray-surfaces per second */
+} tp_cell;
+
+typedef struct tp_size {
+    size_t nray;
+    int skipped; /* out of memory for the arrays */
+    tp_cell c[NMETHOD][NTHR];
+} tp_size;
+
+/* A short measurement: median time of an operation, or why it failed. */
+typedef struct short_res {
+    int rc;
+    char msg[SG_DIAG_MSG];
+    int status; /* trace status of the ray, for the MPFR ray */
+    int samples;
+    stat3 sec;
+} short_res;
+
+typedef struct design_res {
+    const char *path;
+    char title[128];
+    int nsurf, nfield, aim;
+    int load_rc; /* CLI exit status of loading */
+    int trace_rc; /* first engine error of a measurement, SG_OK if none */
+    char trace_msg[SG_DIAG_MSG + 32]; /* why no tracer could be made, or "" */
+    size_t nsizes;
+    tp_size sz[MAXSIZES];
+    short_res mpfr_ray, recompute, recompute_digits;
+} design_res;
+
+typedef struct bench_cfg {
+    int fmt;
+    int repeat;
+    int quick;
+    int threads; /* the multi-threaded runs; 0 means every core */
+    int cores;
+    int nthr_all; /* threads that "all cores" resolves to */
+    int progress; /* report progress on stderr */
+    size_t sizes[MAXSIZES];
+    size_t nsizes;
+} bench_cfg;
+
+/* ------------------------------------------------------------ utilities */
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Sorts v in place. */
+static stat3 stats(double *v, int n)
+{
+    stat3 s;
+    qsort(v, (size_t)n, sizeof *v, cmp_double);
+    s.min = v[0];
+    s.max = v[n - 1];
+    s.med = n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+    return s;
+}
+
+static int count_cores(void)
+{
+    long c = sysconf(_SC_NPROCESSORS_ONLN);
+    return c > 0 ? (int)c : 1;
+}
+
+/* "model name" from /proc/cpuinfo, or "" when it cannot be read. */
+static void cpu_model(char *buf, size_t len)
+{
+    char line[512];
+    FILE *f = fopen("/proc/cpuinfo", "r");
+    buf[0] = '\0';
+    if (!f)
+        return;
+    while (fgets(line, sizeof line, f)) {
+        char *colon = strchr(line, ':');
+        if (strncmp(line, "model name", 10) == 0 && colon) {
+            colon++;
+            while (*colon == ' ' || *colon == '\t')
+                colon++;
+            colon[strcspn(colon, "\n")] = '\0';
+            snprintf(buf, len, "%s", colon);
+            break;
+        }
+    }
+    fclose(f);
+}
+
+/* The 1-minute load average, or -1: a busy machine explains slow figures. */
+static double load_average(void)
+{
+    double la = -1.0;
+    FILE *f = fopen("/proc/loadavg", "r");
+    if (!f)
+        return -1.0;
+    if (fscanf(f, "%lf", &la) != 1)
+        la = -1.0;
+    fclose(f);
+    return la;
+}
+
+/* The build type, as far as the compiler's macros reveal it. */
+static const char *build_type(void)
+{
+#if defined(__OPTIMIZE__) && defined(NDEBUG)
+    return "release (optimized, NDEBUG)";
+#elif defined(__OPTIMIZE__)
+    return "optimized, assertions on (debugoptimized)";
+#else
+    return "not optimized (debug)";
+#endif
+}
+
+static int have_fma(void)
+{
+#if defined(__FMA__)
+    return 1;
+#else
+    return 0;
+#endif
+}
+
+/* ------------------------------------------------------------ examples */
+
+static int cmp_str(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+static int is_dir(const char *p)
+{
+    DIR *d = opendir(p);
+    if (!d)
+        return 0;
+    closedir(d);
+    return 1;
+}
+
+/* Finds the bundled examples: $SAGITTA_EXAMPLES, the source tree, then the
+ * installed copy.  Returns the exit status; *paths is a sorted list of
+ * malloc'd strings. */
+static int find_examples(char ***paths, size_t *n)
+{
+    const char *env = getenv("SAGITTA_EXAMPLES");
+    const char *dir = NULL;
+    DIR *d;
+    struct dirent *e;
+    char **v = NULL;
+    size_t cnt = 0, cap = 0;
+
+    *paths = NULL;
+    *n = 0;
+    if (env && env[0])
+        dir = env;
+    else if (is_dir(SG_SOURCE_EXAMPLES))
+        dir = SG_SOURCE_EXAMPLES;
+    else
+        dir = SG_INSTALL_EXAMPLES;
+    d = opendir(dir);
+    if (!d) {
+        cli_error("bench: examples directory %s: %s (name designs on the command "
+                  "line, or set SAGITTA_EXAMPLES)", dir, strerror(errno));
+        return CLI_EXIT_FILE;
+    }
+    while ((e = readdir(d)) != NULL) {
+        size_t len = strlen(e->d_name);
+        char *p;
+        if (len <= 5 || strcmp(e->d_name + len - 5, ".json") != 0 || e->d_name[0] == '.')
+            continue;
+        if (cnt == cap) {
+            char **nv = realloc(v, (cap ? 2 * cap : 16) * sizeof *v);
+            if (!nv)
+                goto nomem;
+            v = nv;
+            cap = cap ? 2 * cap : 16;
+        }
+        p = malloc(strlen(dir) + len + 2);
+        if (!p)
+            goto nomem;
+        sprintf(p, "%s/%s", dir, e->d_name);
+        v[cnt++] = p;
+    }
+    closedir(d);
+    if (cnt == 0) {
+        cli_error("bench: no *.json designs in %s", dir);
+        free(v);
+        return CLI_EXIT_FILE;
+    }
+    qsort(v, cnt, sizeof *v, cmp_str);
+    *paths = v;
+    *n = cnt;
+    return CLI_EXIT_OK;
+nomem:
+    closedir(d);
+    while (cnt)
+        free(v[--cnt]);
+    free(v);
+    cli_error("out of memory");
+    return CLI_EXIT_INTERNAL;
+}
+
+/* ------------------------------------------------------------ ray sets */
+
+/* nray rays over the design's field points and the unit pupil, field-major.
+ * Pupil points follow Vogel's spiral (radius sqrt((i + 1/2) / m), golden
+ * angle steps), a deterministic low-discrepancy cover of the disc, so
+ * every size samples the whole pupil evenly. */
+static void make_rays(const sg_system *sys, sg_ray_in *rays, size_t nray)
+{
+    const double golden = 3.14159265358979323846 * (3.0 - sqrt(5.0));
+    double sx = 0.0, sy = 0.0;
+    size_t r = 0;
+    int f, nf = sys->nfield > 0 ? sys->nfield : 1;
+
+    for (f = 0; f < sys->nfield; f++) {
+        double x = fabs(sys->field[f].x), y = fabs(sys->field[f].y);
+        if (sys->field_norm == SG_NORM_RADIAL) {
+            double h = hypot(x, y);
+            sx = h > sx ? h : sx;
+            sy = sx;
+        } else {
+            sx = x > sx ? x : sx;
+            sy = y > sy ? y : sy;
+        }
+    }
+    for (f = 0; f < nf; f++) {
+        size_t m = nray / (size_t)nf + ((size_t)f < nray % (size_t)nf), i;
+        double hx = 0.0, hy = 0.0;
+        if (sys->nfield > 0) {
+            hx = sx > 0.0 ? sys->field[f].x / sx : 0.0;
+            hy = sy > 0.0 ? sys->field[f].y / sy : 0.0;
+        }
+        for (i = 0; i < m; i++, r++) {
+            double rad = sqrt(((double)i + 0.5) / (double)m);
+            double th = golden * (double)i;
+            memset(&rays[r], 0, sizeof rays[r]);
+            rays[r].v[0] = hx;
+            rays[r].v[1] = hy;
+            rays[r].v[2] = rad * cos(th);
+            rays[r].v[3] = rad * sin(th);
+        }
+    }
+}
+
+/* ------------------------------------------------------------ measuring */
+
+/* What is being measured, on stderr, so a long JSON run shows it is alive. */
+static void progress(const bench_cfg *cfg, const char *path, const char *what, size_t n)
+{
+    if (!cfg->progress)
+        return;
+    if (n)
+        fprintf(stderr, "sagitta: bench: %s: %zu %s\n", path, n, what);
+    else
+        fprintf(stderr, "sagitta: bench: %s: %s\n", path, what);
+}
+
+/* Runs every method and thread count on one ray-set size.  Repeats are
+ * interleaved (precise, classic, precise, ...) so that a change in machine
+ * load shifts both methods alike and their ratio stays fair. */
+static void bench_size(const bench_cfg *cfg, const sg_system *sys, const sg_catalog *cat,
+                       tp_size *ts)
+{
+    size_t nray = ts->nray, k;
+    int nsurf = sys->nsurf, m, h, rep, nthr = cfg->nthr_all > 1 ? NTHR : 1;
+    sg_ray_in *rays = malloc(nray * sizeof *rays);
+    sg_ray_surface *out = malloc(nray * (size_t)nsurf * sizeof *out);
+    int *status = malloc(nray * sizeof *status);
+    double *sec[NMETHOD][NTHR] = { { NULL } };
+
+    if (!rays || !out || !status)
+        goto nomem;
+    for (m = 0; m < NMETHOD; m++)
+        for (h = 0; h < nthr; h++) {
+            sec[m][h] = malloc((size_t)cfg->repeat * sizeof(double));
+            if (!sec[m][h])
+                goto nomem;
+        }
+    make_rays(sys, rays, nray);
+    /* Touch every page now so the first timed run pays no page faults. */
+    memset(out, 0, nray * (size_t)nsurf * sizeof *out);
+    memset(status, 0, nray * sizeof *status);
+
+    for (rep = -1; rep < cfg->repeat; rep++) {
+        for (m = 0; m < NMETHOD; m++) {
+            for (h = 0; h < nthr; h++) {
+                tp_cell *c = &ts->c[m][h];
+                int nt = h == 0 ? 1 : cfg->threads;
+                sg_trace_opts o;
+                sg_diag d;
+                double t0, t1;
+                int rc;
+                /* A warm-up run (rep -1) only for small sets, where caches
+                 * and the allocator's first calls would show. */
+                if (rep < 0 && nray > 100000)
+                    continue;
+                if (c->rc != SG_OK)
+                    continue;
+                sg_trace_opts_init(&o);
+                o.method = methods[m];
+                sg_diag_clear(&d);
+                t0 = now_s();
+                rc = sg_trace_batch(sys, cat, &o, SG_RAYS_NORMALIZED, rays, nray, nt, out,
+                                    status, &d);
+                t1 = now_s();
+                if (rc != SG_OK) {
+                    c->rc = rc;
+                    snprintf(c->msg, sizeof c->msg, "%s", d.msg[0] ? d.msg : sg_strerror(rc));
+                    continue;
+                }
+                if (rep < 0)
+                    continue;
+                sec[m][h][rep] = t1 - t0;
+                if (rep == cfg->repeat - 1) {
+                    c->nok = 0;
+                    for (k = 0; k < nray; k++)
+                        c->nok += status[k] == SG_OK;
+                }
+            }
+        }
+    }
+    for (m = 0; m < NMETHOD; m++) {
+        for (h = 0; h < nthr; h++) {
+            tp_cell *c = &ts->c[m][h];
+            double *rs = sec[m][h];
+            double work;
+            int i;
+            c->done = 1;
+            c->threads = h == 0 ? 1 : cfg->nthr_all;
+            if ((size_t)c->threads > nray)
+                c->threads = (int)nray;
+            if (c->rc != SG_OK)
+                continue;
+            work = (double)c->nok * (double)(nsurf - 1);
+            c->sec = stats(rs, cfg->repeat);
+            /* Throughput of each run, from the sorted times. */
+            for (i = 0; i < cfg->repeat; i++)
+                rs[i] = rs[i] > 0.0 ? work / rs[i] : 0.0;
+            c->rs = stats(rs, cfg->repeat);
+        }
+    }
+    goto done;
+nomem:
+    ts->skipped = 1;
+done:
+    for (m = 0; m < NMETHOD; m++)
+        for (h = 0; h < NTHR; h++)
+            free(sec[m][h]);
+    free(rays);
+    free(out);
+    free(status);
+}
+
+static void set_err(short_res *r, int rc, const sg_diag *d)
+{
+    r->rc = rc;
+    snprintf(r->msg, sizeof r->msg, "%s", d && d->msg[0] ? d->msg : sg_strerror(rc));
+}
+
+/* One MPFR trace of the edge ray: one tracer, the same ray timed again and
+ * again (the MPFR method keeps no field cache, so every call is a full
+ * trace with its ray aiming). */
+static void bench_mpfr_ray(const bench_cfg *cfg, const sg_system *sys, const sg_catalog *cat,
+                           short_res *r)
+{
+    int n = cfg->repeat > SHORT_MIN_SAMPLES ? cfg->repeat : SHORT_MIN_SAMPLES, i;
+    sg_ray_surface *out = malloc((size_t)sys->nsurf * sizeof *out);
+    double *sec = malloc((size_t)n * sizeof *sec);
+    sg_trace_opts o;
+    sg_tracer *t;
+    sg_diag d;
+
+    memset(r, 0, sizeof *r);
+    if (!out || !sec) {
+        set_err(r, SG_ENOMEM, NULL);
+        goto done;
+    }
+    sg_trace_opts_init(&o);
+    o.method = SG_METHOD_MPFR;
+    o.mpfr_bits = 256;
+    sg_diag_clear(&d);
+    t = sg_tracer_new(sys, cat, &o, &d);
+    if (!t) {
+        set_err(r, d.code ? d.code : SG_ENOMEM, &d);
+        goto done;
+    }
+    for (i = 0; i < n; i++) {
+        double t0 = now_s();
+        r->status = sg_trace_normalized(t, edge_ray[0], edge_ray[1], edge_ray[2],
+                                        edge_ray[3], out);
+        sec[i] = now_s() - t0;
+    }
+    sg_tracer_free(t);
+    r->samples = n;
+    r->sec = stats(sec, n);
+done:
+    free(out);
+    free(sec);
+}
+
+/* The editor's recompute after an edit: a new precise tracer, the edge
+ * ray, the paraxial data; with digits, also an MPFR tracer and its trace
+ * of the same ray.  Freeing the tracers is left out of the timing, as the
+ * editor frees the old ones only when the next edit replaces them. */
+static void bench_recompute(const bench_cfg *cfg, const sg_system *sys,
+                            const sg_catalog *cat, int digits, short_res *r)
+{
+    int n = cfg->repeat > SHORT_MIN_SAMPLES ? cfg->repeat : SHORT_MIN_SAMPLES, i;
+    sg_ray_surface *out = malloc((size_t)sys->nsurf * sizeof *out);
+    sg_ray_surface *ref = malloc((size_t)sys->nsurf * sizeof *ref);
+    double *sec = malloc((size_t)n * sizeof *sec);
+    sg_trace_opts o, mo;
+    sg_paraxial px;
+    sg_diag d;
+
+    memset(r, 0, sizeof *r);
+    if (!out || !ref || !sec) {
+        set_err(r, SG_ENOMEM, NULL);
+        goto done;
+    }
+    sg_trace_opts_init(&o);
+    mo = o;
+    mo.method = SG_METHOD_MPFR;
+    mo.mpfr_bits = 256;
+    for (i = 0; i < n; i++) {
+        sg_tracer *t, *mt = NULL;
+        double t0;
+        int rc;
+        sg_diag_clear(&d);
+        t0 = now_s();
+        t = sg_tracer_new(sys, cat, &o, &d);
+        if (!t) {
+            set_err(r, d.code ? d.code : SG_ENOMEM, &d);
+            goto done;
+        }
+        r->status = sg_trace_normalized(t, edge_ray[0], edge_ray[1], edge_ray[2],
+                                        edge_ray[3], out);
+        rc = sg_paraxial_compute(sys, cat, sys->primary_wave, &px, &d);
+        if (rc == SG_OK && digits) {
+            mt = sg_tracer_new(sys, cat, &mo, &d);
+            if (mt)
+                sg_trace_normalized(mt, edge_ray[0], edge_ray[1], edge_ray[2], edge_ray[3],
+                                    ref);
+            else
+                rc = d.code ? d.code : SG_ENOMEM;
+        }
+        sec[i] = now_s() - t0;
+        sg_tracer_free(t);
+        sg_tracer_free(mt);
+        if (rc != SG_OK) {
+            set_err(r, rc, &d);
+            goto done;
+        }
+    }
+    r->samples = n;
+    r->sec = stats(sec, n);
+done:
+    free(out);
+    free(ref);
+    free(sec);
+}
+
+/* ------------------------------------------------------------ text output */
+
+static const char *size_label(size_t n, char *buf, size_t len)
+{
+    int e = 0;
+    size_t m = n;
+    while (m >= 10 && m % 10 == 0) {
+        m /= 10;
+        e++;
+    }
+    if (m == 1 && e >= 3)
+        snprintf(buf, len, "1e%d", e);
+    else
+        snprintf(buf, len, "%zu", n);
+    return buf;
+}
+
+static void text_cell(FILE *f, const tp_cell *c, size_t nray)
+{
+    if (c->rc != SG_OK) {
+        fprintf(f, "  %-34s", "failed (see below)");
+        return;
+    }
+    fprintf(f, "  %7.2f (%7.2f-%7.2f)  %5.1f%%", c->rs.med / 1e6, c->rs.min / 1e6,
+            c->rs.max / 1e6, 100.0 * (double)(nray - c->nok) / (double)nray);
+}
+
+static void text_short(FILE *f, const char *what, const short_res *r)
+{
+    fprintf(f, "  %-44s", what);
+    if (r->rc != SG_OK) {
+        fprintf(f, "failed: %s\n", r->msg);
+        return;
+    }
+    fprintf(f, "%9.3f ms  (min %.3f, max %.3f, %d runs)", 1e3 * r->sec.med, 1e3 * r->sec.min,
+            1e3 * r->sec.max, r->samples);
+    if (r->status != SG_OK)
+        fprintf(f, "  ray: %s", sg_err_name(r->status));
+    fputc('\n', f);
+}
+
+static void text_header(FILE *f, const bench_cfg *cfg)
+{
+    char cpu[256];
+    double la = load_average();
+    char sizes[64] = "", lab[16];
+    size_t k;
+    cpu_model(cpu, sizeof cpu);
+    for (k = 0; k < cfg->nsizes; k++) {
+        strcat(sizes, k ? ", " : "");
+        strcat(sizes, size_label(cfg->sizes[k], lab, sizeof lab));
+    }
+    fprintf(f, "sagitta %s bench\n", SG_VERSION_STRING);
+    fprintf(f, "machine: %d core%s, %s\n", cfg->cores, cfg->cores == 1 ? "" : "s",
+            cpu[0] ? cpu : "CPU model unknown");
+    fprintf(f, "build:   %s, FMA %s\n", build_type(), have_fma() ? "on" : "off");
+    if (la >= 0.0)
+        fprintf(f, "load:    %.2f (1-minute average before the runs)\n", la);
+    fprintf(f, "runs:    median (min-max) of %d; rays %s; all cores = %d thread%s\n",
+            cfg->repeat, sizes, cfg->nthr_all, cfg->nthr_all == 1 ? "" : "s");
+    fputs("Throughput in millions of ray-surfaces per second: rays that reached\n"
+          "the image times (surfaces - 1) over wall time; 'fail' is the share of\n"
+          "rays that did not reach it.  Rays are field-major, as in a spot diagram.\n",
+          f);
+}
+
+static void text_design(FILE *f, const bench_cfg *cfg, const design_res *r)
+{
+    static const char *aim[] = { "off", "paraxial", "real" };
+    size_t s;
+    int h, m, nthr = cfg->nthr_all > 1 ? NTHR : 1;
+    char lab[16];
+
+    fprintf(f, "\n%s\n", r->path);
+    if (r->load_rc != CLI_EXIT_OK) {
+        fputs("  not measured: the design did not load (see the message above)\n", f);
+        return;
+    }
+    fprintf(f, "  %s\n  %d surfaces, %d field point%s, ray aiming %s\n", r->title, r->nsurf,
+            r->nfield, r->nfield == 1 ? "" : "s",
+            r->aim >= 0 && r->aim <= 2 ? aim[r->aim] : "?");
+    if (r->trace_msg[0]) {
+        fprintf(f, "  not measured: the %s\n", r->trace_msg);
+        return;
+    }
+    fprintf(f, "  %5s %3s  %-27s %5s  %-27s %5s  %s\n", "rays", "thr", "precise Mrs/s", "fail",
+            "classic Mrs/s", "fail", "p/c");
+    for (s = 0; s < r->nsizes; s++) {
+        const tp_size *ts = &r->sz[s];
+        if (ts->skipped) {
+            fprintf(f, "  %5s      not measured: out of memory for the arrays\n",
+                    size_label(ts->nray, lab, sizeof lab));
+            continue;
+        }
+        for (h = 0; h < nthr; h++) {
+            const tp_cell *p = &ts->c[0][h], *c = &ts->c[1][h];
+            fprintf(f, "  %5s %3d", size_label(ts->nray, lab, sizeof lab), p->threads);
+            text_cell(f, p, ts->nray);
+            text_cell(f, c, ts->nray);
+            if (p->rc == SG_OK && c->rc == SG_OK && c->rs.med > 0.0)
+                fprintf(f, "  %.2f", p->rs.med / c->rs.med);
+            fputc('\n', f);
+        }
+    }
+    for (s = 0; s < r->nsizes; s++)
+        for (m = 0; m < NMETHOD; m++)
+            for (h = 0; h < nthr; h++)
+                if (!r->sz[s].skipped && r->sz[s].c[m][h].rc != SG_OK)
+                    fprintf(f, "  %s, %s rays, %d thread%s: %s\n", sg_method_name(methods[m]),
+                            size_label(r->sz[s].nray, lab, sizeof lab),
+                            r->sz[s].c[m][h].threads, r->sz[s].c[m][h].threads == 1 ? "" : "s",
+                            r->sz[s].c[m][h].msg);
+    if (nthr > 1 && r->nsizes > 0 && !r->sz[r->nsizes - 1].skipped) {
+        const tp_size *ts = &r->sz[r->nsizes - 1];
+        const char *sep = "";
+        for (m = 0; m < NMETHOD; m++) {
+            const tp_cell *one = &ts->c[m][0], *all = &ts->c[m][1];
+            if (one->rc != SG_OK || all->rc != SG_OK || !(one->rs.med > 0.0))
+                continue;
+            if (!sep[0])
+                fprintf(f, "  %d-thread scaling at %s rays:", cfg->nthr_all,
+                        size_label(ts->nray, lab, sizeof lab));
+            fprintf(f, "%s %s %.2fx", sep, sg_method_name(methods[m]),
+                    all->rs.med / one->rs.med);
+            sep = ",";
+        }
+        if (sep[0])
+            fputc('\n', f);
+    }
+    text_short(f, "mpfr single ray (0,1,0,1), 256 bits:", &r->mpfr_ray);
+    text_short(f, "live recompute (precise):", &r->recompute);
+    text_short(f, "live recompute with mpfr digits check:", &r->recompute_digits);
+    fflush(f);
+}
+
+/* ------------------------------------------------------------ JSON output */
+
+static cJSON *json_stat(const stat3 *s)
+{
+    cJSON *o = cJSON_CreateObject();
+    cJSON_AddNumberToObject(o, "median", s->med);
+    cJSON_AddNumberToObject(o, "min", s->min);
+    cJSON_AddNumberToObject(o, "max", s->max);
+    return o;
+}
+
+static cJSON *json_short(const short_res *r, int with_status)
+{
+    cJSON *o = cJSON_CreateObject();
+    if (r->rc != SG_OK) {
+        cJSON_AddStringToObject(o, "error", sg_err_name(r->rc));
+        cJSON_AddStringToObject(o, "message", r->msg);
+        return o;
+    }
+    cJSON_AddNumberToObject(o, "samples", r->samples);
+    cJSON_AddItemToObject(o, "seconds", json_stat(&r->sec));
+    if (with_status)
+        cJSON_AddStringToObject(o, "ray_status", sg_err_name(r->status));
+    return o;
+}
+
+static cJSON *json_design(const bench_cfg *cfg, const design_res *r)
+{
+    static const char *aim[] = { "off", "paraxial", "real" };
+    cJSON *o = cJSON_CreateObject(), *tp, *ratio, *scal, *ray;
+    size_t s;
+    int m, h, nthr = cfg->nthr_all > 1 ? NTHR : 1;
+
+    cJSON_AddStringToObject(o, "path", r->path);
+    if (r->load_rc != CLI_EXIT_OK) {
+        cJSON_AddStringToObject(o, "error", "the design did not load");
+        return o;
+    }
+    cJSON_AddStringToObject(o, "title", r->title);
+    cJSON_AddNumberToObject(o, "surfaces", r->nsurf);
+    cJSON_AddNumberToObject(o, "field_points", r->nfield);
+    cJSON_AddStringToObject(o, "ray_aiming", r->aim >= 0 && r->aim <= 2 ? aim[r->aim] : "?");
+    if (r->trace_msg[0]) {
+        cJSON_AddStringToObject(o, "error", sg_err_name(r->trace_rc));
+        cJSON_AddStringToObject(o, "message", r->trace_msg);
+        return o;
+    }
+    tp = cJSON_AddArrayToObject(o, "throughput");
+    ratio = cJSON_AddArrayToObject(o, "precise_over_classic");
+    for (s = 0; s < r->nsizes; s++) {
+        const tp_size *ts = &r->sz[s];
+        for (h = 0; h < nthr; h++) {
+            for (m = 0; m < NMETHOD; m++) {
+                const tp_cell *c = &ts->c[m][h];
+                cJSON *e = cJSON_CreateObject();
+                cJSON_AddStringToObject(e, "method", sg_method_name(methods[m]));
+                cJSON_AddNumberToObject(e, "rays", (double)ts->nray);
+                if (ts->skipped) {
+                    cJSON_AddStringToObject(e, "error", "SG_ENOMEM");
+                    cJSON_AddItemToArray(tp, e);
+                    continue;
+                }
+                cJSON_AddNumberToObject(e, "threads", c->threads);
+                if (c->rc != SG_OK) {
+                    cJSON_AddStringToObject(e, "error", sg_err_name(c->rc));
+                    cJSON_AddStringToObject(e, "message", c->msg);
+                } else {
+                    cJSON_AddNumberToObject(e, "rays_reached_image", (double)c->nok);
+                    cJSON_AddNumberToObject(e, "failed_fraction",
+                                            (double)(ts->nray - c->nok) / (double)ts->nray);
+                    cJSON_AddItemToObject(e, "ray_surfaces_per_second", json_stat(&c->rs));
+                    cJSON_AddItemToObject(e, "seconds", json_stat(&c->sec));
+                }
+                cJSON_AddItemToArray(tp, e);
+            }
+            if (!ts->skipped && ts->c[0][h].rc == SG_OK && ts->c[1][h].rc == SG_OK &&
+                ts->c[1][h].rs.med > 0.0) {
+                cJSON *e = cJSON_CreateObject();
+                cJSON_AddNumberToObject(e, "rays", (double)ts->nray);
+                cJSON_AddNumberToObject(e, "threads", ts->c[0][h].threads);
+                cJSON_AddNumberToObject(e, "ratio", ts->c[0][h].rs.med / ts->c[1][h].rs.med);
+                cJSON_AddItemToArray(ratio, e);
+            }
+        }
+    }
+    scal = cJSON_AddArrayToObject(o, "scaling");
+    if (nthr > 1 && r->nsizes > 0 && !r->sz[r->nsizes - 1].skipped) {
+        const tp_size *ts = &r->sz[r->nsizes - 1];
+        for (m = 0; m < NMETHOD; m++) {
+            const tp_cell *one = &ts->c[m][0], *all = &ts->c[m][1];
+            if (one->rc == SG_OK && all->rc == SG_OK && one->rs.med > 0.0) {
+                cJSON *e = cJSON_CreateObject();
+                cJSON_AddStringToObject(e, "method", sg_method_name(methods[m]));
+                cJSON_AddNumberToObject(e, "rays", (double)ts->nray);
+                cJSON_AddNumberToObject(e, "threads", all->threads);
+                cJSON_AddNumberToObject(e, "ratio", all->rs.med / one->rs.med);
+                cJSON_AddItemToArray(scal, e);
+            }
+        }
+    }
+    ray = cJSON_AddArrayToObject(o, "edge_ray");
+    for (m = 0; m < 4; m++)
+        cJSON_AddItemToArray(ray, cJSON_CreateNumber(edge_ray[m]));
+    cJSON_AddItemToObject(o, "mpfr_single_ray", json_short(&r->mpfr_ray, 1));
+    cJSON_AddNumberToObject(cJSON_GetObjectItem(o, "mpfr_single_ray"), "bits", 256);
+    cJSON_AddItemToObject(o, "live_recompute", json_short(&r->recompute, 1));
+    cJSON_AddItemToObject(o, "live_recompute_with_digits", json_short(&r->recompute_digits, 1));
+    return o;
+}
+
+static cJSON *json_top(const bench_cfg *cfg, double load0, double load1)
+{
+    cJSON *o = cJSON_CreateObject(), *mach, *set, *sizes;
+    char cpu[256];
+    size_t k;
+    cpu_model(cpu, sizeof cpu);
+    cJSON_AddStringToObject(o, "program", "sagitta bench");
+    cJSON_AddStringToObject(o, "version", SG_VERSION_STRING);
+    mach = cJSON_AddObjectToObject(o, "machine");
+    cJSON_AddNumberToObject(mach, "cores", cfg->cores);
+    if (cpu[0])
+        cJSON_AddStringToObject(mach, "cpu", cpu);
+    else
+        cJSON_AddNullToObject(mach, "cpu");
+    cJSON_AddStringToObject(mach, "build", build_type());
+#if defined(__OPTIMIZE__)
+    cJSON_AddTrueToObject(mach, "optimized");
+#else
+    cJSON_AddFalseToObject(mach, "optimized");
+#endif
+    cJSON_AddBoolToObject(mach, "fma", have_fma());
+    if (load0 >= 0.0)
+        cJSON_AddNumberToObject(mach, "load_average_before", load0);
+    if (load1 >= 0.0)
+        cJSON_AddNumberToObject(mach, "load_average_after", load1);
+    set = cJSON_AddObjectToObject(o, "settings");
+    cJSON_AddNumberToObject(set, "repeat", cfg->repeat);
+    cJSON_AddBoolToObject(set, "quick", cfg->quick);
+    cJSON_AddNumberToObject(set, "threads_all", cfg->nthr_all);
+    cJSON_AddNumberToObject(set, "short_samples_min", SHORT_MIN_SAMPLES);
+    cJSON_AddStringToObject(set, "ray_order", "field-major");
+    cJSON_AddStringToObject(set, "pupil_pattern", "Vogel spiral");
+    sizes = cJSON_AddArrayToObject(set, "rays");
+    for (k = 0; k < cfg->nsizes; k++)
+        cJSON_AddItemToArray(sizes, cJSON_CreateNumber((double)cfg->sizes[k]));
+    return o;
+}
+
+/* ------------------------------------------------------------ command */
+
+static void bench_help(FILE *f)
+{
+    fputs(
+"Usage: sagitta bench [DESIGN.json ...] [OPTIONS]\n"
+"Measure trace throughput, the cost of one MPFR ray and of one live\n"
+"recompute of the editor, on the given designs or on every bundled example.\n"
+"\n"
+"Options:\n"
+"  --format F      text (default) or json\n"
+"  --repeat N      runs per measurement, 1 to 1000 (5); the median, minimum and\n"
+"                  maximum are printed; single-ray timings take at least 25\n"
+"  --quick         ray sets of 1e3 and 1e4 rays instead of 1e3, 1e5 and 1e6\n"
+"  --threads N     threads of the multi-threaded runs; 0 (default) is every core\n"
+"  -h, --help      show this help\n"
+"\n"
+"Throughput is in ray-surfaces per second: rays that reached the image times\n"
+"(surfaces - 1), over the wall time of one sg_trace_batch call.  Each design\n"
+"is traced with the precise and the classic method, on one thread and on\n"
+"all, and the ratio precise/classic of the same run is printed.  Rays are\n"
+"ordered field by field, as a spot diagram traces them.  A run of 1e6 rays\n"
+"needs about 80 bytes per ray and surface of memory.  Timings vary with the\n"
+"machine's load; the bench never fails on a slow figure.  See sagitta(1).\n",
+          f);
+}
+
+enum { OPT_HELP = 1, OPT_FORMAT, OPT_REPEAT, OPT_QUICK, OPT_THREADS };
+
+static const cli_opt bench_opts[] = {
+    { "--help", 'h', 0, OPT_HELP },
+    { "--format", 0, 1, OPT_FORMAT },
+    { "--repeat", 0, 1, OPT_REPEAT },
+    { "--quick", 0, 0, OPT_QUICK },
+    { "--threads", 0, 1, OPT_THREADS },
+    { NULL, 0, 0, 0 }
+};
+
+static void bench_design(const bench_cfg *cfg, const char *path, design_res *r)
+{
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    size_t s;
+
+    memset(r, 0, sizeof *r);
+    r->path = path;
+    r->load_rc = cli_load_design(path, &cat, &sys);
+    if (r->load_rc != CLI_EXIT_OK)
+        return;
+    snprintf(r->title, sizeof r->title, "%s", sys->title);
+    r->nsurf = sys->nsurf;
+    r->nfield = sys->nfield;
+    r->aim = (int)sys->aim;
+    /* A design the tracer refuses (say, ray aiming that cannot reach the
+     * stop) is reported once, not once per measurement. */
+    for (s = 0; s < NMETHOD + 1; s++) {
+        sg_trace_opts o;
+        sg_tracer *t;
+        sg_diag d;
+        sg_trace_opts_init(&o);
+        o.method = s < NMETHOD ? methods[s] : SG_METHOD_MPFR;
+        sg_diag_clear(&d);
+        t = sg_tracer_new(sys, cat, &o, &d);
+        if (!t) {
+            r->trace_rc = d.code ? d.code : SG_ENOMEM;
+            snprintf(r->trace_msg, sizeof r->trace_msg, "%s method: %s",
+                     sg_method_name(o.method), d.msg[0] ? d.msg : sg_strerror(r->trace_rc));
+            cli_design_free(cat, sys);
+            return;
+        }
+        sg_tracer_free(t);
+    }
+    r->nsizes = cfg->nsizes;
+    for (s = 0; s < cfg->nsizes; s++) {
+        r->sz[s].nray = cfg->sizes[s];
+        progress(cfg, path, "rays", cfg->sizes[s]);
+        bench_size(cfg, sys, cat, &r->sz[s]);
+    }
+    progress(cfg, path, "single rays and recomputes", 0);
+    bench_mpfr_ray(cfg, sys, cat, &r->mpfr_ray);
+    bench_recompute(cfg, sys, cat, 0, &r->recompute);
+    bench_recompute(cfg, sys, cat, 1, &r->recompute_digits);
+    cli_design_free(cat, sys);
+    /* A design that loads but cannot be traced is a failure of the design,
+     * like in "sagitta trace"; running out of memory for the largest ray
+     * set only leaves that size out. */
+    for (s = 0; s < r->nsizes; s++) {
+        int m, h;
+        for (m = 0; m < NMETHOD; m++)
+            for (h = 0; h < NTHR; h++)
+                if (!r->trace_rc && r->sz[s].c[m][h].rc != SG_OK)
+                    r->trace_rc = r->sz[s].c[m][h].rc;
+    }
+    if (!r->trace_rc)
+        r->trace_rc = r->mpfr_ray.rc ? r->mpfr_ray.rc
+                    : r->recompute.rc ? r->recompute.rc : r->recompute_digits.rc;
+}
+
+int cmd_bench(int argc, char **argv)
+{
+    cli_iter it;
+    const char *val;
+    const char **designs = NULL;
+    char **examples = NULL;
+    size_t ndesign = 0, nex = 0, k;
+    int id, rc = CLI_EXIT_OK, worst = CLI_EXIT_OK;
+    bench_cfg cfg;
+    design_res *res = NULL;
+    cJSON *root = NULL, *arr = NULL;
+    double load0;
+
+    memset(&cfg, 0, sizeof cfg);
+    cfg.repeat = 5;
+    designs = calloc((size_t)(argc > 0 ? argc : 1), sizeof *designs);
+    if (!designs) {
+        cli_error("out of memory");
+        return CLI_EXIT_INTERNAL;
+    }
+    cli_iter_init(&it, "bench", argc, argv);
+    while ((id = cli_next_opt(&it, bench_opts, &val)) != -1) {
+        switch (id) {
+        case 0:
+            designs[ndesign++] = val;
+            break;
+        case OPT_HELP:
+            bench_help(stdout);
+            free(designs);
+            return CLI_EXIT_OK;
+        case OPT_FORMAT:
+            if (strcmp(val, "text") == 0)
+                cfg.fmt = BENCH_TEXT;
+            else if (strcmp(val, "json") == 0)
+                cfg.fmt = BENCH_JSON;
+            else {
+                free(designs);
+                cli_error("--format: expected text or json, got \"%s\"", val);
+                return CLI_EXIT_USAGE;
+            }
+            break;
+        case OPT_REPEAT:
+            if (cli_int_value("--repeat", val, 1, 1000, &cfg.repeat)) {
+                free(designs);
+                return CLI_EXIT_USAGE;
+            }
+            break;
+        case OPT_QUICK:
+            cfg.quick = 1;
+            break;
+        case OPT_THREADS:
+            if (cli_int_value("--threads", val, 0, 256, &cfg.threads)) {
+                free(designs);
+                return CLI_EXIT_USAGE;
+            }
+            break;
+        default:
+            free(designs);
+            return -id;
+        }
+    }
+
+    if (ndesign == 0) {
+        rc = find_examples(&examples, &nex);
+        if (rc != CLI_EXIT_OK) {
+            free(designs);
+            return rc;
+        }
+        free(designs);
+        designs = (const char **)examples;
+        ndesign = nex;
+    }
+
+    cfg.cores = count_cores();
+    /* sg_trace_batch caps its threads at 256, so the label does too. */
+    cfg.nthr_all = cfg.threads > 0 ? cfg.threads : cfg.cores;
+    if (cfg.nthr_all > 256)
+        cfg.nthr_all = 256;
+    cfg.progress = cfg.fmt == BENCH_JSON && isatty(2);
+    if (cfg.quick) {
+        cfg.sizes[0] = 1000;
+        cfg.sizes[1] = 10000;
+        cfg.nsizes = 2;
+    } else {
+        cfg.sizes[0] = 1000;
+        cfg.sizes[1] = 100000;
+        cfg.sizes[2] = 1000000;
+        cfg.nsizes = 3;
+    }
+
+    res = calloc(ndesign, sizeof *res);
+    if (!res) {
+        cli_error("out of memory");
+        rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    load0 = load_average();
+    if (cfg.fmt == BENCH_TEXT) {
+        text_header(stdout, &cfg);
+        fflush(stdout);
+    }
+    for (k = 0; k < ndesign; k++) {
+        bench_design(&cfg, designs[k], &res[k]);
+        if (res[k].load_rc > worst)
+            worst = res[k].load_rc;
+        if (res[k].trace_rc != SG_OK) {
+            int st = res[k].trace_rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
+            if (st > worst)
+                worst = st;
+        }
+        if (cfg.fmt == BENCH_TEXT)
+            text_design(stdout, &cfg, &res[k]);
+    }
+    if (cfg.fmt == BENCH_JSON) {
+        char *txt;
+        root = json_top(&cfg, load0, load_average());
+        arr = root ? cJSON_AddArrayToObject(root, "designs") : NULL;
+        for (k = 0; arr && k < ndesign; k++)
+            cJSON_AddItemToArray(arr, json_design(&cfg, &res[k]));
+        txt = arr ? cJSON_Print(root) : NULL;
+        if (!txt) {
+            cli_error("out of memory");
+            rc = CLI_EXIT_INTERNAL;
+            goto done;
+        }
+        fputs(txt, stdout);
+        fputc('\n', stdout);
+        free(txt);
+    } else {
+        double la = load_average();
+        if (la >= 0.0)
+            printf("\nload: %.2f (1-minute average after the runs)\n", la);
+    }
+    rc = cli_close_output(stdout, NULL);
+    /* A design that did not load or trace is reported in the figures and
+     * in the exit status; a slow figure never is. */
+    if (rc == CLI_EXIT_OK)
+        rc = worst;
+done:
+    cJSON_Delete(root);
+    free(res);
+    if ((void *)designs != (void *)examples)
+        free(designs);
+    for (k = 0; k < nex; k++)
+        free(examples[k]);
+    free(examples);
+    return rc;
+}
