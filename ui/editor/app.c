@@ -1,0 +1,492 @@
+/*
+ * app.c - the editor's entry point and its single event loop: read a key,
+ * hand it to the panel that owns it, act on the flags it returns.
+ */
+#include <errno.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "editor.h"
+#include "term.h"
+#include "ui.h"
+
+#define MIN_ROWS 14
+#define MIN_COLS 50
+
+int ui_run(ui *u, const char *fmt, ...)
+{
+    char line[ED_LINE];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(line, sizeof line, fmt, ap);
+    va_end(ap);
+    return cmd_exec(u->e, line);
+}
+
+void ui_prompt(ui *u, const char *text)
+{
+    le_set(&u->le, text);
+    u->back_mode = u->mode == MODE_COMMAND ? MODE_NORMAL : u->mode;
+    u->mode = MODE_COMMAND;
+    u->hist_pos = u->nhist;
+}
+
+void ui_layout(ui *u)
+{
+    int n = u->e->doc.sys->nsurf, avail;
+    term_size(&u->rows, &u->cols);
+    u->too_small = u->rows < MIN_ROWS || u->cols < MIN_COLS;
+    /* Title, sheet heading, ray, paraxial, results heading, detail and
+     * status take a line each; the surfaces share the rest. */
+    avail = u->rows - 7;
+    if (avail < 2)
+        avail = 2;
+    u->sheet_h = avail / 2 > avail - n ? avail / 2 : avail - n;
+    if (u->sheet_h > n)
+        u->sheet_h = n;
+    u->res_h = avail - u->sheet_h;
+    u->sheet_y = 1;
+    u->ray_y = u->sheet_y + 1 + u->sheet_h;
+    u->parax_y = u->ray_y + 1;
+    u->res_y = u->parax_y + 1;
+    u->detail_y = u->rows - 2;
+    u->status_y = u->rows - 1;
+    u->numw = (u->cols - 8 - 10 - 14 - 11) / 4;
+    if (u->numw < 11)
+        u->numw = 11;
+    if (u->numw > 22)
+        u->numw = 22;
+    u->resw = (u->cols - 8 - 10 - 10 - 10) / 6;
+    if (u->resw < 11)
+        u->resw = 11;
+    if (u->resw > 24)
+        u->resw = 24;
+}
+
+void title_draw(ui *u)
+{
+    const ed *e = u->e;
+    const char *p = doc_path(&e->doc);
+    char left[600], right[200];
+    const char *base = p ? strrchr(p, '/') : NULL;
+    snprintf(left, sizeof left, " sagitta  %s%s%s%s%s", p ? (base ? base + 1 : p) : "[new design]",
+             doc_modified(&e->doc) ? " [+]" : "", e->doc.sys->title[0] ? "  - " : "",
+             e->doc.sys->title, "");
+    if (e->method == SG_METHOD_MPFR)
+        snprintf(right, sizeof right, "mpfr %d bits  %.2f ms  F1 help ", e->bits, e->cmp.ms_last);
+    else
+        snprintf(right, sizeof right, "%s  %.2f ms  F1 help ", sg_method_name(e->method),
+                 e->cmp.ms_last);
+    term_fill(0, 0, u->cols, T_TITLE);
+    /* The right side (method, timing, help) wins over a long title. */
+    if ((int)strlen(right) + 20 < u->cols) {
+        term_text(0, 0, u->cols - (int)strlen(right) - 1, T_TITLE, 1, left);
+        term_text(0, u->cols - (int)strlen(right), (int)strlen(right), T_TITLE, 0, right);
+    } else {
+        term_text(0, 0, u->cols, T_TITLE, 1, left);
+    }
+}
+
+void status_draw(ui *u)
+{
+    const ed *e = u->e;
+    int y = u->status_y;
+    term_fill(y, 0, u->cols, T_NORMAL);
+    if (u->mode == MODE_COMMAND) {
+        size_t start;
+        int cur;
+        term_text(y, 0, 1, T_NORMAL, 0, ":");
+        le_view(&u->le, u->cols - 2, &start, &cur);
+        term_text(y, 1, u->cols - 2, T_NORMAL, 1, u->le.buf + start);
+        term_cursor(y, 1 + cur);
+        return;
+    }
+    if (u->mode == MODE_CONFIRM) {
+        const char *q = e->confirm == CONFIRM_QUIT
+                            ? "Unsaved changes. Save before quitting? (y)es (n)o (c)ancel"
+                            : "Unsaved changes will be lost. Continue? (y)es (n)o";
+        term_text(y, 0, u->cols, T_EDIT, 1, q);
+        return;
+    }
+    if (e->msg[0]) {
+        term_text(y, 0, u->cols, e->msg_err ? T_ERROR : T_NORMAL, 1, e->msg);
+        return;
+    }
+    if (u->mode == MODE_SETTINGS || u->mode == MODE_EXAMPLES)
+        return;
+    term_text(y, 0, u->cols, T_DIM, 1,
+              u->focus == FOCUS_RAY
+                  ? "Ray: Left/Right choose  Up/Down step  Enter edit  c chief  F6-F9 marginal  f back"
+                  : "? help  : command  Enter edit  i/d insert/delete  s stop  u/r undo/redo  "
+                    "f ray  t settings  w save  q quit");
+}
+
+static void draw(ui *u)
+{
+    term_erase();
+    term_cursor(-1, -1);
+    ui_layout(u);
+    if (u->too_small) {
+        char buf[128];
+        snprintf(buf, sizeof buf, "The terminal is %dx%d; the editor needs %dx%d.", u->cols,
+                 u->rows, MIN_COLS, MIN_ROWS);
+        term_text(0, 0, u->cols, T_ERROR, 1, buf);
+        term_text(1, 0, u->cols, T_NORMAL, 1, "Enlarge it, or press q to quit.");
+        term_flush();
+        return;
+    }
+    title_draw(u);
+    switch (u->mode) {
+    case MODE_HELP: help_draw(u); break;
+    case MODE_SETTINGS: settings_draw(u); status_draw(u); break;
+    case MODE_EXAMPLES: examples_draw(u); status_draw(u); break;
+    case MODE_COMMAND:
+        if (u->back_mode == MODE_SETTINGS) {
+            settings_draw(u);
+            status_draw(u);
+            break;
+        }
+        /* fall through */
+    default:
+        sheet_draw(u);
+        ray_draw(u);
+        results_draw(u);
+        status_draw(u);
+        break;
+    }
+    term_flush();
+}
+
+static void hist_add(ui *u, const char *line)
+{
+    char *s;
+    if (!line[0] || (u->nhist > 0 && strcmp(u->hist[u->nhist - 1], line) == 0))
+        return;
+    s = malloc(strlen(line) + 1);
+    if (!s)
+        return;
+    strcpy(s, line);
+    if (u->nhist == HIST_MAX) {
+        free(u->hist[0]);
+        memmove(u->hist, u->hist + 1, (HIST_MAX - 1) * sizeof u->hist[0]);
+        u->nhist--;
+    }
+    u->hist[u->nhist++] = s;
+}
+
+static int command_key(ui *u, int key)
+{
+    int f;
+    char line[LE_MAX];
+    if (key == K_UP || key == K_DOWN) {
+        int p = u->hist_pos + (key == K_UP ? -1 : 1);
+        if (p >= 0 && p <= u->nhist) {
+            u->hist_pos = p;
+            le_set(&u->le, p < u->nhist ? u->hist[p] : "");
+        }
+        return ED_HANDLED | ED_REDRAW;
+    }
+    switch (le_key(&u->le, key)) {
+    case LE_ENTER:
+        snprintf(line, sizeof line, "%s", u->le.buf);
+        hist_add(u, line);
+        u->mode = u->back_mode;
+        f = cmd_exec(u->e, line);
+        if (u->quit_after_save && !(f & (ED_ERROR | ED_PROMPT)) &&
+            !doc_modified(&u->e->doc))
+            f |= ED_QUIT;
+        u->quit_after_save = 0;
+        return f;
+    case LE_CANCEL:
+        u->mode = u->back_mode;
+        u->quit_after_save = 0;
+        return ED_HANDLED | ED_REDRAW;
+    case LE_IGNORED: return ED_HANDLED;
+    default: return ED_HANDLED | ED_REDRAW;
+    }
+}
+
+static int confirm_key(ui *u, int key)
+{
+    ed *e = u->e;
+    int kind = e->confirm, f;
+    if (key == K_ESC || key == 'c' || key == 'C' || (kind == CONFIRM_DISCARD && (key == 'n' || key == 'N'))) {
+        e->confirm = CONFIRM_NONE;
+        u->mode = MODE_NORMAL;
+        ed_msg(e, 0, "cancelled");
+        return ED_HANDLED | ED_REDRAW;
+    }
+    if (kind == CONFIRM_QUIT && (key == 'n' || key == 'N')) {
+        e->confirm = CONFIRM_NONE;
+        u->mode = MODE_NORMAL;
+        return cmd_exec(e, "quit!");
+    }
+    if (key == 'y' || key == 'Y') {
+        e->confirm = CONFIRM_NONE;
+        u->mode = MODE_NORMAL;
+        if (kind == CONFIRM_DISCARD)
+            return cmd_exec(e, e->pending);
+        f = cmd_exec(e, "save");
+        if (f & ED_PROMPT) {
+            /* The design has no name yet: ask for one, then quit. */
+            u->quit_after_save = 1;
+            return f;
+        }
+        if (f & ED_ERROR)
+            return f;
+        return f | ED_QUIT;
+    }
+    return ED_HANDLED;
+}
+
+/* Keys that work whatever has the focus. */
+static int global_key(ui *u, int key)
+{
+    static const char *const methods[] = {"classic", "mpfr", "precise"};
+    ed *e = u->e;
+    int f;
+    switch (key) {
+    case K_F(1):
+    case '?': u->mode = MODE_HELP; return ED_HANDLED | ED_REDRAW;
+    case ':': ui_prompt(u, ""); return ED_HANDLED | ED_REDRAW;
+    case 'q':
+    case K_F(10):
+    case K_CTRL('q'):
+    case K_CTRL('c'): return ui_run(u, "quit");
+    case 'u': return ui_run(u, "undo");
+    case 'r':
+    case K_CTRL('r'): return ui_run(u, "redo");
+    case 'w':
+    case K_CTRL('s'): return ui_run(u, "save");
+    case K_CTRL('w'): ui_prompt(u, "save "); return ED_HANDLED | ED_REDRAW;
+    case 'o': ui_prompt(u, "open "); return ED_HANDLED | ED_REDRAW;
+    case 'e': return ui_run(u, "example");
+    case 'n': return ui_run(u, "new");
+    case 'x': ui_prompt(u, "export "); return ED_HANDLED | ED_REDRAW;
+    case 't':
+    case K_F(4): u->mode = MODE_SETTINGS; return ED_HANDLED | ED_REDRAW;
+    case 'm': return ui_run(u, "method %s", methods[e->method % 3]);
+    case '#': return ui_run(u, "digits toggle");
+    case 'v': return ui_run(u, "wave %d", (e->wave + 1) % e->doc.sys->nwave + 1);
+    case 'f':
+        u->focus = u->focus == FOCUS_SHEET ? FOCUS_RAY : FOCUS_SHEET;
+        return ED_HANDLED | ED_REDRAW;
+    case K_CTRL('l'): term_repaint(); return ED_HANDLED | ED_REDRAW;
+    case K_CTRL('z'): term_suspend(); return ED_HANDLED | ED_REDRAW;
+    default: break;
+    }
+    f = ray_quick(u, key);
+    if (f)
+        return f;
+    return results_key(u, key);
+}
+
+static int mouse(ui *u)
+{
+    int y, x, kind;
+    term_mouse(&y, &x, &kind);
+    if (u->mode != MODE_NORMAL)
+        return ED_HANDLED;
+    if (y > u->sheet_y && y <= u->sheet_y + u->sheet_h)
+        return sheet_click(u, y, x, kind);
+    if (y == u->ray_y)
+        return ray_click(u, x, kind);
+    if (y > u->res_y && y <= u->res_y + u->res_h)
+        return results_click(u, y, kind);
+    return ED_HANDLED;
+}
+
+static int dispatch(ui *u, int key)
+{
+    int f;
+    if (key == K_RESIZE)
+        return ED_HANDLED | ED_REDRAW;
+    if (u->too_small && u->mode == MODE_NORMAL)
+        return key == 'q' || key == K_CTRL('c') ? ui_run(u, "quit") : ED_HANDLED;
+    switch (u->mode) {
+    case MODE_EDIT_CELL: return key == K_MOUSE ? ED_HANDLED : sheet_edit_key(u, key);
+    case MODE_EDIT_RAY: return key == K_MOUSE ? ED_HANDLED : ray_edit_key(u, key);
+    case MODE_COMMAND: return key == K_MOUSE ? ED_HANDLED : command_key(u, key);
+    case MODE_CONFIRM: return confirm_key(u, key);
+    case MODE_HELP: return help_key(u, key);
+    case MODE_SETTINGS:
+        if (key == ':') {
+            ui_prompt(u, "");
+            return ED_HANDLED | ED_REDRAW;
+        }
+        return settings_key(u, key);
+    case MODE_EXAMPLES: return examples_key(u, key);
+    default: break;
+    }
+    /* A fresh key clears the last message; the key's own command may set a
+     * new one. */
+    u->e->msg[0] = '\0';
+    u->e->msg_err = 0;
+    if (key == K_MOUSE)
+        return mouse(u);
+    f = u->focus == FOCUS_RAY ? ray_key(u, key) : sheet_key(u, key);
+    if (f)
+        return f;
+    return global_key(u, key);
+}
+
+/* Acts on what a key or command asked for.  Returns 1 to leave the loop. */
+static int act(ui *u, int f)
+{
+    if (f & ED_QUIT)
+        return 1;
+    if (f & ED_ERROR)
+        term_beep();
+    if (f & ED_CONFIRM)
+        u->mode = MODE_CONFIRM;
+    if (f & ED_PROMPT) {
+        int back = u->mode == MODE_SETTINGS ? MODE_SETTINGS : MODE_NORMAL;
+        ui_prompt(u, u->e->prompt_init);
+        u->back_mode = back;
+    }
+    if (f & ED_SHOW_HELP)
+        u->mode = MODE_HELP;
+    if (f & ED_SHOW_SETTINGS)
+        u->mode = MODE_SETTINGS;
+    if (f & ED_SHOW_EXAMPLES)
+        examples_open(u);
+    if (f & ED_RECOMPUTE)
+        u->e->dirty = 1;
+    return 0;
+}
+
+static int loop(ui *u)
+{
+    int redraw = 1;
+    for (;;) {
+        int key, f;
+        if (u->e->dirty) {
+            ed_recompute(u->e);
+            redraw = 1;
+        }
+        if (redraw)
+            draw(u);
+        redraw = 0;
+        /* The timeout only bounds how long a signal can go unnoticed. */
+        key = term_key(500);
+        if (key == K_NONE)
+            continue;
+        redraw = 1;
+        if (key == K_SIGNAL) {
+            int sig = term_signal();
+            if (sig == SIGINT) {
+                /* Ctrl-C from another process acts like the quit key. */
+                if (u->mode != MODE_CONFIRM && act(u, ui_run(u, "quit")))
+                    return 0;
+                continue;
+            }
+            return 128 + sig;
+        }
+        f = dispatch(u, key);
+        if (act(u, f))
+            return 0;
+    }
+}
+
+static void usage(FILE *f)
+{
+    fputs("Usage: sagitta [edit] [FILE.json] [--batch SCRIPT]\n"
+          "The lens data editor.  Without --batch it needs a terminal; press F1 or ?\n"
+          "inside for every key.  --batch runs the commands in SCRIPT (one a line,\n"
+          "'-' for standard input) without a screen and stops at the first error.\n",
+          f);
+}
+
+int sg_editor_main(int argc, char **argv)
+{
+    const char *file = NULL, *script = NULL;
+    static ed e;
+    static ui u;
+    int i, status;
+    struct stat st;
+
+    for (i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--batch") == 0 || strcmp(argv[i], "-b") == 0) {
+            if (i + 1 >= argc) {
+                fprintf(stderr, "sagitta edit: --batch needs a script file\n");
+                return 2;
+            }
+            script = argv[++i];
+        } else if (strncmp(argv[i], "--batch=", 8) == 0) {
+            script = argv[i] + 8;
+        } else if (strcmp(argv[i], "--help") == 0 || strcmp(argv[i], "-h") == 0) {
+            usage(stdout);
+            return 0;
+        } else if (argv[i][0] == '-' && argv[i][1] != '\0') {
+            fprintf(stderr, "sagitta edit: unknown option %s\n", argv[i]);
+            usage(stderr);
+            return 2;
+        } else if (!file) {
+            file = argv[i];
+        } else {
+            fprintf(stderr, "sagitta edit: one design at a time (%s and %s)\n", file, argv[i]);
+            return 2;
+        }
+    }
+
+    if (ed_init(&e) != SG_EOK) {
+        fprintf(stderr, "sagitta edit: out of memory\n");
+        return 1;
+    }
+    if (file) {
+        if (stat(file, &st) != 0 && errno == ENOENT) {
+            /* Like vi: a new file under the name given. */
+            doc_set_path(&e.doc, file);
+            ed_msg(&e, 0, "%s: new file", file);
+        } else {
+            sg_diag d;
+            sg_diag_clear(&d);
+            if (doc_load(&e.doc, file, &d) != SG_EOK) {
+                fprintf(stderr, "sagitta edit: %s\n", d.msg[0] ? d.msg : sg_strerror(d.code));
+                ed_free(&e);
+                return 1;
+            }
+            e.wave = e.doc.sys->primary_wave;
+        }
+    }
+    if (script) {
+        status = ed_batch(&e, script);
+        ed_free(&e);
+        return status;
+    }
+    if (!isatty(STDIN_FILENO) || !isatty(STDOUT_FILENO)) {
+        fprintf(stderr, "sagitta edit: the editor needs a terminal; use --batch SCRIPT "
+                        "to run commands without one\n");
+        ed_free(&e);
+        return 1;
+    }
+    if (!e.msg[0] && !e.cat)
+        ed_msg(&e, 1, "%s", e.cat_msg);
+    else if (!e.msg[0])
+        ed_msg(&e, 0, "%s%s: %d surfaces.  Press ? for help.",
+               doc_path(&e.doc) ? "" : "new design",
+               doc_path(&e.doc) ? doc_path(&e.doc) : "", e.doc.sys->nsurf);
+
+    memset(&u, 0, sizeof u);
+    u.e = &e;
+    u.step = 0.1;
+    if (term_init() != 0) {
+        ed_free(&e);
+        return 1;
+    }
+    u.ell = term_utf8() ? "\xe2\x80\xa6" : "~";
+    e.col = COL_RADIUS;
+    status = loop(&u);
+    term_end();
+    for (i = 0; i < u.nhist; i++)
+        free(u.hist[i]);
+    if (u.ex)
+        ed_examples_free(u.ex, u.nex);
+    ed_free(&e);
+    return status;
+}

@@ -1,0 +1,1381 @@
+/*
+ * cmd.c - the one command path.  Keys, the ':' line and batch scripts all
+ * end up here, so every edit can be tested without a screen.
+ */
+#include <ctype.h>
+#include <errno.h>
+#include <limits.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "../args.h"
+#include "../report.h"
+#include "cells.h"
+#include "cmd.h"
+#include "ed.h"
+#include "numfmt.h"
+
+#define MAXTOK 16
+
+typedef struct args {
+    int n;
+    char *v[MAXTOK];         /* unquoted tokens */
+    const char *raw[MAXTOK]; /* where each token starts in the line */
+    char buf[ED_LINE];
+} args;
+
+/* Splits line into blank-separated tokens; "..." groups words and \" or \\
+ * escape inside quotes.  Returns 0, or -1 for an unterminated quote or too
+ * many tokens. */
+static int tokenize(const char *line, args *a)
+{
+    const char *p = line;
+    char *o = a->buf, *end = a->buf + sizeof a->buf - 1;
+    a->n = 0;
+    for (;;) {
+        while (isspace((unsigned char)*p))
+            p++;
+        if (!*p)
+            return 0;
+        if (a->n == MAXTOK)
+            return -1;
+        a->raw[a->n] = p;
+        a->v[a->n++] = o;
+        while (*p && !isspace((unsigned char)*p)) {
+            if (*p == '"') {
+                p++;
+                while (*p && *p != '"') {
+                    if (*p == '\\' && (p[1] == '"' || p[1] == '\\'))
+                        p++;
+                    if (o < end)
+                        *o++ = *p;
+                    p++;
+                }
+                if (*p != '"')
+                    return -1;
+                p++;
+            } else {
+                if (o < end)
+                    *o++ = *p;
+                p++;
+            }
+        }
+        *o++ = '\0';
+        if (o >= end)
+            return -1;
+    }
+}
+
+void cmd_quote(const char *s, char *buf, size_t n)
+{
+    size_t k = 0;
+    int plain = *s != '\0';
+    const char *p;
+    for (p = s; *p; p++)
+        if (isspace((unsigned char)*p) || *p == '"' || *p == '\\' || *p == '#')
+            plain = 0;
+    if (plain) {
+        snprintf(buf, n, "%s", s);
+        return;
+    }
+    if (n < 3) {
+        if (n)
+            buf[0] = '\0';
+        return;
+    }
+    buf[k++] = '"';
+    for (p = s; *p && k + 3 < n; p++) {
+        if (*p == '"' || *p == '\\')
+            buf[k++] = '\\';
+        buf[k++] = *p;
+    }
+    buf[k++] = '"';
+    buf[k] = '\0';
+}
+
+/* The text after token i: one quoted token if it is just that, else the
+ * raw text with trailing blanks removed. */
+static void rest_of(const args *a, int i, char *out, size_t n)
+{
+    const char *r = a->raw[i];
+    size_t len;
+    if (i == a->n - 1 && *r == '"') {
+        snprintf(out, n, "%s", a->v[i]);
+        return;
+    }
+    len = strlen(r);
+    while (len > 0 && isspace((unsigned char)r[len - 1]))
+        len--;
+    if (len >= n)
+        len = n - 1;
+    memcpy(out, r, len);
+    out[len] = '\0';
+}
+
+static int fail(ed *e, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+static int fail(ed *e, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(e->msg, sizeof e->msg, fmt, ap);
+    va_end(ap);
+    e->msg_err = 1;
+    return ED_HANDLED | ED_ERROR | ED_REDRAW;
+}
+
+#define OK_VIEW (ED_HANDLED | ED_REDRAW | ED_RECOMPUTE)
+
+static int need(ed *e, const args *a, int lo, int hi, const char *usage)
+{
+    if (a->n - 1 < lo || a->n - 1 > hi) {
+        fail(e, "usage: %s", usage);
+        return 0;
+    }
+    return 1;
+}
+
+/* A surface number, or obj / ima / stop / "." (the cursor's row). */
+static int parse_row(ed *e, const char *s, int lo, int hi, int *row)
+{
+    const sg_system *sys = e->doc.sys;
+    int r, rc;
+    if (strcasecmp(s, "obj") == 0)
+        r = 0;
+    else if (strcasecmp(s, "ima") == 0 || strcasecmp(s, "img") == 0 ||
+             strcasecmp(s, "image") == 0)
+        r = sys->nsurf - 1;
+    else if (strcasecmp(s, "stop") == 0 || strcasecmp(s, "sto") == 0)
+        r = sys->stop;
+    else if (strcmp(s, ".") == 0)
+        r = e->row;
+    else if ((rc = args_int(s, INT_MIN, INT_MAX, &r)) != ARGS_OK) {
+        fail(e, "\"%s\" is not a surface number", s);
+        return 0;
+    }
+    if (r < lo || r > hi) {
+        if (lo > hi)
+            fail(e, "the design has too few surfaces");
+        else
+            fail(e, "surface %d is not one of %d to %d", r, lo, hi);
+        return 0;
+    }
+    *row = r;
+    return 1;
+}
+
+static int parse_num(ed *e, const char *s, const char *what, double *v)
+{
+    int rc = args_double(s, 0, v);
+    if (rc != ARGS_OK) {
+        fail(e, "%s: \"%s\": %s", what, s, args_strerror(rc));
+        return 0;
+    }
+    return 1;
+}
+
+static int parse_int(ed *e, const char *s, const char *what, int lo, int hi, int *v)
+{
+    int rc = args_int(s, lo, hi, v);
+    if (rc != ARGS_OK) {
+        if (rc == ARGS_RANGE)
+            fail(e, "%s: %s is not in %d to %d", what, s, lo, hi);
+        else
+            fail(e, "%s: \"%s\": %s", what, s, args_strerror(rc));
+        return 0;
+    }
+    return 1;
+}
+
+/* on, off or toggle (also the default when s is NULL). */
+static int parse_switch(ed *e, const char *s, int cur, int *out, const char *what)
+{
+    if (!s || strcasecmp(s, "toggle") == 0) {
+        *out = !cur;
+        return 1;
+    }
+    if (strcasecmp(s, "on") == 0 || strcmp(s, "1") == 0 || strcasecmp(s, "yes") == 0) {
+        *out = 1;
+        return 1;
+    }
+    if (strcasecmp(s, "off") == 0 || strcmp(s, "0") == 0 || strcasecmp(s, "no") == 0) {
+        *out = 0;
+        return 1;
+    }
+    fail(e, "%s: \"%s\" is not on, off or toggle", what, s);
+    return 0;
+}
+
+static int parse_onoff(ed *e, const args *a, int cur, int *out, const char *what)
+{
+    return parse_switch(e, a->n > 1 ? a->v[1] : NULL, cur, out, what);
+}
+
+/* ------------------------------------------------------------------------
+ * Changes to the design: each is one undo step.
+ * ------------------------------------------------------------------------ */
+
+static int begin(ed *e, int row)
+{
+    if (doc_begin(&e->doc, row) != SG_EOK) {
+        fail(e, "out of memory: the change was not made");
+        return 0;
+    }
+    return 1;
+}
+
+/* Ends a change and reports it; "unchanged" when the value was the same. */
+static int end(ed *e, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+static int end(ed *e, const char *fmt, ...)
+{
+    va_list ap;
+    int changed = doc_end(&e->doc);
+    va_start(ap, fmt);
+    vsnprintf(e->msg, sizeof e->msg, fmt, ap);
+    va_end(ap);
+    if (!changed) {
+        size_t len = strlen(e->msg);
+        snprintf(e->msg + len, sizeof e->msg - len, " (unchanged)");
+    }
+    e->msg_err = 0;
+    e->dirty = 1;
+    return OK_VIEW;
+}
+
+static int cancel(ed *e, const char *msg)
+{
+    doc_cancel(&e->doc);
+    return fail(e, "%s", msg);
+}
+
+static int c_set(ed *e, args *a)
+{
+    char val[ED_LINE], err[ED_MSG], info[256], shown[ED_LINE];
+    int row, col, rc;
+    if (!need(e, a, 2, MAXTOK, "set SURFACE COLUMN VALUE"))
+        return ED_HANDLED | ED_ERROR;
+    if (!parse_row(e, a->v[1], 0, e->doc.sys->nsurf - 1, &row))
+        return ED_HANDLED | ED_ERROR;
+    col = cell_parse_name(a->v[2]);
+    if (strcasecmp(a->v[2], "fixed") == 0) {
+        int on;
+        if (a->n > 4)
+            return fail(e, "usage: set SURFACE fixed on|off|toggle");
+        if (!parse_switch(e, a->n > 3 ? a->v[3] : NULL, e->doc.sys->surf[row].sd_fixed, &on,
+                          "fixed"))
+            return ED_HANDLED | ED_ERROR;
+        if (!begin(e, row))
+            return ED_HANDLED | ED_ERROR;
+        e->doc.sys->surf[row].sd_fixed = on;
+        e->row = row;
+        e->col = COL_SEMI;
+        return end(e, "surface %d semi-diameter %s", row, on ? "fixed" : "free");
+    }
+    if (col < 0)
+        return fail(e, "no column \"%s\" (type, comment, radius, thickness, material, "
+                       "semi, conic, a2 ... a16)", a->v[2]);
+    if (a->n > 3)
+        rest_of(a, 3, val, sizeof val);
+    else
+        val[0] = '\0';
+    if (!begin(e, row))
+        return ED_HANDLED | ED_ERROR;
+    rc = cell_set(e->doc.sys, e->cat, row, col, val, err, sizeof err, info, sizeof info);
+    if (rc != SG_EOK)
+        return cancel(e, err);
+    e->row = row;
+    e->col = col;
+    cell_text(e->doc.sys, row, col, shown, sizeof shown);
+    return end(e, "surface %d %s = %s%s%s", row, cell_name(col), shown,
+               info[0] ? "; " : "", info);
+}
+
+static int c_insert(ed *e, args *a)
+{
+    int at = e->row < 1 ? 1 : e->row;
+    if (!need(e, a, 0, 1, "insert [SURFACE]"))
+        return ED_HANDLED | ED_ERROR;
+    if (at > e->doc.sys->nsurf - 1)
+        at = e->doc.sys->nsurf - 1;
+    if (a->n > 1 && !parse_row(e, a->v[1], 1, e->doc.sys->nsurf - 1, &at))
+        return ED_HANDLED | ED_ERROR;
+    if (e->doc.sys->nsurf >= SG_MAX_SURFACES)
+        return fail(e, "a design holds at most %d surfaces", SG_MAX_SURFACES);
+    if (!begin(e, at))
+        return ED_HANDLED | ED_ERROR;
+    if (sg_system_insert(e->doc.sys, at) != SG_EOK)
+        return cancel(e, "out of memory: no surface inserted");
+    e->row = at;
+    return end(e, "inserted surface %d", at);
+}
+
+static int c_delete(ed *e, args *a)
+{
+    int at = e->row;
+    if (!need(e, a, 0, 1, "delete [SURFACE]"))
+        return ED_HANDLED | ED_ERROR;
+    if (e->doc.sys->nsurf <= 3)
+        return fail(e, "cannot delete: a design needs an object, a surface and an image");
+    if (a->n > 1) {
+        if (!parse_row(e, a->v[1], 1, e->doc.sys->nsurf - 2, &at))
+            return ED_HANDLED | ED_ERROR;
+    } else if (at < 1 || at > e->doc.sys->nsurf - 2) {
+        return fail(e, "the object and the image surfaces cannot be deleted");
+    }
+    if (!begin(e, at))
+        return ED_HANDLED | ED_ERROR;
+    if (sg_system_delete(e->doc.sys, at) != SG_EOK)
+        return cancel(e, "cannot delete that surface");
+    e->row = at;
+    return end(e, "deleted surface %d", at);
+}
+
+static int c_stop(ed *e, args *a)
+{
+    int at = e->row;
+    if (!need(e, a, 0, 1, "stop [SURFACE]"))
+        return ED_HANDLED | ED_ERROR;
+    if (a->n > 1) {
+        if (!parse_row(e, a->v[1], 1, e->doc.sys->nsurf - 2, &at))
+            return ED_HANDLED | ED_ERROR;
+    } else if (at < 1 || at > e->doc.sys->nsurf - 2) {
+        return fail(e, "the stop must be one of surfaces 1 to %d", e->doc.sys->nsurf - 2);
+    }
+    if (!begin(e, at))
+        return ED_HANDLED | ED_ERROR;
+    e->doc.sys->stop = at;
+    e->row = at;
+    return end(e, "surface %d is the stop", at);
+}
+
+static int undo_redo(ed *e, args *a, int redo)
+{
+    int n = 1, i, row = -1, rc = SG_EOK;
+    if (!need(e, a, 0, 1, redo ? "redo [N]" : "undo [N]"))
+        return ED_HANDLED | ED_ERROR;
+    if (a->n > 1 && !parse_int(e, a->v[1], "count", 1, 1000000, &n))
+        return ED_HANDLED | ED_ERROR;
+    for (i = 0; i < n; i++) {
+        rc = redo ? doc_redo(&e->doc, &row) : doc_undo(&e->doc, &row);
+        if (rc != SG_EOK)
+            break;
+    }
+    if (i == 0)
+        return fail(e, rc == SG_ERANGE ? "nothing to %s" : "out of memory: cannot %s",
+                    redo ? "redo" : "undo");
+    if (row >= 0)
+        e->row = row;
+    e->dirty = 1;
+    ed_msg(e, 0, "%s %d change%s (%zu more to undo, %zu to redo)", redo ? "redid" : "undid",
+           i, i == 1 ? "" : "s", doc_undo_depth(&e->doc), doc_redo_depth(&e->doc));
+    return OK_VIEW;
+}
+
+static int c_undo(ed *e, args *a)
+{
+    return undo_redo(e, a, 0);
+}
+
+static int c_redo(ed *e, args *a)
+{
+    return undo_redo(e, a, 1);
+}
+
+static int c_title(ed *e, args *a)
+{
+    char t[ED_LINE];
+    if (a->n > 1)
+        rest_of(a, 1, t, sizeof t);
+    else
+        t[0] = '\0';
+    if (strlen(t) >= sizeof e->doc.sys->title)
+        return fail(e, "title: longer than %zu bytes", sizeof e->doc.sys->title - 1);
+    if (!begin(e, e->row))
+        return ED_HANDLED | ED_ERROR;
+    memset(e->doc.sys->title, 0, sizeof e->doc.sys->title);
+    memcpy(e->doc.sys->title, t, strlen(t));
+    return end(e, "title \"%s\"", t);
+}
+
+static int c_units(ed *e, args *a)
+{
+    static const char *const u[] = {"mm", "cm", "in", "m"};
+    size_t i;
+    if (!need(e, a, 1, 1, "units mm|cm|in|m"))
+        return ED_HANDLED | ED_ERROR;
+    for (i = 0; i < 4; i++)
+        if (strcasecmp(a->v[1], u[i]) == 0)
+            break;
+    if (i == 4)
+        return fail(e, "units: \"%s\" is not mm, cm, in or m", a->v[1]);
+    if (!begin(e, e->row))
+        return ED_HANDLED | ED_ERROR;
+    memset(e->doc.sys->units, 0, sizeof e->doc.sys->units);
+    memcpy(e->doc.sys->units, u[i], strlen(u[i]));
+    return end(e, "units %s", u[i]);
+}
+
+static int wl_check(ed *e, double um, double w)
+{
+    if (!(um > 0.0) || !isfinite(um))
+        return fail(e, "wavelength: %g um is not positive", um), 0;
+    if (!(um >= 0.1 && um <= 100.0))
+        return fail(e, "wavelength: %g um is outside 0.1 to 100 um; it is in micrometres",
+                    um), 0;
+    if (!(w >= 0.0))
+        return fail(e, "wavelength: weight %g is negative", w), 0;
+    return 1;
+}
+
+static int c_wavelength(ed *e, args *a)
+{
+    sg_system *s = e->doc.sys;
+    const char *usage = "wavelength add UM [WEIGHT] | set N UM [WEIGHT] | delete N | primary N";
+    const char *sub = a->n > 1 ? a->v[1] : "";
+    double um, w = 1.0;
+    int k;
+    if (strcasecmp(sub, "add") == 0) {
+        if (!need(e, a, 2, 3, usage) || !parse_num(e, a->v[2], "wavelength", &um) ||
+            (a->n > 3 && !parse_num(e, a->v[3], "weight", &w)) || !wl_check(e, um, w))
+            return ED_HANDLED | ED_ERROR;
+        if (s->nwave >= SG_MAX_WAVES)
+            return fail(e, "a design holds at most %d wavelengths", SG_MAX_WAVES);
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        s = e->doc.sys;
+        s->wave[s->nwave].um = um;
+        s->wave[s->nwave].weight = w;
+        s->nwave++;
+        return end(e, "wavelength %d: %s um", s->nwave, a->v[2]);
+    }
+    if (strcasecmp(sub, "set") == 0) {
+        if (!need(e, a, 3, 4, usage) ||
+            !parse_int(e, a->v[2], "wavelength", 1, s->nwave, &k) ||
+            !parse_num(e, a->v[3], "wavelength", &um))
+            return ED_HANDLED | ED_ERROR;
+        w = s->wave[k - 1].weight;
+        if ((a->n > 4 && !parse_num(e, a->v[4], "weight", &w)) || !wl_check(e, um, w))
+            return ED_HANDLED | ED_ERROR;
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        e->doc.sys->wave[k - 1].um = um;
+        e->doc.sys->wave[k - 1].weight = w;
+        return end(e, "wavelength %d: %s um", k, a->v[3]);
+    }
+    if (strcasecmp(sub, "delete") == 0 || strcasecmp(sub, "del") == 0) {
+        int i;
+        if (!need(e, a, 2, 2, usage) ||
+            !parse_int(e, a->v[2], "wavelength", 1, s->nwave, &k))
+            return ED_HANDLED | ED_ERROR;
+        if (s->nwave == 1)
+            return fail(e, "the only wavelength cannot be deleted");
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        s = e->doc.sys;
+        for (i = k - 1; i + 1 < s->nwave; i++)
+            s->wave[i] = s->wave[i + 1];
+        s->nwave--;
+        memset(&s->wave[s->nwave], 0, sizeof s->wave[0]);
+        /* The primary stays the same wavelength when it survives. */
+        if (s->primary_wave > k - 1)
+            s->primary_wave--;
+        if (s->primary_wave >= s->nwave)
+            s->primary_wave = s->nwave - 1;
+        if (e->wave > k - 1)
+            e->wave--;
+        return end(e, "deleted wavelength %d", k);
+    }
+    if (strcasecmp(sub, "primary") == 0) {
+        if (!need(e, a, 2, 2, usage) ||
+            !parse_int(e, a->v[2], "wavelength", 1, s->nwave, &k))
+            return ED_HANDLED | ED_ERROR;
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        e->doc.sys->primary_wave = k - 1;
+        return end(e, "primary wavelength %d", k);
+    }
+    return fail(e, "usage: %s", usage);
+}
+
+static int parse_field_type(const char *s)
+{
+    if (strcasecmp(s, "angle") == 0)
+        return SG_FIELD_ANGLE;
+    if (strcasecmp(s, "object") == 0 || strcasecmp(s, "object_height") == 0 ||
+        strcasecmp(s, "height") == 0)
+        return SG_FIELD_OBJECT_HEIGHT;
+    if (strcasecmp(s, "paraximage") == 0 || strcasecmp(s, "paraxial_image_height") == 0)
+        return SG_FIELD_PARAX_IMAGE_HEIGHT;
+    if (strcasecmp(s, "realimage") == 0 || strcasecmp(s, "real_image_height") == 0)
+        return SG_FIELD_REAL_IMAGE_HEIGHT;
+    return -1;
+}
+
+static int field_check(ed *e, int type, double x, double y, double w)
+{
+    if (type == SG_FIELD_ANGLE && (fabs(x) >= 90.0 || fabs(y) >= 90.0))
+        return fail(e, "field: angle (%g, %g) must be below 90 degrees", x, y), 0;
+    if (!(w >= 0.0))
+        return fail(e, "field: weight %g is negative", w), 0;
+    return 1;
+}
+
+static int c_field(ed *e, args *a)
+{
+    sg_system *s = e->doc.sys;
+    const char *usage = "field type angle|object|paraximage|realimage | norm radial|rect | "
+                        "add X Y [WEIGHT] | set N X Y [WEIGHT] | delete N";
+    const char *sub = a->n > 1 ? a->v[1] : "";
+    double x, y, w = 1.0;
+    int k, i;
+    if (strcasecmp(sub, "type") == 0) {
+        if (!need(e, a, 2, 2, usage))
+            return ED_HANDLED | ED_ERROR;
+        k = parse_field_type(a->v[2]);
+        if (k < 0)
+            return fail(e, "field type: \"%s\" is not angle, object, paraximage or realimage",
+                        a->v[2]);
+        if (k == SG_FIELD_ANGLE)
+            for (i = 0; i < s->nfield; i++)
+                if (!field_check(e, k, s->field[i].x, s->field[i].y, 1.0))
+                    return ED_HANDLED | ED_ERROR;
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        e->doc.sys->field_type = (sg_field_type)k;
+        return end(e, "field type %s", ed_field_type_name(k));
+    }
+    if (strcasecmp(sub, "norm") == 0 || strcasecmp(sub, "normalization") == 0) {
+        if (!need(e, a, 2, 2, usage))
+            return ED_HANDLED | ED_ERROR;
+        if (strcasecmp(a->v[2], "radial") == 0)
+            k = SG_NORM_RADIAL;
+        else if (strcasecmp(a->v[2], "rect") == 0 || strcasecmp(a->v[2], "rectangular") == 0)
+            k = SG_NORM_RECT;
+        else
+            return fail(e, "field norm: \"%s\" is not radial or rect", a->v[2]);
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        e->doc.sys->field_norm = (sg_field_norm)k;
+        return end(e, "field normalization %s", ed_field_norm_name(k));
+    }
+    if (strcasecmp(sub, "add") == 0) {
+        if (!need(e, a, 3, 4, usage) || !parse_num(e, a->v[2], "field x", &x) ||
+            !parse_num(e, a->v[3], "field y", &y) ||
+            (a->n > 4 && !parse_num(e, a->v[4], "weight", &w)) ||
+            !field_check(e, s->field_type, x, y, w))
+            return ED_HANDLED | ED_ERROR;
+        if (s->nfield >= SG_MAX_FIELDS)
+            return fail(e, "a design holds at most %d fields", SG_MAX_FIELDS);
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        s = e->doc.sys;
+        s->field[s->nfield].x = x;
+        s->field[s->nfield].y = y;
+        s->field[s->nfield].weight = w;
+        s->nfield++;
+        return end(e, "field %d: (%s, %s)", s->nfield, a->v[2], a->v[3]);
+    }
+    if (strcasecmp(sub, "set") == 0) {
+        if (!need(e, a, 4, 5, usage) || !parse_int(e, a->v[2], "field", 1, s->nfield, &k) ||
+            !parse_num(e, a->v[3], "field x", &x) || !parse_num(e, a->v[4], "field y", &y))
+            return ED_HANDLED | ED_ERROR;
+        w = s->field[k - 1].weight;
+        if ((a->n > 5 && !parse_num(e, a->v[5], "weight", &w)) ||
+            !field_check(e, s->field_type, x, y, w))
+            return ED_HANDLED | ED_ERROR;
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        s = e->doc.sys;
+        s->field[k - 1].x = x;
+        s->field[k - 1].y = y;
+        s->field[k - 1].weight = w;
+        return end(e, "field %d: (%s, %s)", k, a->v[3], a->v[4]);
+    }
+    if (strcasecmp(sub, "delete") == 0 || strcasecmp(sub, "del") == 0) {
+        if (!need(e, a, 2, 2, usage) || !parse_int(e, a->v[2], "field", 1, s->nfield, &k))
+            return ED_HANDLED | ED_ERROR;
+        if (s->nfield == 1)
+            return fail(e, "the only field cannot be deleted");
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        s = e->doc.sys;
+        for (i = k - 1; i + 1 < s->nfield; i++)
+            s->field[i] = s->field[i + 1];
+        s->nfield--;
+        memset(&s->field[s->nfield], 0, sizeof s->field[0]);
+        return end(e, "deleted field %d", k);
+    }
+    return fail(e, "usage: %s", usage);
+}
+
+static int parse_aper(const char *s)
+{
+    static const char *const n[][3] = {
+        {"epd", "entrance", NULL},
+        {"fnum", "image_fnum", "f/#"},
+        {"na", "object_na", "objna"},
+        {"float", "float_by_stop", "stop"},
+        {"pwfnum", "paraxial_working_fnum", "working"},
+    };
+    int i, j;
+    for (i = 0; i < 5; i++)
+        for (j = 0; j < 3; j++)
+            if (n[i][j] && strcasecmp(s, n[i][j]) == 0)
+                return i;
+    return -1;
+}
+
+static int c_aperture(ed *e, args *a)
+{
+    const char *usage = "aperture epd|fnum|na|float|pwfnum [VALUE] | aperture VALUE";
+    int type = e->doc.sys->aper_type, vi = 1;
+    double v = e->doc.sys->aper_value;
+    char shown[NUMFMT_MAX];
+    if (!need(e, a, 1, 2, usage))
+        return ED_HANDLED | ED_ERROR;
+    if (parse_aper(a->v[1]) >= 0) {
+        type = parse_aper(a->v[1]);
+        vi = 2;
+    } else if (a->n > 2) {
+        return fail(e, "aperture: \"%s\" is not epd, fnum, na, float or pwfnum", a->v[1]);
+    }
+    if (vi < a->n && !parse_num(e, a->v[vi], "aperture value", &v))
+        return ED_HANDLED | ED_ERROR;
+    if (type != SG_APER_FLOAT_STOP && !(v > 0.0))
+        return fail(e, "aperture: value %g must be positive", v);
+    if (type == SG_APER_OBJECT_NA && !(v < 1.0))
+        return fail(e, "aperture: object NA %g must be below 1", v);
+    if (type == SG_APER_OBJECT_NA && isinf(e->doc.sys->surf[0].thickness))
+        return fail(e, "aperture: an object NA needs a finite object distance");
+    if (!begin(e, e->row))
+        return ED_HANDLED | ED_ERROR;
+    e->doc.sys->aper_type = (sg_aper_type)type;
+    e->doc.sys->aper_value = v;
+    numfmt_shortest(v, shown, sizeof shown);
+    return end(e, "aperture %s %s", ed_aper_name(type), shown);
+}
+
+static int c_aim(ed *e, args *a)
+{
+    int k;
+    if (!need(e, a, 1, 1, "aim off|paraxial|real"))
+        return ED_HANDLED | ED_ERROR;
+    for (k = 0; k < 3; k++)
+        if (strcasecmp(a->v[1], ed_aim_name(k)) == 0)
+            break;
+    if (k == 3)
+        return fail(e, "aim: \"%s\" is not off, paraxial or real", a->v[1]);
+    if (!begin(e, e->row))
+        return ED_HANDLED | ED_ERROR;
+    e->doc.sys->aim = (sg_aim)k;
+    return end(e, "ray aiming %s", ed_aim_name(k));
+}
+
+/* ------------------------------------------------------------------------
+ * Files
+ * ------------------------------------------------------------------------ */
+
+/* Checks for unsaved changes before the document is replaced.  Returns 1
+ * to go ahead; otherwise flags for the caller to return. */
+static int may_discard(ed *e, const args *a, int bang, int *flags)
+{
+    char q[ED_LINE / 2];
+    int i;
+    size_t len;
+    if (bang || !doc_modified(&e->doc))
+        return 1;
+    if (e->batch) {
+        *flags = fail(e, "unsaved changes: save first, or use %s!", a->v[0]);
+        return 0;
+    }
+    snprintf(e->pending, sizeof e->pending, "%s!", a->v[0]);
+    for (i = 1; i < a->n; i++) {
+        cmd_quote(a->v[i], q, sizeof q);
+        len = strlen(e->pending);
+        snprintf(e->pending + len, sizeof e->pending - len, " %s", q);
+    }
+    e->confirm = CONFIRM_DISCARD;
+    ed_msg(e, 0, "unsaved changes will be lost");
+    *flags = ED_HANDLED | ED_CONFIRM | ED_REDRAW;
+    return 0;
+}
+
+static int opened(ed *e, const char *what)
+{
+    e->row = 0;
+    e->col = COL_RADIUS;
+    e->wave = e->doc.sys->primary_wave;
+    e->dirty = 1;
+    ed_msg(e, 0, "%s: %d surfaces", what, e->doc.sys->nsurf);
+    return OK_VIEW;
+}
+
+static int open_path(ed *e, const char *path)
+{
+    sg_diag d;
+    sg_diag_clear(&d);
+    if (doc_load(&e->doc, path, &d) != SG_EOK)
+        return fail(e, "%s", d.msg[0] ? d.msg : sg_strerror(d.code));
+    return opened(e, path);
+}
+
+static int c_open(ed *e, args *a, int bang)
+{
+    char path[ED_LINE];
+    int flags;
+    if (a->n < 2) {
+        if (e->batch)
+            return fail(e, "usage: open FILE");
+        snprintf(e->prompt_init, sizeof e->prompt_init, "open ");
+        return ED_HANDLED | ED_PROMPT;
+    }
+    rest_of(a, 1, path, sizeof path);
+    if (!may_discard(e, a, bang, &flags))
+        return flags;
+    return open_path(e, path);
+}
+
+static int c_new(ed *e, args *a, int bang)
+{
+    int flags;
+    if (!need(e, a, 0, 1, "new [FILE]"))
+        return ED_HANDLED | ED_ERROR;
+    if (!may_discard(e, a, bang, &flags))
+        return flags;
+    if (doc_new(&e->doc, a->n > 1 ? a->v[1] : NULL) != SG_EOK)
+        return fail(e, "out of memory");
+    return opened(e, "new design");
+}
+
+static int c_example(ed *e, args *a, int bang)
+{
+    const char *dir = ed_examples_dir();
+    char path[ED_LINE];
+    char **names;
+    int n, i, flags;
+    if (a->n < 2) {
+        if (!e->batch)
+            return ED_HANDLED | ED_SHOW_EXAMPLES;
+        n = ed_examples_list(&names);
+        if (n < 0)
+            return fail(e, "no examples directory (set SAGITTA_EXAMPLES)");
+        for (i = 0; i < n; i++)
+            fprintf(e->out, "%s\n", names[i]);
+        ed_examples_free(names, n);
+        return ED_HANDLED;
+    }
+    if (!need(e, a, 1, 1, "example NAME"))
+        return ED_HANDLED | ED_ERROR;
+    if (!dir)
+        return fail(e, "no examples directory (set SAGITTA_EXAMPLES)");
+    if (strchr(a->v[1], '/'))
+        return fail(e, "example: \"%s\": give a name from the list, not a path", a->v[1]);
+    n = (int)strlen(a->v[1]);
+    snprintf(path, sizeof path, "%s/%s%s", dir, a->v[1],
+             n > 5 && strcmp(a->v[1] + n - 5, ".json") == 0 ? "" : ".json");
+    if (!may_discard(e, a, bang, &flags))
+        return flags;
+    /* An example opens as a new file so that "save" cannot overwrite the
+     * bundled copy by accident. */
+    flags = open_path(e, path);
+    if (!(flags & ED_ERROR)) {
+        doc_set_path(&e->doc, NULL);
+        ed_msg(e, 0, "example %s: %d surfaces (save it under a name of your own)",
+               a->v[1], e->doc.sys->nsurf);
+    }
+    return flags;
+}
+
+static int save_as(ed *e, const char *path)
+{
+    sg_diag d;
+    sg_diag_clear(&d);
+    if (doc_save(&e->doc, path, &d) != SG_EOK)
+        return fail(e, "%s", d.msg[0] ? d.msg : sg_strerror(d.code));
+    ed_msg(e, 0, "saved %s", doc_path(&e->doc));
+    return ED_HANDLED | ED_REDRAW;
+}
+
+static int c_save(ed *e, args *a)
+{
+    char path[ED_LINE];
+    if (a->n > 1) {
+        rest_of(a, 1, path, sizeof path);
+        return save_as(e, path);
+    }
+    if (!doc_path(&e->doc)) {
+        if (e->batch)
+            return fail(e, "no file name: use save FILE");
+        snprintf(e->prompt_init, sizeof e->prompt_init, "save ");
+        ed_msg(e, 0, "save as: type a file name");
+        return ED_HANDLED | ED_PROMPT;
+    }
+    return save_as(e, NULL);
+}
+
+static int c_quit(ed *e, args *a, int bang)
+{
+    if (bang || !doc_modified(&e->doc)) {
+        e->quit = 1;
+        return ED_HANDLED | ED_QUIT;
+    }
+    if (e->batch)
+        return fail(e, "unsaved changes: save first, or use quit!");
+    e->confirm = CONFIRM_QUIT;
+    ed_msg(e, 0, "unsaved changes");
+    return ED_HANDLED | ED_CONFIRM | ED_REDRAW;
+}
+
+static int c_wq(ed *e, args *a)
+{
+    int f = c_save(e, a);
+    if (f & (ED_ERROR | ED_PROMPT))
+        return f;
+    e->quit = 1;
+    return f | ED_QUIT;
+}
+
+/* ------------------------------------------------------------------------
+ * Export and print
+ * ------------------------------------------------------------------------ */
+
+static int fmt_from_name(const char *path)
+{
+    const char *dot = strrchr(path, '.');
+    if (dot && strcasecmp(dot, ".csv") == 0)
+        return REPORT_CSV;
+    if (dot && strcasecmp(dot, ".json") == 0)
+        return REPORT_JSON;
+    return REPORT_TEXT;
+}
+
+static void meta_of(ed *e, report_meta *m)
+{
+    const char *p = doc_path(&e->doc);
+    m->design = p ? p : (e->doc.sys->title[0] ? e->doc.sys->title : "(new design)");
+    m->method = sg_method_name(e->method);
+    m->bits = e->method == SG_METHOD_MPFR ? e->bits : 0;
+    m->wave_um = e->doc.sys->wave[e->wave].um;
+    m->wave_index = e->wave + 1;
+}
+
+/* Builds the rays of a set: the current ray, a y or x fan of n rays across
+ * the pupil at the current field, or an n by n grid clipped to the pupil. */
+static sg_ray_in *ray_set(ed *e, const char *set, int n, size_t *count)
+{
+    sg_ray_in *r;
+    size_t k = 0;
+    int i, j;
+    if (strcmp(set, "ray") == 0) {
+        r = calloc(1, sizeof *r);
+        if (r) {
+            memcpy(r->v, e->ray, sizeof e->ray);
+            k = 1;
+        }
+    } else if (strcmp(set, "fan") == 0 || strcmp(set, "xfan") == 0) {
+        r = calloc((size_t)n, sizeof *r);
+        for (i = 0; r && i < n; i++, k++) {
+            double t = n == 1 ? 0.0 : -1.0 + 2.0 * i / (n - 1);
+            r[k].v[0] = e->ray[0];
+            r[k].v[1] = e->ray[1];
+            r[k].v[2] = set[0] == 'x' ? t : 0.0;
+            r[k].v[3] = set[0] == 'x' ? 0.0 : t;
+        }
+    } else {
+        r = calloc((size_t)n * (size_t)n, sizeof *r);
+        for (i = 0; r && i < n; i++)
+            for (j = 0; j < n; j++) {
+                double px = n == 1 ? 0.0 : -1.0 + 2.0 * j / (n - 1);
+                double py = n == 1 ? 0.0 : -1.0 + 2.0 * i / (n - 1);
+                if (px * px + py * py > 1.0)
+                    continue;
+                r[k].v[0] = e->ray[0];
+                r[k].v[1] = e->ray[1];
+                r[k].v[2] = px;
+                r[k].v[3] = py;
+                k++;
+            }
+    }
+    *count = k;
+    return r;
+}
+
+static int c_export(ed *e, args *a)
+{
+    const char *usage = "export FILE [csv|json|text] [ray | fan [N] | xfan [N] | grid N]";
+    const char *path, *set = "ray";
+    int fmt = -1, n = 0, i, rc, tostd;
+    size_t nray = 0;
+    sg_ray_in *rays = NULL;
+    sg_ray_surface *out = NULL;
+    int *status = NULL;
+    sg_diag d;
+    report_meta m;
+    FILE *f;
+
+    if (a->n < 2) {
+        if (e->batch)
+            return fail(e, "usage: %s", usage);
+        snprintf(e->prompt_init, sizeof e->prompt_init, "export ");
+        return ED_HANDLED | ED_PROMPT;
+    }
+    path = a->v[1];
+    for (i = 2; i < a->n; i++) {
+        int f2 = report_parse_fmt(a->v[i]);
+        if (f2 < 0 && strcasecmp(a->v[i], "txt") == 0)
+            f2 = REPORT_TEXT;
+        if (f2 >= 0) {
+            fmt = f2;
+        } else if (strcmp(a->v[i], "ray") == 0 || strcmp(a->v[i], "fan") == 0 ||
+                   strcmp(a->v[i], "xfan") == 0 || strcmp(a->v[i], "grid") == 0) {
+            set = a->v[i];
+            if (i + 1 < a->n && isdigit((unsigned char)a->v[i + 1][0])) {
+                if (!parse_int(e, a->v[++i], set, 1, 1001, &n))
+                    return ED_HANDLED | ED_ERROR;
+            }
+        } else {
+            return fail(e, "export: \"%s\" is not a format or a ray set; usage: %s",
+                        a->v[i], usage);
+        }
+    }
+    if (strcmp(set, "grid") == 0 && n == 0)
+        return fail(e, "export: grid needs a size, e.g. grid 11");
+    if (n == 0)
+        n = 11;
+    if (fmt < 0)
+        fmt = fmt_from_name(path);
+    tostd = strcmp(path, "-") == 0;
+    if (tostd && !e->batch)
+        return fail(e, "export: \"-\" (standard output) works only in batch mode");
+
+    ed_opts(e);
+    rays = ray_set(e, set, n, &nray);
+    if (!rays)
+        return fail(e, "out of memory");
+    if (nray == 0) {
+        free(rays);
+        return fail(e, "export: the ray set is empty");
+    }
+    out = malloc(nray * (size_t)e->doc.sys->nsurf * sizeof *out);
+    status = malloc(nray * sizeof *status);
+    if (!out || !status) {
+        free(rays);
+        free(out);
+        free(status);
+        return fail(e, "out of memory: %zu rays", nray);
+    }
+    sg_diag_clear(&d);
+    rc = sg_trace_batch(e->doc.sys, e->cat, &e->opts, SG_RAYS_NORMALIZED, rays, nray, 0,
+                        out, status, &d);
+    if (rc != SG_EOK) {
+        free(rays);
+        free(out);
+        free(status);
+        return fail(e, "export: %s", d.msg[0] ? d.msg : sg_strerror(rc));
+    }
+    meta_of(e, &m);
+    f = tostd ? e->out : fopen(path, "w");
+    if (!f) {
+        rc = errno;
+        free(rays);
+        free(out);
+        free(status);
+        return fail(e, "export: %s: %s", path, strerror(rc));
+    }
+    rc = report_write(f, (report_fmt)fmt, &m, e->doc.sys->nsurf, out, status, nray,
+                      SG_RAYS_NORMALIZED, rays);
+    if (tostd)
+        rc = fflush(f) != 0 || rc != 0 ? -1 : 0;
+    else if (fclose(f) != 0)
+        rc = -1;
+    i = errno;
+    free(rays);
+    free(out);
+    free(status);
+    if (rc != 0)
+        return fail(e, "export: %s: %s", path, strerror(i));
+    ed_msg(e, 0, "exported %zu ray%s to %s", nray, nray == 1 ? "" : "s",
+           tostd ? "standard output" : path);
+    return ED_HANDLED | ED_REDRAW;
+}
+
+static int c_print(ed *e, args *a)
+{
+    char buf[ED_LINE];
+    const char *what = a->n > 1 ? a->v[1] : "ray";
+    report_meta m;
+    if (strcmp(what, "cell") == 0) {
+        int row, col;
+        if (!need(e, a, 3, 3, "print cell SURFACE COLUMN") ||
+            !parse_row(e, a->v[2], 0, e->doc.sys->nsurf - 1, &row))
+            return ED_HANDLED | ED_ERROR;
+        col = cell_parse_name(a->v[3]);
+        if (col < 0)
+            return fail(e, "no column \"%s\"", a->v[3]);
+        cell_text(e->doc.sys, row, col, buf, sizeof buf);
+        if (e->batch)
+            fprintf(e->out, "%s\n", buf);
+        ed_msg(e, 0, "surface %d %s: %s", row, cell_name(col), buf);
+        return ED_HANDLED | ED_REDRAW;
+    }
+    if (strcmp(what, "ray") != 0 && strcmp(what, "paraxial") != 0)
+        return fail(e, "usage: print ray | paraxial | cell SURFACE COLUMN");
+    ed_recompute(e);
+    if (!e->cmp.have)
+        return fail(e, "no trace: %s", e->cmp.build_msg);
+    if (!e->batch) {
+        const sg_ray_surface *r = &e->cmp.res[e->row];
+        char x[NUMFMT_MAX], y[NUMFMT_MAX], z[NUMFMT_MAX];
+        numfmt_shortest(r->x, x, sizeof x);
+        numfmt_shortest(r->y, y, sizeof y);
+        numfmt_shortest(r->z, z, sizeof z);
+        ed_msg(e, 0, "surface %d: x %s  y %s  z %s", e->row, x, y, z);
+        return ED_HANDLED | ED_REDRAW;
+    }
+    meta_of(e, &m);
+    if (strcmp(what, "paraxial") == 0)
+        report_write_paraxial(e->out, REPORT_TEXT, &m, &e->cmp.par);
+    else
+        report_write(e->out, REPORT_TEXT, &m, e->cmp.nsurf, e->cmp.res, &e->cmp.rc, 1,
+                     SG_RAYS_NORMALIZED, NULL);
+    fflush(e->out);
+    return ED_HANDLED;
+}
+
+/* ------------------------------------------------------------------------
+ * The ray and the trace options (not part of the design)
+ * ------------------------------------------------------------------------ */
+
+static int ray_msg(ed *e)
+{
+    char s[4][NUMFMT_MAX];
+    int i;
+    for (i = 0; i < 4; i++)
+        numfmt_shortest(e->ray[i], s[i], sizeof s[i]);
+    e->dirty = 1;
+    ed_msg(e, 0, "ray Hx %s Hy %s Px %s Py %s", s[0], s[1], s[2], s[3]);
+    return OK_VIEW;
+}
+
+static int c_ray(ed *e, args *a)
+{
+    double v[4];
+    int i, bad;
+    if (a->n == 2) {
+        int rc = args_double_list(a->v[1], 0, v, 4, &bad);
+        if (rc != ARGS_OK)
+            return fail(e, "ray: \"%s\": %s; give Hx,Hy,Px,Py", a->v[1], args_strerror(rc));
+    } else {
+        if (!need(e, a, 4, 4, "ray HX HY PX PY"))
+            return ED_HANDLED | ED_ERROR;
+        for (i = 0; i < 4; i++)
+            if (!parse_num(e, a->v[i + 1], "ray", &v[i]))
+                return ED_HANDLED | ED_ERROR;
+    }
+    memcpy(e->ray, v, sizeof v);
+    return ray_msg(e);
+}
+
+static int c_raycoord(ed *e, args *a)
+{
+    static const char *const n[] = {"hx", "hy", "px", "py"};
+    int i;
+    double v;
+    for (i = 0; i < 4; i++)
+        if (strcasecmp(a->v[0], n[i]) == 0)
+            break;
+    if (!need(e, a, 1, 1, "hx|hy|px|py VALUE") || !parse_num(e, a->v[1], n[i], &v))
+        return ED_HANDLED | ED_ERROR;
+    e->ray[i] = v;
+    return ray_msg(e);
+}
+
+static int c_chief(ed *e, args *a)
+{
+    e->ray[2] = e->ray[3] = 0.0;
+    return ray_msg(e);
+}
+
+static int c_marginal(ed *e, args *a)
+{
+    static const struct {
+        const char *n1, *n2;
+        double px, py;
+    } m[] = {
+        {"top", "+y", 0, 1}, {"bottom", "-y", 0, -1}, {"right", "+x", 1, 0}, {"left", "-x", -1, 0},
+    };
+    size_t i;
+    if (!need(e, a, 1, 1, "marginal top|bottom|left|right"))
+        return ED_HANDLED | ED_ERROR;
+    for (i = 0; i < 4; i++)
+        if (strcasecmp(a->v[1], m[i].n1) == 0 || strcasecmp(a->v[1], m[i].n2) == 0) {
+            e->ray[2] = m[i].px;
+            e->ray[3] = m[i].py;
+            return ray_msg(e);
+        }
+    return fail(e, "marginal: \"%s\" is not top, bottom, left or right", a->v[1]);
+}
+
+static int c_wave(ed *e, args *a)
+{
+    int k;
+    if (!need(e, a, 1, 1, "wave N") ||
+        !parse_int(e, a->v[1], "wavelength", 1, e->doc.sys->nwave, &k))
+        return ED_HANDLED | ED_ERROR;
+    e->wave = k - 1;
+    e->dirty = 1;
+    ed_msg(e, 0, "tracing at wavelength %d (%.10g um)", k, e->doc.sys->wave[k - 1].um);
+    return OK_VIEW;
+}
+
+#define BITS_MIN 53
+#define BITS_MAX 100000
+
+static int c_method(ed *e, args *a)
+{
+    int m, bits = e->bits;
+    if (!need(e, a, 1, 2, "method precise|classic|mpfr [BITS]"))
+        return ED_HANDLED | ED_ERROR;
+    m = sg_method_parse(a->v[1]);
+    if (m < 0)
+        return fail(e, "method: \"%s\" is not precise, classic or mpfr", a->v[1]);
+    if (a->n > 2 && !parse_int(e, a->v[2], "mpfr bits", BITS_MIN, BITS_MAX, &bits))
+        return ED_HANDLED | ED_ERROR;
+    e->method = (sg_method)m;
+    e->bits = bits;
+    e->dirty = 1;
+    if (m == SG_METHOD_MPFR)
+        ed_msg(e, 0, "method mpfr, %d bits", bits);
+    else
+        ed_msg(e, 0, "method %s", sg_method_name((sg_method)m));
+    return OK_VIEW;
+}
+
+static int c_bits(ed *e, args *a)
+{
+    int bits;
+    if (!need(e, a, 1, 1, "bits N") ||
+        !parse_int(e, a->v[1], "mpfr bits", BITS_MIN, BITS_MAX, &bits))
+        return ED_HANDLED | ED_ERROR;
+    e->bits = bits;
+    e->dirty = 1;
+    ed_msg(e, 0, "mpfr precision %d bits", bits);
+    return OK_VIEW;
+}
+
+static int c_digits(ed *e, args *a)
+{
+    int on;
+    if (!need(e, a, 0, 1, "digits [on|off|toggle]") ||
+        !parse_onoff(e, a, e->digits, &on, "digits"))
+        return ED_HANDLED | ED_ERROR;
+    e->digits = on;
+    e->dirty = 1;
+    ed_msg(e, 0, "digits of agreement with mpfr %s", on ? "on" : "off");
+    return OK_VIEW;
+}
+
+static int c_clip(ed *e, args *a)
+{
+    int on;
+    if (!need(e, a, 0, 1, "clip [on|off|toggle]") ||
+        !parse_onoff(e, a, e->clip, &on, "clip"))
+        return ED_HANDLED | ED_ERROR;
+    e->clip = on;
+    e->dirty = 1;
+    ed_msg(e, 0, "vignetting at fixed semi-diameters %s", on ? "on" : "off");
+    return OK_VIEW;
+}
+
+static int c_goto(ed *e, args *a)
+{
+    int row;
+    if (!need(e, a, 1, 2, "goto SURFACE [COLUMN]") ||
+        !parse_row(e, a->v[1], 0, e->doc.sys->nsurf - 1, &row))
+        return ED_HANDLED | ED_ERROR;
+    if (a->n > 2) {
+        int col = cell_parse_name(a->v[2]);
+        if (col < 0)
+            return fail(e, "no column \"%s\"", a->v[2]);
+        e->col = col;
+    }
+    e->row = row;
+    e->msg[0] = '\0';
+    return ED_HANDLED | ED_REDRAW;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+static int c_bench(ed *e, args *a)
+{
+    int n = 20, i;
+    double *t, t0;
+    if (!need(e, a, 0, 1, "bench [N]") ||
+        (a->n > 1 && !parse_int(e, a->v[1], "count", 1, 100000, &n)))
+        return ED_HANDLED | ED_ERROR;
+    t = malloc((size_t)n * sizeof *t);
+    if (!t)
+        return fail(e, "out of memory");
+    for (i = 0; i < n; i++) {
+        /* What a keystroke costs: the tracers rebuilt, the ray traced. */
+        compute_invalidate(&e->cmp);
+        t0 = compute_now_ms();
+        ed_recompute(e);
+        t[i] = compute_now_ms() - t0;
+    }
+    qsort(t, (size_t)n, sizeof *t, cmp_double);
+    ed_msg(e, 0,
+           "recompute of %d surfaces (%s%s): %d runs, min %.3f ms, median %.3f ms, max %.3f ms%s",
+           e->doc.sys->nsurf, sg_method_name(e->method), e->digits ? " + mpfr digits" : "", n,
+           t[0], t[n / 2], t[n - 1], e->cmp.have ? "" : " (no trace: the design is invalid)");
+    free(t);
+    if (e->batch)
+        fprintf(e->out, "%s\n", e->msg);
+    return OK_VIEW;
+}
+
+/* ------------------------------------------------------------------------
+ * The table
+ * ------------------------------------------------------------------------ */
+
+typedef int (*handler)(ed *, args *);
+
+typedef struct command {
+    const char *name;
+    const char *alias;
+    handler fn;
+    const char *usage;
+    const char *help;
+} command;
+
+static int c_open0(ed *e, args *a) { return c_open(e, a, 0); }
+static int c_open1(ed *e, args *a) { return c_open(e, a, 1); }
+static int c_new0(ed *e, args *a) { return c_new(e, a, 0); }
+static int c_new1(ed *e, args *a) { return c_new(e, a, 1); }
+static int c_example0(ed *e, args *a) { return c_example(e, a, 0); }
+static int c_example1(ed *e, args *a) { return c_example(e, a, 1); }
+static int c_quit0(ed *e, args *a) { return c_quit(e, a, 0); }
+static int c_quit1(ed *e, args *a) { return c_quit(e, a, 1); }
+static int c_help(ed *e, args *a);
+static int c_settings(ed *e, args *a) { return ED_HANDLED | ED_SHOW_SETTINGS; }
+static int c_redraw(ed *e, args *a) { return ED_HANDLED | ED_REDRAW; }
+
+static const command commands[] = {
+    {"set", NULL, c_set, "set SURFACE COLUMN VALUE",
+     "set a cell; COLUMN is type comment radius thickness material semi conic a2..a16 "
+     "or fixed; SURFACE may be obj, ima, stop or ."},
+    {"insert", "i", c_insert, "insert [SURFACE]", "insert a flat air surface before SURFACE"},
+    {"delete", "d", c_delete, "delete [SURFACE]", "delete a surface"},
+    {"stop", NULL, c_stop, "stop [SURFACE]", "make a surface the aperture stop"},
+    {"undo", "u", c_undo, "undo [N]", "undo the last change(s)"},
+    {"redo", NULL, c_redo, "redo [N]", "redo undone change(s)"},
+    {"open", "e", c_open0, "open FILE", "open a design (open! discards changes)"},
+    {"open!", "e!", c_open1, "open! FILE", "open a design, discarding unsaved changes"},
+    {"new", NULL, c_new0, "new [FILE]", "start a new design"},
+    {"new!", NULL, c_new1, "new! [FILE]", "start a new design, discarding changes"},
+    {"example", "examples", c_example0, "example [NAME]",
+     "open a bundled example; without NAME list them"},
+    {"example!", NULL, c_example1, "example! NAME", "open an example, discarding changes"},
+    {"save", "w", c_save, "save [FILE]", "save; with FILE, save as FILE"},
+    {"saveas", NULL, c_save, "saveas FILE", "save under a new name"},
+    {"wq", "x", c_wq, "wq [FILE]", "save and quit"},
+    {"quit", "q", c_quit0, "quit", "quit (asks about unsaved changes)"},
+    {"quit!", "q!", c_quit1, "quit!", "quit, discarding unsaved changes"},
+    {"export", NULL, c_export, "export FILE [csv|json|text] [ray|fan N|xfan N|grid N]",
+     "write the ray table of the current ray or a ray set"},
+    {"print", NULL, c_print, "print [ray|paraxial|cell SURFACE COLUMN]",
+     "show a result (batch: on standard output)"},
+    {"ray", NULL, c_ray, "ray HX HY PX PY", "choose the ray (also HX,HY,PX,PY)"},
+    {"hx", NULL, c_raycoord, "hx VALUE", "set the normalized field x"},
+    {"hy", NULL, c_raycoord, "hy VALUE", "set the normalized field y"},
+    {"px", NULL, c_raycoord, "px VALUE", "set the normalized pupil x"},
+    {"py", NULL, c_raycoord, "py VALUE", "set the normalized pupil y"},
+    {"chief", NULL, c_chief, "chief", "the chief ray of the current field (Px = Py = 0)"},
+    {"marginal", NULL, c_marginal, "marginal top|bottom|left|right",
+     "a marginal ray of the current field"},
+    {"wave", NULL, c_wave, "wave N", "trace at wavelength N"},
+    {"method", NULL, c_method, "method precise|classic|mpfr [BITS]", "choose the trace method"},
+    {"bits", NULL, c_bits, "bits N", "MPFR precision for the mpfr method and digits"},
+    {"digits", NULL, c_digits, "digits [on|off]", "show agreement with an MPFR trace"},
+    {"clip", NULL, c_clip, "clip [on|off]", "vignette rays at fixed semi-diameters"},
+    {"wavelength", "wl", c_wavelength,
+     "wavelength add UM [W] | set N UM [W] | delete N | primary N", "edit the wavelengths"},
+    {"field", NULL, c_field,
+     "field type T | norm radial|rect | add X Y [W] | set N X Y [W] | delete N",
+     "edit the fields"},
+    {"aperture", NULL, c_aperture, "aperture [epd|fnum|na|float|pwfnum] [VALUE]",
+     "set the system aperture"},
+    {"aim", NULL, c_aim, "aim off|paraxial|real", "set ray aiming"},
+    {"title", NULL, c_title, "title TEXT", "set the design's title"},
+    {"units", NULL, c_units, "units mm|cm|in|m", "set the lens units"},
+    {"goto", "g", c_goto, "goto SURFACE [COLUMN]", "move the cursor"},
+    {"bench", NULL, c_bench, "bench [N]", "time N live recomputes"},
+    {"settings", NULL, c_settings, "settings", "open the system settings"},
+    {"help", "h", c_help, "help", "list keys and commands"},
+    {"redraw", NULL, c_redraw, "redraw", "repaint the screen"},
+};
+
+#define NCOMMANDS (sizeof commands / sizeof commands[0])
+
+static int c_help(ed *e, args *a)
+{
+    size_t i;
+    if (!e->batch)
+        return ED_HANDLED | ED_SHOW_HELP;
+    for (i = 0; i < NCOMMANDS; i++)
+        fprintf(e->out, "%-58s %s\n", commands[i].usage, commands[i].help);
+    return ED_HANDLED;
+}
+
+int cmd_count(void)
+{
+    return (int)NCOMMANDS;
+}
+
+const char *cmd_usage(int i)
+{
+    return i >= 0 && i < (int)NCOMMANDS ? commands[i].usage : NULL;
+}
+
+const char *cmd_help(int i)
+{
+    return i >= 0 && i < (int)NCOMMANDS ? commands[i].help : NULL;
+}
+
+const char *cmd_name(int i)
+{
+    return i >= 0 && i < (int)NCOMMANDS ? commands[i].name : NULL;
+}
+
+int cmd_exec(ed *e, const char *line)
+{
+    args a;
+    size_t i;
+    while (isspace((unsigned char)*line) || *line == ':')
+        line++;
+    if (*line == '\0' || *line == '#')
+        return ED_HANDLED;
+    if (tokenize(line, &a) != 0)
+        return fail(e, "cannot read the command: an unclosed quote, or too many words");
+    for (i = 0; i < NCOMMANDS; i++)
+        if (strcmp(a.v[0], commands[i].name) == 0 ||
+            (commands[i].alias && strcmp(a.v[0], commands[i].alias) == 0))
+            return commands[i].fn(e, &a);
+    return fail(e, "unknown command \"%s\" (try help)", a.v[0]);
+}

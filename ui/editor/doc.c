@@ -1,0 +1,304 @@
+/* doc.c - the edited system with its file name and undo history. */
+#include "doc.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+/* 64 MiB keeps hundreds of steps of a large design and a few of a huge one. */
+#define DOC_HIST_LIMIT ((size_t)64 << 20)
+
+static size_t snap_bytes(const sg_system *s)
+{
+    return sizeof *s + (size_t)s->capsurf * sizeof *s->surf;
+}
+
+static char *dupstr(const char *s)
+{
+    size_t n = strlen(s) + 1;
+    char *p = malloc(n);
+    if (p)
+        memcpy(p, s, n);
+    return p;
+}
+
+static void stack_clear(doc *d, doc_stack *st)
+{
+    size_t i;
+    for (i = 0; i < st->n; i++) {
+        d->hist_bytes -= snap_bytes(st->v[i].sys);
+        sg_system_free(st->v[i].sys);
+    }
+    st->n = 0;
+}
+
+static int stack_push(doc *d, doc_stack *st, sg_system *sys, unsigned long id, int row)
+{
+    if (st->n == st->cap) {
+        size_t cap = st->cap ? st->cap * 2 : 32;
+        doc_snap *v = realloc(st->v, cap * sizeof *v);
+        if (!v)
+            return SG_ENOMEM;
+        st->v = v;
+        st->cap = cap;
+    }
+    st->v[st->n].sys = sys;
+    st->v[st->n].id = id;
+    st->v[st->n].row = row;
+    st->n++;
+    d->hist_bytes += snap_bytes(sys);
+    return SG_EOK;
+}
+
+/* Drops the oldest undo steps while the history is over its budget, but
+ * always keeps the newest one so the last change can be undone. */
+static void trim(doc *d)
+{
+    size_t drop = 0, i;
+    while (d->hist_bytes > d->hist_limit && drop + 1 < d->undo.n) {
+        d->hist_bytes -= snap_bytes(d->undo.v[drop].sys);
+        sg_system_free(d->undo.v[drop].sys);
+        drop++;
+    }
+    if (drop == 0)
+        return;
+    for (i = drop; i < d->undo.n; i++)
+        d->undo.v[i - drop] = d->undo.v[i];
+    d->undo.n -= drop;
+}
+
+int doc_init(doc *d)
+{
+    memset(d, 0, sizeof *d);
+    d->sys = sg_system_new();
+    if (!d->sys)
+        return SG_ENOMEM;
+    d->id = d->saved_id = 1;
+    d->next_id = 2;
+    d->hist_limit = DOC_HIST_LIMIT;
+    return SG_EOK;
+}
+
+void doc_free(doc *d)
+{
+    stack_clear(d, &d->undo);
+    stack_clear(d, &d->redo);
+    free(d->undo.v);
+    free(d->redo.v);
+    sg_system_free(d->sys);
+    free(d->path);
+    memset(d, 0, sizeof *d);
+}
+
+int doc_modified(const doc *d)
+{
+    return d->id != d->saved_id;
+}
+
+const char *doc_path(const doc *d)
+{
+    return d->path;
+}
+
+int doc_set_path(doc *d, const char *path)
+{
+    char *p = NULL;
+    if (path && !(p = dupstr(path)))
+        return SG_ENOMEM;
+    free(d->path);
+    d->path = p;
+    return SG_EOK;
+}
+
+int doc_begin(doc *d, int row)
+{
+    sg_system *snap = sg_system_clone(d->sys);
+    if (!snap)
+        return SG_ENOMEM;
+    if (stack_push(d, &d->undo, snap, d->id, row) != SG_EOK) {
+        sg_system_free(snap);
+        return SG_ENOMEM;
+    }
+    d->open_change = 1;
+    return SG_EOK;
+}
+
+static doc_snap pop(doc *d, doc_stack *st)
+{
+    doc_snap s = st->v[--st->n];
+    d->hist_bytes -= snap_bytes(s.sys);
+    return s;
+}
+
+int doc_end(doc *d)
+{
+    doc_snap *top;
+    if (!d->open_change || d->undo.n == 0)
+        return 0;
+    d->open_change = 0;
+    top = &d->undo.v[d->undo.n - 1];
+    if (doc_system_equal(top->sys, d->sys)) {
+        doc_snap s = pop(d, &d->undo);
+        sg_system_free(s.sys);
+        return 0;
+    }
+    d->id = d->next_id++;
+    stack_clear(d, &d->redo);
+    trim(d);
+    return 1;
+}
+
+void doc_cancel(doc *d)
+{
+    doc_snap s;
+    if (!d->open_change || d->undo.n == 0)
+        return;
+    d->open_change = 0;
+    s = pop(d, &d->undo);
+    /* The snapshot becomes the document, so nothing needs copying. */
+    sg_system_free(d->sys);
+    d->sys = s.sys;
+}
+
+/* Moves the document onto one stack and the top of the other into the
+ * document: the common step of undo and redo. */
+static int step(doc *d, doc_stack *from, doc_stack *to, int *row)
+{
+    doc_snap s;
+    if (from->n == 0)
+        return SG_ERANGE;
+    if (stack_push(d, to, d->sys, d->id, from->v[from->n - 1].row) != SG_EOK)
+        return SG_ENOMEM;
+    s = pop(d, from);
+    d->sys = s.sys;
+    d->id = s.id;
+    if (row)
+        *row = s.row;
+    return SG_EOK;
+}
+
+int doc_undo(doc *d, int *row)
+{
+    return step(d, &d->undo, &d->redo, row);
+}
+
+int doc_redo(doc *d, int *row)
+{
+    return step(d, &d->redo, &d->undo, row);
+}
+
+size_t doc_undo_depth(const doc *d)
+{
+    return d->undo.n;
+}
+
+size_t doc_redo_depth(const doc *d)
+{
+    return d->redo.n;
+}
+
+static void replace(doc *d, sg_system *sys)
+{
+    stack_clear(d, &d->undo);
+    stack_clear(d, &d->redo);
+    sg_system_free(d->sys);
+    d->sys = sys;
+    d->id = d->saved_id = d->next_id++;
+    d->open_change = 0;
+}
+
+int doc_load(doc *d, const char *path, sg_diag *dg)
+{
+    sg_system *sys = sg_system_new();
+    int rc;
+    char *p;
+    if (!sys || !(p = dupstr(path))) {
+        sg_system_free(sys);
+        return sg_diag_set(dg, SG_ENOMEM, "%s: out of memory", path);
+    }
+    rc = sg_design_load(sys, path, dg);
+    if (rc != SG_EOK) {
+        sg_system_free(sys);
+        free(p);
+        return rc;
+    }
+    replace(d, sys);
+    free(d->path);
+    d->path = p;
+    return SG_EOK;
+}
+
+int doc_new(doc *d, const char *path)
+{
+    sg_system *sys = sg_system_new();
+    char *p = NULL;
+    if (!sys || (path && !(p = dupstr(path)))) {
+        sg_system_free(sys);
+        return SG_ENOMEM;
+    }
+    replace(d, sys);
+    free(d->path);
+    d->path = p;
+    return SG_EOK;
+}
+
+int doc_save(doc *d, const char *path, sg_diag *dg)
+{
+    int rc;
+    if (!path)
+        path = d->path;
+    if (!path)
+        return sg_diag_set(dg, SG_EINVAL, "no file name: give one to save as");
+    rc = sg_design_save(d->sys, path, dg);
+    if (rc != SG_EOK)
+        return rc;
+    if (path != d->path && doc_set_path(d, path) != SG_EOK)
+        return sg_diag_set(dg, SG_ENOMEM, "%s: saved, but out of memory", path);
+    d->saved_id = d->id;
+    return SG_EOK;
+}
+
+static int same_double(double a, double b)
+{
+    return memcmp(&a, &b, sizeof a) == 0;
+}
+
+static int surface_equal(const sg_surface *a, const sg_surface *b)
+{
+    int k;
+    if (a->type != b->type || strcmp(a->comment, b->comment) != 0 ||
+        !same_double(a->radius, b->radius) || !same_double(a->thickness, b->thickness) ||
+        a->mat.kind != b->mat.kind || strcmp(a->mat.name, b->mat.name) != 0 ||
+        !same_double(a->mat.index, b->mat.index) ||
+        !same_double(a->semi_diameter, b->semi_diameter) || a->sd_fixed != b->sd_fixed ||
+        !same_double(a->conic, b->conic))
+        return 0;
+    for (k = 0; k < SG_NASPH; k++)
+        if (!same_double(a->asph[k], b->asph[k]))
+            return 0;
+    return 1;
+}
+
+int doc_system_equal(const sg_system *a, const sg_system *b)
+{
+    int i;
+    if (strcmp(a->title, b->title) != 0 || strcmp(a->units, b->units) != 0 ||
+        a->nwave != b->nwave || a->primary_wave != b->primary_wave ||
+        a->field_type != b->field_type || a->field_norm != b->field_norm ||
+        a->nfield != b->nfield || a->aper_type != b->aper_type ||
+        !same_double(a->aper_value, b->aper_value) || a->aim != b->aim ||
+        a->stop != b->stop || a->nsurf != b->nsurf)
+        return 0;
+    for (i = 0; i < a->nwave; i++)
+        if (!same_double(a->wave[i].um, b->wave[i].um) ||
+            !same_double(a->wave[i].weight, b->wave[i].weight))
+            return 0;
+    for (i = 0; i < a->nfield; i++)
+        if (!same_double(a->field[i].x, b->field[i].x) ||
+            !same_double(a->field[i].y, b->field[i].y) ||
+            !same_double(a->field[i].weight, b->field[i].weight))
+            return 0;
+    for (i = 0; i < a->nsurf; i++)
+        if (!surface_equal(&a->surf[i], &b->surf[i]))
+            return 0;
+    return 1;
+}

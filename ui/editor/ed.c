@@ -1,0 +1,175 @@
+/* ed.c - the editor's state: setup, trace options, bundled examples. */
+#include "ed.h"
+
+#include <dirent.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+#include "sg_config.h"
+
+int ed_init(ed *e)
+{
+    sg_diag d;
+    memset(e, 0, sizeof *e);
+    if (doc_init(&e->doc) != SG_EOK)
+        return SG_ENOMEM;
+    compute_init(&e->cmp);
+    e->cat = sg_catalog_new();
+    sg_diag_clear(&d);
+    if (!e->cat || sg_catalog_load_default(e->cat, &d) != SG_EOK) {
+        snprintf(e->cat_msg, sizeof e->cat_msg, "no glass catalog: %s",
+                 d.msg[0] ? d.msg : "out of memory");
+        sg_catalog_free(e->cat);
+        e->cat = NULL;
+    }
+    sg_trace_opts_init(&e->opts);
+    /* The on-axis upper marginal ray shows the most about a new design. */
+    e->ray[3] = 1.0;
+    e->wave = e->doc.sys->primary_wave;
+    e->method = SG_METHOD_PRECISE;
+    e->bits = e->opts.mpfr_bits > 0 ? e->opts.mpfr_bits : 256;
+    e->clip = e->opts.clip;
+    e->out = stdout;
+    e->dirty = 1;
+    ed_opts(e);
+    return SG_EOK;
+}
+
+void ed_free(ed *e)
+{
+    compute_free(&e->cmp);
+    doc_free(&e->doc);
+    sg_catalog_free(e->cat);
+    e->cat = NULL;
+}
+
+void ed_opts(ed *e)
+{
+    const sg_system *s = e->doc.sys;
+    if (e->wave < 0 || e->wave >= s->nwave)
+        e->wave = s->primary_wave >= 0 && s->primary_wave < s->nwave ? s->primary_wave : 0;
+    if (e->row >= s->nsurf)
+        e->row = s->nsurf - 1;
+    if (e->row < 0)
+        e->row = 0;
+    sg_trace_opts_init(&e->opts);
+    e->opts.method = e->method;
+    e->opts.mpfr_bits = e->bits;
+    e->opts.wave = e->wave;
+    e->opts.clip = e->clip;
+}
+
+void ed_recompute(ed *e)
+{
+    int ref = 0;
+    ed_opts(e);
+    /* An MPFR trace compared with itself says nothing, so the reference
+     * then gets twice the precision. */
+    if (e->digits)
+        ref = e->method == SG_METHOD_MPFR ? 2 * e->bits : e->bits;
+    if (ref > 100000)
+        ref = 100000;
+    compute_run(&e->cmp, e->doc.sys, e->doc.id, e->cat, &e->opts, ref, e->ray);
+    e->dirty = 0;
+}
+
+void ed_msg(ed *e, int err, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(e->msg, sizeof e->msg, fmt, ap);
+    va_end(ap);
+    e->msg_err = err;
+}
+
+static int is_dir(const char *p)
+{
+    struct stat st;
+    return p && *p && stat(p, &st) == 0 && S_ISDIR(st.st_mode);
+}
+
+const char *ed_examples_dir(void)
+{
+    const char *env = getenv("SAGITTA_EXAMPLES");
+    if (is_dir(env))
+        return env;
+    if (is_dir(SG_SOURCE_EXAMPLES))
+        return SG_SOURCE_EXAMPLES;
+    if (is_dir(SG_INSTALL_EXAMPLES))
+        return SG_INSTALL_EXAMPLES;
+    return NULL;
+}
+
+static int cmp_str(const void *a, const void *b)
+{
+    return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+int ed_examples_list(char ***names)
+{
+    const char *dir = ed_examples_dir();
+    DIR *dp;
+    struct dirent *de;
+    char **v = NULL;
+    int n = 0, cap = 0;
+    *names = NULL;
+    if (!dir || !(dp = opendir(dir)))
+        return -1;
+    while ((de = readdir(dp)) != NULL) {
+        size_t len = strlen(de->d_name);
+        char *s;
+        if (len <= 5 || de->d_name[0] == '.' || strcmp(de->d_name + len - 5, ".json") != 0)
+            continue;
+        if (n == cap) {
+            char **nv = realloc(v, (size_t)(cap ? cap * 2 : 16) * sizeof *nv);
+            if (!nv)
+                break;
+            v = nv;
+            cap = cap ? cap * 2 : 16;
+        }
+        s = malloc(len - 4);
+        if (!s)
+            break;
+        memcpy(s, de->d_name, len - 5);
+        s[len - 5] = '\0';
+        v[n++] = s;
+    }
+    closedir(dp);
+    if (n > 1)
+        qsort(v, (size_t)n, sizeof *v, cmp_str);
+    *names = v;
+    return n;
+}
+
+void ed_examples_free(char **names, int n)
+{
+    int i;
+    for (i = 0; i < n; i++)
+        free(names[i]);
+    free(names);
+}
+
+const char *ed_aper_name(int t)
+{
+    static const char *const n[] = {"epd", "fnum", "na", "float", "pwfnum"};
+    return t >= 0 && t < 5 ? n[t] : "?";
+}
+
+const char *ed_field_type_name(int t)
+{
+    static const char *const n[] = {"angle", "object", "paraximage", "realimage"};
+    return t >= 0 && t < 4 ? n[t] : "?";
+}
+
+const char *ed_field_norm_name(int t)
+{
+    return t == SG_NORM_RECT ? "rect" : "radial";
+}
+
+const char *ed_aim_name(int a)
+{
+    static const char *const n[] = {"off", "paraxial", "real"};
+    return a >= 0 && a < 3 ? n[a] : "?";
+}

@@ -1,0 +1,111 @@
+/*
+ * ed.h - the editor's state, shared by the command path and the panels.
+ *
+ * Nothing here touches the terminal: the command path runs the same way
+ * from a key, the ':' line and a batch script.
+ */
+#ifndef SG_ED_H
+#define SG_ED_H
+
+#include <stddef.h>
+#include <stdio.h>
+
+#include "compute.h"
+#include "doc.h"
+#include "sagitta.h"
+
+/* What a command or a key handler asks the event loop to do. */
+enum {
+    ED_HANDLED = 1 << 0,
+    ED_REDRAW = 1 << 1,
+    ED_RECOMPUTE = 1 << 2,
+    ED_QUIT = 1 << 3,
+    ED_CONFIRM = 1 << 4,       /* ask the user; see ed.confirm */
+    ED_ERROR = 1 << 5,         /* the command failed; ed.msg says why */
+    ED_SHOW_HELP = 1 << 6,
+    ED_SHOW_SETTINGS = 1 << 7,
+    ED_SHOW_EXAMPLES = 1 << 8,
+    ED_PROMPT = 1 << 9         /* open the ':' line with ed.prompt_init */
+};
+
+/* What a confirmation asks. */
+enum {
+    CONFIRM_NONE = 0,
+    CONFIRM_QUIT,     /* unsaved changes: save, discard or cancel */
+    CONFIRM_DISCARD   /* unsaved changes: run ed.pending anyway? */
+};
+
+#define ED_MSG 1024
+#define ED_LINE 4096
+
+typedef struct ed {
+    doc doc;
+    sg_catalog *cat;           /* NULL when no catalog could be loaded */
+    char cat_msg[ED_MSG];     /* why not */
+
+    /* The ray on show and how it is traced; not part of the design. */
+    double ray[4];             /* Hx, Hy, Px, Py */
+    int wave;                  /* 0-based wavelength index */
+    sg_method method;
+    int bits;                  /* MPFR precision, for the method and the digits */
+    int clip;
+    int digits;                /* also trace with MPFR and show agreement */
+    sg_trace_opts opts;        /* built from the above by ed_opts() */
+
+    compute cmp;
+    int dirty;                 /* results are stale */
+
+    int row, col;              /* the spreadsheet's cursor */
+
+    char msg[ED_MSG];          /* the last message for the status line */
+    int msg_err;
+    int confirm;               /* CONFIRM_* pending */
+    char pending[ED_LINE];     /* command to run when confirmed */
+    char prompt_init[ED_LINE]; /* text to start the ':' line with */
+
+    int batch;                 /* no screen: print to out, never ask */
+    FILE *out;
+    int quit;                  /* set by quit in batch mode */
+} ed;
+
+int ed_init(ed *e);
+void ed_free(ed *e);
+/* Sets e->opts from the ray and method choices and clamps them to the
+ * design (a deleted wavelength, say). */
+void ed_opts(ed *e);
+/* Recomputes the live trace if anything changed. */
+void ed_recompute(ed *e);
+
+/* Records a message for the status line (batch mode: errors go to
+ * stderr by the caller). */
+void ed_msg(ed *e, int err, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* Runs one command line.  Returns ED_* flags; on failure ED_ERROR is set,
+ * e->msg says why and nothing changed. */
+int cmd_exec(ed *e, const char *line);
+
+/* Quotes s for a command line when it needs it. */
+void cmd_quote(const char *s, char *buf, size_t n);
+
+/* The directory of the bundled examples, or NULL. */
+const char *ed_examples_dir(void);
+/* Lists the bundled examples (file names without ".json"), sorted; the
+ * caller frees each and the array.  Returns the count, or -1. */
+int ed_examples_list(char ***names);
+void ed_examples_free(char **names, int n);
+
+/* Names of the choices, as shown and typed. */
+const char *ed_aper_name(int t);
+const char *ed_field_type_name(int t);
+const char *ed_field_norm_name(int t);
+const char *ed_aim_name(int a);
+
+/* Runs a script of commands without a screen; returns the exit status.
+ * Errors print as "SCRIPT:LINE: message" on stderr. */
+int ed_batch(ed *e, const char *script);
+
+#endif

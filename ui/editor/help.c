@@ -1,0 +1,165 @@
+/* help.c - the help screen: every key, then every command. */
+#include <stdio.h>
+#include <string.h>
+
+#include "cmd.h"
+#include "term.h"
+#include "ui.h"
+
+const char *const ui_key_help[] = {
+    "#Anywhere",
+    "F1 ?            this help (Esc or q closes it)",
+    ":               command line (Up/Down: history; Esc cancels)",
+    "q F10 Ctrl-C    quit (asks first when there are unsaved changes)",
+    "u               undo",
+    "r Ctrl-R        redo",
+    "w Ctrl-S        save (asks for a name when the design has none)",
+    "Ctrl-W          save as",
+    "o               open a design file",
+    "e               open a bundled example",
+    "n               new design",
+    "x               export the ray table (:export FILE [csv|json|text] [ray|fan N|grid N])",
+    "t F4            system settings: wavelengths, fields, aperture, aiming, method",
+    "m               next trace method (precise, classic, mpfr)",
+    "#               digits of agreement with an MPFR trace, on or off",
+    "v               next wavelength for the ray",
+    "c F5            chief ray (Px = Py = 0)",
+    "F6 F7 F8 F9     marginal ray: top, bottom, right, left",
+    "p               next marginal ray",
+    "f               move between the spreadsheet and the ray selector",
+    "{ }             scroll the results left and right",
+    "Ctrl-L          repaint the screen",
+    "Ctrl-Z          suspend",
+    "mouse           click selects a cell or ray item, double-click edits, wheel scrolls",
+    "",
+    "#Spreadsheet",
+    "arrows hjkl     move",
+    "Tab Shift-Tab   next / previous cell",
+    "PgUp PgDn       page up / down",
+    "Home End        first / last column",
+    "< >             first / last surface",
+    "Enter F2        edit the cell (Enter sets, Esc cancels, Tab and Up/Down set and move)",
+    "0-9 . - + A-Z   start typing a new value into the cell",
+    "Backspace       edit the cell starting from empty",
+    "Space           Semi-Dia: fix or free the aperture (U); Type: switch standard/asphere",
+    "i Insert        insert a surface before this one",
+    "a               insert a surface after this one",
+    "d Delete        delete this surface",
+    "s               make this surface the stop",
+    "",
+    "#Cells",
+    "Radius          a number; Infinity or 0 is flat",
+    "Material        empty or AIR, MIRROR, a catalog glass (N-BK7), or a fixed index (1.5)",
+    "Semi-Dia        a number; a trailing U fixes it so rays beyond it are vignetted",
+    "Type            STANDARD or EVENASPH; an r^n term makes a surface EVENASPH",
+    "",
+    "#Ray selector (f)",
+    "Left Right Tab  choose Hx, Hy, Px, Py or Wave",
+    "Up Down k j +   step the value (Wave: next / previous wavelength)",
+    "[ ]             smaller / larger step",
+    "Home            set the value to 0",
+    "Enter 0-9 . -   type a value",
+    "Esc f           back to the spreadsheet",
+    "",
+    "#Settings (t)",
+    "Up Down         choose an item",
+    "Enter           edit it (as a command on the ':' line)",
+    "Left Right Spc  cycle a choice",
+    "a d p           add, delete a wavelength or field; make a wavelength primary",
+    "Esc q t         close",
+    "",
+    "#Results",
+    "x y z           intersection in the surface's local frame",
+    "l m n           direction cosines after the surface",
+    "residual        |z - sag(x, y)| of the reported point",
+    "err bound       bound on the coordinate error against exact arithmetic",
+    "status          OK, MISS, TIR, VIGNETTED, NOT REACHED ...",
+    "dig x ...       digits agreeing with the MPFR trace (with #)",
+    "",
+    NULL,
+};
+
+static int nlines(void)
+{
+    int n = 0;
+    while (ui_key_help[n])
+        n++;
+    return n + 2 + cmd_count();
+}
+
+/* Line i of the help text into buf; returns its style. */
+static int line(int i, char *buf, size_t n)
+{
+    int k = 0;
+    while (ui_key_help[k])
+        k++;
+    if (i < k) {
+        const char *s = ui_key_help[i];
+        if (s[0] == '#') {
+            snprintf(buf, n, "%s", s + 1);
+            return T_HEADER;
+        }
+        snprintf(buf, n, "  %s", s);
+        return T_NORMAL;
+    }
+    i -= k;
+    if (i == 0) {
+        snprintf(buf, n, "Commands (type after ':'; a batch script holds one per line)");
+        return T_HEADER;
+    }
+    if (i == 1) {
+        snprintf(buf, n, "  %-44s %s", "SURFACE: a number, obj, ima, stop or .", "");
+        return T_DIM;
+    }
+    i -= 2;
+    snprintf(buf, n, "  %-44s %s", cmd_usage(i), cmd_help(i));
+    return T_NORMAL;
+}
+
+void help_draw(ui *u)
+{
+    char buf[512];
+    int h = u->rows - 2, i, n = nlines();
+    if (u->help_top > n - h)
+        u->help_top = n - h;
+    if (u->help_top < 0)
+        u->help_top = 0;
+    term_fill(0, 0, u->cols, T_TITLE);
+    term_text(0, 0, u->cols, T_TITLE, 1,
+              " sagitta help   Up/Down PgUp/PgDn scroll, Esc closes");
+    for (i = 0; i < h; i++) {
+        int k = u->help_top + i, style = T_NORMAL;
+        buf[0] = '\0';
+        if (k < n)
+            style = line(k, buf, sizeof buf);
+        term_text(1 + i, 0, u->cols, style, 1, buf);
+    }
+    snprintf(buf, sizeof buf, " lines %d-%d of %d", u->help_top + 1,
+             u->help_top + h < n ? u->help_top + h : n, n);
+    term_text(u->rows - 1, 0, u->cols, T_DIM, 1, buf);
+}
+
+int help_key(ui *u, int key)
+{
+    int h = u->rows - 2;
+    switch (key) {
+    case K_UP:
+    case 'k': u->help_top--; break;
+    case K_DOWN:
+    case 'j': u->help_top++; break;
+    case K_PGUP: u->help_top -= h - 1; break;
+    case K_PGDN:
+    case ' ': u->help_top += h - 1; break;
+    case K_HOME:
+    case '<': u->help_top = 0; break;
+    case K_END:
+    case '>': u->help_top = nlines(); break;
+    case K_ESC:
+    case 'q':
+    case '?':
+    case K_F(1):
+    case K_ENTER: u->mode = MODE_NORMAL; break;
+    default: return ED_HANDLED;
+    }
+    return ED_HANDLED | ED_REDRAW;
+}

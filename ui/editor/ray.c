@@ -1,0 +1,235 @@
+/* ray.c - the ray selector: Hx, Hy, Px, Py and the wavelength. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "../report.h"
+#include "numfmt.h"
+#include "term.h"
+#include "ui.h"
+
+static const char *const item_name[RAY_NITEMS] = {"Hx", "Hy", "Px", "Py", "Wave"};
+static const char *const item_cmd[RAY_NITEMS] = {"hx", "hy", "px", "py", "wave"};
+
+static void item_text(const ui *u, int i, char *buf, size_t n)
+{
+    const ed *e = u->e;
+    if (i == RAY_WAVE)
+        snprintf(buf, n, "%d: %.10gum", e->wave + 1, e->doc.sys->wave[e->wave].um);
+    else
+        numfmt_shortest(e->ray[i], buf, n);
+}
+
+void ray_draw(ui *u)
+{
+    int x = 0, i, y = u->ray_y;
+    char buf[128], shown[128];
+    term_fill(y, 0, u->cols, T_NORMAL);
+    x += term_text(y, x, u->cols - x, u->focus == FOCUS_RAY ? T_FRAME : T_HEADER, 0, "Ray ");
+    for (i = 0; i < RAY_NITEMS; i++) {
+        int w = i == RAY_WAVE ? 16 : 7, style = T_NORMAL;
+        if (x + 4 + w > u->cols)
+            break;
+        snprintf(buf, sizeof buf, " %s ", item_name[i]);
+        x += term_text(y, x, u->cols - x, T_DIM, 0, buf);
+        item_text(u, i, buf, sizeof buf);
+        if (i == RAY_WAVE)
+            snprintf(shown, sizeof shown, "%s", buf);
+        else
+            numfmt_fit(buf, w, u->ell, shown, sizeof shown);
+        if (u->focus == FOCUS_RAY && u->ray_item == i)
+            style = T_CURSOR;
+        u->rayx[i] = x;
+        u->rayw[i] = w;
+        if (u->mode == MODE_EDIT_RAY && u->ray_item == i) {
+            size_t start;
+            int cur;
+            le_view(&u->le, w, &start, &cur);
+            term_text(y, x, w, T_EDIT, 1, u->le.buf + start);
+            term_cursor(y, x + cur);
+        } else {
+            term_text(y, x, w, style, 1, shown);
+        }
+        x += w;
+    }
+    for (; i < RAY_NITEMS; i++)
+        u->rayw[i] = 0;
+    {
+        /* Where the ray ends, in words, so a failure shows at any width. */
+        const compute *c = &u->e->cmp;
+        int k, style = T_GOOD;
+        if (!c->have) {
+            snprintf(buf, sizeof buf, " no trace");
+            style = T_ERROR;
+        } else if (c->rc == SG_EOK) {
+            snprintf(buf, sizeof buf, " OK");
+        } else {
+            for (k = 0; k < c->nsurf && c->res[k].status != c->rc; k++)
+                ;
+            if (k < c->nsurf)
+                snprintf(buf, sizeof buf, " %s at %d", report_status_name(c->rc), k);
+            else
+                snprintf(buf, sizeof buf, " %s", report_status_name(c->rc));
+            style = T_ERROR;
+        }
+        if (x + 6 < u->cols)
+            x += term_text(y, x, u->cols - x, style, 0, buf);
+    }
+    if (u->focus == FOCUS_RAY && x + 14 < u->cols) {
+        char st[NUMFMT_MAX];
+        numfmt_shortest(u->step, st, sizeof st);
+        snprintf(buf, sizeof buf, "  step %s", st);
+        term_text(y, x, u->cols - x, T_DIM, 0, buf);
+    }
+}
+
+static int run_value(ui *u, double v)
+{
+    return ui_run(u, "%s %.17g", item_cmd[u->ray_item], v);
+}
+
+static int step(ui *u, int dir)
+{
+    ed *e = u->e;
+    double v;
+    if (u->ray_item == RAY_WAVE) {
+        int n = e->doc.sys->nwave;
+        return ui_run(u, "wave %d", (e->wave + dir + n) % n + 1);
+    }
+    /* Snapping to the step keeps repeated steps free of rounding drift. */
+    v = e->ray[u->ray_item] + dir * u->step;
+    v = nearbyint(v / u->step) * u->step;
+    if (v > 1.0)
+        v = 1.0;
+    if (v < -1.0)
+        v = -1.0;
+    if (fabs(v) < u->step * 1e-9)
+        v = 0.0;
+    return run_value(u, v);
+}
+
+static void begin_edit(ui *u, const char *init)
+{
+    le_set(&u->le, init);
+    u->mode = MODE_EDIT_RAY;
+    ed_msg(u->e, 0, "%s: Enter sets, Esc cancels", item_name[u->ray_item]);
+}
+
+int ray_key(ui *u, int key)
+{
+    char buf[64];
+    switch (key) {
+    case K_LEFT:
+    case 'h':
+    case K_BTAB:
+        u->ray_item = (u->ray_item + RAY_NITEMS - 1) % RAY_NITEMS;
+        return ED_HANDLED | ED_REDRAW;
+    case K_RIGHT:
+    case 'l':
+    case K_TAB:
+        u->ray_item = (u->ray_item + 1) % RAY_NITEMS;
+        return ED_HANDLED | ED_REDRAW;
+    case K_UP:
+    case 'k':
+    case '+': return step(u, 1);
+    case K_DOWN:
+    case 'j': return step(u, -1);
+    case '[':
+        if (u->step > 1e-6)
+            u->step /= 10.0;
+        return ED_HANDLED | ED_REDRAW;
+    case ']':
+        if (u->step < 1.0)
+            u->step *= 10.0;
+        if (u->step > 1.0)
+            u->step = 1.0;
+        return ED_HANDLED | ED_REDRAW;
+    case K_HOME: return u->ray_item == RAY_WAVE ? ED_HANDLED : run_value(u, 0.0);
+    case K_ENTER:
+    case K_F(2):
+        if (u->ray_item == RAY_WAVE)
+            snprintf(buf, sizeof buf, "%d", u->e->wave + 1);
+        else
+            numfmt_shortest(u->e->ray[u->ray_item], buf, sizeof buf);
+        begin_edit(u, buf);
+        return ED_HANDLED | ED_REDRAW;
+    case K_ESC:
+    case 'f':
+        u->focus = FOCUS_SHEET;
+        return ED_HANDLED | ED_REDRAW;
+    default:
+        if ((key >= '0' && key <= '9') || key == '.' || key == '-') {
+            buf[0] = (char)key;
+            buf[1] = '\0';
+            begin_edit(u, buf);
+            return ED_HANDLED | ED_REDRAW;
+        }
+        return 0;
+    }
+}
+
+int ray_edit_key(ui *u, int key)
+{
+    int f;
+    switch (le_key(&u->le, key)) {
+    case LE_ENTER: {
+        char q[LE_MAX + 8];
+        cmd_quote(u->le.buf, q, sizeof q);
+        f = ui_run(u, "%s %s", item_cmd[u->ray_item], q);
+        if (!(f & ED_ERROR))
+            u->mode = MODE_NORMAL;
+        return f;
+    }
+    case LE_CANCEL:
+        u->mode = MODE_NORMAL;
+        ed_msg(u->e, 0, "edit cancelled");
+        return ED_HANDLED | ED_REDRAW;
+    case LE_IGNORED: return ED_HANDLED;
+    default: return ED_HANDLED | ED_REDRAW;
+    }
+}
+
+int ray_click(ui *u, int x, int kind)
+{
+    int i;
+    for (i = 0; i < RAY_NITEMS; i++)
+        if (u->rayw[i] > 0 && x >= u->rayx[i] - 4 && x < u->rayx[i] + u->rayw[i]) {
+            u->focus = FOCUS_RAY;
+            u->ray_item = i;
+            if (kind == M_WHEEL_UP)
+                return step(u, 1);
+            if (kind == M_WHEEL_DOWN)
+                return step(u, -1);
+            if (kind == M_DOUBLE)
+                return ray_key(u, K_ENTER);
+            return ED_HANDLED | ED_REDRAW;
+        }
+    return ED_HANDLED;
+}
+
+int ray_quick(ui *u, int key)
+{
+    static const char *const cycle[] = {"top", "bottom", "right", "left"};
+    const double *r = u->e->ray;
+    int i;
+    switch (key) {
+    case 'c':
+    case K_F(5): return ui_run(u, "chief");
+    case K_F(6): return ui_run(u, "marginal top");
+    case K_F(7): return ui_run(u, "marginal bottom");
+    case K_F(8): return ui_run(u, "marginal right");
+    case K_F(9): return ui_run(u, "marginal left");
+    case 'p':
+        /* Steps through the four marginal rays, starting with the top. */
+        if (r[2] == 0.0 && r[3] == 1.0)
+            i = 1;
+        else if (r[2] == 0.0 && r[3] == -1.0)
+            i = 2;
+        else if (r[2] == 1.0 && r[3] == 0.0)
+            i = 3;
+        else
+            i = 0;
+        return ui_run(u, "marginal %s", cycle[i]);
+    default: return 0;
+    }
+}

@@ -1,0 +1,114 @@
+/*
+ * ui.h - the screen: layout, modes and the panels drawn through term.h.
+ *
+ * Each panel has a draw function and a key handler that returns ED_*
+ * flags; the event loop in app.c is the only place that acts on them.
+ */
+#ifndef SG_ED_UI_H
+#define SG_ED_UI_H
+
+#include "cells.h"
+#include "ed.h"
+#include "lineedit.h"
+
+enum { FOCUS_SHEET = 0, FOCUS_RAY };
+
+enum {
+    MODE_NORMAL = 0,
+    MODE_EDIT_CELL,  /* typing into a spreadsheet cell */
+    MODE_EDIT_RAY,   /* typing a ray coordinate */
+    MODE_COMMAND,    /* the ':' line */
+    MODE_CONFIRM,    /* a yes/no question on the status line */
+    MODE_HELP,
+    MODE_SETTINGS,
+    MODE_EXAMPLES
+};
+
+/* Items of the ray selector. */
+enum { RAY_HX = 0, RAY_HY, RAY_PX, RAY_PY, RAY_WAVE, RAY_NITEMS };
+
+#define HIST_MAX 100
+
+typedef struct ui {
+    ed *e;
+    int rows, cols;
+    int focus, mode;
+    int back_mode;       /* where the ':' line returns to */
+    int quit_after_save; /* the quit dialog asked for a file name */
+    lineedit le;
+    const char *ell;     /* ellipsis */
+
+    /* Layout, set by ui_layout(). */
+    int sheet_y, sheet_h, ray_y, parax_y, res_y, res_h, detail_y, status_y;
+    int numw, resw;      /* numeric column widths */
+    int too_small;
+
+    /* Spreadsheet. */
+    int top, left;       /* first row and first column on show */
+    int colx[COL_COUNT], colw[COL_COUNT]; /* screen x and width; w 0: hidden */
+
+    /* Ray selector. */
+    int ray_item;
+    double step;
+    int rayx[RAY_NITEMS], rayw[RAY_NITEMS];
+
+    /* Results. */
+    int res_top, res_left;
+
+    /* Overlays. */
+    int help_top;
+    int set_sel, set_top;
+    char **ex;
+    int nex, ex_sel, ex_top;
+
+    /* ':' history, oldest first. */
+    char *hist[HIST_MAX];
+    int nhist, hist_pos;
+} ui;
+
+/* Runs a command built from a format; returns its flags. */
+int ui_run(ui *u, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 2, 3)))
+#endif
+    ;
+
+void ui_layout(ui *u);
+/* Opens the ':' line with text. */
+void ui_prompt(ui *u, const char *text);
+
+/* Panels. */
+void sheet_draw(ui *u);
+int sheet_key(ui *u, int key);
+int sheet_click(ui *u, int y, int x, int kind);
+void sheet_follow(ui *u);
+int sheet_edit_key(ui *u, int key);
+void sheet_begin_edit(ui *u, const char *init);
+
+void ray_draw(ui *u);
+int ray_key(ui *u, int key);
+int ray_edit_key(ui *u, int key);
+int ray_click(ui *u, int x, int kind);
+int ray_quick(ui *u, int key); /* chief and marginal keys; 0 if not one */
+
+void results_draw(ui *u);
+int results_key(ui *u, int key);
+int results_click(ui *u, int y, int kind);
+
+void title_draw(ui *u);
+void status_draw(ui *u);
+
+void help_draw(ui *u);
+int help_key(ui *u, int key);
+
+void settings_draw(ui *u);
+int settings_key(ui *u, int key);
+
+void examples_open(ui *u);
+void examples_draw(ui *u);
+int examples_key(ui *u, int key);
+
+/* Text of the help screen, one line per entry; NULL ends. */
+extern const char *const ui_key_help[];
+
+#endif
