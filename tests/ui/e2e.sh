@@ -32,6 +32,8 @@ if ! command -v tmux >/dev/null 2>&1; then
 fi
 
 WORK=$(mktemp -d "${TMPDIR:-/tmp}/sg-e2e-XXXXXX")
+# Recovery files go to the scratch directory, never the user's own.
+export XDG_STATE_HOME="$WORK/state"
 SOCK=sg-test-$$
 T="tmux -L $SOCK -f /dev/null"
 cleanup() {

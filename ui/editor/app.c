@@ -109,6 +109,9 @@ void status_draw(ui *u)
     if (u->mode == MODE_CONFIRM) {
         const char *q = e->confirm == CONFIRM_QUIT
                             ? "Unsaved changes. Save before quitting? (y)es (n)o (c)ancel"
+                        : e->confirm == CONFIRM_RECOVER
+                            ? ((int)strlen(e->question) <= u->cols ? e->question
+                                                                    : e->question_short)
                             : "Unsaved changes will be lost. Continue? (y)es (n)o";
         term_text(y, 0, u->cols, T_EDIT, 1, q);
         return;
@@ -215,6 +218,19 @@ static int confirm_key(ui *u, int key)
 {
     ed *e = u->e;
     int kind = e->confirm, f;
+    if (kind == CONFIRM_RECOVER) {
+        const char *run = key == 'y' || key == 'Y'   ? e->pending
+                          : key == 'n' || key == 'N' ? e->pending2
+                                                     : NULL;
+        if (!run && key != 'l' && key != 'L' && key != K_ESC)
+            return ED_HANDLED;
+        e->confirm = CONFIRM_NONE;
+        u->mode = MODE_NORMAL;
+        if (run)
+            return cmd_exec(e, run);
+        ed_msg(e, 0, "the recovery file is kept for later: :recover lists it");
+        return ED_HANDLED | ED_REDRAW;
+    }
     if (key == K_ESC || key == 'c' || key == 'C' || (kind == CONFIRM_DISCARD && (key == 'n' || key == 'N'))) {
         e->confirm = CONFIRM_NONE;
         u->mode = MODE_NORMAL;
@@ -364,7 +380,7 @@ static int loop(ui *u)
 {
     int redraw = 1;
     for (;;) {
-        int key, f;
+        int key, f, due;
         if (u->e->dirty) {
             ed_recompute(u->e);
             redraw = 1;
@@ -372,8 +388,10 @@ static int loop(ui *u)
         if (redraw)
             draw(u);
         redraw = 0;
-        /* The timeout only bounds how long a signal can go unnoticed. */
-        key = term_key(500);
+        /* The timeout bounds how long a signal can go unnoticed, and wakes
+         * the loop when a delayed recovery write falls due. */
+        due = rec_sync(u->e, 0);
+        key = term_key(due >= 0 && due < 500 ? due : 500);
         if (key == K_NONE)
             continue;
         redraw = 1;
@@ -385,6 +403,9 @@ static int loop(ui *u)
                     return 0;
                 continue;
             }
+            /* Not from the handler: here writing the file is safe.  It
+             * already holds every change unless one is still delayed. */
+            rec_sync(u->e, 1);
             return 128 + sig;
         }
         f = dispatch(u, key);
@@ -398,8 +419,78 @@ static void usage(FILE *f)
     fputs("Usage: sagitta [edit] [FILE.json] [--batch SCRIPT]\n"
           "The lens data editor.  Without --batch it needs a terminal; press F1 or ?\n"
           "inside for every key.  --batch runs the commands in SCRIPT (one a line,\n"
-          "'-' for standard input) without a screen and stops at the first error.\n",
+          "'-' for standard input) without a screen and stops at the first error.\n"
+          "\n"
+          "While a design has unsaved changes the editor keeps a copy in\n"
+          "$XDG_STATE_HOME/sagitta/ (default ~/.local/state/sagitta/), removed when the\n"
+          "design is saved or the editor quits normally.  After a crash, a signal or a\n"
+          "lost terminal the next start offers to recover it; --batch only warns.\n",
           f);
+}
+
+/* Looks for recovery files that editors which died left for this design
+ * (without a file: for any design).  Batch mode warns and goes on; the
+ * screen asks about the newest one. */
+static void offer_recovery(ed *e, const char *file, int batch)
+{
+    char dir[REC_PATH], abs[REC_PATH], when[64], q[ED_LINE / 2];
+    rec_info *v;
+    int n, i;
+    if (rec_dir(dir, sizeof dir) != 0 || (file && rec_abspath(file, abs, sizeof abs) != 0))
+        return;
+    if (!batch)
+        rec_sweep_temps(dir);
+    n = rec_orphans(dir, file ? abs : NULL, NULL, &v);
+    if (n <= 0)
+        return;
+    if (batch) {
+        for (i = 0; i < n && i < 5; i++) {
+            rec_time_text(v[i].time, when, sizeof when);
+            fprintf(stderr,
+                    "sagitta edit: warning: %s holds unsaved changes to %s from %s; "
+                    "run the editor without --batch to recover them\n",
+                    v[i].file, v[i].path[0] ? v[i].path : "an untitled design", when);
+        }
+        if (n > 5)
+            fprintf(stderr, "sagitta edit: warning: %d more recovery files in %s\n", n - 5, dir);
+    } else {
+        const char *name = file ? file : v[0].path[0] ? v[0].path : "an untitled design";
+        /* The answers must fit on the status line, so a long name shrinks
+         * to its last component. */
+        if (strlen(name) > 60 && strrchr(name, '/'))
+            name = strrchr(name, '/') + 1;
+        rec_time_text(v[0].time, when, sizeof when);
+        snprintf(e->question, sizeof e->question,
+                 "Recover unsaved changes to %.300s from %s? [y]es / [n]o (discard) / [l]ater%s",
+                 name, when, n > 1 ? "  (more: :recover)" : "");
+        snprintf(e->question_short, sizeof e->question_short,
+                 "Recover unsaved changes? [y]es / [n]o (discard) / [l]ater: %.300s, %s", name,
+                 when);
+        cmd_quote(v[0].file, q, sizeof q);
+        snprintf(e->pending, sizeof e->pending, "recover! %s", q);
+        snprintf(e->pending2, sizeof e->pending2, "recover delete %s", q);
+        e->confirm = CONFIRM_RECOVER;
+    }
+    free(v);
+}
+
+/* A design that cannot be opened may still have a recovery file. */
+static void note_recovery(const char *file)
+{
+    char dir[REC_PATH], abs[REC_PATH], when[64];
+    rec_info *v;
+    int n;
+    if (rec_dir(dir, sizeof dir) != 0 || rec_abspath(file, abs, sizeof abs) != 0)
+        return;
+    n = rec_orphans(dir, abs, NULL, &v);
+    if (n > 0) {
+        rec_time_text(v[0].time, when, sizeof when);
+        fprintf(stderr,
+                "sagitta edit: %s holds unsaved changes to it from %s; start the editor "
+                "without a file and type :recover to load them\n",
+                v[0].file, when);
+    }
+    free(v);
 }
 
 int sg_editor_main(int argc, char **argv)
@@ -448,12 +539,17 @@ int sg_editor_main(int argc, char **argv)
             sg_diag_clear(&d);
             if (doc_load(&e.doc, file, &d) != SG_EOK) {
                 fprintf(stderr, "sagitta edit: %s\n", d.msg[0] ? d.msg : sg_strerror(d.code));
+                note_recovery(file);
                 ed_free(&e);
                 return 1;
             }
             e.wave = e.doc.sys->primary_wave;
         }
     }
+    /* A script is its own record of the edits, so batch mode writes no
+     * recovery file; it only warns about those it finds. */
+    e.rec.enabled = !script;
+    offer_recovery(&e, file, script != NULL);
     if (script) {
         status = ed_batch(&e, script);
         ed_free(&e);
@@ -481,8 +577,13 @@ int sg_editor_main(int argc, char **argv)
     }
     u.ell = term_utf8() ? "\xe2\x80\xa6" : "~";
     e.col = COL_RADIUS;
+    if (e.confirm == CONFIRM_RECOVER)
+        u.mode = MODE_CONFIRM;
     status = loop(&u);
     term_end();
+    /* Quitting is a clean end; a signal keeps the file for the next start. */
+    if (status == 0)
+        rec_finish(&e);
     for (i = 0; i < u.nhist; i++)
         free(u.hist[i]);
     if (u.ex)

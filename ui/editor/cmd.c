@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <unistd.h>
 
 #include "../args.h"
 #include "../report.h"
@@ -722,13 +723,32 @@ static int opened(ed *e, const char *what)
     return OK_VIEW;
 }
 
+/* Says so when an editor that died left unsaved changes to this file. */
+static void note_orphans(ed *e, const char *path)
+{
+    char dir[REC_PATH], abs[REC_PATH], when[64];
+    rec_info *v;
+    size_t len;
+    if (rec_dir(dir, sizeof dir) != 0 || rec_abspath(path, abs, sizeof abs) != 0 ||
+        rec_orphans(dir, abs, e->rec.file[0] ? e->rec.file : NULL, &v) <= 0)
+        return;
+    rec_time_text(v[0].time, when, sizeof when);
+    len = strlen(e->msg);
+    snprintf(e->msg + len, sizeof e->msg - len,
+             "; unsaved changes to it from %s are in a recovery file (:recover)", when);
+    free(v);
+}
+
 static int open_path(ed *e, const char *path)
 {
     sg_diag d;
+    int f;
     sg_diag_clear(&d);
     if (doc_load(&e->doc, path, &d) != SG_EOK)
         return fail(e, "%s", d.msg[0] ? d.msg : sg_strerror(d.code));
-    return opened(e, path);
+    f = opened(e, path);
+    note_orphans(e, path);
+    return f;
 }
 
 static int c_open(ed *e, args *a, int bang)
@@ -802,8 +822,11 @@ static int save_as(ed *e, const char *path)
 {
     sg_diag d;
     sg_diag_clear(&d);
+    /* The engine writes a temporary file and renames it, so a failure
+     * leaves the old file whole; the document stays as it was, modified. */
     if (doc_save(&e->doc, path, &d) != SG_EOK)
-        return fail(e, "%s", d.msg[0] ? d.msg : sg_strerror(d.code));
+        return fail(e, "not saved: %s", d.msg[0] ? d.msg : sg_strerror(d.code));
+    rec_saved(e);
     ed_msg(e, 0, "saved %s", doc_path(&e->doc));
     return ED_HANDLED | ED_REDRAW;
 }
@@ -828,6 +851,8 @@ static int c_save(ed *e, args *a)
 static int c_quit(ed *e, args *a, int bang)
 {
     if (bang || !doc_modified(&e->doc)) {
+        /* A clean end: nothing is left to recover. */
+        rec_finish(e);
         e->quit = 1;
         return ED_HANDLED | ED_QUIT;
     }
@@ -843,8 +868,133 @@ static int c_wq(ed *e, args *a)
     int f = c_save(e, a);
     if (f & (ED_ERROR | ED_PROMPT))
         return f;
+    rec_finish(e);
     e->quit = 1;
     return f | ED_QUIT;
+}
+
+/* ------------------------------------------------------------------------
+ * Recovery files left by editors that crashed or were killed
+ * ------------------------------------------------------------------------ */
+
+/* Finds the orphan a token names: its number in the list, or its file. */
+static int pick_orphan(ed *e, const rec_info *v, int n, const char *tok)
+{
+    char want[REC_PATH], have[REC_PATH];
+    rec_info info;
+    sg_diag d;
+    int i, k;
+    if (args_int(tok, 1, INT_MAX, &k) == ARGS_OK) {
+        if (k > n)
+            return fail(e, "recover: there %s %d recovery file%s; see recover list",
+                        n == 1 ? "is" : "are", n, n == 1 ? "" : "s"), -1;
+        return k - 1;
+    }
+    for (i = 0; i < n; i++)
+        if (strcmp(v[i].file, tok) == 0)
+            return i;
+    /* The same file under another spelling (relative, through a link). */
+    if (rec_abspath(tok, want, sizeof want) == 0)
+        for (i = 0; i < n; i++)
+            if (rec_abspath(v[i].file, have, sizeof have) == 0 && strcmp(want, have) == 0)
+                return i;
+    sg_diag_clear(&d);
+    if (rec_read_file(tok, &info, NULL, &d) != SG_OK)
+        return fail(e, "recover: %s", d.msg), -1;
+    if (!info.orphan)
+        return fail(e, "recover: %s belongs to an editor still running (pid %ld%s%s)", tok,
+                    info.pid, info.host[0] ? " on " : "", info.host), -1;
+    return fail(e, "recover: %s is not in the list of recovery files", tok), -1;
+}
+
+static int c_recover(ed *e, args *a, int bang)
+{
+    const char *usage = "recover [list | N | FILE | delete N|FILE]";
+    const char *sub = a->n > 1 ? a->v[1] : "list";
+    char dir[REC_PATH], when[64];
+    rec_info *v = NULL, got;
+    sg_system *sys;
+    sg_diag d;
+    int n, i, k, flags;
+
+    if (rec_dir(dir, sizeof dir) != 0)
+        return fail(e, "recover: set XDG_STATE_HOME or HOME to say where recovery files live");
+    n = rec_orphans(dir, NULL, e->rec.file[0] ? e->rec.file : NULL, &v);
+    if (n < 0)
+        return fail(e, "recover: cannot read %s: %s", dir, strerror(errno));
+    if (strcmp(sub, "list") == 0) {
+        size_t len;
+        if (!need(e, a, 0, 1, usage)) {
+            free(v);
+            return ED_HANDLED | ED_ERROR;
+        }
+        if (n == 0) {
+            ed_msg(e, 0, "no recovery files in %s", dir);
+            free(v);
+            return ED_HANDLED | ED_REDRAW;
+        }
+        ed_msg(e, 0, "%d recovery file%s (recover N loads, recover delete N removes):", n,
+               n == 1 ? "" : "s");
+        for (i = 0; i < n; i++) {
+            rec_time_text(v[i].time, when, sizeof when);
+            if (e->batch)
+                fprintf(e->out, "%d  %s  %s  %s\n", i + 1, when,
+                        v[i].path[0] ? v[i].path : "(untitled)", v[i].file);
+            len = strlen(e->msg);
+            snprintf(e->msg + len, sizeof e->msg - len, "  %d) %s, %s", i + 1,
+                     v[i].path[0] ? v[i].path : "untitled", when);
+        }
+        free(v);
+        return ED_HANDLED | ED_REDRAW;
+    }
+    if (strcmp(sub, "delete") == 0) {
+        if (!need(e, a, 2, 2, usage) || (k = pick_orphan(e, v, n, a->v[2])) < 0) {
+            free(v);
+            return ED_HANDLED | ED_ERROR;
+        }
+        if (unlink(v[k].file) != 0) {
+            flags = fail(e, "recover: cannot delete %s: %s", v[k].file, strerror(errno));
+            free(v);
+            return flags;
+        }
+        ed_msg(e, 0, "deleted %s (unsaved changes to %s)", v[k].file,
+               v[k].path[0] ? v[k].path : "an untitled design");
+        free(v);
+        return ED_HANDLED | ED_REDRAW;
+    }
+    if (!need(e, a, 1, 1, usage) || (k = pick_orphan(e, v, n, a->v[1])) < 0) {
+        free(v);
+        return ED_HANDLED | ED_ERROR;
+    }
+    if (!may_discard(e, a, bang, &flags)) {
+        free(v);
+        return flags;
+    }
+    sys = sg_system_new();
+    if (!sys) {
+        free(v);
+        return fail(e, "out of memory");
+    }
+    sg_diag_clear(&d);
+    if (rec_read_file(v[k].file, &got, sys, &d) != SG_OK) {
+        sg_system_free(sys);
+        flags = fail(e, "recover: %s", d.msg[0] ? d.msg : sg_strerror(d.code));
+        free(v);
+        return flags;
+    }
+    /* The recovered design keeps its file name, so save writes the file it
+     * came from; it differs from that file until then. */
+    free(v);
+    doc_replace(&e->doc, sys, got.path[0] ? got.path : NULL, 1);
+    snprintf(e->rec.adopted, sizeof e->rec.adopted, "%s", got.file);
+    opened(e, "recovered");
+    rec_time_text(got.time, when, sizeof when);
+    if (got.path[0])
+        ed_msg(e, 0, "recovered unsaved changes to %s from %s; save writes them there", got.path,
+               when);
+    else
+        ed_msg(e, 0, "recovered an untitled design from %s; save FILE keeps it", when);
+    return OK_VIEW;
 }
 
 /* ------------------------------------------------------------------------
@@ -1270,6 +1420,8 @@ static int c_new0(ed *e, args *a) { return c_new(e, a, 0); }
 static int c_new1(ed *e, args *a) { return c_new(e, a, 1); }
 static int c_example0(ed *e, args *a) { return c_example(e, a, 0); }
 static int c_example1(ed *e, args *a) { return c_example(e, a, 1); }
+static int c_recover0(ed *e, args *a) { return c_recover(e, a, 0); }
+static int c_recover1(ed *e, args *a) { return c_recover(e, a, 1); }
 static int c_quit0(ed *e, args *a) { return c_quit(e, a, 0); }
 static int c_quit1(ed *e, args *a) { return c_quit(e, a, 1); }
 static int c_help(ed *e, args *a);
@@ -1295,6 +1447,9 @@ static const command commands[] = {
     {"save", "w", c_save, "save [FILE]", "save; with FILE, save as FILE"},
     {"saveas", NULL, c_save, "saveas FILE", "save under a new name"},
     {"wq", "x", c_wq, "wq [FILE]", "save and quit"},
+    {"recover", NULL, c_recover0, "recover [list | N | FILE | delete N|FILE]",
+     "list the recovery files of editors that died, load one, or delete one"},
+    {"recover!", NULL, c_recover1, "recover! N|FILE", "load a recovery file, discarding changes"},
     {"quit", "q", c_quit0, "quit", "quit (asks about unsaved changes)"},
     {"quit!", "q!", c_quit1, "quit!", "quit, discarding unsaved changes"},
     {"export", NULL, c_export, "export FILE [csv|json|text] [ray|fan N|xfan N|grid N]",
@@ -1363,7 +1518,7 @@ const char *cmd_name(int i)
     return i >= 0 && i < (int)NCOMMANDS ? commands[i].name : NULL;
 }
 
-int cmd_exec(ed *e, const char *line)
+static int exec_line(ed *e, const char *line)
 {
     args a;
     size_t i;
@@ -1378,4 +1533,13 @@ int cmd_exec(ed *e, const char *line)
             (commands[i].alias && strcmp(a.v[0], commands[i].alias) == 0))
             return commands[i].fn(e, &a);
     return fail(e, "unknown command \"%s\" (try help)", a.v[0]);
+}
+
+int cmd_exec(ed *e, const char *line)
+{
+    int f = exec_line(e, line);
+    /* Every change reaches the recovery file here, before the editor
+     * waits for the next key. */
+    rec_sync(e, 0);
+    return f;
 }

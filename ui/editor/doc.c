@@ -241,6 +241,19 @@ int doc_new(doc *d, const char *path)
     return SG_EOK;
 }
 
+void doc_replace(doc *d, sg_system *sys, const char *path, int modified)
+{
+    char *p = path ? dupstr(path) : NULL;
+    replace(d, sys);
+    /* Out of memory for the name leaves the design unnamed rather than
+     * lost: save then asks for a name. */
+    free(d->path);
+    d->path = p;
+    /* Ids start at 1, so 0 is a saved state no document ever reaches. */
+    if (modified)
+        d->saved_id = 0;
+}
+
 int doc_save(doc *d, const char *path, sg_diag *dg)
 {
     int rc;

@@ -71,8 +71,14 @@ int doc_load(doc *d, const char *path, sg_diag *dg);
 /* Replaces the document by a new design with the given file name (NULL for
  * none); the history is cleared. */
 int doc_new(doc *d, const char *path);
+/* Replaces the document by sys, which it takes over, under the file name
+ * path (NULL: none); the history is cleared.  With modified set the
+ * document counts as differing from its file (a design recovered after a
+ * crash), and no undo step leads back to an unmodified state. */
+void doc_replace(doc *d, sg_system *sys, const char *path, int modified);
 /* Saves to path (NULL: the current file name) atomically; on success the
- * document takes that name and is unmodified. */
+ * document takes that name and is unmodified.  On failure the file on disk
+ * and the document are both as they were. */
 int doc_save(doc *d, const char *path, sg_diag *dg);
 
 /* Bitwise equality of two systems (every field that a design holds). */

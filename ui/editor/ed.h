@@ -12,6 +12,7 @@
 
 #include "compute.h"
 #include "doc.h"
+#include "recover.h"
 #include "sagitta.h"
 
 /* What a command or a key handler asks the event loop to do. */
@@ -32,7 +33,8 @@ enum {
 enum {
     CONFIRM_NONE = 0,
     CONFIRM_QUIT,     /* unsaved changes: save, discard or cancel */
-    CONFIRM_DISCARD   /* unsaved changes: run ed.pending anyway? */
+    CONFIRM_DISCARD,  /* unsaved changes: run ed.pending anyway? */
+    CONFIRM_RECOVER   /* ed.question: recover (ed.pending), discard (ed.pending2) or later */
 };
 
 #define ED_MSG 1024
@@ -61,11 +63,16 @@ typedef struct ed {
     int msg_err;
     int confirm;               /* CONFIRM_* pending */
     char pending[ED_LINE];     /* command to run when confirmed */
+    char pending2[ED_LINE];    /* CONFIRM_RECOVER: the command for "no" */
+    char question[ED_MSG];     /* CONFIRM_RECOVER: the question asked */
+    char question_short[ED_MSG]; /* the same, answers first, for a narrow screen */
     char prompt_init[ED_LINE]; /* text to start the ':' line with */
 
     int batch;                 /* no screen: print to out, never ask */
     FILE *out;
     int quit;                  /* set by quit in batch mode */
+
+    recov rec;                 /* the recovery file (recover.h) */
 } ed;
 
 int ed_init(ed *e);

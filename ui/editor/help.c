@@ -3,6 +3,7 @@
 #include <string.h>
 
 #include "cmd.h"
+#include "recover.h"
 #include "term.h"
 #include "ui.h"
 
@@ -76,6 +77,17 @@ const char *const ui_key_help[] = {
     "status          OK, MISS, TIR, VIGNETTED, NOT REACHED ...",
     "dig x ...       digits agreeing with the MPFR trace (with #)",
     "",
+    "#Recovery",
+    "While the design has unsaved changes, a copy is kept up to date after every change in",
+    "  $XDG_STATE_HOME/sagitta/ (default ~/.local/state/sagitta/), one FILE-HASH-PID.sgrec",
+    "  (or untitled-PID.sgrec) per session.  Saving, or quitting with q or :quit!, removes it.",
+    "=recdir",
+    "After a crash, kill, SIGHUP, SIGTERM or a closed terminal the copy stays, and the next",
+    "  start on that file (or without a file: the newest copy of any) asks: y loads it as",
+    "  unsaved changes to the original file, n deletes it, l keeps it for later.",
+    ":recover         lists the copies left by editors that died; :recover N loads one",
+    "--batch          never asks; it prints a warning naming the copy and goes on",
+    "",
     NULL,
 };
 
@@ -95,6 +107,15 @@ static int line(int i, char *buf, size_t n)
         k++;
     if (i < k) {
         const char *s = ui_key_help[i];
+        if (strcmp(s, "=recdir") == 0) {
+            /* Where the copies go on this system, with the variables read. */
+            char dir[REC_PATH];
+            if (rec_dir(dir, sizeof dir) == 0)
+                snprintf(buf, n, "    Here: %.400s/", dir);
+            else
+                snprintf(buf, n, "    Here: nowhere, since neither XDG_STATE_HOME nor HOME is set");
+            return T_DIM;
+        }
         if (s[0] == '#') {
             snprintf(buf, n, "%s", s + 1);
             return T_HEADER;

@@ -11,10 +11,13 @@
 #include <curses.h>
 #include <langinfo.h>
 #include <locale.h>
+#include <poll.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <termios.h>
+#include <unistd.h>
 #include <wchar.h>
 
 static int active;
@@ -24,22 +27,64 @@ static int style_attr[T_NSTYLES];
 static volatile sig_atomic_t pending_signal;
 static int mouse_y, mouse_x, mouse_kind;
 
+/* What a crash needs to give the terminal back, prepared in advance so the
+ * handler only calls write() and tcsetattr(), which are async-signal-safe. */
+static struct termios saved_modes;
+static int have_modes;
+static char restore_seq[256];
+static size_t restore_len;
+
+/* SIGTERM, SIGHUP and friends only raise a flag: the event loop notices it
+ * within one key timeout, ends curses and exits in ordinary code.  The
+ * recovery file needs nothing then, being written after every change. */
 static void on_signal(int sig)
 {
     pending_signal = sig;
 }
 
-/* A crash must not leave the user's terminal in raw mode.  endwin() is not
- * async-signal-safe, but the process is about to die anyway, and a dead
- * terminal is worse than the small risk. */
+/* A crash must not leave the user's terminal in raw mode on the alternate
+ * screen. */
 static void on_fatal(int sig)
 {
     if (active) {
         active = 0;
-        endwin();
+        if (restore_len) {
+            ssize_t k = write(STDOUT_FILENO, restore_seq, restore_len);
+            (void)k;
+        }
+        if (have_modes)
+            tcsetattr(STDOUT_FILENO, TCSANOW, &saved_modes);
     }
     signal(sig, SIG_DFL);
     raise(sig);
+}
+
+static void add_restore(const char *cap)
+{
+    size_t n;
+    if (!cap || cap == (char *)-1)
+        return;
+    n = strlen(cap);
+    if (restore_len + n < sizeof restore_seq) {
+        memcpy(restore_seq + restore_len, cap, n);
+        restore_len += n;
+    }
+}
+
+/* The sequences endwin() would send: normal attributes and cursor, keypad
+ * and mouse reporting off, the main screen back. */
+static void prepare_restore(void)
+{
+    const char *xm = tigetstr("XM"), *km = tigetstr("kmous");
+    restore_len = 0;
+    add_restore(tigetstr("sgr0"));
+    add_restore(tigetstr("cnorm"));
+    add_restore(tigetstr("rmkx"));
+    if (xm && xm != (char *)-1)
+        add_restore(tiparm(xm, 0));
+    else if (km && km != (char *)-1)
+        add_restore("\033[?1000l");
+    add_restore(tigetstr("rmcup"));
 }
 
 static void install(int sig, void (*fn)(int))
@@ -90,6 +135,7 @@ int term_init(void)
      * and written with a '.' whatever LC_NUMERIC says. */
     setlocale(LC_CTYPE, "");
     utf8 = strcmp(nl_langinfo(CODESET), "UTF-8") == 0;
+    have_modes = tcgetattr(STDOUT_FILENO, &saved_modes) == 0;
     if (!newterm(NULL, stdout, stdin)) {
         fprintf(stderr, "sagitta: cannot start the terminal (TERM=%s)\n",
                 getenv("TERM") ? getenv("TERM") : "unset");
@@ -123,6 +169,7 @@ int term_init(void)
     mousemask(BUTTON1_PRESSED | BUTTON1_DOUBLE_CLICKED | BUTTON4_PRESSED | BUTTON5_PRESSED,
               NULL);
     mouseinterval(250);
+    prepare_restore();
     install(SIGINT, on_signal);
     install(SIGTERM, on_signal);
     install(SIGHUP, on_signal);
@@ -275,6 +322,15 @@ static int map_code(wint_t c)
     }
 }
 
+static int hung_up(void)
+{
+    struct pollfd p;
+    p.fd = STDIN_FILENO;
+    p.events = POLLIN;
+    p.revents = 0;
+    return poll(&p, 1, 0) > 0 && (p.revents & (POLLHUP | POLLERR | POLLNVAL)) != 0;
+}
+
 int term_key(int timeout_ms)
 {
     wint_t c;
@@ -285,8 +341,15 @@ int term_key(int timeout_ms)
     r = get_wch(&c);
     if (pending_signal)
         return K_SIGNAL;
-    if (r == ERR)
+    if (r == ERR) {
+        /* A terminal that went away without a SIGHUP reaching us would
+         * otherwise make every read fail at once, forever. */
+        if (hung_up()) {
+            pending_signal = SIGHUP;
+            return K_SIGNAL;
+        }
         return K_NONE;
+    }
     if (r == KEY_CODE_YES)
         return map_code(c);
     switch (c) {
