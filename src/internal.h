@@ -14,6 +14,10 @@
  * unknown formula.  Every coefficient is taken exactly as its double. */
 int sg_glass_index_mpfr(const sg_glass *g, mpfr_t out, const mpfr_t um);
 
+/* sg_system_validate for functions that validate on the caller's behalf:
+ * the error, if any, without repeating the warnings. */
+int sg_system_check(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
+
 /* Copies at most n-1 bytes and always terminates. */
 void sg_strlcpy(char *dst, const char *src, size_t n);
 

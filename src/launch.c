@@ -455,6 +455,13 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
         t->ln.epr = dd_from_mpfr(v, tmp);
         t->ln.stop_r = dd_from_mpfr(p.stop_r, tmp);
         t->ln.pimg_slope = dd_from_mpfr(p.pimg_slope, tmp);
+        if ((sys->field_type == SG_FIELD_PARAX_IMAGE_HEIGHT ||
+             sys->field_type == SG_FIELD_REAL_IMAGE_HEIGHT) &&
+            !(t->ln.pimg_slope.hi != 0.0 && isfinite(t->ln.pimg_slope.hi)))
+            rc = sg_diag_set(d, SG_ENONPHYS,
+                             "fields: image heights cannot define fields in this system: the "
+                             "paraxial chief ray meets the image at height %g whatever the "
+                             "field", t->ln.pimg_slope.hi);
         /* Field scales: the largest radius, or the largest |x| and |y|. */
         mpfr_set_zero(fx, 1);
         mpfr_set_zero(fy, 1);

@@ -383,7 +383,7 @@ int sg_paraxial_compute(const sg_system *sys, const sg_catalog *cat, int wave,
     mpfr_t *idx;
     sg_parax_mp p;
     int i, rc;
-    rc = sg_system_validate(sys, cat, d);
+    rc = sg_system_check(sys, cat, d);
     if (rc != SG_OK)
         return rc;
     if (wave < 0)

@@ -272,6 +272,19 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
     return SG_OK;
 }
 
+int sg_system_check(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
+{
+    /* The caller validated the system already and has its warnings; here
+     * only an error matters, so warnings go to a scratch record. */
+    sg_diag scratch;
+    int rc;
+    sg_diag_clear(&scratch);
+    rc = sg_system_validate(sys, cat, &scratch);
+    if (rc != SG_OK)
+        sg_diag_set(d, rc, "%s", scratch.msg);
+    return rc;
+}
+
 double sg_digits(double a, double b)
 {
     double e;

@@ -444,8 +444,14 @@ static int precise_bend(const sg_sprep *s, sg_pray *r)
         k = kb.hi / gg.hi;
         J = s->mu.hi * fabs(s->mu.hi * cosI_d - copysign(sqrt(fmax(k, 0.0)), cosI_d)) /
             sqrt(fmax(k, 1e-300));
-        r->eD = (s->mu.hi + J) * r->eD + (J + fabs(gam.hi) * gn) * dN +
-                60.0 * DD_U * (s->mu.hi + J + 1.0);
+        /* A direction error perpendicular to the ray reaches gamma only
+         * through N.dd, at most sin I times its size; the same holds for
+         * d.dN.  At normal incidence an error just scales by mu. */
+        {
+            double sinI = sqrt(fmax(0.0, 1.0 - cosI_d * cosI_d));
+            r->eD = (s->mu.hi + J * sinI) * r->eD + (J * sinI + fabs(gam.hi) * gn) * dN +
+                    60.0 * DD_U * (s->mu.hi + J + 1.0);
+        }
     }
     r->d = nd;
     return SG_OK;
@@ -590,6 +596,12 @@ int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surfa
                 return rc;
             }
         }
+        /* A bound that overflowed stays infinite rather than turning into
+         * NaN through a product with zero. */
+        if (isnan(r->eP))
+            r->eP = INFINITY;
+        if (isnan(r->eD))
+            r->eD = INFINITY;
         o->l = r->d.x.hi;
         o->m = r->d.y.hi;
         o->n = r->d.z.hi;
@@ -602,7 +614,9 @@ int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surfa
  * Classic method.
  * ------------------------------------------------------------------------ */
 
-static int classic_bend(const sg_sprep *s, const double p[3], double d[3])
+/* Refracts or reflects d at p; *gain is how much a direction error grows
+ * (see precise_bend). */
+static int classic_bend(const sg_sprep *s, const double p[3], double d[3], double *gain)
 {
     double g[3], gg, cosI, nd[3], len;
     len = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
@@ -619,12 +633,14 @@ static int classic_bend(const sg_sprep *s, const double p[3], double d[3])
         nd[0] = d[0] - 2.0 * cosI * g[0];
         nd[1] = d[1] - 2.0 * cosI * g[1];
         nd[2] = d[2] - 2.0 * cosI * g[2];
+        *gain = 1.0;
     } else {
         double mu = s->mu.hi;
         double k = 1.0 - mu * mu * (1.0 - cosI * cosI);
-        double gam;
+        double gam, sinI = sqrt(fmax(0.0, 1.0 - cosI * cosI));
         if (k < 0.0)
             return SG_ETIR;
+        *gain = mu + mu * fabs(mu * fabs(cosI) - sqrt(k)) / sqrt(fmax(k, 1e-300)) * sinI;
         gam = copysign(sqrt(k), cosI) - mu * cosI;
         nd[0] = mu * d[0] + gam * g[0];
         nd[1] = mu * d[1] + gam * g[1];
@@ -725,6 +741,8 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
         o->z = z - s->zg;
         /* Converting to the local frame rounds once more. */
         eP += U53 * fabs(o->z);
+        if (isnan(eP))
+            eP = INFINITY;
         o->path = fabs(tt) * dlen;
         o->residual = sg_sprep_sag_resid(s, o->x, o->y, o->z);
         o->error_bound = bound_up(eP);
@@ -742,13 +760,14 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
                 slope_d(s, x * x + y * y, &w, &dw);
                 gsens = fabs(w) + 2.0 * dw;
             }
-            rc = classic_bend(s, pl, d);
+            rc = classic_bend(s, pl, d, &dn);
             if (rc != SG_OK) {
                 sg_fail_rest(out, i, t->n, rc);
                 return rc;
             }
-            dn = s->mirror ? 1.0 : 2.0 * s->mu.hi + 1.0;
             eD = dn * (eD / (dlen > 0 ? dlen : 1.0)) + 4.0 * gsens * eP + 24.0 * U53 * (s->mu.hi + 2.0);
+            if (isnan(eD))
+                eD = INFINITY;
         }
         o->l = d[0];
         o->m = d[1];
@@ -873,7 +892,7 @@ sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
     sg_tracer *t;
     mpfr_t *idx = NULL;
     int i, rc, n;
-    rc = sg_system_validate(sys, cat, d);
+    rc = sg_system_check(sys, cat, d);
     if (rc != SG_OK)
         return NULL;
     t = calloc(1, sizeof *t);

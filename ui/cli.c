@@ -13,10 +13,21 @@
 
 /* ---------------------------------------------------------------- messages */
 
+/* Messages quote names and values from files, which may hold control
+ * bytes; written raw they could drive the user's terminal, so they are
+ * shown as \xNN instead. */
 static void vmsg(const char *prefix, const char *fmt, va_list ap)
 {
+    char buf[2048];
+    const unsigned char *p;
     fputs(prefix, stderr);
-    vfprintf(stderr, fmt, ap);
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    for (p = (const unsigned char *)buf; *p; p++) {
+        if (*p < 0x20 || *p == 0x7f)
+            fprintf(stderr, "\\x%02x", *p);
+        else
+            fputc(*p, stderr);
+    }
     fputc('\n', stderr);
 }
 
@@ -191,6 +202,7 @@ int cli_exit_for(int err)
     case SG_ENONPHYS:
     case SG_EUNSUPPORTED:
     case SG_EWAVERANGE:
+    case SG_EAIM: /* the tracer could not size the stop for aiming */
         return CLI_EXIT_DESIGN;
     default:
         return CLI_EXIT_INTERNAL;
@@ -249,6 +261,10 @@ int cli_load_design(const char *path, sg_catalog **catp, sg_system **sysp)
     if (rc != SG_OK) {
         print_diag(path, &d, rc);
         cli_design_free(cat, sys);
+        /* A file that parses but describes an untraceable system (too few
+         * surfaces, no stop, two stops) is a design error, as documented. */
+        if (rc == SG_ENOSYS || rc == SG_ENOSTOP || rc == SG_ETWOSTOPS)
+            return CLI_EXIT_DESIGN;
         return rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_FILE;
     }
     cli_print_warnings(&d, path);
