@@ -189,19 +189,16 @@ static int land_classic(sg_tracer *t, const osp *o, const dd q[2], dd at[2], dou
     return rc;
 }
 
-/* Solves land(Q) = target.  Q starts at the aim-off point.  The Jacobian
- * comes from central differences with a step far above rounding and far
- * below the curvature of the landing map, which is enough for Newton: its
- * own error only slows the last digits, and the residual, evaluated in
- * full precision, decides when to stop. */
-static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
-                      const dd target[2], sg_ray_surface *scratch)
+/* The landing map's Jacobian at Q by central differences, with a step far
+ * above rounding and far below the map's curvature: its own error only
+ * slows Newton's last digits, and the residual, evaluated in full
+ * precision, decides when to stop. */
+static int fd_jacobian(sg_tracer *t, land_fn land, const osp *o, const dd q[2],
+                       double J[2][2], sg_ray_surface *scratch)
 {
-    double scale = fmax(t->ln.stop_r.hi, 1e-300);
     double h = 1e-6 * fmax(t->ln.epr.hi, fmax(fabs(q[0].hi), fabs(q[1].hi)));
-    double J[2][2], det, best = INFINITY, tol = t->o.aim_rtol * scale, noise = 0.0;
-    dd at[2], res[2];
-    int it, k, rc;
+    double noise, det;
+    int k, rc;
     for (k = 0; k < 2; k++) {
         dd qp[2] = {q[0], q[1]}, qm[2] = {q[0], q[1]}, ap[2], am[2];
         qp[k] = dd_add_d(qp[k], h);
@@ -216,8 +213,27 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
         J[1][k] = (ap[1].hi - am[1].hi) / (2.0 * h);
     }
     det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
-    if (!(fabs(det) > 0.0) || !isfinite(det))
-        return SG_EAIM;
+    return fabs(det) > 0.0 && isfinite(det) ? SG_OK : SG_EAIM;
+}
+
+/* Solves land(Q) = target by Newton, from Q.  J0, when given, is the
+ * field's Jacobian at its chief ray: most rays converge with it, and a ray
+ * for which it stops helping gets its own, so the result depends on the
+ * ray alone, never on which rays came before. */
+static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
+                      const dd target[2], const double (*J0)[2], sg_ray_surface *scratch)
+{
+    double scale = fmax(t->ln.stop_r.hi, 1e-300);
+    double J[2][2], det, best = INFINITY, tol = t->o.aim_rtol * scale, noise = 0.0;
+    dd at[2], res[2];
+    int it, rc, own = J0 == NULL;
+    if (own) {
+        if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
+            return SG_EAIM;
+    } else {
+        memcpy(J, J0, sizeof J);
+    }
+    det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
     for (it = 0; it < t->o.aim_max_iter; it++) {
         double r0, r1, dx, dy, nr;
         rc = land(t, o, q, at, &noise, scratch);
@@ -231,6 +247,13 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
          * is noisier than the tolerance succeeds within its own noise. */
         if (nr == 0.0 || (nr <= tol + noise && !(nr < 0.5 * best)))
             return SG_OK;
+        if (!own && !(nr < 0.5 * best)) {
+            /* The borrowed Jacobian has stopped helping this ray. */
+            if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
+                return SG_EAIM;
+            det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+            own = 1;
+        }
         best = fmin(best, nr);
         r0 = res[0].hi + res[0].lo;
         r1 = res[1].hi + res[1].lo;
@@ -248,8 +271,10 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
  * Fields.
  * ------------------------------------------------------------------------ */
 
+/* Q for pupil point (px, py), aimed when the system asks.  With cache set,
+ * o is the tracer's current field and its chief-ray Jacobian is kept. */
 static int launch_q(sg_tracer *t, land_fn land, const osp *o, double px, double py,
-                    dd q[2], sg_ray_surface *scratch)
+                    dd q[2], int cache, sg_ray_surface *scratch)
 {
     int clip, rc;
     q_aim_off(t, o, px, py, q);
@@ -262,7 +287,16 @@ static int launch_q(sg_tracer *t, land_fn land, const osp *o, double px, double 
          * final trace applies them. */
         clip = t->o.clip;
         t->o.clip = 0;
-        rc = aim_newton(t, land, o, q, target, scratch);
+        rc = SG_OK;
+        if (cache && !t->have_aimJ) {
+            dd qc[2];
+            q_aim_off(t, o, 0.0, 0.0, qc);
+            rc = fd_jacobian(t, land, o, qc, t->aimJ, scratch);
+            t->have_aimJ = rc == SG_OK;
+        }
+        if (rc == SG_OK)
+            rc = aim_newton(t, land, o, q, target,
+                            cache ? (const double (*)[2])t->aimJ : NULL, scratch);
         t->o.clip = clip;
         if (rc != SG_OK)
             return SG_EAIM;
@@ -277,7 +311,7 @@ static int chief_on_image(sg_tracer *t, land_fn land, const dd v[2], osp *o, dou
     dd q[2];
     int last = t->n - 1, rc;
     osp_from_values(t, v[0], v[1], 0, o);
-    if (launch_q(t, land, o, 0, 0, q, scratch) != SG_OK)
+    if (launch_q(t, land, o, 0, 0, q, 0, scratch) != SG_OK)
         return SG_EAIM;
     if (t->o.method == SG_METHOD_CLASSIC) {
         double S[3], D[3];
@@ -359,6 +393,7 @@ static int field_cached(sg_tracer *t, land_fn land, double hx, double hy, osp *o
                         sg_ray_surface *out)
 {
     if (!t->have_field || t->last_hx != hx || t->last_hy != hy) {
+        t->have_aimJ = 0;
         if (field_osp(t, land, hx, hy, o, t->scratch) != SG_OK) {
             t->have_field = 0;
             sg_fail_rest(out, 0, t->n, SG_EAIM);
@@ -366,6 +401,7 @@ static int field_cached(sg_tracer *t, land_fn land, double hx, double hy, osp *o
         }
         t->field = *o;
         t->have_field = 1;
+        t->have_aimJ = 0;
         t->last_hx = hx;
         t->last_hy = hy;
     }
@@ -382,7 +418,7 @@ int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
     osp o;
     if (field_cached(t, land_precise, hx, hy, &o, out) != SG_OK)
         return SG_EAIM;
-    if (launch_q(t, land_precise, &o, px, py, q, t->scratch) != SG_OK) {
+    if (launch_q(t, land_precise, &o, px, py, q, 1, t->scratch) != SG_OK) {
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;
     }
@@ -399,7 +435,7 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
     osp o;
     if (field_cached(t, land_classic, hx, hy, &o, out) != SG_OK)
         return SG_EAIM;
-    if (launch_q(t, land_classic, &o, px, py, q, t->scratch) != SG_OK) {
+    if (launch_q(t, land_classic, &o, px, py, q, 1, t->scratch) != SG_OK) {
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;
     }

@@ -21,6 +21,7 @@
  */
 #include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -64,14 +65,23 @@ void sg_trace_opts_init(sg_trace_opts *o)
     o->aim_rtol = 1e-13;
 }
 
+/* Spacing of doubles at |x|, from its exponent bits (no libm call). */
 static double ulp_of(double x)
 {
+    uint64_t b;
+    int e;
     x = fabs(x);
     if (!(x < DBL_MAX))
         return x;
     if (x < DBL_MIN)
         return DBL_TRUE_MIN;
-    return ldexp(1.0, ilogb(x) - (DBL_MANT_DIG - 1));
+    memcpy(&b, &x, sizeof b);
+    e = (int)(b >> 52);
+    b = (uint64_t)(e - 52) << 52;
+    if (e <= 52)
+        return ldexp(1.0, e - 1075);
+    memcpy(&x, &b, sizeof x);
+    return x;
 }
 
 /* A bound computed in floating point must not round down past the error

@@ -62,6 +62,8 @@ struct sg_tracer {
     int have_field;
     double last_hx, last_hy;
     osp field;
+    int have_aimJ;     /* aimJ belongs to the current field */
+    double aimJ[2][2]; /* the field's landing Jacobian at its chief ray */
     sg_ray_surface *scratch; /* nsurf entries for aiming traces */
     const sg_catalog *cat;   /* must outlive the tracer */
     sg_mpfr_ctx *mp;   /* only for the mpfr method */
