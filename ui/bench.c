@@ -43,7 +43,6 @@ typedef struct stat3 {
 
 /* One throughput measurement: a method, a thread count, a ray-set size. */
 typedef struct tp_cell {
-    int done;         /* measured */
     int rc;           /* sg_trace_batch's return */
     char msg[SG_DIAG_MSG];
     int threads;      /* threads used */
@@ -384,7 +383,6 @@ static void bench_size(const bench_cfg *cfg, const sg_system *sys, const sg_cata
             double *rs = sec[m][h];
             double work;
             int i;
-            c->done = 1;
             c->threads = h == 0 ? 1 : cfg->nthr_all;
             if ((size_t)c->threads > nray)
                 c->threads = (int)nray;
