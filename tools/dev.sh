@@ -15,7 +15,7 @@ cd "$here"
 build=${BUILD_DIR:-build}
 
 packages="gcc meson ninja-build pkg-config libmpfr-dev libgmp-dev libcjson-dev \
-libcmocka-dev libncurses-dev tmux python3"
+libcmocka-dev libncurses-dev tmux python3 clang libclang-rt-14-dev valgrind"
 
 deps() {
     missing=""
