@@ -226,8 +226,8 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
     double scale = fmax(t->ln.stop_r.hi, 1e-300);
     double J[2][2], det, best = INFINITY, tol = t->o.aim_rtol * scale, noise = 0.0;
     dd at[2], res[2];
-    int it, rc, own = J0 == NULL;
-    if (own) {
+    int it, rc;
+    if (J0 == NULL) {
         if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
             return SG_EAIM;
     } else {
@@ -247,12 +247,13 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
          * is noisier than the tolerance succeeds within its own noise. */
         if (nr == 0.0 || (nr <= tol + noise && !(nr < 0.5 * best)))
             return SG_OK;
-        if (!own && !(nr < 0.5 * best)) {
-            /* The borrowed Jacobian has stopped helping this ray. */
+        if (!(nr < 0.5 * best)) {
+            /* The Jacobian has stopped helping this ray (a borrowed one, or
+             * its own near a turning point of the landing map): take a
+             * fresh one here. */
             if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
                 return SG_EAIM;
             det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
-            own = 1;
         }
         best = fmin(best, nr);
         r0 = res[0].hi + res[0].lo;

@@ -151,6 +151,15 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
         goto out;
     }
     mpfr_div(o->enp, B, A, MPFR_RNDN);
+    if (!inf_obj) {
+        mpfr_add(t1, o->enp, T0, MPFR_RNDN);
+        if (mpfr_zero_p(t1)) {
+            rc = sg_diag_set(d, SG_ENONPHYS,
+                             "the entrance pupil lies on the object surface, so no ray "
+                             "from an object point can be aimed through it");
+            goto out;
+        }
+    }
 
     /* EFL and BFL from a unit parallel ray. */
     mpfr_set_ui(r.y, 1, MPFR_RNDN);

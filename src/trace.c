@@ -753,7 +753,9 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
         eP += U53 * fabs(o->z);
         if (isnan(eP))
             eP = INFINITY;
-        o->path = fabs(tt) * dlen;
+        /* Signed, as in the other methods: negative for a surface behind
+         * the ray's start. */
+        o->path = tt * dlen;
         o->residual = sg_sprep_sag_resid(s, o->x, o->y, o->z);
         o->error_bound = bound_up(eP);
         o->status = SG_OK;

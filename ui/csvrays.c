@@ -299,6 +299,13 @@ int csvrays_read(const char *path, sg_ray_kind *kind, sg_ray_in **rays,
         return sg_diag_set(d, SG_EIO, "%s: %s", name, strerror(errno));
     for (;;) {
         size_t got;
+        /* A ray file has a limit like a design does, so that /dev/zero or a
+         * runaway pipe is refused instead of exhausting memory. */
+        if (len > CSVRAYS_MAX_BYTES) {
+            rc = sg_diag_set(d, SG_ERANGE, "%s: larger than %d MiB; split the rays into "
+                             "several files", name, (int)(CSVRAYS_MAX_BYTES >> 20));
+            goto done;
+        }
         if (cap - len < 65536) {
             size_t ncap = cap ? 2 * cap : 65536;
             char *nb;

@@ -23,6 +23,9 @@ int csvrays_parse(const char *text, size_t len, const char *name,
 
 /* Reads and parses a file; "-" reads standard input.  Adds SG_EIO, with a
  * message naming the file, to the codes above. */
+/* Largest ray file read: about 5 million rays at full precision. */
+#define CSVRAYS_MAX_BYTES ((size_t)1 << 30)
+
 int csvrays_read(const char *path, sg_ray_kind *kind, sg_ray_in **rays,
                  size_t *nray, sg_diag *d);
 
