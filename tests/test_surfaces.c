@@ -149,7 +149,8 @@ static int mtruth(const scase *c, const double S[3], const double D[3], const do
             mpfr_sub(Fp, Fp, u, MPFR_RNDN);
             mpfr_div(u, F, Fp, MPFR_RNDN);
             mpfr_sub(tt, tt, u, MPFR_RNDN);
-            if (mpfr_zero_p(u) || mpfr_zero_p(tt) || mpfr_get_exp(u) < mpfr_get_exp(tt) - PREC + 8)
+            if (!mpfr_regular_p(u) || !mpfr_regular_p(tt) ||
+                mpfr_get_exp(u) < mpfr_get_exp(tt) - PREC + 8)
                 break;
         }
         double pl[3];
