@@ -114,7 +114,9 @@ wait_gone() {
 
 # Waits up to 5 s for process $1 to be gone (a zombie counts as gone).
 wait_dead() {
-    n=50
+    # Up to 20 s: under AddressSanitizer the leak check at exit alone can
+    # take seconds on a loaded machine.
+    n=200
     while [ "$n" -gt 0 ]; do
         if ! kill -0 "$1" 2>/dev/null; then return 0; fi
         case $(sed 's/.*) \(.\).*/\1/' "/proc/$1/stat" 2>/dev/null) in Z | X) return 0 ;; esac
