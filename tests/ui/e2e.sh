@@ -36,8 +36,16 @@ WORK=$(mktemp -d "${TMPDIR:-/tmp}/sg-e2e-XXXXXX")
 export XDG_STATE_HOME="$WORK/state"
 SOCK=sg-test-$$
 T="tmux -L $SOCK -f /dev/null"
+# Under AddressSanitizer, LeakSanitizer's stop-the-world tracer can
+# deadlock at exit in a process whose terminal has just hung up, leaving the
+# editor spinning; the editor's leaks are checked outside tmux instead.
+ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
+export ASAN_OPTIONS
+
 cleanup() {
     $T kill-server >/dev/null 2>&1
+    # No editor this script started may outlive it.
+    [ -f "$WORK/started" ] && xargs kill -9 <"$WORK/started" >/dev/null 2>&1
     rm -rf "$WORK"
 }
 trap cleanup EXIT
@@ -293,6 +301,7 @@ fi
 
 # 10. SIGTERM ends it with the terminal restored.
 CHILD=$(cat "$WORK/pid" 2>/dev/null)
+[ -n "$CHILD" ] && echo "$CHILD" >>"$WORK/started"
 if [ -n "$CHILD" ]; then
     kill -TERM "$CHILD" 2>/dev/null
     if wait_for "EXITED 143" 5 && wait_line icanon; then

@@ -40,8 +40,16 @@ export XDG_STATE_HOME="$WORK/state"
 RECDIR=$XDG_STATE_HOME/sagitta
 SOCK=sg-rec-$$
 T="tmux -L $SOCK -f /dev/null"
+# Under AddressSanitizer, LeakSanitizer's stop-the-world tracer can
+# deadlock at exit in a process whose terminal has just hung up, leaving the
+# editor spinning; the editor's leaks are checked outside tmux instead.
+ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
+export ASAN_OPTIONS
+
 cleanup() {
     $T kill-server >/dev/null 2>&1
+    # No editor this script started may outlive it.
+    [ -f "$WORK/started" ] && xargs kill -9 <"$WORK/started" >/dev/null 2>&1
     rm -rf "$WORK"
 }
 trap cleanup EXIT
@@ -168,6 +176,7 @@ start() {
     n=50
     while [ ! -s "$WORK/pid" ] && [ "$n" -gt 0 ]; do sleep 0.1; n=$((n - 1)); done
     PID=$(cat "$WORK/pid" 2>/dev/null)
+    [ -n "$PID" ] && echo "$PID" >>"$WORK/started"
 }
 
 # The line of surface 3 in the spreadsheet shows radius $1.
