@@ -6,6 +6,9 @@
  * the shortest %.Ng form that reads back to the same double, because a design
  * must survive any number of load/save cycles bit for bit.
  */
+/* realpath() is XSI, beyond the POSIX base the build asks for. */
+#define _XOPEN_SOURCE 700
+
 #include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
@@ -1269,8 +1272,9 @@ static void sync_parent_dir(const char *path)
 
 int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
 {
-    char *text, *tmp;
-    size_t len;
+    char *text, *tmp, *resolved = NULL;
+    const char *target, *slash;
+    size_t len, dirlen;
     struct stat st;
     FILE *f;
     int fd, e, rc;
@@ -1281,22 +1285,37 @@ int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
     if (!text)
         return rc;
     len = strlen(text);
-    tmp = malloc(strlen(path) + 8);
+    /* Saving through a symbolic link writes the file it points at; renaming
+     * over the link itself would replace it with a plain file. */
+    target = path;
+    if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
+        resolved = realpath(path, NULL);
+        if (resolved)
+            target = resolved;
+    }
+    /* The temporary file is a short hidden name in the target's directory,
+     * so even a name at the file system's length limit can be saved. */
+    slash = strrchr(target, '/');
+    dirlen = slash ? (size_t)(slash - target) + 1 : 0;
+    tmp = malloc(dirlen + sizeof ".sagitta-XXXXXX");
     if (!tmp) {
+        free(resolved);
         free(text);
         return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", path);
     }
-    sprintf(tmp, "%s.XXXXXX", path);
+    memcpy(tmp, target, dirlen);
+    strcpy(tmp + dirlen, ".sagitta-XXXXXX");
     fd = mkstemp(tmp);
     if (fd < 0) {
         e = errno;
         free(tmp);
+        free(resolved);
         free(text);
         return sg_diag_set(d, SG_EIO, "%s: cannot create a temporary file: %s", path, strerror(e));
     }
     /* mkstemp makes the file 0600; keep the old file's mode, or give a new
      * file the mode open() would have. */
-    if (stat(path, &st) == 0 && S_ISREG(st.st_mode))
+    if (stat(target, &st) == 0 && S_ISREG(st.st_mode))
         (void)fchmod(fd, st.st_mode & 07777);
     else
         (void)fchmod(fd, new_file_mode());
@@ -1316,18 +1335,20 @@ int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
         e = errno;
         goto fail;
     }
-    if (rename(tmp, path) != 0) {
+    if (rename(tmp, target) != 0) {
         e = errno;
         goto fail;
     }
-    sync_parent_dir(path);
+    sync_parent_dir(target);
     free(tmp);
+    free(resolved);
     free(text);
     return SG_OK;
 
 fail:
     unlink(tmp);
     free(tmp);
+    free(resolved);
     free(text);
     return sg_diag_set(d, SG_EIO, "%s: cannot write: %s", path, strerror(e));
 }

@@ -1100,6 +1100,48 @@ static void test_examples(void **state)
                   "0 differ\n", nfiles, total);
 }
 
+/* Saving through a symbolic link writes the file it points at and keeps
+ * the link; a name at the file system's length limit can be saved. */
+static void test_save_links_and_long_names(void **state)
+{
+    sg_system *s = sg_system_new(), *back = sg_system_new();
+    sg_diag d;
+    char target[512], link[512], longname[1024], dir[512];
+    struct stat st;
+    size_t n;
+    (void)state;
+    s->surf[1].radius = -123.456;
+    scratch_path("target.json", target, sizeof target);
+    scratch_path("link.json", link, sizeof link);
+    write_file(target, "OLD\n");
+    unlink(link);
+    assert_int_equal(symlink(target, link), 0);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_save(s, link, &d), SG_OK);
+    assert_int_equal(lstat(link, &st), 0);
+    assert_true(S_ISLNK(st.st_mode));
+    assert_int_equal(sg_design_load(back, target, &d), SG_OK);
+    assert_true(back->surf[1].radius == -123.456);
+    print_message("# save through a symlink: the link stays, the target holds radius %.17g\n",
+                  back->surf[1].radius);
+
+    /* NAME_MAX (255 bytes) long file name. */
+    scratch_path("", dir, sizeof dir);
+    n = strlen(dir);
+    memcpy(longname, dir, n);
+    memset(longname + n, 'a', 250);
+    strcpy(longname + n + 250, ".json");
+    assert_int_equal(sg_design_save(s, longname, &d), SG_OK);
+    assert_int_equal(sg_design_load(back, longname, &d), SG_OK);
+    assert_true(back->surf[1].radius == -123.456);
+    print_message("# a 255-byte file name saves and loads back\n");
+    unlink(longname);
+    unlink(link);
+    unlink(target);
+    sg_system_free(s);
+    sg_system_free(back);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1112,6 +1154,7 @@ int main(void)
         cmocka_unit_test(test_warnings),
         cmocka_unit_test(test_file_errors),
         cmocka_unit_test(test_atomic_save),
+        cmocka_unit_test(test_save_links_and_long_names),
         cmocka_unit_test(test_examples),
     };
     return cmocka_run_group_tests(tests, group_setup, group_teardown);
