@@ -24,6 +24,7 @@
 #include <cjson/cJSON.h>
 
 #include "cli.h"
+#include "report.h"
 #include "sg_config.h"
 
 /* Short measurements (one ray, one recompute) take at least this many
@@ -928,17 +929,15 @@ int cmd_bench(int argc, char **argv)
             bench_help(stdout);
             free(designs);
             return CLI_EXIT_OK;
-        case OPT_FORMAT:
-            if (strcmp(val, "text") == 0)
-                cfg.fmt = BENCH_TEXT;
-            else if (strcmp(val, "json") == 0)
-                cfg.fmt = BENCH_JSON;
-            else {
+        case OPT_FORMAT: {
+            int f;
+            if (cli_format_value(val, 0, &f)) {
                 free(designs);
-                cli_error("--format: expected text or json, got \"%s\"", val);
                 return CLI_EXIT_USAGE;
             }
+            cfg.fmt = f == REPORT_JSON ? BENCH_JSON : BENCH_TEXT;
             break;
+        }
         case OPT_REPEAT:
             if (cli_int_value("--repeat", val, 1, 1000, &cfg.repeat)) {
                 free(designs);

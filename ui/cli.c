@@ -149,6 +149,18 @@ int cli_next_opt(cli_iter *it, const cli_opt *opts, const char **val)
     return o->id;
 }
 
+int cli_format_value(const char *s, int allow_csv, int *fmt)
+{
+    int f = report_parse_fmt(s);
+    if (f < 0 || (f == REPORT_CSV && !allow_csv)) {
+        cli_error("--format: expected text%s or json, got \"%s\"",
+                  allow_csv ? ", csv" : "", s);
+        return CLI_EXIT_USAGE;
+    }
+    *fmt = f;
+    return CLI_EXIT_OK;
+}
+
 int cli_int_value(const char *opt, const char *s, int lo, int hi, int *out)
 {
     if (args_int(s, lo, hi, out) != ARGS_OK) {
@@ -433,12 +445,8 @@ int cmd_trace(int argc, char **argv)
                 return CLI_EXIT_USAGE;
             break;
         case OPT_FORMAT:
-            fmt = report_parse_fmt(val);
-            if (fmt < 0)
-            {
-                cli_error("--format: expected text, csv or json, got \"%s\"", val);
+            if (cli_format_value(val, 1, &fmt))
                 return CLI_EXIT_USAGE;
-            }
             break;
         case OPT_OUTPUT:
             output = val;
@@ -657,12 +665,8 @@ int cmd_paraxial(int argc, char **argv)
                 return CLI_EXIT_USAGE;
             break;
         case OPT_FORMAT:
-            fmt = report_parse_fmt(val);
-            if (fmt != REPORT_TEXT && fmt != REPORT_JSON)
-            {
-                cli_error("--format: expected text or json, got \"%s\"", val);
+            if (cli_format_value(val, 0, &fmt))
                 return CLI_EXIT_USAGE;
-            }
             break;
         case OPT_OUTPUT:
             output = val;

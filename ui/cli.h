@@ -90,6 +90,10 @@ int cli_int_value(const char *opt, const char *s, int lo, int hi, int *out);
 int cli_doubles_value(const char *opt, const char *s, int n, const char *what,
                       double *out);
 
+/* --format: "text" or "json", and "csv" too when allow_csv; sets *fmt to a
+ * report_fmt value. */
+int cli_format_value(const char *s, int allow_csv, int *fmt);
+
 /* ---- designs ---------------------------------------------------------- */
 
 /* Loads the default catalog, the design at path and validates it.  Returns

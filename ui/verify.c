@@ -1828,11 +1828,8 @@ int cmd_verify(int argc, char **argv)
                 return CLI_EXIT_USAGE;
             break;
         case OPT_FORMAT:
-            fmt = report_parse_fmt(val);
-            if (fmt != REPORT_TEXT && fmt != REPORT_JSON) {
-                cli_error("--format: expected text or json, got \"%s\"", val);
+            if (cli_format_value(val, 0, &fmt))
                 return CLI_EXIT_USAGE;
-            }
             break;
         case OPT_OUTPUT:
             output = val;
