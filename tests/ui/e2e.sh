@@ -9,72 +9,10 @@
 # Every wait is bounded, and the private tmux server is killed on any exit.
 
 SAGITTA=${1:-$SAGITTA}
-ROOT=${SAGITTA_SOURCE_ROOT:-$(cd "$(dirname "$0")/../.." && pwd)}
-export SAGITTA_LENSDB=${SAGITTA_LENSDB:-$ROOT/lensdb}
-export SAGITTA_EXAMPLES=${SAGITTA_EXAMPLES:-$ROOT/examples}
-# A UTF-8 locale lets tmux and the editor agree on the ellipsis; numbers
-# are ASCII either way.
-export LC_ALL=C.UTF-8
-unset NO_COLOR TMUX
-
-NTESTS=10
-echo "1..$NTESTS"
-
-if [ -z "$SAGITTA" ] || [ ! -x "$SAGITTA" ]; then
-    echo "# no sagitta program given"
-    i=1; while [ $i -le $NTESTS ]; do echo "not ok $i - program missing"; i=$((i + 1)); done
-    exit 1
-fi
-case $SAGITTA in /*) ;; *) SAGITTA=$(pwd)/$SAGITTA ;; esac
-if ! command -v tmux >/dev/null 2>&1; then
-    i=1; while [ $i -le $NTESTS ]; do echo "ok $i # SKIP tmux is not installed"; i=$((i + 1)); done
-    exit 0
-fi
-
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/sg-e2e-XXXXXX")
-# Recovery files go to the scratch directory, never the user's own.
-export XDG_STATE_HOME="$WORK/state"
-SOCK=sg-test-$$
-T="tmux -L $SOCK -f /dev/null"
-# Under AddressSanitizer, LeakSanitizer's stop-the-world tracer can
-# deadlock at exit in a process whose terminal has just hung up, leaving the
-# editor spinning; the editor's leaks are checked outside tmux instead.
-ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
-export ASAN_OPTIONS
-
-cleanup() {
-    $T kill-server >/dev/null 2>&1
-    # No editor this script started may outlive it.
-    [ -f "$WORK/started" ] && xargs kill -9 <"$WORK/started" >/dev/null 2>&1
-    rm -rf "$WORK"
-}
-trap cleanup EXIT
-trap 'exit 2' INT TERM HUP
+. "$(dirname "$0")/tmuxlib.sh"
+tmux_setup 10 e2e
 
 cp "$ROOT/examples/cassegrain.json" "$WORK/cassegrain.json"
-N=0
-FAILED=0
-
-ok() {
-    N=$((N + 1))
-    echo "ok $N - $1"
-}
-not_ok() {
-    N=$((N + 1))
-    FAILED=$((FAILED + 1))
-    echo "not ok $N - $1"
-    echo "# screen was:"
-    screen | sed 's/^/#   /'
-}
-check() { # description, then a command that must succeed
-    d=$1
-    shift
-    if "$@"; then ok "$d"; else not_ok "$d"; fi
-}
-
-screen() {
-    $T capture-pane -p -t =main: 2>/dev/null
-}
 
 # Waits up to $2 seconds (default 10) for fixed text $1 on the screen.
 wait_for() {
@@ -132,8 +70,6 @@ wait_gone() {
     return 1
 }
 
-keys() { $T send-keys -t =main: "$@" 2>/dev/null; }
-type_text() { $T send-keys -t =main: -l -- "$1" 2>/dev/null; }
 command_line() { # runs a ':' command
     keys Escape
     type_text ":$1"
@@ -301,7 +237,7 @@ fi
 
 # 10. SIGTERM ends it with the terminal restored.
 CHILD=$(cat "$WORK/pid" 2>/dev/null)
-[ -n "$CHILD" ] && echo "$CHILD" >>"$WORK/started"
+started "$CHILD"
 if [ -n "$CHILD" ]; then
     kill -TERM "$CHILD" 2>/dev/null
     if wait_for "EXITED 143" 5 && wait_line icanon; then

@@ -15,74 +15,13 @@
 # (which also holds XDG_STATE_HOME) go on any exit.
 
 SAGITTA=${1:-$SAGITTA}
-ROOT=${SAGITTA_SOURCE_ROOT:-$(cd "$(dirname "$0")/../.." && pwd)}
-export SAGITTA_LENSDB=${SAGITTA_LENSDB:-$ROOT/lensdb}
-export SAGITTA_EXAMPLES=${SAGITTA_EXAMPLES:-$ROOT/examples}
-export LC_ALL=C.UTF-8
-unset NO_COLOR TMUX
-
-NTESTS=24
-echo "1..$NTESTS"
-
-if [ -z "$SAGITTA" ] || [ ! -x "$SAGITTA" ]; then
-    echo "# no sagitta program given"
-    i=1; while [ $i -le $NTESTS ]; do echo "not ok $i - program missing"; i=$((i + 1)); done
-    exit 1
-fi
-case $SAGITTA in /*) ;; *) SAGITTA=$(pwd)/$SAGITTA ;; esac
-if ! command -v tmux >/dev/null 2>&1; then
-    i=1; while [ $i -le $NTESTS ]; do echo "ok $i # SKIP tmux is not installed"; i=$((i + 1)); done
-    exit 0
-fi
-
-WORK=$(mktemp -d "${TMPDIR:-/tmp}/sg-e2e-rec-XXXXXX")
-export XDG_STATE_HOME="$WORK/state"
+. "$(dirname "$0")/tmuxlib.sh"
+tmux_setup 24 rec
 RECDIR=$XDG_STATE_HOME/sagitta
-SOCK=sg-rec-$$
-T="tmux -L $SOCK -f /dev/null"
-# Under AddressSanitizer, LeakSanitizer's stop-the-world tracer can
-# deadlock at exit in a process whose terminal has just hung up, leaving the
-# editor spinning; the editor's leaks are checked outside tmux instead.
-ASAN_OPTIONS="${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0"
-export ASAN_OPTIONS
 
-cleanup() {
-    $T kill-server >/dev/null 2>&1
-    # No editor this script started may outlive it.
-    [ -f "$WORK/started" ] && xargs kill -9 <"$WORK/started" >/dev/null 2>&1
-    rm -rf "$WORK"
-}
-trap cleanup EXIT
-trap 'exit 2' INT TERM HUP
-
-N=0
-FAILED=0
-WHY=
-
-ok() {
-    N=$((N + 1))
-    echo "ok $N - $1"
-}
-not_ok() {
-    N=$((N + 1))
-    FAILED=$((FAILED + 1))
-    echo "not ok $N - $1"
-    [ -n "$WHY" ] && echo "# $WHY"
-    echo "# screen was:"
-    screen | sed 's/^/#   /'
+diag_extra() {
     echo "# recovery directory:"
     ls -l "$RECDIR" 2>&1 | sed 's/^/#   /'
-}
-# Runs the checks "$@" (a shell function); ok when it returns 0.
-check() {
-    d=$1
-    shift
-    WHY=
-    if "$@"; then ok "$d"; else not_ok "$d"; fi
-}
-
-screen() {
-    $T capture-pane -p -t =main: 2>/dev/null
 }
 
 # Waits up to $2 seconds (default 10) for fixed text $1 on the screen.
@@ -148,8 +87,6 @@ wait_nrec() {
     return 1
 }
 
-keys() { $T send-keys -t =main: "$@" 2>/dev/null; }
-type_text() { $T send-keys -t =main: -l -- "$1" 2>/dev/null; }
 command_line() {
     keys Escape
     type_text ":$1"
@@ -176,7 +113,7 @@ start() {
     n=50
     while [ ! -s "$WORK/pid" ] && [ "$n" -gt 0 ]; do sleep 0.1; n=$((n - 1)); done
     PID=$(cat "$WORK/pid" 2>/dev/null)
-    [ -n "$PID" ] && echo "$PID" >>"$WORK/started"
+    started "$PID"
 }
 
 # The line of surface 3 in the spreadsheet shows radius $1.
