@@ -5,11 +5,13 @@
  * a contiguous slice of the rays, so results land straight in the caller's
  * arrays and equal the single-ray calls bit for bit.
  */
+#include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <unistd.h>
 
 #include "trace_internal.h"
+#include "vdd.h"
 
 typedef struct job {
     sg_tracer *t;
@@ -21,7 +23,8 @@ typedef struct job {
     int *status;
 } job;
 
-static void run_job(job *j)
+/* One ray by the tracer's method, for methods without a vector trace. */
+static void run_scalar(job *j)
 {
     size_t r;
     for (r = j->first; r < j->first + j->count; r++) {
@@ -35,6 +38,57 @@ static void run_job(job *j)
         if (j->status)
             j->status[r] = rc;
     }
+}
+
+/* The precise method: each ray is launched alone (aiming is per ray), then
+ * SG_VL launched rays at a time go through the vector trace. */
+static void run_precise(job *j)
+{
+    sg_tracer *t = j->t;
+    sg_pray st[SG_VL];
+    double path0[SG_VL];
+    sg_ray_surface *o[SG_VL];
+    size_t idx[SG_VL], r, end = j->first + j->count;
+    int rc[SG_VL], nl = 0, k;
+    for (r = j->first; r < end; r++) {
+        const double *v = j->rays[r].v;
+        sg_ray_surface *out = j->out + r * (size_t)j->nsurf;
+        int prc;
+        if (j->kind == SG_RAYS_NORMALIZED) {
+            if (!isfinite(v[0]) || !isfinite(v[1]) || !isfinite(v[2]) || !isfinite(v[3])) {
+                sg_fail_rest(out, 0, t->n, SG_EINVAL);
+                prc = SG_EINVAL;
+            } else {
+                prc = sg_launch_precise_prep(t, v[0], v[1], v[2], v[3], out, &st[nl],
+                                             &path0[nl]);
+            }
+        } else {
+            path0[nl] = 0.0;
+            prc = sg_start_precise_prep(t, v, v + 3, out, &st[nl]);
+        }
+        if (prc != SG_OK) {
+            if (j->status)
+                j->status[r] = prc;
+        } else {
+            o[nl] = out;
+            idx[nl++] = r;
+        }
+        if (nl == SG_VL || (r + 1 == end && nl > 0)) {
+            sg_precise_run_block(t, st, path0, o, nl, t->n - 1, rc);
+            for (k = 0; k < nl; k++)
+                if (j->status)
+                    j->status[idx[k]] = rc[k];
+            nl = 0;
+        }
+    }
+}
+
+static void run_job(job *j)
+{
+    if (j->t->o.method == SG_METHOD_PRECISE)
+        run_precise(j);
+    else
+        run_scalar(j);
 }
 
 static void *thread_main(void *arg)

@@ -410,11 +410,9 @@ static int field_cached(sg_tracer *t, land_fn land, double hx, double hy, osp *o
     return SG_OK;
 }
 
-int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
-                      sg_ray_surface *out)
+int sg_launch_precise_prep(sg_tracer *t, double hx, double hy, double px, double py,
+                           sg_ray_surface *out, sg_pray *r, double *path0)
 {
-    sg_pray r;
-    double path0;
     dd q[2];
     osp o;
     if (field_cached(t, land_precise, hx, hy, &o, out) != SG_OK)
@@ -423,9 +421,18 @@ int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;
     }
-    pray_from(&o, q, &r, &path0);
-    object_row(t, &o, &r, &out[0]);
-    return sg_precise_run_to(t, &r, path0, out, t->n - 1);
+    pray_from(&o, q, r, path0);
+    object_row(t, &o, r, &out[0]);
+    return SG_OK;
+}
+
+int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
+                      sg_ray_surface *out)
+{
+    sg_pray r;
+    double path0;
+    int rc = sg_launch_precise_prep(t, hx, hy, px, py, out, &r, &path0);
+    return rc != SG_OK ? rc : sg_precise_run_to(t, &r, path0, out, t->n - 1);
 }
 
 int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,

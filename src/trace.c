@@ -27,7 +27,6 @@
 
 #include "trace_internal.h"
 
-#define U53 1.1102230246251565e-16 /* unit roundoff of double */
 
 const char *sg_method_name(sg_method m)
 {
@@ -63,32 +62,6 @@ void sg_trace_opts_init(sg_trace_opts *o)
     o->max_iter = 50;
     o->aim_max_iter = 50;
     o->aim_rtol = 1e-13;
-}
-
-/* Spacing of doubles at |x|, from its exponent bits (no libm call). */
-static double ulp_of(double x)
-{
-    uint64_t b;
-    int e;
-    x = fabs(x);
-    if (!(x < DBL_MAX))
-        return x;
-    if (x < DBL_MIN)
-        return DBL_TRUE_MIN;
-    memcpy(&b, &x, sizeof b);
-    e = (int)(b >> 52);
-    b = (uint64_t)(e - 52) << 52;
-    if (e <= 52)
-        return ldexp(1.0, e - 1075);
-    memcpy(&x, &b, sizeof x);
-    return x;
-}
-
-/* A bound computed in floating point must not round down past the error
- * it bounds, so it is nudged up by more than its own rounding. */
-static double bound_up(double b)
-{
-    return b * (1.0 + 8.0 * U53);
 }
 
 /* ------------------------------------------------------------------------
@@ -138,7 +111,7 @@ static dd sag_dd(const sg_sprep *s, dd r2, int *ok)
  * Newton steps and for the normal's sensitivity. */
 static void slope_d(const sg_sprep *s, double r2, double *w, double *dw)
 {
-    double ww = 0.0, dd2 = 0.0;
+    double ww = 0.0, dd2 = 0.0, rk = 1.0;
     int k;
     if (isfinite(s->R)) {
         double q = s->R * s->R - s->k1.hi * r2;
@@ -146,8 +119,11 @@ static void slope_d(const sg_sprep *s, double r2, double *w, double *dw)
         ww = (s->R < 0 ? -1.0 : 1.0) / sq;
         dd2 = fabs(s->k1.hi) / (2.0 * fabs(q) * sq) * r2;
     }
+    /* Powers by running product, the same rounding as the vector trace. */
     for (k = 1; k < s->nasph; k++) {
-        double p = (double)(2 * (k + 1)) * s->a[k] * pow(r2, k);
+        double p;
+        rk = rk * r2;
+        p = (double)(2 * (k + 1)) * s->a[k] * rk;
         ww += p;
         dd2 += fabs(p) * (double)(k);
     }
@@ -278,10 +254,12 @@ static dd surf_F_dd(const sg_sprep *s, dd3 p, double *err, int *ok)
     } else {
         dd r2 = dd_add(dd_sqr(p.x), dd_sqr(p.y));
         dd sag = sag_dd(s, r2, ok);
-        double mag = fabs(p.z.hi) + fabs(sag.hi);
+        double mag = fabs(p.z.hi) + fabs(sag.hi), rk = 1.0;
         int k;
-        for (k = 0; k < s->nasph; k++)
-            mag += fabs(s->a[k]) * pow(r2.hi, k + 1);
+        for (k = 0; k < s->nasph; k++) {
+            rk = rk * r2.hi;
+            mag += fabs(s->a[k]) * rk;
+        }
         *err = (16.0 + 4.0 * s->nasph) * DD_U * mag;
         return dd_sub(p.z, sag);
     }
@@ -387,7 +365,7 @@ static dd3 surf_grad_dd(const sg_sprep *s, dd3 p, double *gsens)
     return g;
 }
 
-static int past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y)
+int sg_past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y)
 {
     return t->o.clip && s->sd > 0.0 && hypot(x, y) > s->sd * (1.0 + t->o.clip_rtol);
 }
@@ -470,8 +448,14 @@ static int precise_bend(const sg_sprep *s, sg_pray *r)
 int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
                       int upto)
 {
+    return sg_precise_run_from(t, r, path0, out, 1, upto);
+}
+
+int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
+                        int from, int upto)
+{
     int i;
-    for (i = 1; i <= upto; i++) {
+    for (i = from; i <= upto; i++) {
         const sg_sprep *s = &t->sp[i];
         sg_ray_surface *o = &out[i];
         double dz = r->d.z.hi, ps[3], ds[3], sd = 0.0, eP0, dpath;
@@ -592,10 +576,10 @@ int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surfa
         o->z = r->p.z.hi;
         o->path = i == 1 ? path0 + dpath : dpath;
         o->residual = sg_sprep_sag_resid(s, o->x, o->y, o->z);
-        o->error_bound = bound_up(r->eP + 0.5 * ulp_of(fmax(fabs(o->x), fmax(fabs(o->y), fabs(o->z)))));
+        o->error_bound = sg_bound_up(r->eP + 0.5 * sg_ulp_of(fmax(fabs(o->x), fmax(fabs(o->y), fabs(o->z)))));
         o->status = SG_OK;
 
-        if (past_clip(t, s, o->x, o->y)) {
+        if (sg_past_clip(t, s, o->x, o->y)) {
             sg_fail_rest(out, i, t->n, SG_EVIGNETTED);
             return SG_EVIGNETTED;
         }
@@ -615,7 +599,7 @@ int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surfa
         o->l = r->d.x.hi;
         o->m = r->d.y.hi;
         o->n = r->d.z.hi;
-        o->dir_error_bound = bound_up(r->eD + 0.5 * ulp_of(fmax(fabs(o->l), fmax(fabs(o->m), fabs(o->n)))));
+        o->dir_error_bound = sg_bound_up(r->eD + 0.5 * sg_ulp_of(fmax(fabs(o->l), fmax(fabs(o->m), fabs(o->n)))));
     }
     return SG_OK;
 }
@@ -757,9 +741,9 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
          * the ray's start. */
         o->path = tt * dlen;
         o->residual = sg_sprep_sag_resid(s, o->x, o->y, o->z);
-        o->error_bound = bound_up(eP);
+        o->error_bound = sg_bound_up(eP);
         o->status = SG_OK;
-        if (past_clip(t, s, o->x, o->y)) {
+        if (sg_past_clip(t, s, o->x, o->y)) {
             sg_fail_rest(out, i, t->n, SG_EVIGNETTED);
             return SG_EVIGNETTED;
         }
@@ -784,7 +768,7 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
         o->l = d[0];
         o->m = d[1];
         o->n = d[2];
-        o->dir_error_bound = bound_up(eD);
+        o->dir_error_bound = sg_bound_up(eD);
     }
     return SG_OK;
 }
@@ -999,8 +983,9 @@ void sg_set_start_row(sg_ray_surface *o, const double S[3], const double u[3])
     o->status = SG_OK;
 }
 
-int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
-                   sg_ray_surface *out)
+/* Rejects a start point or direction that no method can trace. */
+static int start_invalid(const sg_tracer *t, const double start[3], const double dir[3],
+                         sg_ray_surface *out)
 {
     double len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
     int k;
@@ -1013,25 +998,46 @@ int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
         sg_fail_rest(out, 0, t->n, SG_EINVAL);
         return SG_EINVAL;
     }
+    return SG_OK;
+}
+
+int sg_start_precise_prep(const sg_tracer *t, const double start[3], const double dir[3],
+                          sg_ray_surface *out, sg_pray *r)
+{
+    dd len;
+    double u[3];
+    int rc = start_invalid(t, start, dir, out);
+    if (rc != SG_OK)
+        return rc;
+    len = dd_sqrt(dd_add(dd_add(dd_sqr(dd_from(dir[0])), dd_sqr(dd_from(dir[1]))),
+                         dd_sqr(dd_from(dir[2]))));
+    r->p.x = dd_from(start[0]);
+    r->p.y = dd_from(start[1]);
+    r->p.z = dd_from(start[2]);
+    r->d.x = dd_div(dd_from(dir[0]), len);
+    r->d.y = dd_div(dd_from(dir[1]), len);
+    r->d.z = dd_div(dd_from(dir[2]), len);
+    r->eP = 0.0;
+    r->eD = 4.0 * DD_U;
+    u[0] = r->d.x.hi;
+    u[1] = r->d.y.hi;
+    u[2] = r->d.z.hi;
+    sg_set_start_row(&out[0], start, u);
+    return SG_OK;
+}
+
+int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
+                   sg_ray_surface *out)
+{
+    double len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
+    int rc = start_invalid(t, start, dir, out);
+    if (rc != SG_OK)
+        return rc;
     switch (t->o.method) {
     case SG_METHOD_PRECISE: {
         sg_pray r;
-        dd len = dd_sqrt(dd_add(dd_add(dd_sqr(dd_from(dir[0])), dd_sqr(dd_from(dir[1]))),
-                                dd_sqr(dd_from(dir[2]))));
-        double u[3];
-        r.p.x = dd_from(start[0]);
-        r.p.y = dd_from(start[1]);
-        r.p.z = dd_from(start[2]);
-        r.d.x = dd_div(dd_from(dir[0]), len);
-        r.d.y = dd_div(dd_from(dir[1]), len);
-        r.d.z = dd_div(dd_from(dir[2]), len);
-        r.eP = 0.0;
-        r.eD = 4.0 * DD_U;
-        u[0] = r.d.x.hi;
-        u[1] = r.d.y.hi;
-        u[2] = r.d.z.hi;
-        sg_set_start_row(&out[0], start, u);
-        return sg_precise_run_to(t, &r, 0.0, out, t->n - 1);
+        rc = sg_start_precise_prep(t, start, dir, out, &r);
+        return rc != SG_OK ? rc : sg_precise_run_to(t, &r, 0.0, out, t->n - 1);
     }
     case SG_METHOD_CLASSIC: {
         double len = sqrt(len2), u[3];

@@ -7,8 +7,14 @@
 
 #include <mpfr.h>
 
+#include <float.h>
+#include <stdint.h>
+#include <string.h>
+
 #include "dd.h"
 #include "internal.h"
+
+#define U53 1.1102230246251565e-16 /* unit roundoff of double */
 
 enum { SHAPE_PLANE = 0, SHAPE_CONIC = 1, SHAPE_ASPH = 2 };
 
@@ -82,8 +88,45 @@ typedef struct sg_pray {
  * surface upto, which is not bent when upto is not the image. */
 int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
                       int upto);
+/* The same from surface from, with r as it left surface from - 1 (bent)
+ * and still in that surface's frame; from = 1 is sg_precise_run_to. */
+int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
+                        int from, int upto);
+/* The precise trace of nl <= SG_VL rays at once: lane k starts from r[k]
+ * and path0[k] as sg_precise_run_to takes them and fills out[k]; rc[k] is
+ * its status.  Every lane equals sg_precise_run_to's result bit for bit. */
+void sg_precise_run_block(const sg_tracer *t, const sg_pray *r, const double *path0,
+                          sg_ray_surface *const *out, int nl, int upto, int *rc);
+/* Whether clipping at s stops a ray meeting it at (x, y). */
+int sg_past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y);
 int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
                       sg_ray_surface *out, int upto);
+
+/* Spacing of doubles at |x|, from its exponent bits (no libm call). */
+static inline double sg_ulp_of(double x)
+{
+    uint64_t b;
+    int e;
+    x = fabs(x);
+    if (!(x < DBL_MAX))
+        return x;
+    if (x < DBL_MIN)
+        return DBL_TRUE_MIN;
+    memcpy(&b, &x, sizeof b);
+    e = (int)(b >> 52);
+    b = (uint64_t)(e - 52) << 52;
+    if (e <= 52)
+        return ldexp(1.0, e - 1075);
+    memcpy(&x, &b, sizeof x);
+    return x;
+}
+
+/* A bound computed in floating point must not round down past the error
+ * it bounds, so it is nudged up by more than its own rounding. */
+static inline double sg_bound_up(double b)
+{
+    return b * (1.0 + 8.0 * U53);
+}
 
 /* Marks surface from as failed with status and the rest as not reached. */
 void sg_fail_rest(sg_ray_surface *out, int from, int n, int status);
@@ -97,6 +140,12 @@ double sg_sprep_sag_resid(const sg_sprep *s, double x, double y, double z);
 int sg_launch_prepare(sg_tracer *t, sg_diag *d);
 int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
                       sg_ray_surface *out);
+/* The launch of the precise method up to surface 1: fills the object row
+ * and the start state, or fails every row and returns the status. */
+int sg_launch_precise_prep(sg_tracer *t, double hx, double hy, double px, double py,
+                           sg_ray_surface *out, sg_pray *r, double *path0);
+int sg_start_precise_prep(const sg_tracer *t, const double start[3], const double dir[3],
+                          sg_ray_surface *out, sg_pray *r);
 int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
                       sg_ray_surface *out);
 

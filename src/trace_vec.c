@@ -1,0 +1,533 @@
+/*
+ * trace_vec.c - the precise method on SG_VL rays at once.
+ *
+ * This is sg_precise_run_from (trace.c) transcribed lane by lane: the same
+ * operations in the same order, so each lane gives the scalar trace's bits.
+ * Branches that depend on the ray become masks.  A lane that leaves the
+ * common path at a surface (a miss, total internal reflection, clipping, an
+ * asphere that does not converge) is handed back, in its state before that
+ * surface, to the scalar trace, which finishes it and reports the failure.
+ *
+ * Keep the two in step: tests/test_batch.c compares them bit for bit.
+ */
+#include <float.h>
+#include <math.h>
+#include <string.h>
+
+#include "trace_internal.h"
+#include "vdd.h"
+
+typedef struct vray {
+    vdd3 p, d;
+    vd eP, eD;
+} vray;
+
+static void lane_get(const vray *v, int k, sg_pray *r)
+{
+    r->p.x.hi = v->p.x.hi[k];
+    r->p.x.lo = v->p.x.lo[k];
+    r->p.y.hi = v->p.y.hi[k];
+    r->p.y.lo = v->p.y.lo[k];
+    r->p.z.hi = v->p.z.hi[k];
+    r->p.z.lo = v->p.z.lo[k];
+    r->d.x.hi = v->d.x.hi[k];
+    r->d.x.lo = v->d.x.lo[k];
+    r->d.y.hi = v->d.y.hi[k];
+    r->d.y.lo = v->d.y.lo[k];
+    r->d.z.hi = v->d.z.hi[k];
+    r->d.z.lo = v->d.z.lo[k];
+    r->eP = v->eP[k];
+    r->eD = v->eD[k];
+}
+
+static void lane_put(vray *v, int k, const sg_pray *r)
+{
+    v->p.x.hi[k] = r->p.x.hi;
+    v->p.x.lo[k] = r->p.x.lo;
+    v->p.y.hi[k] = r->p.y.hi;
+    v->p.y.lo[k] = r->p.y.lo;
+    v->p.z.hi[k] = r->p.z.hi;
+    v->p.z.lo[k] = r->p.z.lo;
+    v->d.x.hi[k] = r->d.x.hi;
+    v->d.x.lo[k] = r->d.x.lo;
+    v->d.y.hi[k] = r->d.y.hi;
+    v->d.y.lo[k] = r->d.y.lo;
+    v->d.z.hi[k] = r->d.z.hi;
+    v->d.z.lo[k] = r->d.z.lo;
+    v->eP[k] = r->eP;
+    v->eD[k] = r->eD;
+}
+
+/* ------------------------------------------------------------------------
+ * Surface functions, as in trace.c.
+ * ------------------------------------------------------------------------ */
+
+static void slope_v(const sg_sprep *s, vd r2, vd *w, vd *dw)
+{
+    vd ww = vd_set(0.0), dd2 = vd_set(0.0), rk = vd_set(1.0);
+    int k;
+    if (isfinite(s->R)) {
+        vd q = s->R * s->R - s->k1.hi * r2;
+        vd sq = vd_sqrt(vd_abs(q));
+        ww = (s->R < 0 ? -1.0 : 1.0) / sq;
+        dd2 = fabs(s->k1.hi) / (2.0 * vd_abs(q) * sq) * r2;
+    }
+    for (k = 1; k < s->nasph; k++) {
+        vd p;
+        rk = rk * r2;
+        p = (double)(2 * (k + 1)) * s->a[k] * rk;
+        ww += p;
+        dd2 += vd_abs(p) * (double)(k);
+    }
+    if (s->nasph)
+        ww += 2.0 * s->a[0];
+    *w = ww;
+    *dw = dd2;
+}
+
+/* Sag in double-double; *bad marks lanes outside the conic's domain. */
+static vdd sag_v(const sg_sprep *s, vdd r2, vm *bad)
+{
+    vdd z = vdd_from(vd_set(0.0));
+    int k;
+    *bad = vm_set(0);
+    if (isfinite(s->R)) {
+        vdd R = vdd_from(vd_set(s->R));
+        vdd disc = vdd_sub(vdd_sqr(R), vdd_mul(vdd_set(s->k1), r2));
+        vdd root;
+        *bad = (vm)(disc.hi < 0.0);
+        root = vdd_sqrt(disc);
+        if (s->R < 0)
+            root = vdd_neg(root);
+        z = vdd_div(r2, vdd_add(R, root));
+        z.hi = vsel(*bad, vd_set(NAN), z.hi);
+        z.lo = vsel(*bad, vd_set(0.0), z.lo);
+    }
+    if (s->nasph) {
+        vdd p = vdd_from(vd_set(0.0));
+        for (k = s->nasph - 1; k >= 0; k--)
+            p = vdd_add_d(vdd_mul(p, r2), vd_set(s->a[k]));
+        z = vdd_add(z, vdd_mul(p, r2));
+    }
+    return z;
+}
+
+static vd resid_v(const sg_sprep *s, vd x, vd y, vd z)
+{
+    vdd r2, sag;
+    vm bad;
+    if (s->shape == SHAPE_PLANE)
+        return vd_abs(z);
+    r2 = vdd_add(vdd_two_prod(x, x), vdd_two_prod(y, y));
+    if (s->shape == SHAPE_CONIC) {
+        vdd G = vdd_add(r2, vdd_mul(vdd_set(s->k1), vdd_two_prod(z, z)));
+        vd gz = 2.0 * (s->k1.hi * z - s->R);
+        G = vdd_sub(G, vdd_two_prod(z, vd_set(2.0 * s->R)));
+        return vsel((vm)(gz != 0.0), vd_abs((G.hi + G.lo) / gz), vd_set(NAN));
+    }
+    sag = sag_v(s, r2, &bad);
+    sag = vdd_sub(vdd_from(z), sag);
+    return vsel(bad, vd_set(NAN), vd_abs(sag.hi + sag.lo));
+}
+
+/* The eq. 27 root from the tangent plane; *miss marks lanes it misses. */
+static vd conic_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vm *miss)
+{
+    double c = s->c, k1 = s->k1.hi;
+    vd A = c * (d[0] * d[0] + d[1] * d[1] + k1 * d[2] * d[2]);
+    vd b = c * (p[0] * d[0] + p[1] * d[1] + k1 * p[2] * d[2]) - d[2];
+    vd C = c * (p[0] * p[0] + p[1] * p[1] + k1 * p[2] * p[2]) - 2.0 * p[2];
+    vd disc = b * b - A * C;
+    vd q = vd_neg(b + vd_copysign(vd_sqrt(disc), b));
+    vd s1 = vsel((vm)(q != 0.0), C / q, vd_set(0.0));
+    vd s2 = vsel((vm)(A != 0.0), q / A, vd_set(INFINITY));
+    vm ok1 = vd_isfinite(s1) & (vm)(k1 * c * (p[2] + s1 * d[2]) <= 1.0);
+    vm ok2 = vd_isfinite(s2) & (vm)(k1 * c * (p[2] + s2 * d[2]) <= 1.0);
+    vm in = (vm)(disc >= 0.0);
+    *miss = ~(in & (ok1 | ok2));
+    return vsel(in & ok1, s1, vsel(in & ok2, s2, vd_set(0.0)));
+}
+
+/* Newton in double for an even asphere; *fail marks lanes that miss and
+ * *noconv lanes that run out of iterations. */
+static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, int max_iter,
+                      vm active, vm *fail, vm *noconv)
+{
+    vd sv = s0;
+    int it;
+    *fail = vm_set(0);
+    for (it = 0; it < max_iter && vm_any(active); it++) {
+        vd x = p[0] + sv * d[0], y = p[1] + sv * d[1], z = p[2] + sv * d[2];
+        vd r2 = x * x + y * y;
+        vd sag = vd_set(0.0), w, dw, F, Fp, step, snew, pp = vd_set(0.0);
+        vm bad = vm_set(0), conv;
+        int k;
+        if (isfinite(s->R)) {
+            vd q = s->R * s->R - s->k1.hi * r2;
+            bad = (vm)(q < 0.0);
+            sag = r2 / (s->R + vd_copysign(vd_sqrt(q), vd_set(s->R)));
+        }
+        for (k = s->nasph - 1; k >= 0; k--)
+            pp = pp * r2 + s->a[k];
+        sag += pp * r2;
+        slope_v(s, r2, &w, &dw);
+        F = z - sag;
+        Fp = d[2] - w * (x * d[0] + y * d[1]);
+        bad |= (vm)(Fp == 0.0) | ~vd_isfinite(Fp);
+        step = F / Fp;
+        snew = sv - step;
+        bad |= ~vd_isfinite(snew);
+        bad &= active;
+        *fail |= bad;
+        active &= ~bad;
+        sv = vsel(active, snew, sv);
+        conv = (vm)(vd_abs(step) <= 4.0 * U53 * (vd_abs(snew) + vd_abs(x) + vd_abs(y) + vd_abs(z)));
+        active &= ~conv;
+    }
+    *noconv = active;
+    return sv;
+}
+
+static void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
+{
+    if (s->shape == SHAPE_CONIC) {
+        vdd xx = vdd_sqr(p.x), yy = vdd_sqr(p.y), zz = vdd_mul(vdd_set(s->k1), vdd_sqr(p.z));
+        vdd rz = vdd_mul_d(p.z, vd_set(2.0 * s->R));
+        *F = vdd_sub(vdd_add(vdd_add(xx, yy), zz), rz);
+        *err = 8.0 * DD_U *
+               (vd_abs(xx.hi) + vd_abs(yy.hi) + vd_abs(zz.hi) + vd_abs(rz.hi));
+        *bad = vm_set(0);
+    } else {
+        vdd r2 = vdd_add(vdd_sqr(p.x), vdd_sqr(p.y));
+        vdd sag = sag_v(s, r2, bad);
+        vd mag = vd_abs(p.z.hi) + vd_abs(sag.hi), rk = vd_set(1.0);
+        int k;
+        for (k = 0; k < s->nasph; k++) {
+            rk = rk * r2.hi;
+            mag += fabs(s->a[k]) * rk;
+        }
+        *err = (16.0 + 4.0 * s->nasph) * DD_U * mag;
+        *F = vdd_sub(p.z, sag);
+    }
+}
+
+static vd surf_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag)
+{
+    if (s->shape == SHAPE_CONIC) {
+        vd a = p[0] * d[0], b = p[1] * d[1], c = s->k1.hi * p[2] * d[2], e = s->R * d[2];
+        *mag = 2.0 * (vd_abs(a) + vd_abs(b) + vd_abs(c) + vd_abs(e));
+        return 2.0 * (a + b + c - e);
+    }
+    {
+        vd w, dw, a = p[0] * d[0], b = p[1] * d[1];
+        slope_v(s, p[0] * p[0] + p[1] * p[1], &w, &dw);
+        *mag = vd_abs(d[2]) + vd_abs(w) * (vd_abs(a) + vd_abs(b)) * 2.0;
+        return d[2] - w * (a + b);
+    }
+}
+
+static vd surf_Fpp_v(const sg_sprep *s, vd r2)
+{
+    vd w, dw;
+    if (s->shape == SHAPE_CONIC)
+        return vd_set(2.0 * (1.0 + fabs(s->k1.hi)));
+    slope_v(s, r2, &w, &dw);
+    return vd_abs(w) + 2.0 * dw + 1e-300;
+}
+
+static vd surf_cos_v(const sg_sprep *s, const vd p[3], const vd d[3])
+{
+    vd g[3], gn;
+    if (s->shape == SHAPE_PLANE) {
+        g[0] = vd_set(0.0);
+        g[1] = vd_set(0.0);
+        g[2] = vd_set(-1.0);
+    } else if (s->shape == SHAPE_CONIC) {
+        g[0] = p[0];
+        g[1] = p[1];
+        g[2] = s->k1.hi * p[2] - s->R;
+    } else {
+        vd w, dw;
+        slope_v(s, p[0] * p[0] + p[1] * p[1], &w, &dw);
+        g[0] = vd_neg(w) * p[0];
+        g[1] = vd_neg(w) * p[1];
+        g[2] = vd_set(1.0);
+    }
+    gn = vd_sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    return vsel((vm)(gn > 0.0), vd_abs(g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn,
+                vd_set(0.0));
+}
+
+static vdd3 surf_grad_v(const sg_sprep *s, vdd3 p, vd *gsens)
+{
+    vdd3 g;
+    if (s->shape == SHAPE_PLANE) {
+        g.x = vdd_from(vd_set(0.0));
+        g.y = vdd_from(vd_set(0.0));
+        g.z = vdd_from(vd_set(-1.0));
+        *gsens = vd_set(0.0);
+    } else if (s->shape == SHAPE_CONIC) {
+        g.x = p.x;
+        g.y = p.y;
+        g.z = vdd_sub(vdd_mul(vdd_set(s->k1), p.z), vdd_from(vd_set(s->R)));
+        *gsens = vd_set(fmax(1.0, fabs(s->k1.hi)));
+    } else {
+        vdd r2 = vdd_add(vdd_sqr(p.x), vdd_sqr(p.y));
+        vdd w = vdd_from(vd_set(0.0)), pp = vdd_from(vd_set(0.0));
+        vd wd, dwd;
+        int k;
+        if (isfinite(s->R)) {
+            vdd q = vdd_sub(vdd_sqr(vdd_from(vd_set(s->R))), vdd_mul(vdd_set(s->k1), r2));
+            w = vdd_div(vdd_from(vd_set(s->R < 0 ? -1.0 : 1.0)), vdd_sqrt(q));
+        }
+        for (k = s->nasph - 1; k >= 0; k--)
+            pp = vdd_add(vdd_mul(pp, r2),
+                         vdd_two_prod(vd_set(s->a[k]), vd_set((double)(2 * (k + 1)))));
+        w = vdd_add(w, pp);
+        g.x = vdd_neg(vdd_mul(w, p.x));
+        g.y = vdd_neg(vdd_mul(w, p.y));
+        g.z = vdd_from(vd_set(1.0));
+        slope_v(s, r2.hi, &wd, &dwd);
+        *gsens = vd_abs(wd) + 2.0 * dwd;
+    }
+    return g;
+}
+
+/* precise_bend; *bad gets lanes that fail (left for the scalar trace). */
+static void bend_v(const sg_sprep *s, vray *r, vm *bad)
+{
+    vd gsens, gn, cosI, dN;
+    vdd3 g = surf_grad_v(s, r->p, &gsens), nd;
+    vdd gg = vdd_dot3(g, g);
+    vdd dg = vdd_dot3(r->d, g);
+    *bad = (vm)(gg.hi <= 0.0);
+    gn = vd_sqrt(gg.hi);
+    cosI = dg.hi / gn;
+    dN = gsens * r->eP / gn;
+    if (s->mirror) {
+        vdd f = vdd_div(vdd_mul_d(dg, vd_set(2.0)), gg);
+        nd.x = vdd_sub(r->d.x, vdd_mul(f, g.x));
+        nd.y = vdd_sub(r->d.y, vdd_mul(f, g.y));
+        nd.z = vdd_sub(r->d.z, vdd_mul(f, g.z));
+        r->eD = r->eD + 4.0 * dN + 40.0 * DD_U;
+    } else {
+        vdd mu = vdd_set(s->mu);
+        vdd mu2 = vdd_sqr(mu);
+        vdd kb = vdd_sub(gg, vdd_mul(mu2, vdd_sub(gg, vdd_sqr(dg))));
+        vdd sq, gam;
+        vd J, k, sinI, m = vd_set(s->mu.hi);
+        *bad |= (vm)(kb.hi < 0.0);
+        if (fabs(s->mu.hi) == 1.0 && s->mu.lo == 0.0)
+            return;
+        sq = vdd_sqrt(kb);
+        sq = vdd_sel((vm)(dg.hi < 0.0), vdd_neg(sq), sq);
+        gam = vdd_div(vdd_sub(sq, vdd_mul(mu, dg)), gg);
+        nd.x = vdd_add(vdd_mul(mu, r->d.x), vdd_mul(gam, g.x));
+        nd.y = vdd_add(vdd_mul(mu, r->d.y), vdd_mul(gam, g.y));
+        nd.z = vdd_add(vdd_mul(mu, r->d.z), vdd_mul(gam, g.z));
+        k = kb.hi / gg.hi;
+        J = m * vd_abs(m * cosI - vd_copysign(vd_sqrt(vd_fmax(k, vd_set(0.0))), cosI)) /
+            vd_sqrt(vd_fmax(k, vd_set(1e-300)));
+        sinI = vd_sqrt(vd_fmax(vd_set(0.0), 1.0 - cosI * cosI));
+        r->eD = (m + J * sinI) * r->eD + (J * sinI + vd_abs(gam.hi) * gn) * dN +
+                60.0 * DD_U * (m + J + 1.0);
+    }
+    r->d = nd;
+}
+
+/* ------------------------------------------------------------------------
+ * The block trace.
+ * ------------------------------------------------------------------------ */
+
+static void put_row(sg_ray_surface *o, int k, const vd P[3], vd path, vd resid, vd eP)
+{
+    o->x = P[0][k];
+    o->y = P[1][k];
+    o->z = P[2][k];
+    o->path = path[k];
+    o->residual = resid[k];
+    o->error_bound =
+        sg_bound_up(eP[k] + 0.5 * sg_ulp_of(fmax(fabs(o->x), fmax(fabs(o->y), fabs(o->z)))));
+    o->status = SG_OK;
+}
+
+static void put_dir(sg_ray_surface *o, int k, const vray *r)
+{
+    o->l = r->d.x.hi[k];
+    o->m = r->d.y.hi[k];
+    o->n = r->d.z.hi[k];
+    o->dir_error_bound = sg_bound_up(
+        r->eD[k] + 0.5 * sg_ulp_of(fmax(fabs(o->l), fmax(fabs(o->m), fabs(o->n)))));
+}
+
+/* One surface for every live lane; returns the lanes to hand back. */
+static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
+                    sg_ray_surface *const *out, vm live)
+{
+    const sg_sprep *s = &t->sp[i];
+    vd dz = r->d.z.hi, ps[3], ds[3], sd = vd_set(0.0), eP0, root_err = vd_set(0.0);
+    vd pd[3], dpath, kappa, cg, resid;
+    vdd s0 = vdd_from(vd_set(0.0)), sv;
+    vdd3 p0;
+    vm bad = vm_set(0), tp, act;
+    int k, it;
+
+    /* Measure 1: into this surface's frame and onto its tangent plane. */
+    if (i > 1)
+        r->p.z = vdd_add_d(r->p.z, vd_set(-s->T));
+    p0 = r->p;
+    eP0 = r->eP + DD_U * vd_abs(r->p.z.hi);
+    tp = (vm)(dz != 0.0) & (vm)(r->p.z.hi != 0.0);
+    if (vm_any(tp)) {
+        vdd s0t = vdd_neg(vdd_div(r->p.z, r->d.z));
+        vdd3 pt;
+        vd ePt;
+        pt.x = vdd_add(r->p.x, vdd_mul(s0t, r->d.x));
+        pt.y = vdd_add(r->p.y, vdd_mul(s0t, r->d.y));
+        pt.z = vdd_from(vd_set(0.0));
+        ePt = (eP0 + vd_abs(s0t.hi) * r->eD) / vd_abs(dz) +
+              8.0 * DD_U * (vd_abs(r->p.x.hi) + vd_abs(r->p.y.hi) + vd_abs(s0t.hi));
+        s0 = vdd_sel(tp, s0t, s0);
+        p0.x = vdd_sel(tp, pt.x, p0.x);
+        p0.y = vdd_sel(tp, pt.y, p0.y);
+        p0.z = vdd_sel(tp, pt.z, p0.z);
+        eP0 = vsel(tp, ePt, eP0);
+    }
+    ps[0] = p0.x.hi;
+    ps[1] = p0.y.hi;
+    ps[2] = p0.z.hi;
+    ds[0] = r->d.x.hi;
+    ds[1] = r->d.y.hi;
+    ds[2] = r->d.z.hi;
+
+    /* Measure 3: the eq. 27 root (and Newton for aspheres) in double. */
+    if (s->shape == SHAPE_PLANE) {
+        vm off = (vm)(p0.z.hi != 0.0);
+        bad |= off & (vm)(dz == 0.0);
+        sd = vsel(off, vd_neg(p0.z.hi) / dz, vd_set(0.0));
+    } else if (s->c == 0.0) {
+        /* A conic too flat for its curvature to be a double: rare enough
+         * for the scalar trace. */
+        return live;
+    } else {
+        vm miss;
+        sd = conic_root_v(s, ps, ds, &miss);
+        if (s->shape == SHAPE_ASPH) {
+            vm fail, noconv;
+            sd = asph_root_v(s, ps, ds, vsel(miss, vd_set(0.0), sd), t->o.max_iter,
+                             live & ~bad, &fail, &noconv);
+            bad |= fail | noconv;
+        } else {
+            bad |= miss;
+        }
+    }
+
+    /* Measure 4: Newton along the ray with F in double-double. */
+    sv = vdd_from(sd);
+    act = live & ~bad;
+    if (s->shape == SHAPE_PLANE)
+        act &= (vm)(p0.z.hi != 0.0);
+    for (it = 0; it < 4 && vm_any(act); it++) {
+        vdd3 p = vdd3_axpy(p0, sv, r->d);
+        vd ferr, step, Fp, Fmag, Fpp, re;
+        vdd F, snew;
+        vm fbad;
+        pd[0] = p.x.hi;
+        pd[1] = p.y.hi;
+        pd[2] = p.z.hi;
+        if (s->shape == SHAPE_PLANE) {
+            F = p.z;
+            ferr = vd_set(0.0);
+            Fp = dz;
+            Fmag = vd_abs(dz);
+            Fpp = vd_set(0.0);
+            fbad = vm_set(0);
+        } else {
+            surf_F_v(s, p, &F, &ferr, &fbad);
+            Fp = surf_Fp_v(s, pd, ds, &Fmag);
+            Fpp = surf_Fpp_v(s, pd[0] * pd[0] + pd[1] * pd[1]);
+        }
+        fbad |= (vm)(Fp == 0.0) | ~vd_isfinite(Fp);
+        fbad &= act;
+        bad |= fbad;
+        act &= ~fbad;
+        step = F.hi / Fp;
+        snew = vdd_sub(sv, vdd_div_d(F, Fp));
+        re = Fpp / vd_abs(Fp) * step * step + ferr / vd_abs(Fp) +
+             vd_abs(step) * 8.0 * U53 * Fmag / vd_abs(Fp) + 4.0 * DD_U * vd_abs(snew.hi);
+        sv = vdd_sel(act, snew, sv);
+        root_err = vsel(act, re, root_err);
+        act &= ~(vm)(re <= 0x1p-100 * (vd_abs(snew.hi) + vd_abs(p0.x.hi) + vd_abs(p0.y.hi)));
+    }
+    r->p = vdd3_axpy(p0, sv, r->d);
+    pd[0] = r->p.x.hi;
+    pd[1] = r->p.y.hi;
+    pd[2] = r->p.z.hi;
+    cg = surf_cos_v(s, pd, ds);
+    kappa = vsel((vm)(cg > 0.0), 1.0 / cg, vd_set(1e300));
+    r->eP = kappa * (eP0 + vd_abs(sv.hi) * r->eD) + root_err +
+            8.0 * DD_U * (vd_abs(p0.x.hi) + vd_abs(p0.y.hi) + vd_abs(sv.hi));
+
+    {
+        vdd sp = vdd_add(s0, sv);
+        dpath = sp.hi + sp.lo;
+    }
+    if (i == 1)
+        dpath = path0 + dpath;
+    resid = resid_v(s, pd[0], pd[1], pd[2]);
+    if (t->o.clip && s->sd > 0.0)
+        for (k = 0; k < SG_VL; k++)
+            if (live[k] && !bad[k] && sg_past_clip(t, s, pd[0][k], pd[1][k]))
+                bad[k] = -1;
+    for (k = 0; k < SG_VL; k++)
+        if (live[k] && !bad[k])
+            put_row(&out[k][i], k, pd, dpath, resid, r->eP);
+
+    if (i < upto) {
+        vm bbad;
+        bend_v(s, r, &bbad);
+        bad |= bbad & live;
+    }
+    r->eP = vsel(vd_isnan(r->eP), vd_set(INFINITY), r->eP);
+    r->eD = vsel(vd_isnan(r->eD), vd_set(INFINITY), r->eD);
+    for (k = 0; k < SG_VL; k++)
+        if (live[k] && !bad[k])
+            put_dir(&out[k][i], k, r);
+    return bad & live;
+}
+
+void sg_precise_run_block(const sg_tracer *t, const sg_pray *r, const double *path0,
+                          sg_ray_surface *const *out, int nl, int upto, int *rc)
+{
+    vray v, snap;
+    vd p0;
+    vm live = vm_set(0);
+    sg_pray hand[SG_VL];
+    int from[SG_VL], i, k;
+    sg_ray_surface *o[SG_VL];
+
+    /* Idle lanes repeat lane 0 and are never written. */
+    for (k = 0; k < SG_VL; k++) {
+        int src = k < nl ? k : 0;
+        lane_put(&v, k, &r[src]);
+        p0[k] = path0[src];
+        o[k] = out[src];
+        from[k] = 0;
+        if (k < nl)
+            live[k] = -1;
+    }
+    for (i = 1; i <= upto && vm_any(live); i++) {
+        vm bad;
+        snap = v;
+        bad = surface_v(t, i, upto, &v, p0, o, live);
+        for (k = 0; k < SG_VL; k++)
+            if (bad[k]) {
+                lane_get(&snap, k, &hand[k]);
+                from[k] = i;
+            }
+        live &= ~bad;
+    }
+    for (k = 0; k < nl; k++)
+        rc[k] = from[k] ? sg_precise_run_from(t, &hand[k], path0[k], out[k], from[k], upto)
+                        : SG_OK;
+}

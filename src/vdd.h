@@ -1,0 +1,266 @@
+/*
+ * vdd.h - double-double arithmetic on SG_VL rays at once.
+ *
+ * Each operation is the lane-by-lane transcription of the one of the same
+ * name in dd.h, rounding for rounding, so a lane of the vector trace gives
+ * the same bits as the scalar trace of the same ray.  Only correctly
+ * rounded operations are used (add, mul, div, sqrt, fma), which is why the
+ * result does not depend on whether the compiler maps a vector to AVX2,
+ * SSE2 or plain scalar code.
+ */
+#ifndef SG_VDD_H
+#define SG_VDD_H
+
+#include <math.h>
+#include <stdint.h>
+
+#include "dd.h"
+
+#if defined(__AVX__)
+#include <immintrin.h>
+#endif
+
+#define SG_VL 4
+
+typedef double vd __attribute__((vector_size(SG_VL * sizeof(double))));
+/* Comparison results: all bits set in a lane where the comparison holds. */
+typedef int64_t vm __attribute__((vector_size(SG_VL * sizeof(double))));
+
+#define VM_SIGN ((int64_t)1 << 63)
+
+static inline vd vd_set(double a)
+{
+    vd r = {a, a, a, a};
+    return r;
+}
+
+static inline vm vm_set(int64_t a)
+{
+    vm r = {a, a, a, a};
+    return r;
+}
+
+static inline vd vsel(vm m, vd a, vd b)
+{
+    return (vd)(((vm)a & m) | ((vm)b & ~m));
+}
+
+static inline int vm_any(vm m)
+{
+    return (m[0] | m[1] | m[2] | m[3]) != 0;
+}
+
+static inline vd vd_abs(vd a)
+{
+    return (vd)((vm)a & ~vm_set(VM_SIGN));
+}
+
+static inline vd vd_neg(vd a)
+{
+    return (vd)((vm)a ^ vm_set(VM_SIGN));
+}
+
+/* copysign(a, b) */
+static inline vd vd_copysign(vd a, vd b)
+{
+    return (vd)(((vm)a & ~vm_set(VM_SIGN)) | ((vm)b & vm_set(VM_SIGN)));
+}
+
+/* A lane that is neither infinite nor NaN. */
+static inline vm vd_isfinite(vd a)
+{
+    return (vm)(vd_abs(a) <= vd_set(1.79769313486231570815e+308));
+}
+
+static inline vm vd_isnan(vd a)
+{
+    return (vm)(a != a);
+}
+
+/* fmax with C's treatment of NaN: the other operand wins. */
+static inline vd vd_fmax(vd a, vd b)
+{
+    return vsel((vm)(a > b) | vd_isnan(b), a, b);
+}
+
+static inline vd vd_sqrt(vd a)
+{
+#if defined(__AVX__)
+    return _mm256_sqrt_pd(a);
+#else
+    vd r;
+    int k;
+    for (k = 0; k < SG_VL; k++)
+        r[k] = sqrt(a[k]);
+    return r;
+#endif
+}
+
+/* a * b - c with one rounding. */
+static inline vd vd_fms(vd a, vd b, vd c)
+{
+#if defined(__FMA__)
+    return _mm256_fmsub_pd(a, b, c);
+#else
+    vd r;
+    int k;
+    for (k = 0; k < SG_VL; k++)
+        r[k] = fma(a[k], b[k], -c[k]);
+    return r;
+#endif
+}
+
+typedef struct vdd {
+    vd hi, lo;
+} vdd;
+
+static inline vdd vdd_from(vd a)
+{
+    vdd r = {a, vd_set(0.0)};
+    return r;
+}
+
+static inline vdd vdd_set(dd a)
+{
+    vdd r = {vd_set(a.hi), vd_set(a.lo)};
+    return r;
+}
+
+static inline vdd vdd_sel(vm m, vdd a, vdd b)
+{
+    vdd r = {vsel(m, a.hi, b.hi), vsel(m, a.lo, b.lo)};
+    return r;
+}
+
+static inline vdd vdd_two_sum(vd a, vd b)
+{
+    vdd r;
+    vd s = a + b;
+    vd bb = s - a;
+    r.hi = s;
+    r.lo = (a - (s - bb)) + (b - bb);
+    return r;
+}
+
+static inline vdd vdd_fast_two_sum(vd a, vd b)
+{
+    vdd r;
+    vd s = a + b;
+    r.hi = s;
+    r.lo = b - (s - a);
+    return r;
+}
+
+static inline vdd vdd_two_prod(vd a, vd b)
+{
+    vdd r;
+    r.hi = a * b;
+    r.lo = vd_fms(a, b, r.hi);
+    return r;
+}
+
+static inline vdd vdd_add(vdd a, vdd b)
+{
+    vdd s = vdd_two_sum(a.hi, b.hi);
+    vdd t = vdd_two_sum(a.lo, b.lo);
+    s.lo += t.hi;
+    s = vdd_fast_two_sum(s.hi, s.lo);
+    s.lo += t.lo;
+    return vdd_fast_two_sum(s.hi, s.lo);
+}
+
+static inline vdd vdd_neg(vdd a)
+{
+    vdd r = {-a.hi, -a.lo};
+    return r;
+}
+
+static inline vdd vdd_sub(vdd a, vdd b)
+{
+    return vdd_add(a, vdd_neg(b));
+}
+
+static inline vdd vdd_add_d(vdd a, vd b)
+{
+    vdd s = vdd_two_sum(a.hi, b);
+    s.lo += a.lo;
+    return vdd_fast_two_sum(s.hi, s.lo);
+}
+
+static inline vdd vdd_mul(vdd a, vdd b)
+{
+    vdd p = vdd_two_prod(a.hi, b.hi);
+    p.lo += a.hi * b.lo;
+    p.lo += a.lo * b.hi;
+    return vdd_fast_two_sum(p.hi, p.lo);
+}
+
+static inline vdd vdd_mul_d(vdd a, vd b)
+{
+    vdd p = vdd_two_prod(a.hi, b);
+    p.lo += a.lo * b;
+    return vdd_fast_two_sum(p.hi, p.lo);
+}
+
+static inline vdd vdd_sqr(vdd a)
+{
+    vdd p = vdd_two_prod(a.hi, a.hi);
+    p.lo += vd_set(2.0) * a.hi * a.lo;
+    return vdd_fast_two_sum(p.hi, p.lo);
+}
+
+static inline vdd vdd_div(vdd a, vdd b)
+{
+    vd q1 = a.hi / b.hi;
+    vdd r = vdd_sub(a, vdd_mul_d(b, q1));
+    vd q2 = r.hi / b.hi;
+    vd q3;
+    vdd q;
+    r = vdd_sub(r, vdd_mul_d(b, q2));
+    q3 = r.hi / b.hi;
+    q = vdd_fast_two_sum(q1, q2);
+    return vdd_add_d(q, q3);
+}
+
+static inline vdd vdd_div_d(vdd a, vd b)
+{
+    vd q1 = a.hi / b;
+    vdd p = vdd_two_prod(q1, b);
+    vd r = ((a.hi - p.hi) - p.lo) + a.lo;
+    vd q2 = r / b;
+    return vdd_fast_two_sum(q1, q2);
+}
+
+static inline vdd vdd_sqrt(vdd a)
+{
+    /* As dd_sqrt: zero for zero, NaN for a negative argument; a NaN goes
+     * through the arithmetic as it does there. */
+    vm le = (vm)(a.hi <= vd_set(0.0));
+    vd x = vd_sqrt(vsel(le, vd_set(1.0), a.hi));
+    vdd r = vdd_sub(a, vdd_two_prod(x, x));
+    vdd root = vdd_fast_two_sum(x, r.hi / (vd_set(2.0) * x));
+    vd other = vsel((vm)(a.hi == vd_set(0.0)), vd_set(0.0), vd_set(NAN));
+    root.hi = vsel(le, other, root.hi);
+    root.lo = vsel(le, vd_set(0.0), root.lo);
+    return root;
+}
+
+typedef struct vdd3 {
+    vdd x, y, z;
+} vdd3;
+
+static inline vdd vdd_dot3(vdd3 a, vdd3 b)
+{
+    return vdd_add(vdd_add(vdd_mul(a.x, b.x), vdd_mul(a.y, b.y)), vdd_mul(a.z, b.z));
+}
+
+static inline vdd3 vdd3_axpy(vdd3 a, vdd s, vdd3 b)
+{
+    vdd3 r;
+    r.x = vdd_add(a.x, vdd_mul(s, b.x));
+    r.y = vdd_add(a.y, vdd_mul(s, b.y));
+    r.z = vdd_add(a.z, vdd_mul(s, b.z));
+    return r;
+}
+
+#endif
