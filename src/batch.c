@@ -40,47 +40,94 @@ static void run_scalar(job *j)
     }
 }
 
-/* The precise method: each ray is launched alone (aiming is per ray), then
- * SG_VL launched rays at a time go through the vector trace. */
+/* Runs the launched lanes through the vector trace and records statuses. */
+static void flush(job *j, sg_pray *st, double *path0, sg_ray_surface **o, const size_t *idx,
+                  int nl)
+{
+    int rc[SG_VL], k;
+    if (nl == 0)
+        return;
+    sg_precise_run_block(j->t, st, path0, o, nl, j->t->n - 1, rc);
+    if (j->status)
+        for (k = 0; k < nl; k++)
+            j->status[idx[k]] = rc[k];
+}
+
+static int finite4(const double *v)
+{
+    return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]) && isfinite(v[3]);
+}
+
+/* The precise method: up to SG_VL consecutive rays of one field are
+ * launched (and aimed) together, then traced together. */
 static void run_precise(job *j)
 {
     sg_tracer *t = j->t;
     sg_pray st[SG_VL];
-    double path0[SG_VL];
-    sg_ray_surface *o[SG_VL];
-    size_t idx[SG_VL], r, end = j->first + j->count;
-    int rc[SG_VL], nl = 0, k;
-    for (r = j->first; r < end; r++) {
+    double path0[SG_VL], pupil[SG_VL][2];
+    sg_ray_surface *o[SG_VL], *sc[SG_VL], *scratch;
+    size_t idx[SG_VL], r = j->first, end = j->first + j->count;
+    int rc[SG_VL], nl, k;
+    /* Aiming traces of the lanes go here, allocated once per job. */
+    scratch = malloc((size_t)SG_VL * (size_t)t->n * sizeof *scratch);
+    for (k = 0; k < SG_VL; k++)
+        sc[k] = scratch ? scratch + (size_t)k * (size_t)t->n : NULL;
+    while (r < end) {
         const double *v = j->rays[r].v;
-        sg_ray_surface *out = j->out + r * (size_t)j->nsurf;
-        int prc;
-        if (j->kind == SG_RAYS_NORMALIZED) {
-            if (!isfinite(v[0]) || !isfinite(v[1]) || !isfinite(v[2]) || !isfinite(v[3])) {
-                sg_fail_rest(out, 0, t->n, SG_EINVAL);
-                prc = SG_EINVAL;
-            } else {
-                prc = sg_launch_precise_prep(t, v[0], v[1], v[2], v[3], out, &st[nl],
-                                             &path0[nl]);
+        nl = 0;
+        if (j->kind == SG_RAYS_START_DIR) {
+            for (; r < end && nl < SG_VL; r++) {
+                sg_ray_surface *out = j->out + r * (size_t)j->nsurf;
+                int prc = sg_start_precise_prep(t, j->rays[r].v, j->rays[r].v + 3, out, &st[nl]);
+                if (prc != SG_OK) {
+                    if (j->status)
+                        j->status[r] = prc;
+                    continue;
+                }
+                path0[nl] = 0.0;
+                o[nl] = out;
+                idx[nl++] = r;
             }
-        } else {
-            path0[nl] = 0.0;
-            prc = sg_start_precise_prep(t, v, v + 3, out, &st[nl]);
+            flush(j, st, path0, o, idx, nl);
+            continue;
         }
-        if (prc != SG_OK) {
+        if (!finite4(v) || !scratch) {
+            /* The single-ray call reports a bad ray; without scratch rows
+             * the rays go one by one. */
+            sg_ray_surface *out = j->out + r * (size_t)j->nsurf;
+            int prc = sg_trace_normalized(t, v[0], v[1], v[2], v[3], out);
             if (j->status)
                 j->status[r] = prc;
-        } else {
-            o[nl] = out;
-            idx[nl++] = r;
+            r++;
+            continue;
         }
-        if (nl == SG_VL || (r + 1 == end && nl > 0)) {
-            sg_precise_run_block(t, st, path0, o, nl, t->n - 1, rc);
-            for (k = 0; k < nl; k++)
-                if (j->status)
-                    j->status[idx[k]] = rc[k];
-            nl = 0;
+        /* A run of rays of the same field. */
+        while (r < end && nl < SG_VL && finite4(j->rays[r].v) && j->rays[r].v[0] == v[0] &&
+               j->rays[r].v[1] == v[1]) {
+            pupil[nl][0] = j->rays[r].v[2];
+            pupil[nl][1] = j->rays[r].v[3];
+            o[nl] = j->out + r * (size_t)j->nsurf;
+            idx[nl++] = r++;
+        }
+        sg_launch_precise_vec(t, v[0], v[1], (const double(*)[2])pupil, nl, o, sc, st, path0,
+                              rc);
+        {
+            int m = 0;
+            for (k = 0; k < nl; k++) {
+                if (rc[k] != SG_OK) {
+                    if (j->status)
+                        j->status[idx[k]] = rc[k];
+                    continue;
+                }
+                st[m] = st[k];
+                path0[m] = path0[k];
+                o[m] = o[k];
+                idx[m++] = idx[k];
+            }
+            flush(j, st, path0, o, idx, m);
         }
     }
+    free(scratch);
 }
 
 static void run_job(job *j)

@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "trace_internal.h"
+#include "vdd.h"
 
 static int inf_object(const sg_tracer *t)
 {
@@ -355,11 +356,11 @@ static int field_osp(sg_tracer *t, land_fn land, double hx, double hy, osp *o,
         v[1] = dd_div(vy, t->ln.pimg_slope);
         h = 1e-7 * (fabs(v[0].hi) + fabs(v[1].hi) + fabs(t->ln.fy.hi / t->ln.pimg_slope.hi) + 1e-12);
         for (k = 0; k < 2; k++) {
-            dd vp[2] = {v[0], v[1]}, vm[2] = {v[0], v[1]};
-            vp[k] = dd_add_d(vp[k], h);
-            vm[k] = dd_add_d(vm[k], -h);
-            if (chief_on_image(t, land, vp, o, ap, scratch) != SG_OK ||
-                chief_on_image(t, land, vm, o, am, scratch) != SG_OK)
+            dd vhi[2] = {v[0], v[1]}, vlo[2] = {v[0], v[1]};
+            vhi[k] = dd_add_d(vhi[k], h);
+            vlo[k] = dd_add_d(vlo[k], -h);
+            if (chief_on_image(t, land, vhi, o, ap, scratch) != SG_OK ||
+                chief_on_image(t, land, vlo, o, am, scratch) != SG_OK)
                 return SG_EAIM;
             J[0][k] = (ap[0] - am[0]) / (2.0 * h);
             J[1][k] = (ap[1] - am[1]) / (2.0 * h);
@@ -461,6 +462,172 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
         out[0].z = S[2] + t->ln.T0.hi;
     }
     return sg_classic_run_to(t, S, D, out, t->n - 1);
+}
+
+/* ------------------------------------------------------------------------
+ * SG_VL rays of one field at once, for the batch trace.  Each lane repeats
+ * the single-ray launch operation for operation; a lane that would leave
+ * the common path (a landing that fails, a Jacobian that stops helping) is
+ * launched again on its own by sg_launch_precise_prep, so every ray gets
+ * the single-ray result bit for bit.
+ * ------------------------------------------------------------------------ */
+
+/* pray_from for nl lanes, lane k from q[k]. */
+static void pray_from_vec(const osp *o, const dd (*q)[2], int nl, sg_pray *r, double *path0)
+{
+    vdd3 v;
+    vdd len, qx, qy;
+    int k;
+    for (k = 0; k < SG_VL; k++) {
+        int src = k < nl ? k : 0;
+        qx.hi[k] = q[src][0].hi;
+        qx.lo[k] = q[src][0].lo;
+        qy.hi[k] = q[src][1].hi;
+        qy.lo[k] = q[src][1].lo;
+    }
+    if (!o->inf) {
+        v.x = vdd_sub(qx, vdd_set(o->obj.x));
+        v.y = vdd_sub(qy, vdd_set(o->obj.y));
+        v.z = vdd_set(dd_neg(o->obj.z));
+        len = vdd_sqrt(vdd_dot3(v, v));
+        v.x = vdd_div(v.x, len);
+        v.y = vdd_div(v.y, len);
+        v.z = vdd_div(v.z, len);
+    }
+    for (k = 0; k < nl; k++) {
+        r[k].p.x = q[k][0];
+        r[k].p.y = q[k][1];
+        r[k].p.z = dd_from(0.0);
+        r[k].eP = DD_U * (fabs(q[k][0].hi) + fabs(q[k][1].hi));
+        r[k].eD = 8.0 * DD_U;
+        if (o->inf) {
+            r[k].d = o->dir;
+            path0[k] = 0.0;
+        } else {
+            r[k].d.x.hi = v.x.hi[k];
+            r[k].d.x.lo = v.x.lo[k];
+            r[k].d.y.hi = v.y.hi[k];
+            r[k].d.y.lo = v.y.lo[k];
+            r[k].d.z.hi = v.z.hi[k];
+            r[k].d.z.lo = v.z.lo[k];
+            path0[k] = len.hi[k] + len.lo[k];
+        }
+    }
+}
+
+/* aim_newton with the field's Jacobian for nl lanes at once.  done[k] is
+ * set for lanes that converged as the single-ray iteration would. */
+static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*target)[2],
+                           int nl, sg_ray_surface *const *scratch, int *done)
+{
+    double scale = fmax(t->ln.stop_r.hi, 1e-300), tol = t->o.aim_rtol * scale;
+    double (*J)[2] = t->aimJ, det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+    double best[SG_VL], noise[SG_VL];
+    int act[SG_VL], na, k, it, from[SG_VL];
+    for (k = 0; k < nl; k++) {
+        best[k] = INFINITY;
+        noise[k] = 0.0;
+        done[k] = 0;
+    }
+    for (it = 0; it < t->o.aim_max_iter; it++) {
+        dd qa[SG_VL][2];
+        sg_pray st[SG_VL];
+        double p0[SG_VL];
+        sg_ray_surface *sc[SG_VL];
+        /* Only lanes still iterating are traced. */
+        for (na = 0, k = 0; k < nl; k++)
+            if (!done[k] && best[k] >= 0.0) {
+                qa[na][0] = q[k][0];
+                qa[na][1] = q[k][1];
+                sc[na] = scratch[na];
+                act[na++] = k;
+            }
+        if (na == 0)
+            return;
+        pray_from_vec(o, (const dd(*)[2])qa, na, st, p0);
+        sg_precise_vec(t, st, p0, sc, na, t->sys->stop, from);
+        for (k = 0; k < na; k++) {
+            int l = act[k];
+            dd res[2];
+            double r0, r1, dx, dy, nr;
+            if (from[k]) {
+                best[l] = -1.0; /* the landing failed: left to the scalar launch */
+                continue;
+            }
+            noise[l] = st[k].eP;
+            res[0] = dd_sub(st[k].p.x, target[l][0]);
+            res[1] = dd_sub(st[k].p.y, target[l][1]);
+            nr = fmax(fabs(res[0].hi), fabs(res[1].hi));
+            if (nr == 0.0 || (nr <= tol + noise[l] && !(nr < 0.5 * best[l]))) {
+                done[l] = 1;
+                continue;
+            }
+            if (!(nr < 0.5 * best[l])) {
+                best[l] = -1.0; /* it needs a Jacobian of its own */
+                continue;
+            }
+            best[l] = fmin(best[l], nr);
+            r0 = res[0].hi + res[0].lo;
+            r1 = res[1].hi + res[1].lo;
+            dx = (J[1][1] * r0 - J[0][1] * r1) / det;
+            dy = (-J[1][0] * r0 + J[0][0] * r1) / det;
+            q[l][0] = dd_add_d(q[l][0], -dx);
+            q[l][1] = dd_add_d(q[l][1], -dy);
+            if (!isfinite(q[l][0].hi) || !isfinite(q[l][1].hi))
+                best[l] = -1.0;
+        }
+    }
+    for (k = 0; k < nl; k++)
+        if (!done[k] && best[k] >= 0.0 && best[k] <= tol + noise[k])
+            done[k] = 1;
+}
+
+int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pupil)[2], int nl,
+                          sg_ray_surface *const *out, sg_ray_surface *const *scratch,
+                          sg_pray *r, double *path0, int *rc)
+{
+    dd q[SG_VL][2], target[SG_VL][2];
+    int done[SG_VL], k, clip;
+    osp o;
+    if (field_cached(t, land_precise, hx, hy, &o, out[0]) != SG_OK) {
+        for (k = 0; k < nl; k++) {
+            sg_fail_rest(out[k], 0, t->n, SG_EAIM);
+            rc[k] = SG_EAIM;
+        }
+        return nl;
+    }
+    for (k = 0; k < nl; k++) {
+        q_aim_off(t, &o, pupil[k][0], pupil[k][1], q[k]);
+        done[k] = 1;
+    }
+    if (t->sys->aim != SG_AIM_OFF) {
+        clip = t->o.clip;
+        t->o.clip = 0;
+        if (!t->have_aimJ) {
+            dd qc[2];
+            q_aim_off(t, &o, 0.0, 0.0, qc);
+            t->have_aimJ = fd_jacobian(t, land_precise, &o, qc, t->aimJ, t->scratch) == SG_OK;
+        }
+        for (k = 0; k < nl; k++) {
+            target[k][0] = dd_mul_d(t->ln.stop_r, pupil[k][0]);
+            target[k][1] = dd_mul_d(t->ln.stop_r, pupil[k][1]);
+            done[k] = 0;
+        }
+        if (t->have_aimJ)
+            aim_newton_vec(t, &o, q, (const dd(*)[2])target, nl, scratch, done);
+        t->o.clip = clip;
+    }
+    pray_from_vec(&o, (const dd(*)[2])q, nl, r, path0);
+    for (k = 0; k < nl; k++) {
+        if (done[k]) {
+            object_row(t, &o, &r[k], &out[k][0]);
+            rc[k] = SG_OK;
+        } else {
+            rc[k] = sg_launch_precise_prep(t, hx, hy, pupil[k][0], pupil[k][1], out[k], &r[k],
+                                           &path0[k]);
+        }
+    }
+    return nl;
 }
 
 /* Launch constants from a 128-bit paraxial trace. */

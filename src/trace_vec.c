@@ -496,14 +496,13 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
     return bad & live;
 }
 
-void sg_precise_run_block(const sg_tracer *t, const sg_pray *r, const double *path0,
-                          sg_ray_surface *const *out, int nl, int upto, int *rc)
+void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
+                    sg_ray_surface *const *out, int nl, int upto, int *from)
 {
     vray v, snap;
     vd p0;
     vm live = vm_set(0);
-    sg_pray hand[SG_VL];
-    int from[SG_VL], i, k;
+    int i, k;
     sg_ray_surface *o[SG_VL];
 
     /* Idle lanes repeat lane 0 and are never written. */
@@ -512,22 +511,35 @@ void sg_precise_run_block(const sg_tracer *t, const sg_pray *r, const double *pa
         lane_put(&v, k, &r[src]);
         p0[k] = path0[src];
         o[k] = out[src];
-        from[k] = 0;
-        if (k < nl)
+        if (k < nl) {
             live[k] = -1;
+            from[k] = 0;
+        }
     }
     for (i = 1; i <= upto && vm_any(live); i++) {
         vm bad;
         snap = v;
         bad = surface_v(t, i, upto, &v, p0, o, live);
-        for (k = 0; k < SG_VL; k++)
+        for (k = 0; k < nl; k++)
             if (bad[k]) {
-                lane_get(&snap, k, &hand[k]);
+                lane_get(&snap, k, &r[k]);
                 from[k] = i;
             }
         live &= ~bad;
     }
     for (k = 0; k < nl; k++)
-        rc[k] = from[k] ? sg_precise_run_from(t, &hand[k], path0[k], out[k], from[k], upto)
+        if (!from[k])
+            lane_get(&v, k, &r[k]);
+}
+
+void sg_precise_run_block(const sg_tracer *t, const sg_pray *r, const double *path0,
+                          sg_ray_surface *const *out, int nl, int upto, int *rc)
+{
+    sg_pray st[SG_VL];
+    int from[SG_VL], k;
+    memcpy(st, r, (size_t)nl * sizeof *st);
+    sg_precise_vec(t, st, path0, out, nl, upto, from);
+    for (k = 0; k < nl; k++)
+        rc[k] = from[k] ? sg_precise_run_from(t, &st[k], path0[k], out[k], from[k], upto)
                         : SG_OK;
 }
