@@ -217,6 +217,21 @@ static int fd_jacobian(sg_tracer *t, land_fn land, const osp *o, const dd q[2],
     return fabs(det) > 0.0 && isfinite(det) ? SG_OK : SG_EAIM;
 }
 
+/* Broyden's update after the step (-dx, -dy) left the residual (r0, r1):
+ * the borrowed Jacobian learns the map along each step it takes, so a
+ * ray far from the chief still converges superlinearly. */
+static void broyden(double J[2][2], double *det, double r0, double r1, double dx, double dy)
+{
+    double s2 = dx * dx + dy * dy;
+    if (!(s2 > 0.0))
+        return;
+    J[0][0] -= r0 * dx / s2;
+    J[0][1] -= r0 * dy / s2;
+    J[1][0] -= r1 * dx / s2;
+    J[1][1] -= r1 * dy / s2;
+    *det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+}
+
 /* Solves land(Q) = target by Newton, from Q.  J0, when given, is the
  * field's Jacobian at its chief ray: most rays converge with it, and a ray
  * for which it stops helping gets its own, so the result depends on the
@@ -226,8 +241,9 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
 {
     double scale = fmax(t->ln.stop_r.hi, 1e-300);
     double J[2][2], det, best = INFINITY, tol = t->o.aim_rtol * scale, noise = 0.0;
+    double dx = 0.0, dy = 0.0;
     dd at[2], res[2];
-    int it, rc;
+    int it, rc, stepped = 0, fresh = J0 == NULL;
     if (J0 == NULL) {
         if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
             return SG_EAIM;
@@ -236,29 +252,39 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
     }
     det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
     for (it = 0; it < t->o.aim_max_iter; it++) {
-        double r0, r1, dx, dy, nr;
+        double r0, r1, nr;
         rc = land(t, o, q, at, &noise, scratch);
         if (rc != SG_OK && rc != SG_EVIGNETTED)
             return SG_EAIM;
         res[0] = dd_sub(at[0], target[0]);
         res[1] = dd_sub(at[1], target[1]);
         nr = fmax(fabs(res[0].hi), fabs(res[1].hi));
-        /* Stop once the residual no longer shrinks: the landing is then
-         * as exact as the arithmetic carrying it.  A method whose landing
-         * is noisier than the tolerance succeeds within its own noise. */
-        if (nr == 0.0 || (nr <= tol + noise && !(nr < 0.5 * best)))
+        if (nr == 0.0)
             return SG_OK;
         if (!(nr < 0.5 * best)) {
+            /* The residual stopped shrinking.  Within the landing's own
+             * error bound, the landing is as exact as the arithmetic
+             * carrying it; when a fresh Jacobian did not help either, it
+             * is as exact as the tolerance asks. */
+            if (nr <= noise || (fresh && nr <= tol + noise))
+                return SG_OK;
             /* The Jacobian has stopped helping this ray (a borrowed one, or
              * its own near a turning point of the landing map): take a
              * fresh one here. */
             if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
                 return SG_EAIM;
             det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+            stepped = 0;
+            fresh = 1;
+        } else {
+            fresh = 0;
         }
         best = fmin(best, nr);
         r0 = res[0].hi + res[0].lo;
         r1 = res[1].hi + res[1].lo;
+        if (stepped)
+            broyden(J, &det, r0, r1, dx, dy);
+        stepped = 1;
         dx = (J[1][1] * r0 - J[0][1] * r1) / det;
         dy = (-J[1][0] * r0 + J[0][0] * r1) / det;
         q[0] = dd_add_d(q[0], -dx);
@@ -515,19 +541,22 @@ static void pray_from_vec(const osp *o, const dd (*q)[2], int nl, sg_pray *r, do
     }
 }
 
-/* aim_newton with the field's Jacobian for nl lanes at once.  done[k] is
+/* aim_newton from the field's Jacobian for nl lanes at once.  done[k] is
  * set for lanes that converged as the single-ray iteration would. */
 static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*target)[2],
                            int nl, sg_ray_surface *const *scratch, int *done)
 {
     double scale = fmax(t->ln.stop_r.hi, 1e-300), tol = t->o.aim_rtol * scale;
-    double (*J)[2] = t->aimJ, det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
-    double best[SG_VL], noise[SG_VL];
-    int act[SG_VL], na, k, it, from[SG_VL];
+    double J[SG_VL][2][2], det[SG_VL], dx[SG_VL], dy[SG_VL], best[SG_VL], noise[SG_VL];
+    int act[SG_VL], na, k, it, from[SG_VL], stepped[SG_VL];
     for (k = 0; k < nl; k++) {
+        memcpy(J[k], t->aimJ, sizeof J[k]);
+        det[k] = J[k][0][0] * J[k][1][1] - J[k][0][1] * J[k][1][0];
         best[k] = INFINITY;
         noise[k] = 0.0;
         done[k] = 0;
+        stepped[k] = 0;
+        dx[k] = dy[k] = 0.0;
     }
     for (it = 0; it < t->o.aim_max_iter; it++) {
         dd qa[SG_VL][2];
@@ -549,7 +578,7 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
         for (k = 0; k < na; k++) {
             int l = act[k];
             dd res[2];
-            double r0, r1, dx, dy, nr;
+            double r0, r1, nr;
             if (from[k]) {
                 best[l] = -1.0; /* the landing failed: left to the scalar launch */
                 continue;
@@ -558,7 +587,7 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
             res[0] = dd_sub(st[k].p.x, target[l][0]);
             res[1] = dd_sub(st[k].p.y, target[l][1]);
             nr = fmax(fabs(res[0].hi), fabs(res[1].hi));
-            if (nr == 0.0 || (nr <= tol + noise[l] && !(nr < 0.5 * best[l]))) {
+            if (nr == 0.0 || (nr <= noise[l] && !(nr < 0.5 * best[l]))) {
                 done[l] = 1;
                 continue;
             }
@@ -569,10 +598,13 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
             best[l] = fmin(best[l], nr);
             r0 = res[0].hi + res[0].lo;
             r1 = res[1].hi + res[1].lo;
-            dx = (J[1][1] * r0 - J[0][1] * r1) / det;
-            dy = (-J[1][0] * r0 + J[0][0] * r1) / det;
-            q[l][0] = dd_add_d(q[l][0], -dx);
-            q[l][1] = dd_add_d(q[l][1], -dy);
+            if (stepped[l])
+                broyden(J[l], &det[l], r0, r1, dx[l], dy[l]);
+            stepped[l] = 1;
+            dx[l] = (J[l][1][1] * r0 - J[l][0][1] * r1) / det[l];
+            dy[l] = (-J[l][1][0] * r0 + J[l][0][0] * r1) / det[l];
+            q[l][0] = dd_add_d(q[l][0], -dx[l]);
+            q[l][1] = dd_add_d(q[l][1], -dy[l]);
             if (!isfinite(q[l][0].hi) || !isfinite(q[l][1].hi))
                 best[l] = -1.0;
         }
