@@ -576,7 +576,7 @@ int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_sur
         o->z = r->p.z.hi;
         o->path = i == 1 ? path0 + dpath : dpath;
         o->residual = sg_sprep_sag_resid(s, o->x, o->y, o->z);
-        o->error_bound = sg_bound_up(r->eP + 0.5 * sg_ulp_of(fmax(fabs(o->x), fmax(fabs(o->y), fabs(o->z)))));
+        o->error_bound = sg_bound_up(r->eP + 0.5 * sg_ulp_of(sg_max_abs3(o->x, o->y, o->z)));
         o->status = SG_OK;
 
         if (sg_past_clip(t, s, o->x, o->y)) {
@@ -599,7 +599,7 @@ int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_sur
         o->l = r->d.x.hi;
         o->m = r->d.y.hi;
         o->n = r->d.z.hi;
-        o->dir_error_bound = sg_bound_up(r->eD + 0.5 * sg_ulp_of(fmax(fabs(o->l), fmax(fabs(o->m), fabs(o->n)))));
+        o->dir_error_bound = sg_bound_up(r->eD + 0.5 * sg_ulp_of(sg_max_abs3(o->l, o->m, o->n)));
     }
     return SG_OK;
 }

@@ -126,6 +126,13 @@ static inline double sg_ulp_of(double x)
     return x;
 }
 
+/* fmax(|a|, fmax(|b|, |c|)) without a call into libm. */
+static inline double sg_max_abs3(double a, double b, double c)
+{
+    double A = fabs(a), B = fabs(b), C = fabs(c), m = B > C || C != C ? B : C;
+    return A > m || m != m ? A : m;
+}
+
 /* A bound computed in floating point must not round down past the error
  * it bounds, so it is nudged up by more than its own rounding. */
 static inline double sg_bound_up(double b)

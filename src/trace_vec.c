@@ -347,7 +347,7 @@ static void put_row(sg_ray_surface *o, int k, const vd P[3], vd path, vd resid, 
     o->path = path[k];
     o->residual = resid[k];
     o->error_bound =
-        sg_bound_up(eP[k] + 0.5 * sg_ulp_of(fmax(fabs(o->x), fmax(fabs(o->y), fabs(o->z)))));
+        sg_bound_up(eP[k] + 0.5 * sg_ulp_of(sg_max_abs3(o->x, o->y, o->z)));
     o->status = SG_OK;
 }
 
@@ -357,7 +357,7 @@ static void put_dir(sg_ray_surface *o, int k, const vray *r)
     o->m = r->d.y.hi[k];
     o->n = r->d.z.hi[k];
     o->dir_error_bound = sg_bound_up(
-        r->eD[k] + 0.5 * sg_ulp_of(fmax(fabs(o->l), fmax(fabs(o->m), fabs(o->n)))));
+        r->eD[k] + 0.5 * sg_ulp_of(sg_max_abs3(o->l, o->m, o->n)));
 }
 
 /* One surface for every live lane; returns the lanes to hand back. */

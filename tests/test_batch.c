@@ -2,6 +2,7 @@
  * test_batch.c - the batch driver equals single-ray calls bit for bit, for
  * every method and thread count.  The reference is the single-ray API.
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -140,6 +141,86 @@ static void start_dir(void **state)
     sg_catalog_free(cat);
 }
 
+/* The batch traces precise rays four at a time and hands a lane that
+ * fails mid-block back to the scalar trace.  Start/dir rays over steep
+ * angles and wide heights put misses, total internal reflection and good
+ * rays in the same blocks; every one must equal its single-ray trace. */
+static void mixed_blocks(const char *file, double z0, double hmax, int want_tir)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = tu_example(file);
+    sg_trace_opts o;
+    sg_diag d;
+    sg_tracer *t;
+    enum { N = 800 };
+    sg_ray_in *rays = calloc(N, sizeof *rays);
+    size_t ns = (size_t)sys->nsurf;
+    sg_ray_surface *one = calloc(N * ns, sizeof *one), *many = calloc(N * ns, sizeof *many);
+    int st1[N], st2[N], r, k, nok = 0, nmiss = 0, ntir = 0, nother = 0, mixed = 0;
+    unsigned long long seed = 12345;
+    assert_non_null(rays);
+    assert_non_null(one);
+    assert_non_null(many);
+    for (r = 0; r < N; r++) {
+        double u[3], a, b;
+        for (k = 0; k < 3; k++) {
+            seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+            u[k] = (double)(seed >> 11) / 9007199254740992.0;
+        }
+        a = (u[0] - 0.5) * 2.9; /* up to 83 degrees off the axis */
+        b = (u[1] - 0.5) * 2.0 * hmax;
+        rays[r].v[0] = 0.1 * (u[2] - 0.5);
+        rays[r].v[1] = b;
+        rays[r].v[2] = z0;
+        rays[r].v[3] = 0.05 * u[2];
+        rays[r].v[4] = sin(a);
+        rays[r].v[5] = cos(a);
+    }
+    sg_trace_opts_init(&o);
+    sg_diag_clear(&d);
+    t = sg_tracer_new(sys, cat, &o, &d);
+    assert_non_null(t);
+    for (r = 0; r < N; r++) {
+        st1[r] = sg_trace_start(t, rays[r].v, rays[r].v + 3, one + (size_t)r * ns);
+        nok += st1[r] == SG_OK;
+        nmiss += st1[r] == SG_EMISS;
+        ntir += st1[r] == SG_ETIR;
+        nother += st1[r] != SG_OK && st1[r] != SG_EMISS && st1[r] != SG_ETIR;
+    }
+    for (r = 0; r + 4 <= N; r += 4) {
+        int f = (st1[r] != SG_OK) + (st1[r + 1] != SG_OK) + (st1[r + 2] != SG_OK) +
+                (st1[r + 3] != SG_OK);
+        mixed += f > 0 && f < 4;
+    }
+    for (k = 1; k <= 2; k++) {
+        memset(many, 0xA5, N * ns * sizeof *many);
+        assert_int_equal(
+            sg_trace_batch(sys, cat, &o, SG_RAYS_START_DIR, rays, N, k, many, st2, &d), SG_OK);
+        assert_memory_equal(st1, st2, sizeof st1);
+        same_rows(one, many, N * ns);
+    }
+    print_message("# %s: %d start/dir rays (%d traced, %d miss, %d TIR, %d other failures; "
+                  "%d blocks of four mix traced and failed rays) identical on 1 and 2 threads\n",
+                  file, N, nok, nmiss, ntir, nother, mixed);
+    assert_true(nok > 0 && nmiss > 0 && mixed > 10);
+    if (want_tir)
+        assert_true(ntir > 0);
+    sg_tracer_free(t);
+    free(rays);
+    free(one);
+    free(many);
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
+static void handoff(void **state)
+{
+    (void)state;
+    mixed_blocks("singlet.json", -5.0, 60.0, 1);
+    mixed_blocks("tma.json", -10.0, 400.0, 0);
+    mixed_blocks("double_gauss.json", -5.0, 60.0, 0);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -147,6 +228,7 @@ int main(void)
         cmocka_unit_test(classic),
         cmocka_unit_test(mpfr),
         cmocka_unit_test(start_dir),
+        cmocka_unit_test(handoff),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
