@@ -42,12 +42,12 @@ static void run_scalar(job *j)
 
 /* Runs the launched lanes through the vector trace and records statuses. */
 static void flush(job *j, sg_pray *st, double *path0, sg_ray_surface **o, const size_t *idx,
-                  int nl)
+                  const int *start, int nl)
 {
     int rc[SG_VL], k;
     if (nl == 0)
         return;
-    sg_precise_run_block(j->t, st, path0, o, nl, j->t->n - 1, rc);
+    sg_precise_run_block(j->t, st, path0, o, nl, start, j->t->n - 1, rc);
     if (j->status)
         for (k = 0; k < nl; k++)
             j->status[idx[k]] = rc[k];
@@ -67,7 +67,7 @@ static void run_precise(job *j)
     double path0[SG_VL], pupil[SG_VL][2];
     sg_ray_surface *o[SG_VL], *sc[SG_VL], *scratch;
     size_t idx[SG_VL], r = j->first, end = j->first + j->count;
-    int rc[SG_VL], nl, k;
+    int rc[SG_VL], start[SG_VL], one[SG_VL] = {1, 1, 1, 1}, nl, k;
     /* Aiming traces of the lanes go here, allocated once per job. */
     scratch = malloc((size_t)SG_VL * (size_t)t->n * sizeof *scratch);
     for (k = 0; k < SG_VL; k++)
@@ -88,7 +88,7 @@ static void run_precise(job *j)
                 o[nl] = out;
                 idx[nl++] = r;
             }
-            flush(j, st, path0, o, idx, nl);
+            flush(j, st, path0, o, idx, one, nl);
             continue;
         }
         if (!finite4(v) || !scratch) {
@@ -110,7 +110,7 @@ static void run_precise(job *j)
             idx[nl++] = r++;
         }
         sg_launch_precise_vec(t, v[0], v[1], (const double(*)[2])pupil, nl, o, sc, st, path0,
-                              rc);
+                              start, rc);
         {
             int m = 0;
             for (k = 0; k < nl; k++) {
@@ -121,10 +121,11 @@ static void run_precise(job *j)
                 }
                 st[m] = st[k];
                 path0[m] = path0[k];
+                start[m] = start[k];
                 o[m] = o[k];
                 idx[m++] = idx[k];
             }
-            flush(j, st, path0, o, idx, m);
+            flush(j, st, path0, o, idx, start, m);
         }
     }
     free(scratch);

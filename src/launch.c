@@ -542,9 +542,10 @@ static void pray_from_vec(const osp *o, const dd (*q)[2], int nl, sg_pray *r, do
 }
 
 /* aim_newton from the field's Jacobian for nl lanes at once.  done[k] is
- * set for lanes that converged as the single-ray iteration would. */
+ * set for lanes that converged as the single-ray iteration would, and
+ * entry[k] is the state in which their last landing entered the stop. */
 static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*target)[2],
-                           int nl, sg_ray_surface *const *scratch, int *done)
+                           int nl, sg_ray_surface *const *scratch, int *done, sg_pray *entry)
 {
     double scale = fmax(t->ln.stop_r.hi, 1e-300), tol = t->o.aim_rtol * scale;
     double J[SG_VL][2][2], det[SG_VL], dx[SG_VL], dy[SG_VL], best[SG_VL], noise[SG_VL];
@@ -560,21 +561,23 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
     }
     for (it = 0; it < t->o.aim_max_iter; it++) {
         dd qa[SG_VL][2];
-        sg_pray st[SG_VL];
+        sg_pray st[SG_VL], en[SG_VL];
         double p0[SG_VL];
         sg_ray_surface *sc[SG_VL];
-        /* Only lanes still iterating are traced. */
+        int one[SG_VL] = {1, 1, 1, 1};
+        /* Only lanes still iterating are traced, each into its own rows so
+         * that its last landing can start the final trace. */
         for (na = 0, k = 0; k < nl; k++)
             if (!done[k] && best[k] >= 0.0) {
                 qa[na][0] = q[k][0];
                 qa[na][1] = q[k][1];
-                sc[na] = scratch[na];
+                sc[na] = scratch[k];
                 act[na++] = k;
             }
         if (na == 0)
             return;
         pray_from_vec(o, (const dd(*)[2])qa, na, st, p0);
-        sg_precise_vec(t, st, p0, sc, na, t->sys->stop, from);
+        sg_precise_vec(t, st, p0, sc, na, one, t->sys->stop, from, en);
         for (k = 0; k < na; k++) {
             int l = act[k];
             dd res[2];
@@ -583,6 +586,8 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
                 best[l] = -1.0; /* the landing failed: left to the scalar launch */
                 continue;
             }
+            entry[l] = en[k];
+            /* In lanes that stop here, entry[] belongs to the final Q. */
             noise[l] = st[k].eP;
             res[0] = dd_sub(st[k].p.x, target[l][0]);
             res[1] = dd_sub(st[k].p.y, target[l][1]);
@@ -609,17 +614,32 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
                 best[l] = -1.0;
         }
     }
+    /* Out of iterations within tolerance: Q moved after its last landing,
+     * so that landing cannot start the final trace (done = 2). */
     for (k = 0; k < nl; k++)
         if (!done[k] && best[k] >= 0.0 && best[k] <= tol + noise[k])
-            done[k] = 1;
+            done[k] = 2;
+}
+
+/* Whether a lane may start its final trace at the stop from its last
+ * landing: the landing ran with clipping off, so the apertures before the
+ * stop are checked here. */
+static int resumable(const sg_tracer *t, const sg_ray_surface *rows)
+{
+    int i;
+    for (i = 1; i < t->sys->stop; i++)
+        if (sg_past_clip(t, &t->sp[i], rows[i].x, rows[i].y))
+            return 0;
+    return t->sys->stop > 1;
 }
 
 int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pupil)[2], int nl,
                           sg_ray_surface *const *out, sg_ray_surface *const *scratch,
-                          sg_pray *r, double *path0, int *rc)
+                          sg_pray *r, double *path0, int *start, int *rc)
 {
     dd q[SG_VL][2], target[SG_VL][2];
-    int done[SG_VL], k, clip;
+    sg_pray entry[SG_VL];
+    int done[SG_VL], k, clip, aimed = 0;
     osp o;
     if (field_cached(t, land_precise, hx, hy, &o, out[0]) != SG_OK) {
         for (k = 0; k < nl; k++) {
@@ -645,15 +665,24 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
             target[k][1] = dd_mul_d(t->ln.stop_r, pupil[k][1]);
             done[k] = 0;
         }
-        if (t->have_aimJ)
-            aim_newton_vec(t, &o, q, (const dd(*)[2])target, nl, scratch, done);
+        if (t->have_aimJ) {
+            aim_newton_vec(t, &o, q, (const dd(*)[2])target, nl, scratch, done, entry);
+            aimed = 1;
+        }
         t->o.clip = clip;
     }
     pray_from_vec(&o, (const dd(*)[2])q, nl, r, path0);
     for (k = 0; k < nl; k++) {
+        start[k] = 1;
         if (done[k]) {
             object_row(t, &o, &r[k], &out[k][0]);
             rc[k] = SG_OK;
+            if (aimed && done[k] == 1 && resumable(t, scratch[k])) {
+                /* The last landing traced this very ray up to the stop. */
+                memcpy(&out[k][1], &scratch[k][1], (size_t)(t->sys->stop - 1) * sizeof out[k][1]);
+                r[k] = entry[k];
+                start[k] = t->sys->stop;
+            }
         } else {
             rc[k] = sg_launch_precise_prep(t, hx, hy, pupil[k][0], pupil[k][1], out[k], &r[k],
                                            &path0[k]);

@@ -92,16 +92,20 @@ int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surfa
  * and still in that surface's frame; from = 1 is sg_precise_run_to. */
 int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
                         int from, int upto);
-/* The precise trace of nl <= SG_VL rays at once: lane k starts from r[k]
- * and path0[k] as sg_precise_run_to takes them and fills out[k]; rc[k] is
- * its status.  Every lane equals sg_precise_run_to's result bit for bit. */
+/* The precise trace of nl <= SG_VL rays at once: lane k starts at surface
+ * start[k] from r[k] and path0[k] as sg_precise_run_from takes them and
+ * fills out[k]; rc[k] is its status.  Every lane equals the scalar trace
+ * bit for bit. */
 void sg_precise_run_block(const sg_tracer *t, const sg_pray *r, const double *path0,
-                          sg_ray_surface *const *out, int nl, int upto, int *rc);
+                          sg_ray_surface *const *out, int nl, const int *start, int upto,
+                          int *rc);
 /* The vector trace itself: lanes that reach surface upto end there in r[k]
- * with from[k] = 0; a lane that leaves the common path at surface i gets
- * from[k] = i and r[k] as it entered that surface, for the scalar trace. */
+ * with from[k] = 0, and entry[k] (when given) is their state entering it.
+ * A lane that leaves the common path at surface i gets from[k] = i and r[k]
+ * as it entered that surface, for the scalar trace. */
 void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
-                    sg_ray_surface *const *out, int nl, int upto, int *from);
+                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *from,
+                    sg_pray *entry);
 /* Whether clipping at s stops a ray meeting it at (x, y). */
 int sg_past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y);
 int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
@@ -159,10 +163,12 @@ int sg_launch_precise_prep(sg_tracer *t, double hx, double hy, double px, double
 /* sg_launch_precise_prep for nl <= SG_VL pupil points of field (hx, hy),
  * aimed together; scratch holds SG_VL rows of t->n surfaces for the
  * aiming traces.  rc[k] is each ray's status; every lane equals the
- * single-ray launch bit for bit.  Returns nl. */
+ * single-ray launch bit for bit.  A lane whose last aiming trace already
+ * crossed the surfaces before the stop gets start[k] = stop, those rows
+ * filled, and r[k] as it enters the stop; others start[k] = 1.  Returns nl. */
 int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pupil)[2], int nl,
                           sg_ray_surface *const *out, sg_ray_surface *const *scratch,
-                          sg_pray *r, double *path0, int *rc);
+                          sg_pray *r, double *path0, int *start, int *rc);
 int sg_start_precise_prep(const sg_tracer *t, const double start[3], const double dir[3],
                           sg_ray_surface *out, sg_pray *r);
 int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,

@@ -496,13 +496,26 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
     return bad & live;
 }
 
+static void vray_sel(vm m, const vray *a, vray *b)
+{
+    b->p.x = vdd_sel(m, a->p.x, b->p.x);
+    b->p.y = vdd_sel(m, a->p.y, b->p.y);
+    b->p.z = vdd_sel(m, a->p.z, b->p.z);
+    b->d.x = vdd_sel(m, a->d.x, b->d.x);
+    b->d.y = vdd_sel(m, a->d.y, b->d.y);
+    b->d.z = vdd_sel(m, a->d.z, b->d.z);
+    b->eP = vsel(m, a->eP, b->eP);
+    b->eD = vsel(m, a->eD, b->eD);
+}
+
 void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
-                    sg_ray_surface *const *out, int nl, int upto, int *from)
+                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *from,
+                    sg_pray *entry)
 {
     vray v, snap;
     vd p0;
-    vm live = vm_set(0);
-    int i, k;
+    vm live = vm_set(0), pending = vm_set(0);
+    int i, k, first = upto + 1;
     sg_ray_surface *o[SG_VL];
 
     /* Idle lanes repeat lane 0 and are never written. */
@@ -512,14 +525,26 @@ void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
         p0[k] = path0[src];
         o[k] = out[src];
         if (k < nl) {
-            live[k] = -1;
+            pending[k] = -1;
             from[k] = 0;
+            if (start[k] < first)
+                first = start[k];
         }
     }
-    for (i = 1; i <= upto && vm_any(live); i++) {
+    for (i = first; i <= upto && vm_any(live | pending); i++) {
         vm bad;
+        for (k = 0; k < nl; k++)
+            if (pending[k] && start[k] == i) {
+                pending[k] = 0;
+                live[k] = -1;
+            }
         snap = v;
+        if (i == upto && entry)
+            for (k = 0; k < nl; k++)
+                lane_get(&snap, k, &entry[k]);
         bad = surface_v(t, i, upto, &v, p0, o, live);
+        /* Lanes that start further on keep their state. */
+        vray_sel(pending, &snap, &v);
         for (k = 0; k < nl; k++)
             if (bad[k]) {
                 lane_get(&snap, k, &r[k]);
@@ -533,12 +558,13 @@ void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
 }
 
 void sg_precise_run_block(const sg_tracer *t, const sg_pray *r, const double *path0,
-                          sg_ray_surface *const *out, int nl, int upto, int *rc)
+                          sg_ray_surface *const *out, int nl, const int *start, int upto,
+                          int *rc)
 {
     sg_pray st[SG_VL];
     int from[SG_VL], k;
     memcpy(st, r, (size_t)nl * sizeof *st);
-    sg_precise_vec(t, st, path0, out, nl, upto, from);
+    sg_precise_vec(t, st, path0, out, nl, start, upto, from, NULL);
     for (k = 0; k < nl; k++)
         rc[k] = from[k] ? sg_precise_run_from(t, &st[k], path0[k], out[k], from[k], upto)
                         : SG_OK;

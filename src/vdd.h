@@ -21,6 +21,7 @@
 #endif
 
 #define SG_VL 4
+_Static_assert(SG_VL == 4, "vd_set, vm_set and vm_any spell out four lanes");
 
 typedef double vd __attribute__((vector_size(SG_VL * sizeof(double))));
 /* Comparison results: all bits set in a lane where the comparison holds. */
