@@ -67,11 +67,13 @@ static void run_precise(job *j)
     double path0[SG_VL], pupil[SG_VL][2];
     sg_ray_surface *o[SG_VL], *sc[SG_VL], *scratch;
     size_t idx[SG_VL], r = j->first, end = j->first + j->count;
-    int rc[SG_VL], start[SG_VL], one[SG_VL] = {1, 1, 1, 1}, nl, k;
+    int rc[SG_VL], start[SG_VL], one[SG_VL], nl, k;
     /* Aiming traces of the lanes go here, allocated once per job. */
     scratch = malloc((size_t)SG_VL * (size_t)t->n * sizeof *scratch);
-    for (k = 0; k < SG_VL; k++)
+    for (k = 0; k < SG_VL; k++) {
         sc[k] = scratch ? scratch + (size_t)k * (size_t)t->n : NULL;
+        one[k] = 1;
+    }
     while (r < end) {
         const double *v = j->rays[r].v;
         nl = 0;

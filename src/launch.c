@@ -564,9 +564,11 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
         sg_pray st[SG_VL], en[SG_VL];
         double p0[SG_VL];
         sg_ray_surface *sc[SG_VL];
-        int one[SG_VL] = {1, 1, 1, 1};
+        int one[SG_VL];
         /* Only lanes still iterating are traced, each into its own rows so
          * that its last landing can start the final trace. */
+        for (k = 0; k < SG_VL; k++)
+            one[k] = 1;
         for (na = 0, k = 0; k < nl; k++)
             if (!done[k] && best[k] >= 0.0) {
                 qa[na][0] = q[k][0];
