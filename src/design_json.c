@@ -575,7 +575,7 @@ static const char *const aper_keys[] = {"type", "value"};
 static int read_aperture(jctx *c, const cJSON *v, sg_system *sys)
 {
     const cJSON *k[A_N];
-    int rc, e;
+    int rc, e = 0;
     if ((rc = expect_object(c, v, "aperture")) != SG_OK)
         return rc;
     pick_keys(c, v, "aperture", aper_keys, A_N, k);
@@ -685,7 +685,7 @@ static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
 {
     const cJSON *k[T_N], *it;
     char got[80];
-    int rc, n, i, e, stop = -1;
+    int rc, n, i, e = 0, stop = -1;
 
     if (!cJSON_IsObject(root)) {
         describe(root, got, sizeof got);
@@ -701,7 +701,7 @@ static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
     }
     it = last_item(root, "version");
     if (it) {
-        int version;
+        int version = 0;
         if ((rc = get_int(c, it, "version", &version)) != SG_OK)
             return rc;
         if (version > SG_DESIGN_FORMAT_VERSION)

@@ -387,10 +387,13 @@ void sg_fail_rest(sg_ray_surface *out, int from, int n, int status)
 static int precise_bend(const sg_sprep *s, sg_pray *r)
 {
     double gsens, gn, cosI_d, dN;
-    dd3 g = surf_grad_dd(s, r->p, &gsens);
-    dd gg = dd_dot3(g, g);
-    dd dg = dd_dot3(r->d, g);
-    dd3 nd;
+    dd3 g, nd;
+    dd gg, dg;
+    if (sg_sprep_passes(s))
+        return SG_OK;
+    g = surf_grad_dd(s, r->p, &gsens);
+    gg = dd_dot3(g, g);
+    dg = dd_dot3(r->d, g);
     if (gg.hi <= 0.0)
         return SG_ENONPHYS;
     gn = sqrt(gg.hi);

@@ -33,6 +33,14 @@ typedef struct sg_sprep {
     double zg;   /* vertex z in the global frame (surface 1 at 0), classic only */
 } sg_sprep;
 
+/* A flat surface between equal indices leaves a ray's direction exactly
+ * as it is (the normal is exact and nothing can reflect totally), so the
+ * bend is skipped: dummy planes are common in real designs. */
+static inline int sg_sprep_passes(const sg_sprep *s)
+{
+    return s->shape == SHAPE_PLANE && !s->mirror && fabs(s->mu.hi) == 1.0 && s->mu.lo == 0.0;
+}
+
 /* Launch constants of normalized rays, for one precision. */
 typedef struct sg_launch {
     int obj_inf;     /* object at infinity */

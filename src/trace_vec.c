@@ -297,9 +297,15 @@ static vdd3 surf_grad_v(const sg_sprep *s, vdd3 p, vd *gsens)
 static void bend_v(const sg_sprep *s, vray *r, vm *bad)
 {
     vd gsens, gn, cosI, dN;
-    vdd3 g = surf_grad_v(s, r->p, &gsens), nd;
-    vdd gg = vdd_dot3(g, g);
-    vdd dg = vdd_dot3(r->d, g);
+    vdd3 g, nd;
+    vdd gg, dg;
+    if (sg_sprep_passes(s)) {
+        *bad = vm_set(0);
+        return;
+    }
+    g = surf_grad_v(s, r->p, &gsens);
+    gg = vdd_dot3(g, g);
+    dg = vdd_dot3(r->d, g);
     *bad = (vm)(gg.hi <= 0.0);
     gn = vd_sqrt(gg.hi);
     cosI = dg.hi / gn;
