@@ -27,7 +27,7 @@ typedef double vd __attribute__((vector_size(SG_VL * sizeof(double))));
 /* Comparison results: all bits set in a lane where the comparison holds. */
 typedef int64_t vm __attribute__((vector_size(SG_VL * sizeof(double))));
 
-#define VM_SIGN ((int64_t)1 << 63)
+#define VM_SIGN INT64_MIN /* the sign bit of a double, as an integer lane */
 
 static inline vd vd_set(double a)
 {
