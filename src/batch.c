@@ -24,7 +24,7 @@ typedef struct job {
 } job;
 
 /* One ray by the tracer's method, for methods without a vector trace. */
-static void run_scalar(job *j)
+static void run_one_by_one(job *j)
 {
     size_t r;
     for (r = j->first; r < j->first + j->count; r++) {
@@ -47,7 +47,7 @@ static void flush(job *j, sg_pray *st, double *path0, sg_ray_surface **o, const 
     int rc[SG_VL], k;
     if (nl == 0)
         return;
-    sg_precise_run_block(j->t, st, path0, o, nl, start, j->t->n - 1, rc);
+    sg_precise_vec(j->t, st, path0, o, nl, start, j->t->n - 1, rc, NULL);
     if (j->status)
         for (k = 0; k < nl; k++)
             j->status[idx[k]] = rc[k];
@@ -138,7 +138,7 @@ static void run_job(job *j)
     if (j->t->o.method == SG_METHOD_PRECISE)
         run_precise(j);
     else
-        run_scalar(j);
+        run_one_by_one(j);
 }
 
 static void *thread_main(void *arg)

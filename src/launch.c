@@ -549,7 +549,7 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
 {
     double scale = fmax(t->ln.stop_r.hi, 1e-300), tol = t->o.aim_rtol * scale;
     double J[SG_VL][2][2], det[SG_VL], dx[SG_VL], dy[SG_VL], best[SG_VL], noise[SG_VL];
-    int act[SG_VL], na, k, it, from[SG_VL], stepped[SG_VL];
+    int act[SG_VL], na, k, it, rc[SG_VL], stepped[SG_VL];
     for (k = 0; k < nl; k++) {
         memcpy(J[k], t->aimJ, sizeof J[k]);
         det[k] = J[k][0][0] * J[k][1][1] - J[k][0][1] * J[k][1][0];
@@ -579,13 +579,13 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
         if (na == 0)
             return;
         pray_from_vec(o, (const dd(*)[2])qa, na, st, p0);
-        sg_precise_vec(t, st, p0, sc, na, one, t->sys->stop, from, en);
+        sg_precise_vec(t, st, p0, sc, na, one, t->sys->stop, rc, en);
         for (k = 0; k < na; k++) {
             int l = act[k];
             dd res[2];
             double r0, r1, nr;
-            if (from[k]) {
-                best[l] = -1.0; /* the landing failed: left to the scalar launch */
+            if (rc[k] != SG_OK) {
+                best[l] = -1.0; /* the landing failed: left to the one-ray launch */
                 continue;
             }
             entry[l] = en[k];

@@ -90,7 +90,7 @@ typedef struct sg_pray {
     double eP, eD;
 } sg_pray;
 
-/* Traces surfaces 1..n-1 from a ray on or before surface 1 (frame 1).
+/* Traces surfaces 1..upto from a ray on or before surface 1 (frame 1).
  * path0 is the path already travelled before the start point.
  * Fills out[1..upto]; returns the ray status.  The state r is left on
  * surface upto, which is not bent when upto is not the image. */
@@ -100,19 +100,14 @@ int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surfa
  * and still in that surface's frame; from = 1 is sg_precise_run_to. */
 int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
                         int from, int upto);
-/* The precise trace of nl <= SG_VL rays at once: lane k starts at surface
- * start[k] from r[k] and path0[k] as sg_precise_run_from takes them and
- * fills out[k]; rc[k] is its status.  Every lane equals the scalar trace
- * bit for bit. */
-void sg_precise_run_block(const sg_tracer *t, const sg_pray *r, const double *path0,
-                          sg_ray_surface *const *out, int nl, const int *start, int upto,
-                          int *rc);
-/* The vector trace itself: lanes that reach surface upto end there in r[k]
- * with from[k] = 0, and entry[k] (when given) is their state entering it.
- * A lane that leaves the common path at surface i gets from[k] = i and r[k]
- * as it entered that surface, for the scalar trace. */
+/* The precise trace itself, on nl <= SG_VL rays at once (in trace_vec.c):
+ * lane k starts at surface start[k] from r[k] and path0[k] as
+ * sg_precise_run_from takes them, fills out[k] and ends in r[k]; rc[k] is
+ * its status.  entry[k], when given, is the state in which the lane
+ * entered surface upto.  The lanes do not interact: a ray gets the same
+ * bits whatever rays share its call. */
 void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
-                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *from,
+                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc,
                     sg_pray *entry);
 /* Whether clipping at s stops a ray meeting it at (x, y). */
 int sg_past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y);

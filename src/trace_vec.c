@@ -1,14 +1,15 @@
 /*
- * trace_vec.c - the precise method on SG_VL rays at once.
+ * trace_vec.c - the precise method, on SG_VL rays at once.
  *
- * This is sg_precise_run_from (trace.c) transcribed lane by lane: the same
- * operations in the same order, so each lane gives the scalar trace's bits.
- * Branches that depend on the ray become masks.  A lane that leaves the
- * common path at a surface (a miss, total internal reflection, clipping, an
- * asphere that does not converge) is handed back, in its state before that
- * surface, to the scalar trace, which finishes it and reports the failure.
- *
- * Keep the two in step: tests/test_batch.c compares them bit for bit.
+ * The paper's four measures in double-double (see sagitta(1), METHODS):
+ * the transfer into the vertex frame and onto the tangent plane, unit
+ * directions, the eq. 27 root, and Newton steps along the ray with the
+ * surface equation in double-double.  Every operation acts on each lane
+ * alone and branches that depend on the ray are masks, so a ray gets the
+ * same bits whether it is traced alone (sg_precise_run_from, with idle
+ * lanes) or with three others (the batch).  A lane that stops at a surface
+ * (a miss, total internal reflection, clipping, an asphere that does not
+ * converge) gets its status there and drops out of the block.
  */
 #include <float.h>
 #include <math.h>
@@ -59,7 +60,8 @@ static void lane_put(vray *v, int k, const sg_pray *r)
 }
 
 /* ------------------------------------------------------------------------
- * Surface functions, as in trace.c.
+ * Surface functions in double-double, and the double estimates that start
+ * their Newton steps.
  * ------------------------------------------------------------------------ */
 
 static void slope_v(const sg_sprep *s, vd r2, vd *w, vd *dw)
@@ -293,20 +295,21 @@ static vdd3 surf_grad_v(const sg_sprep *s, vdd3 p, vd *gsens)
     return g;
 }
 
-/* precise_bend; *bad gets lanes that fail (left for the scalar trace). */
-static void bend_v(const sg_sprep *s, vray *r, vm *bad)
+/* Refracts or reflects r->d at the point r->p of surface s, in dd.  Lanes
+ * whose normal vanishes go to *nonphys, those reflected totally to *tir. */
+static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
 {
     vd gsens, gn, cosI, dN;
     vdd3 g, nd;
     vdd gg, dg;
-    if (sg_sprep_passes(s)) {
-        *bad = vm_set(0);
+    *nonphys = vm_set(0);
+    *tir = vm_set(0);
+    if (sg_sprep_passes(s))
         return;
-    }
     g = surf_grad_v(s, r->p, &gsens);
     gg = vdd_dot3(g, g);
     dg = vdd_dot3(r->d, g);
-    *bad = (vm)(gg.hi <= 0.0);
+    *nonphys = (vm)(gg.hi <= 0.0);
     gn = vd_sqrt(gg.hi);
     cosI = dg.hi / gn;
     dN = gsens * r->eP / gn;
@@ -322,7 +325,7 @@ static void bend_v(const sg_sprep *s, vray *r, vm *bad)
         vdd kb = vdd_sub(gg, vdd_mul(mu2, vdd_sub(gg, vdd_sqr(dg))));
         vdd sq, gam;
         vd J, k, sinI, m = vd_set(s->mu.hi);
-        *bad |= (vm)(kb.hi < 0.0);
+        *tir = (vm)(kb.hi < 0.0);
         if (fabs(s->mu.hi) == 1.0 && s->mu.lo == 0.0)
             return;
         sq = vdd_sqrt(kb);
@@ -366,9 +369,22 @@ static void put_dir(sg_ray_surface *o, int k, const vray *r)
         r->eD[k] + 0.5 * sg_ulp_of(sg_max_abs3(o->l, o->m, o->n)));
 }
 
-/* One surface for every live lane; returns the lanes to hand back. */
+/* Adds the live lanes of m to bad, giving status code to those that had
+ * not failed yet: a ray reports the first thing that stopped it. */
+static vm fail_lanes(vm bad, vm m, vm live, int code, int *st)
+{
+    int k;
+    m &= live;
+    for (k = 0; k < SG_VL; k++)
+        if (m[k] && !bad[k])
+            st[k] = code;
+    return bad | m;
+}
+
+/* One surface for every live lane; returns the lanes that stop here, with
+ * their status in st[]. */
 static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
-                    sg_ray_surface *const *out, vm live)
+                    sg_ray_surface *const *out, vm live, int *st)
 {
     const sg_sprep *s = &t->sp[i];
     vd dz = r->d.z.hi, ps[3], ds[3], sd = vd_set(0.0), eP0, root_err = vd_set(0.0);
@@ -409,22 +425,25 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
     /* Measure 3: the eq. 27 root (and Newton for aspheres) in double. */
     if (s->shape == SHAPE_PLANE) {
         vm off = (vm)(p0.z.hi != 0.0);
-        bad |= off & (vm)(dz == 0.0);
+        bad = fail_lanes(bad, off & (vm)(dz == 0.0), live, SG_EMISS, st);
         sd = vsel(off, vd_neg(p0.z.hi) / dz, vd_set(0.0));
-    } else if (s->c == 0.0) {
-        /* A conic too flat for its curvature to be a double: rare enough
-         * for the scalar trace. */
-        return live;
     } else {
         vm miss;
-        sd = conic_root_v(s, ps, ds, &miss);
-        if (s->shape == SHAPE_ASPH) {
-            vm fail, noconv;
-            sd = asph_root_v(s, ps, ds, vsel(miss, vd_set(0.0), sd), t->o.max_iter,
-                             live & ~bad, &fail, &noconv);
-            bad |= fail | noconv;
+        if (s->c != 0.0) {
+            sd = conic_root_v(s, ps, ds, &miss);
         } else {
-            bad |= miss;
+            /* A base curvature below the smallest double: the plane's root. */
+            miss = (vm)(dz == 0.0);
+            sd = vsel(miss | (vm)(p0.z.hi == 0.0), vd_set(0.0), vd_neg(p0.z.hi) / dz);
+        }
+        if (s->shape == SHAPE_ASPH) {
+            vm nohit, noconv;
+            sd = asph_root_v(s, ps, ds, vsel(miss, vd_set(0.0), sd), t->o.max_iter,
+                             live & ~bad, &nohit, &noconv);
+            bad = fail_lanes(bad, noconv, live, SG_ENOCONV, st);
+            bad = fail_lanes(bad, nohit, live, SG_EMISS, st);
+        } else {
+            bad = fail_lanes(bad, miss, live, SG_EMISS, st);
         }
     }
 
@@ -455,7 +474,7 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
         }
         fbad |= (vm)(Fp == 0.0) | ~vd_isfinite(Fp);
         fbad &= act;
-        bad |= fbad;
+        bad = fail_lanes(bad, fbad, live, SG_EMISS, st);
         act &= ~fbad;
         step = F.hi / Fp;
         snew = vdd_sub(sv, vdd_div_d(F, Fp));
@@ -483,16 +502,19 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
     resid = resid_v(s, pd[0], pd[1], pd[2]);
     if (t->o.clip && s->sd > 0.0)
         for (k = 0; k < SG_VL; k++)
-            if (live[k] && !bad[k] && sg_past_clip(t, s, pd[0][k], pd[1][k]))
+            if (live[k] && !bad[k] && sg_past_clip(t, s, pd[0][k], pd[1][k])) {
                 bad[k] = -1;
+                st[k] = SG_EVIGNETTED;
+            }
     for (k = 0; k < SG_VL; k++)
         if (live[k] && !bad[k])
             put_row(&out[k][i], k, pd, dpath, resid, r->eP);
 
     if (i < upto) {
-        vm bbad;
-        bend_v(s, r, &bbad);
-        bad |= bbad & live;
+        vm nonphys, tir;
+        bend_v(s, r, &nonphys, &tir);
+        bad = fail_lanes(bad, nonphys, live, SG_ENONPHYS, st);
+        bad = fail_lanes(bad, tir, live, SG_ETIR, st);
     }
     r->eP = vsel(vd_isnan(r->eP), vd_set(INFINITY), r->eP);
     r->eD = vsel(vd_isnan(r->eD), vd_set(INFINITY), r->eD);
@@ -515,13 +537,13 @@ static void vray_sel(vm m, const vray *a, vray *b)
 }
 
 void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
-                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *from,
+                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc,
                     sg_pray *entry)
 {
     vray v, snap;
     vd p0;
     vm live = vm_set(0), pending = vm_set(0);
-    int i, k, first = upto + 1;
+    int i, k, first = upto + 1, st[SG_VL];
     sg_ray_surface *o[SG_VL];
 
     /* Idle lanes repeat lane 0 and are never written. */
@@ -532,7 +554,7 @@ void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
         o[k] = out[src];
         if (k < nl) {
             pending[k] = -1;
-            from[k] = 0;
+            rc[k] = SG_OK;
             if (start[k] < first)
                 first = start[k];
         }
@@ -548,30 +570,32 @@ void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
         if (i == upto && entry)
             for (k = 0; k < nl; k++)
                 lane_get(&snap, k, &entry[k]);
-        bad = surface_v(t, i, upto, &v, p0, o, live);
+        bad = surface_v(t, i, upto, &v, p0, o, live, st);
         /* Lanes that start further on keep their state. */
         vray_sel(pending, &snap, &v);
         for (k = 0; k < nl; k++)
             if (bad[k]) {
-                lane_get(&snap, k, &r[k]);
-                from[k] = i;
+                sg_fail_rest(o[k], i, t->n, st[k]);
+                rc[k] = st[k];
+                lane_get(&v, k, &r[k]);
             }
         live &= ~bad;
     }
     for (k = 0; k < nl; k++)
-        if (!from[k])
+        if (rc[k] == SG_OK)
             lane_get(&v, k, &r[k]);
 }
 
-void sg_precise_run_block(const sg_tracer *t, const sg_pray *r, const double *path0,
-                          sg_ray_surface *const *out, int nl, const int *start, int upto,
-                          int *rc)
+int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
+                        int from, int upto)
 {
-    sg_pray st[SG_VL];
-    int from[SG_VL], k;
-    memcpy(st, r, (size_t)nl * sizeof *st);
-    sg_precise_vec(t, st, path0, out, nl, start, upto, from, NULL);
-    for (k = 0; k < nl; k++)
-        rc[k] = from[k] ? sg_precise_run_from(t, &st[k], path0[k], out[k], from[k], upto)
-                        : SG_OK;
+    int rc;
+    sg_precise_vec(t, r, &path0, &out, 1, &from, upto, &rc, NULL);
+    return rc;
+}
+
+int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
+                      int upto)
+{
+    return sg_precise_run_from(t, r, path0, out, 1, upto);
 }

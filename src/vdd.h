@@ -2,11 +2,11 @@
  * vdd.h - double-double arithmetic on SG_VL rays at once.
  *
  * Each operation is the lane-by-lane transcription of the one of the same
- * name in dd.h, rounding for rounding, so a lane of the vector trace gives
- * the same bits as the scalar trace of the same ray.  Only correctly
- * rounded operations are used (add, mul, div, sqrt, fma), which is why the
- * result does not depend on whether the compiler maps a vector to AVX2,
- * SSE2 or plain scalar code.
+ * name in dd.h, rounding for rounding, so vector and scalar double-double
+ * code (the batch launch and the one-ray launch) give the same bits.  Only
+ * correctly rounded operations are used (add, mul, div, sqrt, fma), which
+ * is why the result does not depend on whether the compiler maps a vector
+ * to AVX2, SSE2 or plain scalar code.
  */
 #ifndef SG_VDD_H
 #define SG_VDD_H

@@ -160,8 +160,8 @@ static void start_dir(void **state)
     sg_catalog_free(cat);
 }
 
-/* The batch traces precise rays four at a time and hands a lane that
- * fails mid-block back to the scalar trace.  Start/dir rays over steep
+/* The batch traces precise rays four at a time; a lane that fails drops
+ * out of its block while the others go on.  Start/dir rays over steep
  * angles and wide heights put misses, total internal reflection and good
  * rays in the same blocks; every one must equal its single-ray trace. */
 static void mixed_blocks(const char *file, double z0, double hmax, int want_tir)
