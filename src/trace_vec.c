@@ -348,25 +348,43 @@ static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
  * The block trace.
  * ------------------------------------------------------------------------ */
 
-static void put_row(sg_ray_surface *o, int k, const vd P[3], vd path, vd resid, vd eP)
+/* The bound as the one-ray code forms it: e + ulp/2 of the largest
+ * coordinate, nudged up.  sg_ulp_of by its exponent bits for normal
+ * values, and by sg_ulp_of itself for the rest. */
+static vd bound_v(vd e, vd a, vd b, vd c)
+{
+    vd A = vd_abs(a), B = vd_abs(b), C = vd_abs(c), m, u;
+    vm bits, odd;
+    int k;
+    m = vsel((vm)(B > C) | vd_isnan(C), B, C);
+    m = vsel((vm)(A > m) | vd_isnan(m), A, m);
+    bits = (vm)m;
+    u = (vd)(((bits >> 52) - 52) << 52);
+    odd = ~(vm)(m >= 0x1p-969) | ~(vm)(m < DBL_MAX);
+    if (vm_any(odd))
+        for (k = 0; k < SG_VL; k++)
+            if (odd[k])
+                u[k] = sg_ulp_of(m[k]);
+    return (e + 0.5 * u) * (1.0 + 8.0 * U53);
+}
+
+static void put_row(sg_ray_surface *o, int k, const vd P[3], vd path, vd resid, vd bound)
 {
     o->x = P[0][k];
     o->y = P[1][k];
     o->z = P[2][k];
     o->path = path[k];
     o->residual = resid[k];
-    o->error_bound =
-        sg_bound_up(eP[k] + 0.5 * sg_ulp_of(sg_max_abs3(o->x, o->y, o->z)));
+    o->error_bound = bound[k];
     o->status = SG_OK;
 }
 
-static void put_dir(sg_ray_surface *o, int k, const vray *r)
+static void put_dir(sg_ray_surface *o, int k, const vray *r, vd bound)
 {
     o->l = r->d.x.hi[k];
     o->m = r->d.y.hi[k];
     o->n = r->d.z.hi[k];
-    o->dir_error_bound = sg_bound_up(
-        r->eD[k] + 0.5 * sg_ulp_of(sg_max_abs3(o->l, o->m, o->n)));
+    o->dir_error_bound = bound[k];
 }
 
 /* Adds the live lanes of m to bad, giving status code to those that had
@@ -375,6 +393,8 @@ static vm fail_lanes(vm bad, vm m, vm live, int code, int *st)
 {
     int k;
     m &= live;
+    if (!vm_any(m))
+        return bad;
     for (k = 0; k < SG_VL; k++)
         if (m[k] && !bad[k])
             st[k] = code;
@@ -506,9 +526,12 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
                 bad[k] = -1;
                 st[k] = SG_EVIGNETTED;
             }
-    for (k = 0; k < SG_VL; k++)
-        if (live[k] && !bad[k])
-            put_row(&out[k][i], k, pd, dpath, resid, r->eP);
+    {
+        vd bnd = bound_v(r->eP, pd[0], pd[1], pd[2]);
+        for (k = 0; k < SG_VL; k++)
+            if (live[k] && !bad[k])
+                put_row(&out[k][i], k, pd, dpath, resid, bnd);
+    }
 
     if (i < upto) {
         vm nonphys, tir;
@@ -518,9 +541,12 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
     }
     r->eP = vsel(vd_isnan(r->eP), vd_set(INFINITY), r->eP);
     r->eD = vsel(vd_isnan(r->eD), vd_set(INFINITY), r->eD);
-    for (k = 0; k < SG_VL; k++)
-        if (live[k] && !bad[k])
-            put_dir(&out[k][i], k, r);
+    {
+        vd bnd = bound_v(r->eD, r->d.x.hi, r->d.y.hi, r->d.z.hi);
+        for (k = 0; k < SG_VL; k++)
+            if (live[k] && !bad[k])
+                put_dir(&out[k][i], k, r, bnd);
+    }
     return bad & live;
 }
 
@@ -543,7 +569,7 @@ void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
     vray v, snap;
     vd p0;
     vm live = vm_set(0), pending = vm_set(0);
-    int i, k, first = upto + 1, st[SG_VL];
+    int i, k, first = upto + 1, st[SG_VL], wait;
     sg_ray_surface *o[SG_VL];
 
     /* Idle lanes repeat lane 0 and are never written. */
@@ -559,6 +585,7 @@ void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
                 first = start[k];
         }
     }
+    snap = v;
     for (i = first; i <= upto && vm_any(live | pending); i++) {
         vm bad;
         for (k = 0; k < nl; k++)
@@ -566,13 +593,16 @@ void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
                 pending[k] = 0;
                 live[k] = -1;
             }
-        snap = v;
         if (i == upto && entry)
             for (k = 0; k < nl; k++)
-                lane_get(&snap, k, &entry[k]);
+                lane_get(&v, k, &entry[k]);
+        wait = vm_any(pending);
+        if (wait)
+            snap = v;
         bad = surface_v(t, i, upto, &v, p0, o, live, st);
         /* Lanes that start further on keep their state. */
-        vray_sel(pending, &snap, &v);
+        if (wait)
+            vray_sel(pending, &snap, &v);
         for (k = 0; k < nl; k++)
             if (bad[k]) {
                 sg_fail_rest(o[k], i, t->n, st[k]);
