@@ -217,6 +217,18 @@ static int fd_jacobian(sg_tracer *t, land_fn land, const osp *o, const dd q[2],
     return fabs(det) > 0.0 && isfinite(det) ? SG_OK : SG_EAIM;
 }
 
+/* Whether a landing residual nr already needs no confirming step: it is
+ * within the landing's error bound and below 2^-96 of both target
+ * coordinates, about where double-double rounding leaves it anyway.  A
+ * zero target coordinate never qualifies: there the iteration goes on
+ * until the residual stops shrinking, so a ray meant to cross the stop on
+ * an axis does, as nearly as the arithmetic can put it. */
+static int landed(double nr, double noise, const dd target[2])
+{
+    double m = fmin(fabs(target[0].hi), fabs(target[1].hi));
+    return nr == 0.0 || (nr <= noise && nr <= 0x1p-96 * m);
+}
+
 /* Broyden's update after the step (-dx, -dy) left the residual (r0, r1):
  * the borrowed Jacobian learns the map along each step it takes, so a
  * ray far from the chief still converges superlinearly. */
@@ -259,7 +271,7 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
         res[0] = dd_sub(at[0], target[0]);
         res[1] = dd_sub(at[1], target[1]);
         nr = fmax(fabs(res[0].hi), fabs(res[1].hi));
-        if (nr == 0.0)
+        if (landed(nr, noise, target))
             return SG_OK;
         if (!(nr < 0.5 * best)) {
             /* The residual stopped shrinking.  Within the landing's own
@@ -594,7 +606,7 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
             res[0] = dd_sub(st[k].p.x, target[l][0]);
             res[1] = dd_sub(st[k].p.y, target[l][1]);
             nr = fmax(fabs(res[0].hi), fabs(res[1].hi));
-            if (nr == 0.0 || (nr <= noise[l] && !(nr < 0.5 * best[l]))) {
+            if (landed(nr, noise[l], target[l]) || (nr <= noise[l] && !(nr < 0.5 * best[l]))) {
                 done[l] = 1;
                 continue;
             }
