@@ -555,9 +555,9 @@ static void pray_from_vec(const osp *o, const dd (*q)[2], int nl, sg_pray *r, do
 
 /* aim_newton from the field's Jacobian for nl lanes at once.  done[k] is
  * set for lanes that converged as the single-ray iteration would, and
- * entry[k] is the state in which their last landing entered the stop. */
+ * at[k] is the state their last landing left on the stop (not bent). */
 static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*target)[2],
-                           int nl, sg_ray_surface *const *scratch, int *done, sg_pray *entry)
+                           int nl, sg_ray_surface *const *scratch, int *done, sg_pray *at)
 {
     double scale = fmax(t->ln.stop_r.hi, 1e-300), tol = t->o.aim_rtol * scale;
     double J[SG_VL][2][2], det[SG_VL], dx[SG_VL], dy[SG_VL], best[SG_VL], noise[SG_VL];
@@ -573,7 +573,7 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
     }
     for (it = 0; it < t->o.aim_max_iter; it++) {
         dd qa[SG_VL][2];
-        sg_pray st[SG_VL], en[SG_VL];
+        sg_pray st[SG_VL];
         double p0[SG_VL];
         sg_ray_surface *sc[SG_VL];
         int one[SG_VL];
@@ -591,7 +591,7 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
         if (na == 0)
             return;
         pray_from_vec(o, (const dd(*)[2])qa, na, st, p0);
-        sg_precise_vec(t, st, p0, sc, na, one, t->sys->stop, rc, en);
+        sg_precise_vec(t, st, p0, sc, na, one, t->sys->stop, rc);
         for (k = 0; k < na; k++) {
             int l = act[k];
             dd res[2];
@@ -600,8 +600,8 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
                 best[l] = -1.0; /* the landing failed: left to the one-ray launch */
                 continue;
             }
-            entry[l] = en[k];
-            /* In lanes that stop here, entry[] belongs to the final Q. */
+            /* In lanes that stop here, at[] belongs to the final Q. */
+            at[l] = st[k];
             noise[l] = st[k].eP;
             res[0] = dd_sub(st[k].p.x, target[l][0]);
             res[1] = dd_sub(st[k].p.y, target[l][1]);
@@ -635,16 +635,20 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
             done[k] = 2;
 }
 
-/* Whether a lane may start its final trace at the stop from its last
- * landing: the landing ran with clipping off, so the apertures before the
- * stop are checked here. */
-static int resumable(const sg_tracer *t, const sg_ray_surface *rows)
+/* Whether a lane's final trace may go on from its last landing, which
+ * left the ray on the stop: the landing ran with clipping off, so the
+ * apertures before the stop are checked here (the stop's own when it is
+ * bent), and a bound that overflowed is left to the full trace, which
+ * meets the overflow in the same order as a ray traced alone. */
+static int resumable(const sg_tracer *t, const sg_ray_surface *rows, const sg_pray *at)
 {
     int i;
+    if (t->sys->stop >= t->n - 1 || !isfinite(at->eP) || !isfinite(at->eD))
+        return 0;
     for (i = 1; i < t->sys->stop; i++)
         if (sg_past_clip(t, &t->sp[i], rows[i].x, rows[i].y))
             return 0;
-    return t->sys->stop > 1;
+    return 1;
 }
 
 int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pupil)[2], int nl,
@@ -652,8 +656,9 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
                           sg_pray *r, double *path0, int *start, int *rc)
 {
     dd q[SG_VL][2], target[SG_VL][2];
-    sg_pray entry[SG_VL];
-    int done[SG_VL], k, clip, aimed = 0;
+    sg_pray at[SG_VL], ra[SG_VL];
+    sg_ray_surface *oa[SG_VL];
+    int done[SG_VL], k, clip, aimed = 0, na = 0, la[SG_VL], rca[SG_VL];
     osp o;
     if (field_cached(t, land_precise, hx, hy, &o, out[0]) != SG_OK) {
         for (k = 0; k < nl; k++) {
@@ -680,7 +685,7 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
             done[k] = 0;
         }
         if (t->have_aimJ) {
-            aim_newton_vec(t, &o, q, (const dd(*)[2])target, nl, scratch, done, entry);
+            aim_newton_vec(t, &o, q, (const dd(*)[2])target, nl, scratch, done, at);
             aimed = 1;
         }
         t->o.clip = clip;
@@ -691,15 +696,24 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
         if (done[k]) {
             object_row(t, &o, &r[k], &out[k][0]);
             rc[k] = SG_OK;
-            if (aimed && done[k] == 1 && resumable(t, scratch[k])) {
-                /* The last landing traced this very ray up to the stop. */
-                memcpy(&out[k][1], &scratch[k][1], (size_t)(t->sys->stop - 1) * sizeof out[k][1]);
-                r[k] = entry[k];
-                start[k] = t->sys->stop;
+            if (aimed && done[k] == 1 && resumable(t, scratch[k], &at[k])) {
+                /* The last landing traced this very ray onto the stop. */
+                memcpy(&out[k][1], &scratch[k][1], (size_t)t->sys->stop * sizeof out[k][1]);
+                ra[na] = at[k];
+                oa[na] = out[k];
+                la[na++] = k;
             }
         } else {
             rc[k] = sg_launch_precise_prep(t, hx, hy, pupil[k][0], pupil[k][1], out[k], &r[k],
                                            &path0[k]);
+        }
+    }
+    if (na > 0) {
+        sg_precise_finish(t, t->sys->stop, ra, oa, na, rca);
+        for (k = 0; k < na; k++) {
+            r[la[k]] = ra[k];
+            rc[la[k]] = rca[k];
+            start[la[k]] = t->sys->stop + 1;
         }
     }
     return nl;

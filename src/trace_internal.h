@@ -103,12 +103,16 @@ int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_sur
 /* The precise trace itself, on nl <= SG_VL rays at once (in trace_vec.c):
  * lane k starts at surface start[k] from r[k] and path0[k] as
  * sg_precise_run_from takes them, fills out[k] and ends in r[k]; rc[k] is
- * its status.  entry[k], when given, is the state in which the lane
- * entered surface upto.  The lanes do not interact: a ray gets the same
- * bits whatever rays share its call. */
+ * its status.  The lanes do not interact: a ray gets the same bits
+ * whatever rays share its call. */
 void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
-                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc,
-                    sg_pray *entry);
+                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc);
+/* Completes surface i < n - 1 for rays a trace to upto = i left on it, with
+ * finite bounds: its aperture, the bend and the direction columns of
+ * out[k][i], exactly as a trace through i would; r[k] is then ready for
+ * surface i + 1. */
+void sg_precise_finish(const sg_tracer *t, int i, sg_pray *r, sg_ray_surface *const *out,
+                       int nl, int *rc);
 /* Whether clipping at s stops a ray meeting it at (x, y). */
 int sg_past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y);
 int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
@@ -167,8 +171,9 @@ int sg_launch_precise_prep(sg_tracer *t, double hx, double hy, double px, double
  * aimed together; scratch holds SG_VL rows of t->n surfaces for the
  * aiming traces.  rc[k] is each ray's status; every lane equals the
  * single-ray launch bit for bit.  A lane whose last aiming trace already
- * crossed the surfaces before the stop gets start[k] = stop, those rows
- * filled, and r[k] as it enters the stop; others start[k] = 1.  Returns nl. */
+ * reached the stop goes on from there: rows 1..stop filled, r[k] bent at
+ * the stop and start[k] = stop + 1 (or rc[k] the failure at the stop);
+ * others start[k] = 1.  Returns nl. */
 int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pupil)[2], int nl,
                           sg_ray_surface *const *out, sg_ray_surface *const *scratch,
                           sg_pray *r, double *path0, int *start, int *rc);

@@ -563,8 +563,7 @@ static void vray_sel(vm m, const vray *a, vray *b)
 }
 
 void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
-                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc,
-                    sg_pray *entry)
+                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc)
 {
     vray v, snap;
     vd p0;
@@ -593,9 +592,6 @@ void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
                 pending[k] = 0;
                 live[k] = -1;
             }
-        if (i == upto && entry)
-            for (k = 0; k < nl; k++)
-                lane_get(&v, k, &entry[k]);
         wait = vm_any(pending);
         if (wait)
             snap = v;
@@ -616,11 +612,51 @@ void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
             lane_get(&v, k, &r[k]);
 }
 
+void sg_precise_finish(const sg_tracer *t, int i, sg_pray *r, sg_ray_surface *const *out,
+                       int nl, int *rc)
+{
+    const sg_sprep *s = &t->sp[i];
+    vray v;
+    vm live = vm_set(0), bad = vm_set(0), nonphys, tir;
+    int k, st[SG_VL];
+    for (k = 0; k < SG_VL; k++) {
+        lane_put(&v, k, &r[k < nl ? k : 0]);
+        if (k < nl) {
+            live[k] = -1;
+            rc[k] = SG_OK;
+        }
+    }
+    /* As surface_v does after the intersection. */
+    if (t->o.clip && s->sd > 0.0)
+        for (k = 0; k < nl; k++)
+            if (sg_past_clip(t, s, out[k][i].x, out[k][i].y)) {
+                bad[k] = -1;
+                st[k] = SG_EVIGNETTED;
+            }
+    bend_v(s, &v, &nonphys, &tir);
+    bad = fail_lanes(bad, nonphys, live, SG_ENONPHYS, st);
+    bad = fail_lanes(bad, tir, live, SG_ETIR, st);
+    v.eP = vsel(vd_isnan(v.eP), vd_set(INFINITY), v.eP);
+    v.eD = vsel(vd_isnan(v.eD), vd_set(INFINITY), v.eD);
+    {
+        vd bnd = bound_v(v.eD, v.d.x.hi, v.d.y.hi, v.d.z.hi);
+        for (k = 0; k < nl; k++) {
+            if (bad[k]) {
+                sg_fail_rest(out[k], i, t->n, st[k]);
+                rc[k] = st[k];
+            } else {
+                put_dir(&out[k][i], k, &v, bnd);
+            }
+            lane_get(&v, k, &r[k]);
+        }
+    }
+}
+
 int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
                         int from, int upto)
 {
     int rc;
-    sg_precise_vec(t, r, &path0, &out, 1, &from, upto, &rc, NULL);
+    sg_precise_vec(t, r, &path0, &out, 1, &from, upto, &rc);
     return rc;
 }
 
