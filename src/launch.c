@@ -87,31 +87,55 @@ static void q_aim_off(const sg_tracer *t, const osp *o, double px, double py, dd
     }
 }
 
-/* Precise ray state from the object-space part and Q. */
+/* Precise ray states from the object-space part and Q, for nl lanes, lane
+ * k from q[k].  A relative error of the direction moves surface 1's point
+ * by nothing: the ray starts on Q itself. */
+static void pray_from_vec(const osp *o, const dd (*q)[2], int nl, sg_pray *r, double *path0)
+{
+    vdd3 v;
+    vdd len, qx, qy;
+    int k;
+    for (k = 0; k < SG_VL; k++) {
+        int src = k < nl ? k : 0;
+        qx.hi[k] = q[src][0].hi;
+        qx.lo[k] = q[src][0].lo;
+        qy.hi[k] = q[src][1].hi;
+        qy.lo[k] = q[src][1].lo;
+    }
+    if (!o->inf) {
+        v.x = vdd_sub(qx, vdd_set(o->obj.x));
+        v.y = vdd_sub(qy, vdd_set(o->obj.y));
+        v.z = vdd_set(dd_neg(o->obj.z));
+        len = vdd_sqrt(vdd_dot3(v, v));
+        v.x = vdd_div(v.x, len);
+        v.y = vdd_div(v.y, len);
+        v.z = vdd_div(v.z, len);
+    }
+    for (k = 0; k < nl; k++) {
+        r[k].p.x = q[k][0];
+        r[k].p.y = q[k][1];
+        r[k].p.z = dd_from(0.0);
+        r[k].eP = DD_U * (fabs(q[k][0].hi) + fabs(q[k][1].hi));
+        r[k].eD = 8.0 * DD_U;
+        if (o->inf) {
+            r[k].d = o->dir;
+            path0[k] = 0.0;
+        } else {
+            r[k].d.x.hi = v.x.hi[k];
+            r[k].d.x.lo = v.x.lo[k];
+            r[k].d.y.hi = v.y.hi[k];
+            r[k].d.y.lo = v.y.lo[k];
+            r[k].d.z.hi = v.z.hi[k];
+            r[k].d.z.lo = v.z.lo[k];
+            path0[k] = len.hi[k] + len.lo[k];
+        }
+    }
+}
+
+/* The same for one ray. */
 static void pray_from(const osp *o, const dd q[2], sg_pray *r, double *path0)
 {
-    r->p.x = q[0];
-    r->p.y = q[1];
-    r->p.z = dd_from(0.0);
-    r->eP = DD_U * (fabs(q[0].hi) + fabs(q[1].hi));
-    if (o->inf) {
-        r->d = o->dir;
-        *path0 = 0.0;
-    } else {
-        dd3 v;
-        dd len;
-        v.x = dd_sub(q[0], o->obj.x);
-        v.y = dd_sub(q[1], o->obj.y);
-        v.z = dd_neg(o->obj.z);
-        len = dd_sqrt(dd_dot3(v, v));
-        r->d.x = dd_div(v.x, len);
-        r->d.y = dd_div(v.y, len);
-        r->d.z = dd_div(v.z, len);
-        *path0 = dd_to_d(len);
-        /* A relative error of the direction moves surface 1's point
-         * by nothing: the ray starts on Q itself. */
-    }
-    r->eD = 8.0 * DD_U;
+    pray_from_vec(o, (const dd(*)[2])q, 1, r, path0);
 }
 
 static void object_row(const sg_tracer *t, const osp *o, const sg_pray *r, sg_ray_surface *out)
@@ -244,6 +268,74 @@ static void broyden(double J[2][2], double *det, double r0, double r1, double dx
     *det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
 }
 
+/* One ray's Newton iteration on Q, shared by the one-ray aiming and the
+ * four-ray aiming so that both take the same steps. */
+typedef struct aim_it {
+    double J[2][2], det; /* the Jacobian in use */
+    double best;         /* the smallest residual so far */
+    double noise;        /* the last landing's error bound */
+    double dx, dy;       /* the last step, for Broyden's update */
+    int stepped;         /* a step was taken with this Jacobian */
+    int fresh;           /* the Jacobian was taken at this Q */
+} aim_it;
+
+enum { AIM_DONE, AIM_STALLED, AIM_STEP };
+
+static void aim_set_jacobian(aim_it *a, const double J[2][2], int fresh)
+{
+    memcpy(a->J, J, sizeof a->J);
+    a->det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+    a->stepped = 0;
+    a->fresh = fresh;
+}
+
+static void aim_start(aim_it *a, const double J[2][2], int fresh)
+{
+    aim_set_jacobian(a, J, fresh);
+    a->best = INFINITY;
+    a->noise = 0.0;
+    a->dx = a->dy = 0.0;
+}
+
+/* Judges the landing at with error bound noise; res and nr get the
+ * residual and its size for aim_step. */
+static int aim_judge(aim_it *a, const dd at[2], double noise, const dd target[2], double tol,
+                     dd res[2], double *nr)
+{
+    a->noise = noise;
+    res[0] = dd_sub(at[0], target[0]);
+    res[1] = dd_sub(at[1], target[1]);
+    *nr = fmax(fabs(res[0].hi), fabs(res[1].hi));
+    if (landed(*nr, noise, target))
+        return AIM_DONE;
+    if (!(*nr < 0.5 * a->best)) {
+        /* The residual stopped shrinking.  Within the landing's own error
+         * bound, the landing is as exact as the arithmetic carrying it;
+         * when a fresh Jacobian did not help either, it is as exact as the
+         * tolerance asks.  Otherwise the Jacobian has stopped helping this
+         * ray (a borrowed one, or its own near a turning point of the
+         * landing map) and a fresh one is needed here. */
+        return *nr <= noise || (a->fresh && *nr <= tol + noise) ? AIM_DONE : AIM_STALLED;
+    }
+    a->fresh = 0;
+    return AIM_STEP;
+}
+
+/* The Newton step from residual res; 0 when Q leaves the doubles. */
+static int aim_step(aim_it *a, const dd res[2], double nr, dd q[2])
+{
+    double r0 = res[0].hi + res[0].lo, r1 = res[1].hi + res[1].lo;
+    a->best = fmin(a->best, nr);
+    if (a->stepped)
+        broyden(a->J, &a->det, r0, r1, a->dx, a->dy);
+    a->stepped = 1;
+    a->dx = (a->J[1][1] * r0 - a->J[0][1] * r1) / a->det;
+    a->dy = (-a->J[1][0] * r0 + a->J[0][0] * r1) / a->det;
+    q[0] = dd_add_d(q[0], -a->dx);
+    q[1] = dd_add_d(q[1], -a->dy);
+    return isfinite(q[0].hi) && isfinite(q[1].hi);
+}
+
 /* Solves land(Q) = target by Newton, from Q.  J0, when given, is the
  * field's Jacobian at its chief ray: most rays converge with it, and a ray
  * for which it stops helping gets its own, so the result depends on the
@@ -251,60 +343,34 @@ static void broyden(double J[2][2], double *det, double r0, double r1, double dx
 static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
                       const dd target[2], const double (*J0)[2], sg_ray_surface *scratch)
 {
-    double scale = fmax(t->ln.stop_r.hi, 1e-300);
-    double J[2][2], det, best = INFINITY, tol = t->o.aim_rtol * scale, noise = 0.0;
-    double dx = 0.0, dy = 0.0;
+    double tol = t->o.aim_rtol * fmax(t->ln.stop_r.hi, 1e-300), J[2][2], noise, nr;
     dd at[2], res[2];
-    int it, rc, stepped = 0, fresh = J0 == NULL;
+    aim_it a;
+    int it, rc;
     if (J0 == NULL) {
         if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
             return SG_EAIM;
+        aim_start(&a, (const double(*)[2])J, 1);
     } else {
-        memcpy(J, J0, sizeof J);
+        aim_start(&a, J0, 0);
     }
-    det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
     for (it = 0; it < t->o.aim_max_iter; it++) {
-        double r0, r1, nr;
         rc = land(t, o, q, at, &noise, scratch);
         if (rc != SG_OK && rc != SG_EVIGNETTED)
             return SG_EAIM;
-        res[0] = dd_sub(at[0], target[0]);
-        res[1] = dd_sub(at[1], target[1]);
-        nr = fmax(fabs(res[0].hi), fabs(res[1].hi));
-        if (landed(nr, noise, target))
+        switch (aim_judge(&a, at, noise, target, tol, res, &nr)) {
+        case AIM_DONE:
             return SG_OK;
-        if (!(nr < 0.5 * best)) {
-            /* The residual stopped shrinking.  Within the landing's own
-             * error bound, the landing is as exact as the arithmetic
-             * carrying it; when a fresh Jacobian did not help either, it
-             * is as exact as the tolerance asks. */
-            if (nr <= noise || (fresh && nr <= tol + noise))
-                return SG_OK;
-            /* The Jacobian has stopped helping this ray (a borrowed one, or
-             * its own near a turning point of the landing map): take a
-             * fresh one here. */
+        case AIM_STALLED:
             if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
                 return SG_EAIM;
-            det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
-            stepped = 0;
-            fresh = 1;
-        } else {
-            fresh = 0;
+            aim_set_jacobian(&a, (const double(*)[2])J, 1);
+            break;
         }
-        best = fmin(best, nr);
-        r0 = res[0].hi + res[0].lo;
-        r1 = res[1].hi + res[1].lo;
-        if (stepped)
-            broyden(J, &det, r0, r1, dx, dy);
-        stepped = 1;
-        dx = (J[1][1] * r0 - J[0][1] * r1) / det;
-        dy = (-J[1][0] * r0 + J[0][0] * r1) / det;
-        q[0] = dd_add_d(q[0], -dx);
-        q[1] = dd_add_d(q[1], -dy);
-        if (!isfinite(q[0].hi) || !isfinite(q[1].hi))
+        if (!aim_step(&a, res, nr, q))
             return SG_EAIM;
     }
-    return best <= tol + noise ? SG_OK : SG_EAIM;
+    return a.best <= tol + a.noise ? SG_OK : SG_EAIM;
 }
 
 /* ------------------------------------------------------------------------
@@ -510,79 +576,33 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
  * the single-ray result bit for bit.
  * ------------------------------------------------------------------------ */
 
-/* pray_from for nl lanes, lane k from q[k]. */
-static void pray_from_vec(const osp *o, const dd (*q)[2], int nl, sg_pray *r, double *path0)
-{
-    vdd3 v;
-    vdd len, qx, qy;
-    int k;
-    for (k = 0; k < SG_VL; k++) {
-        int src = k < nl ? k : 0;
-        qx.hi[k] = q[src][0].hi;
-        qx.lo[k] = q[src][0].lo;
-        qy.hi[k] = q[src][1].hi;
-        qy.lo[k] = q[src][1].lo;
-    }
-    if (!o->inf) {
-        v.x = vdd_sub(qx, vdd_set(o->obj.x));
-        v.y = vdd_sub(qy, vdd_set(o->obj.y));
-        v.z = vdd_set(dd_neg(o->obj.z));
-        len = vdd_sqrt(vdd_dot3(v, v));
-        v.x = vdd_div(v.x, len);
-        v.y = vdd_div(v.y, len);
-        v.z = vdd_div(v.z, len);
-    }
-    for (k = 0; k < nl; k++) {
-        r[k].p.x = q[k][0];
-        r[k].p.y = q[k][1];
-        r[k].p.z = dd_from(0.0);
-        r[k].eP = DD_U * (fabs(q[k][0].hi) + fabs(q[k][1].hi));
-        r[k].eD = 8.0 * DD_U;
-        if (o->inf) {
-            r[k].d = o->dir;
-            path0[k] = 0.0;
-        } else {
-            r[k].d.x.hi = v.x.hi[k];
-            r[k].d.x.lo = v.x.lo[k];
-            r[k].d.y.hi = v.y.hi[k];
-            r[k].d.y.lo = v.y.lo[k];
-            r[k].d.z.hi = v.z.hi[k];
-            r[k].d.z.lo = v.z.lo[k];
-            path0[k] = len.hi[k] + len.lo[k];
-        }
-    }
-}
-
 /* aim_newton from the field's Jacobian for nl lanes at once.  done[k] is
  * set for lanes that converged as the single-ray iteration would, and
- * at[k] is the state their last landing left on the stop (not bent). */
+ * at[k] is the state their last landing left on the stop (not bent).  A
+ * lane that would need a Jacobian of its own, or whose landing fails, is
+ * left with done[k] = 0 for the one-ray launch. */
 static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*target)[2],
                            int nl, sg_ray_surface *const *scratch, int *done, sg_pray *at)
 {
-    double scale = fmax(t->ln.stop_r.hi, 1e-300), tol = t->o.aim_rtol * scale;
-    double J[SG_VL][2][2], det[SG_VL], dx[SG_VL], dy[SG_VL], best[SG_VL], noise[SG_VL];
-    int act[SG_VL], na, k, it, rc[SG_VL], stepped[SG_VL];
+    double tol = t->o.aim_rtol * fmax(t->ln.stop_r.hi, 1e-300);
+    aim_it a[SG_VL];
+    int act[SG_VL], lost[SG_VL], one[SG_VL], rc[SG_VL], na, k, it;
+    for (k = 0; k < SG_VL; k++)
+        one[k] = 1;
     for (k = 0; k < nl; k++) {
-        memcpy(J[k], t->aimJ, sizeof J[k]);
-        det[k] = J[k][0][0] * J[k][1][1] - J[k][0][1] * J[k][1][0];
-        best[k] = INFINITY;
-        noise[k] = 0.0;
+        aim_start(&a[k], (const double(*)[2])t->aimJ, 0);
         done[k] = 0;
-        stepped[k] = 0;
-        dx[k] = dy[k] = 0.0;
+        lost[k] = 0;
     }
     for (it = 0; it < t->o.aim_max_iter; it++) {
         dd qa[SG_VL][2];
         sg_pray st[SG_VL];
         double p0[SG_VL];
         sg_ray_surface *sc[SG_VL];
-        int one[SG_VL];
         /* Only lanes still iterating are traced, each into its own rows so
          * that its last landing can start the final trace. */
-        for (k = 0; k < SG_VL; k++)
-            one[k] = 1;
         for (na = 0, k = 0; k < nl; k++)
-            if (!done[k] && best[k] >= 0.0) {
+            if (!done[k] && !lost[k]) {
                 qa[na][0] = q[k][0];
                 qa[na][1] = q[k][1];
                 sc[na] = scratch[k];
@@ -594,44 +614,30 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
         sg_precise_vec(t, st, p0, sc, na, one, t->sys->stop, rc);
         for (k = 0; k < na; k++) {
             int l = act[k];
-            dd res[2];
-            double r0, r1, nr;
+            dd land[2] = {st[k].p.x, st[k].p.y}, res[2];
+            double nr;
             if (rc[k] != SG_OK) {
-                best[l] = -1.0; /* the landing failed: left to the one-ray launch */
+                lost[l] = 1;
                 continue;
             }
             /* In lanes that stop here, at[] belongs to the final Q. */
             at[l] = st[k];
-            noise[l] = st[k].eP;
-            res[0] = dd_sub(st[k].p.x, target[l][0]);
-            res[1] = dd_sub(st[k].p.y, target[l][1]);
-            nr = fmax(fabs(res[0].hi), fabs(res[1].hi));
-            if (landed(nr, noise[l], target[l]) || (nr <= noise[l] && !(nr < 0.5 * best[l]))) {
+            switch (aim_judge(&a[l], land, st[k].eP, target[l], tol, res, &nr)) {
+            case AIM_DONE:
                 done[l] = 1;
-                continue;
+                break;
+            case AIM_STALLED:
+                lost[l] = 1;
+                break;
+            default:
+                lost[l] = !aim_step(&a[l], res, nr, q[l]);
             }
-            if (!(nr < 0.5 * best[l])) {
-                best[l] = -1.0; /* it needs a Jacobian of its own */
-                continue;
-            }
-            best[l] = fmin(best[l], nr);
-            r0 = res[0].hi + res[0].lo;
-            r1 = res[1].hi + res[1].lo;
-            if (stepped[l])
-                broyden(J[l], &det[l], r0, r1, dx[l], dy[l]);
-            stepped[l] = 1;
-            dx[l] = (J[l][1][1] * r0 - J[l][0][1] * r1) / det[l];
-            dy[l] = (-J[l][1][0] * r0 + J[l][0][0] * r1) / det[l];
-            q[l][0] = dd_add_d(q[l][0], -dx[l]);
-            q[l][1] = dd_add_d(q[l][1], -dy[l]);
-            if (!isfinite(q[l][0].hi) || !isfinite(q[l][1].hi))
-                best[l] = -1.0;
         }
     }
     /* Out of iterations within tolerance: Q moved after its last landing,
      * so that landing cannot start the final trace (done = 2). */
     for (k = 0; k < nl; k++)
-        if (!done[k] && best[k] >= 0.0 && best[k] <= tol + noise[k])
+        if (!done[k] && !lost[k] && a[k].best <= tol + a[k].noise)
             done[k] = 2;
 }
 

@@ -675,15 +675,17 @@ int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
                    sg_ray_surface *out)
 {
     double len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
-    int rc = start_invalid(t, start, dir, out);
-    if (rc != SG_OK)
-        return rc;
-    switch (t->o.method) {
-    case SG_METHOD_PRECISE: {
+    int rc;
+    if (t->o.method == SG_METHOD_PRECISE) {
+        /* The preparation checks the ray, as it does for the batch. */
         sg_pray r;
         rc = sg_start_precise_prep(t, start, dir, out, &r);
         return rc != SG_OK ? rc : sg_precise_run_to(t, &r, 0.0, out, t->n - 1);
     }
+    rc = start_invalid(t, start, dir, out);
+    if (rc != SG_OK)
+        return rc;
+    switch (t->o.method) {
     case SG_METHOD_CLASSIC: {
         double len = sqrt(len2), u[3];
         u[0] = dir[0] / len;
@@ -694,6 +696,8 @@ int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
     }
     case SG_METHOD_MPFR:
         return sg_mpfr_trace_start(t, start, dir, out);
+    case SG_METHOD_PRECISE:
+        break; /* traced above */
     }
     return SG_EINVAL;
 }

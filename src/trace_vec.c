@@ -401,6 +401,41 @@ static vm fail_lanes(vm bad, vm m, vm live, int code, int *st)
     return bad | m;
 }
 
+/* The aperture of s for rays meeting it at (x, y). */
+static vm clip_v(const sg_tracer *t, const sg_sprep *s, vd x, vd y, vm live, vm bad, int *st)
+{
+    int k;
+    if (t->o.clip && s->sd > 0.0)
+        for (k = 0; k < SG_VL; k++)
+            if (live[k] && !bad[k] && sg_past_clip(t, s, x[k], y[k])) {
+                bad[k] = -1;
+                st[k] = SG_EVIGNETTED;
+            }
+    return bad;
+}
+
+/* How a ray leaves surface i: bent when bend is set, its bounds kept
+ * finite, and the direction columns of row i written. */
+static vm leave_v(const sg_sprep *s, int i, int bend, vray *r, sg_ray_surface *const *out,
+                  vm live, vm bad, int *st)
+{
+    vd bnd;
+    int k;
+    if (bend) {
+        vm nonphys, tir;
+        bend_v(s, r, &nonphys, &tir);
+        bad = fail_lanes(bad, nonphys, live, SG_ENONPHYS, st);
+        bad = fail_lanes(bad, tir, live, SG_ETIR, st);
+    }
+    r->eP = vsel(vd_isnan(r->eP), vd_set(INFINITY), r->eP);
+    r->eD = vsel(vd_isnan(r->eD), vd_set(INFINITY), r->eD);
+    bnd = bound_v(r->eD, r->d.x.hi, r->d.y.hi, r->d.z.hi);
+    for (k = 0; k < SG_VL; k++)
+        if (live[k] && !bad[k])
+            put_dir(&out[k][i], k, r, bnd);
+    return bad;
+}
+
 /* One surface for every live lane; returns the lanes that stop here, with
  * their status in st[]. */
 static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
@@ -520,34 +555,14 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
     if (i == 1)
         dpath = path0 + dpath;
     resid = resid_v(s, pd[0], pd[1], pd[2]);
-    if (t->o.clip && s->sd > 0.0)
-        for (k = 0; k < SG_VL; k++)
-            if (live[k] && !bad[k] && sg_past_clip(t, s, pd[0][k], pd[1][k])) {
-                bad[k] = -1;
-                st[k] = SG_EVIGNETTED;
-            }
+    bad = clip_v(t, s, pd[0], pd[1], live, bad, st);
     {
         vd bnd = bound_v(r->eP, pd[0], pd[1], pd[2]);
         for (k = 0; k < SG_VL; k++)
             if (live[k] && !bad[k])
                 put_row(&out[k][i], k, pd, dpath, resid, bnd);
     }
-
-    if (i < upto) {
-        vm nonphys, tir;
-        bend_v(s, r, &nonphys, &tir);
-        bad = fail_lanes(bad, nonphys, live, SG_ENONPHYS, st);
-        bad = fail_lanes(bad, tir, live, SG_ETIR, st);
-    }
-    r->eP = vsel(vd_isnan(r->eP), vd_set(INFINITY), r->eP);
-    r->eD = vsel(vd_isnan(r->eD), vd_set(INFINITY), r->eD);
-    {
-        vd bnd = bound_v(r->eD, r->d.x.hi, r->d.y.hi, r->d.z.hi);
-        for (k = 0; k < SG_VL; k++)
-            if (live[k] && !bad[k])
-                put_dir(&out[k][i], k, r, bnd);
-    }
-    return bad & live;
+    return leave_v(s, i, i < upto, r, out, live, bad, st) & live;
 }
 
 static void vray_sel(vm m, const vray *a, vray *b)
@@ -615,40 +630,26 @@ void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
 void sg_precise_finish(const sg_tracer *t, int i, sg_pray *r, sg_ray_surface *const *out,
                        int nl, int *rc)
 {
-    const sg_sprep *s = &t->sp[i];
     vray v;
-    vm live = vm_set(0), bad = vm_set(0), nonphys, tir;
+    vd x, y;
+    vm live = vm_set(0), bad;
     int k, st[SG_VL];
     for (k = 0; k < SG_VL; k++) {
-        lane_put(&v, k, &r[k < nl ? k : 0]);
-        if (k < nl) {
+        int src = k < nl ? k : 0;
+        lane_put(&v, k, &r[src]);
+        x[k] = out[src][i].x;
+        y[k] = out[src][i].y;
+        if (k < nl)
             live[k] = -1;
-            rc[k] = SG_OK;
-        }
     }
-    /* As surface_v does after the intersection. */
-    if (t->o.clip && s->sd > 0.0)
-        for (k = 0; k < nl; k++)
-            if (sg_past_clip(t, s, out[k][i].x, out[k][i].y)) {
-                bad[k] = -1;
-                st[k] = SG_EVIGNETTED;
-            }
-    bend_v(s, &v, &nonphys, &tir);
-    bad = fail_lanes(bad, nonphys, live, SG_ENONPHYS, st);
-    bad = fail_lanes(bad, tir, live, SG_ETIR, st);
-    v.eP = vsel(vd_isnan(v.eP), vd_set(INFINITY), v.eP);
-    v.eD = vsel(vd_isnan(v.eD), vd_set(INFINITY), v.eD);
-    {
-        vd bnd = bound_v(v.eD, v.d.x.hi, v.d.y.hi, v.d.z.hi);
-        for (k = 0; k < nl; k++) {
-            if (bad[k]) {
-                sg_fail_rest(out[k], i, t->n, st[k]);
-                rc[k] = st[k];
-            } else {
-                put_dir(&out[k][i], k, &v, bnd);
-            }
-            lane_get(&v, k, &r[k]);
-        }
+    /* As surface_v goes on after the intersection. */
+    bad = clip_v(t, &t->sp[i], x, y, live, vm_set(0), st);
+    bad = leave_v(&t->sp[i], i, 1, &v, out, live, bad, st);
+    for (k = 0; k < nl; k++) {
+        rc[k] = bad[k] ? st[k] : SG_OK;
+        if (bad[k])
+            sg_fail_rest(out[k], i, t->n, st[k]);
+        lane_get(&v, k, &r[k]);
     }
 }
 
