@@ -7,20 +7,6 @@
 
 #include "testutil.h"
 
-static sg_tracer *tracer(const sg_system *sys, sg_catalog *cat, sg_method m)
-{
-    sg_trace_opts o;
-    sg_diag d;
-    sg_tracer *t;
-    sg_trace_opts_init(&o);
-    o.method = m;
-    sg_diag_clear(&d);
-    t = sg_tracer_new(sys, cat, &o, &d);
-    if (!t)
-        fail_msg("tracer: %s", d.msg);
-    return t;
-}
-
 /* The Cassegrain aims for real onto its 1500 mm stop (the primary). */
 static void stop_edge(void **state)
 {
@@ -32,7 +18,7 @@ static void stop_edge(void **state)
     int m, f, p;
     (void)state;
     for (m = 0; m < 3; m++) {
-        sg_tracer *t = tracer(sys, cat, methods[m]);
+        sg_tracer *t = tu_tracer(sys, cat, methods[m]);
         sg_ray_surface out[16];
         double worst = 0.0;
         for (f = 0; f < 5; f++)
@@ -113,7 +99,7 @@ static void paraxial_aiming(void **state)
     sys->aim = SG_AIM_PARAXIAL;
     sg_diag_clear(&d);
     assert_int_equal(sg_paraxial_compute(sys, cat, -1, &p, &d), SG_OK);
-    t = tracer(sys, cat, SG_METHOD_PRECISE);
+    t = tu_tracer(sys, cat, SG_METHOD_PRECISE);
     for (f = 0; f <= 4; f++) {
         double hy = 0.25 * f;
         assert_int_equal(sg_trace_normalized(t, 0, hy, 0, 1, out), SG_OK);
@@ -144,7 +130,7 @@ static void real_image_height(void **state)
     sys->field[0].x = sys->field[0].y = 0.0;
     sys->field[1].x = 0.0;
     sys->field[1].y = 12.5;
-    t = tracer(sys, cat, SG_METHOD_PRECISE);
+    t = tu_tracer(sys, cat, SG_METHOD_PRECISE);
     assert_int_equal(sg_trace_normalized(t, 0, 1, 0, 0, out), SG_OK);
     print_message("# real image height 12.5: chief ray lands at y = %.17g\n", out[last].y);
     assert_true(fabs(out[last].y - 12.5) <= 1e-12 * 12.5);
@@ -201,7 +187,7 @@ static void aperture_types(void **state)
         sg_ray_surface out[8];
         double h = 1e-6;
         sys->field[1].y = h;
-        t = tracer(sys, cat, SG_METHOD_PRECISE);
+        t = tu_tracer(sys, cat, SG_METHOD_PRECISE);
         assert_int_equal(sg_trace_normalized(t, 0, 1, 0, 0, out), SG_OK);
         print_message("# paraxial image height %g: real chief ray at %.17g\n", h,
                       out[sys->nsurf - 1].y);

@@ -74,27 +74,13 @@ static double point_digits(const sg_ray_surface *a, const sg_ray_surface *b)
                 fmin(coord_digits(a->y, b->y, sc), coord_digits(a->z, b->z, sc)));
 }
 
-static sg_tracer *tracer(sg_system *sys, sg_catalog *cat, sg_method m)
-{
-    sg_trace_opts o;
-    sg_diag d;
-    sg_tracer *t;
-    sg_trace_opts_init(&o);
-    o.method = m;
-    sg_diag_clear(&d);
-    t = sg_tracer_new(sys, cat, &o, &d);
-    if (!t)
-        fail_msg("tracer: %s", d.msg);
-    return t;
-}
-
 static void against_zemax(const char *file, const row *rows, size_t nrows, int exception_surf)
 {
     sg_catalog *cat = tu_catalog();
     sg_system *sys = tu_example(file);
-    sg_tracer *tp = tracer(sys, cat, SG_METHOD_PRECISE);
-    sg_tracer *tc = tracer(sys, cat, SG_METHOD_CLASSIC);
-    sg_tracer *tm = tracer(sys, cat, SG_METHOD_MPFR);
+    sg_tracer *tp = tu_tracer(sys, cat, SG_METHOD_PRECISE);
+    sg_tracer *tc = tu_tracer(sys, cat, SG_METHOD_CLASSIC);
+    sg_tracer *tm = tu_tracer(sys, cat, SG_METHOD_MPFR);
     sg_ray_surface op[32], oc[32], om[32];
     size_t k;
     int agree = 0, total = 0;
@@ -166,9 +152,9 @@ static void grid(const char *file, int n)
 {
     sg_catalog *cat = tu_catalog();
     sg_system *sys = tu_example(file);
-    sg_tracer *tp = tracer(sys, cat, SG_METHOD_PRECISE);
-    sg_tracer *tc = tracer(sys, cat, SG_METHOD_CLASSIC);
-    sg_tracer *tm = tracer(sys, cat, SG_METHOD_MPFR);
+    sg_tracer *tp = tu_tracer(sys, cat, SG_METHOD_PRECISE);
+    sg_tracer *tc = tu_tracer(sys, cat, SG_METHOD_CLASSIC);
+    sg_tracer *tm = tu_tracer(sys, cat, SG_METHOD_MPFR);
     sg_ray_surface op[32], oc[32], om[32];
     double minp[32], minc[32], worst_ratio = INFINITY;
     int i, hx, hy, px, py, nrays = 0, ns = sys->nsurf;

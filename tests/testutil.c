@@ -50,3 +50,17 @@ double tu_ulps(double a, double b, double ref_scale)
     double s = fmax(fabs(ref_scale), fmax(fabs(a), fabs(b)));
     return fabs(a - b) / tu_ulp(s);
 }
+
+sg_tracer *tu_tracer(const sg_system *sys, const sg_catalog *cat, sg_method m)
+{
+    sg_trace_opts o;
+    sg_diag d;
+    sg_tracer *t;
+    sg_trace_opts_init(&o);
+    o.method = m;
+    sg_diag_clear(&d);
+    t = sg_tracer_new(sys, cat, &o, &d);
+    if (!t)
+        fail_msg("tracer: %s", d.msg);
+    return t;
+}

@@ -19,6 +19,9 @@ sg_catalog *tu_catalog(void);
 /* Loads an example design from examples/ or fails the test. */
 sg_system *tu_example(const char *file);
 
+/* A tracer of sys with default options and method m, or fails the test. */
+sg_tracer *tu_tracer(const sg_system *sys, const sg_catalog *cat, sg_method m);
+
 /* Distance between two doubles in units in the last place of the larger
  * magnitude of ref_scale (so a coordinate near zero is not judged by its
  * own tiny ulp). */

@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "sphere_truth.h"
 #include "vtest.h"
 
 /* paper-notes.md: y of the exact intersection for the double inputs. */
@@ -39,10 +40,9 @@ static double vec3_item(const cJSON *o, const char *name, int k)
  * frame, rounded once. */
 static void table1_truth(double S, double *start_z, double *y, double *zv)
 {
-    mpfr_t a, b, c, r2, t, u, disc;
-    double sz, D[3] = { 0.0, 1.0, sqrt(3.0) }, P[3];
-    int k;
-    mpfr_inits2(400, a, b, c, r2, t, u, disc, (mpfr_ptr)0);
+    mpfr_t a, b, r2;
+    double sz, D[3] = { 0.0, 1.0, sqrt(3.0) }, P[3], hit[3];
+    mpfr_inits2(400, a, b, r2, (mpfr_ptr)0);
     mpfr_sqrt_ui(a, 3, MPFR_RNDN);
     mpfr_add_ui(b, a, 1, MPFR_RNDN);
     mpfr_sqrt_ui(r2, 2, MPFR_RNDN);
@@ -54,36 +54,11 @@ static void table1_truth(double S, double *start_z, double *y, double *zv)
     P[0] = 0.0;
     P[1] = -S;
     P[2] = sz;
-    /* |P + t D|^2 = 64: a t^2 + 2 b t + c = 0 */
-    mpfr_set_zero(a, 1);
-    mpfr_set_zero(b, 1);
-    mpfr_set_si(c, -64, MPFR_RNDN);
-    for (k = 0; k < 3; k++) {
-        mpfr_set_d(t, D[k], MPFR_RNDN);
-        mpfr_sqr(u, t, MPFR_RNDN);
-        mpfr_add(a, a, u, MPFR_RNDN);
-        mpfr_mul_d(u, t, P[k], MPFR_RNDN);
-        mpfr_add(b, b, u, MPFR_RNDN);
-        mpfr_set_d(t, P[k], MPFR_RNDN);
-        mpfr_sqr(u, t, MPFR_RNDN);
-        mpfr_add(c, c, u, MPFR_RNDN);
-    }
-    mpfr_sqr(disc, b, MPFR_RNDN);
-    mpfr_mul(u, a, c, MPFR_RNDN);
-    mpfr_sub(disc, disc, u, MPFR_RNDN);
-    mpfr_sqrt(disc, disc, MPFR_RNDN);
-    mpfr_add(t, b, disc, MPFR_RNDN);
-    mpfr_neg(t, t, MPFR_RNDN);
-    mpfr_div(t, t, a, MPFR_RNDN);
-    mpfr_mul_d(u, t, D[1], MPFR_RNDN);
-    mpfr_add_d(u, u, P[1], MPFR_RNDN);
-    *y = mpfr_get_d(u, MPFR_RNDN);
-    mpfr_mul_d(u, t, D[2], MPFR_RNDN);
-    mpfr_add_d(u, u, P[2], MPFR_RNDN);
-    mpfr_add_ui(u, u, 8, MPFR_RNDN);
-    *zv = mpfr_get_d(u, MPFR_RNDN);
+    sphere64_hit(P, D, 8.0, hit);
+    *y = hit[1];
+    *zv = hit[2];
     *start_z = sz;
-    mpfr_clears(a, b, c, r2, t, u, disc, (mpfr_ptr)0);
+    mpfr_clears(a, b, r2, (mpfr_ptr)0);
 }
 
 static void table1(void **state)
