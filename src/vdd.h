@@ -170,6 +170,17 @@ static inline vdd vdd_add(vdd a, vdd b)
     return vdd_fast_two_sum(s.hi, s.lo);
 }
 
+/* a + b with one two-sum: its error is at most DD_U (|a| + |b|) instead of
+ * DD_U |a + b| (Joldes, Muller and Popescu's sloppy sum), which costs half
+ * as much.  It serves sums whose error bound is taken over the magnitudes
+ * of their terms, and sums of terms of one sign. */
+static inline vdd vdd_add_m(vdd a, vdd b)
+{
+    vdd s = vdd_two_sum(a.hi, b.hi);
+    s.lo += a.lo + b.lo;
+    return vdd_fast_two_sum(s.hi, s.lo);
+}
+
 static inline vdd vdd_neg(vdd a)
 {
     vdd r = {-a.hi, -a.lo};
@@ -250,17 +261,19 @@ typedef struct vdd3 {
     vdd x, y, z;
 } vdd3;
 
+/* Dot product and a + s b with the sloppy sum: errors bounded by DD_U times
+ * the sum of the magnitudes of the products. */
 static inline vdd vdd_dot3(vdd3 a, vdd3 b)
 {
-    return vdd_add(vdd_add(vdd_mul(a.x, b.x), vdd_mul(a.y, b.y)), vdd_mul(a.z, b.z));
+    return vdd_add_m(vdd_add_m(vdd_mul(a.x, b.x), vdd_mul(a.y, b.y)), vdd_mul(a.z, b.z));
 }
 
 static inline vdd3 vdd3_axpy(vdd3 a, vdd s, vdd3 b)
 {
     vdd3 r;
-    r.x = vdd_add(a.x, vdd_mul(s, b.x));
-    r.y = vdd_add(a.y, vdd_mul(s, b.y));
-    r.z = vdd_add(a.z, vdd_mul(s, b.z));
+    r.x = vdd_add_m(a.x, vdd_mul(s, b.x));
+    r.y = vdd_add_m(a.y, vdd_mul(s, b.y));
+    r.z = vdd_add_m(a.z, vdd_mul(s, b.z));
     return r;
 }
 
