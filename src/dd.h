@@ -151,19 +151,4 @@ typedef struct dd3 {
     dd x, y, z;
 } dd3;
 
-static inline dd dd_dot3(dd3 a, dd3 b)
-{
-    return dd_add(dd_add(dd_mul(a.x, b.x), dd_mul(a.y, b.y)), dd_mul(a.z, b.z));
-}
-
-/* a + s b */
-static inline dd3 dd3_axpy(dd3 a, dd s, dd3 b)
-{
-    dd3 r;
-    r.x = dd_add(a.x, dd_mul(s, b.x));
-    r.y = dd_add(a.y, dd_mul(s, b.y));
-    r.z = dd_add(a.z, dd_mul(s, b.z));
-    return r;
-}
-
 #endif
