@@ -1,0 +1,151 @@
+/*
+ * test_dd.c - the double-double sums of the precise trace against exact
+ * sums in MPFR.
+ *
+ * The error analysis in src/trace_vec.c rests on two claims: the accurate
+ * sum vdd_add errs by at most DD_U |a + b|, and the sloppy sum vdd_add_m
+ * by at most DD_U (|a| + |b|).  The truth here is the exact sum of the four
+ * doubles, which 600 bits hold for the exponents drawn.  The cases lean on
+ * cancellation, where the two sums differ and the sloppy one's
+ * renormalization may meet a low part larger than the high part.
+ */
+#include <math.h>
+#include <mpfr.h>
+#include <stdint.h>
+
+#include "testutil.h"
+#include "vdd.h"
+
+static uint64_t state_ = 0x9E3779B97F4A7C15ULL;
+
+static double urand(void)
+{
+    state_ ^= state_ >> 12;
+    state_ ^= state_ << 25;
+    state_ ^= state_ >> 27;
+    return ((double)((state_ * 2685821657736338717ULL) >> 11) + 0.5) * 0x1.0p-53;
+}
+
+/* A normalized pair: hi with a random exponent in [-30, 30], and a low
+ * part anywhere within half an ulp of it. */
+static dd rand_dd(void)
+{
+    dd a;
+    a.hi = ldexp(1.0 + urand(), (int)(urand() * 61.0) - 30);
+    if (urand() < 0.5)
+        a.hi = -a.hi;
+    a.lo = (urand() - 0.5) * tu_ulp(a.hi);
+    return dd_fast_two_sum(a.hi, a.lo);
+}
+
+/* b close to -a, so the sum cancels k bits, k from 0 to 110. */
+static dd near_neg(dd a)
+{
+    dd b;
+    double k = floor(urand() * 111.0);
+    b = dd_add(dd_neg(a), dd_from(ldexp(urand() - 0.5, -(int)k) * a.hi));
+    if (urand() < 0.3)
+        b.lo = -a.lo; /* the high parts then cancel exactly */
+    return dd_fast_two_sum(b.hi, b.lo);
+}
+
+/* |computed - exact| of the sum a + b, and the exact sum. */
+static double sum_error(dd a, dd b, vdd got, mpfr_t exact)
+{
+    mpfr_t g;
+    double e;
+    mpfr_init2(g, 600);
+    mpfr_set_d(exact, a.hi, MPFR_RNDN);
+    mpfr_add_d(exact, exact, a.lo, MPFR_RNDN);
+    mpfr_add_d(exact, exact, b.hi, MPFR_RNDN);
+    mpfr_add_d(exact, exact, b.lo, MPFR_RNDN);
+    mpfr_set_d(g, got.hi[0], MPFR_RNDN);
+    mpfr_add_d(g, g, got.lo[0], MPFR_RNDN);
+    mpfr_sub(g, g, exact, MPFR_RNDN);
+    mpfr_abs(g, g, MPFR_RNDN);
+    e = mpfr_get_d(g, MPFR_RNDU);
+    mpfr_clear(g);
+    return e;
+}
+
+static vdd lane0(dd a)
+{
+    vdd v = vdd_set(a);
+    return v;
+}
+
+static void sums_within_bounds(void **state)
+{
+    enum { N = 200000 };
+    double worst_acc = 0.0, worst_m = 0.0, worst_m_rel = 0.0;
+    long cancel = 0, i;
+    mpfr_t exact;
+    (void)state;
+    mpfr_init2(exact, 600);
+    for (i = 0; i < N; i++) {
+        dd a = rand_dd(), b = (i % 2) ? near_neg(a) : rand_dd();
+        vdd acc = vdd_add(lane0(a), lane0(b)), m = vdd_add_m(lane0(a), lane0(b));
+        double e_acc = sum_error(a, b, acc, exact), e_m = sum_error(a, b, m, exact);
+        double s = fabs(mpfr_get_d(exact, MPFR_RNDN));
+        double mag = fabs(a.hi) + fabs(b.hi);
+        if (s < 0x1p-40 * mag)
+            cancel++;
+        /* Relative to the sum for the accurate one, to the terms for the
+         * sloppy one. */
+        if (e_acc > 0.0) {
+            assert_true(e_acc <= DD_U * s);
+            worst_acc = fmax(worst_acc, e_acc / (DD_U * s));
+        }
+        if (e_m > 0.0) {
+            assert_true(e_m <= DD_U * mag);
+            worst_m = fmax(worst_m, e_m / (DD_U * mag));
+            if (s > 0.0)
+                worst_m_rel = fmax(worst_m_rel, e_m / (DD_U * s));
+        }
+        /* Every lane gives the same bits. */
+        assert_true(m.hi[3] == m.hi[0] && m.lo[3] == m.lo[0]);
+    }
+    mpfr_clear(exact);
+    print_message("# %d sums, %ld cancelling more than 40 bits; exact sums in 600-bit MPFR\n",
+                  N, cancel);
+    print_message("# vdd_add: worst error / (DD_U |a + b|) = %.3f (bound 1)\n", worst_acc);
+    print_message("# vdd_add_m: worst error / (DD_U (|a| + |b|)) = %.3f (bound 1)\n", worst_m);
+    /* Why the accurate sum stays wherever a bound is relative to the sum. */
+    print_message("# vdd_add_m: worst error / (DD_U |a + b|) = %.3g (no bound)\n", worst_m_rel);
+}
+
+/* Terms of one sign: the sloppy sum is then as accurate as the other,
+ * which is what r2 = x^2 + y^2 and |g|^2 rely on. */
+static void same_sign_relative(void **state)
+{
+    enum { N = 100000 };
+    double worst = 0.0;
+    long i;
+    mpfr_t exact;
+    (void)state;
+    mpfr_init2(exact, 600);
+    for (i = 0; i < N; i++) {
+        dd a = rand_dd(), b = rand_dd();
+        vdd m;
+        double e, s;
+        if ((a.hi < 0) != (b.hi < 0))
+            b = dd_neg(b);
+        m = vdd_add_m(lane0(a), lane0(b));
+        e = sum_error(a, b, m, exact);
+        s = fabs(mpfr_get_d(exact, MPFR_RNDN));
+        assert_true(e <= DD_U * s);
+        worst = fmax(worst, e / (DD_U * s));
+    }
+    mpfr_clear(exact);
+    print_message("# %d same-sign sloppy sums: worst error / (DD_U |a + b|) = %.3f (bound 1)\n",
+                  N, worst);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(sums_within_bounds),
+        cmocka_unit_test(same_sign_relative),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
