@@ -93,7 +93,7 @@ static void q_aim_off(const sg_tracer *t, const osp *o, double px, double py, dd
 static void pray_from_vec(const osp *o, const dd (*q)[2], int nl, sg_pray *r, double *path0)
 {
     vdd3 v;
-    vdd len, qx, qy;
+    vdd len, inv, qx, qy;
     int k;
     for (k = 0; k < SG_VL; k++) {
         int src = k < nl ? k : 0;
@@ -106,7 +106,6 @@ static void pray_from_vec(const osp *o, const dd (*q)[2], int nl, sg_pray *r, do
         v.x = vdd_sub(qx, vdd_set(o->obj.x));
         v.y = vdd_sub(qy, vdd_set(o->obj.y));
         v.z = vdd_set(dd_neg(o->obj.z));
-        vdd inv;
         len = vdd_sqrt(vdd_dot3(v, v));
         /* One division and three products: within eD's 8 DD_U. */
         inv = vdd_div(vdd_from(vd_set(1.0)), len);

@@ -127,7 +127,7 @@ static vd resid_v(const sg_sprep *s, vd x, vd y, vd z)
     if (s->shape == SHAPE_CONIC) {
         vdd G = vdd_add_m(r2, vdd_mul(vdd_set(s->k1), vdd_two_prod(z, z)));
         vd gz = 2.0 * (s->k1.hi * z - s->R);
-        G = vdd_add_m(G, vdd_two_prod(z, vd_set(-2.0 * s->R)));
+        G = vdd_sub_m(G, vdd_two_prod(z, vd_set(2.0 * s->R)));
         return vsel((vm)(gz != 0.0), vd_abs((G.hi + G.lo) / gz), vd_set(NAN));
     }
     sag = sag_v(s, r2, &bad);
@@ -198,7 +198,7 @@ static void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
     if (s->shape == SHAPE_CONIC) {
         vdd xx = vdd_sqr(p.x), yy = vdd_sqr(p.y), zz = vdd_mul(vdd_set(s->k1), vdd_sqr(p.z));
         vdd rz = vdd_mul_d(p.z, vd_set(2.0 * s->R));
-        *F = vdd_add_m(vdd_add_m(vdd_add_m(xx, yy), zz), vdd_neg(rz));
+        *F = vdd_sub_m(vdd_add_m(vdd_add_m(xx, yy), zz), rz);
         *err = 8.0 * DD_U *
                (vd_abs(xx.hi) + vd_abs(yy.hi) + vd_abs(zz.hi) + vd_abs(rz.hi));
         *bad = vm_set(0);
@@ -318,9 +318,9 @@ static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
     dN = gsens * r->eP / gn;
     if (s->mirror) {
         vdd f = vdd_div(vdd_mul_d(dg, vd_set(2.0)), gg);
-        nd.x = vdd_add_m(r->d.x, vdd_neg(vdd_mul(f, g.x)));
-        nd.y = vdd_add_m(r->d.y, vdd_neg(vdd_mul(f, g.y)));
-        nd.z = vdd_add_m(r->d.z, vdd_neg(vdd_mul(f, g.z)));
+        nd.x = vdd_sub_m(r->d.x, vdd_mul(f, g.x));
+        nd.y = vdd_sub_m(r->d.y, vdd_mul(f, g.y));
+        nd.z = vdd_sub_m(r->d.z, vdd_mul(f, g.z));
         r->eD = r->eD + 4.0 * dN + 40.0 * DD_U;
     } else {
         vdd mu = vdd_set(s->mu);

@@ -4,8 +4,8 @@
  * Each operation is the lane-by-lane transcription of the one of the same
  * name in dd.h, rounding for rounding, so vector and scalar double-double
  * code (the batch launch and the one-ray launch) give the same bits; the
- * sloppy sum and the vector forms built on it (vdd_add_m, vdd_dot3,
- * vdd3_axpy) serve only the vector trace and have no scalar twin.  Only
+ * sloppy sum and the vector forms built on it (vdd_add_m, vdd_sub_m,
+ * vdd_dot3, vdd3_axpy) serve only the vector trace and have no scalar twin.  Only
  * correctly rounded operations are used (add, mul, div, sqrt, fma), which
  * is why the result does not depend on whether the compiler maps a vector
  * to AVX2, SSE2 or plain scalar code.
@@ -192,6 +192,11 @@ static inline vdd vdd_neg(vdd a)
 static inline vdd vdd_sub(vdd a, vdd b)
 {
     return vdd_add(a, vdd_neg(b));
+}
+
+static inline vdd vdd_sub_m(vdd a, vdd b)
+{
+    return vdd_add_m(a, vdd_neg(b));
 }
 
 static inline vdd vdd_add_d(vdd a, vd b)
