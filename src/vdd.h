@@ -22,8 +22,15 @@
 #include <immintrin.h>
 #endif
 
+/* Eight lanes where the registers hold eight doubles (AVX-512: 32 of
+ * them, so a block's state stays in registers), four elsewhere.  The
+ * double-double chains are long and dependent, so wider blocks give the
+ * core independent work; a lane's bits do not depend on the width. */
+#if defined(__AVX512F__)
+#define SG_VL 8
+#else
 #define SG_VL 4
-_Static_assert(SG_VL == 4, "vd_set, vm_set and vm_any spell out four lanes");
+#endif
 
 typedef double vd __attribute__((vector_size(SG_VL * sizeof(double))));
 /* Comparison results: all bits set in a lane where the comparison holds. */
@@ -33,13 +40,19 @@ typedef int64_t vm __attribute__((vector_size(SG_VL * sizeof(double))));
 
 static inline vd vd_set(double a)
 {
-    vd r = {a, a, a, a};
+    vd r;
+    int k;
+    for (k = 0; k < SG_VL; k++)
+        r[k] = a;
     return r;
 }
 
 static inline vm vm_set(int64_t a)
 {
-    vm r = {a, a, a, a};
+    vm r;
+    int k;
+    for (k = 0; k < SG_VL; k++)
+        r[k] = a;
     return r;
 }
 
@@ -50,7 +63,11 @@ static inline vd vsel(vm m, vd a, vd b)
 
 static inline int vm_any(vm m)
 {
+#if defined(__AVX512F__)
+    return _mm512_test_epi64_mask((__m512i)m, (__m512i)m) != 0;
+#else
     return (m[0] | m[1] | m[2] | m[3]) != 0;
+#endif
 }
 
 static inline vd vd_abs(vd a)
@@ -88,7 +105,9 @@ static inline vd vd_fmax(vd a, vd b)
 
 static inline vd vd_sqrt(vd a)
 {
-#if defined(__AVX__)
+#if defined(__AVX512F__)
+    return _mm512_sqrt_pd(a);
+#elif defined(__AVX__)
     return _mm256_sqrt_pd(a);
 #else
     vd r;
@@ -102,7 +121,9 @@ static inline vd vd_sqrt(vd a)
 /* a * b - c with one rounding. */
 static inline vd vd_fms(vd a, vd b, vd c)
 {
-#if defined(__FMA__)
+#if defined(__AVX512F__)
+    return _mm512_fmsub_pd(a, b, c);
+#elif defined(__FMA__)
     return _mm256_fmsub_pd(a, b, c);
 #else
     vd r;

@@ -103,7 +103,7 @@ static void sums_within_bounds(void **state)
                 worst_m_rel = fmax(worst_m_rel, e_m / (DD_U * s));
         }
         /* Every lane gives the same bits. */
-        assert_true(m.hi[3] == m.hi[0] && m.lo[3] == m.lo[0]);
+        assert_true(m.hi[SG_VL - 1] == m.hi[0] && m.lo[SG_VL - 1] == m.lo[0]);
     }
     mpfr_clear(exact);
     print_message("# %d sums, %ld cancelling more than 40 bits; exact sums in 600-bit MPFR\n",
