@@ -7,7 +7,7 @@
  * surface equation in double-double.  Every operation acts on each lane
  * alone and branches that depend on the ray are masks, so a ray gets the
  * same bits whether it is traced alone (sg_precise_run_from, with idle
- * lanes) or with three others (the batch).  A lane that stops at a surface
+ * lanes) or with others (the batch).  A lane that stops at a surface
  * (a miss, total internal reflection, clipping, an asphere that does not
  * converge) gets its status there and drops out of the block.  Sums whose
  * error bound is taken over the magnitudes of their terms (the surface
@@ -445,46 +445,65 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
                     sg_ray_surface *const *out, vm live, int *st)
 {
     const sg_sprep *s = &t->sp[i];
+    int flat = s->shape == SHAPE_PLANE;
     vd dz = r->d.z.hi, ps[3], ds[3], sd = vd_set(0.0), eP0, root_err = vd_set(0.0);
-    vd pd[3], dpath, kappa, cg, resid;
+    vd pd[3], dpath, kappa, cg, resid, s0d = vd_set(0.0), lever;
     vdd s0 = vdd_from(vd_set(0.0)), sv;
-    vdd3 p0;
+    vdd3 base;
     vm bad = vm_set(0), tp, act;
     int k, it;
 
     /* Measure 1: into this surface's frame and onto its tangent plane. */
     if (i > 1)
         r->p.z = vdd_add_d(r->p.z, vd_set(-s->T));
-    p0 = r->p;
+    base = r->p;
     eP0 = r->eP + DD_U * vd_abs(r->p.z.hi);
     tp = (vm)(dz != 0.0) & (vm)(r->p.z.hi != 0.0);
+    ps[0] = r->p.x.hi;
+    ps[1] = r->p.y.hi;
+    ps[2] = r->p.z.hi;
     if (vm_any(tp)) {
-        vdd s0t = vdd_neg(vdd_div(r->p.z, r->d.z));
-        vdd3 pt;
-        vd ePt;
-        pt.x = vdd_add_m(r->p.x, vdd_mul(s0t, r->d.x));
-        pt.y = vdd_add_m(r->p.y, vdd_mul(s0t, r->d.y));
-        pt.z = vdd_from(vd_set(0.0));
-        ePt = (eP0 + vd_abs(s0t.hi) * r->eD) / vd_abs(dz) +
-              8.0 * DD_U * (vd_abs(r->p.x.hi) + vd_abs(r->p.y.hi) + vd_abs(s0t.hi));
-        s0 = vdd_sel(tp, s0t, s0);
-        p0.x = vdd_sel(tp, pt.x, p0.x);
-        p0.y = vdd_sel(tp, pt.y, p0.y);
-        p0.z = vdd_sel(tp, pt.z, p0.z);
+        vd step0, ePt;
+        if (flat) {
+            /* The tangent plane is the surface: the exact quotient puts the
+             * point on z = 0 exactly, and Newton starts there. */
+            vdd s0t = vdd_neg(vdd_div(r->p.z, r->d.z));
+            vdd3 pt;
+            pt.x = vdd_add_m(r->p.x, vdd_mul(s0t, r->d.x));
+            pt.y = vdd_add_m(r->p.y, vdd_mul(s0t, r->d.y));
+            pt.z = vdd_from(vd_set(0.0));
+            s0 = vdd_sel(tp, s0t, s0);
+            base.x = vdd_sel(tp, pt.x, base.x);
+            base.y = vdd_sel(tp, pt.y, base.y);
+            base.z = vdd_sel(tp, pt.z, base.z);
+            ps[0] = base.x.hi;
+            ps[1] = base.y.hi;
+            ps[2] = base.z.hi;
+            step0 = s0t.hi;
+        } else {
+            /* The tangent-plane point only seeds the root in double;
+             * Newton below works on the whole step from the entry point
+             * in double-double, so a point is always P + s D, two terms
+             * that an aimed ray can cancel exactly. */
+            s0d = vsel(tp, vd_neg(r->p.z.hi) / dz, vd_set(0.0));
+            ps[0] = r->p.x.hi + s0d * r->d.x.hi;
+            ps[1] = r->p.y.hi + s0d * r->d.y.hi;
+            ps[2] = r->p.z.hi + s0d * dz;
+            step0 = s0d;
+        }
+        ePt = (eP0 + vd_abs(step0) * r->eD) / vd_abs(dz) +
+              8.0 * DD_U * (vd_abs(r->p.x.hi) + vd_abs(r->p.y.hi) + vd_abs(step0));
         eP0 = vsel(tp, ePt, eP0);
     }
-    ps[0] = p0.x.hi;
-    ps[1] = p0.y.hi;
-    ps[2] = p0.z.hi;
     ds[0] = r->d.x.hi;
     ds[1] = r->d.y.hi;
     ds[2] = r->d.z.hi;
 
     /* Measure 3: the eq. 27 root (and Newton for aspheres) in double. */
-    if (s->shape == SHAPE_PLANE) {
-        vm off = (vm)(p0.z.hi != 0.0);
+    if (flat) {
+        vm off = (vm)(ps[2] != 0.0);
         bad = fail_lanes(bad, off & (vm)(dz == 0.0), live, SG_EMISS, st);
-        sd = vsel(off, vd_neg(p0.z.hi) / dz, vd_set(0.0));
+        sd = vsel(off, vd_neg(ps[2]) / dz, vd_set(0.0));
     } else {
         vm miss;
         if (s->c != 0.0) {
@@ -492,7 +511,7 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
         } else {
             /* A base curvature below the smallest double: the plane's root. */
             miss = (vm)(dz == 0.0);
-            sd = vsel(miss | (vm)(p0.z.hi == 0.0), vd_set(0.0), vd_neg(p0.z.hi) / dz);
+            sd = vsel(miss | (vm)(ps[2] == 0.0), vd_set(0.0), vd_neg(ps[2]) / dz);
         }
         if (s->shape == SHAPE_ASPH) {
             vm nohit, noconv;
@@ -505,20 +524,21 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
         }
     }
 
-    /* Measure 4: Newton along the ray with F in double-double. */
-    sv = vdd_from(sd);
+    /* Measure 4: Newton along the ray with F in double-double.  The step
+     * starts as the exact sum of the tangent-plane step and the root. */
+    sv = flat ? vdd_from(sd) : vdd_two_sum(s0d, sd);
     act = live & ~bad;
-    if (s->shape == SHAPE_PLANE)
-        act &= (vm)(p0.z.hi != 0.0);
+    if (flat)
+        act &= (vm)(ps[2] != 0.0);
     for (it = 0; it < 4 && vm_any(act); it++) {
-        vdd3 p = vdd3_axpy(p0, sv, r->d);
+        vdd3 p = vdd3_axpy(base, sv, r->d);
         vd ferr, step, Fp, Fmag, Fpp, re;
         vdd F, snew;
         vm fbad;
         pd[0] = p.x.hi;
         pd[1] = p.y.hi;
         pd[2] = p.z.hi;
-        if (s->shape == SHAPE_PLANE) {
+        if (flat) {
             F = p.z;
             ferr = vd_set(0.0);
             Fp = dz;
@@ -540,16 +560,24 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
              vd_abs(step) * 8.0 * U53 * Fmag / vd_abs(Fp) + 4.0 * DD_U * vd_abs(snew.hi);
         sv = vdd_sel(act, snew, sv);
         root_err = vsel(act, re, root_err);
-        act &= ~(vm)(re <= 0x1p-100 * (vd_abs(snew.hi) + vd_abs(p0.x.hi) + vd_abs(p0.y.hi)));
+        act &= ~(vm)(re <= 0x1p-100 * (vd_abs(snew.hi) + vd_abs(ps[0]) + vd_abs(ps[1])));
     }
-    r->p = vdd3_axpy(p0, sv, r->d);
+    r->p = vdd3_axpy(base, sv, r->d);
     pd[0] = r->p.x.hi;
     pd[1] = r->p.y.hi;
     pd[2] = r->p.z.hi;
     cg = surf_cos_v(s, pd, ds);
     kappa = vsel((vm)(cg > 0.0), 1.0 / cg, vd_set(1e300));
-    r->eP = kappa * (eP0 + vd_abs(sv.hi) * r->eD) + root_err +
-            8.0 * DD_U * (vd_abs(p0.x.hi) + vd_abs(p0.y.hi) + vd_abs(sv.hi));
+    /* The ray's own error carried from the tangent plane, the root's, and
+     * the rounding of the point; a curved surface's point is formed from
+     * the entry point, whose coordinates enter that rounding too. */
+    lever = vd_abs(sv.hi - s0d);
+    eP0 = kappa * (eP0 + lever * r->eD) + root_err +
+          8.0 * DD_U * (vd_abs(ps[0]) + vd_abs(ps[1]) + lever);
+    if (!flat)
+        eP0 += 8.0 * DD_U *
+               (vd_abs(base.x.hi) + vd_abs(base.y.hi) + vd_abs(base.z.hi) + vd_abs(sv.hi));
+    r->eP = eP0;
 
     {
         vdd sp = vdd_add_m(s0, sv);
