@@ -54,6 +54,7 @@ static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
         o->dir.x = dd_div(tx, len);
         o->dir.y = dd_div(ty, len);
         o->dir.z = dd_div(dd_from(1.0), len);
+        o->lam = dd_div(t->ln.enp, o->dir.z);
     } else {
         const sg_surface *s0 = &t->sys->surf[0];
         double R = s0->radius;
@@ -67,6 +68,7 @@ static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
             if (isfinite(sag))
                 o->obj.z = dd_add_d(o->obj.z, sag);
         }
+        o->lam = dd_div(dd_neg(o->obj.z), dd_sub(t->ln.enp, o->obj.z));
     }
 }
 
@@ -75,15 +77,12 @@ static void q_aim_off(const sg_tracer *t, const osp *o, double px, double py, dd
 {
     dd ex = dd_mul_d(t->ln.epr, px), ey = dd_mul_d(t->ln.epr, py);
     if (o->inf) {
-        dd f = dd_div(t->ln.enp, o->dir.z);
-        q[0] = dd_sub(ex, dd_mul(f, o->dir.x));
-        q[1] = dd_sub(ey, dd_mul(f, o->dir.y));
+        q[0] = dd_sub(ex, dd_mul(o->lam, o->dir.x));
+        q[1] = dd_sub(ey, dd_mul(o->lam, o->dir.y));
     } else {
-        /* lambda = -Oz / (enp - Oz) along O -> E */
-        dd den = dd_sub(t->ln.enp, o->obj.z);
-        dd lam = dd_div(dd_neg(o->obj.z), den);
-        q[0] = dd_add(o->obj.x, dd_mul(lam, dd_sub(ex, o->obj.x)));
-        q[1] = dd_add(o->obj.y, dd_mul(lam, dd_sub(ey, o->obj.y)));
+        /* The point lam of the way from O to the pupil point E. */
+        q[0] = dd_add(o->obj.x, dd_mul(o->lam, dd_sub(ex, o->obj.x)));
+        q[1] = dd_add(o->obj.y, dd_mul(o->lam, dd_sub(ey, o->obj.y)));
     }
 }
 
@@ -243,99 +242,127 @@ static int fd_jacobian(sg_tracer *t, land_fn land, const osp *o, const dd q[2],
     return fabs(det) > 0.0 && isfinite(det) ? SG_OK : SG_EAIM;
 }
 
-/* Whether a landing residual nr already needs no confirming step: it is
+/* The Newton iteration on Q of SG_VL rays, lane by lane, shared by the
+ * one-ray aiming (one lane) and the batch (a lane per ray), so that both
+ * take the same steps.  Every operation is the lane's own, in the order
+ * the scalar double and double-double arithmetic would take it. */
+typedef struct vaim {
+    vd J[2][2], det; /* the Jacobian in use */
+    vd best;         /* the smallest residual so far */
+    vd noise;        /* the last landing's error bound */
+    vd dx, dy;       /* the last step, for Broyden's update */
+    vm stepped;      /* a step was taken with this Jacobian */
+    vm fresh;        /* the Jacobian was taken at this Q */
+    vdd q[2];        /* the point on surface 1's tangent plane */
+} vaim;
+
+static vd det2(const vaim *a)
+{
+    return a->J[0][0] * a->J[1][1] - a->J[0][1] * a->J[1][0];
+}
+
+/* Every lane starts from Jacobian J; lane k from Q = q[k] (lane 0's for
+ * lanes past nl). */
+static void aim_start(vaim *a, const double J[2][2], int fresh, const dd (*q)[2], int nl)
+{
+    int i, j, k;
+    for (i = 0; i < 2; i++)
+        for (j = 0; j < 2; j++)
+            a->J[i][j] = vd_set(J[i][j]);
+    a->det = det2(a);
+    a->best = vd_set(INFINITY);
+    a->noise = vd_set(0.0);
+    a->dx = a->dy = vd_set(0.0);
+    a->stepped = vm_set(0);
+    a->fresh = vm_set(fresh ? -1 : 0);
+    for (k = 0; k < SG_VL; k++)
+        for (i = 0; i < 2; i++) {
+            a->q[i].hi[k] = q[k < nl ? k : 0][i].hi;
+            a->q[i].lo[k] = q[k < nl ? k : 0][i].lo;
+        }
+}
+
+static void aim_q(const vaim *a, int k, dd q[2])
+{
+    q[0].hi = a->q[0].hi[k];
+    q[0].lo = a->q[0].lo[k];
+    q[1].hi = a->q[1].hi[k];
+    q[1].lo = a->q[1].lo[k];
+}
+
+/* A Jacobian of lane k's own, taken at its current Q. */
+static void aim_set_jacobian(vaim *a, int k, const double J[2][2])
+{
+    int i, j;
+    for (i = 0; i < 2; i++)
+        for (j = 0; j < 2; j++)
+            a->J[i][j][k] = J[i][j];
+    a->det = det2(a);
+    a->stepped[k] = 0;
+    a->fresh[k] = -1;
+}
+
+/* Judges the landings at (at0, at1) with error bounds noise in the lanes
+ * of act.  *done gets the lanes that need no further step: a residual
  * within the landing's error bound and below 2^-96 of both target
- * coordinates, about where double-double rounding leaves it anyway.  A
- * zero target coordinate never qualifies: there the iteration goes on
- * until the residual stops shrinking, so a ray meant to cross the stop on
- * an axis does, as nearly as the arithmetic can put it. */
-static int landed(double nr, double noise, const dd target[2])
+ * coordinates, about where double-double rounding leaves it anyway (a
+ * zero target coordinate never qualifies, so a ray meant to cross the
+ * stop on an axis iterates until the residual stops shrinking), or one
+ * that stopped shrinking within the landing's own error bound, or within
+ * the tolerance with a fresh Jacobian.  *stalled gets the lanes whose
+ * residual stopped shrinking otherwise: the Jacobian has stopped helping
+ * (a borrowed one, or its own near a turning point of the landing map)
+ * and a fresh one is needed.  res and nr get the residuals for
+ * aim_step. */
+static void aim_judge(vaim *a, vm act, vdd at0, vdd at1, vd noise, const vdd target[2],
+                      double tol, vdd res[2], vd *nr, vm *done, vm *stalled)
 {
-    double m = fmin(fabs(target[0].hi), fabs(target[1].hi));
-    return nr == 0.0 || (nr <= noise && nr <= 0x1p-96 * m);
+    vd m = vd_fmin(vd_abs(target[0].hi), vd_abs(target[1].hi));
+    vm landed, still;
+    a->noise = vsel(act, noise, a->noise);
+    res[0] = vdd_sub(at0, target[0]);
+    res[1] = vdd_sub(at1, target[1]);
+    *nr = vd_fmax(vd_abs(res[0].hi), vd_abs(res[1].hi));
+    landed = (vm)(*nr == 0.0) | ((vm)(*nr <= noise) & (vm)(*nr <= 0x1p-96 * m));
+    still = ~landed & ~(vm)(*nr < 0.5 * a->best);
+    *done = act & (landed | (still & ((vm)(*nr <= noise) |
+                                      (a->fresh & (vm)(*nr <= tol + noise)))));
+    *stalled = act & still & ~*done;
+    a->fresh &= ~(act & ~*done & ~*stalled);
 }
 
-/* Broyden's update after the step (-dx, -dy) left the residual (r0, r1):
- * the borrowed Jacobian learns the map along each step it takes, so a
- * ray far from the chief still converges superlinearly. */
-static void broyden(double J[2][2], double *det, double r0, double r1, double dx, double dy)
+/* Broyden's update after the step (-dx, -dy) left the residual (r0, r1)
+ * in the lanes of m: the borrowed Jacobian learns the map along each step
+ * it takes, so a ray far from the chief still converges superlinearly. */
+static void broyden(vaim *a, vm m, vd r0, vd r1)
 {
-    double s2 = dx * dx + dy * dy;
-    if (!(s2 > 0.0))
-        return;
-    J[0][0] -= r0 * dx / s2;
-    J[0][1] -= r0 * dy / s2;
-    J[1][0] -= r1 * dx / s2;
-    J[1][1] -= r1 * dy / s2;
-    *det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
+    vd s2 = a->dx * a->dx + a->dy * a->dy;
+    m &= (vm)(s2 > 0.0);
+    a->J[0][0] = vsel(m, a->J[0][0] - r0 * a->dx / s2, a->J[0][0]);
+    a->J[0][1] = vsel(m, a->J[0][1] - r0 * a->dy / s2, a->J[0][1]);
+    a->J[1][0] = vsel(m, a->J[1][0] - r1 * a->dx / s2, a->J[1][0]);
+    a->J[1][1] = vsel(m, a->J[1][1] - r1 * a->dy / s2, a->J[1][1]);
+    a->det = vsel(m, det2(a), a->det);
 }
 
-/* One ray's Newton iteration on Q, shared by the one-ray aiming and the
- * four-ray aiming so that both take the same steps. */
-typedef struct aim_it {
-    double J[2][2], det; /* the Jacobian in use */
-    double best;         /* the smallest residual so far */
-    double noise;        /* the last landing's error bound */
-    double dx, dy;       /* the last step, for Broyden's update */
-    int stepped;         /* a step was taken with this Jacobian */
-    int fresh;           /* the Jacobian was taken at this Q */
-} aim_it;
-
-enum { AIM_DONE, AIM_STALLED, AIM_STEP };
-
-static void aim_set_jacobian(aim_it *a, const double J[2][2], int fresh)
+/* The Newton step from residual res in the lanes of m; returns the lanes
+ * whose Q left the doubles. */
+static vm aim_step(vaim *a, vm m, const vdd res[2], vd nr)
 {
-    memcpy(a->J, J, sizeof a->J);
-    a->det = J[0][0] * J[1][1] - J[0][1] * J[1][0];
-    a->stepped = 0;
-    a->fresh = fresh;
-}
-
-static void aim_start(aim_it *a, const double J[2][2], int fresh)
-{
-    aim_set_jacobian(a, J, fresh);
-    a->best = INFINITY;
-    a->noise = 0.0;
-    a->dx = a->dy = 0.0;
-}
-
-/* Judges the landing at with error bound noise; res and nr get the
- * residual and its size for aim_step. */
-static int aim_judge(aim_it *a, const dd at[2], double noise, const dd target[2], double tol,
-                     dd res[2], double *nr)
-{
-    a->noise = noise;
-    res[0] = dd_sub(at[0], target[0]);
-    res[1] = dd_sub(at[1], target[1]);
-    *nr = fmax(fabs(res[0].hi), fabs(res[1].hi));
-    if (landed(*nr, noise, target))
-        return AIM_DONE;
-    if (!(*nr < 0.5 * a->best)) {
-        /* The residual stopped shrinking.  Within the landing's own error
-         * bound, the landing is as exact as the arithmetic carrying it;
-         * when a fresh Jacobian did not help either, it is as exact as the
-         * tolerance asks.  Otherwise the Jacobian has stopped helping this
-         * ray (a borrowed one, or its own near a turning point of the
-         * landing map) and a fresh one is needed here. */
-        return *nr <= noise || (a->fresh && *nr <= tol + noise) ? AIM_DONE : AIM_STALLED;
-    }
-    a->fresh = 0;
-    return AIM_STEP;
-}
-
-/* The Newton step from residual res; 0 when Q leaves the doubles. */
-static int aim_step(aim_it *a, const dd res[2], double nr, dd q[2])
-{
-    double r0 = res[0].hi + res[0].lo, r1 = res[1].hi + res[1].lo;
-    a->best = fmin(a->best, nr);
-    if (a->stepped)
-        broyden(a->J, &a->det, r0, r1, a->dx, a->dy);
-    a->stepped = 1;
-    a->dx = (a->J[1][1] * r0 - a->J[0][1] * r1) / a->det;
-    a->dy = (-a->J[1][0] * r0 + a->J[0][0] * r1) / a->det;
-    q[0] = dd_add_d(q[0], -a->dx);
-    q[1] = dd_add_d(q[1], -a->dy);
-    return isfinite(q[0].hi) && isfinite(q[1].hi);
+    vd r0 = res[0].hi + res[0].lo, r1 = res[1].hi + res[1].lo, dx, dy;
+    vdd q0, q1;
+    a->best = vsel(m, vd_fmin(a->best, nr), a->best);
+    broyden(a, m & a->stepped, r0, r1);
+    a->stepped |= m;
+    dx = (a->J[1][1] * r0 - a->J[0][1] * r1) / a->det;
+    dy = (vd_neg(a->J[1][0]) * r0 + a->J[0][0] * r1) / a->det;
+    a->dx = vsel(m, dx, a->dx);
+    a->dy = vsel(m, dy, a->dy);
+    q0 = vdd_add_d(a->q[0], vd_neg(dx));
+    q1 = vdd_add_d(a->q[1], vd_neg(dy));
+    a->q[0] = vdd_sel(m, q0, a->q[0]);
+    a->q[1] = vdd_sel(m, q1, a->q[1]);
+    return m & ~(vd_isfinite(q0.hi) & vd_isfinite(q1.hi));
 }
 
 /* Solves land(Q) = target by Newton, from Q.  J0, when given, is the
@@ -345,34 +372,40 @@ static int aim_step(aim_it *a, const dd res[2], double nr, dd q[2])
 static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
                       const dd target[2], const double (*J0)[2], sg_ray_surface *scratch)
 {
-    double tol = t->o.aim_rtol * fmax(t->ln.stop_r.hi, 1e-300), J[2][2], noise, nr;
-    dd at[2], res[2];
-    aim_it a;
+    double tol = t->o.aim_rtol * fmax(t->ln.stop_r.hi, 1e-300), J[2][2], noise;
+    vdd tg[2] = {vdd_set(target[0]), vdd_set(target[1])}, res[2];
+    vm one = vm_set(0), done, stalled;
+    vd nr;
+    dd at[2];
+    vaim a;
     int it, rc;
+    one[0] = -1;
     if (J0 == NULL) {
         if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
             return SG_EAIM;
-        aim_start(&a, (const double(*)[2])J, 1);
+        aim_start(&a, (const double(*)[2])J, 1, (const dd(*)[2])q, 1);
     } else {
-        aim_start(&a, J0, 0);
+        aim_start(&a, J0, 0, (const dd(*)[2])q, 1);
     }
     for (it = 0; it < t->o.aim_max_iter; it++) {
+        aim_q(&a, 0, q);
         rc = land(t, o, q, at, &noise, scratch);
         if (rc != SG_OK && rc != SG_EVIGNETTED)
             return SG_EAIM;
-        switch (aim_judge(&a, at, noise, target, tol, res, &nr)) {
-        case AIM_DONE:
+        aim_judge(&a, one, vdd_set(at[0]), vdd_set(at[1]), vd_set(noise), tg, tol, res,
+                  &nr, &done, &stalled);
+        if (done[0])
             return SG_OK;
-        case AIM_STALLED:
+        if (stalled[0]) {
             if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
                 return SG_EAIM;
-            aim_set_jacobian(&a, (const double(*)[2])J, 1);
-            break;
+            aim_set_jacobian(&a, 0, (const double(*)[2])J);
         }
-        if (!aim_step(&a, res, nr, q))
+        if (aim_step(&a, one, res, nr)[0])
             return SG_EAIM;
     }
-    return a.best <= tol + a.noise ? SG_OK : SG_EAIM;
+    aim_q(&a, 0, q);
+    return a.best[0] <= tol + a.noise[0] ? SG_OK : SG_EAIM;
 }
 
 /* ------------------------------------------------------------------------
@@ -587,60 +620,67 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
                            int nl, sg_ray_surface *const *scratch, int *done, sg_pray *at)
 {
     double tol = t->o.aim_rtol * fmax(t->ln.stop_r.hi, 1e-300);
-    aim_it a[SG_VL];
-    int act[SG_VL], lost[SG_VL], one[SG_VL], rc[SG_VL], na, k, it;
-    for (k = 0; k < SG_VL; k++)
+    vaim a;
+    vdd tg[2];
+    vm live = vm_set(0), fin = vm_set(0);
+    int act[SG_VL], one[SG_VL], rc[SG_VL], na, k, it;
+    aim_start(&a, (const double(*)[2])t->aimJ, 0, (const dd(*)[2])q, nl);
+    for (k = 0; k < SG_VL; k++) {
+        int src = k < nl ? k : 0;
         one[k] = 1;
-    for (k = 0; k < nl; k++) {
-        aim_start(&a[k], (const double(*)[2])t->aimJ, 0);
-        done[k] = 0;
-        lost[k] = 0;
+        tg[0].hi[k] = target[src][0].hi;
+        tg[0].lo[k] = target[src][0].lo;
+        tg[1].hi[k] = target[src][1].hi;
+        tg[1].lo[k] = target[src][1].lo;
+        if (k < nl)
+            live[k] = -1;
     }
-    for (it = 0; it < t->o.aim_max_iter; it++) {
+    for (it = 0; it < t->o.aim_max_iter && vm_any(live); it++) {
         dd qa[SG_VL][2];
         sg_pray st[SG_VL];
         double p0[SG_VL];
         sg_ray_surface *sc[SG_VL];
+        vdd at0 = a.q[0], at1 = a.q[1], res[2];
+        vd noise = a.noise, nr;
+        vm landed = vm_set(0), ok, stalled;
         /* Only lanes still iterating are traced, each into its own rows so
          * that its last landing can start the final trace. */
         for (na = 0, k = 0; k < nl; k++)
-            if (!done[k] && !lost[k]) {
-                qa[na][0] = q[k][0];
-                qa[na][1] = q[k][1];
+            if (live[k]) {
+                aim_q(&a, k, qa[na]);
                 sc[na] = scratch[k];
                 act[na++] = k;
             }
-        if (na == 0)
-            return;
         pray_from_vec(o, (const dd(*)[2])qa, na, st, p0);
         sg_precise_vec(t, st, p0, sc, na, one, t->sys->stop, rc);
         for (k = 0; k < na; k++) {
             int l = act[k];
-            dd land[2] = {st[k].p.x, st[k].p.y}, res[2];
-            double nr;
-            if (rc[k] != SG_OK) {
-                lost[l] = 1;
+            if (rc[k] != SG_OK)
                 continue;
-            }
             /* In lanes that stop here, at[] belongs to the final Q. */
             at[l] = st[k];
-            switch (aim_judge(&a[l], land, st[k].eP, target[l], tol, res, &nr)) {
-            case AIM_DONE:
-                done[l] = 1;
-                break;
-            case AIM_STALLED:
-                lost[l] = 1;
-                break;
-            default:
-                lost[l] = !aim_step(&a[l], res, nr, q[l]);
-            }
+            at0.hi[l] = st[k].p.x.hi;
+            at0.lo[l] = st[k].p.x.lo;
+            at1.hi[l] = st[k].p.y.hi;
+            at1.lo[l] = st[k].p.y.lo;
+            noise[l] = st[k].eP;
+            landed[l] = -1;
         }
+        /* A landing that fails, stalls or leaves the doubles is the
+         * one-ray launch's to handle. */
+        aim_judge(&a, landed, at0, at1, noise, tg, tol, res, &nr, &ok, &stalled);
+        fin |= ok;
+        live &= landed & ~ok & ~stalled;
+        live &= ~aim_step(&a, live, res, nr);
     }
-    /* Out of iterations within tolerance: Q moved after its last landing,
-     * so that landing cannot start the final trace (done = 2). */
-    for (k = 0; k < nl; k++)
-        if (!done[k] && !lost[k] && a[k].best <= tol + a[k].noise)
+    for (k = 0; k < nl; k++) {
+        aim_q(&a, k, q[k]);
+        done[k] = fin[k] ? 1 : 0;
+        /* Out of iterations within tolerance: Q moved after its last
+         * landing, so that landing cannot start the final trace. */
+        if (live[k] && a.best[k] <= tol + a.noise[k])
             done[k] = 2;
+    }
 }
 
 /* Whether a lane's final trace may go on from its last landing, which

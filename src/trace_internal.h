@@ -60,6 +60,7 @@ typedef struct osp {
     int inf;
     dd3 dir;
     dd3 obj;
+    dd lam; /* aiming off: enp / dir.z at infinity, else -obj.z / (enp - obj.z) */
 } osp;
 
 struct sg_tracer {

@@ -103,6 +103,12 @@ static inline vd vd_fmax(vd a, vd b)
     return vsel((vm)(a > b) | vd_isnan(b), a, b);
 }
 
+/* fmin with C's treatment of NaN, and glibc's choice of b when equal. */
+static inline vd vd_fmin(vd a, vd b)
+{
+    return vsel((vm)(a < b) | vd_isnan(b), a, b);
+}
+
 static inline vd vd_sqrt(vd a)
 {
 #if defined(__AVX512F__)
