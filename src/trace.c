@@ -520,6 +520,7 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
             }
             mpfr_div(q, q, tmp, MPFR_RNDN);
             p->mu = dd_from_mpfr(q, tmp);
+            p->mu2 = dd_sqr(p->mu);
         }
     }
     mpfr_clear(q);

@@ -29,9 +29,17 @@ typedef struct sg_sprep {
     double a[SG_NASPH];
     int mirror;
     dd mu;       /* |n before| / |n after|, for refraction */
+    dd mu2;      /* mu squared, as the bend would form it */
     double sd;   /* clip radius, 0 for none */
     double zg;   /* vertex z in the global frame (surface 1 at 0), classic only */
 } sg_sprep;
+
+/* 1 + conic is exactly 1 on spheres, where a product by it is the other
+ * factor itself and is skipped. */
+static inline int sg_sprep_sphere(const sg_sprep *s)
+{
+    return s->k1.hi == 1.0 && s->k1.lo == 0.0;
+}
 
 /* A flat surface between equal indices leaves a ray's direction exactly
  * as it is (the normal is exact and nothing can reflect totally), so the

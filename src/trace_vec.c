@@ -90,6 +90,12 @@ static void slope_v(const sg_sprep *s, vd r2, vd *w, vd *dw)
     *dw = dd2;
 }
 
+/* (1 + conic) a; the product by an exact 1 is a itself. */
+static vdd k1_mul(const sg_sprep *s, vdd a)
+{
+    return sg_sprep_sphere(s) ? a : vdd_mul(vdd_set(s->k1), a);
+}
+
 /* Sag in double-double; *bad marks lanes outside the conic's domain. */
 static vdd sag_v(const sg_sprep *s, vdd r2, vm *bad)
 {
@@ -98,7 +104,7 @@ static vdd sag_v(const sg_sprep *s, vdd r2, vm *bad)
     *bad = vm_set(0);
     if (isfinite(s->R)) {
         vdd R = vdd_from(vd_set(s->R));
-        vdd disc = vdd_sub(vdd_sqr(R), vdd_mul(vdd_set(s->k1), r2));
+        vdd disc = vdd_sub(vdd_sqr(R), k1_mul(s, r2));
         vdd root;
         *bad = (vm)(disc.hi < 0.0);
         root = vdd_sqrt(disc);
@@ -125,7 +131,7 @@ static vd resid_v(const sg_sprep *s, vd x, vd y, vd z)
         return vd_abs(z);
     r2 = vdd_add_m(vdd_two_prod(x, x), vdd_two_prod(y, y));
     if (s->shape == SHAPE_CONIC) {
-        vdd G = vdd_add_m(r2, vdd_mul(vdd_set(s->k1), vdd_two_prod(z, z)));
+        vdd G = vdd_add_m(r2, k1_mul(s, vdd_two_prod(z, z)));
         vd gz = 2.0 * (s->k1.hi * z - s->R);
         G = vdd_sub_m(G, vdd_two_prod(z, vd_set(2.0 * s->R)));
         return vsel((vm)(gz != 0.0), vd_abs((G.hi + G.lo) / gz), vd_set(NAN));
@@ -196,7 +202,7 @@ static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, in
 static void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
 {
     if (s->shape == SHAPE_CONIC) {
-        vdd xx = vdd_sqr(p.x), yy = vdd_sqr(p.y), zz = vdd_mul(vdd_set(s->k1), vdd_sqr(p.z));
+        vdd xx = vdd_sqr(p.x), yy = vdd_sqr(p.y), zz = k1_mul(s, vdd_sqr(p.z));
         vdd rz = vdd_mul_d(p.z, vd_set(2.0 * s->R));
         *F = vdd_sub_m(vdd_add_m(vdd_add_m(xx, yy), zz), rz);
         *err = 8.0 * DD_U *
@@ -274,7 +280,7 @@ static vdd3 surf_grad_v(const sg_sprep *s, vdd3 p, vd *gsens)
     } else if (s->shape == SHAPE_CONIC) {
         g.x = p.x;
         g.y = p.y;
-        g.z = vdd_sub(vdd_mul(vdd_set(s->k1), p.z), vdd_from(vd_set(s->R)));
+        g.z = vdd_sub(k1_mul(s, p.z), vdd_from(vd_set(s->R)));
         *gsens = vd_set(fmax(1.0, fabs(s->k1.hi)));
     } else {
         vdd r2 = vdd_add(vdd_sqr(p.x), vdd_sqr(p.y));
@@ -282,7 +288,7 @@ static vdd3 surf_grad_v(const sg_sprep *s, vdd3 p, vd *gsens)
         vd wd, dwd;
         int k;
         if (isfinite(s->R)) {
-            vdd q = vdd_sub(vdd_sqr(vdd_from(vd_set(s->R))), vdd_mul(vdd_set(s->k1), r2));
+            vdd q = vdd_sub(vdd_sqr(vdd_from(vd_set(s->R))), k1_mul(s, r2));
             w = vdd_div(vdd_from(vd_set(s->R < 0 ? -1.0 : 1.0)), vdd_sqrt(q));
         }
         for (k = s->nasph - 1; k >= 0; k--)
@@ -305,26 +311,33 @@ static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
     vd gsens, gn, cosI, dN;
     vdd3 g, nd;
     vdd gg, dg;
+    int flat;
     *nonphys = vm_set(0);
     *tir = vm_set(0);
     if (sg_sprep_passes(s))
         return;
     g = surf_grad_v(s, r->p, &gsens);
-    gg = vdd_dot3(g, g);
+    /* A flat surface's normal (0, 0, -1) has g.g = 1 exactly, and a
+     * double-double quotient by exactly 1 is its dividend: both are
+     * skipped there. */
+    flat = s->shape == SHAPE_PLANE;
+    gg = flat ? vdd_from(vd_set(1.0)) : vdd_dot3(g, g);
     dg = vdd_dot3(r->d, g);
     *nonphys = (vm)(gg.hi <= 0.0);
     gn = vd_sqrt(gg.hi);
     cosI = dg.hi / gn;
     dN = gsens * r->eP / gn;
     if (s->mirror) {
-        vdd f = vdd_div(vdd_mul_d(dg, vd_set(2.0)), gg);
+        vdd f = vdd_mul_d(dg, vd_set(2.0));
+        if (!flat)
+            f = vdd_div(f, gg);
         nd.x = vdd_sub_m(r->d.x, vdd_mul(f, g.x));
         nd.y = vdd_sub_m(r->d.y, vdd_mul(f, g.y));
         nd.z = vdd_sub_m(r->d.z, vdd_mul(f, g.z));
         r->eD = r->eD + 4.0 * dN + 40.0 * DD_U;
     } else {
         vdd mu = vdd_set(s->mu);
-        vdd mu2 = vdd_sqr(mu);
+        vdd mu2 = vdd_set(s->mu2);
         vdd kb = vdd_sub(gg, vdd_mul(mu2, vdd_sub(gg, vdd_sqr(dg))));
         vdd sq, gam;
         vd J, k, sinI, m = vd_set(s->mu.hi);
@@ -333,7 +346,9 @@ static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
             return;
         sq = vdd_sqrt(kb);
         sq = vdd_sel((vm)(dg.hi < 0.0), vdd_neg(sq), sq);
-        gam = vdd_div(vdd_sub(sq, vdd_mul(mu, dg)), gg);
+        gam = vdd_sub(sq, vdd_mul(mu, dg));
+        if (!flat)
+            gam = vdd_div(gam, gg);
         nd.x = vdd_add_m(vdd_mul(mu, r->d.x), vdd_mul(gam, g.x));
         nd.y = vdd_add_m(vdd_mul(mu, r->d.y), vdd_mul(gam, g.y));
         nd.z = vdd_add_m(vdd_mul(mu, r->d.z), vdd_mul(gam, g.z));
