@@ -72,18 +72,70 @@ static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
     }
 }
 
-/* Q for aiming off: the line through the paraxial pupil point. */
-static void q_aim_off(const sg_tracer *t, const osp *o, double px, double py, dd q[2])
+/* Q for aiming off, on every lane: the line through the paraxial pupil
+ * point (px, py). */
+static void q_aim_off_v(const sg_tracer *t, const osp *o, vd px, vd py, vdd q[2])
 {
-    dd ex = dd_mul_d(t->ln.epr, px), ey = dd_mul_d(t->ln.epr, py);
+    vdd ex = vdd_mul_d(vdd_set(t->ln.epr), px), ey = vdd_mul_d(vdd_set(t->ln.epr), py);
+    vdd lam = vdd_set(o->lam);
     if (o->inf) {
-        q[0] = dd_sub(ex, dd_mul(o->lam, o->dir.x));
-        q[1] = dd_sub(ey, dd_mul(o->lam, o->dir.y));
+        q[0] = vdd_sub(ex, vdd_mul(lam, vdd_set(o->dir.x)));
+        q[1] = vdd_sub(ey, vdd_mul(lam, vdd_set(o->dir.y)));
     } else {
         /* The point lam of the way from O to the pupil point E. */
-        q[0] = dd_add(o->obj.x, dd_mul(o->lam, dd_sub(ex, o->obj.x)));
-        q[1] = dd_add(o->obj.y, dd_mul(o->lam, dd_sub(ey, o->obj.y)));
+        vdd ox = vdd_set(o->obj.x), oy = vdd_set(o->obj.y);
+        q[0] = vdd_add(ox, vdd_mul(lam, vdd_sub(ex, ox)));
+        q[1] = vdd_add(oy, vdd_mul(lam, vdd_sub(ey, oy)));
     }
+}
+
+/* The start of aiming at target (tg) on the stop, on every lane.  When
+ * every surface before the stop leaves a ray straight, the ray through
+ * the stop's point S = (target, sag) is the line from the object to S,
+ * and Q is where that line meets surface 1's tangent plane: the first
+ * landing is then on target to about the rounding of double-double, and
+ * the iteration only confirms it.  Q is formed as S + mu (O - S) with
+ * mu = z_S / (z_S - O_z), small for a far object, so the object's large
+ * coordinates do not cancel.  Otherwise, or where the stop has no such
+ * point, the paraxial guess. */
+static void q_aim_start_v(const sg_tracer *t, const osp *o, vd px, vd py, const vdd tg[2],
+                          vdd q[2])
+{
+    vdd z, qs[2];
+    vm bad;
+    q_aim_off_v(t, o, px, py, q);
+    if (!t->ln.straight)
+        return;
+    z = sg_sag_v(&t->sp[t->sys->stop], vdd_add(vdd_sqr(tg[0]), vdd_sqr(tg[1])), &bad);
+    z = vdd_add(z, vdd_set(t->ln.zstop));
+    if (o->inf) {
+        vdd s = vdd_div(z, vdd_set(o->dir.z));
+        qs[0] = vdd_sub(tg[0], vdd_mul(s, vdd_set(o->dir.x)));
+        qs[1] = vdd_sub(tg[1], vdd_mul(s, vdd_set(o->dir.y)));
+    } else {
+        vdd mu = vdd_div(z, vdd_sub(z, vdd_set(o->obj.z)));
+        qs[0] = vdd_add(tg[0], vdd_mul(mu, vdd_sub(vdd_set(o->obj.x), tg[0])));
+        qs[1] = vdd_add(tg[1], vdd_mul(mu, vdd_sub(vdd_set(o->obj.y), tg[1])));
+    }
+    bad |= ~vd_isfinite(z.hi) | ~vd_isfinite(qs[0].hi) | ~vd_isfinite(qs[1].hi);
+    q[0] = vdd_sel(bad, q[0], qs[0]);
+    q[1] = vdd_sel(bad, q[1], qs[1]);
+}
+
+static void q_lane(const vdd q[2], int k, dd out[2])
+{
+    out[0].hi = q[0].hi[k];
+    out[0].lo = q[0].lo[k];
+    out[1].hi = q[1].hi[k];
+    out[1].lo = q[1].lo[k];
+}
+
+/* q_aim_off for one pupil point. */
+static void q_aim_off(const sg_tracer *t, const osp *o, double px, double py, dd q[2])
+{
+    vdd v[2];
+    q_aim_off_v(t, o, vd_set(px), vd_set(py), v);
+    q_lane(v, 0, q);
 }
 
 /* Precise ray states from the object-space part and Q, for nl lanes, lane
@@ -424,6 +476,11 @@ static int launch_q(sg_tracer *t, land_fn land, const osp *o, double px, double 
         dd target[2];
         target[0] = dd_mul_d(t->ln.stop_r, px);
         target[1] = dd_mul_d(t->ln.stop_r, py);
+        {
+            vdd tg[2] = {vdd_set(target[0]), vdd_set(target[1])}, v[2];
+            q_aim_start_v(t, o, vd_set(px), vd_set(py), tg, v);
+            q_lane(v, 0, q);
+        }
         /* Apertures do not bend rays, so the iteration ignores them; the
          * final trace applies them. */
         clip = t->o.clip;
@@ -704,6 +761,8 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
                           sg_pray *r, double *path0, int *start, int *rc)
 {
     dd q[SG_VL][2], target[SG_VL][2];
+    vd px = vd_set(0.0), py = vd_set(0.0);
+    vdd qv[2] = {vdd_set(dd_from(0.0)), vdd_set(dd_from(0.0))}, tg[2];
     sg_pray at[SG_VL], ra[SG_VL];
     sg_ray_surface *oa[SG_VL];
     int done[SG_VL], k, clip, aimed = 0, na = 0, la[SG_VL], rca[SG_VL];
@@ -715,8 +774,14 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
         }
         return nl;
     }
+    for (k = 0; k < SG_VL; k++) {
+        px[k] = pupil[k < nl ? k : 0][0];
+        py[k] = pupil[k < nl ? k : 0][1];
+    }
+    if (t->sys->aim == SG_AIM_OFF)
+        q_aim_off_v(t, &o, px, py, qv);
     for (k = 0; k < nl; k++) {
-        q_aim_off(t, &o, pupil[k][0], pupil[k][1], q[k]);
+        q_lane(qv, k, q[k]);
         done[k] = 1;
     }
     if (t->sys->aim != SG_AIM_OFF) {
@@ -732,6 +797,11 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
             target[k][1] = dd_mul_d(t->ln.stop_r, pupil[k][1]);
             done[k] = 0;
         }
+        tg[0] = vdd_mul_d(vdd_set(t->ln.stop_r), px);
+        tg[1] = vdd_mul_d(vdd_set(t->ln.stop_r), py);
+        q_aim_start_v(t, &o, px, py, tg, qv);
+        for (k = 0; k < nl; k++)
+            q_lane(qv, k, q[k]);
         if (t->have_aimJ) {
             aim_newton_vec(t, &o, q, (const dd(*)[2])target, nl, scratch, done, at);
             aimed = 1;
@@ -832,6 +902,14 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
         }
         t->ln.fx = dd_from_mpfr(fx, tmp);
         t->ln.fy = dd_from_mpfr(fy, tmp);
+    }
+    /* The stop's vertex in surface 1's frame, and whether the surfaces
+     * before it leave a ray straight. */
+    t->ln.straight = 1;
+    t->ln.zstop = dd_from(0.0);
+    for (i = 1; i < sys->stop; i++) {
+        t->ln.straight = t->ln.straight && sg_sprep_passes(&t->sp[i]);
+        t->ln.zstop = dd_add_d(t->ln.zstop, t->sp[i + 1].T);
     }
     sg_parax_mp_clear(&p);
     mpfr_clears(tmp, fx, fy, v, (mpfr_ptr)0);

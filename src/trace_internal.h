@@ -13,6 +13,7 @@
 
 #include "dd.h"
 #include "internal.h"
+#include "vdd.h"
 
 #define U53 1.1102230246251565e-16 /* unit roundoff of double */
 
@@ -58,6 +59,8 @@ typedef struct sg_launch {
     dd stop_r;       /* stop radius that aiming lands Py = 1 on */
     dd fx, fy;       /* field scale for Hx and Hy */
     dd pimg_slope;   /* paraxial image height per unit object-space tan or height */
+    int straight;    /* every surface between 1 and the stop leaves a ray straight */
+    dd zstop;        /* the stop's vertex in surface 1's frame */
 } sg_launch;
 
 typedef struct sg_mpfr_ctx sg_mpfr_ctx;
@@ -122,6 +125,9 @@ void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
  * surface i + 1. */
 void sg_precise_finish(const sg_tracer *t, int i, sg_pray *r, sg_ray_surface *const *out,
                        int nl, int *rc);
+/* The sag of s at radius^2 r2 on SG_VL lanes, in double-double as the
+ * precise trace forms it; *bad marks lanes outside the conic's domain. */
+vdd sg_sag_v(const sg_sprep *s, vdd r2, vm *bad);
 /* Whether clipping at s stops a ray meeting it at (x, y). */
 int sg_past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y);
 int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],

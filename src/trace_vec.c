@@ -123,6 +123,11 @@ static vdd sag_v(const sg_sprep *s, vdd r2, vm *bad)
     return z;
 }
 
+vdd sg_sag_v(const sg_sprep *s, vdd r2, vm *bad)
+{
+    return sag_v(s, r2, bad);
+}
+
 static vd resid_v(const sg_sprep *s, vd x, vd y, vd z)
 {
     vdd r2, sag;

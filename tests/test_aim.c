@@ -43,6 +43,71 @@ static void stop_edge(void **state)
     sg_catalog_free(cat);
 }
 
+/* A paraboloid mirror as the stop behind a dummy plane, object at
+ * infinity: the ray through a stop point is a straight line from infinity,
+ * so aiming starts from where it lands.  Truths: each ray lands on its
+ * target, (Px, Py) times the stop's 100 mm, correctly rounded; a
+ * paraboloid images an axial point at infinity perfectly, so the on-axis
+ * rays all meet its focus, 1000 mm in front of it, at (0, 0); and the
+ * mpfr trace of the same system agrees within the precise bound. */
+static void straight_to_stop(void **state)
+{
+    static const double pupils[][2] = {{0.6, 0.8}, {0.3, -0.2}, {-0.9, 0.1}, {0.5, 0.5},
+                                       {0, 1}, {-0.25, 0}, {0.7071, -0.7071}};
+    sg_system *sys = sg_system_new();
+    sg_tracer *tp, *tm;
+    sg_ray_surface op[4], om[4];
+    double worst_focus = 0.0, worst_ratio = INFINITY;
+    int f, p, i, n = 0;
+    (void)state;
+    assert_int_equal(sg_system_reset(sys, 4), SG_OK);
+    sys->surf[0].thickness = INFINITY;
+    sys->surf[1].thickness = 300.0;
+    sys->surf[2].radius = -2000.0;
+    sys->surf[2].conic = -1.0;
+    sys->surf[2].thickness = -1000.0;
+    sys->surf[2].mat.kind = SG_MAT_MIRROR;
+    sys->surf[2].semi_diameter = 100.0;
+    sys->stop = 2;
+    sys->field_type = SG_FIELD_ANGLE;
+    sys->nfield = 2;
+    sys->field[1].x = 0.0;
+    sys->field[1].y = 0.5;
+    sys->field[1].weight = 1.0;
+    sys->aper_type = SG_APER_FLOAT_STOP;
+    sys->aim = SG_AIM_REAL;
+    tp = tu_tracer(sys, NULL, SG_METHOD_PRECISE);
+    tm = tu_tracer(sys, NULL, SG_METHOD_MPFR);
+    for (f = 0; f < 2; f++)
+        for (p = 0; p < 7; p++) {
+            double px = pupils[p][0], py = pupils[p][1];
+            assert_int_equal(sg_trace_normalized(tp, 0, f, px, py, op), SG_OK);
+            assert_int_equal(sg_trace_normalized(tm, 0, f, px, py, om), SG_OK);
+            n++;
+            /* 100 px in double is the exact target correctly rounded. */
+            assert_true(op[2].x == 100.0 * px && op[2].y == 100.0 * py);
+            if (f == 0) {
+                worst_focus = fmax(worst_focus, fmax(fabs(op[3].x), fabs(op[3].y)));
+                assert_true(fabs(op[3].x) <= op[3].error_bound);
+                assert_true(fabs(op[3].y) <= op[3].error_bound);
+            }
+            for (i = 1; i < 4; i++) {
+                double e = fmax(fabs(op[i].x - om[i].x),
+                                fmax(fabs(op[i].y - om[i].y), fabs(op[i].z - om[i].z)));
+                assert_true(e <= op[i].error_bound);
+                if (e > 0.0)
+                    worst_ratio = fmin(worst_ratio, op[i].error_bound / e);
+            }
+        }
+    print_message("# paraboloid stop, object at infinity: %d aimed rays land on (Px, Py) x 100 "
+                  "mm exactly rounded\n", n);
+    print_message("# on axis, worst distance from the focus %.3g mm; smallest bound/error "
+                  "against mpfr %.3g\n", worst_focus, worst_ratio);
+    sg_tracer_free(tp);
+    sg_tracer_free(tm);
+    sg_system_free(sys);
+}
+
 /* A stop no marginal ray can reach: rays above about 3.3 mm in a glass
  * block are totally reflected at its curved exit face, but the stop's
  * semi-diameter asks for 20 mm. */
@@ -202,6 +267,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(stop_edge),
+        cmocka_unit_test(straight_to_stop),
         cmocka_unit_test(impossible),
         cmocka_unit_test(paraxial_aiming),
         cmocka_unit_test(real_image_height),
