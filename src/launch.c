@@ -674,7 +674,8 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
  * lane that would need a Jacobian of its own, or whose landing fails, is
  * left with done[k] = 0 for the one-ray launch. */
 static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*target)[2],
-                           int nl, sg_ray_surface *const *scratch, int *done, sg_pray *at)
+                           int nl, sg_ray_surface *const *scratch, int *done, sg_pray *at,
+                           sg_pray *launch, double *launch_path)
 {
     double tol = t->o.aim_rtol * fmax(t->ln.stop_r.hi, 1e-300);
     vaim a;
@@ -694,7 +695,7 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
     }
     for (it = 0; it < t->o.aim_max_iter && vm_any(live); it++) {
         dd qa[SG_VL][2];
-        sg_pray st[SG_VL];
+        sg_pray st[SG_VL], st0[SG_VL];
         double p0[SG_VL];
         sg_ray_surface *sc[SG_VL];
         vdd at0 = a.q[0], at1 = a.q[1], res[2];
@@ -709,13 +710,17 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
                 act[na++] = k;
             }
         pray_from_vec(o, (const dd(*)[2])qa, na, st, p0);
+        memcpy(st0, st, (size_t)na * sizeof st[0]);
         sg_precise_vec(t, st, p0, sc, na, one, t->sys->stop, rc);
         for (k = 0; k < na; k++) {
             int l = act[k];
             if (rc[k] != SG_OK)
                 continue;
-            /* In lanes that stop here, at[] belongs to the final Q. */
+            /* In lanes that stop here, at[] belongs to the final Q, and
+             * so do the launched state and path. */
             at[l] = st[k];
+            launch[l] = st0[k];
+            launch_path[l] = p0[k];
             at0.hi[l] = st[k].p.x.hi;
             at0.lo[l] = st[k].p.x.lo;
             at1.hi[l] = st[k].p.y.hi;
@@ -765,7 +770,7 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
     vdd qv[2] = {vdd_set(dd_from(0.0)), vdd_set(dd_from(0.0))}, tg[2];
     sg_pray at[SG_VL], ra[SG_VL];
     sg_ray_surface *oa[SG_VL];
-    int done[SG_VL], k, clip, aimed = 0, na = 0, la[SG_VL], rca[SG_VL];
+    int done[SG_VL], k, clip, aimed = 0, all, na = 0, la[SG_VL], rca[SG_VL];
     osp o;
     if (field_cached(t, land_precise, hx, hy, &o, out[0]) != SG_OK) {
         for (k = 0; k < nl; k++) {
@@ -803,12 +808,17 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
         for (k = 0; k < nl; k++)
             q_lane(qv, k, q[k]);
         if (t->have_aimJ) {
-            aim_newton_vec(t, &o, q, (const dd(*)[2])target, nl, scratch, done, at);
+            aim_newton_vec(t, &o, q, (const dd(*)[2])target, nl, scratch, done, at, r, path0);
             aimed = 1;
         }
         t->o.clip = clip;
     }
-    pray_from_vec(&o, (const dd(*)[2])q, nl, r, path0);
+    /* Lanes whose last landing was at their final Q already have its
+     * launch; the rest are launched here. */
+    for (k = 0, all = aimed; k < nl; k++)
+        all = all && done[k] == 1;
+    if (!all)
+        pray_from_vec(&o, (const dd(*)[2])q, nl, r, path0);
     for (k = 0; k < nl; k++) {
         start[k] = 1;
         if (done[k]) {

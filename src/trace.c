@@ -233,7 +233,20 @@ static double surf_cos_d(const sg_sprep *s, const double p[3], const double d[3]
 
 int sg_past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y)
 {
-    return t->o.clip && s->sd > 0.0 && hypot(x, y) > s->sd * (1.0 + t->o.clip_rtol);
+    double lim, r2, l2;
+    if (!t->o.clip || !(s->sd > 0.0))
+        return 0;
+    lim = s->sd * (1.0 + t->o.clip_rtol);
+    /* x^2 + y^2 against lim^2 (a few roundings, far below 1e-12) settles
+     * every point but those within 1e-12 of the edge, and overflow, NaN
+     * and underflow fail both tests; those ask hypot, whose answer this is. */
+    r2 = x * x + y * y;
+    l2 = lim * lim;
+    if (r2 < l2 * (1.0 - 1e-12))
+        return 0;
+    if (r2 > l2 * (1.0 + 1e-12) && isfinite(l2))
+        return 1;
+    return hypot(x, y) > lim;
 }
 
 void sg_fail_rest(sg_ray_surface *out, int from, int n, int status)

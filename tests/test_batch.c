@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "testutil.h"
+#include "trace_internal.h"
 
 /* Every field bit for bit (struct padding is not a result). */
 static void same_rows(const sg_ray_surface *a, const sg_ray_surface *b, size_t n)
@@ -240,6 +241,49 @@ static void handoff(void **state)
     mixed_blocks("double_gauss.json", -5.0, 60.0, 0);
 }
 
+/* The aperture test against its definition, hypot(x, y) > sd (1 + rtol),
+ * on points spread within 1e-9 to 1e-17 of the edge in every direction
+ * and on overflow, underflow, infinities and NaN: the shortcut by
+ * x^2 + y^2 must never decide differently. */
+static void clip_edge(void **state)
+{
+    static const double rel[] = {1e-9, 1e-11, 1e-12, 2e-13, 1e-14, 1e-15, 1e-16, 1e-17};
+    static const double odd[][2] = {{1e200, 0}, {1e-200, 1e-200}, {INFINITY, 0}, {0, -INFINITY},
+                                    {NAN, 0}, {NAN, INFINITY}, {0, 0}, {-0.0, 1500.0}};
+    static const double sds[] = {1500.0, 1e-3, 1e-170, 1e170};
+    sg_tracer t;
+    sg_sprep s;
+    long n = 0;
+    int i, j, k;
+    (void)state;
+    memset(&t, 0, sizeof t);
+    memset(&s, 0, sizeof s);
+    t.o.clip = 1;
+    t.o.clip_rtol = 1e-9;
+    srand(5);
+    for (k = 0; k < 4; k++) {
+        double lim;
+        s.sd = sds[k];
+        lim = s.sd * (1.0 + t.o.clip_rtol);
+        for (i = 0; i < 8; i++)
+            for (j = 0; j < 20000; j++) {
+                double th = 6.283185307179586 * rand() / RAND_MAX;
+                double r = lim * (1.0 + rel[i] * (2.0 * rand() / RAND_MAX - 1.0));
+                double x = r * cos(th), y = r * sin(th);
+                int want = hypot(x, y) > lim;
+                assert_int_equal(sg_past_clip(&t, &s, x, y), want);
+                n++;
+            }
+        for (i = 0; i < 8; i++) {
+            int want = hypot(odd[i][0], odd[i][1]) > lim;
+            assert_int_equal(sg_past_clip(&t, &s, odd[i][0], odd[i][1]), want);
+            n++;
+        }
+    }
+    print_message("# aperture test: %ld points near the edge and special values, all as "
+                  "hypot decides\n", n);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -249,6 +293,7 @@ int main(void)
         cmocka_unit_test(mpfr),
         cmocka_unit_test(start_dir),
         cmocka_unit_test(handoff),
+        cmocka_unit_test(clip_edge),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
