@@ -103,9 +103,10 @@ static void q_aim_start_v(const sg_tracer *t, const osp *o, vd px, vd py, const 
 {
     vdd z, qs[2];
     vm bad;
-    q_aim_off_v(t, o, px, py, q);
-    if (!t->ln.straight)
+    if (!t->ln.straight) {
+        q_aim_off_v(t, o, px, py, q);
         return;
+    }
     z = sg_sag_v(&t->sp[t->sys->stop], vdd_add(vdd_sqr(tg[0]), vdd_sqr(tg[1])), &bad);
     z = vdd_add(z, vdd_set(t->ln.zstop));
     if (o->inf) {
@@ -118,8 +119,14 @@ static void q_aim_start_v(const sg_tracer *t, const osp *o, vd px, vd py, const 
         qs[1] = vdd_add(tg[1], vdd_mul(mu, vdd_sub(vdd_set(o->obj.y), tg[1])));
     }
     bad |= ~vd_isfinite(z.hi) | ~vd_isfinite(qs[0].hi) | ~vd_isfinite(qs[1].hi);
-    q[0] = vdd_sel(bad, q[0], qs[0]);
-    q[1] = vdd_sel(bad, q[1], qs[1]);
+    q[0] = qs[0];
+    q[1] = qs[1];
+    if (vm_any(bad)) {
+        vdd off[2];
+        q_aim_off_v(t, o, px, py, off);
+        q[0] = vdd_sel(bad, off[0], qs[0]);
+        q[1] = vdd_sel(bad, off[1], qs[1]);
+    }
 }
 
 static void q_lane(const vdd q[2], int k, dd out[2])
