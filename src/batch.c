@@ -65,15 +65,11 @@ static void run_precise(job *j)
     sg_tracer *t = j->t;
     sg_pray st[SG_VL];
     double path0[SG_VL], pupil[SG_VL][2];
-    sg_ray_surface *o[SG_VL], *sc[SG_VL], *scratch;
+    sg_ray_surface *o[SG_VL];
     size_t idx[SG_VL], r = j->first, end = j->first + j->count;
     int rc[SG_VL], start[SG_VL], one[SG_VL], nl, k;
-    /* Aiming traces of the lanes go here, allocated once per job. */
-    scratch = malloc((size_t)SG_VL * (size_t)t->n * sizeof *scratch);
-    for (k = 0; k < SG_VL; k++) {
-        sc[k] = scratch ? scratch + (size_t)k * (size_t)t->n : NULL;
+    for (k = 0; k < SG_VL; k++)
         one[k] = 1;
-    }
     while (r < end) {
         const double *v = j->rays[r].v;
         nl = 0;
@@ -93,9 +89,8 @@ static void run_precise(job *j)
             flush(j, st, path0, o, idx, one, nl);
             continue;
         }
-        if (!finite4(v) || !scratch) {
-            /* The single-ray call reports a bad ray; without scratch rows
-             * the rays go one by one. */
+        if (!finite4(v)) {
+            /* The single-ray call reports a bad ray. */
             sg_ray_surface *out = j->out + r * (size_t)j->nsurf;
             int prc = sg_trace_normalized(t, v[0], v[1], v[2], v[3], out);
             if (j->status)
@@ -111,8 +106,8 @@ static void run_precise(job *j)
             o[nl] = j->out + r * (size_t)j->nsurf;
             idx[nl++] = r++;
         }
-        sg_launch_precise_vec(t, v[0], v[1], (const double(*)[2])pupil, nl, o, sc, st, path0,
-                              start, rc);
+        sg_launch_precise_vec(t, v[0], v[1], (const double(*)[2])pupil, nl, o, st, path0, start,
+                              rc);
         {
             int m = 0;
             for (k = 0; k < nl; k++) {
@@ -130,7 +125,6 @@ static void run_precise(job *j)
             flush(j, st, path0, o, idx, start, m);
         }
     }
-    free(scratch);
 }
 
 static void run_job(job *j)

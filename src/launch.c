@@ -676,12 +676,13 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
  * ------------------------------------------------------------------------ */
 
 /* aim_newton from the field's Jacobian for nl lanes at once.  done[k] is
- * set for lanes that converged as the single-ray iteration would, and
- * at[k] is the state their last landing left on the stop (not bent).  A
- * lane that would need a Jacobian of its own, or whose landing fails, is
- * left with done[k] = 0 for the one-ray launch. */
+ * set for lanes that converged as the single-ray iteration would, at[k]
+ * is the state their last landing left on the stop (not bent), and rows
+ * 1..stop of out[k] are that landing's.  A lane that would need a
+ * Jacobian of its own, or whose landing fails, is left with done[k] = 0
+ * for the one-ray launch. */
 static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*target)[2],
-                           int nl, sg_ray_surface *const *scratch, int *done, sg_pray *at,
+                           int nl, sg_ray_surface *const *out, int *done, sg_pray *at,
                            sg_pray *launch, double *launch_path)
 {
     double tol = t->o.aim_rtol * fmax(t->ln.stop_r.hi, 1e-300);
@@ -708,12 +709,12 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
         vdd at0 = a.q[0], at1 = a.q[1], res[2];
         vd noise = a.noise, nr;
         vm landed = vm_set(0), ok, stalled;
-        /* Only lanes still iterating are traced, each into its own rows so
-         * that its last landing can start the final trace. */
+        /* Only lanes still iterating are traced, each into its own output
+         * rows, so that its last landing can start the final trace. */
         for (na = 0, k = 0; k < nl; k++)
             if (live[k]) {
                 aim_q(&a, k, qa[na]);
-                sc[na] = scratch[k];
+                sc[na] = out[k];
                 act[na++] = k;
             }
         pray_from_vec(o, (const dd(*)[2])qa, na, st, p0);
@@ -769,8 +770,8 @@ static int resumable(const sg_tracer *t, const sg_ray_surface *rows, const sg_pr
 }
 
 int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pupil)[2], int nl,
-                          sg_ray_surface *const *out, sg_ray_surface *const *scratch,
-                          sg_pray *r, double *path0, int *start, int *rc)
+                          sg_ray_surface *const *out, sg_pray *r, double *path0, int *start,
+                          int *rc)
 {
     dd q[SG_VL][2], target[SG_VL][2];
     vd px = vd_set(0.0), py = vd_set(0.0);
@@ -815,7 +816,7 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
         for (k = 0; k < nl; k++)
             q_lane(qv, k, q[k]);
         if (t->have_aimJ) {
-            aim_newton_vec(t, &o, q, (const dd(*)[2])target, nl, scratch, done, at, r, path0);
+            aim_newton_vec(t, &o, q, (const dd(*)[2])target, nl, out, done, at, r, path0);
             aimed = 1;
         }
         t->o.clip = clip;
@@ -831,9 +832,9 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
         if (done[k]) {
             object_row(t, &o, &r[k], &out[k][0]);
             rc[k] = SG_OK;
-            if (aimed && done[k] == 1 && resumable(t, scratch[k], &at[k])) {
-                /* The last landing traced this very ray onto the stop. */
-                memcpy(&out[k][1], &scratch[k][1], (size_t)t->sys->stop * sizeof out[k][1]);
+            if (aimed && done[k] == 1 && resumable(t, out[k], &at[k])) {
+                /* The last landing traced this very ray onto the stop,
+                 * into rows 1 .. stop. */
                 ra[na] = at[k];
                 oa[na] = out[k];
                 la[na++] = k;

@@ -183,15 +183,15 @@ int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
 int sg_launch_precise_prep(sg_tracer *t, double hx, double hy, double px, double py,
                            sg_ray_surface *out, sg_pray *r, double *path0);
 /* sg_launch_precise_prep for nl <= SG_VL pupil points of field (hx, hy),
- * aimed together; scratch holds SG_VL rows of t->n surfaces for the
- * aiming traces.  rc[k] is each ray's status; every lane equals the
- * single-ray launch bit for bit.  A lane whose last aiming trace already
- * reached the stop goes on from there: rows 1..stop filled, r[k] bent at
- * the stop and start[k] = stop + 1 (or rc[k] the failure at the stop);
- * others start[k] = 1.  Returns nl. */
+ * aimed together; the aiming traces write rows 1..stop of out[k].  rc[k]
+ * is each ray's status; every lane equals the single-ray launch bit for
+ * bit.  A lane whose last aiming trace already reached the stop goes on
+ * from there: rows 1..stop filled, r[k] bent at the stop and start[k] =
+ * stop + 1 (or rc[k] the failure at the stop); others start[k] = 1, and
+ * their trace writes every row again.  Returns nl. */
 int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pupil)[2], int nl,
-                          sg_ray_surface *const *out, sg_ray_surface *const *scratch,
-                          sg_pray *r, double *path0, int *start, int *rc);
+                          sg_ray_surface *const *out, sg_pray *r, double *path0, int *start,
+                          int *rc);
 int sg_start_precise_prep(const sg_tracer *t, const double start[3], const double dir[3],
                           sg_ray_surface *out, sg_pray *r);
 int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
