@@ -341,14 +341,6 @@ static void aim_start(vaim *a, const double J[2][2], int fresh, const dd (*q)[2]
         }
 }
 
-static void aim_q(const vaim *a, int k, dd q[2])
-{
-    q[0].hi = a->q[0].hi[k];
-    q[0].lo = a->q[0].lo[k];
-    q[1].hi = a->q[1].hi[k];
-    q[1].lo = a->q[1].lo[k];
-}
-
 /* A Jacobian of lane k's own, taken at its current Q. */
 static void aim_set_jacobian(vaim *a, int k, const double J[2][2])
 {
@@ -447,7 +439,7 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
         aim_start(&a, J0, 0, (const dd(*)[2])q, 1);
     }
     for (it = 0; it < t->o.aim_max_iter; it++) {
-        aim_q(&a, 0, q);
+        q_lane(a.q, 0, q);
         rc = land(t, o, q, at, &noise, scratch);
         if (rc != SG_OK && rc != SG_EVIGNETTED)
             return SG_EAIM;
@@ -463,7 +455,7 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
         if (aim_step(&a, one, res, nr)[0])
             return SG_EAIM;
     }
-    aim_q(&a, 0, q);
+    q_lane(a.q, 0, q);
     return a.best[0] <= tol + a.noise[0] ? SG_OK : SG_EAIM;
 }
 
@@ -477,17 +469,18 @@ static int launch_q(sg_tracer *t, land_fn land, const osp *o, double px, double 
                     dd q[2], int cache, sg_ray_surface *scratch)
 {
     int clip, rc;
-    q_aim_off(t, o, px, py, q);
-    if (t->sys->aim != SG_AIM_OFF) {
+    if (t->sys->aim == SG_AIM_OFF) {
+        q_aim_off(t, o, px, py, q);
+    } else {
         /* The target keeps every bit of Px times the stop radius. */
         dd target[2];
+        vdd tg[2], v[2];
         target[0] = dd_mul_d(t->ln.stop_r, px);
         target[1] = dd_mul_d(t->ln.stop_r, py);
-        {
-            vdd tg[2] = {vdd_set(target[0]), vdd_set(target[1])}, v[2];
-            q_aim_start_v(t, o, vd_set(px), vd_set(py), tg, v);
-            q_lane(v, 0, q);
-        }
+        tg[0] = vdd_set(target[0]);
+        tg[1] = vdd_set(target[1]);
+        q_aim_start_v(t, o, vd_set(px), vd_set(py), tg, v);
+        q_lane(v, 0, q);
         /* Apertures do not bend rays, so the iteration ignores them; the
          * final trace applies them. */
         clip = t->o.clip;
@@ -681,23 +674,17 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
  * 1..stop of out[k] are that landing's.  A lane that would need a
  * Jacobian of its own, or whose landing fails, is left with done[k] = 0
  * for the one-ray launch. */
-static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*target)[2],
-                           int nl, sg_ray_surface *const *out, int *done, sg_pray *at,
-                           sg_pray *launch, double *launch_path)
+static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const vdd tg[2], int nl,
+                           sg_ray_surface *const *out, int *done, sg_pray *at, sg_pray *launch,
+                           double *launch_path)
 {
     double tol = t->o.aim_rtol * fmax(t->ln.stop_r.hi, 1e-300);
     vaim a;
-    vdd tg[2];
     vm live = vm_set(0), fin = vm_set(0);
     int act[SG_VL], one[SG_VL], rc[SG_VL], na, k, it;
     aim_start(&a, (const double(*)[2])t->aimJ, 0, (const dd(*)[2])q, nl);
     for (k = 0; k < SG_VL; k++) {
-        int src = k < nl ? k : 0;
         one[k] = 1;
-        tg[0].hi[k] = target[src][0].hi;
-        tg[0].lo[k] = target[src][0].lo;
-        tg[1].hi[k] = target[src][1].hi;
-        tg[1].lo[k] = target[src][1].lo;
         if (k < nl)
             live[k] = -1;
     }
@@ -713,7 +700,7 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
          * rows, so that its last landing can start the final trace. */
         for (na = 0, k = 0; k < nl; k++)
             if (live[k]) {
-                aim_q(&a, k, qa[na]);
+                q_lane(a.q, k, qa[na]);
                 sc[na] = out[k];
                 act[na++] = k;
             }
@@ -744,7 +731,7 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const dd (*ta
         live &= ~aim_step(&a, live, res, nr);
     }
     for (k = 0; k < nl; k++) {
-        aim_q(&a, k, q[k]);
+        q_lane(a.q, k, q[k]);
         done[k] = fin[k] ? 1 : 0;
         /* Out of iterations within tolerance: Q moved after its last
          * landing, so that landing cannot start the final trace. */
@@ -773,9 +760,9 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
                           sg_ray_surface *const *out, sg_pray *r, double *path0, int *start,
                           int *rc)
 {
-    dd q[SG_VL][2], target[SG_VL][2];
+    dd q[SG_VL][2];
     vd px = vd_set(0.0), py = vd_set(0.0);
-    vdd qv[2] = {vdd_set(dd_from(0.0)), vdd_set(dd_from(0.0))}, tg[2];
+    vdd qv[2], tg[2];
     sg_pray at[SG_VL], ra[SG_VL];
     sg_ray_surface *oa[SG_VL];
     int done[SG_VL], k, clip, aimed = 0, all, na = 0, la[SG_VL], rca[SG_VL];
@@ -791,13 +778,21 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
         px[k] = pupil[k < nl ? k : 0][0];
         py[k] = pupil[k < nl ? k : 0][1];
     }
-    if (t->sys->aim == SG_AIM_OFF)
+    if (t->sys->aim == SG_AIM_OFF) {
         q_aim_off_v(t, &o, px, py, qv);
+    } else {
+        /* The targets keep every bit of Px times the stop radius. */
+        tg[0] = vdd_mul_d(vdd_set(t->ln.stop_r), px);
+        tg[1] = vdd_mul_d(vdd_set(t->ln.stop_r), py);
+        q_aim_start_v(t, &o, px, py, tg, qv);
+    }
     for (k = 0; k < nl; k++) {
         q_lane(qv, k, q[k]);
-        done[k] = 1;
+        done[k] = t->sys->aim == SG_AIM_OFF;
     }
     if (t->sys->aim != SG_AIM_OFF) {
+        /* Apertures do not bend rays, so the iteration ignores them; the
+         * final trace applies them. */
         clip = t->o.clip;
         t->o.clip = 0;
         if (!t->have_aimJ) {
@@ -805,18 +800,8 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
             q_aim_off(t, &o, 0.0, 0.0, qc);
             t->have_aimJ = fd_jacobian(t, land_precise, &o, qc, t->aimJ, t->scratch) == SG_OK;
         }
-        for (k = 0; k < nl; k++) {
-            target[k][0] = dd_mul_d(t->ln.stop_r, pupil[k][0]);
-            target[k][1] = dd_mul_d(t->ln.stop_r, pupil[k][1]);
-            done[k] = 0;
-        }
-        tg[0] = vdd_mul_d(vdd_set(t->ln.stop_r), px);
-        tg[1] = vdd_mul_d(vdd_set(t->ln.stop_r), py);
-        q_aim_start_v(t, &o, px, py, tg, qv);
-        for (k = 0; k < nl; k++)
-            q_lane(qv, k, q[k]);
         if (t->have_aimJ) {
-            aim_newton_vec(t, &o, q, (const dd(*)[2])target, nl, out, done, at, r, path0);
+            aim_newton_vec(t, &o, q, tg, nl, out, done, at, r, path0);
             aimed = 1;
         }
         t->o.clip = clip;
