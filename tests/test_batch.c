@@ -161,7 +161,7 @@ static void start_dir(void **state)
     sg_catalog_free(cat);
 }
 
-/* The batch traces precise rays four at a time; a lane that fails drops
+/* The batch traces precise rays SG_VL at a time; a lane that fails drops
  * out of its block while the others go on.  Start/dir rays over steep
  * angles and wide heights put misses, total internal reflection and good
  * rays in the same blocks; every one must equal its single-ray trace. */
@@ -207,10 +207,12 @@ static void mixed_blocks(const char *file, double z0, double hmax, int want_tir)
         ntir += st1[r] == SG_ETIR;
         nother += st1[r] != SG_OK && st1[r] != SG_EMISS && st1[r] != SG_ETIR;
     }
-    for (r = 0; r + 4 <= N; r += 4) {
-        int f = (st1[r] != SG_OK) + (st1[r + 1] != SG_OK) + (st1[r + 2] != SG_OK) +
-                (st1[r + 3] != SG_OK);
-        mixed += f > 0 && f < 4;
+    /* Blocks as the batch forms them: SG_VL consecutive rays. */
+    for (r = 0; r + SG_VL <= N; r += SG_VL) {
+        int f = 0, l;
+        for (l = 0; l < SG_VL; l++)
+            f += st1[r + l] != SG_OK;
+        mixed += f > 0 && f < SG_VL;
     }
     for (k = 1; k <= 2; k++) {
         memset(many, 0xA5, N * ns * sizeof *many);
@@ -220,8 +222,8 @@ static void mixed_blocks(const char *file, double z0, double hmax, int want_tir)
         same_rows(one, many, N * ns);
     }
     print_message("# %s: %d start/dir rays (%d traced, %d miss, %d TIR, %d other failures; "
-                  "%d blocks of four mix traced and failed rays) identical on 1 and 2 threads\n",
-                  file, N, nok, nmiss, ntir, nother, mixed);
+                  "%d blocks of %d mix traced and failed rays) identical on 1 and 2 threads\n",
+                  file, N, nok, nmiss, ntir, nother, mixed, SG_VL);
     assert_true(nok > 0 && nmiss > 0 && mixed > 10);
     if (want_tir)
         assert_true(ntir > 0);
