@@ -108,8 +108,10 @@ start() {
     else
         run="sh -c 'echo \$\$ >pid; exec \"\$0\" \$1' '$SAGITTA' '$1'"
     fi
+    # An editor killed outright leaves the terminal raw and its cursor
+    # anywhere, so the status line starts at column 0 of a line of its own.
     $T new-session -d -s main -x "${2:-110}" -y "${3:-30}" \
-        "cd '$WORK' && ulimit -c 0; $run; echo \"EXITED \$?\"; stty -a | tr ' ' '\\n' | grep -x -- '-\\{0,1\\}icanon'; sleep 60"
+        "cd '$WORK' && ulimit -c 0; $run; st=\$?; printf '\\r\\n'; echo \"EXITED \$st\"; stty -a | tr ' ' '\\n' | grep -x -- '-\\{0,1\\}icanon'; sleep 60"
     n=50
     while [ ! -s "$WORK/pid" ] && [ "$n" -gt 0 ]; do sleep 0.1; n=$((n - 1)); done
     PID=$(cat "$WORK/pid" 2>/dev/null)
