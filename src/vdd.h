@@ -66,7 +66,11 @@ static inline int vm_any(vm m)
 #if defined(__AVX512F__)
     return _mm512_test_epi64_mask((__m512i)m, (__m512i)m) != 0;
 #else
-    return (m[0] | m[1] | m[2] | m[3]) != 0;
+    int64_t any = 0;
+    int k;
+    for (k = 0; k < SG_VL; k++)
+        any |= m[k];
+    return any != 0;
 #endif
 }
 
