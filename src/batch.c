@@ -47,7 +47,8 @@ static void flush(job *j, sg_pray *st, double *path0, sg_ray_surface **o, const 
     int rc[SG_VL], k;
     if (nl == 0)
         return;
-    sg_precise_vec(j->t, st, path0, o, nl, start, j->t->n - 1, rc);
+    /* The rays' final states are not needed. */
+    sg_precise_vec(j->t, st, NULL, path0, o, nl, start, j->t->n - 1, rc);
     if (j->status)
         for (k = 0; k < nl; k++)
             j->status[idx[k]] = rc[k];

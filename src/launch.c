@@ -706,7 +706,7 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const vdd tg[
             }
         pray_from_vec(o, (const dd(*)[2])qa, na, st, p0);
         memcpy(st0, st, (size_t)na * sizeof st[0]);
-        sg_precise_vec(t, st, p0, sc, na, one, t->sys->stop, rc);
+        sg_precise_vec(t, st, st, p0, sc, na, one, t->sys->stop, rc);
         for (k = 0; k < na; k++) {
             int l = act[k];
             if (rc[k] != SG_OK)

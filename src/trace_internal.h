@@ -114,10 +114,11 @@ int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_sur
                         int from, int upto);
 /* The precise trace itself, on nl <= SG_VL rays at once (in trace_vec.c):
  * lane k starts at surface start[k] from r[k] and path0[k] as
- * sg_precise_run_from takes them, fills out[k] and ends in r[k]; rc[k] is
- * its status.  The lanes do not interact: a ray gets the same bits
- * whatever rays share its call. */
-void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
+ * sg_precise_run_from takes them, fills out[k] and, when end is not NULL,
+ * leaves its final state in end[k] (end may be r); rc[k] is its status.
+ * The lanes do not interact: a ray gets the same bits whatever rays share
+ * its call. */
+void sg_precise_vec(const sg_tracer *t, const sg_pray *r, sg_pray *end, const double *path0,
                     sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc);
 /* Completes surface i < n - 1 for rays a trace to upto = i left on it, with
  * finite bounds: its aperture, the bend and the direction columns of

@@ -322,12 +322,12 @@ static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
     if (sg_sprep_passes(s))
         return;
     g = surf_grad_v(s, r->p, &gsens);
-    /* A flat surface's normal (0, 0, -1) has g.g = 1 exactly, and a
-     * double-double quotient by exactly 1 is its dividend: both are
-     * skipped there. */
+    /* A flat surface's normal (0, 0, -1) has g.g = 1 exactly and d.g =
+     * -d.z exactly, and a double-double quotient by exactly 1 is its
+     * dividend: all three are skipped there. */
     flat = s->shape == SHAPE_PLANE;
     gg = flat ? vdd_from(vd_set(1.0)) : vdd_dot3(g, g);
-    dg = vdd_dot3(r->d, g);
+    dg = flat ? vdd_neg(r->d.z) : vdd_dot3(r->d, g);
     *nonphys = (vm)(gg.hi <= 0.0);
     gn = vd_sqrt(gg.hi);
     cosI = dg.hi / gn;
@@ -354,9 +354,16 @@ static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
         gam = vdd_sub(sq, vdd_mul(mu, dg));
         if (!flat)
             gam = vdd_div(gam, gg);
-        nd.x = vdd_add_m(vdd_mul(mu, r->d.x), vdd_mul(gam, g.x));
-        nd.y = vdd_add_m(vdd_mul(mu, r->d.y), vdd_mul(gam, g.y));
-        nd.z = vdd_add_m(vdd_mul(mu, r->d.z), vdd_mul(gam, g.z));
+        if (flat) {
+            /* gam times the normal's zero components adds nothing. */
+            nd.x = vdd_mul(mu, r->d.x);
+            nd.y = vdd_mul(mu, r->d.y);
+            nd.z = vdd_sub_m(vdd_mul(mu, r->d.z), gam);
+        } else {
+            nd.x = vdd_add_m(vdd_mul(mu, r->d.x), vdd_mul(gam, g.x));
+            nd.y = vdd_add_m(vdd_mul(mu, r->d.y), vdd_mul(gam, g.y));
+            nd.z = vdd_add_m(vdd_mul(mu, r->d.z), vdd_mul(gam, g.z));
+        }
         k = kb.hi / gg.hi;
         J = m * vd_abs(m * cosI - vd_copysign(vd_sqrt(vd_fmax(k, vd_set(0.0))), cosI)) /
             vd_sqrt(vd_fmax(k, vd_set(1e-300)));
@@ -374,20 +381,28 @@ static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
 /* The bound as the one-ray code forms it: e + ulp/2 of the largest
  * coordinate, nudged up.  sg_ulp_of by its exponent bits for normal
  * values, and by sg_ulp_of itself for the rest. */
-static vd bound_v(vd e, vd a, vd b, vd c)
+/* The ulps of the lanes of m that are subnormal-range, infinite or NaN;
+ * rare, so kept out of line. */
+static __attribute__((noinline, cold)) vd bound_odd(vd m, vd u, vm odd)
+{
+    int k;
+    for (k = 0; k < SG_VL; k++)
+        if (odd[k])
+            u[k] = sg_ulp_of(m[k]);
+    return u;
+}
+
+static inline __attribute__((always_inline)) vd bound_v(vd e, vd a, vd b, vd c)
 {
     vd A = vd_abs(a), B = vd_abs(b), C = vd_abs(c), m, u;
     vm bits, odd;
-    int k;
     m = vsel((vm)(B > C) | vd_isnan(C), B, C);
     m = vsel((vm)(A > m) | vd_isnan(m), A, m);
     bits = (vm)m;
     u = (vd)(((bits >> 52) - 52) << 52);
     odd = ~(vm)(m >= 0x1p-969) | ~(vm)(m < DBL_MAX);
-    if (vm_any(odd))
-        for (k = 0; k < SG_VL; k++)
-            if (odd[k])
-                u[k] = sg_ulp_of(m[k]);
+    if (__builtin_expect(vm_any(odd), 0))
+        u = bound_odd(m, u, odd);
     return (e + 0.5 * u) * (1.0 + 8.0 * U53);
 }
 
@@ -582,7 +597,12 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
         root_err = vsel(act, re, root_err);
         act &= ~(vm)(re <= 0x1p-100 * (vd_abs(snew.hi) + vd_abs(ps[0]) + vd_abs(ps[1])));
     }
-    r->p = vdd3_axpy(base, sv, r->d);
+    /* A flat surface's step from the tangent plane is zero in every lane
+     * that goes on, and base + 0 D is base. */
+    if (!flat || vm_any((vm)(sv.hi != 0.0) | (vm)(sv.lo != 0.0)))
+        r->p = vdd3_axpy(base, sv, r->d);
+    else
+        r->p = base;
     pd[0] = r->p.x.hi;
     pd[1] = r->p.y.hi;
     pd[2] = r->p.z.hi;
@@ -628,7 +648,7 @@ static void vray_sel(vm m, const vray *a, vray *b)
     b->eD = vsel(m, a->eD, b->eD);
 }
 
-void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
+void sg_precise_vec(const sg_tracer *t, const sg_pray *r, sg_pray *end, const double *path0,
                     sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc)
 {
     vray v, snap;
@@ -669,13 +689,14 @@ void sg_precise_vec(const sg_tracer *t, sg_pray *r, const double *path0,
             if (bad[k]) {
                 sg_fail_rest(o[k], i, t->n, st[k]);
                 rc[k] = st[k];
-                lane_get(&v, k, &r[k]);
+                if (end)
+                    lane_get(&v, k, &end[k]);
             }
         live &= ~bad;
     }
-    for (k = 0; k < nl; k++)
+    for (k = 0; end && k < nl; k++)
         if (rc[k] == SG_OK)
-            lane_get(&v, k, &r[k]);
+            lane_get(&v, k, &end[k]);
 }
 
 void sg_precise_finish(const sg_tracer *t, int i, sg_pray *r, sg_ray_surface *const *out,
@@ -708,7 +729,7 @@ int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_sur
                         int from, int upto)
 {
     int rc;
-    sg_precise_vec(t, r, &path0, &out, 1, &from, upto, &rc);
+    sg_precise_vec(t, r, r, &path0, &out, 1, &from, upto, &rc);
     return rc;
 }
 
