@@ -728,7 +728,9 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const vdd tg[
         aim_judge(&a, landed, at0, at1, noise, tg, tol, res, &nr, &ok, &stalled);
         fin |= ok;
         live &= landed & ~ok & ~stalled;
-        live &= ~aim_step(&a, live, res, nr);
+        /* A step in no lane changes nothing. */
+        if (vm_any(live))
+            live &= ~aim_step(&a, live, res, nr);
     }
     for (k = 0; k < nl; k++) {
         q_lane(a.q, k, q[k]);

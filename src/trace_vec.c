@@ -315,7 +315,7 @@ static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
 {
     vd gsens, gn, cosI, dN;
     vdd3 g, nd;
-    vdd gg, dg;
+    vdd gg, rgg, dg;
     int flat;
     *nonphys = vm_set(0);
     *tir = vm_set(0);
@@ -323,10 +323,15 @@ static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
         return;
     g = surf_grad_v(s, r->p, &gsens);
     /* A flat surface's normal (0, 0, -1) has g.g = 1 exactly and d.g =
-     * -d.z exactly, and a double-double quotient by exactly 1 is its
-     * dividend: all three are skipped there. */
+     * -d.z exactly, and a product by exactly 1 is its other factor: all
+     * three are skipped there.  Elsewhere 1 / g.g is formed as soon as g
+     * is known, beside the chain from d.g to the new direction, which then
+     * takes a product instead of a quotient: one double-double product
+     * more (DD_U relative) in the terms of g, counted in the constant of
+     * the rounding bound below. */
     flat = s->shape == SHAPE_PLANE;
     gg = flat ? vdd_from(vd_set(1.0)) : vdd_dot3(g, g);
+    rgg = flat ? gg : vdd_div(vdd_from(vd_set(1.0)), gg);
     dg = flat ? vdd_neg(r->d.z) : vdd_dot3(r->d, g);
     *nonphys = (vm)(gg.hi <= 0.0);
     gn = vd_sqrt(gg.hi);
@@ -335,17 +340,17 @@ static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
     if (s->mirror) {
         vdd f = vdd_mul_d(dg, vd_set(2.0));
         if (!flat)
-            f = vdd_div(f, gg);
+            f = vdd_mul(f, rgg);
         nd.x = vdd_sub_m(r->d.x, vdd_mul(f, g.x));
         nd.y = vdd_sub_m(r->d.y, vdd_mul(f, g.y));
         nd.z = vdd_sub_m(r->d.z, vdd_mul(f, g.z));
-        r->eD = r->eD + 4.0 * dN + 40.0 * DD_U;
+        r->eD = r->eD + 4.0 * dN + 44.0 * DD_U;
     } else {
         vdd mu = vdd_set(s->mu);
         vdd mu2 = vdd_set(s->mu2);
         vdd kb = vdd_sub(gg, vdd_mul(mu2, vdd_sub(gg, vdd_sqr(dg))));
         vdd sq, gam;
-        vd J, k, sinI, m = vd_set(s->mu.hi);
+        vd J, k, sk, sinI, m = vd_set(s->mu.hi);
         *tir = (vm)(kb.hi < 0.0);
         if (fabs(s->mu.hi) == 1.0 && s->mu.lo == 0.0)
             return;
@@ -353,7 +358,7 @@ static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
         sq = vdd_sel((vm)(dg.hi < 0.0), vdd_neg(sq), sq);
         gam = vdd_sub(sq, vdd_mul(mu, dg));
         if (!flat)
-            gam = vdd_div(gam, gg);
+            gam = vdd_mul(gam, rgg);
         if (flat) {
             /* gam times the normal's zero components adds nothing. */
             nd.x = vdd_mul(mu, r->d.x);
@@ -365,11 +370,13 @@ static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
             nd.z = vdd_add_m(vdd_mul(mu, r->d.z), vdd_mul(gam, g.z));
         }
         k = kb.hi / gg.hi;
-        J = m * vd_abs(m * cosI - vd_copysign(vd_sqrt(vd_fmax(k, vd_set(0.0))), cosI)) /
-            vd_sqrt(vd_fmax(k, vd_set(1e-300)));
+        /* sqrt(max(k, 1e-300)) is max(sqrt(max(k, 0)), sqrt(1e-300)), as
+         * sqrt is monotonic: one root serves both. */
+        sk = vd_sqrt(vd_fmax(k, vd_set(0.0)));
+        J = m * vd_abs(m * cosI - vd_copysign(sk, cosI)) / vd_fmax(sk, vd_set(sqrt(1e-300)));
         sinI = vd_sqrt(vd_fmax(vd_set(0.0), 1.0 - cosI * cosI));
         r->eD = (m + J * sinI) * r->eD + (J * sinI + vd_abs(gam.hi) * gn) * dN +
-                60.0 * DD_U * (m + J + 1.0);
+                64.0 * DD_U * (m + J + 1.0);
     }
     r->d = nd;
 }
@@ -474,6 +481,19 @@ static vm leave_v(const sg_sprep *s, int i, int bend, vray *r, sg_ray_surface *c
     return bad;
 }
 
+/* F / Fp for the Newton step, by products with rFp = 1 / Fp, which is
+ * formed from the double point while F is still being summed in
+ * double-double: quotient and remainder as in vdd_div_d, but off the
+ * chain of divisions.  Its error, below 15 u^2 |F / Fp| (u = 2^-53), is
+ * far inside the step's 8 u Fmag / |Fp| term of the root's bound. */
+static vdd newton_quot(vdd F, vd Fp, vd rFp)
+{
+    vd q1 = F.hi * rFp;
+    vdd p = vdd_two_prod(q1, Fp);
+    vd r = ((F.hi - p.hi) - p.lo) + F.lo;
+    return vdd_fast_two_sum(q1, r * rFp);
+}
+
 /* One surface for every live lane; returns the lanes that stop here, with
  * their status in st[]. */
 static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
@@ -567,7 +587,7 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
         act &= (vm)(ps[2] != 0.0);
     for (it = 0; it < 4 && vm_any(act); it++) {
         vdd3 p = vdd3_axpy(base, sv, r->d);
-        vd ferr, step, Fp, Fmag, Fpp, re;
+        vd ferr, step, Fp, rFp, Fmag, Fpp, re;
         vdd F, snew;
         vm fbad;
         pd[0] = p.x.hi;
@@ -585,14 +605,15 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
             Fp = surf_Fp_v(s, pd, ds, &Fmag);
             Fpp = surf_Fpp_v(s, pd[0] * pd[0] + pd[1] * pd[1]);
         }
+        rFp = 1.0 / Fp;
         fbad |= (vm)(Fp == 0.0) | ~vd_isfinite(Fp);
         fbad &= act;
         bad = fail_lanes(bad, fbad, live, SG_EMISS, st);
         act &= ~fbad;
-        step = F.hi / Fp;
-        snew = vdd_sub(sv, vdd_div_d(F, Fp));
-        re = Fpp / vd_abs(Fp) * step * step + ferr / vd_abs(Fp) +
-             vd_abs(step) * 8.0 * U53 * Fmag / vd_abs(Fp) + 4.0 * DD_U * vd_abs(snew.hi);
+        step = F.hi * rFp;
+        snew = vdd_sub(sv, newton_quot(F, Fp, rFp));
+        re = (Fpp * step * step + ferr + vd_abs(step) * 8.0 * U53 * Fmag) * vd_abs(rFp) +
+             4.0 * DD_U * vd_abs(snew.hi);
         sv = vdd_sel(act, snew, sv);
         root_err = vsel(act, re, root_err);
         act &= ~(vm)(re <= 0x1p-100 * (vd_abs(snew.hi) + vd_abs(ps[0]) + vd_abs(ps[1])));
