@@ -5,7 +5,8 @@
  * name in dd.h, rounding for rounding, so vector and scalar double-double
  * code (the batch launch and the one-ray launch) give the same bits; the
  * sloppy sum and the vector forms built on it (vdd_add_m, vdd_sub_m,
- * vdd_dot3, vdd3_axpy) serve only the vector trace and have no scalar twin.  Only
+ * vdd_dot3, vdd3_axpy) and the reciprocal vdd_recip serve only the vector
+ * trace and have no scalar twin.  Only
  * correctly rounded operations are used (add, mul, div, sqrt, fma), which
  * is why the result does not depend on whether the compiler maps a vector
  * to AVX2, SSE2 or plain scalar code.
@@ -270,6 +271,18 @@ static inline vdd vdd_div(vdd a, vdd b)
     q3 = r.hi / b.hi;
     q = vdd_fast_two_sum(q1, q2);
     return vdd_add_d(q, q3);
+}
+
+/* 1 / b: the double reciprocal y and one Newton step y + y e, e = 1 - b y,
+ * whose part 1 - b.hi y the FMA forms exactly.  With |e| below 2u
+ * (u = 2^-53) the step leaves e^2 <= 4u^2 and its three roundings at most
+ * 5u^2 more: 9u^2 relative, below vdd_div's 15u^2, in one quotient
+ * instead of three. */
+static inline vdd vdd_recip(vdd b)
+{
+    vd y = vd_set(1.0) / b.hi;
+    vd e = vd_neg(vd_fms(b.hi, y, vd_set(1.0))) - b.lo * y;
+    return vdd_fast_two_sum(y, y * e);
 }
 
 static inline vdd vdd_div_d(vdd a, vd b)
