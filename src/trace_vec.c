@@ -110,7 +110,7 @@ static vdd sag_v(const sg_sprep *s, vdd r2, vm *bad)
         root = vdd_sqrt(disc);
         if (s->R < 0)
             root = vdd_neg(root);
-        z = vdd_div(r2, vdd_add(R, root));
+        z = vdd_mul(r2, vdd_recip(vdd_add(R, root)));
         z.hi = vsel(*bad, vd_set(NAN), z.hi);
         z.lo = vsel(*bad, vd_set(0.0), z.lo);
     }
@@ -294,7 +294,9 @@ static vdd3 surf_grad_v(const sg_sprep *s, vdd3 p, vd *gsens)
         int k;
         if (isfinite(s->R)) {
             vdd q = vdd_sub(vdd_sqr(vdd_from(vd_set(s->R))), k1_mul(s, r2));
-            w = vdd_div(vdd_from(vd_set(s->R < 0 ? -1.0 : 1.0)), vdd_sqrt(q));
+            w = vdd_recip(vdd_sqrt(q));
+            if (s->R < 0)
+                w = vdd_neg(w);
         }
         for (k = s->nasph - 1; k >= 0; k--)
             pp = vdd_add(vdd_mul(pp, r2),
