@@ -483,19 +483,6 @@ static vm leave_v(const sg_sprep *s, int i, int bend, vray *r, sg_ray_surface *c
     return bad;
 }
 
-/* F / Fp for the Newton step, by products with rFp = 1 / Fp, which is
- * formed from the double point while F is still being summed in
- * double-double: quotient and remainder as in vdd_div_d, but off the
- * chain of divisions.  Its error, below 15 u^2 |F / Fp| (u = 2^-53), is
- * far inside the step's 8 u Fmag / |Fp| term of the root's bound. */
-static vdd newton_quot(vdd F, vd Fp, vd rFp)
-{
-    vd q1 = F.hi * rFp;
-    vdd p = vdd_two_prod(q1, Fp);
-    vd r = ((F.hi - p.hi) - p.lo) + F.lo;
-    return vdd_fast_two_sum(q1, r * rFp);
-}
-
 /* One surface for every live lane; returns the lanes that stop here, with
  * their status in st[]. */
 static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
@@ -609,13 +596,17 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
             Fp = surf_Fp_v(s, pd, ds, &Fmag);
             Fpp = surf_Fpp_v(s, pd[0] * pd[0] + pd[1] * pd[1]);
         }
+        /* 1 / Fp is formed from the double point while F is still being
+         * summed in double-double, and the step takes products with it;
+         * its error, below 15u^2 |F / Fp|, is far inside the step's
+         * 8 U53 Fmag / |Fp| term of the root's bound. */
         rFp = 1.0 / Fp;
         fbad |= (vm)(Fp == 0.0) | ~vd_isfinite(Fp);
         fbad &= act;
         bad = fail_lanes(bad, fbad, live, SG_EMISS, st);
         act &= ~fbad;
         step = F.hi * rFp;
-        snew = vdd_sub(sv, newton_quot(F, Fp, rFp));
+        snew = vdd_sub(sv, vdd_div_dr(F, Fp, rFp));
         re = (Fpp * step * step + ferr + vd_abs(step) * 8.0 * U53 * Fmag) * vd_abs(rFp) +
              4.0 * DD_U * vd_abs(snew.hi);
         sv = vdd_sel(act, snew, sv);

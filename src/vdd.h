@@ -3,13 +3,13 @@
  *
  * Each operation is the lane-by-lane transcription of the one of the same
  * name in dd.h, rounding for rounding, so vector and scalar double-double
- * code (the batch launch and the one-ray launch) give the same bits; the
- * sloppy sum and the vector forms built on it (vdd_add_m, vdd_sub_m,
- * vdd_dot3, vdd3_axpy) and the reciprocal vdd_recip serve only the vector
- * trace and have no scalar twin.  Only
- * correctly rounded operations are used (add, mul, div, sqrt, fma), which
- * is why the result does not depend on whether the compiler maps a vector
- * to AVX2, SSE2 or plain scalar code.
+ * code give the same bits.  The sloppy sum and the forms built on it
+ * (vdd_add_m, vdd_sub_m, vdd_dot3, vdd3_axpy), the reciprocal vdd_recip
+ * and the quotient by a reciprocal vdd_div_dr have no scalar twin: the
+ * precise trace runs in this file's arithmetic alone, one ray as one lane.
+ * Only correctly rounded operations are used (add, mul, div, sqrt, fma),
+ * which is why the result does not depend on whether the compiler maps a
+ * vector to AVX-512, AVX2, SSE2 or plain scalar code.
  */
 #ifndef SG_VDD_H
 #define SG_VDD_H
@@ -260,19 +260,6 @@ static inline vdd vdd_sqr(vdd a)
     return vdd_fast_two_sum(p.hi, p.lo);
 }
 
-static inline vdd vdd_div(vdd a, vdd b)
-{
-    vd q1 = a.hi / b.hi;
-    vdd r = vdd_sub(a, vdd_mul_d(b, q1));
-    vd q2 = r.hi / b.hi;
-    vd q3;
-    vdd q;
-    r = vdd_sub(r, vdd_mul_d(b, q2));
-    q3 = r.hi / b.hi;
-    q = vdd_fast_two_sum(q1, q2);
-    return vdd_add_d(q, q3);
-}
-
 /* 1 / b: the double reciprocal y and one Newton step y + y e, e = 1 - b y,
  * whose part 1 - b.hi y the FMA forms exactly.  With |e| below 2u
  * (u = 2^-53) the step leaves e^2 <= 4u^2 and its three roundings at most
@@ -285,13 +272,18 @@ static inline vdd vdd_recip(vdd b)
     return vdd_fast_two_sum(y, y * e);
 }
 
-static inline vdd vdd_div_d(vdd a, vd b)
+/* a / b from r = 1 / b rounded: the quotient q = a.hi r and the
+ * remainder a - q b, formed exactly as far as it cancels, divided by the
+ * same product.  With q within 2u of a.hi / b, the remainder's roundings
+ * stay below 7u^2 |a| and the correction's below 8u^2 |a / b|: 15u^2
+ * relative, as vdd_div would take, without a quotient on the path from a
+ * when r is formed beforehand. */
+static inline vdd vdd_div_dr(vdd a, vd b, vd r)
 {
-    vd q1 = a.hi / b;
+    vd q1 = a.hi * r;
     vdd p = vdd_two_prod(q1, b);
-    vd r = ((a.hi - p.hi) - p.lo) + a.lo;
-    vd q2 = r / b;
-    return vdd_fast_two_sum(q1, q2);
+    vd rem = ((a.hi - p.hi) - p.lo) + a.lo;
+    return vdd_fast_two_sum(q1, rem * r);
 }
 
 static inline vdd vdd_sqrt(vdd a)

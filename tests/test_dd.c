@@ -1,6 +1,6 @@
 /*
- * test_dd.c - the double-double sums of the precise trace against exact
- * sums in MPFR.
+ * test_dd.c - the double-double sums, reciprocal and quotient of the
+ * precise trace against exact values in MPFR.
  *
  * The error analysis in src/trace_vec.c rests on two claims: the accurate
  * sum vdd_add errs by at most DD_U |a + b|, and the sloppy sum vdd_add_m
@@ -141,11 +141,74 @@ static void same_sign_relative(void **state)
                   N, worst);
 }
 
+/* |hi + lo - exact| / |exact| of got against the exact value in e. */
+static double rel_error(vdd got, mpfr_t e)
+{
+    mpfr_t g;
+    double r;
+    mpfr_init2(g, 600);
+    mpfr_set_d(g, got.hi[0], MPFR_RNDN);
+    mpfr_add_d(g, g, got.lo[0], MPFR_RNDN);
+    mpfr_sub(g, g, e, MPFR_RNDN);
+    mpfr_div(g, g, e, MPFR_RNDN);
+    mpfr_abs(g, g, MPFR_RNDN);
+    r = mpfr_get_d(g, MPFR_RNDU);
+    mpfr_clear(g);
+    return r;
+}
+
+/* vdd_recip's claim of 9u^2 (u = 2^-53) and vdd_div_dr's of 15u^2, the
+ * figures the bend's 1 / g.g, a flat surface's step and the Newton step
+ * are counted with, against 1 / b and a / b in 600-bit MPFR. */
+static void reciprocal_and_quotient(void **state)
+{
+    enum { N = 200000 };
+    const double u2 = 0x1p-106;
+    double worst_r = 0.0, worst_q = 0.0;
+    long i;
+    mpfr_t e, t;
+    (void)state;
+    mpfr_inits2(600, e, t, (mpfr_ptr)0);
+    for (i = 0; i < N; i++) {
+        dd a = rand_dd(), b = rand_dd();
+        vdd r, q;
+        double rb, er, eq;
+        /* Low parts at the edge of their range make the residual largest. */
+        if (i % 4 == 0)
+            b = dd_fast_two_sum(b.hi, (i % 8 ? 0.5 : -0.5) * tu_ulp(b.hi));
+        r = vdd_recip(lane0(b));
+        rb = 1.0 / b.hi;
+        q = vdd_div_dr(lane0(a), vd_set(b.hi), vd_set(rb));
+        mpfr_set_d(e, b.hi, MPFR_RNDN);
+        mpfr_add_d(e, e, b.lo, MPFR_RNDN);
+        mpfr_ui_div(e, 1, e, MPFR_RNDN);
+        er = rel_error(r, e);
+        mpfr_set_d(e, a.hi, MPFR_RNDN);
+        mpfr_add_d(e, e, a.lo, MPFR_RNDN);
+        mpfr_set_d(t, b.hi, MPFR_RNDN);
+        mpfr_div(e, e, t, MPFR_RNDN);
+        eq = rel_error(q, e);
+        if (er > 9.0 * u2)
+            fail_msg("1 / (%a + %a): relative error %.3g u^2 above 9", b.hi, b.lo, er / u2);
+        if (eq > 15.0 * u2)
+            fail_msg("(%a + %a) / %a: relative error %.3g u^2 above 15", a.hi, a.lo, b.hi,
+                     eq / u2);
+        worst_r = fmax(worst_r, er);
+        worst_q = fmax(worst_q, eq);
+        assert_true(r.hi[SG_VL - 1] == r.hi[0] && r.lo[SG_VL - 1] == r.lo[0]);
+    }
+    mpfr_clears(e, t, (mpfr_ptr)0);
+    print_message("# %d cases against 600-bit MPFR, u = 2^-53\n", N);
+    print_message("# vdd_recip: worst relative error %.3f u^2 (bound 9)\n", worst_r / u2);
+    print_message("# vdd_div_dr: worst relative error %.3f u^2 (bound 15)\n", worst_q / u2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(sums_within_bounds),
         cmocka_unit_test(same_sign_relative),
+        cmocka_unit_test(reciprocal_and_quotient),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
