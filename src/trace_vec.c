@@ -251,9 +251,12 @@ static vd surf_Fpp_v(const sg_sprep *s, vd r2)
     return vd_abs(w) + 2.0 * dw + 1e-300;
 }
 
-static vd surf_cos_v(const sg_sprep *s, const vd p[3], const vd d[3])
+/* 1 / cos of the angle between the ray and the normal, which scales the
+ * ray's error along the surface into the point's; 1e300 where the ray
+ * grazes or the normal vanishes. */
+static vd surf_sec_v(const sg_sprep *s, const vd p[3], const vd d[3])
 {
-    vd g[3], gn;
+    vd g[3], gn, gd;
     if (s->shape == SHAPE_PLANE) {
         g[0] = vd_set(0.0);
         g[1] = vd_set(0.0);
@@ -270,8 +273,8 @@ static vd surf_cos_v(const sg_sprep *s, const vd p[3], const vd d[3])
         g[2] = vd_set(1.0);
     }
     gn = vd_sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
-    return vsel((vm)(gn > 0.0), vd_abs(g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn,
-                vd_set(0.0));
+    gd = vd_abs(g[0] * d[0] + g[1] * d[1] + g[2] * d[2]);
+    return vsel((vm)(gn > 0.0) & (vm)(gd > 0.0), gn / gd, vd_set(1e300));
 }
 
 static vdd3 surf_grad_v(const sg_sprep *s, vdd3 p, vd *gsens)
@@ -491,7 +494,7 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
     const sg_sprep *s = &t->sp[i];
     int flat = s->shape == SHAPE_PLANE;
     vd dz = r->d.z.hi, ps[3], ds[3], sd = vd_set(0.0), eP0, root_err = vd_set(0.0);
-    vd pd[3], dpath, kappa, cg, resid, s0d = vd_set(0.0), lever;
+    vd pd[3], dpath, kappa, resid, s0d = vd_set(0.0), lever;
     vdd s0 = vdd_from(vd_set(0.0)), sv;
     vdd3 base;
     vm bad = vm_set(0), tp, act;
@@ -622,8 +625,7 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
     pd[0] = r->p.x.hi;
     pd[1] = r->p.y.hi;
     pd[2] = r->p.z.hi;
-    cg = surf_cos_v(s, pd, ds);
-    kappa = vsel((vm)(cg > 0.0), 1.0 / cg, vd_set(1e300));
+    kappa = surf_sec_v(s, pd, ds);
     /* The ray's own error carried from the tangent plane, the root's, and
      * the rounding of the point; a curved surface's point is formed from
      * the entry point, whose coordinates enter that rounding too. */

@@ -292,8 +292,9 @@ static inline vdd vdd_sqrt(vdd a)
      * through the arithmetic as it does there. */
     vm le = (vm)(a.hi <= vd_set(0.0));
     vd x = vd_sqrt(vsel(le, vd_set(1.0), a.hi));
+    vd h = vd_set(0.5) / x;
     vdd r = vdd_sub(a, vdd_two_prod(x, x));
-    vdd root = vdd_fast_two_sum(x, r.hi / (vd_set(2.0) * x));
+    vdd root = vdd_fast_two_sum(x, r.hi * h);
     vd other = vsel((vm)(a.hi == vd_set(0.0)), vd_set(0.0), vd_set(NAN));
     root.hi = vsel(le, other, root.hi);
     root.lo = vsel(le, vd_set(0.0), root.lo);

@@ -1,6 +1,6 @@
 /*
- * test_dd.c - the double-double sums, reciprocal and quotient of the
- * precise trace against exact values in MPFR.
+ * test_dd.c - the double-double sums, reciprocal, quotient and square root
+ * of the precise trace against exact values in MPFR.
  *
  * The error analysis in src/trace_vec.c rests on two claims: the accurate
  * sum vdd_add errs by at most DD_U |a + b|, and the sloppy sum vdd_add_m
@@ -157,22 +157,23 @@ static double rel_error(vdd got, mpfr_t e)
     return r;
 }
 
-/* vdd_recip's claim of 9u^2 (u = 2^-53) and vdd_div_dr's of 15u^2, the
- * figures the bend's 1 / g.g, a flat surface's step and the Newton step
- * are counted with, against 1 / b and a / b in 600-bit MPFR. */
-static void reciprocal_and_quotient(void **state)
+/* vdd_recip's claim of 9u^2 (u = 2^-53), vdd_div_dr's of 15u^2 and
+ * vdd_sqrt's of DD_U = 4u^2, the figures the bend's 1 / g.g, a flat
+ * surface's step, the Newton step and the refracted direction are counted
+ * with, against 1 / b, a / b and sqrt|b| in 600-bit MPFR. */
+static void reciprocal_quotient_root(void **state)
 {
     enum { N = 200000 };
     const double u2 = 0x1p-106;
-    double worst_r = 0.0, worst_q = 0.0;
+    double worst_r = 0.0, worst_q = 0.0, worst_s = 0.0;
     long i;
     mpfr_t e, t;
     (void)state;
     mpfr_inits2(600, e, t, (mpfr_ptr)0);
     for (i = 0; i < N; i++) {
         dd a = rand_dd(), b = rand_dd();
-        vdd r, q;
-        double rb, er, eq;
+        vdd r, q, sq;
+        double rb, er, eq, es;
         /* Low parts at the edge of their range make the residual largest. */
         if (i % 4 == 0)
             b = dd_fast_two_sum(b.hi, (i % 8 ? 0.5 : -0.5) * tu_ulp(b.hi));
@@ -188,6 +189,14 @@ static void reciprocal_and_quotient(void **state)
         mpfr_set_d(t, b.hi, MPFR_RNDN);
         mpfr_div(e, e, t, MPFR_RNDN);
         eq = rel_error(q, e);
+        sq = vdd_sqrt(lane0(b.hi < 0 ? dd_neg(b) : b));
+        mpfr_set_d(e, fabs(b.hi), MPFR_RNDN);
+        mpfr_add_d(e, e, b.hi < 0 ? -b.lo : b.lo, MPFR_RNDN);
+        mpfr_sqrt(e, e, MPFR_RNDN);
+        es = rel_error(sq, e);
+        if (es > DD_U)
+            fail_msg("sqrt(%a + %a): relative error %.3g u^2 above 4", b.hi, b.lo, es / u2);
+        worst_s = fmax(worst_s, es);
         if (er > 9.0 * u2)
             fail_msg("1 / (%a + %a): relative error %.3g u^2 above 9", b.hi, b.lo, er / u2);
         if (eq > 15.0 * u2)
@@ -201,6 +210,7 @@ static void reciprocal_and_quotient(void **state)
     print_message("# %d cases against 600-bit MPFR, u = 2^-53\n", N);
     print_message("# vdd_recip: worst relative error %.3f u^2 (bound 9)\n", worst_r / u2);
     print_message("# vdd_div_dr: worst relative error %.3f u^2 (bound 15)\n", worst_q / u2);
+    print_message("# vdd_sqrt: worst relative error %.3f u^2 (bound 4)\n", worst_s / u2);
 }
 
 int main(void)
@@ -208,7 +218,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(sums_within_bounds),
         cmocka_unit_test(same_sign_relative),
-        cmocka_unit_test(reciprocal_and_quotient),
+        cmocka_unit_test(reciprocal_quotient_root),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
