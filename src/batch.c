@@ -2,22 +2,28 @@
  * batch.c - many rays on every core.
  *
  * Each thread owns a tracer (tracers carry per-ray scratch and caches) and
- * a contiguous slice of the rays, so results land straight in the caller's
- * arrays and equal the single-ray calls bit for bit.
+ * takes runs of consecutive rays from a shared counter until none are left,
+ * so a thread slowed by the machine's other load takes fewer of them.
+ * Results land straight in the caller's arrays and equal the single-ray
+ * calls bit for bit, whichever thread traced them.
  */
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdlib.h>
 #include <unistd.h>
 
 #include "trace_internal.h"
 #include "vdd.h"
 
+
 typedef struct job {
     sg_tracer *t;
     sg_ray_kind kind;
     const sg_ray_in *rays;
-    size_t first, count;
+    size_t first, count; /* the run being traced */
+    size_t nray, chunk;
+    atomic_size_t *next; /* the first ray no thread has taken */
     int nsurf;
     sg_ray_surface *out;
     int *status;
@@ -130,10 +136,17 @@ static void run_precise(job *j)
 
 static void run_job(job *j)
 {
-    if (j->t->o.method == SG_METHOD_PRECISE)
-        run_precise(j);
-    else
-        run_one_by_one(j);
+    for (;;) {
+        size_t first = atomic_fetch_add(j->next, j->chunk);
+        if (first >= j->nray)
+            break;
+        j->first = first;
+        j->count = j->nray - first < j->chunk ? j->nray - first : j->chunk;
+        if (j->t->o.method == SG_METHOD_PRECISE)
+            run_precise(j);
+        else
+            run_one_by_one(j);
+    }
 }
 
 static void *thread_main(void *arg)
@@ -150,7 +163,8 @@ int sg_trace_batch(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
 {
     job *jobs;
     pthread_t *tid;
-    size_t per, done = 0;
+    atomic_size_t next;
+    size_t chunk;
     int k, nt, rc = SG_OK, started = 0;
     if (kind != SG_RAYS_NORMALIZED && kind != SG_RAYS_START_DIR)
         return sg_diag_set(d, SG_EINVAL, "batch: unknown ray kind %d", (int)kind);
@@ -165,8 +179,13 @@ int sg_trace_batch(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
     }
     if (nt > 256)
         nt = 256;
-    if ((size_t)nt > nray)
-        nt = (int)nray;
+    /* Runs of about an eighth of a thread's share, from 64 to 4096 rays:
+     * long enough that taking one costs nothing, short enough that the
+     * threads finish close together. */
+    chunk = nray / (8 * (size_t)nt);
+    chunk = chunk < 64 ? 64 : chunk > 4096 ? 4096 : chunk;
+    if ((size_t)nt > (nray + chunk - 1) / chunk)
+        nt = (int)((nray + chunk - 1) / chunk);
     jobs = calloc((size_t)nt, sizeof *jobs);
     tid = calloc((size_t)nt, sizeof *tid);
     if (!jobs || !tid) {
@@ -174,7 +193,7 @@ int sg_trace_batch(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
         free(tid);
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
     }
-    per = nray / (size_t)nt;
+    atomic_init(&next, 0);
     for (k = 0; k < nt; k++) {
         jobs[k].t = sg_tracer_new(sys, cat, opts, d);
         if (!jobs[k].t) {
@@ -183,14 +202,14 @@ int sg_trace_batch(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
         }
         jobs[k].kind = kind;
         jobs[k].rays = rays;
-        jobs[k].first = done;
-        jobs[k].count = k == nt - 1 ? nray - done : per;
+        jobs[k].nray = nray;
+        jobs[k].chunk = chunk;
+        jobs[k].next = &next;
         jobs[k].nsurf = sys->nsurf;
         jobs[k].out = out;
         jobs[k].status = status;
-        done += jobs[k].count;
     }
-    /* The calling thread takes the last slice itself. */
+    /* The calling thread works beside the others. */
     for (k = 0; k < nt - 1; k++) {
         if (pthread_create(&tid[k], NULL, thread_main, &jobs[k]) != 0)
             break;

@@ -336,9 +336,11 @@ static void bench_size(const bench_cfg *cfg, const sg_system *sys, const sg_cata
                 goto nomem;
         }
     make_rays(sys, rays, nray);
-    /* Touch every page now so the first timed run pays no page faults. */
-    memset(out, 0, nray * (size_t)nsurf * sizeof *out);
-    memset(status, 0, nray * sizeof *status);
+    /* Touch every page now so the first timed run pays no page faults.
+     * The fill is not zero: the compiler may turn malloc and a zero
+     * memset into calloc, whose fresh pages stay untouched. */
+    memset(out, 0xff, nray * (size_t)nsurf * sizeof *out);
+    memset(status, 0xff, nray * sizeof *status);
 
     for (rep = -1; rep < cfg->repeat; rep++) {
         for (m = 0; m < NMETHOD; m++) {
