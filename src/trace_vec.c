@@ -16,6 +16,7 @@
  */
 #include <float.h>
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "trace_internal.h"
@@ -418,23 +419,97 @@ static inline __attribute__((always_inline)) vd bound_v(vd e, vd a, vd b, vd c)
     return (e + 0.5 * u) * (1.0 + 8.0 * U53);
 }
 
-static void put_row(sg_ray_surface *o, int k, const vd P[3], vd path, vd resid, vd bound)
-{
-    o->x = P[0][k];
-    o->y = P[1][k];
-    o->z = P[2][k];
-    o->path = path[k];
-    o->residual = resid[k];
-    o->error_bound = bound[k];
-    o->status = SG_OK;
-}
+/* The point's columns of a block's rows, held until the bend has decided
+ * which rays go on: a ray that stops there gets its row from
+ * sg_fail_rest instead. */
+typedef struct vrow {
+    vd x, y, z, residual, bound, path;
+} vrow;
 
-static void put_dir(sg_ray_surface *o, int k, const vray *r, vd bound)
+/* The first eight columns of a row, x to error_bound, are contiguous. */
+_Static_assert(offsetof(sg_ray_surface, y) == 1 * sizeof(double) &&
+                   offsetof(sg_ray_surface, z) == 2 * sizeof(double) &&
+                   offsetof(sg_ray_surface, l) == 3 * sizeof(double) &&
+                   offsetof(sg_ray_surface, m) == 4 * sizeof(double) &&
+                   offsetof(sg_ray_surface, n) == 5 * sizeof(double) &&
+                   offsetof(sg_ray_surface, residual) == 6 * sizeof(double) &&
+                   offsetof(sg_ray_surface, error_bound) == 7 * sizeof(double),
+               "sg_ray_surface begins with eight doubles, x to error_bound");
+
+/* Writes row i of the lanes in ok: every column when pt is given, else
+ * (the stop of an aimed ray, whose point a landing wrote) the direction's.
+ * With eight lanes in AVX-512 registers the first eight columns are
+ * transposed into one 64-byte store per row instead of eight lane
+ * extractions each. */
+static void put_rows(sg_ray_surface *const *out, int i, const vrow *pt, const vray *r,
+                     vd dbound, vm ok)
 {
-    o->l = r->d.x.hi[k];
-    o->m = r->d.y.hi[k];
-    o->n = r->d.z.hi[k];
-    o->dir_error_bound = bound[k];
+    int k;
+    if (!pt) {
+        for (k = 0; k < SG_VL; k++)
+            if (ok[k]) {
+                sg_ray_surface *o = &out[k][i];
+                o->l = r->d.x.hi[k];
+                o->m = r->d.y.hi[k];
+                o->n = r->d.z.hi[k];
+                o->dir_error_bound = dbound[k];
+            }
+        return;
+    }
+#if SG_VL == 8 && defined(__AVX512F__)
+    {
+        __m512d t0 = _mm512_unpacklo_pd(pt->x, pt->y), t1 = _mm512_unpackhi_pd(pt->x, pt->y);
+        __m512d t2 = _mm512_unpacklo_pd(pt->z, r->d.x.hi);
+        __m512d t3 = _mm512_unpackhi_pd(pt->z, r->d.x.hi);
+        __m512d t4 = _mm512_unpacklo_pd(r->d.y.hi, r->d.z.hi);
+        __m512d t5 = _mm512_unpackhi_pd(r->d.y.hi, r->d.z.hi);
+        __m512d t6 = _mm512_unpacklo_pd(pt->residual, pt->bound);
+        __m512d t7 = _mm512_unpackhi_pd(pt->residual, pt->bound);
+        /* Lanes (0, 4), (2, 6), (1, 5) and (3, 7), column pairs 0-1 and
+         * 2-3 in u, 4-5 and 6-7 in v. */
+        __m512d u[4], v[4], row[8];
+        u[0] = _mm512_shuffle_f64x2(t0, t2, 0x88);
+        u[1] = _mm512_shuffle_f64x2(t0, t2, 0xDD);
+        u[2] = _mm512_shuffle_f64x2(t1, t3, 0x88);
+        u[3] = _mm512_shuffle_f64x2(t1, t3, 0xDD);
+        v[0] = _mm512_shuffle_f64x2(t4, t6, 0x88);
+        v[1] = _mm512_shuffle_f64x2(t4, t6, 0xDD);
+        v[2] = _mm512_shuffle_f64x2(t5, t7, 0x88);
+        v[3] = _mm512_shuffle_f64x2(t5, t7, 0xDD);
+        row[0] = _mm512_shuffle_f64x2(u[0], v[0], 0x88);
+        row[4] = _mm512_shuffle_f64x2(u[0], v[0], 0xDD);
+        row[2] = _mm512_shuffle_f64x2(u[1], v[1], 0x88);
+        row[6] = _mm512_shuffle_f64x2(u[1], v[1], 0xDD);
+        row[1] = _mm512_shuffle_f64x2(u[2], v[2], 0x88);
+        row[5] = _mm512_shuffle_f64x2(u[2], v[2], 0xDD);
+        row[3] = _mm512_shuffle_f64x2(u[3], v[3], 0x88);
+        row[7] = _mm512_shuffle_f64x2(u[3], v[3], 0xDD);
+        for (k = 0; k < SG_VL; k++)
+            if (ok[k]) {
+                sg_ray_surface *o = &out[k][i];
+                _mm512_storeu_pd(&o->x, row[k]);
+                o->dir_error_bound = dbound[k];
+                o->path = pt->path[k];
+                o->status = SG_OK;
+            }
+    }
+#else
+    for (k = 0; k < SG_VL; k++)
+        if (ok[k]) {
+            sg_ray_surface *o = &out[k][i];
+            o->x = pt->x[k];
+            o->y = pt->y[k];
+            o->z = pt->z[k];
+            o->l = r->d.x.hi[k];
+            o->m = r->d.y.hi[k];
+            o->n = r->d.z.hi[k];
+            o->residual = pt->residual[k];
+            o->error_bound = pt->bound[k];
+            o->dir_error_bound = dbound[k];
+            o->path = pt->path[k];
+            o->status = SG_OK;
+        }
+#endif
 }
 
 /* Adds the live lanes of m to bad, giving status code to those that had
@@ -465,12 +540,11 @@ static vm clip_v(const sg_tracer *t, const sg_sprep *s, vd x, vd y, vm live, vm 
 }
 
 /* How a ray leaves surface i: bent when bend is set, its bounds kept
- * finite, and the direction columns of row i written. */
+ * finite, and row i written (its direction's columns only without pt). */
 static vm leave_v(const sg_sprep *s, int i, int bend, vray *r, sg_ray_surface *const *out,
-                  vm live, vm bad, int *st)
+                  const vrow *pt, vm live, vm bad, int *st)
 {
     vd bnd;
-    int k;
     if (bend) {
         vm nonphys, tir;
         bend_v(s, r, &nonphys, &tir);
@@ -480,9 +554,7 @@ static vm leave_v(const sg_sprep *s, int i, int bend, vray *r, sg_ray_surface *c
     r->eP = vsel(vd_isnan(r->eP), vd_set(INFINITY), r->eP);
     r->eD = vsel(vd_isnan(r->eD), vd_set(INFINITY), r->eD);
     bnd = bound_v(r->eD, r->d.x.hi, r->d.y.hi, r->d.z.hi);
-    for (k = 0; k < SG_VL; k++)
-        if (live[k] && !bad[k])
-            put_dir(&out[k][i], k, r, bnd);
+    put_rows(out, i, pt, r, bnd, live & ~bad);
     return bad;
 }
 
@@ -494,11 +566,12 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
     const sg_sprep *s = &t->sp[i];
     int flat = s->shape == SHAPE_PLANE;
     vd dz = r->d.z.hi, ps[3], ds[3], sd = vd_set(0.0), eP0, root_err = vd_set(0.0);
-    vd pd[3], dpath, kappa, resid, s0d = vd_set(0.0), lever;
+    vd pd[3], kappa, s0d = vd_set(0.0), lever;
+    vrow row;
     vdd s0 = vdd_from(vd_set(0.0)), sv;
     vdd3 base;
     vm bad = vm_set(0), tp, act;
-    int k, it;
+    int it;
 
     /* Measure 1: into this surface's frame and onto its tangent plane. */
     if (i > 1)
@@ -639,19 +712,17 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
 
     {
         vdd sp = vdd_add_m(s0, sv);
-        dpath = sp.hi + sp.lo;
+        row.path = sp.hi + sp.lo;
     }
     if (i == 1)
-        dpath = path0 + dpath;
-    resid = resid_v(s, pd[0], pd[1], pd[2]);
+        row.path = path0 + row.path;
+    row.x = pd[0];
+    row.y = pd[1];
+    row.z = pd[2];
+    row.residual = resid_v(s, pd[0], pd[1], pd[2]);
+    row.bound = bound_v(r->eP, pd[0], pd[1], pd[2]);
     bad = clip_v(t, s, pd[0], pd[1], live, bad, st);
-    {
-        vd bnd = bound_v(r->eP, pd[0], pd[1], pd[2]);
-        for (k = 0; k < SG_VL; k++)
-            if (live[k] && !bad[k])
-                put_row(&out[k][i], k, pd, dpath, resid, bnd);
-    }
-    return leave_v(s, i, i < upto, r, out, live, bad, st) & live;
+    return leave_v(s, i, i < upto, r, out, &row, live, bad, st) & live;
 }
 
 static void vray_sel(vm m, const vray *a, vray *b)
@@ -734,7 +805,7 @@ void sg_precise_finish(const sg_tracer *t, int i, sg_pray *r, sg_ray_surface *co
     }
     /* As surface_v goes on after the intersection. */
     bad = clip_v(t, &t->sp[i], x, y, live, vm_set(0), st);
-    bad = leave_v(&t->sp[i], i, 1, &v, out, live, bad, st);
+    bad = leave_v(&t->sp[i], i, 1, &v, out, NULL, live, bad, st);
     for (k = 0; k < nl; k++) {
         rc[k] = bad[k] ? st[k] : SG_OK;
         if (bad[k])
