@@ -71,6 +71,8 @@ static void run_precise(job *j)
 {
     sg_tracer *t = j->t;
     sg_pray st[SG_VL];
+    sg_vray vs;
+    vd p0;
     double path0[SG_VL], pupil[SG_VL][2];
     sg_ray_surface *o[SG_VL];
     size_t idx[SG_VL], r = j->first, end = j->first + j->count;
@@ -105,7 +107,8 @@ static void run_precise(job *j)
             r++;
             continue;
         }
-        /* A run of rays of the same field. */
+        /* A run of rays of the same field, launched and traced in vector
+         * form. */
         while (r < end && nl < SG_VL && finite4(j->rays[r].v) && j->rays[r].v[0] == v[0] &&
                j->rays[r].v[1] == v[1]) {
             pupil[nl][0] = j->rays[r].v[2];
@@ -113,24 +116,14 @@ static void run_precise(job *j)
             o[nl] = j->out + r * (size_t)j->nsurf;
             idx[nl++] = r++;
         }
-        sg_launch_precise_vec(t, v[0], v[1], (const double(*)[2])pupil, nl, o, st, path0, start,
-                              rc);
-        {
-            int m = 0;
-            for (k = 0; k < nl; k++) {
-                if (rc[k] != SG_OK) {
-                    if (j->status)
-                        j->status[idx[k]] = rc[k];
-                    continue;
-                }
-                st[m] = st[k];
-                path0[m] = path0[k];
-                start[m] = start[k];
-                o[m] = o[k];
-                idx[m++] = idx[k];
-            }
-            flush(j, st, path0, o, idx, start, m);
-        }
+        for (k = nl; k < SG_VL; k++)
+            o[k] = o[0];
+        sg_launch_precise_block(t, v[0], v[1], (const double(*)[2])pupil, nl, o, &vs, &p0,
+                                start, rc);
+        sg_precise_block(t, &vs, p0, o, nl, start, t->n - 1, rc);
+        if (j->status)
+            for (k = 0; k < nl; k++)
+                j->status[idx[k]] = rc[k];
     }
 }
 

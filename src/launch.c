@@ -145,57 +145,46 @@ static void q_aim_off(const sg_tracer *t, const osp *o, double px, double py, dd
     q_lane(v, 0, q);
 }
 
-/* Precise ray states from the object-space part and Q, for nl lanes, lane
- * k from q[k].  A relative error of the direction moves surface 1's point
- * by nothing: the ray starts on Q itself. */
-static void pray_from_vec(const osp *o, const dd (*q)[2], int nl, sg_pray *r, double *path0)
+/* Precise ray states from the object-space part and Q, lane by lane.  A
+ * relative error of the direction moves surface 1's point by nothing: the
+ * ray starts on Q itself. */
+static void pray_from_v(const osp *o, const vdd q[2], sg_vray *r, vd *path0)
 {
-    vdd3 v;
-    vdd len, inv, qx, qy;
-    int k;
-    for (k = 0; k < SG_VL; k++) {
-        int src = k < nl ? k : 0;
-        qx.hi[k] = q[src][0].hi;
-        qx.lo[k] = q[src][0].lo;
-        qy.hi[k] = q[src][1].hi;
-        qy.lo[k] = q[src][1].lo;
-    }
-    if (!o->inf) {
-        v.x = vdd_sub(qx, vdd_set(o->obj.x));
-        v.y = vdd_sub(qy, vdd_set(o->obj.y));
+    r->p.x = q[0];
+    r->p.y = q[1];
+    r->p.z = vdd_from(vd_set(0.0));
+    r->eP = DD_U * (vd_abs(q[0].hi) + vd_abs(q[1].hi));
+    r->eD = vd_set(8.0 * DD_U);
+    if (o->inf) {
+        r->d.x = vdd_set(o->dir.x);
+        r->d.y = vdd_set(o->dir.y);
+        r->d.z = vdd_set(o->dir.z);
+        *path0 = vd_set(0.0);
+    } else {
+        vdd3 v;
+        vdd len, inv;
+        v.x = vdd_sub(q[0], vdd_set(o->obj.x));
+        v.y = vdd_sub(q[1], vdd_set(o->obj.y));
         v.z = vdd_set(dd_neg(o->obj.z));
         len = vdd_sqrt(vdd_dot3(v, v));
         /* A reciprocal and three products: within eD's 8 DD_U. */
         inv = vdd_recip(len);
-        v.x = vdd_mul(v.x, inv);
-        v.y = vdd_mul(v.y, inv);
-        v.z = vdd_mul(v.z, inv);
-    }
-    for (k = 0; k < nl; k++) {
-        r[k].p.x = q[k][0];
-        r[k].p.y = q[k][1];
-        r[k].p.z = dd_from(0.0);
-        r[k].eP = DD_U * (fabs(q[k][0].hi) + fabs(q[k][1].hi));
-        r[k].eD = 8.0 * DD_U;
-        if (o->inf) {
-            r[k].d = o->dir;
-            path0[k] = 0.0;
-        } else {
-            r[k].d.x.hi = v.x.hi[k];
-            r[k].d.x.lo = v.x.lo[k];
-            r[k].d.y.hi = v.y.hi[k];
-            r[k].d.y.lo = v.y.lo[k];
-            r[k].d.z.hi = v.z.hi[k];
-            r[k].d.z.lo = v.z.lo[k];
-            path0[k] = len.hi[k] + len.lo[k];
-        }
+        r->d.x = vdd_mul(v.x, inv);
+        r->d.y = vdd_mul(v.y, inv);
+        r->d.z = vdd_mul(v.z, inv);
+        *path0 = len.hi + len.lo;
     }
 }
 
 /* The same for one ray. */
 static void pray_from(const osp *o, const dd q[2], sg_pray *r, double *path0)
 {
-    pray_from_vec(o, (const dd(*)[2])q, 1, r, path0);
+    vdd qv[2] = {vdd_set(q[0]), vdd_set(q[1])};
+    sg_vray v;
+    vd p0;
+    pray_from_v(o, qv, &v, &p0);
+    sg_vray_get(&v, 0, r);
+    *path0 = p0[0];
 }
 
 static void object_row(const sg_tracer *t, const osp *o, const sg_pray *r, sg_ray_surface *out)
@@ -320,11 +309,10 @@ static vd det2(const vaim *a)
     return a->J[0][0] * a->J[1][1] - a->J[0][1] * a->J[1][0];
 }
 
-/* Every lane starts from Jacobian J; lane k from Q = q[k] (lane 0's for
- * lanes past nl). */
-static void aim_start(vaim *a, const double J[2][2], int fresh, const dd (*q)[2], int nl)
+/* Every lane starts from Jacobian J and its own Q in q. */
+static void aim_start(vaim *a, const double J[2][2], int fresh, const vdd q[2])
 {
-    int i, j, k;
+    int i, j;
     for (i = 0; i < 2; i++)
         for (j = 0; j < 2; j++)
             a->J[i][j] = vd_set(J[i][j]);
@@ -334,11 +322,8 @@ static void aim_start(vaim *a, const double J[2][2], int fresh, const dd (*q)[2]
     a->dx = a->dy = vd_set(0.0);
     a->stepped = vm_set(0);
     a->fresh = vm_set(fresh ? -1 : 0);
-    for (k = 0; k < SG_VL; k++)
-        for (i = 0; i < 2; i++) {
-            a->q[i].hi[k] = q[k < nl ? k : 0][i].hi;
-            a->q[i].lo[k] = q[k < nl ? k : 0][i].lo;
-        }
+    a->q[0] = q[0];
+    a->q[1] = q[1];
 }
 
 /* A Jacobian of lane k's own, taken at its current Q. */
@@ -425,6 +410,7 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
 {
     double tol = t->o.aim_rtol * fmax(t->ln.stop_r.hi, 1e-300), J[2][2], noise;
     vdd tg[2] = {vdd_set(target[0]), vdd_set(target[1])}, res[2];
+    vdd qv[2] = {vdd_set(q[0]), vdd_set(q[1])};
     vm one = vm_set(0), done, stalled;
     vd nr;
     dd at[2];
@@ -434,9 +420,9 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
     if (J0 == NULL) {
         if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
             return SG_EAIM;
-        aim_start(&a, (const double(*)[2])J, 1, (const dd(*)[2])q, 1);
+        aim_start(&a, (const double(*)[2])J, 1, qv);
     } else {
-        aim_start(&a, J0, 0, (const dd(*)[2])q, 1);
+        aim_start(&a, J0, 0, qv);
     }
     for (it = 0; it < t->o.aim_max_iter; it++) {
         q_lane(a.q, 0, q);
@@ -668,72 +654,56 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
  * the single-ray result bit for bit.
  * ------------------------------------------------------------------------ */
 
-/* aim_newton from the field's Jacobian for nl lanes at once.  done[k] is
- * set for lanes that converged as the single-ray iteration would, at[k]
- * is the state their last landing left on the stop (not bent), and rows
- * 1..stop of out[k] are that landing's.  A lane that would need a
- * Jacobian of its own, or whose landing fails, is left with done[k] = 0
- * for the one-ray launch. */
-static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const vdd tg[2], int nl,
-                           sg_ray_surface *const *out, int *done, sg_pray *at, sg_pray *launch,
-                           double *launch_path)
+/* aim_newton from the field's Jacobian for nl lanes at once, on Q in qv.
+ * done[k] is set for lanes that converged as the single-ray iteration
+ * would; lane k of at is then the state their last landing left on the
+ * stop (not bent), of launch and launch_path the state and path it was
+ * launched with, and rows 1..stop of out[k] are that landing's.  A lane
+ * that would need a Jacobian of its own, or whose landing fails, is left
+ * with done[k] = 0 for the one-ray launch.  qv ends with the final Q. */
+static void aim_newton_vec(sg_tracer *t, const osp *o, vdd qv[2], const vdd tg[2], int nl,
+                           sg_ray_surface *const *out, int *done, sg_vray *at, sg_vray *launch,
+                           vd *launch_path)
 {
     double tol = t->o.aim_rtol * fmax(t->ln.stop_r.hi, 1e-300);
     vaim a;
     vm live = vm_set(0), fin = vm_set(0);
-    int act[SG_VL], one[SG_VL], rc[SG_VL], na, k, it;
-    aim_start(&a, (const double(*)[2])t->aimJ, 0, (const dd(*)[2])q, nl);
-    for (k = 0; k < SG_VL; k++) {
-        one[k] = 1;
-        if (k < nl)
-            live[k] = -1;
-    }
+    int start[SG_VL], rc[SG_VL], k, it;
+    aim_start(&a, (const double(*)[2])t->aimJ, 0, qv);
+    for (k = 0; k < nl; k++)
+        live[k] = -1;
     for (it = 0; it < t->o.aim_max_iter && vm_any(live); it++) {
-        dd qa[SG_VL][2];
-        sg_pray st[SG_VL], st0[SG_VL];
-        double p0[SG_VL];
-        sg_ray_surface *sc[SG_VL];
-        vdd at0 = a.q[0], at1 = a.q[1], res[2];
-        vd noise = a.noise, nr;
+        sg_vray v, v0;
+        vd p0, nr;
+        vdd res[2];
         vm landed = vm_set(0), ok, stalled;
         /* Only lanes still iterating are traced, each into its own output
          * rows, so that its last landing can start the final trace. */
-        for (na = 0, k = 0; k < nl; k++)
-            if (live[k]) {
-                q_lane(a.q, k, qa[na]);
-                sc[na] = out[k];
-                act[na++] = k;
-            }
-        pray_from_vec(o, (const dd(*)[2])qa, na, st, p0);
-        memcpy(st0, st, (size_t)na * sizeof st[0]);
-        sg_precise_vec(t, st, st, p0, sc, na, one, t->sys->stop, rc);
-        for (k = 0; k < na; k++) {
-            int l = act[k];
-            if (rc[k] != SG_OK)
-                continue;
-            /* In lanes that stop here, at[] belongs to the final Q, and
-             * so do the launched state and path. */
-            at[l] = st[k];
-            launch[l] = st0[k];
-            launch_path[l] = p0[k];
-            at0.hi[l] = st[k].p.x.hi;
-            at0.lo[l] = st[k].p.x.lo;
-            at1.hi[l] = st[k].p.y.hi;
-            at1.lo[l] = st[k].p.y.lo;
-            noise[l] = st[k].eP;
-            landed[l] = -1;
-        }
+        pray_from_v(o, a.q, &v, &p0);
+        v0 = v;
+        for (k = 0; k < nl; k++)
+            start[k] = live[k] ? 1 : t->n;
+        sg_precise_block(t, &v, p0, out, nl, start, t->sys->stop, rc);
+        for (k = 0; k < nl; k++)
+            if (live[k] && rc[k] == SG_OK)
+                landed[k] = -1;
+        /* In lanes that stop here, at belongs to the final Q, and so do
+         * the launched state and path. */
+        sg_vray_sel(landed, &v, at);
+        sg_vray_sel(landed, &v0, launch);
+        *launch_path = vsel(landed, p0, *launch_path);
         /* A landing that fails, stalls or leaves the doubles is the
          * one-ray launch's to handle. */
-        aim_judge(&a, landed, at0, at1, noise, tg, tol, res, &nr, &ok, &stalled);
+        aim_judge(&a, landed, v.p.x, v.p.y, v.eP, tg, tol, res, &nr, &ok, &stalled);
         fin |= ok;
         live &= landed & ~ok & ~stalled;
         /* A step in no lane changes nothing. */
         if (vm_any(live))
             live &= ~aim_step(&a, live, res, nr);
     }
+    qv[0] = a.q[0];
+    qv[1] = a.q[1];
     for (k = 0; k < nl; k++) {
-        q_lane(a.q, k, q[k]);
         done[k] = fin[k] ? 1 : 0;
         /* Out of iterations within tolerance: Q moved after its last
          * landing, so that landing cannot start the final trace. */
@@ -742,15 +712,15 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, dd (*q)[2], const vdd tg[
     }
 }
 
-/* Whether a lane's final trace may go on from its last landing, which
- * left the ray on the stop: the landing ran with clipping off, so the
- * apertures before the stop are checked here (the stop's own when it is
- * bent), and a bound that overflowed is left to the full trace, which
- * meets the overflow in the same order as a ray traced alone. */
-static int resumable(const sg_tracer *t, const sg_ray_surface *rows, const sg_pray *at)
+/* Whether lane k's final trace may go on from its last landing, which left
+ * the ray on the stop: the landing ran with clipping off, so the apertures
+ * before the stop are checked here (the stop's own when it is bent), and a
+ * bound that overflowed is left to the full trace, which meets the
+ * overflow in the same order as a ray traced alone. */
+static int resumable(const sg_tracer *t, const sg_ray_surface *rows, const sg_vray *at, int k)
 {
     int i;
-    if (t->sys->stop >= t->n - 1 || !isfinite(at->eP) || !isfinite(at->eD))
+    if (t->sys->stop >= t->n - 1 || !isfinite(at->eP[k]) || !isfinite(at->eD[k]))
         return 0;
     for (i = 1; i < t->sys->stop; i++)
         if (sg_past_clip(t, &t->sp[i], rows[i].x, rows[i].y))
@@ -758,23 +728,24 @@ static int resumable(const sg_tracer *t, const sg_ray_surface *rows, const sg_pr
     return 1;
 }
 
-int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pupil)[2], int nl,
-                          sg_ray_surface *const *out, sg_pray *r, double *path0, int *start,
-                          int *rc)
+void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*pupil)[2],
+                             int nl, sg_ray_surface *const *out, sg_vray *v, vd *path0,
+                             int *start, int *rc)
 {
-    dd q[SG_VL][2];
-    vd px = vd_set(0.0), py = vd_set(0.0);
+    vd px = vd_set(0.0), py = vd_set(0.0), p0 = vd_set(0.0);
     vdd qv[2], tg[2];
-    sg_pray at[SG_VL], ra[SG_VL];
-    sg_ray_surface *oa[SG_VL];
-    int done[SG_VL], k, clip, aimed = 0, all, na = 0, la[SG_VL], rca[SG_VL];
+    sg_vray at, launch;
+    vm resume = vm_set(0);
+    int done[SG_VL], k, clip, aimed = 0, all;
     osp o;
+    for (k = 0; k < nl; k++)
+        start[k] = t->n;
     if (field_cached(t, land_precise, hx, hy, &o, out[0]) != SG_OK) {
         for (k = 0; k < nl; k++) {
             sg_fail_rest(out[k], 0, t->n, SG_EAIM);
             rc[k] = SG_EAIM;
         }
-        return nl;
+        return;
     }
     for (k = 0; k < SG_VL; k++) {
         px[k] = pupil[k < nl ? k : 0][0];
@@ -788,10 +759,8 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
         tg[1] = vdd_mul_d(vdd_set(t->ln.stop_r), py);
         q_aim_start_v(t, &o, px, py, tg, qv);
     }
-    for (k = 0; k < nl; k++) {
-        q_lane(qv, k, q[k]);
+    for (k = 0; k < nl; k++)
         done[k] = t->sys->aim == SG_AIM_OFF;
-    }
     if (t->sys->aim != SG_AIM_OFF) {
         /* Apertures do not bend rays, so the iteration ignores them; the
          * final trace applies them. */
@@ -803,7 +772,10 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
             t->have_aimJ = fd_jacobian(t, land_precise, &o, qc, t->aimJ, t->scratch) == SG_OK;
         }
         if (t->have_aimJ) {
-            aim_newton_vec(t, &o, q, tg, nl, out, done, at, r, path0);
+            /* Lanes that never land take neither. */
+            memset(&at, 0, sizeof at);
+            launch = at;
+            aim_newton_vec(t, &o, qv, tg, nl, out, done, &at, &launch, &p0);
             aimed = 1;
         }
         t->o.clip = clip;
@@ -813,33 +785,38 @@ int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pup
     for (k = 0, all = aimed; k < nl; k++)
         all = all && done[k] == 1;
     if (!all)
-        pray_from_vec(&o, (const dd(*)[2])q, nl, r, path0);
+        pray_from_v(&o, qv, &launch, &p0);
     for (k = 0; k < nl; k++) {
-        start[k] = 1;
         if (done[k]) {
-            object_row(t, &o, &r[k], &out[k][0]);
+            sg_pray r;
+            sg_vray_get(&launch, k, &r);
+            object_row(t, &o, &r, &out[k][0]);
             rc[k] = SG_OK;
-            if (aimed && done[k] == 1 && resumable(t, out[k], &at[k])) {
-                /* The last landing traced this very ray onto the stop,
-                 * into rows 1 .. stop. */
-                ra[na] = at[k];
-                oa[na] = out[k];
-                la[na++] = k;
-            }
+            start[k] = 1;
+            /* The last landing traced this very ray onto the stop, into
+             * rows 1 .. stop. */
+            if (aimed && done[k] == 1 && resumable(t, out[k], &at, k))
+                resume[k] = -1;
         } else {
-            rc[k] = sg_launch_precise_prep(t, hx, hy, pupil[k][0], pupil[k][1], out[k], &r[k],
-                                           &path0[k]);
+            sg_pray r;
+            double pk;
+            rc[k] = sg_launch_precise_prep(t, hx, hy, pupil[k][0], pupil[k][1], out[k], &r, &pk);
+            if (rc[k] == SG_OK) {
+                sg_vray_put(&launch, k, &r);
+                p0[k] = pk;
+                start[k] = 1;
+            }
         }
     }
-    if (na > 0) {
-        sg_precise_finish(t, t->sys->stop, ra, oa, na, rca);
-        for (k = 0; k < na; k++) {
-            r[la[k]] = ra[k];
-            rc[la[k]] = rca[k];
-            start[la[k]] = t->sys->stop + 1;
-        }
+    *v = launch;
+    *path0 = p0;
+    if (vm_any(resume)) {
+        sg_vray_sel(resume, &at, v);
+        sg_precise_finish(t, t->sys->stop, v, out, resume, rc);
+        for (k = 0; k < nl; k++)
+            if (resume[k])
+                start[k] = rc[k] == SG_OK ? t->sys->stop + 1 : t->n;
     }
-    return nl;
 }
 
 /* Launch constants from a 128-bit paraxial trace. */

@@ -102,6 +102,63 @@ typedef struct sg_pray {
     double eP, eD;
 } sg_pray;
 
+/* The state of SG_VL precise rays between surfaces, lane by lane: what
+ * sg_pray holds for one ray. */
+typedef struct sg_vray {
+    vdd3 p, d;
+    vd eP, eD;
+} sg_vray;
+
+/* Lane k of v to and from one ray's state. */
+static inline void sg_vray_get(const sg_vray *v, int k, sg_pray *r)
+{
+    r->p.x.hi = v->p.x.hi[k];
+    r->p.x.lo = v->p.x.lo[k];
+    r->p.y.hi = v->p.y.hi[k];
+    r->p.y.lo = v->p.y.lo[k];
+    r->p.z.hi = v->p.z.hi[k];
+    r->p.z.lo = v->p.z.lo[k];
+    r->d.x.hi = v->d.x.hi[k];
+    r->d.x.lo = v->d.x.lo[k];
+    r->d.y.hi = v->d.y.hi[k];
+    r->d.y.lo = v->d.y.lo[k];
+    r->d.z.hi = v->d.z.hi[k];
+    r->d.z.lo = v->d.z.lo[k];
+    r->eP = v->eP[k];
+    r->eD = v->eD[k];
+}
+
+static inline void sg_vray_put(sg_vray *v, int k, const sg_pray *r)
+{
+    v->p.x.hi[k] = r->p.x.hi;
+    v->p.x.lo[k] = r->p.x.lo;
+    v->p.y.hi[k] = r->p.y.hi;
+    v->p.y.lo[k] = r->p.y.lo;
+    v->p.z.hi[k] = r->p.z.hi;
+    v->p.z.lo[k] = r->p.z.lo;
+    v->d.x.hi[k] = r->d.x.hi;
+    v->d.x.lo[k] = r->d.x.lo;
+    v->d.y.hi[k] = r->d.y.hi;
+    v->d.y.lo[k] = r->d.y.lo;
+    v->d.z.hi[k] = r->d.z.hi;
+    v->d.z.lo[k] = r->d.z.lo;
+    v->eP[k] = r->eP;
+    v->eD[k] = r->eD;
+}
+
+/* b takes a's state in the lanes of m. */
+static inline void sg_vray_sel(vm m, const sg_vray *a, sg_vray *b)
+{
+    b->p.x = vdd_sel(m, a->p.x, b->p.x);
+    b->p.y = vdd_sel(m, a->p.y, b->p.y);
+    b->p.z = vdd_sel(m, a->p.z, b->p.z);
+    b->d.x = vdd_sel(m, a->d.x, b->d.x);
+    b->d.y = vdd_sel(m, a->d.y, b->d.y);
+    b->d.z = vdd_sel(m, a->d.z, b->d.z);
+    b->eP = vsel(m, a->eP, b->eP);
+    b->eD = vsel(m, a->eD, b->eD);
+}
+
 /* Traces surfaces 1..upto from a ray on or before surface 1 (frame 1).
  * path0 is the path already travelled before the start point.
  * Fills out[1..upto]; returns the ray status.  The state r is left on
@@ -120,12 +177,20 @@ int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_sur
  * its call. */
 void sg_precise_vec(const sg_tracer *t, const sg_pray *r, sg_pray *end, const double *path0,
                     sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc);
-/* Completes surface i < n - 1 for rays a trace to upto = i left on it, with
- * finite bounds: its aperture, the bend and the direction columns of
- * out[k][i], exactly as a trace through i would; r[k] is then ready for
- * surface i + 1. */
-void sg_precise_finish(const sg_tracer *t, int i, sg_pray *r, sg_ray_surface *const *out,
-                       int nl, int *rc);
+/* sg_precise_vec on the vector state itself: lane k < nl with start[k]
+ * <= upto starts at surface start[k] from lane k of v and path0, fills
+ * out[k], gets rc[k] and leaves its final state (its state where it
+ * stopped, for a ray that failed) in lane k of v.  Other lanes are not
+ * traced, not written and keep their state and rc. */
+void sg_precise_block(const sg_tracer *t, sg_vray *v, vd path0, sg_ray_surface *const *out,
+                      int nl, const int *start, int upto, int *rc);
+/* Completes surface i < n - 1 for the lanes of m, which a trace to upto =
+ * i left on it with finite bounds: its aperture, the bend and the
+ * direction columns of out[k][i], exactly as a trace through i would; a
+ * lane is then ready for surface i + 1, or gets its failure in rc[k] and
+ * its rows from sg_fail_rest.  Other lanes keep their state and rc. */
+void sg_precise_finish(const sg_tracer *t, int i, sg_vray *v, sg_ray_surface *const *out,
+                       vm m, int *rc);
 /* The sag of s at radius^2 r2 on SG_VL lanes, in double-double as the
  * precise trace forms it; *bad marks lanes outside the conic's domain. */
 vdd sg_sag_v(const sg_sprep *s, vdd r2, vm *bad);
@@ -184,15 +249,16 @@ int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
 int sg_launch_precise_prep(sg_tracer *t, double hx, double hy, double px, double py,
                            sg_ray_surface *out, sg_pray *r, double *path0);
 /* sg_launch_precise_prep for nl <= SG_VL pupil points of field (hx, hy),
- * aimed together; the aiming traces write rows 1..stop of out[k].  rc[k]
- * is each ray's status; every lane equals the single-ray launch bit for
- * bit.  A lane whose last aiming trace already reached the stop goes on
- * from there: rows 1..stop filled, r[k] bent at the stop and start[k] =
- * stop + 1 (or rc[k] the failure at the stop); others start[k] = 1, and
- * their trace writes every row again.  Returns nl. */
-int sg_launch_precise_vec(sg_tracer *t, double hx, double hy, const double (*pupil)[2], int nl,
-                          sg_ray_surface *const *out, sg_pray *r, double *path0, int *start,
-                          int *rc);
+ * aimed together, into the vector state v and path0 that sg_precise_block
+ * goes on from; the aiming traces write rows 1..stop of out[k].  Every lane
+ * equals the single-ray launch bit for bit.  A lane whose last aiming trace
+ * already reached the stop goes on from there: rows 1..stop filled, bent
+ * at the stop and start[k] = stop + 1; others start[k] = 1, and their trace
+ * writes every row again.  A lane that failed gets rc[k] and start[k] =
+ * n, past any surface; the others rc[k] = SG_OK. */
+void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*pupil)[2],
+                             int nl, sg_ray_surface *const *out, sg_vray *v, vd *path0,
+                             int *start, int *rc);
 int sg_start_precise_prep(const sg_tracer *t, const double start[3], const double dir[3],
                           sg_ray_surface *out, sg_pray *r);
 int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,

@@ -22,46 +22,7 @@
 #include "trace_internal.h"
 #include "vdd.h"
 
-typedef struct vray {
-    vdd3 p, d;
-    vd eP, eD;
-} vray;
-
-static void lane_get(const vray *v, int k, sg_pray *r)
-{
-    r->p.x.hi = v->p.x.hi[k];
-    r->p.x.lo = v->p.x.lo[k];
-    r->p.y.hi = v->p.y.hi[k];
-    r->p.y.lo = v->p.y.lo[k];
-    r->p.z.hi = v->p.z.hi[k];
-    r->p.z.lo = v->p.z.lo[k];
-    r->d.x.hi = v->d.x.hi[k];
-    r->d.x.lo = v->d.x.lo[k];
-    r->d.y.hi = v->d.y.hi[k];
-    r->d.y.lo = v->d.y.lo[k];
-    r->d.z.hi = v->d.z.hi[k];
-    r->d.z.lo = v->d.z.lo[k];
-    r->eP = v->eP[k];
-    r->eD = v->eD[k];
-}
-
-static void lane_put(vray *v, int k, const sg_pray *r)
-{
-    v->p.x.hi[k] = r->p.x.hi;
-    v->p.x.lo[k] = r->p.x.lo;
-    v->p.y.hi[k] = r->p.y.hi;
-    v->p.y.lo[k] = r->p.y.lo;
-    v->p.z.hi[k] = r->p.z.hi;
-    v->p.z.lo[k] = r->p.z.lo;
-    v->d.x.hi[k] = r->d.x.hi;
-    v->d.x.lo[k] = r->d.x.lo;
-    v->d.y.hi[k] = r->d.y.hi;
-    v->d.y.lo[k] = r->d.y.lo;
-    v->d.z.hi[k] = r->d.z.hi;
-    v->d.z.lo[k] = r->d.z.lo;
-    v->eP[k] = r->eP;
-    v->eD[k] = r->eD;
-}
+typedef sg_vray vray;
 
 /* ------------------------------------------------------------------------
  * Surface functions in double-double, and the double estimates that start
@@ -725,41 +686,21 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
     return leave_v(s, i, i < upto, r, out, &row, live, bad, st) & live;
 }
 
-static void vray_sel(vm m, const vray *a, vray *b)
+void sg_precise_block(const sg_tracer *t, vray *v, vd p0, sg_ray_surface *const *out, int nl,
+                      const int *start, int upto, int *rc)
 {
-    b->p.x = vdd_sel(m, a->p.x, b->p.x);
-    b->p.y = vdd_sel(m, a->p.y, b->p.y);
-    b->p.z = vdd_sel(m, a->p.z, b->p.z);
-    b->d.x = vdd_sel(m, a->d.x, b->d.x);
-    b->d.y = vdd_sel(m, a->d.y, b->d.y);
-    b->d.z = vdd_sel(m, a->d.z, b->d.z);
-    b->eP = vsel(m, a->eP, b->eP);
-    b->eD = vsel(m, a->eD, b->eD);
-}
-
-void sg_precise_vec(const sg_tracer *t, const sg_pray *r, sg_pray *end, const double *path0,
-                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc)
-{
-    vray v, snap;
-    vd p0;
-    vm live = vm_set(0), pending = vm_set(0);
+    vray snap, stopped;
+    vm live = vm_set(0), pending = vm_set(0), dead = vm_set(0);
     int i, k, first = upto + 1, st[SG_VL], wait;
-    sg_ray_surface *o[SG_VL];
 
-    /* Idle lanes repeat lane 0 and are never written. */
-    for (k = 0; k < SG_VL; k++) {
-        int src = k < nl ? k : 0;
-        lane_put(&v, k, &r[src]);
-        p0[k] = path0[src];
-        o[k] = out[src];
-        if (k < nl) {
+    for (k = 0; k < nl; k++)
+        if (start[k] <= upto) {
             pending[k] = -1;
             rc[k] = SG_OK;
             if (start[k] < first)
                 first = start[k];
         }
-    }
-    snap = v;
+    snap = stopped = *v;
     for (i = first; i <= upto && vm_any(live | pending); i++) {
         vm bad;
         for (k = 0; k < nl; k++)
@@ -769,49 +710,65 @@ void sg_precise_vec(const sg_tracer *t, const sg_pray *r, sg_pray *end, const do
             }
         wait = vm_any(pending);
         if (wait)
-            snap = v;
-        bad = surface_v(t, i, upto, &v, p0, o, live, st);
+            snap = *v;
+        bad = surface_v(t, i, upto, v, p0, out, live, st);
         /* Lanes that start further on keep their state. */
         if (wait)
-            vray_sel(pending, &snap, &v);
-        for (k = 0; k < nl; k++)
-            if (bad[k]) {
-                sg_fail_rest(o[k], i, t->n, st[k]);
-                rc[k] = st[k];
-                if (end)
-                    lane_get(&v, k, &end[k]);
-            }
+            sg_vray_sel(pending, &snap, v);
+        if (vm_any(bad)) {
+            /* A ray that stops keeps the state it stopped in. */
+            sg_vray_sel(bad, v, &stopped);
+            dead |= bad;
+            for (k = 0; k < nl; k++)
+                if (bad[k]) {
+                    sg_fail_rest(out[k], i, t->n, st[k]);
+                    rc[k] = st[k];
+                }
+        }
         live &= ~bad;
     }
-    for (k = 0; end && k < nl; k++)
-        if (rc[k] == SG_OK)
-            lane_get(&v, k, &end[k]);
+    if (vm_any(dead))
+        sg_vray_sel(dead, &stopped, v);
 }
 
-void sg_precise_finish(const sg_tracer *t, int i, sg_pray *r, sg_ray_surface *const *out,
-                       int nl, int *rc)
+void sg_precise_vec(const sg_tracer *t, const sg_pray *r, sg_pray *end, const double *path0,
+                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc)
 {
     vray v;
-    vd x, y;
-    vm live = vm_set(0), bad;
-    int k, st[SG_VL];
+    vd p0;
+    int k;
+    sg_ray_surface *o[SG_VL];
+
+    /* Idle lanes repeat lane 0 and are never written. */
     for (k = 0; k < SG_VL; k++) {
         int src = k < nl ? k : 0;
-        lane_put(&v, k, &r[src]);
-        x[k] = out[src][i].x;
-        y[k] = out[src][i].y;
-        if (k < nl)
-            live[k] = -1;
+        sg_vray_put(&v, k, &r[src]);
+        p0[k] = path0[src];
+        o[k] = out[src];
     }
+    sg_precise_block(t, &v, p0, o, nl, start, upto, rc);
+    for (k = 0; end && k < nl; k++)
+        sg_vray_get(&v, k, &end[k]);
+}
+
+void sg_precise_finish(const sg_tracer *t, int i, vray *v, sg_ray_surface *const *out, vm m,
+                       int *rc)
+{
+    vray w = *v;
+    vd x = w.p.x.hi, y = w.p.y.hi;
+    vm bad;
+    int k, st[SG_VL];
     /* As surface_v goes on after the intersection. */
-    bad = clip_v(t, &t->sp[i], x, y, live, vm_set(0), st);
-    bad = leave_v(&t->sp[i], i, 1, &v, out, NULL, live, bad, st);
-    for (k = 0; k < nl; k++) {
-        rc[k] = bad[k] ? st[k] : SG_OK;
-        if (bad[k])
-            sg_fail_rest(out[k], i, t->n, st[k]);
-        lane_get(&v, k, &r[k]);
-    }
+    bad = clip_v(t, &t->sp[i], x, y, m, vm_set(0), st);
+    bad = leave_v(&t->sp[i], i, 1, &w, out, NULL, m, bad, st);
+    /* The state of a lane outside m is not this surface's to bend. */
+    sg_vray_sel(m, &w, v);
+    for (k = 0; k < SG_VL; k++)
+        if (m[k]) {
+            rc[k] = bad[k] ? st[k] : SG_OK;
+            if (bad[k])
+                sg_fail_rest(out[k], i, t->n, st[k]);
+        }
 }
 
 int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
