@@ -16,7 +16,6 @@
 #include "trace_internal.h"
 #include "vdd.h"
 
-
 typedef struct job {
     sg_tracer *t;
     sg_ray_kind kind;
