@@ -90,22 +90,18 @@ vdd sg_sag_v(const sg_sprep *s, vdd r2, vm *bad)
     return sag_v(s, r2, bad);
 }
 
-static vd resid_v(const sg_sprep *s, vd x, vd y, vd z)
+/* |Z - sag(X, Y)| of the reported point, P = hi + lo rounded to hi.  P
+ * lies on the surface within the root's bound, far below that rounding,
+ * so the residual is what the rounding moved the point off the surface:
+ * to first order w (x lo_x + y lo_y) - lo_z, with w = sag'(r) / r, and the
+ * rest is of the order of DD_U times the point. */
+static vd resid_v(const sg_sprep *s, vdd3 p)
 {
-    vdd r2, sag;
-    vm bad;
+    vd x = p.x.hi, y = p.y.hi, w, dw;
     if (s->shape == SHAPE_PLANE)
-        return vd_abs(z);
-    r2 = vdd_add_m(vdd_two_prod(x, x), vdd_two_prod(y, y));
-    if (s->shape == SHAPE_CONIC) {
-        vdd G = vdd_add_m(r2, k1_mul(s, vdd_two_prod(z, z)));
-        vd gz = 2.0 * (s->k1.hi * z - s->R);
-        G = vdd_sub_m(G, vdd_two_prod(z, vd_set(2.0 * s->R)));
-        return vsel((vm)(gz != 0.0), vd_abs((G.hi + G.lo) / gz), vd_set(NAN));
-    }
-    sag = sag_v(s, r2, &bad);
-    sag = vdd_sub(vdd_from(z), sag);
-    return vsel(bad, vd_set(NAN), vd_abs(sag.hi + sag.lo));
+        return vd_abs(p.z.hi);
+    slope_v(s, x * x + y * y, &w, &dw);
+    return vd_abs(w * (x * p.x.lo + y * p.y.lo) - p.z.lo);
 }
 
 /* The eq. 27 root from the tangent plane; *miss marks lanes it misses. */
@@ -680,7 +676,7 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
     row.x = pd[0];
     row.y = pd[1];
     row.z = pd[2];
-    row.residual = resid_v(s, pd[0], pd[1], pd[2]);
+    row.residual = resid_v(s, r->p);
     row.bound = bound_v(r->eP, pd[0], pd[1], pd[2]);
     bad = clip_v(t, s, pd[0], pd[1], live, bad, st);
     return leave_v(s, i, i < upto, r, out, &row, live, bad, st) & live;
