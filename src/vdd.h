@@ -263,7 +263,7 @@ static inline vdd vdd_sqr(vdd a)
 /* 1 / b: the double reciprocal y and one Newton step y + y e, e = 1 - b y,
  * whose part 1 - b.hi y the FMA forms exactly.  With |e| below 2u
  * (u = 2^-53) the step leaves e^2 <= 4u^2 and its three roundings at most
- * 5u^2 more: 9u^2 relative, below vdd_div's 15u^2, in one quotient
+ * 5u^2 more: 9u^2 relative, below dd_div's 15u^2, in one quotient
  * instead of three. */
 static inline vdd vdd_recip(vdd b)
 {
@@ -272,11 +272,11 @@ static inline vdd vdd_recip(vdd b)
     return vdd_fast_two_sum(y, y * e);
 }
 
-/* a / b from r = 1 / b rounded: the quotient q = a.hi r and the
- * remainder a - q b, formed exactly as far as it cancels, divided by the
- * same product.  With q within 2u of a.hi / b, the remainder's roundings
+/* a / b from r = 1 / b rounded: the quotient q = a.hi r, and the
+ * remainder a - q b, formed exactly as far as it cancels, times r as its
+ * correction.  With q within 2u of a.hi / b, the remainder's roundings
  * stay below 7u^2 |a| and the correction's below 8u^2 |a / b|: 15u^2
- * relative, as vdd_div would take, without a quotient on the path from a
+ * relative, as dd_div would take, without a quotient on the path from a
  * when r is formed beforehand. */
 static inline vdd vdd_div_dr(vdd a, vd b, vd r)
 {
