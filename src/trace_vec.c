@@ -185,28 +185,23 @@ static void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
     }
 }
 
-static vd surf_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag)
+/* F' along the ray at the double point p, the magnitude of its terms in
+ * *mag, and in *fpp a bound on F''; an asphere's slope serves both. */
+static vd surf_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd *fpp)
 {
     if (s->shape == SHAPE_CONIC) {
         vd a = p[0] * d[0], b = p[1] * d[1], c = s->k1.hi * p[2] * d[2], e = s->R * d[2];
         *mag = 2.0 * (vd_abs(a) + vd_abs(b) + vd_abs(c) + vd_abs(e));
+        *fpp = vd_set(2.0 * (1.0 + fabs(s->k1.hi)));
         return 2.0 * (a + b + c - e);
     }
     {
         vd w, dw, a = p[0] * d[0], b = p[1] * d[1];
         slope_v(s, p[0] * p[0] + p[1] * p[1], &w, &dw);
         *mag = vd_abs(d[2]) + vd_abs(w) * (vd_abs(a) + vd_abs(b)) * 2.0;
+        *fpp = vd_abs(w) + 2.0 * dw + 1e-300;
         return d[2] - w * (a + b);
     }
-}
-
-static vd surf_Fpp_v(const sg_sprep *s, vd r2)
-{
-    vd w, dw;
-    if (s->shape == SHAPE_CONIC)
-        return vd_set(2.0 * (1.0 + fabs(s->k1.hi)));
-    slope_v(s, r2, &w, &dw);
-    return vd_abs(w) + 2.0 * dw + 1e-300;
 }
 
 /* 1 / cos of the angle between the ray and the normal, which scales the
@@ -626,8 +621,7 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
             fbad = vm_set(0);
         } else {
             surf_F_v(s, p, &F, &ferr, &fbad);
-            Fp = surf_Fp_v(s, pd, ds, &Fmag);
-            Fpp = surf_Fpp_v(s, pd[0] * pd[0] + pd[1] * pd[1]);
+            Fp = surf_Fp_v(s, pd, ds, &Fmag, &Fpp);
         }
         /* 1 / Fp is formed from the double point while F is still being
          * summed in double-double, and the step takes products with it;
