@@ -36,6 +36,7 @@ static void run_one_by_one(job *j)
         const double *v = j->rays[r].v;
         sg_ray_surface *o = j->out + r * (size_t)j->nsurf;
         int rc;
+        vd_leave();
         if (j->kind == SG_RAYS_NORMALIZED)
             rc = sg_trace_normalized(j->t, v[0], v[1], v[2], v[3], o);
         else

@@ -256,6 +256,7 @@ static int land_classic(sg_tracer *t, const osp *o, const dd q[2], dd at[2], dou
     double S[3], D[3];
     int rc, stop = t->sys->stop;
     classic_start(o, q, S, D);
+    vd_leave();
     rc = sg_classic_run_to(t, S, D, scratch, stop);
     at[0] = dd_from(scratch[stop].x);
     at[1] = dd_from(scratch[stop].y);
@@ -500,6 +501,7 @@ static int chief_on_image(sg_tracer *t, land_fn land, const dd v[2], osp *o, dou
     if (t->o.method == SG_METHOD_CLASSIC) {
         double S[3], D[3];
         classic_start(o, q, S, D);
+        vd_leave();
         rc = sg_classic_run_to(t, S, D, scratch, last);
     } else {
         sg_pray r;
@@ -643,6 +645,7 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
         sg_set_start_row(&out[0], S, u);
         out[0].z = S[2] + t->ln.T0.hi;
     }
+    vd_leave();
     return sg_classic_run_to(t, S, D, out, t->n - 1);
 }
 

@@ -5,6 +5,10 @@
 #ifndef SG_TRACE_INTERNAL_H
 #define SG_TRACE_INTERNAL_H
 
+/* First, so that an instruction-set variant renames the declarations of
+ * sagitta.h and of this file alike. */
+#include "isa.h"
+
 #include <mpfr.h>
 
 #include <float.h>

@@ -145,6 +145,18 @@ static inline vd vd_fms(vd a, vd b, vd c)
 #endif
 }
 
+/* Clears the upper halves of the vector registers before a long call into
+ * code built for the baseline instruction set (the classic trace in
+ * trace.c): its SSE instructions would otherwise run with false
+ * dependencies on those halves, at half speed or worse.  A no-op without
+ * AVX. */
+static inline void vd_leave(void)
+{
+#if defined(__AVX__)
+    _mm256_zeroupper();
+#endif
+}
+
 typedef struct vdd {
     vd hi, lo;
 } vdd;

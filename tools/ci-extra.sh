@@ -6,15 +6,19 @@
 #     suite run with leak detection on and every UBSan finding fatal;
 #  2. the command-line paths (trace on every example with every method and
 #     format, paraxial, a ray list on two threads, and the error paths) run
-#     under valgrind memcheck, which must find no error and no definite leak.
+#     under valgrind memcheck, which must find no error and no definite leak;
+#  3. in that -Dnative=false build, which carries the vector trace for three
+#     instruction sets (src/isa.h), tests/test_isa: the variants this
+#     processor can run give the baseline's bits.
 #
 # Usage: tools/ci-extra.sh [--asan-dir DIR] [--plain-dir DIR] [--jobs N]
 #                          [--skip-asan] [--skip-valgrind] [--meson-test]
 #
 # --asan-dir     sanitizer build (default build-asan in the source tree)
 # --plain-dir    unsanitized build whose sagitta valgrind runs (default
-#                build-valgrind, configured -Dnative=false -Dtests=false so
-#                that valgrind meets no instruction it cannot decode)
+#                build-valgrind, configured -Dnative=false, whose run-time
+#                choice of instruction set follows what valgrind reports, so
+#                that it meets no instruction it cannot decode)
 # --jobs         ninja -j (default 2)
 # --meson-test   as a meson test (suite 'extra'): skipped (77) unless
 #                SAGITTA_CI_EXTRA=1, because it takes many minutes
@@ -45,7 +49,7 @@ while [ $# -gt 0 ]; do
             exit 77
         fi
         shift ;;
-    -h|--help) sed -n '2,27p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,29p' "$0"; exit 0 ;;
     *) echo "ci-extra: unknown argument $1" >&2; exit 2 ;;
     esac
 done
@@ -125,7 +129,7 @@ fi
 if [ "$do_valgrind" = 1 ]; then
     if ! command -v valgrind >/dev/null 2>&1; then
         note "valgrind: not installed; skipped"
-    elif ! { [ -f "$plain_dir/build.ninja" ] || setup "$plain_dir" -Dnative=false -Dtests=false; } ||
+    elif ! { [ -f "$plain_dir/build.ninja" ] || setup "$plain_dir" -Dnative=false; } ||
          ! ninja -C "$plain_dir" -j "$jobs" ui/sagitta > "$plain_dir/ci-extra-build.log" 2>&1; then
         note "valgrind: building $plain_dir/ui/sagitta failed"
         failed=1
@@ -209,6 +213,27 @@ if [ "$do_valgrind" = 1 ]; then
             note "valgrind memcheck: FAILED in $nbad of $nrun command lines:$bad (logs in $vlogs)"
             failed=1
         fi
+    fi
+fi
+
+# ------------------------------------------------------- instruction sets
+if [ "$do_valgrind" = 1 ]; then
+    if ! { [ -f "$plain_dir/build.ninja" ] || setup "$plain_dir" -Dnative=false; } ||
+         ! meson configure "$plain_dir" -Dtests=true >/dev/null 2>&1; then
+        note "instruction-set variants: meson setup of $plain_dir failed"
+        failed=1
+    elif ! meson introspect "$plain_dir" --targets 2>/dev/null | grep -q '"test_isa"'; then
+        note "instruction-set variants: this compiler or processor family builds one; skipped"
+    elif ! ninja -C "$plain_dir" -j "$jobs" tests/test_isa > "$plain_dir/ci-extra-isa.log" 2>&1; then
+        note "instruction-set variants: building tests/test_isa failed (see $plain_dir/ci-extra-isa.log)"
+        failed=1
+    elif ! SAGITTA_LENSDB="$root/lensdb" SAGITTA_EXAMPLES="$root/examples" \
+           "$plain_dir/tests/test_isa" >> "$plain_dir/ci-extra-isa.log" 2>&1; then
+        tail -n 20 "$plain_dir/ci-extra-isa.log"
+        note "instruction-set variants: FAILED (see $plain_dir/ci-extra-isa.log)"
+        failed=1
+    else
+        note "instruction-set variants: $(grep -c 'compared with the baseline' "$plain_dir/ci-extra-isa.log") of 2 compared, same bits as the baseline ($(grep -o '[0-9]* rows' "$plain_dir/ci-extra-isa.log"))"
     fi
 fi
 
