@@ -46,59 +46,52 @@ static void run_one_by_one(job *j)
     }
 }
 
-/* Runs the launched lanes through the vector trace and records statuses. */
-static void flush(job *j, sg_pray *st, double *path0, sg_ray_surface **o, const size_t *idx,
-                  const int *start, int nl)
-{
-    int rc[SG_VL], k;
-    if (nl == 0)
-        return;
-    /* The rays' final states are not needed. */
-    sg_precise_vec(j->t, st, NULL, path0, o, nl, start, j->t->n - 1, rc);
-    if (j->status)
-        for (k = 0; k < nl; k++)
-            j->status[idx[k]] = rc[k];
-}
-
 static int finite4(const double *v)
 {
     return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]) && isfinite(v[3]);
 }
 
-/* The precise method: up to SG_VL consecutive rays of one field are
- * launched (and aimed) together, then traced together. */
+/* The precise method: up to SG_VL consecutive rays (of one field, when
+ * normalized) are launched (and aimed) together, then traced together in
+ * vector form. */
 static void run_precise(job *j)
 {
     sg_tracer *t = j->t;
-    sg_pray st[SG_VL];
     sg_vray vs;
     vd p0;
-    double path0[SG_VL], pupil[SG_VL][2];
+    double pupil[SG_VL][2];
     sg_ray_surface *o[SG_VL];
     size_t idx[SG_VL], r = j->first, end = j->first + j->count;
-    int rc[SG_VL], start[SG_VL], one[SG_VL], nl, k;
-    for (k = 0; k < SG_VL; k++)
-        one[k] = 1;
+    int rc[SG_VL], start[SG_VL], nl, k;
     while (r < end) {
         const double *v = j->rays[r].v;
         nl = 0;
         if (j->kind == SG_RAYS_START_DIR) {
             for (; r < end && nl < SG_VL; r++) {
                 sg_ray_surface *out = j->out + r * (size_t)j->nsurf;
-                int prc = sg_start_precise_prep(t, j->rays[r].v, j->rays[r].v + 3, out, &st[nl]);
+                sg_pray pr;
+                int prc = sg_start_precise_prep(t, j->rays[r].v, j->rays[r].v + 3, out, &pr);
                 if (prc != SG_OK) {
                     if (j->status)
                         j->status[r] = prc;
                     continue;
                 }
-                path0[nl] = 0.0;
+                sg_vray_put(&vs, nl, &pr);
+                p0[nl] = 0.0;
+                start[nl] = 1;
                 o[nl] = out;
                 idx[nl++] = r;
             }
-            flush(j, st, path0, o, idx, one, nl);
-            continue;
-        }
-        if (!finite4(v)) {
+            if (nl == 0)
+                continue;
+            /* Idle lanes repeat lane 0, so they compute on real numbers. */
+            for (k = nl; k < SG_VL; k++) {
+                sg_pray pr;
+                sg_vray_get(&vs, 0, &pr);
+                sg_vray_put(&vs, k, &pr);
+                p0[k] = p0[0];
+            }
+        } else if (!finite4(v)) {
             /* The single-ray call reports a bad ray. */
             sg_ray_surface *out = j->out + r * (size_t)j->nsurf;
             int prc = sg_trace_normalized(t, v[0], v[1], v[2], v[3], out);
@@ -106,20 +99,20 @@ static void run_precise(job *j)
                 j->status[r] = prc;
             r++;
             continue;
-        }
-        /* A run of rays of the same field, launched and traced in vector
-         * form. */
-        while (r < end && nl < SG_VL && finite4(j->rays[r].v) && j->rays[r].v[0] == v[0] &&
-               j->rays[r].v[1] == v[1]) {
-            pupil[nl][0] = j->rays[r].v[2];
-            pupil[nl][1] = j->rays[r].v[3];
-            o[nl] = j->out + r * (size_t)j->nsurf;
-            idx[nl++] = r++;
+        } else {
+            /* A run of rays of the same field. */
+            while (r < end && nl < SG_VL && finite4(j->rays[r].v) &&
+                   j->rays[r].v[0] == v[0] && j->rays[r].v[1] == v[1]) {
+                pupil[nl][0] = j->rays[r].v[2];
+                pupil[nl][1] = j->rays[r].v[3];
+                o[nl] = j->out + r * (size_t)j->nsurf;
+                idx[nl++] = r++;
+            }
+            sg_launch_precise_block(t, v[0], v[1], (const double(*)[2])pupil, nl, o, &vs, &p0,
+                                    start, rc);
         }
         for (k = nl; k < SG_VL; k++)
             o[k] = o[0];
-        sg_launch_precise_block(t, v[0], v[1], (const double(*)[2])pupil, nl, o, &vs, &p0,
-                                start, rc);
         sg_precise_block(t, &vs, p0, o, nl, start, t->n - 1, rc);
         if (j->status)
             for (k = 0; k < nl; k++)

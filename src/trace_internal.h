@@ -173,19 +173,13 @@ int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surfa
  * and still in that surface's frame; from = 1 is sg_precise_run_to. */
 int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
                         int from, int upto);
-/* The precise trace itself, on nl <= SG_VL rays at once (in trace_vec.c):
- * lane k starts at surface start[k] from r[k] and path0[k] as
- * sg_precise_run_from takes them, fills out[k] and, when end is not NULL,
- * leaves its final state in end[k] (end may be r); rc[k] is its status.
- * The lanes do not interact: a ray gets the same bits whatever rays share
- * its call. */
-void sg_precise_vec(const sg_tracer *t, const sg_pray *r, sg_pray *end, const double *path0,
-                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc);
-/* sg_precise_vec on the vector state itself: lane k < nl with start[k]
- * <= upto starts at surface start[k] from lane k of v and path0, fills
- * out[k], gets rc[k] and leaves its final state (its state where it
- * stopped, for a ray that failed) in lane k of v.  Other lanes are not
- * traced, not written and keep their state and rc. */
+/* The precise trace itself, on nl <= SG_VL rays at once in vector form
+ * (in trace_vec.c): lane k < nl with start[k] <= upto starts at surface
+ * start[k] from lane k of v and path0, as sg_precise_run_from takes one
+ * ray, fills out[k], gets rc[k] and leaves its final state (its state
+ * where it stopped, for a ray that failed) in lane k of v.  Other lanes
+ * are not traced, not written and keep their state and rc.  The lanes do
+ * not interact: a ray gets the same bits whatever rays share its call. */
 void sg_precise_block(const sg_tracer *t, sg_vray *v, vd path0, sg_ray_surface *const *out,
                       int nl, const int *start, int upto, int *rc);
 /* Completes surface i < n - 1 for the lanes of m, which a trace to upto =

@@ -721,26 +721,6 @@ void sg_precise_block(const sg_tracer *t, vray *v, vd p0, sg_ray_surface *const 
         sg_vray_sel(dead, &stopped, v);
 }
 
-void sg_precise_vec(const sg_tracer *t, const sg_pray *r, sg_pray *end, const double *path0,
-                    sg_ray_surface *const *out, int nl, const int *start, int upto, int *rc)
-{
-    vray v;
-    vd p0;
-    int k;
-    sg_ray_surface *o[SG_VL];
-
-    /* Idle lanes repeat lane 0 and are never written. */
-    for (k = 0; k < SG_VL; k++) {
-        int src = k < nl ? k : 0;
-        sg_vray_put(&v, k, &r[src]);
-        p0[k] = path0[src];
-        o[k] = out[src];
-    }
-    sg_precise_block(t, &v, p0, o, nl, start, upto, rc);
-    for (k = 0; end && k < nl; k++)
-        sg_vray_get(&v, k, &end[k]);
-}
-
 void sg_precise_finish(const sg_tracer *t, int i, vray *v, sg_ray_surface *const *out, vm m,
                        int *rc)
 {
@@ -764,8 +744,16 @@ void sg_precise_finish(const sg_tracer *t, int i, vray *v, sg_ray_surface *const
 int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
                         int from, int upto)
 {
-    int rc;
-    sg_precise_vec(t, r, r, &path0, &out, 1, &from, upto, &rc);
+    vray v;
+    sg_ray_surface *o[SG_VL];
+    int rc, k;
+    /* Idle lanes repeat the ray and are never written. */
+    for (k = 0; k < SG_VL; k++) {
+        sg_vray_put(&v, k, r);
+        o[k] = out;
+    }
+    sg_precise_block(t, &v, vd_set(path0), o, 1, &from, upto, &rc);
+    sg_vray_get(&v, 0, r);
     return rc;
 }
 
