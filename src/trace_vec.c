@@ -397,71 +397,67 @@ static void put_rows(sg_ray_surface *const *out, int i, const vrow *pt, const vr
                      vd dbound, vm ok)
 {
     int k;
-    if (!pt) {
-        for (k = 0; k < SG_VL; k++)
-            if (ok[k]) {
-                sg_ray_surface *o = &out[k][i];
-                o->l = r->d.x.hi[k];
-                o->m = r->d.y.hi[k];
-                o->n = r->d.z.hi[k];
-                o->dir_error_bound = dbound[k];
-            }
-        return;
-    }
+    if (pt) {
 #if SG_VL == 8 && defined(__AVX512F__)
-    {
-        __m512d t0 = _mm512_unpacklo_pd(pt->x, pt->y), t1 = _mm512_unpackhi_pd(pt->x, pt->y);
-        __m512d t2 = _mm512_unpacklo_pd(pt->z, r->d.x.hi);
-        __m512d t3 = _mm512_unpackhi_pd(pt->z, r->d.x.hi);
-        __m512d t4 = _mm512_unpacklo_pd(r->d.y.hi, r->d.z.hi);
-        __m512d t5 = _mm512_unpackhi_pd(r->d.y.hi, r->d.z.hi);
-        __m512d t6 = _mm512_unpacklo_pd(pt->residual, pt->bound);
-        __m512d t7 = _mm512_unpackhi_pd(pt->residual, pt->bound);
-        /* Lanes (0, 4), (2, 6), (1, 5) and (3, 7), column pairs 0-1 and
-         * 2-3 in u, 4-5 and 6-7 in v. */
-        __m512d u[4], v[4], row[8];
-        u[0] = _mm512_shuffle_f64x2(t0, t2, 0x88);
-        u[1] = _mm512_shuffle_f64x2(t0, t2, 0xDD);
-        u[2] = _mm512_shuffle_f64x2(t1, t3, 0x88);
-        u[3] = _mm512_shuffle_f64x2(t1, t3, 0xDD);
-        v[0] = _mm512_shuffle_f64x2(t4, t6, 0x88);
-        v[1] = _mm512_shuffle_f64x2(t4, t6, 0xDD);
-        v[2] = _mm512_shuffle_f64x2(t5, t7, 0x88);
-        v[3] = _mm512_shuffle_f64x2(t5, t7, 0xDD);
-        row[0] = _mm512_shuffle_f64x2(u[0], v[0], 0x88);
-        row[4] = _mm512_shuffle_f64x2(u[0], v[0], 0xDD);
-        row[2] = _mm512_shuffle_f64x2(u[1], v[1], 0x88);
-        row[6] = _mm512_shuffle_f64x2(u[1], v[1], 0xDD);
-        row[1] = _mm512_shuffle_f64x2(u[2], v[2], 0x88);
-        row[5] = _mm512_shuffle_f64x2(u[2], v[2], 0xDD);
-        row[3] = _mm512_shuffle_f64x2(u[3], v[3], 0x88);
-        row[7] = _mm512_shuffle_f64x2(u[3], v[3], 0xDD);
+        {
+            __m512d t0 = _mm512_unpacklo_pd(pt->x, pt->y), t1 = _mm512_unpackhi_pd(pt->x, pt->y);
+            __m512d t2 = _mm512_unpacklo_pd(pt->z, r->d.x.hi);
+            __m512d t3 = _mm512_unpackhi_pd(pt->z, r->d.x.hi);
+            __m512d t4 = _mm512_unpacklo_pd(r->d.y.hi, r->d.z.hi);
+            __m512d t5 = _mm512_unpackhi_pd(r->d.y.hi, r->d.z.hi);
+            __m512d t6 = _mm512_unpacklo_pd(pt->residual, pt->bound);
+            __m512d t7 = _mm512_unpackhi_pd(pt->residual, pt->bound);
+            /* Lanes (0, 4), (2, 6), (1, 5) and (3, 7), column pairs 0-1 and
+             * 2-3 in u, 4-5 and 6-7 in v. */
+            __m512d u[4], v[4], row[8];
+            u[0] = _mm512_shuffle_f64x2(t0, t2, 0x88);
+            u[1] = _mm512_shuffle_f64x2(t0, t2, 0xDD);
+            u[2] = _mm512_shuffle_f64x2(t1, t3, 0x88);
+            u[3] = _mm512_shuffle_f64x2(t1, t3, 0xDD);
+            v[0] = _mm512_shuffle_f64x2(t4, t6, 0x88);
+            v[1] = _mm512_shuffle_f64x2(t4, t6, 0xDD);
+            v[2] = _mm512_shuffle_f64x2(t5, t7, 0x88);
+            v[3] = _mm512_shuffle_f64x2(t5, t7, 0xDD);
+            row[0] = _mm512_shuffle_f64x2(u[0], v[0], 0x88);
+            row[4] = _mm512_shuffle_f64x2(u[0], v[0], 0xDD);
+            row[2] = _mm512_shuffle_f64x2(u[1], v[1], 0x88);
+            row[6] = _mm512_shuffle_f64x2(u[1], v[1], 0xDD);
+            row[1] = _mm512_shuffle_f64x2(u[2], v[2], 0x88);
+            row[5] = _mm512_shuffle_f64x2(u[2], v[2], 0xDD);
+            row[3] = _mm512_shuffle_f64x2(u[3], v[3], 0x88);
+            row[7] = _mm512_shuffle_f64x2(u[3], v[3], 0xDD);
+            for (k = 0; k < SG_VL; k++)
+                if (ok[k]) {
+                    sg_ray_surface *o = &out[k][i];
+                    _mm512_storeu_pd(&o->x, row[k]);
+                    o->dir_error_bound = dbound[k];
+                    o->path = pt->path[k];
+                    o->status = SG_OK;
+                }
+            return;
+        }
+#else
         for (k = 0; k < SG_VL; k++)
             if (ok[k]) {
                 sg_ray_surface *o = &out[k][i];
-                _mm512_storeu_pd(&o->x, row[k]);
-                o->dir_error_bound = dbound[k];
+                o->x = pt->x[k];
+                o->y = pt->y[k];
+                o->z = pt->z[k];
+                o->residual = pt->residual[k];
+                o->error_bound = pt->bound[k];
                 o->path = pt->path[k];
                 o->status = SG_OK;
             }
+#endif
     }
-#else
     for (k = 0; k < SG_VL; k++)
         if (ok[k]) {
             sg_ray_surface *o = &out[k][i];
-            o->x = pt->x[k];
-            o->y = pt->y[k];
-            o->z = pt->z[k];
             o->l = r->d.x.hi[k];
             o->m = r->d.y.hi[k];
             o->n = r->d.z.hi[k];
-            o->residual = pt->residual[k];
-            o->error_bound = pt->bound[k];
             o->dir_error_bound = dbound[k];
-            o->path = pt->path[k];
-            o->status = SG_OK;
         }
-#endif
 }
 
 /* Adds the live lanes of m to bad, giving status code to those that had
