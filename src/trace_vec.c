@@ -22,8 +22,6 @@
 #include "trace_internal.h"
 #include "vdd.h"
 
-typedef sg_vray vray;
-
 /* ------------------------------------------------------------------------
  * Surface functions in double-double, and the double estimates that start
  * their Newton steps.
@@ -269,7 +267,7 @@ static vdd3 surf_grad_v(const sg_sprep *s, vdd3 p, vd *gsens)
 
 /* Refracts or reflects r->d at the point r->p of surface s, in dd.  Lanes
  * whose normal vanishes go to *nonphys, those reflected totally to *tir. */
-static void bend_v(const sg_sprep *s, vray *r, vm *nonphys, vm *tir)
+static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir)
 {
     vd gsens, gn, cosI, dN;
     vdd3 g, nd;
@@ -393,7 +391,7 @@ _Static_assert(offsetof(sg_ray_surface, y) == 1 * sizeof(double) &&
  * With eight lanes in AVX-512 registers the first eight columns are
  * transposed into one 64-byte store per row instead of eight lane
  * extractions each. */
-static void put_rows(sg_ray_surface *const *out, int i, const vrow *pt, const vray *r,
+static void put_rows(sg_ray_surface *const *out, int i, const vrow *pt, const sg_vray *r,
                      vd dbound, vm ok)
 {
     int k;
@@ -489,7 +487,7 @@ static vm clip_v(const sg_tracer *t, const sg_sprep *s, vd x, vd y, vm live, vm 
 
 /* How a ray leaves surface i: bent when bend is set, its bounds kept
  * finite, and row i written (its direction's columns only without pt). */
-static vm leave_v(const sg_sprep *s, int i, int bend, vray *r, sg_ray_surface *const *out,
+static vm leave_v(const sg_sprep *s, int i, int bend, sg_vray *r, sg_ray_surface *const *out,
                   const vrow *pt, vm live, vm bad, int *st)
 {
     vd bnd;
@@ -508,7 +506,7 @@ static vm leave_v(const sg_sprep *s, int i, int bend, vray *r, sg_ray_surface *c
 
 /* One surface for every live lane; returns the lanes that stop here, with
  * their status in st[]. */
-static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
+static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
                     sg_ray_surface *const *out, vm live, int *st)
 {
     const sg_sprep *s = &t->sp[i];
@@ -672,10 +670,10 @@ static vm surface_v(const sg_tracer *t, int i, int upto, vray *r, vd path0,
     return leave_v(s, i, i < upto, r, out, &row, live, bad, st) & live;
 }
 
-void sg_precise_block(const sg_tracer *t, vray *v, vd p0, sg_ray_surface *const *out, int nl,
+void sg_precise_block(const sg_tracer *t, sg_vray *v, vd p0, sg_ray_surface *const *out, int nl,
                       const int *start, int upto, int *rc)
 {
-    vray snap, stopped;
+    sg_vray snap, stopped;
     vm live = vm_set(0), pending = vm_set(0), dead = vm_set(0);
     int i, k, first = upto + 1, st[SG_VL], wait;
 
@@ -717,10 +715,10 @@ void sg_precise_block(const sg_tracer *t, vray *v, vd p0, sg_ray_surface *const 
         sg_vray_sel(dead, &stopped, v);
 }
 
-void sg_precise_finish(const sg_tracer *t, int i, vray *v, sg_ray_surface *const *out, vm m,
+void sg_precise_finish(const sg_tracer *t, int i, sg_vray *v, sg_ray_surface *const *out, vm m,
                        int *rc)
 {
-    vray w = *v;
+    sg_vray w = *v;
     vd x = w.p.x.hi, y = w.p.y.hi;
     vm bad;
     int k, st[SG_VL];
@@ -740,7 +738,7 @@ void sg_precise_finish(const sg_tracer *t, int i, vray *v, sg_ray_surface *const
 int sg_precise_run_from(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,
                         int from, int upto)
 {
-    vray v;
+    sg_vray v;
     sg_ray_surface *o[SG_VL];
     int rc, k;
     /* Idle lanes repeat the ray and are never written. */
