@@ -1,6 +1,6 @@
 /*
  * test_paraxial.c - first-order data against closed forms and the values
- * established in shared/paper-notes.md.
+ * established in docs/paper-notes.md.
  */
 #include <math.h>
 #include <mpfr.h>

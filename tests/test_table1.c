@@ -4,7 +4,7 @@
  *
  * The truth is the exact intersection of the same double inputs, computed
  * here in MPFR at 400 bits by the closed-form line-sphere solution, and
- * also checked against the values in shared/paper-notes.md.
+ * also checked against the values in docs/paper-notes.md.
  */
 #include <math.h>
 #include <mpfr.h>

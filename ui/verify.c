@@ -1198,7 +1198,7 @@ static void free_tracers(sg_tracer *t[NMETHOD])
 /* ---- Table 1 ---- */
 
 #define T1_N 6
-/* Truth y for the double inputs, from shared/paper-notes.md. */
+/* Truth y for the double inputs, from docs/paper-notes.md. */
 static const double t1_notes_y[T1_N] = { 5.65685424949238153, 5.65685424951482953,
                                          5.65685424975148596, 5.65685425315172111,
                                          5.65685425789323586, 5.65685431548606654 };

@@ -2,7 +2,7 @@
  * test_verify_experiments.c - "sagitta verify --experiment table1|table2",
  * the paper's sections 4.1 and 4.2.
  *
- * Table 1's truths come from shared/paper-notes.md and from the line-sphere
+ * Table 1's truths come from docs/paper-notes.md and from the line-sphere
  * intersection computed here in MPFR; Table 2's from the exact point d/|d|
  * on the unit sphere, also computed here.
  */
