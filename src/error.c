@@ -31,6 +31,12 @@ const char *sg_err_name(int err)
     return err_names[err];
 }
 
+int sg_err_is_ray_status(int err)
+{
+    return err == SG_OK || err == SG_EMISS || err == SG_ETIR || err == SG_EVIGNETTED ||
+           err == SG_ENOCONV || err == SG_EAIM || err == SG_ENOTREACHED || err == SG_EUNCERT;
+}
+
 void sg_diag_clear(sg_diag *d)
 {
     if (d)

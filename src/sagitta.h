@@ -53,7 +53,8 @@ extern "C" {
     X(AIM, "ray aiming did not converge")                                    \
     X(NOTREACHED, "surface not reached")                                     \
     X(UNSUPPORTED, "unsupported feature")                                    \
-    X(WAVERANGE, "wavelength outside material range")
+    X(WAVERANGE, "wavelength outside material range")                       \
+    X(UNCERT, "intersection cannot be certified in double-double")
 
 typedef enum sg_err {
 #define SG_ERR_ENUM_(name, msg) SG_E##name,
@@ -69,6 +70,10 @@ typedef enum sg_err {
 const char *sg_strerror(int err);
 /* Symbolic name for a code, e.g. "SG_EMISS"; never NULL. */
 const char *sg_err_name(int err);
+/* Nonzero when a trace's return code tells the ray's fate (reached the
+ * image, missed, TIR, vignetted, not certified, not aimed ...) rather than
+ * a failure of the program or its input. */
+int sg_err_is_ray_status(int err);
 
 #define SG_DIAG_MSG 512
 #define SG_DIAG_MAXWARN 16

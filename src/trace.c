@@ -594,6 +594,10 @@ sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
         goto fail;
     if (t->o.method == SG_METHOD_MPFR && sg_mpfr_prepare(t, d) != SG_OK)
         goto fail;
+    if (t->o.method == SG_METHOD_PRECISE && !(t->rescue = sg_mpfr_rescue_new())) {
+        sg_diag_set(d, SG_ENOMEM, "out of memory");
+        goto fail;
+    }
     return t;
 fail:
     sg_tracer_free(t);
@@ -606,6 +610,8 @@ void sg_tracer_free(sg_tracer *t)
         return;
     if (t->mp)
         sg_mpfr_free(t->mp);
+    if (t->rescue)
+        sg_mpfr_free(t->rescue);
     sg_system_free(t->sys);
     free(t->sp);
     free(t->nsigned);

@@ -97,6 +97,7 @@ struct sg_tracer {
     sg_ray_surface *scratch; /* nsurf entries for aiming traces */
     const sg_catalog *cat;   /* must outlive the tracer */
     sg_mpfr_ctx *mp;   /* only for the mpfr method */
+    sg_mpfr_ctx *rescue; /* the precise method's MPFR root for rays it cannot certify */
 };
 
 /* Ray state of the precise method: position on the current surface in its
@@ -269,6 +270,14 @@ int sg_mpfr_trace_start(sg_tracer *t, const double S[3], const double D[3],
                         sg_ray_surface *out);
 int sg_mpfr_trace_normalized(sg_tracer *t, double hx, double hy, double px,
                              double py, sg_ray_surface *out);
+/* A one-surface context for sg_mpfr_rescue_root, or NULL. */
+sg_mpfr_ctx *sg_mpfr_rescue_new(void);
+/* The step along D from P (in sp's vertex frame) to the surface sp, found
+ * exactly as the mpfr method finds it (onto the tangent plane, the conic
+ * root nearest it, Newton), in 320 bits; returns SG_OK, SG_EMISS or
+ * SG_ENOCONV. */
+int sg_mpfr_rescue_root(sg_mpfr_ctx *m, const sg_sprep *sp, dd3 P, dd3 D, int max_iter,
+                        dd *step);
 
 /* Paraxial data at MPFR precision prec, in paraxial.c.  idx holds the
  * signed index after every surface (n entries, at least prec bits). */

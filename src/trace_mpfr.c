@@ -111,6 +111,40 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
     free(m);
 }
 
+/* A context of n surfaces at precision prec, every variable initialized;
+ * NULL when out of memory. */
+static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
+{
+    sg_mpfr_ctx *m = calloc(1, sizeof *m);
+    msurf *s = calloc((size_t)n, sizeof *s);
+    int i, k;
+    if (!m || !s) {
+        free(m);
+        free(s);
+        return NULL;
+    }
+    m->prec = prec;
+    m->n = n;
+    m->s = s;
+    mpfr_inits2(prec, m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi,
+                m->q[0], m->q[1], m->path, (mpfr_ptr)0);
+    for (k = 0; k < NT; k++)
+        mpfr_init2(m->t[k], prec);
+    mvec_init(&m->P, prec);
+    mvec_init(&m->D, prec);
+    mvec_init(&m->G, prec);
+    mvec_init(&m->obj, prec);
+    mvec_init(&m->dir, prec);
+    mvec_init(&m->sv_P, prec);
+    mvec_init(&m->sv_D, prec);
+    for (i = 0; i < n; i++) {
+        mpfr_inits2(prec, s[i].R, s[i].k1, s[i].T, s[i].mu, (mpfr_ptr)0);
+        for (k = 0; k < SG_NASPH; k++)
+            mpfr_init2(s[i].a[k], prec);
+    }
+    return m;
+}
+
 /* ------------------------------------------------------------------------
  * Surfaces.
  * ------------------------------------------------------------------------ */
@@ -198,16 +232,15 @@ static int eval_F(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, mpfr_t F, 
     return 1;
 }
 
-/* Moves P along D onto surface i, from P on (or near) its tangent plane.
- * The step is added to m->path. */
-static int intersect(sg_tracer *tr, int i)
+/* Moves P along D onto the surface sp (s in MPFR), from P on (or near)
+ * its tangent plane.  The step is added to m->path. */
+static int intersect_s(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, int max_iter)
 {
-    sg_mpfr_ctx *m = tr->mp;
-    const sg_sprep *sp = &tr->sp[i];
-    const msurf *s = &m->s[i];
     mpfr_t *t = m->t;
     mpfr_ptr sv = t[4], F = t[5], Fp = t[6], A = t[7], b = t[8], C = t[9];
     int it, conv = 0;
+    mpfr_exp_t es_prev = 0;
+    double growth = 1.0, dstep = 0.0;
     mpfr_set_zero(sv, 1);
     if (sp->shape == SHAPE_PLANE) {
         if (mpfr_zero_p(m->P.z))
@@ -270,7 +303,9 @@ static int intersect(sg_tracer *tr, int i)
     if (sp->shape == SHAPE_PLANE)
         return SG_OK;
     /* Newton along the ray until the step is below the precision. */
-    for (it = 0; it < tr->o.max_iter + 4; it++) {
+    /* Near a double root (a ray touching the surface) Newton only halves
+     * its error each step, so the limit grows with the precision. */
+    for (it = 0; it < max_iter + 4 + (int)m->prec; it++) {
         if (!eval_F(m, sp, s, F, Fp))
             return SG_EMISS;
         if (mpfr_zero_p(F)) {
@@ -285,6 +320,19 @@ static int intersect(sg_tracer *tr, int i)
         mpfr_add(m->path, m->path, sv, MPFR_RNDN);
         if (!mpfr_number_p(sv))
             return SG_EMISS;
+        /* Where a step is longer than the one before, a difference in the
+         * start grows by about their ratio.  Past 2^20 in all, the end of
+         * the path depends on rounding, not on the ray: the root is not
+         * certified (the precise method's MPFR rescue follows the same
+         * rule, and its inputs differ by 2^-100 of the ray's). */
+        {
+            double ds = fabs(mpfr_get_d(sv, MPFR_RNDN));
+            if (it > 0 && ds > dstep)
+                growth *= ds / dstep;
+            if (growth > 0x1p20)
+                return SG_ENOCONV;
+            dstep = ds;
+        }
         /* Converged when the step is below 2^(8 - prec) of the path scale. */
         {
             mpfr_exp_t es = mpfr_zero_p(sv) ? mpfr_get_emin() : mpfr_get_exp(sv);
@@ -300,11 +348,78 @@ static int intersect(sg_tracer *tr, int i)
                 conv = 1;
                 break;
             }
+            /* A ray that grazes the surface has an ill-conditioned root:
+             * the rounding of F at this precision, divided by a small F',
+             * keeps the steps from shrinking further.  Steps that stop
+             * shrinking below half the precision are that noise. */
+            if (it > 0 && es < ep - (mpfr_exp_t)m->prec / 2 && es >= es_prev - 1) {
+                conv = 1;
+                break;
+            }
+            es_prev = es;
         }
     }
     if (!conv)
         return SG_ENOCONV;
     return SG_OK;
+}
+
+/* Moves P along D onto the surface from its vertex frame: onto the
+ * tangent plane first, as the precise method does, then to the surface.
+ * The steps are added to m->path. */
+static int onto_surface(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, int max_iter)
+{
+    mpfr_t *t = m->t;
+    if (!mpfr_zero_p(m->D.z) && !mpfr_zero_p(m->P.z)) {
+        mpfr_div(t[11], m->P.z, m->D.z, MPFR_RNDN);
+        mpfr_neg(t[11], t[11], MPFR_RNDN);
+        axpy(&m->P, t[11], &m->D, t[0]);
+        mpfr_set_zero(m->P.z, 1);
+        mpfr_add(m->path, m->path, t[11], MPFR_RNDN);
+    }
+    return intersect_s(m, sp, s, max_iter);
+}
+
+/* ------------------------------------------------------------------------
+ * The precise method's rescue: the intersection of a double-double ray,
+ * found as the reference finds it, for the rare rays whose root the
+ * precise method cannot certify in double-double.
+ * ------------------------------------------------------------------------ */
+
+#define RESCUE_PREC 320
+
+sg_mpfr_ctx *sg_mpfr_rescue_new(void)
+{
+    return ctx_new(RESCUE_PREC, 1);
+}
+
+static void mpfr_set_dd(mpfr_t x, dd a)
+{
+    mpfr_set_d(x, a.hi, MPFR_RNDN);
+    mpfr_add_d(x, x, a.lo, MPFR_RNDN);
+}
+
+int sg_mpfr_rescue_root(sg_mpfr_ctx *m, const sg_sprep *sp, dd3 P, dd3 D, int max_iter,
+                        dd *step)
+{
+    msurf *s = &m->s[0];
+    int k, rc;
+    /* Every input is a double or a double-double: exact at 320 bits. */
+    mpfr_set_d(s->R, sp->R, MPFR_RNDN);
+    mpfr_set_dd(s->k1, sp->k1);
+    for (k = 0; k < SG_NASPH; k++)
+        mpfr_set_d(s->a[k], sp->a[k], MPFR_RNDN);
+    mpfr_set_dd(m->P.x, P.x);
+    mpfr_set_dd(m->P.y, P.y);
+    mpfr_set_dd(m->P.z, P.z);
+    mpfr_set_dd(m->D.x, D.x);
+    mpfr_set_dd(m->D.y, D.y);
+    mpfr_set_dd(m->D.z, D.z);
+    mpfr_set_zero(m->path, 1);
+    rc = onto_surface(m, sp, s, max_iter);
+    if (rc == SG_OK)
+        *step = dd_from_mpfr(m->path, m->t[0]);
+    return rc;
 }
 
 /* Refraction or reflection at surface i, in place on D. */
@@ -380,7 +495,6 @@ static double ulp_d(double x)
 static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
 {
     sg_mpfr_ctx *m = tr->mp;
-    mpfr_t *t = m->t;
     int i, rc;
     for (i = 1; i <= upto; i++) {
         const sg_sprep *sp = &tr->sp[i];
@@ -390,15 +504,7 @@ static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
             mpfr_sub(m->P.z, m->P.z, m->s[i].T, MPFR_RNDN);
             mpfr_set_zero(m->path, 1);
         }
-        /* Onto the tangent plane first, as the precise method does. */
-        if (!mpfr_zero_p(m->D.z) && !mpfr_zero_p(m->P.z)) {
-            mpfr_div(t[11], m->P.z, m->D.z, MPFR_RNDN);
-            mpfr_neg(t[11], t[11], MPFR_RNDN);
-            axpy(&m->P, t[11], &m->D, t[0]);
-            mpfr_set_zero(m->P.z, 1);
-            mpfr_add(m->path, m->path, t[11], MPFR_RNDN);
-        }
-        rc = intersect(tr, i);
+        rc = onto_surface(m, sp, &m->s[i], tr->o.max_iter);
         if (rc != SG_OK) {
             sg_fail_rest(out, i, tr->n, rc);
             return rc;
@@ -698,41 +804,18 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
 {
     const sg_system *sys = tr->sys;
     mpfr_prec_t prec = tr->o.mpfr_bits;
-    sg_mpfr_ctx *m = calloc(1, sizeof *m);
+    sg_mpfr_ctx *m = ctx_new(prec, tr->n);
     mpfr_t *idx;
     sg_parax_mp p;
     int i, k, rc;
     if (!m)
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
-    m->prec = prec;
-    m->n = tr->n;
-    m->s = calloc((size_t)tr->n, sizeof *m->s);
-    idx = calloc((size_t)tr->n, sizeof *idx);
-    mpfr_inits2(prec, m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi,
-                m->q[0], m->q[1], m->path, (mpfr_ptr)0);
-    for (k = 0; k < NT; k++)
-        mpfr_init2(m->t[k], prec);
-    mvec_init(&m->P, prec);
-    mvec_init(&m->D, prec);
-    mvec_init(&m->G, prec);
-    mvec_init(&m->obj, prec);
-    mvec_init(&m->dir, prec);
-    mvec_init(&m->sv_P, prec);
-    mvec_init(&m->sv_D, prec);
     tr->mp = m;
-    if (!m->s || !idx) {
-        free(idx);
-        if (m->s) {
-            free(m->s);
-            m->s = NULL;
-        }
+    idx = calloc((size_t)tr->n, sizeof *idx);
+    if (!idx)
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
-    }
     for (i = 0; i < tr->n; i++) {
         msurf *s = &m->s[i];
-        mpfr_inits2(prec, s->R, s->k1, s->T, s->mu, (mpfr_ptr)0);
-        for (k = 0; k < SG_NASPH; k++)
-            mpfr_init2(s->a[k], prec);
         mpfr_init2(idx[i], prec);
         mpfr_set_d(s->R, tr->sp[i].R, MPFR_RNDN);
         mpfr_set_d(s->k1, sys->surf[i].conic, MPFR_RNDN);

@@ -102,10 +102,16 @@ static vd resid_v(const sg_sprep *s, vdd3 p)
     return vd_abs(w * (x * p.x.lo + y * p.y.lo) - p.z.lo);
 }
 
-/* The eq. 27 root from the tangent plane; *miss marks lanes it misses. */
-static vd conic_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vm *miss)
+/* The eq. 27 root from the seed point p, in double: of the roots on the
+ * vertex sheet, the one nearest the step tgt (the tangent plane's, so
+ * that a seed from the entry point picks the root a seed from the plane
+ * would).  *miss marks lanes it misses; *unsure those whose discriminant
+ * lies within its own rounding of zero, which only double-double can
+ * decide. */
+static vd conic_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd tgt, vd eseed,
+                       vm *miss, vm *unsure)
 {
-    double c = s->c, k1 = s->k1.hi;
+    double c = s->c, k1 = s->k1.hi, ac = fabs(c), ak = fabs(k1);
     vd A = c * (d[0] * d[0] + d[1] * d[1] + k1 * d[2] * d[2]);
     vd b = c * (p[0] * d[0] + p[1] * d[1] + k1 * p[2] * d[2]) - d[2];
     vd C = c * (p[0] * p[0] + p[1] * p[1] + k1 * p[2] * p[2]) - 2.0 * p[2];
@@ -115,23 +121,88 @@ static vd conic_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vm *miss
     vd s2 = vsel((vm)(A != 0.0), q / A, vd_set(INFINITY));
     vm ok1 = vd_isfinite(s1) & (vm)(k1 * c * (p[2] + s1 * d[2]) <= 1.0);
     vm ok2 = vd_isfinite(s2) & (vm)(k1 * c * (p[2] + s2 * d[2]) <= 1.0);
-    vm in = (vm)(disc >= 0.0);
+    vm in = (vm)(disc >= 0.0), first;
+    /* Each of A, b, C errs by a few u of the magnitude of its terms (the
+     * rounded 1 / R included), so b^2 - AC errs by well under 64u of
+     * Mb^2 + Ma Mc.  The seed point itself lies up to eseed off the ray,
+     * which moves b by (1 + k) |c| eseed and C by |grad C| eseed. */
+    vd Ma = ac * (d[0] * d[0] + d[1] * d[1] + ak * d[2] * d[2]);
+    vd Mb = ac * (vd_abs(p[0] * d[0]) + vd_abs(p[1] * d[1]) + ak * vd_abs(p[2] * d[2])) +
+            vd_abs(d[2]);
+    vd Mc = ac * (p[0] * p[0] + p[1] * p[1] + ak * p[2] * p[2]) + 2.0 * vd_abs(p[2]);
+    vd gC = 2.0 * (ac * (vd_abs(p[0]) + vd_abs(p[1]) + ak * vd_abs(p[2])) + 1.0);
+    vd err = 64.0 * U53 * (Mb * Mb + Ma * Mc) +
+             4.0 * (Mb * ac * (1.0 + ak) + Ma * gC) * eseed;
+    *unsure = (vm)(vd_abs(disc) <= err) | vd_isnan(disc);
     *miss = ~(in & (ok1 | ok2));
-    return vsel(in & ok1, s1, vsel(in & ok2, s2, vd_set(0.0)));
+    first = ok1 & (~ok2 | (vm)(vd_abs(s1 - tgt) <= vd_abs(s2 - tgt)));
+    return vsel(in & first, s1, vsel(in & ok2, s2, vd_set(0.0)));
+}
+
+/* The root of the base conic along P + s D in double-double, for the rare
+ * lanes whose double discriminant was too close to zero to trust.  The
+ * surface function is R times the conic's, x^2 + y^2 + k1 z^2 - 2 R z,
+ * so every coefficient is formed without 1 / R.  *miss marks lanes that
+ * certainly miss, *unsure those whose discriminant is still within its
+ * error bound (the rounding here and the ray's own errors eP, eD) of
+ * zero.  The root is the one nearest tgt among those on the vertex sheet,
+ * as in conic_root_v. */
+static vdd conic_root_dd(const sg_sprep *s, vdd3 P, vdd3 D, vd eP, vd eD, vd tgt, vm *miss,
+                         vm *unsure)
+{
+    vdd R = vdd_from(vd_set(s->R));
+    vdd A = vdd_add(vdd_add(vdd_sqr(D.x), vdd_sqr(D.y)), k1_mul(s, vdd_sqr(D.z)));
+    vdd b = vdd_sub(vdd_add(vdd_add(vdd_mul(P.x, D.x), vdd_mul(P.y, D.y)),
+                            k1_mul(s, vdd_mul(P.z, D.z))),
+                    vdd_mul(R, D.z));
+    vdd C = vdd_sub(vdd_add(vdd_add(vdd_sqr(P.x), vdd_sqr(P.y)), k1_mul(s, vdd_sqr(P.z))),
+                    vdd_mul_d(vdd_mul(R, P.z), vd_set(2.0)));
+    vdd disc = vdd_sub(vdd_sqr(b), vdd_mul(A, C)), q, r1, r2;
+    double ak = fabs(s->k1.hi), aR = fabs(s->R);
+    vd px = vd_abs(P.x.hi), py = vd_abs(P.y.hi), pz = vd_abs(P.z.hi);
+    vd Ma = D.x.hi * D.x.hi + D.y.hi * D.y.hi + ak * D.z.hi * D.z.hi;
+    vd Mb = px * vd_abs(D.x.hi) + py * vd_abs(D.y.hi) + ak * pz * vd_abs(D.z.hi) +
+            aR * vd_abs(D.z.hi);
+    vd Mc = px * px + py * py + ak * pz * pz + 2.0 * aR * pz;
+    /* A move of the ray by e (at the closest approach, lever away) moves b
+     * by up to (1 + k) e and C by up to |grad C| e. */
+    vd lever = vd_abs(tgt) + vd_abs(b.hi) / vd_fmax(Ma, vd_set(1e-300));
+    vd e = eP + lever * eD;
+    vd grad = 2.0 * (px + py + ak * pz + aR);
+    vd err = 64.0 * DD_U * (Mb * Mb + Ma * Mc) +
+             4.0 * (vd_abs(b.hi) * (1.0 + ak) + Ma * grad) * e;
+    vd x1, x2;
+    vm in = (vm)(disc.hi >= 0.0), ok1, ok2, first;
+    *unsure = (vm)(vd_abs(disc.hi) <= err) | vd_isnan(disc.hi);
+    q = vdd_sqrt(vdd_sel(in, disc, vdd_from(vd_set(0.0))));
+    q = vdd_sel((vm)(b.hi < 0.0), vdd_neg(q), q);
+    q = vdd_neg(vdd_add(b, q));
+    r1 = vdd_mul(C, vdd_recip(q));
+    r2 = vdd_mul(q, vdd_recip(A));
+    x1 = r1.hi;
+    x2 = r2.hi;
+    ok1 = (vm)(q.hi != 0.0) & vd_isfinite(x1) &
+          (vm)(s->k1.hi * s->c * (P.z.hi + x1 * D.z.hi) <= 1.0);
+    ok2 = (vm)(A.hi != 0.0) & vd_isfinite(x2) &
+          (vm)(s->k1.hi * s->c * (P.z.hi + x2 * D.z.hi) <= 1.0);
+    *miss = ~(in & (ok1 | ok2));
+    first = ok1 & (~ok2 | (vm)(vd_abs(x1 - tgt) <= vd_abs(x2 - tgt)));
+    return vdd_sel(in & first, r1, vdd_sel(in & ok2, r2, vdd_from(vd_set(0.0))));
 }
 
 /* Newton in double for an even asphere; *fail marks lanes that miss and
  * *noconv lanes that run out of iterations. */
 static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, int max_iter,
-                      vm active, vm *fail, vm *noconv)
+                      vm active, vm *fail, vm *noconv, vm *wild)
 {
-    vd sv = s0;
+    vd sv = s0, growth = vd_set(1.0), hprev = vd_set(0.0);
     int it;
     *fail = vm_set(0);
+    *wild = vm_set(0);
     for (it = 0; it < max_iter && vm_any(active); it++) {
         vd x = p[0] + sv * d[0], y = p[1] + sv * d[1], z = p[2] + sv * d[2];
         vd r2 = x * x + y * y;
-        vd sag = vd_set(0.0), w, dw, F, Fp, step, snew, pp = vd_set(0.0);
+        vd sag = vd_set(0.0), w, dw, F, Fp, step, snew, h, pp = vd_set(0.0);
         vm bad = vm_set(0), conv;
         int k;
         if (isfinite(s->R)) {
@@ -152,9 +223,20 @@ static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, in
         bad &= active;
         *fail |= bad;
         active &= ~bad;
-        sv = vsel(active, snew, sv);
+        /* Where a step is long beside F' / F'' (h = F'' |step| / |F'| > 1),
+         * a difference in the iterate grows by about h in the next one;
+         * past a growth of 4, another arithmetic from the same seed could
+         * end on another root.  And where two roots lie closer than double
+         * resolves (a ray touching the surface), h stays near 1/2 down to
+         * the rounding of F, and which of the two Newton ends on is
+         * rounding's choice.  Such roots are not certified here. */
+        h = (vd_abs(w) + 2.0 * dw) * vd_abs(step) / vd_abs(Fp);
+        growth = vsel(active, growth * vd_fmax(vd_set(1.0), h), growth);
         conv = (vm)(vd_abs(step) <= 4.0 * U53 * (vd_abs(snew) + vd_abs(x) + vd_abs(y) + vd_abs(z)));
-        active &= ~conv;
+        *wild |= active & ((vm)(growth > 4.0) | (conv & (vm)(vd_fmax(h, hprev) > 0.25)));
+        hprev = vsel(active, h, hprev);
+        sv = vsel(active, snew, sv);
+        active &= ~conv & ~*wild;
     }
     *noconv = active;
     return sv;
@@ -504,6 +586,40 @@ static vm leave_v(const sg_sprep *s, int i, int bend, sg_vray *r, sg_ray_surface
     return bad;
 }
 
+/* The roots of the lanes of m, from the entry point r->p of each, by
+ * sg_mpfr_rescue_root: the step into sv with its error in root_err, or
+ * the lane's failure.  Rare, so one lane at a time and out of line. */
+static __attribute__((noinline, cold)) vm rescue_v(const sg_tracer *t, const sg_sprep *s,
+                                                  const sg_vray *r, vm m, vdd *sv, vd *root_err,
+                                                  vm live, vm bad, int *st)
+{
+    vm miss = vm_set(0), lost = vm_set(0);
+    int k;
+    for (k = 0; k < SG_VL; k++) {
+        sg_pray one;
+        dd step;
+        int rc;
+        if (!m[k])
+            continue;
+        sg_vray_get(r, k, &one);
+        rc = sg_mpfr_rescue_root(t->rescue, s, one.p, one.d, t->o.max_iter, &step);
+        if (rc == SG_OK) {
+            double scale = fabs(step.hi) + sg_max_abs3(one.p.x.hi, one.p.y.hi, one.p.z.hi);
+            sv->hi[k] = step.hi;
+            sv->lo[k] = step.lo;
+            /* The MPFR root is good to half its 320 bits or better even
+             * where it is ill-conditioned, and is rounded to DD_U. */
+            (*root_err)[k] = ldexp(scale, -150) + DD_U * fabs(step.hi);
+        } else if (rc == SG_EMISS) {
+            miss[k] = -1;
+        } else {
+            lost[k] = -1;
+        }
+    }
+    bad = fail_lanes(bad, miss, live, SG_EMISS, st);
+    return fail_lanes(bad, lost, live, SG_EUNCERT, st);
+}
+
 /* One surface for every live lane; returns the lanes that stop here, with
  * their status in st[]. */
 static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
@@ -512,9 +628,12 @@ static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
     const sg_sprep *s = &t->sp[i];
     int flat = s->shape == SHAPE_PLANE;
     vd dz = r->d.z.hi, ps[3], ds[3], sd = vd_set(0.0), eP0, root_err = vd_set(0.0);
-    vd pd[3], kappa, s0d = vd_set(0.0), lever;
+    vd pd[3], kappa, s0d = vd_set(0.0), s0t = vd_set(0.0), lever;
+    vm cert = vm_set(-1);
     vrow row;
-    vdd s0 = vdd_from(vd_set(0.0)), sv;
+    vdd s0 = vdd_from(vd_set(0.0)), sv, exact = vdd_from(vd_set(0.0));
+    vm seeded = vm_set(0), resc = vm_set(0);
+    int it_max = t->o.max_iter > 4 ? t->o.max_iter : 4;
     vdd3 base;
     vm bad = vm_set(0), tp, act;
     int it;
@@ -535,28 +654,40 @@ static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
              * point on z = 0 exactly, and Newton starts there.  The step is
              * a product by 1 / D_z (9u^2 + 4u^2, within the 15u^2 of a
              * quotient), whose Newton step can start before P_z is known. */
-            vdd s0t = vdd_neg(vdd_mul(r->p.z, vdd_recip(r->d.z)));
+            vdd s0f = vdd_neg(vdd_mul(r->p.z, vdd_recip(r->d.z)));
             vdd3 pt;
-            pt.x = vdd_add_m(r->p.x, vdd_mul(s0t, r->d.x));
-            pt.y = vdd_add_m(r->p.y, vdd_mul(s0t, r->d.y));
+            pt.x = vdd_add_m(r->p.x, vdd_mul(s0f, r->d.x));
+            pt.y = vdd_add_m(r->p.y, vdd_mul(s0f, r->d.y));
             pt.z = vdd_from(vd_set(0.0));
-            s0 = vdd_sel(tp, s0t, s0);
+            s0 = vdd_sel(tp, s0f, s0);
             base.x = vdd_sel(tp, pt.x, base.x);
             base.y = vdd_sel(tp, pt.y, base.y);
             base.z = vdd_sel(tp, pt.z, base.z);
             ps[0] = base.x.hi;
             ps[1] = base.y.hi;
             ps[2] = base.z.hi;
-            step0 = s0t.hi;
+            step0 = s0f.hi;
         } else {
             /* The tangent-plane point only seeds the root in double;
              * Newton below works on the whole step from the entry point
              * in double-double, so a point is always P + s D, two terms
-             * that an aimed ray can cancel exactly. */
-            s0d = vsel(tp, vd_neg(r->p.z.hi) / dz, vd_set(0.0));
-            ps[0] = r->p.x.hi + s0d * r->d.x.hi;
-            ps[1] = r->p.y.hi + s0d * r->d.y.hi;
-            ps[2] = r->p.z.hi + s0d * dz;
+             * that an aimed ray can cancel exactly.  A ray nearly parallel
+             * to the plane would meet it far beyond the surface, where the
+             * double seed is lost to cancellation: it seeds from its entry
+             * point instead, aiming at the same root. */
+            vd tx, ty, tz;
+            vm near;
+            s0t = vsel(tp, vd_neg(r->p.z.hi) / dz, vd_set(0.0));
+            tx = r->p.x.hi + s0t * r->d.x.hi;
+            ty = r->p.y.hi + s0t * r->d.y.hi;
+            tz = r->p.z.hi + s0t * dz;
+            near = tp & (vm)(vd_fmax(vd_abs(tx), vd_abs(ty)) <=
+                             vd_fmax(vd_abs(r->p.x.hi), vd_fmax(vd_abs(r->p.y.hi), vd_abs(r->p.z.hi))));
+            s0d = vsel(near, s0t, vd_set(0.0));
+            ps[0] = vsel(near, tx, ps[0]);
+            ps[1] = vsel(near, ty, ps[1]);
+            ps[2] = vsel(near, tz, ps[2]);
+            tp = near;
             step0 = s0d;
         }
         ePt = (eP0 + vd_abs(step0) * r->eD) / vd_abs(dz) +
@@ -573,34 +704,60 @@ static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
         bad = fail_lanes(bad, off & (vm)(dz == 0.0), live, SG_EMISS, st);
         sd = vsel(off, vd_neg(ps[2]) / dz, vd_set(0.0));
     } else {
-        vm miss;
+        vm miss, unsure = vm_set(0);
+        /* The tangent plane's step, from the seed point. */
+        vd tgt = s0t - s0d;
         if (s->c != 0.0) {
-            sd = conic_root_v(s, ps, ds, &miss);
+            /* The seed point's distance from the ray: its rounding to
+             * double, and the transfer to the plane in double. */
+            vd eseed = 4.0 * U53 *
+                       (vd_abs(r->p.x.hi) + vd_abs(r->p.y.hi) + vd_abs(r->p.z.hi) + vd_abs(s0d));
+            sd = conic_root_v(s, ps, ds, tgt, eseed, &miss, &unsure);
         } else {
             /* A base curvature below the smallest double: the plane's root. */
             miss = (vm)(dz == 0.0);
             sd = vsel(miss | (vm)(ps[2] == 0.0), vd_set(0.0), vd_neg(ps[2]) / dz);
         }
+        unsure &= live & ~bad;
+        if (__builtin_expect(vm_any(unsure), 0)) {
+            /* Decided in double-double from the entry point: a conic's
+             * hit or miss, and an asphere's seed, which must be the root
+             * that the exact conic gives, or Newton may end elsewhere. */
+            vm miss2, unsure2;
+            vdd rt = conic_root_dd(s, r->p, r->d, r->eP, r->eD, s0t, &miss2, &unsure2);
+            resc |= unsure & unsure2;
+            miss = (unsure & miss2) | (~unsure & miss);
+            if (s->shape == SHAPE_ASPH) {
+                sd = vsel(unsure, rt.hi - s0d, sd);
+            } else {
+                exact = vdd_sel(unsure, rt, exact);
+                seeded = unsure;
+            }
+        }
         if (s->shape == SHAPE_ASPH) {
-            vm nohit, noconv;
-            sd = asph_root_v(s, ps, ds, vsel(miss, vd_set(0.0), sd), t->o.max_iter,
-                             live & ~bad, &nohit, &noconv);
-            bad = fail_lanes(bad, noconv, live, SG_ENOCONV, st);
-            bad = fail_lanes(bad, nohit, live, SG_EMISS, st);
+            vm nohit, noconv, wild;
+            /* Where the base conic misses, Newton starts on the plane. */
+            sd = asph_root_v(s, ps, ds, vsel(miss, tgt, sd), t->o.max_iter,
+                             live & ~bad & ~resc, &nohit, &noconv, &wild);
+            resc |= (noconv | wild) & live & ~bad;
+            bad = fail_lanes(bad, nohit & ~resc, live, SG_EMISS, st);
         } else {
-            bad = fail_lanes(bad, miss, live, SG_EMISS, st);
+            bad = fail_lanes(bad, miss & ~resc, live, SG_EMISS, st);
         }
     }
 
     /* Measure 4: Newton along the ray with F in double-double.  The step
-     * starts as the exact sum of the tangent-plane step and the root. */
-    sv = flat ? vdd_from(sd) : vdd_two_sum(s0d, sd);
-    act = live & ~bad;
+     * starts as the exact sum of the tangent-plane step and the root, or
+     * as the double-double root where that was needed. */
+    sv = flat ? vdd_from(sd) : vdd_sel(seeded, exact, vdd_two_sum(s0d, sd));
+    act = live & ~bad & ~resc;
     if (flat)
         act &= (vm)(ps[2] != 0.0);
-    for (it = 0; it < 4 && vm_any(act); it++) {
+    /* Most rays converge within two steps; rays that touch the surface
+     * converge slowly, and may take up to max_iter. */
+    for (it = 0; it < it_max && vm_any(act); it++) {
         vdd3 p = vdd3_axpy(base, sv, r->d);
-        vd ferr, step, Fp, rFp, Fmag, Fpp, re;
+        vd ferr, step, Fp, rFp, Fmag, Fpp, re, trunc;
         vdd F, snew;
         vm fbad;
         pd[0] = p.x.hi;
@@ -630,9 +787,26 @@ static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
         snew = vdd_sub(sv, vdd_div_dr(F, Fp, rFp));
         re = (Fpp * step * step + ferr + vd_abs(step) * 8.0 * U53 * Fmag) * vd_abs(rFp) +
              4.0 * DD_U * vd_abs(snew.hi);
+        /* The quadratic model behind re holds only where the step is small
+         * beside F' / F'' (Kantorovich's h <= 1/2, with room to spare). */
+        cert = (act & (vm)(Fpp * vd_abs(step) * vd_abs(rFp) <= 0.25)) | (~act & cert);
         sv = vdd_sel(act, snew, sv);
         root_err = vsel(act, re, root_err);
-        act &= ~(vm)(re <= 0x1p-100 * (vd_abs(snew.hi) + vd_abs(ps[0]) + vd_abs(ps[1])));
+        /* Done when the root is known to 2^-100 of the point's scale, or
+         * when Newton's own error has fallen far below what the rounding
+         * of F leaves (a ray that grazes the surface has a root that is
+         * ill-conditioned, and its bound says so). */
+        trunc = Fpp * step * step * vd_abs(rFp);
+        act &= ~((vm)(re <= 0x1p-100 * (vd_abs(snew.hi) + vd_abs(ps[0]) + vd_abs(ps[1]))) |
+                 (vm)(trunc <= 0x1p-20 * (re - trunc)));
+    }
+    /* A root that Newton could not certify in double-double is found as
+     * the reference finds it, in MPFR; a ray whose root not even that
+     * finds is reported as such, never as a point. */
+    if (!flat) {
+        resc |= (act | ~cert) & live & ~bad;
+        if (__builtin_expect(vm_any(resc), 0))
+            bad = rescue_v(t, s, r, resc, &sv, &root_err, live, bad, st);
     }
     /* A flat surface's step from the tangent plane is zero in every lane
      * that goes on, and base + 0 D is base. */

@@ -389,13 +389,6 @@ static const cli_opt trace_opts[] = {
     { NULL, 0, 0, 0 }
 };
 
-/* Trace failures that describe the ray rather than the program. */
-static int is_ray_result(int rc)
-{
-    return rc == SG_OK || rc == SG_EMISS || rc == SG_ETIR || rc == SG_EVIGNETTED ||
-           rc == SG_ENOCONV || rc == SG_EAIM || rc == SG_ENOTREACHED;
-}
-
 int cmd_trace(int argc, char **argv)
 {
     cli_iter it;
@@ -568,7 +561,7 @@ int cmd_trace(int argc, char **argv)
         status[0] = rc;
         sg_diag_clear(&d);
     }
-    if (!is_ray_result(rc)) {
+    if (!sg_err_is_ray_status(rc)) {
         if (d.msg[0])
             print_diag(design, &d, rc);
         else

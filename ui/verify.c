@@ -208,13 +208,6 @@ static double min_of(const double *v, size_t n)
     return m;
 }
 
-/* Trace returns that describe the ray rather than the program. */
-static int is_ray_result(int rc)
-{
-    return rc == SG_OK || rc == SG_EMISS || rc == SG_ETIR || rc == SG_EVIGNETTED ||
-           rc == SG_ENOCONV || rc == SG_EAIM || rc == SG_ENOTREACHED;
-}
-
 /* The surface where a ray stopped, or -1 when it reached the image. */
 static int fail_surface(const sg_ray_surface *out, int nsurf)
 {
@@ -516,7 +509,7 @@ static int vdesign_trace(vdesign *v, const sg_catalog *cat)
             sg_ray_surface *out = v->out[m] + r * (size_t)v->nsurf;
             int st = sg_trace_normalized(t[m], ray->h[0], ray->h[1], ray->h[2],
                                          ray->h[3], out);
-            if (!is_ray_result(st)) {
+            if (!sg_err_is_ray_status(st)) {
                 cli_error("%s: ray %g,%g,%g,%g: %s trace failed: %s", v->path,
                           ray->h[0], ray->h[1], ray->h[2], ray->h[3], mname[m],
                           sg_strerror(st));
@@ -1422,7 +1415,7 @@ static int experiment_table1(int bits, int fmt, const char *output)
         }
         for (m = 0; m < NMETHOD; m++) {
             w->st[m] = sg_trace_start(t[m], w->vstart, t1_dir, w->o[m]);
-            if (!is_ray_result(w->st[m])) {
+            if (!sg_err_is_ray_status(w->st[m])) {
                 cli_error("verify: table1: %s trace failed: %s", mname[m],
                           sg_strerror(w->st[m]));
                 rc = CLI_EXIT_INTERNAL;
@@ -1724,7 +1717,7 @@ static int experiment_table2(int bits, size_t count, uint64_t seed, int fmt,
         start[2] = t2_zc[ry->side];
         for (m = 0; m < NMETHOD; m++) {
             ry->st[m] = sg_trace_start(t[ry->side][m], start, ry->dir, ry->o[m]);
-            if (!is_ray_result(ry->st[m])) {
+            if (!sg_err_is_ray_status(ry->st[m])) {
                 cli_error("verify: table2: ray %zu: %s trace failed: %s", r + 1, mname[m],
                           sg_strerror(ry->st[m]));
                 rc = CLI_EXIT_INTERNAL;
