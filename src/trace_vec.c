@@ -349,7 +349,7 @@ static vdd3 surf_grad_v(const sg_sprep *s, vdd3 p, vd *gsens)
 
 /* Refracts or reflects r->d at the point r->p of surface s, in dd.  Lanes
  * whose normal vanishes go to *nonphys, those reflected totally to *tir. */
-static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir)
+static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir, vm *unsure)
 {
     vd gsens, gn, cosI, dN;
     vdd3 g, nd;
@@ -357,6 +357,7 @@ static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir)
     int flat;
     *nonphys = vm_set(0);
     *tir = vm_set(0);
+    *unsure = vm_set(0);
     if (sg_sprep_passes(s))
         return;
     g = surf_grad_v(s, r->p, &gsens);
@@ -390,6 +391,19 @@ static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir)
         vdd sq, gam;
         vd J, k, sk, sinI, m = vd_set(s->mu.hi);
         *tir = (vm)(kb.hi < 0.0);
+        if (s->mu2.hi > 1.0) {
+            /* Into a lower index, kb = gg (1 - mu^2) + mu^2 dg^2 can change
+             * sign.  Within twice its own rounding of zero, whether the
+             * carried ray is reflected totally is not certain.  (The ray's
+             * carried error is not counted here: on long systems its bound
+             * grows far past the true error, and would leave every later
+             * refraction uncertain; the printed bound shows it instead.) */
+            double m2 = s->mu2.hi;
+            vd dgh = vd_abs(dg.hi);
+            vd ekb = 64.0 * DD_U * (gg.hi * (1.0 + m2) + m2 * dgh * dgh);
+            *unsure = (vm)(vd_abs(kb.hi) <= ekb);
+            *tir &= ~*unsure;
+        }
         if (fabs(s->mu.hi) == 1.0 && s->mu.lo == 0.0)
             return;
         sq = vdd_sqrt(kb);
@@ -574,10 +588,11 @@ static vm leave_v(const sg_sprep *s, int i, int bend, sg_vray *r, sg_ray_surface
 {
     vd bnd;
     if (bend) {
-        vm nonphys, tir;
-        bend_v(s, r, &nonphys, &tir);
+        vm nonphys, tir, unsure;
+        bend_v(s, r, &nonphys, &tir, &unsure);
         bad = fail_lanes(bad, nonphys, live, SG_ENONPHYS, st);
         bad = fail_lanes(bad, tir, live, SG_ETIR, st);
+        bad = fail_lanes(bad, unsure, live, SG_EUNCERT, st);
     }
     r->eP = vsel(vd_isnan(r->eP), vd_set(INFINITY), r->eP);
     r->eD = vsel(vd_isnan(r->eD), vd_set(INFINITY), r->eD);
