@@ -11,7 +11,7 @@
 
 SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
-tmux_setup 12 layout
+tmux_setup 14 layout
 
 cp "$ROOT/examples/cooke_triplet.json" "$WORK/cooke.json"
 RAY="0.3 0.7 -0.2 0.4"
@@ -152,7 +152,39 @@ check "80x24 classic: the values equal sagitta trace --method classic, as estima
 WHY="the word bound is on the classic screen"
 check "80x24 classic: nothing is called a bound" sh -c "! $T capture-pane -p -t =main: | grep -qi 'bound'"
 
-# 9-12. 200x50: the same values, and the table has room for more columns.
+# 10-11. The digits are verify's: the least of x, y, z (and of l, m, n) on
+# surface 2, where classic keeps about 9.6 digits, is verify's digits_min
+# (dir_digits_min) for the same ray, to the 0.1 shown.
+"$SAGITTA" verify "$WORK/cooke.json" --ray $RAYC --format json >"$WORK/verify.json" 2>/dev/null
+verify_digits() { # surface, key
+    awk -v s="$1" -v key="\"$2\":" '
+        $1 == "\"surface\":" { v = $2; gsub(/[^0-9]/, "", v); cur = v }
+        $1 == "\"classic\":" { in_c = 1 }
+        $1 == "\"precise\":" { in_c = 0 }
+        in_c && cur == s && $1 == key { v = $2; sub(/,$/, "", v); printf "%.1f", v; exit }
+    ' "$WORK/verify.json"
+}
+# The least of the panel's digits for the names given.
+panel_digits() {
+    screen | grep '^digits vs mpfr' | grep -o " [$1] [0-9.]*" |
+        awk '{ if (m == "" || $2 + 0 < m + 0) m = $2 } END { print m }'
+}
+command_line "goto 2"
+wait_for "Surface 2:" >/dev/null
+sleep 0.3
+VP=$(verify_digits 2 digits_min)
+VD=$(verify_digits 2 dir_digits_min)
+EP=$(panel_digits xyz)
+ED=$(panel_digits lmn)
+echo "# classic surface 2 digits: editor point $EP dir $ED; verify point $VP dir $VD"
+WHY="editor $EP, verify $VP"
+check "the editor's point digits are verify's for the same ray" \
+    sh -c "[ -n '$VP' ] && [ '$EP' = '$VP' ] && [ '$VP' != '17.0' ]"
+WHY="editor $ED, verify $VD"
+check "the editor's direction digits are verify's for the same ray" \
+    sh -c "[ -n '$VD' ] && [ '$ED' = '$VD' ]"
+
+# 12-14. 200x50: the same values, and the table has room for more columns.
 start cooke.json 200 50
 if wait_for "cooke.json" 15 && wait_for "Surf"; then
     command_line "ray $RAY"
@@ -174,7 +206,9 @@ if wait_for "cooke.json" 15 && wait_for "Surf"; then
     command_line "method classic"
     wait_for "err est" >/dev/null
     WHY="classic's heading"
-    check "200x50 classic: the column reads err est" sh -c "$T capture-pane -p -t =main: | grep -q 'err est'"
+    check "200x50 classic: the column reads err est, and nothing is called a bound" \
+        sh -c "$T capture-pane -p -t =main: | grep -q 'err est' &&
+               ! $T capture-pane -p -t =main: | grep -qi 'bound'"
 else
     i=0; while [ $i -lt 4 ]; do not_ok "the Cooke triplet opens at 200x50"; i=$((i + 1)); done
 fi
