@@ -80,6 +80,9 @@ double meas_residual(const sg_surface *s, double x, double y, double z)
     double res = NAN;
     if (!isfinite(x) || !isfinite(y) || !isfinite(z))
         return NAN;
+    /* A plane's residual is |z| exactly. */
+    if ((!isfinite(s->radius) || s->radius == 0.0) && s->type != SG_SURF_EVENASPH)
+        return fabs(z);
     /* The terms are at most about max(|x|, |y|, |z|)^2 / |R| and the
      * polynomial's; a result above 2^(60 - prec) of the largest is known
      * to 20 bits or more.  2^-2200 of it is below any double. */
