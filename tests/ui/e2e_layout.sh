@@ -11,7 +11,7 @@
 
 SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
-tmux_setup 14 layout
+tmux_setup 15 layout
 
 cp "$ROOT/examples/cooke_triplet.json" "$WORK/cooke.json"
 RAY="0.3 0.7 -0.2 0.4"
@@ -211,6 +211,33 @@ if wait_for "cooke.json" 15 && wait_for "Surf"; then
                ! $T capture-pane -p -t =main: | grep -qi 'bound'"
 else
     i=0; while [ $i -lt 4 ]; do not_ok "the Cooke triplet opens at 200x50"; i=$((i + 1)); done
+fi
+
+# 15. A difference far below a point's size reads as agreement: on the
+# Cassegrain's stop, ray (0, 1, -0.25, 0), precise's y is 0 and the 256-bit
+# mpfr reference's -2.6e-76 (sagitta trace shows both); verify's metric
+# counts 17 digits where the old purely relative one showed a red 0.0.
+cp "$ROOT/examples/cassegrain.json" "$WORK/cassegrain.json"
+"$SAGITTA" trace "$WORK/cassegrain.json" --ray 0,1,-0.25,0 --format csv --method mpfr \
+    >"$WORK/cg_mpfr.csv" 2>/dev/null
+"$SAGITTA" trace "$WORK/cassegrain.json" --ray 0,1,-0.25,0 --format csv >"$WORK/cg.csv" 2>/dev/null
+YM=$(csv "$WORK/cg_mpfr.csv" y 2)
+YP=$(csv "$WORK/cg.csv" y 2)
+start cassegrain.json 80 24
+if wait_for "cassegrain.json" 15 && wait_for "Surf"; then
+    command_line "ray 0 1 -0.25 0"
+    command_line "digits on"
+    command_line "goto 2"
+    wait_for "digits vs mpfr" >/dev/null
+    sleep 0.3
+    DY=$(screen | grep '^digits vs mpfr' | grep -o ' y [0-9.]*' | sed 's/ y //')
+    echo "# stop y: precise $YP, mpfr $YM; editor digits of y: $DY"
+    WHY="precise y $YP, mpfr y $YM, digits $DY"
+    check "a 2.6e-76 difference on a 375 mm point reads 17 digits, not 0" \
+        sh -c "[ '$YP' = 0 ] && awk -v m='$YM' 'BEGIN { exit !(m != 0 && m > -1e-60 && m < 1e-60) }' &&
+               [ '$DY' = 17.0 ]"
+else
+    not_ok "the Cassegrain opens"
 fi
 
 [ "$N" -eq "$NTESTS" ] || echo "# ran $N of $NTESTS"
