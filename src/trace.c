@@ -228,6 +228,16 @@ static double surf_cos_d(const sg_sprep *s, const double p[3], const double d[3]
     double g[3], gn;
     grad_d(s, p, g);
     gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    if (!isfinite(gn) || gn < 0x1p-500) {
+        /* Squares out of range (|R| above about 1e154): scale first. */
+        double gm = fmax(fabs(g[0]), fmax(fabs(g[1]), fabs(g[2])));
+        if (gm > 0.0 && isfinite(gm)) {
+            g[0] /= gm;
+            g[1] /= gm;
+            g[2] /= gm;
+            gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        }
+    }
     return gn > 0.0 ? fabs(g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn : 0.0;
 }
 
@@ -277,6 +287,17 @@ static int classic_bend(const sg_sprep *s, const double p[3], double d[3], doubl
     d[2] /= len;
     grad_d(s, p, g);
     gg = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    if (!isfinite(gg) || gg < 0x1p-500) {
+        /* The squares over- or underflow (|R| above about 1e154): scale
+         * first.  Ordinary normals keep the textbook arithmetic. */
+        double gm = fmax(fabs(g[0]), fmax(fabs(g[1]), fabs(g[2])));
+        if (gm > 0.0 && isfinite(gm)) {
+            g[0] /= gm;
+            g[1] /= gm;
+            g[2] /= gm;
+            gg = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+        }
+    }
     g[0] /= gg;
     g[1] /= gg;
     g[2] /= gg;
@@ -333,8 +354,19 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
                 sg_fail_rest(out, i, t->n, SG_EMISS);
                 return SG_EMISS;
             }
-            t1 = (-B + sqrt(disc)) / (2.0 * A);
-            t2 = (-B - sqrt(disc)) / (2.0 * A);
+            if (fabs(4.0 * A * C) <= 0x1p-20 * (B * B)) {
+                /* A nearly flat surface (|R| of 1e15 and more on a lens):
+                 * the textbook near root -B + sqrt(disc) would cancel
+                 * more than 20 bits, and from |R| = 1e18 on cancel to
+                 * nothing, putting the hit at the ray's start.  There the
+                 * cancellation-free form gives both roots. */
+                double q = -0.5 * (B + copysign(sqrt(disc), B));
+                t1 = q / A;
+                t2 = q != 0.0 ? C / q : tl;
+            } else {
+                t1 = (-B + sqrt(disc)) / (2.0 * A);
+                t2 = (-B - sqrt(disc)) / (2.0 * A);
+            }
             ok1 = k1 * c * (zl + t1 * d[2]) <= 1.0;
             ok2 = k1 * c * (zl + t2 * d[2]) <= 1.0;
             if (ok1 && ok2)

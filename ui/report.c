@@ -89,6 +89,19 @@ static const char *sci(double v, int prec, char *buf, size_t n)
     return buf;
 }
 
+/* Classic's error figure is an estimate, not a bound (it is exceeded on
+ * ordinary lenses), so its column carries another name; precise's and
+ * mpfr's keep "bound". */
+static int is_estimate(const report_meta *m)
+{
+    return m && m->method && strcmp(m->method, "classic") == 0;
+}
+
+static const char *bound_key(const report_meta *m)
+{
+    return is_estimate(m) ? "error_estimate" : "error_bound";
+}
+
 static const char *const norm_label[4] = { "Hx", "Hy", "Px", "Py" };
 static const char *const sd_json[6] = { "x", "y", "z", "l", "m", "n" };
 static const char *const norm_json[4] = { "hx", "hy", "px", "py" };
@@ -128,11 +141,12 @@ static void text_status_line(FILE *f, const sg_ray_surface *s, int nsurf, int st
         fprintf(f, "Status      : %s (%s)\n", report_status_name(st), sg_strerror(st));
 }
 
-static void text_table(FILE *f, const sg_ray_surface *s, int nsurf)
+static void text_table(FILE *f, const report_meta *m, const sg_ray_surface *s, int nsurf)
 {
     int i;
     fprintf(f, "%4s %23s %23s %23s %23s %23s %23s %10s %10s %23s  %s\n", "Surf",
-            "X", "Y", "Z", "L", "M", "N", "Residual", "ErrBound", "Path", "Status");
+            "X", "Y", "Z", "L", "M", "N", "Residual", is_estimate(m) ? "ErrEst" : "ErrBound",
+            "Path", "Status");
     for (i = 0; i < nsurf; i++) {
         const sg_ray_surface *e = &s[i];
         char label[16], b[9][40];
@@ -178,6 +192,9 @@ static void text_write(FILE *f, const report_meta *m, int nsurf,
                 shortest(m->wave_um, b, sizeof b), m->wave_index);
     fputs("Coordinates are in each surface's local frame; L, M, N are the "
           "direction cosines after the surface.\n", f);
+    if (is_estimate(m))
+        fputs("ErrEst is the classic method's error estimate, not a bound: the true "
+              "error can exceed it.\n", f);
     if (nray > 1)
         fprintf(f, "Rays        : %zu\n", nray);
     for (r = 0; r < nray; r++) {
@@ -189,7 +206,7 @@ static void text_write(FILE *f, const report_meta *m, int nsurf,
             text_ray_line(f, kind, &rays[r]);
         text_status_line(f, s, nsurf, ray_status(s, nsurf, status, r));
         fputc('\n', f);
-        text_table(f, s, nsurf);
+        text_table(f, m, s, nsurf);
     }
 }
 
@@ -208,13 +225,13 @@ static void put_num(FILE *f, double v, int json)
         fprintf(f, "%.17g", v);
 }
 
-static void csv_write(FILE *f, int nsurf, const sg_ray_surface *out, size_t nray)
+static void csv_write(FILE *f, const report_meta *m, int nsurf, const sg_ray_surface *out,
+                      size_t nray)
 {
     size_t r;
     int i;
-    fputs(nray > 1 ? "ray,surface,x,y,z,l,m,n,residual,error_bound,path,status\n"
-                   : "surface,x,y,z,l,m,n,residual,error_bound,path,status\n",
-          f);
+    fprintf(f, "%ssurface,x,y,z,l,m,n,residual,%s,path,status\n", nray > 1 ? "ray," : "",
+            bound_key(m));
     for (r = 0; r < nray; r++)
         for (i = 0; i < nsurf; i++) {
             const sg_ray_surface *e = &out[r * (size_t)nsurf + (size_t)i];
@@ -287,15 +304,15 @@ static void json_input(FILE *f, sg_ray_kind kind, const sg_ray_in *ray)
     fputc('}', f);
 }
 
-static void json_surfaces(FILE *f, const sg_ray_surface *s, int nsurf,
+static void json_surfaces(FILE *f, const report_meta *m, const sg_ray_surface *s, int nsurf,
                           const char *indent)
 {
     int i;
     fputs("[\n", f);
     for (i = 0; i < nsurf; i++) {
         const sg_ray_surface *e = &s[i];
-        static const char *const key[9] = { "x", "y", "z", "l", "m", "n",
-                                            "residual", "error_bound", "path" };
+        const char *const key[9] = { "x", "y", "z", "l", "m", "n",
+                                     "residual", bound_key(m), "path" };
         const double v[9] = { e->x, e->y, e->z, e->l, e->m, e->n,
                               e->residual, e->error_bound, e->path };
         int k;
@@ -328,7 +345,7 @@ static int json_write(FILE *f, const report_meta *m, int nsurf,
         }
         fprintf(f, ",\n  \"status\": \"%s\",\n  \"surfaces\": ",
                 report_status_name(ray_status(out, nsurf, status, 0)));
-        json_surfaces(f, out, nsurf, "  ");
+        json_surfaces(f, m, out, nsurf, "  ");
         fputs("\n}\n", f);
         return 0;
     }
@@ -342,7 +359,7 @@ static int json_write(FILE *f, const report_meta *m, int nsurf,
         }
         fprintf(f, ", \"status\": \"%s\", \"surfaces\": ",
                 report_status_name(ray_status(s, nsurf, status, r)));
-        json_surfaces(f, s, nsurf, "    ");
+        json_surfaces(f, m, s, nsurf, "    ");
         fprintf(f, "}%s\n", r + 1 < nray ? "," : "");
     }
     fputs("  ]\n}\n", f);
@@ -376,7 +393,7 @@ int report_write(FILE *f, report_fmt fmt, const report_meta *m, int nsurf,
         text_write(f, m, nsurf, out, status, nray, kind, rays);
         break;
     case REPORT_CSV:
-        csv_write(f, nsurf, out, nray);
+        csv_write(f, m, nsurf, out, nray);
         break;
     case REPORT_JSON:
         if (json_write(f, m, nsurf, out, status, nray, kind, rays) < 0)

@@ -25,7 +25,10 @@ typedef struct report_meta {
     int wave_index;     /* 1-based */
 } report_meta;
 
-/* Writes nray rays (each nsurf consecutive sg_ray_surface entries in out;
+/* The error column is error_bound (text: ErrBound) for precise and mpfr;
+ * for m->method "classic" it is error_estimate (ErrEst), since classic's
+ * figure is not a bound.
+ * Writes nray rays (each nsurf consecutive sg_ray_surface entries in out;
  * ray r's launch in rays[r], kind as in sg_trace_batch, may be NULL).
  * status[r] is the sg_trace_* return of ray r (may be NULL when nray == 1).
  * Returns 0, or -1 on a write error (errno set). */

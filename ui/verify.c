@@ -20,6 +20,7 @@
 #include <mpfr.h>
 
 #include "args.h"
+#include "measure.h"
 #include "report.h"
 
 enum { M_PRECISE = 0, M_CLASSIC = 1, M_MPFR = 2, NMETHOD = 3 };
@@ -27,10 +28,10 @@ static const char *const mname[NMETHOD] = { "precise", "classic", "mpfr" };
 static const sg_method mcode[NMETHOD] = { SG_METHOD_PRECISE, SG_METHOD_CLASSIC,
                                           SG_METHOD_MPFR };
 
-#define DIGITS_CAP 17.0
-/* A coordinate much smaller than its point is judged against this fraction
- * of the point's largest coordinate rather than against itself. */
-#define DIGITS_FLOOR 1e-6
+#define DIGITS_CAP MEAS_DIGITS_CAP
+/* The least reference precision verify accepts: over twice the precise
+ * method's 53-bit output and above its 106-bit working precision. */
+#define VERIFY_MIN_BITS 128
 #define DEFAULT_GRID 7
 #define DEFAULT_COUNT 10000
 #define DEFAULT_SEED 20230421
@@ -62,7 +63,7 @@ static void verify_help(FILE *f)
 "  --seed S                 random seed of table2 (20230421)\n"
 "\n"
 "Options:\n"
-"  --bits N                 precision of the MPFR reference, 53 to 100000 (256)\n"
+"  --bits N                 precision of the MPFR reference, 128 to 100000 (256)\n"
 "  --wave N                 wavelength number, from 1 (default: the primary)\n"
 "  --format F               text (default) or json\n"
 "  -o, --output FILE        write to FILE instead of standard output\n"
@@ -111,40 +112,18 @@ static double max_abs3(const double v[3])
     return fmax(fabs(v[0]), fmax(fabs(v[1]), fabs(v[2])));
 }
 
-/* Digits of one coordinate against a reference, judged against den. */
-static double coord_digits(double a, double b, double den)
-{
-    double e, d;
-    if (a == b)
-        return DIGITS_CAP;
-    e = fabs(a - b);
-    if (!(den > 0.0) || !isfinite(e))
-        return 0.0;
-    d = -log10(e / den);
-    return d < 0.0 ? 0.0 : d > DIGITS_CAP ? DIGITS_CAP : d;
-}
-
-/* The least digits over the three coordinates, each judged against
- * max(|b_k|, 1e-6 * max|b|).  A reference point at the origin (a chief
- * ray through a vertex) has no size of its own, so it borrows scale, the
- * size of the other points on its surface; 0 judges it against nothing. */
+/* The digits of a point: see measure.h, shared with the editor's digits
+ * view.  A reference point at the origin (a chief ray through a vertex)
+ * has no size of its own, so it borrows scale, the size of the other
+ * points on its surface; 0 judges it against nothing. */
 static double point_digits_s(const double a[3], const double b[3], double scale)
 {
-    double size = max_abs3(b), floor_, d = DIGITS_CAP;
-    int k;
-    floor_ = DIGITS_FLOOR * (size > 0.0 ? size : scale);
-    for (k = 0; k < 3; k++)
-        d = fmin(d, coord_digits(a[k], b[k], fmax(fabs(b[k]), floor_)));
-    return d;
+    return meas_point_digits(a, b, scale);
 }
 
 static double point_digits(const double a[3], const double b[3])
 {
-    double floor_ = DIGITS_FLOOR * max_abs3(b), d = DIGITS_CAP;
-    int k;
-    for (k = 0; k < 3; k++)
-        d = fmin(d, coord_digits(a[k], b[k], fmax(fabs(b[k]), floor_)));
-    return d;
+    return meas_point_digits(a, b, 0.0);
 }
 
 static double max_diff3(const double a[3], const double b[3])
@@ -206,6 +185,13 @@ static double min_of(const double *v, size_t n)
         if (k == 0 || v[k] < m)
             m = v[k];
     return m;
+}
+
+/* The reference's own failure (it found no aim, or its iteration did not
+ * converge), as opposed to a ray that misses, TIRs or is vignetted. */
+static int ref_broken_status(int st)
+{
+    return st == SG_EAIM || st == SG_ENOCONV || st == SG_EUNCERT;
 }
 
 /* The surface where a ray stopped, or -1 when it reached the image. */
@@ -369,6 +355,7 @@ typedef struct worst {
     long ray; /* -1: none compared */
     int surf;
     double digits;
+    double err; /* max |coordinate - mpfr| there; ties in digits go to the larger */
 } worst;
 
 typedef struct violation {
@@ -391,6 +378,8 @@ typedef struct vdesign {
     size_t nviol;
     size_t ncmp[2];
     size_t nfail_ref;     /* rays the reference does not trace */
+    size_t nref_broken;   /* of those, where the reference itself failed
+                           * (aiming or convergence) rather than the ray */
     size_t ndis[2];       /* disagreements per method */
 } vdesign;
 
@@ -528,6 +517,11 @@ done:
     return rc;
 }
 
+static int ref_broken(const vray *ray)
+{
+    return ref_broken_status(ray->st[M_MPFR]);
+}
+
 static int add_violation(vdesign *v, size_t r, int i, int dir, double err,
                          double bound, double refbound)
 {
@@ -560,13 +554,21 @@ static int vdesign_stats(vdesign *v)
     for (m = 0; m < 2; m++) {
         v->w[m].ray = -1;
         v->w[m].digits = INFINITY;
+        v->w[m].err = -1.0;
         v->ncmp[m] = v->ndis[m] = 0;
     }
     v->nfail_ref = 0;
+    v->nref_broken = 0;
     for (r = 0; r < v->nray; r++) {
         const vray *ray = &v->rays[r];
         if (ray->st[M_MPFR] != SG_OK)
             v->nfail_ref++;
+        /* A reference that could not aim or converge says nothing about
+         * the ray, so the methods are not judged on it. */
+        if (ref_broken(ray)) {
+            v->nref_broken++;
+            continue;
+        }
         for (m = 0; m < 2; m++) {
             if (ray->st[m] != ray->st[M_MPFR] || ray->fs[m] != ray->fs[M_MPFR])
                 v->ndis[m]++;
@@ -606,8 +608,10 @@ static int vdesign_stats(vdesign *v)
                 dig[n++] = dg;
                 ms->dirmin = fmin(ms->dirmin, point_digits(da, db));
                 ms->maxerr = fmax(ms->maxerr, max_diff3(pa, pb));
-                if (dg < v->w[m].digits) {
+                if (dg < v->w[m].digits ||
+                    (dg == v->w[m].digits && max_diff3(pa, pb) > v->w[m].err)) {
                     v->w[m].digits = dg;
+                    v->w[m].err = max_diff3(pa, pb);
                     v->w[m].ray = (long)r;
                     v->w[m].surf = i;
                 }
@@ -677,6 +681,12 @@ static int precise_passes(const vdesign *v)
     return v->nviol == 0 && v->ndis[M_PRECISE] == 0;
 }
 
+/* Every ray was checked: the reference traced or truly stopped each one. */
+static int complete(const vdesign *v)
+{
+    return v->nref_broken == 0;
+}
+
 static void text_fmt_num(char *buf, size_t n, double v, const char *fmt)
 {
     if (isnan(v))
@@ -713,8 +723,8 @@ static void text_worst(FILE *f, const vdesign *v, int m)
         fprintf(f, "worst %s ray: none compared\n", mname[m]);
         return;
     }
-    if (w->digits >= DIGITS_CAP) {
-        fprintf(f, "worst %s ray: none; every point equals mpfr's\n", mname[m]);
+    if (w->err == 0.0) {
+        fprintf(f, "worst %s ray: none; every compared point equals mpfr's\n", mname[m]);
         return;
     }
     a = rs(v, m, (size_t)w->ray, w->surf);
@@ -730,6 +740,8 @@ static void text_worst(FILE *f, const vdesign *v, int m)
     fprintf(f, "  error %.3g", max_diff3(pa, pb));
     if (m == M_PRECISE)
         fprintf(f, ", bound %.3g", a->error_bound);
+    else
+        fprintf(f, ", estimate %.3g (not a bound)", a->error_bound);
     fputc('\n', f);
 }
 
@@ -780,6 +792,10 @@ static void vdesign_text(FILE *f, const vdesign *v)
     if (v->nfail_ref) {
         fprintf(f, "\nrays the mpfr reference does not trace (not compared): %zu\n",
                 v->nfail_ref);
+        if (v->nref_broken)
+            fprintf(f, "of these, the reference itself failed (it could not aim or "
+                       "converge) on %zu; the methods were not checked there\n",
+                    v->nref_broken);
         for (r = 0, shown = 0; r < v->nray; r++) {
             const vray *ray = &v->rays[r];
             if (ray->st[M_MPFR] == SG_OK)
@@ -807,7 +823,8 @@ static void vdesign_text(FILE *f, const vdesign *v)
                 mname[m], v->ndis[m], v->ndis[m] == 1 ? "" : "s");
         for (r = 0, shown = 0; r < v->nray; r++) {
             const vray *ray = &v->rays[r];
-            if (ray->st[m] == ray->st[M_MPFR] && ray->fs[m] == ray->fs[M_MPFR])
+            if (ref_broken(ray) ||
+                (ray->st[m] == ray->st[M_MPFR] && ray->fs[m] == ray->fs[M_MPFR]))
                 continue;
             if (shown++ == TEXT_LIST_MAX) {
                 fprintf(f, "  ... and %zu more (see --format json)\n",
@@ -836,11 +853,18 @@ static void vdesign_text(FILE *f, const vdesign *v)
         if (v->nviol > TEXT_LIST_MAX)
             fprintf(f, "  ... and %zu more (see --format json)\n", v->nviol - TEXT_LIST_MAX);
     }
-    fprintf(f, "\nresult: %s\n",
-            precise_passes(v)
-                ? "PASS: the precise error bound covers the actual error at every "
-                  "surface of every ray"
-                : "FAIL: see above");
+    if (!precise_passes(v))
+        fputs("\nresult: FAIL: see above\n", f);
+    else if (!complete(v))
+        fprintf(f, "\nresult: INCOMPLETE: the precise error bound covers the actual error "
+                   "on every ray checked, but the mpfr reference (%d bits) itself failed on "
+                   "%zu ray%s, which %s not checked; that is the reference's failure, not "
+                   "precise's\n",
+                v->bits, v->nref_broken, v->nref_broken == 1 ? "" : "s",
+                v->nref_broken == 1 ? "was" : "were");
+    else
+        fputs("\nresult: PASS: the precise error bound covers the actual error at every "
+              "surface of every ray\n", f);
 }
 
 static void json_ray(jb *b, cJSON *obj, const vray *ray)
@@ -892,7 +916,8 @@ static void json_worst(jb *b, cJSON *obj, const vdesign *v, int m)
     jvec3(b, o, "point", pa);
     jvec3(b, o, "reference", pb);
     jnum(b, o, "error", max_diff3(pa, pb));
-    jnum(b, o, "bound", a->error_bound);
+    /* Classic's figure is an estimate, not a bound. */
+    jnum(b, o, m == M_PRECISE ? "bound" : "estimate", a->error_bound);
     jnum(b, o, "reference_bound", r->error_bound);
 }
 
@@ -929,6 +954,7 @@ static int vdesign_json(FILE *f, const vdesign *v)
         jint(&b, o, "compared_precise", (long)v->ncmp[0]);
         jint(&b, o, "compared_classic", (long)v->ncmp[1]);
         jint(&b, o, "failed_in_mpfr", (long)v->nfail_ref);
+        jint(&b, o, "reference_failed", (long)v->nref_broken);
         jint(&b, o, "disagreements_precise", (long)v->ndis[0]);
         jint(&b, o, "disagreements_classic", (long)v->ndis[1]);
     }
@@ -979,7 +1005,8 @@ static int vdesign_json(FILE *f, const vdesign *v)
     for (r = 0; a && r < v->nray; r++) {
         const vray *ray = &v->rays[r];
         for (m = 0; m < 2; m++) {
-            if (ray->st[m] == ray->st[M_MPFR] && ray->fs[m] == ray->fs[M_MPFR])
+            if (ref_broken(ray) ||
+                (ray->st[m] == ray->st[M_MPFR] && ray->fs[m] == ray->fs[M_MPFR]))
                 continue;
             e = jput(&b, a, NULL, cJSON_CreateObject());
             if (!e)
@@ -1026,7 +1053,8 @@ static int vdesign_json(FILE *f, const vdesign *v)
             }
         }
     }
-    jbool(&b, root, "pass", precise_passes(v));
+    jbool(&b, root, "pass", precise_passes(v) && complete(v));
+    jbool(&b, root, "complete", complete(v));
     return jemit(&b, root, f);
 }
 
@@ -1104,6 +1132,12 @@ static int verify_design(const char *path, const double *ray4, int grid, int bit
         rc = vdesign_json(out.f, &v);
     else
         vdesign_text(out.f, &v);
+    if (rc == CLI_EXIT_OK && precise_passes(&v) && !complete(&v)) {
+        cli_error("verify: %s: the mpfr reference (%d bits) failed on %zu ray%s (it could "
+                  "not aim or converge), left unchecked; no fault of precise", path, v.bits,
+                  v.nref_broken, v.nref_broken == 1 ? "" : "s");
+        rc = CLI_EXIT_VERIFY;
+    }
     if (rc == CLI_EXIT_OK && !precise_passes(&v)) {
         if (v.nviol)
             cli_error("verify: %s: the precise error bound is below the actual error "
@@ -1428,7 +1462,7 @@ static int experiment_table1(int bits, int fmt, const char *output)
         w->bound_ok = 1;
         for (m = 0; m < 2; m++) {
             const sg_ray_surface *s = &w->o[m][1];
-            double floor_ = DIGITS_FLOOR * max_abs3(ref);
+            double size = max_abs3(ref);
             if (w->st[m] != SG_OK || w->st[M_MPFR] != SG_OK) {
                 w->dy[m] = w->dz[m] = w->dp[m] = w->ulp[m] = NAN;
                 if (m == M_PRECISE)
@@ -1436,8 +1470,8 @@ static int experiment_table1(int bits, int fmt, const char *output)
                 continue;
             }
             point_of(s, pa);
-            w->dy[m] = coord_digits(pa[1], ref[1], fmax(fabs(ref[1]), floor_));
-            w->dz[m] = coord_digits(pa[2], ref[2], fmax(fabs(ref[2]), floor_));
+            w->dy[m] = meas_coord_digits(pa[1], ref[1], size);
+            w->dz[m] = meas_coord_digits(pa[2], ref[2], size);
             w->dp[m] = point_digits(pa, ref);
             w->ulp[m] = max_diff3(pa, ref) / ulp_of(max_abs3(ref));
             if (m == M_PRECISE &&
@@ -1815,6 +1849,15 @@ int cmd_verify(int argc, char **argv)
         case OPT_BITS:
             if (cli_int_value("--bits", val, 53, 100000, &bits))
                 return CLI_EXIT_USAGE;
+            if (bits < VERIFY_MIN_BITS) {
+                /* The precise method carries 106 bits; a reference with
+                 * fewer than about twice a double's cannot judge it, and
+                 * would report its own error as precise's. */
+                return cli_usage_error("verify",
+                                       "--bits %d: a reference of fewer than %d bits is no "
+                                       "reference for a method that carries 106; use %d "
+                                       "or more", bits, VERIFY_MIN_BITS, VERIFY_MIN_BITS);
+            }
             break;
         case OPT_WAVE:
             if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))

@@ -274,7 +274,8 @@ static void cells(const char *csv, int row, char out[10][64])
                                          "error_bound", "path", "status" };
     int c;
     for (c = 0; c < 10; c++)
-        if (!ct_csv(csv, row, col[c], out[c], 64))
+        if (!ct_csv(csv, row, col[c], out[c], 64) &&
+            !(c == 7 && ct_csv(csv, row, "error_estimate", out[c], 64))) /* classic */
             fail_msg("no row %d column %s", row, col[c]);
 }
 

@@ -76,9 +76,9 @@ command_line() { # runs a ':' command
     keys Enter
 }
 
-# The full-precision y of the cursor's surface, from the detail line.
+# The full-precision y of the cursor's surface, from the detail panel.
 detail_y() {
-    screen | sed -n 's/^Surface \([0-9]*\):.* y=\([^ ]*\) .*/\2/p' | head -n 1
+    screen | grep -o '\(^\| \)y=[^ ]*' | head -n 1 | sed 's/^ *y=//'
 }
 
 # y of surface $2 from "sagitta trace" CSV output in file $1.

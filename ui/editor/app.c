@@ -41,9 +41,10 @@ void ui_layout(ui *u)
     int n = u->e->doc.sys->nsurf, avail;
     term_size(&u->rows, &u->cols);
     u->too_small = u->rows < MIN_ROWS || u->cols < MIN_COLS;
-    /* Title, sheet heading, ray, paraxial, results heading, detail and
-     * status take a line each; the surfaces share the rest. */
-    avail = u->rows - 7;
+    /* Title, sheet heading, ray, paraxial, results heading and status take
+     * a line each, the detail panel its own height; the surfaces share the
+     * rest. */
+    avail = u->rows - 6 - results_panel_height(u);
     if (avail < 2)
         avail = 2;
     u->sheet_h = avail / 2 > avail - n ? avail / 2 : avail - n;
@@ -54,11 +55,12 @@ void ui_layout(ui *u)
     u->ray_y = u->sheet_y + 1 + u->sheet_h;
     u->parax_y = u->ray_y + 1;
     u->res_y = u->parax_y + 1;
-    u->detail_y = u->rows - 2;
+    u->detail_y = u->rows - 1 - results_panel_height(u);
     u->status_y = u->rows - 1;
-    u->numw = (u->cols - 8 - 10 - 14 - 11) / 4;
-    if (u->numw < 11)
-        u->numw = 11;
+    /* At 80 columns Radius, Thickness, Semi-Dia and Conic all fit. */
+    u->numw = (u->cols - 8 - 9 - 13 - 10) / 4;
+    if (u->numw < 10)
+        u->numw = 10;
     if (u->numw > 22)
         u->numw = 22;
     u->resw = (u->cols - 8 - 10 - 10 - 10) / 6;

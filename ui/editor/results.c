@@ -1,24 +1,30 @@
-/* results.c - the live results: paraxial summary, per-surface ray data. */
+/* results.c - the live results: paraxial summary, per-surface ray data,
+ * and the detail panel with the cursor's surface at full precision. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
 
+#include "../measure.h"
 #include "../report.h"
 #include "numfmt.h"
 #include "term.h"
 #include "ui.h"
 
-#define LABEL_W 8
-
-/* The status comes first so a failure is visible at any width. */
-enum { RC_STATUS = 0, RC_X, RC_Y, RC_Z, RC_L, RC_M, RC_N, RC_RESID, RC_BOUND,
+/* The status comes first so a failure is visible at any width; the
+ * coordinates follow, then what a wider terminal has room for. */
+enum { RC_STATUS = 0, RC_X, RC_Y, RC_Z, RC_L, RC_M, RC_N, RC_RESID, RC_BOUND, RC_PATH,
        RC_DX, RC_DY, RC_DZ, RC_DL, RC_DM, RC_DN, RC_COUNT };
 
 static const char *const rc_head[RC_COUNT] = {
-    "status", "x", "y", "z", "l", "m", "n", "residual", "err bound",
+    "status", "x", "y", "z", "l", "m", "n", "residual", "err bound", "path",
     "dig x", "dig y", "dig z", "dig l", "dig m", "dig n"};
 
-/* A ray status in at most 9 columns. */
+/* Widest %.17g-shortest text of a double: sign, 17 digits, point, e-308. */
+#define FULL_W 24
+/* One cell of the panel: a one-letter label, '=', a full number. */
+#define CELL_W (2 + FULL_W)
+
+/* A ray status in at most 8 columns. */
 static const char *status_word(int st)
 {
     switch (st) {
@@ -29,20 +35,77 @@ static const char *status_word(int st)
     }
 }
 
+/* Classic's error figure is an estimate, not a bound: it says so. */
+static int is_estimate(const ui *u)
+{
+    return u->e->method == SG_METHOD_CLASSIC;
+}
+
+static const char *head(const ui *u, int c)
+{
+    if (c == RC_BOUND && is_estimate(u))
+        return "err est";
+    return rc_head[c];
+}
+
 static int ncols(const ui *u)
 {
     return u->e->digits ? RC_COUNT : RC_DX;
 }
 
-static int rc_width(const ui *u, int c)
+static int min_width(int c)
 {
-    if (c >= RC_X && c <= RC_N)
-        return u->resw;
     if (c == RC_STATUS)
-        return 10;
+        return 9;
+    if (c >= RC_X && c <= RC_N)
+        return 11;
+    if (c == RC_PATH)
+        return 11;
     if (c >= RC_DX)
         return 6;
     return 10;
+}
+
+/* Width of the surface-number column: enough for the last surface. */
+static int label_w(const ui *u)
+{
+    int n = u->e->cmp.have ? u->e->cmp.nsurf : u->e->doc.sys->nsurf, w = 1;
+    while (n >= 10) {
+        n /= 10;
+        w++;
+    }
+    return w < 4 ? 5 : w + 1;
+}
+
+/* Chooses the table's columns from res_left on and their widths; returns
+ * how many columns are shown.  Coordinates get the room left over, up to
+ * full precision, once every column fits. */
+static int table_layout(const ui *u, int first, int w[RC_COUNT])
+{
+    int nc = ncols(u), x = label_w(u), k, last = first, spare, grow;
+    for (k = 0; k < RC_COUNT; k++)
+        w[k] = 0;
+    for (k = first; k < nc; k++) {
+        if (x + min_width(k) > u->cols)
+            break;
+        w[k] = min_width(k);
+        x += w[k];
+        last = k + 1;
+    }
+    spare = u->cols - x;
+    /* Wider coordinates only when nothing further is hidden. */
+    if (last < nc)
+        return last - first;
+    for (grow = 1; grow && spare > 0;) {
+        grow = 0;
+        for (k = first; k < last && spare > 0; k++)
+            if (((k >= RC_X && k <= RC_N) || k == RC_PATH) && w[k] < FULL_W + 1) {
+                w[k]++;
+                spare--;
+                grow = 1;
+            }
+    }
+    return last - first;
 }
 
 static double coord(const sg_ray_surface *r, int c)
@@ -55,6 +118,59 @@ static double coord(const sg_ray_surface *r, int c)
     case RC_M: return r->m;
     default: return r->n;
     }
+}
+
+/* The residual as defined, |z - sag(x, y)| of the reported point: the
+ * engine's figure is a first-order form that reads 0 where the point is
+ * only very nearly on the surface. */
+static double residual(const ui *u, int row, const sg_ray_surface *r)
+{
+    const sg_system *s = u->e->doc.sys;
+    if (row <= 0 || row >= s->nsurf || u->e->cmp.nsurf != s->nsurf)
+        return r->residual;
+    return meas_residual(&s->surf[row], r->x, r->y, r->z);
+}
+
+/* The size a point at the origin is judged against: the largest reference
+ * coordinate of the ray anywhere, else the entrance pupil radius. */
+static double ref_scale(const compute *c)
+{
+    double s = 0.0;
+    int i, k;
+    for (i = 0; i < c->nsurf; i++) {
+        const sg_ray_surface *r = &c->ref_res[i];
+        if (r->status != SG_EOK)
+            continue;
+        for (k = RC_X; k <= RC_Z; k++)
+            if (isfinite(coord(r, k)))
+                s = fmax(s, fabs(coord(r, k)));
+    }
+    if (!(s > 0.0) && c->par_ok && isfinite(c->par.epd))
+        s = 0.5 * c->par.epd;
+    return s;
+}
+
+/* Digits of coordinate c (RC_X..RC_N) against the reference, judged as
+ * verify judges them (see measure.h); NaN when there is nothing to judge. */
+static double digits_of(const compute *c, const sg_ray_surface *r, const sg_ray_surface *ref,
+                        int k, double scale)
+{
+    double a = coord(r, k), b = coord(ref, k), size = 0.0;
+    int j, base = k <= RC_Z ? RC_X : RC_L;
+    if (!isfinite(a) || !isfinite(b))
+        return NAN;
+    for (j = base; j < base + 3; j++)
+        if (isfinite(coord(ref, j)))
+            size = fmax(size, fabs(coord(ref, j)));
+    if (!(size > 0.0))
+        size = base == RC_X ? scale : 1.0;
+    (void)c;
+    return meas_coord_digits(a, b, size);
+}
+
+static int digits_style(double d)
+{
+    return d >= 15.0 ? T_GOOD : d >= 10.0 ? T_NORMAL : T_ERROR;
 }
 
 static void paraxial_line(ui *u)
@@ -77,35 +193,126 @@ static void paraxial_line(ui *u)
         term_text(y, (int)strlen(buf) + 3, u->cols - (int)strlen(buf) - 3, T_DIM, 0, c->warn);
 }
 
-static void detail_line(ui *u)
+/* ------------------------------------------------------------ the panel */
+
+/* Cells of the panel across the screen: three at 80 columns. */
+static int panel_cells(const ui *u, int *cw)
 {
+    int n = (u->cols + 1) / (CELL_W + 1);
+    if (n > 6)
+        n = 6;
+    if (n >= 2) {
+        *cw = CELL_W;
+        return n;
+    }
+    /* Below 53 columns two cells share the width, numbers cut. */
+    *cw = (u->cols - 1) / 2;
+    return 2;
+}
+
+int results_panel_height(const ui *u)
+{
+    int cw, n = panel_cells(u, &cw);
+    return 1 + (6 + n - 1) / n + 1 + (u->e->digits ? 1 : 0);
+}
+
+/* Draws "label=value" in a cell; the value is cut (never rounded) to fit. */
+static void panel_item(ui *u, int y, int x, int w, const char *label, double v, int style)
+{
+    char num[NUMFMT_MAX], cut[NUMFMT_MAX + 8], buf[NUMFMT_MAX + 16];
+    int lw = (int)strlen(label) + 1;
+    numfmt_shortest(v, num, sizeof num);
+    numfmt_fit(num, w - lw, u->ell, cut, sizeof cut);
+    snprintf(buf, sizeof buf, "%s=%s", label, cut);
+    term_text(y, x, w, style, 1, buf);
+}
+
+static void panel_draw(ui *u)
+{
+    static const char *const name[6] = { "x", "y", "z", "l", "m", "n" };
     const ed *e = u->e;
     const compute *c = &e->cmp;
-    char buf[1024], v[6][NUMFMT_MAX];
-    int i, y = u->detail_y;
+    int h = results_panel_height(u), i, cw, n = panel_cells(u, &cw), y = u->detail_y;
+    char buf[512], num[3][NUMFMT_MAX];
     const sg_ray_surface *r;
-    term_fill(y, 0, u->cols, T_NORMAL);
+
+    for (i = 0; i < h; i++)
+        term_fill(y + i, 0, u->cols, T_NORMAL);
     if (!c->have || e->row >= c->nsurf)
         return;
     r = &c->res[e->row];
     if (r->status == SG_ENOTREACHED) {
-        snprintf(buf, sizeof buf, "Surface %d: not reached", e->row);
-    } else {
-        for (i = 0; i < 6; i++) {
-            double x = coord(r, RC_X + i);
-            if (isfinite(x))
-                numfmt_shortest(x, v[i], sizeof v[i]);
-            else
-                snprintf(v[i], sizeof v[i], "-");
-        }
-        snprintf(buf, sizeof buf, "Surface %d:  x=%s  y=%s  z=%s  l=%s  m=%s  n=%s", e->row,
-                 v[0], v[1], v[2], v[3], v[4], v[5]);
+        snprintf(buf, sizeof buf, "Surface %d: not reached (the ray stopped earlier: %s)",
+                 e->row, report_status_name(c->rc));
+        term_text(y, 0, u->cols, T_DIM, 1, buf);
+        return;
     }
-    term_text(y, 0, u->cols, T_DIM, 1, buf);
+    if (r->status != SG_EOK) {
+        snprintf(buf, sizeof buf, "Surface %d: %s (%s)", e->row,
+                 report_status_name(r->status), sg_strerror(r->status));
+        term_text(y, 0, u->cols, T_ERROR, 1, buf);
+        return;
+    }
+    numfmt_shortest(r->path, num[0], sizeof num[0]);
+    snprintf(buf, sizeof buf, "Surface %d:  OK   path=%s", e->row, num[0]);
+    term_text(y, 0, u->cols, T_GOOD, 1, buf);
+
+    for (i = 0; i < 6; i++)
+        panel_item(u, y + 1 + i / n, (i % n) * (cw + 1), cw, name[i], coord(r, RC_X + i),
+                   T_NORMAL);
+    y += 1 + (6 + n - 1) / n;
+
+    numfmt_shortest(residual(u, e->row, r), num[0], sizeof num[0]);
+    numfmt_shortest(r->error_bound, num[1], sizeof num[1]);
+    numfmt_shortest(r->dir_error_bound, num[2], sizeof num[2]);
+    snprintf(buf, sizeof buf, "residual=%s   %s=%s", num[0],
+             is_estimate(u) ? "estimate" : "bound", num[1]);
+    {
+        /* The direction's figure only where it fits whole. */
+        size_t len = strlen(buf);
+        char more[NUMFMT_MAX + 32];
+        snprintf(more, sizeof more, "   dir %s=%s", is_estimate(u) ? "estimate" : "bound",
+                 num[2]);
+        if ((int)(len + strlen(more)) <= u->cols)
+            snprintf(buf + len, sizeof buf - len, "%s", more);
+    }
+    term_text(y, 0, u->cols, T_NORMAL, 1, buf);
+
+    if (!e->digits)
+        return;
+    y++;
+    if (!c->ref_have) {
+        term_text(y, 0, u->cols, T_ERROR, 1, "digits: the mpfr reference could not be built");
+        return;
+    }
+    {
+        const sg_ray_surface *ref = &c->ref_res[e->row];
+        double scale = ref_scale(c);
+        int x;
+        if (ref->status != SG_EOK) {
+            /* The reference failed, not the method shown: say which. */
+            snprintf(buf, sizeof buf, "digits: the mpfr reference (%d bits) failed: %s",
+                     c->ref_opts.mpfr_bits, report_status_name(c->ref_rc));
+            term_text(y, 0, u->cols, T_ERROR, 1, buf);
+            return;
+        }
+        snprintf(buf, sizeof buf, "digits vs mpfr %d bits:", c->ref_opts.mpfr_bits);
+        term_text(y, 0, u->cols, T_DIM, 1, buf);
+        x = (int)strlen(buf) + 1;
+        for (i = 0; i < 6 && x + 7 <= u->cols; i++) {
+            double d = digits_of(c, r, ref, RC_X + i, scale);
+            snprintf(buf, sizeof buf, "%s %.1f", name[i], d);
+            term_text(y, x, 7, isnan(d) ? T_DIM : digits_style(d), 1, buf);
+            x += 8;
+        }
+    }
 }
 
-static void cell(const ui *u, int c, const sg_ray_surface *r, const sg_ray_surface *ref,
-                 int w, char *out, size_t n, int *style)
+/* ------------------------------------------------------------ the table */
+
+static void cell(const ui *u, int row, int c, const sg_ray_surface *r,
+                 const sg_ray_surface *ref, double scale, int w, char *out, size_t n,
+                 int *style)
 {
     double x;
     *style = T_NORMAL;
@@ -116,28 +323,27 @@ static void cell(const ui *u, int c, const sg_ray_surface *r, const sg_ray_surfa
         return;
     }
     /* Nothing was computed past a failure, so nothing is shown. */
-    if (r->status == SG_ENOTREACHED)
+    if (r->status != SG_EOK)
         return;
-    if (c <= RC_N) {
-        x = coord(r, c);
-        if (isfinite(x))
+    if (c <= RC_N || c == RC_PATH) {
+        x = c == RC_PATH ? r->path : coord(r, c);
+        if (!isnan(x))
             numfmt_cell(x, w, u->ell, out, n);
         return;
     }
     if (c == RC_RESID || c == RC_BOUND) {
-        x = c == RC_RESID ? r->residual : r->error_bound;
-        if (isfinite(x))
+        x = c == RC_RESID ? residual(u, row, r) : r->error_bound;
+        if (!isnan(x))
             snprintf(out, n, "%.2g", x);
         return;
     }
-    if (!ref || ref->status == SG_ENOTREACHED)
+    if (!ref || ref->status != SG_EOK)
         return;
     {
-        double a = coord(r, c - RC_DX + RC_X), b = coord(ref, c - RC_DX + RC_X);
-        if (isfinite(a) && isfinite(b)) {
-            double d = sg_digits(a, b);
+        double d = digits_of(&u->e->cmp, r, ref, c - RC_DX + RC_X, scale);
+        if (!isnan(d)) {
             snprintf(out, n, "%.1f", d);
-            *style = d >= 15.0 ? T_GOOD : d >= 10.0 ? T_NORMAL : T_ERROR;
+            *style = digits_style(d);
         }
     }
 }
@@ -146,15 +352,19 @@ void results_draw(ui *u)
 {
     const ed *e = u->e;
     const compute *c = &e->cmp;
-    int nc = ncols(u), i, k, x, y;
+    int nc = ncols(u), i, k, x, y, w[RC_COUNT], shown, lw = label_w(u);
+    double scale = 0.0;
     char buf[256];
 
     paraxial_line(u);
-    detail_line(u);
+    panel_draw(u);
     if (u->res_left >= nc)
         u->res_left = nc - 1;
     if (u->res_left < 0)
         u->res_left = 0;
+    shown = table_layout(u, u->res_left, w);
+    if (c->have && c->ref_have)
+        scale = ref_scale(c);
 
     /* The results follow the spreadsheet's cursor. */
     if (u->res_top > e->row)
@@ -168,20 +378,18 @@ void results_draw(ui *u)
 
     y = u->res_y;
     term_fill(y, 0, u->cols, T_HEADER);
-    term_text(y, 0, LABEL_W, T_HEADER, 1, u->res_left > 0 ? "Surf  {" : "Surf");
-    x = LABEL_W;
-    for (k = u->res_left; k < nc; k++) {
-        int w = rc_width(u, k);
-        if (x + w > u->cols)
-            break;
-        if (k == RC_STATUS)
-            term_text(y, x, w - 1, T_HEADER, 1, rc_head[k]);
+    term_text(y, 0, lw, T_HEADER, 1, u->res_left > 0 ? "S {" : "Surf");
+    x = lw;
+    for (k = u->res_left; k < u->res_left + shown; k++) {
+        const char *h = head(u, k);
+        int hw = (int)strlen(h);
+        if (k == RC_STATUS || hw >= w[k])
+            term_text(y, x, w[k] - 1, T_HEADER, 1, h);
         else
-            term_text(y, x + w - 1 - (int)strlen(rc_head[k]), (int)strlen(rc_head[k]), T_HEADER,
-                      0, rc_head[k]);
-        x += w;
+            term_text(y, x + w[k] - 1 - hw, hw, T_HEADER, 0, h);
+        x += w[k];
     }
-    if (k < nc)
+    if (u->res_left + shown < nc)
         term_text(y, u->cols - 1, 1, T_HEADER, 0, "}");
 
     for (i = 0; i < u->res_h; i++) {
@@ -196,21 +404,21 @@ void results_draw(ui *u)
         }
         if (r >= c->nsurf)
             continue;
-        snprintf(buf, sizeof buf, "%7d ", r);
-        term_text(y, 0, LABEL_W, r == e->row ? T_ROWSEL : T_DIM, 1, buf);
-        x = LABEL_W;
-        for (k = u->res_left; k < nc; k++) {
-            int w = rc_width(u, k), style, tw;
-            if (x + w > u->cols)
-                break;
-            cell(u, k, &c->res[r], c->ref_have ? &c->ref_res[r] : NULL, w - 1, buf,
-                 sizeof buf, &style);
+        snprintf(buf, sizeof buf, "%d", r);
+        term_fill(y, 0, lw, r == e->row ? T_ROWSEL : T_DIM);
+        term_text(y, lw - 1 - (int)strlen(buf), (int)strlen(buf), r == e->row ? T_ROWSEL : T_DIM,
+                  1, buf);
+        x = lw;
+        for (k = u->res_left; k < u->res_left + shown; k++) {
+            int style, tw;
+            cell(u, r, k, &c->res[r], c->ref_have ? &c->ref_res[r] : NULL, scale, w[k] - 1,
+                 buf, sizeof buf, &style);
             tw = numfmt_width(buf);
-            if (k != RC_STATUS && tw < w - 1)
-                term_text(y, x + (w - 1 - tw), tw, style, 0, buf);
+            if (k != RC_STATUS && tw < w[k] - 1)
+                term_text(y, x + (w[k] - 1 - tw), tw, style, 0, buf);
             else
-                term_text(y, x, w - 1, style, 1, buf);
-            x += w;
+                term_text(y, x, w[k] - 1, style, 1, buf);
+            x += w[k];
         }
     }
 }
@@ -239,7 +447,7 @@ int results_click(ui *u, int y, int kind)
         sheet_follow(u);
         return ED_HANDLED | ED_REDRAW;
     }
-    if (y > u->res_y && r < e->doc.sys->nsurf) {
+    if (y > u->res_y && y <= u->res_y + u->res_h && r < e->doc.sys->nsurf) {
         e->row = r;
         sheet_follow(u);
     }

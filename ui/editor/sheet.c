@@ -12,9 +12,11 @@
 static int col_width(const ui *u, int c)
 {
     switch (c) {
-    case COL_TYPE: return 10;
-    case COL_COMMENT: return u->cols >= 140 ? 20 : 14;
-    case COL_MATERIAL: return 11;
+    /* Compact enough that Conic fits at 80 columns; wider terminals add
+     * the asphere terms. */
+    case COL_TYPE: return 9;
+    case COL_COMMENT: return u->cols >= 140 ? 20 : 13;
+    case COL_MATERIAL: return u->cols >= 100 ? 11 : 10;
     default: return u->numw;
     }
 }

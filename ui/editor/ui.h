@@ -94,6 +94,8 @@ int ray_quick(ui *u, int key); /* chief and marginal keys; 0 if not one */
 void results_draw(ui *u);
 int results_key(ui *u, int key);
 int results_click(ui *u, int y, int kind);
+/* Lines the detail panel below the results takes at this width. */
+int results_panel_height(const ui *u);
 
 void title_draw(ui *u);
 void status_draw(ui *u);
