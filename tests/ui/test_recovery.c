@@ -175,16 +175,22 @@ static int count_rec(char *first, size_t n)
 }
 
 /* Every file in recdir, temporary or not. */
+/* Every file but the editor's lock (REC_LOCK_SUFFIX), which says who has
+ * a design open and holds no work. */
 static int count_all(void)
 {
     DIR *dp = opendir(recdir);
     struct dirent *de;
+    size_t ll = strlen(REC_LOCK_SUFFIX);
     int k = 0;
     if (!dp)
         return 0;
-    while ((de = readdir(dp)) != NULL)
-        if (de->d_name[0] != '.')
+    while ((de = readdir(dp)) != NULL) {
+        size_t len = strlen(de->d_name);
+        if (de->d_name[0] != '.' &&
+            !(len > ll && strcmp(de->d_name + len - ll, REC_LOCK_SUFFIX) == 0))
             k++;
+    }
     closedir(dp);
     return k;
 }

@@ -57,6 +57,12 @@ static double coord(const sg_ray_surface *r, int c)
     }
 }
 
+/* A value that is not a finite number reads as the reports write it. */
+static const char *nonfinite(double x)
+{
+    return isnan(x) ? "undefined" : x > 0 ? "Infinity" : "-Infinity";
+}
+
 static void paraxial_line(ui *u)
 {
     const compute *c = &u->e->cmp;
@@ -70,8 +76,21 @@ static void paraxial_line(ui *u)
     }
     /* Eight digits are plenty for a summary; exact numbers are one export
      * away. */
-    snprintf(buf, sizeof buf, "EFL %.8g   F/# %.6g   EPD %.8g   BFL %.8g   track %.8g",
-             c->par.efl, c->par.image_fnum, c->par.epd, c->par.bfl, c->par.total_track);
+    {
+        /* The lens unit once, and the wavelength the data belong to. */
+        const sg_system *s = u->e->doc.sys;
+        char v[5][NUMFMT_MAX];
+        double x[5] = {c->par.efl, c->par.image_fnum, c->par.epd, c->par.bfl,
+                       c->par.total_track};
+        int i, w = c->par_wave >= 0 && c->par_wave < s->nwave ? c->par_wave : 0;
+        for (i = 0; i < 5; i++)
+            if (isfinite(x[i]))
+                snprintf(v[i], sizeof v[i], i == 1 ? "%.6g" : "%.8g", x[i]);
+            else
+                snprintf(v[i], sizeof v[i], "%s", nonfinite(x[i]));
+        snprintf(buf, sizeof buf, "%s: EFL %s  F/# %s  EPD %s  BFL %s  track %s  at %d: %.7gum",
+                 s->units, v[0], v[1], v[2], v[3], v[4], w + 1, s->wave[w].um);
+    }
     term_text(y, 0, u->cols, T_NORMAL, 1, buf);
     if (c->warn[0] && (int)strlen(buf) + 4 < u->cols)
         term_text(y, (int)strlen(buf) + 3, u->cols - (int)strlen(buf) - 3, T_DIM, 0, c->warn);
@@ -96,7 +115,7 @@ static void detail_line(ui *u)
             if (isfinite(x))
                 numfmt_shortest(x, v[i], sizeof v[i]);
             else
-                snprintf(v[i], sizeof v[i], "-");
+                snprintf(v[i], sizeof v[i], "%s", nonfinite(x));
         }
         snprintf(buf, sizeof buf, "Surface %d:  x=%s  y=%s  z=%s  l=%s  m=%s  n=%s", e->row,
                  v[0], v[1], v[2], v[3], v[4], v[5]);
@@ -122,12 +141,16 @@ static void cell(const ui *u, int c, const sg_ray_surface *r, const sg_ray_surfa
         x = coord(r, c);
         if (isfinite(x))
             numfmt_cell(x, w, u->ell, out, n);
+        else
+            snprintf(out, n, "%s", nonfinite(x));
         return;
     }
     if (c == RC_RESID || c == RC_BOUND) {
         x = c == RC_RESID ? r->residual : r->error_bound;
         if (isfinite(x))
             snprintf(out, n, "%.2g", x);
+        else
+            snprintf(out, n, "%s", nonfinite(x));
         return;
     }
     if (!ref || ref->status == SG_ENOTREACHED)

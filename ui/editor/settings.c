@@ -116,7 +116,7 @@ void settings_draw(ui *u)
         u->set_top = u->set_sel - h + 1;
     term_text(1, 0, u->cols, T_FRAME, 1,
               " System settings   Enter edit  Left/Right change  a add  d delete  "
-              "p primary  Esc close");
+              "p primary  < > move  F FdC  Esc close");
     for (i = 0; i < h; i++) {
         int k = u->set_top + i, y = 2 + i;
         term_fill(y, 0, u->cols, T_NORMAL);
@@ -140,8 +140,26 @@ static int cycle(ui *u, item it, int dir)
         for (k = 0; k < 4 && strcmp(units[k], s->units) != 0; k++)
             ;
         return ui_run(u, "units %s", units[((k % 4) + dir + 4) % 4]);
-    case IT_APER_TYPE:
-        return ui_run(u, "aperture %s", ed_aper_name(((int)s->aper_type + dir + 5) % 5));
+    case IT_APER_TYPE: {
+        /* A type the current value does not suit (an NA of 9, an NA with
+         * the object at infinity) is skipped, so the cycle never sticks;
+         * an NA starts from the design's paraxial object-space NA. */
+        int i, f = ED_HANDLED;
+        for (i = 1; i < 5; i++) {
+            int t = (((int)s->aper_type + dir * i) % 5 + 5) % 5;
+            double na = e->cmp.par_ok ? e->cmp.par.object_na : 0.0;
+            if (t == SG_APER_OBJECT_NA && !(s->aper_value > 0.0 && s->aper_value < 1.0)) {
+                if (!(na > 0.0 && na < 1.0))
+                    continue;
+                f = ui_run(u, "aperture na %.17g", na);
+            } else {
+                f = ui_run(u, "aperture %s", ed_aper_name(t));
+            }
+            if (!(f & ED_ERROR))
+                return f;
+        }
+        return f;
+    }
     case IT_FIELD_TYPE:
         return ui_run(u, "field type %s", ed_field_type_name(((int)s->field_type + dir + 4) % 4));
     case IT_FIELD_NORM:
@@ -243,6 +261,20 @@ int settings_key(ui *u, int key)
         if (it.kind == IT_WAVE)
             return ui_run(u, "wavelength primary %d", it.idx + 1);
         return ED_HANDLED;
+    case '<':
+    case '>':
+        /* Reorders the wavelengths; the selection moves with the line. */
+        if (it.kind == IT_WAVE) {
+            int to = it.idx + (key == '<' ? -1 : 1), f;
+            if (to < 0 || to >= u->e->doc.sys->nwave)
+                return ED_HANDLED;
+            f = ui_run(u, "wavelength move %d %d", it.idx + 1, to + 1);
+            if (!(f & ED_ERROR))
+                u->set_sel += to - it.idx;
+            return f;
+        }
+        return ED_HANDLED;
+    case 'F': return ui_run(u, "wavelength preset FdC");
     case K_ESC:
     case 'q':
     case 't':
