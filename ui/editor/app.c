@@ -151,6 +151,18 @@ void status_draw(ui *u)
         return;
     }
     if (e->msg[0]) {
+        /* A warning of the design (a glass beyond its range) stays in
+         * view after the message of the command that caused it. */
+        if (!e->msg_err && e->cmp.warn[0]) {
+            char m[ED_MSG + SG_DIAG_MSG + 16];
+            int w;
+            snprintf(m, sizeof m, "%s  ", e->msg);
+            w = term_text(y, 0, u->cols, T_NORMAL, 0, m);
+            snprintf(m, sizeof m, "warning: %s", e->cmp.warn);
+            if (w < u->cols)
+                term_text(y, w, u->cols - w, T_ERROR, 1, m);
+            return;
+        }
         term_text(y, 0, u->cols, e->msg_err ? T_ERROR : T_NORMAL, 1, e->msg);
         return;
     }

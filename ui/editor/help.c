@@ -145,16 +145,37 @@ static int line(int i, char *buf, size_t n)
     return T_NORMAL;
 }
 
-/* Rows line i takes at width w: long lines wrap, indented by 4. */
-static int rows_of(const char *buf, int w)
+/* Where the next row of text s ends at width w: at the last blank that
+ * fits, or at w when a word is longer than that. */
+static int row_end(const char *s, int w)
 {
-    int len = (int)strlen(buf), r = 1;
-    if (w <= 8)
-        return 1;
-    if (len > w) {
-        len -= w;
-        r += (len + (w - 4) - 1) / (w - 4);
-    }
+    int len = (int)strlen(s), k;
+    if (len <= w)
+        return len;
+    for (k = w; k > w / 2; k--)
+        if (s[k] == ' ')
+            return k;
+    return w;
+}
+
+/* Lays out line buf at width cols: calls out for each row (its offset and
+ * length, continuation rows indented by 6) and returns the rows. */
+static int wrap(const char *buf, int cols, void (*out)(void *, int, const char *, int, int),
+                void *arg)
+{
+    int off = 0, len = (int)strlen(buf), r = 0;
+    do {
+        int ind = r == 0 ? 0 : 6, w = cols - ind, n;
+        if (w < 10)
+            w = cols, ind = 0;
+        n = row_end(buf + off, w);
+        if (out)
+            out(arg, r, buf + off, n, ind);
+        off += n;
+        while (buf[off] == ' ')
+            off++;
+        r++;
+    } while (off < len);
     return r;
 }
 
@@ -164,15 +185,32 @@ static int total_rows(int w)
     int i, n = nlines(), r = 0;
     for (i = 0; i < n; i++) {
         line(i, buf, sizeof buf);
-        r += rows_of(buf, w);
+        r += wrap(buf, w, NULL, NULL);
     }
     return r;
+}
+
+typedef struct drawing {
+    ui *u;
+    int first, h, style;
+} drawing;
+
+static void put_row(void *arg, int r, const char *s, int n, int ind)
+{
+    drawing *d = arg;
+    int y = 1 + d->first + r - d->u->help_top;
+    char buf[512];
+    if (y < 1 || y > d->h)
+        return;
+    snprintf(buf, sizeof buf, "%*s%.*s", ind, "", n, s);
+    term_text(y, 0, d->u->cols, d->style, 1, buf);
 }
 
 void help_draw(ui *u)
 {
     char buf[512];
     int h = u->rows - 2, i, n = nlines(), total = total_rows(u->cols), r = 0;
+    drawing d;
     if (u->help_top > total - h)
         u->help_top = total - h;
     if (u->help_top < 0)
@@ -182,20 +220,13 @@ void help_draw(ui *u)
               " sagitta help   Up/Down PgUp/PgDn scroll, Esc closes");
     for (i = 1; i <= h; i++)
         term_fill(i, 0, u->cols, T_NORMAL);
+    d.u = u;
+    d.h = h;
+    /* Long lines wrap at a blank, so every word can be read at any width. */
     for (i = 0; i < n && r < u->help_top + h; i++) {
-        int style = line(i, buf, sizeof buf), len = (int)strlen(buf), off = 0, k = 0;
-        do {
-            int y = 1 + r - u->help_top;
-            int w = k == 0 ? u->cols : u->cols - 4;
-            if (y >= 1 && y <= h) {
-                if (k > 0)
-                    term_fill(y, 0, 4, style);
-                term_text(y, k == 0 ? 0 : 4, w, style, 1, buf + off);
-            }
-            off += u->cols > 8 ? w : len;
-            k++;
-            r++;
-        } while (off < len);
+        d.style = line(i, buf, sizeof buf);
+        d.first = r;
+        r += wrap(buf, u->cols, put_row, &d);
     }
     snprintf(buf, sizeof buf, " lines %d-%d of %d", u->help_top + 1,
              u->help_top + h < total ? u->help_top + h : total, total);

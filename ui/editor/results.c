@@ -123,6 +123,21 @@ static void detail_line(ui *u)
     term_text(y, 0, u->cols, T_DIM, 1, buf);
 }
 
+/* Nonzero when surface row's glass does not cover the traced wavelength:
+ * its index there is an extrapolation, as the CLI warns. */
+static int out_of_range(const ui *u, int row)
+{
+    const ed *e = u->e;
+    const sg_surface *s;
+    const sg_glass *g;
+    if (!e->cat || row < 0 || row >= e->doc.sys->nsurf)
+        return 0;
+    s = &e->doc.sys->surf[row];
+    if (s->mat.kind != SG_MAT_GLASS || !(g = sg_catalog_find(e->cat, s->mat.name)))
+        return 0;
+    return !sg_glass_in_range(g, e->doc.sys->wave[e->wave].um);
+}
+
 static void cell(const ui *u, int c, const sg_ray_surface *r, const sg_ray_surface *ref,
                  int w, char *out, size_t n, int *style)
 {
@@ -132,6 +147,11 @@ static void cell(const ui *u, int c, const sg_ray_surface *r, const sg_ray_surfa
     if (c == RC_STATUS) {
         snprintf(out, n, "%s", status_word(r->status));
         *style = r->status == SG_EOK ? T_GOOD : T_ERROR;
+        if (out_of_range(u, (int)(r - u->e->cmp.res))) {
+            /* The glass is used beyond its range: the numbers are suspect. */
+            snprintf(out, n, "%s range!", status_word(r->status));
+            *style = T_ERROR;
+        }
         return;
     }
     /* Nothing was computed past a failure, so nothing is shown. */

@@ -1,4 +1,5 @@
 /* settings.c - the system settings dialog and the examples menu. */
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -141,20 +142,28 @@ static int cycle(ui *u, item it, int dir)
             ;
         return ui_run(u, "units %s", units[((k % 4) + dir + 4) % 4]);
     case IT_APER_TYPE: {
-        /* A type the current value does not suit (an NA of 9, an NA with
-         * the object at infinity) is skipped, so the cycle never sticks;
-         * an NA starts from the design's paraxial object-space NA. */
+        /* The value is kept when the new type can take it; otherwise (an
+         * NA of 9, an F/# of 0 after "float") the new type starts from the
+         * design's own paraxial value, so the system stays as it is, and a
+         * type that cannot apply (an NA with the object at infinity) is
+         * skipped: the cycle never sticks. */
         int i, f = ED_HANDLED;
         for (i = 1; i < 5; i++) {
             int t = (((int)s->aper_type + dir * i) % 5 + 5) % 5;
-            double na = e->cmp.par_ok ? e->cmp.par.object_na : 0.0;
-            if (t == SG_APER_OBJECT_NA && !(s->aper_value > 0.0 && s->aper_value < 1.0)) {
-                if (!(na > 0.0 && na < 1.0))
+            double v = s->aper_value, par = 0.0;
+            if (e->cmp.par_ok)
+                par = t == SG_APER_EPD           ? e->cmp.par.epd
+                      : t == SG_APER_IMAGE_FNUM  ? e->cmp.par.image_fnum
+                      : t == SG_APER_OBJECT_NA   ? e->cmp.par.object_na
+                      : t == SG_APER_PARAX_WORKING_FNUM ? e->cmp.par.working_fnum
+                                                 : 0.0;
+            if (t != SG_APER_FLOAT_STOP &&
+                !(v > 0.0 && (t != SG_APER_OBJECT_NA || v < 1.0))) {
+                if (!(par > 0.0 && isfinite(par) && (t != SG_APER_OBJECT_NA || par < 1.0)))
                     continue;
-                f = ui_run(u, "aperture na %.17g", na);
-            } else {
-                f = ui_run(u, "aperture %s", ed_aper_name(t));
+                v = par;
             }
+            f = ui_run(u, "aperture %s %.17g", ed_aper_name(t), v);
             if (!(f & ED_ERROR))
                 return f;
         }
