@@ -119,6 +119,7 @@ void title_draw(ui *u)
         term_text(0, 0, u->cols - (int)strlen(right) - 1, T_TITLE, 1, left);
         term_text(0, u->cols - (int)strlen(right), (int)strlen(right), T_TITLE, 0, right);
     } else {
+        cut_at_word(left, u->cols - 1, u->ell);
         term_text(0, 0, u->cols, T_TITLE, 1, left);
     }
 }
@@ -501,8 +502,11 @@ static int act(ui *u, int f)
         return 1;
     if (f & ED_ERROR)
         term_beep();
-    if (f & ED_CONFIRM)
+    if (f & ED_CONFIRM) {
+        /* A question is answered by keys pressed after it shows. */
+        term_flush_input();
         u->mode = MODE_CONFIRM;
+    }
     if (f & ED_PROMPT) {
         int back = u->mode == MODE_SETTINGS ? MODE_SETTINGS : MODE_NORMAL;
         ui_prompt(u, u->e->prompt_init);

@@ -450,6 +450,15 @@ void rec_sweep_temps(const char *dir)
         return;
     while ((de = readdir(dp)) != NULL) {
         const char *t = strstr(de->d_name, REC_SUFFIX ".tmp");
+        size_t len = strlen(de->d_name), ll = strlen(REC_LOCK_SUFFIX);
+        rec_info info;
+        /* A lock left by an editor that died holds no work. */
+        if (len > ll && strcmp(de->d_name + len - ll, REC_LOCK_SUFFIX) == 0) {
+            if (put(file, sizeof file, "%s/%s", dir, de->d_name) == 0 &&
+                rec_read_file(file, &info, NULL, NULL) == SG_OK && info.orphan)
+                (void)unlink(file);
+            continue;
+        }
         if (!t || strlen(t) != strlen(REC_SUFFIX ".tmp") + 6 ||
             put(file, sizeof file, "%s/%s", dir, de->d_name) != 0)
             continue;

@@ -100,7 +100,8 @@ int rec_holders(const char *dir, const char *abspath, rec_info *first);
 
 /* Removes temporary files (NAME.sgrec.tmpXXXXXX) older than a minute from
  * dir: a live editor's exist for milliseconds, so these were left by an
- * editor killed in the middle of a write. */
+ * editor killed in the middle of a write.  Also removes the locks of
+ * editors that are gone. */
 void rec_sweep_temps(const char *dir);
 
 /* "YYYY-MM-DD HH:MM:SS" in local time. */
