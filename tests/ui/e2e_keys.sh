@@ -237,7 +237,7 @@ check "field 2 of the TMA is one pick: Hx, Hy = (6, 6.5) / sqrt(78.25); Fld step
 
 # 8. The paraxial line names its wavelength and the units.
 parax_line() {
-    wait_re "^mm: EFL .* at 1: 0\\.5875618um" || return 1
+    wait_re "^at 1: 0\\.5875618um, mm:  EFL 1500 " || return 1
 }
 check "the paraxial line shows the lens units and its (primary) wavelength" parax_line
 

@@ -143,6 +143,17 @@ static void test_saveas_existing(void **state)
     /* Saving again to its own file asks nothing. */
     ok(e, "set 1 radius 60");
     ok(e, "save %s", other);
+    /* A new design named after a file that exists does not replace it
+     * unasked either. */
+    put_file(other, "notes again\n");
+    ok(e, "new! %s", other);
+    ok(e, "set 1 radius 70");
+    f = run(e, "save");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "already exists"));
+    back = get_file(other);
+    assert_string_equal(back, "notes again\n");
+    free(back);
     free_ed(e);
 }
 

@@ -1022,7 +1022,8 @@ static int save_cmd(ed *e, args *a, int bang, int quit)
         if (t != DOC_TARGET_NEW && !own)
             return ask(e, cmd, "%s already exists", target);
         if (own && doc_disk_changed(&e->doc))
-            return ask(e, cmd, "%s changed on disk since it was read", target);
+            return ask(e, cmd, e->doc.disk.have ? "%s changed on disk since it was read"
+                                                : "%s already exists", target);
     }
     f = save_as(e, a->n > 1 ? path : NULL);
     if (!quit || (f & ED_ERROR))

@@ -319,8 +319,12 @@ int doc_stamp_file(const char *path, doc_stamp *st)
 int doc_disk_changed(const doc *d)
 {
     doc_stamp now;
-    if (!d->path || !d->disk.have || doc_stamp_file(d->path, &now) != 0)
+    if (!d->path || doc_stamp_file(d->path, &now) != 0)
         return 0;
+    /* A file this document never read (a new design given a name that
+     * another program has since used) is someone else's work too. */
+    if (!d->disk.have)
+        return 1;
     /* The bytes decide: a touch, or a copy back of the same text, is no
      * change; a new size or new content is. */
     return now.size != d->disk.size || now.hash != d->disk.hash;

@@ -102,7 +102,8 @@ int doc_save(doc *d, const char *path, sg_diag *dg);
 int doc_stamp_file(const char *path, doc_stamp *st);
 /* 1 when the document's file differs from what it last loaded or saved
  * (size or content; a new modification time alone with the same bytes
- * does not count), 0 when it is the same or gone or never read. */
+ * does not count) or exists though the document never read it; 0 when it
+ * is the same, or there is no such file. */
 int doc_disk_changed(const doc *d);
 /* How a save to path would go.  Returns DOC_TARGET_* and, for an existing
  * file, its link count in *nlink (may be NULL). */

@@ -88,8 +88,10 @@ static void paraxial_line(ui *u)
                 snprintf(v[i], sizeof v[i], i == 1 ? "%.6g" : "%.8g", x[i]);
             else
                 snprintf(v[i], sizeof v[i], "%s", nonfinite(x[i]));
-        snprintf(buf, sizeof buf, "%s: EFL %s  F/# %s  EPD %s  BFL %s  track %s  at %d: %.7gum",
-                 s->units, v[0], v[1], v[2], v[3], v[4], w + 1, s->wave[w].um);
+        /* The wavelength and the unit lead, so a narrow screen cuts a
+         * number rather than what the numbers mean. */
+        snprintf(buf, sizeof buf, "at %d: %.7gum, %s:  EFL %s  F/# %s  EPD %s  BFL %s  track %s",
+                 w + 1, s->wave[w].um, s->units, v[0], v[1], v[2], v[3], v[4]);
     }
     term_text(y, 0, u->cols, T_NORMAL, 1, buf);
     if (c->warn[0] && (int)strlen(buf) + 4 < u->cols)
