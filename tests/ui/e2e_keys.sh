@@ -14,7 +14,7 @@
 
 SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
-tmux_setup 24 keys
+tmux_setup 25 keys
 RECDIR=$XDG_STATE_HOME/sagitta
 
 # Waits up to $2 seconds (default 10) for fixed text $1 on the screen.
@@ -484,6 +484,27 @@ confirmed_delete() {
     stop
 }
 check "n, then y, deletes the recovery file" confirmed_delete
+
+# 25. Quitting with unsaved changes, y saves: a design without a name asks
+# for one, and a name that exists asks before it is replaced; then it quits.
+quit_saves() {
+    printf 'old\n' >"$WORK/taken.json"
+    start "" 100 30
+    wait_for "new design" 15 || return 1
+    command_line "set 1 radius 55.5"
+    wait_for "[new design] [+]" || return 1
+    keys Escape q
+    wait_for "Save before quitting?" || return 1
+    keys y
+    wait_re "^:wq *$" || return 1
+    type_text "taken.json"
+    keys Enter
+    wait_for "taken.json already exists. Overwrite it?" || return 1
+    keys y
+    wait_for "EXITED 0" 5 || return 1
+    grep -q sagitta-design "$WORK/taken.json" || { WHY="taken.json was not saved"; return 1; }
+}
+check "quit, y: asks a name, asks before replacing it, saves, quits" quit_saves
 
 echo "# $(( $(date +%s) - T0 )) s"
 [ "$N" -eq "$NTESTS" ] || echo "# ran $N of $NTESTS"

@@ -276,7 +276,6 @@ static void hist_add(ui *u, const char *line)
 
 static int command_key(ui *u, int key)
 {
-    int f;
     char line[LE_MAX];
     if (key == K_UP || key == K_DOWN) {
         int p = u->hist_pos + (key == K_UP ? -1 : 1);
@@ -291,15 +290,9 @@ static int command_key(ui *u, int key)
         snprintf(line, sizeof line, "%s", u->le.buf);
         hist_add(u, line);
         u->mode = u->back_mode;
-        f = cmd_exec(u->e, line);
-        if (u->quit_after_save && !(f & (ED_ERROR | ED_PROMPT)) &&
-            !doc_modified(&u->e->doc))
-            f |= ED_QUIT;
-        u->quit_after_save = 0;
-        return f;
+        return cmd_exec(u->e, line);
     case LE_CANCEL:
         u->mode = u->back_mode;
-        u->quit_after_save = 0;
         return ED_HANDLED | ED_REDRAW;
     case LE_IGNORED: return ED_HANDLED;
     default: return ED_HANDLED | ED_REDRAW;

@@ -35,7 +35,6 @@ typedef struct ui {
     int rows, cols;
     int focus, mode;
     int back_mode;       /* where the ':' line returns to */
-    int quit_after_save; /* the quit dialog asked for a file name */
     int cmd_key;         /* Esc was pressed: the next key is a command, even in a text cell */
     int rec_delete;      /* the recovery question asks to confirm deleting the file */
     lineedit le;
