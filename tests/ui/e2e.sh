@@ -194,13 +194,14 @@ check "save writes a file that loads back bit-exact" \
     sh -c "[ -s '$WORK/saved.json' ] && cmp -s '$WORK/saved.json' '$WORK/batch.json' && [ '$BACK' = '-3846.0000000000005' ]"
 
 # 7. Quitting with unsaved changes asks first; cancel keeps the editor.
+# The cursor is in the Comment cell, where q types; Esc, q is the command.
 command_line "set 3 comment changed"
 wait_for "[+]" >/dev/null
-keys q
+keys Escape q
 if wait_for "Unsaved changes" 5; then
     keys c
     if wait_gone "Unsaved changes" 5 && ! screen | grep -q "EXITED"; then
-        keys q
+        keys Escape q
         wait_for "Unsaved changes" 5 >/dev/null
         keys n
         if wait_for "EXITED 0" 5; then

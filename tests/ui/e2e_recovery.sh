@@ -253,17 +253,21 @@ batch_warns() {
 }
 check "--batch warns naming the recovery file, and runs the script" batch_warns
 
-# 21. "no" deletes it.  In 80 columns the answers come first, so they show.
+# 21. "no", then a second "yes", deletes it.  In 80 columns the answers
+# come first, so they show.
 discard() {
     start c.json 80 24
     wait_for "Recover unsaved changes? [y]es / [n]o (discard) / [l]ater: c.json" 15 || return 1
     keys n
+    wait_for "Delete the recovery file" || return 1
+    [ "$(nrec)" -eq 1 ] || { WHY="n alone deleted the file"; return 1; }
+    keys y
     wait_for "deleted " || return 1
     wait_nrec 0 && radius3_is -3846 && wait_gone "c.json [+]" || return 1
     keys q
     wait_for "EXITED 0" 5
 }
-check "n (no) deletes the recovery file (80x24: the answers show)" discard
+check "n (no) then y deletes the recovery file (80x24: the answers show)" discard
 
 # 22. A design never saved is recovered by a start without a file.
 untitled() {

@@ -175,16 +175,22 @@ static int count_rec(char *first, size_t n)
 }
 
 /* Every file in recdir, temporary or not. */
+/* Every file but the editor's lock (REC_LOCK_SUFFIX), which says who has
+ * a design open and holds no work. */
 static int count_all(void)
 {
     DIR *dp = opendir(recdir);
     struct dirent *de;
+    size_t ll = strlen(REC_LOCK_SUFFIX);
     int k = 0;
     if (!dp)
         return 0;
-    while ((de = readdir(dp)) != NULL)
-        if (de->d_name[0] != '.')
+    while ((de = readdir(dp)) != NULL) {
+        size_t len = strlen(de->d_name);
+        if (de->d_name[0] != '.' &&
+            !(len > ll && strcmp(de->d_name + len - ll, REC_LOCK_SUFFIX) == 0))
             k++;
+    }
     closedir(dp);
     return k;
 }
@@ -764,6 +770,98 @@ static void test_abspath(void **state)
     print_message("# new.json -> %s\n", a);
 }
 
+/* A second editor (a child process) with the design open holds a lock
+ * that names it: rec_holders() sees it while the child lives, and once the
+ * child is killed the lock counts for nothing and goes.  Quitting removes
+ * one's own lock. */
+static void test_holders(void **state)
+{
+    char path[PATH_MAX], abs[PATH_MAX];
+    int p2c[2], c2p[2];
+    rec_info first;
+    pid_t child;
+    char c = 0;
+    ed *e;
+    (void)state;
+    tmp("held.json", path, sizeof path);
+    e = new_ed();
+    ok(e, "save %s", path);
+    rec_finish(e);
+    free_ed(e);
+    assert_int_equal(rec_abspath(path, abs, sizeof abs), 0);
+    assert_int_equal(rec_holders(recdir, abs, NULL), 0);
+    assert_int_equal(pipe(p2c), 0);
+    assert_int_equal(pipe(c2p), 0);
+    child = fork();
+    assert_true(child >= 0);
+    if (child == 0) {
+        /* The other editor: opens the file, as the screen does, then waits. */
+        ed *o = new_ed();
+        {
+            char line[PATH_MAX + 8];
+            snprintf(line, sizeof line, "open %s", path);
+            cmd_exec(o, line);
+        }
+        rec_sync(o, 1);
+        if (write(c2p[1], "r", 1) != 1)
+            _exit(2);
+        if (read(p2c[0], &c, 1) != 1)
+            _exit(2);
+        rec_finish(o);
+        _exit(0);
+    }
+    assert_int_equal(read(c2p[0], &c, 1), 1);
+    assert_int_equal(rec_holders(recdir, abs, &first), 1);
+    assert_int_equal(first.pid, (long)child);
+    assert_string_equal(first.path, abs);
+    /* This process's own lock never counts. */
+    e = new_ed();
+    ok(e, "open %s", path);
+    idle(e);
+    assert_int_equal(rec_holders(recdir, abs, NULL), 1);
+    /* The child quits cleanly: its lock goes with it. */
+    assert_int_equal(write(p2c[1], "q", 1), 1);
+    assert_int_equal(waitpid(child, NULL, 0), child);
+    assert_int_equal(rec_holders(recdir, abs, NULL), 0);
+    rec_finish(e);
+    free_ed(e);
+    {
+        /* Killed: the lock stays on disk but is a dead editor's. */
+        DIR *dp;
+        struct dirent *de;
+        int locks = 0;
+        child = fork();
+        assert_true(child >= 0);
+        if (child == 0) {
+            ed *o = new_ed();
+            char line[PATH_MAX + 8];
+            snprintf(line, sizeof line, "open %s", path);
+            cmd_exec(o, line);
+            rec_sync(o, 1);
+            if (write(c2p[1], "r", 1) != 1)
+                _exit(2);
+            for (;;)
+                pause();
+        }
+        assert_int_equal(read(c2p[0], &c, 1), 1);
+        assert_int_equal(rec_holders(recdir, abs, NULL), 1);
+        kill(child, SIGKILL);
+        assert_int_equal(waitpid(child, NULL, 0), child);
+        assert_int_equal(rec_holders(recdir, abs, NULL), 0);
+        dp = opendir(recdir);
+        assert_non_null(dp);
+        while ((de = readdir(dp)) != NULL)
+            if (strstr(de->d_name, REC_LOCK_SUFFIX))
+                locks++;
+        closedir(dp);
+        assert_int_equal(locks, 0);
+    }
+    close(p2c[0]);
+    close(p2c[1]);
+    close(c2p[0]);
+    close(c2p[1]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -775,6 +873,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_recover_command, setup, teardown),
         cmocka_unit_test_setup_teardown(test_save_failure, setup, teardown),
         cmocka_unit_test_setup_teardown(test_write_failure, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_holders, setup, teardown),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

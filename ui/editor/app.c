@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "editor.h"
+#include "numfmt.h"
 #include "term.h"
 #include "ui.h"
 
@@ -70,6 +71,34 @@ void ui_layout(ui *u)
         u->resw = 24;
 }
 
+/* Cuts s (UTF-8) to at most w columns at the end of a word, marking the
+ * cut with ell; a single word longer than w is cut where it must be. */
+static void cut_at_word(char *s, int w, const char *ell)
+{
+    int cols = 0, lastw = -1;
+    size_t i = 0, lastb = 0, cut = 0;
+    if (w < 2 || numfmt_width(s) <= w)
+        return;
+    while (s[i]) {
+        size_t j = i + 1;
+        while (((unsigned char)s[j] & 0xC0) == 0x80)
+            j++;
+        if (cols + 1 > w - 1)
+            break;
+        cols++;
+        if (s[i] != ' ' && (s[j] == ' ' || s[j] == '\0')) {
+            lastb = j;
+            lastw = cols;
+        }
+        i = j;
+        cut = i;
+    }
+    /* A word boundary not too far back; else the hard cut. */
+    if (lastw > 0 && lastw >= (w - 1) / 2)
+        cut = lastb;
+    snprintf(s + cut, 8, "%s", ell);
+}
+
 void title_draw(ui *u)
 {
     const ed *e = u->e;
@@ -85,11 +114,14 @@ void title_draw(ui *u)
         snprintf(right, sizeof right, "%s  %.2f ms  F1 help ", sg_method_name(e->method),
                  e->cmp.ms_last);
     term_fill(0, 0, u->cols, T_TITLE);
-    /* The right side (method, timing, help) wins over a long title. */
+    /* The right side (method, timing, help) wins over a long title, which
+     * is cut at a word, never inside one. */
     if ((int)strlen(right) + 20 < u->cols) {
+        cut_at_word(left, u->cols - (int)strlen(right) - 2, u->ell);
         term_text(0, 0, u->cols - (int)strlen(right) - 1, T_TITLE, 1, left);
         term_text(0, u->cols - (int)strlen(right), (int)strlen(right), T_TITLE, 0, right);
     } else {
+        cut_at_word(left, u->cols - 1, u->ell);
         term_text(0, 0, u->cols, T_TITLE, 1, left);
     }
 }
@@ -111,7 +143,10 @@ void status_draw(ui *u)
     if (u->mode == MODE_CONFIRM) {
         const char *q = e->confirm == CONFIRM_QUIT
                             ? "Unsaved changes. Save before quitting? (y)es (n)o (c)ancel"
-                        : e->confirm == CONFIRM_RECOVER
+                        : e->confirm == CONFIRM_RECOVER && u->rec_delete
+                            ? "Delete the recovery file and its unsaved changes for good? "
+                              "(y)es delete / (n)o go back"
+                        : e->confirm == CONFIRM_RECOVER || e->confirm == CONFIRM_ASK
                             ? ((int)strlen(e->question) <= u->cols ? e->question
                                                                     : e->question_short)
                             : "Unsaved changes will be lost. Continue? (y)es (n)o";
@@ -119,16 +154,68 @@ void status_draw(ui *u)
         return;
     }
     if (e->msg[0]) {
+        /* A warning of the design (a glass beyond its range) stays in
+         * view after the message of the command that caused it. */
+        if (!e->msg_err && e->cmp.warn[0]) {
+            char m[ED_MSG + SG_DIAG_MSG + 16];
+            int w;
+            snprintf(m, sizeof m, "%s  ", e->msg);
+            w = term_text(y, 0, u->cols, T_NORMAL, 0, m);
+            snprintf(m, sizeof m, "warning: %s", e->cmp.warn);
+            if (w < u->cols)
+                term_text(y, w, u->cols - w, T_ERROR, 1, m);
+            return;
+        }
         term_text(y, 0, u->cols, e->msg_err ? T_ERROR : T_NORMAL, 1, e->msg);
         return;
     }
-    if (u->mode == MODE_SETTINGS || u->mode == MODE_EXAMPLES)
+    if (u->mode == MODE_SETTINGS || u->mode == MODE_EXAMPLES || u->mode == MODE_SYSDATA)
         return;
+    if (u->cmd_key) {
+        term_text(y, 0, u->cols, T_EDIT, 1, "Esc: the next key is a command (Esc again: none)");
+        return;
+    }
+    if (e->cmp.warn[0]) {
+        /* A glass used beyond its range, say: the numbers are suspect. */
+        char w[SG_DIAG_MSG + 16];
+        snprintf(w, sizeof w, "warning: %s", e->cmp.warn);
+        term_text(y, 0, u->cols, T_ERROR, 1, w);
+        return;
+    }
+    if (u->focus == FOCUS_SHEET && sheet_text_col(e->col)) {
+        term_text(y, 0, u->cols, T_DIM, 1,
+                  "Typing edits this text cell; Esc then a key runs a command (Esc : for the "
+                  "command line)  F1 help");
+        return;
+    }
     term_text(y, 0, u->cols, T_DIM, 1,
               u->focus == FOCUS_RAY
                   ? "Ray: Left/Right choose  Up/Down step  Enter edit  c chief  F6-F9 marginal  f back"
                   : "? help  : command  Enter edit  i/d insert/delete  s stop  u/r undo/redo  "
                     "f ray  t settings  w save  q quit");
+}
+
+/* Draws s from line y on, wrapped at blanks to cols columns; returns the
+ * lines used. */
+static int wrap_text(int y, int rows, int cols, int style, const char *s)
+{
+    int n = 0;
+    while (*s && y + n < rows) {
+        int len = (int)strlen(s), take = len;
+        if (len > cols) {
+            take = cols;
+            while (take > 0 && s[take] != ' ')
+                take--;
+            if (take == 0)
+                take = cols;
+        }
+        term_text(y + n, 0, take, style, 1, s);
+        s += take;
+        while (*s == ' ')
+            s++;
+        n++;
+    }
+    return n;
 }
 
 static void draw(ui *u)
@@ -138,16 +225,21 @@ static void draw(ui *u)
     ui_layout(u);
     if (u->too_small) {
         char buf[128];
-        snprintf(buf, sizeof buf, "The terminal is %dx%d; the editor needs %dx%d.", u->cols,
-                 u->rows, MIN_COLS, MIN_ROWS);
-        term_text(0, 0, u->cols, T_ERROR, 1, buf);
-        term_text(1, 0, u->cols, T_NORMAL, 1, "Enlarge it, or press q to quit.");
+        int y = 0;
+        /* Short lines, the size first, so a narrow terminal still shows
+         * what it needs. */
+        snprintf(buf, sizeof buf, "Need %dx%d,", MIN_COLS, MIN_ROWS);
+        y += wrap_text(y, u->rows, u->cols, T_ERROR, buf);
+        snprintf(buf, sizeof buf, "have %dx%d.", u->cols, u->rows);
+        y += wrap_text(y, u->rows, u->cols, T_ERROR, buf);
+        wrap_text(y, u->rows, u->cols, T_NORMAL, "Enlarge the terminal, or press q to quit.");
         term_flush();
         return;
     }
     title_draw(u);
     switch (u->mode) {
     case MODE_HELP: help_draw(u); break;
+    case MODE_SYSDATA: sysdata_draw(u); break;
     case MODE_SETTINGS: settings_draw(u); status_draw(u); break;
     case MODE_EXAMPLES: examples_draw(u); status_draw(u); break;
     case MODE_COMMAND:
@@ -186,7 +278,6 @@ static void hist_add(ui *u, const char *line)
 
 static int command_key(ui *u, int key)
 {
-    int f;
     char line[LE_MAX];
     if (key == K_UP || key == K_DOWN) {
         int p = u->hist_pos + (key == K_UP ? -1 : 1);
@@ -201,15 +292,9 @@ static int command_key(ui *u, int key)
         snprintf(line, sizeof line, "%s", u->le.buf);
         hist_add(u, line);
         u->mode = u->back_mode;
-        f = cmd_exec(u->e, line);
-        if (u->quit_after_save && !(f & (ED_ERROR | ED_PROMPT)) &&
-            !doc_modified(&u->e->doc))
-            f |= ED_QUIT;
-        u->quit_after_save = 0;
-        return f;
+        return cmd_exec(u->e, line);
     case LE_CANCEL:
         u->mode = u->back_mode;
-        u->quit_after_save = 0;
         return ED_HANDLED | ED_REDRAW;
     case LE_IGNORED: return ED_HANDLED;
     default: return ED_HANDLED | ED_REDRAW;
@@ -221,16 +306,48 @@ static int confirm_key(ui *u, int key)
     ed *e = u->e;
     int kind = e->confirm, f;
     if (kind == CONFIRM_RECOVER) {
-        const char *run = key == 'y' || key == 'Y'   ? e->pending
-                          : key == 'n' || key == 'N' ? e->pending2
-                                                     : NULL;
-        if (!run && key != 'l' && key != 'L' && key != K_ESC)
+        /* Only its own answers count; deleting takes a second, explicit
+         * yes, asked after the keys typed so far are dropped. */
+        if (u->rec_delete) {
+            if (key == 'y' || key == 'Y') {
+                u->rec_delete = 0;
+                e->confirm = CONFIRM_NONE;
+                u->mode = MODE_NORMAL;
+                return cmd_exec(e, e->pending2);
+            }
+            if (key == 'n' || key == 'N' || key == K_ESC) {
+                u->rec_delete = 0;
+                term_flush_input();
+                return ED_HANDLED | ED_REDRAW;
+            }
+            return ED_HANDLED;
+        }
+        if (key == 'n' || key == 'N') {
+            u->rec_delete = 1;
+            term_flush_input();
+            return ED_HANDLED | ED_REDRAW;
+        }
+        if (key == 'y' || key == 'Y') {
+            e->confirm = CONFIRM_NONE;
+            u->mode = MODE_NORMAL;
+            return cmd_exec(e, e->pending);
+        }
+        if (key != 'l' && key != 'L' && key != K_ESC)
             return ED_HANDLED;
         e->confirm = CONFIRM_NONE;
         u->mode = MODE_NORMAL;
-        if (run)
-            return cmd_exec(e, run);
         ed_msg(e, 0, "the recovery file is kept for later: :recover lists it");
+        return ED_HANDLED | ED_REDRAW;
+    }
+    if (kind == CONFIRM_ASK) {
+        if (key != 'y' && key != 'Y' && key != 'n' && key != 'N' && key != K_ESC &&
+            key != 'c' && key != 'C')
+            return ED_HANDLED;
+        e->confirm = CONFIRM_NONE;
+        u->mode = MODE_NORMAL;
+        if (key == 'y' || key == 'Y')
+            return cmd_exec(e, e->pending);
+        ed_msg(e, 0, "not saved");
         return ED_HANDLED | ED_REDRAW;
     }
     if (key == K_ESC || key == 'c' || key == 'C' || (kind == CONFIRM_DISCARD && (key == 'n' || key == 'N'))) {
@@ -249,13 +366,10 @@ static int confirm_key(ui *u, int key)
         u->mode = MODE_NORMAL;
         if (kind == CONFIRM_DISCARD)
             return cmd_exec(e, e->pending);
-        f = cmd_exec(e, "save");
-        if (f & ED_PROMPT) {
-            /* The design has no name yet: ask for one, then quit. */
-            u->quit_after_save = 1;
-            return f;
-        }
-        if (f & ED_ERROR)
+        /* wq asks for a name when there is none, and itself asks before
+         * replacing a file; it quits only once the design is saved. */
+        f = cmd_exec(e, "wq");
+        if (f & (ED_PROMPT | ED_CONFIRM | ED_ERROR))
             return f;
         return f | ED_QUIT;
     }
@@ -290,6 +404,7 @@ static int global_key(ui *u, int key)
     case K_F(4): u->mode = MODE_SETTINGS; return ED_HANDLED | ED_REDRAW;
     case 'm': return ui_run(u, "method %s", methods[e->method % 3]);
     case '#': return ui_run(u, "digits toggle");
+    case K_F(3): u->sys_top = 0; u->mode = MODE_SYSDATA; return ED_HANDLED | ED_REDRAW;
     case 'v': return ui_run(u, "wave %d", (e->wave + 1) % e->doc.sys->nwave + 1);
     case 'f':
         u->focus = u->focus == FOCUS_SHEET ? FOCUS_RAY : FOCUS_SHEET;
@@ -322,8 +437,13 @@ static int mouse(ui *u)
 static int dispatch(ui *u, int key)
 {
     int f;
-    if (key == K_RESIZE)
+    if (key == K_RESIZE) {
+        /* The old scroll fitted the old width; the cursor's cell stays in
+         * view from a fresh start. */
+        u->left = 0;
+        u->res_left = 0;
         return ED_HANDLED | ED_REDRAW;
+    }
     if (u->too_small && u->mode == MODE_NORMAL)
         return key == 'q' || key == K_CTRL('c') ? ui_run(u, "quit") : ED_HANDLED;
     switch (u->mode) {
@@ -339,6 +459,7 @@ static int dispatch(ui *u, int key)
         }
         return settings_key(u, key);
     case MODE_EXAMPLES: return examples_key(u, key);
+    case MODE_SYSDATA: return sysdata_key(u, key);
     default: break;
     }
     /* A fresh key clears the last message; the key's own command may set a
@@ -347,6 +468,22 @@ static int dispatch(ui *u, int key)
     u->e->msg_err = 0;
     if (key == K_MOUSE)
         return mouse(u);
+    /* Esc, then a key: that key is a command wherever the cursor is, so
+     * commands stay one key away from a text cell, where every printable
+     * key types.  (A terminal sends Alt-key as Esc, key: the same.) */
+    if (u->cmd_key) {
+        u->cmd_key = 0;
+        if (key == K_ESC)
+            return ED_HANDLED | ED_REDRAW;
+        f = u->focus == FOCUS_RAY ? ray_key(u, key) : sheet_key_command(u, key);
+        if (f)
+            return f;
+        return global_key(u, key);
+    }
+    if (key == K_ESC && u->focus == FOCUS_SHEET) {
+        u->cmd_key = 1;
+        return ED_HANDLED | ED_REDRAW;
+    }
     f = u->focus == FOCUS_RAY ? ray_key(u, key) : sheet_key(u, key);
     if (f)
         return f;
@@ -360,8 +497,11 @@ static int act(ui *u, int f)
         return 1;
     if (f & ED_ERROR)
         term_beep();
-    if (f & ED_CONFIRM)
+    if (f & ED_CONFIRM) {
+        /* A question is answered by keys pressed after it shows. */
+        term_flush_input();
         u->mode = MODE_CONFIRM;
+    }
     if (f & ED_PROMPT) {
         int back = u->mode == MODE_SETTINGS ? MODE_SETTINGS : MODE_NORMAL;
         ui_prompt(u, u->e->prompt_init);
@@ -373,6 +513,10 @@ static int act(ui *u, int f)
         u->mode = MODE_SETTINGS;
     if (f & ED_SHOW_EXAMPLES)
         examples_open(u);
+    if (f & ED_SHOW_SYSDATA) {
+        u->sys_top = 0;
+        u->mode = MODE_SYSDATA;
+    }
     if (f & ED_RECOMPUTE)
         u->e->dirty = 1;
     return 0;
@@ -552,6 +696,10 @@ int sg_editor_main(int argc, char **argv)
      * recovery file; it only warns about those it finds. */
     e.rec.enabled = !script;
     offer_recovery(&e, file, script != NULL);
+    /* Another editor on the file matters when this one may save over it;
+     * a script is checked by the save itself (the file changed on disk). */
+    if (file && !script)
+        ed_note_holders(&e, file);
     if (script) {
         status = ed_batch(&e, script);
         ed_free(&e);
@@ -572,15 +720,19 @@ int sg_editor_main(int argc, char **argv)
 
     memset(&u, 0, sizeof u);
     u.e = &e;
-    u.step = 0.1;
+    u.step_exp = 1;
+    u.ray_item = RAY_HX;
     if (term_init() != 0) {
         ed_free(&e);
         return 1;
     }
     u.ell = term_utf8() ? "\xe2\x80\xa6" : "~";
     e.col = COL_RADIUS;
-    if (e.confirm == CONFIRM_RECOVER)
+    if (e.confirm == CONFIRM_RECOVER) {
+        /* Keys typed before the question showed are not its answer. */
+        term_flush_input();
         u.mode = MODE_CONFIRM;
+    }
     status = loop(&u);
     term_end();
     /* Quitting is a clean end; a signal keeps the file for the next start. */

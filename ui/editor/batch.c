@@ -6,12 +6,49 @@
 
 #include "ed.h"
 
+/* A command fits in ED_LINE bytes, so a longer line is no script of ours;
+ * the total is capped too, so an endless input such as /dev/zero or a
+ * pipe that never ends in a newline cannot eat the memory. */
+#define BATCH_LINE_MAX (ED_LINE - 1)
+#define BATCH_TOTAL_MAX ((long long)64 << 20)
+
+/* Reads one line of at most BATCH_LINE_MAX bytes into buf (without the
+ * newline).  Returns its length, -1 at the end of the input, -2 when the
+ * line is too long, -3 when it holds a NUL byte. */
+static long read_line(FILE *f, char *buf, long long *total)
+{
+    long n = 0;
+    int c, nul = 0;
+    for (;;) {
+        c = getc(f);
+        if (c == EOF) {
+            if (n == 0 && !nul)
+                return -1;
+            break;
+        }
+        (*total)++;
+        if (c == '\n')
+            break;
+        if (c == '\0')
+            nul = 1;
+        if (n >= BATCH_LINE_MAX)
+            return -2;
+        buf[n++] = (char)c;
+        if (nul)
+            return -3;
+        if (*total > BATCH_TOTAL_MAX)
+            break;
+    }
+    buf[n] = '\0';
+    return nul ? -3 : n;
+}
+
 int ed_batch(ed *e, const char *script)
 {
     FILE *f;
-    char *line = NULL;
-    size_t cap = 0;
-    ssize_t len;
+    char line[ED_LINE];
+    long len;
+    long long total = 0;
     long lineno = 0;
     int status = 0, flags;
     const char *name = strcmp(script, "-") == 0 ? "(stdin)" : script;
@@ -22,15 +59,31 @@ int ed_batch(ed *e, const char *script)
         return 1;
     }
     e->batch = 1;
-    while ((len = getline(&line, &cap, f)) >= 0) {
+    for (;;) {
+        len = read_line(f, line, &total);
+        if (len == -1)
+            break;
         lineno++;
-        while (len > 0 && (line[len - 1] == '\n' || line[len - 1] == '\r'))
-            line[--len] = '\0';
-        if (strlen(line) != (size_t)len) {
-            fprintf(stderr, "%s:%ld: the line holds a NUL byte\n", name, lineno);
+        if (len == -2) {
+            fprintf(stderr, "%s:%ld: the line is longer than %d bytes; a command is shorter\n",
+                    name, lineno, BATCH_LINE_MAX);
             status = 1;
             break;
         }
+        if (len == -3) {
+            fprintf(stderr, "%s:%ld: the line holds a NUL byte; a script is text\n", name,
+                    lineno);
+            status = 1;
+            break;
+        }
+        if (total > BATCH_TOTAL_MAX) {
+            fprintf(stderr, "%s:%ld: the script is longer than %lld MiB; it is stopped here\n",
+                    name, lineno, BATCH_TOTAL_MAX >> 20);
+            status = 1;
+            break;
+        }
+        while (len > 0 && line[len - 1] == '\r')
+            line[--len] = '\0';
         flags = cmd_exec(e, line);
         if (flags & ED_ERROR) {
             fprintf(stderr, "%s:%ld: %s\n", name, lineno, e->msg);
@@ -40,11 +93,10 @@ int ed_batch(ed *e, const char *script)
         if (flags & ED_QUIT)
             break;
     }
-    if (ferror(f)) {
+    if (!status && ferror(f)) {
         fprintf(stderr, "sagitta edit: %s: read error\n", name);
         status = 1;
     }
-    free(line);
     if (f != stdin)
         fclose(f);
     return status;

@@ -248,6 +248,16 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
             return SG_EPARSE;
         }
         s->type = (sg_surf_type)rc;
+        if (rc == SG_SURF_STANDARD && info && infon) {
+            int k;
+            for (k = 0; k < SG_NASPH && s->asph[k] == 0.0; k++)
+                ;
+            /* Kept, so switching back restores them, but the trace of a
+             * STANDARD surface does not use them: say so. */
+            if (k < SG_NASPH)
+                snprintf(info, infon, "its r^n terms are kept but ignored (shown dim) "
+                                      "until it is EVENASPH again");
+        }
         return SG_EOK;
     case COL_COMMENT: {
         const unsigned char *p;

@@ -440,15 +440,109 @@ static int wl_check(ed *e, double um, double w)
     return 1;
 }
 
+/* Spectral lines by their Fraunhofer letters, in micrometres, as Schott's
+ * catalog lists them (TIE-29; the d, F and C of Abbe numbers). */
+static const struct line_name {
+    const char *name;
+    double um;
+} spectral_lines[] = {
+    {"i", 0.3650146}, {"h", 0.4046561}, {"g", 0.4358343}, {"F'", 0.4799914},
+    {"F", 0.4861327}, {"e", 0.5460740}, {"d", 0.5875618}, {"D", 0.5892938},
+    {"C'", 0.6438469}, {"C", 0.6562725}, {"r", 0.7065188}, {"s", 0.85211},
+    {"t", 1.01398},
+};
+#define NLINES (sizeof spectral_lines / sizeof spectral_lines[0])
+
+/* A wavelength in um, or a line's letter (case matters: d is not D). */
+static int parse_um(ed *e, const char *s, double *um)
+{
+    size_t i;
+    for (i = 0; i < NLINES; i++)
+        if (strcmp(s, spectral_lines[i].name) == 0) {
+            *um = spectral_lines[i].um;
+            return 1;
+        }
+    return parse_num(e, s, "wavelength", um);
+}
+
+/* Presets as Zemax's wavelength dialog offers them; the primary is the
+ * line in the middle, as there. */
+static const struct preset {
+    const char *name;
+    const char *lines[3];
+    int primary;
+} presets[] = {
+    {"FdC", {"F", "d", "C"}, 1},
+    {"F'eC'", {"F'", "e", "C'"}, 1},
+    {"d", {"d", NULL, NULL}, 0},
+    {"e", {"e", NULL, NULL}, 0},
+};
+
 static int c_wavelength(ed *e, args *a)
 {
     sg_system *s = e->doc.sys;
-    const char *usage = "wavelength add UM [WEIGHT] | set N UM [WEIGHT] | delete N | primary N";
+    const char *usage = "wavelength add UM|LINE [WEIGHT] | set N UM|LINE [WEIGHT] | delete N | "
+                        "primary N | move N TO | preset FdC|F'eC'|d|e";
     const char *sub = a->n > 1 ? a->v[1] : "";
     double um, w = 1.0;
     int k;
+    if (strcasecmp(sub, "preset") == 0) {
+        size_t p, j;
+        if (!need(e, a, 2, 2, usage))
+            return ED_HANDLED | ED_ERROR;
+        for (p = 0; p < sizeof presets / sizeof presets[0]; p++)
+            if (strcasecmp(a->v[2], presets[p].name) == 0)
+                break;
+        if (p == sizeof presets / sizeof presets[0])
+            return fail(e, "wavelength preset: \"%s\" is not FdC, F'eC', d or e", a->v[2]);
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        s = e->doc.sys;
+        memset(s->wave, 0, sizeof s->wave);
+        for (j = 0; j < 3 && presets[p].lines[j]; j++) {
+            parse_um(e, presets[p].lines[j], &s->wave[j].um);
+            s->wave[j].weight = 1.0;
+        }
+        s->nwave = (int)j;
+        s->primary_wave = presets[p].primary;
+        e->wave = s->primary_wave;
+        return end(e, "wavelengths %s (primary %s)", presets[p].name,
+                   presets[p].lines[presets[p].primary]);
+    }
+    if (strcasecmp(sub, "move") == 0) {
+        int to, i;
+        sg_wave moved;
+        if (!need(e, a, 3, 3, usage) ||
+            !parse_int(e, a->v[2], "wavelength", 1, s->nwave, &k) ||
+            !parse_int(e, a->v[3], "to", 1, s->nwave, &to))
+            return ED_HANDLED | ED_ERROR;
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        s = e->doc.sys;
+        k--;
+        to--;
+        moved = s->wave[k];
+        /* The primary and the traced wavelength stay the same light. */
+        {
+            int prim = s->primary_wave, cur = e->wave;
+            if (k < to) {
+                for (i = k; i < to; i++)
+                    s->wave[i] = s->wave[i + 1];
+            } else {
+                for (i = k; i > to; i--)
+                    s->wave[i] = s->wave[i - 1];
+            }
+            s->wave[to] = moved;
+#define FOLLOW(x) ((x) == k ? to : k < to && (x) > k && (x) <= to ? (x) - 1 \
+                   : to < k && (x) >= to && (x) < k ? (x) + 1 : (x))
+            s->primary_wave = FOLLOW(prim);
+            e->wave = FOLLOW(cur);
+#undef FOLLOW
+        }
+        return end(e, "wavelength %d is now %d", k + 1, to + 1);
+    }
     if (strcasecmp(sub, "add") == 0) {
-        if (!need(e, a, 2, 3, usage) || !parse_num(e, a->v[2], "wavelength", &um) ||
+        if (!need(e, a, 2, 3, usage) || !parse_um(e, a->v[2], &um) ||
             (a->n > 3 && !parse_num(e, a->v[3], "weight", &w)) || !wl_check(e, um, w))
             return ED_HANDLED | ED_ERROR;
         if (s->nwave >= SG_MAX_WAVES)
@@ -459,12 +553,12 @@ static int c_wavelength(ed *e, args *a)
         s->wave[s->nwave].um = um;
         s->wave[s->nwave].weight = w;
         s->nwave++;
-        return end(e, "wavelength %d: %s um", s->nwave, a->v[2]);
+        return end(e, "wavelength %d: %.10g um", s->nwave, um);
     }
     if (strcasecmp(sub, "set") == 0) {
         if (!need(e, a, 3, 4, usage) ||
             !parse_int(e, a->v[2], "wavelength", 1, s->nwave, &k) ||
-            !parse_num(e, a->v[3], "wavelength", &um))
+            !parse_um(e, a->v[3], &um))
             return ED_HANDLED | ED_ERROR;
         w = s->wave[k - 1].weight;
         if ((a->n > 4 && !parse_num(e, a->v[4], "weight", &w)) || !wl_check(e, um, w))
@@ -473,7 +567,7 @@ static int c_wavelength(ed *e, args *a)
             return ED_HANDLED | ED_ERROR;
         e->doc.sys->wave[k - 1].um = um;
         e->doc.sys->wave[k - 1].weight = w;
-        return end(e, "wavelength %d: %s um", k, a->v[3]);
+        return end(e, "wavelength %d: %.10g um", k, um);
     }
     if (strcasecmp(sub, "delete") == 0 || strcasecmp(sub, "del") == 0) {
         int i;
@@ -541,6 +635,26 @@ static int c_field(ed *e, args *a)
     const char *sub = a->n > 1 ? a->v[1] : "";
     double x, y, w = 1.0;
     int k, i;
+    if (a->n == 2 && isdigit((unsigned char)sub[0])) {
+        /* field N: the ray of Zemax's ray trace dialog, at field N. */
+        double fx, fy;
+        if (!parse_int(e, sub, "field", 1, s->nfield, &k))
+            return ED_HANDLED | ED_ERROR;
+        ed_field_scale(s, &fx, &fy);
+        e->ray[0] = fx > 0.0 ? s->field[k - 1].x / fx : 0.0;
+        e->ray[1] = fy > 0.0 ? s->field[k - 1].y / fy : 0.0;
+        e->dirty = 1;
+        {
+            char hx[NUMFMT_MAX], hy[NUMFMT_MAX], fxs[NUMFMT_MAX], fys[NUMFMT_MAX];
+            numfmt_shortest(e->ray[0], hx, sizeof hx);
+            numfmt_shortest(e->ray[1], hy, sizeof hy);
+            numfmt_shortest(s->field[k - 1].x, fxs, sizeof fxs);
+            numfmt_shortest(s->field[k - 1].y, fys, sizeof fys);
+            ed_msg(e, 0, "field %d (%s, %s %s): Hx %s Hy %s", k, fxs, fys,
+                   ed_field_unit(s), hx, hy);
+        }
+        return OK_VIEW;
+    }
     if (strcasecmp(sub, "type") == 0) {
         if (!need(e, a, 2, 2, usage))
             return ED_HANDLED | ED_ERROR;
@@ -739,6 +853,25 @@ static void note_orphans(ed *e, const char *path)
     free(v);
 }
 
+int ed_note_holders(ed *e, const char *path)
+{
+    char dir[REC_PATH], abs[REC_PATH], when[64];
+    rec_info first;
+    size_t len;
+    int n;
+    if (rec_dir(dir, sizeof dir) != 0 || rec_abspath(path, abs, sizeof abs) != 0 ||
+        (n = rec_holders(dir, abs, &first)) <= 0)
+        return 0;
+    rec_time_text(first.time, when, sizeof when);
+    len = strlen(e->msg);
+    snprintf(e->msg + len, sizeof e->msg - len,
+             "%swarning: %s is open in %s editor (pid %ld%s%s, since %s); a save may "
+             "overwrite its changes", len ? "; " : "", path, n > 1 ? "more than one" : "another",
+             first.pid, first.host[0] ? " on " : "", first.host, when);
+    e->msg_err = 1;
+    return n;
+}
+
 static int open_path(ed *e, const char *path)
 {
     sg_diag d;
@@ -748,6 +881,7 @@ static int open_path(ed *e, const char *path)
         return fail(e, "%s", d.msg[0] ? d.msg : sg_strerror(d.code));
     f = opened(e, path);
     note_orphans(e, path);
+    ed_note_holders(e, path);
     return f;
 }
 
@@ -822,8 +956,8 @@ static int save_as(ed *e, const char *path)
 {
     sg_diag d;
     sg_diag_clear(&d);
-    /* The engine writes a temporary file and renames it, so a failure
-     * leaves the old file whole; the document stays as it was, modified. */
+    /* A failure leaves the old file whole (see doc_save); the document
+     * stays as it was, modified. */
     if (doc_save(&e->doc, path, &d) != SG_EOK)
         return fail(e, "not saved: %s", d.msg[0] ? d.msg : sg_strerror(d.code));
     rec_saved(e);
@@ -831,21 +965,82 @@ static int save_as(ed *e, const char *path)
     return ED_HANDLED | ED_REDRAW;
 }
 
-static int c_save(ed *e, args *a)
+/* Asks before a save that would replace work: yes runs cmd (the same save
+ * with "!").  In batch mode nobody can answer, so it fails, naming cmd. */
+static int ask(ed *e, const char *cmd, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+static int ask(ed *e, const char *cmd, const char *fmt, ...)
 {
-    char path[ED_LINE];
+    char why[ED_MSG];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(why, sizeof why, fmt, ap);
+    va_end(ap);
+    if (e->batch)
+        return fail(e, "%s: not saved; %s overwrites it", why, cmd);
+    snprintf(e->pending, sizeof e->pending, "%s", cmd);
+    snprintf(e->question, sizeof e->question, "%.900s. Overwrite it? (y)es (n)o", why);
+    snprintf(e->question_short, sizeof e->question_short, "Overwrite? (y)es (n)o: %.900s", why);
+    e->confirm = CONFIRM_ASK;
+    ed_msg(e, 0, "%s", why);
+    return ED_HANDLED | ED_CONFIRM | ED_REDRAW;
+}
+
+/* save, save!, wq and wq!: a new name that holds another file, or our own
+ * file changed on disk by someone else, is not overwritten unasked. */
+static int save_cmd(ed *e, args *a, int bang, int quit)
+{
+    char path[ED_LINE], q[ED_LINE], cmd[ED_LINE + 8];
+    const char *target;
+    int f;
     if (a->n > 1) {
         rest_of(a, 1, path, sizeof path);
-        return save_as(e, path);
+        target = path;
+    } else {
+        target = doc_path(&e->doc);
+        if (!target) {
+            if (e->batch)
+                return fail(e, "no file name: use save FILE");
+            snprintf(e->prompt_init, sizeof e->prompt_init, quit ? "wq " : "save ");
+            ed_msg(e, 0, "save as: type a file name");
+            return ED_HANDLED | ED_PROMPT;
+        }
     }
-    if (!doc_path(&e->doc)) {
-        if (e->batch)
-            return fail(e, "no file name: use save FILE");
-        snprintf(e->prompt_init, sizeof e->prompt_init, "save ");
-        ed_msg(e, 0, "save as: type a file name");
-        return ED_HANDLED | ED_PROMPT;
+    if (!bang) {
+        int t = doc_target(target, NULL), own = doc_is_own_file(&e->doc, target);
+        cmd_quote(target, q, sizeof q);
+        snprintf(cmd, sizeof cmd, "%s! %s", quit ? "wq" : "save", q);
+        if (t == DOC_TARGET_READONLY)
+            return fail(e, "not saved: %s is read-only (save under another name, or make it "
+                           "writable)", target);
+        if (t == DOC_TARGET_NOTFILE)
+            return fail(e, "not saved: %s is not a regular file", target);
+        if (t != DOC_TARGET_NEW && !own)
+            return ask(e, cmd, "%s already exists", target);
+        if (own && doc_disk_changed(&e->doc))
+            return ask(e, cmd, e->doc.disk.have ? "%s changed on disk since it was read"
+                                                : "%s already exists", target);
     }
-    return save_as(e, NULL);
+    f = save_as(e, a->n > 1 ? path : NULL);
+    if (!quit || (f & ED_ERROR))
+        return f;
+    rec_finish(e);
+    e->quit = 1;
+    return f | ED_QUIT;
+}
+
+static int c_save(ed *e, args *a)
+{
+    return save_cmd(e, a, 0, 0);
+}
+
+static int c_save1(ed *e, args *a)
+{
+    return save_cmd(e, a, 1, 0);
 }
 
 static int c_quit(ed *e, args *a, int bang)
@@ -865,12 +1060,12 @@ static int c_quit(ed *e, args *a, int bang)
 
 static int c_wq(ed *e, args *a)
 {
-    int f = c_save(e, a);
-    if (f & (ED_ERROR | ED_PROMPT))
-        return f;
-    rec_finish(e);
-    e->quit = 1;
-    return f | ED_QUIT;
+    return save_cmd(e, a, 0, 1);
+}
+
+static int c_wq1(ed *e, args *a)
+{
+    return save_cmd(e, a, 1, 1);
 }
 
 /* ------------------------------------------------------------------------
@@ -1183,7 +1378,11 @@ static int c_print(ed *e, args *a)
     if (strcmp(what, "ray") != 0 && strcmp(what, "paraxial") != 0)
         return fail(e, "usage: print ray | paraxial | cell SURFACE COLUMN");
     ed_recompute(e);
-    if (!e->cmp.have)
+    if (strcmp(what, "paraxial") == 0 && !e->batch)
+        return ED_HANDLED | ED_SHOW_SYSDATA;
+    if (strcmp(what, "paraxial") == 0 && !e->cmp.par_ok)
+        return fail(e, "no paraxial data: %s", e->cmp.build_msg);
+    if (strcmp(what, "paraxial") != 0 && !e->cmp.have)
         return fail(e, "no trace: %s", e->cmp.build_msg);
     if (!e->batch) {
         const sg_ray_surface *r = &e->cmp.res[e->row];
@@ -1195,8 +1394,12 @@ static int c_print(ed *e, args *a)
         return ED_HANDLED | ED_REDRAW;
     }
     meta_of(e, &m);
-    if (strcmp(what, "paraxial") == 0)
+    if (strcmp(what, "paraxial") == 0) {
+        /* At the primary wavelength, as "sagitta paraxial" computes it. */
+        m.wave_um = e->doc.sys->wave[e->doc.sys->primary_wave].um;
+        m.wave_index = e->doc.sys->primary_wave + 1;
         report_write_paraxial(e->out, REPORT_TEXT, &m, &e->cmp.par);
+    }
     else
         report_write(e->out, REPORT_TEXT, &m, e->cmp.nsurf, e->cmp.res, &e->cmp.rc, 1,
                      SG_RAYS_NORMALIZED, NULL);
@@ -1280,10 +1483,34 @@ static int c_marginal(ed *e, args *a)
 
 static int c_wave(ed *e, args *a)
 {
+    const sg_system *s = e->doc.sys;
     int k;
-    if (!need(e, a, 1, 1, "wave N") ||
-        !parse_int(e, a->v[1], "wavelength", 1, e->doc.sys->nwave, &k))
+    double um;
+    if (!need(e, a, 1, 1, "wave N|UM|LINE"))
         return ED_HANDLED | ED_ERROR;
+    if (args_int(a->v[1], INT_MIN, INT_MAX, &k) != ARGS_OK) {
+        /* Not a number of the list: a wavelength in um or a line's letter,
+         * which must be one of the design's (a trace is at one of them). */
+        char list[512];
+        size_t len = 0;
+        int i;
+        if (!parse_um(e, a->v[1], &um))
+            return fail(e, "wave: \"%s\" is not a wavelength number (1 to %d), a wavelength "
+                           "in um or a line (F, d, C ...)", a->v[1], s->nwave);
+        for (i = 0; i < s->nwave; i++)
+            if (fabs(s->wave[i].um - um) <= 1e-9 * um)
+                break;
+        if (i == s->nwave) {
+            for (k = 0; k < s->nwave && len + 32 < sizeof list; k++)
+                len += (size_t)snprintf(list + len, sizeof list - len, "%s%d: %.10g", k ? ", " : "",
+                                        k + 1, s->wave[k].um);
+            return fail(e, "wave: %.10g um is not a wavelength of the design (%s um); "
+                           ":wavelength add %s adds it", um, list, a->v[1]);
+        }
+        k = i + 1;
+    } else if (!parse_int(e, a->v[1], "wavelength", 1, s->nwave, &k)) {
+        return ED_HANDLED | ED_ERROR;
+    }
     e->wave = k - 1;
     e->dirty = 1;
     ed_msg(e, 0, "tracing at wavelength %d (%.10g um)", k, e->doc.sys->wave[k - 1].um);
@@ -1427,6 +1654,13 @@ static int c_quit1(ed *e, args *a) { return c_quit(e, a, 1); }
 static int c_help(ed *e, args *a);
 static int c_settings(ed *e, args *a) { return ED_HANDLED | ED_SHOW_SETTINGS; }
 static int c_redraw(ed *e, args *a) { return ED_HANDLED | ED_REDRAW; }
+static int c_sysdata(ed *e, args *a)
+{
+    args b = *a;
+    b.n = 2;
+    b.v[1] = (char *)"paraxial";
+    return c_print(e, &b);
+}
 
 static const command commands[] = {
     {"set", NULL, c_set, "set SURFACE COLUMN VALUE",
@@ -1444,9 +1678,13 @@ static const command commands[] = {
     {"example", "examples", c_example0, "example [NAME]",
      "open a bundled example; without NAME list them"},
     {"example!", NULL, c_example1, "example! NAME", "open an example, discarding changes"},
-    {"save", "w", c_save, "save [FILE]", "save; with FILE, save as FILE"},
+    {"save", "w", c_save, "save [FILE]",
+     "save; with FILE, save as FILE (asks before replacing another file or one changed on "
+     "disk)"},
+    {"save!", "w!", c_save1, "save! [FILE]", "save, replacing FILE or changes on disk"},
     {"saveas", NULL, c_save, "saveas FILE", "save under a new name"},
     {"wq", "x", c_wq, "wq [FILE]", "save and quit"},
+    {"wq!", "x!", c_wq1, "wq! [FILE]", "save and quit, replacing FILE or changes on disk"},
     {"recover", NULL, c_recover0, "recover [list | N | FILE | delete N|FILE]",
      "list the recovery files of editors that died, load one, or delete one"},
     {"recover!", NULL, c_recover1, "recover! N|FILE", "load a recovery file, discarding changes"},
@@ -1455,7 +1693,9 @@ static const command commands[] = {
     {"export", NULL, c_export, "export FILE [csv|json|text] [ray|fan N|xfan N|grid N]",
      "write the ray table of the current ray or a ray set"},
     {"print", NULL, c_print, "print [ray|paraxial|cell SURFACE COLUMN]",
-     "show a result (batch: on standard output)"},
+     "show a result (batch: on standard output; paraxial: the system data view)"},
+    {"sysdata", NULL, c_sysdata, "sysdata",
+     "the system data: what sagitta paraxial prints (F3)"},
     {"ray", NULL, c_ray, "ray HX HY PX PY", "choose the ray (also HX,HY,PX,PY)"},
     {"hx", NULL, c_raycoord, "hx VALUE", "set the normalized field x"},
     {"hy", NULL, c_raycoord, "hy VALUE", "set the normalized field y"},
@@ -1464,13 +1704,16 @@ static const command commands[] = {
     {"chief", NULL, c_chief, "chief", "the chief ray of the current field (Px = Py = 0)"},
     {"marginal", NULL, c_marginal, "marginal top|bottom|left|right",
      "a marginal ray of the current field"},
-    {"wave", NULL, c_wave, "wave N", "trace at wavelength N"},
+    {"wave", NULL, c_wave, "wave N|UM|LINE",
+     "trace at wavelength N of the design (or the one of UM micrometres, or line F, d, C ...)"},
     {"method", NULL, c_method, "method precise|classic|mpfr [BITS]", "choose the trace method"},
     {"bits", NULL, c_bits, "bits N", "MPFR precision for the mpfr method and digits"},
     {"digits", NULL, c_digits, "digits [on|off]", "show agreement with an MPFR trace"},
     {"clip", NULL, c_clip, "clip [on|off]", "vignette rays at fixed semi-diameters"},
     {"wavelength", "wl", c_wavelength,
-     "wavelength add UM [W] | set N UM [W] | delete N | primary N", "edit the wavelengths"},
+     "wavelength add UM [W] | set N UM [W] | delete N | primary N | move N TO | preset P",
+     "edit the wavelengths; UM may be a line (F d C e g h i F' C' D r s t); presets FdC F'eC' d e"},
+    {"field", NULL, c_field, "field N", "trace the ray at field N of the design (sets Hx, Hy)"},
     {"field", NULL, c_field,
      "field type T | norm radial|rect | add X Y [W] | set N X Y [W] | delete N",
      "edit the fields"},

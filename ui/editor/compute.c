@@ -91,14 +91,26 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
         c->build_msg[0] = '\0';
         c->warn[0] = '\0';
         c->t = build(sys, cat, o, c);
+        c->par_ok = 0;
         if (c->t) {
+            sg_diag d;
             c->t_id = id;
             c->t_opts = *o;
+            /* First-order data at the primary wavelength, as Zemax and
+             * "sagitta paraxial" give them, whatever the ray's. */
+            /* The tracer keeps no warnings; the checks that raise them
+             * (a glass used beyond its range) run here, as the CLI's do. */
+            sg_diag_clear(&d);
+            if (sg_system_validate(sys, cat, &d) == SG_OK && d.nwarn > 0 && !c->warn[0])
+                snprintf(c->warn, sizeof c->warn, "%s", d.warn[0]);
+            sg_diag_clear(&d);
+            c->par_wave = sys->primary_wave;
+            c->par_ok = sg_paraxial_compute(sys, cat, c->par_wave, &c->par, &d) == SG_OK;
         }
     }
     c->have = c->ref_have = 0;
-    c->par_ok = 0;
     if (!c->t) {
+        c->par_ok = 0;
         sg_tracer_free(c->ref);
         c->ref = NULL;
         c->ref_id = 0;
@@ -111,8 +123,6 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
         snprintf(c->build_msg, sizeof c->build_msg, "%s", sg_strerror(rc));
         return rc;
     }
-    c->par = *sg_tracer_paraxial(c->t);
-    c->par_ok = 1;
     c->rc = sg_trace_normalized(c->t, ray[0], ray[1], ray[2], ray[3], c->res);
     c->have = 1;
 

@@ -23,8 +23,9 @@ typedef struct compute {
     sg_ray_surface *res, *ref_res;
     int have, ref_have;         /* res / ref_res hold the current ray */
     int rc, ref_rc;             /* what the traces returned */
-    sg_paraxial par;
+    sg_paraxial par;            /* at the primary wavelength */
     int par_ok;
+    int par_wave;               /* 0-based: the primary when it was computed */
     double ms_last, ms_max;     /* wall time of recomputes */
 } compute;
 

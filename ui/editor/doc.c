@@ -1,8 +1,13 @@
 /* doc.c - the edited system with its file name and undo history. */
 #include "doc.h"
 
+#include <errno.h>
+#include <fcntl.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 /* 64 MiB keeps hundreds of steps of a large design and a few of a huge one. */
 #define DOC_HIST_LIMIT ((size_t)64 << 20)
@@ -224,6 +229,8 @@ int doc_load(doc *d, const char *path, sg_diag *dg)
     replace(d, sys);
     free(d->path);
     d->path = p;
+    if (doc_stamp_file(path, &d->disk) != 0)
+        d->disk.have = 0;
     return SG_EOK;
 }
 
@@ -238,6 +245,7 @@ int doc_new(doc *d, const char *path)
     replace(d, sys);
     free(d->path);
     d->path = p;
+    d->disk.have = 0;
     return SG_EOK;
 }
 
@@ -249,24 +257,241 @@ void doc_replace(doc *d, sg_system *sys, const char *path, int modified)
      * lost: save then asks for a name. */
     free(d->path);
     d->path = p;
+    /* A recovered design was never read from its file in this session:
+     * what is there now is what a save would replace. */
+    if (!p || doc_stamp_file(p, &d->disk) != 0)
+        d->disk.have = 0;
     /* Ids start at 1, so 0 is a saved state no document ever reaches. */
     if (modified)
         d->saved_id = 0;
 }
 
+/* FNV-1a, 64 bits: enough to tell an edited file from the one we read. */
+static unsigned long long fnv(unsigned long long h, const unsigned char *p, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++) {
+        h ^= p[i];
+        h *= 1099511628211ULL;
+    }
+    return h;
+}
+
+int doc_stamp_file(const char *path, doc_stamp *st)
+{
+    struct stat sb;
+    unsigned char buf[65536];
+    unsigned long long h = 14695981039346656037ULL;
+    ssize_t got;
+    int fd, e;
+    memset(st, 0, sizeof *st);
+    fd = open(path, O_RDONLY);
+    if (fd < 0)
+        return -1;
+    if (fstat(fd, &sb) != 0 || !S_ISREG(sb.st_mode)) {
+        e = S_ISREG(sb.st_mode) ? errno : EINVAL;
+        close(fd);
+        errno = e;
+        return -1;
+    }
+    while ((got = read(fd, buf, sizeof buf)) != 0) {
+        if (got < 0) {
+            if (errno == EINTR)
+                continue;
+            e = errno;
+            close(fd);
+            errno = e;
+            return -1;
+        }
+        h = fnv(h, buf, (size_t)got);
+    }
+    close(fd);
+    st->have = 1;
+    st->dev = (unsigned long long)sb.st_dev;
+    st->ino = (unsigned long long)sb.st_ino;
+    st->size = (unsigned long long)sb.st_size;
+    st->mtime_s = (long long)sb.st_mtim.tv_sec;
+    st->mtime_ns = sb.st_mtim.tv_nsec;
+    st->hash = h;
+    return 0;
+}
+
+int doc_disk_changed(const doc *d)
+{
+    doc_stamp now;
+    if (!d->path || doc_stamp_file(d->path, &now) != 0)
+        return 0;
+    /* A file this document never read (a new design given a name that
+     * another program has since used) is someone else's work too. */
+    if (!d->disk.have)
+        return 1;
+    /* The bytes decide: a touch, or a copy back of the same text, is no
+     * change; a new size or new content is. */
+    return now.size != d->disk.size || now.hash != d->disk.hash;
+}
+
+int doc_target(const char *path, unsigned long *nlink)
+{
+    struct stat sb;
+    if (nlink)
+        *nlink = 0;
+    if (stat(path, &sb) != 0)
+        return DOC_TARGET_NEW;
+    if (!S_ISREG(sb.st_mode))
+        return DOC_TARGET_NOTFILE;
+    if (nlink)
+        *nlink = (unsigned long)sb.st_nlink;
+    /* root may write anything, so the mode bits say what the owner
+     * meant: a file nobody may write is read-only for root too. */
+    if (geteuid() == 0 ? (sb.st_mode & 0222) == 0 : access(path, W_OK) != 0)
+        return DOC_TARGET_READONLY;
+    return DOC_TARGET_FILE;
+}
+
+int doc_is_own_file(const doc *d, const char *path)
+{
+    struct stat a, b;
+    if (!d->path)
+        return 0;
+    if (strcmp(d->path, path) == 0)
+        return 1;
+    return stat(d->path, &a) == 0 && stat(path, &b) == 0 && a.st_dev == b.st_dev &&
+           a.st_ino == b.st_ino;
+}
+
+static int write_all(int fd, const char *p, size_t n)
+{
+    while (n > 0) {
+        ssize_t w = write(fd, p, n);
+        if (w < 0) {
+            if (errno == EINTR)
+                continue;
+            return -1;
+        }
+        p += w;
+        n -= (size_t)w;
+    }
+    return 0;
+}
+
+/* Reads a whole file into a malloc'ed buffer. */
+static char *slurp(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    char *buf = NULL, *nb;
+    size_t n = 0, cap = 0, got;
+    if (!f)
+        return NULL;
+    for (;;) {
+        if (cap - n < 65536) {
+            cap = cap ? cap * 2 : 65536;
+            nb = realloc(buf, cap);
+            if (!nb) {
+                free(buf);
+                fclose(f);
+                errno = ENOMEM;
+                return NULL;
+            }
+            buf = nb;
+        }
+        got = fread(buf + n, 1, cap - n, f);
+        n += got;
+        if (got == 0)
+            break;
+    }
+    if (ferror(f)) {
+        free(buf);
+        fclose(f);
+        errno = EIO;
+        return NULL;
+    }
+    fclose(f);
+    *len = n;
+    return buf;
+}
+
+/* Rewrites path in place with text, keeping its inode and so every hard
+ * link to it.  The old bytes go to a backup beside it first. */
+static int save_in_place(const sg_system *sys, const char *path, sg_diag *dg)
+{
+    char *text = NULL, *old = NULL, *bak = NULL;
+    const char *slash = strrchr(path, '/');
+    size_t oldlen = 0, dirlen = slash ? (size_t)(slash - path) + 1 : 0;
+    int fd = -1, bfd = -1, e, rc;
+    text = sg_design_to_json(sys);
+    if (!text)
+        return sg_diag_set(dg, SG_ENOMEM, "%s: out of memory", path);
+    old = slurp(path, &oldlen);
+    bak = malloc(dirlen + sizeof ".sagitta-bak-XXXXXX");
+    if (!old || !bak) {
+        e = errno;
+        rc = sg_diag_set(dg, SG_EIO, "%s: cannot read it to back it up: %s", path, strerror(e));
+        goto out;
+    }
+    memcpy(bak, path, dirlen);
+    strcpy(bak + dirlen, ".sagitta-bak-XXXXXX");
+    bfd = mkstemp(bak);
+    if (bfd < 0 || write_all(bfd, old, oldlen) != 0 || fsync(bfd) != 0) {
+        e = errno;
+        if (bfd >= 0)
+            unlink(bak);
+        rc = sg_diag_set(dg, SG_EIO, "%s: cannot write a backup beside it: %s", path,
+                         strerror(e));
+        goto out;
+    }
+    fd = open(path, O_WRONLY | O_TRUNC);
+    if (fd < 0 || write_all(fd, text, strlen(text)) != 0 || fsync(fd) != 0) {
+        e = errno;
+        /* Put the old bytes back; the backup stays if even that fails. */
+        if (fd >= 0 && ftruncate(fd, 0) == 0 && lseek(fd, 0, SEEK_SET) == 0 &&
+            write_all(fd, old, oldlen) == 0 && fsync(fd) == 0) {
+            unlink(bak);
+            rc = sg_diag_set(dg, SG_EIO, "%s: cannot write: %s (the file is as it was)", path,
+                             strerror(e));
+        } else {
+            rc = sg_diag_set(dg, SG_EIO, "%s: cannot write: %s; its old content is in %s",
+                             path, strerror(e), bak);
+        }
+        goto out;
+    }
+    unlink(bak);
+    rc = SG_EOK;
+out:
+    if (fd >= 0)
+        close(fd);
+    if (bfd >= 0)
+        close(bfd);
+    free(bak);
+    free(old);
+    free(text);
+    return rc;
+}
+
 int doc_save(doc *d, const char *path, sg_diag *dg)
 {
-    int rc;
+    unsigned long nlink = 0;
+    int rc, t;
     if (!path)
         path = d->path;
     if (!path)
         return sg_diag_set(dg, SG_EINVAL, "no file name: give one to save as");
-    rc = sg_design_save(d->sys, path, dg);
+    t = doc_target(path, &nlink);
+    if (t == DOC_TARGET_READONLY)
+        return sg_diag_set(dg, SG_EIO, "%s is read-only: not saved (save under another name, "
+                                       "or make it writable)", path);
+    /* rename() would give the new text a new inode and leave every other
+     * hard link on the old one. */
+    if (t == DOC_TARGET_FILE && nlink > 1)
+        rc = save_in_place(d->sys, path, dg);
+    else
+        rc = sg_design_save(d->sys, path, dg);
     if (rc != SG_EOK)
         return rc;
     if (path != d->path && doc_set_path(d, path) != SG_EOK)
         return sg_diag_set(dg, SG_ENOMEM, "%s: saved, but out of memory", path);
     d->saved_id = d->id;
+    if (doc_stamp_file(d->path, &d->disk) != 0)
+        d->disk.have = 0;
     return SG_EOK;
 }
 

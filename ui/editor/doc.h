@@ -25,6 +25,16 @@ typedef struct doc_stack {
     size_t n, cap;
 } doc_stack;
 
+/* What the file on disk was when the document last read or wrote it, so a
+ * save can tell that another program changed it meanwhile. */
+typedef struct doc_stamp {
+    int have;                 /* 0: no file was read or written yet */
+    unsigned long long dev, ino, size;
+    long long mtime_s;
+    long mtime_ns;
+    unsigned long long hash;  /* FNV-1a of the content */
+} doc_stamp;
+
 typedef struct doc {
     sg_system *sys;
     char *path;               /* NULL for a design never saved */
@@ -36,6 +46,7 @@ typedef struct doc {
     size_t hist_bytes;        /* memory held by both stacks */
     size_t hist_limit;        /* trim the oldest undo steps beyond this */
     int open_change;          /* doc_begin() called, doc_end() not yet */
+    doc_stamp disk;           /* the file at path as last loaded or saved */
 } doc;
 
 /* A new design (sg_system_new()), no file name, unmodified.  Returns SG_EOK
@@ -76,10 +87,31 @@ int doc_new(doc *d, const char *path);
  * document counts as differing from its file (a design recovered after a
  * crash), and no undo step leads back to an unmodified state. */
 void doc_replace(doc *d, sg_system *sys, const char *path, int modified);
-/* Saves to path (NULL: the current file name) atomically; on success the
- * document takes that name and is unmodified.  On failure the file on disk
- * and the document are both as they were. */
+/* Saves to path (NULL: the current file name); on success the document
+ * takes that name and is unmodified.  A file with one link is replaced
+ * atomically (sg_design_save: a temporary file renamed over it).  A file
+ * with more hard links is written in place so every name keeps seeing it:
+ * first its old bytes are copied to a backup beside it, then it is
+ * rewritten and synced, then the backup goes; should the rewrite fail the
+ * old bytes are put back and, failing that, the message names the backup.
+ * On failure the document is as it was. */
 int doc_save(doc *d, const char *path, sg_diag *dg);
+
+/* Stamps the file at path: returns 0, or -1 with errno set (ENOENT: no
+ * such file). */
+int doc_stamp_file(const char *path, doc_stamp *st);
+/* 1 when the document's file differs from what it last loaded or saved
+ * (size or content; a new modification time alone with the same bytes
+ * does not count) or exists though the document never read it; 0 when it
+ * is the same, or there is no such file. */
+int doc_disk_changed(const doc *d);
+/* How a save to path would go.  Returns DOC_TARGET_* and, for an existing
+ * file, its link count in *nlink (may be NULL). */
+enum { DOC_TARGET_NEW = 0, DOC_TARGET_FILE, DOC_TARGET_READONLY, DOC_TARGET_NOTFILE };
+int doc_target(const char *path, unsigned long *nlink);
+/* 1 when path names the document's own file (the same inode, whatever the
+ * spelling), 0 otherwise. */
+int doc_is_own_file(const doc *d, const char *path);
 
 /* Bitwise equality of two systems (every field that a design holds). */
 int doc_system_equal(const sg_system *a, const sg_system *b);

@@ -2,6 +2,7 @@
 #include "ed.h"
 
 #include <dirent.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -172,4 +173,27 @@ const char *ed_aim_name(int a)
 {
     static const char *const n[] = {"off", "paraxial", "real"};
     return a >= 0 && a < 3 ? n[a] : "?";
+}
+
+void ed_field_scale(const sg_system *s, double *fx, double *fy)
+{
+    int k;
+    *fx = *fy = 0.0;
+    for (k = 0; k < s->nfield; k++) {
+        if (s->field_norm == SG_NORM_RADIAL) {
+            double r = hypot(s->field[k].x, s->field[k].y);
+            if (r > *fx)
+                *fx = *fy = r;
+        } else {
+            if (fabs(s->field[k].x) > *fx)
+                *fx = fabs(s->field[k].x);
+            if (fabs(s->field[k].y) > *fy)
+                *fy = fabs(s->field[k].y);
+        }
+    }
+}
+
+const char *ed_field_unit(const sg_system *s)
+{
+    return s->field_type == SG_FIELD_ANGLE ? "deg" : s->units;
 }

@@ -26,7 +26,8 @@ enum {
     ED_SHOW_HELP = 1 << 6,
     ED_SHOW_SETTINGS = 1 << 7,
     ED_SHOW_EXAMPLES = 1 << 8,
-    ED_PROMPT = 1 << 9         /* open the ':' line with ed.prompt_init */
+    ED_PROMPT = 1 << 9,        /* open the ':' line with ed.prompt_init */
+    ED_SHOW_SYSDATA = 1 << 10  /* the system data (paraxial) view */
 };
 
 /* What a confirmation asks. */
@@ -34,7 +35,8 @@ enum {
     CONFIRM_NONE = 0,
     CONFIRM_QUIT,     /* unsaved changes: save, discard or cancel */
     CONFIRM_DISCARD,  /* unsaved changes: run ed.pending anyway? */
-    CONFIRM_RECOVER   /* ed.question: recover (ed.pending), discard (ed.pending2) or later */
+    CONFIRM_RECOVER,  /* ed.question: recover (ed.pending), discard (ed.pending2) or later */
+    CONFIRM_ASK       /* ed.question, yes or no: yes runs ed.pending */
 };
 
 #define ED_MSG 1024
@@ -110,6 +112,17 @@ const char *ed_aper_name(int t);
 const char *ed_field_type_name(int t);
 const char *ed_field_norm_name(int t);
 const char *ed_aim_name(int a);
+
+/* The field scales of Zemax's normalization: the largest radial field
+ * (both), or the largest |x| and |y| (rectangular); a field (x, y) is
+ * traced at Hx = x / fx, Hy = y / fy. */
+void ed_field_scale(const sg_system *s, double *fx, double *fy);
+/* The unit of the field values: "deg" or the lens unit. */
+const char *ed_field_unit(const sg_system *s);
+
+/* Appends a warning to the message when other live editors have the
+ * design at path open; returns how many. */
+int ed_note_holders(ed *e, const char *path);
 
 /* Runs a script of commands without a screen; returns the exit status.
  * Errors print as "SCRIPT:LINE: message" on stderr. */

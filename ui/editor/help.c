@@ -19,10 +19,12 @@ const char *const ui_key_help[] = {
     "o               open a design file",
     "e               open a bundled example",
     "n               new design",
-    "x               export the ray table (:export FILE [csv|json|text] [ray|fan N|grid N])",
+    "x               export the ray table (:export FILE [csv|json|text] [ray|fan N|xfan N|grid N])",
     "t F4            system settings: wavelengths, fields, aperture, aiming, method",
     "m               next trace method (precise, classic, mpfr)",
     "#               digits of agreement with an MPFR trace, on or off",
+    "F3              system data: pupils, image height, NA, working F/#, magnification",
+    "Esc, then a key run that key's command even in a text cell (Alt-key does the same)",
     "v               next wavelength for the ray",
     "c F5            chief ray (Px = Py = 0)",
     "F6 F7 F8 F9     marginal ray: top, bottom, right, left",
@@ -41,6 +43,8 @@ const char *const ui_key_help[] = {
     "< >             first / last surface",
     "Enter F2        edit the cell (Enter sets, Esc cancels, Tab and Up/Down set and move)",
     "0-9 . - + A-Z   start typing a new value into the cell",
+    "any character   in Comment and Material: start typing (letters there never run commands;",
+    "                use Esc then the key, function keys, or Enter to commit and move)",
     "Backspace       edit the cell starting from empty",
     "Space           Semi-Dia: fix or free the aperture (U); Type: switch standard/asphere",
     "i Insert        insert a surface before this one",
@@ -55,9 +59,9 @@ const char *const ui_key_help[] = {
     "Type            STANDARD or EVENASPH; an r^n term makes a surface EVENASPH",
     "",
     "#Ray selector (f)",
-    "Left Right Tab  choose Hx, Hy, Px, Py or Wave",
-    "Up Down k j +   step the value (Wave: next / previous wavelength)",
-    "[ ]             smaller / larger step",
+    "Left Right Tab  choose Fld (field of the design), Hx, Hy, Px, Py or Wave",
+    "Up Down k j +   step the value in decimal (Fld, Wave: next / previous)",
+    "[ ]             smaller / larger step (1, 0.1 ... 0.000001)",
     "Home            set the value to 0",
     "Enter 0-9 . -   type a value",
     "Esc f           back to the spreadsheet",
@@ -67,6 +71,8 @@ const char *const ui_key_help[] = {
     "Enter           edit it (as a command on the ':' line)",
     "Left Right Spc  cycle a choice",
     "a d p           add, delete a wavelength or field; make a wavelength primary",
+    "< >             move a wavelength up / down the list",
+    "F               wavelengths F, d, C (primary d), as :wavelength preset FdC",
     "Esc q t         close",
     "",
     "#Results",
@@ -87,7 +93,8 @@ const char *const ui_key_help[] = {
     "=recdir",
     "After a crash, kill, SIGHUP, SIGTERM or a closed terminal the copy stays, and the next",
     "  start on that file (or without a file: the newest copy of any) asks: y loads it as",
-    "  unsaved changes to the original file, n deletes it, l keeps it for later.",
+    "  unsaved changes to the original file, l (or Esc) keeps it for later, n asks again",
+    "  and only a second y deletes it.  Other keys, and keys typed before, are ignored.",
     ":recover         lists the copies left by editors that died; :recover N loads one",
     "--batch          never asks; it prints a warning naming the copy and goes on",
     "",
@@ -119,7 +126,8 @@ static int line(int i, char *buf, size_t n)
                 snprintf(buf, n, "    Here: nowhere, since neither XDG_STATE_HOME nor HOME is set");
             return T_DIM;
         }
-        if (s[0] == '#') {
+        /* "#Name" is a heading; "#   ..." is the line of the # key. */
+        if (s[0] == '#' && s[1] != ' ') {
             snprintf(buf, n, "%s", s + 1);
             return T_HEADER;
         }
@@ -140,26 +148,91 @@ static int line(int i, char *buf, size_t n)
     return T_NORMAL;
 }
 
+/* Where the next row of text s ends at width w: at the last blank that
+ * fits, or at w when a word is longer than that. */
+static int row_end(const char *s, int w)
+{
+    int len = (int)strlen(s), k;
+    if (len <= w)
+        return len;
+    for (k = w; k > w / 2; k--)
+        if (s[k] == ' ')
+            return k;
+    return w;
+}
+
+/* Lays out line buf at width cols: calls out for each row (its offset and
+ * length, continuation rows indented by 6) and returns the rows. */
+static int wrap(const char *buf, int cols, void (*out)(void *, int, const char *, int, int),
+                void *arg)
+{
+    int off = 0, len = (int)strlen(buf), r = 0;
+    do {
+        int ind = r == 0 ? 0 : 6, w = cols - ind, n;
+        if (w < 10)
+            w = cols, ind = 0;
+        n = row_end(buf + off, w);
+        if (out)
+            out(arg, r, buf + off, n, ind);
+        off += n;
+        while (buf[off] == ' ')
+            off++;
+        r++;
+    } while (off < len);
+    return r;
+}
+
+static int total_rows(int w)
+{
+    char buf[512];
+    int i, n = nlines(), r = 0;
+    for (i = 0; i < n; i++) {
+        line(i, buf, sizeof buf);
+        r += wrap(buf, w, NULL, NULL);
+    }
+    return r;
+}
+
+typedef struct drawing {
+    ui *u;
+    int first, h, style;
+} drawing;
+
+static void put_row(void *arg, int r, const char *s, int n, int ind)
+{
+    drawing *d = arg;
+    int y = 1 + d->first + r - d->u->help_top;
+    char buf[512];
+    if (y < 1 || y > d->h)
+        return;
+    snprintf(buf, sizeof buf, "%*s%.*s", ind, "", n, s);
+    term_text(y, 0, d->u->cols, d->style, 1, buf);
+}
+
 void help_draw(ui *u)
 {
     char buf[512];
-    int h = u->rows - 2, i, n = nlines();
-    if (u->help_top > n - h)
-        u->help_top = n - h;
+    int h = u->rows - 2, i, n = nlines(), total = total_rows(u->cols), r = 0;
+    drawing d;
+    if (u->help_top > total - h)
+        u->help_top = total - h;
     if (u->help_top < 0)
         u->help_top = 0;
     term_fill(0, 0, u->cols, T_TITLE);
     term_text(0, 0, u->cols, T_TITLE, 1,
               " sagitta help   Up/Down PgUp/PgDn scroll, Esc closes");
-    for (i = 0; i < h; i++) {
-        int k = u->help_top + i, style = T_NORMAL;
-        buf[0] = '\0';
-        if (k < n)
-            style = line(k, buf, sizeof buf);
-        term_text(1 + i, 0, u->cols, style, 1, buf);
+    for (i = 1; i <= h; i++)
+        term_fill(i, 0, u->cols, T_NORMAL);
+    d.u = u;
+    d.h = h;
+    /* Long lines wrap at a blank, so every word can be read at any width. */
+    for (i = 0; i < n && r < u->help_top + h; i++) {
+        d.style = line(i, buf, sizeof buf);
+        d.first = r;
+        r += wrap(buf, u->cols, put_row, &d);
     }
     snprintf(buf, sizeof buf, " lines %d-%d of %d", u->help_top + 1,
-             u->help_top + h < n ? u->help_top + h : n, n);
+             u->help_top + h < total ? u->help_top + h : total, total);
     term_text(u->rows - 1, 0, u->cols, T_DIM, 1, buf);
 }
 
@@ -177,7 +250,7 @@ int help_key(ui *u, int key)
     case K_HOME:
     case '<': u->help_top = 0; break;
     case K_END:
-    case '>': u->help_top = nlines(); break;
+    case '>': u->help_top = total_rows(u->cols); break;
     case K_ESC:
     case 'q':
     case '?':

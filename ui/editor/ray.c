@@ -8,16 +8,46 @@
 #include "term.h"
 #include "ui.h"
 
-static const char *const item_name[RAY_NITEMS] = {"Hx", "Hy", "Px", "Py", "Wave"};
-static const char *const item_cmd[RAY_NITEMS] = {"hx", "hy", "px", "py", "wave"};
+static const char *const item_name[RAY_NITEMS] = {"Fld", "Hx", "Hy", "Px", "Py", "Wave"};
+static const char *const item_cmd[RAY_NITEMS] = {"field", "hx", "hy", "px", "py", "wave"};
+
+/* The design's field the ray's Hx, Hy pick (1-based), or 0 for none. */
+static int ray_field(const ed *e)
+{
+    const sg_system *s = e->doc.sys;
+    double fx, fy;
+    int k;
+    ed_field_scale(s, &fx, &fy);
+    for (k = 0; k < s->nfield; k++)
+        if (e->ray[0] == (fx > 0.0 ? s->field[k].x / fx : 0.0) &&
+            e->ray[1] == (fy > 0.0 ? s->field[k].y / fy : 0.0))
+            return k + 1;
+    return 0;
+}
 
 static void item_text(const ui *u, int i, char *buf, size_t n)
 {
     const ed *e = u->e;
+    int k;
     if (i == RAY_WAVE)
         snprintf(buf, n, "%d: %.10gum", e->wave + 1, e->doc.sys->wave[e->wave].um);
+    else if (i == RAY_FIELD)
+        (k = ray_field(e)) > 0 ? snprintf(buf, n, "%d", k) : snprintf(buf, n, "-");
     else
-        numfmt_shortest(e->ray[i], buf, n);
+        numfmt_shortest(e->ray[i - RAY_HX], buf, n);
+}
+
+static int item_width(const ui *u, int i)
+{
+    char buf[128];
+    int w;
+    if (i == RAY_FIELD)
+        return u->e->doc.sys->nfield >= 10 ? 2 : 1;
+    if (i != RAY_WAVE)
+        return 7;
+    item_text(u, i, buf, sizeof buf);
+    w = (int)strlen(buf);
+    return w < 8 ? 8 : w > 16 ? 16 : w;
 }
 
 void ray_draw(ui *u)
@@ -27,13 +57,13 @@ void ray_draw(ui *u)
     term_fill(y, 0, u->cols, T_NORMAL);
     x += term_text(y, x, u->cols - x, u->focus == FOCUS_RAY ? T_FRAME : T_HEADER, 0, "Ray ");
     for (i = 0; i < RAY_NITEMS; i++) {
-        int w = i == RAY_WAVE ? 16 : 7, style = T_NORMAL;
+        int w = item_width(u, i), style = T_NORMAL;
         if (x + 4 + w > u->cols)
             break;
         snprintf(buf, sizeof buf, " %s ", item_name[i]);
         x += term_text(y, x, u->cols - x, T_DIM, 0, buf);
         item_text(u, i, buf, sizeof buf);
-        if (i == RAY_WAVE)
+        if (i == RAY_WAVE || i == RAY_FIELD)
             snprintf(shown, sizeof shown, "%s", buf);
         else
             numfmt_fit(buf, w, u->ell, shown, sizeof shown);
@@ -76,9 +106,7 @@ void ray_draw(ui *u)
             x += term_text(y, x, u->cols - x, style, 0, buf);
     }
     if (u->focus == FOCUS_RAY && x + 14 < u->cols) {
-        char st[NUMFMT_MAX];
-        numfmt_shortest(u->step, st, sizeof st);
-        snprintf(buf, sizeof buf, "  step %s", st);
+        snprintf(buf, sizeof buf, "  step %.*f", u->step_exp, pow(10.0, -u->step_exp));
         term_text(y, x, u->cols - x, T_DIM, 0, buf);
     }
 }
@@ -88,24 +116,31 @@ static int run_value(ui *u, double v)
     return ui_run(u, "%s %.17g", item_cmd[u->ray_item], v);
 }
 
+/* Steps in decimal: the value is a whole number of steps of 10^-step_exp
+ * and goes to the command as that decimal text, so three steps of 0.1 give
+ * 0.3, the double a user typing 0.3 gets. */
 static int step(ui *u, int dir)
 {
     ed *e = u->e;
-    double v;
+    double p10 = pow(10.0, u->step_exp), k;
     if (u->ray_item == RAY_WAVE) {
         int n = e->doc.sys->nwave;
         return ui_run(u, "wave %d", (e->wave + dir + n) % n + 1);
     }
-    /* Snapping to the step keeps repeated steps free of rounding drift. */
-    v = e->ray[u->ray_item] + dir * u->step;
-    v = nearbyint(v / u->step) * u->step;
-    if (v > 1.0)
-        v = 1.0;
-    if (v < -1.0)
-        v = -1.0;
-    if (fabs(v) < u->step * 1e-9)
-        v = 0.0;
-    return run_value(u, v);
+    if (u->ray_item == RAY_FIELD) {
+        int n = e->doc.sys->nfield, f = ray_field(e);
+        /* From no field, up goes to the first and down to the last. */
+        f = f == 0 ? (dir > 0 ? 1 : n) : (f - 1 + dir + n) % n + 1;
+        return ui_run(u, "field %d", f);
+    }
+    k = nearbyint(e->ray[u->ray_item - RAY_HX] * p10 + dir);
+    if (k > p10)
+        k = p10;
+    if (k < -p10)
+        k = -p10;
+    if (k == 0.0)
+        k = 0.0; /* not -0 */
+    return ui_run(u, "%s %.*f", item_cmd[u->ray_item], u->step_exp, k / p10);
 }
 
 static void begin_edit(ui *u, const char *init)
@@ -135,22 +170,24 @@ int ray_key(ui *u, int key)
     case K_DOWN:
     case 'j': return step(u, -1);
     case '[':
-        if (u->step > 1e-6)
-            u->step /= 10.0;
+        if (u->step_exp < 6)
+            u->step_exp++;
         return ED_HANDLED | ED_REDRAW;
     case ']':
-        if (u->step < 1.0)
-            u->step *= 10.0;
-        if (u->step > 1.0)
-            u->step = 1.0;
+        if (u->step_exp > 0)
+            u->step_exp--;
         return ED_HANDLED | ED_REDRAW;
-    case K_HOME: return u->ray_item == RAY_WAVE ? ED_HANDLED : run_value(u, 0.0);
+    case K_HOME:
+        return u->ray_item == RAY_WAVE || u->ray_item == RAY_FIELD ? ED_HANDLED
+                                                                   : run_value(u, 0.0);
     case K_ENTER:
     case K_F(2):
         if (u->ray_item == RAY_WAVE)
             snprintf(buf, sizeof buf, "%d", u->e->wave + 1);
+        else if (u->ray_item == RAY_FIELD)
+            item_text(u, RAY_FIELD, buf, sizeof buf);
         else
-            numfmt_shortest(u->e->ray[u->ray_item], buf, sizeof buf);
+            numfmt_shortest(u->e->ray[u->ray_item - RAY_HX], buf, sizeof buf);
         begin_edit(u, buf);
         return ED_HANDLED | ED_REDRAW;
     case K_ESC:

@@ -450,6 +450,15 @@ void rec_sweep_temps(const char *dir)
         return;
     while ((de = readdir(dp)) != NULL) {
         const char *t = strstr(de->d_name, REC_SUFFIX ".tmp");
+        size_t len = strlen(de->d_name), ll = strlen(REC_LOCK_SUFFIX);
+        rec_info info;
+        /* A lock left by an editor that died holds no work. */
+        if (len > ll && strcmp(de->d_name + len - ll, REC_LOCK_SUFFIX) == 0) {
+            if (put(file, sizeof file, "%s/%s", dir, de->d_name) == 0 &&
+                rec_read_file(file, &info, NULL, NULL) == SG_OK && info.orphan)
+                (void)unlink(file);
+            continue;
+        }
         if (!t || strlen(t) != strlen(REC_SUFFIX ".tmp") + 6 ||
             put(file, sizeof file, "%s/%s", dir, de->d_name) != 0)
             continue;
@@ -502,7 +511,7 @@ static unsigned long long fnv1a(const char *s)
 
 /* Picks a free name for our file: BASE-HASH-PID.sgrec (or untitled-PID),
  * with a counter when an older file has the name (a pid used again). */
-static int claim(const char *dir, const char *key, char *out, size_t n)
+static int claim(const char *dir, const char *key, const char *suffix, char *out, size_t n)
 {
     char base[49], stem[REC_PATH];
     const char *b = strrchr(key, '/');
@@ -523,8 +532,8 @@ static int claim(const char *dir, const char *key, char *out, size_t n)
         return -1;
     }
     for (k = 0; k < 100; k++) {
-        if (k == 0 ? put(out, n, "%s%s", stem, REC_SUFFIX)
-                   : put(out, n, "%s-%d%s", stem, k, REC_SUFFIX))
+        if (k == 0 ? put(out, n, "%s%s", stem, suffix)
+                   : put(out, n, "%s-%d%s", stem, k, suffix))
             return -1;
         if (lstat(out, &st) != 0 && errno == ENOENT)
             return 0;
@@ -539,6 +548,71 @@ static void unlink_quiet(char *file)
     file[0] = '\0';
 }
 
+/* Keeps our lock file in line with the document's name: one small file
+ * saying that this editor has that design open. */
+static void hold(ed *e)
+{
+    recov *r = &e->rec;
+    const char *p = doc_path(&e->doc);
+    char dir[REC_PATH], key[REC_PATH], err[ED_MSG], *head;
+    int fd;
+    if (p ? strcmp(p, r->lock_for) == 0 : !r->lock_for[0])
+        return;
+    unlink_quiet(r->lock);
+    r->lock_for[0] = '\0';
+    if (!p || put(r->lock_for, sizeof r->lock_for, "%s", p) != 0 ||
+        rec_dir(dir, sizeof dir) != 0 || rec_abspath(p, key, sizeof key) != 0 ||
+        make_dir(dir, err, sizeof err) != 0 ||
+        claim(dir, key, REC_LOCK_SUFFIX, r->lock, sizeof r->lock) != 0) {
+        r->lock[0] = '\0';
+        return;
+    }
+    head = header_json(key);
+    fd = head ? open(r->lock, O_WRONLY | O_CREAT | O_EXCL, 0600) : -1;
+    if (fd < 0 || write_all(fd, head, strlen(head)) != 0 || write_all(fd, "\n", 1) != 0) {
+        if (fd >= 0)
+            unlink(r->lock);
+        r->lock[0] = '\0';
+    }
+    if (fd >= 0)
+        close(fd);
+    free(head);
+}
+
+int rec_holders(const char *dir, const char *abspath, rec_info *first)
+{
+    DIR *dp;
+    struct dirent *de;
+    rec_info info;
+    char file[REC_PATH];
+    size_t ll = strlen(REC_LOCK_SUFFIX), rl = strlen(REC_SUFFIX);
+    int n = 0;
+    dp = opendir(dir);
+    if (!dp)
+        return 0;
+    while ((de = readdir(dp)) != NULL) {
+        size_t len = strlen(de->d_name);
+        int lock = len > ll && strcmp(de->d_name + len - ll, REC_LOCK_SUFFIX) == 0;
+        int rec = len > rl && strcmp(de->d_name + len - rl, REC_SUFFIX) == 0;
+        if (de->d_name[0] == '.' || !(lock || rec) ||
+            put(file, sizeof file, "%s/%s", dir, de->d_name) != 0 ||
+            rec_read_file(file, &info, NULL, NULL) != SG_OK)
+            continue;
+        if (info.orphan) {
+            /* A lock holds no work, so the one a dead editor left goes. */
+            if (lock)
+                (void)unlink(file);
+            continue;
+        }
+        if (info.pid == (long)getpid() || strcmp(info.path, abspath) != 0)
+            continue;
+        if (n++ == 0 && first)
+            *first = info;
+    }
+    closedir(dp);
+    return n;
+}
+
 int rec_sync(ed *e, int force)
 {
     recov *r = &e->rec;
@@ -550,6 +624,7 @@ int rec_sync(ed *e, int force)
 
     if (!r->enabled || r->closed)
         return -1;
+    hold(e);
     mod = doc_modified(&e->doc);
     key[0] = '\0';
     if (mod && p && rec_abspath(p, key, sizeof key) != 0)
@@ -574,7 +649,7 @@ int rec_sync(ed *e, int force)
         if (rec_dir(dir, sizeof dir) != 0)
             snprintf(err, sizeof err, "neither XDG_STATE_HOME nor HOME is set");
         else if (make_dir(dir, err, sizeof err) == 0 &&
-                 claim(dir, key, r->file, sizeof r->file) != 0)
+                 claim(dir, key, REC_SUFFIX, r->file, sizeof r->file) != 0)
             snprintf(err, sizeof err, "%.900s: no free name", dir);
         if (err[0])
             r->file[0] = '\0';
@@ -611,6 +686,7 @@ void rec_finish(ed *e)
 {
     recov *r = &e->rec;
     unlink_quiet(r->file);
+    unlink_quiet(r->lock);
     r->pending = 0;
     r->closed = 1;
 }

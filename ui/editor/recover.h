@@ -24,6 +24,9 @@
 
 #define REC_PATH 4096
 #define REC_SUFFIX ".sgrec"
+/* A lock: the header line alone, kept while an editor has a design open,
+ * so a second editor on the same file can warn. */
+#define REC_LOCK_SUFFIX ".sglock"
 /* Each write costs an fsync, so writes are spaced by REC_COST_FACTOR times
  * what the last one took, and never more than REC_DEBOUNCE_MS: a small
  * design is written after every change, a huge one or a slow disk at most
@@ -55,6 +58,8 @@ typedef struct recov {
     int pending;              /* a change waits for the debounce interval */
     int failing;              /* the last write failed (reported once) */
     char adopted[REC_PATH];   /* an orphan this session loaded: removed once safe */
+    char lock[REC_PATH];      /* our lock file, "" when none */
+    char lock_for[REC_PATH];  /* the document name it was made for */
 } recov;
 
 /* The directory for recovery files into buf: $XDG_STATE_HOME/sagitta when
@@ -88,9 +93,15 @@ int rec_is_orphan(const rec_info *info);
  * count, or -1 when dir cannot be read (a missing dir gives 0). */
 int rec_orphans(const char *dir, const char *abspath, const char *skip, rec_info **out);
 
+/* How many live editors other than this one have the design abspath open
+ * (a lock or a recovery file of a running process names it); the first
+ * goes to *first (may be NULL).  Locks left by dead editors are removed. */
+int rec_holders(const char *dir, const char *abspath, rec_info *first);
+
 /* Removes temporary files (NAME.sgrec.tmpXXXXXX) older than a minute from
  * dir: a live editor's exist for milliseconds, so these were left by an
- * editor killed in the middle of a write. */
+ * editor killed in the middle of a write.  Also removes the locks of
+ * editors that are gone. */
 void rec_sweep_temps(const char *dir);
 
 /* "YYYY-MM-DD HH:MM:SS" in local time. */

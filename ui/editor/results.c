@@ -173,6 +173,12 @@ static int digits_style(double d)
     return d >= 15.0 ? T_GOOD : d >= 10.0 ? T_NORMAL : T_ERROR;
 }
 
+/* A value that is not a finite number reads as the reports write it. */
+static const char *nonfinite(double x)
+{
+    return isnan(x) ? "undefined" : x > 0 ? "Infinity" : "-Infinity";
+}
+
 static void paraxial_line(ui *u)
 {
     const compute *c = &u->e->cmp;
@@ -186,8 +192,23 @@ static void paraxial_line(ui *u)
     }
     /* Eight digits are plenty for a summary; exact numbers are one export
      * away. */
-    snprintf(buf, sizeof buf, "EFL %.8g   F/# %.6g   EPD %.8g   BFL %.8g   track %.8g",
-             c->par.efl, c->par.image_fnum, c->par.epd, c->par.bfl, c->par.total_track);
+    {
+        /* The lens unit once, and the wavelength the data belong to. */
+        const sg_system *s = u->e->doc.sys;
+        char v[5][NUMFMT_MAX];
+        double x[5] = {c->par.efl, c->par.image_fnum, c->par.epd, c->par.bfl,
+                       c->par.total_track};
+        int i, w = c->par_wave >= 0 && c->par_wave < s->nwave ? c->par_wave : 0;
+        for (i = 0; i < 5; i++)
+            if (isfinite(x[i]))
+                snprintf(v[i], sizeof v[i], i == 1 ? "%.6g" : "%.8g", x[i]);
+            else
+                snprintf(v[i], sizeof v[i], "%s", nonfinite(x[i]));
+        /* The wavelength and the unit lead, so a narrow screen cuts a
+         * number rather than what the numbers mean. */
+        snprintf(buf, sizeof buf, "at %d: %.7gum, %s:  EFL %s  F/# %s  EPD %s  BFL %s  track %s",
+                 w + 1, s->wave[w].um, s->units, v[0], v[1], v[2], v[3], v[4]);
+    }
     term_text(y, 0, u->cols, T_NORMAL, 1, buf);
     if (c->warn[0] && (int)strlen(buf) + 4 < u->cols)
         term_text(y, (int)strlen(buf) + 3, u->cols - (int)strlen(buf) - 3, T_DIM, 0, c->warn);
@@ -221,7 +242,10 @@ static void panel_item(ui *u, int y, int x, int w, const char *label, double v, 
 {
     char num[NUMFMT_MAX], cut[NUMFMT_MAX + 8], buf[NUMFMT_MAX + 16];
     int lw = (int)strlen(label) + 1;
-    numfmt_shortest(v, num, sizeof num);
+    if (isfinite(v))
+        numfmt_shortest(v, num, sizeof num);
+    else
+        snprintf(num, sizeof num, "%s", nonfinite(v));
     numfmt_fit(num, w - lw, u->ell, cut, sizeof cut);
     snprintf(buf, sizeof buf, "%s=%s", label, cut);
     term_text(y, x, w, style, 1, buf);
@@ -308,6 +332,21 @@ static void panel_draw(ui *u)
     }
 }
 
+/* Nonzero when surface row's glass does not cover the traced wavelength:
+ * its index there is an extrapolation, as the CLI warns. */
+static int out_of_range(const ui *u, int row)
+{
+    const ed *e = u->e;
+    const sg_surface *s;
+    const sg_glass *g;
+    if (!e->cat || row < 0 || row >= e->doc.sys->nsurf)
+        return 0;
+    s = &e->doc.sys->surf[row];
+    if (s->mat.kind != SG_MAT_GLASS || !(g = sg_catalog_find(e->cat, s->mat.name)))
+        return 0;
+    return !sg_glass_in_range(g, e->doc.sys->wave[e->wave].um);
+}
+
 /* ------------------------------------------------------------ the table */
 
 static void cell(const ui *u, int row, int c, const sg_ray_surface *r,
@@ -320,6 +359,11 @@ static void cell(const ui *u, int row, int c, const sg_ray_surface *r,
     if (c == RC_STATUS) {
         snprintf(out, n, "%s", status_word(r->status));
         *style = r->status == SG_EOK ? T_GOOD : T_ERROR;
+        if (out_of_range(u, row)) {
+            /* The glass is used beyond its range: the numbers are suspect. */
+            snprintf(out, n, "%s range!", status_word(r->status));
+            *style = T_ERROR;
+        }
         return;
     }
     /* Nothing was computed past a failure, so nothing is shown. */
@@ -329,12 +373,16 @@ static void cell(const ui *u, int row, int c, const sg_ray_surface *r,
         x = c == RC_PATH ? r->path : coord(r, c);
         if (!isnan(x))
             numfmt_cell(x, w, u->ell, out, n);
+        else
+            snprintf(out, n, "%s", nonfinite(x));
         return;
     }
     if (c == RC_RESID || c == RC_BOUND) {
         x = c == RC_RESID ? residual(u, row, r) : r->error_bound;
         if (!isnan(x))
             snprintf(out, n, "%.2g", x);
+        else
+            snprintf(out, n, "%s", nonfinite(x));
         return;
     }
     if (!ref || ref->status != SG_EOK)

@@ -1,4 +1,5 @@
 /* settings.c - the system settings dialog and the examples menu. */
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -116,7 +117,7 @@ void settings_draw(ui *u)
         u->set_top = u->set_sel - h + 1;
     term_text(1, 0, u->cols, T_FRAME, 1,
               " System settings   Enter edit  Left/Right change  a add  d delete  "
-              "p primary  Esc close");
+              "p primary  < > move  F FdC  Esc close");
     for (i = 0; i < h; i++) {
         int k = u->set_top + i, y = 2 + i;
         term_fill(y, 0, u->cols, T_NORMAL);
@@ -140,8 +141,34 @@ static int cycle(ui *u, item it, int dir)
         for (k = 0; k < 4 && strcmp(units[k], s->units) != 0; k++)
             ;
         return ui_run(u, "units %s", units[((k % 4) + dir + 4) % 4]);
-    case IT_APER_TYPE:
-        return ui_run(u, "aperture %s", ed_aper_name(((int)s->aper_type + dir + 5) % 5));
+    case IT_APER_TYPE: {
+        /* The value is kept when the new type can take it; otherwise (an
+         * NA of 9, an F/# of 0 after "float") the new type starts from the
+         * design's own paraxial value, so the system stays as it is, and a
+         * type that cannot apply (an NA with the object at infinity) is
+         * skipped: the cycle never sticks. */
+        int i, f = ED_HANDLED;
+        for (i = 1; i < 5; i++) {
+            int t = (((int)s->aper_type + dir * i) % 5 + 5) % 5;
+            double v = s->aper_value, par = 0.0;
+            if (e->cmp.par_ok)
+                par = t == SG_APER_EPD           ? e->cmp.par.epd
+                      : t == SG_APER_IMAGE_FNUM  ? e->cmp.par.image_fnum
+                      : t == SG_APER_OBJECT_NA   ? e->cmp.par.object_na
+                      : t == SG_APER_PARAX_WORKING_FNUM ? e->cmp.par.working_fnum
+                                                 : 0.0;
+            if (t != SG_APER_FLOAT_STOP &&
+                !(v > 0.0 && (t != SG_APER_OBJECT_NA || v < 1.0))) {
+                if (!(par > 0.0 && isfinite(par) && (t != SG_APER_OBJECT_NA || par < 1.0)))
+                    continue;
+                v = par;
+            }
+            f = ui_run(u, "aperture %s %.17g", ed_aper_name(t), v);
+            if (!(f & ED_ERROR))
+                return f;
+        }
+        return f;
+    }
     case IT_FIELD_TYPE:
         return ui_run(u, "field type %s", ed_field_type_name(((int)s->field_type + dir + 4) % 4));
     case IT_FIELD_NORM:
@@ -243,6 +270,20 @@ int settings_key(ui *u, int key)
         if (it.kind == IT_WAVE)
             return ui_run(u, "wavelength primary %d", it.idx + 1);
         return ED_HANDLED;
+    case '<':
+    case '>':
+        /* Reorders the wavelengths; the selection moves with the line. */
+        if (it.kind == IT_WAVE) {
+            int to = it.idx + (key == '<' ? -1 : 1), f;
+            if (to < 0 || to >= u->e->doc.sys->nwave)
+                return ED_HANDLED;
+            f = ui_run(u, "wavelength move %d %d", it.idx + 1, to + 1);
+            if (!(f & ED_ERROR))
+                u->set_sel += to - it.idx;
+            return f;
+        }
+        return ED_HANDLED;
+    case 'F': return ui_run(u, "wavelength preset FdC");
     case K_ESC:
     case 'q':
     case 't':

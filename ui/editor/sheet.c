@@ -9,6 +9,18 @@
 
 #define LABEL_W 8
 
+/* The label column: "IMA" and the surface number with a blank between
+ * them however many digits the number has (IMA 1001, not IMA1001). */
+static int label_w(const ui *u)
+{
+    int n = u->e->doc.sys->nsurf - 1, d = 1;
+    while (n >= 10) {
+        n /= 10;
+        d++;
+    }
+    return d <= 3 ? LABEL_W : 3 + 1 + d + 1;
+}
+
 static int col_width(const ui *u, int c)
 {
     switch (c) {
@@ -64,7 +76,7 @@ static void cell_show(const ui *u, int row, int col, int w, char *out, size_t n)
 /* Places the visible columns from u->left on. */
 static void place(ui *u)
 {
-    int x = LABEL_W, c;
+    int x = label_w(u), c;
     for (c = 0; c < COL_COUNT; c++) {
         u->colx[c] = 0;
         u->colw[c] = 0;
@@ -109,10 +121,10 @@ void sheet_follow(ui *u)
     }
 }
 
-static void label(const sg_system *s, int r, char *buf, size_t n)
+static void label(const sg_system *s, int r, int w, char *buf, size_t n)
 {
     const char *tag = r == 0 ? "OBJ" : r == s->nsurf - 1 ? "IMA" : r == s->stop ? "STO" : "";
-    snprintf(buf, n, "%-3s%4d ", tag, r);
+    snprintf(buf, n, "%-3s%*d ", tag, w > 4 && w < 16 ? w - 4 : 4, r);
 }
 
 void sheet_draw(ui *u)
@@ -124,7 +136,7 @@ void sheet_draw(ui *u)
 
     sheet_follow(u);
     term_fill(u->sheet_y, 0, u->cols, T_HEADER);
-    term_text(u->sheet_y, 0, LABEL_W, T_HEADER, 1, u->left > 0 ? "Surf  <" : "Surf");
+    term_text(u->sheet_y, 0, label_w(u), T_HEADER, 1, u->left > 0 ? "Surf  <" : "Surf");
     for (c = u->left; c < COL_COUNT && u->colw[c] > 0; c++) {
         const char *h = cell_heading(c);
         int w = u->colw[c] - 1, hw = (int)strlen(h);
@@ -142,13 +154,16 @@ void sheet_draw(ui *u)
         term_fill(y, 0, u->cols, T_NORMAL);
         if (r >= s->nsurf)
             continue;
-        label(s, r, buf, sizeof buf);
-        term_text(y, 0, LABEL_W, r == e->row ? T_ROWSEL : r == s->stop ? T_STOP : T_DIM, 1,
+        label(s, r, label_w(u), buf, sizeof buf);
+        term_text(y, 0, label_w(u), r == e->row ? T_ROWSEL : r == s->stop ? T_STOP : T_DIM, 1,
                   buf);
         for (c = u->left; c < COL_COUNT && u->colw[c] > 0; c++) {
             int w = u->colw[c] - 1, style = T_NORMAL, x = u->colx[c];
             char cell[LE_MAX];
             cell_show(u, r, c, w, cell, sizeof cell);
+            /* A STANDARD surface ignores its r^n terms: shown, but dim. */
+            if (c >= COL_ASPH0 && s->surf[r].type == SG_SURF_STANDARD)
+                style = T_DIM;
             if (r == e->row && c == e->col)
                 style = u->focus == FOCUS_SHEET ? T_CURSOR : T_ROWSEL;
             if (cell_numeric(c)) {
@@ -219,10 +234,19 @@ static int tab(ui *u, int dir)
     return ED_HANDLED | ED_REDRAW;
 }
 
+int sheet_text_col(int col)
+{
+    return col == COL_COMMENT || col == COL_MATERIAL;
+}
+
 static int starts_edit(int col, int key)
 {
-    if (key >= K_BASE || key < 0x20)
+    if (key >= K_BASE || key < 0x20 || key == 0x7f)
         return 0;
+    /* In a text cell every printable key is text: a comment may hold any
+     * word, and none of its letters may run a command. */
+    if (sheet_text_col(col))
+        return 1;
     if ((key >= '0' && key <= '9') || key == '.' || key == '-' || key == '+')
         return 1;
     /* Upper case never names a command, so it can start any text:
@@ -232,7 +256,25 @@ static int starts_edit(int col, int key)
     return 0;
 }
 
+static int key_impl(ui *u, int key, int typing);
+
 int sheet_key(ui *u, int key)
+{
+    /* A printable key in a text cell types, before any command sees it. */
+    if (sheet_text_col(u->e->col) && starts_edit(u->e->col, key)) {
+        sheet_begin_edit(u, "");
+        le_key(&u->le, key);
+        return ED_HANDLED | ED_REDRAW;
+    }
+    return key_impl(u, key, 1);
+}
+
+int sheet_key_command(ui *u, int key)
+{
+    return key_impl(u, key, 0);
+}
+
+static int key_impl(ui *u, int key, int typing)
 {
     ed *e = u->e;
     const sg_system *s = e->doc.sys;
@@ -277,9 +319,10 @@ int sheet_key(ui *u, int key)
                           s->surf[e->row].type == SG_SURF_STANDARD ? "evenasph" : "standard");
         return ED_HANDLED;
     default:
-        if (starts_edit(e->col, key)) {
-            char first[2] = {(char)key, '\0'};
-            sheet_begin_edit(u, first);
+        if (typing && starts_edit(e->col, key)) {
+            /* Through the line editor, so any character, UTF-8 too. */
+            sheet_begin_edit(u, "");
+            le_key(&u->le, key);
             return ED_HANDLED | ED_REDRAW;
         }
         return 0;

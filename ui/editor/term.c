@@ -280,6 +280,12 @@ void term_beep(void)
     beep();
 }
 
+void term_flush_input(void)
+{
+    if (active)
+        flushinp();
+}
+
 static int map_code(wint_t c)
 {
     switch (c) {

@@ -66,6 +66,9 @@ void term_flush(void);
 /* Forces a full repaint at the next flush (Ctrl-L). */
 void term_repaint(void);
 void term_beep(void);
+/* Drops keys typed but not yet read, so a question is answered by keys
+ * pressed after it appeared. */
+void term_flush_input(void);
 
 /* Waits up to timeout_ms (-1: forever) for a key. */
 int term_key(int timeout_ms);

@@ -21,11 +21,12 @@ enum {
     MODE_CONFIRM,    /* a yes/no question on the status line */
     MODE_HELP,
     MODE_SETTINGS,
-    MODE_EXAMPLES
+    MODE_EXAMPLES,
+    MODE_SYSDATA     /* the system data view */
 };
 
 /* Items of the ray selector. */
-enum { RAY_HX = 0, RAY_HY, RAY_PX, RAY_PY, RAY_WAVE, RAY_NITEMS };
+enum { RAY_FIELD = 0, RAY_HX, RAY_HY, RAY_PX, RAY_PY, RAY_WAVE, RAY_NITEMS };
 
 #define HIST_MAX 100
 
@@ -34,7 +35,8 @@ typedef struct ui {
     int rows, cols;
     int focus, mode;
     int back_mode;       /* where the ':' line returns to */
-    int quit_after_save; /* the quit dialog asked for a file name */
+    int cmd_key;         /* Esc was pressed: the next key is a command, even in a text cell */
+    int rec_delete;      /* the recovery question asks to confirm deleting the file */
     lineedit le;
     const char *ell;     /* ellipsis */
 
@@ -49,7 +51,7 @@ typedef struct ui {
 
     /* Ray selector. */
     int ray_item;
-    double step;
+    int step_exp;        /* the step is 10^-step_exp, so steps stay decimal */
     int rayx[RAY_NITEMS], rayw[RAY_NITEMS];
 
     /* Results. */
@@ -57,6 +59,7 @@ typedef struct ui {
 
     /* Overlays. */
     int help_top;
+    int sys_top;
     int set_sel, set_top;
     char **ex;
     int nex, ex_sel, ex_top;
@@ -80,6 +83,8 @@ void ui_prompt(ui *u, const char *text);
 /* Panels. */
 void sheet_draw(ui *u);
 int sheet_key(ui *u, int key);
+/* A key as a command (after Esc): never starts typing into a cell. */
+int sheet_key_command(ui *u, int key);
 int sheet_click(ui *u, int y, int x, int kind);
 void sheet_follow(ui *u);
 int sheet_edit_key(ui *u, int key);
@@ -99,6 +104,13 @@ int results_panel_height(const ui *u);
 
 void title_draw(ui *u);
 void status_draw(ui *u);
+
+void sysdata_draw(ui *u);
+int sysdata_key(ui *u, int key);
+/* The lines of the system data view, malloc'ed; the caller frees them. */
+int sysdata_lines(const ed *e, char ***lines);
+/* Nonzero for the columns where any printable key types text. */
+int sheet_text_col(int col);
 
 void help_draw(ui *u);
 int help_key(ui *u, int key);
