@@ -1,0 +1,124 @@
+/*
+ * test_edit_trace.c - the editor's ray, chosen by its commands in batch
+ * mode and exported, equals "sagitta trace" of the same ray value for
+ * value.  The rays are asymmetric (Hx != 0, Hy != Py, Px != Py), so a
+ * swapped or dropped coordinate shows.  argv[1] is the program.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "clitest.h"
+
+static char design[1024];
+
+static char *slurp(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    char *buf;
+    long n;
+    if (!f)
+        fail_msg("cannot read %s", path);
+    fseek(f, 0, SEEK_END);
+    n = ftell(f);
+    rewind(f);
+    buf = malloc((size_t)n + 1);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    buf[n] = '\0';
+    fclose(f);
+    return buf;
+}
+
+/* Every row and column of the two CSV texts: numbers equal as doubles,
+ * the status equal as text.  Returns the rows compared. */
+static int same_csv(const char *a, const char *b)
+{
+    static const char *const cols[] = {"x", "y", "z", "l", "m", "n", "residual",
+                                       "error_bound", "path"};
+    char ba[128], bb[128];
+    int row, c;
+    for (row = 0; ct_csv(b, row, "status", bb, sizeof bb); row++) {
+        if (!ct_csv(a, row, "status", ba, sizeof ba))
+            fail_msg("the export has %d rows, trace more", row);
+        assert_string_equal(ba, bb);
+        for (c = 0; c < (int)(sizeof cols / sizeof cols[0]); c++) {
+            double va = ct_csv_num(a, row, cols[c]), vb = ct_csv_num(b, row, cols[c]);
+            if (!(va == vb || (isnan(va) && isnan(vb))))
+                fail_msg("row %d %s: editor %.17g, trace %.17g", row, cols[c], va, vb);
+        }
+    }
+    assert_null(ct_csv(a, row, "status", ba, sizeof ba));
+    return row;
+}
+
+/* Runs the script (its export goes to OUT) in the editor on the
+ * Cassegrain, and compares with trace --ray r under the given method. */
+static void check(const char *name, const char *script, const char *ray, const char *method)
+{
+    ct_result r, t;
+    char *got;
+    int rows;
+    const char *sc = ct_file(name, script);
+    ct_run(&r, "edit", design, "--batch", sc, (char *)NULL);
+    if (r.code != 0)
+        fail_msg("%s: edit --batch exit %d: %s", name, r.code, r.err);
+    got = slurp(ct_path("out.csv"));
+    ct_run(&t, "trace", design, "--ray", ray, "--method", method, "--format", "csv",
+           (char *)NULL);
+    assert_int_equal(t.code, 0);
+    rows = same_csv(got, t.out);
+    print_message("# %s: ray %s (%s): %d rows equal trace's\n", name, ray, method, rows);
+    assert_int_equal(rows, 15);
+    free(got);
+    ct_free(&r);
+    ct_free(&t);
+}
+
+static void ray_command(void **state)
+{
+    char s[1024];
+    (void)state;
+    snprintf(s, sizeof s, "ray 0.3 0.7 -0.4 0.2\nexport %s csv\n", ct_path("out.csv"));
+    check("ray.cmd", s, "0.3,0.7,-0.4,0.2", "precise");
+    snprintf(s, sizeof s, "ray 0.3,-0.9,0.15,0.55\nexport %s csv\n", ct_path("out.csv"));
+    check("ray_commas.cmd", s, "0.3,-0.9,0.15,0.55", "precise");
+}
+
+static void coordinate_commands(void **state)
+{
+    char s[1024];
+    (void)state;
+    snprintf(s, sizeof s, "hx -0.5\nhy 0.25\npx 0.6\npy -0.1\nexport %s csv\n",
+             ct_path("out.csv"));
+    check("coords.cmd", s, "-0.5,0.25,0.6,-0.1", "precise");
+}
+
+static void other_methods(void **state)
+{
+    char s[1024];
+    (void)state;
+    snprintf(s, sizeof s, "method classic\nray -0.2 0.8 0.45 -0.35\nexport %s csv\n",
+             ct_path("out.csv"));
+    check("classic.cmd", s, "-0.2,0.8,0.45,-0.35", "classic");
+    snprintf(s, sizeof s, "method mpfr\nray 0.6 -0.3 -0.1 0.7\nexport %s csv\n",
+             ct_path("out.csv"));
+    check("mpfr.cmd", s, "0.6,-0.3,-0.1,0.7", "mpfr");
+}
+
+int main(int argc, char **argv)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(ray_command),
+        cmocka_unit_test(coordinate_commands),
+        cmocka_unit_test(other_methods),
+    };
+    const char *root = getenv("SAGITTA_SOURCE_ROOT");
+    int rc;
+    ct_init(argc, argv);
+    snprintf(design, sizeof design, "%s/examples/cassegrain.json", root ? root : ".");
+    rc = cmocka_run_group_tests(tests, NULL, NULL);
+    ct_cleanup();
+    return rc;
+}
