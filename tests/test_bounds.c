@@ -704,12 +704,57 @@ static void examples_bounds(void **state)
 }
 
 
+/* A flat base with only an r^16 term, a = y0 - 1, and the ray from
+ * (0, y0, 0) along (0, -1, 1): it meets the surface first at y = 1,
+ * z = y0 - 1 exactly (before that the surface lies above the ray), a
+ * closed-form truth.  Newton started on the tangent plane, where the r^16
+ * term dominates, shrinks y by only 15/16 a step: from y0 = 4.5 to 17.5
+ * it needs some 30 to 50 iterations, so a Newton loop cut short fails
+ * here.  Every method, and mpfr at 64, 113 and 256 bits, must land on the
+ * truth within its bound; precise, within 0.5 ulp of a double, exactly. */
+static void slow_newton(void **state)
+{
+    static const int bits[3] = {64, 113, 256};
+    sg_system *sys = one_surface();
+    int iy, b, n = 0;
+    (void)state;
+    sys->surf[1].type = SG_SURF_EVENASPH;
+    sys->surf[1].radius = INFINITY;
+    sys->surf[1].mat.kind = SG_MAT_INDEX;
+    sys->surf[1].mat.index = 1.5;
+    sys->surf[1].thickness = 10.0;
+    for (iy = 9; iy <= 35; iy++) {
+        double y0 = 0.5 * iy, S[3] = {0.0, y0, 0.0}, D[3] = {0.0, -1.0, 1.0};
+        sg_ray_surface o[3];
+        sg_tracer *t;
+        sys->surf[1].asph[7] = y0 - 1.0;
+        for (b = 0; b < 4; b++) {
+            double e;
+            t = b < 3 ? tracer(sys, SG_METHOD_MPFR, bits[b]) : tracer(sys, SG_METHOD_PRECISE, 0);
+            if (sg_trace_start(t, S, D, o) != SG_OK)
+                fail_msg("y0 %g, %s %d: %s", y0, b < 3 ? "mpfr" : "precise", b < 3 ? bits[b] : 0,
+                         sg_strerror(o[1].status));
+            sg_tracer_free(t);
+            e = fmax(fabs(o[1].x), fmax(fabs(o[1].y - 1.0), fabs(o[1].z - (y0 - 1.0))));
+            if (e > o[1].error_bound || (b == 3 && e != 0.0))
+                fail_msg("y0 %g, %s %d: point (%.17g, %.17g, %.17g), error %.3g, bound %.3g", y0,
+                         b < 3 ? "mpfr" : "precise", b < 3 ? bits[b] : 0, o[1].x, o[1].y,
+                         o[1].z, e, o[1].error_bound);
+            n++;
+        }
+    }
+    print_message("# r^16 surface, slow Newton from the tangent plane: %d traces (mpfr 64, 113, "
+                  "256 bits, precise) land on (0, 1, y0 - 1)\n", n);
+    sg_system_free(sys);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(single_surface),
         cmocka_unit_test(classic_ordinary),
         cmocka_unit_test(examples_bounds),
+        cmocka_unit_test(slow_newton),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
