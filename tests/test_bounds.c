@@ -636,7 +636,7 @@ static void examples_bounds(void **state)
         sg_tracer *tp, *tm[3];
         sg_ray_surface op[64], om[3][64];
         int hy, px, py, i, b, ns = sys->nsurf, nrays = 0;
-        double rd = INFINITY, rm[2] = {INFINITY, INFINITY};
+        double rd = INFINITY, rm[2] = {INFINITY, INFINITY}, worst_res = 0.0;
         assert_true(ns <= 64);
         tp = tu_tracer(sys, cat, SG_METHOD_PRECISE);
         for (b = 0; b < 3; b++) {
@@ -675,6 +675,21 @@ static void examples_bounds(void **state)
                                      e, op[i].dir_error_bound);
                         if (e > 0)
                             rd = fmin(rd, op[i].dir_error_bound / e);
+                        {
+                            /* The residual of every surface's printed point,
+                             * precise and the 64-bit mpfr trace. */
+                            const sg_surface *sf = &sys->surf[i];
+                            scase c;
+                            int j;
+                            memset(&c, 0, sizeof c);
+                            c.R = sf->radius == 0.0 ? INFINITY : sf->radius;
+                            c.k = sf->conic;
+                            c.asph = sf->type == SG_SURF_EVENASPH;
+                            for (j = 0; j < SG_NASPH; j++)
+                                c.a[j] = c.asph ? sf->asph[j] : 0.0;
+                            check_residual("example precise", i, &c, &op[i], &worst_res);
+                            check_residual("example mpfr 64", i, &c, &om[0][i], &worst_res);
+                        }
                         for (b = 0; b < 2; b++) {
                             const sg_ray_surface *q = &om[b][i];
                             double ep = fmax(fabs(q->x - r->x),
@@ -692,8 +707,8 @@ static void examples_bounds(void **state)
                     }
                 }
         print_message("# %-18s %3d rays: smallest bound/error: precise direction %.3g, mpfr "
-                      "64-bit point %.3g, 113-bit point %.3g\n", files[f], nrays, rd, rm[0],
-                      rm[1]);
+                      "64-bit point %.3g, 113-bit point %.3g; residuals within %.3g of "
+                      "|z - sag|\n", files[f], nrays, rd, rm[0], rm[1], worst_res);
         assert_true(nrays >= 20);
         sg_tracer_free(tp);
         for (b = 0; b < 3; b++)
