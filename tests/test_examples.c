@@ -161,7 +161,7 @@ static void grid(const char *file, int n)
     sg_tracer *tc = tu_tracer(sys, cat, SG_METHOD_CLASSIC);
     sg_tracer *tm = tu_tracer(sys, cat, SG_METHOD_MPFR);
     sg_ray_surface op[32], oc[32], om[32];
-    double minp[32], minc[32], worst_ratio = INFINITY;
+    double minp[32], minc[32], cerr[32] = {0}, worst_ratio = INFINITY;
     int i, hx, hy, px, py, nrays = 0, ns = sys->nsurf;
     for (i = 0; i < ns; i++)
         minp[i] = minc[i] = 17.0;
@@ -182,6 +182,11 @@ static void grid(const char *file, int n)
                     nrays++;
                     if (sg_trace_normalized(tc, Hx, Hy, Px, Py, oc) != SG_OK)
                         memset(oc, 0, sizeof oc);
+                    else
+                        for (i = 1; i < ns; i++)
+                            cerr[i] = fmax(cerr[i], fmax(fabs(oc[i].x - om[i].x),
+                                                         fmax(fabs(oc[i].y - om[i].y),
+                                                              fabs(oc[i].z - om[i].z))));
                     for (i = 1; i < ns; i++) {
                         double e = fmax(fabs(op[i].x - om[i].x),
                                         fmax(fabs(op[i].y - om[i].y), fabs(op[i].z - om[i].z)));
@@ -209,7 +214,12 @@ static void grid(const char *file, int n)
     print_message("# %s: %d rays over field and pupil; min digits against mpfr per surface\n",
                   file, nrays);
     for (i = 1; i < ns; i++) {
-        print_message("#   surface %2d  precise %5.1f  classic %5.1f\n", i, minp[i], minc[i]);
+        print_message("#   surface %2d  precise %5.1f  classic %5.1f (largest classic error "
+                      "%.3g mm)\n", i, minp[i], minc[i], cerr[i]);
+        /* Classic's points stay within 1e-8 mm of the reference (measured
+         * 3.5e-10 on the Cassegrain, 6.8e-13 on the TMA): a mirror
+         * reflection off by 5e-7 moves the Cassegrain's image 5.5 um. */
+        assert_true(cerr[i] <= 1e-8);
         assert_true(minp[i] >= 15.0);
     }
     print_message("# smallest bound/error ratio: %.3g\n", worst_ratio);
