@@ -2,7 +2,9 @@
  * test_edit_trace.c - the editor's ray, chosen by its commands in batch
  * mode and exported, equals "sagitta trace" of the same ray value for
  * value.  The rays are asymmetric (Hx != 0, Hy != Py, Px != Py), so a
- * swapped or dropped coordinate shows.  argv[1] is the program.
+ * swapped or dropped coordinate shows.  "print ray" shows the editor's
+ * live trace (what its screen shows), compared as text since the report
+ * prints 16 digits.  argv[1] is the program.
  */
 #include <math.h>
 #include <stdio.h>
@@ -107,12 +109,50 @@ static void other_methods(void **state)
     check("mpfr.cmd", s, "0.6,-0.3,-0.1,0.7", "mpfr");
 }
 
+/* The table rows of a text report: from the "Surf" header on. */
+static const char *table_of(const char *text)
+{
+    const char *p = strstr(text, "\nSurf ");
+    if (!p)
+        fail_msg("no table in:\n%s", text);
+    return p;
+}
+
+/* "print ray" reports the editor's live trace (the one its screen shows,
+ * not the export's batch): its table must equal trace's text table. */
+static void live_trace(void **state)
+{
+    static const char *const rays[][2] = {
+        {"ray 0.3 0.7 -0.4 0.2", "0.3,0.7,-0.4,0.2"},
+        {"ray -0.45 0.15 0.35 -0.6", "-0.45,0.15,0.35,-0.6"},
+    };
+    size_t k;
+    (void)state;
+    for (k = 0; k < sizeof rays / sizeof rays[0]; k++) {
+        char sc[256];
+        ct_result r, t;
+        snprintf(sc, sizeof sc, "%s\nprint ray\n", rays[k][0]);
+        ct_run(&r, "edit", design, "--batch", ct_file("live.cmd", sc), (char *)NULL);
+        assert_int_equal(r.code, 0);
+        ct_run(&t, "trace", design, "--ray", rays[k][1], (char *)NULL);
+        assert_int_equal(t.code, 0);
+        if (strcmp(table_of(r.out), table_of(t.out)) != 0)
+            fail_msg("ray %s: the editor's live trace differs from trace:\n%s\nvs\n%s",
+                     rays[k][1], table_of(r.out), table_of(t.out));
+        print_message("# print ray after '%s': the table equals trace --ray %s\n", rays[k][0],
+                      rays[k][1]);
+        ct_free(&r);
+        ct_free(&t);
+    }
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(ray_command),
         cmocka_unit_test(coordinate_commands),
         cmocka_unit_test(other_methods),
+        cmocka_unit_test(live_trace),
     };
     const char *root = getenv("SAGITTA_SOURCE_ROOT");
     int rc;
