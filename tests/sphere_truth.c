@@ -5,6 +5,13 @@
 
 void sphere64_hit(const double S[3], const double D[3], double dz, double out[3])
 {
+    double lo[3];
+    sphere64_hit_lo(S, D, dz, out, lo);
+}
+
+void sphere64_hit_lo(const double S[3], const double D[3], double dz, double out[3],
+                     double lo[3])
+{
     mpfr_t a, b, c, t, u, disc;
     int k;
     mpfr_inits2(400, a, b, c, t, u, disc, (mpfr_ptr)0);
@@ -36,6 +43,8 @@ void sphere64_hit(const double S[3], const double D[3], double dz, double out[3]
         if (k == 2)
             mpfr_add_d(u, u, dz, MPFR_RNDN);
         out[k] = mpfr_get_d(u, MPFR_RNDN);
+        mpfr_sub_d(u, u, out[k], MPFR_RNDN);
+        lo[k] = mpfr_get_d(u, MPFR_RNDN);
     }
     mpfr_clears(a, b, c, t, u, disc, (mpfr_ptr)0);
 }

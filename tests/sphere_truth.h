@@ -7,5 +7,9 @@
  * double inputs exactly (MPFR, 400 bits): out = S + t D + (0, 0, dz),
  * each coordinate rounded once. */
 void sphere64_hit(const double S[3], const double D[3], double dz, double out[3]);
+/* The same, with lo = the exact value minus out (rounded), so that an
+ * error can be measured against the unrounded crossing. */
+void sphere64_hit_lo(const double S[3], const double D[3], double dz, double out[3],
+                     double lo[3]);
 
 #endif

@@ -330,7 +330,10 @@ static void random_surfaces(void **state)
         print_message("# bound/error (precise, nonzero errors): min %.6f median %.3g\n",
                       ratio[0], ratio[nratio / 2]);
     assert_true((double)within1 >= 0.99 * N);
-    assert_true(worst_p <= 4.0);
+    /* README: within 0.500 ulp (of the point's largest coordinate) of the
+     * unrounded truth in every case; the 320-bit truth's own rounding is
+     * far below the slack. */
+    assert_true(worst_p <= 0.5 + 1e-9);
     if (nratio)
         assert_true(ratio[nratio / 2] <= 100.0);
     sg_system_free(sys);

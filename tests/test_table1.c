@@ -88,10 +88,11 @@ static void table1(void **state)
     print_message("# start   truth y               precise ulp  classic y             "
                   "classic digits  paper classic y\n");
     for (k = 0; k < 6; k++) {
-        double S[3], D[3], Sv[3], tr[3], up, classic_digits;
+        double S[3], D[3], Sv[3], tr[3], tl[3], up, classic_digits, e[3];
         sg_ray_surface op[3], oc[3];
+        int c;
         inputs(k, S, D);
-        sphere64_hit(S, D, 0.0, tr);
+        sphere64_hit_lo(S, D, 0.0, tr, tl);
         /* The notes' truth agrees with this test's own MPFR truth. */
         assert_true(fabs(tr[1] - notes_y[k]) <= 2e-16 * 5.7);
         /* Into the vertex frame: adding 8 to these z values is exact. */
@@ -101,14 +102,20 @@ static void table1(void **state)
         assert_true(Sv[2] - 8.0 == S[2]);
         assert_int_equal(sg_trace_start(tp, Sv, D, op), SG_OK);
         assert_int_equal(sg_trace_start(tc, Sv, D, oc), SG_OK);
-        up = fmax(tu_ulps(op[1].y, tr[1], tr[1]), tu_ulps(op[1].z, tr[2] + 8.0, tr[1]));
-        up = fmax(up, tu_ulps(op[1].x, tr[0], tr[1]));
+        /* Errors against the unrounded crossing (hi + lo; z + 8 is exact
+         * at these sizes), in ulp of each coordinate's own true value. */
+        e[0] = fabs((op[1].x - tr[0]) - tl[0]) / tu_ulp(tr[1]);
+        e[1] = fabs((op[1].y - tr[1]) - tl[1]) / tu_ulp(tr[1]);
+        e[2] = fabs((op[1].z - (tr[2] + 8.0)) - tl[2]) / tu_ulp(tr[2] + 8.0);
+        up = fmax(e[0], fmax(e[1], e[2]));
         worst_p = fmax(worst_p, up);
         classic_digits = sg_digits(oc[1].y, tr[1]);
-        print_message("# O%d  %.17g  %6.2f      %.15g  %6.2f          %.15g\n", k, tr[1], up,
+        print_message("# O%d  %.17g  %6.3f      %.15g  %6.2f          %.15g\n", k, tr[1], up,
                       oc[1].y, classic_digits, paper_classic_y[k]);
-        /* The target: 4 ulp at every scale (and the bound holds). */
-        assert_true(up <= 4.0);
+        /* README: within 0.5 ulp of the exact intersection at every scale;
+         * the 400-bit truth's own rounding (2^-390 relative) is the slack. */
+        for (c = 0; c < 3; c++)
+            assert_true(e[c] <= 0.5 + 1e-9);
         assert_true(fabs(op[1].y - tr[1]) <= op[1].error_bound);
         assert_true(fabs(op[1].z - (tr[2] + 8.0)) <= op[1].error_bound);
         /* The classic method loses digits with distance, as in the paper:
@@ -117,6 +124,11 @@ static void table1(void **state)
             assert_true(classic_digits < 12.0);
         if (k >= 4)
             assert_true(classic_digits < 5.0);
+        /* README: classic keeps 6.9 digits at 1e5 and none at 1e9. */
+        if (k == 1)
+            assert_true(fabs(classic_digits - 6.9) < 0.05);
+        if (k == 5)
+            assert_true(classic_digits < 0.5);
     }
     print_message("# precise worst error: %.3f ulp\n", worst_p);
     sg_tracer_free(tp);

@@ -64,6 +64,7 @@ static void table2(void **state)
     mpfr_t len, v, w;
     int i, k;
     double worst = 0.0, min_ratio = INFINITY;
+    int nexact_miss = 0;
     (void)state;
     tp[0] = sphere(1.0, SG_METHOD_PRECISE, &s[0]);
     tp[1] = sphere(-1.0, SG_METHOD_PRECISE, &s[1]);
@@ -101,6 +102,9 @@ static void table2(void **state)
             tl[k] = mpfr_get_d(w, MPFR_RNDN);
         }
         assert_int_equal(sg_trace_start(tp[h], S, D, op), SG_OK);
+        /* README: precise equals the truth (rounded once) on every ray. */
+        if (op[1].x != tr[0] || op[1].y != tr[1] || op[1].z != tr[2])
+            nexact_miss++;
         scale = fmax(fabs(tr[0]), fmax(fabs(tr[1]), fabs(tr[2])));
         e = fmax(fabs((op[1].x - tr[0]) - tl[0]),
                  fmax(fabs((op[1].y - tr[1]) - tl[1]), fabs((op[1].z - tr[2]) - tl[2])));
@@ -126,12 +130,18 @@ static void table2(void **state)
                   ep[N / 2], worst, min_ratio);
     print_message("# classic error: median %.3g ulp, p99 %.3g ulp\n", ec[N / 2],
                   ec[(N * 99) / 100]);
-    assert_true(worst <= 1.0);
+    print_message("# precise differs from the correctly rounded truth on %d rays\n",
+                  nexact_miss);
+    print_message("# classic error: max %.3g ulp\n", ec[N - 1]);
+    assert_int_equal(nexact_miss, 0);
+    assert_true(worst <= 0.5 + 1e-9);
     /* The paper reports its original method losing 8 digits here.  With
-     * the start at the centre nothing cancels, so an IEEE double trace of
-     * the textbook formulas stays within a few ulp; the classic figures
-     * are reported, not asserted. */
-    assert_true(ec[N / 2] < INFINITY);
+     * the start at the centre nothing cancels, so the textbook formulas in
+     * IEEE double traced every ray within README's 256 ulp (median about
+     * half an ulp); a classic that lost digits would fail these. */
+    assert_true(ec[N - 1] <= 256.0);
+    assert_true(ec[N / 2] <= 1.0);
+    assert_true(ec[(N * 99) / 100] <= 16.0);
     mpfr_clears(len, v, w, (mpfr_ptr)0);
     for (k = 0; k < 2; k++) {
         sg_tracer_free(tp[k]);

@@ -1,0 +1,167 @@
+/*
+ * test_edit_trace.c - the editor's ray, chosen by its commands in batch
+ * mode and exported, equals "sagitta trace" of the same ray value for
+ * value.  The rays are asymmetric (Hx != 0, Hy != Py, Px != Py), so a
+ * swapped or dropped coordinate shows.  "print ray" shows the editor's
+ * live trace (what its screen shows), compared as text since the report
+ * prints 16 digits.  argv[1] is the program.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "clitest.h"
+
+static char design[1024];
+
+static char *slurp(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    char *buf;
+    long n;
+    if (!f)
+        fail_msg("cannot read %s", path);
+    fseek(f, 0, SEEK_END);
+    n = ftell(f);
+    rewind(f);
+    buf = malloc((size_t)n + 1);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    buf[n] = '\0';
+    fclose(f);
+    return buf;
+}
+
+/* The two CSV texts line by line, header included: both print %.17g, so
+ * equal text is equal doubles in every column (whatever the columns are
+ * called).  Returns the data rows compared. */
+static int same_csv(const char *a, const char *b)
+{
+    int row = -1;
+    for (;;) {
+        const char *ea = strchr(a, '\n'), *eb = strchr(b, '\n');
+        size_t la = ea ? (size_t)(ea - a) : strlen(a), lb = eb ? (size_t)(eb - b) : strlen(b);
+        if (la != lb || memcmp(a, b, la) != 0)
+            fail_msg("line %d differs:\neditor: %.*s\ntrace:  %.*s", row + 2, (int)la, a,
+                     (int)lb, b);
+        if (!ea || !eb) {
+            assert_true(!ea && !eb);
+            break;
+        }
+        a = ea + 1;
+        b = eb + 1;
+        if (!*a && !*b)
+            break;
+        row++;
+    }
+    return row + 1;
+}
+
+/* Runs the script (its export goes to OUT) in the editor on the
+ * Cassegrain, and compares with trace --ray r under the given method. */
+static void check(const char *name, const char *script, const char *ray, const char *method)
+{
+    ct_result r, t;
+    char *got;
+    int rows;
+    const char *sc = ct_file(name, script);
+    ct_run(&r, "edit", design, "--batch", sc, (char *)NULL);
+    if (r.code != 0)
+        fail_msg("%s: edit --batch exit %d: %s", name, r.code, r.err);
+    got = slurp(ct_path("out.csv"));
+    ct_run(&t, "trace", design, "--ray", ray, "--method", method, "--format", "csv",
+           (char *)NULL);
+    assert_int_equal(t.code, 0);
+    rows = same_csv(got, t.out);
+    print_message("# %s: ray %s (%s): %d rows equal trace's\n", name, ray, method, rows);
+    assert_int_equal(rows, 15);
+    free(got);
+    ct_free(&r);
+    ct_free(&t);
+}
+
+static void ray_command(void **state)
+{
+    char s[1024];
+    (void)state;
+    snprintf(s, sizeof s, "ray 0.3 0.7 -0.4 0.2\nexport %s csv\n", ct_path("out.csv"));
+    check("ray.cmd", s, "0.3,0.7,-0.4,0.2", "precise");
+    snprintf(s, sizeof s, "ray 0.3,-0.9,0.15,0.55\nexport %s csv\n", ct_path("out.csv"));
+    check("ray_commas.cmd", s, "0.3,-0.9,0.15,0.55", "precise");
+}
+
+static void coordinate_commands(void **state)
+{
+    char s[1024];
+    (void)state;
+    snprintf(s, sizeof s, "hx -0.5\nhy 0.25\npx 0.6\npy -0.1\nexport %s csv\n",
+             ct_path("out.csv"));
+    check("coords.cmd", s, "-0.5,0.25,0.6,-0.1", "precise");
+}
+
+static void other_methods(void **state)
+{
+    char s[1024];
+    (void)state;
+    snprintf(s, sizeof s, "method classic\nray -0.2 0.8 0.45 -0.35\nexport %s csv\n",
+             ct_path("out.csv"));
+    check("classic.cmd", s, "-0.2,0.8,0.45,-0.35", "classic");
+    snprintf(s, sizeof s, "method mpfr\nray 0.6 -0.3 -0.1 0.7\nexport %s csv\n",
+             ct_path("out.csv"));
+    check("mpfr.cmd", s, "0.6,-0.3,-0.1,0.7", "mpfr");
+}
+
+/* The table rows of a text report: from the "Surf" header on. */
+static const char *table_of(const char *text)
+{
+    const char *p = strstr(text, "\nSurf ");
+    if (!p)
+        fail_msg("no table in:\n%s", text);
+    return p;
+}
+
+/* "print ray" reports the editor's live trace (the one its screen shows,
+ * not the export's batch): its table must equal trace's text table. */
+static void live_trace(void **state)
+{
+    static const char *const rays[][2] = {
+        {"ray 0.3 0.7 -0.4 0.2", "0.3,0.7,-0.4,0.2"},
+        {"ray -0.45 0.15 0.35 -0.6", "-0.45,0.15,0.35,-0.6"},
+    };
+    size_t k;
+    (void)state;
+    for (k = 0; k < sizeof rays / sizeof rays[0]; k++) {
+        char sc[256];
+        ct_result r, t;
+        snprintf(sc, sizeof sc, "%s\nprint ray\n", rays[k][0]);
+        ct_run(&r, "edit", design, "--batch", ct_file("live.cmd", sc), (char *)NULL);
+        assert_int_equal(r.code, 0);
+        ct_run(&t, "trace", design, "--ray", rays[k][1], (char *)NULL);
+        assert_int_equal(t.code, 0);
+        if (strcmp(table_of(r.out), table_of(t.out)) != 0)
+            fail_msg("ray %s: the editor's live trace differs from trace:\n%s\nvs\n%s",
+                     rays[k][1], table_of(r.out), table_of(t.out));
+        print_message("# print ray after '%s': the table equals trace --ray %s\n", rays[k][0],
+                      rays[k][1]);
+        ct_free(&r);
+        ct_free(&t);
+    }
+}
+
+int main(int argc, char **argv)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(ray_command),
+        cmocka_unit_test(coordinate_commands),
+        cmocka_unit_test(other_methods),
+        cmocka_unit_test(live_trace),
+    };
+    const char *root = getenv("SAGITTA_SOURCE_ROOT");
+    int rc;
+    ct_init(argc, argv);
+    snprintf(design, sizeof design, "%s/examples/cassegrain.json", root ? root : ".");
+    rc = cmocka_run_group_tests(tests, NULL, NULL);
+    ct_cleanup();
+    return rc;
+}
