@@ -8,7 +8,7 @@
  * row far into the list must leave an existing output file untouched.
  * Memory must not grow with the list: a run under an address-space cap
  * that the whole-list reader exceeds (it needed nray * nsurf * 88 bytes of
- * rows at once: 60 MB here) must succeed. */
+ * rows at once: 60 MB here) must succeed; so must verify's table2. */
 #include <cjson/cJSON.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -208,9 +208,9 @@ static void test_bad_row_keeps_file(void **state)
     ct_free(&r);
 }
 
-/* Runs a trace with the address space capped at cap_mb MiB; returns its
+/* Runs sagitta with the address space capped at cap_mb MiB; returns its
  * exit status. */
-static int run_capped(long cap_mb, const char *design, const char *rays)
+static int run_capped_args(long cap_mb, const char *const *args)
 {
     struct rlimit old, lim;
     ct_result r;
@@ -221,16 +221,22 @@ static int run_capped(long cap_mb, const char *design, const char *rays)
     if (old.rlim_max != RLIM_INFINITY && lim.rlim_cur > old.rlim_max)
         lim.rlim_cur = old.rlim_max;
     assert_int_equal(setrlimit(RLIMIT_AS, &lim), 0);
-    /* One thread: each further thread reserves a 64 MiB malloc arena of
-     * address space, which says nothing about memory used. */
-    ct_run(&r, "trace", design, "--rays", rays, "--threads", "1", "--format", "csv", "-o",
-           "/dev/null", NULL);
+    ct_runv(&r, args);
     assert_int_equal(setrlimit(RLIMIT_AS, &old), 0);
     code = r.code;
     if (code != 0)
         print_message("# capped at %ld MiB: exit %d: %s", cap_mb, code, r.err);
     ct_free(&r);
     return code;
+}
+
+static int run_capped(long cap_mb, const char *design, const char *rays)
+{
+    /* One thread: each further thread reserves a 64 MiB malloc arena of
+     * address space, which says nothing about memory used. */
+    const char *const args[] = { "trace", design, "--rays", rays, "--threads", "1",
+                                 "--format", "csv", "-o", "/dev/null", NULL };
+    return run_capped_args(cap_mb, args);
 }
 
 static void test_memory_flat(void **state)
@@ -252,6 +258,24 @@ static void test_memory_flat(void **state)
     print_message("# 40000 rays through 17 surfaces within %ld MiB of address space\n", cap);
 }
 
+/* verify --experiment table2 keeps two numbers a ray and method, not each
+ * ray's rows: 50,000 rays took 43 MB before and now fit in 32 MiB with
+ * the program itself. */
+static void test_table2_memory(void **state)
+{
+    const char *const one[] = { "verify", "--experiment", "table2", "--count", "1", "-o",
+                                "/dev/null", NULL };
+    const char *const many[] = { "verify", "--experiment", "table2", "--count", "50000",
+                                 "-o", "/dev/null", NULL };
+    (void)state;
+    if (run_capped_args(32, one) != 0) {
+        print_message("# SKIP: one ray does not run within 32 MiB here\n");
+        skip();
+    }
+    assert_int_equal(run_capped_args(32, many), 0);
+    print_message("# table2 of 50000 rays within 32 MiB of address space\n");
+}
+
 int main(int argc, char **argv)
 {
     const char *e = getenv("SAGITTA_EXAMPLES");
@@ -261,6 +285,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_blocks_mpfr),
         cmocka_unit_test(test_bad_row_keeps_file),
         cmocka_unit_test(test_memory_flat),
+        cmocka_unit_test(test_table2_memory),
     };
     int rc;
     snprintf(examples, sizeof examples, "%s", e && *e ? e : "examples");
