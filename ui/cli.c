@@ -14,24 +14,35 @@
 #include "args.h"
 #include "csvrays.h"
 #include "report.h"
+#include "safetext.h"
 
 /* ---------------------------------------------------------------- messages */
 
 /* Messages quote names and values from files, which may hold control
  * bytes; written raw they could drive the user's terminal, so they are
  * shown as \xNN instead. */
+static void put_escaped(const char *s)
+{
+    const unsigned char *p = (const unsigned char *)s;
+    size_t left = strlen(s);
+    while (left > 0) {
+        size_t k = safe_char_len(p, left);
+        if (k)
+            fwrite(p, 1, k, stderr);
+        else
+            fprintf(stderr, "\\x%02x", *p);
+        k = k ? k : 1;
+        p += k;
+        left -= k;
+    }
+}
+
 static void vmsg(const char *prefix, const char *fmt, va_list ap)
 {
     char buf[2048];
-    const unsigned char *p;
     fputs(prefix, stderr);
     vsnprintf(buf, sizeof buf, fmt, ap);
-    for (p = (const unsigned char *)buf; *p; p++) {
-        if (*p < 0x20 || *p == 0x7f)
-            fprintf(stderr, "\\x%02x", *p);
-        else
-            fputc(*p, stderr);
-    }
+    put_escaped(buf);
     fputc('\n', stderr);
 }
 
@@ -67,12 +78,15 @@ void cli_print_warnings(const sg_diag *d, const char *where)
 int cli_usage_error(const char *cmd, const char *fmt, ...)
 {
     va_list ap;
+    char buf[2048];
     fputs("sagitta: ", stderr);
     if (cmd)
         fprintf(stderr, "%s: ", cmd);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    vsnprintf(buf, sizeof buf, fmt, ap);
     va_end(ap);
+    /* An argument quoted back may hold control bytes, as in vmsg. */
+    put_escaped(buf);
     if (cmd)
         fprintf(stderr, "\nTry 'sagitta %s --help'.\n", cmd);
     else

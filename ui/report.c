@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "safetext.h"
+
 int report_parse_fmt(const char *s)
 {
     if (!s)
@@ -162,7 +164,10 @@ static void text_head(FILE *f, const report_meta *m, int multi, size_t total)
 {
     char b[40];
     fputs(!multi ? "Single ray trace\n" : "Ray trace\n", f);
-    fprintf(f, "Design      : %s\n", m && m->design ? m->design : "(untitled)");
+    /* A file name or title may hold escape codes; text goes to terminals. */
+    fputs("Design      : ", f);
+    safe_fputs(m && m->design ? m->design : "(untitled)", f);
+    fputc('\n', f);
     if (m && m->method) {
         if (m->bits > 0)
             fprintf(f, "Method      : %s, %d bits\n", m->method, m->bits);
@@ -498,7 +503,9 @@ int report_write_paraxial(FILE *f, report_fmt fmt, const report_meta *m,
     }
     switch (fmt) {
     case REPORT_TEXT:
-        fprintf(f, "%-24s:  %s\n", "Design", m && m->design ? m->design : "(untitled)");
+        fprintf(f, "%-24s:  ", "Design");
+        safe_fputs(m && m->design ? m->design : "(untitled)", f);
+        fputc('\n', f);
         if (m)
             fprintf(f, "%-24s:  %s um (wave %d)\n", "Wavelength",
                     shortest(m->wave_um, b, sizeof b), m->wave_index);

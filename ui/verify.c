@@ -21,6 +21,7 @@
 
 #include "args.h"
 #include "report.h"
+#include "safetext.h"
 
 enum { M_PRECISE = 0, M_CLASSIC = 1, M_MPFR = 2, NMETHOD = 3 };
 static const char *const mname[NMETHOD] = { "precise", "classic", "mpfr" };
@@ -746,7 +747,9 @@ static void vdesign_text(FILE *f, const vdesign *v)
     size_t r, shown;
     int i, m;
 
-    fprintf(f, "sagitta verify: %s\n", v->path);
+    fputs("sagitta verify: ", f);
+    safe_fputs(v->path, f);
+    fputc('\n', f);
     fprintf(f, "wavelength %d (%.10g um); reference: mpfr at %d bits, same double inputs\n",
             v->wave0 + 1, v->sys->wave[v->wave0].um, v->bits);
     if (v->nfield)
