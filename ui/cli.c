@@ -14,6 +14,7 @@
 #include "args.h"
 #include "csvrays.h"
 #include "report.h"
+#include "outfile.h"
 #include "safetext.h"
 
 /* ---------------------------------------------------------------- messages */
@@ -416,113 +417,6 @@ static int is_ray_result(int rc)
 
 /* ---- a ray list, streamed ---- */
 
-/* The output of a streamed trace.  A regular file is written under a
- * temporary name beside it and renamed at the end, so a ray list that
- * turns out bad at line 900,000 leaves an existing file as it was (as the
- * whole-file reader did).  Standard output, a device, a pipe, or a file
- * with other hard links (which a rename would break) are written in
- * place. */
-typedef struct rays_out {
-    FILE *f;
-    const char *path; /* NULL for standard output */
-    char target[4096], tmp[4096 + 16];
-} rays_out;
-
-static int rays_out_open(rays_out *o, const char *path)
-{
-    struct stat st;
-    const char *slash;
-    int fd;
-    memset(o, 0, sizeof *o);
-    if (!path || strcmp(path, "-") == 0) {
-        o->f = stdout;
-        return 0;
-    }
-    o->path = path;
-    snprintf(o->target, sizeof o->target, "%s", path);
-    if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
-        /* The link stays; the file it names is replaced. */
-        char *real = realpath(path, NULL);
-        if (real) {
-            snprintf(o->target, sizeof o->target, "%s", real);
-            free(real);
-        }
-    }
-    if (stat(o->target, &st) == 0 && (!S_ISREG(st.st_mode) || st.st_nlink > 1)) {
-        o->f = cli_open_output(path);
-        return o->f ? 0 : -1;
-    }
-    slash = strrchr(o->target, '/');
-    if (slash)
-        snprintf(o->tmp, sizeof o->tmp, "%.*s.sagitta-XXXXXX", (int)(slash - o->target + 1),
-                 o->target);
-    else
-        snprintf(o->tmp, sizeof o->tmp, ".sagitta-XXXXXX");
-    fd = mkstemp(o->tmp);
-    if (fd < 0) {
-        /* A directory we may not create in: write in place after all. */
-        o->tmp[0] = '\0';
-        o->f = cli_open_output(path);
-        return o->f ? 0 : -1;
-    }
-    if (stat(o->target, &st) == 0) {
-        if (fchmod(fd, st.st_mode & 07777) != 0) {
-            /* Not ours to chmod: write in place, keeping owner and mode. */
-            close(fd);
-            unlink(o->tmp);
-            o->tmp[0] = '\0';
-            o->f = cli_open_output(path);
-            return o->f ? 0 : -1;
-        }
-    } else {
-        mode_t mask = umask(0);
-        umask(mask);
-        if (fchmod(fd, 0666 & ~mask) != 0) {
-            /* mkstemp's 0600 is safe to keep. */
-        }
-    }
-    o->f = fdopen(fd, "w");
-    if (!o->f) {
-        cli_error("%s: %s", path, strerror(errno));
-        close(fd);
-        unlink(o->tmp);
-        o->tmp[0] = '\0';
-        return -1;
-    }
-    return 0;
-}
-
-/* Drops a failed output: the temporary goes, an existing file stays. */
-static void rays_out_abort(rays_out *o)
-{
-    if (o->f && o->f != stdout)
-        fclose(o->f);
-    else if (o->f)
-        fflush(o->f);
-    if (o->tmp[0])
-        unlink(o->tmp);
-    o->f = NULL;
-}
-
-static int rays_out_close(rays_out *o)
-{
-    int rc;
-    if (!o->tmp[0])
-        return cli_close_output(o->f, o->path);
-    rc = cli_close_output(o->f, o->path);
-    o->f = NULL;
-    if (rc != CLI_EXIT_OK) {
-        unlink(o->tmp);
-        return rc;
-    }
-    if (rename(o->tmp, o->target) != 0) {
-        cli_error("%s: %s", o->path, strerror(errno));
-        unlink(o->tmp);
-        return CLI_EXIT_FILE;
-    }
-    return CLI_EXIT_OK;
-}
-
 /* Progress of a long run on standard error: only on a terminal, never in
  * CI (CI set) or a pipe, first after a second and then four times a
  * second, erased at the end. */
@@ -643,7 +537,7 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     unsigned long long pos, size;
     report_meta meta;
     report_stream rs;
-    rays_out ro;
+    outfile ro;
     progress pg;
     sg_diag d;
 
@@ -741,7 +635,9 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
         /* The output is opened only after the first block traced, so a
          * design that cannot be traced leaves an existing file as it was. */
         if (!opened) {
-            if (rays_out_open(&ro, output) != 0) {
+            int err = outfile_open(&ro, output, stdout);
+            if (err != 0) {
+                cli_error("%s: %s", output, strerror(err));
                 rc = CLI_EXIT_FILE;
                 goto done;
             }
@@ -765,8 +661,15 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     progress_end(&pg);
     if (report_end(&rs) != 0)
         goto write_error;
-    rc = rays_out_close(&ro);
-    opened = 0;
+    {
+        int err = outfile_commit(&ro);
+        opened = 0;
+        rc = CLI_EXIT_OK;
+        if (err != 0) {
+            cli_error("%s: %s", ro.path ? ro.path : "standard output", strerror(err));
+            rc = CLI_EXIT_FILE;
+        }
+    }
     goto done;
 
 write_error:
@@ -780,7 +683,7 @@ bad_rays:
     rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_FILE;
 done:
     if (opened && rc != CLI_EXIT_OK)
-        rays_out_abort(&ro);
+        outfile_abort(&ro);
     csvrays_close(rd);
     if (spool)
         fclose(spool);

@@ -35,6 +35,7 @@ typedef struct ui {
     int focus, mode;
     int back_mode;       /* where the ':' line returns to */
     int quit_after_save; /* the quit dialog asked for a file name */
+    double prog_t0, prog_last; /* a long export's start and last progress line */
     lineedit le;
     const char *ell;     /* ellipsis */
 
