@@ -17,6 +17,8 @@
 #include "trace_internal.h"
 #include "vdd.h"
 
+_Static_assert(SG_VL <= SG_BATCH_LANES, "a thread's scratch holds SG_BATCH_LANES rays");
+
 typedef struct job {
     sg_tracer *t;
     sg_ray_kind kind;
@@ -215,7 +217,7 @@ int sg_batch_run(sg_tracer *const *t, int nt, sg_ray_kind kind, const sg_ray_in 
         jobs[k].sel = sel;
         jobs[k].nsel = nsel;
         if (sel)
-            jobs[k].scratch = scratch + (size_t)k * SG_VL * (size_t)t[k]->n;
+            jobs[k].scratch = scratch + (size_t)k * SG_BATCH_LANES * (size_t)t[k]->n;
     }
     /* The calling thread works beside the others. */
     for (k = 0; k < nt - 1; k++) {

@@ -11,7 +11,7 @@
 struct sg_batch {
     int nt, nsurf;
     sg_tracer **t;
-    sg_ray_surface *scratch; /* nt * SG_VL * nsurf rows, for a selection */
+    sg_ray_surface *scratch; /* nt * SG_BATCH_LANES * nsurf rows, for a selection */
 };
 
 void sg_batch_free(sg_batch *b)
@@ -90,7 +90,7 @@ int sg_batch_trace(sg_batch *b, sg_ray_kind kind, const sg_ray_in *rays, size_t 
                                    "batch: selected surface %d is not one of 0 to %d",
                                    surf[k], b->nsurf - 1);
         if (!b->scratch) {
-            b->scratch = calloc((size_t)b->nt * SG_VL * (size_t)b->nsurf,
+            b->scratch = calloc((size_t)b->nt * SG_BATCH_LANES * (size_t)b->nsurf,
                                 sizeof *b->scratch);
             if (!b->scratch)
                 return sg_diag_set(d, SG_ENOMEM, "out of memory");
