@@ -2,12 +2,14 @@
 # e2e_export.sh - the editor's large exports on the screen, through tmux:
 # grid 1001 (about 2.6 GB) states its size and asks; n writes nothing; y
 # starts it with progress on the status line, and Esc cancels it leaving
-# no file.  A grid 2 export writes the four rays.  Output is TAP.
+# no file.  A grid 2 export writes the four rays.  Then "trace --rays" on a
+# terminal: a long run shows its progress on standard error and erases it
+# at the end, and shows none when CI is set.  Output is TAP.
 # Usage: e2e_export.sh PATH/TO/sagitta
 
 SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
-tmux_setup 4 e2e-export
+tmux_setup 6 e2e-export
 
 cp "$ROOT/examples/cassegrain.json" "$WORK/cassegrain.json"
 
@@ -81,6 +83,50 @@ if wait_for "exported 4 rays" && head -n 1 "$WORK/g2.csv" | grep -q '^ray,hx,hy,
 else
     not_ok "grid 2 exports four rays with hx, hy, px, py"
 fi
+
+# 5. trace --rays with standard error on the terminal: progress, erased.
+awk 'BEGIN { srand(5); print "hx,hy,px,py";
+             for (i = 0; i < 60000; i++) printf "0,%.3f,%.6f,%.6f\n", (i % 3) / 2, 2 * rand() - 1, 2 * rand() - 1 }' \
+    >"$WORK/rays.csv"
+$T new-session -d -s run -x 100 -y 10 \
+    "cd '$WORK' && env -u CI '$SAGITTA' trace cassegrain.json --rays rays.csv --format csv -o out.csv --threads 1; echo \"DONE \$?\"; sleep 60"
+seen=0
+n=600
+while [ "$n" -gt 0 ]; do
+    S=$($T capture-pane -p -t =run: 2>/dev/null)
+    if echo "$S" | grep -q "sagitta: trace: *[0-9.]*%, [0-9]* rays"; then seen=1; fi
+    if echo "$S" | grep -q "^DONE"; then break; fi
+    sleep 0.1
+    n=$((n - 1))
+done
+S=$($T capture-pane -p -t =run: 2>/dev/null)
+if [ $seen -eq 1 ] && echo "$S" | grep -q "^DONE 0" && ! echo "$S" | grep -q "sagitta: trace:"; then
+    ok "trace --rays shows its progress on a terminal and erases it"
+else
+    WHY="progress seen: $seen; screen: $(echo "$S" | tr '\n' '|')"
+    not_ok "trace --rays shows its progress on a terminal and erases it"
+fi
+$T kill-session -t =run >/dev/null 2>&1
+
+# 6. With CI set, none, though standard error is the terminal.
+$T new-session -d -s run -x 100 -y 10 \
+    "cd '$WORK' && CI=1 '$SAGITTA' trace cassegrain.json --rays rays.csv --format csv -o out.csv --threads 1; echo \"DONE \$?\"; sleep 60"
+seen=0
+n=600
+while [ "$n" -gt 0 ]; do
+    S=$($T capture-pane -p -t =run: 2>/dev/null)
+    if echo "$S" | grep -q "sagitta: trace:"; then seen=1; fi
+    if echo "$S" | grep -q "^DONE"; then break; fi
+    sleep 0.1
+    n=$((n - 1))
+done
+if [ $seen -eq 0 ] && echo "$S" | grep -q "^DONE 0"; then
+    ok "with CI set, trace --rays shows no progress"
+else
+    WHY="progress seen: $seen"
+    not_ok "with CI set, trace --rays shows no progress"
+fi
+$T kill-session -t =run >/dev/null 2>&1
 
 [ "$N" -eq "$NTESTS" ] || echo "# ran $N of $NTESTS"
 [ "$FAILED" -eq 0 ]
