@@ -4,7 +4,8 @@
  * Each thread owns a tracer (tracers carry per-ray scratch and caches) and
  * takes runs of consecutive rays from a shared counter until none are left,
  * so a thread slowed by the machine's other load takes fewer of them.
- * Results land straight in the caller's arrays and equal the single-ray
+ * Results land in the caller's arrays (or, for a selection of surfaces,
+ * in a thread's scratch first) and equal the single-ray
  * calls bit for bit, whichever thread traced them.
  */
 #include <math.h>
@@ -16,6 +17,8 @@
 #include "trace_internal.h"
 #include "vdd.h"
 
+_Static_assert(SG_VL <= SG_BATCH_LANES, "a thread's scratch holds SG_BATCH_LANES rays");
+
 typedef struct job {
     sg_tracer *t;
     sg_ray_kind kind;
@@ -26,7 +29,34 @@ typedef struct job {
     int nsurf;
     sg_ray_surface *out;
     int *status;
+    /* With a selection, rays are traced into scratch (SG_VL full rows of
+     * nsurf surfaces) and only surfaces sel[0..nsel-1] are copied out. */
+    const int *sel;
+    int nsel;
+    sg_ray_surface *scratch;
 } job;
+
+/* Where lane k's trace of ray r writes its nsurf rows. */
+static sg_ray_surface *rows(const job *j, size_t r, int k)
+{
+    if (j->sel)
+        return j->scratch + (size_t)k * (size_t)j->nsurf;
+    return j->out + r * (size_t)j->nsurf;
+}
+
+/* Copies the chosen surfaces of ray r from lane k's scratch. */
+static void keep(const job *j, size_t r, int k)
+{
+    const sg_ray_surface *s;
+    sg_ray_surface *o;
+    int i;
+    if (!j->sel)
+        return;
+    s = j->scratch + (size_t)k * (size_t)j->nsurf;
+    o = j->out + r * (size_t)j->nsel;
+    for (i = 0; i < j->nsel; i++)
+        o[i] = s[j->sel[i]];
+}
 
 /* One ray by the tracer's method, for methods without a vector trace. */
 static void run_one_by_one(job *j)
@@ -34,13 +64,14 @@ static void run_one_by_one(job *j)
     size_t r;
     for (r = j->first; r < j->first + j->count; r++) {
         const double *v = j->rays[r].v;
-        sg_ray_surface *o = j->out + r * (size_t)j->nsurf;
+        sg_ray_surface *o = rows(j, r, 0);
         int rc;
         vd_leave();
         if (j->kind == SG_RAYS_NORMALIZED)
             rc = sg_trace_normalized(j->t, v[0], v[1], v[2], v[3], o);
         else
             rc = sg_trace_start(j->t, v, v + 3, o);
+        keep(j, r, 0);
         if (j->status)
             j->status[r] = rc;
     }
@@ -68,10 +99,11 @@ static void run_precise(job *j)
         nl = 0;
         if (j->kind == SG_RAYS_START_DIR) {
             for (; r < end && nl < SG_VL; r++) {
-                sg_ray_surface *out = j->out + r * (size_t)j->nsurf;
+                sg_ray_surface *out = rows(j, r, nl);
                 sg_pray pr;
                 int prc = sg_start_precise_prep(t, j->rays[r].v, j->rays[r].v + 3, out, &pr);
                 if (prc != SG_OK) {
+                    keep(j, r, nl);
                     if (j->status)
                         j->status[r] = prc;
                     continue;
@@ -93,8 +125,9 @@ static void run_precise(job *j)
             }
         } else if (!finite4(v)) {
             /* The single-ray call reports a bad ray. */
-            sg_ray_surface *out = j->out + r * (size_t)j->nsurf;
+            sg_ray_surface *out = rows(j, r, 0);
             int prc = sg_trace_normalized(t, v[0], v[1], v[2], v[3], out);
+            keep(j, r, 0);
             if (j->status)
                 j->status[r] = prc;
             r++;
@@ -105,7 +138,7 @@ static void run_precise(job *j)
                    j->rays[r].v[0] == v[0] && j->rays[r].v[1] == v[1]) {
                 pupil[nl][0] = j->rays[r].v[2];
                 pupil[nl][1] = j->rays[r].v[3];
-                o[nl] = j->out + r * (size_t)j->nsurf;
+                o[nl] = rows(j, r, nl);
                 idx[nl++] = r++;
             }
             sg_launch_precise_block(t, v[0], v[1], (const double(*)[2])pupil, nl, o, &vs, &p0,
@@ -114,9 +147,11 @@ static void run_precise(job *j)
         for (k = nl; k < SG_VL; k++)
             o[k] = o[0];
         sg_precise_block(t, &vs, p0, o, nl, start, t->n - 1, rc);
-        if (j->status)
-            for (k = 0; k < nl; k++)
+        for (k = 0; k < nl; k++) {
+            keep(j, idx[k], k);
+            if (j->status)
                 j->status[idx[k]] = rc[k];
+        }
     }
 }
 
@@ -143,28 +178,17 @@ static void *thread_main(void *arg)
     return NULL;
 }
 
-int sg_trace_batch(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
-                   sg_ray_kind kind, const sg_ray_in *rays, size_t nray, int nthreads,
-                   sg_ray_surface *out, int *status, sg_diag *d)
+int sg_batch_run(sg_tracer *const *t, int nt, sg_ray_kind kind, const sg_ray_in *rays,
+                 size_t nray, const int *sel, int nsel, sg_ray_surface *scratch,
+                 sg_ray_surface *out, int *status)
 {
     job *jobs;
     pthread_t *tid;
     atomic_size_t next;
     size_t chunk;
-    int k, nt, rc = SG_OK, started = 0;
-    if (kind != SG_RAYS_NORMALIZED && kind != SG_RAYS_START_DIR)
-        return sg_diag_set(d, SG_EINVAL, "batch: unknown ray kind %d", (int)kind);
+    int k, started = 0;
     if (nray == 0)
         return SG_OK;
-    if (!rays || !out)
-        return sg_diag_set(d, SG_EINVAL, "batch: no ray or output array");
-    nt = nthreads;
-    if (nt <= 0) {
-        long c = sysconf(_SC_NPROCESSORS_ONLN);
-        nt = c > 0 ? (int)c : 1;
-    }
-    if (nt > 256)
-        nt = 256;
     /* Runs of about an eighth of a thread's share, from 64 to 4096 rays:
      * long enough that taking one costs nothing, short enough that the
      * threads finish close together. */
@@ -177,23 +201,23 @@ int sg_trace_batch(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
     if (!jobs || !tid) {
         free(jobs);
         free(tid);
-        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+        return SG_ENOMEM;
     }
     atomic_init(&next, 0);
     for (k = 0; k < nt; k++) {
-        jobs[k].t = sg_tracer_new(sys, cat, opts, d);
-        if (!jobs[k].t) {
-            rc = d && d->code ? d->code : SG_ENOMEM;
-            goto out;
-        }
+        jobs[k].t = t[k];
         jobs[k].kind = kind;
         jobs[k].rays = rays;
         jobs[k].nray = nray;
         jobs[k].chunk = chunk;
         jobs[k].next = &next;
-        jobs[k].nsurf = sys->nsurf;
+        jobs[k].nsurf = t[k]->n;
         jobs[k].out = out;
         jobs[k].status = status;
+        jobs[k].sel = sel;
+        jobs[k].nsel = nsel;
+        if (sel)
+            jobs[k].scratch = scratch + (size_t)k * SG_BATCH_LANES * (size_t)t[k]->n;
     }
     /* The calling thread works beside the others. */
     for (k = 0; k < nt - 1; k++) {
@@ -205,10 +229,7 @@ int sg_trace_batch(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
         run_job(&jobs[k]);
     for (k = 0; k < started; k++)
         pthread_join(tid[k], NULL);
-out:
-    for (k = 0; k < nt; k++)
-        sg_tracer_free(jobs[k].t);
     free(jobs);
     free(tid);
-    return rc;
+    return SG_OK;
 }

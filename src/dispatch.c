@@ -21,10 +21,9 @@
                                 sg_ray_surface *out);                                        \
     int sg_precise_run_to_##isa(const sg_tracer *t, sg_pray *r, double path0,                \
                                 sg_ray_surface *out, int upto);                              \
-    int sg_trace_batch_##isa(const sg_system *sys, const sg_catalog *cat,                    \
-                             const sg_trace_opts *opts, sg_ray_kind kind,                    \
-                             const sg_ray_in *rays, size_t nray, int nthreads,               \
-                             sg_ray_surface *out, int *status, sg_diag *d);
+    int sg_batch_run_##isa(sg_tracer *const *t, int nt, sg_ray_kind kind,                    \
+                           const sg_ray_in *rays, size_t nray, const int *sel, int nsel,     \
+                           sg_ray_surface *scratch, sg_ray_surface *out, int *status);
 SG_VARIANT(v4)
 SG_VARIANT(v3)
 SG_VARIANT(base)
@@ -75,11 +74,11 @@ int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surfa
     SG_DISPATCH_CALL(sg_precise_run_to, t, r, path0, out, upto)
 }
 
-int sg_trace_batch(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
-                   sg_ray_kind kind, const sg_ray_in *rays, size_t nray, int nthreads,
-                   sg_ray_surface *out, int *status, sg_diag *d)
+int sg_batch_run(sg_tracer *const *t, int nt, sg_ray_kind kind, const sg_ray_in *rays,
+                 size_t nray, const int *sel, int nsel, sg_ray_surface *scratch,
+                 sg_ray_surface *out, int *status)
 {
-    SG_DISPATCH_CALL(sg_trace_batch, sys, cat, opts, kind, rays, nray, nthreads, out, status, d)
+    SG_DISPATCH_CALL(sg_batch_run, t, nt, kind, rays, nray, sel, nsel, scratch, out, status)
 }
 
 #else

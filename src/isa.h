@@ -26,7 +26,7 @@
 #define sg_launch_precise_block SG_ISA_CAT(sg_launch_precise_block, SG_ISA)
 #define sg_launch_precise_prep SG_ISA_CAT(sg_launch_precise_prep, SG_ISA)
 #define sg_launch_prepare SG_ISA_CAT(sg_launch_prepare, SG_ISA)
-#define sg_trace_batch SG_ISA_CAT(sg_trace_batch, SG_ISA)
+#define sg_batch_run SG_ISA_CAT(sg_batch_run, SG_ISA)
 #endif
 
 #endif

@@ -409,6 +409,25 @@ int sg_trace_batch(const sg_system *sys, const sg_catalog *cat,
                    const sg_ray_in *rays, size_t nray, int nthreads,
                    sg_ray_surface *out, int *status, sg_diag *d);
 
+/* A batch kept ready for many calls: one prepared tracer per thread, so a
+ * long ray list can be traced block after block (read, trace, write) in
+ * bounded memory without preparing the system again. */
+typedef struct sg_batch sg_batch;
+
+/* nthreads as in sg_trace_batch.  NULL on failure, with d filled. */
+sg_batch *sg_batch_new(const sg_system *sys, const sg_catalog *cat,
+                       const sg_trace_opts *opts, int nthreads, sg_diag *d);
+void sg_batch_free(sg_batch *b);
+int sg_batch_nsurf(const sg_batch *b);
+/* Traces nray rays and keeps, for each, only surfaces surf[0..nsel-1]
+ * (each in 0..nsurf-1, in the order given, repeats allowed) at out[r *
+ * nsel + k]; surf NULL keeps every surface (nsel is then ignored and
+ * out has nray * nsurf entries).  Rows and status equal sg_trace_batch's
+ * bit for bit, so an analysis of the image alone stores one row a ray. */
+int sg_batch_trace(sg_batch *b, sg_ray_kind kind, const sg_ray_in *rays,
+                   size_t nray, const int *surf, int nsel,
+                   sg_ray_surface *out, int *status, sg_diag *d);
+
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */
 double sg_digits(double a, double b);

@@ -239,6 +239,16 @@ void sg_set_start_row(sg_ray_surface *o, const double S[3], const double u[3]);
 /* Surface evaluation shared by the methods. */
 double sg_sprep_sag_resid(const sg_sprep *s, double x, double y, double z);
 
+/* The batch on nt prepared tracers, one per thread (in batch.c).  With
+ * sel, ray r keeps surfaces sel[0..nsel-1] at out[r * nsel]; scratch
+ * then holds nt * SG_BATCH_LANES * nsurf rows, enough for the widest
+ * instruction-set variant (the caller may be compiled for a narrower one).
+ * Returns SG_OK or SG_ENOMEM. */
+#define SG_BATCH_LANES 8
+int sg_batch_run(sg_tracer *const *t, int nt, sg_ray_kind kind, const sg_ray_in *rays,
+                 size_t nray, const int *sel, int nsel, sg_ray_surface *scratch,
+                 sg_ray_surface *out, int *status);
+
 /* Launch of normalized rays, in launch.c. */
 int sg_launch_prepare(sg_tracer *t, sg_diag *d);
 int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,

@@ -14,19 +14,48 @@
 #include <string.h>
 
 #include "testutil.h"
+#include "trace_internal.h"
 
-typedef int batch_fn(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
-                     sg_ray_kind kind, const sg_ray_in *rays, size_t nray, int nthreads,
-                     sg_ray_surface *out, int *status, sg_diag *d);
-batch_fn sg_trace_batch_base, sg_trace_batch_v3, sg_trace_batch_v4;
+/* The per-variant batch cores (batch.c, named by src/isa.h). */
+typedef int run_fn(sg_tracer *const *t, int nt, sg_ray_kind kind, const sg_ray_in *rays,
+                   size_t nray, const int *sel, int nsel, sg_ray_surface *scratch,
+                   sg_ray_surface *out, int *status);
+run_fn sg_batch_run_base, sg_batch_run_v3, sg_batch_run_v4;
 
 static const struct {
     const char *name, *level;
-    batch_fn *fn;
+    run_fn *fn;
 } variants[] = {
-    {"x86-64-v3 (AVX2, FMA)", "x86-64-v3", sg_trace_batch_v3},
-    {"x86-64-v4 (AVX-512)", "x86-64-v4", sg_trace_batch_v4},
+    {"x86-64-v3 (AVX2, FMA)", "x86-64-v3", sg_batch_run_v3},
+    {"x86-64-v4 (AVX-512)", "x86-64-v4", sg_batch_run_v4},
 };
+
+/* sg_trace_batch through one variant, on nt tracers made here; with sel,
+ * only those surfaces are kept (as sg_batch_trace keeps them). */
+static int run_variant(run_fn *fn, const sg_system *sys, const sg_catalog *cat,
+                       const sg_trace_opts *o, const sg_ray_in *rays, size_t nray, int nt,
+                       const int *sel, int nsel, sg_ray_surface *out, int *status)
+{
+    sg_tracer *t[4];
+    sg_ray_surface *scratch = NULL;
+    sg_diag d;
+    int k, rc;
+    assert_true(nt >= 1 && nt <= 4);
+    sg_diag_clear(&d);
+    for (k = 0; k < nt; k++) {
+        t[k] = sg_tracer_new(sys, cat, o, &d);
+        assert_non_null(t[k]);
+    }
+    if (sel) {
+        scratch = calloc((size_t)nt * SG_BATCH_LANES * (size_t)sys->nsurf, sizeof *scratch);
+        assert_non_null(scratch);
+    }
+    rc = fn(t, nt, SG_RAYS_NORMALIZED, rays, nray, sel, nsel, scratch, out, status);
+    for (k = 0; k < nt; k++)
+        sg_tracer_free(t[k]);
+    free(scratch);
+    return rc;
+}
 
 static int runs(const char *level)
 {
@@ -65,15 +94,15 @@ static void same_bits(void **state)
             sg_trace_opts_init(&o);
             o.method = methods[m];
             sg_diag_clear(&d);
-            assert_int_equal(sg_trace_batch_base(sys, cat, &o, SG_RAYS_NORMALIZED, rays, NRAY, 1,
-                                                 ref, sr, &d),
+            assert_int_equal(run_variant(sg_batch_run_base, sys, cat, &o, rays, NRAY, 1, NULL, 0,
+                                         ref, sr),
                              SG_OK);
             for (v = 0; v < sizeof variants / sizeof variants[0]; v++) {
                 if (!runs(variants[v].level))
                     continue;
                 memset(got, 0, NRAY * ns * sizeof *got);
-                assert_int_equal(variants[v].fn(sys, cat, &o, SG_RAYS_NORMALIZED, rays, NRAY, 2,
-                                                got, sg, &d),
+                assert_int_equal(run_variant(variants[v].fn, sys, cat, &o, rays, NRAY, 2, NULL,
+                                             0, got, sg),
                                  SG_OK);
                 for (k = 0; k < NRAY * ns; k++) {
                     const double a[10] = {ref[k].x, ref[k].y, ref[k].z, ref[k].l,
@@ -91,6 +120,20 @@ static void same_bits(void **state)
                 }
                 assert_memory_equal(sr, sg, NRAY * sizeof *sr);
                 compared += NRAY * ns;
+                /* The image and the object alone, through the selection path. */
+                {
+                    const int sel[2] = {(int)ns - 1, 0};
+                    memset(got, 0, NRAY * 2 * sizeof *got);
+                    assert_int_equal(run_variant(variants[v].fn, sys, cat, &o, rays, NRAY, 2,
+                                                 sel, 2, got, sg),
+                                     SG_OK);
+                    for (k = 0; k < 2 * (size_t)NRAY; k++) {
+                        const sg_ray_surface *a = &ref[(k / 2) * ns + (size_t)sel[k % 2]];
+                        assert_memory_equal(&a->x, &got[k].x, 10 * sizeof(double));
+                        assert_int_equal(a->status, got[k].status);
+                    }
+                    assert_memory_equal(sr, sg, NRAY * sizeof *sr);
+                }
             }
         }
         free(rays);

@@ -25,6 +25,7 @@
 
 #include "cli.h"
 #include "report.h"
+#include "safetext.h"
 #include "sg_config.h"
 
 /* Short measurements (one ray, one recompute) take at least this many
@@ -308,10 +309,12 @@ static void progress(const bench_cfg *cfg, const char *path, const char *what, s
 {
     if (!cfg->progress)
         return;
+    char safe[1024];
+    safe_text(path, safe, sizeof safe);
     if (n)
-        fprintf(stderr, "sagitta: bench: %s: %zu %s\n", path, n, what);
+        fprintf(stderr, "sagitta: bench: %s: %zu %s\n", safe, n, what);
     else
-        fprintf(stderr, "sagitta: bench: %s: %s\n", path, what);
+        fprintf(stderr, "sagitta: bench: %s: %s\n", safe, what);
 }
 
 /* Runs every method and thread count on one ray-set size.  Repeats are
@@ -593,12 +596,18 @@ static void text_design(FILE *f, const bench_cfg *cfg, const design_res *r)
     int h, m, nthr = cfg->nthr_all > 1 ? NTHR : 1;
     char lab[16];
 
-    fprintf(f, "\n%s\n", r->path);
+    /* The path and the design's title are the user's text: no escape
+     * code in them reaches the terminal. */
+    fputc('\n', f);
+    safe_fputs(r->path, f);
+    fputc('\n', f);
     if (r->load_rc != CLI_EXIT_OK) {
         fputs("  not measured: the design did not load (see the message above)\n", f);
         return;
     }
-    fprintf(f, "  %s\n  %d surfaces, %d field point%s, ray aiming %s\n", r->title, r->nsurf,
+    fputs("  ", f);
+    safe_fputs(r->title, f);
+    fprintf(f, "\n  %d surfaces, %d field point%s, ray aiming %s\n", r->nsurf,
             r->nfield, r->nfield == 1 ? "" : "s",
             r->aim >= 0 && r->aim <= 2 ? aim[r->aim] : "?");
     if (r->trace_msg[0]) {

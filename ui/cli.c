@@ -6,28 +6,42 @@
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <unistd.h>
 
 #include "args.h"
 #include "csvrays.h"
 #include "report.h"
+#include "outfile.h"
+#include "safetext.h"
 
 /* ---------------------------------------------------------------- messages */
 
 /* Messages quote names and values from files, which may hold control
  * bytes; written raw they could drive the user's terminal, so they are
  * shown as \xNN instead. */
+static void put_escaped(const char *s)
+{
+    const unsigned char *p = (const unsigned char *)s;
+    size_t left = strlen(s);
+    while (left > 0) {
+        size_t k = safe_char_len(p, left);
+        if (k)
+            fwrite(p, 1, k, stderr);
+        else
+            fprintf(stderr, "\\x%02x", *p);
+        k = k ? k : 1;
+        p += k;
+        left -= k;
+    }
+}
+
 static void vmsg(const char *prefix, const char *fmt, va_list ap)
 {
     char buf[2048];
-    const unsigned char *p;
     fputs(prefix, stderr);
     vsnprintf(buf, sizeof buf, fmt, ap);
-    for (p = (const unsigned char *)buf; *p; p++) {
-        if (*p < 0x20 || *p == 0x7f)
-            fprintf(stderr, "\\x%02x", *p);
-        else
-            fputc(*p, stderr);
-    }
+    put_escaped(buf);
     fputc('\n', stderr);
 }
 
@@ -63,12 +77,15 @@ void cli_print_warnings(const sg_diag *d, const char *where)
 int cli_usage_error(const char *cmd, const char *fmt, ...)
 {
     va_list ap;
+    char buf[2048];
     fputs("sagitta: ", stderr);
     if (cmd)
         fprintf(stderr, "%s: ", cmd);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    vsnprintf(buf, sizeof buf, fmt, ap);
     va_end(ap);
+    /* An argument quoted back may hold control bytes, as in vmsg. */
+    put_escaped(buf);
     if (cmd)
         fprintf(stderr, "\nTry 'sagitta %s --help'.\n", cmd);
     else
@@ -389,6 +406,287 @@ static const cli_opt trace_opts[] = {
     { NULL, 0, 0, 0 }
 };
 
+/* ---- a ray list, streamed ---- */
+
+/* Progress of a long run on standard error: only on a terminal, never in
+ * CI (CI set) or a pipe, first after a second and then four times a
+ * second, erased at the end. */
+typedef struct progress {
+    int on, shown;
+    double t0, last;
+} progress;
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void progress_init(progress *p)
+{
+    const char *ci = getenv("CI");
+    memset(p, 0, sizeof *p);
+    p->on = isatty(STDERR_FILENO) && !(ci && ci[0]);
+    p->t0 = p->last = now_s();
+}
+
+static void progress_show(progress *p, size_t nray, unsigned long long done,
+                          unsigned long long total)
+{
+    double t;
+    if (!p->on)
+        return;
+    t = now_s();
+    if (t - p->t0 < 1.0 || t - p->last < 0.25)
+        return;
+    p->last = t;
+    p->shown = 1;
+    if (total > 0)
+        fprintf(stderr, "\rsagitta: trace: %5.1f%%, %zu rays, %.0f s", 100.0 * (double)done /
+                (double)total, nray, t - p->t0);
+    else
+        fprintf(stderr, "\rsagitta: trace: %zu rays, %.0f s", nray, t - p->t0);
+    fflush(stderr);
+}
+
+static void progress_end(progress *p)
+{
+    if (p->shown)
+        fputs("\r\033[K", stderr);
+    p->shown = 0;
+}
+
+/* Rays a block holds: about 16 MiB of result rows, from 16 to 65536
+ * rays.  SAGITTA_RAYS_BLOCK sets it (from 1), for tests of the seams. */
+static size_t rays_block(int nsurf)
+{
+    const char *env = getenv("SAGITTA_RAYS_BLOCK");
+    size_t b = ((size_t)16 << 20) / ((size_t)nsurf * sizeof(sg_ray_surface));
+    if (env && env[0]) {
+        long v = strtol(env, NULL, 10);
+        if (v >= 1 && v <= (1L << 24))
+            return (size_t)v;
+    }
+    return b < 16 ? 16 : b > 65536 ? 65536 : b;
+}
+
+/* A ray list from standard input is kept in a temporary file when the
+ * count must be known first (the text report states it). */
+static FILE *spool_stdin(void)
+{
+    FILE *t = tmpfile();
+    char buf[65536];
+    size_t n;
+    if (!t) {
+        cli_error("<stdin>: cannot make a temporary file: %s", strerror(errno));
+        return NULL;
+    }
+    while ((n = fread(buf, 1, sizeof buf, stdin)) > 0)
+        if (fwrite(buf, 1, n, t) != n) {
+            cli_error("<stdin>: writing a temporary file: %s", strerror(errno));
+            fclose(t);
+            return NULL;
+        }
+    if (ferror(stdin) || fflush(t) != 0) {
+        cli_error("<stdin>: %s", strerror(errno ? errno : EIO));
+        fclose(t);
+        return NULL;
+    }
+    rewind(t);
+    return t;
+}
+
+static int open_rays(const char *path, FILE *spool, csvrays_reader **rd, sg_diag *d)
+{
+    if (spool) {
+        rewind(spool);
+        return csvrays_open_stream(spool, "<stdin>", rd, d);
+    }
+    return csvrays_open(path, rd, d);
+}
+
+/* trace --rays: read a block of rays, trace it on every thread, write it,
+ * and go on, so memory stays the same however long the list.  The output
+ * is byte for byte what tracing the whole list at once wrote.  The steps
+ * are separate (reading, sg_batch_trace, report_rays) so that parsing and
+ * formatting can later be split over the threads block by block too. */
+static int trace_rays(const char *design, const char *rays_path, const char *output, int fmt,
+                      const sg_trace_opts *opts_in, int wave1, int threads)
+{
+    csvrays_reader *rd = NULL;
+    FILE *spool = NULL;
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    sg_tracer *t = NULL;
+    sg_batch *b = NULL;
+    sg_trace_opts opts = *opts_in;
+    sg_ray_in *rays = NULL;
+    sg_ray_surface *out = NULL;
+    int *status = NULL, nsurf, rc, wave0 = 0, multi, opened = 0;
+    size_t total = 0, block, cap, n, done = 0;
+    unsigned long long pos, size;
+    report_meta meta;
+    report_stream rs;
+    outfile ro;
+    progress pg;
+    sg_diag d;
+
+    memset(&ro, 0, sizeof ro);
+    sg_diag_clear(&d);
+    /* The text report states the number of rays before the first one. */
+    if (fmt == REPORT_TEXT) {
+        if (strcmp(rays_path, "-") == 0 && !(spool = spool_stdin()))
+            return CLI_EXIT_FILE;
+        rc = open_rays(rays_path, spool, &rd, &d);
+        if (rc == SG_OK)
+            rc = csvrays_count(rd, &total, &d);
+        csvrays_close(rd);
+        rd = NULL;
+        if (rc == SG_OK && total == 0)
+            rc = sg_diag_set(&d, SG_EPARSE, "%s: no rays after the header",
+                             spool ? "<stdin>" : rays_path);
+        if (rc != SG_OK)
+            goto bad_rays;
+    }
+    rc = open_rays(rays_path, spool, &rd, &d);
+    if (rc != SG_OK)
+        goto bad_rays;
+
+    rc = cli_load_design(design, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        goto done;
+    rc = cli_check_wave(design, sys, wave1, &wave0);
+    if (rc != CLI_EXIT_OK)
+        goto done;
+    opts.wave = wave0;
+
+    /* One tracer first, so a design the tracer refuses fails here once
+     * and its warnings are printed once, not once a thread. */
+    sg_diag_clear(&d);
+    t = sg_tracer_new(sys, cat, &opts, &d);
+    if (t) {
+        cli_print_warnings(&d, design);
+        sg_diag_clear(&d);
+        b = sg_batch_new(sys, cat, &opts, threads, &d);
+    }
+    if (!t || !b) {
+        rc = d.code != SG_OK ? d.code : SG_ENOMEM;
+        print_diag(design, &d, rc);
+        rc = cli_exit_for(rc);
+        if (rc == CLI_EXIT_OK)
+            rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    nsurf = sg_tracer_nsurf(t);
+    sg_tracer_free(t);
+    t = NULL;
+
+    block = rays_block(nsurf);
+    cap = block < 2 ? 2 : block;
+    rays = malloc(cap * sizeof *rays);
+    out = malloc(cap * (size_t)nsurf * sizeof *out);
+    status = malloc(cap * sizeof *status);
+    if (!rays || !out || !status) {
+        cli_error("out of memory for %zu rays of %d surfaces", cap, nsurf);
+        rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+
+    /* The first block decides between the one-ray and the list form: a
+     * reader returns fewer rays than asked only at the end. */
+    sg_diag_clear(&d);
+    rc = csvrays_next(rd, rays, cap, &n, &d);
+    if (rc != SG_OK)
+        goto bad_rays;
+    multi = !(n == 1 && cap > 1);
+
+    memset(&meta, 0, sizeof meta);
+    meta.design = design;
+    meta.method = sg_method_name(opts.method);
+    meta.bits = opts.method == SG_METHOD_MPFR ? opts.mpfr_bits : 0;
+    meta.wave_um = sys->wave[wave0].um;
+    meta.wave_index = wave0 + 1;
+
+    progress_init(&pg);
+    while (n > 0) {
+        sg_diag_clear(&d);
+        rc = sg_batch_trace(b, csvrays_kind(rd), rays, n, NULL, 0, out, status, &d);
+        if (rc != SG_OK) {
+            progress_end(&pg);
+            if (d.msg[0])
+                print_diag(design, &d, rc);
+            else
+                cli_error("%s: trace failed: %s", design, sg_strerror(rc));
+            rc = cli_exit_for(rc);
+            if (rc == CLI_EXIT_OK)
+                rc = CLI_EXIT_INTERNAL;
+            goto done;
+        }
+        /* The output is opened only after the first block traced, so a
+         * design that cannot be traced leaves an existing file as it was. */
+        if (!opened) {
+            int err = outfile_open(&ro, output, stdout);
+            if (err != 0) {
+                cli_error("%s: %s", output, strerror(err));
+                rc = CLI_EXIT_FILE;
+                goto done;
+            }
+            opened = 1;
+            if (report_begin(&rs, ro.f, (report_fmt)fmt, &meta, nsurf, csvrays_kind(rd),
+                             multi, total) != 0)
+                goto write_error;
+        }
+        if (report_rays(&rs, out, status, n, rays) != 0)
+            goto write_error;
+        done += n;
+        csvrays_progress(rd, &pos, &size);
+        progress_show(&pg, done, pos, size);
+        sg_diag_clear(&d);
+        rc = csvrays_next(rd, rays, block, &n, &d);
+        if (rc != SG_OK) {
+            progress_end(&pg);
+            goto bad_rays;
+        }
+    }
+    progress_end(&pg);
+    if (report_end(&rs) != 0)
+        goto write_error;
+    {
+        int err = outfile_commit(&ro);
+        opened = 0;
+        rc = CLI_EXIT_OK;
+        if (err != 0) {
+            cli_error("%s: %s", ro.path ? ro.path : "standard output", strerror(err));
+            rc = CLI_EXIT_FILE;
+        }
+    }
+    goto done;
+
+write_error:
+    progress_end(&pg);
+    cli_error("%s: %s", output && strcmp(output, "-") ? output : "standard output",
+              strerror(errno));
+    rc = CLI_EXIT_FILE;
+    goto done;
+bad_rays:
+    cli_error("%s", d.msg[0] ? d.msg : sg_strerror(rc));
+    rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_FILE;
+done:
+    if (opened && rc != CLI_EXIT_OK)
+        outfile_abort(&ro);
+    csvrays_close(rd);
+    if (spool)
+        fclose(spool);
+    free(rays);
+    free(out);
+    free(status);
+    sg_tracer_free(t);
+    sg_batch_free(b);
+    cli_design_free(cat, sys);
+    return rc;
+}
+
 int cmd_trace(int argc, char **argv)
 {
     cli_iter it;
@@ -401,9 +699,9 @@ int cmd_trace(int argc, char **argv)
     sg_system *sys = NULL;
     sg_tracer *t = NULL;
     sg_trace_opts opts;
-    sg_ray_in *rays = NULL, one;
+    sg_ray_in one;
     sg_ray_kind kind = SG_RAYS_NORMALIZED;
-    size_t nray = 1;
+    const size_t nray = 1;
     sg_ray_surface *out = NULL;
     int *status = NULL, nsurf;
     report_meta meta;
@@ -488,26 +786,22 @@ int cmd_trace(int argc, char **argv)
     if (bits && method != SG_METHOD_MPFR)
         cli_warn("--bits only applies to --method mpfr; ignored");
 
-    /* The ray list is read first: it is cheaper than the catalog, and a
-     * typo in it is the likelier mistake. */
     if (rays_path) {
-        sg_diag_clear(&d);
-        rc = csvrays_read(rays_path, &kind, &rays, &nray, &d);
-        if (rc != SG_OK) {
-            cli_error("%s", d.msg[0] ? d.msg : sg_strerror(rc));
-            return rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_FILE;
-        }
+        sg_trace_opts_init(&opts);
+        opts.method = (sg_method)method;
+        if (bits)
+            opts.mpfr_bits = bits;
+        opts.clip = clip;
+        return trace_rays(design, rays_path, output, fmt, &opts, wave1, threads);
+    }
+    memset(&one, 0, sizeof one);
+    if (have_ray) {
+        kind = SG_RAYS_NORMALIZED;
+        memcpy(one.v, ray4, sizeof ray4);
     } else {
-        memset(&one, 0, sizeof one);
-        if (have_ray) {
-            kind = SG_RAYS_NORMALIZED;
-            memcpy(one.v, ray4, sizeof ray4);
-        } else {
-            kind = SG_RAYS_START_DIR;
-            memcpy(one.v, start, sizeof start);
-            memcpy(one.v + 3, dir, sizeof dir);
-        }
-        rays = &one;
+        kind = SG_RAYS_START_DIR;
+        memcpy(one.v, start, sizeof start);
+        memcpy(one.v + 3, dir, sizeof dir);
     }
 
     rc = cli_load_design(design, &cat, &sys);
@@ -524,8 +818,6 @@ int cmd_trace(int argc, char **argv)
     opts.wave = wave0;
     opts.clip = clip;
 
-    /* The tracer is made even for a batch (which makes its own, one per
-     * thread) so that a design the tracer refuses fails here, once. */
     sg_diag_clear(&d);
     t = sg_tracer_new(sys, cat, &opts, &d);
     if (!t) {
@@ -546,13 +838,7 @@ int cmd_trace(int argc, char **argv)
         rc = CLI_EXIT_INTERNAL;
         goto done;
     }
-    if (rays_path) {
-        sg_tracer_free(t);
-        t = NULL;
-        sg_diag_clear(&d);
-        rc = sg_trace_batch(sys, cat, &opts, kind, rays, nray, threads, out,
-                            status, &d);
-    } else if (kind == SG_RAYS_NORMALIZED) {
+    if (kind == SG_RAYS_NORMALIZED) {
         rc = sg_trace_normalized(t, ray4[0], ray4[1], ray4[2], ray4[3], out);
         status[0] = rc;
         sg_diag_clear(&d);
@@ -588,7 +874,7 @@ int cmd_trace(int argc, char **argv)
         goto done;
     }
     if (report_write(f, (report_fmt)fmt, &meta, nsurf, out, status, nray, kind,
-                     rays) != 0) {
+                     &one) != 0) {
         cli_error("%s: %s", output && strcmp(output, "-") ? output : "standard output",
                   strerror(errno));
         if (f != stdout)
@@ -600,8 +886,6 @@ int cmd_trace(int argc, char **argv)
 done:
     free(out);
     free(status);
-    if (rays != &one)
-        free(rays);
     sg_tracer_free(t);
     cli_design_free(cat, sys);
     return rc;

@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "args.h"
 
@@ -210,41 +211,273 @@ static int parse_row(span line, const char *name, long lineno, sg_ray_kind kind,
     return SG_OK;
 }
 
+/* A ray list read a piece at a time: from a file or standard input
+ * through a buffer of at least one whole line, or from text in memory. */
+struct csvrays_reader {
+    FILE *f;            /* NULL for text in memory */
+    int own;            /* f is ours to close */
+    char *buf;          /* file data; or the text itself */
+    size_t pos, len, cap;
+    int eof;
+    char name[1024];
+    long lineno;
+    int ncol, map[NCOLS_MAX];
+    sg_ray_kind kind;
+    unsigned long long consumed, total; /* bytes, for progress */
+    size_t nray;                        /* rays read so far */
+};
+
+/* Refills the buffer so that it holds a whole line from pos, or all that
+ * is left.  Returns SG_OK, or an error naming the line. */
+static int fill(csvrays_reader *r)
+{
+    for (;;) {
+        size_t got;
+        if (memchr(r->buf + r->pos, '\n', r->len - r->pos) || r->eof)
+            return SG_OK;
+        /* A line being gathered is checked for NUL as it grows, so a file
+         * of zeros is named as such before it is too long. */
+        if (memchr(r->buf + r->pos, '\0', r->len - r->pos))
+            return SG_EPARSE;
+        if (r->pos > 0) {
+            memmove(r->buf, r->buf + r->pos, r->len - r->pos);
+            r->len -= r->pos;
+            r->pos = 0;
+        }
+        if (r->len == r->cap) {
+            size_t ncap = 2 * r->cap;
+            char *nb;
+            if (r->cap >= CSVRAYS_MAX_LINE)
+                return SG_ERANGE;
+            if (ncap > CSVRAYS_MAX_LINE)
+                ncap = CSVRAYS_MAX_LINE;
+            nb = realloc(r->buf, ncap);
+            if (!nb)
+                return SG_ENOMEM;
+            r->buf = nb;
+            r->cap = ncap;
+        }
+        got = fread(r->buf + r->len, 1, r->cap - r->len, r->f);
+        r->len += got;
+        if (got == 0) {
+            if (ferror(r->f))
+                return SG_EIO;
+            r->eof = 1;
+        }
+    }
+}
+
+/* The next line (without its newline) in *line; returns 0 at the end, 1
+ * for a line, or -1 with d filled. */
+static int next_line(csvrays_reader *r, span *line, sg_diag *d)
+{
+    const char *nl;
+    if (r->f) {
+        int rc = fill(r);
+        if (rc != SG_OK) {
+            long at = r->lineno + 1;
+            if (rc == SG_EPARSE)
+                sg_diag_set(d, SG_EPARSE, "%s:%ld: NUL byte in line", r->name, at);
+            else if (rc == SG_ERANGE)
+                sg_diag_set(d, SG_EPARSE, "%s:%ld: line longer than %d MiB", r->name, at,
+                            (int)(CSVRAYS_MAX_LINE >> 20));
+            else if (rc == SG_EIO)
+                sg_diag_set(d, SG_EIO, "%s: %s", r->name, strerror(errno));
+            else
+                sg_diag_set(d, SG_ENOMEM, "%s: out of memory reading line %ld", r->name, at);
+            return -1;
+        }
+    }
+    if (r->pos >= r->len)
+        return 0;
+    line->p = r->buf + r->pos;
+    nl = memchr(line->p, '\n', r->len - r->pos);
+    line->n = (size_t)((nl ? nl : r->buf + r->len) - line->p);
+    r->pos += line->n + (nl ? 1 : 0);
+    r->consumed += line->n + (nl ? 1 : 0);
+    r->lineno++;
+    if (memchr(line->p, '\0', line->n)) {
+        sg_diag_set(d, SG_EPARSE, "%s:%ld: NUL byte in line", r->name, r->lineno);
+        return -1;
+    }
+    return 1;
+}
+
+/* Reads up to the header row. */
+static int read_header(csvrays_reader *r, sg_diag *d)
+{
+    span line, t;
+    int got;
+    while ((got = next_line(r, &line, d)) > 0) {
+        t = trim(line);
+        if (t.n == 0 || t.p[0] == '#')
+            continue;
+        return parse_header(t, r->name, r->lineno, &r->kind, r->map, &r->ncol, d);
+    }
+    if (got < 0)
+        return d && d->code ? d->code : SG_EPARSE;
+    return sg_diag_set(d, SG_EPARSE, "%s: no header row; expected the "
+                       "columns hx,hy,px,py or x,y,z,l,m,n", r->name);
+}
+
+static csvrays_reader *reader_new(const char *name)
+{
+    csvrays_reader *r = calloc(1, sizeof *r);
+    if (r) {
+        snprintf(r->name, sizeof r->name, "%s", name);
+        r->kind = SG_RAYS_NORMALIZED;
+    }
+    return r;
+}
+
+static int open_file(FILE *f, int own, const char *name, csvrays_reader **out, sg_diag *d)
+{
+    csvrays_reader *r;
+    int rc;
+    *out = NULL;
+    r = reader_new(name);
+    if (!r) {
+        if (own)
+            fclose(f);
+        return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
+    }
+    r->f = f;
+    r->own = own;
+    r->cap = (size_t)1 << 20;
+    r->buf = malloc(r->cap);
+    if (!r->buf) {
+        csvrays_close(r);
+        return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
+    }
+    {
+        struct stat st;
+        if (fstat(fileno(r->f), &st) == 0 && S_ISREG(st.st_mode))
+            r->total = (unsigned long long)st.st_size;
+    }
+    rc = read_header(r, d);
+    if (rc != SG_OK) {
+        csvrays_close(r);
+        return rc;
+    }
+    *out = r;
+    return SG_OK;
+}
+
+int csvrays_open(const char *path, csvrays_reader **out, sg_diag *d)
+{
+    FILE *f;
+    *out = NULL;
+    if (strcmp(path, "-") == 0)
+        return open_file(stdin, 0, "<stdin>", out, d);
+    f = fopen(path, "rb");
+    if (!f)
+        return sg_diag_set(d, SG_EIO, "%s: %s", path, strerror(errno));
+    return open_file(f, 1, path, out, d);
+}
+
+int csvrays_open_stream(FILE *f, const char *name, csvrays_reader **out, sg_diag *d)
+{
+    return open_file(f, 0, name, out, d);
+}
+
+int csvrays_count(csvrays_reader *r, size_t *n, sg_diag *d)
+{
+    span line, t;
+    int got;
+    *n = 0;
+    while ((got = next_line(r, &line, d)) > 0) {
+        t = trim(line);
+        if (t.n != 0 && t.p[0] != '#')
+            ++*n;
+    }
+    return got < 0 ? (d && d->code ? d->code : SG_EPARSE) : SG_OK;
+}
+
+int csvrays_open_text(const char *text, size_t len, const char *name,
+                      csvrays_reader **out, sg_diag *d)
+{
+    csvrays_reader *r;
+    int rc;
+    *out = NULL;
+    r = reader_new(name);
+    if (!r)
+        return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
+    r->buf = (char *)text;
+    r->len = len;
+    r->total = len;
+    r->eof = 1;
+    rc = read_header(r, d);
+    if (rc != SG_OK) {
+        csvrays_close(r);
+        return rc;
+    }
+    *out = r;
+    return SG_OK;
+}
+
+sg_ray_kind csvrays_kind(const csvrays_reader *r)
+{
+    return r->kind;
+}
+
+int csvrays_next(csvrays_reader *r, sg_ray_in *rays, size_t max, size_t *n, sg_diag *d)
+{
+    span line, t;
+    int got, rc;
+    *n = 0;
+    while (*n < max && (got = next_line(r, &line, d)) != 0) {
+        if (got < 0)
+            return d && d->code ? d->code : SG_EPARSE;
+        t = trim(line);
+        if (t.n == 0 || t.p[0] == '#')
+            continue;
+        rc = parse_row(t, r->name, r->lineno, r->kind, r->map, r->ncol, &rays[*n], d);
+        if (rc != SG_OK)
+            return rc;
+        ++*n;
+        r->nray++;
+    }
+    if (*n == 0 && r->nray == 0)
+        return sg_diag_set(d, SG_EPARSE, "%s: no rays after the header", r->name);
+    return SG_OK;
+}
+
+void csvrays_progress(const csvrays_reader *r, unsigned long long *done,
+                      unsigned long long *total)
+{
+    *done = r->consumed;
+    *total = r->total;
+}
+
+void csvrays_close(csvrays_reader *r)
+{
+    if (!r)
+        return;
+    if (r->f) {
+        if (r->own)
+            fclose(r->f);
+        free(r->buf);
+    }
+    free(r);
+}
+
 int csvrays_parse(const char *text, size_t len, const char *name,
                   sg_ray_kind *kind, sg_ray_in **rays, size_t *nray,
                   sg_diag *d)
 {
-    const char *p = text, *end = text + len;
-    long lineno = 0;
-    int have_header = 0, ncol = 0, map[NCOLS_MAX] = { 0 };
+    csvrays_reader *r;
     sg_ray_in *v = NULL;
-    size_t n = 0, cap = 0;
+    size_t n = 0, cap = 0, got;
     int rc;
 
     *rays = NULL;
     *nray = 0;
     *kind = SG_RAYS_NORMALIZED;
-    while (p < end) {
-        const char *nl = memchr(p, '\n', (size_t)(end - p));
-        span line, t;
-        line.p = p;
-        line.n = (size_t)((nl ? nl : end) - p);
-        p = nl ? nl + 1 : end;
-        lineno++;
-        if (memchr(line.p, '\0', line.n)) {
-            rc = sg_diag_set(d, SG_EPARSE, "%s:%ld: NUL byte in line", name, lineno);
-            goto fail;
-        }
-        t = trim(line);
-        if (t.n == 0 || t.p[0] == '#')
-            continue;
-        if (!have_header) {
-            rc = parse_header(t, name, lineno, kind, map, &ncol, d);
-            if (rc != SG_OK)
-                goto fail;
-            have_header = 1;
-            continue;
-        }
+    rc = csvrays_open_text(text, len, name, &r, d);
+    if (rc != SG_OK)
+        return rc;
+    *kind = r->kind;
+    for (;;) {
         if (n == cap) {
             size_t ncap = cap ? 2 * cap : 64;
             sg_ray_in *nv;
@@ -261,24 +494,19 @@ int csvrays_parse(const char *text, size_t len, const char *name,
             v = nv;
             cap = ncap;
         }
-        rc = parse_row(t, name, lineno, *kind, map, ncol, &v[n], d);
+        rc = csvrays_next(r, v + n, cap - n, &got, d);
         if (rc != SG_OK)
             goto fail;
-        n++;
+        if (got == 0)
+            break;
+        n += got;
     }
-    if (!have_header) {
-        rc = sg_diag_set(d, SG_EPARSE, "%s: no header row; expected the "
-                         "columns hx,hy,px,py or x,y,z,l,m,n", name);
-        goto fail;
-    }
-    if (n == 0) {
-        rc = sg_diag_set(d, SG_EPARSE, "%s: no rays after the header", name);
-        goto fail;
-    }
+    csvrays_close(r);
     *rays = v;
     *nray = n;
     return SG_OK;
 fail:
+    csvrays_close(r);
     free(v);
     return rc;
 }
@@ -286,51 +514,42 @@ fail:
 int csvrays_read(const char *path, sg_ray_kind *kind, sg_ray_in **rays,
                  size_t *nray, sg_diag *d)
 {
-    int use_stdin = strcmp(path, "-") == 0;
-    const char *name = use_stdin ? "<stdin>" : path;
-    FILE *f = use_stdin ? stdin : fopen(path, "rb");
-    char *buf = NULL;
-    size_t len = 0, cap = 0;
+    csvrays_reader *r;
+    sg_ray_in *v = NULL;
+    size_t n = 0, cap = 0, got;
     int rc;
 
     *rays = NULL;
     *nray = 0;
-    if (!f)
-        return sg_diag_set(d, SG_EIO, "%s: %s", name, strerror(errno));
+    rc = csvrays_open(path, &r, d);
+    if (rc != SG_OK)
+        return rc;
+    *kind = r->kind;
     for (;;) {
-        size_t got;
-        /* A ray file has a limit like a design does, so that /dev/zero or a
-         * runaway pipe is refused instead of exhausting memory. */
-        if (len > CSVRAYS_MAX_BYTES) {
-            rc = sg_diag_set(d, SG_ERANGE, "%s: larger than %d MiB; split the rays into "
-                             "several files", name, (int)(CSVRAYS_MAX_BYTES >> 20));
-            goto done;
-        }
-        if (cap - len < 65536) {
-            size_t ncap = cap ? 2 * cap : 65536;
-            char *nb;
-            if (ncap < cap || !(nb = realloc(buf, ncap))) {
-                rc = sg_diag_set(d, SG_ENOMEM, "%s: out of memory reading the file",
-                                 name);
-                goto done;
+        if (n == cap) {
+            size_t ncap = cap ? 2 * cap : 64;
+            sg_ray_in *nv;
+            if (ncap > SIZE_MAX / sizeof *v || !(nv = realloc(v, ncap * sizeof *v))) {
+                rc = sg_diag_set(d, SG_ENOMEM, "%s: out of memory after %zu rays",
+                                 r->name, n);
+                goto fail;
             }
-            buf = nb;
+            v = nv;
             cap = ncap;
         }
-        got = fread(buf + len, 1, cap - len, f);
-        len += got;
-        if (got == 0) {
-            if (ferror(f)) {
-                rc = sg_diag_set(d, SG_EIO, "%s: %s", name, strerror(errno));
-                goto done;
-            }
+        rc = csvrays_next(r, v + n, cap - n, &got, d);
+        if (rc != SG_OK)
+            goto fail;
+        if (got == 0)
             break;
-        }
+        n += got;
     }
-    rc = csvrays_parse(buf, len, name, kind, rays, nray, d);
-done:
-    free(buf);
-    if (!use_stdin)
-        fclose(f);
+    csvrays_close(r);
+    *rays = v;
+    *nray = n;
+    return SG_OK;
+fail:
+    csvrays_close(r);
+    free(v);
     return rc;
 }

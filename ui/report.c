@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "safetext.h"
+
 int report_parse_fmt(const char *s)
 {
     if (!s)
@@ -172,15 +174,14 @@ static void text_table(FILE *f, const report_meta *m, const sg_ray_surface *s, i
     }
 }
 
-static void text_write(FILE *f, const report_meta *m, int nsurf,
-                       const sg_ray_surface *out, const int *status, size_t nray,
-                       sg_ray_kind kind, const sg_ray_in *rays)
+static void text_head(FILE *f, const report_meta *m, int multi, size_t total)
 {
     char b[40];
-    size_t r;
-
-    fputs(nray == 1 ? "Single ray trace\n" : "Ray trace\n", f);
-    fprintf(f, "Design      : %s\n", m && m->design ? m->design : "(untitled)");
+    fputs(!multi ? "Single ray trace\n" : "Ray trace\n", f);
+    /* A file name or title may hold escape codes; text goes to terminals. */
+    fputs("Design      : ", f);
+    safe_fputs(m && m->design ? m->design : "(untitled)", f);
+    fputc('\n', f);
     if (m && m->method) {
         if (m->bits > 0)
             fprintf(f, "Method      : %s, %d bits\n", m->method, m->bits);
@@ -195,19 +196,21 @@ static void text_write(FILE *f, const report_meta *m, int nsurf,
     if (is_estimate(m))
         fputs("ErrEst is the classic method's error estimate, not a bound: the true "
               "error can exceed it.\n", f);
-    if (nray > 1)
-        fprintf(f, "Rays        : %zu\n", nray);
-    for (r = 0; r < nray; r++) {
-        const sg_ray_surface *s = out + r * (size_t)nsurf;
-        fputc('\n', f);
-        if (nray > 1)
-            fprintf(f, "Ray %zu\n", r);
-        if (rays)
-            text_ray_line(f, kind, &rays[r]);
-        text_status_line(f, s, nsurf, ray_status(s, nsurf, status, r));
-        fputc('\n', f);
-        text_table(f, m, s, nsurf);
-    }
+    if (multi)
+        fprintf(f, "Rays        : %zu\n", total);
+}
+
+static void text_ray(FILE *f, const report_meta *m, int multi, size_t index, int nsurf,
+                     const sg_ray_surface *s, int st, sg_ray_kind kind, const sg_ray_in *ray)
+{
+    fputc('\n', f);
+    if (multi)
+        fprintf(f, "Ray %zu\n", index);
+    if (ray)
+        text_ray_line(f, kind, ray);
+    text_status_line(f, s, nsurf, st);
+    fputc('\n', f);
+    text_table(f, m, s, nsurf);
 }
 
 /* ----------------------------------------------------------- CSV, JSON */
@@ -225,32 +228,40 @@ static void put_num(FILE *f, double v, int json)
         fprintf(f, "%.17g", v);
 }
 
-static void csv_write(FILE *f, const report_meta *m, int nsurf, const sg_ray_surface *out,
-                      size_t nray)
+static void csv_head(FILE *f, const report_meta *m, int multi, int inputs, sg_ray_kind kind)
 {
-    size_t r;
-    int i;
-    fprintf(f, "%ssurface,x,y,z,l,m,n,residual,%s,path,status\n", nray > 1 ? "ray," : "",
-            bound_key(m));
-    for (r = 0; r < nray; r++)
-        for (i = 0; i < nsurf; i++) {
-            const sg_ray_surface *e = &out[r * (size_t)nsurf + (size_t)i];
-            if (nray > 1)
-                fprintf(f, "%zu,", r);
-            fprintf(f, "%d,", i);
-            if (e->status == SG_OK) {
-                const double v[9] = { e->x, e->y, e->z, e->l, e->m, e->n,
-                                      e->residual, e->error_bound, e->path };
-                int k;
-                for (k = 0; k < 9; k++) {
-                    put_num(f, v[k], 0);
-                    fputc(',', f);
-                }
-            } else {
-                fputs(",,,,,,,,,", f);
-            }
-            fprintf(f, "%s\n", report_status_name(e->status));
+    if (multi)
+        fputs("ray,", f);
+    if (inputs)
+        fputs(kind == SG_RAYS_NORMALIZED ? "hx,hy,px,py," : "x0,y0,z0,l0,m0,n0,", f);
+    fprintf(f, "surface,x,y,z,l,m,n,residual,%s,path,status\n", bound_key(m));
+}
+
+static void csv_ray(FILE *f, int multi, size_t index, int nsurf, const sg_ray_surface *s,
+                    sg_ray_kind kind, const sg_ray_in *ray)
+{
+    int i, k, nin = ray ? (kind == SG_RAYS_NORMALIZED ? 4 : 6) : 0;
+    for (i = 0; i < nsurf; i++) {
+        const sg_ray_surface *e = &s[i];
+        if (multi)
+            fprintf(f, "%zu,", index);
+        for (k = 0; k < nin; k++) {
+            put_num(f, ray->v[k], 0);
+            fputc(',', f);
         }
+        fprintf(f, "%d,", i);
+        if (e->status == SG_OK) {
+            const double v[9] = { e->x, e->y, e->z, e->l, e->m, e->n,
+                                  e->residual, e->error_bound, e->path };
+            for (k = 0; k < 9; k++) {
+                put_num(f, v[k], 0);
+                fputc(',', f);
+            }
+        } else {
+            fputs(",,,,,,,,,", f);
+        }
+        fprintf(f, "%s\n", report_status_name(e->status));
+    }
 }
 
 /* Writes s as a JSON string; cJSON does the escaping. */
@@ -330,40 +341,33 @@ static void json_surfaces(FILE *f, const report_meta *m, const sg_ray_surface *s
     fprintf(f, "%s]", indent);
 }
 
-static int json_write(FILE *f, const report_meta *m, int nsurf,
-                      const sg_ray_surface *out, const int *status, size_t nray,
-                      sg_ray_kind kind, const sg_ray_in *rays)
+/* One ray of the list form.  The separator goes before every ray but
+ * the first, so a stream need not know which ray is the last. */
+static void json_ray(FILE *f, const report_meta *m, size_t index, int nsurf,
+                     const sg_ray_surface *s, int st, sg_ray_kind kind, const sg_ray_in *ray)
 {
-    size_t r;
-    fputs("{\n", f);
-    if (json_meta(f, m) < 0)
-        return -1;
-    if (nray == 1) {
-        if (rays) {
-            fputs(",\n  \"input\": ", f);
-            json_input(f, kind, &rays[0]);
-        }
-        fprintf(f, ",\n  \"status\": \"%s\",\n  \"surfaces\": ",
-                report_status_name(ray_status(out, nsurf, status, 0)));
-        json_surfaces(f, m, out, nsurf, "  ");
-        fputs("\n}\n", f);
-        return 0;
+    if (index > 0)
+        fputs(",\n", f);
+    fprintf(f, "    {\"ray\": %zu", index);
+    if (ray) {
+        fputs(", \"input\": ", f);
+        json_input(f, kind, ray);
     }
-    fputs(",\n  \"rays\": [\n", f);
-    for (r = 0; r < nray; r++) {
-        const sg_ray_surface *s = out + r * (size_t)nsurf;
-        fprintf(f, "    {\"ray\": %zu", r);
-        if (rays) {
-            fputs(", \"input\": ", f);
-            json_input(f, kind, &rays[r]);
-        }
-        fprintf(f, ", \"status\": \"%s\", \"surfaces\": ",
-                report_status_name(ray_status(s, nsurf, status, r)));
-        json_surfaces(f, m, s, nsurf, "    ");
-        fprintf(f, "}%s\n", r + 1 < nray ? "," : "");
+    fprintf(f, ", \"status\": \"%s\", \"surfaces\": ", report_status_name(st));
+    json_surfaces(f, m, s, nsurf, "    ");
+    fputc('}', f);
+}
+
+static void json_single(FILE *f, const report_meta *m, int nsurf, const sg_ray_surface *s,
+                        int st, sg_ray_kind kind, const sg_ray_in *ray)
+{
+    if (ray) {
+        fputs(",\n  \"input\": ", f);
+        json_input(f, kind, ray);
     }
-    fputs("  ]\n}\n", f);
-    return 0;
+    fprintf(f, ",\n  \"status\": \"%s\",\n  \"surfaces\": ", report_status_name(st));
+    json_surfaces(f, m, s, nsurf, "  ");
+    fputs("\n}\n", f);
 }
 
 /* stdio keeps the first write error sticky, so checking once at the end
@@ -380,30 +384,94 @@ static int finish(FILE *f)
     return 0;
 }
 
+int report_begin(report_stream *s, FILE *f, report_fmt fmt, const report_meta *m,
+                 int nsurf, sg_ray_kind kind, int multi, size_t total)
+{
+    memset(s, 0, sizeof *s);
+    if (!f || nsurf < 0 || (fmt != REPORT_TEXT && fmt != REPORT_CSV && fmt != REPORT_JSON)) {
+        errno = EINVAL;
+        return -1;
+    }
+    s->f = f;
+    s->fmt = fmt;
+    s->m = m;
+    s->nsurf = nsurf;
+    s->kind = kind;
+    s->multi = multi != 0;
+    switch (fmt) {
+    case REPORT_TEXT:
+        text_head(f, m, s->multi, total);
+        break;
+    case REPORT_CSV:
+        csv_head(f, m, s->multi, m && m->csv_inputs, kind);
+        break;
+    default:
+        fputs("{\n", f);
+        if (json_meta(f, m) < 0)
+            return -1;
+        if (s->multi)
+            fputs(",\n  \"rays\": [\n", f);
+        break;
+    }
+    return ferror(f) ? -1 : 0;
+}
+
+int report_rays(report_stream *s, const sg_ray_surface *out, const int *status, size_t n,
+                const sg_ray_in *rays)
+{
+    size_t r;
+    if (!s->f || (n > 0 && !out) || (!s->multi && s->next + n > 1)) {
+        errno = EINVAL;
+        return -1;
+    }
+    for (r = 0; r < n; r++, s->next++) {
+        const sg_ray_surface *o = out + r * (size_t)s->nsurf;
+        const sg_ray_in *in = rays ? &rays[r] : NULL;
+        int st = ray_status(o, s->nsurf, status, r);
+        switch (s->fmt) {
+        case REPORT_TEXT:
+            text_ray(s->f, s->m, s->multi, s->next, s->nsurf, o, st, s->kind, in);
+            break;
+        case REPORT_CSV:
+            csv_ray(s->f, s->multi, s->next, s->nsurf, o, s->kind,
+                    s->m && s->m->csv_inputs ? in : NULL);
+            break;
+        default:
+            if (s->multi)
+                json_ray(s->f, s->m, s->next, s->nsurf, o, st, s->kind, in);
+            else
+                json_single(s->f, s->m, s->nsurf, o, st, s->kind, in);
+            break;
+        }
+    }
+    return ferror(s->f) ? -1 : 0;
+}
+
+int report_end(report_stream *s)
+{
+    if (!s->f) {
+        errno = EINVAL;
+        return -1;
+    }
+    if (s->fmt == REPORT_JSON && s->multi)
+        fputs(s->next > 0 ? "\n  ]\n}\n" : "  ]\n}\n", s->f);
+    return finish(s->f);
+}
+
 int report_write(FILE *f, report_fmt fmt, const report_meta *m, int nsurf,
                  const sg_ray_surface *out, const int *status, size_t nray,
                  sg_ray_kind kind, const sg_ray_in *rays)
 {
+    report_stream s;
     if (!f || nsurf < 0 || (nray > 0 && !out)) {
         errno = EINVAL;
         return -1;
     }
-    switch (fmt) {
-    case REPORT_TEXT:
-        text_write(f, m, nsurf, out, status, nray, kind, rays);
-        break;
-    case REPORT_CSV:
-        csv_write(f, m, nsurf, out, nray);
-        break;
-    case REPORT_JSON:
-        if (json_write(f, m, nsurf, out, status, nray, kind, rays) < 0)
-            return -1;
-        break;
-    default:
-        errno = EINVAL;
+    if (report_begin(&s, f, fmt, m, nsurf, kind, nray != 1, nray) < 0)
         return -1;
-    }
-    return finish(f);
+    if (report_rays(&s, out, status, nray, rays) < 0)
+        return -1;
+    return report_end(&s);
 }
 
 /* ------------------------------------------------------------ paraxial */
@@ -452,7 +520,9 @@ int report_write_paraxial(FILE *f, report_fmt fmt, const report_meta *m,
     }
     switch (fmt) {
     case REPORT_TEXT:
-        fprintf(f, "%-24s:  %s\n", "Design", m && m->design ? m->design : "(untitled)");
+        fprintf(f, "%-24s:  ", "Design");
+        safe_fputs(m && m->design ? m->design : "(untitled)", f);
+        fputc('\n', f);
         if (m)
             fprintf(f, "%-24s:  %s um (wave %d)\n", "Wavelength",
                     shortest(m->wave_um, b, sizeof b), m->wave_index);

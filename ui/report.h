@@ -23,6 +23,8 @@ typedef struct report_meta {
     int bits;           /* mpfr bits, 0 if not mpfr */
     double wave_um;     /* wavelength used */
     int wave_index;     /* 1-based */
+    int csv_inputs;     /* CSV: each row starts with its ray's launch
+                           (hx,hy,px,py or x0,y0,z0,l0,m0,n0) */
 } report_meta;
 
 /* The error column is error_bound (text: ErrBound) for precise and mpfr;
@@ -35,6 +37,29 @@ typedef struct report_meta {
 int report_write(FILE *f, report_fmt fmt, const report_meta *m, int nsurf,
                  const sg_ray_surface *out, const int *status, size_t nray,
                  sg_ray_kind kind, const sg_ray_in *rays);
+
+/* The same report written a block of rays at a time, so a long list
+ * streams through bounded memory: report_begin, report_rays any number of
+ * times (rays numbered on from the last call), report_end.  multi chooses
+ * the list form (nray != 1 in report_write); total is the ray count that
+ * the text form's header states (unused by CSV and JSON).  The bytes equal
+ * report_write's for the same rays. */
+typedef struct report_stream {
+    FILE *f;
+    report_fmt fmt;
+    const report_meta *m;
+    int nsurf, multi;
+    sg_ray_kind kind;
+    size_t next; /* number of the next ray */
+} report_stream;
+
+int report_begin(report_stream *s, FILE *f, report_fmt fmt, const report_meta *m,
+                 int nsurf, sg_ray_kind kind, int multi, size_t total);
+/* n rays: rows out[r * nsurf], status[r] (may be NULL), launch rays[r]
+ * (may be NULL). */
+int report_rays(report_stream *s, const sg_ray_surface *out, const int *status, size_t n,
+                const sg_ray_in *rays);
+int report_end(report_stream *s);
 
 /* Writes every field of a paraxial computation.  Returns 0, or -1 on a
  * write error (errno set). */

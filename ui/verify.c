@@ -22,6 +22,7 @@
 #include "args.h"
 #include "measure.h"
 #include "report.h"
+#include "safetext.h"
 
 enum { M_PRECISE = 0, M_CLASSIC = 1, M_MPFR = 2, NMETHOD = 3 };
 static const char *const mname[NMETHOD] = { "precise", "classic", "mpfr" };
@@ -751,7 +752,9 @@ static void vdesign_text(FILE *f, const vdesign *v)
     size_t r, shown;
     int i, m;
 
-    fprintf(f, "sagitta verify: %s\n", v->path);
+    fputs("sagitta verify: ", f);
+    safe_fputs(v->path, f);
+    fputc('\n', f);
     fprintf(f, "wavelength %d (%.10g um); reference: mpfr at %d bits, same double inputs\n",
             v->wave0 + 1, v->sys->wave[v->wave0].um, v->bits);
     if (v->nfield)
@@ -1715,13 +1718,17 @@ static int t2_json(FILE *f, const t2ray *rays, size_t count, uint64_t seed, int 
     return jemit(&b, root, f);
 }
 
+/* The rays are traced one at a time and only what the report needs is
+ * kept: the first T2_SHOW rays whole, and each ray's error in ulp and in
+ * digits per compared method (32 bytes a ray, for the exact medians and
+ * quantiles), instead of every ray's rows (about 850 bytes a ray). */
 static int experiment_table2(int bits, size_t count, uint64_t seed, int fmt,
                              const char *output)
 {
     sg_system *sys[2] = { NULL, NULL };
     sg_tracer *t[2][NMETHOD] = { { NULL, NULL, NULL }, { NULL, NULL, NULL } };
-    t2ray *rays = NULL;
-    double *ulp = NULL, *dig = NULL;
+    t2ray show[T2_SHOW], ray;
+    double *ulp[2] = { NULL, NULL }, *dig[2] = { NULL, NULL };
     t2stat st[2];
     size_t r, nviol = 0;
     uint64_t state = seed;
@@ -1729,12 +1736,14 @@ static int experiment_table2(int bits, size_t count, uint64_t seed, int fmt,
     vout out = { NULL, NULL };
 
     memset(st, 0, sizeof st);
+    memset(show, 0, sizeof show);
     sys[0] = sphere_system(1.0);
     sys[1] = sphere_system(-1.0);
-    rays = calloc(count, sizeof *rays);
-    ulp = malloc(count * sizeof *ulp);
-    dig = malloc(count * sizeof *dig);
-    if (!sys[0] || !sys[1] || !rays || !ulp || !dig) {
+    for (m = 0; m < 2; m++) {
+        ulp[m] = malloc(count * sizeof *ulp[m]);
+        dig[m] = malloc(count * sizeof *dig[m]);
+    }
+    if (!sys[0] || !sys[1] || !ulp[0] || !dig[0] || !ulp[1] || !dig[1]) {
         cli_error("out of memory for %zu rays", count);
         rc = CLI_EXIT_INTERNAL;
         goto done;
@@ -1745,7 +1754,7 @@ static int experiment_table2(int bits, size_t count, uint64_t seed, int fmt,
             goto done;
     }
     for (r = 0; r < count; r++) {
-        t2ray *ry = &rays[r];
+        t2ray *ry = &ray;
         double start[3] = { 0.0, 0.0, 0.0 };
         t2_draw(&state, ry);
         start[2] = t2_zc[ry->side];
@@ -1758,11 +1767,9 @@ static int experiment_table2(int bits, size_t count, uint64_t seed, int fmt,
                 goto done;
             }
         }
-    }
-    for (m = 0; m < 2; m++) {
-        size_t n = 0;
-        for (r = 0; r < count; r++) {
-            const t2ray *ry = &rays[r];
+        if (r < T2_SHOW)
+            show[r] = *ry;
+        for (m = 0; m < 2; m++) {
             double pa[3], ref[3], e;
             if (ry->st[m] != SG_OK || ry->st[M_MPFR] != SG_OK) {
                 st[m].nfail++;
@@ -1773,19 +1780,21 @@ static int experiment_table2(int bits, size_t count, uint64_t seed, int fmt,
             e = max_diff3(pa, ref);
             if (e == 0.0)
                 st[m].nexact++;
-            ulp[n] = e / ulp_of(max_abs3(ref));
-            dig[n] = point_digits(pa, ref);
-            n++;
+            ulp[m][st[m].n] = e / ulp_of(max_abs3(ref));
+            dig[m][st[m].n] = point_digits(pa, ref);
+            st[m].n++;
             if (m == M_PRECISE &&
                 bound_fails(e, ry->o[m][1].error_bound, ry->o[M_MPFR][1].error_bound))
                 nviol++;
         }
-        st[m].n = n;
-        st[m].ulp_med = median(ulp, n);
-        st[m].ulp_p99 = quantile_sorted(ulp, n, 0.99);
-        st[m].ulp_max = n ? ulp[n - 1] : NAN;
-        st[m].dig_min = min_of(dig, n);
-        st[m].dig_med = median(dig, n);
+    }
+    for (m = 0; m < 2; m++) {
+        size_t n = st[m].n;
+        st[m].ulp_med = median(ulp[m], n);
+        st[m].ulp_p99 = quantile_sorted(ulp[m], n, 0.99);
+        st[m].ulp_max = n ? ulp[m][n - 1] : NAN;
+        st[m].dig_min = min_of(dig[m], n);
+        st[m].dig_med = median(dig[m], n);
     }
     pass = nviol == 0 && st[M_PRECISE].nfail == 0;
     if (nviol)
@@ -1798,9 +1807,9 @@ static int experiment_table2(int bits, size_t count, uint64_t seed, int fmt,
     if (rc != CLI_EXIT_OK)
         goto done;
     if (fmt == REPORT_JSON)
-        rc = t2_json(out.f, rays, count, seed, bits, st, nviol, pass);
+        rc = t2_json(out.f, show, count, seed, bits, st, nviol, pass);
     else
-        t2_text(out.f, rays, count, seed, bits, st, nviol, pass);
+        t2_text(out.f, show, count, seed, bits, st, nviol, pass);
     if (rc == CLI_EXIT_OK && !pass)
         rc = CLI_EXIT_VERIFY;
     rc = close_out(&out, rc);
@@ -1809,9 +1818,10 @@ done:
         free_tracers(t[side]);
         sg_system_free(sys[side]);
     }
-    free(rays);
-    free(ulp);
-    free(dig);
+    for (m = 0; m < 2; m++) {
+        free(ulp[m]);
+        free(dig[m]);
+    }
     return rc;
 }
 

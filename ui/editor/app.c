@@ -8,6 +8,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -149,6 +150,7 @@ void status_draw(ui *u)
                         : e->confirm == CONFIRM_RECOVER || e->confirm == CONFIRM_ASK
                             ? ((int)strlen(e->question) <= u->cols ? e->question
                                                                     : e->question_short)
+                        : e->confirm == CONFIRM_WRITE ? e->question
                             : "Unsaved changes will be lost. Continue? (y)es (n)o";
         term_text(y, 0, u->cols, T_EDIT, 1, q);
         return;
@@ -350,7 +352,8 @@ static int confirm_key(ui *u, int key)
         ed_msg(e, 0, "not saved");
         return ED_HANDLED | ED_REDRAW;
     }
-    if (key == K_ESC || key == 'c' || key == 'C' || (kind == CONFIRM_DISCARD && (key == 'n' || key == 'N'))) {
+    if (key == K_ESC || key == 'c' || key == 'C' ||
+        ((kind == CONFIRM_DISCARD || kind == CONFIRM_WRITE) && (key == 'n' || key == 'N'))) {
         e->confirm = CONFIRM_NONE;
         u->mode = MODE_NORMAL;
         ed_msg(e, 0, "cancelled");
@@ -364,7 +367,7 @@ static int confirm_key(ui *u, int key)
     if (key == 'y' || key == 'Y') {
         e->confirm = CONFIRM_NONE;
         u->mode = MODE_NORMAL;
-        if (kind == CONFIRM_DISCARD)
+        if (kind == CONFIRM_DISCARD || kind == CONFIRM_WRITE)
             return cmd_exec(e, e->pending);
         /* wq asks for a name when there is none, and itself asks before
          * replacing a file; it quits only once the design is saved. */
@@ -374,6 +377,41 @@ static int confirm_key(ui *u, int key)
         return f | ED_QUIT;
     }
     return ED_HANDLED;
+}
+
+/* Progress of a long export on the status line, from half a second on,
+ * at most ten times a second; Esc (read without waiting) cancels it.
+ * Other keys typed meanwhile are dropped. */
+static int export_progress(void *ctx, const char *what, size_t done, size_t total)
+{
+    ui *u = ctx;
+    struct timespec ts;
+    double t;
+    char line[ED_MSG];
+    int key;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    t = (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+    if (done == 0 || u->prog_t0 == 0.0 || t < u->prog_t0) {
+        u->prog_t0 = t;
+        u->prog_last = 0.0;
+    }
+    if (done >= total) {
+        u->prog_t0 = 0.0;
+        return 0;
+    }
+    if (t - u->prog_t0 >= 0.5 && t - u->prog_last >= 0.1) {
+        u->prog_last = t;
+        snprintf(line, sizeof line, "exporting %s: %.0f%% (%zu of %zu rays); Esc cancels",
+                 what, 100.0 * (double)done / (double)total, done, total);
+        term_text(u->status_y, 0, u->cols, T_EDIT, 1, line);
+        term_flush();
+    }
+    while ((key = term_key(0)) != K_NONE)
+        if (key == K_ESC || key == K_SIGNAL) {
+            u->prog_t0 = 0.0;
+            return 1;
+        }
+    return 0;
 }
 
 /* Keys that work whatever has the focus. */
@@ -722,6 +760,8 @@ int sg_editor_main(int argc, char **argv)
     u.e = &e;
     u.step_exp = 1;
     u.ray_item = RAY_HX;
+    e.progress = export_progress;
+    e.progress_ctx = &u;
     if (term_init() != 0) {
         ed_free(&e);
         return 1;

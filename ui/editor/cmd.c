@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "../args.h"
+#include "../outfile.h"
 #include "../report.h"
 #include "cells.h"
 #include "cmd.h"
@@ -1216,59 +1217,131 @@ static void meta_of(ed *e, report_meta *m)
     m->wave_index = e->wave + 1;
 }
 
-/* Builds the rays of a set: the current ray, a y or x fan of n rays across
- * the pupil at the current field, or an n by n grid clipped to the pupil. */
-static sg_ray_in *ray_set(ed *e, const char *set, int n, size_t *count)
+/* The rays of a set, made a block at a time so that a grid of a million
+ * rays takes no more memory than one of a hundred: the current ray; a y or
+ * x fan of n rays from -1 to 1 across the pupil at the current field; or
+ * an n by n grid.  The grid divides the square around the pupil into n by
+ * n equal cells and takes the centre of each, (2j + 1 - n) / n, keeping
+ * those inside the pupil: every ray then stands for the same area (as a
+ * spot diagram wants), grid 1 is the chief ray and grid 2 the four rays at
+ * (+-0.5, +-0.5).  A grid of odd n holds the chief ray; the rim is the
+ * fans' to sample. */
+enum { SET_RAY, SET_FAN, SET_XFAN, SET_GRID };
+
+typedef struct rayset {
+    int kind, n;
+    double hx, hy, px, py; /* the current ray */
+    long next;             /* fan index, or grid cell i * n + j */
+} rayset;
+
+static int grid_point(const rayset *s, long cell, double *px, double *py)
 {
-    sg_ray_in *r;
-    size_t k = 0;
-    int i, j;
-    if (strcmp(set, "ray") == 0) {
-        r = calloc(1, sizeof *r);
-        if (r) {
-            memcpy(r->v, e->ray, sizeof e->ray);
-            k = 1;
-        }
-    } else if (strcmp(set, "fan") == 0 || strcmp(set, "xfan") == 0) {
-        r = calloc((size_t)n, sizeof *r);
-        for (i = 0; r && i < n; i++, k++) {
-            double t = n == 1 ? 0.0 : -1.0 + 2.0 * i / (n - 1);
-            r[k].v[0] = e->ray[0];
-            r[k].v[1] = e->ray[1];
-            r[k].v[2] = set[0] == 'x' ? t : 0.0;
-            r[k].v[3] = set[0] == 'x' ? 0.0 : t;
-        }
-    } else {
-        r = calloc((size_t)n * (size_t)n, sizeof *r);
-        for (i = 0; r && i < n; i++)
-            for (j = 0; j < n; j++) {
-                double px = n == 1 ? 0.0 : -1.0 + 2.0 * j / (n - 1);
-                double py = n == 1 ? 0.0 : -1.0 + 2.0 * i / (n - 1);
-                if (px * px + py * py > 1.0)
-                    continue;
-                r[k].v[0] = e->ray[0];
-                r[k].v[1] = e->ray[1];
-                r[k].v[2] = px;
-                r[k].v[3] = py;
-                k++;
-            }
-    }
-    *count = k;
-    return r;
+    long i = cell / s->n, j = cell % s->n;
+    *px = (2.0 * (double)j + 1.0 - s->n) / s->n;
+    *py = (2.0 * (double)i + 1.0 - s->n) / s->n;
+    return *px * *px + *py * *py <= 1.0;
 }
 
-static int c_export(ed *e, args *a)
+static size_t rayset_next(rayset *s, sg_ray_in *r, size_t max)
+{
+    size_t k = 0;
+    long end = s->kind == SET_RAY ? 1 : s->kind == SET_GRID ? (long)s->n * s->n : s->n;
+    while (k < max && s->next < end) {
+        double px, py;
+        long i = s->next++;
+        memset(&r[k], 0, sizeof r[k]);
+        r[k].v[0] = s->hx;
+        r[k].v[1] = s->hy;
+        if (s->kind == SET_RAY) {
+            px = s->px;
+            py = s->py;
+        } else if (s->kind == SET_GRID) {
+            if (!grid_point(s, i, &px, &py))
+                continue;
+        } else {
+            double t = s->n == 1 ? 0.0 : -1.0 + 2.0 * (double)i / (s->n - 1);
+            px = s->kind == SET_XFAN ? t : 0.0;
+            py = s->kind == SET_XFAN ? 0.0 : t;
+        }
+        r[k].v[2] = px;
+        r[k].v[3] = py;
+        k++;
+    }
+    return k;
+}
+
+static size_t rayset_count(const rayset *s)
+{
+    long c;
+    size_t n = 0;
+    double px, py;
+    if (s->kind == SET_RAY)
+        return 1;
+    if (s->kind != SET_GRID)
+        return (size_t)s->n;
+    for (c = 0; c < (long)s->n * s->n; c++)
+        n += (size_t)grid_point(s, c, &px, &py);
+    return n;
+}
+
+/* Exports larger than this ask first (batch mode: need export!). */
+#define EXPORT_ASK_BYTES 100e6
+
+static void human_size(double b, char *buf, size_t n)
+{
+    if (b >= 1e9)
+        snprintf(buf, n, "%.1f GB", b / 1e9);
+    else if (b >= 1e6)
+        snprintf(buf, n, "%.1f MB", b / 1e6);
+    else if (b >= 1e3)
+        snprintf(buf, n, "%.0f kB", b / 1e3);
+    else
+        snprintf(buf, n, "%.0f bytes", b);
+}
+
+/* Bytes of the report of the first ray, written to memory: the size of an
+ * export is about that times the number of rays. */
+static double bytes_per_ray(const report_meta *m, report_fmt fmt, int nsurf,
+                            const sg_ray_surface *out, const int *status, const sg_ray_in *ray,
+                            int multi)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    FILE *f = open_memstream(&buf, &len);
+    report_stream rs;
+    double b = 0.0;
+    if (!f)
+        return 0.0;
+    if (report_begin(&rs, f, fmt, m, nsurf, SG_RAYS_NORMALIZED, multi, 1) == 0) {
+        size_t head;
+        fflush(f);
+        head = len;
+        report_rays(&rs, out, status, 1, ray);
+        fflush(f);
+        b = (double)(len - head);
+    }
+    fclose(f);
+    free(buf);
+    return b;
+}
+
+static int c_export_any(ed *e, args *a, int bang)
 {
     const char *usage = "export FILE [csv|json|text] [ray | fan [N] | xfan [N] | grid N]";
     const char *path, *set = "ray";
-    int fmt = -1, n = 0, i, rc, tostd;
-    size_t nray = 0;
+    int fmt = -1, n = 0, i, rc, tostd, nsurf, multi, err;
+    size_t nray, block, got, done = 0;
     sg_ray_in *rays = NULL;
     sg_ray_surface *out = NULL;
     int *status = NULL;
+    sg_batch *b = NULL;
     sg_diag d;
     report_meta m;
-    FILE *f;
+    report_stream rs;
+    rayset rset;
+    outfile of;
+    int flags;
+    char size[32];
 
     if (a->n < 2) {
         if (e->batch)
@@ -1306,54 +1379,137 @@ static int c_export(ed *e, args *a)
         return fail(e, "export: \"-\" (standard output) works only in batch mode");
 
     ed_opts(e);
-    rays = ray_set(e, set, n, &nray);
-    if (!rays)
-        return fail(e, "out of memory");
-    if (nray == 0) {
-        free(rays);
+    memset(&rset, 0, sizeof rset);
+    rset.kind = strcmp(set, "ray") == 0    ? SET_RAY
+                : strcmp(set, "fan") == 0  ? SET_FAN
+                : strcmp(set, "xfan") == 0 ? SET_XFAN
+                                           : SET_GRID;
+    rset.n = n;
+    rset.hx = e->ray[0];
+    rset.hy = e->ray[1];
+    rset.px = e->ray[2];
+    rset.py = e->ray[3];
+    nray = rayset_count(&rset);
+    if (nray == 0)
         return fail(e, "export: the ray set is empty");
-    }
-    out = malloc(nray * (size_t)e->doc.sys->nsurf * sizeof *out);
-    status = malloc(nray * sizeof *status);
-    if (!out || !status) {
-        free(rays);
-        free(out);
-        free(status);
-        return fail(e, "out of memory: %zu rays", nray);
+    multi = nray != 1;
+    nsurf = e->doc.sys->nsurf;
+    /* About 16 MiB of rows a block, and blocks small enough that progress
+     * and Esc are seen often. */
+    block = ((size_t)16 << 20) / ((size_t)nsurf * sizeof *out);
+    block = block < 16 ? 16 : block > 4096 ? 4096 : block;
+    rays = malloc(block * sizeof *rays);
+    out = malloc(block * (size_t)nsurf * sizeof *out);
+    status = malloc(block * sizeof *status);
+    if (!rays || !out || !status) {
+        flags = fail(e, "out of memory: %zu rays of %d surfaces", block, nsurf);
+        goto done;
     }
     sg_diag_clear(&d);
-    rc = sg_trace_batch(e->doc.sys, e->cat, &e->opts, SG_RAYS_NORMALIZED, rays, nray, 0,
-                        out, status, &d);
-    if (rc != SG_EOK) {
-        free(rays);
-        free(out);
-        free(status);
-        return fail(e, "export: %s", d.msg[0] ? d.msg : sg_strerror(rc));
+    b = sg_batch_new(e->doc.sys, e->cat, &e->opts, 0, &d);
+    if (!b) {
+        flags = fail(e, "export: %s", d.msg[0] ? d.msg : sg_strerror(d.code));
+        goto done;
     }
     meta_of(e, &m);
-    f = tostd ? e->out : fopen(path, "w");
-    if (!f) {
-        rc = errno;
-        free(rays);
-        free(out);
-        free(status);
-        return fail(e, "export: %s: %s", path, strerror(rc));
+    /* Each row of a fan or grid says which ray it is. */
+    m.csv_inputs = rset.kind != SET_RAY;
+
+    got = rayset_next(&rset, rays, block);
+    rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, got, NULL, 0, out, status, &d);
+    if (rc != SG_EOK) {
+        flags = fail(e, "export: %s", d.msg[0] ? d.msg : sg_strerror(rc));
+        goto done;
     }
-    rc = report_write(f, (report_fmt)fmt, &m, e->doc.sys->nsurf, out, status, nray,
-                      SG_RAYS_NORMALIZED, rays);
-    if (tostd)
-        rc = fflush(f) != 0 || rc != 0 ? -1 : 0;
-    else if (fclose(f) != 0)
-        rc = -1;
-    i = errno;
+    {
+        double est = bytes_per_ray(&m, (report_fmt)fmt, nsurf, out, status, rays, multi) *
+                     (double)nray;
+        human_size(est, size, sizeof size);
+        if (est > EXPORT_ASK_BYTES && !bang && !tostd) {
+            char q[ED_LINE / 2];
+            size_t len;
+            if (e->batch) {
+                flags = fail(e, "export: %s would take about %s (%zu rays); use export! "
+                                "to write it",
+                             path, size, nray);
+                goto done;
+            }
+            snprintf(e->pending, sizeof e->pending, "export!");
+            for (i = 1; i < a->n; i++) {
+                cmd_quote(a->v[i], q, sizeof q);
+                len = strlen(e->pending);
+                snprintf(e->pending + len, sizeof e->pending - len, " %s", q);
+            }
+            snprintf(e->question, sizeof e->question,
+                     "export: %zu rays, about %s, to %s. Write it? (y)es (n)o", nray, size,
+                     path);
+            e->confirm = CONFIRM_WRITE;
+            flags = ED_HANDLED | ED_CONFIRM | ED_REDRAW;
+            goto done;
+        }
+    }
+    err = outfile_open(&of, tostd ? NULL : path, e->out);
+    if (err != 0) {
+        flags = fail(e, "export: %s: %s", path, strerror(err));
+        goto done;
+    }
+    if (report_begin(&rs, of.f, (report_fmt)fmt, &m, nsurf, SG_RAYS_NORMALIZED, multi,
+                     nray) != 0)
+        goto write_error;
+    if (e->progress)
+        e->progress(e->progress_ctx, path, 0, nray);
+    for (;;) {
+        if (report_rays(&rs, out, status, got, rays) != 0)
+            goto write_error;
+        done += got;
+        if (e->progress && e->progress(e->progress_ctx, path, done, nray)) {
+            outfile_abort(&of);
+            ed_msg(e, 0, "export cancelled after %zu of %zu rays; %s not written", done,
+                   nray, path);
+            flags = ED_HANDLED | ED_REDRAW;
+            goto done;
+        }
+        got = rayset_next(&rset, rays, block);
+        if (got == 0)
+            break;
+        rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, got, NULL, 0, out, status, &d);
+        if (rc != SG_EOK) {
+            outfile_abort(&of);
+            flags = fail(e, "export: %s", d.msg[0] ? d.msg : sg_strerror(rc));
+            goto done;
+        }
+    }
+    if (report_end(&rs) != 0)
+        goto write_error;
+    err = outfile_commit(&of);
+    if (err != 0) {
+        flags = fail(e, "export: %s: %s", path, strerror(err));
+        goto done;
+    }
+    ed_msg(e, 0, "exported %zu ray%s (%s) to %s", nray, nray == 1 ? "" : "s", size,
+           tostd ? "standard output" : path);
+    flags = ED_HANDLED | ED_REDRAW;
+    goto done;
+write_error:
+    err = errno;
+    outfile_abort(&of);
+    flags = fail(e, "export: %s: %s", path, strerror(err));
+done:
+    sg_batch_free(b);
     free(rays);
     free(out);
     free(status);
-    if (rc != 0)
-        return fail(e, "export: %s: %s", path, strerror(i));
-    ed_msg(e, 0, "exported %zu ray%s to %s", nray, nray == 1 ? "" : "s",
-           tostd ? "standard output" : path);
-    return ED_HANDLED | ED_REDRAW;
+    return flags;
+}
+
+static int c_export(ed *e, args *a)
+{
+    return c_export_any(e, a, 0);
+}
+
+static int c_export1(ed *e, args *a)
+{
+    return c_export_any(e, a, 1);
 }
 
 static int c_print(ed *e, args *a)
@@ -1692,6 +1848,7 @@ static const command commands[] = {
     {"quit!", "q!", c_quit1, "quit!", "quit, discarding unsaved changes"},
     {"export", NULL, c_export, "export FILE [csv|json|text] [ray|fan N|xfan N|grid N]",
      "write the ray table of the current ray or a ray set"},
+    {"export!", NULL, c_export1, "export! FILE ...", "export without asking about its size"},
     {"print", NULL, c_print, "print [ray|paraxial|cell SURFACE COLUMN]",
      "show a result (batch: on standard output; paraxial: the system data view)"},
     {"sysdata", NULL, c_sysdata, "sysdata",

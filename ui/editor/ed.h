@@ -36,7 +36,8 @@ enum {
     CONFIRM_QUIT,     /* unsaved changes: save, discard or cancel */
     CONFIRM_DISCARD,  /* unsaved changes: run ed.pending anyway? */
     CONFIRM_RECOVER,  /* ed.question: recover (ed.pending), discard (ed.pending2) or later */
-    CONFIRM_ASK       /* ed.question, yes or no: yes runs ed.pending */
+    CONFIRM_ASK,      /* ed.question, yes or no: yes runs ed.pending */
+    CONFIRM_WRITE     /* ed.question: a large export; run ed.pending (y) or not (n) */
 };
 
 #define ED_MSG 1024
@@ -75,6 +76,11 @@ typedef struct ed {
     int quit;                  /* set by quit in batch mode */
 
     recov rec;                 /* the recovery file (recover.h) */
+
+    /* Long work (an export) reports done of total rays to the screen; a
+     * nonzero return cancels it (Esc).  NULL in batch mode. */
+    int (*progress)(void *ctx, const char *what, size_t done, size_t total);
+    void *progress_ctx;
 } ed;
 
 int ed_init(ed *e);

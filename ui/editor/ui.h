@@ -37,6 +37,7 @@ typedef struct ui {
     int back_mode;       /* where the ':' line returns to */
     int cmd_key;         /* Esc was pressed: the next key is a command, even in a text cell */
     int rec_delete;      /* the recovery question asks to confirm deleting the file */
+    double prog_t0, prog_last; /* a long export's start and last progress line */
     lineedit le;
     const char *ell;     /* ellipsis */
 

@@ -1,0 +1,296 @@
+/* test_cli_stream.c - "sagitta trace --rays" streams: it reads, traces and
+ * writes a block of rays at a time.
+ *
+ * The bytes must not depend on where the blocks end: the same list is
+ * traced in one block and in blocks of 1, 2 and 7 rays (SAGITTA_RAYS_BLOCK)
+ * on 1 to 3 threads, by every method, as text, CSV and JSON, normalized
+ * and start/direction; JSON must parse (cJSON) and hold every ray.  A bad
+ * row far into the list must leave an existing output file untouched.
+ * Memory must not grow with the list: a run under an address-space cap
+ * that the whole-list reader exceeds (it needed nray * nsurf * 88 bytes of
+ * rows at once: 60 MB here) must succeed; so must verify's table2. */
+#include <cjson/cJSON.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include "clitest.h"
+
+static char examples[1024];
+
+static const char *example(const char *file)
+{
+    static char buf[4][1200];
+    static int k;
+    k = (k + 1) % 4;
+    snprintf(buf[k], sizeof buf[k], "%s/%s", examples, file);
+    return buf[k];
+}
+
+static uint64_t next(uint64_t *s)
+{
+    uint64_t z = (*s += UINT64_C(0x9E3779B97F4A7C15));
+    z = (z ^ (z >> 30)) * UINT64_C(0xBF58476D1CE4E5B9);
+    z = (z ^ (z >> 27)) * UINT64_C(0x94D049BB133111EB);
+    return z ^ (z >> 31);
+}
+
+static double uni(uint64_t *s, double lo, double hi)
+{
+    return lo + (hi - lo) * ((double)(next(s) >> 11) * 0x1.0p-53);
+}
+
+/* n rays, seeded: normalized in runs of one field with pupils past the
+ * rim (some fail), with comments and blank lines between; or start and
+ * direction rays, the last line without its newline. */
+static const char *ray_file(const char *name, int normalized, int n, uint64_t seed)
+{
+    size_t cap = (size_t)n * 100 + 200, len = 0;
+    char *t = malloc(cap);
+    const char *p;
+    int k;
+    assert_non_null(t);
+    len += (size_t)snprintf(t + len, cap - len, normalized ? "# rays\nhx,hy,px,py\n"
+                                                           : "x,y,z,l,m,n\n");
+    for (k = 0; k < n; k++) {
+        if (normalized) {
+            len += (size_t)snprintf(t + len, cap - len, "0,%.17g,%.17g,%.17g\n",
+                                    0.5 * ((k / 5) % 3), uni(&seed, -1.1, 1.1),
+                                    uni(&seed, -1.1, 1.1));
+            if (k % 9 == 4)
+                len += (size_t)snprintf(t + len, cap - len, "\n# a comment\n");
+        } else {
+            len += (size_t)snprintf(t + len, cap - len, "%.17g,%.17g,-5,%.17g,%.17g,1%s",
+                                    uni(&seed, -20, 20), uni(&seed, -20, 20),
+                                    uni(&seed, -0.3, 0.3), uni(&seed, -0.3, 0.3),
+                                    k + 1 < n ? "\n" : "");
+        }
+    }
+    p = ct_file(name, t);
+    free(t);
+    return p;
+}
+
+static void set_block(int n)
+{
+    char b[32];
+    if (n <= 0) {
+        unsetenv("SAGITTA_RAYS_BLOCK");
+        return;
+    }
+    snprintf(b, sizeof b, "%d", n);
+    setenv("SAGITTA_RAYS_BLOCK", b, 1);
+}
+
+static void check_json(const char *text, int nray)
+{
+    cJSON *j = cJSON_Parse(text);
+    cJSON *rays;
+    assert_non_null(j);
+    rays = cJSON_GetObjectItem(j, "rays");
+    if (nray == 1) {
+        assert_null(rays);
+        assert_non_null(cJSON_GetObjectItem(j, "surfaces"));
+    } else {
+        assert_non_null(rays);
+        assert_int_equal(cJSON_GetArraySize(rays), nray);
+        assert_int_equal(
+            cJSON_GetObjectItem(cJSON_GetArrayItem(rays, nray - 1), "ray")->valueint,
+            nray - 1);
+    }
+    cJSON_Delete(j);
+}
+
+static void same_any_block(const char *design, const char *rays, int nray,
+                           const char *method)
+{
+    static const char *const fmts[3] = { "text", "csv", "json" };
+    static const int blocks[3] = { 1, 2, 7 };
+    static const char *const threads[3] = { "1", "2", "3" };
+    int f, b, t;
+    for (f = 0; f < 3; f++) {
+        ct_result ref;
+        set_block(0);
+        ct_run(&ref, "trace", design, "--rays", rays, "--method", method, "--format",
+               fmts[f], "--threads", "2", NULL);
+        assert_int_equal(ref.code, 0);
+        if (f == 2)
+            check_json(ref.out, nray);
+        for (t = 0; t < 3; t++)
+            for (b = 0; b < 3; b++) {
+                ct_result r;
+                set_block(blocks[b]);
+                ct_run(&r, "trace", design, "--rays", rays, "--method", method, "--format",
+                       fmts[f], "--threads", threads[t], NULL);
+                assert_int_equal(r.code, 0);
+                if (strcmp(r.out, ref.out) != 0)
+                    fail_msg("%s %s %s: blocks of %d on %s threads differ from one block",
+                             rays, method, fmts[f], blocks[b], threads[t]);
+                ct_free(&r);
+            }
+        ct_free(&ref);
+    }
+    set_block(0);
+    print_message("# %s %s: %d rays, text/csv/json identical in blocks of 1, 2, 7 on 1-3 "
+                  "threads\n", design, method, nray);
+}
+
+static void test_blocks_precise(void **state)
+{
+    (void)state;
+    same_any_block(example("double_gauss.json"), ray_file("n.csv", 1, 61, 1), 61, "precise");
+    same_any_block(example("cassegrain.json"), ray_file("s.csv", 0, 43, 2), 43, "precise");
+    same_any_block(example("tma.json"), ray_file("one.csv", 1, 1, 3), 1, "precise");
+}
+
+static void test_blocks_classic(void **state)
+{
+    (void)state;
+    same_any_block(example("double_gauss.json"), ray_file("n.csv", 1, 37, 4), 37, "classic");
+    same_any_block(example("cassegrain.json"), ray_file("s.csv", 0, 29, 5), 29, "classic");
+}
+
+static void test_blocks_mpfr(void **state)
+{
+    (void)state;
+    same_any_block(example("cooke_triplet.json"), ray_file("n.csv", 1, 11, 6), 11, "mpfr");
+    same_any_block(example("cassegrain.json"), ray_file("s.csv", 0, 9, 7), 9, "mpfr");
+}
+
+/* A bad row after several blocks have been written: the message names its
+ * line, the status is 3, and an existing output file keeps its bytes (no
+ * temporary file is left beside it). */
+static void test_bad_row_keeps_file(void **state)
+{
+    const int n = 200;
+    size_t cap = (size_t)n * 20 + 64, len = 0;
+    char *t = malloc(cap);
+    const char *rays, *outp;
+    ct_result r;
+    FILE *f;
+    char buf[64] = "";
+    int k;
+    (void)state;
+    assert_non_null(t);
+    len += (size_t)snprintf(t + len, cap - len, "hx,hy,px,py\n");
+    for (k = 0; k < n; k++)
+        len += (size_t)snprintf(t + len, cap - len, "0,0,0.1,%d.5e-3\n", k);
+    snprintf(t + len, cap - len, "0,0,x,0\n");
+    rays = ct_file("bad.csv", t);
+    free(t);
+    outp = ct_file("kept.txt", "keep me\n");
+    set_block(10);
+    ct_run(&r, "trace", example("singlet.json"), "--rays", rays, "-o", outp, NULL);
+    set_block(0);
+    assert_int_equal(r.code, 3);
+    assert_non_null(strstr(r.err, "bad.csv:202: column \"px\""));
+    f = fopen(outp, "r");
+    assert_non_null(f);
+    assert_non_null(fgets(buf, sizeof buf, f));
+    fclose(f);
+    assert_string_equal(buf, "keep me\n");
+    ct_free(&r);
+    /* The same list, good, replaces the file. */
+    rays = ray_file("good.csv", 1, 30, 8);
+    set_block(4);
+    ct_run(&r, "trace", example("singlet.json"), "--rays", rays, "-o", outp, "--format",
+           "csv", NULL);
+    set_block(0);
+    assert_int_equal(r.code, 0);
+    f = fopen(outp, "r");
+    assert_non_null(f);
+    assert_non_null(fgets(buf, sizeof buf, f));
+    fclose(f);
+    assert_string_equal(buf, "ray,surface,x,y,z,l,m,n,residual,error_bound,path,status\n");
+    ct_free(&r);
+}
+
+/* Runs sagitta with the address space capped at cap_mb MiB; returns its
+ * exit status. */
+static int run_capped_args(long cap_mb, const char *const *args)
+{
+    struct rlimit old, lim;
+    ct_result r;
+    int code;
+    assert_int_equal(getrlimit(RLIMIT_AS, &old), 0);
+    lim = old;
+    lim.rlim_cur = (rlim_t)cap_mb << 20;
+    if (old.rlim_max != RLIM_INFINITY && lim.rlim_cur > old.rlim_max)
+        lim.rlim_cur = old.rlim_max;
+    assert_int_equal(setrlimit(RLIMIT_AS, &lim), 0);
+    ct_runv(&r, args);
+    assert_int_equal(setrlimit(RLIMIT_AS, &old), 0);
+    code = r.code;
+    if (code != 0)
+        print_message("# capped at %ld MiB: exit %d: %s", cap_mb, code, r.err);
+    ct_free(&r);
+    return code;
+}
+
+static int run_capped(long cap_mb, const char *design, const char *rays)
+{
+    /* One thread: each further thread reserves a 64 MiB malloc arena of
+     * address space, which says nothing about memory used. */
+    const char *const args[] = { "trace", design, "--rays", rays, "--threads", "1",
+                                 "--format", "csv", "-o", "/dev/null", NULL };
+    return run_capped_args(cap_mb, args);
+}
+
+static void test_memory_flat(void **state)
+{
+    const long cap = 48;
+    const char *design = example("double_gauss.json");
+    const char *one, *many;
+    (void)state;
+    one = ray_file("one_ray.csv", 1, 1, 9);
+    /* Under a sanitizer or valgrind the program needs far more address
+     * space for itself; the comparison then means nothing. */
+    if (run_capped(cap, design, one) != 0) {
+        print_message("# SKIP: one ray does not run within %ld MiB here\n", cap);
+        skip();
+    }
+    /* 40,000 rays of 17 surfaces: 60 MB of rows held at once before. */
+    many = ray_file("many.csv", 1, 40000, 10);
+    assert_int_equal(run_capped(cap, design, many), 0);
+    print_message("# 40000 rays through 17 surfaces within %ld MiB of address space\n", cap);
+}
+
+/* verify --experiment table2 keeps two numbers a ray and method, not each
+ * ray's rows: 50,000 rays took 43 MB before and now fit in 32 MiB with
+ * the program itself. */
+static void test_table2_memory(void **state)
+{
+    const char *const one[] = { "verify", "--experiment", "table2", "--count", "1", "-o",
+                                "/dev/null", NULL };
+    const char *const many[] = { "verify", "--experiment", "table2", "--count", "50000",
+                                 "-o", "/dev/null", NULL };
+    (void)state;
+    if (run_capped_args(32, one) != 0) {
+        print_message("# SKIP: one ray does not run within 32 MiB here\n");
+        skip();
+    }
+    assert_int_equal(run_capped_args(32, many), 0);
+    print_message("# table2 of 50000 rays within 32 MiB of address space\n");
+}
+
+int main(int argc, char **argv)
+{
+    const char *e = getenv("SAGITTA_EXAMPLES");
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_blocks_precise),
+        cmocka_unit_test(test_blocks_classic),
+        cmocka_unit_test(test_blocks_mpfr),
+        cmocka_unit_test(test_bad_row_keeps_file),
+        cmocka_unit_test(test_memory_flat),
+        cmocka_unit_test(test_table2_memory),
+    };
+    int rc;
+    snprintf(examples, sizeof examples, "%s", e && *e ? e : "examples");
+    ct_init(argc, argv);
+    rc = cmocka_run_group_tests(tests, NULL, NULL);
+    ct_cleanup();
+    return rc;
+}

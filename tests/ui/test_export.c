@@ -1,0 +1,300 @@
+/*
+ * test_export.c - the editor's fan and grid exports: every row names its
+ * ray (hx, hy, px, py) in CSV, JSON and text; an N by N grid is the cell
+ * centres (2j + 1 - N) / N inside the pupil, so grid 2 is the four rays at
+ * (+-0.5, +-0.5); a large export states its size and asks (batch mode:
+ * refuses without export!); a cancelled export leaves no file.
+ *
+ * Independent references: the grid points and their count from integer
+ * arithmetic here ((2j + 1 - N)^2 + (2i + 1 - N)^2 <= N^2), cJSON for the
+ * JSON, and sg_trace_normalized() for every exported number of grid 2.
+ */
+#include <cjson/cJSON.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "testutil.h"
+
+#include "ed.h"
+
+static char tmpdir[256];
+
+static const char *tmp_path(const char *name, char *buf, size_t n)
+{
+    if (!tmpdir[0]) {
+        snprintf(tmpdir, sizeof tmpdir, "%s/sg-export-test-XXXXXX",
+                 getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp");
+        assert_non_null(mkdtemp(tmpdir));
+    }
+    snprintf(buf, n, "%s/%s", tmpdir, name);
+    return buf;
+}
+
+static ed *new_ed(void)
+{
+    char ex[1024], line[1200];
+    ed *e = calloc(1, sizeof *e);
+    assert_non_null(e);
+    assert_int_equal(ed_init(e), SG_OK);
+    e->batch = 1;
+    e->out = tmpfile();
+    assert_non_null(e->out);
+    snprintf(line, sizeof line, "open %s", tu_path("examples/cassegrain.json", ex, sizeof ex));
+    assert_false(cmd_exec(e, line) & ED_ERROR);
+    assert_false(cmd_exec(e, "ray 0 1 0 0") & ED_ERROR);
+    return e;
+}
+
+static void free_ed(ed *e)
+{
+    fclose(e->out);
+    ed_free(e);
+    free(e);
+}
+
+static int run(ed *e, const char *fmt, const char *path, const char *rest)
+{
+    char line[ED_LINE];
+    snprintf(line, sizeof line, fmt, path, rest);
+    return cmd_exec(e, line);
+}
+
+static char *slurp(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    char *buf;
+    long n;
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    n = ftell(f);
+    rewind(f);
+    buf = malloc((size_t)n + 1);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    buf[n] = '\0';
+    fclose(f);
+    return buf;
+}
+
+/* Grid points by integers: cell (i, j) of N is inside when
+ * (2j + 1 - N)^2 + (2i + 1 - N)^2 <= N^2. */
+static size_t grid_count(int n)
+{
+    size_t c = 0;
+    int i, j;
+    for (i = 0; i < n; i++)
+        for (j = 0; j < n; j++) {
+            long a = 2L * j + 1 - n, b = 2L * i + 1 - n;
+            c += a * a + b * b <= (long)n * n;
+        }
+    return c;
+}
+
+static void test_grid_counts(void **state)
+{
+    static const int ns[] = { 1, 2, 3, 4, 10, 11, 50 };
+    char path[512], want[64];
+    size_t k;
+    (void)state;
+    for (k = 0; k < sizeof ns / sizeof ns[0]; k++) {
+        ed *e = new_ed();
+        char n[16];
+        snprintf(n, sizeof n, "grid %d", ns[k]);
+        assert_false(run(e, "export %s csv %s", tmp_path("g.csv", path, sizeof path), n) &
+                     ED_ERROR);
+        snprintf(want, sizeof want, "exported %zu ray%s", grid_count(ns[k]),
+                 grid_count(ns[k]) == 1 ? "" : "s");
+        if (!strstr(e->msg, want))
+            fail_msg("grid %d: \"%s\", expected \"%s\"", ns[k], e->msg, want);
+        free_ed(e);
+    }
+    assert_int_equal(grid_count(2), 4);
+    print_message("# grid 1, 2, 3, 4, 10, 11, 50: %zu, %zu, %zu, %zu, %zu, %zu, %zu rays\n",
+                  grid_count(1), grid_count(2), grid_count(3), grid_count(4), grid_count(10),
+                  grid_count(11), grid_count(50));
+}
+
+static int same_bits(double a, double b)
+{
+    return memcmp(&a, &b, sizeof a) == 0;
+}
+
+/* grid 2 in CSV: each row starts with its ray, the pupil points are the
+ * four cell centres, and the numbers equal the single-ray trace. */
+static void test_grid2_csv(void **state)
+{
+    char path[512], *text, *line, *save = NULL;
+    ed *e = new_ed();
+    int nsurf = e->doc.sys->nsurf, rows = 0, seen[4] = { 0 };
+    sg_ray_surface *ref = calloc((size_t)nsurf, sizeof *ref);
+    sg_tracer *t;
+    sg_diag d;
+    (void)state;
+    assert_false(run(e, "export %s %s", tmp_path("g2.csv", path, sizeof path), "grid 2") &
+                 ED_ERROR);
+    sg_diag_clear(&d);
+    t = sg_tracer_new(e->doc.sys, e->cat, &e->opts, &d);
+    assert_non_null(t);
+    text = slurp(path);
+    line = strtok_r(text, "\n", &save);
+    assert_string_equal(line, "ray,hx,hy,px,py,surface,x,y,z,l,m,n,residual,error_bound,path,"
+                              "status");
+    while ((line = strtok_r(NULL, "\n", &save))) {
+        int r, s, q;
+        double hx, hy, px, py, x, y, z;
+        assert_int_equal(sscanf(line, "%d,%lf,%lf,%lf,%lf,%d,%lf,%lf,%lf", &r, &hx, &hy, &px,
+                                &py, &s, &x, &y, &z),
+                         9);
+        assert_true(hx == 0.0 && hy == 1.0);
+        assert_true(fabs(px) == 0.5 && fabs(py) == 0.5);
+        q = (px > 0) + 2 * (py > 0);
+        assert_int_equal(r, q); /* rows of py, then px, as the grid runs */
+        seen[q]++;
+        if (s == 0)
+            assert_int_equal(sg_trace_normalized(t, hx, hy, px, py, ref), SG_OK);
+        assert_true(same_bits(x, ref[s].x) && same_bits(y, ref[s].y) &&
+                    same_bits(z, ref[s].z));
+        rows++;
+    }
+    assert_int_equal(rows, 4 * nsurf);
+    assert_true(seen[0] == nsurf && seen[1] == nsurf && seen[2] == nsurf && seen[3] == nsurf);
+    print_message("# grid 2: 4 rays at (+-0.5, +-0.5), %d rows equal sg_trace_normalized()\n",
+                  rows);
+    free(text);
+    free(ref);
+    sg_tracer_free(t);
+    free_ed(e);
+}
+
+/* A y fan in JSON and text carries each ray's coordinates too. */
+static void test_fan_json_text(void **state)
+{
+    char path[512], *text;
+    ed *e = new_ed();
+    cJSON *j, *rays;
+    int k;
+    (void)state;
+    assert_false(run(e, "export %s %s", tmp_path("f.json", path, sizeof path), "fan 5") &
+                 ED_ERROR);
+    text = slurp(path);
+    j = cJSON_Parse(text);
+    assert_non_null(j);
+    rays = cJSON_GetObjectItem(j, "rays");
+    assert_int_equal(cJSON_GetArraySize(rays), 5);
+    for (k = 0; k < 5; k++) {
+        cJSON *in = cJSON_GetObjectItem(cJSON_GetArrayItem(rays, k), "input");
+        assert_non_null(in);
+        assert_true(cJSON_GetObjectItem(in, "hy")->valuedouble == 1.0);
+        assert_true(cJSON_GetObjectItem(in, "px")->valuedouble == 0.0);
+        assert_true(cJSON_GetObjectItem(in, "py")->valuedouble == -1.0 + 0.5 * k);
+    }
+    cJSON_Delete(j);
+    free(text);
+    assert_false(run(e, "export %s %s", tmp_path("x.txt", path, sizeof path), "xfan 3") &
+                 ED_ERROR);
+    text = slurp(path);
+    assert_non_null(strstr(text, "Ray         : Hx = 0, Hy = 1, Px = -1, Py = 0\n"));
+    assert_non_null(strstr(text, "Ray         : Hx = 0, Hy = 1, Px = 0, Py = 0\n"));
+    assert_non_null(strstr(text, "Ray         : Hx = 0, Hy = 1, Px = 1, Py = 0\n"));
+    free(text);
+    free_ed(e);
+}
+
+/* grid 1001 would write gigabytes: batch mode refuses with the size, the
+ * screen asks (y runs export!), and no file appears until then. */
+static void test_large_asks(void **state)
+{
+    char path[512];
+    struct stat st;
+    char want[64];
+    ed *e = new_ed();
+    int f;
+    (void)state;
+    f = run(e, "export %s %s", tmp_path("big.csv", path, sizeof path), "grid 1001");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "would take about"));
+    snprintf(want, sizeof want, "GB (%zu rays)", grid_count(1001));
+    assert_non_null(strstr(e->msg, want));
+    assert_non_null(strstr(e->msg, "export!"));
+    assert_int_not_equal(stat(path, &st), 0);
+    print_message("# batch: %s\n", e->msg);
+    e->batch = 0;
+    f = run(e, "export %s %s", path, "grid 1001");
+    assert_true(f & ED_CONFIRM);
+    assert_int_equal(e->confirm, CONFIRM_WRITE);
+    snprintf(want, sizeof want, "%zu rays, about ", grid_count(1001));
+    assert_non_null(strstr(e->question, want));
+    assert_non_null(strstr(e->question, "Write it? (y)es (n)o"));
+    assert_true(strncmp(e->pending, "export! ", 8) == 0);
+    assert_int_not_equal(stat(path, &st), 0);
+    print_message("# screen: %s\n", e->question);
+    e->confirm = CONFIRM_NONE;
+    e->batch = 1;
+    free_ed(e);
+}
+
+static int calls;
+
+/* Cancels at the second block, as Esc would. */
+static int cancel_soon(void *ctx, const char *what, size_t done, size_t total)
+{
+    (void)ctx;
+    (void)what;
+    (void)total;
+    return done > 0 && ++calls >= 2;
+}
+
+static void test_cancel_leaves_no_file(void **state)
+{
+    char path[512], *text;
+    struct stat st;
+    ed *e = new_ed();
+    FILE *f;
+    (void)state;
+    e->progress = cancel_soon;
+    calls = 0;
+    /* A new file: none appears. */
+    assert_false(run(e, "export %s %s", tmp_path("c.csv", path, sizeof path), "grid 151") &
+                 ED_ERROR);
+    assert_non_null(strstr(e->msg, "export cancelled after"));
+    assert_int_not_equal(stat(path, &st), 0);
+    /* An existing file: it keeps its bytes. */
+    f = fopen(path, "w");
+    assert_non_null(f);
+    fputs("old\n", f);
+    fclose(f);
+    calls = 0;
+    assert_false(run(e, "export %s %s", path, "grid 151") & ED_ERROR);
+    text = slurp(path);
+    assert_string_equal(text, "old\n");
+    free(text);
+    print_message("# %s\n", e->msg);
+    /* Not cancelled, the same export completes. */
+    e->progress = NULL;
+    assert_false(run(e, "export %s %s", path, "grid 151") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "exported"));
+    free_ed(e);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_grid_counts),
+        cmocka_unit_test(test_grid2_csv),
+        cmocka_unit_test(test_fan_json_text),
+        cmocka_unit_test(test_large_asks),
+        cmocka_unit_test(test_cancel_leaves_no_file),
+    };
+    int rc = cmocka_run_group_tests(tests, NULL, NULL);
+    char cmd[400];
+    if (tmpdir[0]) {
+        snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpdir);
+        if (system(cmd) != 0)
+            rc = rc ? rc : 1;
+    }
+    return rc;
+}
