@@ -490,12 +490,64 @@ static double ulp_d(double x)
     return nextafter(x, INFINITY) - x;
 }
 
+/* How far the unit normal of sp turns per unit move of the point (x, y,
+ * z) (a bound on the normal's derivative over |grad F|), and in *cos the
+ * cosine between the normal and the unit direction d; in double, since it
+ * only scales a bound. */
+static double normal_turn(const sg_sprep *sp, double x, double y, double z, const double d[3],
+                          double *cos)
+{
+    double g[3], gn, sens, r2 = x * x + y * y;
+    int k;
+    if (sp->shape == SHAPE_PLANE) {
+        *cos = fabs(d[2]);
+        return 0.0;
+    }
+    if (sp->shape == SHAPE_CONIC) {
+        g[0] = x;
+        g[1] = y;
+        g[2] = sp->k1.hi * z - sp->R;
+        sens = 2.0 * fmax(1.0, fabs(sp->k1.hi));
+    } else {
+        /* w = sag'(r) / r and its derivative in r^2, conic and polynomial. */
+        double w = 0.0, dw = 0.0, rk = 1.0;
+        if (isfinite(sp->R)) {
+            double q = sp->R * sp->R - sp->k1.hi * r2;
+            q = q > 0.0 ? q : 0.0;
+            w = copysign(1.0, sp->R) / sqrt(q);
+            dw = fabs(sp->k1.hi) / (2.0 * q * sqrt(q));
+        }
+        for (k = 0; k < sp->nasph; k++) {
+            w += 2.0 * (k + 1) * sp->a[k] * rk;
+            if (k > 0)
+                dw += fabs(2.0 * (k + 1) * k * sp->a[k]) * (rk / r2);
+            rk *= r2;
+        }
+        g[0] = -w * x;
+        g[1] = -w * y;
+        g[2] = 1.0;
+        sens = 2.0 * (fabs(w) + 2.0 * dw * r2);
+    }
+    gn = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+    if (!(gn > 0.0) || !isfinite(gn)) {
+        *cos = 0.0;
+        return INFINITY;
+    }
+    *cos = fabs(g[0] * d[0] + g[1] * d[1] + g[2] * d[2]) / gn;
+    return sens / gn;
+}
+
 /* Traces surfaces 1..upto from P, D (unit) in frame 1; path is preset to
- * the distance already travelled. */
+ * the distance already travelled.  The bounds: the point errs by the
+ * roundings of some 2^16 operations of the path's size; the direction by
+ * as much, plus the turn of each normal by its point's error, carried on
+ * through later bends (a refraction scales it by up to 1 + mu / cos of the
+ * refracted angle). */
 static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
 {
     sg_mpfr_ctx *m = tr->mp;
     int i, rc;
+    double dD = 0.0;
     for (i = 1; i <= upto; i++) {
         const sg_sprep *sp = &tr->sp[i];
         sg_ray_surface *o = &out[i];
@@ -531,8 +583,16 @@ static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
         o->l = mpfr_get_d(m->D.x, MPFR_RNDN);
         o->m = mpfr_get_d(m->D.y, MPFR_RNDN);
         o->n = mpfr_get_d(m->D.z, MPFR_RNDN);
-        o->dir_error_bound = 0.5 * ulp_d(fmax(fabs(o->l), fmax(fabs(o->m), fabs(o->n)))) +
-                             ldexp(1.0, 16 - (int)m->prec);
+        if (i < upto) {
+            double dout[3] = {o->l, o->m, o->n}, cos_t, turn, gain;
+            double ep = ldexp(big + fabs(o->path), 16 - (int)m->prec);
+            turn = normal_turn(sp, o->x, o->y, o->z, dout, &cos_t);
+            gain = sp->mirror ? 2.0 : 1.0 + fabs(sp->mu.hi) / fmax(cos_t, 1e-300);
+            dD = gain * (dD + 2.0 * turn * ep) + ldexp(1.0, 16 - (int)m->prec);
+        }
+        o->dir_error_bound = sg_bound_up(
+            0.5 * ulp_d(fmax(fabs(o->l), fmax(fabs(o->m), fabs(o->n)))) +
+            fmax(dD, ldexp(1.0, 16 - (int)m->prec)));
     }
     return SG_OK;
 }
