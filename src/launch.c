@@ -402,6 +402,16 @@ static vm aim_step(vaim *a, vm m, const vdd res[2], vd nr)
     return m & ~(vd_isfinite(q0.hi) & vd_isfinite(q1.hi));
 }
 
+/* How far from the exact solution a Q with residual r may lie, by lane
+ * 0's Jacobian: 2 |J^-1|, the factor 2 for the Jacobian's own error. */
+static double aim_error(const vaim *a, double r)
+{
+    double n0 = fabs(a->J[1][1][0]) + fabs(a->J[0][1][0]);
+    double n1 = fabs(a->J[1][0][0]) + fabs(a->J[0][0][0]);
+    double e = 2.0 * fmax(n0, n1) / fabs(a->det[0]) * r;
+    return isfinite(e) ? e : INFINITY;
+}
+
 /* Backtracking steps one aim may take in all: each halves the step, so
  * 40 reach far below any step that still changes Q. */
 enum { AIM_CUTS = 40 };
@@ -417,9 +427,15 @@ enum { AIM_CUTS = 40 };
  * or Broyden-updated one may point the wrong way) and then halved until
  * the residual drops.  A ray that converges without ever backtracking
  * takes exactly the steps of the batch's vector iteration, which hands
- * every other ray to this one. */
+ * every other ray to this one.
+ *
+ * A ray accepted short of its landing's error bound (within the aiming
+ * tolerance, with a fresh Jacobian or out of steps) starts its trace that
+ * far from the exactly aimed ray: *eaim gets twice |J^-1| times the
+ * residual and the landing's bound, for the launch's bound; 0 otherwise. */
 static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
-                      const dd target[2], const double (*J0)[2], sg_ray_surface *scratch)
+                      const dd target[2], const double (*J0)[2], sg_ray_surface *scratch,
+                      double *eaim)
 {
     double tol = t->o.aim_rtol * fmax(t->ln.stop_r.hi, 1e-300), J[2][2], noise;
     double sdx = 0.0, sdy = 0.0, bres[2] = {0.0, 0.0}, bnr = INFINITY;
@@ -431,6 +447,8 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
     vaim a;
     int it, rc, cuts = 0, have_best = 0, bfresh = 0;
     one[0] = -1;
+    if (eaim)
+        *eaim = 0.0;
     if (J0 == NULL) {
         if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
             return SG_EAIM;
@@ -449,8 +467,11 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
         if (!failed) {
             aim_judge(&a, one, vdd_set(at[0]), vdd_set(at[1]), vd_set(noise), tg, tol, res,
                       &nr, &done, &stalled);
-            if (done[0])
+            if (done[0]) {
+                if (eaim && !(nr[0] <= noise))
+                    *eaim = aim_error(&a, nr[0] + noise);
                 return SG_OK;
+            }
             worse = have_best && !(nr[0] < bnr);
         }
         if (failed || worse) {
@@ -501,7 +522,11 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
         sdy = a.dy[0];
     }
     q_lane(a.q, 0, q);
-    return a.best[0] <= tol + a.noise[0] ? SG_OK : SG_EAIM;
+    if (!(a.best[0] <= tol + a.noise[0]))
+        return SG_EAIM;
+    if (eaim)
+        *eaim = aim_error(&a, a.best[0] + a.noise[0]);
+    return SG_OK;
 }
 
 /* The object-space part of field o scaled by s, 0 <= s < 1: tangents for
@@ -523,7 +548,7 @@ static void osp_scaled(const sg_tracer *t, const osp *o, double s, osp *out)
  * successful one lets the next grow.  The last aim is Newton's at field o
  * itself, so the result is the ray's own solution. */
 static int aim_continue(sg_tracer *t, land_fn land, const osp *o, double px, double py,
-                        const dd target[2], dd q[2], sg_ray_surface *scratch)
+                        const dd target[2], dd q[2], sg_ray_surface *scratch, double *eaim)
 {
     vdd tg[2] = {vdd_set(target[0]), vdd_set(target[1])}, v[2];
     double s = 0.0, ds = 0.25;
@@ -533,7 +558,7 @@ static int aim_continue(sg_tracer *t, land_fn land, const osp *o, double px, dou
     osp_scaled(t, o, 0.0, &os);
     q_aim_start_v(t, &os, vd_set(px), vd_set(py), tg, v);
     q_lane(v, 0, qs);
-    if (aim_newton(t, land, &os, qs, target, NULL, scratch) != SG_OK)
+    if (aim_newton(t, land, &os, qs, target, NULL, scratch, eaim) != SG_OK)
         return SG_EAIM;
     q_aim_off(t, &os, px, py, off0);
     for (steps = 0; s < 1.0 && steps < 64; steps++) {
@@ -547,7 +572,7 @@ static int aim_continue(sg_tracer *t, land_fn land, const osp *o, double px, dou
         q_aim_off(t, &on, px, py, off1);
         qn[0] = dd_add(qs[0], dd_sub(off1[0], off0[0]));
         qn[1] = dd_add(qs[1], dd_sub(off1[1], off0[1]));
-        if (aim_newton(t, land, &on, qn, target, NULL, scratch) == SG_OK) {
+        if (aim_newton(t, land, &on, qn, target, NULL, scratch, eaim) == SG_OK) {
             s = sn;
             qs[0] = qn[0];
             qs[1] = qn[1];
@@ -570,11 +595,11 @@ static int aim_continue(sg_tracer *t, land_fn land, const osp *o, double px, dou
 /* Newton from Q, and continuation in field when that fails. */
 static int aim_robust(sg_tracer *t, land_fn land, const osp *o, double px, double py,
                       const dd target[2], const double (*J0)[2], dd q[2],
-                      sg_ray_surface *scratch)
+                      sg_ray_surface *scratch, double *eaim)
 {
-    if (aim_newton(t, land, o, q, target, J0, scratch) == SG_OK)
+    if (aim_newton(t, land, o, q, target, J0, scratch, eaim) == SG_OK)
         return SG_OK;
-    return aim_continue(t, land, o, px, py, target, q, scratch);
+    return aim_continue(t, land, o, px, py, target, q, scratch, eaim);
 }
 
 /* The field's Jacobian at its chief ray, for every ray of the field: at
@@ -592,7 +617,7 @@ static void field_jacobian(sg_tracer *t, land_fn land, const osp *o, sg_ray_surf
     }
     q_aim_start_v(t, o, vd_set(0.0), vd_set(0.0), tg, v);
     q_lane(v, 0, qc);
-    t->have_aimJ = aim_robust(t, land, o, 0.0, 0.0, zero, NULL, qc, scratch) == SG_OK &&
+    t->have_aimJ = aim_robust(t, land, o, 0.0, 0.0, zero, NULL, qc, scratch, NULL) == SG_OK &&
                            fd_jacobian(t, land, o, qc, t->aimJ, scratch) == SG_OK
                        ? 1
                        : -1;
@@ -603,11 +628,15 @@ static void field_jacobian(sg_tracer *t, land_fn land, const osp *o, sg_ray_surf
  * ------------------------------------------------------------------------ */
 
 /* Q for pupil point (px, py), aimed when the system asks.  With cache set,
- * o is the tracer's current field and its chief-ray Jacobian is kept. */
+ * o is the tracer's current field and its chief-ray Jacobian is kept.
+ * *eaim, when asked for, gets how far Q may lie from the exactly aimed
+ * one beyond its landing's rounding (aim_newton). */
 static int launch_q(sg_tracer *t, land_fn land, const osp *o, double px, double py,
-                    dd q[2], int cache, sg_ray_surface *scratch)
+                    dd q[2], int cache, sg_ray_surface *scratch, double *eaim)
 {
     int clip, rc;
+    if (eaim)
+        *eaim = 0.0;
     if (t->sys->aim == SG_AIM_OFF) {
         q_aim_off(t, o, px, py, q);
     } else {
@@ -628,7 +657,7 @@ static int launch_q(sg_tracer *t, land_fn land, const osp *o, double px, double 
             field_jacobian(t, land, o, scratch);
         rc = aim_robust(t, land, o, px, py, target,
                         cache && t->have_aimJ > 0 ? (const double (*)[2])t->aimJ : NULL, q,
-                        scratch);
+                        scratch, eaim);
         t->o.clip = clip;
         if (rc != SG_OK)
             return SG_EAIM;
@@ -643,7 +672,7 @@ static int chief_on_image(sg_tracer *t, land_fn land, const dd v[2], osp *o, dou
     dd q[2];
     int last = t->n - 1, rc;
     osp_from_values(t, v[0], v[1], 0, o);
-    if (launch_q(t, land, o, 0, 0, q, 0, scratch) != SG_OK)
+    if (launch_q(t, land, o, 0, 0, q, 0, scratch, NULL) != SG_OK)
         return SG_EAIM;
     if (t->o.method == SG_METHOD_CLASSIC) {
         double S[3], D[3];
@@ -746,14 +775,22 @@ int sg_launch_precise_prep(sg_tracer *t, double hx, double hy, double px, double
                            sg_ray_surface *out, sg_pray *r, double *path0)
 {
     dd q[2];
+    double eaim;
     osp o;
     if (field_cached(t, land_precise, hx, hy, &o, out) != SG_OK)
         return SG_EAIM;
-    if (launch_q(t, land_precise, &o, px, py, q, 1, t->scratch) != SG_OK) {
+    if (launch_q(t, land_precise, &o, px, py, q, 1, t->scratch, &eaim) != SG_OK) {
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;
     }
     pray_from(&o, q, r, path0);
+    if (eaim > 0.0) {
+        /* The aim's own error moves the start, and from a finite object
+         * turns the direction by at most that over the distance. */
+        r->eP += eaim;
+        if (!o.inf)
+            r->eD += eaim / *path0;
+    }
     object_row(t, &o, r, &out[0]);
     return SG_OK;
 }
@@ -775,7 +812,7 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
     osp o;
     if (field_cached(t, land_classic, hx, hy, &o, out) != SG_OK)
         return SG_EAIM;
-    if (launch_q(t, land_classic, &o, px, py, q, 1, t->scratch) != SG_OK) {
+    if (launch_q(t, land_classic, &o, px, py, q, 1, t->scratch, NULL) != SG_OK) {
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;
     }
@@ -853,13 +890,10 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, vdd qv[2], const vdd tg[2
     }
     qv[0] = a.q[0];
     qv[1] = a.q[1];
-    for (k = 0; k < nl; k++) {
+    /* A lane out of iterations is the one-ray launch's, which adds the
+     * aim's remaining error to its bound. */
+    for (k = 0; k < nl; k++)
         done[k] = fin[k] ? 1 : 0;
-        /* Out of iterations within tolerance: Q moved after its last
-         * landing, so that landing cannot start the final trace. */
-        if (live[k] && a.best[k] <= tol + a.noise[k])
-            done[k] = 2;
-    }
 }
 
 /* Whether lane k's final trace may go on from its last landing, which left

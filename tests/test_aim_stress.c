@@ -366,6 +366,64 @@ static void wide_angle_batch(void **state)
     sg_catalog_free(cat);
 }
 
+/* A ray accepted within a loose aiming tolerance, out of Newton steps,
+ * starts short of the exactly aimed ray: its bound must carry that.  The
+ * reference aims fully (its own step limit is aim_max_iter plus log2 of
+ * its bits). */
+static void loose_tolerance(void **state)
+{
+    static const double rays[][4] = {{0, 1, 0, 1}, {0, 1, 0, -1}, {0, 0.7, 0.6, -0.8},
+                                     {0, 1, 1, 0}};
+    sg_catalog *cat = tu_catalog();
+    int e, r, mode, checked = 0;
+    (void)state;
+    for (e = 1; e < 3; e++) {
+        sg_system *sys = tu_example(examples[e]);
+        for (mode = 1; mode < 3; mode++) {
+            sg_trace_opts o;
+            sg_diag d;
+            sg_tracer *tp, *tm;
+            double worst = 0.0;
+            int n, nok = 0;
+            sys->aim = (sg_aim)mode;
+            sg_trace_opts_init(&o);
+            o.aim_max_iter = 1;
+            o.aim_rtol = 0.1;
+            sg_diag_clear(&d);
+            tp = sg_tracer_new(sys, cat, &o, &d);
+            assert_non_null(tp);
+            o.method = SG_METHOD_MPFR;
+            o.mpfr_bits = 512;
+            tm = sg_tracer_new(sys, cat, &o, &d);
+            assert_non_null(tm);
+            n = sg_tracer_nsurf(tp);
+            for (r = 0; r < 4; r++) {
+                sg_ray_surface op[MAXS], om[MAXS];
+                int rp = sg_trace_normalized(tp, rays[r][0], rays[r][1], rays[r][2], rays[r][3],
+                                             op);
+                assert_int_equal(sg_trace_normalized(tm, rays[r][0], rays[r][1], rays[r][2],
+                                                     rays[r][3], om),
+                                 SG_OK);
+                if (rp != SG_OK)
+                    continue;
+                checked++;
+                nok++;
+                if (!within_bounds(op, om, n, &worst))
+                    fail_msg("%s aim %s ray %d, one aiming step: precise outside its bound",
+                             examples[e], mode_name[mode], r);
+            }
+            print_message("# %-18s aim %-8s one step, tolerance 0.1: %d of 4 rays aim; "
+                          "largest error / bound %.3g\n", examples[e], mode_name[mode], nok,
+                          worst);
+            sg_tracer_free(tp);
+            sg_tracer_free(tm);
+        }
+        sg_system_free(sys);
+    }
+    assert_true(checked >= 8);
+    sg_catalog_free(cat);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -374,6 +432,7 @@ int main(void)
         cmocka_unit_test(wide_angle),
         cmocka_unit_test(wide_angle_bits),
         cmocka_unit_test(wide_angle_batch),
+        cmocka_unit_test(loose_tolerance),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
