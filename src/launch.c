@@ -145,6 +145,36 @@ static void q_aim_off(const sg_tracer *t, const osp *o, double px, double py, dd
     q_lane(v, 0, q);
 }
 
+/* How far Q for aiming off may lie from the exact line through the
+ * paraxial pupil point: a few double-double roundings of each term of
+ * E - lam dir (object at infinity) or O + lam (E - O), which cancel when a
+ * far object's large coordinates give a small Q (the Cassegrain's object
+ * 4e6 mm off the axis lands 36 mm from surface 1's vertex). */
+static vd aim_off_err_v(const sg_tracer *t, const osp *o, vd px, vd py)
+{
+    vd ex = vd_abs(t->ln.epr.hi * px), ey = vd_abs(t->ln.epr.hi * py), s;
+    double lam = fabs(o->lam.hi);
+    if (o->inf) {
+        s = ex + ey + vd_set(lam * (fabs(o->dir.x.hi) + fabs(o->dir.y.hi)));
+    } else {
+        vd ox = vd_set(fabs(o->obj.x.hi)), oy = vd_set(fabs(o->obj.y.hi));
+        s = ox + oy + lam * (ex + ox + ey + oy);
+    }
+    return vd_set(16.0 * DD_U) * s;
+}
+
+/* The launch state of aiming off carries that error: the start moves by
+ * it, and from a finite object the direction turns by it over the
+ * distance. */
+static void add_aim_off_err_v(const sg_tracer *t, const osp *o, vd px, vd py, sg_vray *r,
+                              vd path0)
+{
+    vd e = aim_off_err_v(t, o, px, py);
+    r->eP = r->eP + e;
+    if (!o->inf)
+        r->eD = r->eD + e / path0;
+}
+
 /* Precise ray states from the object-space part and Q, lane by lane.  A
  * relative error of the direction moves surface 1's point by nothing: the
  * ray starts on Q itself. */
@@ -783,7 +813,18 @@ int sg_launch_precise_prep(sg_tracer *t, double hx, double hy, double px, double
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;
     }
-    pray_from(&o, q, r, path0);
+    if (t->sys->aim == SG_AIM_OFF) {
+        /* As the batch does it, lane by lane. */
+        sg_vray v;
+        vdd qv[2] = {vdd_set(q[0]), vdd_set(q[1])};
+        vd p0;
+        pray_from_v(&o, qv, &v, &p0);
+        add_aim_off_err_v(t, &o, vd_set(px), vd_set(py), &v, p0);
+        sg_vray_get(&v, 0, r);
+        *path0 = p0[0];
+    } else {
+        pray_from(&o, q, r, path0);
+    }
     if (eaim > 0.0) {
         /* The aim's own error moves the start, and from a finite object
          * turns the direction by at most that over the distance. */
@@ -967,6 +1008,8 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
         all = all && done[k] == 1;
     if (!all)
         pray_from_v(&o, qv, &launch, &p0);
+    if (t->sys->aim == SG_AIM_OFF)
+        add_aim_off_err_v(t, &o, px, py, &launch, p0);
     for (k = 0; k < nl; k++) {
         if (done[k]) {
             sg_pray r;
