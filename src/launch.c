@@ -145,6 +145,36 @@ static void q_aim_off(const sg_tracer *t, const osp *o, double px, double py, dd
     q_lane(v, 0, q);
 }
 
+/* How far Q for aiming off may lie from the exact line through the
+ * paraxial pupil point: a few double-double roundings of each term of
+ * E - lam dir (object at infinity) or O + lam (E - O), which cancel when a
+ * far object's large coordinates give a small Q (the Cassegrain's object
+ * 4e6 mm off the axis lands 36 mm from surface 1's vertex). */
+static vd aim_off_err_v(const sg_tracer *t, const osp *o, vd px, vd py)
+{
+    vd ex = vd_abs(t->ln.epr.hi * px), ey = vd_abs(t->ln.epr.hi * py), s;
+    double lam = fabs(o->lam.hi);
+    if (o->inf) {
+        s = ex + ey + vd_set(lam * (fabs(o->dir.x.hi) + fabs(o->dir.y.hi)));
+    } else {
+        vd ox = vd_set(fabs(o->obj.x.hi)), oy = vd_set(fabs(o->obj.y.hi));
+        s = ox + oy + lam * (ex + ox + ey + oy);
+    }
+    return vd_set(16.0 * DD_U) * s;
+}
+
+/* The launch state of aiming off carries that error: the start moves by
+ * it, and from a finite object the direction turns by it over the
+ * distance. */
+static void add_aim_off_err_v(const sg_tracer *t, const osp *o, vd px, vd py, sg_vray *r,
+                              vd path0)
+{
+    vd e = aim_off_err_v(t, o, px, py);
+    r->eP = r->eP + e;
+    if (!o->inf)
+        r->eD = r->eD + e / path0;
+}
+
 /* Precise ray states from the object-space part and Q, lane by lane.  A
  * relative error of the direction moves surface 1's point by nothing: the
  * ray starts on Q itself. */
@@ -402,22 +432,53 @@ static vm aim_step(vaim *a, vm m, const vdd res[2], vd nr)
     return m & ~(vd_isfinite(q0.hi) & vd_isfinite(q1.hi));
 }
 
+/* How far from the exact solution a Q with residual r may lie, by lane
+ * 0's Jacobian: 2 |J^-1|, the factor 2 for the Jacobian's own error. */
+static double aim_error(const vaim *a, double r)
+{
+    double n0 = fabs(a->J[1][1][0]) + fabs(a->J[0][1][0]);
+    double n1 = fabs(a->J[1][0][0]) + fabs(a->J[0][0][0]);
+    double e = 2.0 * fmax(n0, n1) / fabs(a->det[0]) * r;
+    return isfinite(e) ? e : INFINITY;
+}
+
+/* Backtracking steps one aim may take in all: each halves the step, so
+ * 40 reach far below any step that still changes Q. */
+enum { AIM_CUTS = 40 };
+
 /* Solves land(Q) = target by Newton, from Q.  J0, when given, is the
  * field's Jacobian at its chief ray: most rays converge with it, and a ray
  * for which it stops helping gets its own, so the result depends on the
- * ray alone, never on which rays came before. */
+ * ray alone, never on which rays came before.
+ *
+ * The iteration is globalised by a line search on the landing residual: a
+ * step whose ray fails to land, or lands no closer than the best Q so far,
+ * is taken again from that Q, first with a Jacobian of its own (a borrowed
+ * or Broyden-updated one may point the wrong way) and then halved until
+ * the residual drops.  A ray that converges without ever backtracking
+ * takes exactly the steps of the batch's vector iteration, which hands
+ * every other ray to this one.
+ *
+ * A ray accepted short of its landing's error bound (within the aiming
+ * tolerance, with a fresh Jacobian or out of steps) starts its trace that
+ * far from the exactly aimed ray: *eaim gets twice |J^-1| times the
+ * residual and the landing's bound, for the launch's bound; 0 otherwise. */
 static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
-                      const dd target[2], const double (*J0)[2], sg_ray_surface *scratch)
+                      const dd target[2], const double (*J0)[2], sg_ray_surface *scratch,
+                      double *eaim)
 {
     double tol = t->o.aim_rtol * fmax(t->ln.stop_r.hi, 1e-300), J[2][2], noise;
+    double sdx = 0.0, sdy = 0.0, bres[2] = {0.0, 0.0}, bnr = INFINITY;
     vdd tg[2] = {vdd_set(target[0]), vdd_set(target[1])}, res[2];
-    vdd qv[2] = {vdd_set(q[0]), vdd_set(q[1])};
+    vdd qv[2] = {vdd_set(q[0]), vdd_set(q[1])}, qb[2];
     vm one = vm_set(0), done, stalled;
     vd nr;
     dd at[2];
     vaim a;
-    int it, rc;
+    int it, rc, cuts = 0, have_best = 0, bfresh = 0;
     one[0] = -1;
+    if (eaim)
+        *eaim = 0.0;
     if (J0 == NULL) {
         if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
             return SG_EAIM;
@@ -425,25 +486,171 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
     } else {
         aim_start(&a, J0, 0, qv);
     }
-    for (it = 0; it < t->o.aim_max_iter; it++) {
+    qb[0] = qv[0];
+    qb[1] = qv[1];
+    for (it = 0; it < t->o.aim_max_iter + cuts; it++) {
+        int failed, worse;
         q_lane(a.q, 0, q);
         rc = land(t, o, q, at, &noise, scratch);
-        if (rc != SG_OK && rc != SG_EVIGNETTED)
-            return SG_EAIM;
-        aim_judge(&a, one, vdd_set(at[0]), vdd_set(at[1]), vd_set(noise), tg, tol, res,
-                  &nr, &done, &stalled);
-        if (done[0])
-            return SG_OK;
+        failed = rc != SG_OK && rc != SG_EVIGNETTED;
+        worse = 0;
+        if (!failed) {
+            aim_judge(&a, one, vdd_set(at[0]), vdd_set(at[1]), vd_set(noise), tg, tol, res,
+                      &nr, &done, &stalled);
+            if (done[0]) {
+                if (eaim && !(nr[0] <= noise))
+                    *eaim = aim_error(&a, nr[0] + noise);
+                return SG_OK;
+            }
+            worse = have_best && !(nr[0] < bnr);
+        }
+        if (failed || worse) {
+            /* Back to the best Q: first a Jacobian of its own and the
+             * full step, then half the step each time. */
+            if (!have_best || cuts++ >= AIM_CUTS)
+                return SG_EAIM;
+            if (!bfresh) {
+                dd qq[2];
+                q_lane(qb, 0, qq);
+                if (fd_jacobian(t, land, o, qq, J, scratch) != SG_OK)
+                    return SG_EAIM;
+                sdx = (J[1][1] * bres[0] - J[0][1] * bres[1]) /
+                      (J[0][0] * J[1][1] - J[0][1] * J[1][0]);
+                sdy = (-J[1][0] * bres[0] + J[0][0] * bres[1]) /
+                      (J[0][0] * J[1][1] - J[0][1] * J[1][0]);
+                aim_set_jacobian(&a, 0, (const double(*)[2])J);
+                bfresh = 1;
+            } else {
+                sdx *= 0.5;
+                sdy *= 0.5;
+            }
+            if (!(isfinite(sdx) && isfinite(sdy)))
+                return SG_EAIM;
+            a.q[0] = vdd_add_d(qb[0], vd_set(-sdx));
+            a.q[1] = vdd_add_d(qb[1], vd_set(-sdy));
+            /* The next step starts afresh: no secant update across a cut. */
+            a.stepped[0] = 0;
+            a.fresh[0] = -1;
+            continue;
+        }
         if (stalled[0]) {
             if (fd_jacobian(t, land, o, q, J, scratch) != SG_OK)
                 return SG_EAIM;
             aim_set_jacobian(&a, 0, (const double(*)[2])J);
         }
+        /* This Q is the best so far: the line search returns here. */
+        have_best = 1;
+        bnr = nr[0];
+        bfresh = a.fresh[0] != 0;
+        bres[0] = res[0].hi[0] + res[0].lo[0];
+        bres[1] = res[1].hi[0] + res[1].lo[0];
+        qb[0] = a.q[0];
+        qb[1] = a.q[1];
         if (aim_step(&a, one, res, nr)[0])
             return SG_EAIM;
+        sdx = a.dx[0];
+        sdy = a.dy[0];
     }
     q_lane(a.q, 0, q);
-    return a.best[0] <= tol + a.noise[0] ? SG_OK : SG_EAIM;
+    if (!(a.best[0] <= tol + a.noise[0]))
+        return SG_EAIM;
+    if (eaim)
+        *eaim = aim_error(&a, a.best[0] + a.noise[0]);
+    return SG_OK;
+}
+
+/* The object-space part of field o scaled by s, 0 <= s < 1: tangents for
+ * an object at infinity, heights otherwise. */
+static void osp_scaled(const sg_tracer *t, const osp *o, double s, osp *out)
+{
+    if (o->inf)
+        osp_from_values(t, dd_mul_d(dd_div(o->dir.x, o->dir.z), s),
+                        dd_mul_d(dd_div(o->dir.y, o->dir.z), s), 0, out);
+    else
+        osp_from_values(t, dd_mul_d(o->obj.x, s), dd_mul_d(o->obj.y, s), 0, out);
+}
+
+/* Aims pupil point (px, py) of field o at target by continuation in field
+ * when Newton alone does not converge: the same pupil point is aimed at
+ * field fraction 0, where the paraxial guess is good, and the field is
+ * stepped up to 1, each aim starting from the last converged Q moved as
+ * the paraxial Q moves.  A step that fails is retried shorter; a
+ * successful one lets the next grow.  The last aim is Newton's at field o
+ * itself, so the result is the ray's own solution. */
+static int aim_continue(sg_tracer *t, land_fn land, const osp *o, double px, double py,
+                        const dd target[2], dd q[2], sg_ray_surface *scratch, double *eaim)
+{
+    vdd tg[2] = {vdd_set(target[0]), vdd_set(target[1])}, v[2];
+    double s = 0.0, ds = 0.25;
+    dd qs[2], off0[2];
+    osp os;
+    int steps;
+    osp_scaled(t, o, 0.0, &os);
+    q_aim_start_v(t, &os, vd_set(px), vd_set(py), tg, v);
+    q_lane(v, 0, qs);
+    if (aim_newton(t, land, &os, qs, target, NULL, scratch, eaim) != SG_OK)
+        return SG_EAIM;
+    q_aim_off(t, &os, px, py, off0);
+    for (steps = 0; s < 1.0 && steps < 64; steps++) {
+        double sn = s + ds >= 1.0 ? 1.0 : s + ds;
+        dd qn[2], off1[2];
+        osp on;
+        if (sn == 1.0)
+            on = *o;
+        else
+            osp_scaled(t, o, sn, &on);
+        q_aim_off(t, &on, px, py, off1);
+        qn[0] = dd_add(qs[0], dd_sub(off1[0], off0[0]));
+        qn[1] = dd_add(qs[1], dd_sub(off1[1], off0[1]));
+        if (aim_newton(t, land, &on, qn, target, NULL, scratch, eaim) == SG_OK) {
+            s = sn;
+            qs[0] = qn[0];
+            qs[1] = qn[1];
+            off0[0] = off1[0];
+            off0[1] = off1[1];
+            ds *= 2.0;
+        } else {
+            ds *= 0.25;
+            if (ds < 1e-4)
+                return SG_EAIM;
+        }
+    }
+    if (s < 1.0)
+        return SG_EAIM;
+    q[0] = qs[0];
+    q[1] = qs[1];
+    return SG_OK;
+}
+
+/* Newton from Q, and continuation in field when that fails. */
+static int aim_robust(sg_tracer *t, land_fn land, const osp *o, double px, double py,
+                      const dd target[2], const double (*J0)[2], dd q[2],
+                      sg_ray_surface *scratch, double *eaim)
+{
+    if (aim_newton(t, land, o, q, target, J0, scratch, eaim) == SG_OK)
+        return SG_OK;
+    return aim_continue(t, land, o, px, py, target, q, scratch, eaim);
+}
+
+/* The field's Jacobian at its chief ray, for every ray of the field: at
+ * the paraxial chief ray's Q, or where that ray does not land (a wide
+ * field), at the aimed chief ray's.  have_aimJ becomes 1, or -1 when
+ * neither lands, so that rays aim on their own without asking again. */
+static void field_jacobian(sg_tracer *t, land_fn land, const osp *o, sg_ray_surface *scratch)
+{
+    dd qc[2], zero[2] = {dd_from(0.0), dd_from(0.0)};
+    vdd tg[2] = {vdd_set(zero[0]), vdd_set(zero[1])}, v[2];
+    q_aim_off(t, o, 0.0, 0.0, qc);
+    if (fd_jacobian(t, land, o, qc, t->aimJ, scratch) == SG_OK) {
+        t->have_aimJ = 1;
+        return;
+    }
+    q_aim_start_v(t, o, vd_set(0.0), vd_set(0.0), tg, v);
+    q_lane(v, 0, qc);
+    t->have_aimJ = aim_robust(t, land, o, 0.0, 0.0, zero, NULL, qc, scratch, NULL) == SG_OK &&
+                           fd_jacobian(t, land, o, qc, t->aimJ, scratch) == SG_OK
+                       ? 1
+                       : -1;
 }
 
 /* ------------------------------------------------------------------------
@@ -451,11 +658,15 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
  * ------------------------------------------------------------------------ */
 
 /* Q for pupil point (px, py), aimed when the system asks.  With cache set,
- * o is the tracer's current field and its chief-ray Jacobian is kept. */
+ * o is the tracer's current field and its chief-ray Jacobian is kept.
+ * *eaim, when asked for, gets how far Q may lie from the exactly aimed
+ * one beyond its landing's rounding (aim_newton). */
 static int launch_q(sg_tracer *t, land_fn land, const osp *o, double px, double py,
-                    dd q[2], int cache, sg_ray_surface *scratch)
+                    dd q[2], int cache, sg_ray_surface *scratch, double *eaim)
 {
     int clip, rc;
+    if (eaim)
+        *eaim = 0.0;
     if (t->sys->aim == SG_AIM_OFF) {
         q_aim_off(t, o, px, py, q);
     } else {
@@ -472,16 +683,11 @@ static int launch_q(sg_tracer *t, land_fn land, const osp *o, double px, double 
          * final trace applies them. */
         clip = t->o.clip;
         t->o.clip = 0;
-        rc = SG_OK;
-        if (cache && !t->have_aimJ) {
-            dd qc[2];
-            q_aim_off(t, o, 0.0, 0.0, qc);
-            rc = fd_jacobian(t, land, o, qc, t->aimJ, scratch);
-            t->have_aimJ = rc == SG_OK;
-        }
-        if (rc == SG_OK)
-            rc = aim_newton(t, land, o, q, target,
-                            cache ? (const double (*)[2])t->aimJ : NULL, scratch);
+        if (cache && !t->have_aimJ)
+            field_jacobian(t, land, o, scratch);
+        rc = aim_robust(t, land, o, px, py, target,
+                        cache && t->have_aimJ > 0 ? (const double (*)[2])t->aimJ : NULL, q,
+                        scratch, eaim);
         t->o.clip = clip;
         if (rc != SG_OK)
             return SG_EAIM;
@@ -496,7 +702,7 @@ static int chief_on_image(sg_tracer *t, land_fn land, const dd v[2], osp *o, dou
     dd q[2];
     int last = t->n - 1, rc;
     osp_from_values(t, v[0], v[1], 0, o);
-    if (launch_q(t, land, o, 0, 0, q, 0, scratch) != SG_OK)
+    if (launch_q(t, land, o, 0, 0, q, 0, scratch, NULL) != SG_OK)
         return SG_EAIM;
     if (t->o.method == SG_METHOD_CLASSIC) {
         double S[3], D[3];
@@ -599,14 +805,33 @@ int sg_launch_precise_prep(sg_tracer *t, double hx, double hy, double px, double
                            sg_ray_surface *out, sg_pray *r, double *path0)
 {
     dd q[2];
+    double eaim;
     osp o;
     if (field_cached(t, land_precise, hx, hy, &o, out) != SG_OK)
         return SG_EAIM;
-    if (launch_q(t, land_precise, &o, px, py, q, 1, t->scratch) != SG_OK) {
+    if (launch_q(t, land_precise, &o, px, py, q, 1, t->scratch, &eaim) != SG_OK) {
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;
     }
-    pray_from(&o, q, r, path0);
+    if (t->sys->aim == SG_AIM_OFF) {
+        /* As the batch does it, lane by lane. */
+        sg_vray v;
+        vdd qv[2] = {vdd_set(q[0]), vdd_set(q[1])};
+        vd p0;
+        pray_from_v(&o, qv, &v, &p0);
+        add_aim_off_err_v(t, &o, vd_set(px), vd_set(py), &v, p0);
+        sg_vray_get(&v, 0, r);
+        *path0 = p0[0];
+    } else {
+        pray_from(&o, q, r, path0);
+    }
+    if (eaim > 0.0) {
+        /* The aim's own error moves the start, and from a finite object
+         * turns the direction by at most that over the distance. */
+        r->eP += eaim;
+        if (!o.inf)
+            r->eD += eaim / *path0;
+    }
     object_row(t, &o, r, &out[0]);
     return SG_OK;
 }
@@ -628,7 +853,7 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
     osp o;
     if (field_cached(t, land_classic, hx, hy, &o, out) != SG_OK)
         return SG_EAIM;
-    if (launch_q(t, land_classic, &o, px, py, q, 1, t->scratch) != SG_OK) {
+    if (launch_q(t, land_classic, &o, px, py, q, 1, t->scratch, NULL) != SG_OK) {
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;
     }
@@ -706,13 +931,10 @@ static void aim_newton_vec(sg_tracer *t, const osp *o, vdd qv[2], const vdd tg[2
     }
     qv[0] = a.q[0];
     qv[1] = a.q[1];
-    for (k = 0; k < nl; k++) {
+    /* A lane out of iterations is the one-ray launch's, which adds the
+     * aim's remaining error to its bound. */
+    for (k = 0; k < nl; k++)
         done[k] = fin[k] ? 1 : 0;
-        /* Out of iterations within tolerance: Q moved after its last
-         * landing, so that landing cannot start the final trace. */
-        if (live[k] && a.best[k] <= tol + a.noise[k])
-            done[k] = 2;
-    }
 }
 
 /* Whether lane k's final trace may go on from its last landing, which left
@@ -769,12 +991,9 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
          * final trace applies them. */
         clip = t->o.clip;
         t->o.clip = 0;
-        if (!t->have_aimJ) {
-            dd qc[2];
-            q_aim_off(t, &o, 0.0, 0.0, qc);
-            t->have_aimJ = fd_jacobian(t, land_precise, &o, qc, t->aimJ, t->scratch) == SG_OK;
-        }
-        if (t->have_aimJ) {
+        if (!t->have_aimJ)
+            field_jacobian(t, land_precise, &o, t->scratch);
+        if (t->have_aimJ > 0) {
             /* Lanes that never land take neither. */
             memset(&at, 0, sizeof at);
             launch = at;
@@ -789,6 +1008,8 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
         all = all && done[k] == 1;
     if (!all)
         pray_from_v(&o, qv, &launch, &p0);
+    if (t->sys->aim == SG_AIM_OFF)
+        add_aim_off_err_v(t, &o, px, py, &launch, p0);
     for (k = 0; k < nl; k++) {
         if (done[k]) {
             sg_pray r;
@@ -921,7 +1142,7 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
             return sg_diag_set(d, SG_EAIM,
                                "ray aiming: the on-axis marginal ray does not reach the stop "
                                "(surface %d): %s", sys->stop, sg_strerror(rc));
-        t->ln.stop_r = dd_from(hypot(at[0].hi, at[1].hi));
+        t->ln.stop_r = dd_sqrt(dd_add(dd_sqr(at[0]), dd_sqr(at[1])));
     }
     return SG_OK;
 }

@@ -15,7 +15,7 @@
 
 #include "trace_internal.h"
 
-enum { NT = 32 };
+enum { NT = 32, NA = 16 };
 
 typedef struct msurf {
     mpfr_t R, k1, T, mu;
@@ -36,6 +36,11 @@ struct sg_mpfr_ctx {
     mvec P, D, G, obj, dir, sv_P, sv_D;
     mpfr_t q[2], t[NT];
     mpfr_t path;
+    /* aiming: the field values before m_osp, the target, the last good Q,
+     * the step, and the paraxial Q the continuation moves with */
+    mpfr_t fv[2], tgt[2], qb[2], dq[2], qo[2];
+    mpfr_t a[NA]; /* aiming's scratch: the landings reuse every t[] */
+    int fdeg;
 };
 
 static void mvec_init(mvec *v, mpfr_prec_t p)
@@ -99,6 +104,10 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
     }
     mpfr_clears(m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi,
                 m->q[0], m->q[1], m->path, (mpfr_ptr)0);
+    for (k = 0; k < 2; k++)
+        mpfr_clears(m->fv[k], m->tgt[k], m->qb[k], m->dq[k], m->qo[k], (mpfr_ptr)0);
+    for (k = 0; k < NA; k++)
+        mpfr_clear(m->a[k]);
     for (k = 0; k < NT; k++)
         mpfr_clear(m->t[k]);
     mvec_clear(&m->P);
@@ -128,6 +137,10 @@ static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
     m->s = s;
     mpfr_inits2(prec, m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi,
                 m->q[0], m->q[1], m->path, (mpfr_ptr)0);
+    for (k = 0; k < 2; k++)
+        mpfr_inits2(prec, m->fv[k], m->tgt[k], m->qb[k], m->dq[k], m->qo[k], (mpfr_ptr)0);
+    for (k = 0; k < NA; k++)
+        mpfr_init2(m->a[k], prec);
     for (k = 0; k < NT; k++)
         mpfr_init2(m->t[k], prec);
     mvec_init(&m->P, prec);
@@ -712,72 +725,176 @@ static int m_land(sg_tracer *tr, int upto, mpfr_t a, mpfr_t b)
     return rc;
 }
 
-/* Newton on Q with an MPFR central-difference Jacobian; the step h is
- * 2^(-prec/3) of the pupil, where difference and rounding errors balance. */
-static int m_aim(sg_tracer *tr, double px, double py)
+/* The larger of |x| and |y|, as a power of two: the exponent, or
+ * mpfr_get_emin() when both are zero. */
+static mpfr_exp_t m_mag(const mpfr_t x, const mpfr_t y)
+{
+    mpfr_exp_t e = mpfr_get_emin();
+    if (mpfr_regular_p(x) && mpfr_get_exp(x) > e)
+        e = mpfr_get_exp(x);
+    if (mpfr_regular_p(y) && mpfr_get_exp(y) > e)
+        e = mpfr_get_exp(y);
+    return e;
+}
+
+/* The landing residual of Q = m->q into ra, rb, with its size in *mag;
+ * nonzero when the ray does not reach the stop. */
+static int m_resid(sg_tracer *tr, mpfr_t ra, mpfr_t rb, mpfr_exp_t *mag)
 {
     sg_mpfr_ctx *m = tr->mp;
-    mpfr_t *t = m->t;
-    mpfr_ptr h = t[16], J00 = t[17], J01 = t[18], J10 = t[19], J11 = t[20], det = t[21];
-    mpfr_ptr ra = t[22], rb = t[23];
-    int k, it, stop = tr->sys->stop;
-    mpfr_t tgt[2], sa, sb;
-    int rc = SG_EAIM;
-    mpfr_inits2(m->prec, tgt[0], tgt[1], sa, sb, (mpfr_ptr)0);
-    mpfr_mul_d(tgt[0], m->stop_r, px, MPFR_RNDN);
-    mpfr_mul_d(tgt[1], m->stop_r, py, MPFR_RNDN);
-    mpfr_mul_2si(h, m->epr, -(long)(m->prec / 3), MPFR_RNDN);
-    for (k = 0; k < 2; k++) {
-        mpfr_add(m->q[k], m->q[k], h, MPFR_RNDN);
-        if (m_land(tr, stop, sa, sb) != SG_OK)
-            goto out;
-        mpfr_sub(m->q[k], m->q[k], h, MPFR_RNDN);
-        mpfr_sub(m->q[k], m->q[k], h, MPFR_RNDN);
-        if (m_land(tr, stop, ra, rb) != SG_OK)
-            goto out;
-        mpfr_add(m->q[k], m->q[k], h, MPFR_RNDN);
-        mpfr_sub(sa, sa, ra, MPFR_RNDN);
-        mpfr_sub(sb, sb, rb, MPFR_RNDN);
-        mpfr_div(sa, sa, h, MPFR_RNDN);
-        mpfr_div(sb, sb, h, MPFR_RNDN);
-        mpfr_div_2ui(k == 0 ? J00 : J01, sa, 1, MPFR_RNDN);
-        mpfr_div_2ui(k == 0 ? J10 : J11, sb, 1, MPFR_RNDN);
-    }
-    mpfr_mul(det, J00, J11, MPFR_RNDN);
-    mpfr_mul(sa, J01, J10, MPFR_RNDN);
-    mpfr_sub(det, det, sa, MPFR_RNDN);
-    if (mpfr_zero_p(det) || !mpfr_number_p(det))
-        goto out;
-    for (it = 0; it < tr->o.aim_max_iter; it++) {
-        if (m_land(tr, stop, ra, rb) != SG_OK)
-            goto out;
-        mpfr_sub(ra, ra, tgt[0], MPFR_RNDN);
-        mpfr_sub(rb, rb, tgt[1], MPFR_RNDN);
+    if (m_land(tr, tr->sys->stop, ra, rb) != SG_OK || !mpfr_number_p(ra) ||
+        !mpfr_number_p(rb))
+        return 1;
+    mpfr_sub(ra, ra, m->tgt[0], MPFR_RNDN);
+    mpfr_sub(rb, rb, m->tgt[1], MPFR_RNDN);
+    *mag = m_mag(ra, rb);
+    return 0;
+}
+
+/* Newton on Q = m->q for landing on m->tgt, globalised by a line search:
+ * the Jacobian is taken afresh by central differences at every Q (its
+ * step h = 2^(-prec/3) of the pupil balances difference and rounding
+ * errors, so near the root each step gains about 2 prec / 3 bits), and a
+ * step that fails to land, or does not lower the residual, is halved.
+ * Converged when Q moves by less than 2^(6 - prec) of the pupil, or when
+ * no step lowers a residual already within 2^(20 - prec) of the stop's
+ * scale, the landing's own rounding.  The limit grows with the bits,
+ * since each doubling of the precision can cost one more step. */
+static int m_newton(sg_tracer *tr)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    mpfr_t *t = m->a;
+    mpfr_ptr h = t[0], J00 = t[1], J01 = t[2], J10 = t[3], J11 = t[4], det = t[5];
+    mpfr_ptr ra = t[6], rb = t[7], sa = t[8], sb = t[9], ua = t[10], ub = t[11];
+    mpfr_exp_t eq = mpfr_get_exp(m->epr), nr, nt, scale = m_mag(m->stop_r, m->epr);
+    long prec = (long)m->prec, lim = tr->o.aim_max_iter, it, cut;
+    for (it = prec; it > 1; it >>= 1)
+        lim++;
+    if (mpfr_zero_p(m->epr))
+        eq = scale;
+    if (m_resid(tr, ra, rb, &nr))
+        return SG_EAIM;
+    for (it = 0; it < lim; it++) {
+        int k;
+        if (mpfr_zero_p(ra) && mpfr_zero_p(rb))
+            return SG_OK;
+        mpfr_mul_2si(h, m->epr, -(long)(m->prec / 3), MPFR_RNDN);
+        if (mpfr_zero_p(h))
+            mpfr_set_ui_2exp(h, 1, scale - (long)(m->prec / 3), MPFR_RNDN);
+        mpfr_set(m->qb[0], m->q[0], MPFR_RNDN);
+        mpfr_set(m->qb[1], m->q[1], MPFR_RNDN);
+        for (k = 0; k < 2; k++) {
+            mpfr_add(m->q[k], m->qb[k], h, MPFR_RNDN);
+            if (m_land(tr, tr->sys->stop, sa, sb) != SG_OK)
+                return SG_EAIM;
+            mpfr_sub(m->q[k], m->qb[k], h, MPFR_RNDN);
+            if (m_land(tr, tr->sys->stop, ua, ub) != SG_OK)
+                return SG_EAIM;
+            mpfr_set(m->q[k], m->qb[k], MPFR_RNDN);
+            mpfr_sub(sa, sa, ua, MPFR_RNDN);
+            mpfr_sub(sb, sb, ub, MPFR_RNDN);
+            mpfr_div(sa, sa, h, MPFR_RNDN);
+            mpfr_div(sb, sb, h, MPFR_RNDN);
+            mpfr_div_2ui(k == 0 ? J00 : J01, sa, 1, MPFR_RNDN);
+            mpfr_div_2ui(k == 0 ? J10 : J11, sb, 1, MPFR_RNDN);
+        }
+        mpfr_mul(det, J00, J11, MPFR_RNDN);
+        mpfr_mul(sa, J01, J10, MPFR_RNDN);
+        mpfr_sub(det, det, sa, MPFR_RNDN);
+        if (mpfr_zero_p(det) || !mpfr_number_p(det))
+            return SG_EAIM;
         /* dq = J^-1 r */
         mpfr_mul(sa, J11, ra, MPFR_RNDN);
         mpfr_mul(sb, J01, rb, MPFR_RNDN);
-        mpfr_sub(sa, sa, sb, MPFR_RNDN);
-        mpfr_div(sa, sa, det, MPFR_RNDN);
-        mpfr_mul(sb, J00, rb, MPFR_RNDN);
-        mpfr_mul(h, J10, ra, MPFR_RNDN);
-        mpfr_sub(sb, sb, h, MPFR_RNDN);
-        mpfr_div(sb, sb, det, MPFR_RNDN);
-        mpfr_sub(m->q[0], m->q[0], sa, MPFR_RNDN);
-        mpfr_sub(m->q[1], m->q[1], sb, MPFR_RNDN);
+        mpfr_sub(m->dq[0], sa, sb, MPFR_RNDN);
+        mpfr_div(m->dq[0], m->dq[0], det, MPFR_RNDN);
+        mpfr_mul(sa, J00, rb, MPFR_RNDN);
+        mpfr_mul(sb, J10, ra, MPFR_RNDN);
+        mpfr_sub(m->dq[1], sa, sb, MPFR_RNDN);
+        mpfr_div(m->dq[1], m->dq[1], det, MPFR_RNDN);
+        /* The line search. */
+        for (cut = 0; cut < 30; cut++) {
+            mpfr_sub(m->q[0], m->qb[0], m->dq[0], MPFR_RNDN);
+            mpfr_sub(m->q[1], m->qb[1], m->dq[1], MPFR_RNDN);
+            if (!m_resid(tr, ua, ub, &nt) &&
+                (nt < nr || (mpfr_zero_p(ua) && mpfr_zero_p(ub)) ||
+                 (nt == nr && mpfr_cmpabs(ua, ra) <= 0 && mpfr_cmpabs(ub, rb) <= 0 &&
+                  (mpfr_cmpabs(ua, ra) < 0 || mpfr_cmpabs(ub, rb) < 0))))
+                break;
+            mpfr_div_2ui(m->dq[0], m->dq[0], 1, MPFR_RNDN);
+            mpfr_div_2ui(m->dq[1], m->dq[1], 1, MPFR_RNDN);
+        }
+        if (cut == 30) {
+            /* No step lowers the residual: converged if it is rounding. */
+            mpfr_set(m->q[0], m->qb[0], MPFR_RNDN);
+            mpfr_set(m->q[1], m->qb[1], MPFR_RNDN);
+            return nr <= scale + 20 - prec ? SG_OK : SG_EAIM;
+        }
+        mpfr_swap(ra, ua);
+        mpfr_swap(rb, ub);
+        nr = nt;
         /* Converged when the correction is below the precision of Q. */
-        {
-            mpfr_exp_t eq = mpfr_get_exp(m->epr);
-            int small_a = mpfr_zero_p(sa) || mpfr_get_exp(sa) < eq - (mpfr_exp_t)m->prec + 6;
-            int small_b = mpfr_zero_p(sb) || mpfr_get_exp(sb) < eq - (mpfr_exp_t)m->prec + 6;
-            if (small_a && small_b) {
-                rc = SG_OK;
-                goto out;
-            }
+        if (m_mag(m->dq[0], m->dq[1]) < eq - prec + 6)
+            return SG_OK;
+    }
+    return SG_EAIM;
+}
+
+/* Sets the object-space part for field fraction s of the values in m->fv
+ * and the paraxial Q of pupil point (px, py) into m->qo. */
+static void m_field_at(sg_tracer *tr, double s, double px, double py)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    mpfr_mul_d(m->t[12], m->fv[0], s, MPFR_RNDN);
+    mpfr_mul_d(m->t[13], m->fv[1], s, MPFR_RNDN);
+    m_osp(tr, m->fdeg);
+    m_q_off(tr, px, py);
+    mpfr_set(m->qo[0], m->q[0], MPFR_RNDN);
+    mpfr_set(m->qo[1], m->q[1], MPFR_RNDN);
+}
+
+/* Aims pupil point (px, py) from the paraxial Q in m->q: Newton, and
+ * where that fails, continuation in field as in the precise launch (the
+ * same pupil point aimed at field fraction 0, then the field stepped up to
+ * 1 from each converged Q moved as the paraxial Q moves).  The last aim
+ * is Newton's at the ray's own field. */
+static int m_aim(sg_tracer *tr, double px, double py)
+{
+    sg_mpfr_ctx *m = tr->mp;
+    mpfr_ptr qs0 = m->a[12], qs1 = m->a[13];
+    double s = 0.0, ds = 0.25;
+    int steps;
+    mpfr_mul_d(m->tgt[0], m->stop_r, px, MPFR_RNDN);
+    mpfr_mul_d(m->tgt[1], m->stop_r, py, MPFR_RNDN);
+    if (m_newton(tr) == SG_OK)
+        return SG_OK;
+    m_field_at(tr, 0.0, px, py);
+    if (m_newton(tr) != SG_OK)
+        return SG_EAIM;
+    for (steps = 0; s < 1.0 && steps < 64; steps++) {
+        double sn = s + ds >= 1.0 ? 1.0 : s + ds;
+        mpfr_set(qs0, m->q[0], MPFR_RNDN);
+        mpfr_set(qs1, m->q[1], MPFR_RNDN);
+        /* The start: the last Q plus the paraxial Q's move. */
+        mpfr_sub(m->a[14], qs0, m->qo[0], MPFR_RNDN);
+        mpfr_sub(m->a[15], qs1, m->qo[1], MPFR_RNDN);
+        m_field_at(tr, sn, px, py);
+        mpfr_add(m->q[0], m->q[0], m->a[14], MPFR_RNDN);
+        mpfr_add(m->q[1], m->q[1], m->a[15], MPFR_RNDN);
+        if (m_newton(tr) == SG_OK) {
+            s = sn;
+            ds *= 2.0;
+        } else {
+            /* Back to fraction s and its Q; a shorter step. */
+            m_field_at(tr, s, px, py);
+            mpfr_set(m->q[0], qs0, MPFR_RNDN);
+            mpfr_set(m->q[1], qs1, MPFR_RNDN);
+            ds *= 0.25;
+            if (ds < 1e-4)
+                return SG_EAIM;
         }
     }
-out:
-    mpfr_clears(tgt[0], tgt[1], sa, sb, (mpfr_ptr)0);
-    return rc;
+    return s == 1.0 ? SG_OK : SG_EAIM;
 }
 
 int sg_mpfr_trace_normalized(sg_tracer *tr, double hx, double hy, double px, double py,
@@ -832,6 +949,9 @@ int sg_mpfr_trace_normalized(sg_tracer *tr, double hx, double hy, double px, dou
         break;
     }
     }
+    mpfr_set(m->fv[0], t[12], MPFR_RNDN);
+    mpfr_set(m->fv[1], t[13], MPFR_RNDN);
+    m->fdeg = deg;
     m_osp(tr, deg);
     m_q_off(tr, px, py);
     if (tr->sys->aim != SG_AIM_OFF && m_aim(tr, px, py) != SG_OK) {

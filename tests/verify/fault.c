@@ -8,6 +8,8 @@
  *   point  every surface's y moved by 4 times (bound + 1 ulp)
  *   dir    every surface's m moved by 4 times (dir bound + 1 ulp)
  *   fail   the ray stops at the last surface with SG_ENOCONV
+ * and, applied to the mpfr method (the reference) only:
+ *   reffail  the ray is not aimed: SG_EAIM, every surface not reached
  * Unset (or anything else), the wrappers change nothing.
  */
 #include <math.h>
@@ -60,6 +62,15 @@ static int inject(const sg_tracer *t, int rc, sg_ray_surface *out)
     for (k = 0; k < MAXT; k++)
         if (known[k].t == t)
             break;
+    if (f && k < MAXT && known[k].m == SG_METHOD_MPFR && strcmp(f, "reffail") == 0) {
+        for (i = 0; i <= last; i++) {
+            out[i].x = out[i].y = out[i].z = out[i].l = out[i].m = out[i].n = NAN;
+            out[i].residual = out[i].error_bound = out[i].dir_error_bound = NAN;
+            out[i].path = NAN;
+            out[i].status = i == 0 ? SG_EAIM : SG_ENOTREACHED;
+        }
+        return SG_EAIM;
+    }
     if (!f || k == MAXT || known[k].m != SG_METHOD_PRECISE || rc != SG_OK)
         return rc;
     if (strcmp(f, "point") == 0) {

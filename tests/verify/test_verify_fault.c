@@ -105,6 +105,33 @@ static void table1_fault(void **state)
     vt_free(&r);
 }
 
+/* The reference itself fails (its aiming, here injected): verify says so,
+ * does not blame precise, and exits 6 with the run marked incomplete. */
+static void reference_failure_named(void **state)
+{
+    char path[512];
+    vt_result r, j;
+    (void)state;
+    vt_source("examples/cassegrain.json", path, sizeof path);
+    setenv("SAGITTA_TEST_FAULT", "reffail", 1);
+    vt_run(&j, "verify", path, "--ray", "0,1,0,1", "--format", "json", (char *)NULL);
+    vt_run(&r, "verify", path, "--ray", "0,1,0,1", (char *)NULL);
+    unsetenv("SAGITTA_TEST_FAULT");
+    assert_non_null(j.json);
+    assert_true(vt_num(j.json, "rays", "reference_failed", NULL) == 1);
+    assert_int_equal(j.code, 6);
+    assert_true(vt_num(j.json, "rays", "disagreements_precise", NULL) == 0);
+    assert_true(cJSON_IsFalse(vt_get(j.json, "complete", NULL)));
+    assert_int_equal(r.code, 6);
+    assert_non_null(strstr(r.out, "result: INCOMPLETE"));
+    assert_non_null(strstr(r.out, "reference's failure, not precise's"));
+    assert_null(strstr(r.out, "precise disagrees"));
+    assert_non_null(strstr(r.err, "no fault of precise"));
+    print_message("# mpfr AIM FAILED (injected): reported as the reference's failure\n");
+    vt_free(&r);
+    vt_free(&j);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -113,6 +140,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(dir_fault),
         cmocka_unit_test(fail_fault),
         cmocka_unit_test(table1_fault),
+        cmocka_unit_test(reference_failure_named),
     };
     int rc;
     vt_init(argc, argv);

@@ -94,40 +94,11 @@ static void equals_follows_data(void **state)
  * not follow the bits), verify must say the reference failed and not list
  * the ray as precise's disagreement.  Where it aims, there is nothing to
  * report and the check is skipped. */
-static void reference_failure_named(void **state)
-{
-    char path[512];
-    vt_result r, j;
-    (void)state;
-    vt_source("examples/cassegrain.json", path, sizeof path);
-    vt_run(&j, "verify", path, "--ray", "0,1,0,1", "--bits", "1040", "--format", "json",
-           (char *)NULL);
-    assert_non_null(j.json);
-    if (vt_num(j.json, "rays", "reference_failed", NULL) == 0) {
-        print_message("# mpfr at 1040 bits aims this ray here: nothing to check\n");
-        vt_free(&j);
-        skip();
-    }
-    assert_int_equal(j.code, 6);
-    assert_true(vt_num(j.json, "rays", "disagreements_precise", NULL) == 0);
-    assert_true(cJSON_IsFalse(vt_get(j.json, "complete", NULL)));
-    vt_run(&r, "verify", path, "--ray", "0,1,0,1", "--bits", "1040", (char *)NULL);
-    assert_int_equal(r.code, 6);
-    assert_non_null(strstr(r.out, "result: INCOMPLETE"));
-    assert_non_null(strstr(r.out, "reference's failure, not precise's"));
-    assert_null(strstr(r.out, "precise disagrees"));
-    assert_non_null(strstr(r.err, "no fault of precise"));
-    print_message("# mpfr AIM FAILED at 1040 bits: reported as the reference's failure\n");
-    vt_free(&r);
-    vt_free(&j);
-}
-
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(low_bits_refused),
         cmocka_unit_test(equals_follows_data),
-        cmocka_unit_test(reference_failure_named),
     };
     int rc;
     vt_init(argc, argv);
