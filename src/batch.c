@@ -114,6 +114,8 @@ static void run_precise(job *j)
         for (k = nl; k < SG_VL; k++)
             o[k] = o[0];
         sg_precise_block(t, &vs, p0, o, nl, start, t->n - 1, rc);
+        for (k = 0; k < nl; k++)
+            rc[k] = sg_guard_rows(t, o[k], rc[k]);
         if (j->status)
             for (k = 0; k < nl; k++)
                 j->status[idx[k]] = rc[k];

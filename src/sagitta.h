@@ -273,6 +273,10 @@ void sg_surface_init(sg_surface *s);
  * known glasses (when cat is not NULL), wavelengths and fields.  The
  * message names the surface and field at fault. */
 int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
+/* Whether normalized field coordinates (hx, hy) give a field a trace can
+ * launch: Zemax's scaling of the largest field (of the angle itself for
+ * angle fields), below 90 degrees.  The message names the field. */
+int sg_field_check(const sg_system *sys, double hx, double hy, sg_diag *d);
 /* Curvature 1/R, 0 for a flat. */
 double sg_surface_curvature(const sg_surface *s);
 /* Sag z(x, y) in the surface's local frame; NaN outside the conic's domain. */

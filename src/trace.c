@@ -590,6 +590,13 @@ sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
     free(idx);
     if (rc != SG_OK)
         goto fail;
+    if (t->wave != sys->primary_wave) {
+        sg_trace_opts po = t->o;
+        po.wave = sys->primary_wave;
+        t->prim = sg_tracer_new(sys, cat, &po, d);
+        if (!t->prim)
+            goto fail;
+    }
     if (sg_launch_prepare(t, d) != SG_OK)
         goto fail;
     if (t->o.method == SG_METHOD_MPFR && sg_mpfr_prepare(t, d) != SG_OK)
@@ -606,6 +613,7 @@ void sg_tracer_free(sg_tracer *t)
         return;
     if (t->mp)
         sg_mpfr_free(t->mp);
+    sg_tracer_free(t->prim);
     sg_system_free(t->sys);
     free(t->sp);
     free(t->nsigned);
@@ -628,6 +636,29 @@ double sg_tracer_index(const sg_tracer *t, int i)
     if (i < 0 || i >= t->n)
         return NAN;
     return t->nsigned[i];
+}
+
+static int row_finite(const sg_ray_surface *o, int point)
+{
+    return (!point || (isfinite(o->x) && isfinite(o->y) && isfinite(o->z))) &&
+           isfinite(o->l) && isfinite(o->m) && isfinite(o->n) && isfinite(o->residual) &&
+           isfinite(o->error_bound) && isfinite(o->dir_error_bound) && isfinite(o->path);
+}
+
+int sg_guard_rows(const sg_tracer *t, sg_ray_surface *out, int rc)
+{
+    int i;
+    for (i = 0; i < t->n && out[i].status == SG_OK; i++) {
+        /* The object at infinity lies infinitely far back along the ray;
+         * its row says so with infinite coordinates, never NaN. */
+        int point = i > 0 || isfinite(t->sys->surf[0].thickness);
+        if (!row_finite(&out[i], point) ||
+            (!point && (isnan(out[i].x) || isnan(out[i].y) || isnan(out[i].z)))) {
+            sg_fail_rest(out, i, t->n, SG_ERANGE);
+            return SG_ERANGE;
+        }
+    }
+    return rc;
 }
 
 void sg_set_start_row(sg_ray_surface *o, const double S[3], const double u[3])
@@ -694,7 +725,7 @@ int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
         /* The preparation checks the ray, as it does for the batch. */
         sg_pray r;
         rc = sg_start_precise_prep(t, start, dir, out, &r);
-        return rc != SG_OK ? rc : sg_precise_run_to(t, &r, 0.0, out, t->n - 1);
+        return rc != SG_OK ? rc : sg_guard_rows(t, out, sg_precise_run_to(t, &r, 0.0, out, t->n - 1));
     }
     rc = start_invalid(t, start, dir, out);
     if (rc != SG_OK)
@@ -706,10 +737,10 @@ int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
         u[1] = dir[1] / len;
         u[2] = dir[2] / len;
         sg_set_start_row(&out[0], start, u);
-        return sg_classic_run_to(t, start, dir, out, t->n - 1);
+        return sg_guard_rows(t, out, sg_classic_run_to(t, start, dir, out, t->n - 1));
     }
     case SG_METHOD_MPFR:
-        return sg_mpfr_trace_start(t, start, dir, out);
+        return sg_guard_rows(t, out, sg_mpfr_trace_start(t, start, dir, out));
     case SG_METHOD_PRECISE:
         break; /* traced above */
     }
@@ -725,11 +756,11 @@ int sg_trace_normalized(sg_tracer *t, double hx, double hy, double px, double py
     }
     switch (t->o.method) {
     case SG_METHOD_PRECISE:
-        return sg_launch_precise(t, hx, hy, px, py, out);
+        return sg_guard_rows(t, out, sg_launch_precise(t, hx, hy, px, py, out));
     case SG_METHOD_CLASSIC:
-        return sg_launch_classic(t, hx, hy, px, py, out);
+        return sg_guard_rows(t, out, sg_launch_classic(t, hx, hy, px, py, out));
     case SG_METHOD_MPFR:
-        return sg_mpfr_trace_normalized(t, hx, hy, px, py, out);
+        return sg_guard_rows(t, out, sg_mpfr_trace_normalized(t, hx, hy, px, py, out));
     }
     return SG_EINVAL;
 }

@@ -393,7 +393,7 @@ static const cli_opt trace_opts[] = {
 static int is_ray_result(int rc)
 {
     return rc == SG_OK || rc == SG_EMISS || rc == SG_ETIR || rc == SG_EVIGNETTED ||
-           rc == SG_ENOCONV || rc == SG_EAIM || rc == SG_ENOTREACHED;
+           rc == SG_ENOCONV || rc == SG_EAIM || rc == SG_ENOTREACHED || rc == SG_ERANGE;
 }
 
 int cmd_trace(int argc, char **argv)
@@ -523,6 +523,14 @@ int cmd_trace(int argc, char **argv)
     rc = cli_check_wave(design, sys, wave1, &wave0);
     if (rc != CLI_EXIT_OK)
         goto done;
+    /* A field past 90 degrees is the command line's mistake, not a ray's
+     * result. */
+    sg_diag_clear(&d);
+    if (have_ray && sg_field_check(sys, ray4[0], ray4[1], &d) != SG_OK) {
+        cli_error("--ray: %s: %s", design, d.msg);
+        rc = CLI_EXIT_USAGE;
+        goto done;
+    }
 
     sg_trace_opts_init(&opts);
     opts.method = (sg_method)method;
