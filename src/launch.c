@@ -867,6 +867,9 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
     }
 }
 
+static const char *const aper_names[5] = {"entrance pupil diameter", "image F/#", "object NA",
+                                          "stop size", "paraxial working F/#"};
+
 /* Launch constants from a 128-bit paraxial trace. */
 int sg_launch_prepare(sg_tracer *t, sg_diag *d)
 {
@@ -951,9 +954,9 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
     if (!(fabs(t->ln.enp.hi) <= 1e150) || !(t->ln.epr.hi <= 1e150) ||
         !(fabs(t->ln.stop_r.hi) <= 1e150))
         return sg_diag_set(d, SG_ERANGE,
-                           "aperture: %s %g gives an entrance pupil of radius %g at %g, "
-                           "beyond the doubles a trace can square",
-                           sys->aper_type == SG_APER_EPD ? "entrance pupil diameter" : "value",
+                           "aperture: %s %g gives an entrance pupil of radius %g at %g "
+                           "from surface 1, beyond 1e+150 lens units (a trace squares it)",
+                           aper_names[sys->aper_type < 5 ? sys->aper_type : 0],
                            sys->aper_value, t->ln.epr.hi, t->ln.enp.hi);
     if (t->prim) {
         /* As in Zemax, the pupil's position and size, the aperture and the
