@@ -638,11 +638,15 @@ double sg_tracer_index(const sg_tracer *t, int i)
     return t->nsigned[i];
 }
 
+/* 0 * v is 0 for a finite v and NaN for an infinity or NaN, so one sum
+ * tells, without a branch per value. */
 static int row_finite(const sg_ray_surface *o, int point)
 {
-    return (!point || (isfinite(o->x) && isfinite(o->y) && isfinite(o->z))) &&
-           isfinite(o->l) && isfinite(o->m) && isfinite(o->n) && isfinite(o->residual) &&
-           isfinite(o->error_bound) && isfinite(o->dir_error_bound) && isfinite(o->path);
+    double z = 0.0 * o->l + 0.0 * o->m + 0.0 * o->n + 0.0 * o->residual +
+               0.0 * o->error_bound + 0.0 * o->dir_error_bound + 0.0 * o->path;
+    if (point)
+        z += 0.0 * o->x + 0.0 * o->y + 0.0 * o->z;
+    return z == z;
 }
 
 int sg_guard_rows(const sg_tracer *t, sg_ray_surface *out, int rc)
