@@ -212,7 +212,7 @@ static double min_of(const double *v, size_t n)
 static int is_ray_result(int rc)
 {
     return rc == SG_OK || rc == SG_EMISS || rc == SG_ETIR || rc == SG_EVIGNETTED ||
-           rc == SG_ENOCONV || rc == SG_EAIM || rc == SG_ENOTREACHED;
+           rc == SG_ENOCONV || rc == SG_EAIM || rc == SG_ENOTREACHED || rc == SG_ERANGE;
 }
 
 /* The surface where a ray stopped, or -1 when it reached the image. */
