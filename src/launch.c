@@ -24,12 +24,14 @@ static int inf_object(const sg_tracer *t)
 }
 
 /* Object point or direction from object-space field values (vx, vy):
- * tangents for an object at infinity (or degrees when deg is set), heights
- * for a finite object. */
+ * tangents for an object at infinity, heights for a finite object, or
+ * degrees when deg is set.  As in Zemax, an angle is the chief ray's slope
+ * towards the entrance pupil's centre, also from a finite object, whose
+ * point is then -tan (enp + T0) from the axis. */
 static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
 {
     memset(o, 0, sizeof *o);
-    if (inf_object(t)) {
+    if (deg || inf_object(t)) {
         dd tx = vx, ty = vy, len;
         if (deg) {
             mpfr_t a, pi, tmp;
@@ -48,6 +50,13 @@ static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
             mpfr_tan(a, a, MPFR_RNDN);
             ty = dd_from_mpfr(a, tmp);
             mpfr_clears(a, pi, tmp, (mpfr_ptr)0);
+        }
+        if (!inf_object(t)) {
+            dd dist = dd_add(t->ln.enp, t->ln.T0);
+            /* 0 - v, so that an axis gets +0, not -0. */
+            osp_from_values(t, dd_sub(dd_from(0.0), dd_mul(tx, dist)),
+                            dd_sub(dd_from(0.0), dd_mul(ty, dist)), 0, o);
+            return;
         }
         len = dd_sqrt(dd_add(dd_add(dd_sqr(tx), dd_sqr(ty)), dd_from(1.0)));
         o->inf = 1;

@@ -461,15 +461,30 @@ static void m_osp(sg_tracer *tr, int deg)
 {
     sg_mpfr_ctx *m = tr->mp;
     mpfr_t *t = m->t;
-    if (!isfinite(tr->sys->surf[0].thickness)) {
-        if (deg) {
-            mpfr_mul(t[12], t[12], m->pi, MPFR_RNDN);
-            mpfr_div_ui(t[12], t[12], 180, MPFR_RNDN);
-            mpfr_tan(t[12], t[12], MPFR_RNDN);
-            mpfr_mul(t[13], t[13], m->pi, MPFR_RNDN);
-            mpfr_div_ui(t[13], t[13], 180, MPFR_RNDN);
-            mpfr_tan(t[13], t[13], MPFR_RNDN);
+    if (deg) {
+        mpfr_mul(t[12], t[12], m->pi, MPFR_RNDN);
+        mpfr_div_ui(t[12], t[12], 180, MPFR_RNDN);
+        mpfr_tan(t[12], t[12], MPFR_RNDN);
+        mpfr_mul(t[13], t[13], m->pi, MPFR_RNDN);
+        mpfr_div_ui(t[13], t[13], 180, MPFR_RNDN);
+        mpfr_tan(t[13], t[13], MPFR_RNDN);
+        if (isfinite(tr->sys->surf[0].thickness)) {
+            /* From a finite object, as in Zemax, the chief ray's slope
+             * towards the entrance pupil's centre: the object point is
+             * -tan (enp + T0) from the axis. */
+            mpfr_add(t[14], m->enp, m->T0, MPFR_RNDN);
+            mpfr_mul(t[12], t[12], t[14], MPFR_RNDN);
+            mpfr_neg(t[12], t[12], MPFR_RNDN);
+            mpfr_mul(t[13], t[13], t[14], MPFR_RNDN);
+            mpfr_neg(t[13], t[13], MPFR_RNDN);
+            /* An axis gets +0, as in the precise launch. */
+            if (mpfr_zero_p(t[12]))
+                mpfr_set_zero(t[12], 1);
+            if (mpfr_zero_p(t[13]))
+                mpfr_set_zero(t[13], 1);
         }
+    }
+    if (!isfinite(tr->sys->surf[0].thickness)) {
         mpfr_set(m->dir.x, t[12], MPFR_RNDN);
         mpfr_set(m->dir.y, t[13], MPFR_RNDN);
         mpfr_set_ui(m->dir.z, 1, MPFR_RNDN);
