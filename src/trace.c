@@ -591,11 +591,19 @@ sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
     if (rc != SG_OK)
         goto fail;
     if (t->wave != sys->primary_wave) {
+        /* Its warnings would repeat this tracer's; only a failure counts,
+         * named as the primary wavelength's. */
         sg_trace_opts po = t->o;
+        sg_diag pd;
         po.wave = sys->primary_wave;
-        t->prim = sg_tracer_new(sys, cat, &po, d);
-        if (!t->prim)
+        sg_diag_clear(&pd);
+        t->prim = sg_tracer_new(sys, cat, &po, &pd);
+        if (!t->prim) {
+            sg_diag_set(d, pd.code != SG_OK ? pd.code : SG_ENOMEM,
+                        "primary wavelength %d, which defines the pupil and fields: %s",
+                        sys->primary_wave + 1, pd.msg);
             goto fail;
+        }
     }
     if (sg_launch_prepare(t, d) != SG_OK)
         goto fail;
