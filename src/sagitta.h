@@ -385,8 +385,13 @@ int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
                    sg_ray_surface *out);
 
 /* Traces the ray with normalized field (hx, hy) and pupil (px, py)
- * coordinates, using the system's fields, aperture and ray aiming.
- * Returns SG_EAIM (with every surface SG_ENOTREACHED) when aiming fails. */
+ * coordinates, using the system's fields, aperture and ray aiming, all
+ * defined at the primary wavelength whatever the tracer's (as in Zemax).
+ * Returns SG_EAIM (with every surface SG_ENOTREACHED) when aiming fails,
+ * and SG_ERANGE on every surface for a field sg_field_check refuses.  In
+ * every method and entry point, a ray whose numbers leave the doubles
+ * gets SG_ERANGE where they do: no surface marked SG_OK has a NaN or an
+ * infinity (but the object row's point of an object at infinity). */
 int sg_trace_normalized(sg_tracer *t, double hx, double hy, double px,
                         double py, sg_ray_surface *out);
 
