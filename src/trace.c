@@ -646,30 +646,56 @@ double sg_tracer_index(const sg_tracer *t, int i)
     return t->nsigned[i];
 }
 
-/* 0 * v is 0 for a finite v and NaN for an infinity or NaN, so one sum
- * tells, without a branch per value. */
-static int row_finite(const sg_ray_surface *o, int point)
+/* Bit 63 of the result is set when v is an infinity or NaN: its exponent
+ * field is all ones, and adding one to it carries into bit 63. */
+static inline uint64_t nonfinite_bit(double v)
 {
-    double z = 0.0 * o->l + 0.0 * o->m + 0.0 * o->n + 0.0 * o->residual +
-               0.0 * o->error_bound + 0.0 * o->dir_error_bound + 0.0 * o->path;
-    if (point)
-        z += 0.0 * o->x + 0.0 * o->y + 0.0 * o->z;
-    return z == z;
+    uint64_t u;
+    memcpy(&u, &v, sizeof u);
+    return (u & 0x7ff0000000000000ull) + 0x0010000000000000ull;
+}
+
+/* The row's ten numbers, each read once and ORed as a tree with integer
+ * operations: no branch and no long chain, so the common, finite ray
+ * costs a few instructions a row. */
+static inline uint64_t row_bits(const sg_ray_surface *o)
+{
+    return ((nonfinite_bit(o->x) | nonfinite_bit(o->y)) |
+            (nonfinite_bit(o->z) | nonfinite_bit(o->l))) |
+           ((nonfinite_bit(o->m) | nonfinite_bit(o->n)) |
+            (nonfinite_bit(o->residual) | nonfinite_bit(o->error_bound))) |
+           (nonfinite_bit(o->dir_error_bound) | nonfinite_bit(o->path));
+}
+
+static int row_bad(const sg_tracer *t, const sg_ray_surface *o, int i)
+{
+    if (i == 0 && isinf(t->sys->surf[0].thickness)) {
+        /* The object at infinity lies infinitely far back along the ray;
+         * its row says so with infinite coordinates, never NaN. */
+        sg_ray_surface c = *o;
+        if (isnan(c.x) || isnan(c.y) || isnan(c.z))
+            return 1;
+        c.x = c.y = c.z = 0.0;
+        return (int)(row_bits(&c) >> 63);
+    }
+    return (int)(row_bits(o) >> 63);
 }
 
 int sg_guard_rows(const sg_tracer *t, sg_ray_surface *out, int rc)
 {
+    uint64_t acc = 0;
     int i;
-    for (i = 0; i < t->n && out[i].status == SG_OK; i++) {
-        /* The object at infinity lies infinitely far back along the ray;
-         * its row says so with infinite coordinates, never NaN. */
-        int point = i > 0 || isfinite(t->sys->surf[0].thickness);
-        if (!row_finite(&out[i], point) ||
-            (!point && (isnan(out[i].x) || isnan(out[i].y) || isnan(out[i].z)))) {
+    if (out[0].status != SG_OK)
+        return rc;
+    for (i = 1; i < t->n && out[i].status == SG_OK; i++)
+        acc |= row_bits(&out[i]);
+    if (!(acc >> 63) && !row_bad(t, &out[0], 0))
+        return rc;
+    for (i = 0; i < t->n && out[i].status == SG_OK; i++)
+        if (row_bad(t, &out[i], i)) {
             sg_fail_rest(out, i, t->n, SG_ERANGE);
             return SG_ERANGE;
         }
-    }
     return rc;
 }
 
