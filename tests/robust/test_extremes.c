@@ -392,6 +392,25 @@ static void seeded_invariant(void **state)
                     failed_rays += rc != SG_OK;
                 }
                 sg_tracer_free(t);
+                if (METHODS[m] == SG_METHOD_PRECISE) {
+                    /* The batch's vector launch and trace, on the same
+                     * normalized rays, hold the invariant too. */
+                    sg_ray_in in[8];
+                    sg_ray_surface bout[8 * 8];
+                    int st[8];
+                    memset(in, 0, sizeof in);
+                    for (r = 0; r < 8; r++)
+                        memcpy(in[r].v, normalized[r], sizeof normalized[r]);
+                    sg_diag_clear(&d);
+                    if (sg_trace_batch(s, NULL, &o, SG_RAYS_NORMALIZED, in, 8, 1, bout, st,
+                                       &d) == SG_OK)
+                        for (r = 0; r < 8; r++) {
+                            const char *b = breach(s, bout + r * s->nsurf, s->nsurf, st[r]);
+                            if (b)
+                                fail_msg("design %d, batch, wave %d, ray %d: %s", k, w + 1,
+                                         r, b);
+                        }
+                }
             }
     }
     print_message("# %d designs, %d refused by validation, %d rays traced, %d failed\n",
