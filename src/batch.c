@@ -82,6 +82,40 @@ static int finite4(const double *v)
     return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]) && isfinite(v[3]);
 }
 
+/* Whether the rows after the object row that are marked OK hold only
+ * finite numbers, SG_VL of a row's ten at a time (x .. path lie first and
+ * in order): 0 * v is NaN exactly for an infinity or NaN.  The common,
+ * finite ray costs a few vector operations a row; sg_guard_rows then
+ * looks only at a ray that fails here, and checks its object row. */
+static int rows_finite(const sg_ray_surface *out, int n)
+{
+    vm bad = vm_set(0);
+    int i, off;
+    for (i = 1; i < n && out[i].status == SG_OK; i++) {
+        const char *row = (const char *)&out[i];
+        for (off = 0; off < 10; off += SG_VL) {
+            vd v;
+            int at = off + SG_VL <= 10 ? off : 10 - SG_VL;
+            memcpy(&v, row + (size_t)at * sizeof(double), sizeof v);
+            v = v * 0.0;
+            bad |= (vm)(v != v);
+        }
+    }
+    return !vm_any(bad);
+}
+
+/* The object row: finite, but for the infinite point of an object at
+ * infinity, which must still not be NaN. */
+static int row0_finite(const sg_tracer *t, const sg_ray_surface *o)
+{
+    double s = 0.0 * o->l + 0.0 * o->m + 0.0 * o->n + 0.0 * o->residual +
+               0.0 * o->error_bound + 0.0 * o->dir_error_bound + 0.0 * o->path;
+    if (t->ln.obj_inf)
+        return s == s && o->x == o->x && o->y == o->y && o->z == o->z;
+    s += 0.0 * o->x + 0.0 * o->y + 0.0 * o->z;
+    return s == s;
+}
+
 /* The precise method: up to SG_VL consecutive rays (of one field, when
  * normalized) are launched (and aimed) together, then traced together in
  * vector form. */
@@ -148,6 +182,9 @@ static void run_precise(job *j)
             o[k] = o[0];
         sg_precise_block(t, &vs, p0, o, nl, start, t->n - 1, rc);
         for (k = 0; k < nl; k++) {
+            if (o[k][0].status == SG_OK &&
+                !(row0_finite(t, o[k]) && rows_finite(o[k], t->n)))
+                rc[k] = sg_guard_rows(t, o[k], rc[k]);
             keep(j, idx[k], k);
             if (j->status)
                 j->status[idx[k]] = rc[k];

@@ -34,7 +34,8 @@ const char *sg_err_name(int err)
 int sg_err_is_ray_status(int err)
 {
     return err == SG_OK || err == SG_EMISS || err == SG_ETIR || err == SG_EVIGNETTED ||
-           err == SG_ENOCONV || err == SG_EAIM || err == SG_ENOTREACHED || err == SG_EUNCERT;
+           err == SG_ENOCONV || err == SG_EAIM || err == SG_ENOTREACHED || err == SG_EUNCERT ||
+           err == SG_ERANGE;
 }
 
 void sg_diag_clear(sg_diag *d)

@@ -24,12 +24,14 @@ static int inf_object(const sg_tracer *t)
 }
 
 /* Object point or direction from object-space field values (vx, vy):
- * tangents for an object at infinity (or degrees when deg is set), heights
- * for a finite object. */
+ * tangents for an object at infinity, heights for a finite object, or
+ * degrees when deg is set.  As in Zemax, an angle is the chief ray's slope
+ * towards the entrance pupil's centre, also from a finite object, whose
+ * point is then -tan (enp + T0) from the axis. */
 static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
 {
     memset(o, 0, sizeof *o);
-    if (inf_object(t)) {
+    if (deg || inf_object(t)) {
         dd tx = vx, ty = vy, len;
         if (deg) {
             mpfr_t a, pi, tmp;
@@ -48,6 +50,13 @@ static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
             mpfr_tan(a, a, MPFR_RNDN);
             ty = dd_from_mpfr(a, tmp);
             mpfr_clears(a, pi, tmp, (mpfr_ptr)0);
+        }
+        if (!inf_object(t)) {
+            dd dist = dd_add(t->ln.enp, t->ln.T0);
+            /* 0 - v, so that an axis gets +0, not -0. */
+            osp_from_values(t, dd_sub(dd_from(0.0), dd_mul(tx, dist)),
+                            dd_sub(dd_from(0.0), dd_mul(ty, dist)), 0, o);
+            return;
         }
         len = dd_sqrt(dd_add(dd_add(dd_sqr(tx), dd_sqr(ty)), dd_from(1.0)));
         o->inf = 1;
@@ -720,13 +729,44 @@ static int chief_on_image(sg_tracer *t, land_fn land, const dd v[2], osp *o, dou
     return rc;
 }
 
-/* Object-space part of field (hx, hy), by the system's field type. */
+static int osp_finite(const osp *o)
+{
+    return isfinite(o->lam.hi) &&
+           (o->inf ? isfinite(o->dir.x.hi) && isfinite(o->dir.y.hi) && isfinite(o->dir.z.hi)
+                   : isfinite(o->obj.x.hi) && isfinite(o->obj.y.hi) && isfinite(o->obj.z.hi));
+}
+
+static int field_osp_at(sg_tracer *t, land_fn land, double hx, double hy, osp *o,
+                        sg_ray_surface *scratch);
+
+/* Object-space part of field (hx, hy), by the system's field type.  A
+ * field that would wrap past 90 degrees or leave the doubles is refused;
+ * image-height fields are found at the primary wavelength, as in Zemax. */
 static int field_osp(sg_tracer *t, land_fn land, double hx, double hy, osp *o,
                      sg_ray_surface *scratch)
+{
+    int rc;
+    if (sg_field_check(t->sys, hx, hy, NULL) != SG_OK)
+        return SG_ERANGE;
+    if (t->prim && t->sys->field_type == SG_FIELD_REAL_IMAGE_HEIGHT)
+        rc = field_osp_at(t->prim, t->prim->o.method == SG_METHOD_CLASSIC ? land_classic
+                                                                          : land_precise,
+                          hx, hy, o, t->prim->scratch);
+    else
+        rc = field_osp_at(t, land, hx, hy, o, scratch);
+    if (rc == SG_OK && !osp_finite(o))
+        rc = SG_ERANGE;
+    return rc;
+}
+
+static int field_osp_at(sg_tracer *t, land_fn land, double hx, double hy, osp *o,
+                        sg_ray_surface *scratch)
 {
     dd vx = dd_mul_d(t->ln.fx, hx), vy = dd_mul_d(t->ln.fy, hy);
     switch (t->sys->field_type) {
     case SG_FIELD_ANGLE:
+        if (!(fabs(vx.hi) < 90.0) || !(fabs(vy.hi) < 90.0))
+            return SG_ERANGE;
         osp_from_values(t, vx, vy, 1, o);
         return SG_OK;
     case SG_FIELD_OBJECT_HEIGHT:
@@ -739,7 +779,7 @@ static int field_osp(sg_tracer *t, land_fn land, double hx, double hy, osp *o,
         /* Newton on the object-space value until the chief ray lands on
          * the requested image height. */
         dd v[2];
-        double J[2][2], det, h, at[2], ap[2], am[2];
+        double J[2][2], det, h, at[2], ap[2], am[2], best = INFINITY;
         double target[2] = {dd_to_d(vx), dd_to_d(vy)};
         int it, k;
         v[0] = dd_div(vx, t->ln.pimg_slope);
@@ -759,13 +799,20 @@ static int field_osp(sg_tracer *t, land_fn land, double hx, double hy, osp *o,
         if (!(fabs(det) > 0.0))
             return SG_EAIM;
         for (it = 0; it < t->o.aim_max_iter; it++) {
-            double r0, r1;
+            double r0, r1, nr, tol = 4e-16 * (fabs(target[0]) + fabs(target[1])) + 1e-300;
             if (chief_on_image(t, land, v, o, at, scratch) != SG_OK)
                 return SG_EAIM;
             r0 = at[0] - target[0];
             r1 = at[1] - target[1];
-            if (fabs(r0) + fabs(r1) <= 4e-16 * (fabs(target[0]) + fabs(target[1])) + 1e-300)
+            nr = fabs(r0) + fabs(r1);
+            if (nr <= tol)
                 return SG_OK;
+            /* A residual that stopped shrinking within the landing's own
+             * noise (the classic method's, or an aimed chief ray's) is as
+             * close as the method can tell. */
+            if (!(nr < 0.5 * best) && nr <= tol + 8.0 * scratch[t->n - 1].error_bound)
+                return SG_OK;
+            best = fmin(best, nr);
             v[0] = dd_add_d(v[0], -(J[1][1] * r0 - J[0][1] * r1) / det);
             v[1] = dd_add_d(v[1], -(-J[1][0] * r0 + J[0][0] * r1) / det);
         }
@@ -785,11 +832,15 @@ static int field_cached(sg_tracer *t, land_fn land, double hx, double hy, osp *o
                         sg_ray_surface *out)
 {
     if (!t->have_field || t->last_hx != hx || t->last_hy != hy) {
+        int rc;
         t->have_aimJ = 0;
-        if (field_osp(t, land, hx, hy, o, t->scratch) != SG_OK) {
+        rc = field_osp(t, land, hx, hy, o, t->scratch);
+        if (rc != SG_OK) {
+            /* A field out of range, or an image height not reached. */
+            rc = rc == SG_ERANGE ? SG_ERANGE : SG_EAIM;
             t->have_field = 0;
-            sg_fail_rest(out, 0, t->n, SG_EAIM);
-            return SG_EAIM;
+            sg_fail_rest(out, 0, t->n, rc);
+            return rc;
         }
         t->field = *o;
         t->have_field = 1;
@@ -807,8 +858,9 @@ int sg_launch_precise_prep(sg_tracer *t, double hx, double hy, double px, double
     dd q[2];
     double eaim;
     osp o;
-    if (field_cached(t, land_precise, hx, hy, &o, out) != SG_OK)
-        return SG_EAIM;
+    int rc = field_cached(t, land_precise, hx, hy, &o, out);
+    if (rc != SG_OK)
+        return rc;
     if (launch_q(t, land_precise, &o, px, py, q, 1, t->scratch, &eaim) != SG_OK) {
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;
@@ -851,8 +903,9 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
     double S[3], D[3], u[3], len;
     dd q[2];
     osp o;
-    if (field_cached(t, land_classic, hx, hy, &o, out) != SG_OK)
-        return SG_EAIM;
+    int rc = field_cached(t, land_classic, hx, hy, &o, out);
+    if (rc != SG_OK)
+        return rc;
     if (launch_q(t, land_classic, &o, px, py, q, 1, t->scratch, NULL) != SG_OK) {
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;
@@ -965,10 +1018,11 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
     osp o;
     for (k = 0; k < nl; k++)
         start[k] = t->n;
-    if (field_cached(t, land_precise, hx, hy, &o, out[0]) != SG_OK) {
+    rc[0] = field_cached(t, land_precise, hx, hy, &o, out[0]);
+    if (rc[0] != SG_OK) {
         for (k = 0; k < nl; k++) {
-            sg_fail_rest(out[k], 0, t->n, SG_EAIM);
-            rc[k] = SG_EAIM;
+            sg_fail_rest(out[k], 0, t->n, rc[0]);
+            rc[k] = rc[0];
         }
         return;
     }
@@ -1042,6 +1096,9 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
                 start[k] = rc[k] == SG_OK ? t->sys->stop + 1 : t->n;
     }
 }
+
+static const char *const aper_names[5] = {"entrance pupil diameter", "image F/#", "object NA",
+                                          "stop size", "paraxial working F/#"};
 
 /* Launch constants from a 128-bit paraxial trace. */
 int sg_launch_prepare(sg_tracer *t, sg_diag *d)
@@ -1124,6 +1181,23 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
     free(idx);
     if (rc != SG_OK)
         return rc;
+    if (!(fabs(t->ln.enp.hi) <= 1e150) || !(t->ln.epr.hi <= 1e150) ||
+        !(fabs(t->ln.stop_r.hi) <= 1e150))
+        return sg_diag_set(d, SG_ERANGE,
+                           "aperture: %s %g gives an entrance pupil of radius %g at %g "
+                           "from surface 1, beyond 1e+150 lens units (a trace squares it)",
+                           aper_names[sys->aper_type < 5 ? sys->aper_type : 0],
+                           sys->aper_value, t->ln.epr.hi, t->ln.enp.hi);
+    if (t->prim) {
+        /* As in Zemax, the pupil's position and size, the aperture and the
+         * fields belong to the primary wavelength: every wavelength's rays
+         * launch through the primary's pupil, towards its stop radius. */
+        t->ln.enp = t->prim->ln.enp;
+        t->ln.epr = t->prim->ln.epr;
+        t->ln.stop_r = t->prim->ln.stop_r;
+        t->ln.pimg_slope = t->prim->ln.pimg_slope;
+        return SG_OK;
+    }
 
     /* Real aiming with a pupil set by anything but the stop size lands the
      * marginal ray where the real on-axis marginal ray meets the stop. */

@@ -343,6 +343,12 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
         mpfr_mul(t1, t1, t2, MPFR_RNDN);
         mpfr_div_ui(t1, t1, 180, MPFR_RNDN);
         mpfr_tan(t1, t1, MPFR_RNDN);
+        if (!inf_obj) {
+            /* The object height of that slope towards the pupil's centre. */
+            mpfr_add(t2, o->enp, T0, MPFR_RNDN);
+            mpfr_mul(t1, t1, t2, MPFR_RNDN);
+            mpfr_neg(t1, t1, MPFR_RNDN);
+        }
         mpfr_mul(o->pimg_h, t1, o->pimg_slope, MPFR_RNDN);
         break;
     case SG_FIELD_OBJECT_HEIGHT:

@@ -278,6 +278,10 @@ void sg_surface_init(sg_surface *s);
  * known glasses (when cat is not NULL), wavelengths and fields.  The
  * message names the surface and field at fault. */
 int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
+/* Whether normalized field coordinates (hx, hy) give a field a trace can
+ * launch: Zemax's scaling of the largest field (of the angle itself for
+ * angle fields), below 90 degrees.  The message names the field. */
+int sg_field_check(const sg_system *sys, double hx, double hy, sg_diag *d);
 /* Curvature 1/R, 0 for a flat. */
 double sg_surface_curvature(const sg_surface *s);
 /* Sag z(x, y) in the surface's local frame; NaN outside the conic's domain. */
@@ -386,8 +390,13 @@ int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
                    sg_ray_surface *out);
 
 /* Traces the ray with normalized field (hx, hy) and pupil (px, py)
- * coordinates, using the system's fields, aperture and ray aiming.
- * Returns SG_EAIM (with every surface SG_ENOTREACHED) when aiming fails. */
+ * coordinates, using the system's fields, aperture and ray aiming, all
+ * defined at the primary wavelength whatever the tracer's (as in Zemax).
+ * Returns SG_EAIM (with every surface SG_ENOTREACHED) when aiming fails,
+ * and SG_ERANGE on every surface for a field sg_field_check refuses.  In
+ * every method and entry point, a ray whose numbers leave the doubles
+ * gets SG_ERANGE where they do: no surface marked SG_OK has a NaN or an
+ * infinity (but the object row's point of an object at infinity). */
 int sg_trace_normalized(sg_tracer *t, double hx, double hy, double px,
                         double py, sg_ray_surface *out);
 

@@ -185,8 +185,51 @@ static int finite_or_inf_radius(double r)
     return !isnan(r);
 }
 
+/* Lengths a trace squares (radii, thicknesses, pupil and field sizes) must
+ * keep their squares and products inside the doubles. */
+#define SG_MAX_LEN 1e150
+
+/* The scale of normalized field coordinate Hx (k = 0) or Hy (k = 1): the
+ * largest radial field, or the largest |x| or |y|. */
+static double field_scale(const sg_system *sys, int k)
+{
+    double m = 0.0;
+    int i;
+    for (i = 0; i < sys->nfield; i++) {
+        double v = sys->field_norm == SG_NORM_RADIAL
+                       ? hypot(sys->field[i].x, sys->field[i].y)
+                       : fabs(k == 0 ? sys->field[i].x : sys->field[i].y);
+        m = fmax(m, v);
+    }
+    return m;
+}
+
+int sg_field_check(const sg_system *sys, double hx, double hy, sg_diag *d)
+{
+    double vx, vy;
+    if (!isfinite(hx) || !isfinite(hy))
+        return sg_diag_set(d, SG_EINVAL, "field (Hx %g, Hy %g): not a number", hx, hy);
+    /* Zemax scales the field value itself: for angle fields the angle. */
+    vx = field_scale(sys, 0) * hx;
+    vy = field_scale(sys, 1) * hy;
+    if (sys->field_type == SG_FIELD_ANGLE) {
+        if (!(fabs(vx) < 90.0) || !(fabs(vy) < 90.0))
+            return sg_diag_set(d, SG_ERANGE,
+                               "field (Hx %g, Hy %g): the angle (%g, %g) degrees reaches 90 "
+                               "degrees; normalized coordinates scale the largest field, "
+                               "(%g, %g) degrees, and an angle never wraps",
+                               hx, hy, vx, vy, field_scale(sys, 0), field_scale(sys, 1));
+    } else if (!(fabs(vx) <= SG_MAX_LEN) || !(fabs(vy) <= SG_MAX_LEN)) {
+        return sg_diag_set(d, SG_ERANGE,
+                           "field (Hx %g, Hy %g): the height (%g, %g) is beyond %g lens units",
+                           hx, hy, vx, vy, SG_MAX_LEN);
+    }
+    return SG_OK;
+}
+
 int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
 {
+    double track;
     int i, k;
     if (sys->nsurf < 3)
         return sg_diag_set(d, SG_ENOSYS,
@@ -226,10 +269,40 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
     if (sys->aper_type == SG_APER_OBJECT_NA && !(sys->aper_value < 1.0))
         return sg_diag_set(d, SG_ERANGE, "aperture: object NA %g must be below 1",
                            sys->aper_value);
+    if (sys->aper_type != SG_APER_FLOAT_STOP && sys->aper_value > SG_MAX_LEN)
+        return sg_diag_set(d, SG_ERANGE, "aperture: value %g is beyond %g", sys->aper_value,
+                           SG_MAX_LEN);
+    for (k = 0; k < sys->nfield; k++)
+        if (sys->field_type != SG_FIELD_ANGLE &&
+            (fabs(sys->field[k].x) > SG_MAX_LEN || fabs(sys->field[k].y) > SG_MAX_LEN))
+            return sg_diag_set(d, SG_ERANGE, "field %d: height (%g, %g) is beyond %g lens units",
+                               k + 1, sys->field[k].x, sys->field[k].y, SG_MAX_LEN);
+    track = 0.0;
     for (i = 0; i < sys->nsurf; i++) {
         const sg_surface *s = &sys->surf[i];
         if (!finite_or_inf_radius(s->radius))
             return sg_diag_set(d, SG_ERANGE, "surface %d: radius is not a number", i);
+        /* Beyond this a trace's squares overflow: such a surface is flat
+         * to every digit, and "inf" says so. */
+        if (isfinite(s->radius) && fabs(s->radius) > SG_MAX_LEN)
+            return sg_diag_set(d, SG_ERANGE,
+                               "surface %d: radius %g is beyond %g lens units; write \"inf\" "
+                               "for a flat surface", i, s->radius, SG_MAX_LEN);
+        if (isfinite(s->thickness) && fabs(s->thickness) > SG_MAX_LEN)
+            return sg_diag_set(d, SG_ERANGE,
+                               "surface %d: thickness %g is beyond %g lens units", i,
+                               s->thickness, SG_MAX_LEN);
+        if (i > 0 && i < sys->nsurf - 1) {
+            track += fabs(s->thickness);
+            if (track > SG_MAX_LEN)
+                return sg_diag_set(d, SG_ERANGE,
+                                   "surface %d: thickness: the system is longer than %g lens "
+                                   "units from surface 1 to here", i, SG_MAX_LEN);
+        }
+        if (isfinite(s->semi_diameter) && s->semi_diameter > SG_MAX_LEN)
+            return sg_diag_set(d, SG_ERANGE,
+                               "surface %d: semi-diameter %g is beyond %g lens units", i,
+                               s->semi_diameter, SG_MAX_LEN);
         if (i > 0 && i < sys->nsurf - 1 && !isfinite(s->thickness))
             return sg_diag_set(d, SG_ERANGE, "surface %d: thickness must be finite", i);
         if (i == 0 && isnan(s->thickness))

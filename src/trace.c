@@ -622,14 +622,31 @@ sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
     free(idx);
     if (rc != SG_OK)
         goto fail;
+    if (t->wave != sys->primary_wave) {
+        /* Its warnings would repeat this tracer's; only a failure counts,
+         * named as the primary wavelength's. */
+        sg_trace_opts po = t->o;
+        sg_diag pd;
+        po.wave = sys->primary_wave;
+        sg_diag_clear(&pd);
+        t->prim = sg_tracer_new(sys, cat, &po, &pd);
+        if (!t->prim) {
+            sg_diag_set(d, pd.code != SG_OK ? pd.code : SG_ENOMEM,
+                        "primary wavelength %d, which defines the pupil and fields: %s",
+                        sys->primary_wave + 1, pd.msg);
+            goto fail;
+        }
+    }
+    /* Every method's launch may trace precisely (the real-aim stop radius),
+     * so every tracer has the precise method's rescue, before the launch. */
+    if (!(t->rescue = sg_mpfr_rescue_new())) {
+        sg_diag_set(d, SG_ENOMEM, "out of memory");
+        goto fail;
+    }
     if (sg_launch_prepare(t, d) != SG_OK)
         goto fail;
     if (t->o.method == SG_METHOD_MPFR && sg_mpfr_prepare(t, d) != SG_OK)
         goto fail;
-    if (t->o.method == SG_METHOD_PRECISE && !(t->rescue = sg_mpfr_rescue_new())) {
-        sg_diag_set(d, SG_ENOMEM, "out of memory");
-        goto fail;
-    }
     return t;
 fail:
     sg_tracer_free(t);
@@ -644,6 +661,7 @@ void sg_tracer_free(sg_tracer *t)
         sg_mpfr_free(t->mp);
     if (t->rescue)
         sg_mpfr_free(t->rescue);
+    sg_tracer_free(t->prim);
     sg_system_free(t->sys);
     free(t->sp);
     free(t->nsigned);
@@ -666,6 +684,59 @@ double sg_tracer_index(const sg_tracer *t, int i)
     if (i < 0 || i >= t->n)
         return NAN;
     return t->nsigned[i];
+}
+
+/* Bit 63 of the result is set when v is an infinity or NaN: its exponent
+ * field is all ones, and adding one to it carries into bit 63. */
+static inline uint64_t nonfinite_bit(double v)
+{
+    uint64_t u;
+    memcpy(&u, &v, sizeof u);
+    return (u & 0x7ff0000000000000ull) + 0x0010000000000000ull;
+}
+
+/* The row's ten numbers, each read once and ORed as a tree with integer
+ * operations: no branch and no long chain, so the common, finite ray
+ * costs a few instructions a row. */
+static inline uint64_t row_bits(const sg_ray_surface *o)
+{
+    return ((nonfinite_bit(o->x) | nonfinite_bit(o->y)) |
+            (nonfinite_bit(o->z) | nonfinite_bit(o->l))) |
+           ((nonfinite_bit(o->m) | nonfinite_bit(o->n)) |
+            (nonfinite_bit(o->residual) | nonfinite_bit(o->error_bound))) |
+           (nonfinite_bit(o->dir_error_bound) | nonfinite_bit(o->path));
+}
+
+static int row_bad(const sg_tracer *t, const sg_ray_surface *o, int i)
+{
+    if (i == 0 && isinf(t->sys->surf[0].thickness)) {
+        /* The object at infinity lies infinitely far back along the ray;
+         * its row says so with infinite coordinates, never NaN. */
+        sg_ray_surface c = *o;
+        if (isnan(c.x) || isnan(c.y) || isnan(c.z))
+            return 1;
+        c.x = c.y = c.z = 0.0;
+        return (int)(row_bits(&c) >> 63);
+    }
+    return (int)(row_bits(o) >> 63);
+}
+
+int sg_guard_rows(const sg_tracer *t, sg_ray_surface *out, int rc)
+{
+    uint64_t acc = 0;
+    int i;
+    if (out[0].status != SG_OK)
+        return rc;
+    for (i = 1; i < t->n && out[i].status == SG_OK; i++)
+        acc |= row_bits(&out[i]);
+    if (!(acc >> 63) && !row_bad(t, &out[0], 0))
+        return rc;
+    for (i = 0; i < t->n && out[i].status == SG_OK; i++)
+        if (row_bad(t, &out[i], i)) {
+            sg_fail_rest(out, i, t->n, SG_ERANGE);
+            return SG_ERANGE;
+        }
+    return rc;
 }
 
 void sg_set_start_row(sg_ray_surface *o, const double S[3], const double u[3])
@@ -732,7 +803,7 @@ int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
         /* The preparation checks the ray, as it does for the batch. */
         sg_pray r;
         rc = sg_start_precise_prep(t, start, dir, out, &r);
-        return rc != SG_OK ? rc : sg_precise_run_to(t, &r, 0.0, out, t->n - 1);
+        return rc != SG_OK ? rc : sg_guard_rows(t, out, sg_precise_run_to(t, &r, 0.0, out, t->n - 1));
     }
     rc = start_invalid(t, start, dir, out);
     if (rc != SG_OK)
@@ -744,10 +815,10 @@ int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
         u[1] = dir[1] / len;
         u[2] = dir[2] / len;
         sg_set_start_row(&out[0], start, u);
-        return sg_classic_run_to(t, start, dir, out, t->n - 1);
+        return sg_guard_rows(t, out, sg_classic_run_to(t, start, dir, out, t->n - 1));
     }
     case SG_METHOD_MPFR:
-        return sg_mpfr_trace_start(t, start, dir, out);
+        return sg_guard_rows(t, out, sg_mpfr_trace_start(t, start, dir, out));
     case SG_METHOD_PRECISE:
         break; /* traced above */
     }
@@ -763,11 +834,11 @@ int sg_trace_normalized(sg_tracer *t, double hx, double hy, double px, double py
     }
     switch (t->o.method) {
     case SG_METHOD_PRECISE:
-        return sg_launch_precise(t, hx, hy, px, py, out);
+        return sg_guard_rows(t, out, sg_launch_precise(t, hx, hy, px, py, out));
     case SG_METHOD_CLASSIC:
-        return sg_launch_classic(t, hx, hy, px, py, out);
+        return sg_guard_rows(t, out, sg_launch_classic(t, hx, hy, px, py, out));
     case SG_METHOD_MPFR:
-        return sg_mpfr_trace_normalized(t, hx, hy, px, py, out);
+        return sg_guard_rows(t, out, sg_mpfr_trace_normalized(t, hx, hy, px, py, out));
     }
     return SG_EINVAL;
 }

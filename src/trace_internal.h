@@ -98,6 +98,9 @@ struct sg_tracer {
     const sg_catalog *cat;   /* must outlive the tracer */
     sg_mpfr_ctx *mp;   /* only for the mpfr method */
     sg_mpfr_ctx *rescue; /* the precise method's MPFR root for rays it cannot certify */
+    /* The same system at the primary wavelength, when this tracer's is
+     * another: pupil, aperture and fields are defined there. */
+    struct sg_tracer *prim;
 };
 
 /* Ray state of the precise method: position on the current surface in its
@@ -231,6 +234,11 @@ static inline double sg_bound_up(double b)
     return b * (1.0 + 8.0 * U53);
 }
 
+/* The last check of every method: the first row marked OK whose point,
+ * direction, bound or path is not finite fails with SG_ERANGE, with the
+ * rest not reached (the object row of an object at infinity keeps its
+ * infinite point).  Returns the ray's status, rc when nothing failed. */
+int sg_guard_rows(const sg_tracer *t, sg_ray_surface *out, int rc);
 /* Marks surface from as failed with status and the rest as not reached. */
 void sg_fail_rest(sg_ray_surface *out, int from, int n, int status);
 /* Fills the object row from a start point and a unit direction. */

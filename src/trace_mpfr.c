@@ -640,15 +640,30 @@ static void m_osp(sg_tracer *tr, int deg)
 {
     sg_mpfr_ctx *m = tr->mp;
     mpfr_t *t = m->t;
-    if (!isfinite(tr->sys->surf[0].thickness)) {
-        if (deg) {
-            mpfr_mul(t[12], t[12], m->pi, MPFR_RNDN);
-            mpfr_div_ui(t[12], t[12], 180, MPFR_RNDN);
-            mpfr_tan(t[12], t[12], MPFR_RNDN);
-            mpfr_mul(t[13], t[13], m->pi, MPFR_RNDN);
-            mpfr_div_ui(t[13], t[13], 180, MPFR_RNDN);
-            mpfr_tan(t[13], t[13], MPFR_RNDN);
+    if (deg) {
+        mpfr_mul(t[12], t[12], m->pi, MPFR_RNDN);
+        mpfr_div_ui(t[12], t[12], 180, MPFR_RNDN);
+        mpfr_tan(t[12], t[12], MPFR_RNDN);
+        mpfr_mul(t[13], t[13], m->pi, MPFR_RNDN);
+        mpfr_div_ui(t[13], t[13], 180, MPFR_RNDN);
+        mpfr_tan(t[13], t[13], MPFR_RNDN);
+        if (isfinite(tr->sys->surf[0].thickness)) {
+            /* From a finite object, as in Zemax, the chief ray's slope
+             * towards the entrance pupil's centre: the object point is
+             * -tan (enp + T0) from the axis. */
+            mpfr_add(t[14], m->enp, m->T0, MPFR_RNDN);
+            mpfr_mul(t[12], t[12], t[14], MPFR_RNDN);
+            mpfr_neg(t[12], t[12], MPFR_RNDN);
+            mpfr_mul(t[13], t[13], t[14], MPFR_RNDN);
+            mpfr_neg(t[13], t[13], MPFR_RNDN);
+            /* An axis gets +0, as in the precise launch. */
+            if (mpfr_zero_p(t[12]))
+                mpfr_set_zero(t[12], 1);
+            if (mpfr_zero_p(t[13]))
+                mpfr_set_zero(t[13], 1);
         }
+    }
+    if (!isfinite(tr->sys->surf[0].thickness)) {
         mpfr_set(m->dir.x, t[12], MPFR_RNDN);
         mpfr_set(m->dir.y, t[13], MPFR_RNDN);
         mpfr_set_ui(m->dir.z, 1, MPFR_RNDN);
@@ -904,6 +919,11 @@ int sg_mpfr_trace_normalized(sg_tracer *tr, double hx, double hy, double px, dou
     mpfr_t *t = m->t;
     int inf = !isfinite(tr->sys->surf[0].thickness), deg = 0;
     double S[3], u[3];
+    /* A field that would wrap past 90 degrees or leave the doubles. */
+    if (sg_field_check(tr->sys, hx, hy, NULL) != SG_OK) {
+        sg_fail_rest(out, 0, tr->n, SG_ERANGE);
+        return SG_ERANGE;
+    }
     mpfr_mul_d(t[12], m->fx, hx, MPFR_RNDN);
     mpfr_mul_d(t[13], m->fy, hy, MPFR_RNDN);
     switch (tr->sys->field_type) {
@@ -918,33 +938,35 @@ int sg_mpfr_trace_normalized(sg_tracer *tr, double hx, double hy, double px, dou
         break;
     case SG_FIELD_REAL_IMAGE_HEIGHT: {
         /* The precise method finds the object-space value to double-double
-         * accuracy; the reference then traces that launch exactly. */
-        sg_ray_surface *o0 = tr->scratch;
-        sg_method keep = tr->o.method;
+         * accuracy, at the primary wavelength as Zemax defines the field;
+         * the reference then traces that launch exactly. */
+        sg_tracer *ft = tr->prim ? tr->prim : tr;
+        sg_ray_surface *o0 = ft->scratch;
+        sg_method keep = ft->o.method;
         int rc;
-        tr->o.method = SG_METHOD_PRECISE;
-        tr->have_field = 0;
-        rc = sg_launch_precise(tr, hx, hy, 0.0, 0.0, o0);
-        tr->o.method = keep;
-        tr->have_field = 0;
-        if (rc == SG_EAIM) {
-            sg_fail_rest(out, 0, tr->n, SG_EAIM);
-            return SG_EAIM;
+        ft->o.method = SG_METHOD_PRECISE;
+        ft->have_field = 0;
+        rc = sg_launch_precise(ft, hx, hy, 0.0, 0.0, o0);
+        ft->o.method = keep;
+        ft->have_field = 0;
+        if (rc == SG_EAIM || rc == SG_ERANGE) {
+            sg_fail_rest(out, 0, tr->n, rc);
+            return rc;
         }
         if (inf) {
-            mpfr_set_d(t[12], tr->field.dir.x.hi, MPFR_RNDN);
-            mpfr_add_d(t[12], t[12], tr->field.dir.x.lo, MPFR_RNDN);
-            mpfr_set_d(t[13], tr->field.dir.y.hi, MPFR_RNDN);
-            mpfr_add_d(t[13], t[13], tr->field.dir.y.lo, MPFR_RNDN);
-            mpfr_set_d(t[14], tr->field.dir.z.hi, MPFR_RNDN);
-            mpfr_add_d(t[14], t[14], tr->field.dir.z.lo, MPFR_RNDN);
+            mpfr_set_d(t[12], ft->field.dir.x.hi, MPFR_RNDN);
+            mpfr_add_d(t[12], t[12], ft->field.dir.x.lo, MPFR_RNDN);
+            mpfr_set_d(t[13], ft->field.dir.y.hi, MPFR_RNDN);
+            mpfr_add_d(t[13], t[13], ft->field.dir.y.lo, MPFR_RNDN);
+            mpfr_set_d(t[14], ft->field.dir.z.hi, MPFR_RNDN);
+            mpfr_add_d(t[14], t[14], ft->field.dir.z.lo, MPFR_RNDN);
             mpfr_div(t[12], t[12], t[14], MPFR_RNDN);
             mpfr_div(t[13], t[13], t[14], MPFR_RNDN);
         } else {
-            mpfr_set_d(t[12], tr->field.obj.x.hi, MPFR_RNDN);
-            mpfr_add_d(t[12], t[12], tr->field.obj.x.lo, MPFR_RNDN);
-            mpfr_set_d(t[13], tr->field.obj.y.hi, MPFR_RNDN);
-            mpfr_add_d(t[13], t[13], tr->field.obj.y.lo, MPFR_RNDN);
+            mpfr_set_d(t[12], ft->field.obj.x.hi, MPFR_RNDN);
+            mpfr_add_d(t[12], t[12], ft->field.obj.x.lo, MPFR_RNDN);
+            mpfr_set_d(t[13], ft->field.obj.y.hi, MPFR_RNDN);
+            mpfr_add_d(t[13], t[13], ft->field.obj.y.lo, MPFR_RNDN);
         }
         break;
     }
@@ -1048,6 +1070,16 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             mpfr_set_d(m->t[0], fabs(sys->field[k].y), MPFR_RNDN);
             mpfr_max(m->fy, m->fy, m->t[0], MPFR_RNDN);
         }
+    }
+    if (tr->prim) {
+        /* The pupil, aperture and fields of the primary wavelength, as in
+         * the precise launch. */
+        sg_mpfr_ctx *pm = tr->prim->mp;
+        mpfr_set(m->enp, pm->enp, MPFR_RNDN);
+        mpfr_set(m->epr, pm->epr, MPFR_RNDN);
+        mpfr_set(m->stop_r, pm->stop_r, MPFR_RNDN);
+        mpfr_set(m->pimg_slope, pm->pimg_slope, MPFR_RNDN);
+        return SG_OK;
     }
     /* Real aiming with a pupil not set by the stop: the stop radius is
      * where the real on-axis marginal ray meets the stop. */

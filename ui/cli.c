@@ -810,6 +810,14 @@ int cmd_trace(int argc, char **argv)
     rc = cli_check_wave(design, sys, wave1, &wave0);
     if (rc != CLI_EXIT_OK)
         goto done;
+    /* A field past 90 degrees is the command line's mistake, not a ray's
+     * result. */
+    sg_diag_clear(&d);
+    if (have_ray && sg_field_check(sys, ray4[0], ray4[1], &d) != SG_OK) {
+        cli_error("--ray: %s: %s", design, d.msg);
+        rc = CLI_EXIT_USAGE;
+        goto done;
+    }
 
     sg_trace_opts_init(&opts);
     opts.method = (sg_method)method;

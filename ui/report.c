@@ -33,6 +33,7 @@ const char *report_status_name(int status)
     case SG_ENOCONV: return "NOCONV";
     case SG_ENOTREACHED: return "NOT REACHED";
     case SG_EAIM: return "AIM FAILED";
+    case SG_ERANGE: return "OUT OF RANGE";
     default:
         name = sg_err_name(status);
         return strncmp(name, "SG_E", 4) == 0 ? name + 4 : name;

@@ -8,12 +8,13 @@
  * is writable); that text must parse again to the same system, every double
  * bit for bit, and write the identical text.
  *
- * With SAGITTA_FUZZ_TRACE=1 in the environment (run.sh --trace), small
- * designs that validate are also traced (paraxial data, then three rays by
- * two methods), so that the engine meets every odd value the loader lets
- * through; a reached surface must then have numbers, never NaN.  This is
- * off by default so that the loader's smoke run does not fail on engine
- * findings.
+ * With SAGITTA_FUZZ_TRACE=1 in the environment (run.sh --trace, as the
+ * smoke test runs it), small designs that validate are also traced
+ * (paraxial data, then rays inside and beyond the field and pupil by every
+ * method, at the primary and another wavelength), so that the engine meets
+ * every odd value the loader lets through; a surface marked OK must then
+ * have finite numbers (only the object row of an object at infinity has
+ * infinite coordinates), never NaN or an infinite bound or path.
  */
 #include <math.h>
 #include <stdint.h>
@@ -115,18 +116,27 @@ static const char *compare(const sg_system *a, const sg_system *b)
     return NULL;
 }
 
-/* A failed surface has no numbers; a reached one has finite or infinite
- * numbers, never NaN (sagitta(1), OUTPUT FORMATS). */
-static void check_rays(const sg_ray_surface *out, int n, int rc)
+/* A failed surface has no numbers; a reached one has finite numbers, and
+ * only the object row of an object at infinity infinite coordinates
+ * (sagitta(1), OUTPUT FORMATS). */
+static void check_rays(const sg_system *sys, const sg_ray_surface *out, int n, int rc)
 {
     int i;
     for (i = 0; i < n; i++) {
-        if (out[i].status < 0 || out[i].status >= SG_ERRNO_COUNT)
+        const sg_ray_surface *o = &out[i];
+        int inf_point = i == 0 && isinf(sys->surf[0].thickness);
+        if (o->status < 0 || o->status >= SG_ERRNO_COUNT)
             die("a surface status outside the error table", NULL);
-        if (out[i].status == SG_OK &&
-            (isnan(out[i].x) || isnan(out[i].y) || isnan(out[i].z) || isnan(out[i].l) ||
-             isnan(out[i].m) || isnan(out[i].n)))
+        if (o->status != SG_OK)
+            continue;
+        if (isnan(o->x) || isnan(o->y) || isnan(o->z) || !isfinite(o->l) || !isfinite(o->m) ||
+            !isfinite(o->n))
             die("NaN coordinates on a surface reported OK", NULL);
+        if (!inf_point && (!isfinite(o->x) || !isfinite(o->y) || !isfinite(o->z)))
+            die("infinite coordinates on a surface reported OK", NULL);
+        if (!isfinite(o->residual) || !isfinite(o->error_bound) ||
+            !isfinite(o->dir_error_bound) || !isfinite(o->path))
+            die("a residual, bound or path that is not finite on a surface reported OK", NULL);
     }
     if (rc == SG_OK && out[n - 1].status != SG_OK)
         die("trace succeeded but the image is not OK", NULL);
@@ -134,7 +144,11 @@ static void check_rays(const sg_ray_surface *out, int n, int rc)
 
 static void trace_some(const sg_system *sys)
 {
-    static const sg_method methods[] = {SG_METHOD_PRECISE, SG_METHOD_CLASSIC};
+    static const sg_method methods[] = {SG_METHOD_PRECISE, SG_METHOD_CLASSIC, SG_METHOD_MPFR};
+    /* Inside the field and pupil, and beyond both: a field past 90
+     * degrees must be refused, never wrap. */
+    static const double rays[][4] = {{0.0, 1.0, 0.0, 1.0}, {0.7, -0.3, -0.5, 0.5},
+                                     {0.0, 20.0, 0.0, 0.0}, {3.0, 0.0, 0.0, -4.0}};
     sg_ray_surface out[64];
     sg_trace_opts o;
     sg_paraxial p;
@@ -148,12 +162,17 @@ static void trace_some(const sg_system *sys)
         sg_diag_clear(&d);
         check_diag(&d, sg_paraxial_compute(sys, cat, w, &p, &d), 0);
     }
-    for (m = 0; m < sizeof methods / sizeof methods[0]; m++) {
+    for (m = 0; m < sizeof methods / sizeof methods[0] * 2; m++) {
         static const double start[3] = {0.0, 1.0, -1.0}, dir[3] = {0.0, 0.01, 1.0};
         sg_tracer *t;
+        size_t r;
         int rc;
         sg_trace_opts_init(&o);
-        o.method = methods[m];
+        o.method = methods[m % 3];
+        o.mpfr_bits = 64;
+        /* The second round at the last wavelength, whose pupil and fields
+         * are the primary's. */
+        o.wave = m < 3 ? -1 : sys->nwave - 1;
         sg_diag_clear(&d);
         t = sg_tracer_new(sys, cat, &o, &d);
         if (!t) {
@@ -163,12 +182,15 @@ static void trace_some(const sg_system *sys)
         }
         if (sg_tracer_nsurf(t) != sys->nsurf)
             die("tracer surface count differs from the system's", NULL);
-        rc = sg_trace_normalized(t, 0.0, 1.0, 0.0, 1.0, out);
-        check_rays(out, sys->nsurf, rc);
-        rc = sg_trace_normalized(t, 0.7, -0.3, -0.5, 0.5, out);
-        check_rays(out, sys->nsurf, rc);
+        for (r = 0; r < sizeof rays / sizeof rays[0]; r++) {
+            rc = sg_trace_normalized(t, rays[r][0], rays[r][1], rays[r][2], rays[r][3], out);
+            check_rays(sys, out, sys->nsurf, rc);
+            if (r == 2 && sys->field_type == SG_FIELD_ANGLE && rc == SG_OK &&
+                !(sg_field_check(sys, rays[r][0], rays[r][1], NULL) == SG_OK))
+                die("a field past 90 degrees was traced", NULL);
+        }
         rc = sg_trace_start(t, start, dir, out);
-        check_rays(out, sys->nsurf, rc);
+        check_rays(sys, out, sys->nsurf, rc);
         sg_tracer_free(t);
     }
 }

@@ -31,6 +31,7 @@ static const char *status_word(int st)
     case SG_EOK: return "OK";
     case SG_ENOTREACHED: return "-";
     case SG_EAIM: return "AIM FAIL";
+    case SG_ERANGE: return "RANGE";
     default: return report_status_name(st);
     }
 }
