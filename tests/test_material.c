@@ -915,9 +915,13 @@ static void test_locale(void **state)
     (void)state;
     for (i = 0; i < sizeof locs / sizeof locs[0] && !got; i++)
         got = setlocale(LC_NUMERIC, locs[i]);
+    /* tools/dev.sh generates de_DE.UTF-8; without it the case is a skip,
+     * counted as one, and in CI a failure. */
     if (!got) {
-        print_message("# no comma-decimal locale installed; locale case not "
-                      "exercised\n");
+        if (tu_ci())
+            fail_msg("no comma-decimal locale installed (tools/dev.sh generates "
+                     "de_DE.UTF-8); CI must run this case");
+        print_message("# SKIP no comma-decimal locale installed\n");
         return;
     }
     {

@@ -3,6 +3,11 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#ifdef __linux__
+#include <sys/fsuid.h>
+#endif
 
 #include "testutil.h"
 
@@ -63,4 +68,39 @@ sg_tracer *tu_tracer(const sg_system *sys, const sg_catalog *cat, sg_method m)
     if (!t)
         fail_msg("tracer: %s", d.msg);
     return t;
+}
+
+int tu_ci(void)
+{
+    const char *ci = getenv("CI");
+    return ci && *ci && strcmp(ci, "0") != 0 && strcmp(ci, "false") != 0 &&
+           strcmp(ci, "no") != 0;
+}
+
+int tu_unpriv_begin(void)
+{
+    if (geteuid() != 0)
+        return 0;
+#ifdef __linux__
+    /* Group first: once the user id is nobody's, changing it is refused. */
+    setfsgid(TU_NOBODY);
+    setfsuid(TU_NOBODY);
+    /* setfsuid reports the previous id, never an error: ask again. */
+    if (setfsuid(TU_NOBODY) != TU_NOBODY)
+        fail_msg("setfsuid(%d) did not take effect", TU_NOBODY);
+    return 1;
+#else
+    fail_msg("running as root, and this system has no setfsuid to drop it");
+    return 0;
+#endif
+}
+
+void tu_unpriv_end(void)
+{
+#ifdef __linux__
+    if (geteuid() == 0) {
+        setfsuid(0);
+        setfsgid(0);
+    }
+#endif
 }

@@ -30,4 +30,23 @@ double tu_ulps(double a, double b, double ref_scale);
 /* ulp of |x| for a double (spacing of doubles at x). */
 double tu_ulp(double x);
 
+/* A case that cannot run here prints a line "# SKIP reason" and returns:
+ * tools/dev.sh counts it as a skip.  (cmocka's skip() prints "not ok # SKIP",
+ * which meson counts as a failure.)
+ *
+ * Nonzero when the tests run in CI (CI set, and not "", 0, false or no),
+ * where a case that cannot run must fail rather than be skipped. */
+int tu_ci(void);
+
+/* Root's writes ignore a directory's mode, so a read-only-directory case
+ * run as root would test nothing.  tu_unpriv_begin() switches this
+ * thread's filesystem user and group to nobody (TU_NOBODY) with
+ * setfsuid(2), which also drops root's file capabilities, and returns 1;
+ * tu_unpriv_end() switches back.  The case first chowns what nobody must
+ * own.  Not root: both do nothing and tu_unpriv_begin() returns 0.  Call
+ * no cmocka assertion in between (a failure would leave the ids changed). */
+#define TU_NOBODY 65534
+int tu_unpriv_begin(void);
+void tu_unpriv_end(void);
+
 #endif

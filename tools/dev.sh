@@ -15,7 +15,12 @@ cd "$here"
 build=${BUILD_DIR:-build}
 
 packages="gcc meson ninja-build pkg-config libmpfr-dev libgmp-dev libcjson-dev \
-libcmocka-dev libncurses-dev tmux python3 clang libclang-rt-14-dev valgrind"
+libcmocka-dev libncurses-dev tmux python3 clang libclang-rt-14-dev valgrind \
+locales"
+
+# A comma-decimal locale, for the test that numbers are read with '.'
+# whatever LC_NUMERIC is (tests/test_material.c).
+locale_name=de_DE.UTF-8
 
 deps() {
     missing=""
@@ -23,16 +28,21 @@ deps() {
         dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" ||
             missing="$missing $p"
     done
-    [ -z "$missing" ] && return 0
-    echo "dev.sh: installing:$missing" >&2
     if [ "$(id -u)" -eq 0 ]; then
         sudo=""
     else
         sudo="sudo"
     fi
-    $sudo apt-get update -qq
-    # shellcheck disable=SC2086
-    DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq $missing >/dev/null
+    if [ -n "$missing" ]; then
+        echo "dev.sh: installing:$missing" >&2
+        $sudo apt-get update -qq
+        # shellcheck disable=SC2086
+        DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq $missing >/dev/null
+    fi
+    if ! locale -a 2>/dev/null | grep -qix "$(echo "$locale_name" | sed 's/UTF-8/utf8/')"; then
+        echo "dev.sh: generating the $locale_name locale" >&2
+        $sudo localedef -i "${locale_name%%.*}" -c -f UTF-8 "$locale_name"
+    fi
 }
 
 build() {
@@ -44,24 +54,44 @@ build() {
     ninja -C "$build"
 }
 
-# Prints "N passed, N failed" from meson's log, counting each TAP case.
+# Prints "N passed, N failed, N skipped" from meson's log, counting each TAP
+# case.  Skips are counted as skips, not passes: a TAP line with a "# SKIP"
+# directive, a test that exits 77, and a cmocka case that printed a line
+# "# SKIP reason" and returned (cmocka's own skip() reads as a failure to
+# meson).  CI reads the last line: it starts with "N passed, N failed".
 summary() {
     python3 - "$build/meson-logs/testlog.json" <<'PY'
 import json, re, sys
-passed = failed = 0
+passed = failed = skipped = 0
+names = []
 for line in open(sys.argv[1]):
     t = json.loads(line)
-    cases = re.findall(r"^(ok|not ok)\b", t.get("stdout") or "", re.M)
+    cases = re.findall(r"^(ok|not ok)\b(.*)$", t.get("stdout") or "", re.M)
     if cases:
-        passed += sum(c == "ok" for c in cases)
-        failed += sum(c == "not ok" for c in cases)
-        if t["result"] not in ("OK", "SKIP") and "not ok" not in cases:
+        for verdict, rest in cases:
+            if re.search(r"#\s*skip", rest, re.I):
+                skipped += 1
+                names.append(t["name"] + ":" + rest.strip())
+            elif verdict == "ok":
+                passed += 1
+            else:
+                failed += 1
+        for reason in re.findall(r"^# SKIP\b(.*)$", t.get("stdout") or "", re.M):
+            passed -= 1
+            skipped += 1
+            names.append(t["name"] + ": " + reason.strip())
+        if t["result"] not in ("OK", "SKIP") and all(v == "ok" for v, _ in cases):
             failed += 1
     elif t["result"] in ("OK", "EXPECTEDFAIL"):
         passed += 1
-    elif t["result"] != "SKIP":
+    elif t["result"] == "SKIP":
+        skipped += 1
+        names.append(t["name"])
+    else:
         failed += 1
-print(f"{passed} passed, {failed} failed")
+for n in names:
+    print("skipped:", n)
+print(f"{passed} passed, {failed} failed, {skipped} skipped")
 PY
 }
 

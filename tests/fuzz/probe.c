@@ -1,4 +1,4 @@
-/* probe.c - the smallest libFuzzer target; meson links it to learn whether
+/* probe.c - the smallest libFuzzer target; run.sh links it to learn whether
  * clang's -fsanitize=fuzzer works here. */
 #include <stddef.h>
 #include <stdint.h>
