@@ -97,6 +97,34 @@ static double sag_d(const gcase *c, double r2, double *dr2)
     return s;
 }
 
+/* The point of c at radius r and azimuth phi, the unit normal there
+ * (-2 x dsag, -2 y dsag, 1) normalized, and two unit tangents across it.
+ * A plane (R infinite) has sag and slope 0. */
+static void point_frame(const gcase *c, double r, double phi, double tgt[3], double nrm[3],
+                        double t1[3], double t2[3])
+{
+    double dr2 = 0.0, len;
+    tgt[0] = r * cos(phi);
+    tgt[1] = r * sin(phi);
+    tgt[2] = isfinite(c->R) ? sag_d(c, tgt[0] * tgt[0] + tgt[1] * tgt[1], &dr2) : 0.0;
+    nrm[0] = -2.0 * tgt[0] * dr2;
+    nrm[1] = -2.0 * tgt[1] * dr2;
+    nrm[2] = 1.0;
+    len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + 1.0);
+    nrm[0] /= len;
+    nrm[1] /= len;
+    nrm[2] /= len;
+    t1[0] = nrm[2];
+    t1[1] = 0.0;
+    t1[2] = -nrm[0];
+    len = sqrt(t1[0] * t1[0] + t1[2] * t1[2]);
+    t1[0] /= len;
+    t1[2] /= len;
+    t2[0] = nrm[1] * t1[2] - nrm[2] * t1[1];
+    t2[1] = nrm[2] * t1[0] - nrm[0] * t1[2];
+    t2[2] = nrm[0] * t1[1] - nrm[1] * t1[0];
+}
+
 static void set_surface(sg_system *sys, const gcase *c, const double S[3], const double D[3])
 {
     int j;
@@ -233,7 +261,7 @@ static void judge(tally *t, int kind, long i, const sg_ray_surface *p,
 static void report(const tally *t, const char *what)
 {
     print_message("# %s: %ld rays, %ld hit in both, %ld uncertified (%ld where the reference "
-                  "decided), %ld disagree on hit/miss, %ld beyond a bound, %.2f%% within 1 ulp, "
+                  "decided), %ld disagree on status, %ld beyond a bound, %.2f%% within 1 ulp, "
                   "worst %.3g ulp\n",
                   what, t->n, t->both_hit, t->uncert, t->uncert_decided, t->disagree,
                   t->over_bound,
@@ -256,6 +284,23 @@ static void assert_tally(const tally *t, double max_uncert)
     assert_true((double)t->uncert_decided <= max_uncert * (double)t->n);
 }
 
+/* Traces S + t D with precise and with 512-bit mpfr through the surface
+ * of c, and judges surface 1 (a TIR shows as its status). */
+static void trace_and_judge(sg_system *sys, const gcase *c, const double S[3],
+                            const double D[3], tally *t, int kind, long i)
+{
+    sg_ray_surface op[3], om[3];
+    sg_tracer *tp, *tm;
+    set_surface(sys, c, S, D);
+    tp = tracer(sys, SG_METHOD_PRECISE, 0);
+    tm = tracer(sys, SG_METHOD_MPFR, 512);
+    sg_trace_start(tp, S, D, op);
+    sg_trace_start(tm, S, D, om);
+    judge(t, kind, i, &op[1], &om[1]);
+    sg_tracer_free(tp);
+    sg_tracer_free(tm);
+}
+
 /* Rays nearly tangent to the surface at a random point: along a tangent
  * direction tilted by +-1e-1 .. 1e-12 rad towards or away from the
  * surface, starting 1e-2 to 1e3 radii back. */
@@ -270,34 +315,12 @@ static void grazing_rays(void **state)
     for (i = 0; i < PER_KIND * NSHAPE; i++) {
         gcase c;
         int kind = (int)(i / PER_KIND);
-        double rmax, r, phi, tgt[3], dr2, nrm[3], tan1[3], tan2[3], len, eps, ps, D[3], S[3],
-            L;
-        sg_ray_surface op[3], om[3];
-        sg_tracer *tp, *tm;
+        double rmax, r, phi, tgt[3], nrm[3], tan1[3], tan2[3], eps, ps, D[3], S[3], L;
         random_surface(&c, kind);
         rmax = 0.7 * fabs(c.R) / (c.k > 0 ? sqrt(1.0 + c.k) : 1.0);
         r = rmax * sqrt(urand());
         phi = 2.0 * PI_D * urand();
-        tgt[0] = r * cos(phi);
-        tgt[1] = r * sin(phi);
-        tgt[2] = sag_d(&c, tgt[0] * tgt[0] + tgt[1] * tgt[1], &dr2);
-        /* The normal (-2 x dsag, -2 y dsag, 1), and two tangents. */
-        nrm[0] = -2.0 * tgt[0] * dr2;
-        nrm[1] = -2.0 * tgt[1] * dr2;
-        nrm[2] = 1.0;
-        len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + 1.0);
-        nrm[0] /= len;
-        nrm[1] /= len;
-        nrm[2] /= len;
-        tan1[0] = nrm[2];
-        tan1[1] = 0.0;
-        tan1[2] = -nrm[0];
-        len = sqrt(tan1[0] * tan1[0] + tan1[2] * tan1[2]);
-        tan1[0] /= len;
-        tan1[2] /= len;
-        tan2[0] = nrm[1] * tan1[2] - nrm[2] * tan1[1];
-        tan2[1] = nrm[2] * tan1[0] - nrm[0] * tan1[2];
-        tan2[2] = nrm[0] * tan1[1] - nrm[1] * tan1[0];
+        point_frame(&c, r, phi, tgt, nrm, tan1, tan2);
         ps = 2.0 * PI_D * urand();
         eps = pow(10.0, -1.0 - 11.0 * urand()) * (urand() < 0.5 ? -1.0 : 1.0);
         D[0] = cos(eps) * (cos(ps) * tan1[0] + sin(ps) * tan2[0]) + sin(eps) * nrm[0];
@@ -312,14 +335,7 @@ static void grazing_rays(void **state)
         S[0] = tgt[0] - L * D[0];
         S[1] = tgt[1] - L * D[1];
         S[2] = tgt[2] - L * D[2];
-        set_surface(sys, &c, S, D);
-        tp = tracer(sys, SG_METHOD_PRECISE, 0);
-        tm = tracer(sys, SG_METHOD_MPFR, 512);
-        sg_trace_start(tp, S, D, op);
-        sg_trace_start(tm, S, D, om);
-        judge(&t, kind, i, &op[1], &om[1]);
-        sg_tracer_free(tp);
-        sg_tracer_free(tm);
+        trace_and_judge(sys, &c, S, D, &t, kind, i);
     }
     report(&t, "grazing");
     assert_tally(&t, 0.01);
@@ -342,8 +358,6 @@ static void parallel_to_tangent_plane(void **state)
         gcase c;
         int kind = (int)(i % NSHAPE);
         double S[3], D[3], az, tilt, h;
-        sg_ray_surface op[3], om[3];
-        sg_tracer *tp, *tm;
         random_surface(&c, kind);
         h = fabs(c.R) * pow(10.0, -3.0 + 3.0 * urand());
         az = 2.0 * PI_D * urand();
@@ -354,14 +368,7 @@ static void parallel_to_tangent_plane(void **state)
         D[0] = cos(az);
         D[1] = sin(az);
         D[2] = tilt;
-        set_surface(sys, &c, S, D);
-        tp = tracer(sys, SG_METHOD_PRECISE, 0);
-        tm = tracer(sys, SG_METHOD_MPFR, 512);
-        sg_trace_start(tp, S, D, op);
-        sg_trace_start(tm, S, D, om);
-        judge(&t, kind, i, &op[1], &om[1]);
-        sg_tracer_free(tp);
-        sg_tracer_free(tm);
+        trace_and_judge(sys, &c, S, D, &t, kind, i);
     }
     report(&t, "parallel");
     assert_tally(&t, 0.01);
@@ -421,38 +428,12 @@ static void critical_angle(void **state)
     for (i = 0; i < N; i++) {
         gcase c = {0};
         int kind = (int)(i % 2);
-        double S[3], D[3], tgt[3], nrm[3], dr2, len, az, th, r, phi, L, ax[3], bx[3];
-        sg_ray_surface op[3], om[3];
-        sg_tracer *tp, *tm;
+        double S[3], D[3], tgt[3], nrm[3], az, th, r, phi, L, ax[3], bx[3];
         c.R = kind ? pow(10.0, -1.0 + 4.0 * urand()) * (urand() < 0.5 ? -1.0 : 1.0) : INFINITY;
         c.exit = 1;
         r = isfinite(c.R) ? 0.5 * fabs(c.R) * sqrt(urand()) : 10.0 * urand();
         phi = 2.0 * PI_D * urand();
-        tgt[0] = r * cos(phi);
-        tgt[1] = r * sin(phi);
-        if (isfinite(c.R)) {
-            tgt[2] = sag_d(&c, tgt[0] * tgt[0] + tgt[1] * tgt[1], &dr2);
-        } else {
-            tgt[2] = 0.0;
-            dr2 = 0.0;
-        }
-        nrm[0] = -2.0 * tgt[0] * dr2;
-        nrm[1] = -2.0 * tgt[1] * dr2;
-        nrm[2] = 1.0;
-        len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + 1.0);
-        nrm[0] /= len;
-        nrm[1] /= len;
-        nrm[2] /= len;
-        /* Two unit vectors across the normal. */
-        ax[0] = nrm[2];
-        ax[1] = 0.0;
-        ax[2] = -nrm[0];
-        len = sqrt(ax[0] * ax[0] + ax[2] * ax[2]);
-        ax[0] /= len;
-        ax[2] /= len;
-        bx[0] = nrm[1] * ax[2] - nrm[2] * ax[1];
-        bx[1] = nrm[2] * ax[0] - nrm[0] * ax[2];
-        bx[2] = nrm[0] * ax[1] - nrm[1] * ax[0];
+        point_frame(&c, r, phi, tgt, nrm, ax, bx);
         th = crit + pow(10.0, -1.0 - 16.0 * urand()) * (urand() < 0.5 ? -1.0 : 1.0);
         az = 2.0 * PI_D * urand();
         D[0] = cos(th) * nrm[0] + sin(th) * (cos(az) * ax[0] + sin(az) * bx[0]);
@@ -462,15 +443,8 @@ static void critical_angle(void **state)
         S[0] = tgt[0] - L * D[0];
         S[1] = tgt[1] - L * D[1];
         S[2] = tgt[2] - L * D[2];
-        set_surface(sys, &c, S, D);
-        tp = tracer(sys, SG_METHOD_PRECISE, 0);
-        tm = tracer(sys, SG_METHOD_MPFR, 512);
-        sg_trace_start(tp, S, D, op);
-        sg_trace_start(tm, S, D, om);
         /* TIR shows as the status of surface 1 itself. */
-        judge(&t, kind ? 0 : PLANE, i, &op[1], &om[1]);
-        sg_tracer_free(tp);
-        sg_tracer_free(tm);
+        trace_and_judge(sys, &c, S, D, &t, kind ? 0 : PLANE, i);
     }
     report(&t, "critical");
     assert_tally(&t, 0.01);

@@ -408,6 +408,18 @@ static const cli_opt trace_opts[] = {
 
 /* ---- a ray list, streamed ---- */
 
+/* Reports a trace that failed for a reason other than the ray's own fate,
+ * and returns the exit status for it. */
+static int trace_failed(const char *design, const sg_diag *d, int rc)
+{
+    if (d->msg[0])
+        print_diag(design, d, rc);
+    else
+        cli_error("%s: trace failed: %s", design, sg_strerror(rc));
+    rc = cli_exit_for(rc);
+    return rc == CLI_EXIT_OK ? CLI_EXIT_INTERNAL : rc;
+}
+
 /* Progress of a long run on standard error: only on a terminal, never in
  * CI (CI set) or a pipe, first after a second and then four times a
  * second, erased at the end. */
@@ -614,13 +626,7 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
         rc = sg_batch_trace(b, csvrays_kind(rd), rays, n, NULL, 0, out, status, &d);
         if (rc != SG_OK) {
             progress_end(&pg);
-            if (d.msg[0])
-                print_diag(design, &d, rc);
-            else
-                cli_error("%s: trace failed: %s", design, sg_strerror(rc));
-            rc = cli_exit_for(rc);
-            if (rc == CLI_EXIT_OK)
-                rc = CLI_EXIT_INTERNAL;
+            rc = trace_failed(design, &d, rc);
             goto done;
         }
         /* The output is opened only after the first block traced, so a
@@ -856,13 +862,7 @@ int cmd_trace(int argc, char **argv)
         sg_diag_clear(&d);
     }
     if (!sg_err_is_ray_status(rc)) {
-        if (d.msg[0])
-            print_diag(design, &d, rc);
-        else
-            cli_error("%s: trace failed: %s", design, sg_strerror(rc));
-        rc = cli_exit_for(rc);
-        if (rc == CLI_EXIT_OK)
-            rc = CLI_EXIT_INTERNAL;
+        rc = trace_failed(design, &d, rc);
         goto done;
     }
     cli_print_warnings(&d, design);
