@@ -125,14 +125,15 @@ static vd conic_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd tgt, 
     /* Each of A, b, C errs by a few u of the magnitude of its terms (the
      * rounded 1 / R included), so b^2 - AC errs by well under 64u of
      * Mb^2 + Ma Mc.  The seed point itself lies up to eseed off the ray,
-     * which moves b by (1 + k) |c| eseed and C by |grad C| eseed. */
-    vd Ma = ac * (d[0] * d[0] + d[1] * d[1] + ak * d[2] * d[2]);
-    vd Mb = ac * (vd_abs(p[0] * d[0]) + vd_abs(p[1] * d[1]) + ak * vd_abs(p[2] * d[2])) +
-            vd_abs(d[2]);
-    vd Mc = ac * (p[0] * p[0] + p[1] * p[1] + ak * p[2] * p[2]) + 2.0 * vd_abs(p[2]);
-    vd gC = 2.0 * (ac * (vd_abs(p[0]) + vd_abs(p[1]) + ak * vd_abs(p[2])) + 1.0);
-    vd err = 64.0 * U53 * (Mb * Mb + Ma * Mc) +
-             4.0 * (Mb * ac * (1.0 + ak) + Ma * gC) * eseed;
+     * which moves b by (1 + k) |c| eseed and C by |grad C| eseed.  With
+     * K = |c| (1 + |k|), a unit direction and m = |p|_1, the magnitudes
+     * are at most Ma = K, Mb = K m + |d_z|, Mc = K m^2 + 2 |p_z| and
+     * |grad C| = 2 (K m + 1): bounds that cost a few operations. */
+    double K = ac * (1.0 + ak);
+    vd m = vd_abs(p[0]) + vd_abs(p[1]) + vd_abs(p[2]);
+    vd Mb = K * m + vd_abs(d[2]);
+    vd Mc = K * m * m + 2.0 * vd_abs(p[2]);
+    vd err = 64.0 * U53 * (Mb * Mb + K * Mc) + 4.0 * K * (Mb + 2.0 * (K * m + 1.0)) * eseed;
     *unsure = (vm)(vd_abs(disc) <= err) | vd_isnan(disc);
     *miss = ~(in & (ok1 | ok2));
     first = ok1 & (~ok2 | (vm)(vd_abs(s1 - tgt) <= vd_abs(s2 - tgt)));
