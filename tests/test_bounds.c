@@ -328,22 +328,6 @@ static double derr(const sg_ray_surface *o, const truth *t)
                 fmax(fabs((o->m - t->d[1]) - t->dl[1]), fabs((o->n - t->d[2]) - t->dl[2])));
 }
 
-static sg_tracer *tracer(const sg_system *sys, sg_method m, int bits)
-{
-    sg_trace_opts o;
-    sg_diag d;
-    sg_tracer *t;
-    sg_trace_opts_init(&o);
-    o.method = m;
-    if (bits)
-        o.mpfr_bits = bits;
-    sg_diag_clear(&d);
-    t = sg_tracer_new(sys, NULL, &o, &d);
-    if (!t)
-        fail_msg("tracer: %s", d.msg);
-    return t;
-}
-
 /* A random surface of kind 0..5 (sphere, prolate, oblate, paraboloid,
  * hyperboloid, asphere), a target on it, a direction within 60 degrees of
  * the axis and a start dist back along it (rounded to double). */
@@ -407,16 +391,6 @@ static void set_surface(sg_system *sys, const scase *c)
     }
 }
 
-static sg_system *one_surface(void)
-{
-    sg_system *sys = sg_system_new();
-    assert_non_null(sys);
-    assert_int_equal(sg_system_reset(sys, 3), SG_OK);
-    sys->surf[0].thickness = INFINITY;
-    sys->stop = 1;
-    return sys;
-}
-
 /* The reported residual against |z - sag| of the same double point: within
  * 1% of it, or below 1e-6 ulp of the point's size when it is that small
  * (the first-order formulas drop a term of that order). */
@@ -445,7 +419,7 @@ static void check_residual(const char *what, int i, const scase *c, const sg_ray
 static void single_surface(void **state)
 {
     enum { PER_KIND = 300, NK = 6 };
-    sg_system *sys = one_surface();
+    sg_system *sys = tu_one_surface();
     int i, mirror, nchecked = 0;
     double min_rp = INFINITY, min_rd = INFINITY, min_rm[2] = {INFINITY, INFINITY};
     double min_rmd[2] = {INFINITY, INFINITY}, worst_res[3] = {0, 0, 0};
@@ -465,7 +439,7 @@ static void single_surface(void **state)
             if (!mtruth(&c, S, D, tgt, &t))
                 continue;
             set_surface(sys, &c);
-            tp = tracer(sys, SG_METHOD_PRECISE, 0);
+            tp = tu_tracer_bits(sys, NULL, SG_METHOD_PRECISE, 0);
             if (sg_trace_start(tp, S, D, op) > SG_OK && op[1].status != SG_OK) {
                 sg_tracer_free(tp);
                 continue;
@@ -486,12 +460,12 @@ static void single_surface(void **state)
                 min_rd = fmin(min_rd, op[1].dir_error_bound / e);
             check_residual("precise", i, &c, &op[1], &worst_res[0]);
             sg_tracer_free(tp);
-            tc = tracer(sys, SG_METHOD_CLASSIC, 0);
+            tc = tu_tracer_bits(sys, NULL, SG_METHOD_CLASSIC, 0);
             if (sg_trace_start(tc, S, D, oc) == SG_OK)
                 check_residual("classic", i, &c, &oc[1], &worst_res[1]);
             sg_tracer_free(tc);
             for (b = 0; b < 2; b++) {
-                tm = tracer(sys, SG_METHOD_MPFR, bits[b]);
+                tm = tu_tracer_bits(sys, NULL, SG_METHOD_MPFR, bits[b]);
                 assert_int_equal(sg_trace_start(tm, S, D, om), SG_OK);
                 e = perr(&om[1], &t);
                 if (e > om[1].error_bound)
@@ -537,7 +511,7 @@ static void single_surface(void **state)
 static void classic_ordinary(void **state)
 {
     enum { PER_KIND = 200, NK = 6 };
-    sg_system *sys = one_surface();
+    sg_system *sys = tu_one_surface();
     int i, mirror, n = 0, nother = 0, nfail = 0;
     double worst_p = 0.0, worst_d = 0.0;
     static double cep[2 * PER_KIND * NK], ced[2 * PER_KIND * NK];
@@ -564,7 +538,7 @@ static void classic_ordinary(void **state)
             if (!mtruth(&c, S, D, tgt, &t))
                 continue;
             set_surface(sys, &c);
-            tc = tracer(sys, SG_METHOD_CLASSIC, 0);
+            tc = tu_tracer_bits(sys, NULL, SG_METHOD_CLASSIC, 0);
             if (sg_trace_start(tc, S, D, oc) != SG_OK) {
                 /* Its double Newton on an asphere can stall (counted). */
                 sg_tracer_free(tc);
@@ -720,7 +694,7 @@ static void examples_bounds(void **state)
 static void slow_newton(void **state)
 {
     static const int bits[3] = {64, 113, 256};
-    sg_system *sys = one_surface();
+    sg_system *sys = tu_one_surface();
     int iy, b, n = 0;
     (void)state;
     sys->surf[1].type = SG_SURF_EVENASPH;
@@ -735,7 +709,8 @@ static void slow_newton(void **state)
         sys->surf[1].asph[7] = y0 - 1.0;
         for (b = 0; b < 4; b++) {
             double e;
-            t = b < 3 ? tracer(sys, SG_METHOD_MPFR, bits[b]) : tracer(sys, SG_METHOD_PRECISE, 0);
+            t = b < 3 ? tu_tracer_bits(sys, NULL, SG_METHOD_MPFR, bits[b])
+                      : tu_tracer_bits(sys, NULL, SG_METHOD_PRECISE, 0);
             if (sg_trace_start(t, S, D, o) != SG_OK)
                 fail_msg("y0 %g, %s %d: %s", y0, b < 3 ? "mpfr" : "precise", b < 3 ? bits[b] : 0,
                          sg_strerror(o[1].status));

@@ -156,32 +156,6 @@ static void set_surface(sg_system *sys, const gcase *c, const double S[3], const
     sys->surf[0].mat.index = 1.5;
 }
 
-static sg_system *one_surface_system(void)
-{
-    sg_system *sys = sg_system_new();
-    assert_non_null(sys);
-    assert_int_equal(sg_system_reset(sys, 3), SG_OK);
-    sys->surf[0].thickness = INFINITY;
-    sys->stop = 1;
-    return sys;
-}
-
-static sg_tracer *tracer(const sg_system *sys, sg_method m, int bits)
-{
-    sg_trace_opts o;
-    sg_diag d;
-    sg_tracer *t;
-    sg_trace_opts_init(&o);
-    o.method = m;
-    if (bits)
-        o.mpfr_bits = bits;
-    sg_diag_clear(&d);
-    t = sg_tracer_new(sys, NULL, &o, &d);
-    if (!t)
-        fail_msg("tracer: %s", d.msg);
-    return t;
-}
-
 /* The fixed seeds of the suite, or others from $SAGITTA_STRESS_SEED for
  * a longer search (the failure messages print each case in full). */
 static uint64_t seed(uint64_t fixed)
@@ -292,8 +266,8 @@ static void trace_and_judge(sg_system *sys, const gcase *c, const double S[3],
     sg_ray_surface op[3], om[3];
     sg_tracer *tp, *tm;
     set_surface(sys, c, S, D);
-    tp = tracer(sys, SG_METHOD_PRECISE, 0);
-    tm = tracer(sys, SG_METHOD_MPFR, 512);
+    tp = tu_tracer_bits(sys, NULL, SG_METHOD_PRECISE, 0);
+    tm = tu_tracer_bits(sys, NULL, SG_METHOD_MPFR, 512);
     sg_trace_start(tp, S, D, op);
     sg_trace_start(tm, S, D, om);
     judge(t, kind, i, &op[1], &om[1]);
@@ -307,7 +281,7 @@ static void trace_and_judge(sg_system *sys, const gcase *c, const double S[3],
 static void grazing_rays(void **state)
 {
     enum { PER_KIND = 1500 };
-    sg_system *sys = one_surface_system();
+    sg_system *sys = tu_one_surface();
     tally t = {0};
     long i;
     (void)state;
@@ -349,7 +323,7 @@ static void grazing_rays(void **state)
 static void parallel_to_tangent_plane(void **state)
 {
     enum { N = 6000 };
-    sg_system *sys = one_surface_system();
+    sg_system *sys = tu_one_surface();
     tally t = {0};
     long i;
     (void)state;
@@ -380,7 +354,7 @@ static void parallel_to_tangent_plane(void **state)
  * about 2, beyond the radius: a miss, checked by the closed form below. */
 static void reported_miss(void **state)
 {
-    sg_system *sys = one_surface_system();
+    sg_system *sys = tu_one_surface();
     double S[3] = {0.0, 0.0, -1.0}, D[3] = {0.0, 1.0, 1e-9};
     sg_ray_surface op[3];
     sg_tracer *tp;
@@ -405,7 +379,7 @@ static void reported_miss(void **state)
     mpfr_sub(disc, disc, u, MPFR_RNDN);
     assert_true(mpfr_sgn(disc) < 0);
     mpfr_clears(a, b, c, disc, u, (mpfr_ptr)0);
-    tp = tracer(sys, SG_METHOD_PRECISE, 0);
+    tp = tu_tracer_bits(sys, NULL, SG_METHOD_PRECISE, 0);
     assert_int_equal(sg_trace_start(tp, S, D, op), SG_EMISS);
     assert_int_equal(op[1].status, SG_EMISS);
     sg_tracer_free(tp);
@@ -419,7 +393,7 @@ static void reported_miss(void **state)
 static void critical_angle(void **state)
 {
     enum { N = 3000 };
-    sg_system *sys = one_surface_system();
+    sg_system *sys = tu_one_surface();
     tally t = {0};
     long i;
     double crit = asin(1.0 / 1.5);

@@ -56,18 +56,35 @@ double tu_ulps(double a, double b, double ref_scale)
     return fabs(a - b) / tu_ulp(s);
 }
 
-sg_tracer *tu_tracer(const sg_system *sys, const sg_catalog *cat, sg_method m)
+sg_tracer *tu_tracer_bits(const sg_system *sys, const sg_catalog *cat, sg_method m, int bits)
 {
     sg_trace_opts o;
     sg_diag d;
     sg_tracer *t;
     sg_trace_opts_init(&o);
     o.method = m;
+    if (bits)
+        o.mpfr_bits = bits;
     sg_diag_clear(&d);
     t = sg_tracer_new(sys, cat, &o, &d);
     if (!t)
         fail_msg("tracer: %s", d.msg);
     return t;
+}
+
+sg_tracer *tu_tracer(const sg_system *sys, const sg_catalog *cat, sg_method m)
+{
+    return tu_tracer_bits(sys, cat, m, 0);
+}
+
+sg_system *tu_one_surface(void)
+{
+    sg_system *sys = sg_system_new();
+    assert_non_null(sys);
+    assert_int_equal(sg_system_reset(sys, 3), SG_OK);
+    sys->surf[0].thickness = INFINITY;
+    sys->stop = 1;
+    return sys;
 }
 
 int tu_ci(void)

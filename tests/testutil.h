@@ -21,6 +21,12 @@ sg_system *tu_example(const char *file);
 
 /* A tracer of sys with default options and method m, or fails the test. */
 sg_tracer *tu_tracer(const sg_system *sys, const sg_catalog *cat, sg_method m);
+/* The same with an mpfr precision of bits (0: the default). */
+sg_tracer *tu_tracer_bits(const sg_system *sys, const sg_catalog *cat, sg_method m, int bits);
+
+/* Object at infinity, surface 1 (the stop, flat air until the test sets
+ * it) and the image: a system for tests of one surface. */
+sg_system *tu_one_surface(void);
 
 /* Distance between two doubles in units in the last place of the larger
  * magnitude of ref_scale (so a coordinate near zero is not judged by its
