@@ -671,6 +671,11 @@ static void examples_bounds(void **state)
                         }
                     }
                 }
+        /* Ordinary rays are certified in double-double: none of them
+         * needs the MPFR root (one that did would be correct, and slow). */
+        if (sg_tracer_rescues(tp) != 0)
+            fail_msg("%s: %lu of the grid's roots needed the MPFR rescue", files[f],
+                     sg_tracer_rescues(tp));
         print_message("# %-18s %3d rays: smallest bound/error: precise direction %.3g, mpfr "
                       "64-bit point %.3g, 113-bit point %.3g; residuals within %.3g of "
                       "|z - sag|\n", files[f], nrays, rd, rm[0], rm[1], worst_res);
@@ -758,6 +763,7 @@ static void carried_error(void **state)
     sg_system *sys = tu_one_surface();
     int i, n = 0, nother = 0;
     double min_r[2] = {INFINITY, INFINITY};
+    unsigned long nresc = 0;
     (void)state;
     rng_state = 0x2545F4914F6CDD1DULL;
     for (i = 0; i < PER_KIND * NK; i++) {
@@ -817,9 +823,11 @@ static void carried_error(void **state)
         tp = tu_tracer_bits(sys, NULL, SG_METHOD_PRECISE, 0);
         if (sg_start_precise_prep(tp, S, D, out, &r) != SG_OK ||
             sg_precise_run_to(tp, &r, 0.0, out, 1) != SG_OK || out[1].status != SG_OK) {
+            nresc += sg_tracer_rescues(tp);
             sg_tracer_free(tp);
             continue;
         }
+        nresc += sg_tracer_rescues(tp);
         sg_tracer_free(tp);
         {
             /* Judged against the exact crossing next to the point found. */
@@ -842,9 +850,14 @@ static void carried_error(void **state)
         n++;
     }
     print_message("# carried state, %d rays (%d at a crossing not judged): smallest eP/error "
-                  "%.3g on grazing rays, %.3g on cancelling aspheres\n", n, nother, min_r[0],
-                  min_r[1]);
+                  "%.3g on grazing rays, %.3g on cancelling aspheres; %lu roots found in MPFR\n",
+                  n, nother, min_r[0], min_r[1], nresc);
     assert_true(n > PER_KIND * NK / 2);
+    /* The counter counts: some of these roots are beyond double-double, but
+     * few (README.md: 92 of these 1,735, about 5%); a kernel that gave up
+     * on more would still be right, and many times slower. */
+    assert_true(nresc > 0);
+    assert_true(nresc <= (unsigned long)n / 10);
     sg_system_free(sys);
 }
 

@@ -26,8 +26,10 @@
 #               moved, so the list needs updating.
 #
 # The suite is `meson test` without the 'extra' suite (tools/ci-extra.sh
-# rebuilds the project) and the 'fuzz' suite (it builds its own harnesses
-# and looks for crashes, not values), stopping at the first failing test.
+# rebuilds the project), the 'fuzz' suite (it builds its own harnesses
+# and looks for crashes, not values) and the 'lint' suite (its check that
+# every mutant's text is in the source fails on any mutated tree),
+# stopping at the first failing test.
 # The per-mutant timeout (default 600 s) covers the build and the tests.
 # Results go to FILE (default build-mutate/results.tsv in the source tree,
 # ignored by git), one TAB-separated line a mutant, and a summary to
@@ -146,7 +148,7 @@ dirty=$(cd "$root" && git status --porcelain --untracked-files=no | wc -l)
 
 suite() { # runs the suite in $build with timeout $1; returns its status
     timeout "$1" meson test -C "$build" --no-rebuild --num-processes "$jobs" --maxfail 1 \
-        --no-suite extra --no-suite fuzz > "$2" 2>&1
+        --no-suite extra --no-suite fuzz --no-suite lint > "$2" 2>&1
 }
 
 echo "mutate: scratch tree $src (commit $commit$([ "$dirty" -gt 0 ] && echo ", $dirty files modified"))"
