@@ -108,7 +108,15 @@ int sg_trace_batch(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
                    sg_ray_surface *out, int *status, sg_diag *d)
 {
     sg_batch *b;
+    sg_diag own;
     int rc;
+    /* The code of a failure comes back through a diagnostic, so the
+     * caller who passed none still gets it (an unknown glass is not
+     * "out of memory"). */
+    if (!d) {
+        sg_diag_clear(&own);
+        d = &own;
+    }
     if (kind != SG_RAYS_NORMALIZED && kind != SG_RAYS_START_DIR)
         return sg_diag_set(d, SG_EINVAL, "batch: unknown ray kind %d", (int)kind);
     if (nray == 0)
@@ -124,7 +132,7 @@ int sg_trace_batch(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
         nthreads = (int)((nray + 63) / 64);
     b = sg_batch_new(sys, cat, opts, nthreads, d);
     if (!b)
-        return d && d->code ? d->code : SG_ENOMEM;
+        return d->code ? d->code : SG_ENOMEM;
     rc = sg_batch_trace(b, kind, rays, nray, NULL, 0, out, status, d);
     sg_batch_free(b);
     return rc;

@@ -380,6 +380,11 @@ const sg_paraxial *sg_tracer_paraxial(const sg_tracer *t);
 /* Index of the medium after surface i at the tracer's wavelength
  * (negative after an odd number of mirrors, as in the paraxial trace). */
 double sg_tracer_index(const sg_tracer *t, int i);
+/* How many roots the precise method has had to find in MPFR since t was
+ * made: rays it could not certify in double-double (grazing, tangent, or
+ * an asphere's ill-conditioned root).  Ordinary rays need none; a count
+ * that grows on them means a slow trace. */
+unsigned long sg_tracer_rescues(const sg_tracer *t);
 
 /* Traces a ray given in surface 1's local frame: start point and direction
  * (any nonzero length).  out has nsurf entries; out[0] holds the start.

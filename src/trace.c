@@ -686,6 +686,14 @@ double sg_tracer_index(const sg_tracer *t, int i)
     return t->nsigned[i];
 }
 
+unsigned long sg_tracer_rescues(const sg_tracer *t)
+{
+    if (!t)
+        return 0;
+    /* The primary wavelength's tracer aims this one's rays. */
+    return sg_mpfr_rescues(t->rescue) + (t->prim ? sg_tracer_rescues(t->prim) : 0);
+}
+
 /* Bit 63 of the result is set when v is an infinity or NaN: its exponent
  * field is all ones, and adding one to it carries into bit 63. */
 static inline uint64_t nonfinite_bit(double v)

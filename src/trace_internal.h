@@ -290,6 +290,8 @@ int sg_mpfr_trace_normalized(sg_tracer *t, double hx, double hy, double px,
                              double py, sg_ray_surface *out);
 /* A one-surface context for sg_mpfr_rescue_root, or NULL. */
 sg_mpfr_ctx *sg_mpfr_rescue_new(void);
+/* How many roots sg_mpfr_rescue_root was asked for on m. */
+unsigned long sg_mpfr_rescues(const sg_mpfr_ctx *m);
 /* The step along D from P (in sp's vertex frame) to the surface sp, found
  * exactly as the mpfr method finds it (onto the tangent plane, the conic
  * root nearest it, Newton), in 320 bits; returns SG_OK, SG_EMISS or

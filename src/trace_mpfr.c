@@ -29,6 +29,7 @@ typedef struct mvec {
 struct sg_mpfr_ctx {
     mpfr_prec_t prec;
     int n;
+    unsigned long nrescue; /* roots found by sg_mpfr_rescue_root */
     msurf *s;
     /* launch constants */
     mpfr_t T0, enp, epr, stop_r, fx, fy, pimg_slope, pi;
@@ -417,6 +418,7 @@ int sg_mpfr_rescue_root(sg_mpfr_ctx *m, const sg_sprep *sp, dd3 P, dd3 D, int ma
 {
     msurf *s = &m->s[0];
     int k, rc;
+    m->nrescue++;
     /* Every input is a double or a double-double: exact at 320 bits. */
     mpfr_set_d(s->R, sp->R, MPFR_RNDN);
     mpfr_set_dd(s->k1, sp->k1);
@@ -1095,4 +1097,9 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
         mpfr_hypot(m->stop_r, m->t[14], m->t[15], MPFR_RNDN);
     }
     return SG_OK;
+}
+
+unsigned long sg_mpfr_rescues(const sg_mpfr_ctx *m)
+{
+    return m ? m->nrescue : 0;
 }

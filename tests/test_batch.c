@@ -288,6 +288,37 @@ static void clip_edge(void **state)
                   "hypot decides\n", n);
 }
 
+/* A failure's own code, with or without a diagnostic to carry its message:
+ * an unknown glass is SG_ENOGLASS, never "out of memory". */
+static void error_code_without_diag(void **state)
+{
+    sg_system *sys = tu_example("singlet.json");
+    sg_catalog *cat = tu_catalog();
+    sg_trace_opts o;
+    sg_ray_in ray = {{0.0, 0.0, 0.0, 0.5, 0.0, 0.0}};
+    sg_ray_surface out[16];
+    int st, m;
+    sg_diag d;
+    (void)state;
+    assert_true(sys->nsurf <= 16);
+    sys->surf[1].mat.kind = SG_MAT_GLASS;
+    strcpy(sys->surf[1].mat.name, "NO-SUCH-GLASS");
+    for (m = 0; m < 3; m++) {
+        sg_trace_opts_init(&o);
+        o.method = (sg_method)m;
+        assert_int_equal(sg_trace_batch(sys, cat, &o, SG_RAYS_NORMALIZED, &ray, 1, 1, out, &st,
+                                        NULL),
+                         SG_ENOGLASS);
+        sg_diag_clear(&d);
+        assert_int_equal(sg_trace_batch(sys, cat, &o, SG_RAYS_NORMALIZED, &ray, 1, 1, out, &st,
+                                        &d),
+                         SG_ENOGLASS);
+        assert_non_null(strstr(d.msg, "NO-SUCH-GLASS"));
+    }
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -298,6 +329,7 @@ int main(void)
         cmocka_unit_test(start_dir),
         cmocka_unit_test(handoff),
         cmocka_unit_test(clip_edge),
+        cmocka_unit_test(error_code_without_diag),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

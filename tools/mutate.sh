@@ -4,6 +4,7 @@
 #   tools/mutate.sh [--list FILE] [--dir DIR] [--jobs N] [--timeout S]
 #                   [--only NAME[,NAME...]] [--kind KIND[,KIND...]] [--keep]
 #                   [--out FILE] [--probe-only]
+#   tools/mutate.sh --check [--list FILE]
 #
 # Copies the working tree (tracked and untracked, not ignored files) into a
 # scratch directory DIR (default: a new one under ${TMPDIR:-/tmp}), builds
@@ -25,8 +26,10 @@
 #               moved, so the list needs updating.
 #
 # The suite is `meson test` without the 'extra' suite (tools/ci-extra.sh
-# rebuilds the project) and the 'fuzz' suite (it builds its own harnesses
-# and looks for crashes, not values), stopping at the first failing test.
+# rebuilds the project), the 'fuzz' suite (it builds its own harnesses
+# and looks for crashes, not values) and the 'lint' suite (its check that
+# every mutant's text is in the source fails on any mutated tree),
+# stopping at the first failing test.
 # The per-mutant timeout (default 600 s) covers the build and the tests.
 # Results go to FILE (default build-mutate/results.tsv in the source tree,
 # ignored by git), one TAB-separated line a mutant, and a summary to
@@ -38,6 +41,8 @@
 # whether it changes an output of the probe set (to sort survivors into
 # blind spots and equivalent mutants without running the suite again).
 # MESON_ARGS adds options to the scratch build's setup.
+# --check builds and runs nothing: it exits 1 when a mutant is STALE or
+# malformed (the suite runs it, so code that moves takes its mutants along).
 set -u
 
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -49,6 +54,7 @@ only=""
 kinds=""
 keep=0
 probe_only=0
+check=0
 out=$root/build-mutate/results.tsv
 
 while [ $# -gt 0 ]; do
@@ -61,6 +67,7 @@ while [ $# -gt 0 ]; do
     --kind) kinds=$2; shift 2 ;;
     --keep) keep=1; shift ;;
     --probe-only) probe_only=1; shift ;;
+    --check) check=1; shift ;;
     --out) out=$2; shift 2 ;;
     -h|--help) sed -n '2,43p' "$0"; exit 0 ;;
     *) echo "mutate: unknown argument $1" >&2; exit 2 ;;
@@ -69,6 +76,40 @@ done
 case $list in /*) ;; *) list=$PWD/$list ;; esac
 case $out in /*) ;; *) out=$PWD/$out ;; esac
 [ -f "$list" ] || { echo "mutate: no mutant list $list" >&2; exit 2; }
+if [ "$check" = 1 ]; then
+    python3 - "$root" "$list" <<'PY'
+import os, sys
+root, path = sys.argv[1:3]
+un = lambda s: s.replace("\\n", "\n").replace("\\t", "\t")
+bad, n, names = 0, 0, set()
+for lineno, line in enumerate(open(path), 1):
+    if line.startswith("#") or not line.strip():
+        continue
+    f = line.rstrip("\n").split("\t")
+    n += 1
+    if len(f) != 5 or not all(f):
+        print(f"{path}:{lineno}: malformed (five TAB-separated fields)")
+        bad += 1
+        continue
+    name, kind, rel, orig, rep = f
+    if name in names:
+        print(f"{path}:{lineno}: {name}: name used twice")
+        bad += 1
+    names.add(name)
+    src = os.path.join(root, rel)
+    if not os.path.isfile(src):
+        print(f"{path}:{lineno}: {name}: no file {rel}")
+        bad += 1
+        continue
+    c = open(src).read().count(un(orig))
+    if c != 1:
+        print(f"{path}:{lineno}: {name}: STALE, its original occurs {c} times in {rel}")
+        bad += 1
+print(f"mutate: {n} mutants, {bad} stale or malformed")
+sys.exit(1 if bad else 0)
+PY
+    exit $?
+fi
 if [ -z "$dir" ]; then
     dir=$(mktemp -d "${TMPDIR:-/tmp}/sagitta-mutate-XXXXXX")
 else
@@ -107,7 +148,7 @@ dirty=$(cd "$root" && git status --porcelain --untracked-files=no | wc -l)
 
 suite() { # runs the suite in $build with timeout $1; returns its status
     timeout "$1" meson test -C "$build" --no-rebuild --num-processes "$jobs" --maxfail 1 \
-        --no-suite extra --no-suite fuzz > "$2" 2>&1
+        --no-suite extra --no-suite fuzz --no-suite lint > "$2" 2>&1
 }
 
 echo "mutate: scratch tree $src (commit $commit$([ "$dirty" -gt 0 ] && echo ", $dirty files modified"))"

@@ -105,6 +105,24 @@ static void table1_fault(void **state)
     vt_free(&r);
 }
 
+/* Table 2 likewise: the point fault must make it fail, and say so. */
+static void table2_fault(void **state)
+{
+    vt_result r;
+    (void)state;
+    vt_run(&r, "verify", "--experiment", "table2", "--count", "200", "--format", "json",
+           (char *)NULL);
+    assert_int_equal(r.code, 0);
+    vt_free(&r);
+    setenv("SAGITTA_TEST_FAULT", "point", 1);
+    vt_run(&r, "verify", "--experiment", "table2", "--count", "200", (char *)NULL);
+    unsetenv("SAGITTA_TEST_FAULT");
+    print_message("# table2 with the point fault: exit %d\n", r.code);
+    assert_int_equal(r.code, 6);
+    assert_non_null(strstr(r.out, "FAIL"));
+    vt_free(&r);
+}
+
 /* The reference itself fails (its aiming, here injected): verify says so,
  * does not blame precise, and exits 6 with the run marked incomplete. */
 static void reference_failure_named(void **state)
@@ -140,6 +158,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(dir_fault),
         cmocka_unit_test(fail_fault),
         cmocka_unit_test(table1_fault),
+        cmocka_unit_test(table2_fault),
         cmocka_unit_test(reference_failure_named),
     };
     int rc;
