@@ -23,6 +23,7 @@
 #include "measure.h"
 #include "report.h"
 #include "safetext.h"
+#include "xquant.h"
 
 enum { M_PRECISE = 0, M_CLASSIC = 1, M_MPFR = 2, NMETHOD = 3 };
 static const char *const mname[NMETHOD] = { "precise", "classic", "mpfr" };
@@ -166,16 +167,6 @@ static double median(double *v, size_t n)
         return NAN;
     qsort(v, n, sizeof *v, cmp_double);
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-/* The value below which a fraction q of the sorted v lies (nearest rank). */
-static double quantile_sorted(const double *v, size_t n, double q)
-{
-    size_t k;
-    if (n == 0)
-        return NAN;
-    k = (size_t)ceil(q * (double)n);
-    return v[k == 0 ? 0 : k - 1];
 }
 
 static double min_of(const double *v, size_t n)
@@ -1718,83 +1709,167 @@ static int t2_json(FILE *f, const t2ray *rays, size_t count, uint64_t seed, int 
     return jemit(&b, root, f);
 }
 
-/* The rays are traced one at a time and only what the report needs is
- * kept: the first T2_SHOW rays whole, and each ray's error in ulp and in
- * digits per compared method (32 bytes a ray, for the exact medians and
- * quantiles), instead of every ray's rows (about 850 bytes a ray). */
+/* The ranks table2 reports of n sorted values: the median's one or two,
+ * the 99th percentile (nearest rank) and the largest (ulp), or the median's
+ * and the least (digits).  Returns how many. */
+static int t2_ranks(size_t n, int ulp, size_t rank[XQ_MAXRANK])
+{
+    size_t k;
+    int nr = 0;
+    rank[nr++] = n % 2 ? n / 2 : n / 2 - 1;
+    rank[nr++] = n / 2;
+    if (ulp) {
+        k = (size_t)ceil(0.99 * (double)n);
+        rank[nr++] = k == 0 ? 0 : k - 1;
+        rank[nr++] = n - 1;
+    } else {
+        rank[nr++] = 0;
+    }
+    return nr;
+}
+
+static double t2_median(const xquant *q, size_t n)
+{
+    if (n == 0)
+        return NAN;
+    return n % 2 ? xq_value(q, 0) : 0.5 * (xq_value(q, 0) + xq_value(q, 1));
+}
+
+/* One pass over the seeded rays, traced one at a time.  The first pass
+ * (first != 0) counts, keeps the first T2_SHOW rays whole and finds the
+ * bound violations; every pass gives each ray's error in ulp and digits
+ * to the statistics in want[] that still need them (xquant.h), so nothing
+ * is kept per ray.  Returns the exit status. */
+static int t2_pass(sg_tracer *t[2][NMETHOD], size_t count, uint64_t seed, int first,
+                   xquant *ulp, xquant *dig, const int want[2][2], t2ray *show,
+                   t2stat st[2], size_t *nviol)
+{
+    uint64_t state = seed;
+    size_t r;
+    int m;
+    for (r = 0; r < count; r++) {
+        t2ray ray, *ry = &ray;
+        double start[3] = { 0.0, 0.0, 0.0 };
+        t2_draw(&state, ry);
+        start[2] = t2_zc[ry->side];
+        for (m = 0; m < NMETHOD; m++) {
+            /* A later pass traces only what its statistics need. */
+            if (m != M_MPFR && !want[m][0] && !want[m][1]) {
+                ry->st[m] = SG_ENOTREACHED;
+                continue;
+            }
+            ry->st[m] = sg_trace_start(t[ry->side][m], start, ry->dir, ry->o[m]);
+            if (!sg_err_is_ray_status(ry->st[m])) {
+                cli_error("verify: table2: ray %zu: %s trace failed: %s", r + 1, mname[m],
+                          sg_strerror(ry->st[m]));
+                return CLI_EXIT_INTERNAL;
+            }
+        }
+        if (first && r < T2_SHOW)
+            show[r] = *ry;
+        for (m = 0; m < 2; m++) {
+            double pa[3], ref[3], e;
+            if (!want[m][0] && !want[m][1])
+                continue;
+            if (ry->st[m] != SG_OK || ry->st[M_MPFR] != SG_OK) {
+                if (first)
+                    st[m].nfail++;
+                continue;
+            }
+            point_of(&ry->o[m][1], pa);
+            point_of(&ry->o[M_MPFR][1], ref);
+            e = max_diff3(pa, ref);
+            if (want[m][0])
+                xq_add(&ulp[m], e / ulp_of(max_abs3(ref)));
+            if (want[m][1])
+                xq_add(&dig[m], point_digits(pa, ref));
+            if (!first)
+                continue;
+            if (e == 0.0)
+                st[m].nexact++;
+            st[m].n++;
+            if (m == M_PRECISE &&
+                bound_fails(e, ry->o[m][1].error_bound, ry->o[M_MPFR][1].error_bound))
+                (*nviol)++;
+        }
+    }
+    return CLI_EXIT_OK;
+}
+
+/* Nothing is kept per ray: the first pass keeps the first T2_SHOW rays
+ * whole and counts; the medians and the 99th percentile are exact, from
+ * further passes over the same seeded rays when the first cannot settle
+ * them (xquant.h), so memory does not grow with --count. */
 static int experiment_table2(int bits, size_t count, uint64_t seed, int fmt,
                              const char *output)
 {
     sg_system *sys[2] = { NULL, NULL };
     sg_tracer *t[2][NMETHOD] = { { NULL, NULL, NULL }, { NULL, NULL, NULL } };
-    t2ray show[T2_SHOW], ray;
-    double *ulp[2] = { NULL, NULL }, *dig[2] = { NULL, NULL };
+    t2ray show[T2_SHOW];
+    xquant *ulp = NULL, *dig = NULL;
     t2stat st[2];
-    size_t r, nviol = 0;
-    uint64_t state = seed;
-    int m, side, rc = CLI_EXIT_OK, pass;
+    size_t nviol = 0, rank[XQ_MAXRANK];
+    int want[2][2] = { { 1, 1 }, { 1, 1 } };
+    int m, k, side, rc = CLI_EXIT_OK, pass, again, first = 1;
     vout out = { NULL, NULL };
 
     memset(st, 0, sizeof st);
     memset(show, 0, sizeof show);
     sys[0] = sphere_system(1.0);
     sys[1] = sphere_system(-1.0);
-    for (m = 0; m < 2; m++) {
-        ulp[m] = malloc(count * sizeof *ulp[m]);
-        dig[m] = malloc(count * sizeof *dig[m]);
-    }
-    if (!sys[0] || !sys[1] || !ulp[0] || !dig[0] || !ulp[1] || !dig[1]) {
-        cli_error("out of memory for %zu rays", count);
+    ulp = calloc(2, sizeof *ulp);
+    dig = calloc(2, sizeof *dig);
+    if (!sys[0] || !sys[1] || !ulp || !dig) {
+        cli_error("out of memory");
         rc = CLI_EXIT_INTERNAL;
         goto done;
+    }
+    for (m = 0; m < 2; m++) {
+        xq_init(&ulp[m]);
+        xq_init(&dig[m]);
     }
     for (side = 0; side < 2; side++) {
         rc = make_tracers(sys[side], bits, t[side], "table2");
         if (rc != CLI_EXIT_OK)
             goto done;
     }
-    for (r = 0; r < count; r++) {
-        t2ray *ry = &ray;
-        double start[3] = { 0.0, 0.0, 0.0 };
-        t2_draw(&state, ry);
-        start[2] = t2_zc[ry->side];
-        for (m = 0; m < NMETHOD; m++) {
-            ry->st[m] = sg_trace_start(t[ry->side][m], start, ry->dir, ry->o[m]);
-            if (!sg_err_is_ray_status(ry->st[m])) {
-                cli_error("verify: table2: ray %zu: %s trace failed: %s", r + 1, mname[m],
-                          sg_strerror(ry->st[m]));
-                rc = CLI_EXIT_INTERNAL;
-                goto done;
+    do {
+        rc = t2_pass(t, count, seed, first, ulp, dig, (const int(*)[2])want, show, st,
+                     &nviol);
+        if (rc != CLI_EXIT_OK)
+            goto done;
+        again = 0;
+        for (m = 0; m < 2; m++)
+            for (k = 0; k < 2; k++) {
+                xquant *q = k ? &dig[m] : &ulp[m];
+                int x;
+                if (!want[m][k])
+                    continue;
+                if (first && st[m].n == 0) {
+                    want[m][k] = 0;
+                    continue;
+                }
+                x = xq_resolve(q, rank, first ? t2_ranks(st[m].n, !k, rank) : 0);
+                if (x < 0) {
+                    cli_error(x == XQ_ECHANGED ? "verify: table2: a ray traced differently "
+                                                 "the second time"
+                              : x == XQ_ETOOMANY ? "verify: table2: too many rays"
+                                                 : "verify: table2: out of memory");
+                    rc = CLI_EXIT_INTERNAL;
+                    goto done;
+                }
+                want[m][k] = x == XQ_AGAIN;
+                again |= want[m][k];
             }
-        }
-        if (r < T2_SHOW)
-            show[r] = *ry;
-        for (m = 0; m < 2; m++) {
-            double pa[3], ref[3], e;
-            if (ry->st[m] != SG_OK || ry->st[M_MPFR] != SG_OK) {
-                st[m].nfail++;
-                continue;
-            }
-            point_of(&ry->o[m][1], pa);
-            point_of(&ry->o[M_MPFR][1], ref);
-            e = max_diff3(pa, ref);
-            if (e == 0.0)
-                st[m].nexact++;
-            ulp[m][st[m].n] = e / ulp_of(max_abs3(ref));
-            dig[m][st[m].n] = point_digits(pa, ref);
-            st[m].n++;
-            if (m == M_PRECISE &&
-                bound_fails(e, ry->o[m][1].error_bound, ry->o[M_MPFR][1].error_bound))
-                nviol++;
-        }
-    }
+        first = 0;
+    } while (again);
     for (m = 0; m < 2; m++) {
         size_t n = st[m].n;
-        st[m].ulp_med = median(ulp[m], n);
-        st[m].ulp_p99 = quantile_sorted(ulp[m], n, 0.99);
-        st[m].ulp_max = n ? ulp[m][n - 1] : NAN;
-        st[m].dig_min = min_of(dig[m], n);
-        st[m].dig_med = median(dig[m], n);
+        st[m].ulp_med = t2_median(&ulp[m], n);
+        st[m].ulp_p99 = n ? xq_value(&ulp[m], 2) : NAN;
+        st[m].ulp_max = n ? xq_value(&ulp[m], 3) : NAN;
+        st[m].dig_min = n ? xq_value(&dig[m], 2) : NAN;
+        st[m].dig_med = t2_median(&dig[m], n);
     }
     pass = nviol == 0 && st[M_PRECISE].nfail == 0;
     if (nviol)
@@ -1818,10 +1893,12 @@ done:
         free_tracers(t[side]);
         sg_system_free(sys[side]);
     }
-    for (m = 0; m < 2; m++) {
-        free(ulp[m]);
-        free(dig[m]);
+    for (m = 0; ulp && dig && m < 2; m++) {
+        xq_free(&ulp[m]);
+        xq_free(&dig[m]);
     }
+    free(ulp);
+    free(dig);
     return rc;
 }
 
