@@ -610,6 +610,13 @@ static int vdesign_run(vdesign *v, const sg_catalog *cat)
     int i, m, rc = CLI_EXIT_OK;
 
     blk = VERIFY_BLOCK_ROWS / ns;
+    /* As for trace --rays: a test sets the block to see its seams. */
+    {
+        const char *env = getenv("SAGITTA_RAYS_BLOCK");
+        long b = env && env[0] ? strtol(env, NULL, 10) : 0;
+        if (b >= 1 && b <= (1L << 24))
+            blk = (size_t)b;
+    }
     if (blk < 1)
         blk = 1;
     if (blk > v->nray)

@@ -314,6 +314,39 @@ static void test_grid_memory(void **state)
     print_message("# verify --grid 101 of the double Gauss within 40 MiB of address space\n");
 }
 
+/* verify on a design gives the same bytes whatever its blocks: a grid on
+ * three designs, text and JSON, in blocks of 1, 2 and 7 rays against one
+ * block of every ray (their vertex points, worst rays and first ray's
+ * rows are settled across the seams). */
+static void test_grid_blocks(void **state)
+{
+    static const char *const designs[] = { "double_gauss.json", "cassegrain.json",
+                                           "tma.json" };
+    static const int blocks[] = { 1, 2, 7 };
+    static const char *const fmts[] = { "text", "json" };
+    size_t k, b, f;
+    (void)state;
+    for (k = 0; k < 3; k++)
+        for (f = 0; f < 2; f++) {
+            ct_result whole, part;
+            set_block(1000000);
+            ct_run(&whole, "verify", example(designs[k]), "--grid", "4", "--format", fmts[f],
+                   NULL);
+            assert_int_equal(whole.code, 0);
+            for (b = 0; b < 3; b++) {
+                set_block(blocks[b]);
+                ct_run(&part, "verify", example(designs[k]), "--grid", "4", "--format",
+                       fmts[f], NULL);
+                assert_int_equal(part.code, whole.code);
+                assert_string_equal(part.out, whole.out);
+                ct_free(&part);
+            }
+            ct_free(&whole);
+        }
+    set_block(0);
+    print_message("# verify --grid 4: the same bytes in blocks of 1, 2, 7 and all rays\n");
+}
+
 /* Runs bench on one thread under a cap, as JSON; returns the rays that
  * reached the image in its one ray set's runs (-1 if one was not
  * measured, as when its arrays do not fit). */
@@ -385,6 +418,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_table2_memory),
         cmocka_unit_test(test_bench_memory),
         cmocka_unit_test(test_grid_memory),
+        cmocka_unit_test(test_grid_blocks),
     };
     int rc;
     snprintf(examples, sizeof examples, "%s", e && *e ? e : "examples");
