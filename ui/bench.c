@@ -2,10 +2,12 @@
  * bench.c - "sagitta bench": trace throughput, the cost of one MPFR ray and
  * of one live recompute of the editor, as figures to read, never to assert.
  *
- * Throughput is measured through sg_trace_batch(), the call a spot diagram
- * or the editor makes, so it includes what such a caller pays: one tracer
- * per thread and the thread start-up.  Output arrays are allocated and
- * touched before the clock starts, so page faults are not counted.
+ * Throughput is measured through the library's batch (sg_batch_new, then
+ * sg_batch_trace on every surface), the path a spot diagram or the editor
+ * takes, so it includes what such a caller pays: one tracer per thread and
+ * the thread start-up.  The set is made and traced block by block into
+ * one block's arrays, allocated and touched before the clock starts, so
+ * page faults are not counted and memory does not grow with the set.
  *
  * Ray sets are field-major: every pupil point of one field point, then the
  * next field point.  The tracer keeps the last field point's object-space
@@ -45,7 +47,7 @@ typedef struct stat3 {
 
 /* One throughput measurement: a method, a thread count, a ray-set size. */
 typedef struct tp_cell {
-    int rc;           /* sg_trace_batch's return */
+    int rc;           /* the batch's return */
     char msg[SG_DIAG_MSG];
     int threads;      /* threads used */
     size_t nok;       /* rays that reached the image */
@@ -261,15 +263,18 @@ nomem:
 
 /* ------------------------------------------------------------ ray sets */
 
-/* nray rays over the design's field points and the unit pupil, field-major.
- * Pupil points follow Vogel's spiral (radius sqrt((i + 1/2) / m), golden
- * angle steps), a deterministic low-discrepancy cover of the disc, so
- * every size samples the whole pupil evenly. */
-static void make_rays(const sg_system *sys, sg_ray_in *rays, size_t nray)
+/* Rays first..first+n-1 of a set of nray rays over the design's field
+ * points and the unit pupil, field-major, into rays[0..n-1].  Pupil points
+ * follow Vogel's spiral (radius sqrt((i + 1/2) / m), golden angle steps),
+ * a deterministic low-discrepancy cover of the disc, so every size samples
+ * the whole pupil evenly.  Any block of the set can be made on its own, so
+ * the set is never held whole. */
+static void make_rays(const sg_system *sys, size_t nray, size_t first, size_t n,
+                      sg_ray_in *rays)
 {
     const double golden = 3.14159265358979323846 * (3.0 - sqrt(5.0));
     double sx = 0.0, sy = 0.0;
-    size_t r = 0;
+    size_t off = 0;
     int f, nf = sys->nfield > 0 ? sys->nfield : 1;
 
     for (f = 0; f < sys->nfield; f++) {
@@ -290,16 +295,32 @@ static void make_rays(const sg_system *sys, sg_ray_in *rays, size_t nray)
             hx = sx > 0.0 ? sys->field[f].x / sx : 0.0;
             hy = sy > 0.0 ? sys->field[f].y / sy : 0.0;
         }
-        for (i = 0; i < m; i++, r++) {
+        for (i = first > off ? first - off : 0; i < m && off + i < first + n; i++) {
+            sg_ray_in *ray = &rays[off + i - first];
             double rad = sqrt(((double)i + 0.5) / (double)m);
             double th = golden * (double)i;
-            memset(&rays[r], 0, sizeof rays[r]);
-            rays[r].v[0] = hx;
-            rays[r].v[1] = hy;
-            rays[r].v[2] = rad * cos(th);
-            rays[r].v[3] = rad * sin(th);
+            memset(ray, 0, sizeof *ray);
+            ray->v[0] = hx;
+            ray->v[1] = hy;
+            ray->v[2] = rad * cos(th);
+            ray->v[3] = rad * sin(th);
         }
+        off += m;
     }
+}
+
+/* Rays of one block of a throughput run: its rows (every surface of every
+ * ray, as a spot diagram's caller gets them) stay near 11 MB, so memory
+ * does not grow with the ray count. */
+#define BENCH_BLOCK_ROWS ((size_t)1 << 17)
+
+static size_t block_rays(int nsurf, int nthr)
+{
+    size_t b = BENCH_BLOCK_ROWS / (size_t)(nsurf > 0 ? nsurf : 1);
+    /* Every thread gets at least one run of 64 rays (batch.c). */
+    if (b < 64 * (size_t)nthr)
+        b = 64 * (size_t)nthr;
+    return b;
 }
 
 /* ------------------------------------------------------------ measuring */
@@ -317,19 +338,62 @@ static void progress(const bench_cfg *cfg, const char *path, const char *what, s
         fprintf(stderr, "sagitta: bench: %s: %s\n", safe, what);
 }
 
+/* One timed run: a kept batch (one tracer per thread, as sg_trace_batch
+ * makes), then the set block by block, every surface of every ray written
+ * to the block's rows.  Only the batch's making and its trace calls are
+ * timed; making the next block's rays is not.  Returns the engine's code;
+ * *sec is the time, *nok the rays that reached the image. */
+static int timed_run(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *o,
+                     int nt, size_t nray, size_t blk, sg_ray_in *rays,
+                     sg_ray_surface *out, int *status, double *sec, size_t *nok,
+                     sg_diag *d)
+{
+    sg_batch *b;
+    size_t first, k;
+    double t0 = now_s(), t;
+    int rc = SG_OK;
+    /* No more threads than runs of rays to give them, as sg_trace_batch. */
+    if ((size_t)nt > (nray + 63) / 64)
+        nt = (int)((nray + 63) / 64);
+    b = sg_batch_new(sys, cat, o, nt, d);
+    if (!b)
+        return d->code ? d->code : SG_ENOMEM;
+    *nok = 0;
+    t = now_s() - t0;
+    for (first = 0; first < nray && rc == SG_OK; first += blk) {
+        size_t n = nray - first < blk ? nray - first : blk;
+        make_rays(sys, nray, first, n, rays);
+        t0 = now_s();
+        rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, n, NULL, 0, out, status, d);
+        t += now_s() - t0;
+        for (k = 0; rc == SG_OK && k < n; k++)
+            *nok += status[k] == SG_OK;
+    }
+    t0 = now_s();
+    sg_batch_free(b);
+    *sec = t + (now_s() - t0);
+    return rc;
+}
+
 /* Runs every method and thread count on one ray-set size.  Repeats are
  * interleaved (precise, classic, precise, ...) so that a change in machine
  * load shifts both methods alike and their ratio stays fair. */
 static void bench_size(const bench_cfg *cfg, const sg_system *sys, const sg_catalog *cat,
                        tp_size *ts)
 {
-    size_t nray = ts->nray, k;
+    size_t nray = ts->nray, blk;
     int nsurf = sys->nsurf, m, h, rep, nthr = cfg->nthr_all > 1 ? NTHR : 1;
-    sg_ray_in *rays = malloc(nray * sizeof *rays);
-    sg_ray_surface *out = malloc(nray * (size_t)nsurf * sizeof *out);
-    int *status = malloc(nray * sizeof *status);
+    sg_ray_in *rays;
+    sg_ray_surface *out;
+    int *status;
     double *sec[NMETHOD][NTHR] = { { NULL } };
 
+    blk = block_rays(nsurf, cfg->nthr_all);
+    if (blk > nray)
+        blk = nray;
+    rays = malloc(blk * sizeof *rays);
+    out = malloc(blk * (size_t)nsurf * sizeof *out);
+    status = malloc(blk * sizeof *status);
     if (!rays || !out || !status)
         goto nomem;
     for (m = 0; m < NMETHOD; m++)
@@ -338,12 +402,12 @@ static void bench_size(const bench_cfg *cfg, const sg_system *sys, const sg_cata
             if (!sec[m][h])
                 goto nomem;
         }
-    make_rays(sys, rays, nray);
     /* Touch every page now so the first timed run pays no page faults.
      * The fill is not zero: the compiler may turn malloc and a zero
      * memset into calloc, whose fresh pages stay untouched. */
-    memset(out, 0xff, nray * (size_t)nsurf * sizeof *out);
-    memset(status, 0xff, nray * sizeof *status);
+    memset(out, 0xff, blk * (size_t)nsurf * sizeof *out);
+    memset(status, 0xff, blk * sizeof *status);
+    memset(rays, 0xff, blk * sizeof *rays);
 
     for (rep = -1; rep < cfg->repeat; rep++) {
         for (m = 0; m < NMETHOD; m++) {
@@ -352,7 +416,8 @@ static void bench_size(const bench_cfg *cfg, const sg_system *sys, const sg_cata
                 int nt = h == 0 ? 1 : cfg->threads;
                 sg_trace_opts o;
                 sg_diag d;
-                double t0, t1;
+                double t;
+                size_t nok;
                 int rc;
                 /* A warm-up run (rep -1) only for small sets, where caches
                  * and the allocator's first calls would show. */
@@ -363,10 +428,10 @@ static void bench_size(const bench_cfg *cfg, const sg_system *sys, const sg_cata
                 sg_trace_opts_init(&o);
                 o.method = methods[m];
                 sg_diag_clear(&d);
-                t0 = now_s();
-                rc = sg_trace_batch(sys, cat, &o, SG_RAYS_NORMALIZED, rays, nray, nt, out,
-                                    status, &d);
-                t1 = now_s();
+                if (nt <= 0)
+                    nt = cfg->nthr_all;
+                rc = timed_run(sys, cat, &o, nt, nray, blk, rays, out, status, &t, &nok,
+                               &d);
                 if (rc != SG_OK) {
                     c->rc = rc;
                     snprintf(c->msg, sizeof c->msg, "%s", d.msg[0] ? d.msg : sg_strerror(rc));
@@ -374,12 +439,9 @@ static void bench_size(const bench_cfg *cfg, const sg_system *sys, const sg_cata
                 }
                 if (rep < 0)
                     continue;
-                sec[m][h][rep] = t1 - t0;
-                if (rep == cfg->repeat - 1) {
-                    c->nok = 0;
-                    for (k = 0; k < nray; k++)
-                        c->nok += status[k] == SG_OK;
-                }
+                sec[m][h][rep] = t;
+                if (rep == cfg->repeat - 1)
+                    c->nok = nok;
             }
         }
     }
@@ -842,20 +904,22 @@ static void bench_help(FILE *f)
 "  --repeat N      runs per measurement, 1 to 1000 (5); the median, minimum and\n"
 "                  maximum are printed; single-ray timings take at least 25\n"
 "  --quick         ray sets of 1e3 and 1e4 rays instead of 1e3, 1e5 and 1e6\n"
+"  --rays N        one ray set of N rays, 1 to 1e9, instead\n"
 "  --threads N     threads of the multi-threaded runs; 0 (default) is every core\n"
 "  -h, --help      show this help\n"
 "\n"
 "Throughput is in ray-surfaces per second: rays that reached the image times\n"
-"(surfaces - 1), over the wall time of one sg_trace_batch call.  Each design\n"
+"(surfaces - 1), over the wall time of one batch trace of the set.  Each design\n"
 "is traced with the precise and the classic method, on one thread and on\n"
 "all, and the ratio precise/classic of the same run is printed.  Rays are\n"
-"ordered field by field, as a spot diagram traces them.  A run of 1e6 rays\n"
-"needs about 80 bytes per ray and surface of memory.  Timings vary with the\n"
+"ordered field by field, as a spot diagram traces them.  A set is made and\n"
+"traced in blocks of about 131072 ray-surfaces, every surface of each ray\n"
+"written, so memory does not grow with N.  Timings vary with the\n"
 "machine's load; the bench never fails on a slow figure.  See sagitta(1).\n",
           f);
 }
 
-enum { OPT_HELP = 1, OPT_FORMAT, OPT_REPEAT, OPT_QUICK, OPT_THREADS };
+enum { OPT_HELP = 1, OPT_FORMAT, OPT_REPEAT, OPT_QUICK, OPT_THREADS, OPT_RAYS };
 
 static const cli_opt bench_opts[] = {
     { "--help", 'h', 0, OPT_HELP },
@@ -863,6 +927,7 @@ static const cli_opt bench_opts[] = {
     { "--repeat", 0, 1, OPT_REPEAT },
     { "--quick", 0, 0, OPT_QUICK },
     { "--threads", 0, 1, OPT_THREADS },
+    { "--rays", 0, 1, OPT_RAYS },
     { NULL, 0, 0, 0 }
 };
 
@@ -933,7 +998,7 @@ int cmd_bench(int argc, char **argv)
     const char **designs = NULL;
     char **examples = NULL;
     size_t ndesign = 0, nex = 0, k;
-    int id, rc = CLI_EXIT_OK, worst = CLI_EXIT_OK;
+    int id, rc = CLI_EXIT_OK, worst = CLI_EXIT_OK, nrays = 0;
     bench_cfg cfg;
     design_res *res = NULL;
     cJSON *root = NULL, *arr = NULL;
@@ -974,6 +1039,12 @@ int cmd_bench(int argc, char **argv)
         case OPT_QUICK:
             cfg.quick = 1;
             break;
+        case OPT_RAYS:
+            if (cli_int_value("--rays", val, 1, 1000000000, &nrays)) {
+                free(designs);
+                return CLI_EXIT_USAGE;
+            }
+            break;
         case OPT_THREADS:
             if (cli_int_value("--threads", val, 0, 256, &cfg.threads)) {
                 free(designs);
@@ -1003,7 +1074,10 @@ int cmd_bench(int argc, char **argv)
     if (cfg.nthr_all > 256)
         cfg.nthr_all = 256;
     cfg.progress = cfg.fmt == BENCH_JSON && isatty(2);
-    if (cfg.quick) {
+    if (nrays > 0) {
+        cfg.sizes[0] = (size_t)nrays;
+        cfg.nsizes = 1;
+    } else if (cfg.quick) {
         cfg.sizes[0] = 1000;
         cfg.sizes[1] = 10000;
         cfg.nsizes = 2;

@@ -23,6 +23,7 @@
 #include "measure.h"
 #include "report.h"
 #include "safetext.h"
+#include "xquant.h"
 
 enum { M_PRECISE = 0, M_CLASSIC = 1, M_MPFR = 2, NMETHOD = 3 };
 static const char *const mname[NMETHOD] = { "precise", "classic", "mpfr" };
@@ -36,8 +37,9 @@ static const sg_method mcode[NMETHOD] = { SG_METHOD_PRECISE, SG_METHOD_CLASSIC,
 #define DEFAULT_GRID 7
 #define DEFAULT_COUNT 10000
 #define DEFAULT_SEED 20230421
-/* Every ray's three traces are kept until the medians are taken, so the
- * set is bounded: this many ray-surfaces take about 600 MB. */
+/* The rays are traced in blocks, but each compared point's digits and
+ * bound/error are kept for the exact medians (24 bytes a ray-surface),
+ * so the set is bounded: this many ray-surfaces take about 48 MB. */
 #define MAX_RAY_SURFACES 2000000
 /* Failed rays and disagreements listed in text output; JSON lists all. */
 #define TEXT_LIST_MAX 20
@@ -166,16 +168,6 @@ static double median(double *v, size_t n)
         return NAN;
     qsort(v, n, sizeof *v, cmp_double);
     return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-/* The value below which a fraction q of the sorted v lies (nearest rank). */
-static double quantile_sorted(const double *v, size_t n, double q)
-{
-    size_t k;
-    if (n == 0)
-        return NAN;
-    k = (size_t)ceil(q * (double)n);
-    return v[k == 0 ? 0 : k - 1];
 }
 
 static double min_of(const double *v, size_t n)
@@ -372,9 +364,14 @@ typedef struct vdesign {
     int wave0, bits, nsurf;
     size_t nray, nfield, npupil;
     vray *rays;
-    sg_ray_surface *out[NMETHOD]; /* nray * nsurf each */
+    /* Traced a block at a time; kept per surface are only the digits of
+     * each compared ray (dig[m][i * nray + k]) and precise's bound/error
+     * (ratio, likewise), for the exact medians. */
+    double *dig[2], *ratio;
+    sg_ray_surface *ray0;         /* NMETHOD * nsurf rows of ray 0 */
     sstat *ss;                    /* per surface */
     worst w[2];
+    sg_ray_surface wrow[2][2];    /* the worst's rows: the method's, mpfr's */
     violation *viol;
     size_t nviol;
     size_t ncmp[2];
@@ -384,10 +381,6 @@ typedef struct vdesign {
     size_t ndis[2];       /* disagreements per method */
 } vdesign;
 
-static const sg_ray_surface *rs(const vdesign *v, int m, size_t r, int i)
-{
-    return &v->out[m][r * (size_t)v->nsurf + (size_t)i];
-}
 
 /* Normalized field coordinates of every distinct field point. */
 static size_t field_points(const sg_system *sys, double (*h)[2])
@@ -454,20 +447,198 @@ static void vdesign_free(vdesign *v)
 {
     int m;
     free(v->rays);
-    for (m = 0; m < NMETHOD; m++)
-        free(v->out[m]);
+    for (m = 0; m < 2; m++)
+        free(v->dig[m]);
+    free(v->ratio);
+    free(v->ray0);
     free(v->ss);
     free(v->viol);
 }
 
-/* Traces every ray with the three methods.  Returns the exit status. */
-static int vdesign_trace(vdesign *v, const sg_catalog *cat)
+/* Rays traced at once: their rows of the three methods stay near 9 MB
+ * (VERIFY_BLOCK_ROWS rows each), whatever the grid. */
+#define VERIFY_BLOCK_ROWS 32768
+
+/* A compared point whose reference is the origin: its digits borrow the
+ * surface's scale, known only once every ray is traced. */
+typedef struct deferred {
+    size_t ray;
+    int surf, m;
+    sg_ray_surface a, b;
+} deferred;
+
+static int ref_broken(const vray *ray)
+{
+    return ref_broken_status(ray->st[M_MPFR]);
+}
+
+static int add_violation(vdesign *v, size_t r, int i, int dir, double err,
+                         double bound, double refbound)
+{
+    violation *nv = realloc(v->viol, (v->nviol + 1) * sizeof *nv);
+    if (!nv)
+        return -1;
+    v->viol = nv;
+    nv[v->nviol].ray = r;
+    nv[v->nviol].surf = i;
+    nv[v->nviol].dir = dir;
+    nv[v->nviol].err = err;
+    nv[v->nviol].bound = bound;
+    nv[v->nviol].refbound = refbound;
+    v->nviol++;
+    return 0;
+}
+
+/* The worst point so far: the fewest digits, then the largest error, then
+ * the first by surface and ray, the order a whole-set scan would meet it
+ * in, so the blocks' order does not matter. */
+static void take_worst(vdesign *v, int m, double dg, double err, size_t r, int i,
+                       const sg_ray_surface *a, const sg_ray_surface *b)
+{
+    worst *w = &v->w[m];
+    if (dg < w->digits ||
+        (dg == w->digits &&
+         (err > w->err ||
+          (err == w->err && (i < w->surf || (i == w->surf && (long)r < w->ray)))))) {
+        w->digits = dg;
+        w->err = err;
+        w->ray = (long)r;
+        w->surf = i;
+        v->wrow[m][0] = *a;
+        v->wrow[m][1] = *b;
+    }
+}
+
+static int cmp_violation(const void *pa, const void *pb)
+{
+    const violation *a = pa, *b = pb;
+    if (a->surf != b->surf)
+        return a->surf < b->surf ? -1 : 1;
+    if (a->ray != b->ray)
+        return a->ray < b->ray ? -1 : 1;
+    return a->dir - b->dir;
+}
+
+/* One ray's rows (the three methods, out[m] + k * nsurf) into the
+ * statistics.  Returns 0, or -1 when memory runs out. */
+static int vdesign_take(vdesign *v, sg_ray_surface *const out[NMETHOD], size_t k, size_t r,
+                        deferred **dfr, size_t *ndfr)
+{
+    const vray *ray = &v->rays[r];
+    size_t ns = (size_t)v->nsurf;
+    int i, m;
+    if (ray->st[M_MPFR] != SG_OK)
+        v->nfail_ref++;
+    /* A reference that could not aim or converge says nothing about the
+     * ray, so the methods are not judged on it. */
+    if (ref_broken(ray)) {
+        v->nref_broken++;
+    } else {
+        for (m = 0; m < 2; m++) {
+            if (ray->st[m] != ray->st[M_MPFR] || ray->fs[m] != ray->fs[M_MPFR])
+                v->ndis[m]++;
+            else if (ray->st[m] == SG_OK)
+                v->ncmp[m]++;
+        }
+    }
+    if (ray->st[M_MPFR] != SG_OK)
+        return 0;
+    for (i = 1; i < v->nsurf; i++) {
+        sstat *s = &v->ss[i];
+        const sg_ray_surface *b = &out[M_MPFR][k * ns + (size_t)i];
+        double pb[3], db[3];
+        point_of(b, pb);
+        dir_of(b, db);
+        s->scale = fmax(s->scale, max_abs3(pb));
+        for (m = 0; m < 2; m++) {
+            mstat *ms = &s->m[m];
+            const sg_ray_surface *a = &out[m][k * ns + (size_t)i];
+            double pa[3], da[3], e;
+            if (ray->st[m] != SG_OK)
+                continue;
+            point_of(a, pa);
+            dir_of(a, da);
+            e = max_diff3(pa, pb);
+            ms->dirmin = fmin(ms->dirmin, point_digits(da, db));
+            ms->maxerr = fmax(ms->maxerr, e);
+            if (max_abs3(pb) > 0.0) {
+                double dg = point_digits(pa, pb);
+                v->dig[m][(size_t)i * v->nray + ms->n++] = dg;
+                take_worst(v, m, dg, e, r, i, a, b);
+            } else {
+                deferred *nd = realloc(*dfr, (*ndfr + 1) * sizeof *nd);
+                if (!nd)
+                    return -1;
+                *dfr = nd;
+                nd[*ndfr].ray = r;
+                nd[*ndfr].surf = i;
+                nd[*ndfr].m = m;
+                nd[*ndfr].a = *a;
+                nd[*ndfr].b = *b;
+                (*ndfr)++;
+            }
+            if (m == M_PRECISE) {
+                double ed = max_diff3(da, db);
+                if (bound_fails(e, a->error_bound, b->error_bound) &&
+                    add_violation(v, r, i, 0, e, a->error_bound, b->error_bound))
+                    return -1;
+                if (bound_fails(ed, a->dir_error_bound, b->dir_error_bound) &&
+                    add_violation(v, r, i, 1, ed, a->dir_error_bound, b->dir_error_bound))
+                    return -1;
+                /* Bound over error, for the rays where the precise point
+                 * differs from the reference at all. */
+                if (e == 0.0)
+                    s->nexact++;
+                else
+                    v->ratio[(size_t)i * v->nray + s->nratio++] = a->error_bound / e;
+            }
+        }
+    }
+    return 0;
+}
+
+/* Traces every ray with the three methods, a block at a time, and takes
+ * the digits, bounds and worst rays as it goes.  Returns the exit status. */
+static int vdesign_run(vdesign *v, const sg_catalog *cat)
 {
     sg_tracer *t[NMETHOD] = { NULL, NULL, NULL };
+    sg_ray_surface *out[NMETHOD] = { NULL, NULL, NULL };
+    deferred *dfr = NULL;
+    size_t ndfr = 0, blk, r0, k, ns = (size_t)v->nsurf;
     sg_trace_opts o;
     sg_diag d;
-    size_t r;
-    int m, rc = CLI_EXIT_OK;
+    int i, m, rc = CLI_EXIT_OK;
+
+    blk = VERIFY_BLOCK_ROWS / ns;
+    /* As for trace --rays: a test sets the block to see its seams. */
+    {
+        const char *env = getenv("SAGITTA_RAYS_BLOCK");
+        long b = env && env[0] ? strtol(env, NULL, 10) : 0;
+        if (b >= 1 && b <= (1L << 24))
+            blk = (size_t)b;
+    }
+    if (blk < 1)
+        blk = 1;
+    if (blk > v->nray)
+        blk = v->nray;
+    v->ss = calloc(ns, sizeof *v->ss);
+    v->ray0 = calloc(NMETHOD * ns, sizeof *v->ray0);
+    v->ratio = malloc(ns * v->nray * sizeof *v->ratio);
+    for (m = 0; m < NMETHOD; m++)
+        out[m] = malloc(blk * ns * sizeof *out[m]);
+    for (m = 0; m < 2; m++)
+        v->dig[m] = malloc(ns * v->nray * sizeof *v->dig[m]);
+    if (!v->ss || !v->ray0 || !v->ratio || !out[0] || !out[1] || !out[2] || !v->dig[0] ||
+        !v->dig[1])
+        goto nomem;
+    for (m = 0; m < 2; m++) {
+        v->w[m].ray = -1;
+        v->w[m].digits = INFINITY;
+        v->w[m].err = -1.0;
+    }
+    for (i = 0; i < v->nsurf; i++)
+        for (m = 0; m < 2; m++)
+            v->ss[i].m[m].dirmin = DIGITS_CAP;
 
     for (m = 0; m < NMETHOD; m++) {
         sg_trace_opts_init(&o);
@@ -493,174 +664,71 @@ static int vdesign_trace(vdesign *v, const sg_catalog *cat)
         if (m == 0)
             cli_print_warnings(&d, v->path);
     }
-    for (r = 0; r < v->nray; r++) {
-        vray *ray = &v->rays[r];
-        for (m = 0; m < NMETHOD; m++) {
-            sg_ray_surface *out = v->out[m] + r * (size_t)v->nsurf;
-            int st = sg_trace_normalized(t[m], ray->h[0], ray->h[1], ray->h[2],
-                                         ray->h[3], out);
-            if (!sg_err_is_ray_status(st)) {
-                cli_error("%s: ray %g,%g,%g,%g: %s trace failed: %s", v->path,
-                          ray->h[0], ray->h[1], ray->h[2], ray->h[3], mname[m],
-                          sg_strerror(st));
-                rc = cli_exit_for(st);
-                if (rc == CLI_EXIT_OK)
-                    rc = CLI_EXIT_INTERNAL;
-                goto done;
+    for (r0 = 0; r0 < v->nray; r0 += blk) {
+        size_t nb = v->nray - r0 < blk ? v->nray - r0 : blk;
+        for (k = 0; k < nb; k++) {
+            vray *ray = &v->rays[r0 + k];
+            for (m = 0; m < NMETHOD; m++) {
+                sg_ray_surface *o1 = out[m] + k * ns;
+                int st = sg_trace_normalized(t[m], ray->h[0], ray->h[1], ray->h[2],
+                                             ray->h[3], o1);
+                if (!sg_err_is_ray_status(st)) {
+                    cli_error("%s: ray %g,%g,%g,%g: %s trace failed: %s", v->path,
+                              ray->h[0], ray->h[1], ray->h[2], ray->h[3], mname[m],
+                              sg_strerror(st));
+                    rc = cli_exit_for(st);
+                    if (rc == CLI_EXIT_OK)
+                        rc = CLI_EXIT_INTERNAL;
+                    goto done;
+                }
+                ray->st[m] = st;
+                ray->fs[m] = st == SG_OK ? -1 : fail_surface(o1, v->nsurf);
             }
-            ray->st[m] = st;
-            ray->fs[m] = st == SG_OK ? -1 : fail_surface(out, v->nsurf);
         }
+        if (r0 == 0)
+            for (m = 0; m < NMETHOD; m++)
+                memcpy(v->ray0 + (size_t)m * ns, out[m], ns * sizeof *out[m]);
+        for (k = 0; k < nb; k++)
+            if (vdesign_take(v, out, k, r0 + k, &dfr, &ndfr))
+                goto nomem;
     }
-done:
-    for (m = 0; m < NMETHOD; m++)
-        sg_tracer_free(t[m]);
-    return rc;
-}
-
-static int ref_broken(const vray *ray)
-{
-    return ref_broken_status(ray->st[M_MPFR]);
-}
-
-static int add_violation(vdesign *v, size_t r, int i, int dir, double err,
-                         double bound, double refbound)
-{
-    violation *nv = realloc(v->viol, (v->nviol + 1) * sizeof *nv);
-    if (!nv)
-        return -1;
-    v->viol = nv;
-    nv[v->nviol].ray = r;
-    nv[v->nviol].surf = i;
-    nv[v->nviol].dir = dir;
-    nv[v->nviol].err = err;
-    nv[v->nviol].bound = bound;
-    nv[v->nviol].refbound = refbound;
-    v->nviol++;
-    return 0;
-}
-
-/* Digits, bounds and the worst rays.  Returns the exit status. */
-static int vdesign_stats(vdesign *v)
-{
-    double *dig = NULL, *ratio = NULL;
-    size_t r, n, nr;
-    int i, m, rc = CLI_EXIT_OK;
-
-    v->ss = calloc((size_t)v->nsurf, sizeof *v->ss);
-    dig = malloc((v->nray + 1) * sizeof *dig);
-    ratio = malloc((v->nray + 1) * sizeof *ratio);
-    if (!v->ss || !dig || !ratio)
-        goto nomem;
-    for (m = 0; m < 2; m++) {
-        v->w[m].ray = -1;
-        v->w[m].digits = INFINITY;
-        v->w[m].err = -1.0;
-        v->ncmp[m] = v->ndis[m] = 0;
+    /* Points at the vertex, now that each surface's scale is known. */
+    for (k = 0; k < ndfr; k++) {
+        const deferred *x = &dfr[k];
+        double pa[3], pb[3], dg;
+        point_of(&x->a, pa);
+        point_of(&x->b, pb);
+        dg = point_digits_s(pa, pb, v->ss[x->surf].scale);
+        v->dig[x->m][(size_t)x->surf * v->nray + v->ss[x->surf].m[x->m].n++] = dg;
+        take_worst(v, x->m, dg, max_diff3(pa, pb), x->ray, x->surf, &x->a, &x->b);
     }
-    v->nfail_ref = 0;
-    v->nref_broken = 0;
-    for (r = 0; r < v->nray; r++) {
-        const vray *ray = &v->rays[r];
-        if (ray->st[M_MPFR] != SG_OK)
-            v->nfail_ref++;
-        /* A reference that could not aim or converge says nothing about
-         * the ray, so the methods are not judged on it. */
-        if (ref_broken(ray)) {
-            v->nref_broken++;
-            continue;
-        }
-        for (m = 0; m < 2; m++) {
-            if (ray->st[m] != ray->st[M_MPFR] || ray->fs[m] != ray->fs[M_MPFR])
-                v->ndis[m]++;
-            else if (ray->st[m] == SG_OK)
-                v->ncmp[m]++;
-        }
-    }
-
     for (i = 1; i < v->nsurf; i++) {
         sstat *s = &v->ss[i];
-        s->scale = 0.0;
-        for (r = 0; r < v->nray; r++) {
-            double pb[3];
-            if (v->rays[r].st[M_MPFR] != SG_OK)
-                continue;
-            point_of(rs(v, M_MPFR, r, i), pb);
-            s->scale = fmax(s->scale, max_abs3(pb));
-        }
+        double *ratio = v->ratio + (size_t)i * v->nray;
         for (m = 0; m < 2; m++) {
             mstat *ms = &s->m[m];
-            n = 0;
-            ms->dirmin = DIGITS_CAP;
-            ms->maxerr = 0.0;
-            for (r = 0; r < v->nray; r++) {
-                const vray *ray = &v->rays[r];
-                const sg_ray_surface *a, *b;
-                double pa[3], pb[3], da[3], db[3], dg;
-                if (ray->st[M_MPFR] != SG_OK || ray->st[m] != SG_OK)
-                    continue;
-                a = rs(v, m, r, i);
-                b = rs(v, M_MPFR, r, i);
-                point_of(a, pa);
-                point_of(b, pb);
-                dir_of(a, da);
-                dir_of(b, db);
-                dg = point_digits_s(pa, pb, s->scale);
-                dig[n++] = dg;
-                ms->dirmin = fmin(ms->dirmin, point_digits(da, db));
-                ms->maxerr = fmax(ms->maxerr, max_diff3(pa, pb));
-                if (dg < v->w[m].digits ||
-                    (dg == v->w[m].digits && max_diff3(pa, pb) > v->w[m].err)) {
-                    v->w[m].digits = dg;
-                    v->w[m].err = max_diff3(pa, pb);
-                    v->w[m].ray = (long)r;
-                    v->w[m].surf = i;
-                }
-                if (m == M_PRECISE) {
-                    double e = max_diff3(pa, pb), ed = max_diff3(da, db);
-                    if (bound_fails(e, a->error_bound, b->error_bound) &&
-                        add_violation(v, r, i, 0, e, a->error_bound, b->error_bound))
-                        goto nomem;
-                    if (bound_fails(ed, a->dir_error_bound, b->dir_error_bound) &&
-                        add_violation(v, r, i, 1, ed, a->dir_error_bound,
-                                      b->dir_error_bound))
-                        goto nomem;
-                }
-            }
-            ms->n = n;
-            ms->dmin = min_of(dig, n);
-            ms->dmed = median(dig, n);
-            if (n == 0)
+            double *dig = v->dig[m] + (size_t)i * v->nray;
+            ms->dmin = min_of(dig, ms->n);
+            ms->dmed = median(dig, ms->n);
+            if (ms->n == 0)
                 ms->dirmin = NAN;
         }
-        /* Bound over error, for the rays where the precise point differs
-         * from the reference at all. */
-        nr = 0;
-        s->nexact = 0;
-        for (r = 0; r < v->nray; r++) {
-            const vray *ray = &v->rays[r];
-            double pa[3], pb[3], e;
-            if (ray->st[M_MPFR] != SG_OK || ray->st[M_PRECISE] != SG_OK)
-                continue;
-            point_of(rs(v, M_PRECISE, r, i), pa);
-            point_of(rs(v, M_MPFR, r, i), pb);
-            e = max_diff3(pa, pb);
-            if (e == 0.0)
-                s->nexact++;
-            else
-                ratio[nr++] = rs(v, M_PRECISE, r, i)->error_bound / e;
-        }
-        s->nratio = nr;
-        s->rmin = min_of(ratio, nr);
-        s->rmed = median(ratio, nr);
+        s->rmin = min_of(ratio, s->nratio);
+        s->rmed = median(ratio, s->nratio);
     }
+    /* In the order a surface-by-surface scan finds them. */
+    if (v->nviol > 1)
+        qsort(v->viol, v->nviol, sizeof *v->viol, cmp_violation);
     goto done;
 nomem:
     cli_error("out of memory for the statistics of %zu rays", v->nray);
     rc = CLI_EXIT_INTERNAL;
 done:
-    free(dig);
-    free(ratio);
+    for (m = 0; m < NMETHOD; m++) {
+        sg_tracer_free(t[m]);
+        free(out[m]);
+    }
+    free(dfr);
     return rc;
 }
 
@@ -728,8 +796,8 @@ static void text_worst(FILE *f, const vdesign *v, int m)
         fprintf(f, "worst %s ray: none; every compared point equals mpfr's\n", mname[m]);
         return;
     }
-    a = rs(v, m, (size_t)w->ray, w->surf);
-    b = rs(v, M_MPFR, (size_t)w->ray, w->surf);
+    a = &v->wrow[m][0];
+    b = &v->wrow[m][1];
     point_of(a, pa);
     point_of(b, pb);
     fprintf(f, "worst %s ray: ", mname[m]);
@@ -906,8 +974,8 @@ static void json_worst(jb *b, cJSON *obj, const vdesign *v, int m)
     o = jobj(b, obj, mname[m]);
     if (!o)
         return;
-    a = rs(v, m, (size_t)w->ray, w->surf);
-    r = rs(v, M_MPFR, (size_t)w->ray, w->surf);
+    a = &v->wrow[m][0];
+    r = &v->wrow[m][1];
     point_of(a, pa);
     point_of(r, pb);
     dir_of(a, da);
@@ -1042,7 +1110,7 @@ static int vdesign_json(FILE *f, const vdesign *v)
                 break;
             jint(&b, e, "surface", i);
             for (m = 0; m < NMETHOD; m++) {
-                const sg_ray_surface *s = rs(v, m, 0, i);
+                const sg_ray_surface *s = &v->ray0[(size_t)m * (size_t)v->nsurf + (size_t)i];
                 double p3[3];
                 mo = jobj(&b, e, mname[m]);
                 if (!mo)
@@ -1069,7 +1137,7 @@ static int verify_design(const char *path, const double *ray4, int grid, int bit
     vdesign v;
     double (*fh)[2] = NULL, (*pp)[2] = NULL;
     size_t nf, np, a, b, r;
-    int rc, m;
+    int rc;
     vout out = { NULL, NULL };
 
     memset(&v, 0, sizeof v);
@@ -1117,15 +1185,7 @@ static int verify_design(const char *path, const double *ray4, int grid, int bit
                              MAX_RAY_SURFACES);
         goto done;
     }
-    for (m = 0; m < NMETHOD; m++) {
-        v.out[m] = calloc(v.nray, (size_t)v.nsurf * sizeof *v.out[m]);
-        if (!v.out[m])
-            goto nomem;
-    }
-    rc = vdesign_trace(&v, cat);
-    if (rc != CLI_EXIT_OK)
-        goto done;
-    rc = vdesign_stats(&v);
+    rc = vdesign_run(&v, cat);
     if (rc != CLI_EXIT_OK)
         goto done;
     rc = open_out(&out, output);
@@ -1718,83 +1778,167 @@ static int t2_json(FILE *f, const t2ray *rays, size_t count, uint64_t seed, int 
     return jemit(&b, root, f);
 }
 
-/* The rays are traced one at a time and only what the report needs is
- * kept: the first T2_SHOW rays whole, and each ray's error in ulp and in
- * digits per compared method (32 bytes a ray, for the exact medians and
- * quantiles), instead of every ray's rows (about 850 bytes a ray). */
+/* The ranks table2 reports of n sorted values: the median's one or two,
+ * the 99th percentile (nearest rank) and the largest (ulp), or the median's
+ * and the least (digits).  Returns how many. */
+static int t2_ranks(size_t n, int ulp, size_t rank[XQ_MAXRANK])
+{
+    size_t k;
+    int nr = 0;
+    rank[nr++] = n % 2 ? n / 2 : n / 2 - 1;
+    rank[nr++] = n / 2;
+    if (ulp) {
+        k = (size_t)ceil(0.99 * (double)n);
+        rank[nr++] = k == 0 ? 0 : k - 1;
+        rank[nr++] = n - 1;
+    } else {
+        rank[nr++] = 0;
+    }
+    return nr;
+}
+
+static double t2_median(const xquant *q, size_t n)
+{
+    if (n == 0)
+        return NAN;
+    return n % 2 ? xq_value(q, 0) : 0.5 * (xq_value(q, 0) + xq_value(q, 1));
+}
+
+/* One pass over the seeded rays, traced one at a time.  The first pass
+ * (first != 0) counts, keeps the first T2_SHOW rays whole and finds the
+ * bound violations; every pass gives each ray's error in ulp and digits
+ * to the statistics in want[] that still need them (xquant.h), so nothing
+ * is kept per ray.  Returns the exit status. */
+static int t2_pass(sg_tracer *t[2][NMETHOD], size_t count, uint64_t seed, int first,
+                   xquant *ulp, xquant *dig, const int want[2][2], t2ray *show,
+                   t2stat st[2], size_t *nviol)
+{
+    uint64_t state = seed;
+    size_t r;
+    int m;
+    for (r = 0; r < count; r++) {
+        t2ray ray, *ry = &ray;
+        double start[3] = { 0.0, 0.0, 0.0 };
+        t2_draw(&state, ry);
+        start[2] = t2_zc[ry->side];
+        for (m = 0; m < NMETHOD; m++) {
+            /* A later pass traces only what its statistics need. */
+            if (m != M_MPFR && !want[m][0] && !want[m][1]) {
+                ry->st[m] = SG_ENOTREACHED;
+                continue;
+            }
+            ry->st[m] = sg_trace_start(t[ry->side][m], start, ry->dir, ry->o[m]);
+            if (!sg_err_is_ray_status(ry->st[m])) {
+                cli_error("verify: table2: ray %zu: %s trace failed: %s", r + 1, mname[m],
+                          sg_strerror(ry->st[m]));
+                return CLI_EXIT_INTERNAL;
+            }
+        }
+        if (first && r < T2_SHOW)
+            show[r] = *ry;
+        for (m = 0; m < 2; m++) {
+            double pa[3], ref[3], e;
+            if (!want[m][0] && !want[m][1])
+                continue;
+            if (ry->st[m] != SG_OK || ry->st[M_MPFR] != SG_OK) {
+                if (first)
+                    st[m].nfail++;
+                continue;
+            }
+            point_of(&ry->o[m][1], pa);
+            point_of(&ry->o[M_MPFR][1], ref);
+            e = max_diff3(pa, ref);
+            if (want[m][0])
+                xq_add(&ulp[m], e / ulp_of(max_abs3(ref)));
+            if (want[m][1])
+                xq_add(&dig[m], point_digits(pa, ref));
+            if (!first)
+                continue;
+            if (e == 0.0)
+                st[m].nexact++;
+            st[m].n++;
+            if (m == M_PRECISE &&
+                bound_fails(e, ry->o[m][1].error_bound, ry->o[M_MPFR][1].error_bound))
+                (*nviol)++;
+        }
+    }
+    return CLI_EXIT_OK;
+}
+
+/* Nothing is kept per ray: the first pass keeps the first T2_SHOW rays
+ * whole and counts; the medians and the 99th percentile are exact, from
+ * further passes over the same seeded rays when the first cannot settle
+ * them (xquant.h), so memory does not grow with --count. */
 static int experiment_table2(int bits, size_t count, uint64_t seed, int fmt,
                              const char *output)
 {
     sg_system *sys[2] = { NULL, NULL };
     sg_tracer *t[2][NMETHOD] = { { NULL, NULL, NULL }, { NULL, NULL, NULL } };
-    t2ray show[T2_SHOW], ray;
-    double *ulp[2] = { NULL, NULL }, *dig[2] = { NULL, NULL };
+    t2ray show[T2_SHOW];
+    xquant *ulp = NULL, *dig = NULL;
     t2stat st[2];
-    size_t r, nviol = 0;
-    uint64_t state = seed;
-    int m, side, rc = CLI_EXIT_OK, pass;
+    size_t nviol = 0, rank[XQ_MAXRANK];
+    int want[2][2] = { { 1, 1 }, { 1, 1 } };
+    int m, k, side, rc = CLI_EXIT_OK, pass, again, first = 1;
     vout out = { NULL, NULL };
 
     memset(st, 0, sizeof st);
     memset(show, 0, sizeof show);
     sys[0] = sphere_system(1.0);
     sys[1] = sphere_system(-1.0);
-    for (m = 0; m < 2; m++) {
-        ulp[m] = malloc(count * sizeof *ulp[m]);
-        dig[m] = malloc(count * sizeof *dig[m]);
-    }
-    if (!sys[0] || !sys[1] || !ulp[0] || !dig[0] || !ulp[1] || !dig[1]) {
-        cli_error("out of memory for %zu rays", count);
+    ulp = calloc(2, sizeof *ulp);
+    dig = calloc(2, sizeof *dig);
+    if (!sys[0] || !sys[1] || !ulp || !dig) {
+        cli_error("out of memory");
         rc = CLI_EXIT_INTERNAL;
         goto done;
+    }
+    for (m = 0; m < 2; m++) {
+        xq_init(&ulp[m]);
+        xq_init(&dig[m]);
     }
     for (side = 0; side < 2; side++) {
         rc = make_tracers(sys[side], bits, t[side], "table2");
         if (rc != CLI_EXIT_OK)
             goto done;
     }
-    for (r = 0; r < count; r++) {
-        t2ray *ry = &ray;
-        double start[3] = { 0.0, 0.0, 0.0 };
-        t2_draw(&state, ry);
-        start[2] = t2_zc[ry->side];
-        for (m = 0; m < NMETHOD; m++) {
-            ry->st[m] = sg_trace_start(t[ry->side][m], start, ry->dir, ry->o[m]);
-            if (!sg_err_is_ray_status(ry->st[m])) {
-                cli_error("verify: table2: ray %zu: %s trace failed: %s", r + 1, mname[m],
-                          sg_strerror(ry->st[m]));
-                rc = CLI_EXIT_INTERNAL;
-                goto done;
+    do {
+        rc = t2_pass(t, count, seed, first, ulp, dig, (const int(*)[2])want, show, st,
+                     &nviol);
+        if (rc != CLI_EXIT_OK)
+            goto done;
+        again = 0;
+        for (m = 0; m < 2; m++)
+            for (k = 0; k < 2; k++) {
+                xquant *q = k ? &dig[m] : &ulp[m];
+                int x;
+                if (!want[m][k])
+                    continue;
+                if (first && st[m].n == 0) {
+                    want[m][k] = 0;
+                    continue;
+                }
+                x = xq_resolve(q, rank, first ? t2_ranks(st[m].n, !k, rank) : 0);
+                if (x < 0) {
+                    cli_error(x == XQ_ECHANGED ? "verify: table2: a ray traced differently "
+                                                 "the second time"
+                              : x == XQ_ETOOMANY ? "verify: table2: too many rays"
+                                                 : "verify: table2: out of memory");
+                    rc = CLI_EXIT_INTERNAL;
+                    goto done;
+                }
+                want[m][k] = x == XQ_AGAIN;
+                again |= want[m][k];
             }
-        }
-        if (r < T2_SHOW)
-            show[r] = *ry;
-        for (m = 0; m < 2; m++) {
-            double pa[3], ref[3], e;
-            if (ry->st[m] != SG_OK || ry->st[M_MPFR] != SG_OK) {
-                st[m].nfail++;
-                continue;
-            }
-            point_of(&ry->o[m][1], pa);
-            point_of(&ry->o[M_MPFR][1], ref);
-            e = max_diff3(pa, ref);
-            if (e == 0.0)
-                st[m].nexact++;
-            ulp[m][st[m].n] = e / ulp_of(max_abs3(ref));
-            dig[m][st[m].n] = point_digits(pa, ref);
-            st[m].n++;
-            if (m == M_PRECISE &&
-                bound_fails(e, ry->o[m][1].error_bound, ry->o[M_MPFR][1].error_bound))
-                nviol++;
-        }
-    }
+        first = 0;
+    } while (again);
     for (m = 0; m < 2; m++) {
         size_t n = st[m].n;
-        st[m].ulp_med = median(ulp[m], n);
-        st[m].ulp_p99 = quantile_sorted(ulp[m], n, 0.99);
-        st[m].ulp_max = n ? ulp[m][n - 1] : NAN;
-        st[m].dig_min = min_of(dig[m], n);
-        st[m].dig_med = median(dig[m], n);
+        st[m].ulp_med = t2_median(&ulp[m], n);
+        st[m].ulp_p99 = n ? xq_value(&ulp[m], 2) : NAN;
+        st[m].ulp_max = n ? xq_value(&ulp[m], 3) : NAN;
+        st[m].dig_min = n ? xq_value(&dig[m], 2) : NAN;
+        st[m].dig_med = t2_median(&dig[m], n);
     }
     pass = nviol == 0 && st[M_PRECISE].nfail == 0;
     if (nviol)
@@ -1818,10 +1962,12 @@ done:
         free_tracers(t[side]);
         sg_system_free(sys[side]);
     }
-    for (m = 0; m < 2; m++) {
-        free(ulp[m]);
-        free(dig[m]);
+    for (m = 0; ulp && dig && m < 2; m++) {
+        xq_free(&ulp[m]);
+        xq_free(&dig[m]);
     }
+    free(ulp);
+    free(dig);
     return rc;
 }
 
