@@ -77,6 +77,9 @@ typedef struct zsurf {
     long parm_line[ZMX_MAX_PARM + 1];
     int have_diam;
     double diam;
+    long pend_line;      /* first refusal inside the block, reported after TYPE's */
+    int pend_code;
+    char pend_msg[SG_DIAG_MSG];
     long xdat_line;      /* first nonzero XDAT */
     double xdat;
     int ap;              /* 0 none, 1 CLAP, 2 FLAP */
@@ -320,6 +323,24 @@ static void zwarn(zctx *c, const char *fmt, ...)
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
     sg_diag_warn(c->d, "%s: %s", where(c, w, sizeof w), msg);
+}
+
+/* A refusal inside a SURF block waits for the block's end, so that an
+ * unsupported TYPE is the one reported whatever the order of the lines. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+static int pend(zctx *c, int code, const char *fmt, ...)
+{
+    va_list ap;
+    if (c->zs.pend_line)
+        return SG_OK;
+    va_start(ap, fmt);
+    vsnprintf(c->zs.pend_msg, sizeof c->zs.pend_msg, fmt, ap);
+    va_end(ap);
+    c->zs.pend_line = c->line;
+    c->zs.pend_code = code;
+    return SG_OK;
 }
 
 /* Strict decimal syntax: [+-]digits[.digits][(e|E)[+-]digits]. */
@@ -740,6 +761,10 @@ static int end_surface(zctx *c)
                     "TYPE %s is %s; sagitta has standard (sphere, conic) and even-asphere "
                     "surfaces only", z->type, what);
     }
+    if (z->pend_line) {
+        c->line = z->pend_line;
+        return zerr(c, z->pend_code, "%s", z->pend_msg);
+    }
     if (z->xdat_line) {
         c->line = z->xdat_line;
         return zerr(c, SG_EUNSUPPORTED, "XDAT: extra data %.17g; sagitta's surfaces have no "
@@ -853,7 +878,7 @@ static int surface_line(zctx *c, const zline *l)
             (rc = tok_num(c, l, 2, "maximum radius", &mx)) != SG_OK)
             return rc;
         if (mn != 0.0)
-            return zerr(c, SG_EUNSUPPORTED, "%.4s: an annular aperture (minimum radius %.17g); "
+            return pend(c, SG_EUNSUPPORTED, "%.4s: an annular aperture (minimum radius %.17g); "
                         "sagitta's apertures are full discs", k->p, mn);
         if (!(mx >= 0.0))
             return zerr(c, SG_ERANGE, "%.4s: maximum radius %.17g is negative", k->p, mx);
@@ -867,13 +892,13 @@ static int surface_line(zctx *c, const zline *l)
         if (rc != SG_OK)
             return rc;
         if (nz)
-            return zerr(c, SG_EUNSUPPORTED, "OBDC: a decentred aperture; sagitta's apertures are "
+            return pend(c, SG_EUNSUPPORTED, "OBDC: a decentred aperture; sagitta's apertures are "
                         "centred on the axis");
         return SG_OK;
     }
     if (tok_is(k, "OBSC") || tok_is(k, "SQAP") || tok_is(k, "ELAP") || tok_is(k, "SQOB") ||
         tok_is(k, "ELOB") || tok_is(k, "UDAD") || tok_is(k, "UDOD"))
-        return zerr(c, SG_EUNSUPPORTED, "%.4s: %s; sagitta has circular clear apertures only",
+        return pend(c, SG_EUNSUPPORTED, "%.4s: %s; sagitta has circular clear apertures only",
                     k->p,
                     tok_is(k, "OBSC") ? "a circular obscuration"
                     : tok_is(k, "SQAP") ? "a rectangular aperture"
@@ -895,7 +920,7 @@ static int surface_line(zctx *c, const zline *l)
         if (rc != SG_OK)
             return rc;
         if (nz)
-            return zerr(c, SG_EUNSUPPORTED, "%.4s: a tilt or decenter %s the surface; sagitta's "
+            return pend(c, SG_EUNSUPPORTED, "%.4s: a tilt or decenter %s the surface; sagitta's "
                         "surfaces are centred and untilted", k->p,
                         tok_is(k, "SCAD") ? "after" : "before");
         return SG_OK;
@@ -1256,6 +1281,7 @@ static int parse_text(zctx *c, char *text)
             }
             if ((rc = end_surface(c)) != SG_OK)
                 break;
+            c->cur = -1;
             if ((rc = tok_int(c, l, 1, "surface number", 0, SG_MAX_SURFACES - 1, &n)) != SG_OK)
                 break;
             if (n != seen_next) {
