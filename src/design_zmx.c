@@ -1159,6 +1159,8 @@ static int finish(zctx *c)
     int nf, nw, i;
 
     c->cur = -1;
+    /* Messages about the file as a whole name no line. */
+    c->line = 0;
     /* Fields: FTYP's count, else the values given. */
     nf = c->have_ftyp ? c->ftyp_nfield : (c->nyfln > c->nxfln ? c->nyfln : c->nxfln);
     if (nf < 1)
