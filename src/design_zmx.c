@@ -539,21 +539,32 @@ static int in_list(const ztok *t, const char *const *list, size_t n)
     return 0;
 }
 
-/* Copies the rest of the line after the keyword, without trailing blanks. */
+/* Copies the rest of the line after the keyword.  Control characters
+ * become spaces and blanks at either end go, as the writer would leave
+ * them, so a text reads back the same after a round trip. */
 static void rest_copy(const zline *l, char *dst, size_t n, int *cut)
 {
-    size_t len = strlen(l->rest1);
-    while (len && (l->rest1[len - 1] == ' ' || l->rest1[len - 1] == '\t'))
-        len--;
-    *cut = len >= n;
+    const char *src = l->rest1;
+    size_t len, i, start = 0;
+    len = strlen(src);
+    *cut = 0;
     if (len >= n) {
+        *cut = 1;
         len = n - 1;
         /* Cut on a UTF-8 character boundary. */
-        while (len && ((unsigned char)l->rest1[len] & 0xC0) == 0x80)
+        while (len && ((unsigned char)src[len] & 0xC0) == 0x80)
             len--;
     }
-    memcpy(dst, l->rest1, len);
-    dst[len] = '\0';
+    for (i = 0; i < len; i++) {
+        unsigned char ch = (unsigned char)src[i];
+        dst[i] = (ch < 0x20 || ch == 0x7F) ? ' ' : (char)ch;
+    }
+    while (len && dst[len - 1] == ' ')
+        len--;
+    while (start < len && dst[start] == ' ')
+        start++;
+    memmove(dst, dst + start, len - start);
+    dst[len - start] = '\0';
 }
 
 /* Whether every number from token k on is zero (absent counts as zero). */
