@@ -297,6 +297,59 @@ static void test_zemax_semi_diameters(void **state)
     sg_system_free(s);
 }
 
+/* The Thorlabs AL1815-C file stores Zemax's automatic semi-diameter of the
+ * flat back (surface 2), 7.258157225112, the marginal ray's height there.
+ * With the catalog index of S-LAH64 sagitta's height is lower by about
+ * 2e-6 relative: Zemax corrects catalog indices for temperature (issue 16
+ * measured 1.95e-5 on this glass).  Solving for the index offset that
+ * reproduces Zemax's 13 digits must give that figure, which shows the rest
+ * of the geometry (asphere, thicknesses) agrees to the digits stored. */
+static double back_height(sg_system *s, const sg_catalog *cat, double n)
+{
+    sg_trace_opts o;
+    sg_diag d;
+    sg_ray_surface r[4];
+    sg_tracer *t;
+    s->surf[1].mat.kind = SG_MAT_INDEX;
+    s->surf[1].mat.index = n;
+    sg_trace_opts_init(&o);
+    o.clip = 0;
+    sg_diag_clear(&d);
+    t = sg_tracer_new(s, cat, &o, &d);
+    assert_non_null(t);
+    assert_int_equal(sg_trace_normalized(t, 0, 0, 0, 1, r), SG_OK);
+    sg_tracer_free(t);
+    return r[2].y;
+}
+
+static void test_zemax_asphere_temperature(void **state)
+{
+    sg_system *s = must_load("lens_thorlabs_iso_8859_1.zmx");
+    sg_catalog *cat = tu_catalog();
+    const double zemax = strtod("7.258157225112", NULL);
+    double n0 = sg_glass_index(sg_catalog_find(cat, "S-LAH64"), 0.78);
+    double a = 0.0, b = -2e-5, ha, hb, h0;
+    int k;
+    (void)state;
+    h0 = ha = back_height(s, cat, n0);
+    hb = back_height(s, cat, n0 + b);
+    for (k = 0; k < 8 && hb != ha; k++) {
+        double c = b - (hb - zemax) * (b - a) / (hb - ha);
+        a = b;
+        ha = hb;
+        b = c;
+        hb = back_height(s, cat, n0 + b);
+    }
+    print_message("# AL1815-C back surface: Zemax %.13g, sagitta %.13g with the catalog index "
+                  "(relative %.1e); Zemax's figure needs an index lower by %.4g\n",
+                  zemax, h0, fabs(h0 - zemax) / zemax, -b);
+    assert_true(fabs(h0 - zemax) / zemax > 1e-6);
+    assert_true(fabs(hb - zemax) / zemax <= 5.1e-13);
+    assert_true(-b > 1.9e-5 && -b < 2.0e-5);
+    sg_catalog_free(cat);
+    sg_system_free(s);
+}
+
 /* ------------------------------------------------------------------------
  * Hostile and bad inputs
  * ------------------------------------------------------------------------ */
@@ -408,6 +461,7 @@ int main(void)
         cmocka_unit_test(test_roundtrip_files),
         cmocka_unit_test(test_roundtrip_examples),
         cmocka_unit_test(test_zemax_semi_diameters),
+        cmocka_unit_test(test_zemax_asphere_temperature),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_failed_load_keeps_system),
     };
