@@ -1058,6 +1058,14 @@ static int header_line(zctx *c, const zline *l)
         if (t != 20.0 || p != 1.0)
             return zerr(c, SG_EUNSUPPORTED, "ENVD: %.17g C and %.17g atm; sagitta has no "
                         "temperature or pressure and traces at 20 C and 1 atm", t, p);
+        if ((rc = opt_num(c, l, 3, "index adjustment flag", 0.0, &f)) != SG_OK)
+            return rc;
+        /* Zemax then corrects each glass measured at another temperature
+         * than 20 C; sagitta has no reference temperatures to do so. */
+        if (f != 0.0)
+            zwarn(c, "ENVD: Zemax adjusts catalog indices to 20 C and 1 atm; sagitta uses the "
+                  "catalog data as they are, so a glass measured at another temperature differs "
+                  "(by some 2e-5 in index for S-LAH64)");
         return SG_OK;
     }
     if (tok_is(k, "GCAT")) {
