@@ -1537,7 +1537,9 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
                 sg_strlcpy(gcat[ngcat++], g->catalog, SG_GLASS_NAME);
         }
     }
-    zb_add(b, "VERS 0\nMODE SEQ\nNAME ", 21);
+    /* No VERS line: Zemax reads a file without one, and a made-up version
+     * number could select an old reading of the keywords. */
+    zb_add(b, "MODE SEQ\nNAME ", 14);
     zb_text(b, s->title, &changed);
     zb_printf(b, "\nUNIT %s X W X CM MR CPMM\n",
               strcmp(s->units, "cm") == 0 ? "CM" : strcmp(s->units, "in") == 0 ? "IN"
