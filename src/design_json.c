@@ -876,16 +876,16 @@ int sg_design_parse(sg_system *sys, const char *text, size_t len, const char *na
     return rc;
 }
 
-int sg_design_load(sg_system *sys, const char *path, sg_diag *d)
+int sg_read_file(const char *path, size_t max, char **out, size_t *outlen, sg_diag *d)
 {
     FILE *f;
     struct stat st;
     char *buf = NULL;
     size_t len = 0, cap = 0;
-    int rc, e;
+    int e;
 
-    if (!sys || !path)
-        return sg_diag_set(d, SG_EINVAL, "load: no system or no path");
+    *out = NULL;
+    *outlen = 0;
     f = fopen(path, "rb");
     if (!f) {
         e = errno;
@@ -896,10 +896,10 @@ int sg_design_load(sg_system *sys, const char *path, sg_diag *d)
             fclose(f);
             return sg_diag_set(d, SG_EIO, "%s: cannot read: %s", path, strerror(EISDIR));
         }
-        if (S_ISREG(st.st_mode) && (unsigned long long)st.st_size > DESIGN_MAX_BYTES) {
+        if (S_ISREG(st.st_mode) && (unsigned long long)st.st_size > max) {
             fclose(f);
             return sg_diag_set(d, SG_ERANGE, "%s: the file is %lld bytes; the limit is %zu (64 MiB)",
-                               path, (long long)st.st_size, DESIGN_MAX_BYTES);
+                               path, (long long)st.st_size, max);
         }
     }
     /* Read in chunks: a pipe or a file that grows has no reliable size. */
@@ -908,13 +908,13 @@ int sg_design_load(sg_system *sys, const char *path, sg_diag *d)
         if (len == cap) {
             size_t ncap = cap ? cap * 2 : 65536;
             char *p;
-            if (ncap > DESIGN_MAX_BYTES + 1)
-                ncap = DESIGN_MAX_BYTES + 1;
+            if (ncap > max + 1)
+                ncap = max + 1;
             if (ncap <= cap) {
                 free(buf);
                 fclose(f);
                 return sg_diag_set(d, SG_ERANGE, "%s: the file is larger than %zu bytes (64 MiB)",
-                                   path, DESIGN_MAX_BYTES);
+                                   path, max);
             }
             p = realloc(buf, ncap);
             if (!p) {
@@ -937,12 +937,32 @@ int sg_design_load(sg_system *sys, const char *path, sg_diag *d)
         return sg_diag_set(d, SG_EIO, "%s: cannot read: %s", path, strerror(e));
     }
     fclose(f);
-    if (len > DESIGN_MAX_BYTES) {
+    if (len > max) {
         free(buf);
         return sg_diag_set(d, SG_ERANGE, "%s: the file is larger than %zu bytes (64 MiB)", path,
-                           DESIGN_MAX_BYTES);
+                           max);
     }
-    rc = sg_design_parse(sys, buf ? buf : "", len, path, d);
+    *out = buf;
+    *outlen = len;
+    return SG_OK;
+}
+
+int sg_design_load(sg_system *sys, const char *path, sg_diag *d)
+{
+    char *buf;
+    size_t len;
+    int rc;
+
+    if (!sys || !path)
+        return sg_diag_set(d, SG_EINVAL, "load: no system or no path");
+    rc = sg_read_file(path, DESIGN_MAX_BYTES, &buf, &len, d);
+    if (rc != SG_OK)
+        return rc;
+    /* A Zemax lens file, by its name or its first bytes. */
+    if (sg_zmx_detect(path, buf, len))
+        rc = sg_zmx_parse(sys, buf, len, path, NULL, d);
+    else
+        rc = sg_design_parse(sys, buf ? buf : "", len, path, d);
     free(buf);
     return rc;
 }
@@ -1272,19 +1292,30 @@ static void sync_parent_dir(const char *path)
 
 int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
 {
-    char *text, *tmp, *resolved = NULL;
-    const char *target, *slash;
-    size_t len, dirlen;
-    struct stat st;
-    FILE *f;
-    int fd, e, rc;
+    char *text;
+    int rc;
 
     if (!sys || !path || !path[0])
         return sg_diag_set(d, SG_EINVAL, "save: no system or no path");
+    /* A name ending in .zmx is written as a Zemax lens file. */
+    if (sg_zmx_detect(path, NULL, 0))
+        return sg_zmx_save(sys, path, NULL, d);
     text = build_json(sys, d, &rc);
     if (!text)
         return rc;
-    len = strlen(text);
+    rc = sg_save_text_atomic(path, text, strlen(text), d);
+    free(text);
+    return rc;
+}
+
+int sg_save_text_atomic(const char *path, const char *text, size_t len, sg_diag *d)
+{
+    char *tmp, *resolved = NULL;
+    const char *target, *slash;
+    size_t dirlen;
+    struct stat st;
+    FILE *f;
+    int fd, e;
     /* Saving through a symbolic link writes the file it points at; renaming
      * over the link itself would replace it with a plain file. */
     target = path;
@@ -1300,7 +1331,6 @@ int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
     tmp = malloc(dirlen + sizeof ".sagitta-XXXXXX");
     if (!tmp) {
         free(resolved);
-        free(text);
         return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", path);
     }
     memcpy(tmp, target, dirlen);
@@ -1310,7 +1340,6 @@ int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
         e = errno;
         free(tmp);
         free(resolved);
-        free(text);
         return sg_diag_set(d, SG_EIO, "%s: cannot create a temporary file: %s", path, strerror(e));
     }
     /* mkstemp makes the file 0600; keep the old file's mode, or give a new
@@ -1342,13 +1371,11 @@ int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
     sync_parent_dir(target);
     free(tmp);
     free(resolved);
-    free(text);
     return SG_OK;
 
 fail:
     unlink(tmp);
     free(tmp);
     free(resolved);
-    free(text);
     return sg_diag_set(d, SG_EIO, "%s: cannot write: %s", path, strerror(e));
 }

@@ -21,4 +21,10 @@ int sg_system_check(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
 /* Copies at most n-1 bytes and always terminates. */
 void sg_strlcpy(char *dst, const char *src, size_t n);
 
+/* Reads a whole file of at most max bytes into *out (free() it). */
+int sg_read_file(const char *path, size_t max, char **out, size_t *len, sg_diag *d);
+
+/* Writes text atomically: a temporary file beside path, fsync, rename. */
+int sg_save_text_atomic(const char *path, const char *text, size_t len, sg_diag *d);
+
 #endif

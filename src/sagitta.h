@@ -303,6 +303,26 @@ int sg_design_save(const sg_system *sys, const char *path, sg_diag *d);
 /* The design as a NUL-terminated JSON text; free() it. */
 char *sg_design_to_json(const sg_system *sys);
 
+/* sg_design_load reads a Zemax .zmx lens file too (by its name, or by a
+ * byte-order mark or a first VERS or MODE line), and sg_design_save writes
+ * one when the name ends in .zmx.  The functions below do the same with a
+ * catalog of the caller's: the reader checks each glass in it (NULL: the
+ * default catalog) and names the nearest by nd and vd for one it lacks.
+ * What the model cannot hold (coordinate breaks, tilts, toroids,
+ * obscurations, vignetting factors...) is refused with SG_EUNSUPPORTED and
+ * a message "FILE:LINE: surface N: KEYWORD: ..."; solves and pickups are
+ * kept at their stored values, with a warning.  See sagitta-design(5). */
+int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name,
+                 const sg_catalog *cat, sg_diag *d);
+int sg_zmx_load(sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
+/* The design as .zmx text (UTF-8, Zemax keywords); NULL on failure. */
+char *sg_zmx_to_text(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
+/* Writes a .zmx file atomically, as sg_design_save does. */
+int sg_zmx_save(const sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
+/* Nonzero when path ends in .zmx (any case) or the first n bytes of head
+ * (may be NULL) look like a lens file rather than JSON. */
+int sg_zmx_detect(const char *path, const void *head, size_t n);
+
 /* ------------------------------------------------------------------------
  * Paraxial data (y-nu trace)
  * ------------------------------------------------------------------------ */

@@ -292,7 +292,7 @@ int cli_load_design(const char *path, sg_catalog **catp, sg_system **sysp)
         cli_design_free(cat, sys);
         /* A file that parses but describes an untraceable system (too few
          * surfaces, no stop, two stops) is a design error, as documented. */
-        if (rc == SG_ENOSYS || rc == SG_ENOSTOP || rc == SG_ETWOSTOPS)
+        if (rc == SG_ENOSYS || rc == SG_ENOSTOP || rc == SG_ETWOSTOPS || rc == SG_ENOGLASS)
             return CLI_EXIT_DESIGN;
         return rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_FILE;
     }

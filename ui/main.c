@@ -25,14 +25,16 @@ static const cli_command commands[] = {
     { "paraxial", cmd_paraxial, "print first-order (paraxial) data" },
     { "verify", cmd_verify, "check a design's traces against the MPFR reference" },
     { "bench", cmd_bench, "measure trace throughput" },
+    { "import", cmd_import, "read a Zemax .zmx lens file into a JSON design" },
+    { "export", cmd_export, "write a design as a Zemax .zmx lens file" },
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
 
 static void usage(FILE *f)
 {
     size_t k;
-    fputs("Usage: sagitta [FILE.json]\n"
-          "       sagitta edit [FILE.json]\n"
+    fputs("Usage: sagitta [FILE.json | FILE.zmx]\n"
+          "       sagitta edit [FILE.json | FILE.zmx]\n"
           "       sagitta COMMAND [ARGS]\n"
           "       sagitta help COMMAND | --help | --version\n"
           "\n"
@@ -73,7 +75,7 @@ static int looks_like_file(const char *a)
     struct stat st;
     size_t n = strlen(a);
     return strchr(a, '/') != NULL || (n > 5 && strcmp(a + n - 5, ".json") == 0) ||
-           stat(a, &st) == 0;
+           sg_zmx_detect(a, NULL, 0) || stat(a, &st) == 0;
 }
 
 int main(int argc, char **argv)

@@ -261,6 +261,8 @@ static void gen_csv_nul(const char *path)
 /* --------------------------------------------------------------- the table */
 
 #define ARGS(...) { __VA_ARGS__, NULL }
+/* The header of a small .zmx file: four lines. */
+#define ZH "MODE SEQ\nENPD 10\nWAVM 1 0.55 1\nPWAV 1\n"
 #define TRACE0(...) ARGS("trace", "@F", "--ray", "0,0,0,0", __VA_ARGS__)
 
 static const bad_case cases[] = {
@@ -501,6 +503,36 @@ static const bad_case cases[] = {
     { "design_directory", "a directory given as the design",
       NULL, NULL, NULL, NULL, ARGS("trace", "@E", "--ray", "0,0,0,0"), 3,
       "@E: cannot read", NULL, NULL, NULL, 0 },
+
+    /* ---- Zemax .zmx files (issue 17): exit 3 for what cannot be read or
+     *      represented, 4 for an unknown glass, the line and surface named,
+     *      and import writes nothing (here: no design on standard output) ---- */
+    { "zmx_coordbrk", "a coordinate break (TYPE on line 8) is refused there",
+      "cb.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  TYPE COORDBRK\n", NULL, NULL,
+      ARGS("import", "@F", "-o", "-"), 3, "@F:8: surface 1: TYPE COORDBRK", NULL, NULL,
+      "sagitta-design", 0 },
+    { "zmx_obscuration", "an obscuration on line 9 is refused, traced or imported",
+      "obsc.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  OBSC 0 2 0\n", NULL, NULL,
+      ARGS("trace", "@F", "--ray", "0,0,0,0"), 3, "@F:9: surface 1: OBSC", NULL, NULL,
+      NULL, 0 },
+    { "zmx_vignetting", "a vignetting factor on line 3 names its field",
+      "vig.zmx", "FTYP 0 0 2 1 0 0 0\nYFLN 0 5\nVDYN 0 0.2\n", NULL, NULL,
+      ARGS("paraxial", "@F"), 3, "@F:3: VDYN: field 2", NULL, NULL, NULL, 0 },
+    { "zmx_syntax", "a curvature that is not a number, line 7",
+      "num.zmx", ZH "SURF 0\nSURF 1\n  CURV 1..2\n", NULL, NULL,
+      ARGS("import", "@F", "-o", "-"), 3, "@F:7: surface 1: curvature: not a number", NULL,
+      NULL, "sagitta-design", 0 },
+    { "zmx_glass", "an unknown glass is exit 4, as in a JSON design, with its catalog",
+      "glass.zmx", "GCAT ACME\n" ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n"
+      "  GLAS NOGLASS 0 0 1.6 40.5\n", NULL, NULL, ARGS("import", "@F", "-o", "-"), 4,
+      "@F:10: surface 1: GLAS: glass NOGLASS (from the file's catalogs ACME)", NULL, NULL,
+      "sagitta-design", 0 },
+    { "zmx_utf16_cut", "UTF-16 text of an odd length is refused",
+      "odd.zmx", "\xFF\xFEM\0O", NULL, NULL, ARGS("import", "@F", "-o", "-"), 3,
+      "odd number of bytes", NULL, NULL, "sagitta-design", 0 },
+    { "zmx_no_stop", "a lens file without STOP is a design error, exit 4",
+      "nostop.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  DISZ 1\nSURF 2\n", NULL, NULL,
+      ARGS("import", "@F", "-o", "-"), 4, "no STOP line", NULL, NULL, "sagitta-design", 0 },
 
     /* ---- bad ray lists: exit 3, FILE:LINE and the column ---- */
     { "csv_bad_header", "an unknown column in the header, line 1",

@@ -159,6 +159,35 @@ static void test_saveas_existing(void **state)
 
 /* Another program rewrites the file after it was loaded: save refuses
  * until save!.  Touching it (new mtime, same bytes) is no change. */
+/* The editor opens a Zemax file (UTF-16, no TYPE lines, from
+ * tests/data/zmx) and saves a name ending in .zmx as a lens file, which
+ * opens again to the same design (issue 17). */
+static void test_open_zmx(void **state)
+{
+    char src[1024], out[512];
+    char *j1, *j2, *back;
+    ed *e = new_ed();
+    (void)state;
+    tu_path("tests/data/zmx/zmax_55278.zmx", src, sizeof src);
+    ok(e, "open %s", src);
+    assert_int_equal(e->doc.sys->nsurf, 8);
+    assert_string_equal(e->doc.sys->surf[1].mat.name, "SF5");
+    j1 = sg_design_to_json(e->doc.sys);
+    tmp_path("copy.zmx", out, sizeof out);
+    ok(e, "saveas %s", out);
+    back = get_file(out);
+    assert_non_null(strstr(back, "MODE SEQ"));
+    assert_null(strstr(back, "sagitta-design"));
+    free(back);
+    ok(e, "open! %s", out);
+    j2 = sg_design_to_json(e->doc.sys);
+    assert_string_equal(j1, j2);
+    free(j1);
+    free(j2);
+    unlink(out);
+    free_ed(e);
+}
+
 static void test_changed_on_disk(void **state)
 {
     char a[512];
@@ -462,6 +491,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_saveas_existing),
         cmocka_unit_test(test_changed_on_disk),
+        cmocka_unit_test(test_open_zmx),
         cmocka_unit_test(test_readonly),
         cmocka_unit_test(test_hard_link),
         cmocka_unit_test(test_batch_bounds),

@@ -1,0 +1,1723 @@
+/*
+ * design_zmx.c - Zemax .zmx lens files: read and write (sagitta-design(5),
+ * section ZEMAX FILES).
+ *
+ * The reader takes UTF-16LE with a byte-order mark, UTF-8 (with or without
+ * a mark) and ISO-8859-1.  Every keyword either maps onto the model, is
+ * known not to change a sequential trace (display, coatings, tolerancing,
+ * the merit function), or refuses the file with a message that names the
+ * file, the line, the surface and what sagitta lacks.  Nothing that changes
+ * the optics is dropped or approximated.
+ *
+ * Numbers are read with strtod from the text as written.  The curvature is
+ * the one exception: the model holds the radius, so the radius is the
+ * correctly rounded reciprocal of the exact decimal written (GMP rational
+ * arithmetic), and the writer prints 1/R to 25 digits, whose reciprocal
+ * rounds back to R.  A design therefore survives export and import bit for
+ * bit.
+ */
+#include <ctype.h>
+#include <errno.h>
+#include <locale.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <gmp.h>
+#include <mpfr.h>
+
+#include "internal.h"
+
+#define ZMX_MAX_BYTES ((size_t)64 * 1024 * 1024)
+#define ZMX_MAX_TOK 64       /* tokens read from one line */
+#define ZMX_MAX_NUMBER 80    /* characters of one number */
+#define ZMX_NPARM 8          /* even-asphere PARM 1..8 */
+#define ZMX_MAX_PARM 64      /* PARM numbers accepted at all */
+#define ZMX_NWSLOT 24        /* WAVM slots */
+#define ZMX_MAX_GCAT 16
+
+/* Keywords that do not change a sequential trace of the model, and why;
+ * sagitta-design(5) lists them with the same reasons. */
+static const char *const ignored_header[] = {
+    "VERS", /* the writer's version */
+    "NOTE", "AUTH", "LANG", "LUID", "DBDT", "BLNK", /* notes, vendor data */
+    "PFIL", "POLS", "NSCD", "COFN", /* polarization, non-sequential, coatings */
+    "GFAC", "GLRS", "GSTD", "RGLA", /* glass substitution for optimisation */
+    "SDMA", "OMMA", "ROPD", "PICB", "HYPR", "EERA", "IWDP", "STUD", "RCMF",
+    /* semi-diameter margins, OPD reference, display settings */
+    "TOL", "MOFF", "TCMM", /* tolerances; multi-configuration rows of MNUM 1 */
+};
+static const char *const ignored_surface[] = {
+    "FIMP", "HIDE", "MIRR", "SLAB", "POPS", "MEMA", "OEMA", "COAT", "SSID",
+    "VPAR", "VCRV", "VDSZ", "VTHI", "VCON", "VGLS", "TCEX", "CONF",
+    /* drawing, labels, physical optics, mechanical apertures, coatings,
+     * variable flags for optimisation, thermal expansion (no temperature
+     * in the model: ENVD is refused away from 20 C, 1 atm) */
+};
+
+typedef struct ztok {
+    const char *p;
+    size_t n;
+} ztok;
+
+typedef struct zline {
+    ztok t[ZMX_MAX_TOK];
+    int n;
+    const char *rest1; /* the text after the keyword, for NAME and COMM */
+    int indented;
+} zline;
+
+typedef struct zsurf {
+    long line;           /* SURF line */
+    char type[24];       /* "" when no TYPE line: STANDARD */
+    long type_line;
+    double parm[ZMX_MAX_PARM + 1];
+    long parm_line[ZMX_MAX_PARM + 1];
+    int have_diam;
+    double diam;
+    long pend_line;      /* first refusal inside the block, reported after TYPE's */
+    int pend_code;
+    char pend_msg[SG_DIAG_MSG];
+    long xdat_line;      /* first nonzero XDAT */
+    double xdat;
+    int ap;              /* 0 none, 1 CLAP, 2 FLAP */
+    double ap_max;
+    long ap_line;
+} zsurf;
+
+typedef struct zctx {
+    const char *name;
+    sg_diag *d;
+    const sg_catalog *cat;
+    long line;
+    sg_system *sys;
+    int cur;             /* current surface, -1 in the header */
+    int after;           /* past the surfaces: merit function and tolerances */
+    zsurf zs;
+    int nstop, stop;
+    long stop_line;
+    /* header values, resolved at the end */
+    int have_ftyp, ftyp_nfield, ftyp_nwave;
+    long ftyp_line;
+    double xfln[SG_MAX_FIELDS], yfln[SG_MAX_FIELDS], fwgn[SG_MAX_FIELDS];
+    int nxfln, nyfln, nfwgn;
+    long xfln_line, yfln_line;
+    double wum[ZMX_NWSLOT], wwt[ZMX_NWSLOT];
+    int whave[ZMX_NWSLOT];
+    int nwavl, nwwgt;
+    double wavl[ZMX_NWSLOT], wwgt[ZMX_NWSLOT];
+    int pwav;
+    long pwav_line;
+    int have_aper;
+    long aper_line;
+    char gcat[ZMX_MAX_GCAT][SG_GLASS_NAME];
+    int ngcat;
+    int nfrozen;
+} zctx;
+
+/* ------------------------------------------------------------------------
+ * Text: decoding to UTF-8
+ * ------------------------------------------------------------------------ */
+
+static void put_utf8(char *out, size_t *j, unsigned cp)
+{
+    if (cp < 0x80) {
+        out[(*j)++] = (char)cp;
+    } else if (cp < 0x800) {
+        out[(*j)++] = (char)(0xC0 | (cp >> 6));
+        out[(*j)++] = (char)(0x80 | (cp & 0x3F));
+    } else if (cp < 0x10000) {
+        out[(*j)++] = (char)(0xE0 | (cp >> 12));
+        out[(*j)++] = (char)(0x80 | ((cp >> 6) & 0x3F));
+        out[(*j)++] = (char)(0x80 | (cp & 0x3F));
+    } else {
+        out[(*j)++] = (char)(0xF0 | (cp >> 18));
+        out[(*j)++] = (char)(0x80 | ((cp >> 12) & 0x3F));
+        out[(*j)++] = (char)(0x80 | ((cp >> 6) & 0x3F));
+        out[(*j)++] = (char)(0x80 | (cp & 0x3F));
+    }
+}
+
+/* Length of the valid UTF-8 sequence at s, or 0. */
+static size_t utf8_len(const unsigned char *s, size_t n)
+{
+    unsigned cp;
+    size_t k, len;
+    if (s[0] < 0x80)
+        return 1;
+    if (s[0] >= 0xC2 && s[0] <= 0xDF)
+        len = 2, cp = s[0] & 0x1F;
+    else if (s[0] >= 0xE0 && s[0] <= 0xEF)
+        len = 3, cp = s[0] & 0x0F;
+    else if (s[0] >= 0xF0 && s[0] <= 0xF4)
+        len = 4, cp = s[0] & 0x07;
+    else
+        return 0;
+    if (len > n)
+        return 0;
+    for (k = 1; k < len; k++) {
+        if ((s[k] & 0xC0) != 0x80)
+            return 0;
+        cp = (cp << 6) | (s[k] & 0x3F);
+    }
+    if ((len == 3 && (cp < 0x800 || (cp >= 0xD800 && cp <= 0xDFFF))) ||
+        (len == 4 && (cp < 0x10000 || cp > 0x10FFFF)))
+        return 0;
+    return len;
+}
+
+/* Line number (from 1) of byte offset off in a byte-oriented text. */
+static long line_of(const unsigned char *b, size_t off, size_t unit)
+{
+    long ln = 1;
+    size_t i;
+    for (i = 0; i + unit <= off; i += unit)
+        if (b[i] == '\n' && (unit == 1 || b[i + 1] == 0))
+            ln++;
+    return ln;
+}
+
+/* Decodes the file into NUL-terminated UTF-8 in *out.  *enc names the
+ * encoding found, for messages. */
+static int decode(const char *name, const unsigned char *b, size_t n, char **out,
+                  const char **enc, sg_diag *d)
+{
+    char *o;
+    size_t i, j = 0;
+    *out = NULL;
+    if (n >= 2 && b[0] == 0xFE && b[1] == 0xFF)
+        return sg_diag_set(d, SG_EUNSUPPORTED,
+                           "%s:1: UTF-16 big-endian text; Zemax writes UTF-16LE, UTF-8 or "
+                           "ISO-8859-1, and sagitta reads those", name);
+    if (n >= 2 && b[0] == 0xFF && b[1] == 0xFE) {
+        *enc = "UTF-16LE";
+        if (n % 2)
+            return sg_diag_set(d, SG_EPARSE, "%s:%ld: UTF-16LE text of an odd number of bytes "
+                               "(the file is cut)", name, line_of(b + 2, n - 3, 2));
+        o = malloc((n / 2) * 3 + 1);
+        if (!o)
+            return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
+        for (i = 2; i + 1 < n; i += 2) {
+            unsigned u = b[i] | (unsigned)b[i + 1] << 8;
+            if (u == 0) {
+                free(o);
+                return sg_diag_set(d, SG_EPARSE, "%s:%ld: NUL character in the text", name,
+                                   line_of(b + 2, i - 2, 2));
+            }
+            if (u >= 0xD800 && u <= 0xDBFF && i + 3 < n) {
+                unsigned v = b[i + 2] | (unsigned)b[i + 3] << 8;
+                if (v >= 0xDC00 && v <= 0xDFFF) {
+                    put_utf8(o, &j, 0x10000 + ((u - 0xD800) << 10) + (v - 0xDC00));
+                    i += 2;
+                    continue;
+                }
+            }
+            if (u >= 0xD800 && u <= 0xDFFF) {
+                free(o);
+                return sg_diag_set(d, SG_EPARSE, "%s:%ld: unpaired UTF-16 surrogate 0x%04X", name,
+                                   line_of(b + 2, i - 2, 2), u);
+            }
+            put_utf8(o, &j, u);
+        }
+        o[j] = '\0';
+        *out = o;
+        return SG_OK;
+    }
+    if (n >= 3 && b[0] == 0xEF && b[1] == 0xBB && b[2] == 0xBF) {
+        b += 3;
+        n -= 3;
+        *enc = "UTF-8";
+    } else {
+        *enc = NULL;
+    }
+    for (i = 0; i < n; i++)
+        if (b[i] == 0)
+            return sg_diag_set(d, SG_EPARSE, "%s:%ld: NUL byte in the text (UTF-16 without its "
+                               "byte-order mark?)", name, line_of(b, i, 1));
+    /* Valid UTF-8 is read as UTF-8; anything else is ISO-8859-1, in which
+     * every byte is a character. */
+    for (i = 0; i < n;) {
+        size_t k = utf8_len(b + i, n - i);
+        if (!k)
+            break;
+        i += k;
+    }
+    if (i < n && *enc) {
+        return sg_diag_set(d, SG_EPARSE, "%s:%ld: invalid UTF-8 after a UTF-8 byte-order mark",
+                           name, line_of(b, i, 1));
+    }
+    o = malloc(n * 2 + 1);
+    if (!o)
+        return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
+    if (i == n) {
+        memcpy(o, b, n);
+        j = n;
+        if (!*enc)
+            *enc = "UTF-8";
+    } else {
+        *enc = "ISO-8859-1";
+        for (i = 0; i < n; i++)
+            put_utf8(o, &j, b[i]);
+    }
+    o[j] = '\0';
+    *out = o;
+    return SG_OK;
+}
+
+/* ------------------------------------------------------------------------
+ * Messages and tokens
+ * ------------------------------------------------------------------------ */
+
+/* A token for a message: printable ASCII, other bytes as '?', cut at 40. */
+static void tok_show(const ztok *t, char *buf, size_t n)
+{
+    size_t i, j = 0, len = t->n > 40 ? 40 : t->n;
+    for (i = 0; i < len && j + 1 < n; i++) {
+        unsigned char c = (unsigned char)t->p[i];
+        buf[j++] = (c >= 0x20 && c < 0x7F) ? (char)c : '?';
+    }
+    buf[j] = '\0';
+    if (t->n > 40 && j + 4 < n)
+        strcat(buf, "...");
+}
+
+static int tok_is(const ztok *t, const char *s)
+{
+    return t->n == strlen(s) && memcmp(t->p, s, t->n) == 0;
+}
+
+static const char *where(zctx *c, char *buf, size_t n)
+{
+    if (c->cur >= 0)
+        snprintf(buf, n, "%s:%ld: surface %d", c->name, c->line, c->cur);
+    else if (c->line > 0)
+        snprintf(buf, n, "%s:%ld", c->name, c->line);
+    else
+        snprintf(buf, n, "%s", c->name);
+    return buf;
+}
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+static int zerr(zctx *c, int code, const char *fmt, ...)
+{
+    char msg[SG_DIAG_MSG], w[200];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    return sg_diag_set(c->d, code, "%s: %s", where(c, w, sizeof w), msg);
+}
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+static void zwarn(zctx *c, const char *fmt, ...)
+{
+    char msg[SG_DIAG_MSG], w[200];
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(msg, sizeof msg, fmt, ap);
+    va_end(ap);
+    sg_diag_warn(c->d, "%s: %s", where(c, w, sizeof w), msg);
+}
+
+/* A refusal inside a SURF block waits for the block's end, so that an
+ * unsupported TYPE is the one reported whatever the order of the lines. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+static int pend(zctx *c, int code, const char *fmt, ...)
+{
+    va_list ap;
+    if (c->zs.pend_line)
+        return SG_OK;
+    va_start(ap, fmt);
+    vsnprintf(c->zs.pend_msg, sizeof c->zs.pend_msg, fmt, ap);
+    va_end(ap);
+    c->zs.pend_line = c->line;
+    c->zs.pend_code = code;
+    return SG_OK;
+}
+
+/* Strict decimal syntax: [+-]digits[.digits][(e|E)[+-]digits]. */
+static int decimal_ok(const char *s)
+{
+    int digits = 0;
+    if (*s == '+' || *s == '-')
+        s++;
+    while (isdigit((unsigned char)*s))
+        s++, digits++;
+    if (*s == '.') {
+        s++;
+        while (isdigit((unsigned char)*s))
+            s++, digits++;
+    }
+    if (!digits)
+        return 0;
+    if (*s == 'e' || *s == 'E') {
+        int ed = 0;
+        s++;
+        if (*s == '+' || *s == '-')
+            s++;
+        while (isdigit((unsigned char)*s))
+            s++, ed++;
+        if (!ed)
+            return 0;
+    }
+    return *s == '\0';
+}
+
+/* Copies token k into buf as a C string, or fails naming what. */
+static int tok_text(zctx *c, const zline *l, int k, const char *what, char *buf, size_t n)
+{
+    char q[48];
+    if (k >= l->n)
+        return zerr(c, SG_EPARSE, "missing %s", what);
+    if (l->t[k].n >= n) {
+        tok_show(&l->t[k], q, sizeof q);
+        return zerr(c, SG_EPARSE, "%s: too long: '%s'", what, q);
+    }
+    memcpy(buf, l->t[k].p, l->t[k].n);
+    buf[l->t[k].n] = '\0';
+    return SG_OK;
+}
+
+/* Token k as a finite number, read by strtod exactly as written. */
+static int tok_num(zctx *c, const zline *l, int k, const char *what, double *out)
+{
+    char buf[ZMX_MAX_NUMBER + 1], q[48];
+    double v;
+    int rc;
+    if (k >= l->n)
+        return zerr(c, SG_EPARSE, "%.4s: missing %s", l->t[0].p, what);
+    if ((rc = tok_text(c, l, k, what, buf, sizeof buf)) != SG_OK)
+        return rc;
+    tok_show(&l->t[k], q, sizeof q);
+    if (!decimal_ok(buf))
+        return zerr(c, SG_EPARSE, "%s: not a number: '%s'", what, q);
+    v = strtod(buf, NULL);
+    if (!isfinite(v))
+        return zerr(c, SG_ERANGE, "%s: %s is beyond the doubles", what, q);
+    *out = v;
+    return SG_OK;
+}
+
+/* Token k as an integer in [lo, hi]; Zemax sometimes writes "1.0". */
+static int tok_int(zctx *c, const zline *l, int k, const char *what, int lo, int hi, int *out)
+{
+    double v;
+    int rc = tok_num(c, l, k, what, &v);
+    if (rc != SG_OK)
+        return rc;
+    if (v != floor(v) || v < lo || v > hi)
+        return zerr(c, SG_ERANGE, "%s: %.17g is not a whole number from %d to %d", what, v, lo,
+                    hi);
+    *out = (int)v;
+    return SG_OK;
+}
+
+/* Optional number: absent tokens read as dflt. */
+static int opt_num(zctx *c, const zline *l, int k, const char *what, double dflt, double *out)
+{
+    if (k >= l->n) {
+        *out = dflt;
+        return SG_OK;
+    }
+    return tok_num(c, l, k, what, out);
+}
+
+/* The radius nearest the exact decimal curvature in tok: 1/D rounded once,
+ * by rational arithmetic. */
+static int tok_curv(zctx *c, const zline *l, int k, double *radius)
+{
+    char buf[ZMX_MAX_NUMBER + 1], digits[ZMX_MAX_NUMBER + 1], q[48];
+    const char *s;
+    double cv;
+    long e10 = 0;
+    size_t nd = 0;
+    int neg = 0, rc;
+    mpz_t num, den;
+    mpq_t r;
+    mpfr_t R;
+
+    if ((rc = tok_num(c, l, k, "curvature", &cv)) != SG_OK)
+        return rc;
+    if (cv == 0.0) {
+        *radius = INFINITY;
+        return SG_OK;
+    }
+    tok_show(&l->t[k], q, sizeof q);
+    /* Beyond this the radius exceeds what sg_system_validate accepts. */
+    if (fabs(cv) < 1e-150)
+        return zerr(c, SG_ERANGE, "curvature %s: the radius is beyond 1e150 lens units", q);
+    memcpy(buf, l->t[k].p, l->t[k].n);
+    buf[l->t[k].n] = '\0';
+    s = buf;
+    if (*s == '+' || *s == '-')
+        neg = *s++ == '-';
+    for (; *s && *s != 'e' && *s != 'E'; s++)
+        if (*s != '.')
+            digits[nd++] = *s;
+    digits[nd] = '\0';
+    {
+        const char *dot = strchr(buf, '.');
+        const char *ex = strpbrk(buf, "eE");
+        long frac = 0;
+        if (dot)
+            frac = (long)((ex ? ex : buf + strlen(buf)) - dot - 1);
+        /* The exponent is bounded: the value is a finite nonzero double
+         * and the text has at most ZMX_MAX_NUMBER characters. */
+        e10 = (ex ? strtol(ex + 1, NULL, 10) : 0) - frac;
+    }
+    /* D = digits * 10^e10, so 1/D = 10^-e10 / digits. */
+    mpz_init_set_str(num, digits, 10);
+    mpz_init_set_ui(den, 1);
+    if (e10 > 0) {
+        mpz_t p;
+        mpz_init(p);
+        mpz_ui_pow_ui(p, 10, (unsigned long)e10);
+        mpz_mul(num, num, p);
+        mpz_clear(p);
+    } else if (e10 < 0) {
+        mpz_ui_pow_ui(den, 10, (unsigned long)(-e10));
+    }
+    mpq_init(r);
+    mpq_set_num(r, den);
+    mpq_set_den(r, num);
+    mpq_canonicalize(r);
+    mpfr_init2(R, 53);
+    mpfr_set_q(R, r, MPFR_RNDN);
+    *radius = mpfr_get_d(R, MPFR_RNDN);
+    if (neg)
+        *radius = -*radius;
+    mpfr_clear(R);
+    mpq_clear(r);
+    mpz_clear(num);
+    mpz_clear(den);
+    return SG_OK;
+}
+
+/* ------------------------------------------------------------------------
+ * Lines
+ * ------------------------------------------------------------------------ */
+
+static void split(char *s, zline *l)
+{
+    char *p = s;
+    l->n = 0;
+    l->rest1 = "";
+    l->indented = *p == ' ' || *p == '\t';
+    while (*p) {
+        while (*p == ' ' || *p == '\t')
+            p++;
+        if (!*p)
+            break;
+        if (l->n == 1)
+            l->rest1 = p;
+        if (l->n < ZMX_MAX_TOK) {
+            l->t[l->n].p = p;
+            while (*p && *p != ' ' && *p != '\t')
+                p++;
+            l->t[l->n].n = (size_t)(p - l->t[l->n].p);
+            l->n++;
+        } else {
+            break;
+        }
+    }
+}
+
+static int in_list(const ztok *t, const char *const *list, size_t n)
+{
+    size_t i;
+    for (i = 0; i < n; i++)
+        if (tok_is(t, list[i]))
+            return 1;
+    return 0;
+}
+
+/* Copies the rest of the line after the keyword.  Control characters
+ * become spaces and blanks at either end go, as the writer would leave
+ * them, so a text reads back the same after a round trip. */
+static void rest_copy(const zline *l, char *dst, size_t n, int *cut)
+{
+    const char *src = l->rest1;
+    size_t len, i, start = 0;
+    len = strlen(src);
+    *cut = 0;
+    if (len >= n) {
+        *cut = 1;
+        len = n - 1;
+        /* Cut on a UTF-8 character boundary. */
+        while (len && ((unsigned char)src[len] & 0xC0) == 0x80)
+            len--;
+    }
+    for (i = 0; i < len; i++) {
+        unsigned char ch = (unsigned char)src[i];
+        dst[i] = (ch < 0x20 || ch == 0x7F) ? ' ' : (char)ch;
+    }
+    while (len && dst[len - 1] == ' ')
+        len--;
+    while (start < len && dst[start] == ' ')
+        start++;
+    memmove(dst, dst + start, len - start);
+    dst[len - start] = '\0';
+}
+
+/* Whether every number from token k on is zero (absent counts as zero). */
+static int all_zero(zctx *c, const zline *l, int k, int *rc)
+{
+    double v;
+    *rc = SG_OK;
+    for (; k < l->n; k++) {
+        if (l->t[k].n == 2 && l->t[k].p[0] == '"' && l->t[k].p[1] == '"')
+            continue;
+        if ((*rc = tok_num(c, l, k, "value", &v)) != SG_OK)
+            return 0;
+        if (v != 0.0)
+            return 0;
+    }
+    return 1;
+}
+
+/* ------------------------------------------------------------------------
+ * Surfaces
+ * ------------------------------------------------------------------------ */
+
+/* Appends surface n (the next one) to the system being read. */
+static int grow_to(zctx *c, int n)
+{
+    sg_system *s = c->sys;
+    if (n <= s->nsurf)
+        return SG_OK;
+    if (n > SG_MAX_SURFACES)
+        return zerr(c, SG_ERANGE, "more than %d surfaces", SG_MAX_SURFACES);
+    if (n > s->capsurf) {
+        int cap = s->capsurf ? s->capsurf * 2 : 8;
+        sg_surface *p;
+        if (cap > SG_MAX_SURFACES)
+            cap = SG_MAX_SURFACES;
+        p = realloc(s->surf, (size_t)cap * sizeof *p);
+        if (!p)
+            return zerr(c, SG_ENOMEM, "out of memory for %d surfaces", n);
+        s->surf = p;
+        s->capsurf = cap;
+    }
+    s->nsurf = n;
+    return SG_OK;
+}
+
+static const char *nearest_glass(const sg_catalog *cat, double nd, double vd, char *buf,
+                                 size_t n)
+{
+    size_t i, m = cat ? sg_catalog_count(cat) : 0;
+    const sg_glass *best = NULL;
+    double bd = INFINITY;
+    for (i = 0; i < m; i++) {
+        const sg_glass *g = sg_catalog_at(cat, i);
+        /* 0.01 in nd weighs as much as 1 in vd, the usual glass-map scale. */
+        double e = pow((g->nd - nd) / 0.01, 2) + pow(g->vd - vd, 2);
+        if (e < bd) {
+            bd = e;
+            best = g;
+        }
+    }
+    if (!best)
+        snprintf(buf, n, "no catalog is loaded to suggest one");
+    else
+        snprintf(buf, n, "the nearest by nd and vd is %s (%s, nd %.6g, vd %.4g)", best->name,
+                 best->catalog, best->nd, best->vd);
+    return buf;
+}
+
+static int gcat_has(const zctx *c, const char *cat)
+{
+    int i;
+    for (i = 0; i < c->ngcat; i++)
+        if (strcmp(c->gcat[i], cat) == 0)
+            return 1;
+    return 0;
+}
+
+static int read_glas(zctx *c, const zline *l, sg_surface *s)
+{
+    char name[SG_GLASS_NAME], q[48], sug[160];
+    double flag = 0.0, nd = 0.0, vd = 0.0;
+    const sg_glass *g;
+    size_t i;
+    int rc;
+    if (l->n < 2) {
+        s->mat.kind = SG_MAT_AIR;
+        return SG_OK;
+    }
+    tok_show(&l->t[1], q, sizeof q);
+    if (l->t[1].n >= SG_GLASS_NAME)
+        return zerr(c, SG_ERANGE, "GLAS: glass name '%s' is longer than %d characters", q,
+                    SG_GLASS_NAME - 1);
+    memcpy(name, l->t[1].p, l->t[1].n);
+    name[l->t[1].n] = '\0';
+    for (i = 0; name[i]; i++)
+        name[i] = (char)toupper((unsigned char)name[i]);
+    if ((rc = opt_num(c, l, 2, "glass solve", 0.0, &flag)) != SG_OK ||
+        (rc = opt_num(c, l, 4, "nd", 0.0, &nd)) != SG_OK ||
+        (rc = opt_num(c, l, 5, "vd", 0.0, &vd)) != SG_OK)
+        return rc;
+    if (strcmp(name, "MIRROR") == 0) {
+        s->mat.kind = SG_MAT_MIRROR;
+        return SG_OK;
+    }
+    if (strcmp(name, "AIR") == 0) {
+        s->mat.kind = SG_MAT_AIR;
+        return SG_OK;
+    }
+    if (strcmp(name, "___BLANK") == 0) {
+        /* A model glass: nd, vd (and dPgF).  Without dispersion (vd 0) it
+         * is a fixed index; with it, the model has no such material. */
+        double dpgf = 0.0;
+        if ((rc = opt_num(c, l, 6, "dPgF", 0.0, &dpgf)) != SG_OK)
+            return rc;
+        if (vd != 0.0 || dpgf != 0.0)
+            return zerr(c, SG_EUNSUPPORTED,
+                        "GLAS: a model glass (nd %.17g, vd %.17g, dPgF %.17g) is dispersive; "
+                        "sagitta has catalog glasses and fixed indices only (%s)",
+                        nd, vd, dpgf, nearest_glass(c->cat, nd, vd, sug, sizeof sug));
+        if (!(nd >= 1e-3 && nd < 100.0))
+            return zerr(c, SG_ERANGE, "GLAS: model glass index %.17g is not physical", nd);
+        s->mat.kind = SG_MAT_INDEX;
+        s->mat.index = nd;
+        return SG_OK;
+    }
+    if (flag != 0.0 && flag != 1.0) {
+        c->nfrozen++;
+        zwarn(c, "GLAS: the glass solve (type %g) is frozen: %s is used as stored", flag, name);
+    }
+    s->mat.kind = SG_MAT_GLASS;
+    sg_strlcpy(s->mat.name, name, sizeof s->mat.name);
+    if (!c->cat)
+        return SG_OK;
+    g = sg_catalog_find(c->cat, name);
+    if (!g) {
+        char cats[128] = "";
+        int k;
+        for (k = 0; k < c->ngcat; k++) {
+            if (k)
+                strncat(cats, " ", sizeof cats - strlen(cats) - 1);
+            strncat(cats, c->gcat[k], sizeof cats - strlen(cats) - 1);
+        }
+        /* Zemax writes nd 1.5, vd 40 (or zeros) for a catalog glass whose
+         * data it does not store. */
+        if (nd > 0.0 && !(nd == 1.5 && vd == 40.0))
+            nearest_glass(c->cat, nd, vd, sug, sizeof sug);
+        else
+            snprintf(sug, sizeof sug, "the file stores no nd and vd to suggest one by");
+        return zerr(c, SG_ENOGLASS,
+                    "GLAS: glass %s (from the file's catalogs %s) is not in sagitta's catalog; "
+                    "%s, but no glass is substituted",
+                    name, cats[0] ? cats : "(no GCAT line)", sug);
+    }
+    if (c->ngcat && !gcat_has(c, g->catalog))
+        zwarn(c, "GLAS: %s is taken from sagitta's %s catalog, which the file's GCAT line "
+              "does not list", name, g->catalog);
+    return SG_OK;
+}
+
+/* Ends the current surface block: its type, parameters and aperture. */
+static int end_surface(zctx *c)
+{
+    sg_surface *s;
+    zsurf *z = &c->zs;
+    int k, save = c->cur;
+    long save_line = c->line;
+    if (c->cur < 0)
+        return SG_OK;
+    s = &c->sys->surf[c->cur];
+    c->line = z->type_line ? z->type_line : z->line;
+    if (!z->type[0] || strcmp(z->type, "STANDARD") == 0) {
+        s->type = SG_SURF_STANDARD;
+        for (k = 0; k <= ZMX_MAX_PARM; k++)
+            if (z->parm[k] != 0.0) {
+                c->line = z->parm_line[k];
+                return zerr(c, SG_EUNSUPPORTED,
+                            "PARM %d is %.17g on a standard surface, which has no parameter %d",
+                            k, z->parm[k], k);
+            }
+    } else if (strcmp(z->type, "EVENASPH") == 0) {
+        s->type = SG_SURF_EVENASPH;
+        for (k = 0; k <= ZMX_MAX_PARM; k++) {
+            if (k >= 1 && k <= ZMX_NPARM)
+                s->asph[k - 1] = z->parm[k];
+            else if (z->parm[k] != 0.0) {
+                c->line = z->parm_line[k];
+                return zerr(c, SG_EUNSUPPORTED,
+                            "PARM %d is %.17g; the even asphere has terms r^2 to r^16 "
+                            "(PARM 1 to 8)", k, z->parm[k]);
+            }
+        }
+    } else {
+        const char *what = strcmp(z->type, "COORDBRK") == 0 ? "a coordinate break"
+                           : strcmp(z->type, "TOROIDAL") == 0 ? "a toroid"
+                           : strcmp(z->type, "BICONICX") == 0 || strcmp(z->type, "BICONIC") == 0
+                               ? "a biconic"
+                           : strcmp(z->type, "ODDASPHE") == 0 ? "an odd asphere"
+                           : strcmp(z->type, "PARAXIAL") == 0 ? "a paraxial surface"
+                           : strcmp(z->type, "DGRATING") == 0 ? "a diffraction grating"
+                           : strncmp(z->type, "SZERNSAG", 8) == 0 || strncmp(z->type, "FZERNSAG", 8) == 0
+                               ? "a Zernike sag"
+                           : strcmp(z->type, "XPOLYNOM") == 0 ? "an XY polynomial"
+                                                               : "this surface type";
+        return zerr(c, SG_EUNSUPPORTED,
+                    "TYPE %s is %s; sagitta has standard (sphere, conic) and even-asphere "
+                    "surfaces only", z->type, what);
+    }
+    if (z->pend_line) {
+        c->line = z->pend_line;
+        return zerr(c, z->pend_code, "%s", z->pend_msg);
+    }
+    if (z->xdat_line) {
+        c->line = z->xdat_line;
+        return zerr(c, SG_EUNSUPPORTED, "XDAT: extra data %.17g; sagitta's surfaces have no "
+                    "extra data", z->xdat);
+    }
+    if (z->ap) {
+        if (z->have_diam && z->diam != z->ap_max) {
+            c->line = z->ap_line;
+            zwarn(c, "the %s aperture of radius %.17g vignettes; the semi-diameter shown "
+                  "becomes it (DIAM was %.17g)", z->ap == 1 ? "circular" : "floating", z->ap_max,
+                  z->diam);
+        }
+        s->semi_diameter = z->ap_max;
+        s->sd_fixed = 1;
+    } else if (z->have_diam) {
+        s->semi_diameter = z->diam;
+        s->sd_fixed = 0;
+    }
+    c->cur = save;
+    c->line = save_line;
+    return SG_OK;
+}
+
+static int surface_line(zctx *c, const zline *l)
+{
+    sg_surface *s = &c->sys->surf[c->cur];
+    zsurf *z = &c->zs;
+    const ztok *k = &l->t[0];
+    char q[48];
+    double v;
+    int rc, nz;
+
+    if (tok_is(k, "TYPE")) {
+        if (l->n < 2)
+            return zerr(c, SG_EPARSE, "TYPE: missing the surface type");
+        if (z->type[0])
+            return zerr(c, SG_EPARSE, "a second TYPE line in one surface");
+        if ((rc = tok_text(c, l, 1, "surface type", z->type, sizeof z->type)) != SG_OK)
+            return rc;
+        z->type_line = c->line;
+        return SG_OK;
+    }
+    if (tok_is(k, "CURV")) {
+        if ((rc = tok_curv(c, l, 1, &s->radius)) != SG_OK)
+            return rc;
+        if ((rc = opt_num(c, l, 2, "curvature solve", 0.0, &v)) != SG_OK)
+            return rc;
+        if (v != 0.0 && v != 1.0) {
+            c->nfrozen++;
+            zwarn(c, "CURV: the curvature solve (type %g) is frozen at the stored value", v);
+        }
+        return SG_OK;
+    }
+    if (tok_is(k, "DISZ")) {
+        char buf[16];
+        if (l->n >= 2 && l->t[1].n < sizeof buf) {
+            memcpy(buf, l->t[1].p, l->t[1].n);
+            buf[l->t[1].n] = '\0';
+            if (strcmp(buf, "INFINITY") == 0 || strcmp(buf, "Infinity") == 0) {
+                if (c->cur != 0)
+                    return zerr(c, SG_ERANGE, "DISZ: an infinite thickness is allowed on the "
+                                "object surface only");
+                s->thickness = INFINITY;
+                return SG_OK;
+            }
+        }
+        return tok_num(c, l, 1, "thickness", &s->thickness);
+    }
+    if (tok_is(k, "GLAS"))
+        return read_glas(c, l, s);
+    if (tok_is(k, "CONI"))
+        return tok_num(c, l, 1, "conic", &s->conic);
+    if (tok_is(k, "PARM")) {
+        int n;
+        if ((rc = tok_int(c, l, 1, "parameter number", 0, ZMX_MAX_PARM, &n)) != SG_OK ||
+            (rc = tok_num(c, l, 2, "parameter value", &v)) != SG_OK)
+            return rc;
+        z->parm[n] = v;
+        z->parm_line[n] = c->line;
+        return SG_OK;
+    }
+    if (tok_is(k, "XDAT")) {
+        /* Extra data belong to types sagitta refuses, which the end of the
+         * block reports first; zeros change nothing. */
+        if (l->n >= 3 && (rc = tok_num(c, l, 2, "extra data value", &v)) != SG_OK)
+            return rc;
+        if (l->n >= 3 && v != 0.0 && !z->xdat_line) {
+            z->xdat_line = c->line;
+            z->xdat = v;
+        }
+        return SG_OK;
+    }
+    if (tok_is(k, "DIAM")) {
+        if ((rc = tok_num(c, l, 1, "semi-diameter", &z->diam)) != SG_OK)
+            return rc;
+        if (!(z->diam >= 0.0))
+            return zerr(c, SG_ERANGE, "DIAM: semi-diameter %.17g is negative", z->diam);
+        z->have_diam = 1;
+        return SG_OK;
+    }
+    if (tok_is(k, "STOP")) {
+        if (c->nstop++)
+            return zerr(c, SG_ETWOSTOPS, "STOP: surface %d is the stop already", c->stop);
+        c->stop = c->cur;
+        c->stop_line = c->line;
+        return SG_OK;
+    }
+    if (tok_is(k, "CLAP") || tok_is(k, "FLAP")) {
+        double mn, mx;
+        if ((rc = tok_num(c, l, 1, "minimum radius", &mn)) != SG_OK ||
+            (rc = tok_num(c, l, 2, "maximum radius", &mx)) != SG_OK)
+            return rc;
+        if (mn != 0.0)
+            return pend(c, SG_EUNSUPPORTED, "%.4s: an annular aperture (minimum radius %.17g); "
+                        "sagitta's apertures are full discs", k->p, mn);
+        if (!(mx >= 0.0))
+            return zerr(c, SG_ERANGE, "%.4s: maximum radius %.17g is negative", k->p, mx);
+        z->ap = tok_is(k, "CLAP") ? 1 : 2;
+        z->ap_max = mx;
+        z->ap_line = c->line;
+        return SG_OK;
+    }
+    if (tok_is(k, "OBDC")) {
+        nz = !all_zero(c, l, 1, &rc);
+        if (rc != SG_OK)
+            return rc;
+        if (nz)
+            return pend(c, SG_EUNSUPPORTED, "OBDC: a decentred aperture; sagitta's apertures are "
+                        "centred on the axis");
+        return SG_OK;
+    }
+    if (tok_is(k, "OBSC") || tok_is(k, "SQAP") || tok_is(k, "ELAP") || tok_is(k, "SQOB") ||
+        tok_is(k, "ELOB") || tok_is(k, "UDAD") || tok_is(k, "UDOD"))
+        return pend(c, SG_EUNSUPPORTED, "%.4s: %s; sagitta has circular clear apertures only",
+                    k->p,
+                    tok_is(k, "OBSC") ? "a circular obscuration"
+                    : tok_is(k, "SQAP") ? "a rectangular aperture"
+                    : tok_is(k, "ELAP") ? "an elliptical aperture"
+                    : tok_is(k, "SQOB") ? "a rectangular obscuration"
+                    : tok_is(k, "ELOB") ? "an elliptical obscuration"
+                                        : "a user-defined aperture");
+    if (tok_is(k, "COMM")) {
+        int cut;
+        rest_copy(l, s->comment, sizeof s->comment, &cut);
+        if (cut)
+            zwarn(c, "COMM: the comment is cut to %d bytes", SG_COMMENT - 1);
+        return SG_OK;
+    }
+    if (tok_is(k, "SCBD") || tok_is(k, "SCAD") || tok_is(k, "TLTX") || tok_is(k, "DECX")) {
+        /* Tilts and decenters before or after the surface: the order flag
+         * first, then the motions; all zero is the identity. */
+        nz = !all_zero(c, l, 2, &rc);
+        if (rc != SG_OK)
+            return rc;
+        if (nz)
+            return pend(c, SG_EUNSUPPORTED, "%.4s: a tilt or decenter %s the surface; sagitta's "
+                        "surfaces are centred and untilted", k->p,
+                        tok_is(k, "SCAD") ? "after" : "before");
+        return SG_OK;
+    }
+    if (tok_is(k, "PZUP") || tok_is(k, "PPAR") || tok_is(k, "MAZH")) {
+        c->nfrozen++;
+        zwarn(c, "%.4s: the solve or pickup is frozen at the value stored in the file", k->p);
+        return SG_OK;
+    }
+    if (in_list(k, ignored_surface, sizeof ignored_surface / sizeof *ignored_surface))
+        return SG_OK;
+    tok_show(k, q, sizeof q);
+    return zerr(c, SG_EUNSUPPORTED, "unknown surface keyword '%s'; sagitta cannot tell whether "
+                "it changes the trace, so the file is refused", q);
+}
+
+/* ------------------------------------------------------------------------
+ * The header
+ * ------------------------------------------------------------------------ */
+
+static int set_aper(zctx *c, sg_aper_type t, double v)
+{
+    if (c->have_aper)
+        return zerr(c, SG_EPARSE, "a second aperture line (the first is on line %ld)",
+                    c->aper_line);
+    c->have_aper = 1;
+    c->aper_line = c->line;
+    c->sys->aper_type = t;
+    c->sys->aper_value = v;
+    return SG_OK;
+}
+
+static int read_list(zctx *c, const zline *l, double *dst, int cap, int *n)
+{
+    int k, rc;
+    *n = 0;
+    for (k = 1; k < l->n && *n < cap; k++) {
+        if ((rc = tok_num(c, l, k, "value", &dst[*n])) != SG_OK)
+            return rc;
+        (*n)++;
+    }
+    return SG_OK;
+}
+
+static int vignetting(zctx *c, const zline *l, const char *what)
+{
+    double v;
+    int k, rc;
+    /* Slots past the fields in use are ignored; FTYP may come later, so
+     * the field count is checked at the end from the line kept here. */
+    for (k = 1; k < l->n && k <= SG_MAX_FIELDS; k++) {
+        if ((rc = tok_num(c, l, k, what, &v)) != SG_OK)
+            return rc;
+        if (v != 0.0 && (!c->have_ftyp || k <= c->ftyp_nfield))
+            return zerr(c, SG_EUNSUPPORTED, "%.4s: field %d has the vignetting factor %s %.17g; "
+                        "sagitta has no vignetting factors", l->t[0].p, k, what, v);
+    }
+    return SG_OK;
+}
+
+static int header_line(zctx *c, const zline *l)
+{
+    const ztok *k = &l->t[0];
+    sg_system *s = c->sys;
+    char q[48], buf[32];
+    double v, f;
+    int rc, n, i;
+
+    if (tok_is(k, "MODE")) {
+        if (l->n < 2 || !tok_is(&l->t[1], "SEQ"))
+            return zerr(c, SG_EUNSUPPORTED, "MODE: sagitta reads sequential files (MODE SEQ) only");
+        return SG_OK;
+    }
+    if (tok_is(k, "NAME")) {
+        int cut;
+        rest_copy(l, s->title, sizeof s->title, &cut);
+        if (cut)
+            zwarn(c, "NAME: the title is cut to %zu bytes", sizeof s->title - 1);
+        return SG_OK;
+    }
+    if (tok_is(k, "UNIT")) {
+        if ((rc = tok_text(c, l, 1, "lens unit", buf, sizeof buf)) != SG_OK)
+            return rc;
+        if (strcmp(buf, "MM") == 0)
+            sg_strlcpy(s->units, "mm", sizeof s->units);
+        else if (strcmp(buf, "CM") == 0)
+            sg_strlcpy(s->units, "cm", sizeof s->units);
+        else if (strcmp(buf, "IN") == 0 || strcmp(buf, "INCH") == 0)
+            sg_strlcpy(s->units, "in", sizeof s->units);
+        else if (strcmp(buf, "METER") == 0 || strcmp(buf, "M") == 0)
+            sg_strlcpy(s->units, "m", sizeof s->units);
+        else
+            return zerr(c, SG_EUNSUPPORTED, "UNIT: lens unit '%s'; sagitta has MM, CM, IN and "
+                        "METER", buf);
+        return SG_OK;
+    }
+    if (tok_is(k, "ENPD")) {
+        if ((rc = tok_num(c, l, 1, "entrance pupil diameter", &v)) != SG_OK)
+            return rc;
+        return set_aper(c, SG_APER_EPD, v);
+    }
+    if (tok_is(k, "FNUM") || tok_is(k, "OBNA")) {
+        int fn = tok_is(k, "FNUM");
+        if ((rc = tok_num(c, l, 1, fn ? "F/#" : "object NA", &v)) != SG_OK ||
+            (rc = opt_num(c, l, 2, "aperture kind", 0.0, &f)) != SG_OK)
+            return rc;
+        if (f == 0.0)
+            return set_aper(c, fn ? SG_APER_IMAGE_FNUM : SG_APER_OBJECT_NA, v);
+        if (f == 1.0 && fn)
+            return set_aper(c, SG_APER_PARAX_WORKING_FNUM, v);
+        if (f == 1.0)
+            return zerr(c, SG_EUNSUPPORTED, "OBNA: an object cone angle of %.17g degrees; sagitta "
+                        "has the object NA, and converting would round", v);
+        return zerr(c, SG_EUNSUPPORTED, "%.4s: aperture kind %.17g is not one sagitta knows",
+                    k->p, f);
+    }
+    if (tok_is(k, "FLOA"))
+        return set_aper(c, SG_APER_FLOAT_STOP, 0.0);
+    if (tok_is(k, "ENVD")) {
+        double t, p;
+        if ((rc = tok_num(c, l, 1, "temperature", &t)) != SG_OK ||
+            (rc = opt_num(c, l, 2, "pressure", 1.0, &p)) != SG_OK)
+            return rc;
+        if (t != 20.0 || p != 1.0)
+            return zerr(c, SG_EUNSUPPORTED, "ENVD: %.17g C and %.17g atm; sagitta has no "
+                        "temperature or pressure and traces at 20 C and 1 atm", t, p);
+        if ((rc = opt_num(c, l, 3, "index adjustment flag", 0.0, &f)) != SG_OK)
+            return rc;
+        /* Zemax then corrects each glass measured at another temperature
+         * than 20 C; sagitta has no reference temperatures to do so. */
+        if (f != 0.0)
+            zwarn(c, "ENVD: Zemax adjusts catalog indices to 20 C and 1 atm; sagitta uses the "
+                  "catalog data as they are, so a glass measured at another temperature differs "
+                  "(by some 2e-5 in index for S-LAH64)");
+        return SG_OK;
+    }
+    if (tok_is(k, "GCAT")) {
+        for (i = 1; i < l->n; i++) {
+            if (c->ngcat >= ZMX_MAX_GCAT)
+                return zerr(c, SG_ERANGE, "GCAT: more than %d catalogs", ZMX_MAX_GCAT);
+            if ((rc = tok_text(c, l, i, "catalog name", c->gcat[c->ngcat], SG_GLASS_NAME)) != SG_OK)
+                return rc;
+            c->ngcat++;
+        }
+        return SG_OK;
+    }
+    if (tok_is(k, "RAIM")) {
+        int t = 0;
+        if (l->n > 2 && (rc = tok_int(c, l, 2, "ray-aiming type", 0, 2, &t)) != SG_OK)
+            return rc;
+        s->aim = t == 0 ? SG_AIM_OFF : t == 1 ? SG_AIM_PARAXIAL : SG_AIM_REAL;
+        return SG_OK;
+    }
+    if (tok_is(k, "PUSH")) {
+        int nz = !all_zero(c, l, 1, &rc);
+        if (rc != SG_OK)
+            return rc;
+        if (nz)
+            return zerr(c, SG_EUNSUPPORTED, "PUSH: pupil shifts; sagitta's ray aiming has none");
+        return SG_OK;
+    }
+    if (tok_is(k, "FTYP")) {
+        int t, tel = 0, norm = 0, afocal = 0;
+        if ((rc = tok_int(c, l, 1, "field type", 0, 99, &t)) != SG_OK ||
+            (rc = tok_int(c, l, 3, "number of fields", 1, SG_MAX_FIELDS, &c->ftyp_nfield)) != SG_OK ||
+            (rc = tok_int(c, l, 4, "number of wavelengths", 1, SG_MAX_WAVES, &c->ftyp_nwave)) != SG_OK)
+            return rc;
+        if ((l->n > 2 && (rc = tok_int(c, l, 2, "telecentric flag", 0, 1, &tel)) != SG_OK) ||
+            (l->n > 5 && (rc = tok_int(c, l, 5, "field normalization", 0, 1, &norm)) != SG_OK) ||
+            (l->n > 7 && (rc = tok_int(c, l, 7, "afocal flag", 0, 1, &afocal)) != SG_OK))
+            return rc;
+        if (t > 3)
+            return zerr(c, SG_EUNSUPPORTED, "FTYP: field type %d (%s); sagitta has angle, object "
+                        "height, paraxial and real image height", t,
+                        t == 4 ? "theodolite angle" : "unknown");
+        if (tel)
+            return zerr(c, SG_EUNSUPPORTED, "FTYP: object space is telecentric; sagitta has no "
+                        "entrance pupil at infinity");
+        if (afocal)
+            return zerr(c, SG_EUNSUPPORTED, "FTYP: afocal image space; sagitta traces to an "
+                        "image surface");
+        s->field_type = (sg_field_type)t;
+        s->field_norm = norm ? SG_NORM_RECT : SG_NORM_RADIAL;
+        c->have_ftyp = 1;
+        c->ftyp_line = c->line;
+        return SG_OK;
+    }
+    if (tok_is(k, "XFLN") || tok_is(k, "YFLN") || tok_is(k, "FWGN")) {
+        int x = tok_is(k, "XFLN"), y = tok_is(k, "YFLN");
+        rc = read_list(c, l, x ? c->xfln : y ? c->yfln : c->fwgn, SG_MAX_FIELDS,
+                       x ? &c->nxfln : y ? &c->nyfln : &c->nfwgn);
+        if (x)
+            c->xfln_line = c->line;
+        if (y)
+            c->yfln_line = c->line;
+        return rc;
+    }
+    if (tok_is(k, "VDXN") || tok_is(k, "VDYN") || tok_is(k, "VCXN") || tok_is(k, "VCYN") ||
+        tok_is(k, "VANN") || tok_is(k, "ZVDX") || tok_is(k, "ZVDY") || tok_is(k, "ZVCX") ||
+        tok_is(k, "ZVCY") || tok_is(k, "ZVAN"))
+        return vignetting(c, l, k->p[0] == 'Z' ? "(old form)" : k->p[1] == 'D' ? "decenter"
+                                 : k->p[1] == 'C' ? "compression" : "angle");
+    if (tok_is(k, "WAVM")) {
+        if ((rc = tok_int(c, l, 1, "wavelength number", 1, ZMX_NWSLOT, &n)) != SG_OK ||
+            (rc = tok_num(c, l, 2, "wavelength", &c->wum[n - 1])) != SG_OK ||
+            (rc = opt_num(c, l, 3, "wavelength weight", 1.0, &c->wwt[n - 1])) != SG_OK)
+            return rc;
+        c->whave[n - 1] = 1;
+        return SG_OK;
+    }
+    if (tok_is(k, "WAVL"))
+        return read_list(c, l, c->wavl, ZMX_NWSLOT, &c->nwavl);
+    if (tok_is(k, "WWGT"))
+        return read_list(c, l, c->wwgt, ZMX_NWSLOT, &c->nwwgt);
+    if (tok_is(k, "PWAV")) {
+        c->pwav_line = c->line;
+        return tok_int(c, l, 1, "primary wavelength", 1, ZMX_NWSLOT, &c->pwav);
+    }
+    if (tok_is(k, "MNUM")) {
+        if ((rc = tok_int(c, l, 1, "number of configurations", 0, 1 << 20, &n)) != SG_OK)
+            return rc;
+        if (n > 1)
+            return zerr(c, SG_EUNSUPPORTED, "MNUM: %d configurations; sagitta has one", n);
+        return SG_OK;
+    }
+    if (in_list(k, ignored_header, sizeof ignored_header / sizeof *ignored_header))
+        return SG_OK;
+    /* After the surfaces come the merit function's operands (EFFL, REAY,
+     * ...), which describe targets, not the system. */
+    if (c->after && k->n == 4)
+        return SG_OK;
+    tok_show(k, q, sizeof q);
+    return zerr(c, SG_EUNSUPPORTED, "unknown keyword '%s'; sagitta cannot tell whether it "
+                "changes the trace, so the file is refused", q);
+}
+
+/* ------------------------------------------------------------------------
+ * Resolving the header at the end
+ * ------------------------------------------------------------------------ */
+
+static int finish(zctx *c)
+{
+    sg_system *s = c->sys;
+    int nf, nw, i;
+
+    c->cur = -1;
+    /* Messages about the file as a whole name no line. */
+    c->line = 0;
+    /* Fields: FTYP's count, else the values given. */
+    nf = c->have_ftyp ? c->ftyp_nfield : (c->nyfln > c->nxfln ? c->nyfln : c->nxfln);
+    if (nf < 1)
+        nf = 1;
+    if (nf > SG_MAX_FIELDS) {
+        c->line = c->yfln_line;
+        return zerr(c, SG_ERANGE, "%d fields; sagitta holds %d", nf, SG_MAX_FIELDS);
+    }
+    if ((c->nxfln || c->nyfln) && (c->nxfln < nf || c->nyfln < nf)) {
+        c->line = c->nxfln < nf ? c->xfln_line : c->yfln_line;
+        return zerr(c, SG_EPARSE, "%s: %d values for %d fields", c->nxfln < nf ? "XFLN" : "YFLN",
+                    c->nxfln < nf ? c->nxfln : c->nyfln, nf);
+    }
+    s->nfield = nf;
+    for (i = 0; i < nf; i++) {
+        s->field[i].x = c->nxfln ? c->xfln[i] : 0.0;
+        s->field[i].y = c->nyfln ? c->yfln[i] : 0.0;
+        s->field[i].weight = i < c->nfwgn ? c->fwgn[i] : 1.0;
+        if (!(s->field[i].weight >= 0.0)) {
+            return zerr(c, SG_ERANGE, "FWGN: field %d has the negative weight %.17g", i + 1,
+                        s->field[i].weight);
+        }
+    }
+    /* Wavelengths: WAVM slots, or the old WAVL and WWGT lists. */
+    if (c->nwavl) {
+        nw = c->have_ftyp ? c->ftyp_nwave : c->nwavl;
+        if (c->nwavl < nw)
+            return zerr(c, SG_EPARSE, "WAVL: %d wavelengths for %d", c->nwavl, nw);
+        for (i = 0; i < nw; i++) {
+            s->wave[i].um = c->wavl[i];
+            s->wave[i].weight = i < c->nwwgt ? c->wwgt[i] : 1.0;
+        }
+    } else {
+        nw = c->have_ftyp ? c->ftyp_nwave : 0;
+        if (!c->have_ftyp)
+            while (nw < ZMX_NWSLOT && c->whave[nw])
+                nw++;
+        if (nw < 1)
+            return zerr(c, SG_EPARSE, "no wavelength (WAVM or WAVL)");
+        for (i = 0; i < nw; i++) {
+            if (!c->whave[i])
+                return zerr(c, SG_EPARSE, "WAVM %d is missing; the file has %d wavelengths", i + 1,
+                            nw);
+            s->wave[i].um = c->wum[i];
+            s->wave[i].weight = c->wwt[i];
+        }
+    }
+    s->nwave = nw;
+    for (i = 0; i < nw; i++)
+        if (!(s->wave[i].um > 0.0) || !(s->wave[i].weight >= 0.0))
+            return zerr(c, SG_ERANGE, "wavelength %d: %.17g um, weight %.17g", i + 1,
+                        s->wave[i].um, s->wave[i].weight);
+    if (c->pwav > nw) {
+        c->line = c->pwav_line;
+        return zerr(c, SG_ERANGE, "PWAV: primary wavelength %d of %d", c->pwav, nw);
+    }
+    s->primary_wave = c->pwav ? c->pwav - 1 : 0;
+    if (!c->have_aper)
+        return zerr(c, SG_EPARSE, "no system aperture (ENPD, FNUM, OBNA or FLOA)");
+    if (s->aper_type != SG_APER_FLOAT_STOP && !(s->aper_value > 0.0)) {
+        c->line = c->aper_line;
+        return zerr(c, SG_ERANGE, "aperture value %.17g must be positive", s->aper_value);
+    }
+    if (s->nsurf < 3)
+        return zerr(c, SG_ENOSYS, "%d surfaces; a design needs an object, at least one surface "
+                    "and an image", s->nsurf);
+    if (!c->nstop)
+        return zerr(c, SG_ENOSTOP, "no STOP line; sagitta needs the aperture stop marked");
+    if (c->stop < 1 || c->stop > s->nsurf - 2) {
+        c->line = c->stop_line;
+        return zerr(c, SG_ENOSTOP, "the stop is surface %d; it must be one of 1 to %d", c->stop,
+                    s->nsurf - 2);
+    }
+    s->stop = c->stop;
+    if (s->surf[s->nsurf - 1].mat.kind != SG_MAT_AIR && s->surf[s->nsurf - 1].mat.kind != SG_MAT_GLASS)
+        return zerr(c, SG_ENONPHYS, "the image surface cannot be a mirror");
+    return SG_OK;
+}
+
+/* Keywords of a SURF block, recognised in files that do not indent them. */
+static int is_surface_kw(const ztok *k)
+{
+    static const char *const kw[] = {
+        "TYPE", "CURV", "DISZ", "GLAS", "CONI", "PARM", "XDAT", "DIAM", "STOP", "CLAP",
+        "FLAP", "OBDC", "OBSC", "SQAP", "ELAP", "SQOB", "ELOB", "COMM", "SCBD", "SCAD",
+        "PZUP", "PPAR", "MAZH"};
+    return in_list(k, kw, sizeof kw / sizeof *kw) ||
+           in_list(k, ignored_surface, sizeof ignored_surface / sizeof *ignored_surface);
+}
+
+static int parse_text(zctx *c, char *text)
+{
+    char *p = text, *nl;
+    zline *l;
+    int rc = SG_OK, seen_next = 0;
+
+    l = malloc(sizeof *l);
+    if (!l)
+        return sg_diag_set(c->d, SG_ENOMEM, "%s: out of memory", c->name);
+    c->line = 0;
+    while (p && *p) {
+        nl = strchr(p, '\n');
+        if (nl)
+            *nl = '\0';
+        c->line++;
+        {
+            size_t n = strlen(p);
+            if (n && p[n - 1] == '\r')
+                p[n - 1] = '\0';
+        }
+        split(p, l);
+        p = nl ? nl + 1 : NULL;
+        if (l->n == 0)
+            continue;
+        if (tok_is(&l->t[0], "SURF")) {
+            int n;
+            if (c->after) {
+                rc = zerr(c, SG_EPARSE, "SURF after the end of the surfaces");
+                break;
+            }
+            if ((rc = end_surface(c)) != SG_OK)
+                break;
+            c->cur = -1;
+            if ((rc = tok_int(c, l, 1, "surface number", 0, SG_MAX_SURFACES - 1, &n)) != SG_OK)
+                break;
+            if (n != seen_next) {
+                rc = zerr(c, SG_EPARSE, "SURF %d where SURF %d comes next (%s)", n, seen_next,
+                          n < seen_next ? "a surface written twice" : "a surface is missing");
+                break;
+            }
+            seen_next++;
+            if ((rc = grow_to(c, n + 1)) != SG_OK)
+                break;
+            c->cur = n;
+            memset(&c->zs, 0, sizeof c->zs);
+            c->zs.line = c->line;
+            sg_surface_init(&c->sys->surf[n]);
+            c->sys->surf[n].thickness = 0.0;
+            continue;
+        }
+        if (c->cur >= 0 && (l->indented || is_surface_kw(&l->t[0]))) {
+            if ((rc = surface_line(c, l)) != SG_OK)
+                break;
+            continue;
+        }
+        if (c->cur >= 0) {
+            if ((rc = end_surface(c)) != SG_OK)
+                break;
+            c->cur = -1;
+            c->after = 1;
+        }
+        if ((rc = header_line(c, l)) != SG_OK)
+            break;
+    }
+    if (rc == SG_OK && c->cur >= 0)
+        rc = end_surface(c);
+    free(l);
+    if (rc == SG_OK && seen_next == 0)
+        return sg_diag_set(c->d, SG_EPARSE, "%s: no SURF line: not a Zemax lens file", c->name);
+    if (rc == SG_OK)
+        rc = finish(c);
+    return rc;
+}
+
+int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name,
+                 const sg_catalog *cat, sg_diag *d)
+{
+    zctx *c;
+    char *text = NULL;
+    const char *enc = NULL;
+    sg_system *tmp;
+    sg_catalog *own = NULL;
+    locale_t cloc, old = (locale_t)0;
+    int rc;
+
+    name = name ? name : "(memory)";
+    if (!sys || (!bytes && len))
+        return sg_diag_set(d, SG_EINVAL, "%s: no system or no text to parse", name);
+    if (len > ZMX_MAX_BYTES)
+        return sg_diag_set(d, SG_ERANGE, "%s: the file is %zu bytes; the limit is %zu (64 MiB)",
+                           name, len, ZMX_MAX_BYTES);
+    rc = decode(name, bytes ? bytes : (const void *)"", len, &text, &enc, d);
+    if (rc != SG_OK)
+        return rc;
+    if (!cat) {
+        /* The default catalog checks the glasses and suggests neighbours;
+         * without one, the names are kept for sg_system_validate. */
+        sg_diag scratch;
+        own = sg_catalog_new();
+        sg_diag_clear(&scratch);
+        if (own && sg_catalog_load_default(own, &scratch) != SG_OK) {
+            sg_catalog_free(own);
+            own = NULL;
+        }
+        cat = own;
+    }
+    c = calloc(1, sizeof *c);
+    tmp = sg_system_new();
+    if (!c || !tmp) {
+        free(c);
+        sg_system_free(tmp);
+        sg_catalog_free(own);
+        free(text);
+        return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
+    }
+    /* The header keeps sg_system_new's values until the file sets them;
+     * the surfaces are appended as their SURF lines come. */
+    tmp->nsurf = 0;
+    c->name = name;
+    c->d = d;
+    c->cat = cat;
+    c->sys = tmp;
+    c->cur = -1;
+    cloc = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
+    if (cloc)
+        old = uselocale(cloc);
+    rc = parse_text(c, text);
+    if (cloc) {
+        uselocale(old);
+        freelocale(cloc);
+    }
+    if (rc == SG_OK && c->nfrozen)
+        sg_diag_warn(d, "%s: %d solve%s and pickup%s frozen at the values the file stores; "
+                     "sagitta does not evaluate them", name, c->nfrozen,
+                     c->nfrozen == 1 ? "" : "s", c->nfrozen == 1 ? "" : "s");
+    if (rc == SG_OK) {
+        rc = sg_system_assign(sys, tmp);
+        if (rc != SG_OK)
+            sg_diag_set(d, rc, "%s: cannot store the design: %s", name, sg_strerror(rc));
+    }
+    (void)enc;
+    sg_system_free(tmp);
+    sg_catalog_free(own);
+    free(c);
+    free(text);
+    return rc;
+}
+
+/* ------------------------------------------------------------------------
+ * Writing
+ * ------------------------------------------------------------------------ */
+
+typedef struct zbuf {
+    char *p;
+    size_t len, cap;
+    int oom;
+} zbuf;
+
+static void zb_add(zbuf *b, const char *s, size_t n)
+{
+    if (b->oom)
+        return;
+    if (b->len + n + 1 > b->cap) {
+        size_t cap = b->cap ? b->cap : 4096;
+        char *q;
+        while (cap < b->len + n + 1)
+            cap *= 2;
+        q = realloc(b->p, cap);
+        if (!q) {
+            b->oom = 1;
+            return;
+        }
+        b->p = q;
+        b->cap = cap;
+    }
+    memcpy(b->p + b->len, s, n);
+    b->len += n;
+    b->p[b->len] = '\0';
+}
+
+#if defined(__GNUC__)
+__attribute__((format(printf, 2, 3)))
+#endif
+static void zb_printf(zbuf *b, const char *fmt, ...)
+{
+    char tmp[1024];
+    va_list ap;
+    int n;
+    va_start(ap, fmt);
+    n = vsnprintf(tmp, sizeof tmp, fmt, ap);
+    va_end(ap);
+    if (n < 0)
+        return;
+    zb_add(b, tmp, (size_t)n < sizeof tmp ? (size_t)n : sizeof tmp - 1);
+}
+
+/* The shortest of %.15g to %.17g that strtod reads back to x. */
+static const char *num(char out[40], double x)
+{
+    int prec;
+    for (prec = 15; prec <= 17; prec++) {
+        snprintf(out, 40, "%.*g", prec, x);
+        if (strtod(out, NULL) == x)
+            break;
+    }
+    return out;
+}
+
+/* A text on one line: control characters become spaces. */
+static void zb_text(zbuf *b, const char *s, int *changed)
+{
+    for (; *s; s++) {
+        unsigned char ch = (unsigned char)*s;
+        if (ch < 0x20 || ch == 0x7F) {
+            *changed = 1;
+            ch = ' ';
+        }
+        zb_add(b, (const char *)&ch, 1);
+    }
+}
+
+static void zb_list(zbuf *b, const char *kw, const sg_system *s, int what)
+{
+    char n[40];
+    int i;
+    zb_add(b, kw, strlen(kw));
+    for (i = 0; i < s->nfield; i++)
+        zb_printf(b, " %s", num(n, what == 0 ? s->field[i].x : what == 1 ? s->field[i].y
+                                                                           : s->field[i].weight));
+    zb_add(b, "\n", 1);
+}
+
+static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_diag *d)
+{
+    char n1[40], n2[40], gcat[ZMX_MAX_GCAT][SG_GLASS_NAME];
+    int ngcat = 0, i, k, changed = 0;
+    mpfr_t q;
+
+    if (s->nsurf < 3 || s->stop < 1 || s->stop > s->nsurf - 2)
+        return sg_diag_set(d, SG_ENOSYS, "export: the design needs an object, a stop surface "
+                           "and an image");
+    if (s->nwave < 1 || s->nwave > SG_MAX_WAVES || s->nfield < 1 || s->nfield > SG_MAX_FIELDS ||
+        s->primary_wave < 0 || s->primary_wave >= s->nwave)
+        return sg_diag_set(d, SG_ERANGE, "export: wavelengths or fields out of range");
+    for (i = 0; i < s->nsurf; i++) {
+        const sg_surface *f = &s->surf[i];
+        if (isnan(f->radius) || isnan(f->thickness) || !isfinite(f->conic) ||
+            (!isfinite(f->thickness) && !(i == 0 && f->thickness > 0)))
+            return sg_diag_set(d, SG_ERANGE, "export: surface %d: a value a .zmx file cannot "
+                               "hold (thickness %g, radius %g, conic %g)", i, f->thickness,
+                               f->radius, f->conic);
+        if (f->type == SG_SURF_EVENASPH)
+            for (k = 0; k < SG_NASPH; k++)
+                if (!isfinite(f->asph[k]))
+                    return sg_diag_set(d, SG_ERANGE, "export: surface %d: asphere term r^%d is "
+                                       "not finite", i, 2 * k + 2);
+        if (f->mat.kind == SG_MAT_GLASS && cat) {
+            const sg_glass *g = sg_catalog_find(cat, f->mat.name);
+            int j, have = 0;
+            if (!g)
+                continue;
+            for (j = 0; j < ngcat; j++)
+                have |= strcmp(gcat[j], g->catalog) == 0;
+            if (!have && ngcat < ZMX_MAX_GCAT)
+                sg_strlcpy(gcat[ngcat++], g->catalog, SG_GLASS_NAME);
+        }
+    }
+    /* No VERS line: Zemax reads a file without one, and a made-up version
+     * number could select an old reading of the keywords. */
+    zb_add(b, "MODE SEQ\nNAME ", 14);
+    zb_text(b, s->title, &changed);
+    zb_printf(b, "\nUNIT %s X W X CM MR CPMM\n",
+              strcmp(s->units, "cm") == 0 ? "CM" : strcmp(s->units, "in") == 0 ? "IN"
+              : strcmp(s->units, "m") == 0 ? "METER" : "MM");
+    switch (s->aper_type) {
+    case SG_APER_EPD:
+        zb_printf(b, "ENPD %s\n", num(n1, s->aper_value));
+        break;
+    case SG_APER_IMAGE_FNUM:
+        zb_printf(b, "FNUM %s 0\n", num(n1, s->aper_value));
+        break;
+    case SG_APER_PARAX_WORKING_FNUM:
+        zb_printf(b, "FNUM %s 1\n", num(n1, s->aper_value));
+        break;
+    case SG_APER_OBJECT_NA:
+        zb_printf(b, "OBNA %s 0\n", num(n1, s->aper_value));
+        break;
+    default:
+        zb_add(b, "FLOA\n", 5);
+        break;
+    }
+    zb_add(b, "ENVD 20 1 0\n", 12);
+    if (ngcat) {
+        zb_add(b, "GCAT", 4);
+        for (i = 0; i < ngcat; i++)
+            zb_printf(b, " %s", gcat[i]);
+        zb_add(b, "\n", 1);
+    }
+    zb_printf(b, "RAIM 0 %d 1 1 0 0 0 0 0\n", s->aim == SG_AIM_REAL ? 2 : s->aim == SG_AIM_PARAXIAL ? 1 : 0);
+    zb_printf(b, "FTYP %d 0 %d %d %d 0 0\n", (int)s->field_type, s->nfield, s->nwave,
+              s->field_norm == SG_NORM_RECT ? 1 : 0);
+    zb_list(b, "XFLN", s, 0);
+    zb_list(b, "YFLN", s, 1);
+    zb_list(b, "FWGN", s, 2);
+    for (i = 0; i < s->nwave; i++)
+        zb_printf(b, "WAVM %d %s %s\n", i + 1, num(n1, s->wave[i].um), num(n2, s->wave[i].weight));
+    zb_printf(b, "PWAV %d\n", s->primary_wave + 1);
+    mpfr_init2(q, 128);
+    for (i = 0; i < s->nsurf; i++) {
+        const sg_surface *f = &s->surf[i];
+        zb_printf(b, "SURF %d\n  TYPE %s\n", i, f->type == SG_SURF_EVENASPH ? "EVENASPH" : "STANDARD");
+        if (f->comment[0]) {
+            zb_add(b, "  COMM ", 7);
+            zb_text(b, f->comment, &changed);
+            zb_add(b, "\n", 1);
+        }
+        if (i == s->stop)
+            zb_add(b, "  STOP\n", 7);
+        if (f->radius == 0.0 || isinf(f->radius)) {
+            zb_add(b, "  CURV 0\n", 9);
+        } else {
+            /* 1/R to 25 digits: its exact reciprocal rounds back to R. */
+            char cv[64];
+            mpfr_set_d(q, f->radius, MPFR_RNDN);
+            mpfr_ui_div(q, 1, q, MPFR_RNDN);
+            mpfr_snprintf(cv, sizeof cv, "%.24Re", q);
+            zb_printf(b, "  CURV %s\n", cv);
+        }
+        if (f->type == SG_SURF_EVENASPH)
+            for (k = 0; k < SG_NASPH; k++)
+                zb_printf(b, "  PARM %d %s\n", k + 1, num(n1, f->asph[k]));
+        if (isinf(f->thickness))
+            zb_add(b, "  DISZ INFINITY\n", 16);
+        else
+            zb_printf(b, "  DISZ %s\n", num(n1, f->thickness));
+        switch (f->mat.kind) {
+        case SG_MAT_MIRROR:
+            zb_add(b, "  GLAS MIRROR 0 0 1.5 40 0 0 0 0 0 0\n", 37);
+            break;
+        case SG_MAT_GLASS: {
+            const sg_glass *g = cat ? sg_catalog_find(cat, f->mat.name) : NULL;
+            zb_printf(b, "  GLAS %s 0 0 %s %s 0 0 0 0 0 0\n", f->mat.name,
+                      num(n1, g ? g->nd : 0.0), num(n2, g ? g->vd : 0.0));
+            break;
+        }
+        case SG_MAT_INDEX:
+            /* A model glass without dispersion. */
+            zb_printf(b, "  GLAS ___BLANK 1 0 %s 0 0 0 0 0 0 0\n", num(n1, f->mat.index));
+            break;
+        default:
+            break;
+        }
+        zb_printf(b, "  CONI %s\n", num(n1, f->conic));
+        zb_printf(b, "  DIAM %s %d 0 0 1 \"\"\n", num(n1, f->semi_diameter), f->sd_fixed ? 1 : 0);
+        if (f->sd_fixed)
+            zb_printf(b, "  CLAP 0 %s 0\n", num(n1, f->semi_diameter));
+    }
+    mpfr_clear(q);
+    if (changed)
+        sg_diag_warn(d, "export: control characters in the title or a comment became spaces");
+    if (b->oom)
+        return sg_diag_set(d, SG_ENOMEM, "export: out of memory");
+    return SG_OK;
+}
+
+char *sg_zmx_to_text(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
+{
+    zbuf b = {0};
+    locale_t cloc, old = (locale_t)0;
+    int rc;
+    if (!sys) {
+        sg_diag_set(d, SG_EINVAL, "export: no system");
+        return NULL;
+    }
+    cloc = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
+    if (cloc)
+        old = uselocale(cloc);
+    rc = write_text(&b, sys, cat, d);
+    if (cloc) {
+        uselocale(old);
+        freelocale(cloc);
+    }
+    if (rc != SG_OK) {
+        free(b.p);
+        return NULL;
+    }
+    return b.p;
+}
+
+int sg_zmx_save(const sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d)
+{
+    sg_catalog *own = NULL;
+    char *text;
+    int rc;
+    if (!sys || !path || !path[0])
+        return sg_diag_set(d, SG_EINVAL, "save: no system or no path");
+    if (!cat) {
+        sg_diag scratch;
+        own = sg_catalog_new();
+        sg_diag_clear(&scratch);
+        if (own && sg_catalog_load_default(own, &scratch) != SG_OK) {
+            sg_catalog_free(own);
+            own = NULL;
+        }
+        cat = own;
+    }
+    text = sg_zmx_to_text(sys, cat, d);
+    sg_catalog_free(own);
+    if (!text)
+        return d && d->code ? d->code : SG_ENOMEM;
+    rc = sg_save_text_atomic(path, text, strlen(text), d);
+    free(text);
+    return rc;
+}
+
+int sg_zmx_load(sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    int rc = sg_read_file(path, ZMX_MAX_BYTES, &buf, &len, d);
+    if (rc != SG_OK)
+        return rc;
+    rc = sg_zmx_parse(sys, buf, len, path, cat, d);
+    free(buf);
+    return rc;
+}
+
+static int ends_with_zmx(const char *path)
+{
+    size_t n = path ? strlen(path) : 0;
+    return n >= 4 && path[n - 4] == '.' && tolower((unsigned char)path[n - 3]) == 'z' &&
+           tolower((unsigned char)path[n - 2]) == 'm' && tolower((unsigned char)path[n - 1]) == 'x';
+}
+
+int sg_zmx_detect(const char *path, const void *head, size_t n)
+{
+    const unsigned char *b = head;
+    size_t i = 0;
+    if (ends_with_zmx(path))
+        return 1;
+    if (!b)
+        return 0;
+    if (n >= 2 && ((b[0] == 0xFF && b[1] == 0xFE) || (b[0] == 0xFE && b[1] == 0xFF)))
+        return 1;
+    if (n >= 3 && b[0] == 0xEF && b[1] == 0xBB && b[2] == 0xBF)
+        i = 3;
+    while (i < n && (b[i] == ' ' || b[i] == '\t' || b[i] == '\r' || b[i] == '\n'))
+        i++;
+    /* A JSON design opens with '{'; a lens file with a keyword. */
+    return n - i >= 5 && (memcmp(b + i, "VERS ", 5) == 0 || memcmp(b + i, "MODE ", 5) == 0);
+}

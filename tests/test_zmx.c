@@ -1,0 +1,485 @@
+/*
+ * test_zmx.c - Zemax .zmx files (issue 17): real files written by Zemax
+ * (tests/data/zmx, sources in its README), refusals with the line and
+ * surface, round trips, Zemax's stored semi-diameters, and a table of
+ * hostile inputs.
+ *
+ * Expected values come from the files: numbers as written (strtod), the
+ * radius as the exact reciprocal of the written curvature computed here in
+ * MPFR from the decimal text, and line numbers as grep -n shows them.
+ */
+#define _USE_MATH_DEFINES
+#include <math.h>
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include <gmp.h>
+#include <mpfr.h>
+
+#include "testutil.h"
+
+static sg_system *load_zmx(const char *file, sg_diag *d, int *rc)
+{
+    char rel[256], path[1024];
+    sg_system *sys = sg_system_new();
+    assert_non_null(sys);
+    snprintf(rel, sizeof rel, "tests/data/zmx/%s", file);
+    sg_diag_clear(d);
+    *rc = sg_design_load(sys, tu_path(rel, path, sizeof path), d);
+    return sys;
+}
+
+static sg_system *must_load(const char *file)
+{
+    sg_diag d;
+    int rc;
+    sg_system *sys = load_zmx(file, &d, &rc);
+    if (rc != SG_OK)
+        fail_msg("%s: %s", file, d.msg);
+    return sys;
+}
+
+/* The double nearest 1/c, c given as decimal text: MPFR at 2000 bits
+ * holds every decimal used here within far less than a double's rounding,
+ * and the one rounding to 53 bits is checked not to sit on a tie. */
+static double recip_text(const char *text)
+{
+    mpfr_t c;
+    double r;
+    mpfr_init2(c, 2000);
+    mpfr_set_str(c, text, 10, MPFR_RNDN);
+    mpfr_ui_div(c, 1, c, MPFR_RNDN);
+    r = mpfr_get_d(c, MPFR_RNDN);
+    mpfr_clear(c);
+    return r;
+}
+
+static void test_cooke_triplet(void **state)
+{
+    sg_system *s = must_load("lens1.zmx");
+    (void)state;
+    /* Values as the file writes them (lines 3 to 45). */
+    assert_int_equal(s->nsurf, 9);
+    assert_int_equal(s->stop, 5);
+    assert_true(s->aper_type == SG_APER_EPD);
+    assert_true(s->aper_value == strtod("8.333333969116211", NULL));
+    assert_int_equal(s->nfield, 3);
+    assert_true(s->field[2].y == strtod("12.000000333930423", NULL));
+    assert_int_equal(s->nwave, 3);
+    assert_int_equal(s->primary_wave, 1);
+    assert_true(s->wave[0].um == strtod("0.48613269999999997", NULL));
+    assert_true(s->surf[1].radius == recip_text("0.08038721978664398"));
+    assert_true(s->surf[2].radius == recip_text("-0.0055170138366520405"));
+    assert_true(s->surf[1].thickness == strtod("5.514017105102539", NULL));
+    assert_true(isinf(s->surf[0].thickness));
+    assert_true(isinf(s->surf[5].radius));
+    assert_string_equal(s->surf[1].mat.name, "N-SK16");
+    assert_string_equal(s->surf[3].mat.name, "N-SF2");
+    assert_string_equal(s->surf[6].mat.name, "N-LAK9");
+    assert_true(s->surf[2].mat.kind == SG_MAT_AIR);
+    sg_system_free(s);
+}
+
+static void test_iso8859_asphere(void **state)
+{
+    sg_diag d;
+    int rc, i, warned = 0;
+    sg_system *s = load_zmx("lens_thorlabs_iso_8859_1.zmx", &d, &rc);
+    (void)state;
+    assert_int_equal(rc, SG_OK);
+    /* ENVD 2.0E+1 1 1 (line 9): Zemax's index adjustment is not made, and
+     * the warning says so. */
+    for (i = 0; i < d.nwarn && i < SG_DIAG_MAXWARN; i++)
+        warned |= strstr(d.warn[i], "lens_thorlabs_iso_8859_1.zmx:9: ENVD") != NULL;
+    assert_true(warned);
+    /* "Ø" is byte 0xD8 in the file; in the model it is UTF-8. */
+    assert_non_null(strstr(s->title, "\xC3\x98" "18 mm"));
+    assert_true(s->surf[1].type == SG_SURF_EVENASPH);
+    assert_true(s->surf[1].asph[0] == 0.0);
+    assert_true(s->surf[1].asph[1] == strtod("3.69067205091E-5", NULL));
+    assert_true(s->surf[1].asph[7] == strtod("-1.127794407419E-20", NULL));
+    assert_true(s->surf[1].conic == -1.1);
+    assert_true(s->surf[1].radius == recip_text("8.583690987124463500E-002"));
+    assert_string_equal(s->surf[1].mat.name, "S-LAH64");
+    /* FLAP 0 9.0: a floating aperture of the semi-diameter vignettes. */
+    assert_true(s->surf[1].sd_fixed && s->surf[1].semi_diameter == 9.0);
+    assert_true(s->surf[2].sd_fixed && s->surf[2].semi_diameter == strtod("7.258157225112", NULL));
+    assert_true(!s->surf[3].sd_fixed);
+    assert_true(s->wave[0].um == 0.78);
+    assert_string_equal(s->surf[1].comment, "AL1815-C");
+    sg_system_free(s);
+}
+
+static void test_utf16_no_type(void **state)
+{
+    sg_diag d;
+    int rc, i, found = 0;
+    sg_system *s = load_zmx("zmax_55278.zmx", &d, &rc);
+    (void)state;
+    assert_int_equal(rc, SG_OK);
+    assert_string_equal(s->title, "55278 Mounted Achromat Pair");
+    assert_int_equal(s->nsurf, 8);
+    for (i = 0; i < s->nsurf; i++)
+        assert_true(s->surf[i].type == SG_SURF_STANDARD);
+    assert_true(s->surf[1].radius == recip_text("7.695859627520400432E-03"));
+    assert_true(s->surf[6].thickness == strtod("43.707716717029655", NULL));
+    assert_string_equal(s->surf[1].mat.name, "SF5");
+    assert_string_equal(s->surf[2].mat.name, "BK7");
+    assert_true(s->wave[1].um == strtod("0.58760000000000001", NULL));
+    /* The MAZH solve on surface 6 (line 84) is kept as stored, with a note. */
+    for (i = 0; i < d.nwarn && i < SG_DIAG_MAXWARN; i++)
+        if (strstr(d.warn[i], "zmax_55278.zmx:84: surface 6: MAZH") &&
+            strstr(d.warn[i], "frozen"))
+            found = 1;
+    assert_true(found);
+    sg_system_free(s);
+}
+
+typedef struct refusal {
+    const char *file;
+    int code;
+    const char *has[3];
+} refusal;
+
+static void test_refusals(void **state)
+{
+    /* Each line number is where grep -n finds the keyword in the file. */
+    static const refusal cases[] = {
+        { "zmax_37992.zmx", SG_EUNSUPPORTED, { "zmax_37992.zmx:86: surface 2", "COORDBRK",
+                                               "coordinate break" } },
+        { "thorlabs_lj1598l1.zmx", SG_EUNSUPPORTED, { ":69: surface 1", "TOROIDAL", "toroid" } },
+        { "US05331467-1.zmx", SG_EUNSUPPORTED, { ":90: surface 2", "OBSC", "obscuration" } },
+        { "US00583336-2-scaled.zmx", SG_EUNSUPPORTED, { ":22:", "VDYN: field 2", "vignetting" } },
+        { "US05831776-1.zmx", SG_EUNSUPPORTED, { ":38:", "FTYP", "telecentric" } },
+        { "US08011793-1.zmx", SG_EUNSUPPORTED, { ":92: surface 2", "SQAP", "rectangular" } },
+        { "lens2.zmx", SG_ENOGLASS, { ":48: surface 1", "L-BAL35", "SCHOTT OHARA" } },
+        { "354710-C.zmx", SG_ENOGLASS, { ":84: surface 1", "D-ZK3M", "nearest by nd and vd" } },
+    };
+    size_t i;
+    int k;
+    (void)state;
+    for (i = 0; i < sizeof cases / sizeof *cases; i++) {
+        sg_diag d;
+        int rc;
+        sg_system *s = load_zmx(cases[i].file, &d, &rc);
+        if (rc != cases[i].code)
+            fail_msg("%s: code %s, want %s: %s", cases[i].file, sg_err_name(rc),
+                     sg_err_name(cases[i].code), d.msg);
+        for (k = 0; k < 3; k++)
+            if (!strstr(d.msg, cases[i].has[k]))
+                fail_msg("%s: message lacks \"%s\": %s", cases[i].file, cases[i].has[k], d.msg);
+        print_message("# %s: %s\n", cases[i].file, d.msg);
+        sg_system_free(s);
+    }
+}
+
+/* Import, export, import: the same design, compared as its JSON text
+ * (which writes every double so that it reads back to the same bits). */
+static void roundtrip(sg_system *a, const sg_catalog *cat, const char *what)
+{
+    sg_diag d;
+    char *z, *j1, *j2;
+    sg_system *b = sg_system_new();
+    sg_diag_clear(&d);
+    z = sg_zmx_to_text(a, cat, &d);
+    if (!z)
+        fail_msg("%s: export: %s", what, d.msg);
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(b, z, strlen(z), what, cat, &d) != SG_OK)
+        fail_msg("%s: import of the export: %s", what, d.msg);
+    j1 = sg_design_to_json(a);
+    j2 = sg_design_to_json(b);
+    assert_string_equal(j1, j2);
+    free(j1);
+    free(j2);
+    free(z);
+    sg_system_free(b);
+}
+
+static void test_roundtrip_files(void **state)
+{
+    static const char *files[] = {"lens1.zmx", "lens_thorlabs_iso_8859_1.zmx",
+                                  "zmax_55278.zmx", "HoO-V2C18Ex03.zmx"};
+    sg_catalog *cat = tu_catalog();
+    size_t i;
+    (void)state;
+    for (i = 0; i < sizeof files / sizeof *files; i++) {
+        sg_system *s = must_load(files[i]);
+        roundtrip(s, cat, files[i]);
+        sg_system_free(s);
+    }
+    sg_catalog_free(cat);
+}
+
+/* Every example exported and imported: the same design, and the same trace
+ * bit for bit for a grid of rays by the precise and classic methods. */
+static void test_roundtrip_examples(void **state)
+{
+    static const char *ex[] = {"singlet.json", "cooke_triplet.json", "double_gauss.json",
+                               "cassegrain.json", "tma.json"};
+    sg_catalog *cat = tu_catalog();
+    size_t i;
+    long nray = 0;
+    (void)state;
+    for (i = 0; i < sizeof ex / sizeof *ex; i++) {
+        sg_system *a = tu_example(ex[i]), *b = sg_system_new();
+        sg_diag d;
+        char *z;
+        int m;
+        sg_diag_clear(&d);
+        z = sg_zmx_to_text(a, cat, &d);
+        assert_non_null(z);
+        assert_int_equal(sg_zmx_parse(b, z, strlen(z), ex[i], cat, &d), SG_OK);
+        free(z);
+        {
+            /* The same design, every double to the bit (so every method
+             * traces it the same); the rays below check the trace itself. */
+            char *j1 = sg_design_to_json(a), *j2 = sg_design_to_json(b);
+            assert_string_equal(j1, j2);
+            free(j1);
+            free(j2);
+        }
+        for (m = 0; m < 2; m++) {
+            sg_tracer *ta = tu_tracer(a, cat, m ? SG_METHOD_CLASSIC : SG_METHOD_PRECISE);
+            sg_tracer *tb = tu_tracer(b, cat, m ? SG_METHOD_CLASSIC : SG_METHOD_PRECISE);
+            int n = sg_tracer_nsurf(ta), f, p, q;
+            sg_ray_surface *ra = calloc((size_t)n, sizeof *ra), *rb = calloc((size_t)n, sizeof *rb);
+            assert_int_equal(n, sg_tracer_nsurf(tb));
+            for (f = 0; f <= 2; f++)
+                for (p = -2; p <= 2; p++)
+                    for (q = -2; q <= 2; q++) {
+                        int r1 = sg_trace_normalized(ta, 0, f / 2.0, p / 2.5, q / 2.5, ra);
+                        int r2 = sg_trace_normalized(tb, 0, f / 2.0, p / 2.5, q / 2.5, rb);
+                        assert_int_equal(r1, r2);
+                        if (memcmp(ra, rb, (size_t)n * sizeof *ra) != 0)
+                            fail_msg("%s: ray (0, %g, %g, %g) differs after the round trip",
+                                     ex[i], f / 2.0, p / 2.5, q / 2.5);
+                        nray++;
+                    }
+            free(ra);
+            free(rb);
+            sg_tracer_free(ta);
+            sg_tracer_free(tb);
+        }
+        sg_system_free(a);
+        sg_system_free(b);
+    }
+    print_message("# examples exported and imported: %ld rays identical to the bit\n", nray);
+    sg_catalog_free(cat);
+}
+
+/* HoO-V2C18Ex03 (a Cassegrain of two conic mirrors, so no glass and no
+ * temperature correction) stores Zemax's automatic semi-diameters with 13
+ * digits.  Zemax takes the largest ray height over the fields and the pupil
+ * edge; here a ring of 3600 rays per field gives it. */
+static void test_zemax_semi_diameters(void **state)
+{
+    static const struct { int surf; const char *diam; } want[] = {
+        {1, "1.029095987097E+01"}, {2, "1.003088602257E+01"},
+        {3, "3.336697757110E+00"}, {4, "1.435181192595E+00"}};
+    sg_system *s = must_load("HoO-V2C18Ex03.zmx");
+    sg_catalog *cat = tu_catalog();
+    sg_tracer *t = tu_tracer(s, cat, SG_METHOD_PRECISE);
+    int n = sg_tracer_nsurf(t), f, k;
+    size_t i;
+    sg_ray_surface *r = calloc((size_t)n, sizeof *r);
+    double h[8] = {0};
+    (void)state;
+    assert_int_equal(s->nfield, 2);
+    for (f = 0; f < s->nfield; f++)
+        for (k = 0; k < 3600; k++) {
+            double a = 2 * M_PI * k / 3600;
+            int j;
+            assert_int_equal(sg_trace_normalized(t, 0, f, sin(a), cos(a), r), SG_OK);
+            for (j = 1; j < n && j < 8; j++)
+                h[j] = fmax(h[j], hypot(r[j].x, r[j].y));
+        }
+    for (i = 0; i < sizeof want / sizeof *want; i++) {
+        double z = strtod(want[i].diam, NULL);
+        double rel = fabs(h[want[i].surf] - z) / z;
+        print_message("# surface %d: Zemax %s, sagitta %.13e (relative difference %.1e)\n",
+                      want[i].surf, want[i].diam, h[want[i].surf], rel);
+        /* 13 digits stored: half a unit in the 13th digit. */
+        assert_true(rel <= 5.1e-13);
+    }
+    free(r);
+    sg_tracer_free(t);
+    sg_catalog_free(cat);
+    sg_system_free(s);
+}
+
+/* The Thorlabs AL1815-C file stores Zemax's automatic semi-diameter of the
+ * flat back (surface 2), 7.258157225112, the marginal ray's height there.
+ * With the catalog index of S-LAH64 sagitta's height is lower by about
+ * 2e-6 relative: Zemax corrects catalog indices for temperature (issue 16
+ * measured 1.95e-5 on this glass).  Solving for the index offset that
+ * reproduces Zemax's 13 digits must give that figure, which shows the rest
+ * of the geometry (asphere, thicknesses) agrees to the digits stored. */
+static double back_height(sg_system *s, const sg_catalog *cat, double n)
+{
+    sg_trace_opts o;
+    sg_diag d;
+    sg_ray_surface r[4];
+    sg_tracer *t;
+    s->surf[1].mat.kind = SG_MAT_INDEX;
+    s->surf[1].mat.index = n;
+    sg_trace_opts_init(&o);
+    o.clip = 0;
+    sg_diag_clear(&d);
+    t = sg_tracer_new(s, cat, &o, &d);
+    assert_non_null(t);
+    assert_int_equal(sg_trace_normalized(t, 0, 0, 0, 1, r), SG_OK);
+    sg_tracer_free(t);
+    return r[2].y;
+}
+
+static void test_zemax_asphere_temperature(void **state)
+{
+    sg_system *s = must_load("lens_thorlabs_iso_8859_1.zmx");
+    sg_catalog *cat = tu_catalog();
+    const double zemax = strtod("7.258157225112", NULL);
+    double n0 = sg_glass_index(sg_catalog_find(cat, "S-LAH64"), 0.78);
+    double a = 0.0, b = -2e-5, ha, hb, h0;
+    int k;
+    (void)state;
+    h0 = ha = back_height(s, cat, n0);
+    hb = back_height(s, cat, n0 + b);
+    for (k = 0; k < 8 && hb != ha; k++) {
+        double c = b - (hb - zemax) * (b - a) / (hb - ha);
+        a = b;
+        ha = hb;
+        b = c;
+        hb = back_height(s, cat, n0 + b);
+    }
+    print_message("# AL1815-C back surface: Zemax %.13g, sagitta %.13g with the catalog index "
+                  "(relative %.1e); Zemax's figure needs an index lower by %.4g\n",
+                  zemax, h0, fabs(h0 - zemax) / zemax, -b);
+    assert_true(fabs(h0 - zemax) / zemax > 1e-6);
+    assert_true(fabs(hb - zemax) / zemax <= 5.1e-13);
+    assert_true(-b > 1.9e-5 && -b < 2.0e-5);
+    sg_catalog_free(cat);
+    sg_system_free(s);
+}
+
+/* ------------------------------------------------------------------------
+ * Hostile and bad inputs
+ * ------------------------------------------------------------------------ */
+
+#define H "MODE SEQ\nENPD 10\nWAVM 1 0.55 1\nPWAV 1\n"
+#define S0 "SURF 0\n  DISZ INFINITY\n"
+#define S1 "SURF 1\n  STOP\n  CURV 0.02\n  DISZ 5\n  GLAS N-BK7\n"
+#define S2 "SURF 2\n  CURV -0.02\n  DISZ 50\n"
+#define S3 "SURF 3\n"
+
+typedef struct bad {
+    const char *name, *text;
+    size_t len; /* 0: strlen */
+    int code;
+    const char *has;
+} bad;
+
+static void test_bad_inputs(void **state)
+{
+    static const bad cases[] = {
+        {"good", H S0 S1 S2 S3, 0, SG_OK, ""},
+        {"empty", "", 0, SG_EPARSE, "no SURF line"},
+        {"json", "{\"format\": \"sagitta-design\"}\n", 0, SG_EUNSUPPORTED, "t.zmx:1: unknown keyword"},
+        {"nsc", "MODE NSC\n" S0, 0, SG_EUNSUPPORTED, "t.zmx:1: MODE"},
+        {"bad number", H S0 "SURF 1\n  CURV 0.0x2\n", 0, SG_EPARSE, "t.zmx:8: surface 1: curvature: not a number: '0.0x2'"},
+        {"nan", H S0 "SURF 1\n  DISZ nan\n", 0, SG_EPARSE, "t.zmx:8: surface 1: thickness: not a number"},
+        {"huge", H S0 "SURF 1\n  DISZ 1e999\n", 0, SG_ERANGE, "t.zmx:8: surface 1: thickness"},
+        {"twice", H S0 S1 S1 S2 S3, 0, SG_EPARSE, "SURF 1 where SURF 2 comes next (a surface written twice)"},
+        {"gap", H S0 S2, 0, SG_EPARSE, "t.zmx:7: SURF 2 where SURF 1 comes next"},
+        {"no stop", H S0 S2 "", 0, SG_EPARSE, "SURF 2 where SURF 1"},
+        {"stop missing", H S0 "SURF 1\n  DISZ 5\n" S2 S3, 0, SG_ENOSTOP, "no STOP line"},
+        {"two stops", H S0 S1 "SURF 2\n  STOP\n" S3, 0, SG_ETWOSTOPS, "t.zmx:13: surface 2: STOP"},
+        {"unknown type", H S0 "SURF 1\n  TYPE GRINSUR1\n", 0, SG_EUNSUPPORTED, "t.zmx:8: surface 1: TYPE GRINSUR1"},
+        {"coordbrk", H S0 "SURF 1\n  TYPE COORDBRK\n  PARM 3 45\n", 0, SG_EUNSUPPORTED, "coordinate break"},
+        {"tilt", H S0 "SURF 1\n  SCBD 1 0 0 0 0 90 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:8: surface 1: SCBD: a tilt"},
+        {"annulus", H S0 "SURF 1\n  CLAP 1 5 0\n", 0, SG_EUNSUPPORTED, "t.zmx:8: surface 1: CLAP: an annular"},
+        {"ellipse", H S0 "SURF 1\n  ELAP 5 3 0\n", 0, SG_EUNSUPPORTED, "elliptical aperture"},
+        {"decentred", H S0 "SURF 1\n  OBDC 0 1\n", 0, SG_EUNSUPPORTED, "decentred aperture"},
+        {"parm on standard", H S0 "SURF 1\n  STOP\n  PARM 2 1e-5\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: PARM 2"},
+        {"parm 9", H S0 "SURF 1\n  TYPE EVENASPH\n  STOP\n  PARM 9 1\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:10: surface 1: PARM 9"},
+        {"vignetting", "FTYP 0 0 2 1 0 0 0\nYFLN 0 5\nVCYN 0 0.1\n" H S0 S1 S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:3: VCYN: field 2"},
+        {"model glass", H S0 "SURF 1\n  GLAS ___BLANK 1 0 1.6 40 0\n", 0, SG_EUNSUPPORTED, "model glass"},
+        {"unknown glass", H S0 "SURF 1\n  GLAS NOSUCH 0 0 1.6 40.5\n", 0, SG_ENOGLASS, "NOSUCH"},
+        {"cone angle", "OBNA 10 1\n" S0, 0, SG_EUNSUPPORTED, "t.zmx:1: OBNA: an object cone angle"},
+        {"temperature", "ENVD 25 1 0\n", 0, SG_EUNSUPPORTED, "t.zmx:1: ENVD"},
+        {"configs", "MNUM 3 1\n", 0, SG_EUNSUPPORTED, "t.zmx:1: MNUM: 3 configurations"},
+        {"pupil shift", "PUSH 1 0 0 0 0 0\n", 0, SG_EUNSUPPORTED, "PUSH"},
+        {"two apertures", "ENPD 10\nFNUM 4 0\n", 0, SG_EPARSE, "t.zmx:2: a second aperture line"},
+        {"few waves", "FTYP 0 0 1 3 0 0 0\n" "ENPD 10\nWAVM 1 0.55 1\n" S0 S1 S2 S3, 0, SG_EPARSE, "WAVM 2 is missing"},
+        {"pwav", "ENPD 10\nWAVM 1 0.55 1\nPWAV 3\n" S0 S1 S2 S3, 0, SG_ERANGE, "t.zmx:3: PWAV"},
+        {"no aperture", "WAVM 1 0.55 1\n" S0 S1 S2 S3, 0, SG_EPARSE, "no system aperture"},
+        {"utf16be", "\xFE\xFF\0M", 4, SG_EUNSUPPORTED, "big-endian"},
+        {"utf16 odd", "\xFF\xFEM\0O", 5, SG_EPARSE, "odd number of bytes"},
+        {"utf16 surrogate", "\xFF\xFE\x00\xD8M\0", 6, SG_EPARSE, "unpaired UTF-16 surrogate"},
+        {"nul", "MODE SEQ\nENPD\0 10\n", 18, SG_EPARSE, "t.zmx:2: NUL byte"},
+        {"bad utf8 bom", "\xEF\xBB\xBFMODE SEQ\n\xC3(\n", 0, SG_EPARSE, "t.zmx:2: invalid UTF-8"},
+        {"long number", H S0 "SURF 1\n  DISZ 1.000000000000000000000000000000000000000000000000000000000000000000000000000000000000001\n", 0, SG_EPARSE, "too long"},
+        {"neg diam", H S0 "SURF 1\n  DIAM -1 0\n", 0, SG_ERANGE, "DIAM: semi-diameter -1 is negative"},
+        {"infinite thickness", H S0 "SURF 1\n  DISZ INFINITY\n", 0, SG_ERANGE, "t.zmx:8: surface 1: DISZ"},
+        {"tiny curvature", H S0 "SURF 1\n  CURV 1e-300\n", 0, SG_ERANGE, "beyond 1e150"},
+        {"unknown surface keyword", H S0 "SURF 1\n  ZZZZ 1\n", 0, SG_EUNSUPPORTED, "t.zmx:8: surface 1: unknown surface keyword 'ZZZZ'"},
+        {"field type", "FTYP 4 0 1 1 0 0 0\n", 0, SG_EUNSUPPORTED, "theodolite"},
+        {"surf number", H "SURF x\n", 0, SG_EPARSE, "t.zmx:5: surface number: not a number"},
+    };
+    sg_catalog *cat = tu_catalog();
+    size_t i;
+    (void)state;
+    for (i = 0; i < sizeof cases / sizeof *cases; i++) {
+        sg_system *s = sg_system_new();
+        sg_diag d;
+        size_t len = cases[i].len ? cases[i].len : strlen(cases[i].text);
+        int rc;
+        sg_diag_clear(&d);
+        rc = sg_zmx_parse(s, cases[i].text, len, "t.zmx", cat, &d);
+        if (rc != cases[i].code || !strstr(d.msg, cases[i].has))
+            fail_msg("case %s: %s (%s), want %s with \"%s\"", cases[i].name, sg_err_name(rc),
+                     d.msg, sg_err_name(cases[i].code), cases[i].has);
+        sg_system_free(s);
+    }
+    print_message("# %zu bad .zmx inputs refused with their line\n", sizeof cases / sizeof *cases - 1);
+    sg_catalog_free(cat);
+}
+
+/* A failed import writes nothing: the engine's save is never reached, and a
+ * save over an existing file is atomic. */
+static void test_failed_load_keeps_system(void **state)
+{
+    sg_system *s = tu_example("singlet.json");
+    char *before = sg_design_to_json(s), *after;
+    sg_diag d;
+    (void)state;
+    sg_diag_clear(&d);
+    static const char text[] = H S0 "SURF 1\n  TYPE TOROIDAL\n";
+    assert_int_equal(sg_zmx_parse(s, text, strlen(text), "t.zmx", NULL, &d), SG_EUNSUPPORTED);
+    after = sg_design_to_json(s);
+    assert_string_equal(before, after);
+    free(before);
+    free(after);
+    sg_system_free(s);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_cooke_triplet),
+        cmocka_unit_test(test_iso8859_asphere),
+        cmocka_unit_test(test_utf16_no_type),
+        cmocka_unit_test(test_refusals),
+        cmocka_unit_test(test_roundtrip_files),
+        cmocka_unit_test(test_roundtrip_examples),
+        cmocka_unit_test(test_zemax_semi_diameters),
+        cmocka_unit_test(test_zemax_asphere_temperature),
+        cmocka_unit_test(test_bad_inputs),
+        cmocka_unit_test(test_failed_load_keeps_system),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
