@@ -34,6 +34,9 @@ int cmd_paraxial(int argc, char **argv);
 /* Further subcommands live in their own files. */
 int cmd_verify(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
+int cmd_spot(int argc, char **argv);
+int cmd_fan(int argc, char **argv);
+int cmd_layout(int argc, char **argv);
 
 /* "sagitta: " + message + newline on stderr. */
 void cli_error(const char *fmt, ...)
