@@ -541,6 +541,11 @@ static int run(int kind, int argc, char **argv)
     }
     if (!design)
         return cli_usage_error(cmd, "missing DESIGN.json");
+    if (kind == AN_SPOT) {
+        sg_diag_clear(&d);
+        if (sg_pupil_check(pattern, density, &d) != SG_OK)
+            return cli_usage_error(cmd, "--density: %s", d.msg);
+    }
     if (fmt >= FMT_PNG && (!output || strcmp(output, "-") == 0) && isatty(STDOUT_FILENO))
         return cli_usage_error(cmd, "a %s picture needs -o FILE (standard output is a "
                                     "terminal)", fmt == FMT_PNG ? "PNG" : fmt == FMT_SVG ? "SVG" : "PDF");
