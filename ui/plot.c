@@ -217,8 +217,13 @@ static plot_cell *cell_at(plot_grid *g, int x, int y)
 
 void plot_grid_text(plot_grid *g, int x, int y, const char *s, int color)
 {
+    plot_grid_text_n(g, x, y, s, color, 1 << 30);
+}
+
+void plot_grid_text_n(plot_grid *g, int x, int y, const char *s, int color, int maxw)
+{
     const unsigned char *u = (const unsigned char *)s;
-    while (*u) {
+    while (*u && maxw-- > 0) {
         size_t len = *u < 0x80 ? 1 : (*u >> 5) == 6 ? 2 : (*u >> 4) == 14 ? 3 : 4;
         plot_cell *c = cell_at(g, x, y);
         size_t i;
@@ -288,13 +293,14 @@ static void line(dots *d, long x0, long y0, long x1, long y1, int color)
     }
 }
 
+/* Centred in w columns, and cut to them. */
 static void center_text(plot_grid *g, int x, int w, int y, const char *s, int color)
 {
     size_t len = 0;
     const unsigned char *u = (const unsigned char *)s;
     for (; *u; u++)
         len += (*u & 0xC0) != 0x80;
-    plot_grid_text(g, x + (w > (int)len ? (w - (int)len) / 2 : 0), y, s, color);
+    plot_grid_text_n(g, x + (w > (int)len ? (w - (int)len) / 2 : 0), y, s, color, w);
 }
 
 static size_t text_len(const char *s)
@@ -318,7 +324,7 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
         return;
     }
     H = h - 4;
-    nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 2, yt, 16);
+    nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 3, yt, 16);
     ystep = nyt > 1 ? yt[1] - yt[0] : p.ymax - p.ymin;
     for (k = 0; k < nyt; k++) {
         plot_tick_label(yt[k], ystep, lab, sizeof lab);
@@ -332,7 +338,7 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
     }
     /* Braille dots are about square: 2 per cell across, 4 down. */
     plot_panel_limits(&p, (2.0 * W) / (4.0 * H));
-    nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 2, yt, 16);
+    nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 3, yt, 16);
     ystep = nyt > 1 ? yt[1] - yt[0] : p.ymax - p.ymin;
     nxt = plot_ticks(p.xmin, p.xmax, W >= 40 ? 5 : 3, xt, 16);
     xstep = nxt > 1 ? xt[1] - xt[0] : p.xmax - p.xmin;
@@ -359,7 +365,9 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
             len = (int)strlen(lab);
             at = col - len / 2;
             plot_grid_text(g, col, ay, "┬", PLOT_FG);
-            if (at < nextfree || at + len > x0 + w)
+            if (at + len > x0 + w)
+                at = x0 + w - len; /* the last tick's label, moved in */
+            if (at < nextfree)
                 continue;
             plot_grid_text(g, at, ay + 1, lab, PLOT_FG);
             nextfree = at + len + 1;
@@ -369,7 +377,7 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
         char yl[80];
         size_t xl = text_len(p.xlabel);
         snprintf(yl, sizeof yl, "↑ %s", p.ylabel);
-        plot_grid_text(g, x0, ay + 2, yl, PLOT_FG);
+        plot_grid_text_n(g, x0, ay + 2, yl, PLOT_FG, w);
         if ((int)xl + 2 < w)
             plot_grid_text(g, x0 + w - (int)xl - 2, ay + 2, p.xlabel, PLOT_FG);
         if ((int)xl + 4 < w)
@@ -472,10 +480,30 @@ void plot_draw_cells(const plot_figure *f, plot_grid *g, int x0, int y0, int w, 
             best = nc;
         }
     }
+    if (score < 0.0) {
+        /* Not all fit: as many rows of the widest panels as room allows,
+         * and a note of the rest (a file has room for every one). */
+        nc = w / 14 > 0 ? w / 14 : 1;
+        if (nc > f->npanel)
+            nc = f->npanel;
+        best = nc;
+    }
     nc = best;
     {
-        int nr = (f->npanel + nc - 1) / nc, pw = w / nc, ph = (bottom - top) / nr;
-        for (k = 0; k < f->npanel; k++)
+        int nr = (f->npanel + nc - 1) / nc, pw = w / nc, ph, shown;
+        if ((bottom - top) / nr < 6)
+            nr = (bottom - top) / 6 > 0 ? (bottom - top) / 6 : 1;
+        ph = (bottom - top) / nr;
+        shown = nr * nc < f->npanel ? nr * nc : f->npanel;
+        if (shown < f->npanel) {
+            char note[64];
+            snprintf(note, sizeof note, "(%d of %d panels; export shows all)", shown,
+                     f->npanel);
+            plot_grid_text_n(g, x0 + w - (int)strlen(note), top - 1 >= y0 ? top - 1 : y0, note,
+                             PLOT_FG, w);
+            nr = shown / nc;
+        }
+        for (k = 0; k < shown; k++)
             draw_panel(&f->panel[k], g, x0 + (k % nc) * pw, top + (k / nc) * ph, pw - 1, ph);
     }
 }

@@ -86,6 +86,8 @@ int plot_grid_init(plot_grid *g, int w, int h);
 void plot_grid_free(plot_grid *g);
 /* Writes UTF-8 text from column x of row y, cut at the grid's edge. */
 void plot_grid_text(plot_grid *g, int x, int y, const char *s, int color);
+/* The same, at most maxw characters. */
+void plot_grid_text_n(plot_grid *g, int x, int y, const char *s, int color, int maxw);
 /* The braille character of a 2 x 4 dot pattern: bit (col, row) is dot
  * (col 0..1, row 0..3), numbered as Unicode numbers them. */
 unsigned plot_braille_bit(int col, int row);

@@ -67,9 +67,11 @@ int view_spot_figure(const sg_system *sys, const sg_spot *s, plot_figure *f)
         char fl[64], pt[96];
         plot_panel *p;
         view_field_label(sys, s->field_index[fi], fl, sizeof fl);
+        /* The radii first, so a narrow panel still shows them. */
         if (fd->status == SG_OK)
-            snprintf(pt, sizeof pt, "%s RMS %.4g GEO %.4g %s", fl, fd->rms * scale,
-                     fd->geo * scale, u);
+            snprintf(pt, sizeof pt, "field %d: RMS %.4g, GEO %.4g %s  %s",
+                     s->field_index[fi] + 1, fd->rms * scale, fd->geo * scale, u,
+                     strchr(fl, '(') ? strchr(fl, '(') : "");
         else
             snprintf(pt, sizeof pt, "%s: chief ray %s", fl, sg_strerror(fd->status));
         p = plot_add_panel(f, pt, xl, yl);
