@@ -4,6 +4,10 @@
  * (with a picture on a terminal), CSV, JSON, or a PNG, SVG or PDF picture.
  * Every output goes through outfile, so a file appears whole or not at all.
  */
+/* TIOCGWINSZ, for the terminal's width. */
+#define _DEFAULT_SOURCE
+#include <sys/ioctl.h>
+
 #include <cjson/cJSON.h>
 #include <errno.h>
 #include <math.h>
@@ -408,12 +412,14 @@ static int terminal_picture(const plot_figure *fig, FILE *f)
 {
     plot_grid g;
     const char *cols = getenv("COLUMNS");
-    int w = 100, h, rc;
+    struct winsize ws;
+    int w = 80, h, rc;
     long c;
+    /* COLUMNS first (a user's choice), then the terminal's own width. */
     if (cols && args_long(cols, 40, 1000, &c) == ARGS_OK)
         w = (int)c;
-    else
-        w = 100;
+    else if (ioctl(fileno(f), TIOCGWINSZ, &ws) == 0 && ws.ws_col >= 40)
+        w = ws.ws_col;
     if (w > 160)
         w = 160;
     h = fig->npanel > 2 ? 40 : 24;
