@@ -4,8 +4,7 @@
  * (with a picture on a terminal), CSV, JSON, or a PNG, SVG or PDF picture.
  * Every output goes through outfile, so a file appears whole or not at all.
  */
-/* TIOCGWINSZ, for the terminal's width. */
-#define _DEFAULT_SOURCE
+/* TIOCGWINSZ, for the terminal's width (the build defines _DEFAULT_SOURCE). */
 #include <sys/ioctl.h>
 
 #include <cjson/cJSON.h>
