@@ -462,6 +462,184 @@ int sg_batch_trace(sg_batch *b, sg_ray_kind kind, const sg_ray_in *rays,
                    size_t nray, const int *surf, int nsel,
                    sg_ray_surface *out, int *status, sg_diag *d);
 
+/* ------------------------------------------------------------------------
+ * Image analyses: spot diagrams, transverse ray fans and the layout.  Each
+ * returns data (no printing); the rays go through a kept sg_batch that
+ * keeps only the surfaces an analysis needs, in blocks of bounded size.
+ * ------------------------------------------------------------------------ */
+
+/* Normalized field coordinates (Hx, Hy) of field k (0-based): the field
+ * divided by Zemax's field scale (the largest radius, or the largest |x|
+ * and |y| for rectangular normalization). */
+int sg_field_normalized(const sg_system *sys, int k, double *hx, double *hy);
+
+/* Pupil sampling patterns, as Zemax defines them.  Hexapolar: density N
+ * rings; ring i (1..N) holds 6i rays at radius i/N, the first at angle 0
+ * (the +x axis), so 1 + 3N(N+1) rays.  Square: an N x N grid of cell
+ * centres, Px = -1 + (2j+1)/N, keeping those with Px^2 + Py^2 <= 1.
+ * Vogel: N rays on the sunflower spiral, r = sqrt((k+1/2)/N), angle k
+ * times the golden angle pi (3 - sqrt 5), each ray an equal area. */
+typedef enum sg_pupil_pattern {
+    SG_PUPIL_HEXAPOLAR = 0,
+    SG_PUPIL_SQUARE = 1,
+    SG_PUPIL_VOGEL = 2
+} sg_pupil_pattern;
+
+#define SG_PUPIL_MAX_DENSITY 100000000 /* N for square and Vogel; rings are fewer */
+
+const char *sg_pupil_pattern_name(int pattern);
+/* Parses "hexapolar", "square" or "vogel"; -1 when unknown. */
+int sg_pupil_pattern_parse(const char *s);
+/* Checks density for a pattern (message names the limit). */
+int sg_pupil_check(int pattern, int density, sg_diag *d);
+/* Number of pupil points of a pattern; 0 for a bad pattern or density. */
+size_t sg_pupil_count(int pattern, int density);
+/* Fills up to cap points (px, py) of the pattern in its order, from
+ * *cursor (0 at the start; an opaque position advanced by the call), so
+ * a long pattern can be made block by block.  Returns the number filled;
+ * 0 at the end. */
+size_t sg_pupil_fill(int pattern, int density, size_t *cursor, double (*p)[2], size_t cap);
+
+typedef enum sg_spot_ref {
+    SG_SPOT_REF_CHIEF = 0,   /* the real chief ray (Zemax's default) */
+    SG_SPOT_REF_CENTROID = 1 /* the mean of the rays' image points */
+} sg_spot_ref;
+
+typedef struct sg_spot_opts {
+    sg_trace_opts trace; /* method, clipping ...; trace.wave is ignored */
+    int pattern;         /* sg_pupil_pattern */
+    int density;         /* rings (hexapolar), grid size (square), rays (Vogel) */
+    int reference;       /* sg_spot_ref */
+    int wave;            /* 0-based, or -1: every wavelength (polychromatic) */
+    int field;           /* 0-based, or -1: every field */
+    int nthreads;        /* 0: every core */
+    size_t block;        /* rays per batch call; 0: 65536 */
+    size_t max_points;   /* image points kept per field and wavelength, for
+                            pictures (every k-th ray); 0 keeps none */
+} sg_spot_opts;
+
+void sg_spot_opts_init(sg_spot_opts *o);
+
+/* One field at one wavelength.  Points and radii are in lens units on the
+ * image surface, relative to the reference point (ref_x, ref_y). */
+typedef struct sg_spot_cell {
+    int status;            /* SG_OK, or the chief ray's failure */
+    size_t nray, nok;      /* rays launched; rays that reached the image */
+    double chief_x, chief_y;       /* this wavelength's chief ray on the image */
+    double centroid_x, centroid_y; /* mean image point of the rays that reached it */
+    double rms, geo;       /* about the analysis's reference point */
+    size_t npts;           /* points kept */
+    double (*pts)[2];      /* kept points, relative to the reference */
+} sg_spot_cell;
+
+typedef struct sg_spot_field {
+    double hx, hy;         /* normalized field */
+    int status;            /* SG_OK, or the reference chief ray's failure */
+    double ref_x, ref_y;   /* reference point: the primary (or only) wavelength's
+                              chief ray, or the weighted centroid */
+    double rms, geo;       /* over every wavelength, weighted by wavelength weight */
+    double centroid_x, centroid_y;
+} sg_spot_field;
+
+typedef struct sg_spot {
+    int nfield, nwave;
+    int field_index[SG_MAX_FIELDS]; /* design field of each row */
+    int wave_index[SG_MAX_WAVES];   /* design wavelength of each column */
+    double wave_um[SG_MAX_WAVES];
+    double airy_radius;    /* 1.22 lambda F/#: the primary (or only) wavelength and
+                              the paraxial working F/# (Zemax's Airy radius) */
+    size_t nray_per_cell;  /* pupil points of the pattern */
+    sg_spot_field field[SG_MAX_FIELDS];
+    sg_spot_cell *cell;    /* nfield * nwave, row by field */
+} sg_spot;
+
+/* Spot diagrams of the chosen fields and wavelengths.  Fills *out (free it
+ * with sg_spot_free).  Rays that fail (vignetting, TIR ...) are left out of
+ * the figures and counted.  Returns SG_OK, or an error with d filled. */
+int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_opts *o,
+                    sg_spot *out, sg_diag *d);
+void sg_spot_free(sg_spot *s);
+
+typedef struct sg_fan_opts {
+    sg_trace_opts trace;
+    int npts;    /* pupil samples from -1 to 1 on each fan; at least 2 */
+    int wave;    /* 0-based, or -1 for every wavelength */
+    int field;   /* 0-based, or -1 for every field */
+    int nthreads;
+} sg_fan_opts;
+
+void sg_fan_opts_init(sg_fan_opts *o);
+
+/* One fan: the pupil coordinate of each sample and the aberration. */
+typedef struct sg_fan_curve {
+    double *p;      /* npts pupil coordinates (Py tangential, Px sagittal) */
+    double *e;      /* ey (tangential) or ex (sagittal), lens units */
+    int *status;    /* each ray's status; e is 0 where it is not SG_OK */
+} sg_fan_curve;
+
+typedef struct sg_fan {
+    int nfield, nwave, npts;
+    int field_index[SG_MAX_FIELDS];
+    int wave_index[SG_MAX_WAVES];
+    double wave_um[SG_MAX_WAVES];
+    double hx[SG_MAX_FIELDS], hy[SG_MAX_FIELDS];
+    int status[SG_MAX_FIELDS];       /* the reference chief ray's status */
+    double ref_x[SG_MAX_FIELDS], ref_y[SG_MAX_FIELDS];
+    sg_fan_curve *tan, *sag;         /* nfield * nwave each, row by field */
+} sg_fan;
+
+/* Transverse ray fans: ey against Py (Px = 0) and ex against Px (Py = 0),
+ * on the image surface, each relative to the chief ray of the primary
+ * wavelength (of the only wavelength when one is chosen), as Zemax draws
+ * them. */
+int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opts *o,
+                   sg_fan *out, sg_diag *d);
+void sg_fan_free(sg_fan *f);
+
+typedef struct sg_layout_opts {
+    sg_trace_opts trace;  /* trace.wave: -1 primary */
+    int nrays;            /* rays per field from Py = -1 to 1; at least 1 */
+    int field;            /* 0-based, or -1 for every field */
+    int profile_pts;      /* points per surface profile; at least 2 */
+    int nthreads;
+} sg_layout_opts;
+
+void sg_layout_opts_init(sg_layout_opts *o);
+
+typedef struct sg_layout_surface {
+    double z0;           /* the vertex's global z (surface 1 at 0) */
+    double sd;           /* the semi-diameter drawn: the design's, or the
+                            largest ray height there when it has none */
+    int mirror, glass_after; /* a mirror; glass (index != 1) after it */
+    int npts;
+    double *y, *z;       /* the profile, global y and z */
+} sg_layout_surface;
+
+typedef struct sg_layout_ray {
+    int field;           /* row of field_index */
+    double py;
+    int status;          /* the trace's result */
+    int npts;            /* points from surface 1 to where the ray stopped */
+    double *y, *z;       /* global y and z of each point */
+} sg_layout_ray;
+
+typedef struct sg_layout {
+    int nsurf;           /* surfaces 1 .. N drawn: nsurf - 1 entries */
+    sg_layout_surface *surf; /* surf[i - 1] for surface i */
+    int nfield;
+    int field_index[SG_MAX_FIELDS];
+    int nray;
+    sg_layout_ray *ray;
+    double zmin, zmax, ymin, ymax; /* extent of everything drawn */
+} sg_layout;
+
+/* A y-z cross-section: each surface's profile over its semi-diameter at
+ * its global position (surfaces 1 to the image; the object is left out,
+ * as in Zemax's default layout), and a fan of rays in y per field. */
+int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layout_opts *o,
+                      sg_layout *out, sg_diag *d);
+void sg_layout_free(sg_layout *l);
+
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */
 double sg_digits(double a, double b);

@@ -14,7 +14,7 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
 build=${BUILD_DIR:-build}
 
-packages="gcc meson ninja-build pkg-config libmpfr-dev libgmp-dev libcjson-dev \
+packages="gcc meson ninja-build pkg-config libmpfr-dev libgmp-dev libcjson-dev libcairo2-dev \
 libcmocka-dev libncurses-dev tmux python3 clang libclang-rt-14-dev valgrind \
 locales"
 

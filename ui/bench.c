@@ -906,6 +906,9 @@ static void bench_help(FILE *f)
 "  --quick         ray sets of 1e3 and 1e4 rays instead of 1e3, 1e5 and 1e6\n"
 "  --rays N        one ray set of N rays, 1 to 1e9, instead\n"
 "  --threads N     threads of the multi-threaded runs; 0 (default) is every core\n"
+"  --spot          instead: a spot diagram of 1e6 rays (1e5 with --quick) on\n"
+"                  the designs (default: the Cassegrain) against the batch\n"
+"                  trace of the same rays to the image, and their ratio\n"
 "  -h, --help      show this help\n"
 "\n"
 "Throughput is in ray-surfaces per second: rays that reached the image times\n"
@@ -919,7 +922,7 @@ static void bench_help(FILE *f)
           f);
 }
 
-enum { OPT_HELP = 1, OPT_FORMAT, OPT_REPEAT, OPT_QUICK, OPT_THREADS, OPT_RAYS };
+enum { OPT_HELP = 1, OPT_FORMAT, OPT_REPEAT, OPT_QUICK, OPT_THREADS, OPT_RAYS, OPT_SPOT };
 
 static const cli_opt bench_opts[] = {
     { "--help", 'h', 0, OPT_HELP },
@@ -928,8 +931,134 @@ static const cli_opt bench_opts[] = {
     { "--quick", 0, 0, OPT_QUICK },
     { "--threads", 0, 1, OPT_THREADS },
     { "--rays", 0, 1, OPT_RAYS },
+    { "--spot", 0, 0, OPT_SPOT },
     { NULL, 0, 0, 0 }
 };
+
+/* ------------------------------------------------------------ spot mode */
+
+/* One spot diagram of nray Vogel rays (every field, the primary
+ * wavelength, about the chief ray) against sg_batch_trace of the same
+ * pupil points, all in one call that keeps the image only: the analysis's
+ * own cost (pupil points, blocks, sums) is the difference.  The two are
+ * timed alternately so that a change in the machine's load falls on both. */
+static int bench_spot(const bench_cfg *cfg, const char *path, cJSON *arr)
+{
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    size_t nray = cfg->quick ? 100000 : 1000000, cur, k, nall;
+    int rc, f, last, rep;
+    double *ts = NULL, *tb = NULL, *ratio = NULL;
+    sg_ray_in *rays = NULL;
+    sg_ray_surface *rows = NULL;
+    int *st = NULL;
+    double (*pup)[2] = NULL;
+    sg_spot_opts so;
+    sg_diag d;
+    stat3 a, b, r;
+
+    rc = cli_load_design(path, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    nall = nray * (size_t)sys->nfield;
+    pup = malloc(nray * sizeof *pup);
+    rays = malloc(nall * sizeof *rays);
+    rows = malloc(nall * sizeof *rows);
+    st = malloc(nall * sizeof *st);
+    ts = calloc((size_t)cfg->repeat, sizeof *ts);
+    tb = calloc((size_t)cfg->repeat, sizeof *tb);
+    ratio = calloc((size_t)cfg->repeat, sizeof *ratio);
+    if (!pup || !rays || !rows || !st || !ts || !tb || !ratio) {
+        cli_error("out of memory");
+        rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    cur = 0;
+    sg_pupil_fill(SG_PUPIL_VOGEL, (int)nray, &cur, pup, nray);
+    for (f = 0; f < sys->nfield; f++) {
+        double hx, hy;
+        sg_field_normalized(sys, f, &hx, &hy);
+        for (k = 0; k < nray; k++) {
+            sg_ray_in *ri = &rays[(size_t)f * nray + k];
+            ri->v[0] = hx;
+            ri->v[1] = hy;
+            ri->v[2] = pup[k][0];
+            ri->v[3] = pup[k][1];
+        }
+    }
+    memset(rows, 0, nall * sizeof *rows);
+    memset(st, 0, nall * sizeof *st);
+    sg_spot_opts_init(&so);
+    so.pattern = SG_PUPIL_VOGEL;
+    so.density = (int)nray;
+    so.wave = sys->primary_wave;
+    so.nthreads = cfg->threads;
+    last = sys->nsurf - 1;
+    for (rep = 0; rep < cfg->repeat; rep++) {
+        sg_spot spot;
+        sg_batch *bt;
+        sg_trace_opts to;
+        double t0;
+        sg_diag_clear(&d);
+        t0 = now_s();
+        rc = sg_spot_compute(sys, cat, &so, &spot, &d);
+        ts[rep] = now_s() - t0;
+        if (rc != SG_OK)
+            break;
+        sg_spot_free(&spot);
+        sg_trace_opts_init(&to);
+        t0 = now_s();
+        bt = sg_batch_new(sys, cat, &to, cfg->threads, &d);
+        rc = bt ? sg_batch_trace(bt, SG_RAYS_NORMALIZED, rays, nall, &last, 1, rows, st, &d)
+                : (d.code ? d.code : SG_ENOMEM);
+        sg_batch_free(bt);
+        tb[rep] = now_s() - t0;
+        if (rc != SG_OK)
+            break;
+        ratio[rep] = ts[rep] / tb[rep];
+    }
+    if (rc != SG_OK) {
+        cli_error("%s: %s", path, d.msg[0] ? d.msg : sg_strerror(rc));
+        rc = cli_exit_for(rc);
+        if (rc == CLI_EXIT_OK)
+            rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    a = stats(ts, cfg->repeat);
+    b = stats(tb, cfg->repeat);
+    r = stats(ratio, cfg->repeat);
+    if (cfg->fmt == BENCH_TEXT) {
+        char t[96];
+        printf("%s\n  %s\n", path, safe_text(sys->title, t, sizeof t));
+        printf("  spot diagram, %zu rays x %d fields, %d threads: %.4f s (min %.4f, max %.4f)\n",
+               nray, sys->nfield, cfg->nthr_all, a.med, a.min, a.max);
+        printf("  batch trace of the same rays to the image:       %.4f s (min %.4f, max %.4f)\n",
+               b.med, b.min, b.max);
+        printf("  spot / batch: %.3f (median of %d alternating pairs; min %.3f, max %.3f)\n",
+               r.med, cfg->repeat, r.min, r.max);
+    } else {
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddStringToObject(o, "design", path);
+        cJSON_AddNumberToObject(o, "rays_per_field", (double)nray);
+        cJSON_AddNumberToObject(o, "fields", sys->nfield);
+        cJSON_AddNumberToObject(o, "threads", cfg->nthr_all);
+        cJSON_AddItemToObject(o, "spot_s", json_stat(&a));
+        cJSON_AddItemToObject(o, "batch_s", json_stat(&b));
+        cJSON_AddItemToObject(o, "ratio", json_stat(&r));
+        cJSON_AddItemToArray(arr, o);
+    }
+    rc = CLI_EXIT_OK;
+done:
+    free(pup);
+    free(rays);
+    free(rows);
+    free(st);
+    free(ts);
+    free(tb);
+    free(ratio);
+    cli_design_free(cat, sys);
+    return rc;
+}
 
 static void bench_design(const bench_cfg *cfg, const char *path, design_res *r)
 {
@@ -998,7 +1127,7 @@ int cmd_bench(int argc, char **argv)
     const char **designs = NULL;
     char **examples = NULL;
     size_t ndesign = 0, nex = 0, k;
-    int id, rc = CLI_EXIT_OK, worst = CLI_EXIT_OK, nrays = 0;
+    int id, rc = CLI_EXIT_OK, worst = CLI_EXIT_OK, nrays = 0, spot_mode = 0;
     bench_cfg cfg;
     design_res *res = NULL;
     cJSON *root = NULL, *arr = NULL;
@@ -1045,6 +1174,9 @@ int cmd_bench(int argc, char **argv)
                 return CLI_EXIT_USAGE;
             }
             break;
+        case OPT_SPOT:
+            spot_mode = 1;
+            break;
         case OPT_THREADS:
             if (cli_int_value("--threads", val, 0, 256, &cfg.threads)) {
                 free(designs);
@@ -1057,6 +1189,42 @@ int cmd_bench(int argc, char **argv)
         }
     }
 
+    if (spot_mode) {
+        static char cass[4096];
+        cJSON *sarr = NULL;
+        cfg.cores = count_cores();
+        cfg.nthr_all = cfg.threads > 0 ? cfg.threads : cfg.cores;
+        if (ndesign == 0) {
+            snprintf(cass, sizeof cass, "%s/cassegrain.json", SG_SOURCE_EXAMPLES);
+            if (!is_dir(SG_SOURCE_EXAMPLES))
+                snprintf(cass, sizeof cass, "%s/cassegrain.json", SG_INSTALL_EXAMPLES);
+            designs[ndesign++] = cass;
+        }
+        if (cfg.fmt == BENCH_JSON) {
+            root = cJSON_CreateObject();
+            sarr = root ? cJSON_AddArrayToObject(root, "spot") : NULL;
+            if (!sarr) {
+                cli_error("out of memory");
+                rc = CLI_EXIT_INTERNAL;
+                goto done;
+            }
+        }
+        for (k = 0; k < ndesign; k++) {
+            rc = bench_spot(&cfg, designs[k], sarr);
+            if (rc > worst)
+                worst = rc;
+        }
+        if (root) {
+            char *txt = cJSON_Print(root);
+            if (txt)
+                puts(txt);
+            free(txt);
+        }
+        rc = cli_close_output(stdout, NULL);
+        if (rc == CLI_EXIT_OK)
+            rc = worst;
+        goto done;
+    }
     if (ndesign == 0) {
         rc = find_examples(&examples, &nex);
         if (rc != CLI_EXIT_OK) {

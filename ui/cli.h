@@ -36,6 +36,9 @@ int cmd_verify(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
 int cmd_import(int argc, char **argv);
 int cmd_export(int argc, char **argv);
+int cmd_spot(int argc, char **argv);
+int cmd_fan(int argc, char **argv);
+int cmd_layout(int argc, char **argv);
 
 /* "sagitta: " + message + newline on stderr. */
 void cli_error(const char *fmt, ...)

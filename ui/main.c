@@ -23,6 +23,9 @@
 static const cli_command commands[] = {
     { "trace", cmd_trace, "trace rays and print every surface crossing" },
     { "paraxial", cmd_paraxial, "print first-order (paraxial) data" },
+    { "spot", cmd_spot, "spot diagrams: RMS and GEO radii, centroid, Airy radius" },
+    { "fan", cmd_fan, "transverse ray fans, tangential and sagittal" },
+    { "layout", cmd_layout, "a y-z cross-section of surfaces and rays" },
     { "verify", cmd_verify, "check a design's traces against the MPFR reference" },
     { "bench", cmd_bench, "measure trace throughput" },
     { "import", cmd_import, "read a Zemax .zmx lens file into a JSON design" },

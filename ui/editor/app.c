@@ -46,6 +46,25 @@ void ui_layout(ui *u)
     /* Title, sheet heading, ray, paraxial, results heading and status take
      * a line each, the detail panel its own height; the surfaces share the
      * rest. */
+    if (u->e->view.kind != VIEW_OFF) {
+        /* The view takes the results' place: the sheet keeps up to a third
+         * of the rows (at least 3), the view the rest below the ray and
+         * paraxial lines. */
+        avail = u->rows - 5;
+        u->sheet_h = avail / 3 < 3 ? 3 : avail / 3;
+        if (u->sheet_h > n)
+            u->sheet_h = n;
+        u->sheet_y = 1;
+        u->ray_y = u->sheet_y + 1 + u->sheet_h;
+        u->parax_y = u->ray_y + 1;
+        u->res_y = u->parax_y;
+        u->res_h = 0;
+        u->view_y = u->parax_y + 1;
+        u->status_y = u->rows - 1;
+        u->view_h = u->status_y - u->view_y;
+        u->detail_y = u->status_y;
+        goto widths;
+    }
     avail = u->rows - 6 - results_panel_height(u);
     if (avail < 2)
         avail = 2;
@@ -59,6 +78,8 @@ void ui_layout(ui *u)
     u->res_y = u->parax_y + 1;
     u->detail_y = u->rows - 1 - results_panel_height(u);
     u->status_y = u->rows - 1;
+    u->view_y = u->view_h = 0;
+widths:
     /* At 80 columns Radius, Thickness, Semi-Dia and Conic all fit. */
     u->numw = (u->cols - 8 - 9 - 13 - 10) / 4;
     if (u->numw < 10)
@@ -254,7 +275,10 @@ static void draw(ui *u)
     default:
         sheet_draw(u);
         ray_draw(u);
-        results_draw(u);
+        if (u->e->view.kind != VIEW_OFF)
+            view_draw(u);
+        else
+            results_draw(u);
         status_draw(u);
         break;
     }
@@ -444,6 +468,7 @@ static int global_key(ui *u, int key)
     case '#': return ui_run(u, "digits toggle");
     case K_F(3): u->sys_top = 0; u->mode = MODE_SYSDATA; return ED_HANDLED | ED_REDRAW;
     case 'v': return ui_run(u, "wave %d", (e->wave + 1) % e->doc.sys->nwave + 1);
+    case 'g': return ui_run(u, "view next");
     case 'f':
         u->focus = u->focus == FOCUS_SHEET ? FOCUS_RAY : FOCUS_SHEET;
         return ED_HANDLED | ED_REDRAW;

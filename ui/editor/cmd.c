@@ -14,6 +14,7 @@
 
 #include "../args.h"
 #include "../outfile.h"
+#include "../plot.h"
 #include "../report.h"
 #include "cells.h"
 #include "cmd.h"
@@ -1325,9 +1326,12 @@ static double bytes_per_ray(const report_meta *m, report_fmt fmt, int nsurf,
     return b;
 }
 
+static int export_picture(ed *e, const char *path, int format);
+
 static int c_export_any(ed *e, args *a, int bang)
 {
-    const char *usage = "export FILE [csv|json|text] [ray | fan [N] | xfan [N] | grid N]";
+    const char *usage = "export FILE [csv|json|text] [ray | fan [N] | xfan [N] | grid N] | "
+                        "export FILE png|svg|pdf";
     const char *path, *set = "ray";
     int fmt = -1, n = 0, i, rc, tostd, nsurf, multi, err;
     size_t nray, block, got, done = 0;
@@ -1350,6 +1354,19 @@ static int c_export_any(ed *e, args *a, int bang)
         return ED_HANDLED | ED_PROMPT;
     }
     path = a->v[1];
+    /* A picture format (named, or the file's extension) writes the view. */
+    {
+        int pf = a->n > 2 ? plot_file_format(a->v[2]) : -1;
+        const char *dot = strrchr(path, '.');
+        if (pf < 0 && a->n == 2 && dot)
+            pf = plot_file_format(dot + 1);
+        if (pf >= 0) {
+            if (a->n > 3)
+                return fail(e, "export: a picture takes no ray set; usage: export FILE "
+                               "[png|svg|pdf]");
+            return export_picture(e, path, pf);
+        }
+    }
     for (i = 2; i < a->n; i++) {
         int f2 = report_parse_fmt(a->v[i]);
         if (f2 < 0 && strcasecmp(a->v[i], "txt") == 0)
@@ -1732,6 +1749,53 @@ static int c_clip(ed *e, args *a)
     return OK_VIEW;
 }
 
+static int c_view(ed *e, args *a)
+{
+    const char *usage = "view layout|spot|fan|off|next";
+    int k;
+    if (!need(e, a, 0, 1, usage))
+        return ED_HANDLED | ED_ERROR;
+    if (a->n < 2 || strcasecmp(a->v[1], "next") == 0)
+        k = (e->view.kind + 1) % VIEW_COUNT;
+    else if ((k = view_parse(a->v[1])) < 0)
+        return fail(e, "view: \"%s\" is not one of layout, spot, fan, off, next", a->v[1]);
+    e->view.kind = k;
+    e->dirty = 1;
+    if (k == VIEW_OFF)
+        ed_msg(e, 0, "view off: the ray's table is back");
+    else
+        ed_msg(e, 0, "view %s (g: next view; export FILE.png|svg|pdf writes it)",
+               view_name(k));
+    return OK_VIEW;
+}
+
+/* Writes the view on show as a picture (format: plot.h's PLOT_*). */
+static int export_picture(ed *e, const char *path, int format)
+{
+    outfile of;
+    char msg[256];
+    int err, rc;
+    if (e->view.kind == VIEW_OFF)
+        return fail(e, "export: no view on show to draw; choose one with g or "
+                       ":view layout|spot|fan");
+    if (strcmp(path, "-") == 0 && !e->batch)
+        return fail(e, "export: \"-\" (standard output) works only in batch mode");
+    ed_opts(e);
+    rc = edview_update(&e->view, e->doc.sys, e->doc.id, e->cat, &e->opts, ed_view_field(e));
+    if (rc != SG_EOK || !e->view.have_fig)
+        return fail(e, "export: %s", e->view.msg[0] ? e->view.msg : sg_strerror(rc));
+    if ((err = outfile_open(&of, strcmp(path, "-") == 0 ? NULL : path, e->out ? e->out : stdout)))
+        return fail(e, "export: %s: %s", path, strerror(err));
+    if (plot_write(&e->view.fig, format, 1000, 750, of.f, msg, sizeof msg)) {
+        outfile_abort(&of);
+        return fail(e, "export: %s: %s", path, msg);
+    }
+    if ((err = outfile_commit(&of)))
+        return fail(e, "export: %s: %s", path, strerror(err));
+    ed_msg(e, 0, "exported the %s view to %s", view_name(e->view.kind), path);
+    return ED_HANDLED | ED_REDRAW;
+}
+
 static int c_goto(ed *e, args *a)
 {
     int row;
@@ -1866,6 +1930,8 @@ static const command commands[] = {
     {"method", NULL, c_method, "method precise|classic|mpfr [BITS]", "choose the trace method"},
     {"bits", NULL, c_bits, "bits N", "MPFR precision for the mpfr method and digits"},
     {"digits", NULL, c_digits, "digits [on|off]", "show agreement with an MPFR trace"},
+    {"view", NULL, c_view, "view layout|spot|fan|off|next",
+     "show an analysis below the sheet, live (g: next); export FILE.png|svg|pdf writes it"},
     {"clip", NULL, c_clip, "clip [on|off]", "vignette rays at fixed semi-diameters"},
     {"wavelength", "wl", c_wavelength,
      "wavelength add UM [W] | set N UM [W] | delete N | primary N | move N TO | preset P",

@@ -17,6 +17,7 @@ int ed_init(ed *e)
     if (doc_init(&e->doc) != SG_EOK)
         return SG_ENOMEM;
     compute_init(&e->cmp);
+    edview_init(&e->view);
     e->cat = sg_catalog_new();
     sg_diag_clear(&d);
     if (!e->cat || sg_catalog_load_default(e->cat, &d) != SG_EOK) {
@@ -41,6 +42,7 @@ int ed_init(ed *e)
 void ed_free(ed *e)
 {
     compute_free(&e->cmp);
+    edview_free(&e->view);
     doc_free(&e->doc);
     sg_catalog_free(e->cat);
     e->cat = NULL;
@@ -73,7 +75,28 @@ void ed_recompute(ed *e)
     if (ref > 100000)
         ref = 100000;
     compute_run(&e->cmp, e->doc.sys, e->doc.id, e->cat, &e->opts, ref, e->ray);
+    /* The view follows every edit too (it keeps its figure otherwise). */
+    edview_update(&e->view, e->doc.sys, e->doc.id, e->cat, &e->opts, ed_view_field(e));
     e->dirty = 0;
+}
+
+int ed_view_field(const ed *e)
+{
+    int k = ed_ray_field(e);
+    return k > 0 ? k - 1 : e->doc.sys->nfield - 1;
+}
+
+int ed_ray_field(const ed *e)
+{
+    const sg_system *s = e->doc.sys;
+    double fx, fy;
+    int k;
+    ed_field_scale(s, &fx, &fy);
+    for (k = 0; k < s->nfield; k++)
+        if (e->ray[0] == (fx > 0.0 ? s->field[k].x / fx : 0.0) &&
+            e->ray[1] == (fy > 0.0 ? s->field[k].y / fy : 0.0))
+            return k + 1;
+    return 0;
 }
 
 void ed_msg(ed *e, int err, const char *fmt, ...)

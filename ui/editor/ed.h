@@ -14,6 +14,7 @@
 #include "doc.h"
 #include "recover.h"
 #include "sagitta.h"
+#include "view.h"
 
 /* What a command or a key handler asks the event loop to do. */
 enum {
@@ -59,6 +60,7 @@ typedef struct ed {
 
     compute cmp;
     int dirty;                 /* results are stale */
+    edview view;               /* the analysis view beside the sheet */
 
     int row, col;              /* the spreadsheet's cursor */
 
@@ -123,6 +125,10 @@ const char *ed_aim_name(int a);
  * (both), or the largest |x| and |y| (rectangular); a field (x, y) is
  * traced at Hx = x / fx, Hy = y / fy. */
 void ed_field_scale(const sg_system *s, double *fx, double *fy);
+/* The design's field the ray's Hx, Hy pick (1-based), or 0 for none. */
+int ed_ray_field(const ed *e);
+/* The field the fan view shows (0-based): the ray's, else the last. */
+int ed_view_field(const ed *e);
 /* The unit of the field values: "deg" or the lens unit. */
 const char *ed_field_unit(const sg_system *s);
 

@@ -14,15 +14,7 @@ static const char *const item_cmd[RAY_NITEMS] = {"field", "hx", "hy", "px", "py"
 /* The design's field the ray's Hx, Hy pick (1-based), or 0 for none. */
 static int ray_field(const ed *e)
 {
-    const sg_system *s = e->doc.sys;
-    double fx, fy;
-    int k;
-    ed_field_scale(s, &fx, &fy);
-    for (k = 0; k < s->nfield; k++)
-        if (e->ray[0] == (fx > 0.0 ? s->field[k].x / fx : 0.0) &&
-            e->ray[1] == (fy > 0.0 ? s->field[k].y / fy : 0.0))
-            return k + 1;
-    return 0;
+    return ed_ray_field(e);
 }
 
 static void item_text(const ui *u, int i, char *buf, size_t n)

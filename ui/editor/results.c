@@ -397,6 +397,11 @@ static void cell(const ui *u, int row, int c, const sg_ray_surface *r,
     }
 }
 
+void paraxial_draw(ui *u)
+{
+    paraxial_line(u);
+}
+
 void results_draw(ui *u)
 {
     const ed *e = u->e;

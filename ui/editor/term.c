@@ -116,6 +116,12 @@ static void setup_styles(void)
         [T_DIM] = {-1, -1, A_DIM, A_DIM},
         [T_EDIT] = {COLOR_BLACK, COLOR_YELLOW, A_NORMAL, A_UNDERLINE | A_BOLD},
         [T_FRAME] = {COLOR_MAGENTA, -1, A_BOLD, A_BOLD},
+        [T_PLOT0] = {COLOR_BLUE, -1, A_BOLD, A_NORMAL},
+        [T_PLOT1] = {COLOR_GREEN, -1, A_NORMAL, A_NORMAL},
+        [T_PLOT2] = {COLOR_RED, -1, A_NORMAL, A_NORMAL},
+        [T_PLOT3] = {COLOR_YELLOW, -1, A_NORMAL, A_NORMAL},
+        [T_PLOT4] = {COLOR_MAGENTA, -1, A_NORMAL, A_NORMAL},
+        [T_PLOT5] = {COLOR_CYAN, -1, A_NORMAL, A_NORMAL},
     };
     int i;
     for (i = 0; i < T_NSTYLES; i++) {

@@ -36,6 +36,12 @@ enum {
     T_DIM,     /* secondary text */
     T_EDIT,    /* a field being edited */
     T_FRAME,   /* dialog frames and titles */
+    T_PLOT0,   /* pictures: palette colour 0 (blue), then green, red, yellow, */
+    T_PLOT1,   /* magenta and cyan, as ui/plot.c numbers them; plain text */
+    T_PLOT2,   /* under NO_COLOR */
+    T_PLOT3,
+    T_PLOT4,
+    T_PLOT5,
     T_NSTYLES
 };
 

@@ -43,6 +43,7 @@ typedef struct ui {
 
     /* Layout, set by ui_layout(). */
     int sheet_y, sheet_h, ray_y, parax_y, res_y, res_h, detail_y, status_y;
+    int view_y, view_h;  /* the analysis view, when one is on (res_h is then 0) */
     int numw, resw;      /* numeric column widths */
     int too_small;
 
@@ -98,6 +99,10 @@ int ray_click(ui *u, int x, int kind);
 int ray_quick(ui *u, int key); /* chief and marginal keys; 0 if not one */
 
 void results_draw(ui *u);
+/* The analysis view (viewpanel.c), in place of the results when on. */
+void view_draw(ui *u);
+/* The paraxial summary line alone (results.c), for the view mode. */
+void paraxial_draw(ui *u);
 int results_key(ui *u, int key);
 int results_click(ui *u, int y, int kind);
 /* Lines the detail panel below the results takes at this width. */

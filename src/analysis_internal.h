@@ -1,0 +1,15 @@
+/*
+ * analysis_internal.h - what the analyses (spot.c, fan.c, layout.c) share.
+ */
+#ifndef SG_ANALYSIS_INTERNAL_H
+#define SG_ANALYSIS_INTERNAL_H
+
+#include "sagitta.h"
+
+/* The chosen indices (one, or all of n when sel < 0) into idx; returns how
+ * many, or 0 with d filled when sel is out of range. */
+int sg_an_select(int sel, int n, const char *what, int *idx, sg_diag *d);
+/* One micrometre in the design's lens units. */
+double sg_an_um_to_units(const sg_system *sys);
+
+#endif

@@ -1,0 +1,146 @@
+#!/bin/sh
+# e2e_views.sh - the analysis views at 80x24: layout, spot and fan below
+# the spreadsheet, chosen by the g key, drawn in braille within 80 columns,
+# following an edit, coloured per wavelength (plain under NO_COLOR), and
+# written by export as a PNG.  Output is TAP.
+# Usage: e2e_views.sh PATH/TO/sagitta
+#
+# Independent reference: the spot radius on screen against "sagitta spot"
+# run as a separate program on the same design, before and after the edit.
+
+SAGITTA=${1:-$SAGITTA}
+. "$(dirname "$0")/tmuxlib.sh"
+tmux_setup 9 views
+
+cp "$ROOT/examples/cooke_triplet.json" "$WORK/cooke.json"
+
+wait_for() {
+    n=$(( ${2:-10} * 10 ))
+    while [ "$n" -gt 0 ]; do
+        screen | grep -qF -- "$1" && return 0
+        if ! $T has-session -t =main 2>/dev/null; then
+            echo "# the tmux session is gone"
+            return 1
+        fi
+        sleep 0.1
+        n=$((n - 1))
+    done
+    echo "# timed out waiting for: $1"
+    return 1
+}
+
+command_line() {
+    keys Escape
+    type_text ":$1"
+    keys Enter
+}
+
+start() { # file, width, height, environment
+    $T new-session -d -s fresh -x "$2" -y "$3" \
+        "cd '$WORK' && $4 sh -c 'echo \$\$ >pid; exec \"\$0\" \"\$1\"' '$SAGITTA' '$1'; echo \"EXITED \$?\"; sleep 60"
+    $T kill-session -t =main >/dev/null 2>&1
+    $T rename-session -t =fresh main 2>/dev/null
+    sleep 0.2
+    started "$(cat "$WORK/pid" 2>/dev/null)"
+}
+
+# Lines with a braille character (U+2800 to U+28FF: bytes E2 A0-A3 ..).
+braille_lines() { screen | LC_ALL=C grep -c "$(printf '\342')[$(printf '\240\241\242\243')]"; }
+# Lines wider than 80 characters (not bytes).
+wide_lines() {
+    screen | python3 -c 'import sys; print(sum(len(l.rstrip("\n")) > 80 for l in sys.stdin))'
+}
+
+# field 1's RMS radius in um from "sagitta spot", as the view shows it (%.4g).
+spot_rms() {
+    "$SAGITTA" spot "$1" --field 1 --format csv 2>/dev/null |
+        awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "rms") k = i }
+                 NR > 1 && $4 == "all" { printf "%.4g\n", $k * 1000 }'
+}
+screen_rms() { screen | grep -o "field 1: RMS [0-9.]*" | head -n 1 | sed 's/.* //'; }
+
+start cooke.json 80 24
+if wait_for "cooke.json" 15 && wait_for "Surf"; then
+    # 1. g: the layout, braille within 80 columns, the sheet still there.
+    keys Escape g
+    wait_for " layout " >/dev/null
+    sleep 0.3
+    WHY="braille lines $(braille_lines), lines over 80: $(wide_lines)"
+    check "g shows the layout in braille at 80x24 beside the sheet" \
+        sh -c "[ $(braille_lines) -ge 3 ] && [ $(wide_lines) -eq 0 ] &&
+               $T capture-pane -p -t =main: | grep -q 'element 1' &&
+               $T capture-pane -p -t =main: | grep -q 'z (mm)'"
+    # 2. g again: the spot diagram, its RMS radius as sagitta spot's.
+    keys Escape g
+    wait_for "RMS" >/dev/null
+    sleep 0.3
+    R0=$(screen_rms)
+    E0=$(spot_rms "$WORK/cooke.json")
+    echo "# field 1 RMS: screen $R0 um, sagitta spot $E0 um"
+    WHY="screen '$R0', sagitta spot '$E0'"
+    check "the spot view's RMS radius is sagitta spot's" sh -c "[ -n '$R0' ] && [ '$R0' = '$E0' ]"
+    # 3. Colour: wavelength colours on the view's rows.
+    COL=$($T capture-pane -e -p -t =main: | tail -n 12 | grep -c "$(printf '\033')\[3[1-4]m")
+    WHY="$COL coloured lines"
+    check "the spot view is coloured per wavelength" sh -c "[ '$COL' -ge 2 ]"
+    # 4. An edit: the view follows, to sagitta spot's value for the edited design.
+    command_line "set 6 thickness 41.5"
+    command_line "save $WORK/edited.json"
+    wait_for "saved" >/dev/null
+    sleep 0.5
+    R1=$(screen_rms)
+    E1=$(spot_rms "$WORK/edited.json")
+    echo "# after the edit: screen $R1 um, sagitta spot $E1 um"
+    WHY="before $R0, after: screen '$R1', sagitta spot '$E1'"
+    check "after an edit the spot view shows the new design's RMS radius" \
+        sh -c "[ -n '$R1' ] && [ '$R1' = '$E1' ] && [ '$R1' != '$R0' ]"
+    # 5. g: the fans of the ray's field.
+    keys Escape g
+    wait_for "sagittal" >/dev/null
+    sleep 0.3
+    check "the fan view shows the tangential and sagittal fans" \
+        sh -c "$T capture-pane -p -t =main: | grep -q tangential &&
+               $T capture-pane -p -t =main: | grep -q sagittal && [ $(wide_lines) -eq 0 ]"
+    # 6. export writes the view on show as a PNG of 1000 x 750.
+    command_line "export $WORK/fan.png"
+    wait_for "exported the fan view" >/dev/null
+    W=$(od -An -tu1 -j16 -N8 "$WORK/fan.png" 2>/dev/null | awk '{ print $3 * 256 + $4, $7 * 256 + $8 }')
+    WHY="PNG size '$W'"
+    check "export FILE.png writes the view, 1000 x 750" sh -c "[ '$W' = '1000 750' ]"
+    # 7. view off: the ray table is back.
+    command_line "view off"
+    wait_for "Surf status" >/dev/null
+    check "view off brings back the results" sh -c "$T capture-pane -p -t =main: | grep -q 'Surf status'"
+else
+    not_ok "the Cooke triplet opens at 80x24"
+    not_ok "spot"
+    not_ok "colour"
+    not_ok "edit"
+    not_ok "fan"
+    not_ok "export"
+    not_ok "view off"
+fi
+
+# 8. NO_COLOR: the same view, no colour at all.
+start cooke.json 80 24 "NO_COLOR=1"
+if wait_for "cooke.json" 15 && wait_for "Surf"; then
+    command_line "view spot"
+    wait_for "RMS" >/dev/null
+    sleep 0.3
+    COL=$($T capture-pane -e -p -t =main: | grep -c "$(printf '\033')\[3[0-7]")
+    WHY="$COL lines with colour"
+    check "under NO_COLOR the spot view is monochrome" \
+        sh -c "[ '$COL' -eq 0 ] && [ $(braille_lines) -ge 3 ]"
+else
+    not_ok "NO_COLOR start"
+fi
+
+# 9. The help screen names the view key.
+keys Escape F1
+wait_for "Help" >/dev/null
+sleep 0.3
+check "the help screen names g and :view" \
+    sh -c "$T capture-pane -p -t =main: | grep -q 'g  *analysis view below the sheet'"
+
+[ "$N" -eq "$NTESTS" ] || echo "# ran $N of $NTESTS"
+[ "$FAILED" -eq 0 ]

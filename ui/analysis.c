@@ -1,0 +1,703 @@
+/*
+ * analysis.c - "sagitta spot", "sagitta fan" and "sagitta layout": an
+ * analysis of the engine (src/spot.c, fan.c, layout.c) written as text
+ * (with a picture on a terminal), CSV, JSON, or a PNG, SVG or PDF picture.
+ * Every output goes through outfile, so a file appears whole or not at all.
+ */
+/* TIOCGWINSZ, for the terminal's width (the build defines _DEFAULT_SOURCE). */
+#include <sys/ioctl.h>
+
+#include <cjson/cJSON.h>
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "args.h"
+#include "cli.h"
+#include "outfile.h"
+#include "plot.h"
+#include "safetext.h"
+#include "views.h"
+
+enum { AN_SPOT, AN_FAN, AN_LAYOUT };
+enum { FMT_TEXT, FMT_CSV, FMT_JSON, FMT_PNG, FMT_SVG, FMT_PDF };
+
+enum {
+    O_HELP = 1, O_WAVE, O_FIELD, O_FORMAT, O_OUTPUT, O_METHOD, O_PATTERN, O_DENSITY,
+    O_REFERENCE, O_POINTS, O_RAYS, O_SIZE, O_THREADS, O_NOCLIP
+};
+
+static const cli_opt an_opts[] = {
+    { "--help", 'h', 0, O_HELP },
+    { "--wave", 0, 1, O_WAVE },
+    { "--field", 0, 1, O_FIELD },
+    { "--format", 0, 1, O_FORMAT },
+    { "--output", 'o', 1, O_OUTPUT },
+    { "--method", 0, 1, O_METHOD },
+    { "--pattern", 0, 1, O_PATTERN },
+    { "--density", 0, 1, O_DENSITY },
+    { "--reference", 0, 1, O_REFERENCE },
+    { "--points", 0, 1, O_POINTS },
+    { "--rays", 0, 1, O_RAYS },
+    { "--size", 0, 1, O_SIZE },
+    { "--threads", 0, 1, O_THREADS },
+    { "--no-clip", 0, 0, O_NOCLIP },
+    { NULL, 0, 0, 0 }
+};
+
+static const char *const an_name[] = {"spot", "fan", "layout"};
+
+static void an_help(int kind, FILE *f)
+{
+    static const char *const what[] = {
+        "Spot diagrams: where a pupil pattern of rays meets the image, per field\n"
+        "and wavelength, with RMS and GEO radii, the centroid and the Airy radius.\n",
+        "Transverse ray fans: ey against Py and ex against Px on the image, per\n"
+        "field and wavelength, relative to the primary wavelength's chief ray.\n",
+        "Layout: a y-z cross-section of the surfaces over their semi-diameters\n"
+        "and fans of rays in y from each field.\n"};
+    fprintf(f, "Usage: sagitta %s DESIGN.json [OPTIONS]\n%s\n", an_name[kind], what[kind]);
+    fputs("  --format F         text (default), csv, json, png, svg or pdf\n"
+          "  -o, --output FILE  write to FILE (default: standard output)\n"
+          "  --size WxH         picture size in pixels (png) or points (svg, pdf);\n"
+          "                     default 1000x750\n"
+          "  --field N          one field (default: every field)\n", f);
+    if (kind != AN_LAYOUT)
+        fputs("  --wave N           one wavelength (default: every wavelength)\n", f);
+    else
+        fputs("  --wave N           the wavelength traced (default: the primary)\n", f);
+    if (kind == AN_SPOT)
+        fputs("  --pattern P        hexapolar (default), square or vogel\n"
+              "  --density N        rings (hexapolar, default 6), grid size (square),\n"
+              "                     or rays (vogel)\n"
+              "  --reference R      chief (default) or centroid\n", f);
+    if (kind == AN_FAN)
+        fputs("  --points N         rays on each fan from -1 to 1 (default 21)\n", f);
+    if (kind == AN_LAYOUT)
+        fputs("  --rays N           rays per field from Py = -1 to 1 (default 7)\n", f);
+    fputs("  --method M         precise (default), classic or mpfr\n"
+          "  --threads N        0 (default) uses every core\n"
+          "  --no-clip          do not vignette rays outside fixed semi-diameters\n"
+          "  -h, --help         show this help\n"
+          "\nText on a terminal includes a picture (braille dots, a colour per\n"
+          "wavelength unless NO_COLOR is set).  See sagitta(1).\n", f);
+}
+
+static int parse_format(const char *s, int *fmt)
+{
+    static const char *const names[] = {"text", "csv", "json", "png", "svg", "pdf"};
+    int k;
+    for (k = 0; k < 6; k++)
+        if (strcmp(s, names[k]) == 0) {
+            *fmt = k;
+            return CLI_EXIT_OK;
+        }
+    cli_error("--format: expected text, csv, json, png, svg or pdf, got \"%s\"", s);
+    return CLI_EXIT_USAGE;
+}
+
+static void diag_error(const char *design, const sg_diag *d, int rc)
+{
+    const char *msg = d->msg[0] ? d->msg : sg_strerror(rc);
+    if (strstr(msg, design))
+        cli_error("%s", msg);
+    else
+        cli_error("%s: %s", design, msg);
+}
+
+/* A number with every digit a double holds, for CSV and JSON. */
+static void num(FILE *f, double v)
+{
+    fprintf(f, "%.17g", v);
+}
+
+/* ---- spot ---- */
+
+static void spot_text(FILE *f, const sg_system *sys, const sg_spot *s, const sg_spot_opts *o)
+{
+    double ext = s->airy_radius, sc;
+    const char *u;
+    char t[200];
+    int fi, w;
+    for (fi = 0; fi < s->nfield; fi++)
+        ext = fmax(ext, s->field[fi].geo);
+    u = view_length_unit(sys, ext, &sc);
+    fprintf(f, "Spot diagram: %s\n", safe_text(sys->title, t, sizeof t));
+    fprintf(f, "Pattern %s, density %d, %zu rays per field and wavelength; reference: %s\n",
+            sg_pupil_pattern_name(o->pattern), o->density, s->nray_per_cell,
+            o->reference == SG_SPOT_REF_CHIEF ? "chief ray" : "centroid");
+    fprintf(f, "Airy radius %.6g %s (1.22 x %.6g µm x working F/#)\n\n", s->airy_radius * sc, u,
+            sys->wave[o->wave >= 0 ? o->wave : sys->primary_wave].um);
+    fprintf(f, "%-26s %-12s %8s %14s %14s %14s %14s\n", "Field", "Wavelength", "Rays",
+            "RMS", "GEO", "Centroid x", "Centroid y");
+    for (fi = 0; fi < s->nfield; fi++) {
+        char fl[64];
+        const sg_spot_field *fd = &s->field[fi];
+        view_field_label(sys, s->field_index[fi], fl, sizeof fl);
+        if (fd->status != SG_OK) {
+            fprintf(f, "%-26s chief ray: %s\n", fl, sg_strerror(fd->status));
+            continue;
+        }
+        for (w = 0; w < s->nwave; w++) {
+            const sg_spot_cell *c = &s->cell[fi * s->nwave + w];
+            char wl[32], rays[32];
+            view_wave_label(s->wave_um[w], wl, sizeof wl);
+            snprintf(rays, sizeof rays, "%zu", c->nok);
+            fprintf(f, "%-26s %-12s %8s %11.6g %s %11.6g %s %14.8g %14.8g\n", w ? "" : fl, wl,
+                    rays, c->rms * sc, u, c->geo * sc, u, c->centroid_x, c->centroid_y);
+        }
+        if (s->nwave > 1)
+            fprintf(f, "%-26s %-12s %8s %11.6g %s %11.6g %s %14.8g %14.8g\n", "", "all", "",
+                    fd->rms * sc, u, fd->geo * sc, u, fd->centroid_x, fd->centroid_y);
+    }
+    fprintf(f, "(centroids in %s on the image surface)\n", sys->units);
+}
+
+static void spot_csv(FILE *f, const sg_spot *s)
+{
+    int fi, w;
+    fputs("field,hx,hy,wave,um,rays,reached,chief_x,chief_y,centroid_x,centroid_y,"
+          "ref_x,ref_y,rms,geo,status\n", f);
+    for (fi = 0; fi < s->nfield; fi++) {
+        const sg_spot_field *fd = &s->field[fi];
+        for (w = 0; w <= s->nwave; w++) {
+            int all = w == s->nwave;
+            const sg_spot_cell *c = all ? NULL : &s->cell[fi * s->nwave + w];
+            if (all && s->nwave == 1)
+                break;
+            fprintf(f, "%d,", s->field_index[fi] + 1);
+            num(f, fd->hx);
+            fputc(',', f);
+            num(f, fd->hy);
+            if (all)
+                fputs(",all,,", f);
+            else {
+                fprintf(f, ",%d,", s->wave_index[w] + 1);
+                num(f, s->wave_um[w]);
+                fputc(',', f);
+            }
+            if (all)
+                fputs(",,,,", f);
+            else {
+                fprintf(f, "%zu,%zu,", c->nray, c->nok);
+                num(f, c->chief_x);
+                fputc(',', f);
+                num(f, c->chief_y);
+                fputc(',', f);
+            }
+            num(f, all ? fd->centroid_x : c->centroid_x);
+            fputc(',', f);
+            num(f, all ? fd->centroid_y : c->centroid_y);
+            fputc(',', f);
+            num(f, fd->ref_x);
+            fputc(',', f);
+            num(f, fd->ref_y);
+            fputc(',', f);
+            num(f, all ? fd->rms : c->rms);
+            fputc(',', f);
+            num(f, all ? fd->geo : c->geo);
+            fprintf(f, ",%s\n", sg_err_name(all ? fd->status : c->status));
+        }
+    }
+}
+
+static cJSON *spot_json(const sg_system *sys, const sg_spot *s, const sg_spot_opts *o)
+{
+    cJSON *root = cJSON_CreateObject(), *fields = cJSON_AddArrayToObject(root, "fields");
+    int fi, w;
+    cJSON_AddStringToObject(root, "analysis", "spot");
+    cJSON_AddStringToObject(root, "units", sys->units);
+    cJSON_AddStringToObject(root, "pattern", sg_pupil_pattern_name(o->pattern));
+    cJSON_AddNumberToObject(root, "density", o->density);
+    cJSON_AddNumberToObject(root, "rays_per_cell", (double)s->nray_per_cell);
+    cJSON_AddStringToObject(root, "reference",
+                            o->reference == SG_SPOT_REF_CHIEF ? "chief" : "centroid");
+    cJSON_AddNumberToObject(root, "airy_radius", s->airy_radius);
+    for (fi = 0; fi < s->nfield; fi++) {
+        const sg_spot_field *fd = &s->field[fi];
+        cJSON *jf = cJSON_CreateObject(), *ws;
+        cJSON_AddNumberToObject(jf, "field", s->field_index[fi] + 1);
+        cJSON_AddNumberToObject(jf, "hx", fd->hx);
+        cJSON_AddNumberToObject(jf, "hy", fd->hy);
+        cJSON_AddStringToObject(jf, "status", sg_err_name(fd->status));
+        cJSON_AddNumberToObject(jf, "ref_x", fd->ref_x);
+        cJSON_AddNumberToObject(jf, "ref_y", fd->ref_y);
+        cJSON_AddNumberToObject(jf, "rms", fd->rms);
+        cJSON_AddNumberToObject(jf, "geo", fd->geo);
+        cJSON_AddNumberToObject(jf, "centroid_x", fd->centroid_x);
+        cJSON_AddNumberToObject(jf, "centroid_y", fd->centroid_y);
+        ws = cJSON_AddArrayToObject(jf, "waves");
+        for (w = 0; w < s->nwave; w++) {
+            const sg_spot_cell *c = &s->cell[fi * s->nwave + w];
+            cJSON *jw = cJSON_CreateObject();
+            cJSON_AddNumberToObject(jw, "wave", s->wave_index[w] + 1);
+            cJSON_AddNumberToObject(jw, "um", s->wave_um[w]);
+            cJSON_AddNumberToObject(jw, "rays", (double)c->nray);
+            cJSON_AddNumberToObject(jw, "reached", (double)c->nok);
+            cJSON_AddNumberToObject(jw, "chief_x", c->chief_x);
+            cJSON_AddNumberToObject(jw, "chief_y", c->chief_y);
+            cJSON_AddNumberToObject(jw, "centroid_x", c->centroid_x);
+            cJSON_AddNumberToObject(jw, "centroid_y", c->centroid_y);
+            cJSON_AddNumberToObject(jw, "rms", c->rms);
+            cJSON_AddNumberToObject(jw, "geo", c->geo);
+            cJSON_AddItemToArray(ws, jw);
+        }
+        cJSON_AddItemToArray(fields, jf);
+    }
+    return root;
+}
+
+/* ---- fan ---- */
+
+static void fan_rows(FILE *f, const sg_system *sys, const sg_fan *fan, int csv)
+{
+    int fi, w, j, side;
+    double sc = 1.0;
+    const char *u = sys->units;
+    if (csv)
+        fputs("field,wave,um,fan,p,e,status\n", f);
+    else {
+        double ext = 0.0;
+        for (j = 0; j < fan->nfield * fan->nwave; j++)
+            for (side = 0; side < 2; side++) {
+                const sg_fan_curve *c = side ? &fan->sag[j] : &fan->tan[j];
+                int i;
+                for (i = 0; i < fan->npts; i++)
+                    if (c->status[i] == SG_OK)
+                        ext = fmax(ext, fabs(c->e[i]));
+            }
+        u = view_length_unit(sys, ext, &sc);
+        fprintf(f, "%-26s %-12s %-11s %8s %16s  %s\n", "Field", "Wavelength", "Fan", "P", "e",
+                "Status");
+    }
+    for (fi = 0; fi < fan->nfield; fi++)
+        for (w = 0; w < fan->nwave; w++)
+            for (side = 0; side < 2; side++) {
+                const sg_fan_curve *c = side ? &fan->sag[fi * fan->nwave + w]
+                                             : &fan->tan[fi * fan->nwave + w];
+                char fl[64], wl[32];
+                view_field_label(sys, fan->field_index[fi], fl, sizeof fl);
+                view_wave_label(fan->wave_um[w], wl, sizeof wl);
+                for (j = 0; j < fan->npts; j++) {
+                    if (csv) {
+                        fprintf(f, "%d,%d,", fan->field_index[fi] + 1, fan->wave_index[w] + 1);
+                        num(f, fan->wave_um[w]);
+                        fprintf(f, ",%s,", side ? "sagittal" : "tangential");
+                        num(f, c->p[j]);
+                        fputc(',', f);
+                        if (c->status[j] == SG_OK)
+                            num(f, c->e[j]);
+                        fprintf(f, ",%s\n", sg_err_name(c->status[j]));
+                    } else if (c->status[j] == SG_OK) {
+                        fprintf(f, "%-26s %-12s %-11s %8.4f %13.6g %s  OK\n", fl, wl,
+                                side ? "sagittal" : "tangential", c->p[j], c->e[j] * sc, u);
+                    } else {
+                        fprintf(f, "%-26s %-12s %-11s %8.4f %16s  %s\n", fl, wl,
+                                side ? "sagittal" : "tangential", c->p[j], "-",
+                                sg_strerror(c->status[j]));
+                    }
+                }
+            }
+}
+
+static cJSON *fan_json(const sg_system *sys, const sg_fan *fan)
+{
+    cJSON *root = cJSON_CreateObject(), *fans = cJSON_AddArrayToObject(root, "fans");
+    int fi, w, side;
+    cJSON_AddStringToObject(root, "analysis", "fan");
+    cJSON_AddStringToObject(root, "units", sys->units);
+    for (fi = 0; fi < fan->nfield; fi++)
+        for (w = 0; w < fan->nwave; w++)
+            for (side = 0; side < 2; side++) {
+                const sg_fan_curve *c = side ? &fan->sag[fi * fan->nwave + w]
+                                             : &fan->tan[fi * fan->nwave + w];
+                cJSON *o = cJSON_CreateObject(), *p, *e, *st;
+                int j;
+                cJSON_AddNumberToObject(o, "field", fan->field_index[fi] + 1);
+                cJSON_AddNumberToObject(o, "wave", fan->wave_index[w] + 1);
+                cJSON_AddNumberToObject(o, "um", fan->wave_um[w]);
+                cJSON_AddStringToObject(o, "fan", side ? "sagittal" : "tangential");
+                cJSON_AddNumberToObject(o, "ref_x", fan->ref_x[fi]);
+                cJSON_AddNumberToObject(o, "ref_y", fan->ref_y[fi]);
+                p = cJSON_AddArrayToObject(o, side ? "px" : "py");
+                e = cJSON_AddArrayToObject(o, side ? "ex" : "ey");
+                st = cJSON_AddArrayToObject(o, "status");
+                for (j = 0; j < fan->npts; j++) {
+                    cJSON_AddItemToArray(p, cJSON_CreateNumber(c->p[j]));
+                    cJSON_AddItemToArray(e, c->status[j] == SG_OK ? cJSON_CreateNumber(c->e[j])
+                                                                  : cJSON_CreateNull());
+                    cJSON_AddItemToArray(st, cJSON_CreateString(sg_err_name(c->status[j])));
+                }
+                cJSON_AddItemToArray(fans, o);
+            }
+    return root;
+}
+
+/* ---- layout ---- */
+
+static void layout_rows(FILE *f, const sg_system *sys, const sg_layout *l, int csv)
+{
+    int i, j;
+    if (csv)
+        fputs("kind,index,field,py,point,y,z\n", f);
+    else
+        fprintf(f, "Layout: surfaces 1 to %d, %d rays; lengths in %s\n%-8s %16s %14s %s\n",
+                l->nsurf - 1, l->nray, sys->units, "Surface", "Vertex z", "Semi-diam",
+                "Kind");
+    for (i = 0; i < l->nsurf - 1; i++) {
+        const sg_layout_surface *s = &l->surf[i];
+        if (!csv) {
+            fprintf(f, "%-8d %16.10g %14.8g %s\n", i + 1, s->z0, s->sd,
+                    s->mirror ? "mirror" : s->glass_after ? "into glass" : "");
+            continue;
+        }
+        for (j = 0; j < s->npts; j++) {
+            fprintf(f, "surface,%d,,,%d,", i + 1, j);
+            num(f, s->y[j]);
+            fputc(',', f);
+            num(f, s->z[j]);
+            fputc('\n', f);
+        }
+    }
+    if (!csv)
+        return;
+    for (i = 0; i < l->nray; i++)
+        for (j = 0; j < l->ray[i].npts; j++) {
+            fprintf(f, "ray,%d,%d,", i + 1, l->field_index[l->ray[i].field] + 1);
+            num(f, l->ray[i].py);
+            fprintf(f, ",%d,", j + 1);
+            num(f, l->ray[i].y[j]);
+            fputc(',', f);
+            num(f, l->ray[i].z[j]);
+            fputc('\n', f);
+        }
+}
+
+static cJSON *layout_json(const sg_system *sys, const sg_layout *l)
+{
+    cJSON *root = cJSON_CreateObject(), *ss = cJSON_AddArrayToObject(root, "surfaces"),
+          *rs = cJSON_AddArrayToObject(root, "rays");
+    int i;
+    cJSON_AddStringToObject(root, "analysis", "layout");
+    cJSON_AddStringToObject(root, "units", sys->units);
+    for (i = 0; i < l->nsurf - 1; i++) {
+        const sg_layout_surface *s = &l->surf[i];
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddNumberToObject(o, "surface", i + 1);
+        cJSON_AddNumberToObject(o, "z0", s->z0);
+        cJSON_AddNumberToObject(o, "semi_diameter", s->sd);
+        cJSON_AddBoolToObject(o, "mirror", s->mirror);
+        cJSON_AddItemToObject(o, "y", cJSON_CreateDoubleArray(s->y, s->npts));
+        cJSON_AddItemToObject(o, "z", cJSON_CreateDoubleArray(s->z, s->npts));
+        cJSON_AddItemToArray(ss, o);
+    }
+    for (i = 0; i < l->nray; i++) {
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddNumberToObject(o, "field", l->field_index[l->ray[i].field] + 1);
+        cJSON_AddNumberToObject(o, "py", l->ray[i].py);
+        cJSON_AddStringToObject(o, "status", sg_err_name(l->ray[i].status));
+        cJSON_AddItemToObject(o, "y", cJSON_CreateDoubleArray(l->ray[i].y, l->ray[i].npts));
+        cJSON_AddItemToObject(o, "z", cJSON_CreateDoubleArray(l->ray[i].z, l->ray[i].npts));
+        cJSON_AddItemToArray(rs, o);
+    }
+    return root;
+}
+
+/* ---- the command ---- */
+
+static int terminal_picture(const plot_figure *fig, FILE *f)
+{
+    plot_grid g;
+    const char *cols = getenv("COLUMNS");
+    struct winsize ws;
+    int w = 80, h, rc;
+    long c;
+    /* COLUMNS first (a user's choice), then the terminal's own width. */
+    if (cols && args_long(cols, 40, 1000, &c) == ARGS_OK)
+        w = (int)c;
+    else if (ioctl(fileno(f), TIOCGWINSZ, &ws) == 0 && ws.ws_col >= 40)
+        w = ws.ws_col;
+    if (w > 160)
+        w = 160;
+    h = fig->npanel > 2 ? 40 : 24;
+    if (plot_grid_init(&g, w - 1, h))
+        return -1;
+    plot_draw_cells(fig, &g, 0, 0, w - 1, h);
+    fputc('\n', f);
+    rc = plot_grid_print(&g, f, plot_use_colour(f));
+    plot_grid_free(&g);
+    return rc;
+}
+
+static int run(int kind, int argc, char **argv)
+{
+    cli_iter it;
+    const char *val, *design = NULL, *output = NULL, *cmd = an_name[kind];
+    int id, rc, fmt = FMT_TEXT, wave1 = 0, field1 = 0, method = SG_METHOD_PRECISE;
+    int pattern = SG_PUPIL_HEXAPOLAR, density = 6, ref = SG_SPOT_REF_CHIEF, points = 21;
+    int nrays = 7, threads = 0, noclip = 0, pw = 1000, ph = 750, tty;
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    sg_diag d;
+    sg_trace_opts to;
+    sg_spot spot;
+    sg_spot_opts so;
+    sg_fan fan;
+    sg_fan_opts fo;
+    sg_layout lay;
+    sg_layout_opts lo;
+    plot_figure fig;
+    outfile of;
+    int have_fig = 0, have_res = 0, err;
+
+    cli_iter_init(&it, cmd, argc, argv);
+    while ((id = cli_next_opt(&it, an_opts, &val)) != -1) {
+        switch (id) {
+        case 0:
+            if (design)
+                return cli_usage_error(cmd, "unexpected argument \"%s\"", val);
+            design = val;
+            break;
+        case O_HELP:
+            an_help(kind, stdout);
+            return CLI_EXIT_OK;
+        case O_WAVE:
+            if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))
+                return CLI_EXIT_USAGE;
+            break;
+        case O_FIELD:
+            if (cli_int_value("--field", val, 1, SG_MAX_FIELDS, &field1))
+                return CLI_EXIT_USAGE;
+            break;
+        case O_FORMAT:
+            if (parse_format(val, &fmt))
+                return CLI_EXIT_USAGE;
+            break;
+        case O_OUTPUT:
+            output = val;
+            break;
+        case O_METHOD:
+            method = sg_method_parse(val);
+            if (method < 0)
+                return cli_usage_error(cmd, "--method: expected precise, classic or mpfr, "
+                                            "got \"%s\"", val);
+            break;
+        case O_PATTERN:
+            pattern = sg_pupil_pattern_parse(val);
+            if (pattern < 0 || kind != AN_SPOT)
+                return cli_usage_error(cmd, kind != AN_SPOT ? "--pattern is for spot"
+                                                            : "--pattern: expected hexapolar, "
+                                                              "square or vogel");
+            break;
+        case O_DENSITY:
+            if (kind != AN_SPOT)
+                return cli_usage_error(cmd, "--density is for spot");
+            if (cli_int_value("--density", val, 1, SG_PUPIL_MAX_DENSITY, &density))
+                return CLI_EXIT_USAGE;
+            break;
+        case O_REFERENCE:
+            if (kind != AN_SPOT)
+                return cli_usage_error(cmd, "--reference is for spot");
+            if (strcmp(val, "chief") == 0)
+                ref = SG_SPOT_REF_CHIEF;
+            else if (strcmp(val, "centroid") == 0)
+                ref = SG_SPOT_REF_CENTROID;
+            else
+                return cli_usage_error(cmd, "--reference: expected chief or centroid, got "
+                                            "\"%s\"", val);
+            break;
+        case O_POINTS:
+            if (kind != AN_FAN)
+                return cli_usage_error(cmd, "--points is for fan");
+            if (cli_int_value("--points", val, 2, 1000000, &points))
+                return CLI_EXIT_USAGE;
+            break;
+        case O_RAYS:
+            if (kind != AN_LAYOUT)
+                return cli_usage_error(cmd, "--rays is for layout");
+            if (cli_int_value("--rays", val, 1, 10000, &nrays))
+                return CLI_EXIT_USAGE;
+            break;
+        case O_SIZE: {
+            char *x = strchr(val, 'x');
+            char a[32];
+            if (!x || (size_t)(x - val) >= sizeof a)
+                return cli_usage_error(cmd, "--size: expected WIDTHxHEIGHT, got \"%s\"", val);
+            memcpy(a, val, (size_t)(x - val));
+            a[x - val] = '\0';
+            if (args_int(a, 100, 20000, &pw) != ARGS_OK ||
+                args_int(x + 1, 100, 20000, &ph) != ARGS_OK)
+                return cli_usage_error(cmd, "--size: expected WIDTHxHEIGHT, each from 100 to "
+                                            "20000, got \"%s\"", val);
+            break;
+        }
+        case O_THREADS:
+            if (cli_int_value("--threads", val, 0, 256, &threads))
+                return CLI_EXIT_USAGE;
+            break;
+        case O_NOCLIP:
+            noclip = 1;
+            break;
+        default:
+            return -id;
+        }
+    }
+    if (!design)
+        return cli_usage_error(cmd, "missing DESIGN.json");
+    if (kind == AN_SPOT) {
+        sg_diag_clear(&d);
+        if (sg_pupil_check(pattern, density, &d) != SG_OK)
+            return cli_usage_error(cmd, "--density: %s", d.msg);
+    }
+    if (fmt >= FMT_PNG && (!output || strcmp(output, "-") == 0) && isatty(STDOUT_FILENO))
+        return cli_usage_error(cmd, "a %s picture needs -o FILE (standard output is a "
+                                    "terminal)", fmt == FMT_PNG ? "PNG" : fmt == FMT_SVG ? "SVG" : "PDF");
+    rc = cli_load_design(design, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    if (wave1 > sys->nwave || field1 > sys->nfield) {
+        rc = cli_usage_error(cmd, "%s: %s %d is not one of 1 to %d", design,
+                             wave1 > sys->nwave ? "--wave" : "--field",
+                             wave1 > sys->nwave ? wave1 : field1,
+                             wave1 > sys->nwave ? sys->nwave : sys->nfield);
+        goto done;
+    }
+    sg_trace_opts_init(&to);
+    to.method = (sg_method)method;
+    to.clip = !noclip;
+    sg_diag_clear(&d);
+    if (kind == AN_SPOT) {
+        sg_spot_opts_init(&so);
+        so.trace = to;
+        so.pattern = pattern;
+        so.density = density;
+        so.reference = ref;
+        so.wave = wave1 - 1;
+        so.field = field1 - 1;
+        so.nthreads = threads;
+        so.max_points = 20000;
+        rc = sg_spot_compute(sys, cat, &so, &spot, &d);
+    } else if (kind == AN_FAN) {
+        sg_fan_opts_init(&fo);
+        fo.trace = to;
+        fo.npts = points;
+        fo.wave = wave1 - 1;
+        fo.field = field1 - 1;
+        fo.nthreads = threads;
+        rc = sg_fan_compute(sys, cat, &fo, &fan, &d);
+    } else {
+        sg_layout_opts_init(&lo);
+        lo.trace = to;
+        lo.trace.wave = wave1 - 1;
+        lo.nrays = nrays;
+        lo.field = field1 - 1;
+        lo.nthreads = threads;
+        rc = sg_layout_compute(sys, cat, &lo, &lay, &d);
+    }
+    if (rc != SG_OK) {
+        diag_error(design, &d, rc);
+        rc = cli_exit_for(rc);
+        if (rc == CLI_EXIT_OK)
+            rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    have_res = 1;
+    cli_print_warnings(&d, design);
+    if ((err = outfile_open(&of, output, stdout)) != 0) {
+        cli_error("%s: %s", output, strerror(err));
+        rc = CLI_EXIT_FILE;
+        goto done;
+    }
+    tty = fmt == FMT_TEXT && isatty(fileno(of.f));
+    if (fmt >= FMT_PNG || tty) {
+        int r = kind == AN_SPOT  ? view_spot_figure(sys, &spot, &fig)
+                : kind == AN_FAN ? view_fan_figure(sys, &fan, &fig)
+                                 : view_layout_figure(sys, &lay, &fig);
+        have_fig = 1;
+        if (r) {
+            cli_error("out of memory");
+            outfile_abort(&of);
+            rc = CLI_EXIT_INTERNAL;
+            goto done;
+        }
+    }
+    rc = CLI_EXIT_OK;
+    if (fmt >= FMT_PNG) {
+        char msg[256];
+        if (plot_write(&fig, fmt - FMT_PNG, pw, ph, of.f, msg, sizeof msg)) {
+            cli_error("%s: %s", output ? output : "standard output", msg);
+            outfile_abort(&of);
+            rc = CLI_EXIT_FILE;
+            goto done;
+        }
+    } else if (fmt == FMT_JSON) {
+        cJSON *j = kind == AN_SPOT  ? spot_json(sys, &spot, &so)
+                   : kind == AN_FAN ? fan_json(sys, &fan)
+                                    : layout_json(sys, &lay);
+        char *s;
+        if (j)
+            cJSON_AddStringToObject(j, "design", design);
+        s = j ? cJSON_Print(j) : NULL;
+        if (s) {
+            fputs(s, of.f);
+            fputc('\n', of.f);
+        }
+        free(s);
+        cJSON_Delete(j);
+        if (!s) {
+            cli_error("out of memory");
+            outfile_abort(&of);
+            rc = CLI_EXIT_INTERNAL;
+            goto done;
+        }
+    } else if (kind == AN_SPOT) {
+        if (fmt == FMT_CSV)
+            spot_csv(of.f, &spot);
+        else
+            spot_text(of.f, sys, &spot, &so);
+    } else if (kind == AN_FAN) {
+        fan_rows(of.f, sys, &fan, fmt == FMT_CSV);
+    } else {
+        layout_rows(of.f, sys, &lay, fmt == FMT_CSV);
+    }
+    if (tty && terminal_picture(&fig, of.f)) {
+        cli_error("out of memory");
+        outfile_abort(&of);
+        rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    if ((err = outfile_commit(&of)) != 0) {
+        cli_error("%s: %s", output ? output : "standard output", strerror(err));
+        rc = CLI_EXIT_FILE;
+    }
+done:
+    if (have_fig)
+        plot_figure_free(&fig);
+    if (have_res) {
+        if (kind == AN_SPOT)
+            sg_spot_free(&spot);
+        else if (kind == AN_FAN)
+            sg_fan_free(&fan);
+        else
+            sg_layout_free(&lay);
+    }
+    cli_design_free(cat, sys);
+    return rc;
+}
+
+int cmd_spot(int argc, char **argv)
+{
+    return run(AN_SPOT, argc, argv);
+}
+
+int cmd_fan(int argc, char **argv)
+{
+    return run(AN_FAN, argc, argv);
+}
+
+int cmd_layout(int argc, char **argv)
+{
+    return run(AN_LAYOUT, argc, argv);
+}

@@ -1,0 +1,279 @@
+/*
+ * figure_cairo.c - figures as PNG, SVG or PDF through cairo: a title, the
+ * panels in a grid (each with a frame, grid lines, ticks, labels and the
+ * data clipped to it), a colour bar for maps, and the legend.
+ */
+#include <cairo-pdf.h>
+#include <cairo-svg.h>
+#include <cairo.h>
+#include <math.h>
+#include <string.h>
+#include <strings.h>
+
+#include "plot.h"
+
+#define M_PI_  3.14159265358979323846
+
+static const double palette[PLOT_NPALETTE][3] = {
+    {0.00, 0.35, 0.85}, {0.00, 0.60, 0.20}, {0.85, 0.10, 0.10},
+    {0.90, 0.55, 0.00}, {0.65, 0.20, 0.70}, {0.00, 0.60, 0.70}};
+
+int plot_file_format(const char *s)
+{
+    if (!s)
+        return -1;
+    if (strcasecmp(s, "png") == 0)
+        return PLOT_PNG;
+    if (strcasecmp(s, "svg") == 0)
+        return PLOT_SVG;
+    if (strcasecmp(s, "pdf") == 0)
+        return PLOT_PDF;
+    return -1;
+}
+
+static void set_colour(cairo_t *cr, int c)
+{
+    if (c < 0)
+        cairo_set_source_rgb(cr, 0, 0, 0);
+    else
+        cairo_set_source_rgb(cr, palette[c % PLOT_NPALETTE][0], palette[c % PLOT_NPALETTE][1],
+                             palette[c % PLOT_NPALETTE][2]);
+}
+
+/* A perceptually even map from dark blue through green to yellow (five
+ * stops of viridis), for t in 0..1. */
+static void map_colour(double t, double rgb[3])
+{
+    static const double stop[5][3] = {{0.267, 0.005, 0.329}, {0.229, 0.322, 0.546},
+                                      {0.128, 0.567, 0.551}, {0.369, 0.789, 0.383},
+                                      {0.993, 0.906, 0.144}};
+    double u = fmin(1.0, fmax(0.0, t)) * 4.0;
+    int k = (int)fmin(3.0, floor(u)), j;
+    for (j = 0; j < 3; j++)
+        rgb[j] = stop[k][j] + (u - k) * (stop[k + 1][j] - stop[k][j]);
+}
+
+static void text_at(cairo_t *cr, double x, double y, const char *s, double ax, double ay)
+{
+    cairo_text_extents_t e;
+    cairo_text_extents(cr, s, &e);
+    cairo_move_to(cr, x - ax * e.width - e.x_bearing, y - ay * e.height - e.y_bearing);
+    cairo_show_text(cr, s);
+}
+
+static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, double w,
+                       double h)
+{
+    plot_panel p = *src;
+    double L = 62, R = p.map ? 60 : 12, T = 22, B = 42, bx, by, bw, bh, t[16], step;
+    int n, k;
+    size_t i;
+    char lab[32];
+    bx = x + L;
+    by = y + T;
+    bw = w - L - R;
+    bh = h - T - B;
+    if (bw < 20 || bh < 20)
+        return;
+    plot_panel_limits(&p, bw / bh);
+    cairo_set_font_size(cr, 12);
+    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
+    set_colour(cr, PLOT_FG);
+    text_at(cr, bx + bw / 2, y + 4, p.title, 0.5, 0.0);
+    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL,
+                           CAIRO_FONT_WEIGHT_NORMAL);
+    cairo_set_font_size(cr, 10);
+    if (p.map && p.mw > 0 && p.mh > 0 && p.map_hi > p.map_lo) {
+        double cw = bw / p.mw, ch = bh / p.mh, rgb[3];
+        int r, c;
+        for (r = 0; r < p.mh; r++)
+            for (c = 0; c < p.mw; c++) {
+                double v = p.map[r * p.mw + c];
+                if (!isfinite(v))
+                    continue;
+                map_colour((v - p.map_lo) / (p.map_hi - p.map_lo), rgb);
+                cairo_set_source_rgb(cr, rgb[0], rgb[1], rgb[2]);
+                cairo_rectangle(cr, bx + c * cw, by + r * ch, cw + 0.5, ch + 0.5);
+                cairo_fill(cr);
+            }
+        /* The colour bar, with its scale. */
+        for (k = 0; k < 100; k++) {
+            map_colour(k / 99.0, rgb);
+            cairo_set_source_rgb(cr, rgb[0], rgb[1], rgb[2]);
+            cairo_rectangle(cr, bx + bw + 10, by + bh - (k + 1) * bh / 100.0, 12, bh / 100.0 + 0.5);
+            cairo_fill(cr);
+        }
+        n = plot_ticks(p.map_lo, p.map_hi, 5, t, 16);
+        step = n > 1 ? t[1] - t[0] : 1.0;
+        set_colour(cr, PLOT_FG);
+        for (k = 0; k < n; k++) {
+            plot_tick_label(t[k], step, lab, sizeof lab);
+            text_at(cr, bx + bw + 25, by + bh - (t[k] - p.map_lo) / (p.map_hi - p.map_lo) * bh,
+                    lab, 0.0, 0.5);
+        }
+    }
+    /* Grid lines and ticks. */
+    cairo_set_line_width(cr, 0.5);
+    n = plot_ticks(p.xmin, p.xmax, bw > 300 ? 6 : 4, t, 16);
+    step = n > 1 ? t[1] - t[0] : 1.0;
+    for (k = 0; k < n; k++) {
+        double px = bx + (t[k] - p.xmin) / (p.xmax - p.xmin) * bw;
+        cairo_set_source_rgb(cr, 0.85, 0.85, 0.85);
+        cairo_move_to(cr, px, by);
+        cairo_line_to(cr, px, by + bh);
+        cairo_stroke(cr);
+        set_colour(cr, PLOT_FG);
+        plot_tick_label(t[k], step, lab, sizeof lab);
+        text_at(cr, px, by + bh + 4, lab, 0.5, 0.0);
+    }
+    n = plot_ticks(p.ymin, p.ymax, bh > 300 ? 6 : 4, t, 16);
+    step = n > 1 ? t[1] - t[0] : 1.0;
+    for (k = 0; k < n; k++) {
+        double py = by + (p.ymax - t[k]) / (p.ymax - p.ymin) * bh;
+        cairo_set_source_rgb(cr, 0.85, 0.85, 0.85);
+        cairo_move_to(cr, bx, py);
+        cairo_line_to(cr, bx + bw, py);
+        cairo_stroke(cr);
+        set_colour(cr, PLOT_FG);
+        plot_tick_label(t[k], step, lab, sizeof lab);
+        text_at(cr, bx - 4, py, lab, 1.0, 0.5);
+    }
+    set_colour(cr, PLOT_FG);
+    cairo_set_line_width(cr, 1.0);
+    cairo_rectangle(cr, bx, by, bw, bh);
+    cairo_stroke(cr);
+    cairo_set_font_size(cr, 11);
+    text_at(cr, bx + bw / 2, by + bh + 20, p.xlabel, 0.5, 0.0);
+    cairo_save(cr);
+    cairo_translate(cr, x + 12, by + bh / 2);
+    cairo_rotate(cr, -M_PI_ / 2);
+    text_at(cr, 0, 0, p.ylabel, 0.5, 0.5);
+    cairo_restore(cr);
+    /* The data, clipped to the frame. */
+    cairo_save(cr);
+    cairo_rectangle(cr, bx, by, bw, bh);
+    cairo_clip(cr);
+    for (k = 0; k < p.nseries; k++) {
+        const plot_series *s = &p.s[k];
+        int have = 0;
+        set_colour(cr, s->color);
+        cairo_set_line_width(cr, 1.2);
+        for (i = 0; i < s->n; i++) {
+            double px = bx + (s->x[i] - p.xmin) / (p.xmax - p.xmin) * bw;
+            double py = by + (p.ymax - s->y[i]) / (p.ymax - p.ymin) * bh;
+            if (!isfinite(px) || !isfinite(py) || fabs(px) > 1e7 || fabs(py) > 1e7) {
+                if (have && s->kind == PLOT_LINES)
+                    cairo_stroke(cr);
+                have = 0;
+                continue;
+            }
+            if (s->kind == PLOT_POINTS) {
+                cairo_arc(cr, px, py, 1.3, 0, 2 * M_PI_);
+                cairo_fill(cr);
+            } else if (have) {
+                cairo_line_to(cr, px, py);
+            } else {
+                cairo_move_to(cr, px, py);
+                have = 1;
+            }
+        }
+        if (have && s->kind == PLOT_LINES)
+            cairo_stroke(cr);
+    }
+    cairo_restore(cr);
+}
+
+static void draw(cairo_t *cr, const plot_figure *f, double W, double H)
+{
+    double top = 8, bottom = H, x;
+    int nc, best = 1, k;
+    double score = -1;
+    cairo_set_source_rgb(cr, 1, 1, 1);
+    cairo_paint(cr);
+    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
+    if (f->title[0]) {
+        cairo_set_font_size(cr, 14);
+        set_colour(cr, PLOT_FG);
+        text_at(cr, W / 2, top, f->title, 0.5, 0.0);
+        top += 24;
+    }
+    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL,
+                           CAIRO_FONT_WEIGHT_NORMAL);
+    if (f->nlegend) {
+        bottom -= 24;
+        x = 20;
+        cairo_set_font_size(cr, 11);
+        for (k = 0; k < f->nlegend; k++) {
+            cairo_text_extents_t e;
+            set_colour(cr, f->legend[k].color);
+            cairo_rectangle(cr, x, bottom + 8, 10, 10);
+            cairo_fill(cr);
+            set_colour(cr, PLOT_FG);
+            text_at(cr, x + 14, bottom + 13, f->legend[k].label, 0.0, 0.5);
+            cairo_text_extents(cr, f->legend[k].label, &e);
+            x += e.x_advance + 34;
+        }
+    }
+    if (f->npanel == 0)
+        return;
+    for (nc = 1; nc <= f->npanel; nc++) {
+        int nr = (f->npanel + nc - 1) / nc;
+        double sc = fmin(W / nc, (bottom - top) / nr);
+        if (sc > score) {
+            score = sc;
+            best = nc;
+        }
+    }
+    nc = best;
+    {
+        int nr = (f->npanel + nc - 1) / nc;
+        double pw = W / nc, ph = (bottom - top) / nr;
+        for (k = 0; k < f->npanel; k++)
+            draw_panel(cr, &f->panel[k], (k % nc) * pw, top + (k / nc) * ph, pw, ph);
+    }
+}
+
+static cairo_status_t to_file(void *closure, const unsigned char *data, unsigned int len)
+{
+    return fwrite(data, 1, len, (FILE *)closure) == len ? CAIRO_STATUS_SUCCESS
+                                                         : CAIRO_STATUS_WRITE_ERROR;
+}
+
+int plot_write(const plot_figure *fig, int format, int width, int height, FILE *f, char *err,
+               size_t nerr)
+{
+    cairo_surface_t *s;
+    cairo_t *cr;
+    cairo_status_t st;
+    if (width < 100 || height < 100 || width > 20000 || height > 20000) {
+        snprintf(err, nerr, "picture size %dx%d is not within 100 to 20000 on each side", width,
+                 height);
+        return -1;
+    }
+    if (format == PLOT_PNG)
+        s = cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height);
+    else if (format == PLOT_SVG)
+        s = cairo_svg_surface_create_for_stream(to_file, f, width, height);
+    else if (format == PLOT_PDF)
+        s = cairo_pdf_surface_create_for_stream(to_file, f, width, height);
+    else {
+        snprintf(err, nerr, "unknown picture format %d", format);
+        return -1;
+    }
+    cr = cairo_create(s);
+    draw(cr, fig, width, height);
+    cairo_show_page(cr);
+    st = cairo_status(cr);
+    cairo_destroy(cr);
+    if (st == CAIRO_STATUS_SUCCESS && format == PLOT_PNG)
+        st = cairo_surface_write_to_png_stream(s, to_file, f);
+    cairo_surface_finish(s);
+    if (st == CAIRO_STATUS_SUCCESS)
+        st = cairo_surface_status(s);
+    cairo_surface_destroy(s);
+    if (st != CAIRO_STATUS_SUCCESS) {
+        snprintf(err, nerr, "cairo: %s", cairo_status_to_string(st));
+        return -1;
+    }
+    return 0;
+}

@@ -1,0 +1,545 @@
+/*
+ * plot.c - figures and their terminal rendering: braille dots (2 x 4 per
+ * cell) in a frame with ticks and labels, one colour per series.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "plot.h"
+
+void plot_figure_init(plot_figure *f, const char *title)
+{
+    memset(f, 0, sizeof *f);
+    snprintf(f->title, sizeof f->title, "%s", title ? title : "");
+}
+
+void plot_figure_free(plot_figure *f)
+{
+    int k, j;
+    for (k = 0; k < f->npanel; k++) {
+        plot_panel *p = &f->panel[k];
+        for (j = 0; j < p->nseries; j++) {
+            free(p->s[j].x);
+            free(p->s[j].y);
+        }
+        free(p->s);
+        free(p->map);
+    }
+    free(f->panel);
+    memset(f, 0, sizeof *f);
+}
+
+plot_panel *plot_add_panel(plot_figure *f, const char *title, const char *xlabel,
+                           const char *ylabel)
+{
+    plot_panel *p;
+    if (f->npanel == f->cap) {
+        int cap = f->cap ? 2 * f->cap : 4;
+        plot_panel *np = realloc(f->panel, (size_t)cap * sizeof *np);
+        if (!np)
+            return NULL;
+        f->panel = np;
+        f->cap = cap;
+    }
+    p = &f->panel[f->npanel++];
+    memset(p, 0, sizeof *p);
+    snprintf(p->title, sizeof p->title, "%s", title ? title : "");
+    snprintf(p->xlabel, sizeof p->xlabel, "%s", xlabel ? xlabel : "");
+    snprintf(p->ylabel, sizeof p->ylabel, "%s", ylabel ? ylabel : "");
+    return p;
+}
+
+int plot_add_series(plot_panel *p, int kind, int color, const double *x, const double *y,
+                    size_t n)
+{
+    plot_series *s;
+    if (p->nseries == p->cap) {
+        int cap = p->cap ? 2 * p->cap : 8;
+        plot_series *ns = realloc(p->s, (size_t)cap * sizeof *ns);
+        if (!ns)
+            return -1;
+        p->s = ns;
+        p->cap = cap;
+    }
+    s = &p->s[p->nseries];
+    s->kind = kind;
+    s->color = color;
+    s->n = n;
+    s->x = malloc((n ? n : 1) * sizeof *s->x);
+    s->y = malloc((n ? n : 1) * sizeof *s->y);
+    if (!s->x || !s->y) {
+        free(s->x);
+        free(s->y);
+        return -1;
+    }
+    if (n) {
+        memcpy(s->x, x, n * sizeof *x);
+        memcpy(s->y, y, n * sizeof *y);
+    }
+    p->nseries++;
+    return 0;
+}
+
+void plot_add_legend(plot_figure *f, int color, const char *label)
+{
+    if (f->nlegend >= PLOT_MAXLEGEND)
+        return;
+    f->legend[f->nlegend].color = color;
+    snprintf(f->legend[f->nlegend].label, sizeof f->legend[0].label, "%s", label);
+    f->nlegend++;
+}
+
+void plot_panel_limits(plot_panel *p, double aspect)
+{
+    double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY, dx, dy;
+    int k;
+    size_t i;
+    if (p->xmin < p->xmax && p->ymin < p->ymax)
+        goto fit;
+    for (k = 0; k < p->nseries; k++)
+        for (i = 0; i < p->s[k].n; i++) {
+            double x = p->s[k].x[i], y = p->s[k].y[i];
+            if (!isfinite(x) || !isfinite(y))
+                continue;
+            x0 = fmin(x0, x);
+            x1 = fmax(x1, x);
+            y0 = fmin(y0, y);
+            y1 = fmax(y1, y);
+        }
+    if (!(x0 <= x1)) {
+        x0 = y0 = -1.0;
+        x1 = y1 = 1.0;
+    }
+    dx = x1 - x0;
+    dy = y1 - y0;
+    /* A flat set (a perfect focus, one ray) still gets a visible range. */
+    if (!(dx > 1e-300 * fmax(1.0, fabs(x0))))
+        dx = fmax(fabs(x0), fmax(dy, 1e-9));
+    if (!(dy > 1e-300 * fmax(1.0, fabs(y0))))
+        dy = fmax(fabs(y0), fmax(dx, 1e-9));
+    if (p->xmin < p->xmax) {
+        x0 = p->xmin;
+        x1 = p->xmax;
+    } else {
+        double c = 0.5 * (x0 + x1);
+        dx = fmax(dx, x1 - x0);
+        x0 = c - 0.55 * dx;
+        x1 = c + 0.55 * dx;
+    }
+    if (p->ymin < p->ymax) {
+        y0 = p->ymin;
+        y1 = p->ymax;
+    } else {
+        double c = 0.5 * (y0 + y1);
+        dy = fmax(dy, y1 - y0);
+        y0 = c - 0.55 * dy;
+        y1 = c + 0.55 * dy;
+    }
+    p->xmin = x0;
+    p->xmax = x1;
+    p->ymin = y0;
+    p->ymax = y1;
+fit:
+    if (p->equal && aspect > 0.0) {
+        /* aspect: the plot's width over its height, in the same measure. */
+        double w = p->xmax - p->xmin, h = p->ymax - p->ymin;
+        if (w / h < aspect) {
+            double c = 0.5 * (p->xmin + p->xmax);
+            p->xmin = c - 0.5 * h * aspect;
+            p->xmax = c + 0.5 * h * aspect;
+        } else {
+            double c = 0.5 * (p->ymin + p->ymax);
+            p->ymin = c - 0.5 * w / aspect;
+            p->ymax = c + 0.5 * w / aspect;
+        }
+    }
+}
+
+int plot_ticks(double lo, double hi, int n, double *t, int max)
+{
+    double span = hi - lo, raw, mag, step, v;
+    int k = 0;
+    if (!(span > 0.0) || !isfinite(span) || n < 1)
+        return 0;
+    raw = span / n;
+    mag = pow(10.0, floor(log10(raw)));
+    step = raw / mag < 1.5 ? mag : raw / mag < 3.5 ? 2 * mag : raw / mag < 7.5 ? 5 * mag
+                                                                                : 10 * mag;
+    for (v = ceil(lo / step) * step; v <= hi + 1e-9 * step && k < max; v += step) {
+        /* A tick at a rounding of zero is zero. */
+        t[k++] = fabs(v) < 1e-9 * step ? 0.0 : v;
+    }
+    return k;
+}
+
+void plot_tick_label(double v, double step, char *buf, size_t n)
+{
+    int dec = step > 0.0 ? (int)ceil(-log10(step) - 1e-9) : 0;
+    if (dec < 0)
+        dec = 0;
+    if (fabs(v) >= 1e6 || (v != 0.0 && fabs(v) < 1e-4) || dec > 6)
+        snprintf(buf, n, "%.3g", v);
+    else
+        snprintf(buf, n, "%.*f", dec, v);
+}
+
+/* ---- cells ------------------------------------------------------------- */
+
+int plot_grid_init(plot_grid *g, int w, int h)
+{
+    int k;
+    g->w = w > 0 ? w : 0;
+    g->h = h > 0 ? h : 0;
+    g->c = malloc((size_t)(g->w * g->h > 0 ? g->w * g->h : 1) * sizeof *g->c);
+    if (!g->c)
+        return -1;
+    for (k = 0; k < g->w * g->h; k++) {
+        strcpy(g->c[k].ch, " ");
+        g->c[k].color = PLOT_FG;
+    }
+    return 0;
+}
+
+void plot_grid_free(plot_grid *g)
+{
+    free(g->c);
+    g->c = NULL;
+}
+
+static plot_cell *cell_at(plot_grid *g, int x, int y)
+{
+    if (x < 0 || y < 0 || x >= g->w || y >= g->h)
+        return NULL;
+    return &g->c[y * g->w + x];
+}
+
+void plot_grid_text(plot_grid *g, int x, int y, const char *s, int color)
+{
+    plot_grid_text_n(g, x, y, s, color, 1 << 30);
+}
+
+void plot_grid_text_n(plot_grid *g, int x, int y, const char *s, int color, int maxw)
+{
+    const unsigned char *u = (const unsigned char *)s;
+    while (*u && maxw-- > 0) {
+        size_t len = *u < 0x80 ? 1 : (*u >> 5) == 6 ? 2 : (*u >> 4) == 14 ? 3 : 4;
+        plot_cell *c = cell_at(g, x, y);
+        size_t i;
+        for (i = 1; i < len; i++)
+            if (!u[i])
+                return;
+        if (c) {
+            memcpy(c->ch, u, len);
+            c->ch[len] = '\0';
+            c->color = (signed char)color;
+        }
+        u += len;
+        x++;
+    }
+}
+
+unsigned plot_braille_bit(int col, int row)
+{
+    static const unsigned bits[4][2] = {{0x01, 0x08}, {0x02, 0x10}, {0x04, 0x20}, {0x40, 0x80}};
+    if (col < 0 || col > 1 || row < 0 || row > 3)
+        return 0;
+    return bits[row][col];
+}
+
+void plot_braille_utf8(unsigned bits, char out[5])
+{
+    unsigned cp = 0x2800 + (bits & 0xff);
+    out[0] = (char)(0xE0 | (cp >> 12));
+    out[1] = (char)(0x80 | ((cp >> 6) & 0x3F));
+    out[2] = (char)(0x80 | (cp & 0x3F));
+    out[3] = '\0';
+}
+
+/* The dots of one panel's plotting area. */
+typedef struct dots {
+    int w, h; /* in cells */
+    unsigned char *bits;
+    signed char *color;
+} dots;
+
+static void dot(dots *d, long px, long py, int color)
+{
+    long cx = px / 2, cy = py / 4;
+    if (px < 0 || py < 0 || cx >= d->w || cy >= d->h)
+        return;
+    d->bits[cy * d->w + cx] |= (unsigned char)plot_braille_bit((int)(px % 2), (int)(py % 4));
+    d->color[cy * d->w + cx] = (signed char)color;
+}
+
+static void line(dots *d, long x0, long y0, long x1, long y1, int color)
+{
+    long dx = labs(x1 - x0), dy = -labs(y1 - y0), sx = x0 < x1 ? 1 : -1,
+         sy = y0 < y1 ? 1 : -1, err = dx + dy, n = 0;
+    /* Bresenham; long lines far outside are cut by the step limit. */
+    while (n++ < 100000) {
+        dot(d, x0, y0, color);
+        if (x0 == x1 && y0 == y1)
+            break;
+        if (2 * err >= dy) {
+            err += dy;
+            x0 += sx;
+        }
+        if (2 * err <= dx) {
+            err += dx;
+            y0 += sy;
+        }
+    }
+}
+
+/* Centred in w columns, and cut to them. */
+static void center_text(plot_grid *g, int x, int w, int y, const char *s, int color)
+{
+    size_t len = 0;
+    const unsigned char *u = (const unsigned char *)s;
+    for (; *u; u++)
+        len += (*u & 0xC0) != 0x80;
+    plot_grid_text_n(g, x + (w > (int)len ? (w - (int)len) / 2 : 0), y, s, color, w);
+}
+
+static size_t text_len(const char *s)
+{
+    size_t len = 0;
+    for (; *s; s++)
+        len += ((unsigned char)*s & 0xC0) != 0x80;
+    return len;
+}
+
+static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int w, int h)
+{
+    plot_panel p = *src;
+    double yt[16], xt[16], ystep, xstep;
+    int nyt, nxt, lw = 0, k, W, H, ax, ay;
+    char lab[32];
+    dots d;
+    size_t i;
+    if (w < 12 || h < 6) {
+        plot_grid_text(g, x0, y0, "(too small)", PLOT_FG);
+        return;
+    }
+    H = h - 4;
+    nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 3, yt, 16);
+    ystep = nyt > 1 ? yt[1] - yt[0] : p.ymax - p.ymin;
+    for (k = 0; k < nyt; k++) {
+        plot_tick_label(yt[k], ystep, lab, sizeof lab);
+        if ((int)strlen(lab) > lw)
+            lw = (int)strlen(lab);
+    }
+    W = w - lw - 1;
+    if (W < 4) {
+        plot_grid_text(g, x0, y0, "(too small)", PLOT_FG);
+        return;
+    }
+    /* Braille dots are about square: 2 per cell across, 4 down. */
+    plot_panel_limits(&p, (2.0 * W) / (4.0 * H));
+    nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 3, yt, 16);
+    ystep = nyt > 1 ? yt[1] - yt[0] : p.ymax - p.ymin;
+    nxt = plot_ticks(p.xmin, p.xmax, W >= 40 ? 5 : 3, xt, 16);
+    xstep = nxt > 1 ? xt[1] - xt[0] : p.xmax - p.xmin;
+    center_text(g, x0, w, y0, p.title, PLOT_FG);
+    ax = x0 + lw;     /* the y axis's column */
+    ay = y0 + 1 + H;  /* the x axis's row */
+    for (k = 0; k < H; k++)
+        plot_grid_text(g, ax, y0 + 1 + k, "│", PLOT_FG);
+    for (k = 1; k <= W; k++)
+        plot_grid_text(g, ax + k, ay, "─", PLOT_FG);
+    plot_grid_text(g, ax, ay, "└", PLOT_FG);
+    for (k = 0; k < nyt; k++) {
+        int row = y0 + 1 + (int)lround((p.ymax - yt[k]) / (p.ymax - p.ymin) * (H - 1));
+        plot_tick_label(yt[k], ystep, lab, sizeof lab);
+        plot_grid_text(g, ax - (int)strlen(lab), row, lab, PLOT_FG);
+        plot_grid_text(g, ax, row, "┤", PLOT_FG);
+    }
+    {
+        int nextfree = x0;
+        for (k = 0; k < nxt; k++) {
+            int col = ax + 1 + (int)lround((xt[k] - p.xmin) / (p.xmax - p.xmin) * (W - 1));
+            int len, at;
+            plot_tick_label(xt[k], xstep, lab, sizeof lab);
+            len = (int)strlen(lab);
+            at = col - len / 2;
+            plot_grid_text(g, col, ay, "┬", PLOT_FG);
+            if (at + len > x0 + w)
+                at = x0 + w - len; /* the last tick's label, moved in */
+            if (at < nextfree)
+                continue;
+            plot_grid_text(g, at, ay + 1, lab, PLOT_FG);
+            nextfree = at + len + 1;
+        }
+    }
+    {
+        char yl[80];
+        size_t xl = text_len(p.xlabel);
+        snprintf(yl, sizeof yl, "↑ %s", p.ylabel);
+        plot_grid_text_n(g, x0, ay + 2, yl, PLOT_FG, w);
+        if ((int)xl + 2 < w)
+            plot_grid_text(g, x0 + w - (int)xl - 2, ay + 2, p.xlabel, PLOT_FG);
+        if ((int)xl + 4 < w)
+            plot_grid_text(g, x0 + w - 1, ay + 2, "→", PLOT_FG);
+    }
+    d.w = W;
+    d.h = H;
+    d.bits = calloc((size_t)(W * H), 1);
+    d.color = calloc((size_t)(W * H), 1);
+    if (!d.bits || !d.color) {
+        free(d.bits);
+        free(d.color);
+        return;
+    }
+    memset(d.color, PLOT_FG, (size_t)(W * H));
+    if (p.map && p.mw > 0 && p.mh > 0) {
+        /* A map in shades: each cell takes the value under its centre. */
+        static const char *const shade[] = {" ", "░", "▒", "▓", "█"};
+        int r, c;
+        for (r = 0; r < H; r++)
+            for (c = 0; c < W; c++) {
+                int mx = c * p.mw / W, my = r * p.mh / H;
+                double v = p.map[my * p.mw + mx], t;
+                if (!isfinite(v) || !(p.map_hi > p.map_lo))
+                    continue;
+                t = (v - p.map_lo) / (p.map_hi - p.map_lo);
+                plot_grid_text(g, ax + 1 + c, y0 + 1 + r, shade[(int)fmin(4, fmax(0, t * 4.999))],
+                               PLOT_FG);
+            }
+    }
+    for (k = 0; k < p.nseries; k++) {
+        const plot_series *s = &p.s[k];
+        long lx = 0, ly = 0;
+        int have = 0;
+        for (i = 0; i < s->n; i++) {
+            double fx = (s->x[i] - p.xmin) / (p.xmax - p.xmin) * (2.0 * W - 1);
+            double fy = (p.ymax - s->y[i]) / (p.ymax - p.ymin) * (4.0 * H - 1);
+            long px, py;
+            if (!isfinite(fx) || !isfinite(fy) || fabs(fx) > 1e6 || fabs(fy) > 1e6) {
+                have = 0;
+                continue;
+            }
+            px = lround(fx);
+            py = lround(fy);
+            if (s->kind == PLOT_LINES && have)
+                line(&d, lx, ly, px, py, s->color);
+            else
+                dot(&d, px, py, s->color);
+            lx = px;
+            ly = py;
+            have = 1;
+        }
+    }
+    for (k = 0; k < W * H; k++)
+        if (d.bits[k]) {
+            char ch[5];
+            plot_braille_utf8(d.bits[k], ch);
+            plot_grid_text(g, ax + 1 + k % W, y0 + 1 + k / W, ch, d.color[k]);
+        }
+    free(d.bits);
+    free(d.color);
+}
+
+void plot_draw_cells(const plot_figure *f, plot_grid *g, int x0, int y0, int w, int h)
+{
+    int top = y0, bottom = y0 + h, nc, best = 1, k;
+    double score = -1.0;
+    if (w < 12 || h < 7) {
+        plot_grid_text(g, x0, y0, "(window too small for the picture)", PLOT_FG);
+        return;
+    }
+    if (f->title[0]) {
+        char t[200];
+        snprintf(t, sizeof t, "%s", f->title);
+        center_text(g, x0, w, top++, t, PLOT_FG);
+    }
+    if (f->nlegend) {
+        int x = x0;
+        bottom--;
+        for (k = 0; k < f->nlegend; k++) {
+            size_t len = text_len(f->legend[k].label) + 3;
+            if (x + (int)len > x0 + w)
+                break;
+            plot_grid_text(g, x, bottom, "■", f->legend[k].color);
+            plot_grid_text(g, x + 1, bottom, " ", PLOT_FG);
+            plot_grid_text(g, x + 2, bottom, f->legend[k].label, PLOT_FG);
+            x += (int)len;
+        }
+    }
+    if (f->npanel == 0)
+        return;
+    /* Columns that give the roomiest panels (a cell is about twice as tall
+     * as it is wide). */
+    for (nc = 1; nc <= f->npanel; nc++) {
+        int nr = (f->npanel + nc - 1) / nc;
+        double pw = (double)w / nc, ph = (double)(bottom - top) / nr;
+        double sc = fmin(pw / 2.0, ph);
+        if (pw >= 14 && ph >= 6 && sc > score) {
+            score = sc;
+            best = nc;
+        }
+    }
+    if (score < 0.0) {
+        /* Not all fit: as many rows of the widest panels as room allows,
+         * and a note of the rest (a file has room for every one). */
+        nc = w / 14 > 0 ? w / 14 : 1;
+        if (nc > f->npanel)
+            nc = f->npanel;
+        best = nc;
+    }
+    nc = best;
+    {
+        int nr = (f->npanel + nc - 1) / nc, pw = w / nc, ph, shown;
+        if ((bottom - top) / nr < 6)
+            nr = (bottom - top) / 6 > 0 ? (bottom - top) / 6 : 1;
+        ph = (bottom - top) / nr;
+        shown = nr * nc < f->npanel ? nr * nc : f->npanel;
+        if (shown < f->npanel) {
+            char note[64];
+            snprintf(note, sizeof note, "(%d of %d panels; export shows all)", shown,
+                     f->npanel);
+            plot_grid_text_n(g, x0 + w - (int)strlen(note), top - 1 >= y0 ? top - 1 : y0, note,
+                             PLOT_FG, w);
+            nr = shown / nc;
+        }
+        for (k = 0; k < shown; k++)
+            draw_panel(&f->panel[k], g, x0 + (k % nc) * pw, top + (k / nc) * ph, pw - 1, ph);
+    }
+}
+
+int plot_grid_print(const plot_grid *g, FILE *out, int colour)
+{
+    static const int ansi[PLOT_NPALETTE] = {34, 32, 31, 33, 35, 36};
+    int x, y;
+    for (y = 0; y < g->h; y++) {
+        int cur = PLOT_FG, end = g->w;
+        while (end > 0 && strcmp(g->c[y * g->w + end - 1].ch, " ") == 0)
+            end--;
+        for (x = 0; x < end; x++) {
+            const plot_cell *c = &g->c[y * g->w + x];
+            /* A blank needs no colour: no escape for it. */
+            if (colour && c->color != cur && strcmp(c->ch, " ") != 0) {
+                if (c->color == PLOT_FG)
+                    fputs("\033[0m", out);
+                else
+                    fprintf(out, "\033[%dm", ansi[c->color % PLOT_NPALETTE]);
+                cur = c->color;
+            }
+            fputs(c->ch, out);
+        }
+        if (colour && cur != PLOT_FG)
+            fputs("\033[0m", out);
+        if (fputc('\n', out) == EOF)
+            return -1;
+    }
+    return ferror(out) ? -1 : 0;
+}
+
+int plot_use_colour(FILE *f)
+{
+    const char *nc = getenv("NO_COLOR");
+    if (nc && *nc)
+        return 0;
+    return isatty(fileno(f));
+}

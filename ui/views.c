@@ -1,0 +1,215 @@
+/*
+ * views.c - analyses as figures: spots per field with the Airy circle,
+ * tangential and sagittal fans per field, and the layout.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "safetext.h"
+#include "views.h"
+
+#define PI_ 3.14159265358979323846
+
+const char *view_length_unit(const sg_system *sys, double extent, double *scale)
+{
+    double um = 1e3; /* micrometres per lens unit */
+    if (strcmp(sys->units, "cm") == 0)
+        um = 1e4;
+    else if (strcmp(sys->units, "in") == 0)
+        um = 25.4e3;
+    else if (strcmp(sys->units, "m") == 0)
+        um = 1e6;
+    if (extent * um < 2000.0) {
+        *scale = um;
+        return "µm";
+    }
+    *scale = 1.0;
+    return sys->units[0] ? sys->units : "mm";
+}
+
+void view_wave_label(double um, char *buf, size_t n)
+{
+    snprintf(buf, n, "%.4g µm", um);
+}
+
+void view_field_label(const sg_system *sys, int k, char *buf, size_t n)
+{
+    snprintf(buf, n, "field %d (%.4g, %.4g %s)", k + 1, sys->field[k].x, sys->field[k].y,
+             sys->field_type == SG_FIELD_ANGLE ? "deg" : sys->units);
+}
+
+static void legend_waves(plot_figure *f, int nwave, const int *index, const double *um)
+{
+    int w;
+    for (w = 0; w < nwave; w++) {
+        char lab[48];
+        view_wave_label(um[w], lab, sizeof lab);
+        plot_add_legend(f, index[w], lab);
+    }
+}
+
+int view_spot_figure(const sg_system *sys, const sg_spot *s, plot_figure *f)
+{
+    double ext = s->airy_radius, scale;
+    const char *u;
+    char title[200], lab[64], xl[32], yl[32];
+    int fi, w, k;
+    for (fi = 0; fi < s->nfield; fi++)
+        ext = fmax(ext, s->field[fi].geo);
+    u = view_length_unit(sys, ext, &scale);
+    snprintf(title, sizeof title, "Spot diagram: %s", safe_text(sys->title, lab, sizeof lab));
+    plot_figure_init(f, title);
+    snprintf(xl, sizeof xl, "x (%s)", u);
+    snprintf(yl, sizeof yl, "y (%s)", u);
+    for (fi = 0; fi < s->nfield; fi++) {
+        const sg_spot_field *fd = &s->field[fi];
+        char fl[64], pt[96];
+        plot_panel *p;
+        view_field_label(sys, s->field_index[fi], fl, sizeof fl);
+        /* The radii first, so a narrow panel still shows them. */
+        if (fd->status == SG_OK)
+            snprintf(pt, sizeof pt, "field %d: RMS %.4g, GEO %.4g %s  %s",
+                     s->field_index[fi] + 1, fd->rms * scale, fd->geo * scale, u,
+                     strchr(fl, '(') ? strchr(fl, '(') : "");
+        else
+            snprintf(pt, sizeof pt, "%s: chief ray %s", fl, sg_strerror(fd->status));
+        p = plot_add_panel(f, pt, xl, yl);
+        if (!p)
+            return -1;
+        p->equal = 1;
+        for (w = 0; w < s->nwave; w++) {
+            const sg_spot_cell *c = &s->cell[fi * s->nwave + w];
+            double *x = malloc((c->npts + 1) * sizeof *x), *y = malloc((c->npts + 1) * sizeof *y);
+            size_t i;
+            int rc;
+            if (!x || !y) {
+                free(x);
+                free(y);
+                return -1;
+            }
+            for (i = 0; i < c->npts; i++) {
+                x[i] = c->pts[i][0] * scale;
+                y[i] = c->pts[i][1] * scale;
+            }
+            rc = plot_add_series(p, PLOT_POINTS, s->wave_index[w], x, y, c->npts);
+            free(x);
+            free(y);
+            if (rc)
+                return -1;
+        }
+        if (s->airy_radius > 0.0 && fd->status == SG_OK) {
+            /* The Airy circle about the reference point, as Zemax draws it. */
+            double x[73], y[73];
+            for (k = 0; k < 73; k++) {
+                x[k] = s->airy_radius * scale * cos(2 * PI_ * k / 72);
+                y[k] = s->airy_radius * scale * sin(2 * PI_ * k / 72);
+            }
+            if (plot_add_series(p, PLOT_LINES, PLOT_FG, x, y, 73))
+                return -1;
+        }
+        plot_panel_limits(p, 0.0);
+    }
+    legend_waves(f, s->nwave, s->wave_index, s->wave_um);
+    return 0;
+}
+
+int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f)
+{
+    double ext = 0.0, scale;
+    const char *u;
+    char title[200], lab[64], yt[32], ys[32];
+    int fi, w, j, side, n = fan->npts;
+    double *x = malloc((size_t)n * sizeof *x), *y = malloc((size_t)n * sizeof *y);
+    if (!x || !y) {
+        free(x);
+        free(y);
+        return -1;
+    }
+    for (j = 0; j < fan->nfield * fan->nwave; j++)
+        for (side = 0; side < 2; side++) {
+            const sg_fan_curve *c = side ? &fan->sag[j] : &fan->tan[j];
+            int i;
+            for (i = 0; i < n; i++)
+                if (c->status[i] == SG_OK)
+                    ext = fmax(ext, fabs(c->e[i]));
+        }
+    u = view_length_unit(sys, ext, &scale);
+    snprintf(title, sizeof title, "Transverse ray fans: %s", safe_text(sys->title, lab, sizeof lab));
+    plot_figure_init(f, title);
+    snprintf(yt, sizeof yt, "ey (%s)", u);
+    snprintf(ys, sizeof ys, "ex (%s)", u);
+    for (fi = 0; fi < fan->nfield; fi++)
+        for (side = 0; side < 2; side++) {
+            char fl[64], pt[96];
+            plot_panel *p;
+            view_field_label(sys, fan->field_index[fi], fl, sizeof fl);
+            snprintf(pt, sizeof pt, "%s %s", fl, side ? "sagittal" : "tangential");
+            p = plot_add_panel(f, pt, side ? "Px" : "Py", side ? ys : yt);
+            if (!p)
+                goto oom;
+            for (w = 0; w < fan->nwave; w++) {
+                const sg_fan_curve *c = side ? &fan->sag[fi * fan->nwave + w]
+                                             : &fan->tan[fi * fan->nwave + w];
+                for (j = 0; j < n; j++) {
+                    x[j] = c->p[j];
+                    y[j] = c->status[j] == SG_OK ? c->e[j] * scale : NAN;
+                }
+                if (plot_add_series(p, PLOT_LINES, fan->wave_index[w], x, y, (size_t)n))
+                    goto oom;
+            }
+            p->xmin = -1.0;
+            p->xmax = 1.0;
+            /* Both fans of a field on one scale, symmetric about zero. */
+            p->ymin = -(ext > 0 ? ext * scale * 1.1 : 1.0);
+            p->ymax = -p->ymin;
+        }
+    legend_waves(f, fan->nwave, fan->wave_index, fan->wave_um);
+    free(x);
+    free(y);
+    return 0;
+oom:
+    free(x);
+    free(y);
+    return -1;
+}
+
+int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f)
+{
+    char title[200], lab[64], xl[32], yl[32];
+    const char *u = sys->units[0] ? sys->units : "mm";
+    plot_panel *p;
+    int i, fi;
+    snprintf(title, sizeof title, "Layout: %s", safe_text(sys->title, lab, sizeof lab));
+    plot_figure_init(f, title);
+    snprintf(xl, sizeof xl, "z (%s)", u);
+    snprintf(yl, sizeof yl, "y (%s)", u);
+    p = plot_add_panel(f, "", xl, yl);
+    if (!p)
+        return -1;
+    p->equal = 1;
+    for (i = 0; i < l->nsurf - 1; i++) {
+        const sg_layout_surface *s = &l->surf[i];
+        if (plot_add_series(p, PLOT_LINES, PLOT_FG, s->z, s->y, (size_t)s->npts))
+            return -1;
+        /* A lens's edges: its two surfaces' rims joined. */
+        if (s->glass_after && i + 1 < l->nsurf - 1 && s->npts && l->surf[i + 1].npts) {
+            const sg_layout_surface *t = &l->surf[i + 1];
+            double z[5] = {s->z[0], t->z[0], NAN, s->z[s->npts - 1], t->z[t->npts - 1]};
+            double y[5] = {s->y[0], t->y[0], NAN, s->y[s->npts - 1], t->y[t->npts - 1]};
+            if (plot_add_series(p, PLOT_LINES, PLOT_FG, z, y, 5))
+                return -1;
+        }
+    }
+    for (i = 0; i < l->nray; i++)
+        if (plot_add_series(p, PLOT_LINES, l->ray[i].field, l->ray[i].z, l->ray[i].y,
+                            (size_t)l->ray[i].npts))
+            return -1;
+    for (fi = 0; fi < l->nfield; fi++) {
+        char fl[64];
+        view_field_label(sys, l->field_index[fi], fl, sizeof fl);
+        plot_add_legend(f, fi, fl);
+    }
+    plot_panel_limits(p, 0.0);
+    return 0;
+}

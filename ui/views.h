@@ -1,0 +1,26 @@
+/*
+ * views.h - pictures of the analyses: a spot diagram, ray fans or a layout
+ * made into a plot_figure (plot.h), shared by the commands and the editor.
+ */
+#ifndef SG_UI_VIEWS_H
+#define SG_UI_VIEWS_H
+
+#include "plot.h"
+#include "sagitta.h"
+
+/* The unit to show lengths of up to extent lens units in: micrometres for
+ * small ones (as Zemax shows spots and fans), else the lens unit; *scale
+ * converts lens units to it. */
+const char *view_length_unit(const sg_system *sys, double extent, double *scale);
+/* "0.588 µm" for a wavelength. */
+void view_wave_label(double um, char *buf, size_t n);
+/* A field's label, "field 2 (0, 14 deg)". */
+void view_field_label(const sg_system *sys, int k, char *buf, size_t n);
+
+/* Each fills f (plot_figure_init'ed here; free with plot_figure_free);
+ * 0, or -1 when out of memory. */
+int view_spot_figure(const sg_system *sys, const sg_spot *s, plot_figure *f);
+int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f);
+int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f);
+
+#endif
