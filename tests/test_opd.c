@@ -392,8 +392,9 @@ static double grid_check(const char *file, const double (*fields)[2], int nf,
     sg_system *sys = tu_example(file);
     sg_tracer *tp = tu_tracer(sys, cat, SG_METHOD_PRECISE);
     sg_tracer *tc = tu_tracer(sys, cat, SG_METHOD_CLASSIC);
+    sg_tracer *tm = tu_tracer(sys, cat, SG_METHOD_MPFR);
     int n = sg_tracer_nsurf(tp), f, i, j, count = 0;
-    double worst = 0.0, lam = wave_mm(sys), ez = sg_tracer_paraxial(tp)->exp_pos;
+    double mworst = 0.0, worst = 0.0, lam = wave_mm(sys), ez = sg_tracer_paraxial(tp)->exp_pos;
     double nimg = fabs(sg_tracer_index(tp, n - 1));
     sg_ray_surface chief[MAXS], rows[MAXS], crow[MAXS];
     mray r;
@@ -407,7 +408,7 @@ static double grid_check(const char *file, const double (*fields)[2], int nf,
     *bound_ratio = 0.0;
     for (f = 0; f < nf; f++) {
         double c1[3], side;
-        sg_opd_ref ref, cref;
+        sg_opd_ref ref, cref, mref;
         assert_int_equal(sg_trace_normalized(tp, fields[f][0], fields[f][1], 0, 0, chief), SG_OK);
         c1[0] = chief[1].x;
         c1[1] = chief[1].y;
@@ -428,6 +429,10 @@ static double grid_check(const char *file, const double (*fields)[2], int nf,
         msphere_opl(&r, C, ez, nimg, side, copl, &t);
         assert_int_equal(sg_opd_reference(tp, fields[f][0], fields[f][1], &ref, NULL), SG_OK);
         assert_int_equal(sg_opd_reference(tc, fields[f][0], fields[f][1], &cref, NULL), SG_OK);
+        assert_int_equal(sg_opd_reference(tm, fields[f][0], fields[f][1], &mref, NULL), SG_OK);
+        /* At infinity the chief ray's path starts on surface 1 itself. */
+        if (isinf(sys->surf[0].thickness))
+            assert_true(chief[1].opl == 0.0 && chief[1].opl_lo == 0.0);
         for (i = -3; i <= 3; i++)
             for (j = -3; j <= 3; j++) {
                 double px = i / 3.0, py = j / 3.0, got, want, e;
@@ -437,6 +442,14 @@ static double grid_check(const char *file, const double (*fields)[2], int nf,
                 assert_int_equal(sg_trace_opd(tp, &ref, px, py, rows, &o), SG_OK);
                 assert_int_equal(o.status, SG_OK);
                 mlaunch(sys, tp, rows, c1, &r, &t);
+                /* The path to surface 1 from the object point or the start
+                 * plane, as the test forms it. */
+                {
+                    double o1 = mpfr_get_d(r.opl, MPFR_RNDN);
+                    if (!(fabs(rows[1].opl - o1) <= 1e-15 * fabs(o1) + 1e-12))
+                        fail_msg("%s: the OPL at surface 1 is %.17g, not %.17g", file,
+                                 rows[1].opl, o1);
+                }
                 assert_int_equal(mtrace(sys, tp, &r, &t), 0);
                 msphere_opl(&r, C, ez, nimg, side, ropl, &t);
                 mpfr_sub(t.a, copl, ropl, MPFR_RNDN);
@@ -466,17 +479,24 @@ static double grid_check(const char *file, const double (*fields)[2], int nf,
                 assert_int_equal(sg_trace_opd(tc, &cref, px, py, crow, &oc), SG_OK);
                 if (fabs(oc.opd_waves - want) > *classic_worst)
                     *classic_worst = fabs(oc.opd_waves - want);
+                /* The mpfr method's OPD (its own indices in MPFR). */
+                assert_int_equal(sg_trace_opd(tm, &mref, px, py, crow, &oc), SG_OK);
+                if (fabs(oc.opd_waves - want) > mworst)
+                    mworst = fabs(oc.opd_waves - want);
                 count++;
             }
     }
-    print_message("# %-15s %d rays: precise OPD within %.3g waves of the test's MPFR; "
-                  "error / bound at most %.3g; plain double (classic) off by up to %.3g waves\n",
-                  file, count, worst, *bound_ratio, *classic_worst);
+    print_message("# %-15s %d rays: precise OPD within %.3g waves of the test's MPFR "
+                  "(error / bound at most %.3g), mpfr method within %.3g; plain double "
+                  "(classic) off by up to %.3g waves\n",
+                  file, count, worst, *bound_ratio, mworst, *classic_worst);
+    assert_true(mworst <= 1e-10);
     mpfr_clears(C[0], C[1], C[2], copl, ropl, (mpfr_ptr)0);
     mtmp_clear(&t);
     mray_clear(&r);
     sg_tracer_free(tp);
     sg_tracer_free(tc);
+    sg_tracer_free(tm);
     sg_system_free(sys);
     sg_catalog_free(cat);
     return worst;
@@ -488,8 +508,9 @@ static void cassegrain_vs_mpfr(void **state)
     double cw, br;
     (void)state;
     grid_check("cassegrain.json", fields, 4, &cw, &br);
-    /* 5e8 mm of path in double: the plain OPD errs visibly. */
-    assert_true(cw > 1e-6);
+    /* 5e8 mm of path in double: the plain OPD errs visibly, by about the
+     * rounding of the path (6e-8 mm, 1e-4 waves), but no more. */
+    assert_true(cw > 1e-6 && cw < 2e-3);
 }
 
 static void tma_vs_mpfr(void **state)
@@ -498,6 +519,8 @@ static void tma_vs_mpfr(void **state)
     double cw, br;
     (void)state;
     grid_check("tma.json", fields, 4, &cw, &br);
+    /* Paths of 3 m: the plain OPD is good to some 1e-9 waves. */
+    assert_true(cw < 1e-7);
 }
 
 /* ------------------------------------------------------------------------
