@@ -11,6 +11,7 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -83,19 +84,21 @@ static int finite4(const double *v)
 }
 
 /* Whether the rows after the object row that are marked OK hold only
- * finite numbers, SG_VL of a row's ten at a time (x .. path lie first and
+ * finite numbers, SG_VL of a row's thirteen at a time (x .. opl_error_bound lie first and
  * in order): 0 * v is NaN exactly for an infinity or NaN.  The common,
  * finite ray costs a few vector operations a row; sg_guard_rows then
  * looks only at a ray that fails here, and checks its object row. */
+_Static_assert(offsetof(sg_ray_surface, opl_error_bound) == 12 * sizeof(double),
+               "a row's thirteen doubles come first, in order");
 static int rows_finite(const sg_ray_surface *out, int n)
 {
     vm bad = vm_set(0);
     int i, off;
     for (i = 1; i < n && out[i].status == SG_OK; i++) {
         const char *row = (const char *)&out[i];
-        for (off = 0; off < 10; off += SG_VL) {
+        for (off = 0; off < 13; off += SG_VL) {
             vd v;
-            int at = off + SG_VL <= 10 ? off : 10 - SG_VL;
+            int at = off + SG_VL <= 13 ? off : 13 - SG_VL;
             memcpy(&v, row + (size_t)at * sizeof(double), sizeof v);
             v = v * 0.0;
             bad |= (vm)(v != v);
@@ -109,7 +112,8 @@ static int rows_finite(const sg_ray_surface *out, int n)
 static int row0_finite(const sg_tracer *t, const sg_ray_surface *o)
 {
     double s = 0.0 * o->l + 0.0 * o->m + 0.0 * o->n + 0.0 * o->residual +
-               0.0 * o->error_bound + 0.0 * o->dir_error_bound + 0.0 * o->path;
+               0.0 * o->error_bound + 0.0 * o->dir_error_bound + 0.0 * o->path +
+               0.0 * o->opl + 0.0 * o->opl_lo + 0.0 * o->opl_error_bound;
     if (t->ln.obj_inf)
         return s == s && o->x == o->x && o->y == o->y && o->z == o->z;
     s += 0.0 * o->x + 0.0 * o->y + 0.0 * o->z;

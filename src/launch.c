@@ -64,6 +64,7 @@ static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
         o->dir.y = dd_div(ty, len);
         o->dir.z = dd_div(dd_from(1.0), len);
         o->lam = dd_div(t->ln.enp, o->dir.z);
+        o->n0 = fabs(t->nsigned[0]);
     } else {
         const sg_surface *s0 = &t->sys->surf[0];
         double R = s0->radius;
@@ -78,6 +79,7 @@ static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
                 o->obj.z = dd_add_d(o->obj.z, sag);
         }
         o->lam = dd_div(dd_neg(o->obj.z), dd_sub(t->ln.enp, o->obj.z));
+        o->n0 = fabs(t->nsigned[0]);
     }
 }
 
@@ -195,10 +197,16 @@ static void pray_from_v(const osp *o, const vdd q[2], sg_vray *r, vd *path0)
     r->eP = DD_U * (vd_abs(q[0].hi) + vd_abs(q[1].hi));
     r->eD = vd_set(8.0 * DD_U);
     if (o->inf) {
+        vdd a;
         r->d.x = vdd_set(o->dir.x);
         r->d.y = vdd_set(o->dir.y);
         r->d.z = vdd_set(o->dir.z);
         *path0 = vd_set(0.0);
+        /* The optical path from the field's start plane to Q. */
+        a = vdd_add_m(vdd_mul(q[0], r->d.x), vdd_mul(q[1], r->d.y));
+        r->opl = vdd_mul_d(vdd_sub(a, vdd_set(o->plane)), vd_set(o->n0));
+        r->eO = 8.0 * DD_U * o->n0 *
+                (vd_abs(q[0].hi) + vd_abs(q[1].hi) + vd_set(fabs(o->plane.hi)));
     } else {
         vdd3 v;
         vdd len, inv;
@@ -212,6 +220,10 @@ static void pray_from_v(const osp *o, const vdd q[2], sg_vray *r, vd *path0)
         r->d.y = vdd_mul(v.y, inv);
         r->d.z = vdd_mul(v.z, inv);
         *path0 = len.hi + len.lo;
+        /* The optical path from the object point; the length errs by a
+         * few roundings of the pair. */
+        r->opl = vdd_mul_d(len, vd_set(o->n0));
+        r->eO = 16.0 * DD_U * o->n0 * len.hi;
     }
 }
 
@@ -826,6 +838,39 @@ static int field_osp_at(sg_tracer *t, land_fn land, double hx, double hy, osp *o
  * Entry points.
  * ------------------------------------------------------------------------ */
 
+/* An object at infinity's optical paths start on the plane through the
+ * chief ray's point on surface 1, normal to the field's direction (as in
+ * Zemax); the chief ray is the primary wavelength's, whose tracer aims it
+ * as the rays of the primary wavelength are aimed.  Returns that point
+ * dotted with the direction, or 0 where the chief ray fails. */
+static dd chief_plane(sg_tracer *t, const osp *o)
+{
+    sg_tracer *p = t->prim ? t->prim : t;
+    int classic = p->o.method == SG_METHOD_CLASSIC;
+    land_fn land = classic ? land_classic : land_precise;
+    dd q[2], zero = dd_from(0.0);
+    if (launch_q(p, land, o, 0.0, 0.0, q, 0, p->scratch, NULL) != SG_OK)
+        return zero;
+    if (classic) {
+        double S[3], D[3];
+        classic_start(o, q, S, D);
+        vd_leave();
+        if (sg_classic_run_to(p, S, D, p->scratch, 1) != SG_OK)
+            return zero;
+        return dd_add(dd_add(dd_two_prod(p->scratch[1].x, o->dir.x.hi),
+                             dd_two_prod(p->scratch[1].y, o->dir.y.hi)),
+                      dd_two_prod(p->scratch[1].z, o->dir.z.hi));
+    } else {
+        sg_pray r;
+        double p0;
+        pray_from(o, q, &r, &p0);
+        if (sg_precise_run_to(p, &r, p0, p->scratch, 1) != SG_OK)
+            return zero;
+        return dd_add(dd_add(dd_mul(r.p.x, o->dir.x), dd_mul(r.p.y, o->dir.y)),
+                      dd_mul(r.p.z, o->dir.z));
+    }
+}
+
 /* The object-space part of field (hx, hy), cached for the next ray of the
  * same field; on failure every surface is marked. */
 static int field_cached(sg_tracer *t, land_fn land, double hx, double hy, osp *o,
@@ -842,6 +887,8 @@ static int field_cached(sg_tracer *t, land_fn land, double hx, double hy, osp *o
             sg_fail_rest(out, 0, t->n, rc);
             return rc;
         }
+        if (o->inf)
+            o->plane = chief_plane(t, o);
         t->field = *o;
         t->have_field = 1;
         t->have_aimJ = 0;
@@ -924,7 +971,17 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
         out[0].z = S[2] + t->ln.T0.hi;
     }
     vd_leave();
-    return sg_classic_run_to(t, S, D, out, t->n - 1);
+    rc = sg_classic_run_to(t, S, D, out, t->n - 1);
+    if (o.inf) {
+        /* The optical path from the field's start plane to Q. */
+        double off = o.n0 * (q[0].hi * o.dir.x.hi + q[1].hi * o.dir.y.hi - o.plane.hi);
+        int i;
+        for (i = 1; i < t->n && out[i].status == SG_OK; i++) {
+            out[i].opl += off;
+            out[i].opl_error_bound += sg_bound_up(4.0 * U53 * (fabs(off) + fabs(out[i].opl)));
+        }
+    }
+    return rc;
 }
 
 /* ------------------------------------------------------------------------

@@ -384,6 +384,14 @@ typedef struct sg_ray_surface {
     double error_bound; /* bound on max |coordinate error| against exact arithmetic */
     double dir_error_bound; /* the same for l, m, n */
     double path;        /* geometric distance from the previous surface */
+    /* Optical path from the ray's start to this point: the sum of |index|
+     * times each signed step, in lens units.  A finite object's rays start
+     * at the object point; an object at infinity's on the plane through
+     * the primary wavelength's chief ray's point on surface 1, normal to
+     * the field's direction; rays given by start and direction at their
+     * start.  opl + opl_lo is the path in double-double (opl_lo is 0 in
+     * the classic method), and opl_error_bound bounds its error. */
+    double opl, opl_lo, opl_error_bound;
     int status;         /* SG_OK or a ray failure: SG_EMISS, SG_ETIR, ... */
 } sg_ray_surface;
 
@@ -639,6 +647,58 @@ typedef struct sg_layout {
 int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layout_opts *o,
                       sg_layout *out, sg_diag *d);
 void sg_layout_free(sg_layout *l);
+
+/* ------------------------------------------------------------------------
+ * Optical path difference (Zemax's convention, sagitta(1)).
+ * ------------------------------------------------------------------------ */
+
+/* The reference sphere of one field: centred on the primary wavelength's
+ * chief ray's point on the image surface, through the axial point of the
+ * paraxial exit pupil (the stop's paraxial image in image space).  All
+ * coordinates are in the image surface's frame. */
+typedef struct sg_opd_ref {
+    double hx, hy;          /* the field */
+    int status;             /* SG_OK, or the chief ray's failure */
+    double um;              /* the primary wavelength */
+    double n_image;         /* |index| of image space at the primary wavelength */
+    double cx, cy, cz;      /* the centre: the chief ray's image point */
+    double chief_l, chief_m, chief_n; /* the chief ray's direction in image space */
+    double centre_error_bound;        /* the chief row's error_bound */
+    double ez;              /* the exit pupil's axial point (0, 0, ez) */
+    double radius, radius_lo; /* |E - C|, in double-double */
+    double side;            /* -1 when the sphere lies behind the image point
+                             * along the chief ray (a pupil before the image) */
+    double chief_opl, chief_opl_lo;  /* the chief ray's optical path to the sphere */
+    double chief_opl_error_bound;
+} sg_opd_ref;
+
+/* One ray against a reference sphere. */
+typedef struct sg_opd {
+    int status;            /* SG_OK, the ray's failure, or the reference's */
+    double opd_waves;      /* (chief's path - ray's path to the sphere) / lambda */
+    double error_bound;    /* bound on |opd_waves - exact|, in waves */
+    double ex, ey;         /* transverse aberration: image point minus the chief's */
+    double sphere_x, sphere_y, sphere_z; /* the ray's point on the sphere */
+    double opl, opl_lo;    /* the ray's optical path to the sphere */
+} sg_opd;
+
+/* The reference sphere of field (hx, hy).  The chief ray is traced at the
+ * primary wavelength (by t's primary-wavelength tracer when t is at
+ * another).  A chief ray that fails is a result: SG_OK is returned with
+ * ref->status set.  SG_EUNSUPPORTED when the exit pupil is at infinity. */
+int sg_opd_reference(sg_tracer *t, double hx, double hy, sg_opd_ref *ref, sg_diag *d);
+/* The OPD of a ray traced by t (in t's wavelength, for ref's field) from
+ * its image row alone, so the rows of sg_batch_trace with only the image
+ * surface selected serve.  A failed ray or reference sets out->status and
+ * NaNs; returns SG_EINVAL only for NULL arguments. */
+int sg_opd_of_ray(const sg_tracer *t, const sg_opd_ref *ref, const sg_ray_surface *image_row,
+                  sg_opd *out);
+/* Traces pupil point (px, py) of ref's field with t (out: nsurf rows) and
+ * fills res; returns the trace's status. */
+int sg_trace_opd(sg_tracer *t, const sg_opd_ref *ref, double px, double py,
+                 sg_ray_surface *out, sg_opd *res);
+/* The tracer's wavelength in micrometres. */
+double sg_tracer_wavelength(const sg_tracer *t);
 
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */

@@ -268,6 +268,7 @@ void sg_fail_rest(sg_ray_surface *out, int from, int n, int status)
         out[i].l = out[i].m = out[i].n = NAN;
         out[i].residual = out[i].error_bound = out[i].dir_error_bound = NAN;
         out[i].path = NAN;
+        out[i].opl = out[i].opl_lo = out[i].opl_error_bound = NAN;
         out[i].status = i == from ? status : SG_ENOTREACHED;
     }
 }
@@ -329,7 +330,7 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
                       sg_ray_surface *out, int upto)
 {
     double P[3] = {S[0], S[1], S[2]}, d[3] = {D[0], D[1], D[2]};
-    double eP = 0.0, eD = 0.0;
+    double eP = 0.0, eD = 0.0, opl = 0.0, eO = 0.0;
     int i;
     for (i = 1; i <= upto; i++) {
         const sg_sprep *s = &t->sp[i];
@@ -430,6 +431,18 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
         /* Signed, as in the other methods: negative for a surface behind
          * the ray's start. */
         o->path = tt * dlen;
+        {
+            /* The textbook optical path: |n| times each step, summed in
+             * double; its estimate from the roundings of the step and the
+             * sum (a point's error off the ray's own path moves the path
+             * only to second order, by Fermat's principle). */
+            double nb = fabs(t->nsigned[i - 1]);
+            opl += nb * o->path;
+            eO += nb * (eta_t * dlen + 4.0 * U53 * fabs(o->path)) + 2.0 * U53 * fabs(opl);
+            o->opl = opl;
+            o->opl_lo = 0.0;
+            o->opl_error_bound = sg_bound_up(eO);
+        }
         o->residual = sg_sprep_sag_resid(s, o->x, o->y, o->z);
         o->error_bound = sg_bound_up(eP);
         o->status = SG_OK;
@@ -703,7 +716,7 @@ static inline uint64_t nonfinite_bit(double v)
     return (u & 0x7ff0000000000000ull) + 0x0010000000000000ull;
 }
 
-/* The row's ten numbers, each read once and ORed as a tree with integer
+/* The row's thirteen numbers, each read once and ORed as a tree with integer
  * operations: no branch and no long chain, so the common, finite ray
  * costs a few instructions a row. */
 static inline uint64_t row_bits(const sg_ray_surface *o)
@@ -712,7 +725,8 @@ static inline uint64_t row_bits(const sg_ray_surface *o)
             (nonfinite_bit(o->z) | nonfinite_bit(o->l))) |
            ((nonfinite_bit(o->m) | nonfinite_bit(o->n)) |
             (nonfinite_bit(o->residual) | nonfinite_bit(o->error_bound))) |
-           (nonfinite_bit(o->dir_error_bound) | nonfinite_bit(o->path));
+           ((nonfinite_bit(o->dir_error_bound) | nonfinite_bit(o->path)) |
+            (nonfinite_bit(o->opl) | nonfinite_bit(o->opl_lo) | nonfinite_bit(o->opl_error_bound)));
 }
 
 static int row_bad(const sg_tracer *t, const sg_ray_surface *o, int i)
@@ -795,6 +809,8 @@ int sg_start_precise_prep(const sg_tracer *t, const double start[3], const doubl
     r->d.z = dd_div(dd_from(dir[2]), len);
     r->eP = 0.0;
     r->eD = 4.0 * DD_U;
+    r->opl = dd_from(0.0);
+    r->eO = 0.0;
     u[0] = r->d.x.hi;
     u[1] = r->d.y.hi;
     u[2] = r->d.z.hi;

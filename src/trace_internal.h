@@ -76,6 +76,11 @@ typedef struct osp {
     dd3 dir;
     dd3 obj;
     dd lam; /* aiming off: enp / dir.z at infinity, else -obj.z / (enp - obj.z) */
+    double n0; /* |index| of object space */
+    /* At infinity, the optical path's start plane: the primary chief
+     * ray's point on surface 1 dotted with dir (0 until the field's chief
+     * ray is known, and where it fails). */
+    dd plane;
 } osp;
 
 struct sg_tracer {
@@ -108,6 +113,8 @@ struct sg_tracer {
 typedef struct sg_pray {
     dd3 p, d;
     double eP, eD;
+    dd opl;    /* optical path so far */
+    double eO; /* bound on its error */
 } sg_pray;
 
 /* The state of SG_VL precise rays between surfaces, lane by lane: what
@@ -115,6 +122,8 @@ typedef struct sg_pray {
 typedef struct sg_vray {
     vdd3 p, d;
     vd eP, eD;
+    vdd opl;
+    vd eO;
 } sg_vray;
 
 /* Lane k of v to and from one ray's state. */
@@ -134,6 +143,9 @@ static inline void sg_vray_get(const sg_vray *v, int k, sg_pray *r)
     r->d.z.lo = v->d.z.lo[k];
     r->eP = v->eP[k];
     r->eD = v->eD[k];
+    r->opl.hi = v->opl.hi[k];
+    r->opl.lo = v->opl.lo[k];
+    r->eO = v->eO[k];
 }
 
 static inline void sg_vray_put(sg_vray *v, int k, const sg_pray *r)
@@ -152,6 +164,9 @@ static inline void sg_vray_put(sg_vray *v, int k, const sg_pray *r)
     v->d.z.lo[k] = r->d.z.lo;
     v->eP[k] = r->eP;
     v->eD[k] = r->eD;
+    v->opl.hi[k] = r->opl.hi;
+    v->opl.lo[k] = r->opl.lo;
+    v->eO[k] = r->eO;
 }
 
 /* b takes a's state in the lanes of m. */
@@ -165,6 +180,8 @@ static inline void sg_vray_sel(vm m, const sg_vray *a, sg_vray *b)
     b->d.z = vdd_sel(m, a->d.z, b->d.z);
     b->eP = vsel(m, a->eP, b->eP);
     b->eD = vsel(m, a->eD, b->eD);
+    b->opl = vdd_sel(m, a->opl, b->opl);
+    b->eO = vsel(m, a->eO, b->eO);
 }
 
 /* Traces surfaces 1..upto from a ray on or before surface 1 (frame 1).

@@ -19,6 +19,7 @@ enum { NT = 32, NA = 16 };
 
 typedef struct msurf {
     mpfr_t R, k1, T, mu;
+    mpfr_t nb; /* |index| before the surface */
     mpfr_t a[SG_NASPH];
 } msurf;
 
@@ -37,6 +38,13 @@ struct sg_mpfr_ctx {
     mvec P, D, G, obj, dir, sv_P, sv_D;
     mpfr_t q[2], t[NT];
     mpfr_t path;
+    /* The optical path so far; at infinity, the start plane (the primary
+     * chief ray's point on surface 1 dotted with the direction) of the
+     * field (plane_hx, plane_hy), and c1dot, that product for the ray
+     * last traced through surface 1. */
+    mpfr_t opl, plane, c1dot;
+    int plane_ok, plane_busy;
+    double plane_hx, plane_hy;
     /* aiming: the field values before m_osp, the target, the last good Q,
      * the step, and the paraxial Q the continuation moves with */
     mpfr_t fv[2], tgt[2], qb[2], dq[2], qo[2];
@@ -97,14 +105,14 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
         return;
     if (m->s) {
         for (i = 0; i < m->n; i++) {
-            mpfr_clears(m->s[i].R, m->s[i].k1, m->s[i].T, m->s[i].mu, (mpfr_ptr)0);
+            mpfr_clears(m->s[i].R, m->s[i].k1, m->s[i].T, m->s[i].mu, m->s[i].nb, (mpfr_ptr)0);
             for (k = 0; k < SG_NASPH; k++)
                 mpfr_clear(m->s[i].a[k]);
         }
         free(m->s);
     }
     mpfr_clears(m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi,
-                m->q[0], m->q[1], m->path, (mpfr_ptr)0);
+                m->q[0], m->q[1], m->path, m->opl, m->plane, m->c1dot, (mpfr_ptr)0);
     for (k = 0; k < 2; k++)
         mpfr_clears(m->fv[k], m->tgt[k], m->qb[k], m->dq[k], m->qo[k], (mpfr_ptr)0);
     for (k = 0; k < NA; k++)
@@ -137,7 +145,10 @@ static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
     m->n = n;
     m->s = s;
     mpfr_inits2(prec, m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi,
-                m->q[0], m->q[1], m->path, (mpfr_ptr)0);
+                m->q[0], m->q[1], m->path, m->opl, m->plane, m->c1dot, (mpfr_ptr)0);
+    mpfr_set_zero(m->opl, 1);
+    mpfr_set_zero(m->plane, 1);
+    mpfr_set_zero(m->c1dot, 1);
     for (k = 0; k < 2; k++)
         mpfr_inits2(prec, m->fv[k], m->tgt[k], m->qb[k], m->dq[k], m->qo[k], (mpfr_ptr)0);
     for (k = 0; k < NA; k++)
@@ -152,7 +163,8 @@ static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
     mvec_init(&m->sv_P, prec);
     mvec_init(&m->sv_D, prec);
     for (i = 0; i < n; i++) {
-        mpfr_inits2(prec, s[i].R, s[i].k1, s[i].T, s[i].mu, (mpfr_ptr)0);
+        mpfr_inits2(prec, s[i].R, s[i].k1, s[i].T, s[i].mu, s[i].nb, (mpfr_ptr)0);
+        mpfr_set_ui(s[i].nb, 1, MPFR_RNDN);
         for (k = 0; k < SG_NASPH; k++)
             mpfr_init2(s[i].a[k], prec);
     }
@@ -580,9 +592,21 @@ static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
         o->y = mpfr_get_d(m->P.y, MPFR_RNDN);
         o->z = mpfr_get_d(m->P.z, MPFR_RNDN);
         o->path = mpfr_get_d(m->path, MPFR_RNDN);
+        if (i == 1)
+            dot(m->c1dot, &m->P, &m->D, m->t[0]);
+        mpfr_mul(m->t[0], m->path, m->s[i].nb, MPFR_RNDN);
+        mpfr_add(m->opl, m->opl, m->t[0], MPFR_RNDN);
+        {
+            dd o2 = dd_from_mpfr(m->opl, m->t[0]);
+            o->opl = o2.hi;
+            o->opl_lo = o2.lo;
+        }
         o->residual = sg_sprep_sag_resid(sp, o->x, o->y, o->z);
         big = fmax(fabs(o->x), fmax(fabs(o->y), fabs(o->z)));
         o->error_bound = 0.5 * ulp_d(big) + ldexp(big + fabs(o->path), 16 - (int)m->prec);
+        /* As the point's: some 2^16 roundings of the path's size a surface. */
+        o->opl_error_bound =
+            sg_bound_up(ldexp((double)i * (big + fabs(o->opl) + fabs(o->path)), 16 - (int)m->prec));
         o->status = SG_OK;
         if (tr->o.clip && sp->sd > 0.0 && hypot(o->x, o->y) > sp->sd * (1.0 + tr->o.clip_rtol)) {
             sg_fail_rest(out, i, tr->n, SG_EVIGNETTED);
@@ -629,6 +653,7 @@ int sg_mpfr_trace_start(sg_tracer *tr, const double S[3], const double Dv[3],
     u[2] = mpfr_get_d(m->D.z, MPFR_RNDN);
     sg_set_start_row(&out[0], S, u);
     mpfr_set_zero(m->path, 1);
+    mpfr_set_zero(m->opl, 1);
     return run(tr, out, tr->n - 1);
 }
 
@@ -694,7 +719,14 @@ static void m_start(sg_tracer *tr)
     if (!isfinite(tr->sys->surf[0].thickness)) {
         mvec_set(&m->D, &m->dir);
         mpfr_set_zero(m->path, 1);
+        /* The optical path from the field's start plane to Q. */
+        mpfr_mul(m->t[0], m->q[0], m->dir.x, MPFR_RNDN);
+        mpfr_mul(m->t[1], m->q[1], m->dir.y, MPFR_RNDN);
+        mpfr_add(m->t[0], m->t[0], m->t[1], MPFR_RNDN);
+        mpfr_sub(m->t[0], m->t[0], m->plane, MPFR_RNDN);
+        mpfr_mul(m->opl, m->t[0], m->s[1].nb, MPFR_RNDN);
     } else {
+        mpfr_set_zero(m->opl, 1);
         mpfr_sub(m->D.x, m->q[0], m->obj.x, MPFR_RNDN);
         mpfr_sub(m->D.y, m->q[1], m->obj.y, MPFR_RNDN);
         mpfr_neg(m->D.z, m->obj.z, MPFR_RNDN);
@@ -926,6 +958,24 @@ int sg_mpfr_trace_normalized(sg_tracer *tr, double hx, double hy, double px, dou
         sg_fail_rest(out, 0, tr->n, SG_ERANGE);
         return SG_ERANGE;
     }
+    if (inf && !m->plane_busy &&
+        (!m->plane_ok || m->plane_hx != hx || m->plane_hy != hy)) {
+        /* The field's optical paths start on the plane through the primary
+         * wavelength's chief ray's point on surface 1, normal to the
+         * field's direction; it is traced first, once a field. */
+        sg_tracer *pt = tr->prim ? tr->prim : tr;
+        int rc;
+        pt->mp->plane_busy = 1;
+        rc = sg_mpfr_trace_normalized(pt, hx, hy, 0.0, 0.0, pt->scratch);
+        pt->mp->plane_busy = 0;
+        if (rc == SG_OK || pt->scratch[1].status == SG_OK)
+            mpfr_set(m->plane, pt->mp->c1dot, MPFR_RNDN);
+        else
+            mpfr_set_zero(m->plane, 1);
+        m->plane_ok = 1;
+        m->plane_hx = hx;
+        m->plane_hy = hy;
+    }
     mpfr_mul_d(t[12], m->fx, hx, MPFR_RNDN);
     mpfr_mul_d(t[13], m->fy, hy, MPFR_RNDN);
     switch (tr->sys->field_type) {
@@ -1035,6 +1085,7 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             mpfr_abs(m->t[0], idx[i - 1], MPFR_RNDN);
             mpfr_abs(m->t[1], idx[i], MPFR_RNDN);
             mpfr_div(m->s[i].mu, m->t[0], m->t[1], MPFR_RNDN);
+            mpfr_set(m->s[i].nb, m->t[0], MPFR_RNDN);
         }
         sg_parax_mp_init(&p, prec);
         rc = sg_paraxial_mpfr(sys, idx, prec, &p, d);

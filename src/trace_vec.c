@@ -466,11 +466,17 @@ static inline __attribute__((always_inline)) vd bound_v(vd e, vd a, vd b, vd c)
     return (e + 0.5 * u) * (1.0 + 8.0 * U53);
 }
 
+static inline vd sg_bound_up_v(vd b)
+{
+    return b * (1.0 + 8.0 * U53);
+}
+
 /* The point's columns of a block's rows, held until the bend has decided
  * which rays go on: a ray that stops there gets its row from
  * sg_fail_rest instead. */
 typedef struct vrow {
-    vd x, y, z, residual, bound, path;
+    vd x, y, z, residual, bound, path, eO;
+    vdd opl;
 } vrow;
 
 /* The first eight columns of a row, x to error_bound, are contiguous. */
@@ -527,6 +533,9 @@ static void put_rows(sg_ray_surface *const *out, int i, const vrow *pt, const sg
                     _mm512_storeu_pd(&o->x, row[k]);
                     o->dir_error_bound = dbound[k];
                     o->path = pt->path[k];
+                    o->opl = pt->opl.hi[k];
+                    o->opl_lo = pt->opl.lo[k];
+                    o->opl_error_bound = pt->eO[k];
                     o->status = SG_OK;
                 }
             return;
@@ -541,6 +550,9 @@ static void put_rows(sg_ray_surface *const *out, int i, const vrow *pt, const sg
                 o->residual = pt->residual[k];
                 o->error_bound = pt->bound[k];
                 o->path = pt->path[k];
+                o->opl = pt->opl.hi[k];
+                o->opl_lo = pt->opl.lo[k];
+                o->opl_error_bound = pt->eO[k];
                 o->status = SG_OK;
             }
 #endif
@@ -652,6 +664,7 @@ static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
     int it_max = t->o.max_iter > 4 ? t->o.max_iter : 4;
     vdd3 base;
     vm bad = vm_set(0), tp, act;
+    vd ePin = r->eP;
     int it;
 
     /* Measure 1: into this surface's frame and onto its tangent plane. */
@@ -846,8 +859,19 @@ static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
     r->eP = eP0;
 
     {
-        vdd sp = vdd_add_m(s0, sv);
+        vdd sp = vdd_add_m(s0, sv), seg;
+        double nb = fabs(t->nsigned[i - 1]);
         row.path = sp.hi + sp.lo;
+        /* The optical path adds |n| times the signed step in double-double.
+         * The step errs by at most both points' errors (each up to sqrt(3)
+         * times eP) and the direction's over its length; then the
+         * roundings of the product and the sum. */
+        seg = nb == 1.0 ? sp : vdd_mul_d(sp, vd_set(nb));
+        r->opl = vdd_add(r->opl, seg);
+        r->eO = sg_bound_up_v(r->eO + nb * 2.0 * (ePin + r->eP + vd_abs(sp.hi) * r->eD) +
+                              4.0 * DD_U * (vd_abs(r->opl.hi) + vd_abs(seg.hi)));
+        row.opl = r->opl;
+        row.eO = r->eO;
     }
     if (i == 1)
         row.path = path0 + row.path;

@@ -149,7 +149,7 @@ static void examples_every_mode(void **state)
                                             many, st, &d),
                              SG_OK);
             for (k = 0; k < NF * NP * n; k++)
-                if (memcmp(&single[k], &many[k], sizeof many[k]) != 0)
+                if (!tu_same_row(&single[k], &many[k]))
                     fail_msg("%s aim %s: ray %d surface %d differs in the batch", examples[e],
                              mode_name[mode], k / n, k % n);
             sg_tracer_free(tp);
@@ -375,7 +375,7 @@ static void wide_angle_batch(void **state)
                                             st, &d),
                              SG_OK);
             for (i = 0; i < NR * n; i++)
-                if (memcmp(&one[i], &many[i], sizeof one[i]) != 0)
+                if (!tu_same_row(&one[i], &many[i]))
                     fail_msg("fisheye aim %s %s: ray %d surface %d differs in the batch",
                              mode_name[mode], sg_method_name(methods[m]), i / n, i % n);
             print_message("# fisheye aim %-8s %-7s: %d rays (%d not OK) identical in the "

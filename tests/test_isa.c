@@ -105,15 +105,7 @@ static void same_bits(void **state)
                                              0, got, sg),
                                  SG_OK);
                 for (k = 0; k < NRAY * ns; k++) {
-                    const double a[10] = {ref[k].x, ref[k].y, ref[k].z, ref[k].l,
-                                          ref[k].m, ref[k].n, ref[k].residual,
-                                          ref[k].error_bound, ref[k].dir_error_bound,
-                                          ref[k].path};
-                    const double b[10] = {got[k].x, got[k].y, got[k].z, got[k].l,
-                                          got[k].m, got[k].n, got[k].residual,
-                                          got[k].error_bound, got[k].dir_error_bound,
-                                          got[k].path};
-                    if (memcmp(a, b, sizeof a) != 0 || ref[k].status != got[k].status)
+                    if (!tu_same_row(&ref[k], &got[k]))
                         fail_msg("%s, %s, %s: ray %zu surface %zu differs from the baseline",
                                  files[f], sg_method_name(methods[m]), variants[v].name,
                                  k / ns, k % ns);

@@ -29,11 +29,7 @@ static void same_rows(const sg_ray_surface *a, const sg_ray_surface *b, size_t n
 {
     size_t i;
     for (i = 0; i < n; i++) {
-        const double fa[10] = {a[i].x, a[i].y, a[i].z, a[i].l, a[i].m, a[i].n, a[i].residual,
-                               a[i].error_bound, a[i].dir_error_bound, a[i].path};
-        const double fb[10] = {b[i].x, b[i].y, b[i].z, b[i].l, b[i].m, b[i].n, b[i].residual,
-                               b[i].error_bound, b[i].dir_error_bound, b[i].path};
-        if (memcmp(fa, fb, sizeof fa) != 0 || a[i].status != b[i].status)
+        if (!tu_same_row(&a[i], &b[i]))
             fail_msg("%d threads: row %zu differs from the single-ray trace (x %.17g vs %.17g)",
                      nt, i, b[i].x, a[i].x);
     }

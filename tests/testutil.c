@@ -121,3 +121,12 @@ void tu_unpriv_end(void)
     }
 #endif
 }
+
+int tu_same_row(const sg_ray_surface *a, const sg_ray_surface *b)
+{
+    const double fa[13] = {a->x, a->y, a->z, a->l, a->m, a->n, a->residual, a->error_bound,
+                           a->dir_error_bound, a->path, a->opl, a->opl_lo, a->opl_error_bound};
+    const double fb[13] = {b->x, b->y, b->z, b->l, b->m, b->n, b->residual, b->error_bound,
+                           b->dir_error_bound, b->path, b->opl, b->opl_lo, b->opl_error_bound};
+    return memcmp(fa, fb, sizeof fa) == 0 && a->status == b->status;
+}

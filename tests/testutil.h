@@ -32,6 +32,9 @@ sg_system *tu_one_surface(void);
  * magnitude of ref_scale (so a coordinate near zero is not judged by its
  * own tiny ulp). */
 double tu_ulps(double a, double b, double ref_scale);
+/* Whether two rows hold the same bits in every number and the same status
+ * (the struct's padding is no part of a result). */
+int tu_same_row(const sg_ray_surface *a, const sg_ray_surface *b);
 
 /* ulp of |x| for a double (spacing of doubles at x). */
 double tu_ulp(double x);

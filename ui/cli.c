@@ -537,6 +537,8 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     sg_ray_surface *out = NULL;
     int *status = NULL, nsurf, rc, wave0 = 0, multi, opened = 0;
     size_t total = 0, block, cap, n, done = 0;
+    sg_opd *opd = NULL;
+    sg_opd_ref ref;
     unsigned long long pos, size;
     report_meta meta;
     report_stream rs;
@@ -591,15 +593,19 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
         goto done;
     }
     nsurf = sg_tracer_nsurf(t);
-    sg_tracer_free(t);
-    t = NULL;
+    /* The tracer stays for the reference spheres of normalized rays. */
+    if (csvrays_kind(rd) != SG_RAYS_NORMALIZED) {
+        sg_tracer_free(t);
+        t = NULL;
+    }
 
     block = rays_block(nsurf);
     cap = block < 2 ? 2 : block;
     rays = malloc(cap * sizeof *rays);
     out = malloc(cap * (size_t)nsurf * sizeof *out);
     status = malloc(cap * sizeof *status);
-    if (!rays || !out || !status) {
+    opd = t ? malloc(cap * sizeof *opd) : NULL;
+    if (!rays || !out || !status || (t && !opd)) {
         cli_error("out of memory for %zu rays of %d surfaces", cap, nsurf);
         rc = CLI_EXIT_INTERNAL;
         goto done;
@@ -619,6 +625,9 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     meta.bits = opts.method == SG_METHOD_MPFR ? opts.mpfr_bits : 0;
     meta.wave_um = sys->wave[wave0].um;
     meta.wave_index = wave0 + 1;
+    meta.opd = t != NULL;
+    memset(&ref, 0, sizeof ref);
+    ref.status = SG_EINVAL;
 
     progress_init(&pg);
     while (n > 0) {
@@ -643,7 +652,9 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
                              multi, total) != 0)
                 goto write_error;
         }
-        if (report_rays(&rs, out, status, n, rays) != 0)
+        if (t)
+            report_opd_block(t, &ref, rays, n, out, nsurf, opd);
+        if (report_rays_opd(&rs, out, status, n, rays, opd) != 0)
             goto write_error;
         done += n;
         csvrays_progress(rd, &pos, &size);
@@ -687,6 +698,7 @@ done:
     free(rays);
     free(out);
     free(status);
+    free(opd);
     sg_tracer_free(t);
     sg_batch_free(b);
     cli_design_free(cat, sys);
@@ -711,9 +723,11 @@ int cmd_trace(int argc, char **argv)
     sg_ray_surface *out = NULL;
     int *status = NULL, nsurf;
     report_meta meta;
+    sg_opd opd1;
     sg_diag d;
     FILE *f;
 
+    memset(&opd1, 0, sizeof opd1);
     cli_iter_init(&it, "trace", argc, argv);
     while ((id = cli_next_opt(&it, trace_opts, &val)) != -1) {
         switch (id) {
@@ -853,9 +867,16 @@ int cmd_trace(int argc, char **argv)
         goto done;
     }
     if (kind == SG_RAYS_NORMALIZED) {
+        sg_opd_ref ref;
         rc = sg_trace_normalized(t, ray4[0], ray4[1], ray4[2], ray4[3], out);
         status[0] = rc;
         sg_diag_clear(&d);
+        if (sg_err_is_ray_status(rc)) {
+            /* The reference sphere of the ray's field; its failure is the
+             * OPD's status, not the trace's. */
+            sg_opd_reference(t, ray4[0], ray4[1], &ref, NULL);
+            sg_opd_of_ray(t, &ref, &out[nsurf - 1], &opd1);
+        }
     } else {
         rc = sg_trace_start(t, start, dir, out);
         status[0] = rc;
@@ -873,6 +894,7 @@ int cmd_trace(int argc, char **argv)
     meta.bits = method == SG_METHOD_MPFR ? opts.mpfr_bits : 0;
     meta.wave_um = sys->wave[wave0].um;
     meta.wave_index = wave0 + 1;
+    meta.opd = kind == SG_RAYS_NORMALIZED;
 
     /* The output is opened only now, so a failed trace leaves an existing
      * file as it was. */
@@ -881,8 +903,8 @@ int cmd_trace(int argc, char **argv)
         rc = CLI_EXIT_FILE;
         goto done;
     }
-    if (report_write(f, (report_fmt)fmt, &meta, nsurf, out, status, nray, kind,
-                     &one) != 0) {
+    if (report_write_opd(f, (report_fmt)fmt, &meta, nsurf, out, status, nray, kind, &one,
+                         kind == SG_RAYS_NORMALIZED ? &opd1 : NULL) != 0) {
         cli_error("%s: %s", output && strcmp(output, "-") ? output : "standard output",
                   strerror(errno));
         if (f != stdout)

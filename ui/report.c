@@ -147,12 +147,12 @@ static void text_status_line(FILE *f, const sg_ray_surface *s, int nsurf, int st
 static void text_table(FILE *f, const report_meta *m, const sg_ray_surface *s, int nsurf)
 {
     int i;
-    fprintf(f, "%4s %23s %23s %23s %23s %23s %23s %10s %10s %23s  %s\n", "Surf",
+    fprintf(f, "%4s %23s %23s %23s %23s %23s %23s %10s %10s %23s %24s  %s\n", "Surf",
             "X", "Y", "Z", "L", "M", "N", "Residual", is_estimate(m) ? "ErrEst" : "ErrBound",
-            "Path", "Status");
+            "Path", "OPL", "Status");
     for (i = 0; i < nsurf; i++) {
         const sg_ray_surface *e = &s[i];
-        char label[16], b[9][40];
+        char label[16], b[10][40];
         if (i == 0)
             strcpy(label, "OBJ");
         else if (i == nsurf - 1)
@@ -165,13 +165,13 @@ static void text_table(FILE *f, const report_meta *m, const sg_ray_surface *s, i
             fprintf(f, "%4s %23s\n", label, report_status_name(e->status));
             continue;
         }
-        fprintf(f, "%4s %23s %23s %23s %23s %23s %23s %10s %10s %23s  %s\n", label,
+        fprintf(f, "%4s %23s %23s %23s %23s %23s %23s %10s %10s %23s %24s  %s\n", label,
                 sci(e->x, 15, b[0], sizeof b[0]), sci(e->y, 15, b[1], sizeof b[1]),
                 sci(e->z, 15, b[2], sizeof b[2]), sci(e->l, 15, b[3], sizeof b[3]),
                 sci(e->m, 15, b[4], sizeof b[4]), sci(e->n, 15, b[5], sizeof b[5]),
                 sci(e->residual, 3, b[6], sizeof b[6]),
                 sci(e->error_bound, 3, b[7], sizeof b[7]),
-                sci(e->path, 15, b[8], sizeof b[8]), "OK");
+                sci(e->path, 15, b[8], sizeof b[8]), sci(e->opl, 16, b[9], sizeof b[9]), "OK");
     }
 }
 
@@ -201,8 +201,25 @@ static void text_head(FILE *f, const report_meta *m, int multi, size_t total)
         fprintf(f, "Rays        : %zu\n", total);
 }
 
+/* The OPD line: the wavefront against the reference sphere, in waves of
+ * the ray's wavelength, and the transverse aberration. */
+static void text_opd_line(FILE *f, const report_meta *m, const sg_opd *o)
+{
+    char b[4][40];
+    if (o->status != SG_OK) {
+        fprintf(f, "OPD         : none (%s)\n", sg_strerror(o->status));
+        return;
+    }
+    fprintf(f, "OPD         : %s waves (%s %s); ex = %s, ey = %s\n",
+            sci(o->opd_waves, 15, b[0], sizeof b[0]),
+            is_estimate(m) ? "error estimate" : "error bound",
+            sci(o->error_bound, 3, b[1], sizeof b[1]), sci(o->ex, 15, b[2], sizeof b[2]),
+            sci(o->ey, 15, b[3], sizeof b[3]));
+}
+
 static void text_ray(FILE *f, const report_meta *m, int multi, size_t index, int nsurf,
-                     const sg_ray_surface *s, int st, sg_ray_kind kind, const sg_ray_in *ray)
+                     const sg_ray_surface *s, int st, sg_ray_kind kind, const sg_ray_in *ray,
+                     const sg_opd *opd)
 {
     fputc('\n', f);
     if (multi)
@@ -210,6 +227,8 @@ static void text_ray(FILE *f, const report_meta *m, int multi, size_t index, int
     if (ray)
         text_ray_line(f, kind, ray);
     text_status_line(f, s, nsurf, st);
+    if (opd)
+        text_opd_line(f, m, opd);
     fputc('\n', f);
     text_table(f, m, s, nsurf);
 }
@@ -235,11 +254,15 @@ static void csv_head(FILE *f, const report_meta *m, int multi, int inputs, sg_ra
         fputs("ray,", f);
     if (inputs)
         fputs(kind == SG_RAYS_NORMALIZED ? "hx,hy,px,py," : "x0,y0,z0,l0,m0,n0,", f);
-    fprintf(f, "surface,x,y,z,l,m,n,residual,%s,path,status\n", bound_key(m));
+    fprintf(f, "surface,x,y,z,l,m,n,residual,%s,path,status,opl,opl_%s", bound_key(m),
+            bound_key(m));
+    if (m && m->opd)
+        fprintf(f, ",opd_waves,opd_%s,ex,ey", bound_key(m));
+    fputc('\n', f);
 }
 
 static void csv_ray(FILE *f, int multi, size_t index, int nsurf, const sg_ray_surface *s,
-                    sg_ray_kind kind, const sg_ray_in *ray)
+                    sg_ray_kind kind, const sg_ray_in *ray, const sg_opd *opd)
 {
     int i, k, nin = ray ? (kind == SG_RAYS_NORMALIZED ? 4 : 6) : 0;
     for (i = 0; i < nsurf; i++) {
@@ -261,7 +284,28 @@ static void csv_ray(FILE *f, int multi, size_t index, int nsurf, const sg_ray_su
         } else {
             fputs(",,,,,,,,,", f);
         }
-        fprintf(f, "%s\n", report_status_name(e->status));
+        fputs(report_status_name(e->status), f);
+        fputc(',', f);
+        if (e->status == SG_OK) {
+            put_num(f, e->opl, 0);
+            fputc(',', f);
+            put_num(f, e->opl_error_bound, 0);
+        } else {
+            fputc(',', f);
+        }
+        if (opd) {
+            /* A ray's OPD belongs to its image row. */
+            if (i == nsurf - 1 && opd->status == SG_OK) {
+                const double v[4] = { opd->opd_waves, opd->error_bound, opd->ex, opd->ey };
+                for (k = 0; k < 4; k++) {
+                    fputc(',', f);
+                    put_num(f, v[k], 0);
+                }
+            } else {
+                fputs(",,,,", f);
+            }
+        }
+        fputc('\n', f);
     }
 }
 
@@ -336,6 +380,16 @@ static void json_surfaces(FILE *f, const report_meta *m, const sg_ray_surface *s
             else
                 fputs("null", f);
         }
+        fputs(", \"opl\": ", f);
+        if (e->status == SG_OK)
+            put_num(f, e->opl, 1);
+        else
+            fputs("null", f);
+        fprintf(f, ", \"opl_%s\": ", bound_key(m));
+        if (e->status == SG_OK)
+            put_num(f, e->opl_error_bound, 1);
+        else
+            fputs("null", f);
         fprintf(f, ", \"status\": \"%s\"}%s\n", report_status_name(e->status),
                 i + 1 < nsurf ? "," : "");
     }
@@ -344,8 +398,25 @@ static void json_surfaces(FILE *f, const report_meta *m, const sg_ray_surface *s
 
 /* One ray of the list form.  The separator goes before every ray but
  * the first, so a stream need not know which ray is the last. */
+/* The OPD keys of a ray's object: null where there is no OPD, with the
+ * reason in opd_status. */
+static void json_opd(FILE *f, const report_meta *m, const sg_opd *o, const char *sep)
+{
+    int ok = o->status == SG_OK;
+    fprintf(f, "%s\"opd_status\": \"%s\"", sep, report_status_name(o->status));
+    fprintf(f, "%s\"opd_waves\": ", sep);
+    put_num(f, ok ? o->opd_waves : NAN, 1);
+    fprintf(f, "%s\"opd_%s\": ", sep, bound_key(m));
+    put_num(f, ok ? o->error_bound : NAN, 1);
+    fprintf(f, "%s\"ex\": ", sep);
+    put_num(f, ok ? o->ex : NAN, 1);
+    fprintf(f, "%s\"ey\": ", sep);
+    put_num(f, ok ? o->ey : NAN, 1);
+}
+
 static void json_ray(FILE *f, const report_meta *m, size_t index, int nsurf,
-                     const sg_ray_surface *s, int st, sg_ray_kind kind, const sg_ray_in *ray)
+                     const sg_ray_surface *s, int st, sg_ray_kind kind, const sg_ray_in *ray,
+                     const sg_opd *opd)
 {
     if (index > 0)
         fputs(",\n", f);
@@ -354,19 +425,25 @@ static void json_ray(FILE *f, const report_meta *m, size_t index, int nsurf,
         fputs(", \"input\": ", f);
         json_input(f, kind, ray);
     }
-    fprintf(f, ", \"status\": \"%s\", \"surfaces\": ", report_status_name(st));
+    fprintf(f, ", \"status\": \"%s\"", report_status_name(st));
+    if (opd)
+        json_opd(f, m, opd, ", ");
+    fputs(", \"surfaces\": ", f);
     json_surfaces(f, m, s, nsurf, "    ");
     fputc('}', f);
 }
 
 static void json_single(FILE *f, const report_meta *m, int nsurf, const sg_ray_surface *s,
-                        int st, sg_ray_kind kind, const sg_ray_in *ray)
+                        int st, sg_ray_kind kind, const sg_ray_in *ray, const sg_opd *opd)
 {
     if (ray) {
         fputs(",\n  \"input\": ", f);
         json_input(f, kind, ray);
     }
-    fprintf(f, ",\n  \"status\": \"%s\",\n  \"surfaces\": ", report_status_name(st));
+    fprintf(f, ",\n  \"status\": \"%s\"", report_status_name(st));
+    if (opd)
+        json_opd(f, m, opd, ",\n  ");
+    fputs(",\n  \"surfaces\": ", f);
     json_surfaces(f, m, s, nsurf, "  ");
     fputs("\n}\n", f);
 }
@@ -420,6 +497,12 @@ int report_begin(report_stream *s, FILE *f, report_fmt fmt, const report_meta *m
 int report_rays(report_stream *s, const sg_ray_surface *out, const int *status, size_t n,
                 const sg_ray_in *rays)
 {
+    return report_rays_opd(s, out, status, n, rays, NULL);
+}
+
+int report_rays_opd(report_stream *s, const sg_ray_surface *out, const int *status, size_t n,
+                    const sg_ray_in *rays, const sg_opd *opds)
+{
     size_t r;
     if (!s->f || (n > 0 && !out) || (!s->multi && s->next + n > 1)) {
         errno = EINVAL;
@@ -429,19 +512,22 @@ int report_rays(report_stream *s, const sg_ray_surface *out, const int *status, 
         const sg_ray_surface *o = out + r * (size_t)s->nsurf;
         const sg_ray_in *in = rays ? &rays[r] : NULL;
         int st = ray_status(o, s->nsurf, status, r);
+        /* The OPD columns are the header's: present whenever it names them. */
+        const sg_opd none = { SG_EINVAL, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN };
+        const sg_opd *opd = s->m && s->m->opd ? (opds ? &opds[r] : &none) : NULL;
         switch (s->fmt) {
         case REPORT_TEXT:
-            text_ray(s->f, s->m, s->multi, s->next, s->nsurf, o, st, s->kind, in);
+            text_ray(s->f, s->m, s->multi, s->next, s->nsurf, o, st, s->kind, in, opd);
             break;
         case REPORT_CSV:
             csv_ray(s->f, s->multi, s->next, s->nsurf, o, s->kind,
-                    s->m && s->m->csv_inputs ? in : NULL);
+                    s->m && s->m->csv_inputs ? in : NULL, opd);
             break;
         default:
             if (s->multi)
-                json_ray(s->f, s->m, s->next, s->nsurf, o, st, s->kind, in);
+                json_ray(s->f, s->m, s->next, s->nsurf, o, st, s->kind, in, opd);
             else
-                json_single(s->f, s->m, s->nsurf, o, st, s->kind, in);
+                json_single(s->f, s->m, s->nsurf, o, st, s->kind, in, opd);
             break;
         }
     }
@@ -459,9 +545,32 @@ int report_end(report_stream *s)
     return finish(s->f);
 }
 
+void report_opd_block(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
+                      const sg_ray_surface *out, int nsurf, sg_opd *opd)
+{
+    size_t r;
+    /* A reference is found once for a run of rays of one field (sets and
+     * ray lists are usually field-major). */
+    for (r = 0; r < n; r++) {
+        if (ref->status == SG_EINVAL || ref->hx != rays[r].v[0] || ref->hy != rays[r].v[1]) {
+            sg_opd_reference(t, rays[r].v[0], rays[r].v[1], ref, NULL);
+            if (ref->status == SG_EINVAL)
+                ref->status = SG_ERANGE;
+        }
+        sg_opd_of_ray(t, ref, &out[r * (size_t)nsurf + (size_t)nsurf - 1], &opd[r]);
+    }
+}
+
 int report_write(FILE *f, report_fmt fmt, const report_meta *m, int nsurf,
                  const sg_ray_surface *out, const int *status, size_t nray,
                  sg_ray_kind kind, const sg_ray_in *rays)
+{
+    return report_write_opd(f, fmt, m, nsurf, out, status, nray, kind, rays, NULL);
+}
+
+int report_write_opd(FILE *f, report_fmt fmt, const report_meta *m, int nsurf,
+                     const sg_ray_surface *out, const int *status, size_t nray,
+                     sg_ray_kind kind, const sg_ray_in *rays, const sg_opd *opd)
 {
     report_stream s;
     if (!f || nsurf < 0 || (nray > 0 && !out)) {
@@ -470,7 +579,7 @@ int report_write(FILE *f, report_fmt fmt, const report_meta *m, int nsurf,
     }
     if (report_begin(&s, f, fmt, m, nsurf, kind, nray != 1, nray) < 0)
         return -1;
-    if (report_rays(&s, out, status, nray, rays) < 0)
+    if (report_rays_opd(&s, out, status, nray, rays, opd) < 0)
         return -1;
     return report_end(&s);
 }

@@ -25,6 +25,8 @@ typedef struct report_meta {
     int wave_index;     /* 1-based */
     int csv_inputs;     /* CSV: each row starts with its ray's launch
                            (hx,hy,px,py or x0,y0,z0,l0,m0,n0) */
+    int opd;            /* each ray comes with an sg_opd (report_rays_opd):
+                           its OPD and transverse aberration are written */
 } report_meta;
 
 /* The error column is error_bound (text: ErrBound) for precise and mpfr;
@@ -37,6 +39,16 @@ typedef struct report_meta {
 int report_write(FILE *f, report_fmt fmt, const report_meta *m, int nsurf,
                  const sg_ray_surface *out, const int *status, size_t nray,
                  sg_ray_kind kind, const sg_ray_in *rays);
+/* The OPD of n normalized rays (launches rays[r], rows out[r * nsurf]
+ * from a trace at t's wavelength) into opd[r], each against its field's
+ * reference sphere from sg_opd_reference; *ref carries the last field's
+ * sphere from block to block (ref->status = SG_EINVAL before the first). */
+void report_opd_block(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
+                      const sg_ray_surface *out, int nsurf, sg_opd *opd);
+/* report_write with each ray's OPD (see report_rays_opd). */
+int report_write_opd(FILE *f, report_fmt fmt, const report_meta *m, int nsurf,
+                     const sg_ray_surface *out, const int *status, size_t nray,
+                     sg_ray_kind kind, const sg_ray_in *rays, const sg_opd *opd);
 
 /* The same report written a block of rays at a time, so a long list
  * streams through bounded memory: report_begin, report_rays any number of
@@ -59,6 +71,12 @@ int report_begin(report_stream *s, FILE *f, report_fmt fmt, const report_meta *m
  * (may be NULL). */
 int report_rays(report_stream *s, const sg_ray_surface *out, const int *status, size_t n,
                 const sg_ray_in *rays);
+/* The same with each ray's OPD in opd[r] (may be NULL), written when the
+ * stream's meta asks for it: text, a line after the status; CSV, the
+ * columns opd_waves, opd_error_bound, ex, ey on the image row; JSON, keys
+ * of the ray's object. */
+int report_rays_opd(report_stream *s, const sg_ray_surface *out, const int *status, size_t n,
+                    const sg_ray_in *rays, const sg_opd *opd);
 int report_end(report_stream *s);
 
 /* Writes every field of a paraxial computation.  Returns 0, or -1 on a

@@ -69,7 +69,7 @@ __attribute__((noinline)) static char *render(report_fmt fmt, const report_meta 
     return buf;
 }
 
-static const report_meta meta = { "dir/\"odd\" \\name.json", "mpfr", 512, 0.5875618, 2, 0 };
+static const report_meta meta = { "dir/\"odd\" \\name.json", "mpfr", 512, 0.5875618, 2, 0, 0 };
 
 static void test_names(void **state)
 {
@@ -199,26 +199,40 @@ static void test_csv(void **state)
     make_rays(s, status, in);
     text = render(REPORT_CSV, &meta, s, status, 2, in);
     for (line = strtok_r(text, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
-        char *f[12], *p = line;
+        char *f[14], *p = line;
         int k, n = 0;
         for (;;) {
-            assert_true(n < 12);
+            assert_true(n < 14);
             f[n++] = p;
             p = strchr(p, ',');
             if (!p)
                 break;
             *p++ = '\0';
         }
-        assert_int_equal(n, 12);
+        assert_int_equal(n, 14);
         if (row == 0) {
-            static const char *const head[12] = { "ray", "surface", "x", "y", "z",
-                "l", "m", "n", "residual", "error_bound", "path", "status" };
-            for (k = 0; k < 12; k++)
+            static const char *const head[14] = { "ray", "surface", "x", "y", "z",
+                "l", "m", "n", "residual", "error_bound", "path", "status", "opl",
+                "opl_error_bound" };
+            for (k = 0; k < 14; k++)
                 assert_string_equal(f[k], head[k]);
         } else {
             const sg_ray_surface *e = &s[row - 1];
             const double v[9] = { e->x, e->y, e->z, e->l, e->m, e->n,
                                   e->residual, e->error_bound, e->path };
+            const double w[2] = { e->opl, e->opl_error_bound };
+            for (k = 0; k < 2; k++) {
+                if (e->status != SG_OK) {
+                    assert_string_equal(f[k + 12], "");
+                } else {
+                    char *end;
+                    double r = strtod(f[k + 12], &end);
+                    assert_true(*end == '\0');
+                    if (memcmp(&r, &w[k], sizeof r) != 0)
+                        fail_msg("row %d col %d: \"%s\" is not %.17g", row, k + 12,
+                                 f[k + 12], w[k]);
+                }
+            }
             assert_int_equal(atoi(f[0]), (row - 1) / NSURF);
             assert_int_equal(atoi(f[1]), (row - 1) % NSURF);
             assert_string_equal(f[11], report_status_name(e->status));
@@ -241,8 +255,10 @@ static void test_csv(void **state)
     free(text);
 
     text = render(REPORT_CSV, &meta, s, NULL, 1, in);
-    assert_memory_equal(text, "surface,x,y,z,l,m,n,residual,error_bound,path,status\n0,-inf,inf,-inf,",
-                        strlen("surface,x,y,z,l,m,n,residual,error_bound,path,status\n0,-inf,inf,-inf,"));
+    assert_memory_equal(text, "surface,x,y,z,l,m,n,residual,error_bound,path,status,opl,"
+                              "opl_error_bound\n0,-inf,inf,-inf,",
+                        strlen("surface,x,y,z,l,m,n,residual,error_bound,path,status,opl,"
+                               "opl_error_bound\n0,-inf,inf,-inf,"));
     free(text);
     print_message("# CSV: header as documented, 63 numbers read back bit-identical, "
                   "6 failed rows with empty cells\n");

@@ -665,14 +665,14 @@ static const bad_case cases[] = {
       "miss.json", HEAD OBJ "    {\"radius\": 10, \"thickness\": 5, \"material\": 1.5, \"stop\": true},\n"
       "    {\"radius\": -10, \"thickness\": 45},\n" IMA TAIL, NULL, NULL,
       ARGS("trace", "@F", "--start", "0,15,-1", "--dir", "0,0,1", "--format", "csv"), 0,
-      NULL, "\n1,,,,,,,,,,MISS\n2,,,,,,,,,,NOT REACHED\n", NULL, NULL, 0 },
+      NULL, "\n1,,,,,,,,,,MISS,,\n2,,,,,,,,,,NOT REACHED,,\n", NULL, NULL, 0 },
     /* Inside index 1.5 the ray meets a sphere of radius 10 at height 8:
      * sin(i) = 0.8 > 1/1.5, so it is totally internally reflected. */
     { "ray_tir", "sin(i) = 0.8 inside index 1.5: TIR on surface 2",
       "tir.json", HEAD OBJ "    {\"thickness\": 5, \"material\": 1.5, \"stop\": true},\n"
       "    {\"radius\": -10, \"thickness\": 45},\n" IMA TAIL, NULL, NULL,
       ARGS("trace", "@F", "--start", "0,8,-1", "--dir", "0,0,1", "--format", "csv"), 0,
-      NULL, "\n2,,,,,,,,,,TIR\n3,,,,,,,,,,NOT REACHED\n", NULL, NULL, 0 },
+      NULL, "\n2,,,,,,,,,,TIR,,\n3,,,,,,,,,,NOT REACHED,,\n", NULL, NULL, 0 },
     { "ray_tir_text", "the same TIR in the text report",
       "tir.json", HEAD OBJ "    {\"thickness\": 5, \"material\": 1.5, \"stop\": true},\n"
       "    {\"radius\": -10, \"thickness\": 45},\n" IMA TAIL, NULL, NULL,
@@ -687,34 +687,34 @@ static const bad_case cases[] = {
     { "asphere_noconv_precise", "a ray that never meets z = r^2: UNCERT or MISS, no hang",
       "wild.json", WILD_ASPHERE, NULL, NULL,
       ARGS("trace", "@F", "--start", "0,1,0", "--dir", "0,1,0.1", "--format", "csv"), 0,
-      NULL, "\n1,,,,,,,,,,UNCERT\n", "\n1,,,,,,,,,,MISS\n", NULL, 0 },
+      NULL, "\n1,,,,,,,,,,UNCERT,,\n", "\n1,,,,,,,,,,MISS,,\n", NULL, 0 },
     { "asphere_noconv_classic", "the same with --method classic",
       "wild.json", WILD_ASPHERE, NULL, NULL,
       ARGS("trace", "@F", "--start", "0,1,0", "--dir", "0,1,0.1", "--format", "csv",
            "--method", "classic"), 0,
-      NULL, "\n1,,,,,,,,,,NOCONV\n", "\n1,,,,,,,,,,MISS\n", NULL, 0 },
+      NULL, "\n1,,,,,,,,,,NOCONV,,\n", "\n1,,,,,,,,,,MISS,,\n", NULL, 0 },
     { "asphere_noconv_mpfr", "the same with --method mpfr",
       "wild.json", WILD_ASPHERE, NULL, NULL,
       ARGS("trace", "@F", "--start", "0,1,0", "--dir", "0,1,0.1", "--format", "csv",
            "--method", "mpfr"), 0,
-      NULL, "\n1,,,,,,,,,,NOCONV\n", "\n1,,,,,,,,,,MISS\n", NULL, 0 },
+      NULL, "\n1,,,,,,,,,,NOCONV,,\n", "\n1,,,,,,,,,,MISS,,\n", NULL, 0 },
     { "aim_impossible_precise", "paraxial aiming at an unreachable stop height: AIM FAILED",
       "aim.json", HEAD_AIM("paraxial", "10") AIM_LENS, NULL, NULL,
       ARGS("trace", "@F", "--ray", "0,0,0,1", "--format", "csv"), 0,
-      NULL, "\n0,,,,,,,,,,AIM FAILED\n1,,,,,,,,,,NOT REACHED\n", NULL, NULL, 0 },
+      NULL, "\n0,,,,,,,,,,AIM FAILED,,,,,,\n1,,,,,,,,,,NOT REACHED,,,,,,\n", NULL, NULL, 0 },
     { "aim_impossible_classic", "the same with --method classic",
       "aim.json", HEAD_AIM("paraxial", "10") AIM_LENS, NULL, NULL,
       ARGS("trace", "@F", "--ray", "0,0,0,1", "--format", "csv", "--method", "classic"), 0,
-      NULL, "\n0,,,,,,,,,,AIM FAILED\n1,,,,,,,,,,NOT REACHED\n", NULL, NULL, 0 },
+      NULL, "\n0,,,,,,,,,,AIM FAILED,,,,,,\n1,,,,,,,,,,NOT REACHED,,,,,,\n", NULL, NULL, 0 },
     { "aim_impossible_mpfr", "the same with --method mpfr",
       "aim.json", HEAD_AIM("paraxial", "10") AIM_LENS, NULL, NULL,
       ARGS("trace", "@F", "--ray", "0,0,0,1", "--format", "csv", "--method", "mpfr"), 0,
-      NULL, "\n0,,,,,,,,,,AIM FAILED\n1,,,,,,,,,,NOT REACHED\n", NULL, NULL, 0 },
+      NULL, "\n0,,,,,,,,,,AIM FAILED,,,,,,\n1,,,,,,,,,,NOT REACHED,,,,,,\n", NULL, NULL, 0 },
     { "aim_batch", "a batch mixing AIM FAILED and traced rays, 2 threads",
       "aim.json", HEAD_AIM("paraxial", "10") AIM_LENS, NULL,
       "hx,hy,px,py\n0,0,0,1\n0,0,0,0\n", ARGS("trace", "@F", "--rays", "-", "--threads", "2",
                                            "--format", "csv"), 0,
-      NULL, "\n0,0,,,,,,,,,,AIM FAILED\n", NULL, NULL, 0 },
+      NULL, "\n0,0,,,,,,,,,,AIM FAILED,,,,,,\n", NULL, NULL, 0 },
     /* With real aiming and EPD 100 the on-axis marginal ray (height 50)
      * misses the R 20 sphere, so the tracer cannot size the stop: the
      * design cannot be traced as set up (exit 4), not an internal error. */
@@ -727,7 +727,7 @@ static const bad_case cases[] = {
       "vig.json", HEAD OBJ "    {\"radius\": 50, \"thickness\": 5, \"material\": 1.5, \"stop\": true,"
       " \"semi_diameter\": 5, \"sd_fixed\": true},\n" S2 IMA TAIL, NULL, NULL,
       ARGS("trace", "@F", "--start", "0,8,-1", "--dir", "0,0,1", "--format", "csv"), 0,
-      NULL, "\n1,,,,,,,,,,VIGNETTED\n", NULL, NULL, 0 },
+      NULL, "\n1,,,,,,,,,,VIGNETTED,,\n", NULL, NULL, 0 },
     /* The image surface lies on the last lens (thickness 0), so the chief
      * ray's paraxial height there is 0 for every field angle and a field
      * given as a paraxial image height has no angle: refusing the design

@@ -142,7 +142,7 @@ static void test_grid2_csv(void **state)
     text = slurp(path);
     line = strtok_r(text, "\n", &save);
     assert_string_equal(line, "ray,hx,hy,px,py,surface,x,y,z,l,m,n,residual,error_bound,path,"
-                              "status");
+                              "status,opl,opl_error_bound,opd_waves,opd_error_bound,ex,ey");
     while ((line = strtok_r(NULL, "\n", &save))) {
         int r, s, q;
         double hx, hy, px, py, x, y, z;

@@ -1216,6 +1216,7 @@ static void meta_of(ed *e, report_meta *m)
     m->bits = e->method == SG_METHOD_MPFR ? e->bits : 0;
     m->wave_um = e->doc.sys->wave[e->wave].um;
     m->wave_index = e->wave + 1;
+    m->opd = 0;
 }
 
 /* The rays of a set, made a block at a time so that a grid of a million
@@ -1339,6 +1340,9 @@ static int c_export_any(ed *e, args *a, int bang)
     sg_ray_surface *out = NULL;
     int *status = NULL;
     sg_batch *b = NULL;
+    sg_tracer *rt = NULL;
+    sg_opd *opd = NULL;
+    sg_opd_ref ref;
     sg_diag d;
     report_meta m;
     report_stream rs;
@@ -1431,6 +1435,17 @@ static int c_export_any(ed *e, args *a, int bang)
     meta_of(e, &m);
     /* Each row of a fan or grid says which ray it is. */
     m.csv_inputs = rset.kind != SET_RAY;
+    /* Every ray's OPD, as sagitta trace writes it, from a tracer of the
+     * batch's options for the reference spheres. */
+    opd = malloc(block * sizeof *opd);
+    rt = sg_tracer_new(e->doc.sys, e->cat, &e->opts, &d);
+    if (!opd || !rt) {
+        flags = fail(e, "export: %s", rt ? "out of memory" : d.msg[0] ? d.msg : sg_strerror(d.code));
+        goto done;
+    }
+    m.opd = 1;
+    memset(&ref, 0, sizeof ref);
+    ref.status = SG_EINVAL;
 
     got = rayset_next(&rset, rays, block);
     rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, got, NULL, 0, out, status, &d);
@@ -1476,7 +1491,8 @@ static int c_export_any(ed *e, args *a, int bang)
     if (e->progress)
         e->progress(e->progress_ctx, path, 0, nray);
     for (;;) {
-        if (report_rays(&rs, out, status, got, rays) != 0)
+        report_opd_block(rt, &ref, rays, got, out, nsurf, opd);
+        if (report_rays_opd(&rs, out, status, got, rays, opd) != 0)
             goto write_error;
         done += got;
         if (e->progress && e->progress(e->progress_ctx, path, done, nray)) {
@@ -1513,6 +1529,8 @@ write_error:
     flags = fail(e, "export: %s: %s", path, strerror(err));
 done:
     sg_batch_free(b);
+    sg_tracer_free(rt);
+    free(opd);
     free(rays);
     free(out);
     free(status);
