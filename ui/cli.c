@@ -11,6 +11,7 @@
 
 #include "args.h"
 #include "csvrays.h"
+#include "h5rays.h"
 #include "report.h"
 #include "outfile.h"
 #include "safetext.h"
@@ -375,7 +376,8 @@ static void trace_help(FILE *f)
 "  --method M               precise (default), classic or mpfr\n"
 "  --bits N                 precision of the mpfr method, 53 to 100000 (256)\n"
 "  --wave N                 wavelength number, from 1 (default: the primary)\n"
-"  --format F               text (default), csv or json\n"
+"  --format F               text (default), csv, json, or with --rays and\n"
+"                           --output FILE: hdf5 (one dataset per column)\n"
 "  -o, --output FILE        write to FILE instead of standard output\n"
 "  --no-clip                do not vignette rays outside fixed semi-diameters\n"
 "  --threads N              threads for --rays; 0 (default) uses every core\n"
@@ -407,6 +409,9 @@ static const cli_opt trace_opts[] = {
 };
 
 /* ---- a ray list, streamed ---- */
+
+/* --format hdf5: a ray table only, not one of report.c's text forms. */
+#define FMT_HDF5 100
 
 /* Reports a trace that failed for a reason other than the ray's own fate,
  * and returns the exit status for it. */
@@ -545,6 +550,8 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     outfile ro;
     progress pg;
     sg_diag d;
+    h5rays *h5 = NULL;
+    char h5err[512];
 
     memset(&ro, 0, sizeof ro);
     sg_diag_clear(&d);
@@ -566,6 +573,7 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     rc = open_rays(rays_path, spool, &rd, &d);
     if (rc != SG_OK)
         goto bad_rays;
+    csvrays_set_threads(rd, threads);
 
     rc = cli_load_design(design, &cat, &sys);
     if (rc != CLI_EXIT_OK)
@@ -640,7 +648,16 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
         }
         /* The output is opened only after the first block traced, so a
          * design that cannot be traced leaves an existing file as it was. */
-        if (!opened) {
+        if (fmt == FMT_HDF5) {
+            if (!h5) {
+                h5 = h5rays_open(output, &meta, sys->units, nsurf, csvrays_kind(rd),
+                                 n * (size_t)nsurf, h5err, sizeof h5err);
+                if (!h5)
+                    goto h5_error;
+            }
+            if (h5rays_write(h5, out, status, n, rays, h5err, sizeof h5err) != 0)
+                goto h5_error;
+        } else if (!opened) {
             int err = outfile_open(&ro, output, stdout);
             if (err != 0) {
                 cli_error("%s: %s", output, strerror(err));
@@ -651,10 +668,11 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
             if (report_begin(&rs, ro.f, (report_fmt)fmt, &meta, nsurf, csvrays_kind(rd),
                              multi, total) != 0)
                 goto write_error;
+            report_set_threads(&rs, threads);
         }
         if (t)
             report_opd_block(t, &ref, rays, n, out, nsurf, opd);
-        if (report_rays_opd(&rs, out, status, n, rays, opd) != 0)
+        if (fmt != FMT_HDF5 && report_rays_opd(&rs, out, status, n, rays, opd) != 0)
             goto write_error;
         done += n;
         csvrays_progress(rd, &pos, &size);
@@ -667,6 +685,17 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
         }
     }
     progress_end(&pg);
+    if (fmt == FMT_HDF5) {
+        rc = h5rays_close(h5, h5err, sizeof h5err);
+        h5 = NULL;
+        if (rc != 0) {
+            cli_error("%s: %s", output, h5err);
+            rc = CLI_EXIT_FILE;
+        } else {
+            rc = CLI_EXIT_OK;
+        }
+        goto done;
+    }
     if (report_end(&rs) != 0)
         goto write_error;
     {
@@ -680,6 +709,11 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     }
     goto done;
 
+h5_error:
+    progress_end(&pg);
+    cli_error("%s: %s", output, h5err);
+    rc = CLI_EXIT_FILE;
+    goto done;
 write_error:
     progress_end(&pg);
     cli_error("%s: %s", output && strcmp(output, "-") ? output : "standard output",
@@ -692,6 +726,7 @@ bad_rays:
 done:
     if (opened && rc != CLI_EXIT_OK)
         outfile_abort(&ro);
+    h5rays_abort(h5);
     csvrays_close(rd);
     if (spool)
         fclose(spool);
@@ -756,7 +791,9 @@ int cmd_trace(int argc, char **argv)
                 return CLI_EXIT_USAGE;
             break;
         case OPT_FORMAT:
-            if (cli_format_value(val, 1, &fmt))
+            if (strcmp(val, "hdf5") == 0)
+                fmt = FMT_HDF5;
+            else if (cli_format_value(val, 1, &fmt))
                 return CLI_EXIT_USAGE;
             break;
         case OPT_OUTPUT:
@@ -805,6 +842,11 @@ int cmd_trace(int argc, char **argv)
                                : "give a ray with --ray, --start/--dir or --rays");
     if (bits && method != SG_METHOD_MPFR)
         cli_warn("--bits only applies to --method mpfr; ignored");
+    /* An HDF5 file is written by seeking about it, so it needs a name. */
+    if (fmt == FMT_HDF5 && !rays_path)
+        return cli_usage_error("trace", "--format hdf5 writes a ray table: give --rays");
+    if (fmt == FMT_HDF5 && (!output || strcmp(output, "-") == 0))
+        return cli_usage_error("trace", "--format hdf5 needs --output FILE.h5");
 
     if (rays_path) {
         sg_trace_opts_init(&opts);

@@ -2,13 +2,16 @@
 #include "csvrays.h"
 
 #include <errno.h>
+#include <pthread.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "args.h"
+#include "numfmt.h"
 
 #define NCOLS_MAX 6
 
@@ -189,6 +192,11 @@ static int parse_row(span line, const char *name, long lineno, sg_ray_kind kind,
         span s = trim(f[k]);
         char num[128];
         int rc;
+        /* A plain decimal is read here, correctly rounded, as strtod
+         * would; anything else (hex, inf, bad text) goes to args_double
+         * for its value or its message. */
+        if (numfmt_parse(s.p, s.n, &ray->v[map[k]]))
+            continue;
         if (s.n >= sizeof num) {
             rc = ARGS_SYNTAX;
         } else {
@@ -225,7 +233,19 @@ struct csvrays_reader {
     sg_ray_kind kind;
     unsigned long long consumed, total; /* bytes, for progress */
     size_t nray;                        /* rays read so far */
+    int threads;                        /* parsing threads, 1 or more */
+    char *arena;                        /* a block's rows, copied */
+    size_t arena_len, arena_cap;
+    struct pending *rows;
+    size_t nrows, rows_cap;
 };
+
+/* A row gathered for parsing: its text in the arena, its line number and
+ * the ray it becomes. */
+typedef struct pending {
+    size_t off, len, slot;
+    long lineno;
+} pending;
 
 /* Refills the buffer so that it holds a whole line from pos, or all that
  * is left.  Returns SG_OK, or an error naming the line. */
@@ -326,6 +346,7 @@ static csvrays_reader *reader_new(const char *name)
     if (r) {
         snprintf(r->name, sizeof r->name, "%s", name);
         r->kind = SG_RAYS_NORMALIZED;
+        r->threads = 1;
     }
     return r;
 }
@@ -420,23 +441,171 @@ sg_ray_kind csvrays_kind(const csvrays_reader *r)
     return r->kind;
 }
 
+/* Rows longer than this are parsed as they come, not copied, so a block's
+ * copy stays small; a valid row is far shorter. */
+#define ROW_COPY_MAX 4096
+#define PARSE_MIN_ROWS 256
+#define PARSE_MAX_THREADS 64
+
+typedef struct parse_job {
+    const csvrays_reader *r;
+    sg_ray_in *rays;
+    size_t from, to;
+    size_t bad;  /* index of the first bad row, or to */
+    int rc;
+    sg_diag d;
+} parse_job;
+
+static void *parse_main(void *arg)
+{
+    parse_job *j = arg;
+    const csvrays_reader *r = j->r;
+    size_t i;
+    j->bad = j->to;
+    j->rc = SG_OK;
+    sg_diag_clear(&j->d);
+    for (i = j->from; i < j->to; i++) {
+        const pending *p = &r->rows[i];
+        span t;
+        t.p = r->arena + p->off;
+        t.n = p->len;
+        j->rc = parse_row(t, r->name, p->lineno, r->kind, r->map, r->ncol,
+                          &j->rays[p->slot], &j->d);
+        if (j->rc != SG_OK) {
+            j->bad = i;
+            break;
+        }
+    }
+    return NULL;
+}
+
+/* Parses the gathered rows, in contiguous shares on the reader's threads;
+ * the first bad row in file order decides the error, as reading them one
+ * by one would. */
+static int flush_rows(csvrays_reader *r, sg_ray_in *rays, sg_diag *d)
+{
+    parse_job job[PARSE_MAX_THREADS];
+    pthread_t tid[PARSE_MAX_THREADS];
+    int started[PARSE_MAX_THREADS];
+    int k, nt = r->threads;
+    size_t n = r->nrows;
+    if (n == 0)
+        return SG_OK;
+    if ((size_t)nt > n / (PARSE_MIN_ROWS / 2))
+        nt = (int)(n / (PARSE_MIN_ROWS / 2));
+    if (nt < 1)
+        nt = 1;
+    for (k = 0; k < nt; k++) {
+        job[k].r = r;
+        job[k].rays = rays;
+        job[k].from = n * (size_t)k / (size_t)nt;
+        job[k].to = n * (size_t)(k + 1) / (size_t)nt;
+        started[k] = k > 0 && pthread_create(&tid[k], NULL, parse_main, &job[k]) == 0;
+    }
+    parse_main(&job[0]);
+    for (k = 1; k < nt; k++) {
+        if (started[k])
+            pthread_join(tid[k], NULL);
+        else
+            parse_main(&job[k]);
+    }
+    r->nrows = 0;
+    r->arena_len = 0;
+    for (k = 0; k < nt; k++)
+        if (job[k].rc != SG_OK) {
+            if (d)
+                *d = job[k].d;
+            return job[k].rc;
+        }
+    return SG_OK;
+}
+
+/* Copies a row into the block's arena for flush_rows. */
+static int gather(csvrays_reader *r, span t, size_t slot)
+{
+    pending *p;
+    if (r->nrows == r->rows_cap) {
+        size_t cap = r->rows_cap ? 2 * r->rows_cap : 1024;
+        pending *n = realloc(r->rows, cap * sizeof *n);
+        if (!n)
+            return SG_ENOMEM;
+        r->rows = n;
+        r->rows_cap = cap;
+    }
+    if (r->arena_len + t.n > r->arena_cap) {
+        size_t cap = r->arena_cap ? 2 * r->arena_cap : (size_t)1 << 16;
+        char *n;
+        while (cap < r->arena_len + t.n)
+            cap *= 2;
+        n = realloc(r->arena, cap);
+        if (!n)
+            return SG_ENOMEM;
+        r->arena = n;
+        r->arena_cap = cap;
+    }
+    memcpy(r->arena + r->arena_len, t.p, t.n);
+    p = &r->rows[r->nrows++];
+    p->off = r->arena_len;
+    p->len = t.n;
+    p->slot = slot;
+    p->lineno = r->lineno;
+    r->arena_len += t.n;
+    return SG_OK;
+}
+
+void csvrays_set_threads(csvrays_reader *r, int threads)
+{
+    long n = threads > 0 ? threads : sysconf(_SC_NPROCESSORS_ONLN);
+    r->threads = n < 1 ? 1 : n > PARSE_MAX_THREADS ? PARSE_MAX_THREADS : (int)n;
+}
+
+/* Rows are split into lines here, in order, and parsed a block at a time
+ * on the reader's threads; the rays, and the first error, are those of
+ * parsing them one by one. */
 int csvrays_next(csvrays_reader *r, sg_ray_in *rays, size_t max, size_t *n, sg_diag *d)
 {
     span line, t;
     int got, rc;
+    size_t count = 0;
     *n = 0;
-    while (*n < max && (got = next_line(r, &line, d)) != 0) {
-        if (got < 0)
-            return d && d->code ? d->code : SG_EPARSE;
+    r->nrows = 0;
+    r->arena_len = 0;
+    while (count < max && (got = next_line(r, &line, d)) != 0) {
+        if (got < 0) {
+            /* A bad row before the unreadable line is the first error. */
+            int code = d && d->code ? d->code : SG_EPARSE;
+            sg_diag keep;
+            if (d)
+                keep = *d;
+            rc = flush_rows(r, rays, d);
+            if (rc != SG_OK)
+                return rc;
+            if (d)
+                *d = keep;
+            return code;
+        }
         t = trim(line);
         if (t.n == 0 || t.p[0] == '#')
             continue;
-        rc = parse_row(t, r->name, r->lineno, r->kind, r->map, r->ncol, &rays[*n], d);
-        if (rc != SG_OK)
-            return rc;
-        ++*n;
-        r->nray++;
+        if (r->threads > 1 && t.n <= ROW_COPY_MAX) {
+            if (gather(r, t, count) != SG_OK)
+                return sg_diag_set(d, SG_ENOMEM, "%s: out of memory reading line %ld",
+                                   r->name, r->lineno);
+        } else {
+            rc = flush_rows(r, rays, d);
+            if (rc == SG_OK)
+                rc = parse_row(t, r->name, r->lineno, r->kind, r->map, r->ncol,
+                               &rays[count], d);
+            if (rc != SG_OK)
+                return rc;
+        }
+        count++;
     }
+    rc = flush_rows(r, rays, d);
+    if (rc != SG_OK)
+        return rc;
+    *n = count;
+    r->nray += count;
     if (*n == 0 && r->nray == 0)
         return sg_diag_set(d, SG_EPARSE, "%s: no rays after the header", r->name);
     return SG_OK;
@@ -458,6 +627,8 @@ void csvrays_close(csvrays_reader *r)
             fclose(r->f);
         free(r->buf);
     }
+    free(r->arena);
+    free(r->rows);
     free(r);
 }
 

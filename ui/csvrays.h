@@ -51,6 +51,9 @@ sg_ray_kind csvrays_kind(const csvrays_reader *r);
  * single ray is SG_EPARSE ("no rays after the header"). */
 int csvrays_next(csvrays_reader *r, sg_ray_in *rays, size_t max, size_t *n,
                  sg_diag *d);
+/* Lets csvrays_next parse a block's rows on threads (0: every core; the
+ * default is 1).  The rays and messages are the same. */
+void csvrays_set_threads(csvrays_reader *r, int threads);
 /* Bytes read so far and the file's size (0 when unknown, as for a pipe). */
 void csvrays_progress(const csvrays_reader *r, unsigned long long *done,
                       unsigned long long *total);

@@ -63,6 +63,7 @@ typedef struct report_stream {
     int nsurf, multi;
     sg_ray_kind kind;
     size_t next; /* number of the next ray */
+    int threads; /* threads report_rays formats on; 0 or 1: the caller's */
 } report_stream;
 
 int report_begin(report_stream *s, FILE *f, report_fmt fmt, const report_meta *m,
@@ -78,6 +79,9 @@ int report_rays(report_stream *s, const sg_ray_surface *out, const int *status, 
 int report_rays_opd(report_stream *s, const sg_ray_surface *out, const int *status, size_t n,
                     const sg_ray_in *rays, const sg_opd *opd);
 int report_end(report_stream *s);
+/* Lets report_rays format a list's blocks on threads (0: every core),
+ * each share into memory, written in order: the bytes are the same. */
+void report_set_threads(report_stream *s, int threads);
 
 /* Writes every field of a paraxial computation.  Returns 0, or -1 on a
  * write error (errno set). */

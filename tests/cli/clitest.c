@@ -1,4 +1,6 @@
 /* clitest.c - running the built sagitta binary from cmocka tests. */
+/* wait4, for the child's peak resident set. */
+#define _DEFAULT_SOURCE
 #include "clitest.h"
 
 #include <errno.h>
@@ -11,6 +13,7 @@
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/types.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -139,8 +142,13 @@ void ct_runv(ct_result *r, const char *const *args)
     posix_spawn_file_actions_destroy(&fa);
     if (rc != 0)
         fail_msg("cannot run %s: %s", exe_path, strerror(rc));
-    while (waitpid(pid, &st, 0) < 0)
-        assert_int_equal(errno, EINTR);
+    {
+        struct rusage ru;
+        memset(&ru, 0, sizeof ru);
+        while (wait4(pid, &st, 0, &ru) < 0)
+            assert_int_equal(errno, EINTR);
+        r->maxrss_kb = ru.ru_maxrss;
+    }
     r->code = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
     r->out = slurp(outp);
     r->err = slurp(errp);

@@ -11,6 +11,7 @@ typedef struct ct_result {
     int code;  /* exit status, or 128 + signal */
     char *out; /* standard output, NUL-terminated */
     char *err; /* standard error, NUL-terminated */
+    long maxrss_kb; /* the child's peak resident set, from wait4 */
 } ct_result;
 
 /* Takes the binary's path from argv[1] (meson passes it) and makes a

@@ -85,6 +85,73 @@ static void test_blocks(void **state)
     free(want);
 }
 
+/* Parsing on threads: the same rays as one by one, and a file with two
+ * bad rows deep in a block reports the first of them, as the serial reader
+ * does (the second lies in another thread's share). */
+static void test_threads(void **state)
+{
+    const size_t nray = 20000, blk = 5000;
+    sg_ray_in *a = malloc(blk * sizeof *a), *b = malloc(blk * sizeof *b);
+    uint64_t seed = 7;
+    size_t k, n1, n2;
+    char tpath[64], msg1[SG_DIAG_MSG];
+    FILE *f;
+    int fd, pass;
+    (void)state;
+    assert_non_null(a);
+    assert_non_null(b);
+    for (pass = 0; pass < 2; pass++) {
+        csvrays_reader *r1, *r2;
+        sg_diag d1, d2;
+        int rc1, rc2;
+        strcpy(tpath, "/tmp/sg-csvthreads-XXXXXX");
+        fd = mkstemp(tpath);
+        assert_true(fd >= 0);
+        f = fdopen(fd, "w");
+        assert_non_null(f);
+        fputs("x,y,z,l,m,n\n", f);
+        for (k = 0; k < nray; k++) {
+            if (pass == 1 && (k == 12345 || k == 14999))
+                fputs(k == 12345 ? "1,2,3,0,0,zz\n" : "1,2\n", f);
+            else
+                fprintf(f, "%.17g,%.17g,%.17g, 0x1p-3 ,%.6e,%.17g\n",
+                        (double)(int64_t)next(&seed) * 0x1.0p-60, 1e-300 * (double)k,
+                        (double)k, (double)(int64_t)next(&seed) * 0x1.0p-62,
+                        (double)(int64_t)next(&seed) * 0x1.0p-50 + 1.0);
+        }
+        fclose(f);
+        sg_diag_clear(&d1);
+        sg_diag_clear(&d2);
+        assert_int_equal(csvrays_open(tpath, &r1, &d1), SG_OK);
+        assert_int_equal(csvrays_open(tpath, &r2, &d2), SG_OK);
+        csvrays_set_threads(r2, 4);
+        for (;;) {
+            rc1 = csvrays_next(r1, a, blk, &n1, &d1);
+            rc2 = csvrays_next(r2, b, blk, &n2, &d2);
+            assert_int_equal(rc1, rc2);
+            if (rc1 != SG_OK)
+                break;
+            assert_int_equal(n1, n2);
+            if (n1 == 0)
+                break;
+            assert_memory_equal(a, b, n1 * sizeof *a);
+        }
+        if (pass == 1) {
+            snprintf(msg1, sizeof msg1, "%s", d1.msg);
+            assert_string_equal(d1.msg, d2.msg);
+            /* Line 12347: the header and 12345 rows before it. */
+            assert_non_null(strstr(d2.msg, ":12347: column \"n\""));
+        } else {
+            assert_int_equal(rc1, SG_OK);
+        }
+        csvrays_close(r1);
+        csvrays_close(r2);
+        unlink(tpath);
+    }
+    free(a);
+    free(b);
+}
+
 static void test_long_line(void **state)
 {
     csvrays_reader *rd;
@@ -138,6 +205,7 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_blocks),
+        cmocka_unit_test(test_threads),
         cmocka_unit_test(test_long_line),
         cmocka_unit_test(test_dev_zero),
     };

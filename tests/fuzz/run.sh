@@ -76,9 +76,18 @@ fi
 
 cflags="-std=c11 -D_POSIX_C_SOURCE=200809L -O1 -g -fno-omit-frame-pointer
  -ffp-contract=off -fno-math-errno -fno-sanitize-recover=all
- -I$build -I$root/src -I$root/ui"
+ -I$build -I$root/src -I$root/ui $(pkg-config --cflags hdf5)"
 cflags_lib="$cflags -fsanitize=fuzzer-no-link,address,undefined"
-libs="-lcjson -lmpfr -lgmp -lm -lpthread"
+libs="-lcjson -lmpfr -lgmp -lm -lpthread $(pkg-config --libs hdf5)"
+
+# ui/numfmt.c's power-of-ten table, made as meson makes it.
+if [ ! -f "$build/numfmt_pow10.h" ] || [ "$root/ui/gen_pow10.c" -nt "$build/numfmt_pow10.h" ]; then
+    if ! $CC -O1 "$root/ui/gen_pow10.c" -o "$build/gen_pow10" -lgmp ||
+       ! "$build/gen_pow10" "$build/numfmt_pow10.h"; then
+        echo "run.sh: generating numfmt_pow10.h failed" >&2
+        exit 1
+    fi
+fi
 
 # Compiles src/*.c and the command-line modules once, rebuilding an object
 # when its source or any header is newer.
@@ -89,6 +98,7 @@ n=0
 status=0
 for src in "$root"/src/*.c "$root"/ui/args.c "$root"/ui/csvrays.c "$root"/ui/report.c \
            "$root"/ui/outfile.c "$root"/ui/safetext.c \
+           "$root"/ui/numfmt.c "$root"/ui/h5rays.c \
            "$root"/ui/cli.c; do
     dir=$(basename "$(dirname "$src")")
     obj="$build/obj/$dir-$(basename "$src" .c).o"

@@ -1,0 +1,245 @@
+/* test_numfmt.c - ui/numfmt.c against the C library it must equal:
+ * numfmt_g17 against glibc's snprintf("%.17g") byte for byte, numfmt_parse
+ * against glibc's strtod bit for bit (both exact, the independent source).
+ * Random bit patterns, 2e6 a direction by default; NUMFMT_COUNT sets the
+ * count for a long run. */
+#include <float.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <stddef.h>
+#include <stdarg.h>
+#include <setjmp.h>
+#include <cmocka.h>
+
+#include "numfmt.h"
+
+static uint64_t rng = UINT64_C(0x9e3779b97f4a7c15);
+
+/* xorshift64*: a fixed seed, so a failure repeats. */
+static uint64_t next(void)
+{
+    rng ^= rng >> 12;
+    rng ^= rng << 25;
+    rng ^= rng >> 27;
+    return rng * UINT64_C(2685821657736338717);
+}
+
+static double from_bits(uint64_t b)
+{
+    double v;
+    memcpy(&v, &b, sizeof v);
+    return v;
+}
+
+static long count(void)
+{
+    const char *e = getenv("NUMFMT_COUNT");
+    long n = e && e[0] ? atol(e) : 2000000;
+    return n > 0 ? n : 2000000;
+}
+
+static long fmt_failures;
+
+static void check_fmt(double v)
+{
+    char want[64], got[NUMFMT_G17_MAX + 8];
+    size_t n;
+    snprintf(want, sizeof want, "%.17g", v);
+    memset(got, 'X', sizeof got);
+    n = numfmt_g17(v, got);
+    if (strcmp(want, got) != 0 || n != strlen(want)) {
+        if (fmt_failures++ < 10)
+            print_error("%%.17g of %a: want \"%s\", got \"%s\"\n", v, want, got);
+    }
+}
+
+static long parse_failures, parse_fast;
+
+/* The text must read as strtod reads it, or be handed back (0). */
+static void check_parse(const char *s)
+{
+    double want = strtod(s, NULL), got;
+    if (numfmt_parse(s, strlen(s), &got)) {
+        parse_fast++;
+        if (memcmp(&want, &got, sizeof got) != 0 && parse_failures++ < 10)
+            print_error("\"%s\": strtod %a, numfmt_parse %a\n", s, want, got);
+    }
+}
+
+static void edge_values(void (*fn)(double))
+{
+    int e, k;
+    uint64_t m;
+    double p;
+    const double fixed[] = { 0.0, -0.0, DBL_MIN, -DBL_MIN, DBL_MAX, -DBL_MAX,
+                             DBL_TRUE_MIN, -DBL_TRUE_MIN, nextafter(DBL_MIN, 0),
+                             DBL_EPSILON, 1.0, 0.1, 0.2, 0.3, 1e-5, 1e-4, 9.5e-5,
+                             1e16, 1e17, 9.99999999999999999e16, 99999999999999999.0,
+                             0.5, 2.5, 1e23, 5e-324, 1.7976931348623157e308,
+                             INFINITY, -INFINITY };
+    for (k = 0; k < (int)(sizeof fixed / sizeof fixed[0]); k++)
+        fn(fixed[k]);
+    /* Powers of two and their neighbours. */
+    for (e = -1074; e <= 1023; e++) {
+        p = ldexp(1.0, e);
+        fn(p);
+        fn(-p);
+        fn(nextafter(p, 0));
+        fn(nextafter(p, INFINITY));
+    }
+    /* Powers of ten and their neighbours. */
+    for (e = -323; e <= 308; e++) {
+        char b[32];
+        snprintf(b, sizeof b, "1e%d", e);
+        p = strtod(b, NULL);
+        fn(p);
+        fn(nextafter(p, 0));
+        fn(nextafter(p, INFINITY));
+    }
+    /* Integers up to 2^53, where %.17g prints every digit. */
+    for (m = 1; m <= (UINT64_C(1) << 53); m = m * 3 + 1) {
+        fn((double)m);
+        fn((double)(m - 1));
+    }
+    fn(9007199254740992.0);
+    fn(9007199254740991.0);
+    /* Subnormals: every bit length of the significand. */
+    for (k = 0; k < 52; k++) {
+        fn(from_bits(UINT64_C(1) << k));
+        fn(from_bits((UINT64_C(1) << (k + 1)) - 1));
+    }
+    /* Values whose 18th digit is a 5 followed by zeros, in the digits
+     * printf decides: the round-half-even ties, and their neighbours. */
+    for (k = 0; k < 20000; k++) {
+        uint64_t d17 = UINT64_C(10000000000000000) + next() % UINT64_C(90000000000000000);
+        char b[64];
+        snprintf(b, sizeof b, "%llu5e%d", (unsigned long long)d17, (int)(next() % 600) - 320);
+        p = strtod(b, NULL);
+        fn(p);
+        fn(nextafter(p, 0));
+        fn(nextafter(p, INFINITY));
+    }
+}
+
+static void fmt_one(double v) { check_fmt(v); }
+
+static void test_g17_edges(void **state)
+{
+    (void)state;
+    fmt_failures = 0;
+    edge_values(fmt_one);
+    assert_int_equal(fmt_failures, 0);
+}
+
+static void test_g17_random(void **state)
+{
+    long i, n = count();
+    (void)state;
+    fmt_failures = 0;
+    for (i = 0; i < n; i++) {
+        uint64_t b = next();
+        check_fmt(from_bits(b));
+        /* Doubles of ordinary size, the numbers ray files hold. */
+        check_fmt(from_bits((b & ~(UINT64_C(0x7ff) << 52)) |
+                            ((UINT64_C(1023) - 20 + (b >> 58)) << 52)));
+    }
+    print_message("# %ld random doubles, %ld failures\n", 2 * n, fmt_failures);
+    assert_int_equal(fmt_failures, 0);
+}
+
+static void parse_forms(double v)
+{
+    char b[64];
+    int prec;
+    snprintf(b, sizeof b, "%.17g", v);
+    check_parse(b);
+    snprintf(b, sizeof b, "%.16g", v);
+    check_parse(b);
+    snprintf(b, sizeof b, "%.15e", v);
+    check_parse(b);
+    prec = (int)(next() % 25);
+    snprintf(b, sizeof b, "%.*g", prec, v);
+    check_parse(b);
+    snprintf(b, sizeof b, "%.*f", (int)(next() % 30), v);
+    if (strlen(b) < 60)
+        check_parse(b);
+}
+
+static void test_parse_edges(void **state)
+{
+    static const char *const texts[] = {
+        "0", "-0", "+0", "0.0", "-0.0e5", "00000000000000000000001", ".5", "5.", "-.5e-3",
+        "1e308", "1.7976931348623157e308", "1.7976931348623158e308", "1e309", "2e-308",
+        "2.2250738585072014e-308", "2.2250738585072011e-308", "4.9e-324", "2.4e-324",
+        "1e-400", "1e400", "1e999999999999", "1e-999999999999", "123456789012345678901234",
+        "1234567890123456789", "12345678901234567890", "9007199254740993",
+        "9007199254740992.5", "0.1000000000000000055511151231257827021181583404541015625",
+        "0.10000000000000000555111512312578270211815834045410156250000000001",
+        "1.00000000000000011102230246251565404236316680908203125",
+        "1.000000000000000111022302462515654042363166809082031250000000000",
+        "7.2057594037927933e16", "4503599627370496.5", "4503599627370497.5",
+        "1e", "1e+", "e5", ".", "-", "+", "", "1.2.3", "1,5", "0x1p3", "inf", "nan",
+        "1e5x", " 1", "1 ", "--1", "1e-5", "1E5", "1e+05",
+    };
+    size_t k;
+    (void)state;
+    parse_failures = parse_fast = 0;
+    for (k = 0; k < sizeof texts / sizeof texts[0]; k++)
+        check_parse(texts[k]);
+    edge_values(parse_forms);
+    /* Text that is not a plain decimal must be handed back, not misread. */
+    {
+        static const char *const bad[] = { "", "1e", "1e+", ".", "-", "0x1p3", "inf", "nan",
+                                           "1,5", " 1", "1 ", "1.2.3", "e5", "--1" };
+        double v;
+        for (k = 0; k < sizeof bad / sizeof bad[0]; k++)
+            if (numfmt_parse(bad[k], strlen(bad[k]), &v))
+                parse_failures++, print_error("\"%s\" was read\n", bad[k]);
+    }
+    assert_int_equal(parse_failures, 0);
+    assert_true(parse_fast > 1000);
+}
+
+static void test_parse_random(void **state)
+{
+    long i, n = count();
+    (void)state;
+    parse_failures = parse_fast = 0;
+    for (i = 0; i < n; i++) {
+        uint64_t b = next();
+        char t[64];
+        snprintf(t, sizeof t, "%.17g", from_bits(b));
+        check_parse(t);
+        /* Random digit strings of 1 to 19 digits (exactly in w) and to 25
+         * (beyond it) with random exponents. */
+        {
+            int nd = 1 + (int)(next() % 25), k, pos = 0, dot = (int)(next() % 27);
+            for (k = 0; k < nd; k++) {
+                if (k == dot)
+                    t[pos++] = '.';
+                t[pos++] = (char)('0' + next() % 10);
+            }
+            pos += snprintf(t + pos, sizeof t - (size_t)pos, "e%d",
+                            (int)(next() % 700) - 350);
+            check_parse(t);
+        }
+    }
+    print_message("# %ld random texts, %ld read fast, %ld failures\n", 2 * n, parse_fast,
+                  parse_failures);
+    assert_int_equal(parse_failures, 0);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_g17_edges),
+        cmocka_unit_test(test_g17_random),
+        cmocka_unit_test(test_parse_edges),
+        cmocka_unit_test(test_parse_random),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,326 @@
+/* h5rays.c - ray tables as HDF5 files. */
+#include "h5rays.h"
+
+#include <errno.h>
+#include <hdf5.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+/* Rows a chunk holds: 64 Ki doubles, 512 KiB, the size HDF5's guide
+ * suggests for sequential reading and writing. */
+#define H5R_CHUNK 65536
+
+enum { C_RAY, C_IN0, C_SURFACE = C_IN0 + 6, C_X, C_Y, C_Z, C_L, C_M, C_N, C_RESIDUAL,
+       C_ERROR, C_PATH, C_STATUS, C_MAX };
+
+struct h5rays {
+    hid_t file, status_type;
+    hid_t ds[C_MAX];
+    int nin, nsurf;
+    size_t rows, next_ray;
+    char path[4096], tmp[4096 + 32];
+    void *buf; /* one column of a block */
+    size_t bufrows;
+};
+
+static int fail(char *err, size_t n, const char *what)
+{
+    snprintf(err, n, "%s", what);
+    return -1;
+}
+
+static herr_t put_attr_str(hid_t obj, const char *name, const char *v)
+{
+    hid_t t = H5Tcopy(H5T_C_S1), sp = H5Screate(H5S_SCALAR), a;
+    herr_t rc = -1;
+    if (t >= 0 && sp >= 0 && H5Tset_size(t, strlen(v) > 0 ? strlen(v) : 1) >= 0) {
+        a = H5Acreate2(obj, name, t, sp, H5P_DEFAULT, H5P_DEFAULT);
+        if (a >= 0) {
+            rc = H5Awrite(a, t, v);
+            H5Aclose(a);
+        }
+    }
+    if (sp >= 0)
+        H5Sclose(sp);
+    if (t >= 0)
+        H5Tclose(t);
+    return rc;
+}
+
+static herr_t put_attr_num(hid_t obj, const char *name, hid_t type, const void *v)
+{
+    hid_t sp = H5Screate(H5S_SCALAR), a;
+    herr_t rc = -1;
+    if (sp < 0)
+        return -1;
+    a = H5Acreate2(obj, name, type, sp, H5P_DEFAULT, H5P_DEFAULT);
+    if (a >= 0) {
+        rc = H5Awrite(a, type, v);
+        H5Aclose(a);
+    }
+    H5Sclose(sp);
+    return rc;
+}
+
+/* The status column is an enumeration, so readers see the report's words
+ * ("OK", "MISS", ...) with the library's codes as values. */
+static hid_t make_status_type(void)
+{
+    hid_t t = H5Tenum_create(H5T_NATIVE_INT);
+    int code;
+    if (t < 0)
+        return -1;
+    for (code = 0; code < SG_ERRNO_COUNT; code++)
+        if (H5Tenum_insert(t, report_status_name(code), &code) < 0) {
+            H5Tclose(t);
+            return -1;
+        }
+    return t;
+}
+
+static hid_t make_column(hid_t file, const char *name, hid_t type, const char *units,
+                         const char *what, hsize_t chunk)
+{
+    hsize_t dims = 0, maxdims = H5S_UNLIMITED;
+    hid_t sp = H5Screate_simple(1, &dims, &maxdims);
+    hid_t pl = H5Pcreate(H5P_DATASET_CREATE), ds = -1;
+    if (sp >= 0 && pl >= 0 && H5Pset_chunk(pl, 1, &chunk) >= 0)
+        ds = H5Dcreate2(file, name, type, sp, H5P_DEFAULT, pl, H5P_DEFAULT);
+    if (pl >= 0)
+        H5Pclose(pl);
+    if (sp >= 0)
+        H5Sclose(sp);
+    if (ds >= 0 && ((units && put_attr_str(ds, "units", units) < 0) ||
+                    put_attr_str(ds, "description", what) < 0)) {
+        H5Dclose(ds);
+        ds = -1;
+    }
+    return ds;
+}
+
+static void close_all(h5rays *h)
+{
+    int k;
+    for (k = 0; k < C_MAX; k++)
+        if (h->ds[k] > 0)
+            H5Dclose(h->ds[k]);
+    if (h->status_type > 0)
+        H5Tclose(h->status_type);
+    if (h->file > 0)
+        H5Fclose(h->file);
+    memset(h->ds, 0, sizeof h->ds);
+    h->status_type = h->file = 0;
+}
+
+void h5rays_abort(h5rays *h)
+{
+    if (!h)
+        return;
+    close_all(h);
+    if (h->tmp[0])
+        unlink(h->tmp);
+    free(h->buf);
+    free(h);
+}
+
+h5rays *h5rays_open(const char *path, const report_meta *m, const char *units,
+                    int nsurf, sg_ray_kind kind, size_t rows_hint, char *err, size_t errlen)
+{
+    /* A short table gets chunks its own size: HDF5 stores whole chunks. */
+    hsize_t chunk = rows_hint > 0 && rows_hint < H5R_CHUNK ? rows_hint : H5R_CHUNK;
+    static const char *const norm[4] = { "hx", "hy", "px", "py" };
+    static const char *const sd[6] = { "x0", "y0", "z0", "l0", "m0", "n0" };
+    static const char *const out_name[9] = { "x", "y", "z", "l", "m", "n",
+                                             "residual", NULL, "path" };
+    static const char *const out_what[9] = {
+        "intersection point x in the surface's local frame",
+        "intersection point y in the surface's local frame",
+        "intersection point z in the surface's local frame",
+        "direction cosine l after the surface", "direction cosine m after the surface",
+        "direction cosine n after the surface", "|z - sag(x, y)| of the reported point",
+        NULL, "geometric distance from the previous surface"
+    };
+    h5rays *h;
+    int k, ok = 1, v;
+    double w;
+    const char *u = units && units[0] ? units : "mm";
+
+    h = calloc(1, sizeof *h);
+    if (!h) {
+        fail(err, errlen, "out of memory");
+        return NULL;
+    }
+    if (strlen(path) >= sizeof h->path) {
+        free(h);
+        fail(err, errlen, "file name too long");
+        return NULL;
+    }
+    strcpy(h->path, path);
+    snprintf(h->tmp, sizeof h->tmp, "%s.tmp%ld", path, (long)getpid());
+    h->nsurf = nsurf;
+    h->nin = kind == SG_RAYS_NORMALIZED ? 4 : 6;
+    /* The library's own messages would go to stderr unasked. */
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+    h->file = H5Fcreate(h->tmp, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (h->file < 0) {
+        snprintf(err, errlen, "cannot create %s: %s", h->tmp, strerror(errno ? errno : EIO));
+        h->tmp[0] = '\0';
+        h5rays_abort(h);
+        return NULL;
+    }
+    h->status_type = make_status_type();
+    ok = h->status_type >= 0;
+    if (ok)
+        h->ds[C_RAY] = make_column(h->file, "ray", H5T_STD_U64LE, NULL,
+                                   "ray number, from 0 in the input's order", chunk);
+    for (k = 0; ok && k < h->nin; k++) {
+        const char *nm = kind == SG_RAYS_NORMALIZED ? norm[k] : sd[k];
+        char what[96];
+        snprintf(what, sizeof what, "the ray's launch: %s", nm);
+        h->ds[C_IN0 + k] = make_column(h->file, nm, H5T_IEEE_F64LE,
+                                       kind == SG_RAYS_NORMALIZED ? "1" : k < 3 ? u : "1",
+                                       what, chunk);
+    }
+    if (ok)
+        h->ds[C_SURFACE] = make_column(h->file, "surface", H5T_STD_I32LE, NULL,
+                                       "surface number, 0 the object", chunk);
+    for (k = 0; ok && k < 9; k++) {
+        int est = m && m->method && strcmp(m->method, "classic") == 0;
+        const char *nm = k == 7 ? (est ? "error_estimate" : "error_bound") : out_name[k];
+        const char *what = k == 7 ? (est ? "classic's error estimate of the point (not a bound)"
+                                         : "bound on the point's largest coordinate error")
+                                  : out_what[k];
+        h->ds[C_X + k] = make_column(h->file, nm, H5T_IEEE_F64LE,
+                                     k >= 3 && k <= 5 ? "1" : u, what, chunk);
+    }
+    if (ok)
+        h->ds[C_STATUS] = make_column(h->file, "status", h->status_type, NULL,
+                                      "the ray's state at the surface", chunk);
+    for (k = 0; ok && k < C_MAX; k++)
+        if ((k < C_IN0 + h->nin || k >= C_SURFACE) && h->ds[k] <= 0)
+            ok = 0;
+    if (ok) {
+        hid_t root = h->file;
+        v = nsurf;
+        ok = put_attr_str(root, "design", m && m->design ? m->design : "") >= 0 &&
+             put_attr_str(root, "method", m && m->method ? m->method : "") >= 0 &&
+             put_attr_str(root, "sagitta_version", SG_VERSION_STRING) >= 0 &&
+             put_attr_str(root, "units", u) >= 0 &&
+             put_attr_str(root, "rays", kind == SG_RAYS_NORMALIZED ? "normalized"
+                                                                   : "start_dir") >= 0 &&
+             put_attr_num(root, "surfaces", H5T_NATIVE_INT, &v) >= 0;
+        if (ok && m) {
+            w = m->wave_um;
+            v = m->wave_index;
+            ok = put_attr_num(root, "wavelength_um", H5T_NATIVE_DOUBLE, &w) >= 0 &&
+                 put_attr_num(root, "wave", H5T_NATIVE_INT, &v) >= 0;
+            if (ok && m->bits > 0) {
+                v = m->bits;
+                ok = put_attr_num(root, "bits", H5T_NATIVE_INT, &v) >= 0;
+            }
+        }
+    }
+    if (!ok) {
+        fail(err, errlen, "cannot lay out the HDF5 file");
+        h5rays_abort(h);
+        return NULL;
+    }
+    return h;
+}
+
+/* Appends rows [0, n) of buf to one column. */
+static int append(h5rays *h, int col, hid_t memtype, const void *buf, size_t n)
+{
+    hsize_t start = h->rows, count = n, size = h->rows + n;
+    hid_t fs, ms;
+    herr_t rc;
+    if (H5Dset_extent(h->ds[col], &size) < 0)
+        return -1;
+    fs = H5Dget_space(h->ds[col]);
+    ms = H5Screate_simple(1, &count, NULL);
+    rc = fs >= 0 && ms >= 0 &&
+         H5Sselect_hyperslab(fs, H5S_SELECT_SET, &start, NULL, &count, NULL) >= 0
+         ? H5Dwrite(h->ds[col], memtype, ms, fs, H5P_DEFAULT, buf) : -1;
+    if (ms >= 0)
+        H5Sclose(ms);
+    if (fs >= 0)
+        H5Sclose(fs);
+    return rc < 0 ? -1 : 0;
+}
+
+int h5rays_write(h5rays *h, const sg_ray_surface *out, const int *status, size_t n,
+                 const sg_ray_in *rays, char *err, size_t errlen)
+{
+    size_t rows = n * (size_t)h->nsurf, r, i, j;
+    int k;
+    (void)status;
+    if (rows == 0)
+        return 0;
+    if (rows > h->bufrows) {
+        void *b = realloc(h->buf, rows * sizeof(double));
+        if (!b)
+            return fail(err, errlen, "out of memory");
+        h->buf = b;
+        h->bufrows = rows;
+    }
+    /* Column by column through one buffer: memory is one column of a
+     * block, whatever the column count. */
+    for (k = 0; k < C_MAX; k++) {
+        hid_t mt = H5T_NATIVE_DOUBLE;
+        if (k >= C_IN0 + h->nin && k < C_SURFACE)
+            continue;
+        for (r = 0, j = 0; r < n; r++)
+            for (i = 0; i < (size_t)h->nsurf; i++, j++) {
+                const sg_ray_surface *e = &out[r * (size_t)h->nsurf + i];
+                double nan = NAN, v = nan;
+                if (k == C_RAY) {
+                    ((uint64_t *)h->buf)[j] = h->next_ray + r;
+                    mt = H5T_NATIVE_UINT64;
+                    continue;
+                }
+                if (k == C_SURFACE || k == C_STATUS) {
+                    ((int *)h->buf)[j] = k == C_SURFACE ? (int)i : e->status;
+                    mt = k == C_SURFACE ? H5T_NATIVE_INT : h->status_type;
+                    continue;
+                }
+                if (k < C_SURFACE)
+                    v = rays ? rays[r].v[k - C_IN0] : nan;
+                else if (e->status == SG_OK) {
+                    /* A failed surface's numbers mean nothing: NaN, as
+                     * CSV leaves the fields empty. */
+                    const double all[9] = { e->x, e->y, e->z, e->l, e->m, e->n,
+                                            e->residual, e->error_bound, e->path };
+                    v = all[k - C_X];
+                }
+                ((double *)h->buf)[j] = v;
+            }
+        if (append(h, k, mt, h->buf, rows) < 0)
+            return fail(err, errlen, "HDF5 write failed");
+    }
+    h->rows += rows;
+    h->next_ray += n;
+    return 0;
+}
+
+int h5rays_close(h5rays *h, char *err, size_t errlen)
+{
+    unsigned long long nrows = h->rows;
+    int rc = 0;
+    if (put_attr_num(h->file, "rows", H5T_NATIVE_ULLONG, &nrows) < 0 ||
+        H5Fflush(h->file, H5F_SCOPE_GLOBAL) < 0)
+        rc = fail(err, errlen, "HDF5 write failed");
+    close_all(h);
+    if (rc == 0 && rename(h->tmp, h->path) != 0) {
+        snprintf(err, errlen, "%s: %s", h->path, strerror(errno));
+        rc = -1;
+    }
+    if (rc != 0)
+        unlink(h->tmp);
+    free(h->buf);
+    free(h);
+    return rc;
+}

@@ -1,0 +1,28 @@
+/*
+ * numfmt.h - doubles to and from decimal text, fast and exact.
+ *
+ * numfmt_g17 writes the bytes snprintf("%.17g") writes in the C locale;
+ * numfmt_parse reads a plain decimal number to the double strtod returns.
+ * Both decide with a 128-bit product and hand the rare cases they cannot
+ * decide to the C library, so the results are the library's, bit for bit.
+ */
+#ifndef SG_UI_NUMFMT_H
+#define SG_UI_NUMFMT_H
+
+#include <stddef.h>
+
+/* Room numfmt_g17 needs, with its terminating NUL. */
+#define NUMFMT_G17_MAX 32
+
+/* Writes v as "%.17g" (C locale; "-0", "inf", "-inf", "nan" and "-nan" as
+ * glibc writes them) into buf, NUL-terminated; returns the length. */
+size_t numfmt_g17(double v, char *buf);
+
+/* Reads [s, s + n) as [+-]digits[.digits][(e|E)[+-]digits] with at least
+ * one digit, the whole span and nothing else, always with '.' as the
+ * decimal point.  Returns 1 with *out the correctly rounded double, or 0
+ * when the text is not of that form or its value is out of the normal
+ * range (the caller then asks strtod, which also judges the syntax). */
+int numfmt_parse(const char *s, size_t n, double *out);
+
+#endif
