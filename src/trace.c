@@ -147,7 +147,12 @@ double sg_sprep_sag_resid(const sg_sprep *s, double x, double y, double z)
         dd G = dd_add(r2, dd_mul(s->k1, dd_two_prod(z, z)));
         double gz = 2.0 * (s->k1.hi * z - s->R);
         G = dd_sub(G, dd_two_prod(z, 2.0 * s->R));
-        return gz != 0.0 ? fabs(dd_to_d(G) / gz) : NAN;
+        if (gz != 0.0)
+            return fabs(dd_to_d(G) / gz);
+        /* At the rim of the vertex sheet (dG/dz = 0, a sphere's equator)
+         * z - sag has no first-order form: the distance along the normal,
+         * |G| / |grad G|, is what is left to report. */
+        return fabs(dd_to_d(G)) / (2.0 * sqrt(x * x + y * y));
     }
     sag = sag_dd(s, r2, &ok);
     if (!ok)

@@ -102,6 +102,20 @@ static vd resid_v(const sg_sprep *s, vdd3 p)
     return vd_abs(w * (x * p.x.lo + y * p.y.lo) - p.z.lo);
 }
 
+/* A point at the rim of a conic's vertex sheet, where the sag's slope is
+ * infinite (a sphere's equator), has no first-order residual: its lanes
+ * take the double-double one of sg_sprep_sag_resid instead.  Rare, so one
+ * lane at a time. */
+static __attribute__((noinline, cold)) vd resid_rim(const sg_sprep *s, vd res, const vd pd[3],
+                                                   vm m)
+{
+    int k;
+    for (k = 0; k < SG_VL; k++)
+        if (m[k] && !isfinite(res[k]))
+            res[k] = sg_sprep_sag_resid(s, pd[0][k], pd[1][k], pd[2][k]);
+    return res;
+}
+
 /* The eq. 27 root from the seed point p, in double: of the roots on the
  * vertex sheet, the one nearest the step tgt (the tangent plane's, so
  * that a seed from the entry point picks the root a seed from the plane
@@ -879,6 +893,8 @@ static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
     row.y = pd[1];
     row.z = pd[2];
     row.residual = resid_v(s, r->p);
+    if (__builtin_expect(vm_any(~vd_isfinite(row.residual) & live & ~bad), 0))
+        row.residual = resid_rim(s, row.residual, pd, live & ~bad);
     row.bound = bound_v(r->eP, pd[0], pd[1], pd[2]);
     bad = clip_v(t, s, pd[0], pd[1], live, bad, st);
     return leave_v(s, i, i < upto, r, out, &row, live, bad, st) & live;

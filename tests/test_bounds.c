@@ -932,6 +932,60 @@ static void classic_estimate(void **state)
     sg_catalog_free(cat);
 }
 
+/* Rays from the centre of a sphere or spheroid out to its rim, the
+ * equator of the vertex sheet, where dG/dz = 0 and the sag's slope is
+ * infinite.  Table 2 of the paper draws such rays (one in 1e7 of its
+ * rays came within 5e-9 of the equator and was reported OUT OF RANGE for
+ * a NaN residual).  Precise must agree with 512-bit mpfr on each status,
+ * and an OK point must lie within its bound with a finite residual. */
+static void rim_rays(void **state)
+{
+    enum { N = 3000 };
+    sg_system *sys = tu_one_surface();
+    int i, nok = 0, nboth = 0;
+    (void)state;
+    rng_state = 0x9E3779B97F4A7C15ULL;
+    for (i = 0; i < N; i++) {
+        double R = pow(10.0, -2.0 + 6.0 * urand()) * (urand() < 0.5 ? -1.0 : 1.0);
+        double k = i % 3 == 0 ? 0.0 : (i % 3 == 1 ? -0.9 * urand() : 3.0 * urand());
+        double k1 = 1.0 + k, phi = 2.0 * PI_D * urand();
+        double eps = pow(10.0, -2.0 - 13.0 * urand()) * (urand() < 0.5 ? -1.0 : 1.0);
+        double sc = urand() < 0.5 ? 1.0 : 100.0 + urand();
+        double S[3] = {0.0, 0.0, R / k1}, D[3] = {sc * cos(phi), sc * sin(phi), sc * eps};
+        sg_ray_surface op[3], om[3];
+        sg_tracer *tp, *tm;
+        int sp, sm;
+        sys->surf[1].type = SG_SURF_STANDARD;
+        sys->surf[1].radius = R;
+        sys->surf[1].conic = k;
+        tp = tu_tracer_bits(sys, NULL, SG_METHOD_PRECISE, 0);
+        tm = tu_tracer_bits(sys, NULL, SG_METHOD_MPFR, 512);
+        sp = sg_trace_start(tp, S, D, op);
+        sm = sg_trace_start(tm, S, D, om);
+        sg_tracer_free(tp);
+        sg_tracer_free(tm);
+        (void)sp;
+        (void)sm;
+        if (op[1].status != SG_EUNCERT && om[1].status != op[1].status)
+            fail_msg("case %d (R %.17g, k %.17g, D %.17g %.17g %.17g): precise %s at the rim, "
+                     "mpfr %s", i, R, k, D[0], D[1], D[2], sg_err_name(op[1].status),
+                     sg_err_name(om[1].status));
+        if (op[1].status == SG_OK) {
+            double e = fmax(fabs(op[1].x - om[1].x),
+                            fmax(fabs(op[1].y - om[1].y), fabs(op[1].z - om[1].z)));
+            if (!(e <= op[1].error_bound + om[1].error_bound) || !isfinite(op[1].residual))
+                fail_msg("case %d (R %.17g, k %.17g): error %.3g, bound %.3g, residual %g", i, R,
+                         k, e, op[1].error_bound, op[1].residual);
+            nok++;
+        }
+        nboth += om[1].status == SG_OK;
+    }
+    print_message("# %d rays from the centre to the rim of spheres and spheroids: %d OK in "
+                  "precise, %d in 512-bit mpfr, the same statuses\n", N, nok, nboth);
+    assert_true(nok > N / 2);
+    sg_system_free(sys);
+}
+
 
 /* A flat base with only an r^16 term, a = y0 - 1, and the ray from
  * (0, y0, 0) along (0, -1, 1): it meets the surface first at y = 1,
@@ -986,6 +1040,7 @@ int main(void)
         cmocka_unit_test(examples_bounds),
         cmocka_unit_test(classic_estimate),
         cmocka_unit_test(carried_error),
+        cmocka_unit_test(rim_rays),
         cmocka_unit_test(slow_newton),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -1677,6 +1677,8 @@ typedef struct t2stat {
 } t2stat;
 
 static const double t2_zc[2] = { 1.0, -1.0 };
+/* Rays that precise or the reference did not trace, named on stderr. */
+#define T2_NAME_FAILED 8
 
 /* Eq. (28) in double, scaled by xi4 = 100 + xi3.  A point on the equator
  * (z = 0) belongs to neither vertex hemisphere and is drawn again. */
@@ -1915,6 +1917,12 @@ static int t2_pass(sg_tracer *t[2][NMETHOD], size_t count, uint64_t seed, int fi
             if (ry->st[m] != SG_OK || ry->st[M_MPFR] != SG_OK) {
                 if (first)
                     st[m].nfail++;
+                /* The first few, named, so that one can be traced again. */
+                if (first && m == M_PRECISE && st[m].nfail <= T2_NAME_FAILED)
+                    cli_error("verify: table2: ray %zu: start 0,0,%g, direction %.17g,%.17g,%.17g: "
+                              "precise %s, mpfr %s", r + 1, t2_zc[ry->side], ry->dir[0],
+                              ry->dir[1], ry->dir[2], sg_err_name(ry->st[M_PRECISE]),
+                              sg_err_name(ry->st[M_MPFR]));
                 continue;
             }
             point_of(&ry->o[m][1], pa);
