@@ -437,6 +437,66 @@ int sg_batch_trace(sg_batch *b, sg_ray_kind kind, const sg_ray_in *rays,
                    size_t nray, const int *surf, int nsel,
                    sg_ray_surface *out, int *status, sg_diag *d);
 
+/* ------------------------------------------------------------------------
+ * Seidel sums (third-order aberrations and first-order colour)
+ * ------------------------------------------------------------------------ */
+
+/* The seven sums, Welford's S_I to S_V, C_I and C_II, in lens units. */
+enum {
+    SG_SEIDEL_SI = 0,   /* spherical aberration */
+    SG_SEIDEL_SII = 1,  /* coma */
+    SG_SEIDEL_SIII = 2, /* astigmatism */
+    SG_SEIDEL_SIV = 3,  /* Petzval field curvature */
+    SG_SEIDEL_SV = 4,   /* distortion */
+    SG_SEIDEL_CI = 5,   /* axial colour */
+    SG_SEIDEL_CII = 6,  /* lateral colour */
+    SG_SEIDEL_N = 7
+};
+
+typedef struct sg_seidel {
+    int nsurf;        /* surfaces 0..nsurf-1; row 0 (the object) is zero */
+    double *surf;     /* nsurf * SG_SEIDEL_N: surface j's sums at surf[j * SG_SEIDEL_N] */
+    double total[SG_SEIDEL_N];
+    double lagrange;  /* Welford's H = n (u ybar - ubar y), full field and aperture */
+    double nu_image;  /* n'u' of the paraxial marginal ray in image space */
+    double wave_um;   /* the primary wavelength, at which the sums are taken */
+    double wave_lens; /* the same in lens units */
+    double short_um, long_um; /* colour: index differences between these two */
+} sg_seidel;
+
+/* Seidel sums of every surface at the primary wavelength, from the
+ * paraxial marginal ray (full entrance pupil) and the chief ray of the
+ * largest field (scaled to the paraxial image height).  The conic and the
+ * r^4 term of an even asphere contribute; the r^2 term is left out, as in
+ * the paraxial data.  Free with sg_seidel_free. */
+int sg_seidel_compute(const sg_system *sys, const sg_catalog *cat, sg_seidel *out,
+                      sg_diag *d);
+void sg_seidel_free(sg_seidel *s);
+
+/* Zemax's wavefront coefficients, in waves of lambda (lens units):
+ * W040 = SI/8, W131 = SII/2, W222 = SIII/2, W220P = SIV/4, W311 = SV/2,
+ * W020 = CI/2, W111 = CII, W220S = (SIII+SIV)/4, W220M = (2SIII+SIV)/4,
+ * W220T = (3SIII+SIV)/4. */
+enum {
+    SG_W040 = 0, SG_W131, SG_W222, SG_W220P, SG_W311, SG_W020, SG_W111,
+    SG_W220S, SG_W220M, SG_W220T, SG_NWCOEF
+};
+void sg_seidel_waves(const double *s, double lambda, double *w);
+
+/* Zemax's transverse aberrations in lens units, with nu = n'u' of the
+ * marginal ray: TSPH = SI/(2n'u'), TSCO = SII/(2n'u'), TTCO = 3 TSCO,
+ * TAST = SIII/(n'u'), TPFC = SIV/(2n'u'), TSFC = (SIII+SIV)/(2n'u'),
+ * TTFC = (3SIII+SIV)/(2n'u'), TDIS = SV/(2n'u'), TAXC = CI/(n'u'),
+ * TLAC = CII/(n'u'). */
+enum {
+    SG_TSPH = 0, SG_TSCO, SG_TTCO, SG_TAST, SG_TPFC, SG_TSFC, SG_TTFC, SG_TDIS,
+    SG_TAXC, SG_TLAC, SG_NTCOEF
+};
+void sg_seidel_transverse(const double *s, double nu, double *t);
+
+/* Millimetres in one lens unit of the system (mm, cm, in or m). */
+double sg_lens_unit_mm(const sg_system *sys);
+
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */
 double sg_digits(double a, double b);
