@@ -497,6 +497,37 @@ void sg_seidel_transverse(const double *s, double nu, double *t);
 /* Millimetres in one lens unit of the system (mm, cm, in or m). */
 double sg_lens_unit_mm(const sg_system *sys);
 
+/* ------------------------------------------------------------------------
+ * Zernike polynomials and wavefront statistics
+ * ------------------------------------------------------------------------ */
+
+typedef enum sg_zernike_kind {
+    SG_ZERNIKE_FRINGE = 0,  /* University of Arizona order, 37 terms, not normalized */
+    SG_ZERNIKE_STANDARD = 1 /* Noll's order and normalization (unit RMS) */
+} sg_zernike_kind;
+
+#define SG_ZERNIKE_FRINGE_MAX 37
+#define SG_ZERNIKE_STANDARD_MAX 231 /* radial orders 0 to 20 */
+
+/* Radial order n and azimuthal order m of term j (from 1); m < 0 is a
+ * sine term, m > 0 a cosine term.  SG_ERANGE outside the set. */
+int sg_zernike_nm(sg_zernike_kind kind, int j, int *n, int *m);
+/* Term j at pupil point (x, y), |(x, y)| <= 1, angle from the x axis; NaN
+ * for a j outside the set. */
+double sg_zernike_eval(sg_zernike_kind kind, int j, double x, double y);
+/* Least-squares coefficients of terms 1..nterms for the values w at the
+ * npts points (x, y) of the unit pupil, into coef[0..nterms-1], and the
+ * RMS of what the fit leaves (rms_resid may be NULL).  Memory does not
+ * depend on npts. */
+int sg_zernike_fit(sg_zernike_kind kind, int nterms, size_t npts, const double *x,
+                   const double *y, const double *w, double *coef, double *rms_resid,
+                   sg_diag *d);
+/* RMS and peak-to-valley of the values w at (x, y) after removing their
+ * least-squares piston, and tilt too when remove_tilt (Zemax's figures
+ * "to centroid"; piston alone gives its "to chief"). */
+int sg_wavefront_stats(size_t npts, const double *x, const double *y, const double *w,
+                       int remove_tilt, double *rms, double *pv, sg_diag *d);
+
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */
 double sg_digits(double a, double b);
