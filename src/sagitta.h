@@ -498,6 +498,31 @@ void sg_seidel_transverse(const double *s, double nu, double *t);
 double sg_lens_unit_mm(const sg_system *sys);
 
 /* ------------------------------------------------------------------------
+ * Field curvature and distortion
+ * ------------------------------------------------------------------------ */
+
+typedef struct sg_fieldcurve_pt {
+    double hy;         /* normalized field, 0 to 1 */
+    double field;      /* the same in the system's field units (degrees or lens units) */
+    double tan_focus;  /* tangential focus: z from the chief ray's image-surface point */
+    double sag_focus;  /* sagittal focus, the same way */
+    double real_y;     /* real chief ray height on the image surface */
+    double parax_y;    /* paraxial image height of this field (f tan(theta) at infinity) */
+    double distortion; /* 100 (real_y - parax_y) / parax_y, percent; 0 on axis */
+    int status;        /* SG_OK, or the failure of one of the field's rays */
+} sg_fieldcurve_pt;
+
+/* Field curvature and distortion at npts fields evenly from 0 to the
+ * largest (in the field's own measure: the angle for angle fields), along
+ * +y, at opts' wavelength, by differential real rays a pupil step delta
+ * (normalized, e.g. 0.01) either side of the chief ray, with Richardson's
+ * step to delta / 2.  A field whose rays fail gets that status; the call
+ * fails only for bad arguments or a system that cannot be traced.  Fields
+ * given as real image height are refused (SG_EUNSUPPORTED). */
+int sg_fieldcurve(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
+                  int npts, double delta, sg_fieldcurve_pt *out, sg_diag *d);
+
+/* ------------------------------------------------------------------------
  * Zernike polynomials and wavefront statistics
  * ------------------------------------------------------------------------ */
 
