@@ -199,8 +199,10 @@ int sg_seidel_compute(const sg_system *sys, const sg_catalog *cat, sg_seidel *ou
             e *= y;
             o[SG_SEIDEL_SI] += e;
         }
-        for (k = 0; k < SG_SEIDEL_N; k++)
+        for (k = 0; k < SG_SEIDEL_N; k++) {
+            o[k] += 0.0; /* no -0 in a report */
             out->total[k] += o[k];
+        }
     }
     out->nsurf = n;
     out->lagrange = H;

@@ -34,6 +34,8 @@ int cmd_paraxial(int argc, char **argv);
 /* Further subcommands live in their own files. */
 int cmd_verify(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
+int cmd_seidel(int argc, char **argv);     /* analysis.c */
+int cmd_fieldcurve(int argc, char **argv); /* analysis.c */
 
 /* "sagitta: " + message + newline on stderr. */
 void cli_error(const char *fmt, ...)

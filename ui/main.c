@@ -25,6 +25,8 @@ static const cli_command commands[] = {
     { "paraxial", cmd_paraxial, "print first-order (paraxial) data" },
     { "verify", cmd_verify, "check a design's traces against the MPFR reference" },
     { "bench", cmd_bench, "measure trace throughput" },
+    { "seidel", cmd_seidel, "print Seidel sums: per surface, in waves and transverse" },
+    { "fieldcurve", cmd_fieldcurve, "print field curvature and distortion against field" },
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
 
