@@ -553,6 +553,32 @@ int sg_zernike_fit(sg_zernike_kind kind, int nterms, size_t npts, const double *
 int sg_wavefront_stats(size_t npts, const double *x, const double *y, const double *w,
                        int remove_tilt, double *rms, double *pv, sg_diag *d);
 
+/* A source of optical path difference: OPD in waves at normalized pupil
+ * point (px, py), returning SG_OK or the ray's failure. */
+typedef int (*sg_opd_fn)(void *ctx, double px, double py, double *opd_waves);
+
+#define SG_WAVEFRONT_MAXTERMS 37
+
+typedef struct sg_wavefront {
+    int grid;           /* points across the pupil */
+    double *map;        /* grid * grid, row py, column px, from -1 to 1 */
+    unsigned char *valid; /* 1 where map holds an OPD (inside the pupil, ray OK) */
+    size_t nvalid;
+    double rms_chief, pv_chief;       /* piston removed */
+    double rms_centroid, pv_centroid; /* piston and tilt removed */
+    sg_zernike_kind kind;
+    int nterms;
+    double coef[SG_WAVEFRONT_MAXTERMS]; /* Zernike coefficients, waves */
+    double fit_rms;                     /* RMS of what the fit leaves */
+} sg_wavefront;
+
+/* The wavefront map of opd on a grid x grid square of pupil points (those
+ * inside the unit circle), its RMS and P-V, and nterms Zernike terms of
+ * kind.  Free with sg_wavefront_free. */
+int sg_wavefront_compute(sg_opd_fn opd, void *ctx, int grid, sg_zernike_kind kind,
+                         int nterms, sg_wavefront *out, sg_diag *d);
+void sg_wavefront_free(sg_wavefront *w);
+
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */
 double sg_digits(double a, double b);

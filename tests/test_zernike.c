@@ -322,12 +322,101 @@ static void bad_input(void **state)
     assert_int_equal(sg_wavefront_stats(3, x, y, w, 0, &rms, &pv, &d), SG_ERANGE);
 }
 
+/* ---- the wavefront map from an OPD function ------------------------------ */
+
+typedef struct synth {
+    double cut; /* rays with px above this fail */
+} synth;
+
+/* 0.3 + 0.2 px - 0.1 py + 0.05 Z9 - 0.02 Z5 (Fringe), in waves. */
+static double synth_w(double px, double py)
+{
+    return 0.3 + 0.2 * px - 0.1 * py +
+           0.05 * (6 * pow(px * px + py * py, 2) - 6 * (px * px + py * py) + 1) -
+           0.02 * (px * px - py * py);
+}
+
+static int synth_opd(void *ctx, double px, double py, double *w)
+{
+    const synth *s = ctx;
+    if (px > s->cut)
+        return SG_EVIGNETTED;
+    *w = synth_w(px, py);
+    return SG_OK;
+}
+
+static void wavefront_map(void **state)
+{
+    synth s = { 2.0 };
+    sg_wavefront w;
+    sg_diag d;
+    double mean = 0, ss = 0, sc = 0, lo = INFINITY, hi = -INFINITY;
+    size_t cnt = 0;
+    int i, j, g = 33;
+    (void)state;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_wavefront_compute(synth_opd, &s, g, SG_ZERNIKE_FRINGE, 37, &w, &d),
+                     SG_OK);
+    /* Direct sums over the same grid: the grid is symmetric, so the even
+     * part has no tilt and the piston is its mean. */
+    for (j = 0; j < g; j++)
+        for (i = 0; i < g; i++) {
+            double px = -1.0 + 2.0 * i / (g - 1), py = -1.0 + 2.0 * j / (g - 1);
+            if (px * px + py * py > 1.0)
+                continue;
+            mean += synth_w(px, py) - 0.2 * px + 0.1 * py;
+            cnt++;
+        }
+    mean /= cnt;
+    for (j = 0; j < g; j++)
+        for (i = 0; i < g; i++) {
+            double px = -1.0 + 2.0 * i / (g - 1), py = -1.0 + 2.0 * j / (g - 1), r;
+            if (px * px + py * py > 1.0)
+                continue;
+            r = synth_w(px, py) - 0.2 * px + 0.1 * py - mean;
+            ss += r * r;
+            sc += (r + 0.2 * px - 0.1 * py) * (r + 0.2 * px - 0.1 * py);
+            lo = fmin(lo, r);
+            hi = fmax(hi, r);
+        }
+    assert_int_equal(w.nvalid, cnt);
+    assert_true(fabs(w.rms_centroid - sqrt(ss / cnt)) < 1e-13);
+    assert_true(fabs(w.pv_centroid - (hi - lo)) < 1e-13);
+    assert_true(fabs(w.rms_chief - sqrt(sc / cnt)) < 1e-13);
+    assert_true(fabs(w.coef[1] - 0.2) < 1e-12 && fabs(w.coef[2] + 0.1) < 1e-12);
+    assert_true(fabs(w.coef[8] - 0.05) < 1e-12 && fabs(w.coef[4] + 0.02) < 1e-12);
+    assert_true(fabs(w.coef[0] - 0.3) < 1e-12 && fabs(w.coef[3]) < 1e-12);
+    assert_true(w.fit_rms < 1e-13);
+    sg_wavefront_free(&w);
+
+    /* Failed rays are left out of the map and the statistics. */
+    s.cut = 0.5;
+    assert_int_equal(sg_wavefront_compute(synth_opd, &s, g, SG_ZERNIKE_STANDARD, 15, &w, &d),
+                     SG_OK);
+    for (j = 0, cnt = 0; j < g; j++)
+        for (i = 0; i < g; i++) {
+            double px = -1.0 + 2.0 * i / (g - 1), py = -1.0 + 2.0 * j / (g - 1);
+            int in = px * px + py * py <= 1.0 && px <= 0.5;
+            cnt += in;
+            assert_int_equal(w.valid[(size_t)j * g + i], in);
+        }
+    assert_int_equal(w.nvalid, cnt);
+    sg_wavefront_free(&w);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_wavefront_compute(synth_opd, &s, 2, SG_ZERNIKE_FRINGE, 37, &w, &d),
+                     SG_ERANGE);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_wavefront_compute(synth_opd, &s, 9, SG_ZERNIKE_STANDARD, 38, &w, &d),
+                     SG_ERANGE);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(fringe_table), cmocka_unit_test(noll_table),
         cmocka_unit_test(orthogonal),   cmocka_unit_test(fit),
         cmocka_unit_test(fit_residual), cmocka_unit_test(bad_input),
+        cmocka_unit_test(wavefront_map),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
