@@ -700,6 +700,148 @@ int sg_trace_opd(sg_tracer *t, const sg_opd_ref *ref, double px, double py,
 /* The tracer's wavelength in micrometres. */
 double sg_tracer_wavelength(const sg_tracer *t);
 
+/* ------------------------------------------------------------------------
+ * Seidel sums (third-order aberrations and first-order colour)
+ * ------------------------------------------------------------------------ */
+
+/* The seven sums, Welford's S_I to S_V, C_I and C_II, in lens units. */
+enum {
+    SG_SEIDEL_SI = 0,   /* spherical aberration */
+    SG_SEIDEL_SII = 1,  /* coma */
+    SG_SEIDEL_SIII = 2, /* astigmatism */
+    SG_SEIDEL_SIV = 3,  /* Petzval field curvature */
+    SG_SEIDEL_SV = 4,   /* distortion */
+    SG_SEIDEL_CI = 5,   /* axial colour */
+    SG_SEIDEL_CII = 6,  /* lateral colour */
+    SG_SEIDEL_N = 7
+};
+
+typedef struct sg_seidel {
+    int nsurf;        /* surfaces 0..nsurf-1; row 0 (the object) is zero */
+    double *surf;     /* nsurf * SG_SEIDEL_N: surface j's sums at surf[j * SG_SEIDEL_N] */
+    double total[SG_SEIDEL_N];
+    double lagrange;  /* Welford's H = n (u ybar - ubar y), full field and aperture */
+    double nu_image;  /* n'u' of the paraxial marginal ray in image space */
+    double wave_um;   /* the primary wavelength, at which the sums are taken */
+    double wave_lens; /* the same in lens units */
+    double short_um, long_um; /* colour: index differences between these two */
+} sg_seidel;
+
+/* Seidel sums of every surface at the primary wavelength, from the
+ * paraxial marginal ray (full entrance pupil) and the chief ray of the
+ * largest field (scaled to the paraxial image height).  The conic and the
+ * r^4 term of an even asphere contribute; the r^2 term is left out, as in
+ * the paraxial data.  Free with sg_seidel_free. */
+int sg_seidel_compute(const sg_system *sys, const sg_catalog *cat, sg_seidel *out,
+                      sg_diag *d);
+void sg_seidel_free(sg_seidel *s);
+
+/* Zemax's wavefront coefficients, in waves of lambda (lens units):
+ * W040 = SI/8, W131 = SII/2, W222 = SIII/2, W220P = SIV/4, W311 = SV/2,
+ * W020 = CI/2, W111 = CII, W220S = (SIII+SIV)/4, W220M = (2SIII+SIV)/4,
+ * W220T = (3SIII+SIV)/4. */
+enum {
+    SG_W040 = 0, SG_W131, SG_W222, SG_W220P, SG_W311, SG_W020, SG_W111,
+    SG_W220S, SG_W220M, SG_W220T, SG_NWCOEF
+};
+void sg_seidel_waves(const double *s, double lambda, double *w);
+
+/* Zemax's transverse aberrations in lens units, with nu = n'u' of the
+ * marginal ray: TSPH = SI/(2n'u'), TSCO = SII/(2n'u'), TTCO = 3 TSCO,
+ * TAST = SIII/(n'u'), TPFC = SIV/(2n'u'), TSFC = (SIII+SIV)/(2n'u'),
+ * TTFC = (3SIII+SIV)/(2n'u'), TDIS = SV/(2n'u'), TAXC = CI/(n'u'),
+ * TLAC = CII/(n'u'). */
+enum {
+    SG_TSPH = 0, SG_TSCO, SG_TTCO, SG_TAST, SG_TPFC, SG_TSFC, SG_TTFC, SG_TDIS,
+    SG_TAXC, SG_TLAC, SG_NTCOEF
+};
+void sg_seidel_transverse(const double *s, double nu, double *t);
+
+/* Millimetres in one lens unit of the system (mm, cm, in or m). */
+double sg_lens_unit_mm(const sg_system *sys);
+
+/* ------------------------------------------------------------------------
+ * Field curvature and distortion
+ * ------------------------------------------------------------------------ */
+
+typedef struct sg_fieldcurve_pt {
+    double hy;         /* normalized field, 0 to 1 */
+    double field;      /* the same in the system's field units (degrees or lens units) */
+    double tan_focus;  /* tangential focus: z from the chief ray's image-surface point */
+    double sag_focus;  /* sagittal focus, the same way */
+    double real_y;     /* real chief ray height on the image surface */
+    double parax_y;    /* paraxial image height of this field (f tan(theta) at infinity) */
+    double distortion; /* 100 (real_y - parax_y) / parax_y, percent; 0 on axis */
+    int status;        /* SG_OK, or the failure of one of the field's rays */
+} sg_fieldcurve_pt;
+
+/* Field curvature and distortion at npts fields evenly from 0 to the
+ * largest (in the field's own measure: the angle for angle fields), along
+ * +y, at opts' wavelength, by differential real rays a pupil step delta
+ * (normalized, e.g. 0.01) either side of the chief ray, with Richardson's
+ * step to delta / 2.  A field whose rays fail gets that status; the call
+ * fails only for bad arguments or a system that cannot be traced.  Fields
+ * given as real image height are refused (SG_EUNSUPPORTED). */
+int sg_fieldcurve(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
+                  int npts, double delta, sg_fieldcurve_pt *out, sg_diag *d);
+
+/* ------------------------------------------------------------------------
+ * Zernike polynomials and wavefront statistics
+ * ------------------------------------------------------------------------ */
+
+typedef enum sg_zernike_kind {
+    SG_ZERNIKE_FRINGE = 0,  /* University of Arizona order, 37 terms, not normalized */
+    SG_ZERNIKE_STANDARD = 1 /* Noll's order and normalization (unit RMS) */
+} sg_zernike_kind;
+
+#define SG_ZERNIKE_FRINGE_MAX 37
+#define SG_ZERNIKE_STANDARD_MAX 231 /* radial orders 0 to 20 */
+
+/* Radial order n and azimuthal order m of term j (from 1); m < 0 is a
+ * sine term, m > 0 a cosine term.  SG_ERANGE outside the set. */
+int sg_zernike_nm(sg_zernike_kind kind, int j, int *n, int *m);
+/* Term j at pupil point (x, y), |(x, y)| <= 1, angle from the x axis; NaN
+ * for a j outside the set. */
+double sg_zernike_eval(sg_zernike_kind kind, int j, double x, double y);
+/* Least-squares coefficients of terms 1..nterms for the values w at the
+ * npts points (x, y) of the unit pupil, into coef[0..nterms-1], and the
+ * RMS of what the fit leaves (rms_resid may be NULL).  Memory does not
+ * depend on npts. */
+int sg_zernike_fit(sg_zernike_kind kind, int nterms, size_t npts, const double *x,
+                   const double *y, const double *w, double *coef, double *rms_resid,
+                   sg_diag *d);
+/* RMS and peak-to-valley of the values w at (x, y) after removing their
+ * least-squares piston, and tilt too when remove_tilt (Zemax's figures
+ * "to centroid"; piston alone gives its "to chief"). */
+int sg_wavefront_stats(size_t npts, const double *x, const double *y, const double *w,
+                       int remove_tilt, double *rms, double *pv, sg_diag *d);
+
+/* A source of optical path difference: OPD in waves at normalized pupil
+ * point (px, py), returning SG_OK or the ray's failure. */
+typedef int (*sg_opd_fn)(void *ctx, double px, double py, double *opd_waves);
+
+#define SG_WAVEFRONT_MAXTERMS 37
+
+typedef struct sg_wavefront {
+    int grid;           /* points across the pupil */
+    double *map;        /* grid * grid, row py, column px, from -1 to 1 */
+    unsigned char *valid; /* 1 where map holds an OPD (inside the pupil, ray OK) */
+    size_t nvalid;
+    double rms_chief, pv_chief;       /* piston removed */
+    double rms_centroid, pv_centroid; /* piston and tilt removed */
+    sg_zernike_kind kind;
+    int nterms;
+    double coef[SG_WAVEFRONT_MAXTERMS]; /* Zernike coefficients, waves */
+    double fit_rms;                     /* RMS of what the fit leaves */
+} sg_wavefront;
+
+/* The wavefront map of opd on a grid x grid square of pupil points (those
+ * inside the unit circle), its RMS and P-V, and nterms Zernike terms of
+ * kind.  Free with sg_wavefront_free. */
+int sg_wavefront_compute(sg_opd_fn opd, void *ctx, int grid, sg_zernike_kind kind,
+                         int nterms, sg_wavefront *out, sg_diag *d);
+void sg_wavefront_free(sg_wavefront *w);
+
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */
 double sg_digits(double a, double b);

@@ -39,6 +39,8 @@ int cmd_export(int argc, char **argv);
 int cmd_spot(int argc, char **argv);
 int cmd_fan(int argc, char **argv);
 int cmd_layout(int argc, char **argv);
+int cmd_seidel(int argc, char **argv);     /* aberration.c */
+int cmd_fieldcurve(int argc, char **argv); /* aberration.c */
 
 /* "sagitta: " + message + newline on stderr. */
 void cli_error(const char *fmt, ...)

@@ -30,6 +30,8 @@ static const cli_command commands[] = {
     { "bench", cmd_bench, "measure trace throughput" },
     { "import", cmd_import, "read a Zemax .zmx lens file into a JSON design" },
     { "export", cmd_export, "write a design as a Zemax .zmx lens file" },
+    { "seidel", cmd_seidel, "print Seidel sums: per surface, in waves and transverse" },
+    { "fieldcurve", cmd_fieldcurve, "print field curvature and distortion against field" },
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
 

@@ -1,0 +1,504 @@
+/*
+ * aberration.c - the "seidel" and "fieldcurve" subcommands: the engine's
+ * sg_seidel_compute and sg_fieldcurve written as text, CSV or JSON.
+ *
+ * Text output passes the design's name through safe_fputs; files are
+ * written through outfile, so a failed write leaves an old file whole.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cli.h"
+#include "outfile.h"
+#include "report.h"
+#include "safetext.h"
+
+enum { A_HELP = 1, A_FORMAT, A_OUTPUT, A_WAVE, A_METHOD, A_POINTS, A_STEP };
+
+static const char *const seidel_names[SG_SEIDEL_N] = { "SI", "SII", "SIII", "SIV",
+                                                       "SV", "CI",  "CII" };
+static const char *const wave_names[SG_NWCOEF] = { "W040", "W131", "W222",  "W220P", "W311",
+                                                   "W020", "W111", "W220S", "W220M", "W220T" };
+static const char *const trans_names[SG_NTCOEF] = { "TSPH", "TSCO", "TTCO", "TAST", "TPFC",
+                                                    "TSFC", "TTFC", "TDIS", "TAXC", "TLAC" };
+
+/* A JSON string with the escapes RFC 8259 requires. */
+static void json_str(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (; *s; s++) {
+        unsigned char c = (unsigned char)*s;
+        if (c == '"' || c == '\\')
+            fprintf(f, "\\%c", c);
+        else if (c < 0x20 || c == 0x7f)
+            fprintf(f, "\\u%04x", c);
+        else
+            fputc(c, f);
+    }
+    fputc('"', f);
+}
+
+/* %.17g, or null (JSON) / empty (CSV) for a value that is not finite. */
+static void num(FILE *f, double v, int json)
+{
+    if (isfinite(v))
+        fprintf(f, "%.17g", v);
+    else if (json)
+        fputs("null", f);
+}
+
+static int open_out(outfile *o, const char *output)
+{
+    int err = outfile_open(o, output && strcmp(output, "-") ? output : NULL, stdout);
+    if (err) {
+        cli_error("%s: %s", output, strerror(err));
+        return CLI_EXIT_FILE;
+    }
+    return CLI_EXIT_OK;
+}
+
+static int close_out(outfile *o, const char *output)
+{
+    int err = outfile_commit(o);
+    if (err) {
+        cli_error("%s: %s", output && strcmp(output, "-") ? output : "standard output",
+                  strerror(err));
+        return CLI_EXIT_FILE;
+    }
+    return CLI_EXIT_OK;
+}
+
+/* Exit status and message for an engine failure. */
+static int engine_error(const char *design, const sg_diag *d, int rc)
+{
+    const char *msg = d->msg[0] ? d->msg : sg_strerror(rc);
+    if (strstr(msg, design))
+        cli_error("%s", msg);
+    else
+        cli_error("%s: %s", design, msg);
+    rc = cli_exit_for(rc);
+    return rc == CLI_EXIT_OK ? CLI_EXIT_INTERNAL : rc;
+}
+
+/* ------------------------------------------------------------------- seidel */
+
+static void seidel_help(FILE *f)
+{
+    fputs(
+"Usage: sagitta seidel DESIGN.json [OPTIONS]\n"
+"Print the Seidel sums of every surface and their totals: SI (spherical),\n"
+"SII (coma), SIII (astigmatism), SIV (Petzval), SV (distortion), CI (axial\n"
+"colour), CII (lateral colour) in lens units; Zemax's wavefront coefficients\n"
+"in waves (W040 ... W220T); and the transverse aberrations TSPH ... TLAC.\n"
+"Taken at the primary wavelength, the full aperture and the largest field;\n"
+"colour between the shortest and the longest wavelength.  See sagitta(1).\n"
+"\n"
+"Options:\n"
+"  --format F               text (default), csv or json\n"
+"  -o, --output FILE        write to FILE instead of standard output\n"
+"  -h, --help               show this help\n", f);
+}
+
+static const cli_opt seidel_opts[] = {
+    { "--help", 'h', 0, A_HELP },
+    { "--format", 0, 1, A_FORMAT },
+    { "--output", 'o', 1, A_OUTPUT },
+    { NULL, 0, 0, 0 }
+};
+
+/* The three sets of one row (a surface or the total). */
+static void seidel_row(const sg_seidel *s, const double *in, double *w, double *t)
+{
+    sg_seidel_waves(in, s->wave_lens, w);
+    sg_seidel_transverse(in, s->nu_image, t);
+}
+
+static void seidel_text(FILE *f, const char *design, const sg_system *sys, const sg_seidel *s)
+{
+    int j, k, set;
+    double w[SG_NWCOEF], t[SG_NTCOEF];
+    fputs("Design      : ", f);
+    safe_fputs(design, f);
+    fprintf(f, "\nWavelength  : %.10g um (primary); colour from %.10g to %.10g um\n",
+            s->wave_um, s->short_um, s->long_um);
+    fprintf(f, "Units       : %s; waves of %.10g %s\n", sys->units, s->wave_lens, sys->units);
+    fprintf(f, "Lagrange H  : %.12g\nn'u' image  : %.12g\n", s->lagrange, s->nu_image);
+    for (set = 0; set < 3; set++) {
+        int ncol = set == 0 ? SG_SEIDEL_N : set == 1 ? SG_NWCOEF : SG_NTCOEF;
+        const char *const *names = set == 0 ? seidel_names : set == 1 ? wave_names : trans_names;
+        fprintf(f, "\n%s\n%-5s", set == 0   ? "Seidel sums (lens units)"
+                                 : set == 1 ? "Wavefront coefficients (waves)"
+                                            : "Transverse aberrations (lens units)",
+                "Surf");
+        for (k = 0; k < ncol; k++)
+            fprintf(f, " %14s", names[k]);
+        fputc('\n', f);
+        for (j = 1; j <= s->nsurf; j++) {
+            const double *row = j < s->nsurf ? s->surf + (size_t)j * SG_SEIDEL_N : s->total;
+            const double *v = row;
+            seidel_row(s, row, w, t);
+            if (set == 1)
+                v = w;
+            else if (set == 2)
+                v = t;
+            if (j < s->nsurf)
+                fprintf(f, "%-5d", j);
+            else
+                fprintf(f, "%-5s", "TOT");
+            for (k = 0; k < ncol; k++)
+                fprintf(f, " %14.6e", v[k]);
+            fputc('\n', f);
+        }
+    }
+}
+
+static void seidel_csv(FILE *f, const sg_seidel *s)
+{
+    int j, k;
+    double w[SG_NWCOEF], t[SG_NTCOEF];
+    fputs("surface", f);
+    for (k = 0; k < SG_SEIDEL_N; k++)
+        fprintf(f, ",%s", seidel_names[k]);
+    for (k = 0; k < SG_NWCOEF; k++)
+        fprintf(f, ",%s", wave_names[k]);
+    for (k = 0; k < SG_NTCOEF; k++)
+        fprintf(f, ",%s", trans_names[k]);
+    fputc('\n', f);
+    for (j = 1; j <= s->nsurf; j++) {
+        const double *row = j < s->nsurf ? s->surf + (size_t)j * SG_SEIDEL_N : s->total;
+        seidel_row(s, row, w, t);
+        if (j < s->nsurf)
+            fprintf(f, "%d", j);
+        else
+            fputs("total", f);
+        for (k = 0; k < SG_SEIDEL_N; k++) {
+            fputc(',', f);
+            num(f, row[k], 0);
+        }
+        for (k = 0; k < SG_NWCOEF; k++) {
+            fputc(',', f);
+            num(f, w[k], 0);
+        }
+        for (k = 0; k < SG_NTCOEF; k++) {
+            fputc(',', f);
+            num(f, t[k], 0);
+        }
+        fputc('\n', f);
+    }
+}
+
+static void json_set(FILE *f, const char *const *names, const double *v, int n)
+{
+    int k;
+    fputc('{', f);
+    for (k = 0; k < n; k++) {
+        fprintf(f, "%s\"%s\": ", k ? ", " : "", names[k]);
+        num(f, v[k], 1);
+    }
+    fputc('}', f);
+}
+
+static void seidel_json_row(FILE *f, const sg_seidel *s, const double *row)
+{
+    double w[SG_NWCOEF], t[SG_NTCOEF];
+    seidel_row(s, row, w, t);
+    fputs("\"sums\": ", f);
+    json_set(f, seidel_names, row, SG_SEIDEL_N);
+    fputs(", \"waves\": ", f);
+    json_set(f, wave_names, w, SG_NWCOEF);
+    fputs(", \"transverse\": ", f);
+    json_set(f, trans_names, t, SG_NTCOEF);
+}
+
+static void seidel_json(FILE *f, const char *design, const sg_system *sys, const sg_seidel *s)
+{
+    int j;
+    fputs("{\n  \"design\": ", f);
+    json_str(f, design);
+    fputs(",\n  \"units\": ", f);
+    json_str(f, sys->units);
+    fputs(",\n  \"wavelength_um\": ", f);
+    num(f, s->wave_um, 1);
+    fputs(",\n  \"wave_lens_units\": ", f);
+    num(f, s->wave_lens, 1);
+    fputs(",\n  \"colour_short_um\": ", f);
+    num(f, s->short_um, 1);
+    fputs(",\n  \"colour_long_um\": ", f);
+    num(f, s->long_um, 1);
+    fputs(",\n  \"lagrange\": ", f);
+    num(f, s->lagrange, 1);
+    fputs(",\n  \"nu_image\": ", f);
+    num(f, s->nu_image, 1);
+    fputs(",\n  \"surfaces\": [", f);
+    for (j = 1; j < s->nsurf; j++) {
+        fprintf(f, "%s\n    {\"surface\": %d, ", j > 1 ? "," : "", j);
+        seidel_json_row(f, s, s->surf + (size_t)j * SG_SEIDEL_N);
+        fputc('}', f);
+    }
+    fputs("\n  ],\n  \"total\": {", f);
+    seidel_json_row(f, s, s->total);
+    fputs("}\n}\n", f);
+}
+
+int cmd_seidel(int argc, char **argv)
+{
+    cli_iter it;
+    const char *val, *design = NULL, *output = NULL;
+    int id, rc, fmt = REPORT_TEXT;
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    sg_seidel s;
+    sg_diag d;
+    outfile o;
+
+    cli_iter_init(&it, "seidel", argc, argv);
+    while ((id = cli_next_opt(&it, seidel_opts, &val)) != -1) {
+        switch (id) {
+        case 0:
+            if (design)
+                return cli_usage_error("seidel", "unexpected argument \"%s\"", val);
+            design = val;
+            break;
+        case A_HELP:
+            seidel_help(stdout);
+            return CLI_EXIT_OK;
+        case A_FORMAT:
+            if (cli_format_value(val, 1, &fmt))
+                return CLI_EXIT_USAGE;
+            break;
+        case A_OUTPUT:
+            output = val;
+            break;
+        default:
+            return -id;
+        }
+    }
+    if (!design)
+        return cli_usage_error("seidel", "missing DESIGN.json");
+    rc = cli_load_design(design, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    sg_diag_clear(&d);
+    rc = sg_seidel_compute(sys, cat, &s, &d);
+    if (rc != SG_OK) {
+        rc = engine_error(design, &d, rc);
+        goto done;
+    }
+    cli_print_warnings(&d, design);
+    rc = open_out(&o, output);
+    if (rc == CLI_EXIT_OK) {
+        if (fmt == REPORT_CSV)
+            seidel_csv(o.f, &s);
+        else if (fmt == REPORT_JSON)
+            seidel_json(o.f, design, sys, &s);
+        else
+            seidel_text(o.f, design, sys, &s);
+        rc = close_out(&o, output);
+    }
+    sg_seidel_free(&s);
+done:
+    cli_design_free(cat, sys);
+    return rc;
+}
+
+/* --------------------------------------------------------------- fieldcurve */
+
+static void fieldcurve_help(FILE *f)
+{
+    fputs(
+"Usage: sagitta fieldcurve DESIGN.json [OPTIONS]\n"
+"Print the tangential and sagittal focus (z from the chief ray's point on\n"
+"the image surface, lens units) and the distortion (%, real chief ray height\n"
+"against the paraxial image height) at fields from 0 to the largest, along\n"
+"+y.  The foci come from real rays a small pupil step either side of the\n"
+"chief ray.  See sagitta(1).\n"
+"\n"
+"Options:\n"
+"  --points N               number of fields, 2 to 100000 (default 21)\n"
+"  --step D                 normalized pupil step, (0, 0.1] (default 0.01)\n"
+"  --wave N                 wavelength number, from 1 (default: the primary)\n"
+"  --method M               precise (default), classic or mpfr\n"
+"  --format F               text (default), csv or json\n"
+"  -o, --output FILE        write to FILE instead of standard output\n"
+"  -h, --help               show this help\n", f);
+}
+
+static const cli_opt fieldcurve_opts[] = {
+    { "--help", 'h', 0, A_HELP },
+    { "--format", 0, 1, A_FORMAT },
+    { "--output", 'o', 1, A_OUTPUT },
+    { "--wave", 0, 1, A_WAVE },
+    { "--method", 0, 1, A_METHOD },
+    { "--points", 0, 1, A_POINTS },
+    { "--step", 0, 1, A_STEP },
+    { NULL, 0, 0, 0 }
+};
+
+static void fieldcurve_write(FILE *f, int fmt, const char *design, const sg_system *sys,
+                             int wave0, const sg_fieldcurve_pt *p, int n)
+{
+    int i;
+    const char *fu = sys->field_type == SG_FIELD_ANGLE ? "deg" : sys->units;
+    if (fmt == REPORT_CSV) {
+        fputs("hy,field,tan_focus,sag_focus,real_y,parax_y,distortion_pct,status\n", f);
+        for (i = 0; i < n; i++) {
+            int ok = p[i].status == SG_OK;
+            num(f, p[i].hy, 0);
+            fputc(',', f);
+            num(f, p[i].field, 0);
+            fputc(',', f);
+            num(f, ok ? p[i].tan_focus : NAN, 0);
+            fputc(',', f);
+            num(f, ok ? p[i].sag_focus : NAN, 0);
+            fputc(',', f);
+            num(f, ok ? p[i].real_y : NAN, 0);
+            fputc(',', f);
+            num(f, p[i].parax_y, 0);
+            fputc(',', f);
+            num(f, ok ? p[i].distortion : NAN, 0);
+            fprintf(f, ",%s\n", report_status_name(p[i].status));
+        }
+        return;
+    }
+    if (fmt == REPORT_JSON) {
+        fputs("{\n  \"design\": ", f);
+        json_str(f, design);
+        fputs(",\n  \"units\": ", f);
+        json_str(f, sys->units);
+        fputs(",\n  \"field_units\": ", f);
+        json_str(f, fu);
+        fputs(",\n  \"wavelength_um\": ", f);
+        num(f, sys->wave[wave0].um, 1);
+        fputs(",\n  \"fields\": [", f);
+        for (i = 0; i < n; i++) {
+            int ok = p[i].status == SG_OK;
+            fprintf(f, "%s\n    {\"hy\": ", i ? "," : "");
+            num(f, p[i].hy, 1);
+            fputs(", \"field\": ", f);
+            num(f, p[i].field, 1);
+            fputs(", \"tan_focus\": ", f);
+            num(f, ok ? p[i].tan_focus : NAN, 1);
+            fputs(", \"sag_focus\": ", f);
+            num(f, ok ? p[i].sag_focus : NAN, 1);
+            fputs(", \"real_y\": ", f);
+            num(f, ok ? p[i].real_y : NAN, 1);
+            fputs(", \"parax_y\": ", f);
+            num(f, p[i].parax_y, 1);
+            fputs(", \"distortion_pct\": ", f);
+            num(f, ok ? p[i].distortion : NAN, 1);
+            fputs(", \"status\": ", f);
+            json_str(f, report_status_name(p[i].status));
+            fputc('}', f);
+        }
+        fputs("\n  ]\n}\n", f);
+        return;
+    }
+    fputs("Design      : ", f);
+    safe_fputs(design, f);
+    fprintf(f, "\nWavelength  : %.10g um (wave %d)\n", sys->wave[wave0].um, wave0 + 1);
+    fprintf(f, "Focus       : z from the chief ray's image point, %s\n\n", sys->units);
+    fprintf(f, "%10s %12s %16s %16s %16s %16s %14s  %s\n", "Hy", fu, "Tangential",
+            "Sagittal", "Real y", "Paraxial y", "Distortion %", "Status");
+    for (i = 0; i < n; i++) {
+        fprintf(f, "%10.6f %12.6g ", p[i].hy, p[i].field);
+        if (p[i].status == SG_OK)
+            fprintf(f, "%16.9e %16.9e %16.9e %16.9e %14.6e  OK\n", p[i].tan_focus,
+                    p[i].sag_focus, p[i].real_y, p[i].parax_y, p[i].distortion);
+        else
+            fprintf(f, "%16s %16s %16s %16.9e %14s  %s\n", "-", "-", "-", p[i].parax_y, "-",
+                    report_status_name(p[i].status));
+    }
+}
+
+int cmd_fieldcurve(int argc, char **argv)
+{
+    cli_iter it;
+    const char *val, *design = NULL, *output = NULL;
+    int id, rc, fmt = REPORT_TEXT, wave1 = 0, wave0 = 0, npts = 21, m;
+    double step = 0.01;
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    sg_fieldcurve_pt *pts = NULL;
+    sg_trace_opts opts;
+    sg_diag d;
+    outfile o;
+
+    sg_trace_opts_init(&opts);
+    cli_iter_init(&it, "fieldcurve", argc, argv);
+    while ((id = cli_next_opt(&it, fieldcurve_opts, &val)) != -1) {
+        switch (id) {
+        case 0:
+            if (design)
+                return cli_usage_error("fieldcurve", "unexpected argument \"%s\"", val);
+            design = val;
+            break;
+        case A_HELP:
+            fieldcurve_help(stdout);
+            return CLI_EXIT_OK;
+        case A_FORMAT:
+            if (cli_format_value(val, 1, &fmt))
+                return CLI_EXIT_USAGE;
+            break;
+        case A_OUTPUT:
+            output = val;
+            break;
+        case A_WAVE:
+            if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))
+                return CLI_EXIT_USAGE;
+            break;
+        case A_METHOD:
+            m = sg_method_parse(val);
+            if (m < 0)
+                return cli_usage_error("fieldcurve", "--method: \"%s\" is not precise, "
+                                                     "classic or mpfr", val);
+            opts.method = (sg_method)m;
+            break;
+        case A_POINTS:
+            if (cli_int_value("--points", val, 2, 100000, &npts))
+                return CLI_EXIT_USAGE;
+            break;
+        case A_STEP:
+            if (cli_doubles_value("--step", val, 1, "step", &step))
+                return CLI_EXIT_USAGE;
+            if (!(step > 0.0 && step <= 0.1))
+                return cli_usage_error("fieldcurve", "--step: %g is not in (0, 0.1]", step);
+            break;
+        default:
+            return -id;
+        }
+    }
+    if (!design)
+        return cli_usage_error("fieldcurve", "missing DESIGN.json");
+    rc = cli_load_design(design, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    rc = cli_check_wave(design, sys, wave1, &wave0);
+    if (rc != CLI_EXIT_OK)
+        goto done;
+    opts.wave = wave0;
+    pts = calloc((size_t)npts, sizeof *pts);
+    if (!pts) {
+        cli_error("out of memory");
+        rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    sg_diag_clear(&d);
+    rc = sg_fieldcurve(sys, cat, &opts, npts, step, pts, &d);
+    if (rc != SG_OK) {
+        rc = engine_error(design, &d, rc);
+        goto done;
+    }
+    cli_print_warnings(&d, design);
+    rc = open_out(&o, output);
+    if (rc == CLI_EXIT_OK) {
+        fieldcurve_write(o.f, fmt, design, sys, wave0, pts, npts);
+        rc = close_out(&o, output);
+    }
+done:
+    free(pts);
+    cli_design_free(cat, sys);
+    return rc;
+}
