@@ -136,7 +136,8 @@ static int hull_add(hull *h, double (*pts)[2], size_t n, double (*work)[2])
         if (!inside)
             memcpy(work[m++], pts[i], sizeof *pts);
     }
-    memcpy(work + m, h->p, h->n * sizeof *h->p);
+    if (h->n > 0) /* no hull yet: h->p may be NULL */
+        memcpy(work + m, h->p, h->n * sizeof *h->p);
     m += h->n;
     out = work + m;
     nh = monotone(work, m, out);

@@ -102,6 +102,7 @@ if [ "$do_asan" = 1 ]; then
         # The fuzz suite builds its own sanitized harnesses and this suite
         # would run itself, so both are left out.
         ASAN_OPTIONS="detect_leaks=1:log_path=$logs/asan" \
+        LSAN_OPTIONS="suppressions=$root/tools/lsan.supp:print_suppressions=0" \
         UBSAN_OPTIONS="halt_on_error=1:print_stacktrace=1:log_path=$logs/ubsan" \
         meson test -C "$asan_dir" --no-rebuild --print-errorlogs --timeout-multiplier 4 \
             --no-suite extra --no-suite fuzz > "$asan_dir/ci-extra-test.log" 2>&1
