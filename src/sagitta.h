@@ -842,6 +842,28 @@ int sg_wavefront_compute(sg_opd_fn opd, void *ctx, int grid, sg_zernike_kind kin
                          int nterms, sg_wavefront *out, sg_diag *d);
 void sg_wavefront_free(sg_wavefront *w);
 
+typedef struct sg_wavefront_opts {
+    sg_trace_opts trace; /* trace.wave: the wavelength, -1 the primary */
+    int field;           /* 0-based design field, or -1 to use hx, hy */
+    double hx, hy;       /* normalized field when field < 0 */
+    int grid;            /* points across the pupil (Zemax's sampling) */
+    int kind;            /* sg_zernike_kind */
+    int nterms;          /* Zernike terms fitted, 1 to 37 */
+    int nthreads;        /* 0: every core */
+    size_t block;        /* rays per batch call; 0: 65536 */
+} sg_wavefront_opts;
+
+void sg_wavefront_opts_init(sg_wavefront_opts *o);
+
+/* The traced wavefront of one field at one wavelength: the OPD of the
+ * grid's pupil points against the field's reference sphere (sg_opd_ref,
+ * copied to *ref when ref is not NULL), through the batch in blocks with
+ * only the image surface kept.  Rays that fail are left out, as in Zemax.
+ * A chief ray that fails is an error naming the field. */
+int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
+                       const sg_wavefront_opts *o, sg_wavefront *out, sg_opd_ref *ref,
+                       sg_diag *d);
+
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */
 double sg_digits(double a, double b);
