@@ -574,6 +574,7 @@ typedef struct sg_fan_opts {
     int wave;    /* 0-based, or -1 for every wavelength */
     int field;   /* 0-based, or -1 for every field */
     int nthreads;
+    int opd;     /* nonzero: OPD fans (waves) instead of transverse ray fans */
 } sg_fan_opts;
 
 void sg_fan_opts_init(sg_fan_opts *o);
@@ -581,7 +582,8 @@ void sg_fan_opts_init(sg_fan_opts *o);
 /* One fan: the pupil coordinate of each sample and the aberration. */
 typedef struct sg_fan_curve {
     double *p;      /* npts pupil coordinates (Py tangential, Px sagittal) */
-    double *e;      /* ey (tangential) or ex (sagittal), lens units */
+    double *e;      /* ey (tangential) or ex (sagittal), lens units; or, in an
+                       OPD fan, the OPD in waves of the curve's wavelength */
     int *status;    /* each ray's status; e is 0 where it is not SG_OK */
 } sg_fan_curve;
 
@@ -594,12 +596,18 @@ typedef struct sg_fan {
     int status[SG_MAX_FIELDS];       /* the reference chief ray's status */
     double ref_x[SG_MAX_FIELDS], ref_y[SG_MAX_FIELDS];
     sg_fan_curve *tan, *sag;         /* nfield * nwave each, row by field */
+    int opd;                         /* OPD fans: e in waves */
 } sg_fan;
 
 /* Transverse ray fans: ey against Py (Px = 0) and ex against Px (Py = 0),
  * on the image surface, each relative to the chief ray of the primary
  * wavelength (of the only wavelength when one is chosen), as Zemax draws
- * them. */
+ * them.  With o->opd, OPD fans instead: the OPD (sg_opd_of_ray) against
+ * each field's reference sphere (the primary wavelength's, whatever is
+ * chosen, as in Zemax), in waves of each curve's wavelength, less that
+ * wavelength's chief ray's OPD so every curve passes through zero at the
+ * pupil's centre (the chromatic piston left out, as Zemax draws OPD fans);
+ * a ray whose OPD is not defined gets that status. */
 int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opts *o,
                    sg_fan *out, sg_diag *d);
 void sg_fan_free(sg_fan *f);

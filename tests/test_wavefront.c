@@ -152,6 +152,113 @@ static void rms_direct(void **state)
     sg_system_free(sys);
 }
 
+/* OPD fans of the Cooke triplet at every wavelength equal sg_trace_opd
+ * against the field's sphere at the same pupil points, less the same
+ * wavelength's chief ray's. */
+static void opd_fan_direct(void **state)
+{
+    sg_system *sys = tu_example("cooke_triplet.json");
+    sg_catalog *cat = tu_catalog();
+    sg_fan_opts o;
+    sg_fan fan;
+    sg_diag d;
+    sg_ray_surface rows[32];
+    int fi, w, j, side, n = 0;
+    double worst = 0.0;
+    (void)state;
+    sg_fan_opts_init(&o);
+    o.npts = 11;
+    o.opd = 1;
+    assert_int_equal(sg_fan_compute(sys, cat, &o, &fan, &d), SG_OK);
+    assert_int_equal(fan.opd, 1);
+    for (w = 0; w < fan.nwave; w++) {
+        sg_trace_opts to;
+        sg_tracer *t;
+        sg_trace_opts_init(&to);
+        to.wave = fan.wave_index[w];
+        t = sg_tracer_new(sys, cat, &to, &d);
+        assert_non_null(t);
+        for (fi = 0; fi < fan.nfield; fi++) {
+            sg_opd_ref ref;
+            sg_opd c0;
+            assert_int_equal(sg_opd_reference(t, fan.hx[fi], fan.hy[fi], &ref, NULL), SG_OK);
+            assert_int_equal(sg_trace_opd(t, &ref, 0.0, 0.0, rows, &c0), SG_OK);
+            if (fan.wave_index[w] != sys->primary_wave)
+                assert_true(fabs(c0.opd_waves) > 1.0); /* the piston taken away */
+            for (side = 0; side < 2; side++) {
+                const sg_fan_curve *c = side ? &fan.sag[fi * fan.nwave + w]
+                                             : &fan.tan[fi * fan.nwave + w];
+                for (j = 0; j < fan.npts; j++) {
+                    double p = -1.0 + 2.0 * j / (fan.npts - 1);
+                    sg_opd r;
+                    int st = sg_trace_opd(t, &ref, side ? p : 0.0, side ? 0.0 : p, rows, &r);
+                    assert_int_equal(c->status[j], st == SG_OK ? r.status : st);
+                    if (c->status[j] != SG_OK)
+                        continue;
+                    worst = fmax(worst, fabs(c->e[j] - (r.opd_waves - c0.opd_waves)));
+                    n++;
+                }
+            }
+        }
+        sg_tracer_free(t);
+    }
+    print_message("# Cooke OPD fans: %d rays, largest difference from sg_trace_opd %.3g "
+                  "waves\n", n, worst);
+    assert_true(n > 150);
+    assert_true(worst <= 1e-9);
+    sg_fan_free(&fan);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
+/* A paraboloid (focal length f, stop on it, object at infinity) with its
+ * image plane dz beyond the focus F.  After the mirror the wavefront is a
+ * sphere about F; the one through the vertex E has radius f.  The
+ * reference sphere is centred on the image point C, dz beyond F on the
+ * axis, through E: radius f + dz.  A ray leaving the wavefront at angle
+ * theta to the axis toward F meets it where its signed distance s from F
+ * solves s^2 + 2 s dz cos(theta) + dz^2 = (f + dz)^2, having travelled
+ * f - s; the chief ray travels 0.  So
+ *     W = (s - f) / lambda,  s = -dz cos(theta) + sqrt((f + dz)^2 - dz^2 sin^2(theta)),
+ * with tan(theta / 2) = h / (2 f) for the ray at height h = P * EPD / 2
+ * (the paraboloid's focal chord).  Both fans are the same curve. */
+static void opd_fan_defocus(void **state)
+{
+    const double f = 200.0, dz = 0.5, epd = 80.0;
+    sg_system *sys = stop_mirror(0.0, -2 * f, -1.0, -(f + dz), epd);
+    sg_catalog *cat = tu_catalog();
+    sg_fan_opts o;
+    sg_fan fan;
+    sg_diag d;
+    double lambda, worst = 0.0, big = 0.0;
+    int j, side;
+    (void)state;
+    /* The stop on the mirror: surface 1 is a dummy at the mirror's vertex. */
+    lambda = sys->wave[sys->primary_wave].um * 1e-3;
+    sg_fan_opts_init(&o);
+    o.npts = 21;
+    o.opd = 1;
+    assert_int_equal(sg_fan_compute(sys, cat, &o, &fan, &d), SG_OK);
+    for (side = 0; side < 2; side++) {
+        const sg_fan_curve *c = side ? &fan.sag[0] : &fan.tan[0];
+        for (j = 0; j < fan.npts; j++) {
+            double h = c->p[j] * epd / 2, th = 2.0 * atan(h / (2.0 * f)), s, W;
+            s = -dz * cos(th) + sqrt((f + dz) * (f + dz) - dz * dz * sin(th) * sin(th));
+            W = (s - f) / lambda;
+            assert_int_equal(c->status[j], SG_OK);
+            worst = fmax(worst, fabs(c->e[j] - W));
+            big = fmax(big, fabs(W));
+        }
+    }
+    print_message("# paraboloid f %g defocused %g: OPD fan against the closed form: largest "
+                  "difference %.3g waves (largest OPD %.4g)\n", f, dz, worst, big);
+    assert_true(big > 10.0);
+    assert_true(worst <= 1e-9);
+    sg_fan_free(&fan);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
 static void bad_input(void **state)
 {
     sg_system *sys = tu_example("cooke_triplet.json");
@@ -178,6 +285,8 @@ int main(void)
         cmocka_unit_test(paraboloid_flat),
         cmocka_unit_test(sphere_w040),
         cmocka_unit_test(rms_direct),
+        cmocka_unit_test(opd_fan_direct),
+        cmocka_unit_test(opd_fan_defocus),
         cmocka_unit_test(bad_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

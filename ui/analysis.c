@@ -27,7 +27,7 @@ enum { FMT_TEXT, FMT_CSV, FMT_JSON, FMT_PNG, FMT_SVG, FMT_PDF };
 enum {
     O_HELP = 1, O_WAVE, O_FIELD, O_FORMAT, O_OUTPUT, O_METHOD, O_PATTERN, O_DENSITY,
     O_REFERENCE, O_POINTS, O_RAYS, O_SIZE, O_THREADS, O_NOCLIP, O_GRID, O_ZERNIKE,
-    O_TERMS
+    O_TERMS, O_OPD
 };
 
 static const cli_opt an_opts[] = {
@@ -48,6 +48,7 @@ static const cli_opt an_opts[] = {
     { "--grid", 0, 1, O_GRID },
     { "--zernike", 0, 1, O_ZERNIKE },
     { "--terms", 0, 1, O_TERMS },
+    { "--opd", 0, 0, O_OPD },
     { NULL, 0, 0, 0 }
 };
 
@@ -59,7 +60,8 @@ static void an_help(int kind, FILE *f)
         "Spot diagrams: where a pupil pattern of rays meets the image, per field\n"
         "and wavelength, with RMS and GEO radii, the centroid and the Airy radius.\n",
         "Transverse ray fans: ey against Py and ex against Px on the image, per\n"
-        "field and wavelength, relative to the primary wavelength's chief ray.\n",
+        "field and wavelength, relative to the primary wavelength's chief ray;\n"
+        "with --opd, OPD fans: the OPD in waves against Py and Px.\n",
         "Layout: a y-z cross-section of the surfaces over their semi-diameters\n"
         "and fans of rays in y from each field.\n",
         "Wavefront: the OPD map over the pupil of one field at one wavelength\n"
@@ -87,7 +89,8 @@ static void an_help(int kind, FILE *f)
               "                     or rays (vogel)\n"
               "  --reference R      chief (default) or centroid\n", f);
     if (kind == AN_FAN)
-        fputs("  --points N         rays on each fan from -1 to 1 (default 21)\n", f);
+        fputs("  --points N         rays on each fan from -1 to 1 (default 21)\n"
+              "  --opd              OPD fans (waves) instead of transverse ray fans\n", f);
     if (kind == AN_LAYOUT)
         fputs("  --rays N           rays per field from Py = -1 to 1 (default 7)\n", f);
     fputs("  --method M         precise (default), classic or mpfr\n"
@@ -270,7 +273,8 @@ static void fan_rows(FILE *f, const sg_system *sys, const sg_fan *fan, int csv)
     double sc = 1.0;
     const char *u = sys->units;
     if (csv)
-        fputs("field,wave,um,fan,p,e,status\n", f);
+        fputs(fan->opd ? "field,wave,um,fan,p,opd_waves,status\n"
+                       : "field,wave,um,fan,p,e,status\n", f);
     else {
         double ext = 0.0;
         for (j = 0; j < fan->nfield * fan->nwave; j++)
@@ -282,8 +286,13 @@ static void fan_rows(FILE *f, const sg_system *sys, const sg_fan *fan, int csv)
                         ext = fmax(ext, fabs(c->e[i]));
             }
         u = view_length_unit(sys, ext, &sc);
-        fprintf(f, "%-26s %-12s %-11s %8s %16s  %s\n", "Field", "Wavelength", "Fan", "P", "e",
-                "Status");
+        if (fan->opd) {
+            /* OPD in waves of each curve's wavelength. */
+            u = "waves";
+            sc = 1.0;
+        }
+        fprintf(f, "%-26s %-12s %-11s %8s %16s  %s\n", "Field", "Wavelength", "Fan", "P",
+                fan->opd ? "OPD" : "e", "Status");
     }
     for (fi = 0; fi < fan->nfield; fi++)
         for (w = 0; w < fan->nwave; w++)
@@ -320,7 +329,8 @@ static cJSON *fan_json(const sg_system *sys, const sg_fan *fan)
     cJSON *root = cJSON_CreateObject(), *fans = cJSON_AddArrayToObject(root, "fans");
     int fi, w, side;
     cJSON_AddStringToObject(root, "analysis", "fan");
-    cJSON_AddStringToObject(root, "units", sys->units);
+    cJSON_AddStringToObject(root, "kind", fan->opd ? "opd" : "ray");
+    cJSON_AddStringToObject(root, "units", fan->opd ? "waves" : sys->units);
     for (fi = 0; fi < fan->nfield; fi++)
         for (w = 0; w < fan->nwave; w++)
             for (side = 0; side < 2; side++) {
@@ -335,7 +345,7 @@ static cJSON *fan_json(const sg_system *sys, const sg_fan *fan)
                 cJSON_AddNumberToObject(o, "ref_x", fan->ref_x[fi]);
                 cJSON_AddNumberToObject(o, "ref_y", fan->ref_y[fi]);
                 p = cJSON_AddArrayToObject(o, side ? "px" : "py");
-                e = cJSON_AddArrayToObject(o, side ? "ex" : "ey");
+                e = cJSON_AddArrayToObject(o, fan->opd ? "opd" : side ? "ex" : "ey");
                 st = cJSON_AddArrayToObject(o, "status");
                 for (j = 0; j < fan->npts; j++) {
                     cJSON_AddItemToArray(p, cJSON_CreateNumber(c->p[j]));
@@ -542,7 +552,7 @@ static int run(int kind, int argc, char **argv)
     int id, rc, fmt = FMT_TEXT, wave1 = 0, field1 = 0, method = SG_METHOD_PRECISE;
     int pattern = SG_PUPIL_HEXAPOLAR, density = 6, ref = SG_SPOT_REF_CHIEF, points = 21;
     int nrays = 7, threads = 0, noclip = 0, pw = 1000, ph = 750, tty;
-    int grid = 64, zkind = SG_ZERNIKE_FRINGE, terms = 37;
+    int grid = 64, zkind = SG_ZERNIKE_FRINGE, terms = 37, opdfan = 0;
     sg_wavefront wf;
     sg_wavefront_opts wo;
     sg_opd_ref wref;
@@ -648,6 +658,11 @@ static int run(int kind, int argc, char **argv)
         case O_NOCLIP:
             noclip = 1;
             break;
+        case O_OPD:
+            if (kind != AN_FAN)
+                return cli_usage_error(cmd, "--opd is for fan");
+            opdfan = 1;
+            break;
         case O_GRID:
             if (kind != AN_WAVEFRONT)
                 return cli_usage_error(cmd, "--grid is for wavefront");
@@ -717,6 +732,7 @@ static int run(int kind, int argc, char **argv)
         fo.wave = wave1 - 1;
         fo.field = field1 - 1;
         fo.nthreads = threads;
+        fo.opd = opdfan;
         rc = sg_fan_compute(sys, cat, &fo, &fan, &d);
     } else if (kind == AN_WAVEFRONT) {
         if (field1 == 0)

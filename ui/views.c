@@ -135,10 +135,16 @@ int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f)
                     ext = fmax(ext, fabs(c->e[i]));
         }
     u = view_length_unit(sys, ext, &scale);
-    snprintf(title, sizeof title, "Transverse ray fans: %s", safe_text(sys->title, lab, sizeof lab));
+    if (fan->opd) {
+        /* OPD in waves of each curve's wavelength, as Zemax plots it. */
+        u = "waves";
+        scale = 1.0;
+    }
+    snprintf(title, sizeof title, "%s: %s", fan->opd ? "OPD fans" : "Transverse ray fans",
+             safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
-    snprintf(yt, sizeof yt, "ey (%s)", u);
-    snprintf(ys, sizeof ys, "ex (%s)", u);
+    snprintf(yt, sizeof yt, "%s (%s)", fan->opd ? "W" : "ey", u);
+    snprintf(ys, sizeof ys, "%s (%s)", fan->opd ? "W" : "ex", u);
     for (fi = 0; fi < fan->nfield; fi++)
         for (side = 0; side < 2; side++) {
             char fl[64], pt[96];

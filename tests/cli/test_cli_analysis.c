@@ -226,6 +226,37 @@ static void test_wavefront_formats(void **state)
     ct_free(&r);
 }
 
+/* OPD fans: the mirror's OPD at the rim against the same W040 rho^4
+ * (SI / 8, with the higher orders within 1%), and 0 on the chief ray. */
+static void test_fan_opd(void **state)
+{
+    const char *d = ct_design("mirror.json", MIRROR);
+    double W040 = -2.0 * 625.0 / -1e6 / 8.0 / 0.55e-3;
+    ct_result r;
+    cJSON *j, *f0, *opd;
+    (void)state;
+    ct_run(&r, "fan", d, "--opd", "--field", "1", "--points", "5", "--format", "json", NULL);
+    assert_int_equal(r.code, 0);
+    j = cJSON_Parse(r.out);
+    assert_non_null(j);
+    assert_string_equal(cJSON_GetObjectItem(j, "kind")->valuestring, "opd");
+    f0 = cJSON_GetArrayItem(cJSON_GetObjectItem(j, "fans"), 0);
+    opd = cJSON_GetObjectItem(f0, "opd");
+    assert_non_null(opd);
+    ct_close(cJSON_GetArrayItem(opd, 2)->valuedouble, 0.0, 0, 1e-12, "chief OPD");
+    ct_close(cJSON_GetArrayItem(opd, 4)->valuedouble, W040, 1e-2, 0, "rim OPD");
+    cJSON_Delete(j);
+    ct_free(&r);
+    ct_run(&r, "fan", d, "--opd", "--format", "csv", NULL);
+    assert_int_equal(r.code, 0);
+    assert_true(strncmp(r.out, "field,wave,um,fan,p,opd_waves,status", 36) == 0);
+    ct_free(&r);
+    ct_run(&r, "spot", d, "--opd", NULL);
+    assert_int_equal(r.code, 2);
+    assert_non_null(strstr(r.err, "--opd is for fan"));
+    ct_free(&r);
+}
+
 static void test_bad_options(void **state)
 {
     const char *d = ct_design("mirror.json", MIRROR);
@@ -269,6 +300,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_pictures),
         cmocka_unit_test(test_layout_csv),
         cmocka_unit_test(test_wavefront_formats),
+        cmocka_unit_test(test_fan_opd),
         cmocka_unit_test(test_bad_options),
     };
     int rc;
