@@ -1,8 +1,9 @@
 /*
  * fan.c - transverse ray fans: ey against Py and ex against Px on the
- * image surface, relative to the reference wavelength's chief ray.  Every
- * fan of a wavelength goes through the batch in one call, keeping only the
- * image surface.
+ * image surface, relative to the reference wavelength's chief ray, or
+ * OPD fans against each field's reference sphere.  Every fan of a
+ * wavelength goes through the batch in one call, keeping only the image
+ * surface.
  */
 #include <stdlib.h>
 #include <string.h>
@@ -48,6 +49,24 @@ static int curve_alloc(sg_fan_curve *c, int n)
     return c->p && c->e && c->status ? SG_OK : SG_ENOMEM;
 }
 
+/* One ray's OPD into *e, or its failure (the reference's first) into *st. */
+static void opd_value(const sg_tracer *t, const sg_opd_ref *ref, const sg_ray_surface *row,
+                      int *st, double *e)
+{
+    sg_opd r;
+    *e = 0.0;
+    if (ref->status != SG_OK) {
+        *st = ref->status;
+        return;
+    }
+    if (*st != SG_OK)
+        return;
+    sg_opd_of_ray(t, ref, row, &r);
+    *st = r.status;
+    if (r.status == SG_OK)
+        *e = r.opd_waves;
+}
+
 int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opts *o,
                    sg_fan *out, sg_diag *d)
 {
@@ -58,6 +77,10 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
     sg_ray_surface *rows = NULL;
     int *st = NULL;
     sg_batch *b = NULL;
+    sg_tracer *tw = NULL;
+    sg_opd_ref *ref = NULL;
+    double c0 = 0.0;
+    int c0st = SG_OK;
 
     if (!sys || !o || !out)
         return sg_diag_set(d, SG_EINVAL, "fan: no system, options or result");
@@ -75,6 +98,7 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
     out->nfield = nf;
     out->nwave = nw;
     out->npts = np;
+    out->opd = o->opd != 0;
     for (w = 0; w < nw; w++) {
         out->wave_index[w] = waves[w];
         out->wave_um[w] = sys->wave[waves[w]].um;
@@ -91,7 +115,8 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
     rays = malloc(nray * sizeof *rays);
     rows = malloc(nray * sizeof *rows);
     st = malloc(nray * sizeof *st);
-    if (!out->tan || !out->sag || !rays || !rows || !st) {
+    ref = calloc((size_t)nf, sizeof *ref);
+    if (!out->tan || !out->sag || !rays || !rows || !st || !ref) {
         rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
         goto done;
     }
@@ -137,6 +162,20 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
             goto done;
         sg_batch_free(b);
         b = NULL;
+        if (o->opd) {
+            /* A tracer at this wavelength, for the OPD in its waves; the
+             * spheres are the primary wavelength's whichever traces them. */
+            sg_tracer_free(tw);
+            if (!(tw = sg_tracer_new(sys, cat, &to, d))) {
+                rc = d && d->code ? d->code : SG_ENOMEM;
+                goto done;
+            }
+            if (k == 0)
+                for (f = 0; f < nf; f++)
+                    if ((rc = sg_opd_reference(tw, out->hx[f], out->hy[f], &ref[f], d)) !=
+                        SG_OK)
+                        goto done;
+        }
         for (f = 0; f < nf; f++) {
             sg_fan_curve *t = &out->tan[f * nw + w], *s = &out->sag[f * nw + w];
             r = (size_t)f * (size_t)(2 * np + 1);
@@ -145,6 +184,11 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
                 out->ref_x[f] = st[r] == SG_OK ? rows[r].x : 0.0;
                 out->ref_y[f] = st[r] == SG_OK ? rows[r].y : 0.0;
             }
+            if (o->opd) {
+                /* This wavelength's chief ray: its OPD is the curve's zero. */
+                c0st = out->status[f] != SG_OK ? out->status[f] : st[r];
+                opd_value(tw, &ref[f], &rows[r], &c0st, &c0);
+            }
             for (j = 0; j < np; j++) {
                 size_t it = r + 1 + (size_t)j, is = r + 1 + (size_t)(np + j);
                 t->p[j] = rays[it].v[3];
@@ -152,6 +196,17 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
                 /* Without the reference chief ray there is nothing to measure from. */
                 t->status[j] = out->status[f] != SG_OK ? out->status[f] : st[it];
                 s->status[j] = out->status[f] != SG_OK ? out->status[f] : st[is];
+                if (o->opd) {
+                    if (c0st != SG_OK)
+                        t->status[j] = s->status[j] = c0st;
+                    opd_value(tw, &ref[f], &rows[it], &t->status[j], &t->e[j]);
+                    opd_value(tw, &ref[f], &rows[is], &s->status[j], &s->e[j]);
+                    if (t->status[j] == SG_OK)
+                        t->e[j] -= c0;
+                    if (s->status[j] == SG_OK)
+                        s->e[j] -= c0;
+                    continue;
+                }
                 t->e[j] = t->status[j] == SG_OK ? rows[it].y - out->ref_y[f] : 0.0;
                 s->e[j] = s->status[j] == SG_OK ? rows[is].x - out->ref_x[f] : 0.0;
             }
@@ -160,6 +215,8 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
     rc = SG_OK;
 done:
     sg_batch_free(b);
+    sg_tracer_free(tw);
+    free(ref);
     free(rays);
     free(rows);
     free(st);

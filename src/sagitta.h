@@ -574,6 +574,7 @@ typedef struct sg_fan_opts {
     int wave;    /* 0-based, or -1 for every wavelength */
     int field;   /* 0-based, or -1 for every field */
     int nthreads;
+    int opd;     /* nonzero: OPD fans (waves) instead of transverse ray fans */
 } sg_fan_opts;
 
 void sg_fan_opts_init(sg_fan_opts *o);
@@ -581,7 +582,8 @@ void sg_fan_opts_init(sg_fan_opts *o);
 /* One fan: the pupil coordinate of each sample and the aberration. */
 typedef struct sg_fan_curve {
     double *p;      /* npts pupil coordinates (Py tangential, Px sagittal) */
-    double *e;      /* ey (tangential) or ex (sagittal), lens units */
+    double *e;      /* ey (tangential) or ex (sagittal), lens units; or, in an
+                       OPD fan, the OPD in waves of the curve's wavelength */
     int *status;    /* each ray's status; e is 0 where it is not SG_OK */
 } sg_fan_curve;
 
@@ -594,12 +596,18 @@ typedef struct sg_fan {
     int status[SG_MAX_FIELDS];       /* the reference chief ray's status */
     double ref_x[SG_MAX_FIELDS], ref_y[SG_MAX_FIELDS];
     sg_fan_curve *tan, *sag;         /* nfield * nwave each, row by field */
+    int opd;                         /* OPD fans: e in waves */
 } sg_fan;
 
 /* Transverse ray fans: ey against Py (Px = 0) and ex against Px (Py = 0),
  * on the image surface, each relative to the chief ray of the primary
  * wavelength (of the only wavelength when one is chosen), as Zemax draws
- * them. */
+ * them.  With o->opd, OPD fans instead: the OPD (sg_opd_of_ray) against
+ * each field's reference sphere (the primary wavelength's, whatever is
+ * chosen, as in Zemax), in waves of each curve's wavelength, less that
+ * wavelength's chief ray's OPD so every curve passes through zero at the
+ * pupil's centre (the chromatic piston left out, as Zemax draws OPD fans);
+ * a ray whose OPD is not defined gets that status. */
 int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opts *o,
                    sg_fan *out, sg_diag *d);
 void sg_fan_free(sg_fan *f);
@@ -841,6 +849,28 @@ typedef struct sg_wavefront {
 int sg_wavefront_compute(sg_opd_fn opd, void *ctx, int grid, sg_zernike_kind kind,
                          int nterms, sg_wavefront *out, sg_diag *d);
 void sg_wavefront_free(sg_wavefront *w);
+
+typedef struct sg_wavefront_opts {
+    sg_trace_opts trace; /* trace.wave: the wavelength, -1 the primary */
+    int field;           /* 0-based design field, or -1 to use hx, hy */
+    double hx, hy;       /* normalized field when field < 0 */
+    int grid;            /* points across the pupil (Zemax's sampling) */
+    int kind;            /* sg_zernike_kind */
+    int nterms;          /* Zernike terms fitted, 1 to 37 */
+    int nthreads;        /* 0: every core */
+    size_t block;        /* rays per batch call; 0: 65536 */
+} sg_wavefront_opts;
+
+void sg_wavefront_opts_init(sg_wavefront_opts *o);
+
+/* The traced wavefront of one field at one wavelength: the OPD of the
+ * grid's pupil points against the field's reference sphere (sg_opd_ref,
+ * copied to *ref when ref is not NULL), through the batch in blocks with
+ * only the image surface kept.  Rays that fail are left out, as in Zemax.
+ * A chief ray that fails is an error naming the field. */
+int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
+                       const sg_wavefront_opts *o, sg_wavefront *out, sg_opd_ref *ref,
+                       sg_diag *d);
 
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */

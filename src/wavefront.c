@@ -90,3 +90,142 @@ fail:
     sg_wavefront_free(out);
     return rc;
 }
+
+void sg_wavefront_opts_init(sg_wavefront_opts *o)
+{
+    memset(o, 0, sizeof *o);
+    sg_trace_opts_init(&o->trace);
+    o->field = 0;
+    o->grid = 64;
+    o->kind = SG_ZERNIKE_FRINGE;
+    o->nterms = 37;
+}
+
+/* The traced OPD of every grid point, looked up by the callback. */
+typedef struct grid_opd {
+    int grid;
+    const double *opd;
+    const unsigned char *ok;
+} grid_opd;
+
+static int grid_lookup(void *ctx, double px, double py, double *w)
+{
+    const grid_opd *g = ctx;
+    long i = lround((px + 1.0) * 0.5 * (g->grid - 1)), j = lround((py + 1.0) * 0.5 * (g->grid - 1));
+    size_t k;
+    if (i < 0 || j < 0 || i >= g->grid || j >= g->grid)
+        return SG_ERANGE;
+    k = (size_t)j * (size_t)g->grid + (size_t)i;
+    if (!g->ok[k])
+        return SG_EMISS;
+    *w = g->opd[k];
+    return SG_OK;
+}
+
+int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
+                       const sg_wavefront_opts *o, sg_wavefront *out, sg_opd_ref *ref_out,
+                       sg_diag *d)
+{
+    sg_trace_opts to;
+    sg_tracer *t = NULL;
+    sg_batch *b = NULL;
+    sg_opd_ref ref;
+    sg_ray_in *rays = NULL;
+    sg_ray_surface *rows = NULL;
+    int *st = NULL, last, rc;
+    double hx, hy, *opd = NULL;
+    unsigned char *ok = NULL;
+    size_t n, blk, k, start;
+    grid_opd g;
+
+    if (!sys || !o || !out)
+        return sg_diag_set(d, SG_EINVAL, "wavefront: no system, options or result");
+    memset(out, 0, sizeof *out);
+    if (o->grid < 3 || o->grid > 4096)
+        return sg_diag_set(d, SG_ERANGE, "wavefront: grid %d; from 3 to 4096 points across "
+                                         "are allowed", o->grid);
+    if ((rc = sg_system_validate(sys, cat, d)) != SG_OK)
+        return rc;
+    if (o->field >= sys->nfield)
+        return sg_diag_set(d, SG_ERANGE, "wavefront: field %d is not one of 1 to %d",
+                           o->field + 1, sys->nfield);
+    if (o->trace.wave >= sys->nwave)
+        return sg_diag_set(d, SG_ERANGE, "wavefront: wavelength %d is not one of 1 to %d",
+                           o->trace.wave + 1, sys->nwave);
+    if (o->field >= 0)
+        sg_field_normalized(sys, o->field, &hx, &hy);
+    else {
+        hx = o->hx;
+        hy = o->hy;
+    }
+    to = o->trace;
+    if (to.wave < 0)
+        to.wave = sys->primary_wave;
+    if (!(t = sg_tracer_new(sys, cat, &to, d)))
+        return d && d->code ? d->code : SG_ENOMEM;
+    if ((rc = sg_opd_reference(t, hx, hy, &ref, d)) != SG_OK)
+        goto done;
+    if (ref.status != SG_OK) {
+        rc = sg_diag_set(d, ref.status, "wavefront: the chief ray of field (%.6g, %.6g) "
+                                        "fails: %s", hx, hy, sg_strerror(ref.status));
+        goto done;
+    }
+    if (ref_out)
+        *ref_out = ref;
+    n = (size_t)o->grid * (size_t)o->grid;
+    blk = o->block ? o->block : 65536;
+    if (blk > n)
+        blk = n;
+    opd = malloc(n * sizeof *opd);
+    ok = calloc(n, 1);
+    rays = malloc(blk * sizeof *rays);
+    rows = malloc(blk * sizeof *rows);
+    st = malloc(blk * sizeof *st);
+    if (!opd || !ok || !rays || !rows || !st) {
+        rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
+        goto done;
+    }
+    if (!(b = sg_batch_new(sys, cat, &to, o->nthreads, d))) {
+        rc = d && d->code ? d->code : SG_ENOMEM;
+        goto done;
+    }
+    last = sys->nsurf - 1;
+    /* Grid points in blocks; the same pupil coordinates as sg_wavefront_compute. */
+    for (start = 0; start < n; start += blk) {
+        size_t m = n - start < blk ? n - start : blk;
+        for (k = 0; k < m; k++) {
+            size_t q = start + k;
+            int i = (int)(q % (size_t)o->grid), j = (int)(q / (size_t)o->grid);
+            rays[k].v[0] = hx;
+            rays[k].v[1] = hy;
+            rays[k].v[2] = -1.0 + 2.0 * i / (o->grid - 1);
+            rays[k].v[3] = -1.0 + 2.0 * j / (o->grid - 1);
+            rays[k].v[4] = rays[k].v[5] = 0.0;
+        }
+        if ((rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, m, &last, 1, rows, st, d)) !=
+            SG_OK)
+            goto done;
+        for (k = 0; k < m; k++) {
+            sg_opd r;
+            if (st[k] != SG_OK || sg_opd_of_ray(t, &ref, &rows[k], &r) != SG_OK ||
+                r.status != SG_OK || !isfinite(r.opd_waves))
+                continue;
+            opd[start + k] = r.opd_waves;
+            ok[start + k] = 1;
+        }
+    }
+    g.grid = o->grid;
+    g.opd = opd;
+    g.ok = ok;
+    rc = sg_wavefront_compute(grid_lookup, &g, o->grid, (sg_zernike_kind)o->kind, o->nterms,
+                              out, d);
+done:
+    sg_batch_free(b);
+    sg_tracer_free(t);
+    free(opd);
+    free(ok);
+    free(rays);
+    free(rows);
+    free(st);
+    return rc;
+}

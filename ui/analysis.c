@@ -21,12 +21,13 @@
 #include "safetext.h"
 #include "views.h"
 
-enum { AN_SPOT, AN_FAN, AN_LAYOUT };
+enum { AN_SPOT, AN_FAN, AN_LAYOUT, AN_WAVEFRONT };
 enum { FMT_TEXT, FMT_CSV, FMT_JSON, FMT_PNG, FMT_SVG, FMT_PDF };
 
 enum {
     O_HELP = 1, O_WAVE, O_FIELD, O_FORMAT, O_OUTPUT, O_METHOD, O_PATTERN, O_DENSITY,
-    O_REFERENCE, O_POINTS, O_RAYS, O_SIZE, O_THREADS, O_NOCLIP
+    O_REFERENCE, O_POINTS, O_RAYS, O_SIZE, O_THREADS, O_NOCLIP, O_GRID, O_ZERNIKE,
+    O_TERMS, O_OPD
 };
 
 static const cli_opt an_opts[] = {
@@ -44,10 +45,14 @@ static const cli_opt an_opts[] = {
     { "--size", 0, 1, O_SIZE },
     { "--threads", 0, 1, O_THREADS },
     { "--no-clip", 0, 0, O_NOCLIP },
+    { "--grid", 0, 1, O_GRID },
+    { "--zernike", 0, 1, O_ZERNIKE },
+    { "--terms", 0, 1, O_TERMS },
+    { "--opd", 0, 0, O_OPD },
     { NULL, 0, 0, 0 }
 };
 
-static const char *const an_name[] = {"spot", "fan", "layout"};
+static const char *const an_name[] = {"spot", "fan", "layout", "wavefront"};
 
 static void an_help(int kind, FILE *f)
 {
@@ -55,16 +60,26 @@ static void an_help(int kind, FILE *f)
         "Spot diagrams: where a pupil pattern of rays meets the image, per field\n"
         "and wavelength, with RMS and GEO radii, the centroid and the Airy radius.\n",
         "Transverse ray fans: ey against Py and ex against Px on the image, per\n"
-        "field and wavelength, relative to the primary wavelength's chief ray.\n",
+        "field and wavelength, relative to the primary wavelength's chief ray;\n"
+        "with --opd, OPD fans: the OPD in waves against Py and Px.\n",
         "Layout: a y-z cross-section of the surfaces over their semi-diameters\n"
-        "and fans of rays in y from each field.\n"};
+        "and fans of rays in y from each field.\n",
+        "Wavefront: the OPD map over the pupil of one field at one wavelength\n"
+        "against the reference sphere, its RMS and P-V (to the chief ray, and\n"
+        "with piston and tilt removed) and its Zernike coefficients.\n"};
     fprintf(f, "Usage: sagitta %s DESIGN.json [OPTIONS]\n%s\n", an_name[kind], what[kind]);
     fputs("  --format F         text (default), csv, json, png, svg or pdf\n"
           "  -o, --output FILE  write to FILE (default: standard output)\n"
           "  --size WxH         picture size in pixels (png) or points (svg, pdf);\n"
           "                     default 1000x750\n"
           "  --field N          one field (default: every field)\n", f);
-    if (kind != AN_LAYOUT)
+    if (kind == AN_WAVEFRONT)
+        fputs("  --wave N           the wavelength (default: the primary); --field\n"
+              "                     defaults to field 1\n"
+              "  --grid N           points across the pupil (default 64)\n"
+              "  --zernike Z        fringe (default) or standard\n"
+              "  --terms N          Zernike terms, 1 to 37 (default 37)\n", f);
+    else if (kind != AN_LAYOUT)
         fputs("  --wave N           one wavelength (default: every wavelength)\n", f);
     else
         fputs("  --wave N           the wavelength traced (default: the primary)\n", f);
@@ -74,7 +89,8 @@ static void an_help(int kind, FILE *f)
               "                     or rays (vogel)\n"
               "  --reference R      chief (default) or centroid\n", f);
     if (kind == AN_FAN)
-        fputs("  --points N         rays on each fan from -1 to 1 (default 21)\n", f);
+        fputs("  --points N         rays on each fan from -1 to 1 (default 21)\n"
+              "  --opd              OPD fans (waves) instead of transverse ray fans\n", f);
     if (kind == AN_LAYOUT)
         fputs("  --rays N           rays per field from Py = -1 to 1 (default 7)\n", f);
     fputs("  --method M         precise (default), classic or mpfr\n"
@@ -257,7 +273,8 @@ static void fan_rows(FILE *f, const sg_system *sys, const sg_fan *fan, int csv)
     double sc = 1.0;
     const char *u = sys->units;
     if (csv)
-        fputs("field,wave,um,fan,p,e,status\n", f);
+        fputs(fan->opd ? "field,wave,um,fan,p,opd_waves,status\n"
+                       : "field,wave,um,fan,p,e,status\n", f);
     else {
         double ext = 0.0;
         for (j = 0; j < fan->nfield * fan->nwave; j++)
@@ -269,8 +286,13 @@ static void fan_rows(FILE *f, const sg_system *sys, const sg_fan *fan, int csv)
                         ext = fmax(ext, fabs(c->e[i]));
             }
         u = view_length_unit(sys, ext, &sc);
-        fprintf(f, "%-26s %-12s %-11s %8s %16s  %s\n", "Field", "Wavelength", "Fan", "P", "e",
-                "Status");
+        if (fan->opd) {
+            /* OPD in waves of each curve's wavelength. */
+            u = "waves";
+            sc = 1.0;
+        }
+        fprintf(f, "%-26s %-12s %-11s %8s %16s  %s\n", "Field", "Wavelength", "Fan", "P",
+                fan->opd ? "OPD" : "e", "Status");
     }
     for (fi = 0; fi < fan->nfield; fi++)
         for (w = 0; w < fan->nwave; w++)
@@ -307,7 +329,8 @@ static cJSON *fan_json(const sg_system *sys, const sg_fan *fan)
     cJSON *root = cJSON_CreateObject(), *fans = cJSON_AddArrayToObject(root, "fans");
     int fi, w, side;
     cJSON_AddStringToObject(root, "analysis", "fan");
-    cJSON_AddStringToObject(root, "units", sys->units);
+    cJSON_AddStringToObject(root, "kind", fan->opd ? "opd" : "ray");
+    cJSON_AddStringToObject(root, "units", fan->opd ? "waves" : sys->units);
     for (fi = 0; fi < fan->nfield; fi++)
         for (w = 0; w < fan->nwave; w++)
             for (side = 0; side < 2; side++) {
@@ -322,7 +345,7 @@ static cJSON *fan_json(const sg_system *sys, const sg_fan *fan)
                 cJSON_AddNumberToObject(o, "ref_x", fan->ref_x[fi]);
                 cJSON_AddNumberToObject(o, "ref_y", fan->ref_y[fi]);
                 p = cJSON_AddArrayToObject(o, side ? "px" : "py");
-                e = cJSON_AddArrayToObject(o, side ? "ex" : "ey");
+                e = cJSON_AddArrayToObject(o, fan->opd ? "opd" : side ? "ex" : "ey");
                 st = cJSON_AddArrayToObject(o, "status");
                 for (j = 0; j < fan->npts; j++) {
                     cJSON_AddItemToArray(p, cJSON_CreateNumber(c->p[j]));
@@ -405,9 +428,100 @@ static cJSON *layout_json(const sg_system *sys, const sg_layout *l)
     return root;
 }
 
+/* ---- wavefront ---- */
+
+static void wave_label_of(const sg_system *sys, int wave1, char *wl, size_t n)
+{
+    view_wave_label(sys->wave[wave1 > 0 ? wave1 - 1 : sys->primary_wave].um, wl, n);
+}
+
+static void wavefront_text(FILE *f, const sg_system *sys, const sg_wavefront *w,
+                           const sg_opd_ref *ref, int field1, int wave1)
+{
+    char t[200], fl[64], wl[32];
+    int j;
+    view_field_label(sys, field1 - 1, fl, sizeof fl);
+    wave_label_of(sys, wave1, wl, sizeof wl);
+    fprintf(f, "Wavefront: %s\n", safe_text(sys->title, t, sizeof t));
+    fprintf(f, "%s, %s; grid %d x %d, %zu rays in the pupil\n", fl, wl, w->grid, w->grid,
+            w->nvalid);
+    fprintf(f, "Reference sphere: centre (%.10g, %.10g) on the image, radius %.10g %s\n",
+            ref->cx, ref->cy, ref->radius, sys->units);
+    fprintf(f, "OPD in waves of %s\n\n", wl);
+    fprintf(f, "%-44s %14s %14s\n", "", "RMS", "P-V");
+    fprintf(f, "%-44s %14.8g %14.8g\n", "to chief (piston removed)", w->rms_chief,
+            w->pv_chief);
+    fprintf(f, "%-44s %14.8g %14.8g\n", "to centroid (piston and tilt removed)",
+            w->rms_centroid, w->pv_centroid);
+    fprintf(f, "\n%s Zernike coefficients (waves):\n",
+            w->kind == SG_ZERNIKE_FRINGE ? "Fringe" : "Standard");
+    for (j = 1; j <= w->nterms; j++) {
+        int n = 0, m = 0;
+        sg_zernike_nm(w->kind, j, &n, &m);
+        fprintf(f, "  Z%-3d n %2d m %3d %16.8g\n", j, n, m, w->coef[j - 1]);
+    }
+    fprintf(f, "Fit residual RMS: %.8g waves\n", w->fit_rms);
+}
+
+static void wavefront_csv(FILE *f, const sg_wavefront *w)
+{
+    int i, j;
+    fputs("i,j,px,py,opd_waves\n", f);
+    for (j = 0; j < w->grid; j++)
+        for (i = 0; i < w->grid; i++) {
+            size_t k = (size_t)j * (size_t)w->grid + (size_t)i;
+            fprintf(f, "%d,%d,", i, j);
+            num(f, -1.0 + 2.0 * i / (w->grid - 1));
+            fputc(',', f);
+            num(f, -1.0 + 2.0 * j / (w->grid - 1));
+            fputc(',', f);
+            if (w->valid[k])
+                num(f, w->map[k]);
+            fputc('\n', f);
+        }
+}
+
+static cJSON *wavefront_json(const sg_system *sys, const sg_wavefront *w,
+                             const sg_opd_ref *ref, int field1, int wave1)
+{
+    cJSON *root = cJSON_CreateObject(), *z, *map;
+    int i, j;
+    cJSON_AddStringToObject(root, "analysis", "wavefront");
+    cJSON_AddStringToObject(root, "units", sys->units);
+    cJSON_AddNumberToObject(root, "field", field1);
+    cJSON_AddNumberToObject(root, "hx", ref->hx);
+    cJSON_AddNumberToObject(root, "hy", ref->hy);
+    cJSON_AddNumberToObject(root, "wave", wave1 > 0 ? wave1 : sys->primary_wave + 1);
+    cJSON_AddNumberToObject(root, "um", sys->wave[wave1 > 0 ? wave1 - 1 : sys->primary_wave].um);
+    cJSON_AddNumberToObject(root, "grid", w->grid);
+    cJSON_AddNumberToObject(root, "rays", (double)w->nvalid);
+    cJSON_AddNumberToObject(root, "sphere_radius", ref->radius);
+    cJSON_AddNumberToObject(root, "rms_chief", w->rms_chief);
+    cJSON_AddNumberToObject(root, "pv_chief", w->pv_chief);
+    cJSON_AddNumberToObject(root, "rms_centroid", w->rms_centroid);
+    cJSON_AddNumberToObject(root, "pv_centroid", w->pv_centroid);
+    z = cJSON_AddObjectToObject(root, "zernike");
+    cJSON_AddStringToObject(z, "kind", w->kind == SG_ZERNIKE_FRINGE ? "fringe" : "standard");
+    cJSON_AddItemToObject(z, "coef", cJSON_CreateDoubleArray(w->coef, w->nterms));
+    cJSON_AddNumberToObject(z, "fit_rms", w->fit_rms);
+    /* map[j][i]: py = -1 + 2 j / (grid - 1), px likewise; null outside the
+     * pupil or where the ray failed. */
+    map = cJSON_AddArrayToObject(root, "map");
+    for (j = 0; j < w->grid; j++) {
+        cJSON *row = cJSON_CreateArray();
+        for (i = 0; i < w->grid; i++) {
+            size_t k = (size_t)j * (size_t)w->grid + (size_t)i;
+            cJSON_AddItemToArray(row, w->valid[k] ? cJSON_CreateNumber(w->map[k])
+                                                  : cJSON_CreateNull());
+        }
+        cJSON_AddItemToArray(map, row);
+    }
+    return root;
+}
+
 /* ---- the command ---- */
 
-static int terminal_picture(const plot_figure *fig, FILE *f)
+static int terminal_picture(const plot_figure *fig, FILE *f, int colour)
 {
     plot_grid g;
     const char *cols = getenv("COLUMNS");
@@ -426,7 +540,7 @@ static int terminal_picture(const plot_figure *fig, FILE *f)
         return -1;
     plot_draw_cells(fig, &g, 0, 0, w - 1, h);
     fputc('\n', f);
-    rc = plot_grid_print(&g, f, plot_use_colour(f));
+    rc = plot_grid_print(&g, f, colour);
     plot_grid_free(&g);
     return rc;
 }
@@ -438,6 +552,10 @@ static int run(int kind, int argc, char **argv)
     int id, rc, fmt = FMT_TEXT, wave1 = 0, field1 = 0, method = SG_METHOD_PRECISE;
     int pattern = SG_PUPIL_HEXAPOLAR, density = 6, ref = SG_SPOT_REF_CHIEF, points = 21;
     int nrays = 7, threads = 0, noclip = 0, pw = 1000, ph = 750, tty;
+    int grid = 64, zkind = SG_ZERNIKE_FRINGE, terms = 37, opdfan = 0;
+    sg_wavefront wf;
+    sg_wavefront_opts wo;
+    sg_opd_ref wref;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
     sg_diag d;
@@ -540,6 +658,34 @@ static int run(int kind, int argc, char **argv)
         case O_NOCLIP:
             noclip = 1;
             break;
+        case O_OPD:
+            if (kind != AN_FAN)
+                return cli_usage_error(cmd, "--opd is for fan");
+            opdfan = 1;
+            break;
+        case O_GRID:
+            if (kind != AN_WAVEFRONT)
+                return cli_usage_error(cmd, "--grid is for wavefront");
+            if (cli_int_value("--grid", val, 3, 4096, &grid))
+                return CLI_EXIT_USAGE;
+            break;
+        case O_ZERNIKE:
+            if (kind != AN_WAVEFRONT)
+                return cli_usage_error(cmd, "--zernike is for wavefront");
+            if (strcmp(val, "fringe") == 0)
+                zkind = SG_ZERNIKE_FRINGE;
+            else if (strcmp(val, "standard") == 0)
+                zkind = SG_ZERNIKE_STANDARD;
+            else
+                return cli_usage_error(cmd, "--zernike: expected fringe or standard, got "
+                                            "\"%s\"", val);
+            break;
+        case O_TERMS:
+            if (kind != AN_WAVEFRONT)
+                return cli_usage_error(cmd, "--terms is for wavefront");
+            if (cli_int_value("--terms", val, 1, SG_WAVEFRONT_MAXTERMS, &terms))
+                return CLI_EXIT_USAGE;
+            break;
         default:
             return -id;
         }
@@ -586,7 +732,20 @@ static int run(int kind, int argc, char **argv)
         fo.wave = wave1 - 1;
         fo.field = field1 - 1;
         fo.nthreads = threads;
+        fo.opd = opdfan;
         rc = sg_fan_compute(sys, cat, &fo, &fan, &d);
+    } else if (kind == AN_WAVEFRONT) {
+        if (field1 == 0)
+            field1 = 1;
+        sg_wavefront_opts_init(&wo);
+        wo.trace = to;
+        wo.trace.wave = wave1 - 1;
+        wo.field = field1 - 1;
+        wo.grid = grid;
+        wo.kind = zkind;
+        wo.nterms = terms;
+        wo.nthreads = threads;
+        rc = sg_wavefront_trace(sys, cat, &wo, &wf, &wref, &d);
     } else {
         sg_layout_opts_init(&lo);
         lo.trace = to;
@@ -610,11 +769,16 @@ static int run(int kind, int argc, char **argv)
         rc = CLI_EXIT_FILE;
         goto done;
     }
-    tty = fmt == FMT_TEXT && isatty(fileno(of.f));
+    /* The wavefront's text always carries its shaded map. */
+    tty = fmt == FMT_TEXT && (kind == AN_WAVEFRONT || isatty(fileno(of.f)));
     if (fmt >= FMT_PNG || tty) {
         int r = kind == AN_SPOT  ? view_spot_figure(sys, &spot, &fig)
                 : kind == AN_FAN ? view_fan_figure(sys, &fan, &fig)
-                                 : view_layout_figure(sys, &lay, &fig);
+                : kind == AN_WAVEFRONT
+                    ? view_wavefront_figure(sys, &wf, &wref, field1 - 1,
+                                            sys->wave[wave1 > 0 ? wave1 - 1 : sys->primary_wave].um,
+                                            &fig)
+                    : view_layout_figure(sys, &lay, &fig);
         have_fig = 1;
         if (r) {
             cli_error("out of memory");
@@ -635,6 +799,7 @@ static int run(int kind, int argc, char **argv)
     } else if (fmt == FMT_JSON) {
         cJSON *j = kind == AN_SPOT  ? spot_json(sys, &spot, &so)
                    : kind == AN_FAN ? fan_json(sys, &fan)
+                   : kind == AN_WAVEFRONT ? wavefront_json(sys, &wf, &wref, field1, wave1)
                                     : layout_json(sys, &lay);
         char *s;
         if (j)
@@ -659,10 +824,15 @@ static int run(int kind, int argc, char **argv)
             spot_text(of.f, sys, &spot, &so);
     } else if (kind == AN_FAN) {
         fan_rows(of.f, sys, &fan, fmt == FMT_CSV);
+    } else if (kind == AN_WAVEFRONT) {
+        if (fmt == FMT_CSV)
+            wavefront_csv(of.f, &wf);
+        else
+            wavefront_text(of.f, sys, &wf, &wref, field1, wave1);
     } else {
         layout_rows(of.f, sys, &lay, fmt == FMT_CSV);
     }
-    if (tty && terminal_picture(&fig, of.f)) {
+    if (tty && terminal_picture(&fig, of.f, plot_use_colour(of.f))) {
         cli_error("out of memory");
         outfile_abort(&of);
         rc = CLI_EXIT_INTERNAL;
@@ -680,6 +850,8 @@ done:
             sg_spot_free(&spot);
         else if (kind == AN_FAN)
             sg_fan_free(&fan);
+        else if (kind == AN_WAVEFRONT)
+            sg_wavefront_free(&wf);
         else
             sg_layout_free(&lay);
     }
@@ -700,4 +872,9 @@ int cmd_fan(int argc, char **argv)
 int cmd_layout(int argc, char **argv)
 {
     return run(AN_LAYOUT, argc, argv);
+}
+
+int cmd_wavefront(int argc, char **argv)
+{
+    return run(AN_WAVEFRONT, argc, argv);
 }

@@ -38,6 +38,7 @@ int cmd_import(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 int cmd_spot(int argc, char **argv);
 int cmd_fan(int argc, char **argv);
+int cmd_wavefront(int argc, char **argv);
 int cmd_layout(int argc, char **argv);
 int cmd_seidel(int argc, char **argv);     /* aberration.c */
 int cmd_fieldcurve(int argc, char **argv); /* aberration.c */

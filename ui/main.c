@@ -25,6 +25,7 @@ static const cli_command commands[] = {
     { "paraxial", cmd_paraxial, "print first-order (paraxial) data" },
     { "spot", cmd_spot, "spot diagrams: RMS and GEO radii, centroid, Airy radius" },
     { "fan", cmd_fan, "transverse ray fans, tangential and sagittal" },
+    { "wavefront", cmd_wavefront, "OPD map, RMS and P-V, Zernike coefficients" },
     { "layout", cmd_layout, "a y-z cross-section of surfaces and rays" },
     { "verify", cmd_verify, "check a design's traces against the MPFR reference" },
     { "bench", cmd_bench, "measure trace throughput" },

@@ -394,8 +394,9 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
     }
     memset(d.color, PLOT_FG, (size_t)(W * H));
     if (p.map && p.mw > 0 && p.mh > 0) {
-        /* A map in shades: each cell takes the value under its centre. */
-        static const char *const shade[] = {" ", "░", "▒", "▓", "█"};
+        /* A map in shades: each cell takes the value under its centre; the
+         * lowest is a dot, so a blank is a point with no data. */
+        static const char *const shade[] = {"·", "░", "▒", "▓", "█"};
         int r, c;
         for (r = 0; r < H; r++)
             for (c = 0; c < W; c++) {

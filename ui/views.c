@@ -135,10 +135,16 @@ int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f)
                     ext = fmax(ext, fabs(c->e[i]));
         }
     u = view_length_unit(sys, ext, &scale);
-    snprintf(title, sizeof title, "Transverse ray fans: %s", safe_text(sys->title, lab, sizeof lab));
+    if (fan->opd) {
+        /* OPD in waves of each curve's wavelength, as Zemax plots it. */
+        u = "waves";
+        scale = 1.0;
+    }
+    snprintf(title, sizeof title, "%s: %s", fan->opd ? "OPD fans" : "Transverse ray fans",
+             safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
-    snprintf(yt, sizeof yt, "ey (%s)", u);
-    snprintf(ys, sizeof ys, "ex (%s)", u);
+    snprintf(yt, sizeof yt, "%s (%s)", fan->opd ? "W" : "ey", u);
+    snprintf(ys, sizeof ys, "%s (%s)", fan->opd ? "W" : "ex", u);
     for (fi = 0; fi < fan->nfield; fi++)
         for (side = 0; side < 2; side++) {
             char fl[64], pt[96];
@@ -211,5 +217,55 @@ int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f)
         plot_add_legend(f, fi, fl);
     }
     plot_panel_limits(p, 0.0);
+    return 0;
+}
+
+int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_opd_ref *ref,
+                          int field, double um, plot_figure *f)
+{
+    char title[200], lab[64], fl[64], pt[256], wl[32], sc[48];
+    double lo = INFINITY, hi = -INFINITY;
+    plot_panel *p;
+    int g = w->grid, i, j;
+    snprintf(title, sizeof title, "Wavefront map: %s", safe_text(sys->title, lab, sizeof lab));
+    plot_figure_init(f, title);
+    if (field >= 0)
+        view_field_label(sys, field, fl, sizeof fl);
+    else
+        snprintf(fl, sizeof fl, "Hx %.4g, Hy %.4g", ref->hx, ref->hy);
+    view_wave_label(um, wl, sizeof wl);
+    snprintf(pt, sizeof pt, "%s %s: RMS %.4g, P-V %.4g waves", fl, wl, w->rms_centroid,
+             w->pv_centroid);
+    p = plot_add_panel(f, pt, "Px", "Py");
+    if (!p)
+        return -1;
+    p->map = malloc((size_t)g * (size_t)g * sizeof *p->map);
+    if (!p->map)
+        return -1;
+    p->mw = p->mh = g;
+    /* Row 0 of the picture is Py = +1, the top. */
+    for (j = 0; j < g; j++)
+        for (i = 0; i < g; i++) {
+            size_t k = (size_t)j * (size_t)g + (size_t)i;
+            double v = w->valid[k] ? w->map[k] : NAN;
+            p->map[(size_t)(g - 1 - j) * (size_t)g + (size_t)i] = v;
+            if (w->valid[k]) {
+                lo = fmin(lo, v);
+                hi = fmax(hi, v);
+            }
+        }
+    if (!(lo <= hi))
+        lo = hi = 0.0;
+    /* A flat wavefront (a perfect system) still gets a scale. */
+    if (!(hi - lo > 1e-12)) {
+        lo -= 1e-6;
+        hi += 1e-6;
+    }
+    p->map_lo = lo;
+    p->map_hi = hi;
+    p->xmin = p->ymin = -1.0;
+    p->xmax = p->ymax = 1.0;
+    snprintf(sc, sizeof sc, "OPD ·%.3g to █%.3g waves", lo, hi);
+    plot_add_legend(f, PLOT_FG, sc);
     return 0;
 }

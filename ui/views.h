@@ -22,5 +22,10 @@ void view_field_label(const sg_system *sys, int k, char *buf, size_t n);
 int view_spot_figure(const sg_system *sys, const sg_spot *s, plot_figure *f);
 int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f);
 int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f);
+/* The OPD map of one field (design field index, or -1 for a field given by
+ * its normalized coordinates in ref) at wavelength um, in waves, with a
+ * colour bar (files) or shades and their scale (terminal). */
+int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_opd_ref *ref,
+                          int field, double um, plot_figure *f);
 
 #endif

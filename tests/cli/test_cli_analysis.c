@@ -2,7 +2,9 @@
  * test_cli_analysis.c - sagitta spot, fan and layout as a user runs them:
  * a spherical mirror's spot and fan against the exact reflection worked
  * out here in long double, the formats (CSV, JSON, PNG with its size read
- * back, SVG, PDF), and bad options named in the message.
+ * back, SVG, PDF), and bad options named in the message.  The wavefront's
+ * spherical term against Welford's SI / 8 for the mirror (see
+ * test_wavefront_formats) in every format.
  */
 #include <cjson/cJSON.h>
 #include <math.h>
@@ -144,6 +146,117 @@ static void test_layout_csv(void **state)
     ct_free(&r);
 }
 
+static void png_size(const char *png, int w, int h)
+{
+    size_t n;
+    char *b = slurp(png, &n);
+    unsigned char *u = (unsigned char *)b;
+    assert_true(n > 24 && memcmp(b, "\x89PNG\r\n\x1a\n", 8) == 0);
+    assert_int_equal((u[16] << 24) | (u[17] << 16) | (u[18] << 8) | u[19], w);
+    assert_int_equal((u[20] << 24) | (u[21] << 16) | (u[22] << 8) | u[23], h);
+    free(b);
+}
+
+/* On axis the mirror (stop on it, h = 5, R = -100) has spherical
+ * aberration alone: Welford's SI = -2 h^4 / R^3 (A = h / R, D(u/n) = 2h / R),
+ * W040 = SI / 8, and Fringe Z9 = 6 rho^4 - ... takes W040 / 6.  Higher
+ * orders are some 1.5 (h / R)^2 = 0.4% of it. */
+static void test_wavefront_formats(void **state)
+{
+    const char *d = ct_design("mirror.json", MIRROR);
+    const char *png = ct_path("wf.png"), *svg = ct_path("wf.svg"), *pdf = ct_path("wf.pdf");
+    double W040 = -2.0 * 625.0 / -1e6 / 8.0 / 0.55e-3, z9;
+    ct_result r;
+    cJSON *j, *map;
+    size_t n;
+    char *b;
+    int k, lines = 0;
+    (void)state;
+    ct_run(&r, "wavefront", d, "--grid", "21", "--format", "json", NULL);
+    assert_int_equal(r.code, 0);
+    j = cJSON_Parse(r.out);
+    assert_non_null(j);
+    z9 = cJSON_GetArrayItem(cJSON_GetObjectItem(cJSON_GetObjectItem(j, "zernike"), "coef"), 8)
+             ->valuedouble;
+    ct_close(6.0 * z9, W040, 1e-2, 0, "W040 from Z9");
+    map = cJSON_GetObjectItem(j, "map");
+    assert_int_equal(cJSON_GetArraySize(map), 21);
+    assert_int_equal(cJSON_GetArraySize(cJSON_GetArrayItem(map, 0)), 21);
+    /* The corner is outside the pupil, the centre inside. */
+    assert_true(cJSON_IsNull(cJSON_GetArrayItem(cJSON_GetArrayItem(map, 0), 0)));
+    assert_true(cJSON_IsNumber(cJSON_GetArrayItem(cJSON_GetArrayItem(map, 10), 10)));
+    cJSON_Delete(j);
+    ct_free(&r);
+    ct_run(&r, "wavefront", d, "--grid", "21", "--format", "csv", NULL);
+    assert_int_equal(r.code, 0);
+    for (k = 0; r.out[k]; k++)
+        lines += r.out[k] == '\n';
+    assert_int_equal(lines, 1 + 21 * 21);
+    ct_close(ct_csv_num(r.out, 220, "px"), 0.0, 0, 1e-15, "centre px");
+    ct_free(&r);
+    ct_run(&r, "wavefront", d, "--zernike", "standard", "--terms", "11", NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.out, "Standard Zernike coefficients"));
+    assert_non_null(strstr(r.out, "piston and tilt removed"));
+    assert_non_null(strstr(r.out, "█"));
+    ct_free(&r);
+    ct_run(&r, "wavefront", d, "--format", "png", "--size", "400x300", "-o", png, NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    png_size(png, 400, 300);
+    ct_run(&r, "wavefront", d, "--format", "svg", "-o", svg, NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    b = slurp(svg, &n);
+    assert_true(strncmp(b, "<?xml", 5) == 0 && strstr(b, "</svg>"));
+    free(b);
+    ct_run(&r, "wavefront", d, "--format", "pdf", "-o", pdf, NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    b = slurp(pdf, &n);
+    assert_true(n > 100 && strncmp(b, "%PDF-", 5) == 0);
+    free(b);
+    ct_run(&r, "wavefront", d, "--terms", "38", NULL);
+    assert_int_equal(r.code, 2);
+    assert_non_null(strstr(r.err, "--terms"));
+    ct_free(&r);
+    ct_run(&r, "wavefront", d, "--zernike", "noll", NULL);
+    assert_int_equal(r.code, 2);
+    assert_non_null(strstr(r.err, "fringe or standard"));
+    ct_free(&r);
+}
+
+/* OPD fans: the mirror's OPD at the rim against the same W040 rho^4
+ * (SI / 8, with the higher orders within 1%), and 0 on the chief ray. */
+static void test_fan_opd(void **state)
+{
+    const char *d = ct_design("mirror.json", MIRROR);
+    double W040 = -2.0 * 625.0 / -1e6 / 8.0 / 0.55e-3;
+    ct_result r;
+    cJSON *j, *f0, *opd;
+    (void)state;
+    ct_run(&r, "fan", d, "--opd", "--field", "1", "--points", "5", "--format", "json", NULL);
+    assert_int_equal(r.code, 0);
+    j = cJSON_Parse(r.out);
+    assert_non_null(j);
+    assert_string_equal(cJSON_GetObjectItem(j, "kind")->valuestring, "opd");
+    f0 = cJSON_GetArrayItem(cJSON_GetObjectItem(j, "fans"), 0);
+    opd = cJSON_GetObjectItem(f0, "opd");
+    assert_non_null(opd);
+    ct_close(cJSON_GetArrayItem(opd, 2)->valuedouble, 0.0, 0, 1e-12, "chief OPD");
+    ct_close(cJSON_GetArrayItem(opd, 4)->valuedouble, W040, 1e-2, 0, "rim OPD");
+    cJSON_Delete(j);
+    ct_free(&r);
+    ct_run(&r, "fan", d, "--opd", "--format", "csv", NULL);
+    assert_int_equal(r.code, 0);
+    assert_true(strncmp(r.out, "field,wave,um,fan,p,opd_waves,status", 36) == 0);
+    ct_free(&r);
+    ct_run(&r, "spot", d, "--opd", NULL);
+    assert_int_equal(r.code, 2);
+    assert_non_null(strstr(r.err, "--opd is for fan"));
+    ct_free(&r);
+}
+
 static void test_bad_options(void **state)
 {
     const char *d = ct_design("mirror.json", MIRROR);
@@ -186,6 +299,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_fan_json_mirror),
         cmocka_unit_test(test_pictures),
         cmocka_unit_test(test_layout_csv),
+        cmocka_unit_test(test_wavefront_formats),
+        cmocka_unit_test(test_fan_opd),
         cmocka_unit_test(test_bad_options),
     };
     int rc;

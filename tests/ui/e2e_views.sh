@@ -1,16 +1,18 @@
 #!/bin/sh
-# e2e_views.sh - the analysis views at 80x24: layout, spot and fan below
+# e2e_views.sh - the analysis views at 80x24: layout, spot, fan, OPD fan
+# and wavefront map below
 # the spreadsheet, chosen by the g key, drawn in braille within 80 columns,
 # following an edit, coloured per wavelength (plain under NO_COLOR), and
 # written by export as a PNG.  Output is TAP.
 # Usage: e2e_views.sh PATH/TO/sagitta
 #
 # Independent reference: the spot radius on screen against "sagitta spot"
-# run as a separate program on the same design, before and after the edit.
+# run as a separate program on the same design, before and after the edit;
+# the wavefront map's RMS against "sagitta wavefront" likewise.
 
 SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
-tmux_setup 9 views
+tmux_setup 12 views
 
 cp "$ROOT/examples/cooke_triplet.json" "$WORK/cooke.json"
 
@@ -58,6 +60,13 @@ spot_rms() {
                  NR > 1 && $4 == "all" { printf "%.4g\n", $k * 1000 }'
 }
 screen_rms() { screen | grep -o "field 1: RMS [0-9.]*" | head -n 1 | sed 's/.* //'; }
+# The wavefront view's RMS (piston and tilt removed, %.4g) of the ray's
+# field, from "sagitta wavefront" at the view's 32-point grid.
+wave_rms() {
+    "$SAGITTA" wavefront "$1" --field "$2" --grid 32 --format json 2>/dev/null |
+        python3 -c 'import json, sys; print("%.4g" % json.load(sys.stdin)["rms_centroid"])'
+}
+screen_wave_rms() { screen | grep -o "µm: RMS [0-9.e-]*" | head -n 1 | sed 's/.* //'; }
 
 start cooke.json 80 24
 if wait_for "cooke.json" 15 && wait_for "Surf"; then
@@ -107,7 +116,29 @@ if wait_for "cooke.json" 15 && wait_for "Surf"; then
     W=$(od -An -tu1 -j16 -N8 "$WORK/fan.png" 2>/dev/null | awk '{ print $3 * 256 + $4, $7 * 256 + $8 }')
     WHY="PNG size '$W'"
     check "export FILE.png writes the view, 1000 x 750" sh -c "[ '$W' = '1000 750' ]"
-    # 7. view off: the ray table is back.
+    # 7. g: the OPD fans, in waves, within 80 columns.
+    keys Escape g
+    wait_for "OPD fans" >/dev/null
+    sleep 0.3
+    WHY="braille lines $(braille_lines), lines over 80: $(wide_lines)"
+    check "the opd view shows OPD fans in waves" \
+        sh -c "$T capture-pane -p -t =main: | grep -q 'W (waves)' &&
+               $T capture-pane -p -t =main: | grep -q sagittal &&
+               [ $(braille_lines) -ge 3 ] && [ $(wide_lines) -eq 0 ]"
+    # 8. g: the wavefront map of the ray's field, its RMS as sagitta wavefront's.
+    keys Escape g
+    wait_for "Wavefront map" >/dev/null
+    sleep 0.3
+    FLD=$(screen | grep -o "field [0-9]* (" | tail -n 1 | sed 's/field \([0-9]*\).*/\1/')
+    RW=$(screen_wave_rms)
+    EW=$(wave_rms "$WORK/edited.json" "${FLD:-1}")
+    echo "# wavefront field $FLD RMS: screen $RW, sagitta wavefront $EW waves"
+    WHY="screen '$RW', sagitta wavefront '$EW', lines over 80: $(wide_lines)"
+    check "the wave view shows the map, its RMS as sagitta wavefront's" \
+        sh -c "[ -n '$RW' ] && [ '$RW' = '$EW' ] && [ $(wide_lines) -eq 0 ] &&
+               $T capture-pane -p -t =main: | grep -q '█' &&
+               $T capture-pane -p -t =main: | grep -q 'OPD .* waves'"
+    # 9. view off: the ray table is back.
     command_line "view off"
     wait_for "Surf status" >/dev/null
     check "view off brings back the results" sh -c "$T capture-pane -p -t =main: | grep -q 'Surf status'"
@@ -118,10 +149,12 @@ else
     not_ok "edit"
     not_ok "fan"
     not_ok "export"
+    not_ok "opd"
+    not_ok "wave"
     not_ok "view off"
 fi
 
-# 8. NO_COLOR: the same view, no colour at all.
+# 10. NO_COLOR: the same view, no colour at all.
 start cooke.json 80 24 "NO_COLOR=1"
 if wait_for "cooke.json" 15 && wait_for "Surf"; then
     command_line "view spot"
@@ -131,11 +164,20 @@ if wait_for "cooke.json" 15 && wait_for "Surf"; then
     WHY="$COL lines with colour"
     check "under NO_COLOR the spot view is monochrome" \
         sh -c "[ '$COL' -eq 0 ] && [ $(braille_lines) -ge 3 ]"
+    # 11. The OPD fans under NO_COLOR: no colour either.
+    command_line "view opd"
+    wait_for "OPD fans" >/dev/null
+    sleep 0.3
+    COL=$($T capture-pane -e -p -t =main: | grep -c "$(printf '\033')\[3[0-7]")
+    WHY="$COL lines with colour"
+    check "under NO_COLOR the opd view is monochrome" \
+        sh -c "[ '$COL' -eq 0 ] && [ $(braille_lines) -ge 3 ]"
 else
     not_ok "NO_COLOR start"
+    not_ok "NO_COLOR opd"
 fi
 
-# 9. The help screen names the view key.
+# 12. The help screen names the view key.
 keys Escape F1
 wait_for "Help" >/dev/null
 sleep 0.3

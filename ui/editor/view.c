@@ -8,7 +8,7 @@
 #include "view.h"
 #include "views.h"
 
-static const char *const names[VIEW_COUNT] = {"off", "layout", "spot", "fan"};
+static const char *const names[VIEW_COUNT] = {"off", "layout", "spot", "fan", "opd", "wave"};
 
 const char *view_name(int kind)
 {
@@ -52,7 +52,7 @@ int edview_update(edview *v, const sg_system *sys, unsigned long id, const sg_ca
         return SG_EOK;
     if (field < 0 || field >= sys->nfield)
         field = sys->nfield - 1;
-    if (v->kind != VIEW_FAN)
+    if (v->kind != VIEW_FAN && v->kind != VIEW_OPD && v->kind != VIEW_WAVE)
         field = -1;
     if (v->id == id && v->id != 0 && v->built_kind == v->kind && v->field == field &&
         memcmp(&v->opts, o, sizeof *o) == 0)
@@ -74,13 +74,30 @@ int edview_update(edview *v, const sg_system *sys, unsigned long id, const sg_ca
             fr = view_spot_figure(sys, &s, &v->fig);
             sg_spot_free(&s);
         }
-    } else if (v->kind == VIEW_FAN) {
+    } else if (v->kind == VIEW_WAVE) {
+        sg_wavefront w;
+        sg_wavefront_opts wo;
+        sg_opd_ref ref;
+        sg_wavefront_opts_init(&wo);
+        wo.trace = *o;
+        wo.field = field;
+        wo.grid = 32;
+        wo.nterms = 9;
+        wo.nthreads = 1;
+        rc = sg_wavefront_trace(sys, cat, &wo, &w, &ref, &d);
+        if (rc == SG_EOK) {
+            int wv = o->wave >= 0 && o->wave < sys->nwave ? o->wave : sys->primary_wave;
+            fr = view_wavefront_figure(sys, &w, &ref, field, sys->wave[wv].um, &v->fig);
+            sg_wavefront_free(&w);
+        }
+    } else if (v->kind == VIEW_FAN || v->kind == VIEW_OPD) {
         sg_fan f;
         sg_fan_opts fo;
         sg_fan_opts_init(&fo);
         fo.trace = *o;
         fo.nthreads = 1;
         fo.field = field;
+        fo.opd = v->kind == VIEW_OPD;
         rc = sg_fan_compute(sys, cat, &fo, &f, &d);
         if (rc == SG_EOK) {
             fr = view_fan_figure(sys, &f, &v->fig);

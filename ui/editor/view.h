@@ -1,6 +1,6 @@
 /*
  * view.h - the analysis view beside the spreadsheet: a layout, spot
- * diagram or ray fan of the design, kept as a figure (ui/plot.h) that is
+ * diagram, ray fan, OPD fan or wavefront map of the design, kept as a figure (ui/plot.h) that is
  * rebuilt whenever the document or the trace options change.  No terminal
  * here: the panel (viewpanel.c) draws the figure, export writes it.
  */
@@ -10,7 +10,7 @@
 #include "plot.h"
 #include "sagitta.h"
 
-enum { VIEW_OFF = 0, VIEW_LAYOUT, VIEW_SPOT, VIEW_FAN, VIEW_COUNT };
+enum { VIEW_OFF = 0, VIEW_LAYOUT, VIEW_SPOT, VIEW_FAN, VIEW_OPD, VIEW_WAVE, VIEW_COUNT };
 
 typedef struct edview {
     int kind;                 /* VIEW_* on show */
@@ -19,13 +19,13 @@ typedef struct edview {
     int built_kind;           /* what fig shows */
     unsigned long id;         /* document state fig was built for; 0: none */
     sg_trace_opts opts;       /* and the options */
-    int field;                /* and the fan's field */
+    int field;                /* and the fan's or map's field */
     int rc;                   /* SG_EOK, or why there is no figure */
     char msg[SG_DIAG_MSG + 16];
     double ms_last;           /* wall time of the last rebuild */
 } edview;
 
-/* "off", "layout", "spot", "fan". */
+/* "off", "layout", "spot", "fan", "opd", "wave". */
 const char *view_name(int kind);
 /* The kind named s, or -1. */
 int view_parse(const char *s);
@@ -36,7 +36,9 @@ void edview_invalidate(edview *v);
 /* Rebuilds the figure if the kind, document state id, options or field
  * changed: the editor's sampling (spot: hexapolar, 6 rings, every field
  * and wavelength; fan: 21 points of field `field` (0-based), every
- * wavelength, since a terminal has room for one field's two fans; layout:
+ * wavelength, since a terminal has room for one field's two fans; opd: the
+ * same as OPD fans; wave: the wavefront map of field `field` at the
+ * editor's wavelength (the primary when none), 32 points across; layout:
  * 7 rays a field), traced with the editor's method.  Returns SG_EOK or the
  * error (also in msg). */
 int edview_update(edview *v, const sg_system *sys, unsigned long id, const sg_catalog *cat,
