@@ -9,6 +9,11 @@
 /* The chosen indices (one, or all of n when sel < 0) into idx; returns how
  * many, or 0 with d filled when sel is out of range. */
 int sg_an_select(int sel, int n, const char *what, int *idx, sg_diag *d);
+/* The nw chosen wavelengths waves[] as an analysis reports them (design
+ * index and micrometres), and the order they are traced in: the reference
+ * wavelength refw first, whose chief rays every other is measured from. */
+void sg_an_wave_order(const sg_system *sys, const int *waves, int nw, int refw,
+                      int *wave_index, double *wave_um, int *order);
 /* One micrometre in the design's lens units. */
 double sg_an_um_to_units(const sg_system *sys);
 

@@ -71,7 +71,7 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
                    sg_fan *out, sg_diag *d)
 {
     int waves[SG_MAX_WAVES], fields[SG_MAX_FIELDS], order[SG_MAX_WAVES];
-    int nw, nf, np, refw, ri = 0, w, f, k, j, rc, last;
+    int nw, nf, np, refw, w, f, k, j, rc, last;
     size_t nray, r;
     sg_ray_in *rays = NULL;
     sg_ray_surface *rows = NULL;
@@ -99,16 +99,7 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
     out->nwave = nw;
     out->npts = np;
     out->opd = o->opd != 0;
-    for (w = 0; w < nw; w++) {
-        out->wave_index[w] = waves[w];
-        out->wave_um[w] = sys->wave[waves[w]].um;
-        if (waves[w] == refw)
-            ri = w;
-    }
-    order[0] = ri;
-    for (w = 0, k = 1; w < nw; w++)
-        if (w != ri)
-            order[k++] = w;
+    sg_an_wave_order(sys, waves, nw, refw, out->wave_index, out->wave_um, order);
     nray = (size_t)nf * (size_t)(2 * np + 1);
     out->tan = calloc((size_t)nf * (size_t)nw, sizeof *out->tan);
     out->sag = calloc((size_t)nf * (size_t)nw, sizeof *out->sag);

@@ -28,6 +28,22 @@ int sg_an_select(int sel, int n, const char *what, int *idx, sg_diag *d)
     return n;
 }
 
+void sg_an_wave_order(const sg_system *sys, const int *waves, int nw, int refw,
+                      int *wave_index, double *wave_um, int *order)
+{
+    int w, k, ri = 0;
+    for (w = 0; w < nw; w++) {
+        wave_index[w] = waves[w];
+        wave_um[w] = sys->wave[waves[w]].um;
+        if (waves[w] == refw)
+            ri = w;
+    }
+    order[0] = ri;
+    for (w = 0, k = 1; w < nw; w++)
+        if (w != ri)
+            order[k++] = w;
+}
+
 double sg_an_um_to_units(const sg_system *sys)
 {
     if (strcmp(sys->units, "cm") == 0)
@@ -172,7 +188,7 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
                     sg_spot *out, sg_diag *d)
 {
     int waves[SG_MAX_WAVES], fields[SG_MAX_FIELDS], order[SG_MAX_WAVES];
-    int nw, nf, refw, ri = 0, w, f, k, rc = SG_OK, last;
+    int nw, nf, refw, w, f, k, rc = SG_OK, last;
     size_t count, block, stride, i;
     sg_paraxial px;
     sg_ray_in *rays = NULL;
@@ -207,17 +223,8 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
     out->nwave = nw;
     out->nray_per_cell = count;
     out->airy_radius = 1.22 * sys->wave[refw].um * sg_an_um_to_units(sys) * px.working_fnum;
-    for (w = 0; w < nw; w++) {
-        out->wave_index[w] = waves[w];
-        out->wave_um[w] = sys->wave[waves[w]].um;
-        if (waves[w] == refw)
-            ri = w;
-    }
     /* The reference wavelength first: its chief rays are every cell's origin. */
-    order[0] = ri;
-    for (w = 0, k = 1; w < nw; w++)
-        if (w != ri)
-            order[k++] = w;
+    sg_an_wave_order(sys, waves, nw, refw, out->wave_index, out->wave_um, order);
     out->cell = calloc((size_t)nf * (size_t)nw, sizeof *out->cell);
     a = calloc((size_t)nf * (size_t)nw, sizeof *a);
     rays = malloc(block * sizeof *rays);

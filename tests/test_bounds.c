@@ -107,6 +107,35 @@ static double true_residual(const scase *c, double x, double y, double z)
     return out;
 }
 
+/* One Newton step on F(t) = z - sag(x^2 + y^2) along S + t D: the step
+ * F / F' into step, and tt moved by it. */
+static void mnewton_step(const scase *c, const double S[3], const double D[3], mpfr_t tt,
+                         mpfr_t step)
+{
+    mpfr_t P[3], r2, u, v, sag, ds, F, Fp;
+    int k;
+    mpfr_inits2(PREC, P[0], P[1], P[2], r2, u, v, sag, ds, F, Fp, (mpfr_ptr)0);
+    for (k = 0; k < 3; k++) {
+        mpfr_mul_d(P[k], tt, D[k], MPFR_RNDN);
+        mpfr_add_d(P[k], P[k], S[k], MPFR_RNDN);
+    }
+    mpfr_sqr(r2, P[0], MPFR_RNDN);
+    mpfr_sqr(u, P[1], MPFR_RNDN);
+    mpfr_add(r2, r2, u, MPFR_RNDN);
+    msag(c, r2, sag, ds);
+    mpfr_sub(F, P[2], sag, MPFR_RNDN);
+    /* dF/dt = Dz - ds * 2 (x Dx + y Dy) */
+    mpfr_mul_d(u, P[0], D[0], MPFR_RNDN);
+    mpfr_mul_d(v, P[1], D[1], MPFR_RNDN);
+    mpfr_add(u, u, v, MPFR_RNDN);
+    mpfr_mul_2ui(u, u, 1, MPFR_RNDN);
+    mpfr_mul(u, u, ds, MPFR_RNDN);
+    mpfr_d_sub(Fp, D[2], u, MPFR_RNDN);
+    mpfr_div(step, F, Fp, MPFR_RNDN);
+    mpfr_sub(tt, tt, step, MPFR_RNDN);
+    mpfr_clears(P[0], P[1], P[2], r2, u, v, sag, ds, F, Fp, (mpfr_ptr)0);
+}
+
 /* The truth for one double ray: point hi + lo, direction hi + lo. */
 typedef struct truth {
     double p[3], pl[3], d[3], dl[3];
@@ -179,24 +208,7 @@ static int mtruth(const scase *c, const double S[3], const double D[3], const do
         for (it = 0; it < 4000 && c->asph; it++) {
             /* Newton on F(t) = z - sag(x^2 + y^2), until the step is
              * below 2^-1000 of t. */
-            for (k = 0; k < 3; k++) {
-                mpfr_mul_d(P[k], tt, D[k], MPFR_RNDN);
-                mpfr_add_d(P[k], P[k], S[k], MPFR_RNDN);
-            }
-            mpfr_sqr(r2, P[0], MPFR_RNDN);
-            mpfr_sqr(u, P[1], MPFR_RNDN);
-            mpfr_add(r2, r2, u, MPFR_RNDN);
-            msag(c, r2, sag, ds);
-            mpfr_sub(F, P[2], sag, MPFR_RNDN);
-            mpfr_mul_d(u, P[0], D[0], MPFR_RNDN);
-            mpfr_mul_d(v, P[1], D[1], MPFR_RNDN);
-            mpfr_add(u, u, v, MPFR_RNDN);
-            mpfr_mul_2ui(u, u, 1, MPFR_RNDN);
-            mpfr_mul(u, u, ds, MPFR_RNDN);
-            mpfr_set_d(Fp, D[2], MPFR_RNDN);
-            mpfr_sub(Fp, Fp, u, MPFR_RNDN);
-            mpfr_div(u, F, Fp, MPFR_RNDN);
-            mpfr_sub(tt, tt, u, MPFR_RNDN);
+            mnewton_step(c, S, D, tt, u);
             if (!mpfr_regular_p(u) || !mpfr_regular_p(tt) ||
                 mpfr_get_exp(u) < mpfr_get_exp(tt) - (PREC - 24))
                 break;
@@ -693,10 +705,10 @@ static void examples_bounds(void **state)
 static int mcross_from(const scase *c, const double S[3], const double D[3], const double q[3],
                        double hi[3], double lo[3])
 {
-    mpfr_t tt, u, v, r2, sag, ds, F, Fp, P[3];
+    mpfr_t tt, u, P;
     double len2 = D[0] * D[0] + D[1] * D[1] + D[2] * D[2];
     int it, k, ok = 0;
-    mpfr_inits2(PREC, tt, u, v, r2, sag, ds, F, Fp, P[0], P[1], P[2], (mpfr_ptr)0);
+    mpfr_inits2(PREC, tt, u, P, (mpfr_ptr)0);
     mpfr_set_zero(tt, 1);
     for (k = 0; k < 3; k++) {
         mpfr_set_d(u, q[k], MPFR_RNDN);
@@ -706,23 +718,7 @@ static int mcross_from(const scase *c, const double S[3], const double D[3], con
     }
     mpfr_div_d(tt, tt, len2, MPFR_RNDN);
     for (it = 0; it < 400 && !ok; it++) {
-        for (k = 0; k < 3; k++) {
-            mpfr_mul_d(P[k], tt, D[k], MPFR_RNDN);
-            mpfr_add_d(P[k], P[k], S[k], MPFR_RNDN);
-        }
-        mpfr_sqr(r2, P[0], MPFR_RNDN);
-        mpfr_sqr(u, P[1], MPFR_RNDN);
-        mpfr_add(r2, r2, u, MPFR_RNDN);
-        msag(c, r2, sag, ds);
-        mpfr_sub(F, P[2], sag, MPFR_RNDN);
-        mpfr_mul_d(u, P[0], D[0], MPFR_RNDN);
-        mpfr_mul_d(v, P[1], D[1], MPFR_RNDN);
-        mpfr_add(u, u, v, MPFR_RNDN);
-        mpfr_mul_2ui(u, u, 1, MPFR_RNDN);
-        mpfr_mul(u, u, ds, MPFR_RNDN);
-        mpfr_d_sub(Fp, D[2], u, MPFR_RNDN);
-        mpfr_div(u, F, Fp, MPFR_RNDN);
-        mpfr_sub(tt, tt, u, MPFR_RNDN);
+        mnewton_step(c, S, D, tt, u);
         if (!mpfr_number_p(tt))
             break;
         /* Settled far below what the test resolves (2^-110 of the point),
@@ -731,11 +727,11 @@ static int mcross_from(const scase *c, const double S[3], const double D[3], con
     }
     if (ok)
         for (k = 0; k < 3; k++) {
-            mpfr_mul_d(P[k], tt, D[k], MPFR_RNDN);
-            mpfr_add_d(P[k], P[k], S[k], MPFR_RNDN);
-            split(P[k], &hi[k], &lo[k], u);
+            mpfr_mul_d(P, tt, D[k], MPFR_RNDN);
+            mpfr_add_d(P, P, S[k], MPFR_RNDN);
+            split(P, &hi[k], &lo[k], u);
         }
-    mpfr_clears(tt, u, v, r2, sag, ds, F, Fp, P[0], P[1], P[2], (mpfr_ptr)0);
+    mpfr_clears(tt, u, P, (mpfr_ptr)0);
     return ok;
 }
 

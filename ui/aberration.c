@@ -74,11 +74,7 @@ static int close_out(outfile *o, const char *output)
 /* Exit status and message for an engine failure. */
 static int engine_error(const char *design, const sg_diag *d, int rc)
 {
-    const char *msg = d->msg[0] ? d->msg : sg_strerror(rc);
-    if (strstr(msg, design))
-        cli_error("%s", msg);
-    else
-        cli_error("%s: %s", design, msg);
+    cli_print_diag(design, d, rc);
     rc = cli_exit_for(rc);
     return rc == CLI_EXIT_OK ? CLI_EXIT_INTERNAL : rc;
 }

@@ -114,15 +114,6 @@ static int parse_format(const char *s, int *fmt)
     return CLI_EXIT_USAGE;
 }
 
-static void diag_error(const char *design, const sg_diag *d, int rc)
-{
-    const char *msg = d->msg[0] ? d->msg : sg_strerror(rc);
-    if (strstr(msg, design))
-        cli_error("%s", msg);
-    else
-        cli_error("%s: %s", design, msg);
-}
-
 /* A number with every digit a double holds, for CSV and JSON. */
 static void num(FILE *f, double v)
 {
@@ -756,7 +747,7 @@ static int run(int kind, int argc, char **argv)
         rc = sg_layout_compute(sys, cat, &lo, &lay, &d);
     }
     if (rc != SG_OK) {
-        diag_error(design, &d, rc);
+        cli_print_diag(design, &d, rc);
         rc = cli_exit_for(rc);
         if (rc == CLI_EXIT_OK)
             rc = CLI_EXIT_INTERNAL;

@@ -239,9 +239,7 @@ int cli_exit_for(int err)
     }
 }
 
-/* Prints an engine failure, adding the file name when the message does not
- * already carry it. */
-static void print_diag(const char *path, const sg_diag *d, int rc)
+void cli_print_diag(const char *path, const sg_diag *d, int rc)
 {
     const char *msg = d->msg[0] ? d->msg : sg_strerror(rc);
     if (path && !strstr(msg, path))
@@ -289,7 +287,7 @@ int cli_load_design(const char *path, sg_catalog **catp, sg_system **sysp)
     sg_diag_clear(&d);
     rc = sg_design_load(sys, path, &d);
     if (rc != SG_OK) {
-        print_diag(path, &d, rc);
+        cli_print_diag(path, &d, rc);
         cli_design_free(cat, sys);
         /* A file that parses but describes an untraceable system (too few
          * surfaces, no stop, two stops) is a design error, as documented. */
@@ -302,7 +300,7 @@ int cli_load_design(const char *path, sg_catalog **catp, sg_system **sysp)
     sg_diag_clear(&d);
     rc = sg_system_validate(sys, cat, &d);
     if (rc != SG_OK) {
-        print_diag(path, &d, rc);
+        cli_print_diag(path, &d, rc);
         cli_design_free(cat, sys);
         return rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
     }
@@ -418,7 +416,7 @@ static const cli_opt trace_opts[] = {
 static int trace_failed(const char *design, const sg_diag *d, int rc)
 {
     if (d->msg[0])
-        print_diag(design, d, rc);
+        cli_print_diag(design, d, rc);
     else
         cli_error("%s: trace failed: %s", design, sg_strerror(rc));
     rc = cli_exit_for(rc);
@@ -594,7 +592,7 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     }
     if (!t || !b) {
         rc = d.code != SG_OK ? d.code : SG_ENOMEM;
-        print_diag(design, &d, rc);
+        cli_print_diag(design, &d, rc);
         rc = cli_exit_for(rc);
         if (rc == CLI_EXIT_OK)
             rc = CLI_EXIT_INTERNAL;
@@ -892,7 +890,7 @@ int cmd_trace(int argc, char **argv)
     t = sg_tracer_new(sys, cat, &opts, &d);
     if (!t) {
         rc = d.code != SG_OK ? d.code : SG_ENOMEM;
-        print_diag(design, &d, rc);
+        cli_print_diag(design, &d, rc);
         rc = cli_exit_for(rc);
         if (rc == CLI_EXIT_OK)
             rc = CLI_EXIT_INTERNAL;
@@ -1037,7 +1035,7 @@ int cmd_paraxial(int argc, char **argv)
     memset(&p, 0, sizeof p);
     rc = sg_paraxial_compute(sys, cat, wave0, &p, &d);
     if (rc != SG_OK) {
-        print_diag(design, &d, rc);
+        cli_print_diag(design, &d, rc);
         rc = cli_exit_for(rc);
         if (rc == CLI_EXIT_OK)
             rc = CLI_EXIT_INTERNAL;

@@ -57,6 +57,9 @@ void cli_warn(const char *fmt, ...)
     ;
 /* Prints the warnings an sg_diag collected, prefixed by where (may be NULL). */
 void cli_print_warnings(const sg_diag *d, const char *where);
+/* Prints an engine failure rc with d's message, adding the file name path
+ * when the message does not already carry it. */
+void cli_print_diag(const char *path, const sg_diag *d, int rc);
 /* Prints "sagitta: CMD: MESSAGE" and the hint to run CMD --help; returns
  * CLI_EXIT_USAGE. */
 int cli_usage_error(const char *cmd, const char *fmt, ...)
