@@ -16,6 +16,11 @@
 static const char *const units_names[] = {"mm", "cm", "in", "m"};
 static const char *const surf_type_names[] = {"standard", "even_asphere"};
 static const char *const surf_type_shown[] = {"STANDARD", "EVENASPH"};
+static const char *const aperture_names[] = {
+    "none", "circular_aperture", "circular_obscuration", "rectangular_aperture",
+    "rectangular_obscuration", "elliptical_aperture", "elliptical_obscuration"};
+/* The editor shows the .zmx keyword of each. */
+static const char *const aperture_shown[] = {"none", "CLAP", "OBSC", "SQAP", "SQOB", "ELAP", "ELOB"};
 static const char *const field_type_names[] = {
     "angle", "object_height", "paraxial_image_height", "real_image_height"};
 static const char *const field_norm_names[] = {"radial", "rectangular"};
@@ -82,6 +87,28 @@ static const sg_param surface_params[] = {
           0.0),
     {"asphere", "asphere term r^%d", "r^%d", "a%d", "PARM", SG_PARAM_REAL, 0,
      offsetof(sg_surface, asph), 0, SG_NASPH, 2, 2, -INFINITY, INFINITY, 0.0, NONAMES, 1},
+    /* Format version 2: surface apertures and obscurations. */
+    {"aperture", "aperture", "Aperture", "aperture", "CLAP", SG_PARAM_ENUM, SG_PARAM_OPTIONAL,
+     offsetof(sg_surface, aperture), 0, 1, 0, 0, 0, 0, SG_APERTURE_NONE, aperture_names,
+     aperture_shown, 7, 2},
+    {"aperture_min_radius", "aperture minimum radius", "Ap r-min", "ap_rmin", "CLAP",
+     SG_PARAM_REAL, SG_PARAM_NONNEG | SG_PARAM_OPTIONAL, offsetof(sg_surface, ap_rmin), 0, 1, 0,
+     0, 0.0, SG_MAX_LEN, 0.0, NONAMES, 2},
+    {"aperture_max_radius", "aperture maximum radius", "Ap r-max", "ap_rmax", "CLAP",
+     SG_PARAM_REAL, SG_PARAM_NONNEG | SG_PARAM_OPTIONAL, offsetof(sg_surface, ap_rmax), 0, 1, 0,
+     0, 0.0, SG_MAX_LEN, 0.0, NONAMES, 2},
+    {"aperture_x_half_width", "aperture x half width", "Ap x-half", "ap_xhalf", "SQAP",
+     SG_PARAM_REAL, SG_PARAM_NONNEG | SG_PARAM_OPTIONAL, offsetof(sg_surface, ap_xhalf), 0, 1, 0,
+     0, 0.0, SG_MAX_LEN, 0.0, NONAMES, 2},
+    {"aperture_y_half_width", "aperture y half width", "Ap y-half", "ap_yhalf", "SQAP",
+     SG_PARAM_REAL, SG_PARAM_NONNEG | SG_PARAM_OPTIONAL, offsetof(sg_surface, ap_yhalf), 0, 1, 0,
+     0, 0.0, SG_MAX_LEN, 0.0, NONAMES, 2},
+    {"aperture_x_decenter", "aperture x decenter", "Ap x-dec", "ap_xdec", "OBDC", SG_PARAM_REAL,
+     SG_PARAM_OPTIONAL, offsetof(sg_surface, ap_xdec), 0, 1, 0, 0, -SG_MAX_LEN, SG_MAX_LEN, 0.0,
+     NONAMES, 2},
+    {"aperture_y_decenter", "aperture y decenter", "Ap y-dec", "ap_ydec", "OBDC", SG_PARAM_REAL,
+     SG_PARAM_OPTIONAL, offsetof(sg_surface, ap_ydec), 0, 1, 0, 0, -SG_MAX_LEN, SG_MAX_LEN, 0.0,
+     NONAMES, 2},
 };
 
 #define NROWS(a) ((int)(sizeof(a) / sizeof((a)[0])))

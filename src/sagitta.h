@@ -27,7 +27,7 @@ extern "C" {
 #define SG_VERSION_STRING "0.1.0"
 
 /* The JSON design format version this library reads and writes. */
-#define SG_DESIGN_FORMAT_VERSION 1
+#define SG_DESIGN_FORMAT_VERSION 2
 
 /* ------------------------------------------------------------------------
  * Errors.  One table yields the enum, the names and the messages, so the
@@ -173,6 +173,20 @@ typedef enum sg_surf_type {
     SG_SURF_EVENASPH = 1  /* conic plus even polynomial in r */
 } sg_surf_type;
 
+/* Surface apertures and obscurations, as Zemax defines them: one a surface
+ * (a dummy surface of zero thickness adds another), each about its own
+ * decenter.  A ray that meets the surface where its aperture stops it is
+ * vignetted (SG_EVIGNETTED), as beyond a fixed semi-diameter. */
+typedef enum sg_aperture_type {
+    SG_APERTURE_NONE = 0,
+    SG_APERTURE_CIRCULAR = 1,     /* passes min_radius <= r <= max_radius */
+    SG_OBSCURATION_CIRCULAR = 2,  /* stops min_radius <= r <= max_radius */
+    SG_APERTURE_RECTANGULAR = 3,  /* passes |x| <= x_half, |y| <= y_half */
+    SG_OBSCURATION_RECTANGULAR = 4,
+    SG_APERTURE_ELLIPTICAL = 5,   /* passes (x/x_half)^2 + (y/y_half)^2 <= 1 */
+    SG_OBSCURATION_ELLIPTICAL = 6
+} sg_aperture_type;
+
 typedef enum sg_mat_kind {
     SG_MAT_AIR = 0,    /* index 1 (indices are relative to air) */
     SG_MAT_MIRROR = 1, /* reflect; the medium after keeps the index before */
@@ -196,6 +210,10 @@ typedef struct sg_surface {
     int sd_fixed;          /* nonzero: rays beyond semi_diameter are vignetted */
     double conic;
     double asph[SG_NASPH]; /* coefficients of r^2, r^4, ..., r^16 */
+    sg_aperture_type aperture; /* the surface aperture or obscuration */
+    double ap_rmin, ap_rmax;   /* circular: the annulus's radii */
+    double ap_xhalf, ap_yhalf; /* rectangular and elliptical: half widths */
+    double ap_xdec, ap_ydec;   /* the aperture's centre in the local frame */
     /* Room for tilts and decenters: every frame change goes through one
      * internal transfer function, which will read these once they exist. */
 } sg_surface;

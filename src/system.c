@@ -313,6 +313,29 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
                     SG_OK)
                     return sg_diag_set(d, SG_ERANGE, "surface %d: %s", i, msg);
         }
+        switch (s->aperture) {
+        case SG_APERTURE_NONE:
+            break;
+        case SG_APERTURE_CIRCULAR:
+        case SG_OBSCURATION_CIRCULAR:
+            if (!(s->ap_rmax > s->ap_rmin))
+                return sg_diag_set(d, SG_ERANGE,
+                                   "surface %d: aperture: the maximum radius %g must be above "
+                                   "the minimum radius %g", i, s->ap_rmax, s->ap_rmin);
+            break;
+        case SG_APERTURE_RECTANGULAR:
+        case SG_OBSCURATION_RECTANGULAR:
+        case SG_APERTURE_ELLIPTICAL:
+        case SG_OBSCURATION_ELLIPTICAL:
+            if (!(s->ap_xhalf > 0.0 && s->ap_yhalf > 0.0))
+                return sg_diag_set(d, SG_ERANGE,
+                                   "surface %d: aperture: the x and y half widths (%g, %g) must "
+                                   "be positive", i, s->ap_xhalf, s->ap_yhalf);
+            break;
+        default:
+            return sg_diag_set(d, SG_ERANGE, "surface %d: aperture: unknown type %d", i,
+                               (int)s->aperture);
+        }
         if (s->mat.kind == SG_MAT_INDEX && !(s->mat.index >= 1e-3 && s->mat.index < 100.0))
             return sg_diag_set(d, SG_ERANGE,
                                "surface %d: material index %g is not physical", i, s->mat.index);

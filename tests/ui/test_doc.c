@@ -145,6 +145,20 @@ static void test_set_exact(void **state)
     /* A flat radius may be typed as Infinity. */
     ok(e, "set 1 radius Infinity");
     assert_true(isinf(e->doc.sys->surf[1].radius));
+    /* The aperture columns come from the engine's parameter table. */
+    ok(e, "set 1 aperture OBSC");
+    assert_int_equal(e->doc.sys->surf[1].aperture, SG_OBSCURATION_CIRCULAR);
+    ok(e, "set 1 aperture elliptical_aperture");
+    assert_int_equal(e->doc.sys->surf[1].aperture, SG_APERTURE_ELLIPTICAL);
+    ok(e, "set 1 ap_xhalf 4.5");
+    ok(e, "set 1 ap_ydec -0.125");
+    assert_true(same_bits(e->doc.sys->surf[1].ap_xhalf, 4.5));
+    assert_true(same_bits(e->doc.sys->surf[1].ap_ydec, -0.125));
+    assert_true(cmd_exec(e, "set 1 ap_rmax -1") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 1 ap_rmax"));
+    assert_true(cmd_exec(e, "set 1 aperture square") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "not one of none, CLAP, OBSC, SQAP, SQOB, ELAP, ELOB"));
+    ok(e, "set 1 aperture none");
     print_message("# %d typed values stored; each equals strtod() of its text bit for bit "
                   "(worst difference 0 ulp)\n", n);
     free_ed(e);

@@ -288,6 +288,27 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
     s = &sys->surf[row];
     switch (p->kind) {
     case SG_PARAM_ENUM:
+        if (col != COL_TYPE) {
+            /* Any other choice: its JSON name or the name shown. */
+            if (!trimmed(text, buf, sizeof buf))
+                buf[0] = '\0';
+            for (k = 0; k < p->nnames; k++)
+                if (strcasecmp(buf, p->names[k]) == 0 ||
+                    (p->shown && strcasecmp(buf, p->shown[k]) == 0))
+                    break;
+            if (k == p->nnames) {
+                snprintf(err, errn, "surface %d %s: \"%s\" is not one of", row, cell_name(col),
+                         text);
+                for (k = 0; k < p->nnames; k++) {
+                    size_t len = strlen(err);
+                    snprintf(err + len, errn - len, "%s %s", k ? "," : "",
+                             p->shown ? p->shown[k] : p->names[k]);
+                }
+                return SG_EPARSE;
+            }
+            sg_param_set(p, s, 0, k);
+            return SG_EOK;
+        }
         rc = cell_type_parse(text);
         if (rc < 0) {
             snprintf(err, errn, "surface %d type: \"%s\" is not STANDARD or EVENASPH",

@@ -288,7 +288,8 @@ static int c_set(ed *e, args *a)
     }
     if (col < 0)
         return fail(e, "no column \"%s\" (type, comment, radius, thickness, material, "
-                       "semi, conic, a2 ... a16)", a->v[2]);
+                       "semi, conic, a2 ... a16, aperture, ap_rmin, ap_rmax, ap_xhalf, "
+                       "ap_yhalf, ap_xdec, ap_ydec)", a->v[2]);
     if (a->n > 3)
         rest_of(a, 3, val, sizeof val);
     else
@@ -698,6 +699,7 @@ static int c_field(ed *e, args *a)
         if (!begin(e, e->row))
             return ED_HANDLED | ED_ERROR;
         s = e->doc.sys;
+        sg_param_defaults(SG_SCOPE_FIELD, &s->field[s->nfield]);
         s->field[s->nfield].x = x;
         s->field[s->nfield].y = y;
         s->field[s->nfield].weight = w;
@@ -1903,7 +1905,8 @@ static int c_sysdata(ed *e, args *a)
 static const command commands[] = {
     {"set", NULL, c_set, "set SURFACE COLUMN VALUE",
      "set a cell; COLUMN is type comment radius thickness material semi conic a2..a16 "
-     "or fixed; SURFACE may be obj, ima, stop or ."},
+     "aperture ap_rmin ap_rmax ap_xhalf ap_yhalf ap_xdec ap_ydec or fixed; SURFACE may be "
+     "obj, ima, stop or ."},
     {"insert", "i", c_insert, "insert [SURFACE]", "insert a flat air surface before SURFACE"},
     {"delete", "d", c_delete, "delete [SURFACE]", "delete a surface"},
     {"stop", NULL, c_stop, "stop [SURFACE]", "make a surface the aperture stop"},
