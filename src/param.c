@@ -66,6 +66,17 @@ static const sg_param field_params[] = {
     REAL1(sg_field, "y", "y", NULL, NULL, "YFLN", 0, y, -INFINITY, INFINITY, 0.0),
     REAL1(sg_field, "weight", "weight", NULL, NULL, "FWGN", SG_PARAM_NONNEG, weight, 0.0,
           INFINITY, 1.0),
+    /* Format version 2: Zemax's vignetting factors. */
+    {"vdx", "vignetting decenter x", NULL, NULL, "VDXN", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+     offsetof(sg_field, vdx), 0, 1, 0, 0, -1e6, 1e6, 0.0, NONAMES, 2},
+    {"vdy", "vignetting decenter y", NULL, NULL, "VDYN", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+     offsetof(sg_field, vdy), 0, 1, 0, 0, -1e6, 1e6, 0.0, NONAMES, 2},
+    {"vcx", "vignetting compression x", NULL, NULL, "VCXN", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+     offsetof(sg_field, vcx), 0, 1, 0, 0, -1e6, 1e6, 0.0, NONAMES, 2},
+    {"vcy", "vignetting compression y", NULL, NULL, "VCYN", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+     offsetof(sg_field, vcy), 0, 1, 0, 0, -1e6, 1e6, 0.0, NONAMES, 2},
+    {"van", "vignetting angle", NULL, NULL, "VANN", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+     offsetof(sg_field, van), 0, 1, 0, 0, -1e6, 1e6, 0.0, NONAMES, 2},
 };
 
 static const sg_param surface_params[] = {

@@ -252,6 +252,10 @@ typedef struct sg_wave {
 typedef struct sg_field {
     double x, y;
     double weight;
+    /* Zemax's vignetting factors: the pupil of this field is compressed
+     * (vcx, vcy), turned by van degrees and decentred (vdx, vdy) before
+     * its rays are aimed; see sg_field_vignette. */
+    double vdx, vdy, vcx, vcy, van;
 } sg_field;
 
 typedef struct sg_system {
@@ -579,6 +583,16 @@ int sg_batch_trace(sg_batch *b, sg_ray_kind kind, const sg_ray_in *rays,
  * divided by Zemax's field scale (the largest radius, or the largest |x|
  * and |y| for rectangular normalization). */
 int sg_field_normalized(const sg_system *sys, int k, double *hx, double *hy);
+
+/* The pupil point a normalized ray is traced at: (px, py) itself, unless
+ * (hx, hy) is a field's own normalized point (sg_field_normalized, bit for
+ * bit; the first such field) with vignetting factors, when it is
+ *   a = px (1 - vcx), b = py (1 - vcy),
+ *   px' = vdx + a cos(van) - b sin(van), py' = vdy + a sin(van) + b cos(van),
+ * the compressed pupil turned by van (degrees, counterclockwise) about its
+ * centre, then decentred.  Every method traces (px', py'). */
+void sg_field_vignette(const sg_system *sys, double hx, double hy, double px, double py,
+                       double *vpx, double *vpy);
 
 /* Pupil sampling patterns, as Zemax defines them.  Hexapolar: density N
  * rings; ring i (1..N) holds 6i rays at radius i/N, the first at angle 0

@@ -256,6 +256,14 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
         if (sys->field_type == SG_FIELD_ANGLE && (fabs(f->x) >= 90.0 || fabs(f->y) >= 90.0))
             return sg_diag_set(d, SG_ERANGE, "field %d: angle (%g, %g) must be below 90 degrees",
                                k + 1, f->x, f->y);
+        /* The table's other numbers (the vignetting factors). */
+        for (p = 0; p < sg_param_count(SG_SCOPE_FIELD); p++) {
+            const sg_param *pp = sg_param_at(SG_SCOPE_FIELD, p);
+            char msg[160];
+            if (pp->kind == SG_PARAM_REAL && (pp->flags & SG_PARAM_OPTIONAL) &&
+                sg_param_check(pp, 0, sg_param_get(pp, f, 0), 0, msg, sizeof msg) != SG_OK)
+                return sg_diag_set(d, SG_ERANGE, "field %d: %s", k + 1, msg);
+        }
     }
     if (!(sys->aper_value > 0.0) || !isfinite(sys->aper_value))
         if (sys->aper_type != SG_APER_FLOAT_STOP)

@@ -855,6 +855,8 @@ int sg_trace_normalized(sg_tracer *t, double hx, double hy, double px, double py
         sg_fail_rest(out, 0, t->n, SG_EINVAL);
         return SG_EINVAL;
     }
+    /* A field's vignetting factors move its pupil point, for every method. */
+    sg_field_vignette(t->sys, hx, hy, px, py, &px, &py);
     switch (t->o.method) {
     case SG_METHOD_PRECISE:
         return sg_guard_rows(t, out, sg_launch_precise(t, hx, hy, px, py, out));
