@@ -99,7 +99,8 @@ static const sg_param surface_params[] = {
     {"asphere", "asphere term r^%d", "r^%d", "a%d", "PARM", SG_PARAM_REAL, 0,
      offsetof(sg_surface, asph), 0, SG_NASPH, 2, 2, -INFINITY, INFINITY, 0.0, NONAMES, 1},
     /* Format version 2: surface apertures and obscurations. */
-    {"aperture", "aperture", "Aperture", "aperture", "CLAP", SG_PARAM_ENUM, SG_PARAM_OPTIONAL,
+    {"aperture", "aperture", "Aperture", "aperture", "CLAP|OBSC|SQAP|SQOB|ELAP|ELOB",
+     SG_PARAM_ENUM, SG_PARAM_OPTIONAL,
      offsetof(sg_surface, aperture), 0, 1, 0, 0, 0, 0, SG_APERTURE_NONE, aperture_names,
      aperture_shown, 7, 2},
     {"aperture_min_radius", "aperture minimum radius", "Ap r-min", "ap_rmin", "CLAP",

@@ -301,6 +301,11 @@ static void test_json(void **state)
     assert_int_equal(sg_design_parse(back, json, strlen(json), "back", &d), SG_OK);
     assert_true(sg_system_equal(sys, back));
     free(json);
+    /* The .zmx writer refuses what it cannot write yet, naming it. */
+    sg_diag_clear(&d);
+    assert_null(sg_zmx_to_text(sys, NULL, &d));
+    assert_int_equal(d.code, SG_EUNSUPPORTED);
+    assert_non_null(strstr(d.msg, "export: surface 2: aperture (CLAP|OBSC|SQAP|SQOB|ELAP|ELOB): the .zmx writer"));
     /* Without an aperture the file stays version 1. */
     sys->surf[2].aperture = SG_APERTURE_NONE;
     sys->surf[2].ap_xhalf = sys->surf[2].ap_yhalf = 0.0;

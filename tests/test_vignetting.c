@@ -185,6 +185,10 @@ static void test_json(void **state)
     assert_int_equal(sg_design_parse(back, json, strlen(json), "back", &d), SG_OK);
     assert_true(sg_system_equal(sys, back));
     free(json);
+    /* The .zmx writer refuses what it cannot write yet, naming it. */
+    sg_diag_clear(&d);
+    assert_null(sg_zmx_to_text(sys, NULL, &d));
+    assert_non_null(strstr(d.msg, "export: field 1: vdx (VDXN): the .zmx writer"));
     /* A bad factor names the field and the key. */
     {
         static const char bad[] = "{\"fields\": {\"list\": [{\"y\": 1, \"vcx\": \"x\"}]},"
