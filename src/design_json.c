@@ -32,15 +32,17 @@
 
 #define FORMAT_NAME "sagitta-design"
 
-static const char *const units_names[] = {"mm", "cm", "in", "m"};
-static const char *const surf_type_names[] = {"standard", "even_asphere"};
-static const char *const field_type_names[] = {
-    "angle", "object_height", "paraxial_image_height", "real_image_height"};
-static const char *const field_norm_names[] = {"radial", "rectangular"};
-static const char *const aper_type_names[] = {
-    "epd", "image_fnum", "object_na", "float_by_stop", "paraxial_working_fnum"};
-static const char *const aim_names[] = {"off", "paraxial", "real"};
-
+/* The names of an enumeration or a closed set of texts, from the table. */
+static const sg_param *sysp(const char *key)
+{
+    return sg_param_find(SG_SCOPE_SYSTEM, key);
+}
+#define units_names (sysp("units")->names)
+#define field_type_names (sysp("fields.type")->names)
+#define field_norm_names (sysp("fields.normalization")->names)
+#define aper_type_names (sysp("aperture.type")->names)
+#define aim_names (sysp("ray_aiming")->names)
+#define surf_type_names (sg_param_find(SG_SCOPE_SURFACE, "type")->names)
 #define NELEM(a) ((int)(sizeof(a) / sizeof((a)[0])))
 
 /* ------------------------------------------------------------------------
@@ -447,18 +449,120 @@ static int get_material(jctx *c, const cJSON *v, const char *where, sg_material 
                 got);
 }
 
+/* One parameter of the table from its JSON value into obj; where names
+ * the object ("surface 3", "fields: list[1]"), isurf the surface (or -1). */
+static int read_param(jctx *c, const sg_param *p, const cJSON *v, const char *where,
+                      const char *sep, int isurf, void *obj)
+{
+    char at[96];
+    void *q = sg_param_ptr(p, obj);
+    int rc, e;
+    if (where && where[0])
+        snprintf(at, sizeof at, "%s%s%s", where, sep, p->key);
+    else
+        snprintf(at, sizeof at, "%s", p->key);
+    switch (p->kind) {
+    case SG_PARAM_ENUM:
+        if ((rc = get_enum(c, v, at, p->names, p->nnames, &e)) != SG_OK)
+            return rc;
+        *(int *)q = e;
+        return SG_OK;
+    case SG_PARAM_TEXT:
+        if (p->names) {
+            if ((rc = get_enum(c, v, at, p->names, p->nnames, &e)) != SG_OK)
+                return rc;
+            sg_strlcpy(q, p->names[e], p->size);
+            return SG_OK;
+        }
+        return get_string(c, v, at, q, p->size);
+    case SG_PARAM_MATERIAL:
+        return get_material(c, v, at, q);
+    case SG_PARAM_BOOL:
+        return get_bool(c, v, at, q);
+    case SG_PARAM_REAL:
+        break;
+    }
+    if (p->count > 1) {
+        const cJSON *it;
+        double *arr = q;
+        int j = 0, na;
+        if (!cJSON_IsArray(v)) {
+            char got[80];
+            describe(v, got, sizeof got);
+            return perr(c, SG_EPARSE, at, "expected an array of numbers, got %s", got);
+        }
+        na = cJSON_GetArraySize(v);
+        if (na > p->count)
+            return perr(c, SG_EPARSE, at, "%d terms; at most %d (%s%d to %s%d) are allowed", na,
+                        p->count, p->elem_mul == 2 ? "r^" : "", p->elem_add,
+                        p->elem_mul == 2 ? "r^" : "", p->elem_mul * (p->count - 1) + p->elem_add);
+        cJSON_ArrayForEach(it, v) {
+            char el[120];
+            snprintf(el, sizeof el, "%s[%d]", at, j);
+            if ((rc = get_finite(c, it, el, &arr[j])) != SG_OK)
+                return rc;
+            j++;
+        }
+        return SG_OK;
+    }
+    if (p->flags & SG_PARAM_INF)
+        return get_radius(c, v, at, q);
+    if (p->flags & SG_PARAM_OBJ_INF)
+        return get_thickness(c, v, at, isurf, q);
+    if (p->flags & SG_PARAM_POSITIVE)
+        return get_positive(c, v, at, q);
+    if (p->flags & SG_PARAM_NONNEG)
+        return get_nonneg(c, v, at, q);
+    return get_finite(c, v, at, q);
+}
+
+/* The keys of a scope's table, plus extra (may be NULL), for pick_keys. */
+#define MAX_KEYS 64
+static int scope_keys(sg_param_scope scope, const char *extra, const char *names[MAX_KEYS])
+{
+    int n = sg_param_count(scope), i;
+    for (i = 0; i < n && i < MAX_KEYS - 1; i++)
+        names[i] = sg_param_at(scope, i)->key;
+    if (extra)
+        names[i++] = extra;
+    return i;
+}
+
+/* Reads every key of a scope's table present in v into obj (the caller
+ * set the defaults); a required key must be there. */
+static int read_scope(jctx *c, sg_param_scope scope, const cJSON *v, const char *where,
+                      const char *sep, int isurf, void *obj, const char *extra,
+                      const cJSON **extra_out)
+{
+    const char *names[MAX_KEYS];
+    const cJSON *k[MAX_KEYS];
+    int n = scope_keys(scope, extra, names), i, rc;
+    pick_keys(c, v, where, names, n, k);
+    for (i = 0; i < sg_param_count(scope); i++) {
+        const sg_param *p = sg_param_at(scope, i);
+        if (!k[i]) {
+            if (p->flags & SG_PARAM_REQUIRED)
+                return perr(c, SG_EPARSE, where, "required key \"%s\" is missing", p->key);
+            continue;
+        }
+        if ((rc = read_param(c, p, k[i], where, sep, isurf, obj)) != SG_OK)
+            return rc;
+    }
+    if (extra_out)
+        *extra_out = extra ? k[n - 1] : NULL;
+    return SG_OK;
+}
+
 /* ------------------------------------------------------------------------
  * Reading sections
  * ------------------------------------------------------------------------ */
 
 enum { W_PRIMARY, W_LIST, W_N };
 static const char *const wave_keys[] = {"primary", "list"};
-enum { WL_UM, WL_WEIGHT, WL_N };
-static const char *const wave_item_keys[] = {"um", "weight"};
 
 static int read_wavelengths(jctx *c, const cJSON *v, sg_system *sys)
 {
-    const cJSON *k[W_N], *kk[WL_N], *it;
+    const cJSON *k[W_N], *it;
     char where[64], at[96];
     int rc, n, i, primary = 1;
     if ((rc = expect_object(c, v, "wavelengths")) != SG_OK)
@@ -482,15 +586,9 @@ static int read_wavelengths(jctx *c, const cJSON *v, sg_system *sys)
             snprintf(where, sizeof where, "wavelengths: list[%d]", i);
             if ((rc = expect_object(c, it, where)) != SG_OK)
                 return rc;
-            pick_keys(c, it, where, wave_item_keys, WL_N, kk);
-            if (!kk[WL_UM])
-                return perr(c, SG_EPARSE, where, "required key \"um\" is missing");
-            snprintf(at, sizeof at, "wavelengths: list[%d].um", i);
-            if ((rc = get_positive(c, kk[WL_UM], at, &w->um)) != SG_OK)
-                return rc;
-            w->weight = 1.0;
-            snprintf(at, sizeof at, "wavelengths: list[%d].weight", i);
-            if (kk[WL_WEIGHT] && (rc = get_nonneg(c, kk[WL_WEIGHT], at, &w->weight)) != SG_OK)
+            sg_param_defaults(SG_SCOPE_WAVE, w);
+            if ((rc = read_scope(c, SG_SCOPE_WAVE, it, where, ".", -1, w, NULL, NULL)) !=
+                SG_OK)
                 return rc;
             i++;
         }
@@ -509,12 +607,10 @@ static int read_wavelengths(jctx *c, const cJSON *v, sg_system *sys)
 
 enum { F_TYPE, F_NORM, F_LIST, F_N };
 static const char *const field_keys[] = {"type", "normalization", "list"};
-enum { FL_X, FL_Y, FL_WEIGHT, FL_N };
-static const char *const field_item_keys[] = {"x", "y", "weight"};
 
 static int read_fields(jctx *c, const cJSON *v, sg_system *sys)
 {
-    const cJSON *k[F_N], *kk[FL_N], *it;
+    const cJSON *k[F_N], *it;
     char where[64], at[96];
     int rc, n, i, e;
     if ((rc = expect_object(c, v, "fields")) != SG_OK)
@@ -522,13 +618,13 @@ static int read_fields(jctx *c, const cJSON *v, sg_system *sys)
     pick_keys(c, v, "fields", field_keys, F_N, k);
     if (k[F_TYPE]) {
         if ((rc = get_enum(c, k[F_TYPE], "fields: type", field_type_names,
-                           NELEM(field_type_names), &e)) != SG_OK)
+                           sysp("fields.type")->nnames, &e)) != SG_OK)
             return rc;
         sys->field_type = (sg_field_type)e;
     }
     if (k[F_NORM]) {
         if ((rc = get_enum(c, k[F_NORM], "fields: normalization", field_norm_names,
-                           NELEM(field_norm_names), &e)) != SG_OK)
+                           sysp("fields.normalization")->nnames, &e)) != SG_OK)
             return rc;
         sys->field_norm = (sg_field_norm)e;
     }
@@ -550,18 +646,8 @@ static int read_fields(jctx *c, const cJSON *v, sg_system *sys)
         snprintf(where, sizeof where, "fields: list[%d]", i);
         if ((rc = expect_object(c, it, where)) != SG_OK)
             return rc;
-        pick_keys(c, it, where, field_item_keys, FL_N, kk);
-        f->x = 0.0;
-        f->y = 0.0;
-        f->weight = 1.0;
-        snprintf(at, sizeof at, "fields: list[%d].x", i);
-        if (kk[FL_X] && (rc = get_finite(c, kk[FL_X], at, &f->x)) != SG_OK)
-            return rc;
-        snprintf(at, sizeof at, "fields: list[%d].y", i);
-        if (kk[FL_Y] && (rc = get_finite(c, kk[FL_Y], at, &f->y)) != SG_OK)
-            return rc;
-        snprintf(at, sizeof at, "fields: list[%d].weight", i);
-        if (kk[FL_WEIGHT] && (rc = get_nonneg(c, kk[FL_WEIGHT], at, &f->weight)) != SG_OK)
+        sg_param_defaults(SG_SCOPE_FIELD, f);
+        if ((rc = read_scope(c, SG_SCOPE_FIELD, it, where, ".", -1, f, NULL, NULL)) != SG_OK)
             return rc;
         i++;
     }
@@ -581,7 +667,7 @@ static int read_aperture(jctx *c, const cJSON *v, sg_system *sys)
     pick_keys(c, v, "aperture", aper_keys, A_N, k);
     if (k[A_TYPE]) {
         if ((rc = get_enum(c, k[A_TYPE], "aperture: type", aper_type_names,
-                           NELEM(aper_type_names), &e)) != SG_OK)
+                           sysp("aperture.type")->nnames, &e)) != SG_OK)
             return rc;
         sys->aper_type = (sg_aper_type)e;
     }
@@ -590,81 +676,23 @@ static int read_aperture(jctx *c, const cJSON *v, sg_system *sys)
     return SG_OK;
 }
 
-enum {
-    S_TYPE, S_COMMENT, S_RADIUS, S_THICKNESS, S_MATERIAL, S_SD, S_SDFIXED,
-    S_CONIC, S_ASPHERE, S_STOP, S_N
-};
-static const char *const surf_keys[] = {
-    "type", "comment", "radius", "thickness", "material", "semi_diameter",
-    "sd_fixed", "conic", "asphere", "stop"};
-
 /* Reads surface i of n; *is_stop reports its "stop" flag. */
 static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, int *is_stop)
 {
-    const cJSON *k[S_N];
+    const cJSON *stop;
     char where[32], at[64];
-    int rc, e;
+    int rc;
     snprintf(where, sizeof where, "surface %d", i);
     if ((rc = expect_object(c, v, where)) != SG_OK)
         return rc;
-    pick_keys(c, v, where, surf_keys, S_N, k);
     sg_surface_init(s);
-    s->type = SG_SURF_STANDARD;
-    s->radius = INFINITY;
-    s->thickness = i == 0 ? INFINITY : 0.0;
-    s->mat.kind = SG_MAT_AIR;
+    if (i == 0)
+        s->thickness = INFINITY;
     *is_stop = 0;
-    if (k[S_TYPE]) {
-        if ((rc = get_enum(c, k[S_TYPE], join(at, sizeof at, where, "type"), surf_type_names,
-                           NELEM(surf_type_names), &e)) != SG_OK)
-            return rc;
-        s->type = (sg_surf_type)e;
-    }
-    if (k[S_COMMENT] && (rc = get_string(c, k[S_COMMENT], join(at, sizeof at, where, "comment"),
-                                         s->comment, sizeof s->comment)) != SG_OK)
+    if ((rc = read_scope(c, SG_SCOPE_SURFACE, v, where, ": ", i, s, "stop", &stop)) != SG_OK)
         return rc;
-    if (k[S_RADIUS] &&
-        (rc = get_radius(c, k[S_RADIUS], join(at, sizeof at, where, "radius"), &s->radius)) != SG_OK)
-        return rc;
-    if (k[S_THICKNESS] && (rc = get_thickness(c, k[S_THICKNESS],
-                                              join(at, sizeof at, where, "thickness"), i,
-                                              &s->thickness)) != SG_OK)
-        return rc;
-    if (k[S_MATERIAL] && (rc = get_material(c, k[S_MATERIAL],
-                                            join(at, sizeof at, where, "material"), &s->mat)) != SG_OK)
-        return rc;
-    if (k[S_SD] && (rc = get_nonneg(c, k[S_SD], join(at, sizeof at, where, "semi_diameter"),
-                                    &s->semi_diameter)) != SG_OK)
-        return rc;
-    if (k[S_SDFIXED] &&
-        (rc = get_bool(c, k[S_SDFIXED], join(at, sizeof at, where, "sd_fixed"), &s->sd_fixed)) != SG_OK)
-        return rc;
-    if (k[S_CONIC] &&
-        (rc = get_finite(c, k[S_CONIC], join(at, sizeof at, where, "conic"), &s->conic)) != SG_OK)
-        return rc;
-    if (k[S_ASPHERE]) {
-        const cJSON *it;
-        int j = 0, na;
-        join(at, sizeof at, where, "asphere");
-        if (!cJSON_IsArray(k[S_ASPHERE])) {
-            char got[80];
-            describe(k[S_ASPHERE], got, sizeof got);
-            return perr(c, SG_EPARSE, at, "expected an array of numbers, got %s", got);
-        }
-        na = cJSON_GetArraySize(k[S_ASPHERE]);
-        if (na > SG_NASPH)
-            return perr(c, SG_EPARSE, at, "%d terms; at most %d (r^2 to r^%d) are allowed", na,
-                        SG_NASPH, 2 * SG_NASPH);
-        cJSON_ArrayForEach(it, k[S_ASPHERE]) {
-            char el[80];
-            snprintf(el, sizeof el, "%s[%d]", at, j);
-            if ((rc = get_finite(c, it, el, &s->asph[j])) != SG_OK)
-                return rc;
-            j++;
-        }
-    }
-    if (k[S_STOP]) {
-        if ((rc = get_bool(c, k[S_STOP], join(at, sizeof at, where, "stop"), is_stop)) != SG_OK)
+    if (stop) {
+        if ((rc = get_bool(c, stop, join(at, sizeof at, where, "stop"), is_stop)) != SG_OK)
             return rc;
         if (*is_stop && (i == 0 || i == n - 1))
             return perr(c, SG_EPARSE, at, "the %s surface cannot be the aperture stop",
@@ -750,7 +778,7 @@ static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
     if (k[T_TITLE] && (rc = get_string(c, k[T_TITLE], "title", tmp->title, sizeof tmp->title)) != SG_OK)
         return rc;
     if (k[T_UNITS]) {
-        if ((rc = get_enum(c, k[T_UNITS], "units", units_names, NELEM(units_names), &e)) != SG_OK)
+        if ((rc = get_enum(c, k[T_UNITS], "units", units_names, sysp("units")->nnames, &e)) != SG_OK)
             return rc;
         sg_strlcpy(tmp->units, units_names[e], sizeof tmp->units);
     }
@@ -761,7 +789,7 @@ static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
     if (k[T_APER] && (rc = read_aperture(c, k[T_APER], tmp)) != SG_OK)
         return rc;
     if (k[T_AIM]) {
-        if ((rc = get_enum(c, k[T_AIM], "ray_aiming", aim_names, NELEM(aim_names), &e)) != SG_OK)
+        if ((rc = get_enum(c, k[T_AIM], "ray_aiming", aim_names, sysp("ray_aiming")->nnames, &e)) != SG_OK)
             return rc;
         tmp->aim = (sg_aim)e;
     }
@@ -1039,18 +1067,99 @@ static int terminated(const char *s, size_t cap)
     return memchr(s, '\0', cap) != NULL;
 }
 
+/* Refuses a value of the table that the loader would refuse: where names
+ * the object ("surface 3"), isurf the surface or -1. */
+static int check_param(const sg_param *p, const void *obj, const char *where, int isurf,
+                       sg_diag *d)
+{
+    const void *q = sg_param_cptr(p, obj);
+    int k;
+    switch (p->kind) {
+    case SG_PARAM_ENUM:
+        if ((unsigned)*(const int *)q >= (unsigned)p->nnames)
+            return sg_diag_set(d, SG_EINVAL, "%s: unknown %s %d", where, p->key, *(const int *)q);
+        return SG_OK;
+    case SG_PARAM_TEXT:
+        if (!terminated(q, p->size))
+            return sg_diag_set(d, SG_EINVAL, "%s: %s is not a terminated string", where, p->key);
+        return SG_OK;
+    case SG_PARAM_BOOL:
+        return SG_OK;
+    case SG_PARAM_MATERIAL: {
+        const sg_material *m = q;
+        switch (m->kind) {
+        case SG_MAT_AIR:
+        case SG_MAT_MIRROR:
+            return SG_OK;
+        case SG_MAT_GLASS:
+            if (!terminated(m->name, sizeof m->name) || m->name[0] == '\0')
+                return sg_diag_set(d, SG_EINVAL, "%s: material: glass has no name", where);
+            return SG_OK;
+        case SG_MAT_INDEX:
+            if (!isfinite(m->index))
+                return sg_diag_set(d, SG_EINVAL, "%s: material: index is %g", where, m->index);
+            return SG_OK;
+        default:
+            return sg_diag_set(d, SG_EINVAL, "%s: material: unknown kind %d", where,
+                               (int)m->kind);
+        }
+    }
+    case SG_PARAM_REAL:
+        break;
+    }
+    for (k = 0; k < p->count; k++) {
+        double v = ((const double *)q)[k];
+        char key[48], head[24];
+        if (p->count > 1) {
+            sg_param_heading(p, k, head, sizeof head);
+            snprintf(key, sizeof key, "%s[%d] (%s)", p->key, k, head);
+        } else
+            snprintf(key, sizeof key, "%s", p->key);
+        if (isnan(v) && (p->flags & (SG_PARAM_INF | SG_PARAM_OBJ_INF)))
+            return sg_diag_set(d, SG_EINVAL, "%s: %s is NaN", where, key);
+        if (p->flags & SG_PARAM_INF)
+            continue;
+        if ((p->flags & SG_PARAM_OBJ_INF) && isinf(v)) {
+            if (isurf != 0 || v < 0)
+                return sg_diag_set(d, SG_EINVAL, "%s: %s is %g; only the object's "
+                                   "%s may be +inf", where, key, v, key);
+            continue;
+        }
+        if ((p->flags & SG_PARAM_POSITIVE) && !(isfinite(v) && v > 0.0))
+            return sg_diag_set(d, SG_EINVAL, "%s: %s is %g; it must be positive and finite",
+                               where, key, v);
+        if ((p->flags & SG_PARAM_NONNEG) && !(isfinite(v) && v >= 0.0))
+            return sg_diag_set(d, SG_EINVAL,
+                               "%s: %s is %g; it must be finite and not negative", where, key, v);
+        if (!isfinite(v))
+            return sg_diag_set(d, SG_EINVAL, "%s: %s is %g", where, key, v);
+    }
+    return SG_OK;
+}
+
+static int check_scope(sg_param_scope scope, const void *obj, const char *where, int isurf,
+                       sg_diag *d)
+{
+    int i, rc;
+    for (i = 0; i < sg_param_count(scope); i++)
+        if ((rc = check_param(sg_param_at(scope, i), obj, where, isurf, d)) != SG_OK)
+            return rc;
+    return SG_OK;
+}
+
 /* Refuses what the loader would refuse, so that every saved file loads. */
 static int check_writable(const sg_system *sys, sg_diag *d)
 {
-    int i, k;
+    char where[32];
+    int i, k, rc;
     if (!sys)
         return sg_diag_set(d, SG_EINVAL, "save: no system");
     if (!terminated(sys->title, sizeof sys->title))
         return sg_diag_set(d, SG_EINVAL, "title: not a terminated string");
-    for (k = 0; k < NELEM(units_names); k++)
+    for (k = 0; k < sysp("units")->nnames; k++)
         if (terminated(sys->units, sizeof sys->units) && strcmp(sys->units, units_names[k]) == 0)
             break;
-    if (k == NELEM(units_names))
+    if (k == sysp("units")->nnames)
         return sg_diag_set(d, SG_EINVAL, "units: must be mm, cm, in or m");
     if (sys->nwave < 1 || sys->nwave > SG_MAX_WAVES)
         return sg_diag_set(d, SG_EINVAL, "wavelengths: %d given, 1 to %d allowed", sys->nwave,
@@ -1059,36 +1168,27 @@ static int check_writable(const sg_system *sys, sg_diag *d)
         return sg_diag_set(d, SG_EINVAL, "wavelengths: primary %d is not one of 1 to %d",
                            sys->primary_wave + 1, sys->nwave);
     for (k = 0; k < sys->nwave; k++) {
-        if (!isfinite(sys->wave[k].um) || !(sys->wave[k].um > 0.0))
-            return sg_diag_set(d, SG_EINVAL, "wavelength %d: um is %g; it must be positive and finite",
-                               k + 1, sys->wave[k].um);
-        if (!isfinite(sys->wave[k].weight) || !(sys->wave[k].weight >= 0.0))
-            return sg_diag_set(d, SG_EINVAL,
-                               "wavelength %d: weight is %g; it must be finite and not negative",
-                               k + 1, sys->wave[k].weight);
+        snprintf(where, sizeof where, "wavelength %d", k + 1);
+        if ((rc = check_scope(SG_SCOPE_WAVE, &sys->wave[k], where, -1, d)) != SG_OK)
+            return rc;
     }
-    if ((unsigned)sys->field_type >= (unsigned)NELEM(field_type_names) ||
-        (unsigned)sys->field_norm >= (unsigned)NELEM(field_norm_names))
+    if ((unsigned)sys->field_type >= (unsigned)sysp("fields.type")->nnames ||
+        (unsigned)sys->field_norm >= (unsigned)sysp("fields.normalization")->nnames)
         return sg_diag_set(d, SG_EINVAL, "fields: unknown field type or normalization");
     if (sys->nfield < 1 || sys->nfield > SG_MAX_FIELDS)
         return sg_diag_set(d, SG_EINVAL, "fields: %d given, 1 to %d allowed", sys->nfield,
                            SG_MAX_FIELDS);
     for (k = 0; k < sys->nfield; k++) {
-        const sg_field *f = &sys->field[k];
-        if (!isfinite(f->x) || !isfinite(f->y))
-            return sg_diag_set(d, SG_EINVAL, "field %d: x and y must be finite (x %g, y %g)", k + 1,
-                               f->x, f->y);
-        if (!isfinite(f->weight) || !(f->weight >= 0.0))
-            return sg_diag_set(d, SG_EINVAL,
-                               "field %d: weight is %g; it must be finite and not negative", k + 1,
-                               f->weight);
+        snprintf(where, sizeof where, "field %d", k + 1);
+        if ((rc = check_scope(SG_SCOPE_FIELD, &sys->field[k], where, -1, d)) != SG_OK)
+            return rc;
     }
-    if ((unsigned)sys->aper_type >= (unsigned)NELEM(aper_type_names))
+    if ((unsigned)sys->aper_type >= (unsigned)sysp("aperture.type")->nnames)
         return sg_diag_set(d, SG_EINVAL, "aperture: unknown type %d", (int)sys->aper_type);
     if (!isfinite(sys->aper_value) || !(sys->aper_value >= 0.0))
         return sg_diag_set(d, SG_EINVAL, "aperture: value is %g; it must be finite and not negative",
                            sys->aper_value);
-    if ((unsigned)sys->aim >= (unsigned)NELEM(aim_names))
+    if ((unsigned)sys->aim >= (unsigned)sysp("ray_aiming")->nnames)
         return sg_diag_set(d, SG_EINVAL, "ray_aiming: unknown mode %d", (int)sys->aim);
     if (sys->nsurf < 3 || sys->nsurf > SG_MAX_SURFACES || !sys->surf)
         return sg_diag_set(d, SG_EINVAL, "surfaces: %d given, 3 to %d allowed", sys->nsurf,
@@ -1097,47 +1197,101 @@ static int check_writable(const sg_system *sys, sg_diag *d)
         return sg_diag_set(d, SG_EINVAL, "surfaces: the stop (%d) must be one of surfaces 1 to %d",
                            sys->stop, sys->nsurf - 2);
     for (i = 0; i < sys->nsurf; i++) {
-        const sg_surface *s = &sys->surf[i];
-        if ((unsigned)s->type >= (unsigned)NELEM(surf_type_names))
-            return sg_diag_set(d, SG_EINVAL, "surface %d: unknown type %d", i, (int)s->type);
-        if (!terminated(s->comment, sizeof s->comment))
-            return sg_diag_set(d, SG_EINVAL, "surface %d: comment is not a terminated string", i);
-        if (isnan(s->radius))
-            return sg_diag_set(d, SG_EINVAL, "surface %d: radius is NaN", i);
-        if (isnan(s->thickness))
-            return sg_diag_set(d, SG_EINVAL, "surface %d: thickness is NaN", i);
-        if (isinf(s->thickness) && (i != 0 || s->thickness < 0))
-            return sg_diag_set(d, SG_EINVAL, "surface %d: thickness is %g; only the object's "
-                               "thickness may be +inf", i, s->thickness);
-        switch (s->mat.kind) {
-        case SG_MAT_AIR:
-        case SG_MAT_MIRROR:
-            break;
-        case SG_MAT_GLASS:
-            if (!terminated(s->mat.name, sizeof s->mat.name) || s->mat.name[0] == '\0')
-                return sg_diag_set(d, SG_EINVAL, "surface %d: material: glass has no name", i);
-            break;
-        case SG_MAT_INDEX:
-            if (!isfinite(s->mat.index))
-                return sg_diag_set(d, SG_EINVAL, "surface %d: material: index is %g", i,
-                                   s->mat.index);
-            break;
-        default:
-            return sg_diag_set(d, SG_EINVAL, "surface %d: material: unknown kind %d", i,
-                               (int)s->mat.kind);
-        }
-        if (!isfinite(s->semi_diameter) || !(s->semi_diameter >= 0.0))
-            return sg_diag_set(d, SG_EINVAL,
-                               "surface %d: semi_diameter is %g; it must be finite and not negative",
-                               i, s->semi_diameter);
-        if (!isfinite(s->conic))
-            return sg_diag_set(d, SG_EINVAL, "surface %d: conic is %g", i, s->conic);
-        for (k = 0; k < SG_NASPH; k++)
-            if (!isfinite(s->asph[k]))
-                return sg_diag_set(d, SG_EINVAL, "surface %d: asphere[%d] (r^%d) is %g", i, k,
-                                   2 * (k + 1), s->asph[k]);
+        snprintf(where, sizeof where, "surface %d", i);
+        if ((rc = check_scope(SG_SCOPE_SURFACE, &sys->surf[i], where, i, d)) != SG_OK)
+            return rc;
     }
     return SG_OK;
+}
+
+/* One value of the table as JSON. */
+static void sb_param(sbuf *b, const sg_param *p, const void *obj)
+{
+    const void *q = sg_param_cptr(p, obj);
+    int k;
+    switch (p->kind) {
+    case SG_PARAM_ENUM:
+        sb_str(b, p->names[*(const int *)q]);
+        return;
+    case SG_PARAM_TEXT:
+        sb_str(b, q);
+        return;
+    case SG_PARAM_BOOL:
+        sb_puts(b, *(const int *)q ? "true" : "false");
+        return;
+    case SG_PARAM_MATERIAL: {
+        const sg_material *m = q;
+        switch (m->kind) {
+        case SG_MAT_MIRROR: sb_puts(b, "\"MIRROR\""); break;
+        case SG_MAT_GLASS: sb_str(b, m->name); break;
+        case SG_MAT_INDEX: sb_num(b, m->index); break;
+        default: sb_puts(b, "\"AIR\""); break;
+        }
+        return;
+    }
+    case SG_PARAM_REAL:
+        break;
+    }
+    if (p->count > 1) {
+        sb_puts(b, "[");
+        for (k = 0; k < p->count; k++) {
+            if (k)
+                sb_puts(b, ", ");
+            sb_num(b, ((const double *)q)[k]);
+        }
+        sb_puts(b, "]");
+    } else if (p->flags & SG_PARAM_INF) {
+        double v = *(const double *)q;
+        /* 0 means flat in C as on input; write it the way it reads back. */
+        sb_len(b, v == 0.0 ? INFINITY : v);
+    } else if (p->flags & SG_PARAM_OBJ_INF) {
+        sb_len(b, *(const double *)q);
+    } else {
+        sb_num(b, *(const double *)q);
+    }
+}
+
+/* Whether an optional parameter is at its default, so not written. */
+static int at_default(const sg_param *p, const void *obj)
+{
+    int k;
+    if (!(p->flags & SG_PARAM_OPTIONAL))
+        return 0;
+    for (k = 0; k < p->count; k++) {
+        double v = sg_param_get(p, obj, k), def = p->def;
+        if (memcmp(&v, &def, sizeof v) != 0)
+            return 0;
+    }
+    return 1;
+}
+
+/* The members of obj's table, each after sep (the first after first). */
+static void sb_scope(sbuf *b, sg_param_scope scope, const void *obj, const char *first,
+                     const char *sep)
+{
+    int i, n = 0;
+    for (i = 0; i < sg_param_count(scope); i++) {
+        const sg_param *p = sg_param_at(scope, i);
+        if (at_default(p, obj))
+            continue;
+        sb_puts(b, n++ ? sep : first);
+        sb_puts(b, "\"");
+        sb_puts(b, p->key);
+        sb_puts(b, "\": ");
+        sb_param(b, p, obj);
+    }
+}
+
+/* The format version a file needs: that of the newest key written. */
+static int needed_version(sg_param_scope scope, const void *obj, int v)
+{
+    int i;
+    for (i = 0; i < sg_param_count(scope); i++) {
+        const sg_param *p = sg_param_at(scope, i);
+        if (p->version > v && !at_default(p, obj))
+            v = p->version;
+    }
+    return v;
 }
 
 /* The design's text, or NULL with *rc set to the reason. */
@@ -1145,13 +1299,22 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
 {
     sbuf b = {NULL, 0, 0, 0};
     char t[96];
-    int i, k;
+    int i, k, version;
 
     *rc = check_writable(sys, d);
     if (*rc != SG_OK)
         return NULL;
     sb_puts(&b, "{\n  \"format\": \"" FORMAT_NAME "\",\n");
-    snprintf(t, sizeof t, "  \"version\": %d,\n", SG_DESIGN_FORMAT_VERSION);
+    version = 1;
+    for (k = 0; k < sys->nwave; k++)
+        version = needed_version(SG_SCOPE_WAVE, &sys->wave[k], version);
+    for (k = 0; k < sys->nfield; k++)
+        version = needed_version(SG_SCOPE_FIELD, &sys->field[k], version);
+    for (i = 0; i < sys->nsurf; i++)
+        version = needed_version(SG_SCOPE_SURFACE, &sys->surf[i], version);
+    /* A file says the oldest format that reads it, so designs without the
+     * newer keys stay readable by older programs. */
+    snprintf(t, sizeof t, "  \"version\": %d,\n", version);
     sb_puts(&b, t);
     sb_puts(&b, "  \"title\": ");
     sb_str(&b, sys->title);
@@ -1162,10 +1325,7 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     sb_puts(&b, t);
     sb_puts(&b, "    \"list\": [\n");
     for (k = 0; k < sys->nwave; k++) {
-        sb_puts(&b, "      { \"um\": ");
-        sb_num(&b, sys->wave[k].um);
-        sb_puts(&b, ", \"weight\": ");
-        sb_num(&b, sys->wave[k].weight);
+        sb_scope(&b, SG_SCOPE_WAVE, &sys->wave[k], "      { ", ", ");
         sb_puts(&b, k + 1 < sys->nwave ? " },\n" : " }\n");
     }
     sb_puts(&b, "    ]\n  },\n");
@@ -1176,12 +1336,7 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     sb_str(&b, field_norm_names[sys->field_norm]);
     sb_puts(&b, ",\n    \"list\": [\n");
     for (k = 0; k < sys->nfield; k++) {
-        sb_puts(&b, "      { \"x\": ");
-        sb_num(&b, sys->field[k].x);
-        sb_puts(&b, ", \"y\": ");
-        sb_num(&b, sys->field[k].y);
-        sb_puts(&b, ", \"weight\": ");
-        sb_num(&b, sys->field[k].weight);
+        sb_scope(&b, SG_SCOPE_FIELD, &sys->field[k], "      { ", ", ");
         sb_puts(&b, k + 1 < sys->nfield ? " },\n" : " }\n");
     }
     sb_puts(&b, "    ]\n  },\n");
@@ -1195,43 +1350,8 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     sb_puts(&b, ",\n  \"surfaces\": [\n");
 
     for (i = 0; i < sys->nsurf; i++) {
-        const sg_surface *s = &sys->surf[i];
-        sb_puts(&b, "    {\n      \"type\": ");
-        sb_str(&b, surf_type_names[s->type]);
-        sb_puts(&b, ",\n      \"comment\": ");
-        sb_str(&b, s->comment);
-        sb_puts(&b, ",\n      \"radius\": ");
-        /* 0 means flat in C as on input; write it the way it reads back. */
-        sb_len(&b, s->radius == 0.0 ? INFINITY : s->radius);
-        sb_puts(&b, ",\n      \"thickness\": ");
-        sb_len(&b, s->thickness);
-        sb_puts(&b, ",\n      \"material\": ");
-        switch (s->mat.kind) {
-        case SG_MAT_MIRROR:
-            sb_puts(&b, "\"MIRROR\"");
-            break;
-        case SG_MAT_GLASS:
-            sb_str(&b, s->mat.name);
-            break;
-        case SG_MAT_INDEX:
-            sb_num(&b, s->mat.index);
-            break;
-        default:
-            sb_puts(&b, "\"AIR\"");
-            break;
-        }
-        sb_puts(&b, ",\n      \"semi_diameter\": ");
-        sb_num(&b, s->semi_diameter);
-        sb_puts(&b, s->sd_fixed ? ",\n      \"sd_fixed\": true" : ",\n      \"sd_fixed\": false");
-        sb_puts(&b, ",\n      \"conic\": ");
-        sb_num(&b, s->conic);
-        sb_puts(&b, ",\n      \"asphere\": [");
-        for (k = 0; k < SG_NASPH; k++) {
-            if (k)
-                sb_puts(&b, ", ");
-            sb_num(&b, s->asph[k]);
-        }
-        sb_puts(&b, i == sys->stop ? "],\n      \"stop\": true\n" : "],\n      \"stop\": false\n");
+        sb_scope(&b, SG_SCOPE_SURFACE, &sys->surf[i], "    {\n      ", ",\n      ");
+        sb_puts(&b, i == sys->stop ? ",\n      \"stop\": true\n" : ",\n      \"stop\": false\n");
         sb_puts(&b, i + 1 < sys->nsurf ? "    },\n" : "    }\n");
     }
     sb_puts(&b, "  ]\n}\n");

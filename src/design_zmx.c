@@ -1502,6 +1502,25 @@ static void zb_list(zbuf *b, const char *kw, const sg_system *s, int what)
     zb_add(b, "\n", 1);
 }
 
+/* The first parameter of the table's newer rows (those written only when
+ * set) that obj holds away from its default, or NULL: the writer does not
+ * write them yet, and must not drop them silently. */
+static const sg_param *unwritten(sg_param_scope scope, const void *obj)
+{
+    int i, k;
+    for (i = 0; i < sg_param_count(scope); i++) {
+        const sg_param *p = sg_param_at(scope, i);
+        if (!(p->flags & SG_PARAM_OPTIONAL))
+            continue;
+        for (k = 0; k < p->count; k++) {
+            double v = sg_param_get(p, obj, k), def = p->def;
+            if (memcmp(&v, &def, sizeof v) != 0)
+                return p;
+        }
+    }
+    return NULL;
+}
+
 static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_diag *d)
 {
     char n1[40], n2[40], gcat[ZMX_MAX_GCAT][SG_GLASS_NAME];
@@ -1514,8 +1533,20 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
     if (s->nwave < 1 || s->nwave > SG_MAX_WAVES || s->nfield < 1 || s->nfield > SG_MAX_FIELDS ||
         s->primary_wave < 0 || s->primary_wave >= s->nwave)
         return sg_diag_set(d, SG_ERANGE, "export: wavelengths or fields out of range");
+    for (i = 0; i < s->nfield; i++) {
+        const sg_param *p = unwritten(SG_SCOPE_FIELD, &s->field[i]);
+        if (p)
+            return sg_diag_set(d, SG_EUNSUPPORTED, "export: field %d: %s (%s): the .zmx writer "
+                               "does not write vignetting factors yet; save the design as JSON",
+                               i + 1, p->key, p->zmx);
+    }
     for (i = 0; i < s->nsurf; i++) {
         const sg_surface *f = &s->surf[i];
+        const sg_param *p = unwritten(SG_SCOPE_SURFACE, f);
+        if (p)
+            return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: %s (%s): the .zmx writer "
+                               "does not write surface apertures yet; save the design as JSON",
+                               i, p->key, p->zmx);
         if (isnan(f->radius) || isnan(f->thickness) || !isfinite(f->conic) ||
             (!isfinite(f->thickness) && !(i == 0 && f->thickness > 0)))
             return sg_diag_set(d, SG_ERANGE, "export: surface %d: a value a .zmx file cannot "

@@ -9,6 +9,10 @@
 
 #include "sagitta.h"
 
+/* Lengths a trace squares (radii, thicknesses, pupil and field sizes) must
+ * keep their squares and products inside the doubles. */
+#define SG_MAX_LEN 1e150
+
 /* Index of glass g at wavelength um (both MPFR), with out's precision.
  * Returns SG_OK, or SG_ERANGE when n^2 is not positive, or SG_EINVAL for an
  * unknown formula.  Every coefficient is taken exactly as its double. */

@@ -1063,10 +1063,11 @@ static int resumable(const sg_tracer *t, const sg_ray_surface *rows, const sg_vr
     return 1;
 }
 
-void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*pupil)[2],
+void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*pupil_in)[2],
                              int nl, sg_ray_surface *const *out, sg_vray *v, vd *path0,
                              int *start, int *rc)
 {
+    double pupil[SG_VL][2];
     vd px = vd_set(0.0), py = vd_set(0.0), p0 = vd_set(0.0);
     vdd qv[2], tg[2];
     sg_vray at, launch;
@@ -1075,6 +1076,10 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
     osp o;
     for (k = 0; k < nl; k++)
         start[k] = t->n;
+    /* A field's vignetting factors move its pupil points, as for one ray. */
+    for (k = 0; k < nl; k++)
+        sg_field_vignette(t->sys, hx, hy, pupil_in[k][0], pupil_in[k][1], &pupil[k][0],
+                          &pupil[k][1]);
     rc[0] = field_cached(t, land_precise, hx, hy, &o, out[0]);
     if (rc[0] != SG_OK) {
         for (k = 0; k < nl; k++) {

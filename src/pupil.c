@@ -139,3 +139,38 @@ int sg_field_normalized(const sg_system *sys, int k, double *hx, double *hy)
     *hy = fy > 0.0 ? sys->field[k].y / fy : 0.0;
     return SG_OK;
 }
+
+void sg_field_vignette(const sg_system *sys, double hx, double hy, double px, double py,
+                       double *vpx, double *vpy)
+{
+    int k;
+    *vpx = px;
+    *vpy = py;
+    for (k = 0; k < sys->nfield; k++) {
+        const sg_field *f = &sys->field[k];
+        double fx, fy, a, b, c, s;
+        if (f->vdx == 0.0 && f->vdy == 0.0 && f->vcx == 0.0 && f->vcy == 0.0 && f->van == 0.0)
+            continue;
+        if (sg_field_normalized(sys, k, &fx, &fy) != SG_OK || fx != hx || fy != hy)
+            continue;
+        a = px * (1.0 - f->vcx);
+        b = py * (1.0 - f->vcy);
+        if (f->van == 0.0) {
+            *vpx = f->vdx + a;
+            *vpy = f->vdy + b;
+        } else {
+            /* Degrees reduced first, so that 90 and 180 turn exactly. */
+            double r = fmod(f->van, 360.0) * (3.14159265358979323846 / 180.0);
+            c = cos(r);
+            s = sin(r);
+            if (fmod(f->van, 90.0) == 0.0) {
+                int q = ((int)(fmod(f->van, 360.0) / 90.0) + 4) % 4;
+                c = q == 0 ? 1.0 : q == 2 ? -1.0 : 0.0;
+                s = q == 1 ? 1.0 : q == 3 ? -1.0 : 0.0;
+            }
+            *vpx = f->vdx + (a * c - b * s);
+            *vpy = f->vdy + (a * s + b * c);
+        }
+        return;
+    }
+}

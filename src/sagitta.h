@@ -27,7 +27,7 @@ extern "C" {
 #define SG_VERSION_STRING "0.1.0"
 
 /* The JSON design format version this library reads and writes. */
-#define SG_DESIGN_FORMAT_VERSION 1
+#define SG_DESIGN_FORMAT_VERSION 2
 
 /* ------------------------------------------------------------------------
  * Errors.  One table yields the enum, the names and the messages, so the
@@ -173,6 +173,20 @@ typedef enum sg_surf_type {
     SG_SURF_EVENASPH = 1  /* conic plus even polynomial in r */
 } sg_surf_type;
 
+/* Surface apertures and obscurations, as Zemax defines them: one a surface
+ * (a dummy surface of zero thickness adds another), each about its own
+ * decenter.  A ray that meets the surface where its aperture stops it is
+ * vignetted (SG_EVIGNETTED), as beyond a fixed semi-diameter. */
+typedef enum sg_aperture_type {
+    SG_APERTURE_NONE = 0,
+    SG_APERTURE_CIRCULAR = 1,     /* passes min_radius <= r <= max_radius */
+    SG_OBSCURATION_CIRCULAR = 2,  /* stops min_radius <= r <= max_radius */
+    SG_APERTURE_RECTANGULAR = 3,  /* passes |x| <= x_half, |y| <= y_half */
+    SG_OBSCURATION_RECTANGULAR = 4,
+    SG_APERTURE_ELLIPTICAL = 5,   /* passes (x/x_half)^2 + (y/y_half)^2 <= 1 */
+    SG_OBSCURATION_ELLIPTICAL = 6
+} sg_aperture_type;
+
 typedef enum sg_mat_kind {
     SG_MAT_AIR = 0,    /* index 1 (indices are relative to air) */
     SG_MAT_MIRROR = 1, /* reflect; the medium after keeps the index before */
@@ -196,6 +210,10 @@ typedef struct sg_surface {
     int sd_fixed;          /* nonzero: rays beyond semi_diameter are vignetted */
     double conic;
     double asph[SG_NASPH]; /* coefficients of r^2, r^4, ..., r^16 */
+    sg_aperture_type aperture; /* the surface aperture or obscuration */
+    double ap_rmin, ap_rmax;   /* circular: the annulus's radii */
+    double ap_xhalf, ap_yhalf; /* rectangular and elliptical: half widths */
+    double ap_xdec, ap_ydec;   /* the aperture's centre in the local frame */
     /* Room for tilts and decenters: every frame change goes through one
      * internal transfer function, which will read these once they exist. */
 } sg_surface;
@@ -234,6 +252,10 @@ typedef struct sg_wave {
 typedef struct sg_field {
     double x, y;
     double weight;
+    /* Zemax's vignetting factors: the pupil of this field is compressed
+     * (vcx, vcy), turned by van degrees and decentred (vdx, vdy) before
+     * its rays are aimed; see sg_field_vignette. */
+    double vdx, vdy, vcx, vcy, van;
 } sg_field;
 
 typedef struct sg_system {
@@ -258,6 +280,87 @@ typedef struct sg_system {
     int capsurf; /* allocated */
     sg_surface *surf;
 } sg_system;
+
+/* ------------------------------------------------------------------------
+ * Parameters.  One table (src/param.c) describes every parameter of the
+ * system, its wavelengths, fields and surfaces: its JSON key, the editor's
+ * column, its kind, limits, default and .zmx keyword, and where it lives in
+ * the struct.  JSON reading and writing, validation, equality and the
+ * editor's cells are driven by it, so a new parameter is one row.
+ * ------------------------------------------------------------------------ */
+
+typedef enum sg_param_scope {
+    SG_SCOPE_SYSTEM = 0,  /* an sg_system */
+    SG_SCOPE_WAVE = 1,    /* an sg_wave */
+    SG_SCOPE_FIELD = 2,   /* an sg_field */
+    SG_SCOPE_SURFACE = 3, /* an sg_surface */
+    SG_SCOPE_COUNT
+} sg_param_scope;
+
+typedef enum sg_param_kind {
+    SG_PARAM_REAL = 0,    /* count doubles */
+    SG_PARAM_BOOL = 1,    /* an int, 0 or 1 */
+    SG_PARAM_ENUM = 2,    /* an int (an enum), one of names[] */
+    SG_PARAM_TEXT = 3,    /* char[size]; one of names[] when names is set */
+    SG_PARAM_MATERIAL = 4 /* an sg_material */
+} sg_param_kind;
+
+#define SG_PARAM_NONNEG 0x01u    /* not negative */
+#define SG_PARAM_POSITIVE 0x02u  /* above zero */
+#define SG_PARAM_INF 0x04u       /* +-inf allowed, written "inf"; 0 reads as inf (a radius) */
+#define SG_PARAM_OBJ_INF 0x08u   /* +inf allowed on the object surface alone */
+#define SG_PARAM_OPTIONAL 0x10u  /* written only when not at its default */
+#define SG_PARAM_REQUIRED 0x20u  /* a JSON object must give it */
+
+typedef struct sg_param {
+    const char *key;       /* JSON key, e.g. "semi_diameter" */
+    const char *label;     /* in messages, e.g. "semi-diameter"; arrays: a
+                            * format of the element's number ("asphere term r^%d") */
+    const char *heading;   /* editor column heading ("r^%d" per element); NULL: none */
+    const char *cell;      /* editor command name ("a%d" per element) */
+    const char *zmx;       /* the .zmx keyword that holds it, or NULL */
+    sg_param_kind kind;
+    unsigned flags;        /* SG_PARAM_* */
+    size_t offset;         /* offsetof in the scope's struct */
+    size_t size;           /* bytes of a TEXT buffer */
+    int count;             /* REAL elements (1: a scalar) */
+    int elem_mul, elem_add; /* element k is numbered elem_mul * k + elem_add */
+    double min, max;       /* REAL limits, inclusive, after the finite check */
+    double def;            /* default of a REAL, BOOL or ENUM */
+    const char *const *names; /* ENUM and TEXT: the values as JSON writes them */
+    const char *const *shown; /* ENUM: as the editor and .zmx files show them */
+    int nnames;
+    int version;           /* the first design format version with the key */
+} sg_param;
+
+/* The scope's parameters in JSON order; NULL beyond the end. */
+int sg_param_count(sg_param_scope scope);
+const sg_param *sg_param_at(sg_param_scope scope, int i);
+/* By JSON key; NULL when none. */
+const sg_param *sg_param_find(sg_param_scope scope, const char *key);
+/* Element k of a REAL, or a BOOL or ENUM as a double, from the scope's
+ * struct obj. */
+double sg_param_get(const sg_param *p, const void *obj, int k);
+/* Sets element k of a REAL, BOOL or ENUM (no checks: see sg_param_check). */
+void sg_param_set(const sg_param *p, void *obj, int k, double v);
+/* The address of the parameter in obj. */
+void *sg_param_ptr(const sg_param *p, void *obj);
+const void *sg_param_cptr(const sg_param *p, const void *obj);
+/* SG_OK when v may be element k's value (the object surface when object
+ * is nonzero); else SG_ERANGE, with "LABEL: ..." in msg (may be NULL). */
+int sg_param_check(const sg_param *p, int k, double v, int object, char *msg, size_t n);
+/* The label of element k ("asphere term r^4"), the heading ("r^4") and
+ * the cell name ("a4"). */
+void sg_param_label(const sg_param *p, int k, char *buf, size_t n);
+void sg_param_heading(const sg_param *p, int k, char *buf, size_t n);
+void sg_param_cell(const sg_param *p, int k, char *buf, size_t n);
+/* Every parameter of obj at its default. */
+void sg_param_defaults(sg_param_scope scope, void *obj);
+/* Nonzero when every parameter of a and b is the same, bit for bit. */
+int sg_param_equal(sg_param_scope scope, const void *a, const void *b);
+/* Nonzero when the whole systems are the same, bit for bit: every
+ * parameter, wavelength, field and surface, and the stop. */
+int sg_system_equal(const sg_system *a, const sg_system *b);
 
 /* A new system: object at infinity, stop on surface 1, image; one
  * wavelength (0.5875618 um), one on-axis field, EPD 10. */
@@ -480,6 +583,16 @@ int sg_batch_trace(sg_batch *b, sg_ray_kind kind, const sg_ray_in *rays,
  * divided by Zemax's field scale (the largest radius, or the largest |x|
  * and |y| for rectangular normalization). */
 int sg_field_normalized(const sg_system *sys, int k, double *hx, double *hy);
+
+/* The pupil point a normalized ray is traced at: (px, py) itself, unless
+ * (hx, hy) is a field's own normalized point (sg_field_normalized, bit for
+ * bit; the first such field) with vignetting factors, when it is
+ *   a = px (1 - vcx), b = py (1 - vcy),
+ *   px' = vdx + a cos(van) - b sin(van), py' = vdy + a sin(van) + b cos(van),
+ * the compressed pupil turned by van (degrees, counterclockwise) about its
+ * centre, then decentred.  Every method traces (px', py'). */
+void sg_field_vignette(const sg_system *sys, double hx, double hy, double px, double py,
+                       double *vpx, double *vpy);
 
 /* Pupil sampling patterns, as Zemax defines them.  Hexapolar: density N
  * rings; ring i (1..N) holds 6i rays at radius i/N, the first at angle 0

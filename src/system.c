@@ -8,9 +8,7 @@
 void sg_surface_init(sg_surface *s)
 {
     memset(s, 0, sizeof *s);
-    s->type = SG_SURF_STANDARD;
-    s->radius = INFINITY;
-    s->mat.kind = SG_MAT_AIR;
+    sg_param_defaults(SG_SCOPE_SURFACE, s);
 }
 
 static int grow(sg_system *sys, int need)
@@ -185,9 +183,6 @@ static int finite_or_inf_radius(double r)
     return !isnan(r);
 }
 
-/* Lengths a trace squares (radii, thicknesses, pupil and field sizes) must
- * keep their squares and products inside the doubles. */
-#define SG_MAX_LEN 1e150
 
 /* The scale of normalized field coordinate Hx (k = 0) or Hy (k = 1): the
  * largest radial field, or the largest |x| or |y|. */
@@ -230,7 +225,7 @@ int sg_field_check(const sg_system *sys, double hx, double hy, sg_diag *d)
 int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
 {
     double track;
-    int i, k;
+    int i, k, p;
     if (sys->nsurf < 3)
         return sg_diag_set(d, SG_ENOSYS,
                            "the system has %d surfaces; it needs an object, "
@@ -261,6 +256,14 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
         if (sys->field_type == SG_FIELD_ANGLE && (fabs(f->x) >= 90.0 || fabs(f->y) >= 90.0))
             return sg_diag_set(d, SG_ERANGE, "field %d: angle (%g, %g) must be below 90 degrees",
                                k + 1, f->x, f->y);
+        /* The table's other numbers (the vignetting factors). */
+        for (p = 0; p < sg_param_count(SG_SCOPE_FIELD); p++) {
+            const sg_param *pp = sg_param_at(SG_SCOPE_FIELD, p);
+            char msg[160];
+            if (pp->kind == SG_PARAM_REAL && (pp->flags & SG_PARAM_OPTIONAL) &&
+                sg_param_check(pp, 0, sg_param_get(pp, f, 0), 0, msg, sizeof msg) != SG_OK)
+                return sg_diag_set(d, SG_ERANGE, "field %d: %s", k + 1, msg);
+        }
     }
     if (!(sys->aper_value > 0.0) || !isfinite(sys->aper_value))
         if (sys->aper_type != SG_APER_FLOAT_STOP)
@@ -299,10 +302,6 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
                                    "surface %d: thickness: the system is longer than %g lens "
                                    "units from surface 1 to here", i, SG_MAX_LEN);
         }
-        if (isfinite(s->semi_diameter) && s->semi_diameter > SG_MAX_LEN)
-            return sg_diag_set(d, SG_ERANGE,
-                               "surface %d: semi-diameter %g is beyond %g lens units", i,
-                               s->semi_diameter, SG_MAX_LEN);
         if (i > 0 && i < sys->nsurf - 1 && !isfinite(s->thickness))
             return sg_diag_set(d, SG_ERANGE, "surface %d: thickness must be finite", i);
         if (i == 0 && isnan(s->thickness))
@@ -311,16 +310,40 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
             return sg_diag_set(d, SG_ENONPHYS,
                                "surface 0: the object must lie away from surface 1 "
                                "(thickness %g)", s->thickness);
-        if (!isfinite(s->conic))
-            return sg_diag_set(d, SG_ERANGE, "surface %d: conic must be finite", i);
-        for (k = 0; k < SG_NASPH; k++)
-            if (!isfinite(s->asph[k]))
-                return sg_diag_set(d, SG_ERANGE, "surface %d: asphere term r^%d must be finite",
-                                   i, 2 * (k + 1));
-        if (!(s->semi_diameter >= 0.0) || !isfinite(s->semi_diameter))
-            return sg_diag_set(d, SG_ERANGE,
-                               "surface %d: semi-diameter %g must be finite and not negative",
-                               i, s->semi_diameter);
+        /* The table's plain numbers: finite, within their limits. */
+        for (p = 0; p < sg_param_count(SG_SCOPE_SURFACE); p++) {
+            const sg_param *pp = sg_param_at(SG_SCOPE_SURFACE, p);
+            char msg[160];
+            if (pp->kind != SG_PARAM_REAL || (pp->flags & (SG_PARAM_INF | SG_PARAM_OBJ_INF)))
+                continue;
+            for (k = 0; k < pp->count; k++)
+                if (sg_param_check(pp, k, sg_param_get(pp, s, k), i == 0, msg, sizeof msg) !=
+                    SG_OK)
+                    return sg_diag_set(d, SG_ERANGE, "surface %d: %s", i, msg);
+        }
+        switch (s->aperture) {
+        case SG_APERTURE_NONE:
+            break;
+        case SG_APERTURE_CIRCULAR:
+        case SG_OBSCURATION_CIRCULAR:
+            if (!(s->ap_rmax > s->ap_rmin))
+                return sg_diag_set(d, SG_ERANGE,
+                                   "surface %d: aperture: the maximum radius %g must be above "
+                                   "the minimum radius %g", i, s->ap_rmax, s->ap_rmin);
+            break;
+        case SG_APERTURE_RECTANGULAR:
+        case SG_OBSCURATION_RECTANGULAR:
+        case SG_APERTURE_ELLIPTICAL:
+        case SG_OBSCURATION_ELLIPTICAL:
+            if (!(s->ap_xhalf > 0.0 && s->ap_yhalf > 0.0))
+                return sg_diag_set(d, SG_ERANGE,
+                                   "surface %d: aperture: the x and y half widths (%g, %g) must "
+                                   "be positive", i, s->ap_xhalf, s->ap_yhalf);
+            break;
+        default:
+            return sg_diag_set(d, SG_ERANGE, "surface %d: aperture: unknown type %d", i,
+                               (int)s->aperture);
+        }
         if (s->mat.kind == SG_MAT_INDEX && !(s->mat.index >= 1e-3 && s->mat.index < 100.0))
             return sg_diag_set(d, SG_ERANGE,
                                "surface %d: material index %g is not physical", i, s->mat.index);

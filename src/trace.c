@@ -248,20 +248,7 @@ static double surf_cos_d(const sg_sprep *s, const double p[3], const double d[3]
 
 int sg_past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y)
 {
-    double lim, r2, l2;
-    if (!t->o.clip || !(s->sd > 0.0))
-        return 0;
-    lim = s->sd * (1.0 + t->o.clip_rtol);
-    /* x^2 + y^2 against lim^2 (a few roundings, far below 1e-12) settles
-     * every point but those within 1e-12 of the edge, and overflow, NaN
-     * and underflow fail both tests; those ask hypot, whose answer this is. */
-    r2 = x * x + y * y;
-    l2 = lim * lim;
-    if (r2 < l2 * (1.0 - 1e-12))
-        return 0;
-    if (r2 > l2 * (1.0 + 1e-12) && isfinite(l2))
-        return 1;
-    return hypot(x, y) > lim;
+    return t->o.clip && sg_clip_point(s, x, y, t->o.clip_rtol);
 }
 
 void sg_fail_rest(sg_ray_surface *out, int from, int n, int status)
@@ -569,6 +556,13 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
             p->shape = SHAPE_PLANE;
         p->mirror = s->mat.kind == SG_MAT_MIRROR;
         p->sd = s->sd_fixed ? s->semi_diameter : 0.0;
+        p->aper = (int)s->aperture;
+        p->ap_a = s->aperture == SG_APERTURE_CIRCULAR || s->aperture == SG_OBSCURATION_CIRCULAR
+                      ? s->ap_rmin : s->ap_xhalf;
+        p->ap_b = s->aperture == SG_APERTURE_CIRCULAR || s->aperture == SG_OBSCURATION_CIRCULAR
+                      ? s->ap_rmax : s->ap_yhalf;
+        p->ap_dx = s->ap_xdec;
+        p->ap_dy = s->ap_ydec;
         if (i >= 2)
             zg += p->T;
         p->zg = i >= 1 ? zg : -p->T;
@@ -861,6 +855,8 @@ int sg_trace_normalized(sg_tracer *t, double hx, double hy, double px, double py
         sg_fail_rest(out, 0, t->n, SG_EINVAL);
         return SG_EINVAL;
     }
+    /* A field's vignetting factors move its pupil point, for every method. */
+    sg_field_vignette(t->sys, hx, hy, px, py, &px, &py);
     switch (t->o.method) {
     case SG_METHOD_PRECISE:
         return sg_guard_rows(t, out, sg_launch_precise(t, hx, hy, px, py, out));

@@ -36,6 +36,9 @@ typedef struct sg_sprep {
     dd mu;       /* |n before| / |n after|, for refraction */
     dd mu2;      /* mu squared, as the bend would form it */
     double sd;   /* clip radius, 0 for none */
+    int aper;    /* sg_aperture_type of the surface aperture */
+    double ap_a, ap_b;   /* circular: min and max radius; else x and y half widths */
+    double ap_dx, ap_dy; /* the aperture's decenter */
     double zg;   /* vertex z in the global frame (surface 1 at 0), classic only */
 } sg_sprep;
 
@@ -213,6 +216,10 @@ void sg_precise_finish(const sg_tracer *t, int i, sg_vray *v, sg_ray_surface *co
 /* The sag of s at radius^2 r2 on SG_VL lanes, in double-double as the
  * precise trace forms it; *bad marks lanes outside the conic's domain. */
 vdd sg_sag_v(const sg_sprep *s, vdd r2, vm *bad);
+/* Whether s's fixed semi-diameter or aperture stops a ray meeting it at
+ * (x, y), edges widened in the ray's favour by rtol (aperture.c); every
+ * method asks this. */
+int sg_clip_point(const sg_sprep *s, double x, double y, double rtol);
 /* Whether clipping at s stops a ray meeting it at (x, y). */
 int sg_past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y);
 int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],

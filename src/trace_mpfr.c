@@ -608,7 +608,7 @@ static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
         o->opl_error_bound =
             sg_bound_up(ldexp((double)i * (big + fabs(o->opl) + fabs(o->path)), 16 - (int)m->prec));
         o->status = SG_OK;
-        if (tr->o.clip && sp->sd > 0.0 && hypot(o->x, o->y) > sp->sd * (1.0 + tr->o.clip_rtol)) {
+        if (tr->o.clip && sg_clip_point(sp, o->x, o->y, tr->o.clip_rtol)) {
             sg_fail_rest(out, i, tr->n, SG_EVIGNETTED);
             return SG_EVIGNETTED;
         }

@@ -112,7 +112,13 @@ static const char *compare(const sg_system *a, const sg_system *b)
         for (k = 0; k < SG_NASPH; k++)
             if (!same_bits(s->asph[k], t->asph[k]))
                 return "an asphere term";
+        /* Every other row of the parameter table (apertures, ...). */
+        if (!sg_param_equal(SG_SCOPE_SURFACE, s, t))
+            return "a surface parameter";
     }
+    for (k = 0; k < a->nfield; k++)
+        if (!sg_param_equal(SG_SCOPE_FIELD, &a->field[k], &b->field[k]))
+            return "a field parameter";
     return NULL;
 }
 

@@ -343,9 +343,9 @@ static const bad_case cases[] = {
       NULL, NULL, ARGS("paraxial", "@F"), 3,
       "format: expected \"sagitta-design\", got string \"zemax-zmx\"", NULL, NULL, NULL, 0 },
     { "type_newer_version", "a newer format version names both versions",
-      "t12.json", "{\"version\": 2, \"surfaces\": [{}, {\"stop\": true}, {}]}\n",
+      "t12.json", "{\"version\": 3, \"surfaces\": [{}, {\"stop\": true}, {}]}\n",
       NULL, NULL, ARGS("paraxial", "@F"), 3,
-      "version: this is format version 2; this program reads version 1", NULL, NULL, NULL, 0 },
+      "version: this is format version 3; this program reads version 2", NULL, NULL, NULL, 0 },
     { "type_primary_range", "a primary wavelength beyond the list",
       "t13.json", "{\"wavelengths\": {\"primary\": 3, \"list\": [{\"um\": 0.5}]},"
       " \"surfaces\": [{}, {\"stop\": true}, {}]}\n", NULL, NULL, ARGS("paraxial", "@F"), 3,

@@ -145,6 +145,30 @@ static void test_set_exact(void **state)
     /* A flat radius may be typed as Infinity. */
     ok(e, "set 1 radius Infinity");
     assert_true(isinf(e->doc.sys->surf[1].radius));
+    /* The aperture columns come from the engine's parameter table. */
+    ok(e, "set 1 aperture OBSC");
+    assert_int_equal(e->doc.sys->surf[1].aperture, SG_OBSCURATION_CIRCULAR);
+    ok(e, "set 1 aperture elliptical_aperture");
+    assert_int_equal(e->doc.sys->surf[1].aperture, SG_APERTURE_ELLIPTICAL);
+    ok(e, "set 1 ap_xhalf 4.5");
+    ok(e, "set 1 ap_ydec -0.125");
+    assert_true(same_bits(e->doc.sys->surf[1].ap_xhalf, 4.5));
+    assert_true(same_bits(e->doc.sys->surf[1].ap_ydec, -0.125));
+    assert_true(cmd_exec(e, "set 1 ap_rmax -1") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 1 ap_rmax"));
+    assert_true(cmd_exec(e, "set 1 aperture square") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "not one of none, CLAP, OBSC, SQAP, SQOB, ELAP, ELOB"));
+    ok(e, "set 1 aperture none");
+    /* Zemax's vignetting factors of a field, rows of the field table. */
+    ok(e, "field vignette 1 0.1 -0.2 0.25 0.5 30");
+    assert_true(same_bits(e->doc.sys->field[0].vdx, 0.1) &&
+                same_bits(e->doc.sys->field[0].vdy, -0.2) &&
+                same_bits(e->doc.sys->field[0].vcx, 0.25) &&
+                same_bits(e->doc.sys->field[0].vcy, 0.5) && same_bits(e->doc.sys->field[0].van, 30.0));
+    assert_true(cmd_exec(e, "field vignette 1 0 0 2e6 0") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "field 1: vignetting compression x 2e+06 is beyond 1e+06"));
+    ok(e, "field vignette 1 0 0 0 0");
+    assert_true(same_bits(e->doc.sys->field[0].van, 0.0));
     print_message("# %d typed values stored; each equals strtod() of its text bit for bit "
                   "(worst difference 0 ulp)\n", n);
     free_ed(e);

@@ -10,15 +10,51 @@
 #include "../args.h"
 #include "numfmt.h"
 
-static const char *const headings[COL_COUNT] = {
-    "Type", "Comment", "Radius", "Thickness", "Material", "Semi-Dia", "Conic",
-    "r^2", "r^4", "r^6", "r^8", "r^10", "r^12", "r^14", "r^16",
-};
+/* The columns, made once from the engine's parameter table. */
+typedef struct colinfo {
+    const sg_param *p;
+    int k;
+    char heading[24];
+    char name[24];
+} colinfo;
 
-static const char *const names[COL_COUNT] = {
-    "type", "comment", "radius", "thickness", "material", "semi", "conic",
-    "a2", "a4", "a6", "a8", "a10", "a12", "a14", "a16",
-};
+static colinfo cols[COL_MAX];
+static int ncols = -1;
+
+static void build(void)
+{
+    int i, k, n = 0;
+    if (ncols >= 0)
+        return;
+    for (i = 0; i < sg_param_count(SG_SCOPE_SURFACE); i++) {
+        const sg_param *p = sg_param_at(SG_SCOPE_SURFACE, i);
+        if (!p->heading)
+            continue;
+        for (k = 0; k < p->count && n < COL_MAX; k++, n++) {
+            cols[n].p = p;
+            cols[n].k = k;
+            sg_param_heading(p, k, cols[n].heading, sizeof cols[n].heading);
+            sg_param_cell(p, k, cols[n].name, sizeof cols[n].name);
+        }
+    }
+    ncols = n;
+}
+
+int cell_count(void)
+{
+    build();
+    return ncols;
+}
+
+const sg_param *cell_param(int col, int *k)
+{
+    build();
+    if (col < 0 || col >= ncols)
+        return NULL;
+    if (k)
+        *k = cols[col].k;
+    return cols[col].p;
+}
 
 static const struct {
     const char *alias;
@@ -32,19 +68,22 @@ static const struct {
 
 const char *cell_heading(int col)
 {
-    return col >= 0 && col < COL_COUNT ? headings[col] : "?";
+    build();
+    return col >= 0 && col < ncols ? cols[col].heading : "?";
 }
 
 const char *cell_name(int col)
 {
-    return col >= 0 && col < COL_COUNT ? names[col] : "?";
+    build();
+    return col >= 0 && col < ncols ? cols[col].name : "?";
 }
 
 int cell_parse_name(const char *s)
 {
     size_t i;
-    for (i = 0; i < COL_COUNT; i++)
-        if (strcasecmp(s, names[i]) == 0)
+    build();
+    for (i = 0; i < (size_t)ncols; i++)
+        if (strcasecmp(s, cols[i].name) == 0)
             return (int)i;
     for (i = 0; i < sizeof aliases / sizeof aliases[0]; i++)
         if (strcasecmp(s, aliases[i].alias) == 0)
@@ -53,8 +92,8 @@ int cell_parse_name(const char *s)
     if ((s[0] == 'r' || s[0] == 'R') && isdigit((unsigned char)s[1])) {
         char buf[8];
         snprintf(buf, sizeof buf, "a%s", s + 1);
-        for (i = COL_ASPH0; i < COL_COUNT; i++)
-            if (strcasecmp(buf, names[i]) == 0)
+        for (i = COL_ASPH0; i < (size_t)ncols; i++)
+            if (strcasecmp(buf, cols[i].name) == 0)
                 return (int)i;
     }
     return -1;
@@ -62,8 +101,8 @@ int cell_parse_name(const char *s)
 
 int cell_numeric(int col)
 {
-    return col == COL_RADIUS || col == COL_THICKNESS || col == COL_SEMI ||
-           col == COL_CONIC || (col >= COL_ASPH0 && col < COL_COUNT);
+    const sg_param *p = cell_param(col, NULL);
+    return p && p->kind == SG_PARAM_REAL;
 }
 
 const char *cell_type_name(int type)
@@ -100,27 +139,33 @@ static void text(const sg_system *sys, int row, int col, int edit, char *buf, si
 {
     const sg_surface *s = &sys->surf[row];
     char num[NUMFMT_MAX];
+    int k, v;
+    const sg_param *p = cell_param(col, &k);
     buf[0] = '\0';
-    switch (col) {
-    case COL_TYPE: snprintf(buf, n, "%s", cell_type_name(s->type)); break;
-    case COL_COMMENT: snprintf(buf, n, "%s", s->comment); break;
-    case COL_RADIUS:
-        if (!edit && (s->radius == 0.0 || isinf(s->radius)))
+    if (!p)
+        return;
+    switch (p->kind) {
+    case SG_PARAM_ENUM:
+        v = *(const int *)sg_param_cptr(p, s);
+        if (v >= 0 && v < p->nnames)
+            snprintf(buf, n, "%s", p->shown ? p->shown[v] : p->names[v]);
+        break;
+    case SG_PARAM_TEXT: snprintf(buf, n, "%s", (const char *)sg_param_cptr(p, s)); break;
+    case SG_PARAM_MATERIAL: mat_text(sg_param_cptr(p, s), buf, n); break;
+    case SG_PARAM_BOOL: snprintf(buf, n, "%s", sg_param_get(p, s, 0) != 0.0 ? "on" : "off"); break;
+    case SG_PARAM_REAL: {
+        double x = sg_param_get(p, s, k);
+        if ((p->flags & SG_PARAM_INF) && !edit && (x == 0.0 || isinf(x))) {
             snprintf(buf, n, "Infinity");
-        else
-            numfmt_shortest(s->radius, buf, n);
+        } else if (col == COL_SEMI) {
+            /* Zemax marks a fixed semi-diameter with a U. */
+            numfmt_shortest(x, num, sizeof num);
+            snprintf(buf, n, "%s%s", num, s->sd_fixed ? " U" : "");
+        } else {
+            numfmt_shortest(x, buf, n);
+        }
         break;
-    case COL_THICKNESS: numfmt_shortest(s->thickness, buf, n); break;
-    case COL_MATERIAL: mat_text(&s->mat, buf, n); break;
-    case COL_SEMI:
-        numfmt_shortest(s->semi_diameter, num, sizeof num);
-        snprintf(buf, n, "%s%s", num, s->sd_fixed ? " U" : "");
-        break;
-    case COL_CONIC: numfmt_shortest(s->conic, buf, n); break;
-    default:
-        if (col >= COL_ASPH0 && col < COL_COUNT)
-            numfmt_shortest(s->asph[col - COL_ASPH0], buf, n);
-        break;
+    }
     }
 }
 
@@ -224,9 +269,10 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
              const char *text, char *err, size_t errn, char *info, size_t infon)
 {
     sg_surface *s;
-    char buf[128];
+    const sg_param *p;
+    char buf[128], msg[160];
     double v;
-    int rc;
+    int rc, k, fixed = 0;
 
     if (info && infon)
         info[0] = '\0';
@@ -234,13 +280,35 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
         snprintf(err, errn, "no surface %d (the design has 0 to %d)", row, sys->nsurf - 1);
         return SG_ERANGE;
     }
-    if (col < 0 || col >= COL_COUNT) {
+    p = cell_param(col, &k);
+    if (!p) {
         snprintf(err, errn, "no such column");
         return SG_EINVAL;
     }
     s = &sys->surf[row];
-    switch (col) {
-    case COL_TYPE:
+    switch (p->kind) {
+    case SG_PARAM_ENUM:
+        if (col != COL_TYPE) {
+            /* Any other choice: its JSON name or the name shown. */
+            if (!trimmed(text, buf, sizeof buf))
+                buf[0] = '\0';
+            for (k = 0; k < p->nnames; k++)
+                if (strcasecmp(buf, p->names[k]) == 0 ||
+                    (p->shown && strcasecmp(buf, p->shown[k]) == 0))
+                    break;
+            if (k == p->nnames) {
+                snprintf(err, errn, "surface %d %s: \"%s\" is not one of", row, cell_name(col),
+                         text);
+                for (k = 0; k < p->nnames; k++) {
+                    size_t len = strlen(err);
+                    snprintf(err + len, errn - len, "%s %s", k ? "," : "",
+                             p->shown ? p->shown[k] : p->names[k]);
+                }
+                return SG_EPARSE;
+            }
+            sg_param_set(p, s, 0, k);
+            return SG_EOK;
+        }
         rc = cell_type_parse(text);
         if (rc < 0) {
             snprintf(err, errn, "surface %d type: \"%s\" is not STANDARD or EVENASPH",
@@ -249,7 +317,6 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
         }
         s->type = (sg_surf_type)rc;
         if (rc == SG_SURF_STANDARD && info && infon) {
-            int k;
             for (k = 0; k < SG_NASPH && s->asph[k] == 0.0; k++)
                 ;
             /* Kept, so switching back restores them, but the trace of a
@@ -259,84 +326,75 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
                                       "until it is EVENASPH again");
         }
         return SG_EOK;
-    case COL_COMMENT: {
-        const unsigned char *p;
-        if (strlen(text) >= SG_COMMENT) {
-            snprintf(err, errn, "surface %d comment: longer than %d bytes", row,
-                     SG_COMMENT - 1);
+    case SG_PARAM_TEXT: {
+        const unsigned char *c;
+        char *dst = sg_param_ptr(p, s);
+        if (strlen(text) >= p->size) {
+            snprintf(err, errn, "surface %d %s: longer than %d bytes", row, cell_name(col),
+                     (int)p->size - 1);
             return SG_ERANGE;
         }
-        for (p = (const unsigned char *)text; *p; p++)
-            if (*p < 0x20 || *p == 0x7f) {
-                snprintf(err, errn, "surface %d comment: control characters are not allowed",
-                         row);
+        for (c = (const unsigned char *)text; *c; c++)
+            if (*c < 0x20 || *c == 0x7f) {
+                snprintf(err, errn, "surface %d %s: control characters are not allowed",
+                         row, cell_name(col));
                 return SG_EPARSE;
             }
-        memset(s->comment, 0, sizeof s->comment);
-        memcpy(s->comment, text, strlen(text));
+        memset(dst, 0, p->size);
+        memcpy(dst, text, strlen(text));
         return SG_EOK;
     }
-    case COL_RADIUS:
-        rc = number(text, 1, row, col, &v, err, errn);
-        if (rc != SG_EOK)
-            return rc;
-        s->radius = v;
-        return SG_EOK;
-    case COL_THICKNESS:
-        rc = number(text, row == 0, row, col, &v, err, errn);
-        if (rc != SG_EOK)
-            return rc;
-        if (row == 0 && v == 0.0) {
-            snprintf(err, errn, "surface 0 thickness: the object must lie away from "
-                     "surface 1 (use Infinity for an object at infinity)");
-            return SG_ENONPHYS;
-        }
-        s->thickness = v;
-        return SG_EOK;
-    case COL_MATERIAL:
+    case SG_PARAM_MATERIAL:
         return set_material(sys, cat, row, text, err, errn);
-    case COL_SEMI: {
-        int fixed = 0;
-        size_t len;
-        if (!trimmed(text, buf, sizeof buf)) {
-            snprintf(err, errn, "surface %d semi: text is too long", row);
-            return SG_EPARSE;
-        }
+    case SG_PARAM_BOOL:
+        snprintf(err, errn, "surface %d %s: not a column", row, cell_name(col));
+        return SG_EINVAL;
+    case SG_PARAM_REAL:
+        break;
+    }
+    if (!trimmed(text, buf, sizeof buf)) {
+        snprintf(err, errn, "surface %d %s: text is too long", row, cell_name(col));
+        return SG_EPARSE;
+    }
+    if (col == COL_SEMI) {
         /* A trailing U fixes the aperture, as Zemax marks it. */
-        len = strlen(buf);
+        size_t len = strlen(buf);
         if (len > 0 && (buf[len - 1] == 'U' || buf[len - 1] == 'u')) {
             fixed = 1;
             buf[len - 1] = '\0';
         }
-        rc = number(buf, 0, row, col, &v, err, errn);
-        if (rc != SG_EOK)
-            return rc;
-        if (v < 0.0) {
-            snprintf(err, errn, "surface %d semi: %s is negative", row, buf);
-            return SG_ERANGE;
-        }
-        s->semi_diameter = v;
+    }
+    rc = number(col == COL_SEMI ? buf : text,
+                (p->flags & SG_PARAM_INF) || ((p->flags & SG_PARAM_OBJ_INF) && row == 0), row,
+                col, &v, err, errn);
+    if (rc != SG_EOK)
+        return rc;
+    if ((p->flags & SG_PARAM_OBJ_INF) && row == 0 && v == 0.0) {
+        snprintf(err, errn, "surface 0 thickness: the object must lie away from "
+                 "surface 1 (use Infinity for an object at infinity)");
+        return SG_ENONPHYS;
+    }
+    if ((p->flags & SG_PARAM_NONNEG) && v < 0.0) {
+        snprintf(err, errn, "surface %d %s: %s is negative", row, cell_name(col), buf);
+        return SG_ERANGE;
+    }
+    /* The table's limits; radius and thickness are left to validation,
+     * which knows the whole system. */
+    if (!(p->flags & (SG_PARAM_INF | SG_PARAM_OBJ_INF)) &&
+        sg_param_check(p, k, v, row == 0, msg, sizeof msg) != SG_OK) {
+        snprintf(err, errn, "surface %d %s: %s", row, cell_name(col), msg);
+        return SG_ERANGE;
+    }
+    sg_param_set(p, s, k, v);
+    if (col == COL_SEMI)
         s->sd_fixed = fixed;
-        return SG_EOK;
+    /* A standard surface ignores its polynomial, so a term typed into
+     * one means the user wants an asphere. */
+    if (col >= COL_ASPH0 && col < COL_ASPH0 + SG_NASPH && v != 0.0 &&
+        s->type != SG_SURF_EVENASPH) {
+        s->type = SG_SURF_EVENASPH;
+        if (info && infon)
+            snprintf(info, infon, "surface %d is now EVENASPH", row);
     }
-    case COL_CONIC:
-        rc = number(text, 0, row, col, &v, err, errn);
-        if (rc != SG_EOK)
-            return rc;
-        s->conic = v;
-        return SG_EOK;
-    default:
-        rc = number(text, 0, row, col, &v, err, errn);
-        if (rc != SG_EOK)
-            return rc;
-        s->asph[col - COL_ASPH0] = v;
-        /* A standard surface ignores its polynomial, so a term typed into
-         * one means the user wants an asphere. */
-        if (v != 0.0 && s->type != SG_SURF_EVENASPH) {
-            s->type = SG_SURF_EVENASPH;
-            if (info && infon)
-                snprintf(info, infon, "surface %d is now EVENASPH", row);
-        }
-        return SG_EOK;
-    }
+    return SG_EOK;
 }

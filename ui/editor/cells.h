@@ -12,6 +12,10 @@
 
 #include "sagitta.h"
 
+/* The columns are the surface parameters of the engine's table
+ * (sg_param_at(SG_SCOPE_SURFACE, ...)) that have a heading, an array's
+ * elements one column each, in the table's order.  The first ones are
+ * named here because the editor treats them specially. */
 typedef enum cell_col {
     COL_TYPE = 0,
     COL_COMMENT,
@@ -21,9 +25,13 @@ typedef enum cell_col {
     COL_SEMI,
     COL_CONIC,
     COL_ASPH0, /* r^2; COL_ASPH0 + k is the r^(2k+2) term */
-    COL_COUNT = COL_ASPH0 + SG_NASPH
+    COL_MAX = 96 /* room for every column the table can give */
 } cell_col;
 
+/* How many columns the table gives. */
+int cell_count(void);
+/* The parameter and element of a column, or NULL. */
+const sg_param *cell_param(int col, int *k);
 /* Column heading, e.g. "Radius" or "r^4". */
 const char *cell_heading(int col);
 /* Command name, e.g. "radius" or "a4". */

@@ -288,7 +288,8 @@ static int c_set(ed *e, args *a)
     }
     if (col < 0)
         return fail(e, "no column \"%s\" (type, comment, radius, thickness, material, "
-                       "semi, conic, a2 ... a16)", a->v[2]);
+                       "semi, conic, a2 ... a16, aperture, ap_rmin, ap_rmax, ap_xhalf, "
+                       "ap_yhalf, ap_xdec, ap_ydec)", a->v[2]);
     if (a->n > 3)
         rest_of(a, 3, val, sizeof val);
     else
@@ -633,7 +634,8 @@ static int c_field(ed *e, args *a)
 {
     sg_system *s = e->doc.sys;
     const char *usage = "field type angle|object|paraximage|realimage | norm radial|rect | "
-                        "add X Y [WEIGHT] | set N X Y [WEIGHT] | delete N";
+                        "add X Y [WEIGHT] | set N X Y [WEIGHT] | delete N | "
+                        "vignette N VDX VDY VCX VCY [VAN]";
     const char *sub = a->n > 1 ? a->v[1] : "";
     double x, y, w = 1.0;
     int k, i;
@@ -698,6 +700,7 @@ static int c_field(ed *e, args *a)
         if (!begin(e, e->row))
             return ED_HANDLED | ED_ERROR;
         s = e->doc.sys;
+        sg_param_defaults(SG_SCOPE_FIELD, &s->field[s->nfield]);
         s->field[s->nfield].x = x;
         s->field[s->nfield].y = y;
         s->field[s->nfield].weight = w;
@@ -719,6 +722,28 @@ static int c_field(ed *e, args *a)
         s->field[k - 1].y = y;
         s->field[k - 1].weight = w;
         return end(e, "field %d: (%s, %s)", k, a->v[3], a->v[4]);
+    }
+    if (strcasecmp(sub, "vignette") == 0 || strcasecmp(sub, "vig") == 0) {
+        /* Zemax's VDX VDY VCX VCY VAN, rows of the engine's field table. */
+        static const char *const keys[] = {"vdx", "vdy", "vcx", "vcy", "van"};
+        double v[5] = {0.0, 0.0, 0.0, 0.0, 0.0};
+        char msg[160];
+        if (!need(e, a, 6, 7, usage) || !parse_int(e, a->v[2], "field", 1, s->nfield, &k))
+            return ED_HANDLED | ED_ERROR;
+        for (i = 0; i < 5 && 3 + i < a->n; i++) {
+            const sg_param *p = sg_param_find(SG_SCOPE_FIELD, keys[i]);
+            if (!parse_num(e, a->v[3 + i], keys[i], &v[i]))
+                return ED_HANDLED | ED_ERROR;
+            if (sg_param_check(p, 0, v[i], 0, msg, sizeof msg) != SG_OK)
+                return fail(e, "field %d: %s", k, msg);
+        }
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        s = e->doc.sys;
+        for (i = 0; i < 5; i++)
+            sg_param_set(sg_param_find(SG_SCOPE_FIELD, keys[i]), &s->field[k - 1], 0, v[i]);
+        return end(e, "field %d: vignetting VDX %g VDY %g VCX %g VCY %g VAN %g", k, v[0], v[1],
+                   v[2], v[3], v[4]);
     }
     if (strcasecmp(sub, "delete") == 0 || strcasecmp(sub, "del") == 0) {
         if (!need(e, a, 2, 2, usage) || !parse_int(e, a->v[2], "field", 1, s->nfield, &k))
@@ -1903,7 +1928,8 @@ static int c_sysdata(ed *e, args *a)
 static const command commands[] = {
     {"set", NULL, c_set, "set SURFACE COLUMN VALUE",
      "set a cell; COLUMN is type comment radius thickness material semi conic a2..a16 "
-     "or fixed; SURFACE may be obj, ima, stop or ."},
+     "aperture ap_rmin ap_rmax ap_xhalf ap_yhalf ap_xdec ap_ydec or fixed; SURFACE may be "
+     "obj, ima, stop or ."},
     {"insert", "i", c_insert, "insert [SURFACE]", "insert a flat air surface before SURFACE"},
     {"delete", "d", c_delete, "delete [SURFACE]", "delete a surface"},
     {"stop", NULL, c_stop, "stop [SURFACE]", "make a surface the aperture stop"},
@@ -1956,8 +1982,9 @@ static const command commands[] = {
      "edit the wavelengths; UM may be a line (F d C e g h i F' C' D r s t); presets FdC F'eC' d e"},
     {"field", NULL, c_field, "field N", "trace the ray at field N of the design (sets Hx, Hy)"},
     {"field", NULL, c_field,
-     "field type T | norm radial|rect | add X Y [W] | set N X Y [W] | delete N",
-     "edit the fields"},
+     "field type T | norm radial|rect | add X Y [W] | set N X Y [W] | delete N | "
+     "vignette N VDX VDY VCX VCY [VAN]",
+     "edit the fields; vignette sets Zemax's vignetting factors"},
     {"aperture", NULL, c_aperture, "aperture [epd|fnum|na|float|pwfnum] [VALUE]",
      "set the system aperture"},
     {"aim", NULL, c_aim, "aim off|paraxial|real", "set ray aiming"},

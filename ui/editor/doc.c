@@ -495,48 +495,7 @@ int doc_save(doc *d, const char *path, sg_diag *dg)
     return SG_EOK;
 }
 
-static int same_double(double a, double b)
-{
-    return memcmp(&a, &b, sizeof a) == 0;
-}
-
-static int surface_equal(const sg_surface *a, const sg_surface *b)
-{
-    int k;
-    if (a->type != b->type || strcmp(a->comment, b->comment) != 0 ||
-        !same_double(a->radius, b->radius) || !same_double(a->thickness, b->thickness) ||
-        a->mat.kind != b->mat.kind || strcmp(a->mat.name, b->mat.name) != 0 ||
-        !same_double(a->mat.index, b->mat.index) ||
-        !same_double(a->semi_diameter, b->semi_diameter) || a->sd_fixed != b->sd_fixed ||
-        !same_double(a->conic, b->conic))
-        return 0;
-    for (k = 0; k < SG_NASPH; k++)
-        if (!same_double(a->asph[k], b->asph[k]))
-            return 0;
-    return 1;
-}
-
 int doc_system_equal(const sg_system *a, const sg_system *b)
 {
-    int i;
-    if (strcmp(a->title, b->title) != 0 || strcmp(a->units, b->units) != 0 ||
-        a->nwave != b->nwave || a->primary_wave != b->primary_wave ||
-        a->field_type != b->field_type || a->field_norm != b->field_norm ||
-        a->nfield != b->nfield || a->aper_type != b->aper_type ||
-        !same_double(a->aper_value, b->aper_value) || a->aim != b->aim ||
-        a->stop != b->stop || a->nsurf != b->nsurf)
-        return 0;
-    for (i = 0; i < a->nwave; i++)
-        if (!same_double(a->wave[i].um, b->wave[i].um) ||
-            !same_double(a->wave[i].weight, b->wave[i].weight))
-            return 0;
-    for (i = 0; i < a->nfield; i++)
-        if (!same_double(a->field[i].x, b->field[i].x) ||
-            !same_double(a->field[i].y, b->field[i].y) ||
-            !same_double(a->field[i].weight, b->field[i].weight))
-            return 0;
-    for (i = 0; i < a->nsurf; i++)
-        if (!surface_equal(&a->surf[i], &b->surf[i]))
-            return 0;
-    return 1;
+    return sg_system_equal(a, b);
 }

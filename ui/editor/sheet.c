@@ -77,11 +77,11 @@ static void cell_show(const ui *u, int row, int col, int w, char *out, size_t n)
 static void place(ui *u)
 {
     int x = label_w(u), c;
-    for (c = 0; c < COL_COUNT; c++) {
+    for (c = 0; c < cell_count(); c++) {
         u->colx[c] = 0;
         u->colw[c] = 0;
     }
-    for (c = u->left; c < COL_COUNT; c++) {
+    for (c = u->left; c < cell_count(); c++) {
         int w = col_width(u, c);
         if (x + w > u->cols)
             break;
@@ -101,8 +101,8 @@ void sheet_follow(ui *u)
         e->row = 0;
     if (e->col < 0)
         e->col = 0;
-    if (e->col >= COL_COUNT)
-        e->col = COL_COUNT - 1;
+    if (e->col >= cell_count())
+        e->col = cell_count() - 1;
     if (u->top > e->row)
         u->top = e->row;
     if (u->sheet_h > 0 && e->row >= u->top + u->sheet_h)
@@ -137,7 +137,7 @@ void sheet_draw(ui *u)
     sheet_follow(u);
     term_fill(u->sheet_y, 0, u->cols, T_HEADER);
     term_text(u->sheet_y, 0, label_w(u), T_HEADER, 1, u->left > 0 ? "Surf  <" : "Surf");
-    for (c = u->left; c < COL_COUNT && u->colw[c] > 0; c++) {
+    for (c = u->left; c < cell_count() && u->colw[c] > 0; c++) {
         const char *h = cell_heading(c);
         int w = u->colw[c] - 1, hw = (int)strlen(h);
         /* Headings sit over their numbers, which line up on the right. */
@@ -146,7 +146,7 @@ void sheet_draw(ui *u)
         else
             term_text(u->sheet_y, u->colx[c], w, T_HEADER, 1, h);
     }
-    if (c < COL_COUNT)
+    if (c < cell_count())
         term_text(u->sheet_y, u->cols - 1, 1, T_HEADER, 0, ">");
 
     for (i = 0; i < u->sheet_h; i++) {
@@ -157,12 +157,12 @@ void sheet_draw(ui *u)
         label(s, r, label_w(u), buf, sizeof buf);
         term_text(y, 0, label_w(u), r == e->row ? T_ROWSEL : r == s->stop ? T_STOP : T_DIM, 1,
                   buf);
-        for (c = u->left; c < COL_COUNT && u->colw[c] > 0; c++) {
+        for (c = u->left; c < cell_count() && u->colw[c] > 0; c++) {
             int w = u->colw[c] - 1, style = T_NORMAL, x = u->colx[c];
             char cell[LE_MAX];
             cell_show(u, r, c, w, cell, sizeof cell);
             /* A STANDARD surface ignores its r^n terms: shown, but dim. */
-            if (c >= COL_ASPH0 && s->surf[r].type == SG_SURF_STANDARD)
+            if (c >= COL_ASPH0 && c < COL_ASPH0 + SG_NASPH && s->surf[r].type == SG_SURF_STANDARD)
                 style = T_DIM;
             if (r == e->row && c == e->col)
                 style = u->focus == FOCUS_SHEET ? T_CURSOR : T_ROWSEL;
@@ -215,16 +215,16 @@ static int tab(ui *u, int dir)
     ed *e = u->e;
     int n = e->doc.sys->nsurf;
     e->col += dir;
-    if (e->col >= COL_COUNT) {
+    if (e->col >= cell_count()) {
         if (e->row + 1 < n) {
             e->col = 0;
             e->row++;
         } else {
-            e->col = COL_COUNT - 1;
+            e->col = cell_count() - 1;
         }
     } else if (e->col < 0) {
         if (e->row > 0) {
-            e->col = COL_COUNT - 1;
+            e->col = cell_count() - 1;
             e->row--;
         } else {
             e->col = 0;
@@ -293,7 +293,7 @@ static int key_impl(ui *u, int key, int typing)
     case K_PGUP: return move(u, -(u->sheet_h > 1 ? u->sheet_h - 1 : 1), 0);
     case K_PGDN: return move(u, u->sheet_h > 1 ? u->sheet_h - 1 : 1, 0);
     case K_HOME: e->col = 0; return move(u, 0, 0);
-    case K_END: e->col = COL_COUNT - 1; return move(u, 0, 0);
+    case K_END: e->col = cell_count() - 1; return move(u, 0, 0);
     case '<': e->row = 0; return move(u, 0, 0);
     case '>': e->row = s->nsurf - 1; return move(u, 0, 0);
     case K_ENTER:
@@ -380,7 +380,7 @@ int sheet_click(ui *u, int y, int x, int kind)
     if (y <= u->sheet_y || r >= e->doc.sys->nsurf)
         return ED_HANDLED;
     e->row = r;
-    for (c = u->left; c < COL_COUNT && u->colw[c] > 0; c++)
+    for (c = u->left; c < cell_count() && u->colw[c] > 0; c++)
         if (x >= u->colx[c] && x < u->colx[c] + u->colw[c])
             e->col = c;
     u->focus = FOCUS_SHEET;

@@ -49,7 +49,7 @@ typedef struct ui {
 
     /* Spreadsheet. */
     int top, left;       /* first row and first column on show */
-    int colx[COL_COUNT], colw[COL_COUNT]; /* screen x and width; w 0: hidden */
+    int colx[COL_MAX], colw[COL_MAX]; /* screen x and width; w 0: hidden */
 
     /* Ray selector. */
     int ray_item;
