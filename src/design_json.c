@@ -33,7 +33,7 @@
 #define FORMAT_NAME "sagitta-design"
 
 static const char *const units_names[] = {"mm", "cm", "in", "m"};
-static const char *const surf_type_names[] = {"standard", "even_asphere"};
+static const char *const surf_type_names[] = {"standard", "even_asphere", "coordinate_break"};
 static const char *const field_type_names[] = {
     "angle", "object_height", "paraxial_image_height", "real_image_height"};
 static const char *const field_norm_names[] = {"radial", "rectangular"};
@@ -592,11 +592,68 @@ static int read_aperture(jctx *c, const cJSON *v, sg_system *sys)
 
 enum {
     S_TYPE, S_COMMENT, S_RADIUS, S_THICKNESS, S_MATERIAL, S_SD, S_SDFIXED,
-    S_CONIC, S_ASPHERE, S_STOP, S_N
+    S_CONIC, S_ASPHERE, S_STOP, S_BREAK, S_BEFORE, S_AFTER, S_N
 };
 static const char *const surf_keys[] = {
     "type", "comment", "radius", "thickness", "material", "semi_diameter",
-    "sd_fixed", "conic", "asphere", "stop"};
+    "sd_fixed", "conic", "asphere", "stop", "break", "before", "after"};
+
+/* An array of exactly n finite numbers. */
+static int get_vec(jctx *c, const cJSON *v, const char *where, int n, double *out)
+{
+    const cJSON *it;
+    char got[80];
+    int j = 0;
+    if (!cJSON_IsArray(v) || cJSON_GetArraySize(v) != n) {
+        describe(v, got, sizeof got);
+        return perr(c, SG_EPARSE, where, "expected an array of %d numbers, got %s", n, got);
+    }
+    cJSON_ArrayForEach(it, v) {
+        char el[96];
+        int rc;
+        snprintf(el, sizeof el, "%s[%d]", where, j);
+        if ((rc = get_finite(c, it, el, &out[j])) != SG_OK)
+            return rc;
+        j++;
+    }
+    return SG_OK;
+}
+
+enum { C_DECENTER, C_TILT, C_ORDER, C_N };
+static const char *const change_keys[] = {"decenter", "tilt", "order"};
+static const char *const order_names[] = {"decenter_then_tilt", "tilt_then_decenter"};
+
+/* A frame change: {"decenter": [x, y], "tilt": [x, y, z], "order": ...};
+ * missing keys are zero and "decenter_then_tilt". */
+static int get_change(jctx *c, const cJSON *v, const char *where, sg_frame_change *f)
+{
+    const cJSON *k[C_N];
+    char at[96];
+    double dec[2] = {0.0, 0.0}, tilt[3] = {0.0, 0.0, 0.0};
+    int rc, e;
+    if ((rc = expect_object(c, v, where)) != SG_OK)
+        return rc;
+    pick_keys(c, v, where, change_keys, C_N, k);
+    memset(f, 0, sizeof *f);
+    if (k[C_DECENTER] &&
+        (rc = get_vec(c, k[C_DECENTER], join(at, sizeof at, where, "decenter"), 2, dec)) != SG_OK)
+        return rc;
+    if (k[C_TILT] &&
+        (rc = get_vec(c, k[C_TILT], join(at, sizeof at, where, "tilt"), 3, tilt)) != SG_OK)
+        return rc;
+    if (k[C_ORDER]) {
+        if ((rc = get_enum(c, k[C_ORDER], join(at, sizeof at, where, "order"), order_names,
+                           NELEM(order_names), &e)) != SG_OK)
+            return rc;
+        f->order = e;
+    }
+    f->dx = dec[0];
+    f->dy = dec[1];
+    f->tx = tilt[0];
+    f->ty = tilt[1];
+    f->tz = tilt[2];
+    return SG_OK;
+}
 
 /* Reads surface i of n; *is_stop reports its "stop" flag. */
 static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, int *is_stop)
@@ -662,6 +719,34 @@ static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, in
                 return rc;
             j++;
         }
+    }
+    if (k[S_BREAK]) {
+        join(at, sizeof at, where, "break");
+        if (s->type != SG_SURF_COORDBRK)
+            return perr(c, SG_EPARSE, at, "only a coordinate_break has a break; use \"before\"");
+        if ((rc = get_change(c, k[S_BREAK], at, &s->before)) != SG_OK)
+            return rc;
+    }
+    if (k[S_BEFORE]) {
+        if (s->type == SG_SURF_COORDBRK)
+            return perr(c, SG_EPARSE, join(at, sizeof at, where, "before"),
+                        "a coordinate_break takes its change as \"break\"");
+        if ((rc = get_change(c, k[S_BEFORE], join(at, sizeof at, where, "before"),
+                             &s->before)) != SG_OK)
+            return rc;
+    }
+    if (k[S_AFTER]) {
+        join(at, sizeof at, where, "after");
+        if (s->type == SG_SURF_COORDBRK)
+            return perr(c, SG_EPARSE, at, "a coordinate_break has no after change");
+        if (cJSON_IsString(k[S_AFTER]) && k[S_AFTER]->valuestring &&
+            strcmp(k[S_AFTER]->valuestring, "reverse") == 0)
+            s->after_mode = SG_AFTER_REVERSE;
+        else if (cJSON_IsString(k[S_AFTER]))
+            return perr(c, SG_EPARSE, at,
+                        "expected \"reverse\" or an object with decenter, tilt and order");
+        else if ((rc = get_change(c, k[S_AFTER], at, &s->after)) != SG_OK)
+            return rc;
     }
     if (k[S_STOP]) {
         if ((rc = get_bool(c, k[S_STOP], join(at, sizeof at, where, "stop"), is_stop)) != SG_OK)
@@ -1020,6 +1105,24 @@ static void sb_len(sbuf *b, double x)
         sb_num(b, x);
 }
 
+/* A frame change as get_change reads it. */
+static void sb_change(sbuf *b, const sg_frame_change *f)
+{
+    sb_puts(b, "{\"decenter\": [");
+    sb_num(b, f->dx);
+    sb_puts(b, ", ");
+    sb_num(b, f->dy);
+    sb_puts(b, "], \"tilt\": [");
+    sb_num(b, f->tx);
+    sb_puts(b, ", ");
+    sb_num(b, f->ty);
+    sb_puts(b, ", ");
+    sb_num(b, f->tz);
+    sb_puts(b, "], \"order\": \"");
+    sb_puts(b, f->order ? "tilt_then_decenter" : "decenter_then_tilt");
+    sb_puts(b, "\"}");
+}
+
 /* A quoted, escaped JSON string; cJSON does the escaping. */
 static void sb_str(sbuf *b, const char *s)
 {
@@ -1151,7 +1254,12 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     if (*rc != SG_OK)
         return NULL;
     sb_puts(&b, "{\n  \"format\": \"" FORMAT_NAME "\",\n");
-    snprintf(t, sizeof t, "  \"version\": %d,\n", SG_DESIGN_FORMAT_VERSION);
+    /* A design that a version-1 reader can trace as written says so. */
+    for (k = 1, i = 0; i < sys->nsurf; i++)
+        if (sys->surf[i].type == SG_SURF_COORDBRK || sg_surface_moves_frame(&sys->surf[i]) ||
+            sys->surf[i].after_mode != SG_AFTER_EXPLICIT)
+            k = SG_DESIGN_FORMAT_VERSION;
+    snprintf(t, sizeof t, "  \"version\": %d,\n", k);
     sb_puts(&b, t);
     sb_puts(&b, "  \"title\": ");
     sb_str(&b, sys->title);
@@ -1231,7 +1339,23 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
                 sb_puts(&b, ", ");
             sb_num(&b, s->asph[k]);
         }
-        sb_puts(&b, i == sys->stop ? "],\n      \"stop\": true\n" : "],\n      \"stop\": false\n");
+        sb_puts(&b, "]");
+        if (s->type == SG_SURF_COORDBRK) {
+            sb_puts(&b, ",\n      \"break\": ");
+            sb_change(&b, &s->before);
+        } else {
+            if (!sg_frame_change_is_zero(&s->before)) {
+                sb_puts(&b, ",\n      \"before\": ");
+                sb_change(&b, &s->before);
+            }
+            if (s->after_mode == SG_AFTER_REVERSE) {
+                sb_puts(&b, ",\n      \"after\": \"reverse\"");
+            } else if (!sg_frame_change_is_zero(&s->after)) {
+                sb_puts(&b, ",\n      \"after\": ");
+                sb_change(&b, &s->after);
+            }
+        }
+        sb_puts(&b, i == sys->stop ? ",\n      \"stop\": true\n" : ",\n      \"stop\": false\n");
         sb_puts(&b, i + 1 < sys->nsurf ? "    },\n" : "    }\n");
     }
     sb_puts(&b, "  ]\n}\n");

@@ -27,7 +27,9 @@ extern "C" {
 #define SG_VERSION_STRING "0.1.0"
 
 /* The JSON design format version this library reads and writes. */
-#define SG_DESIGN_FORMAT_VERSION 1
+/* Version 2 adds coordinate breaks and surface tilts and decenters; a
+ * design without them is still written as version 1. */
+#define SG_DESIGN_FORMAT_VERSION 2
 
 /* ------------------------------------------------------------------------
  * Errors.  One table yields the enum, the names and the messages, so the
@@ -170,7 +172,8 @@ int sg_glass_in_range(const sg_glass *g, double um);
 
 typedef enum sg_surf_type {
     SG_SURF_STANDARD = 0, /* sphere, plane or conic */
-    SG_SURF_EVENASPH = 1  /* conic plus even polynomial in r */
+    SG_SURF_EVENASPH = 1, /* conic plus even polynomial in r */
+    SG_SURF_COORDBRK = 2  /* Zemax's coordinate break: a new frame, no optics */
 } sg_surf_type;
 
 typedef enum sg_mat_kind {
@@ -186,6 +189,23 @@ typedef struct sg_material {
     double index;             /* for SG_MAT_INDEX */
 } sg_material;
 
+/* A change of coordinate frame, as Zemax defines it (its coordinate break
+ * and surface tilt/decenter).  Order 0: decenter the frame in x and y,
+ * then tilt it about x, then about the new y, then about the new z.
+ * Order 1: tilt about z, new y, new x, then decenter along the new axes.
+ * Tilts are in degrees, right-handed; decenters in lens units.  A change
+ * with order toggled and every value negated undoes it. */
+typedef struct sg_frame_change {
+    double dx, dy;
+    double tx, ty, tz;
+    int order; /* 0 or 1 */
+} sg_frame_change;
+
+typedef enum sg_after_mode {
+    SG_AFTER_EXPLICIT = 0, /* the after change is as given */
+    SG_AFTER_REVERSE = 1   /* the after change undoes the before change */
+} sg_after_mode;
+
 typedef struct sg_surface {
     sg_surf_type type;
     char comment[SG_COMMENT];
@@ -196,8 +216,13 @@ typedef struct sg_surface {
     int sd_fixed;          /* nonzero: rays beyond semi_diameter are vignetted */
     double conic;
     double asph[SG_NASPH]; /* coefficients of r^2, r^4, ..., r^16 */
-    /* Room for tilts and decenters: every frame change goes through one
-     * internal transfer function, which will read these once they exist. */
+    /* The frame changes around the surface: before it (for a coordinate
+     * break, the break itself) and after it, ahead of the thickness.  A
+     * coordinate break is a plane in its new frame, with the medium
+     * before it; its radius, material and semi-diameter are not used. */
+    sg_frame_change before;
+    sg_frame_change after;
+    sg_after_mode after_mode;
 } sg_surface;
 
 typedef enum sg_field_type {
@@ -286,6 +311,11 @@ int sg_field_check(const sg_system *sys, double hx, double hy, sg_diag *d);
 double sg_surface_curvature(const sg_surface *s);
 /* Sag z(x, y) in the surface's local frame; NaN outside the conic's domain. */
 double sg_surface_sag(const sg_surface *s, double x, double y);
+/* Whether a frame change moves or turns anything. */
+int sg_frame_change_is_zero(const sg_frame_change *c);
+/* Whether a surface changes the frame: a coordinate break, or a tilt or
+ * decenter before or after it. */
+int sg_surface_moves_frame(const sg_surface *s);
 
 /* ------------------------------------------------------------------------
  * JSON designs
@@ -394,6 +424,23 @@ typedef struct sg_ray_surface {
     double opl, opl_lo, opl_error_bound;
     int status;         /* SG_OK or a ray failure: SG_EMISS, SG_ETIR, ... */
 } sg_ray_surface;
+
+/* A surface's frame in a global one: a point p given in the surface's
+ * local frame is R p + o globally, and a direction u is R u.  R's columns
+ * are the local axes. */
+typedef struct sg_frame {
+    double R[3][3];
+    double o[3];
+} sg_frame;
+/* Every surface's frame (out[0..nsurf-1]) relative to the frame of
+ * surface ref, Zemax's global coordinate reference surface (1 by
+ * default; 0 is refused for an object at infinity, whose frame has no
+ * place).  Computed in 256-bit MPFR and rounded. */
+int sg_global_frames(const sg_system *sys, int ref, sg_frame *out, sg_diag *d);
+/* A trace row in surface i's local frame to the global frame f: point,
+ * direction and their bounds (a rotation can grow a coordinate's error by
+ * the rows of R; the conversion's rounding is added). */
+void sg_row_to_global(const sg_frame *f, sg_ray_surface *row);
 
 /* A prepared system: indices, paraxial data and work buffers, computed
  * once so the per-ray path allocates nothing.  A tracer is used by one

@@ -70,10 +70,15 @@ int cli_usage_error(const char *cmd, const char *fmt, ...)
 
 /* ---- options ---------------------------------------------------------- */
 
+/* A long option whose value may be left out: "--name=N", or "--name N"
+ * when N is a whole number (so "--global 3" and "--global design.json"
+ * both read as meant); *val is NULL when it is left out. */
+#define CLI_OPT_NUM 2
+
 typedef struct cli_opt {
     const char *name; /* "--ray", or NULL to end the table */
     char shortc;      /* 'o' for -o, or 0 */
-    int has_arg;
+    int has_arg;      /* 0 none, 1 one, CLI_OPT_NUM an optional number */
     int id;           /* positive; returned by cli_next_opt */
 } cli_opt;
 

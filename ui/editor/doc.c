@@ -500,6 +500,13 @@ static int same_double(double a, double b)
     return memcmp(&a, &b, sizeof a) == 0;
 }
 
+static int same_change(const sg_frame_change *a, const sg_frame_change *b)
+{
+    return same_double(a->dx, b->dx) && same_double(a->dy, b->dy) &&
+           same_double(a->tx, b->tx) && same_double(a->ty, b->ty) &&
+           same_double(a->tz, b->tz) && a->order == b->order;
+}
+
 static int surface_equal(const sg_surface *a, const sg_surface *b)
 {
     int k;
@@ -513,7 +520,8 @@ static int surface_equal(const sg_surface *a, const sg_surface *b)
     for (k = 0; k < SG_NASPH; k++)
         if (!same_double(a->asph[k], b->asph[k]))
             return 0;
-    return 1;
+    return same_change(&a->before, &b->before) && same_change(&a->after, &b->after) &&
+           a->after_mode == b->after_mode;
 }
 
 int doc_system_equal(const sg_system *a, const sg_system *b)
