@@ -442,6 +442,24 @@ int sg_global_frames(const sg_system *sys, int ref, sg_frame *out, sg_diag *d);
  * the rows of R; the conversion's rounding is added). */
 void sg_row_to_global(const sg_frame *f, sg_ray_surface *row);
 
+/* Zemax's automatic semi-diameters. */
+typedef struct sg_semidiam_opts {
+    sg_trace_opts trace; /* the method; every wavelength is traced (trace.wave
+                            is not used); clip off, so no fixed aperture
+                            hides a ray */
+    int ring;            /* rays on the pupil's edge a field and wavelength (64) */
+    int refine;          /* golden-section steps refining each surface's
+                            highest ray along the edge (40) */
+} sg_semidiam_opts;
+void sg_semidiam_opts_init(sg_semidiam_opts *o);
+/* sd[i] for every surface i: the largest radial height, hypot(x, y) in the
+ * surface's frame, of the real rays through the edge of the pupil over
+ * every field and wavelength (0 where none reaches, and on the object).
+ * The ring finds each surface's highest ray; a golden-section search along
+ * the edge refines it.  o NULL takes the defaults. */
+int sg_semi_diameters(const sg_system *sys, const sg_catalog *cat, const sg_semidiam_opts *o,
+                      double *sd, sg_diag *d);
+
 /* A prepared system: indices, paraxial data and work buffers, computed
  * once so the per-ray path allocates nothing.  A tracer is used by one
  * thread at a time; make one per thread. */

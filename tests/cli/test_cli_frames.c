@@ -161,9 +161,30 @@ static void bad_frames(void **state)
     }
 }
 
+/* "sagitta semidiam": the fold's surfaces 1 and 2 carry the whole beam
+ * (EPD 10, field 5 degrees), so the lens's front is the pupil: 5 mm. */
+static void semidiam_command(void **state)
+{
+    const char *fold = ct_design("fold3.json", FOLD);
+    ct_result r;
+    (void)state;
+    ct_run(&r, "semidiam", fold, NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.out, "coordinate break"));
+    ct_free(&r);
+    ct_run(&r, "semidiam", fold, "--format", "json", NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.out, "{\"surface\": 1, \"auto\": 5"));
+    ct_free(&r);
+    ct_run(&r, "semidiam", NULL);
+    assert_int_equal(r.code, 2);
+    ct_free(&r);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(semidiam_command),
         cmocka_unit_test(global_fold),
         cmocka_unit_test(global_reports_and_refusals),
         cmocka_unit_test(bad_frames),
