@@ -518,25 +518,26 @@ static int read_param(jctx *c, const sg_param *p, const cJSON *v, const char *wh
 
 /* The keys of a scope's table, plus extra (may be NULL), for pick_keys. */
 #define MAX_KEYS 64
-static int scope_keys(sg_param_scope scope, const char *extra, const char *names[MAX_KEYS])
+static int scope_keys(sg_param_scope scope, const char *const *extra, int nextra,
+                      const char *names[MAX_KEYS])
 {
-    int n = sg_param_count(scope), i;
-    for (i = 0; i < n && i < MAX_KEYS - 1; i++)
+    int n = sg_param_count(scope), i, j;
+    for (i = 0; i < n && i < MAX_KEYS - nextra; i++)
         names[i] = sg_param_at(scope, i)->key;
-    if (extra)
-        names[i++] = extra;
+    for (j = 0; j < nextra; j++)
+        names[i++] = extra[j];
     return i;
 }
 
 /* Reads every key of a scope's table present in v into obj (the caller
  * set the defaults); a required key must be there. */
 static int read_scope(jctx *c, sg_param_scope scope, const cJSON *v, const char *where,
-                      const char *sep, int isurf, void *obj, const char *extra,
-                      const cJSON **extra_out)
+                      const char *sep, int isurf, void *obj, const char *const *extra,
+                      int nextra, const cJSON **extra_out)
 {
     const char *names[MAX_KEYS];
     const cJSON *k[MAX_KEYS];
-    int n = scope_keys(scope, extra, names), i, rc;
+    int n = scope_keys(scope, extra, nextra, names), i, rc;
     pick_keys(c, v, where, names, n, k);
     for (i = 0; i < sg_param_count(scope); i++) {
         const sg_param *p = sg_param_at(scope, i);
@@ -548,8 +549,9 @@ static int read_scope(jctx *c, sg_param_scope scope, const cJSON *v, const char 
         if ((rc = read_param(c, p, k[i], where, sep, isurf, obj)) != SG_OK)
             return rc;
     }
-    if (extra_out)
-        *extra_out = extra ? k[n - 1] : NULL;
+    /* The keys outside the table, in the order asked for. */
+    for (i = 0; i < nextra; i++)
+        extra_out[i] = k[n - nextra + i];
     return SG_OK;
 }
 
@@ -587,7 +589,7 @@ static int read_wavelengths(jctx *c, const cJSON *v, sg_system *sys)
             if ((rc = expect_object(c, it, where)) != SG_OK)
                 return rc;
             sg_param_defaults(SG_SCOPE_WAVE, w);
-            if ((rc = read_scope(c, SG_SCOPE_WAVE, it, where, ".", -1, w, NULL, NULL)) !=
+            if ((rc = read_scope(c, SG_SCOPE_WAVE, it, where, ".", -1, w, NULL, 0, NULL)) !=
                 SG_OK)
                 return rc;
             i++;
@@ -647,7 +649,7 @@ static int read_fields(jctx *c, const cJSON *v, sg_system *sys)
         if ((rc = expect_object(c, it, where)) != SG_OK)
             return rc;
         sg_param_defaults(SG_SCOPE_FIELD, f);
-        if ((rc = read_scope(c, SG_SCOPE_FIELD, it, where, ".", -1, f, NULL, NULL)) != SG_OK)
+        if ((rc = read_scope(c, SG_SCOPE_FIELD, it, where, ".", -1, f, NULL, 0, NULL)) != SG_OK)
             return rc;
         i++;
     }
@@ -677,9 +679,71 @@ static int read_aperture(jctx *c, const cJSON *v, sg_system *sys)
 }
 
 /* Reads surface i of n; *is_stop reports its "stop" flag. */
+/* An array of exactly n finite numbers. */
+static int get_vec(jctx *c, const cJSON *v, const char *where, int n, double *out)
+{
+    const cJSON *it;
+    char got[80];
+    int j = 0;
+    if (!cJSON_IsArray(v) || cJSON_GetArraySize(v) != n) {
+        describe(v, got, sizeof got);
+        return perr(c, SG_EPARSE, where, "expected an array of %d numbers, got %s", n, got);
+    }
+    cJSON_ArrayForEach(it, v) {
+        char el[96];
+        int rc;
+        snprintf(el, sizeof el, "%s[%d]", where, j);
+        if ((rc = get_finite(c, it, el, &out[j])) != SG_OK)
+            return rc;
+        j++;
+    }
+    return SG_OK;
+}
+
+enum { C_DECENTER, C_TILT, C_ORDER, C_N };
+static const char *const change_keys[] = {"decenter", "tilt", "order"};
+static const char *const order_names[] = {"decenter_then_tilt", "tilt_then_decenter"};
+
+/* A frame change: {"decenter": [x, y], "tilt": [x, y, z], "order": ...};
+ * missing keys are zero and "decenter_then_tilt".  Its values are one
+ * nested object, not rows of the parameter table. */
+static int get_change(jctx *c, const cJSON *v, const char *where, sg_frame_change *f)
+{
+    const cJSON *k[C_N];
+    char at[96];
+    double dec[2] = {0.0, 0.0}, tilt[3] = {0.0, 0.0, 0.0};
+    int rc, e;
+    if ((rc = expect_object(c, v, where)) != SG_OK)
+        return rc;
+    pick_keys(c, v, where, change_keys, C_N, k);
+    memset(f, 0, sizeof *f);
+    if (k[C_DECENTER] &&
+        (rc = get_vec(c, k[C_DECENTER], join(at, sizeof at, where, "decenter"), 2, dec)) != SG_OK)
+        return rc;
+    if (k[C_TILT] &&
+        (rc = get_vec(c, k[C_TILT], join(at, sizeof at, where, "tilt"), 3, tilt)) != SG_OK)
+        return rc;
+    if (k[C_ORDER]) {
+        if ((rc = get_enum(c, k[C_ORDER], join(at, sizeof at, where, "order"), order_names,
+                           NELEM(order_names), &e)) != SG_OK)
+            return rc;
+        f->order = e;
+    }
+    f->dx = dec[0];
+    f->dy = dec[1];
+    f->tx = tilt[0];
+    f->ty = tilt[1];
+    f->tz = tilt[2];
+    return SG_OK;
+}
+
+/* The surface keys outside the parameter table. */
+enum { X_STOP, X_BREAK, X_BEFORE, X_AFTER, X_N };
+static const char *const surf_extra[X_N] = {"stop", "break", "before", "after"};
+
 static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, int *is_stop)
 {
-    const cJSON *stop;
+    const cJSON *x[X_N], *stop;
     char where[32], at[64];
     int rc;
     snprintf(where, sizeof where, "surface %d", i);
@@ -689,8 +753,38 @@ static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, in
     if (i == 0)
         s->thickness = INFINITY;
     *is_stop = 0;
-    if ((rc = read_scope(c, SG_SCOPE_SURFACE, v, where, ": ", i, s, "stop", &stop)) != SG_OK)
+    if ((rc = read_scope(c, SG_SCOPE_SURFACE, v, where, ": ", i, s, surf_extra, X_N, x)) !=
+        SG_OK)
         return rc;
+    if (x[X_BREAK]) {
+        join(at, sizeof at, where, "break");
+        if (s->type != SG_SURF_COORDBRK)
+            return perr(c, SG_EPARSE, at, "only a coordinate_break has a break; use \"before\"");
+        if ((rc = get_change(c, x[X_BREAK], at, &s->before)) != SG_OK)
+            return rc;
+    }
+    if (x[X_BEFORE]) {
+        if (s->type == SG_SURF_COORDBRK)
+            return perr(c, SG_EPARSE, join(at, sizeof at, where, "before"),
+                        "a coordinate_break takes its change as \"break\"");
+        if ((rc = get_change(c, x[X_BEFORE], join(at, sizeof at, where, "before"),
+                             &s->before)) != SG_OK)
+            return rc;
+    }
+    if (x[X_AFTER]) {
+        join(at, sizeof at, where, "after");
+        if (s->type == SG_SURF_COORDBRK)
+            return perr(c, SG_EPARSE, at, "a coordinate_break has no after change");
+        if (cJSON_IsString(x[X_AFTER]) && x[X_AFTER]->valuestring &&
+            strcmp(x[X_AFTER]->valuestring, "reverse") == 0)
+            s->after_mode = SG_AFTER_REVERSE;
+        else if (cJSON_IsString(x[X_AFTER]))
+            return perr(c, SG_EPARSE, at,
+                        "expected \"reverse\" or an object with decenter, tilt and order");
+        else if ((rc = get_change(c, x[X_AFTER], at, &s->after)) != SG_OK)
+            return rc;
+    }
+    stop = x[X_STOP];
     if (stop) {
         if ((rc = get_bool(c, stop, join(at, sizeof at, where, "stop"), is_stop)) != SG_OK)
             return rc;
@@ -1251,6 +1345,24 @@ static void sb_param(sbuf *b, const sg_param *p, const void *obj)
     }
 }
 
+/* A frame change as get_change reads it. */
+static void sb_change(sbuf *b, const sg_frame_change *f)
+{
+    sb_puts(b, "{\"decenter\": [");
+    sb_num(b, f->dx);
+    sb_puts(b, ", ");
+    sb_num(b, f->dy);
+    sb_puts(b, "], \"tilt\": [");
+    sb_num(b, f->tx);
+    sb_puts(b, ", ");
+    sb_num(b, f->ty);
+    sb_puts(b, ", ");
+    sb_num(b, f->tz);
+    sb_puts(b, "], \"order\": \"");
+    sb_puts(b, f->order ? "tilt_then_decenter" : "decenter_then_tilt");
+    sb_puts(b, "\"}");
+}
+
 /* Whether an optional parameter is at its default, so not written. */
 static int at_default(const sg_param *p, const void *obj)
 {
@@ -1310,8 +1422,14 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
         version = needed_version(SG_SCOPE_WAVE, &sys->wave[k], version);
     for (k = 0; k < sys->nfield; k++)
         version = needed_version(SG_SCOPE_FIELD, &sys->field[k], version);
-    for (i = 0; i < sys->nsurf; i++)
-        version = needed_version(SG_SCOPE_SURFACE, &sys->surf[i], version);
+    for (i = 0; i < sys->nsurf; i++) {
+        const sg_surface *s = &sys->surf[i];
+        version = needed_version(SG_SCOPE_SURFACE, s, version);
+        /* Coordinate breaks and tilts came with version 2. */
+        if (s->type == SG_SURF_COORDBRK || sg_surface_moves_frame(s) ||
+            s->after_mode != SG_AFTER_EXPLICIT)
+            version = version < 2 ? 2 : version;
+    }
     /* A file says the oldest format that reads it, so designs without the
      * newer keys stay readable by older programs. */
     snprintf(t, sizeof t, "  \"version\": %d,\n", version);
@@ -1350,7 +1468,23 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     sb_puts(&b, ",\n  \"surfaces\": [\n");
 
     for (i = 0; i < sys->nsurf; i++) {
-        sb_scope(&b, SG_SCOPE_SURFACE, &sys->surf[i], "    {\n      ", ",\n      ");
+        const sg_surface *s = &sys->surf[i];
+        sb_scope(&b, SG_SCOPE_SURFACE, s, "    {\n      ", ",\n      ");
+        if (s->type == SG_SURF_COORDBRK) {
+            sb_puts(&b, ",\n      \"break\": ");
+            sb_change(&b, &s->before);
+        } else {
+            if (!sg_frame_change_is_zero(&s->before)) {
+                sb_puts(&b, ",\n      \"before\": ");
+                sb_change(&b, &s->before);
+            }
+            if (s->after_mode == SG_AFTER_REVERSE) {
+                sb_puts(&b, ",\n      \"after\": \"reverse\"");
+            } else if (!sg_frame_change_is_zero(&s->after)) {
+                sb_puts(&b, ",\n      \"after\": ");
+                sb_change(&b, &s->after);
+            }
+        }
         sb_puts(&b, i == sys->stop ? ",\n      \"stop\": true\n" : ",\n      \"stop\": false\n");
         sb_puts(&b, i + 1 < sys->nsurf ? "    },\n" : "    }\n");
     }

@@ -756,9 +756,37 @@ static int end_surface(zctx *c)
                             "(PARM 1 to 8)", k, z->parm[k]);
             }
         }
+    } else if (strcmp(z->type, "COORDBRK") == 0) {
+        /* Zemax's parameters: decenter x, decenter y, tilt about x, y, z
+         * (degrees), and the order flag (0: decenter, then tilt). */
+        s->type = SG_SURF_COORDBRK;
+        for (k = 7; k <= ZMX_MAX_PARM; k++)
+            if (z->parm[k] != 0.0) {
+                c->line = z->parm_line[k];
+                return zerr(c, SG_EUNSUPPORTED,
+                            "PARM %d is %.17g; a coordinate break has parameters 1 to 6", k,
+                            z->parm[k]);
+            }
+        if (z->parm[0] != 0.0) {
+            c->line = z->parm_line[0];
+            return zerr(c, SG_EUNSUPPORTED, "PARM 0 is %.17g; a coordinate break has "
+                        "parameters 1 to 6", z->parm[0]);
+        }
+        s->before.dx = z->parm[1];
+        s->before.dy = z->parm[2];
+        s->before.tx = z->parm[3];
+        s->before.ty = z->parm[4];
+        s->before.tz = z->parm[5];
+        s->before.order = z->parm[6] != 0.0;
+        /* Its medium is the one before it; its radius is not used. */
+        if (s->mat.kind != SG_MAT_AIR) {
+            c->line = z->type_line ? z->type_line : z->line;
+            return zerr(c, SG_EUNSUPPORTED, "a coordinate break with a material (GLAS); "
+                        "Zemax keeps the medium before it");
+        }
+        s->radius = INFINITY;
     } else {
-        const char *what = strcmp(z->type, "COORDBRK") == 0 ? "a coordinate break"
-                           : strcmp(z->type, "TOROIDAL") == 0 ? "a toroid"
+        const char *what = strcmp(z->type, "TOROIDAL") == 0 ? "a toroid"
                            : strcmp(z->type, "BICONICX") == 0 || strcmp(z->type, "BICONIC") == 0
                                ? "a biconic"
                            : strcmp(z->type, "ODDASPHE") == 0 ? "an odd asphere"
@@ -769,8 +797,8 @@ static int end_surface(zctx *c)
                            : strcmp(z->type, "XPOLYNOM") == 0 ? "an XY polynomial"
                                                                : "this surface type";
         return zerr(c, SG_EUNSUPPORTED,
-                    "TYPE %s is %s; sagitta has standard (sphere, conic) and even-asphere "
-                    "surfaces only", z->type, what);
+                    "TYPE %s is %s; sagitta has standard (sphere, conic), even-asphere "
+                    "and coordinate-break surfaces only", z->type, what);
     }
     if (z->pend_line) {
         c->line = z->pend_line;
@@ -930,9 +958,13 @@ static int surface_line(zctx *c, const zline *l)
         nz = !all_zero(c, l, 2, &rc);
         if (rc != SG_OK)
             return rc;
+        /* The fields of these lines are not documented where this reader
+         * could check them; a guess could tilt the wrong way silently. */
         if (nz)
-            return pend(c, SG_EUNSUPPORTED, "%.4s: a tilt or decenter %s the surface; sagitta's "
-                        "surfaces are centred and untilted", k->p,
+            return pend(c, SG_EUNSUPPORTED, "%.4s: a tilt or decenter %s the surface; sagitta "
+                        "reads Zemax's coordinate breaks (TYPE COORDBRK) but not the surface "
+                        "tilt/decenter lines, whose fields it cannot check: in Zemax, convert "
+                        "them to coordinate breaks", k->p,
                         tok_is(k, "SCAD") ? "after" : "before");
         return SG_OK;
     }
@@ -1552,6 +1584,14 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
             return sg_diag_set(d, SG_ERANGE, "export: surface %d: a value a .zmx file cannot "
                                "hold (thickness %g, radius %g, conic %g)", i, f->thickness,
                                f->radius, f->conic);
+        if (f->type != SG_SURF_COORDBRK && sg_surface_moves_frame(f))
+            return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: a tilt or decenter "
+                               "before or after a surface is not written to .zmx (its "
+                               "SCBD/SCAD lines are not checked); use coordinate breaks", i);
+        if (f->type != SG_SURF_COORDBRK && f->after_mode == SG_AFTER_REVERSE &&
+            !sg_frame_change_is_zero(&f->before))
+            return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: a reversed tilt or "
+                               "decenter is not written to .zmx; use coordinate breaks", i);
         if (f->type == SG_SURF_EVENASPH)
             for (k = 0; k < SG_NASPH; k++)
                 if (!isfinite(f->asph[k]))
@@ -1611,7 +1651,10 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
     mpfr_init2(q, 128);
     for (i = 0; i < s->nsurf; i++) {
         const sg_surface *f = &s->surf[i];
-        zb_printf(b, "SURF %d\n  TYPE %s\n", i, f->type == SG_SURF_EVENASPH ? "EVENASPH" : "STANDARD");
+        zb_printf(b, "SURF %d\n  TYPE %s\n", i,
+                  f->type == SG_SURF_EVENASPH   ? "EVENASPH"
+                  : f->type == SG_SURF_COORDBRK ? "COORDBRK"
+                                                : "STANDARD");
         if (f->comment[0]) {
             zb_add(b, "  COMM ", 7);
             zb_text(b, f->comment, &changed);
@@ -1632,6 +1675,12 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         if (f->type == SG_SURF_EVENASPH)
             for (k = 0; k < SG_NASPH; k++)
                 zb_printf(b, "  PARM %d %s\n", k + 1, num(n1, f->asph[k]));
+        if (f->type == SG_SURF_COORDBRK) {
+            const double v[6] = {f->before.dx, f->before.dy, f->before.tx, f->before.ty,
+                                 f->before.tz, f->before.order ? 1.0 : 0.0};
+            for (k = 0; k < 6; k++)
+                zb_printf(b, "  PARM %d %s\n", k + 1, num(n1, v[k]));
+        }
         if (isinf(f->thickness))
             zb_add(b, "  DISZ INFINITY\n", 16);
         else

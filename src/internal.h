@@ -22,6 +22,13 @@ int sg_glass_index_mpfr(const sg_glass *g, mpfr_t out, const mpfr_t um);
  * the error, if any, without repeating the warnings. */
 int sg_system_check(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
 
+/* Whether the transfer into surface i (i >= 1) from surface i-1's frame
+ * is more than the thickness along z. */
+int sg_xfer_moves(const sg_system *sys, int i);
+/* That transfer, p_i = A^T (p_{i-1} - b), at the precision of b (A's
+ * entries take theirs), from MPFR 32 bits finer. */
+int sg_xfer_mpfr(const sg_system *sys, int i, mpfr_t A[3][3], mpfr_t b[3]);
+
 /* Copies at most n-1 bytes and always terminates. */
 void sg_strlcpy(char *dst, const char *src, size_t n);
 

@@ -1,8 +1,11 @@
 /*
  * layout.c - a y-z cross-section of the system: each surface's profile at
- * its vertex's global z, and fans of rays in y.  Local frames are parallel
- * to the global one, so a point's global z is its local z plus the sum of
- * the thicknesses before it (surface 1 at 0).
+ * its vertex's global z, and fans of rays in y.  In a system without
+ * tilts, decenters or breaks the local frames are parallel to the global
+ * one, so a point's global z is its local z plus the sum of the
+ * thicknesses before it (surface 1 at 0); otherwise each point goes
+ * through its surface's global frame (sg_global_frames, surface 1 the
+ * reference, as in Zemax's layouts) and is drawn projected on y-z.
  */
 #include <math.h>
 #include <stdlib.h>
@@ -38,6 +41,19 @@ void sg_layout_free(sg_layout *l)
     l->ray = NULL;
 }
 
+/* A local point of surface i as drawn: global y and z. */
+static void to_yz(const sg_frame *gf, const double *z0, int i, double x, double y, double z,
+                  double *gy, double *gz)
+{
+    if (!gf) {
+        *gy = y;
+        *gz = z + z0[i];
+        return;
+    }
+    *gy = gf[i].R[1][0] * x + gf[i].R[1][1] * y + gf[i].R[1][2] * z + gf[i].o[1];
+    *gz = gf[i].R[2][0] * x + gf[i].R[2][1] * y + gf[i].R[2][2] * z + gf[i].o[2];
+}
+
 static void extend(sg_layout *l, double y, double z, int *first)
 {
     if (*first) {
@@ -58,6 +74,7 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
     int fields[SG_MAX_FIELDS], nf, ns, i, j, f, rc, first = 1;
     size_t nray, r;
     double *z0 = NULL;
+    sg_frame *gf = NULL;
     sg_ray_in *rays = NULL;
     sg_ray_surface *rows = NULL;
     int *st = NULL;
@@ -92,6 +109,20 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
     }
     for (i = 2; i < ns; i++)
         z0[i] = z0[i - 1] + sys->surf[i - 1].thickness;
+    for (i = 1; i < ns && !sg_surface_moves_frame(&sys->surf[i]) &&
+                sys->surf[i].after_mode == SG_AFTER_EXPLICIT;
+         i++)
+        ;
+    if (i < ns) {
+        if (!(gf = malloc((size_t)ns * sizeof *gf))) {
+            rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
+            goto done;
+        }
+        if ((rc = sg_global_frames(sys, 1, gf, d)) != SG_OK)
+            goto done;
+        for (i = 1; i < ns; i++)
+            z0[i] = gf[i].o[2];
+    }
     for (f = 0; f < nf; f++) {
         double hx, hy;
         out->field_index[f] = fields[f];
@@ -126,8 +157,7 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
                      (row[i].status == SG_EVIGNETTED && isfinite(row[i].y) && isfinite(row[i].z));
             if (!ok)
                 break;
-            lr->y[lr->npts] = row[i].y;
-            lr->z[lr->npts] = row[i].z + z0[i];
+            to_yz(gf, z0, i, row[i].x, row[i].y, row[i].z, &lr->y[lr->npts], &lr->z[lr->npts]);
             extend(out, lr->y[lr->npts], lr->z[lr->npts], &first);
             lr->npts++;
             if (row[i].status != SG_OK)
@@ -140,8 +170,17 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
         double sd = su->semi_diameter;
         int np = o->profile_pts;
         s->z0 = z0[i];
-        s->mirror = su->mat.kind == SG_MAT_MIRROR;
+        s->mirror = su->type != SG_SURF_COORDBRK && su->mat.kind == SG_MAT_MIRROR;
         s->glass_after = su->mat.kind == SG_MAT_GLASS || su->mat.kind == SG_MAT_INDEX;
+        if (su->type == SG_SURF_COORDBRK) {
+            /* A break has no profile; it still takes a place. */
+            s->glass_after = 0;
+            for (j = i - 1; j > 0 && sys->surf[j].type == SG_SURF_COORDBRK; j--)
+                ;
+            s->glass_after = sys->surf[j].mat.kind == SG_MAT_GLASS ||
+                             sys->surf[j].mat.kind == SG_MAT_INDEX;
+            continue;
+        }
         if (!(sd > 0.0)) {
             /* Zemax's automatic semi-diameter: the largest ray height there. */
             sd = 0.0;
@@ -163,15 +202,15 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
             double z = sg_surface_sag(su, 0.0, y);
             if (!isfinite(z))
                 continue; /* beyond the conic's domain: nothing to draw */
-            s->y[s->npts] = y;
-            s->z[s->npts] = z + z0[i];
-            extend(out, y, s->z[s->npts], &first);
+            to_yz(gf, z0, i, 0.0, y, z, &s->y[s->npts], &s->z[s->npts]);
+            extend(out, s->y[s->npts], s->z[s->npts], &first);
             s->npts++;
         }
     }
     rc = SG_OK;
 done:
     free(z0);
+    free(gf);
     free(rays);
     free(rows);
     free(st);

@@ -14,8 +14,8 @@
 #include "internal.h"
 
 static const char *const units_names[] = {"mm", "cm", "in", "m"};
-static const char *const surf_type_names[] = {"standard", "even_asphere"};
-static const char *const surf_type_shown[] = {"STANDARD", "EVENASPH"};
+static const char *const surf_type_names[] = {"standard", "even_asphere", "coordinate_break"};
+static const char *const surf_type_shown[] = {"STANDARD", "EVENASPH", "COORDBRK"};
 static const char *const aperture_names[] = {
     "none", "circular_aperture", "circular_obscuration", "rectangular_aperture",
     "rectangular_obscuration", "elliptical_aperture", "elliptical_obscuration"};
@@ -81,7 +81,7 @@ static const sg_param field_params[] = {
 
 static const sg_param surface_params[] = {
     {"type", "type", "Type", "type", "TYPE", SG_PARAM_ENUM, 0, offsetof(sg_surface, type), 0, 1,
-     0, 0, 0, 0, SG_SURF_STANDARD, surf_type_names, surf_type_shown, 2, 1},
+     0, 0, 0, 0, SG_SURF_STANDARD, surf_type_names, surf_type_shown, 3, 1},
     {"comment", "comment", "Comment", "comment", "COMM", SG_PARAM_TEXT, 0,
      offsetof(sg_surface, comment), SG_COMMENT, 1, 0, 0, 0, 0, 0, NONAMES, 1},
     REAL1(sg_surface, "radius", "radius", "Radius", "radius", "CURV", SG_PARAM_INF, radius,
@@ -339,6 +339,16 @@ int sg_param_equal(sg_param_scope scope, const void *a, const void *b)
     return 1;
 }
 
+/* Frame changes are one nested JSON object each ("break", "before",
+ * "after"), read and written by design_json.c outside this table; bits,
+ * as the table compares. */
+static int same_change(const sg_frame_change *a, const sg_frame_change *b)
+{
+    return memcmp(&a->dx, &b->dx, sizeof a->dx) == 0 && memcmp(&a->dy, &b->dy, sizeof a->dy) == 0 &&
+           memcmp(&a->tx, &b->tx, sizeof a->tx) == 0 && memcmp(&a->ty, &b->ty, sizeof a->ty) == 0 &&
+           memcmp(&a->tz, &b->tz, sizeof a->tz) == 0 && a->order == b->order;
+}
+
 int sg_system_equal(const sg_system *a, const sg_system *b)
 {
     int i;
@@ -353,7 +363,10 @@ int sg_system_equal(const sg_system *a, const sg_system *b)
         if (!sg_param_equal(SG_SCOPE_FIELD, &a->field[i], &b->field[i]))
             return 0;
     for (i = 0; i < a->nsurf; i++)
-        if (!sg_param_equal(SG_SCOPE_SURFACE, &a->surf[i], &b->surf[i]))
+        if (!sg_param_equal(SG_SCOPE_SURFACE, &a->surf[i], &b->surf[i]) ||
+            !same_change(&a->surf[i].before, &b->surf[i].before) ||
+            !same_change(&a->surf[i].after, &b->surf[i].after) ||
+            a->surf[i].after_mode != b->surf[i].after_mode)
             return 0;
     return 1;
 }

@@ -27,6 +27,8 @@ extern "C" {
 #define SG_VERSION_STRING "0.1.0"
 
 /* The JSON design format version this library reads and writes. */
+/* Version 2 adds coordinate breaks and surface tilts and decenters; a
+ * design without them is still written as version 1. */
 #define SG_DESIGN_FORMAT_VERSION 2
 
 /* ------------------------------------------------------------------------
@@ -170,7 +172,8 @@ int sg_glass_in_range(const sg_glass *g, double um);
 
 typedef enum sg_surf_type {
     SG_SURF_STANDARD = 0, /* sphere, plane or conic */
-    SG_SURF_EVENASPH = 1  /* conic plus even polynomial in r */
+    SG_SURF_EVENASPH = 1, /* conic plus even polynomial in r */
+    SG_SURF_COORDBRK = 2  /* Zemax's coordinate break: a new frame, no optics */
 } sg_surf_type;
 
 /* Surface apertures and obscurations, as Zemax defines them: one a surface
@@ -200,6 +203,23 @@ typedef struct sg_material {
     double index;             /* for SG_MAT_INDEX */
 } sg_material;
 
+/* A change of coordinate frame, as Zemax defines it (its coordinate break
+ * and surface tilt/decenter).  Order 0: decenter the frame in x and y,
+ * then tilt it about x, then about the new y, then about the new z.
+ * Order 1: tilt about z, new y, new x, then decenter along the new axes.
+ * Tilts are in degrees, right-handed; decenters in lens units.  A change
+ * with order toggled and every value negated undoes it. */
+typedef struct sg_frame_change {
+    double dx, dy;
+    double tx, ty, tz;
+    int order; /* 0 or 1 */
+} sg_frame_change;
+
+typedef enum sg_after_mode {
+    SG_AFTER_EXPLICIT = 0, /* the after change is as given */
+    SG_AFTER_REVERSE = 1   /* the after change undoes the before change */
+} sg_after_mode;
+
 typedef struct sg_surface {
     sg_surf_type type;
     char comment[SG_COMMENT];
@@ -214,8 +234,13 @@ typedef struct sg_surface {
     double ap_rmin, ap_rmax;   /* circular: the annulus's radii */
     double ap_xhalf, ap_yhalf; /* rectangular and elliptical: half widths */
     double ap_xdec, ap_ydec;   /* the aperture's centre in the local frame */
-    /* Room for tilts and decenters: every frame change goes through one
-     * internal transfer function, which will read these once they exist. */
+    /* The frame changes around the surface: before it (for a coordinate
+     * break, the break itself) and after it, ahead of the thickness.  A
+     * coordinate break is a plane in its new frame, with the medium
+     * before it; its radius, material and semi-diameter are not used. */
+    sg_frame_change before;
+    sg_frame_change after;
+    sg_after_mode after_mode;
 } sg_surface;
 
 typedef enum sg_field_type {
@@ -389,6 +414,11 @@ int sg_field_check(const sg_system *sys, double hx, double hy, sg_diag *d);
 double sg_surface_curvature(const sg_surface *s);
 /* Sag z(x, y) in the surface's local frame; NaN outside the conic's domain. */
 double sg_surface_sag(const sg_surface *s, double x, double y);
+/* Whether a frame change moves or turns anything. */
+int sg_frame_change_is_zero(const sg_frame_change *c);
+/* Whether a surface changes the frame: a coordinate break, or a tilt or
+ * decenter before or after it. */
+int sg_surface_moves_frame(const sg_surface *s);
 
 /* ------------------------------------------------------------------------
  * JSON designs
@@ -497,6 +527,41 @@ typedef struct sg_ray_surface {
     double opl, opl_lo, opl_error_bound;
     int status;         /* SG_OK or a ray failure: SG_EMISS, SG_ETIR, ... */
 } sg_ray_surface;
+
+/* A surface's frame in a global one: a point p given in the surface's
+ * local frame is R p + o globally, and a direction u is R u.  R's columns
+ * are the local axes. */
+typedef struct sg_frame {
+    double R[3][3];
+    double o[3];
+} sg_frame;
+/* Every surface's frame (out[0..nsurf-1]) relative to the frame of
+ * surface ref, Zemax's global coordinate reference surface (1 by
+ * default; 0 is refused for an object at infinity, whose frame has no
+ * place).  Computed in 256-bit MPFR and rounded. */
+int sg_global_frames(const sg_system *sys, int ref, sg_frame *out, sg_diag *d);
+/* A trace row in surface i's local frame to the global frame f: point,
+ * direction and their bounds (a rotation can grow a coordinate's error by
+ * the rows of R; the conversion's rounding is added). */
+void sg_row_to_global(const sg_frame *f, sg_ray_surface *row);
+
+/* Zemax's automatic semi-diameters. */
+typedef struct sg_semidiam_opts {
+    sg_trace_opts trace; /* the method; every wavelength is traced (trace.wave
+                            is not used); clip off, so no fixed aperture
+                            hides a ray */
+    int ring;            /* rays on the pupil's edge a field and wavelength (64) */
+    int refine;          /* golden-section steps refining each surface's
+                            highest ray along the edge (40) */
+} sg_semidiam_opts;
+void sg_semidiam_opts_init(sg_semidiam_opts *o);
+/* sd[i] for every surface i: the largest radial height, hypot(x, y) in the
+ * surface's frame, of the real rays through the edge of the pupil over
+ * every field and wavelength (0 where none reaches, and on the object).
+ * The ring finds each surface's highest ray; a golden-section search along
+ * the edge refines it.  o NULL takes the defaults. */
+int sg_semi_diameters(const sg_system *sys, const sg_catalog *cat, const sg_semidiam_opts *o,
+                      double *sd, sg_diag *d);
 
 /* A prepared system: indices, paraxial data and work buffers, computed
  * once so the per-ray path allocates nothing.  A tracer is used by one

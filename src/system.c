@@ -154,7 +154,7 @@ int sg_system_delete(sg_system *sys, int at)
 
 double sg_surface_curvature(const sg_surface *s)
 {
-    if (isinf(s->radius) || s->radius == 0.0)
+    if (s->type == SG_SURF_COORDBRK || isinf(s->radius) || s->radius == 0.0)
         return 0.0;
     return 1.0 / s->radius;
 }
@@ -176,6 +176,95 @@ double sg_surface_sag(const sg_surface *s, double x, double y)
         z += p * r2;
     }
     return z;
+}
+
+/* Lengths a trace squares (radii, thicknesses, pupil and field sizes) must
+ * keep their squares and products inside the doubles. */
+#define SG_MAX_LEN 1e150
+
+/* A frame change's values: finite, within the model's lengths and one
+ * turn, order 0 or 1. */
+static int check_change(const sg_frame_change *c, int i, const char *which, sg_diag *d)
+{
+    const double v[5] = {c->dx, c->dy, c->tx, c->ty, c->tz};
+    static const char *const name[5] = {"decenter x", "decenter y", "tilt about x",
+                                        "tilt about y", "tilt about z"};
+    int k;
+    for (k = 0; k < 5; k++) {
+        if (!isfinite(v[k]))
+            return sg_diag_set(d, SG_ERANGE, "surface %d: %s %s is not finite", i, which,
+                               name[k]);
+        if (k < 2 && fabs(v[k]) > SG_MAX_LEN)
+            return sg_diag_set(d, SG_ERANGE, "surface %d: %s %s %g is beyond %g lens units", i,
+                               which, name[k], v[k], SG_MAX_LEN);
+        if (k >= 2 && fabs(v[k]) > 360.0)
+            return sg_diag_set(d, SG_ERANGE, "surface %d: %s %s %g is beyond 360 degrees", i,
+                               which, name[k], v[k]);
+    }
+    if (c->order != 0 && c->order != 1)
+        return sg_diag_set(d, SG_ERANGE,
+                           "surface %d: %s order %d must be 0 (decenter, then tilt) or 1 "
+                           "(tilt, then decenter)", i, which, c->order);
+    return SG_OK;
+}
+
+/* Where frame changes may stand: rays start in surface 1's frame, so
+ * nothing may move the object or surface 1 itself; the image has nothing
+ * after it; a coordinate break is a plane in the medium before it. */
+static int check_frames(const sg_system *sys, int i, sg_diag *d)
+{
+    const sg_surface *s = &sys->surf[i];
+    const char *what = s->type == SG_SURF_COORDBRK ? "break" : "before";
+    int rc, last = sys->nsurf - 1;
+    if ((rc = check_change(&s->before, i, what, d)) != SG_OK ||
+        (rc = check_change(&s->after, i, "after", d)) != SG_OK)
+        return rc;
+    if (s->after_mode != SG_AFTER_EXPLICIT && s->after_mode != SG_AFTER_REVERSE)
+        return sg_diag_set(d, SG_ERANGE, "surface %d: after mode %d is not explicit or reverse",
+                           i, (int)s->after_mode);
+    if (s->after_mode == SG_AFTER_REVERSE && !sg_frame_change_is_zero(&s->after))
+        return sg_diag_set(d, SG_EINVAL,
+                           "surface %d: after: \"reverse\" undoes the before change and takes "
+                           "no values of its own", i);
+    if (s->type == SG_SURF_COORDBRK) {
+        if (i <= 1 || i == last)
+            return sg_diag_set(d, SG_EINVAL,
+                               "surface %d: the %s cannot be a coordinate break", i,
+                               i == 0 ? "object" : i == 1 ? "first surface" : "image");
+        if (i == sys->stop)
+            return sg_diag_set(d, SG_EINVAL,
+                               "surface %d: a coordinate break cannot be the stop", i);
+        if (s->mat.kind != SG_MAT_AIR)
+            return sg_diag_set(d, SG_EINVAL,
+                               "surface %d: a coordinate break keeps the medium before it; "
+                               "its material must be empty (AIR)", i);
+        if (isfinite(s->radius) && s->radius != 0.0)
+            return sg_diag_set(d, SG_EINVAL,
+                               "surface %d: a coordinate break is flat; its radius must be inf",
+                               i);
+        if (!sg_frame_change_is_zero(&s->after) || s->after_mode != SG_AFTER_EXPLICIT)
+            return sg_diag_set(d, SG_EINVAL,
+                               "surface %d: a coordinate break has no after change; use "
+                               "another break", i);
+        if (s->aperture != SG_APERTURE_NONE)
+            return sg_diag_set(d, SG_EINVAL,
+                               "surface %d: a coordinate break has no aperture; put it on a "
+                               "dummy surface after the break", i);
+        return SG_OK;
+    }
+    if (i == 0 && sg_surface_moves_frame(s))
+        return sg_diag_set(d, SG_EINVAL,
+                           "surface 0: the object cannot be tilted or decentered");
+    if (i == 1 && !sg_frame_change_is_zero(&s->before))
+        return sg_diag_set(d, SG_EINVAL,
+                           "surface 1: rays start in surface 1's frame, which cannot be "
+                           "tilted or decentered before it; tilt after it, or from surface 2 "
+                           "on");
+    if (i == last && (s->after_mode == SG_AFTER_REVERSE ? 0 : !sg_frame_change_is_zero(&s->after)))
+        return sg_diag_set(d, SG_EINVAL,
+                           "surface %d: nothing follows the image, so it takes no after change",
+                           i);
+    return SG_OK;
 }
 
 static int finite_or_inf_radius(double r)
@@ -285,6 +374,13 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
         const sg_surface *s = &sys->surf[i];
         if (!finite_or_inf_radius(s->radius))
             return sg_diag_set(d, SG_ERANGE, "surface %d: radius is not a number", i);
+        if ((int)s->type < SG_SURF_STANDARD || (int)s->type > SG_SURF_COORDBRK)
+            return sg_diag_set(d, SG_ERANGE, "surface %d: type %d is unknown", i, (int)s->type);
+        {
+            int rc = check_frames(sys, i, d);
+            if (rc != SG_OK)
+                return rc;
+        }
         /* Beyond this a trace's squares overflow: such a surface is flat
          * to every digit, and "inf" says so. */
         if (isfinite(s->radius) && fabs(s->radius) > SG_MAX_LEN)
@@ -296,7 +392,9 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
                                "surface %d: thickness %g is beyond %g lens units", i,
                                s->thickness, SG_MAX_LEN);
         if (i > 0 && i < sys->nsurf - 1) {
-            track += fabs(s->thickness);
+            /* Decenters move the rays as far as thicknesses do. */
+            track += fabs(s->thickness) + fabs(s->before.dx) + fabs(s->before.dy) +
+                     fabs(s->after.dx) + fabs(s->after.dy);
             if (track > SG_MAX_LEN)
                 return sg_diag_set(d, SG_ERANGE,
                                    "surface %d: thickness: the system is longer than %g lens "

@@ -327,7 +327,24 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
     for (i = 1; i <= upto; i++) {
         const sg_sprep *s = &t->sp[i];
         sg_ray_surface *o = &out[i];
-        double zl = P[2] - s->zg;
+        double zl;
+        if (s->xf) {
+            /* Into this surface's frame, which classic then keeps: the
+             * rotation in double, as a textbook trace would do it. */
+            const sg_xfer *x = s->xf;
+            double q[3] = {P[0] - x->bd[0], P[1] - x->bd[1], (P[2] - t->sp[i - 1].zg) - x->bd[2]};
+            double dq[3] = {d[0], d[1], d[2]}, big;
+            int j;
+            big = fmax(fabs(P[0]), fmax(fabs(P[1]), fabs(P[2]))) + fabs(t->sp[i - 1].zg) +
+                  fmax(fabs(x->bd[0]), fmax(fabs(x->bd[1]), fabs(x->bd[2])));
+            for (j = 0; j < 3; j++) {
+                P[j] = x->Atd[j][0] * q[0] + x->Atd[j][1] * q[1] + x->Atd[j][2] * q[2];
+                d[j] = x->Atd[j][0] * dq[0] + x->Atd[j][1] * dq[1] + x->Atd[j][2] * dq[2];
+            }
+            eP = x->grow * (eP + 3.0 * U53 * big) + 4.0 * U53 * x->grow * big;
+            eD = x->grow * eD + 4.0 * U53 * x->grow;
+        }
+        zl = P[2] - s->zg;
         double c = s->c, k1 = s->k1.hi, tt, x, y, z, dn;
         double A = c * (d[0] * d[0] + d[1] * d[1] + k1 * d[2] * d[2]);
         double B = 2.0 * c * (P[0] * d[0] + P[1] * d[1] + k1 * zl * d[2]) - 2.0 * d[2];
@@ -481,6 +498,11 @@ int sg_indices_mpfr(const sg_system *sys, const sg_catalog *cat, int wave,
     mpfr_set_d(um, sys->wave[wave].um, MPFR_RNDN);
     for (i = 0; i < sys->nsurf; i++) {
         const sg_surface *s = &sys->surf[i];
+        if (s->type == SG_SURF_COORDBRK && i > 0) {
+            /* A coordinate break keeps the medium before it. */
+            mpfr_set(idx[i], idx[i - 1], MPFR_RNDN);
+            continue;
+        }
         switch (s->mat.kind) {
         case SG_MAT_AIR:
             mpfr_set_si(idx[i], sign, MPFR_RNDN);
@@ -525,6 +547,45 @@ out:
     return rc;
 }
 
+/* The transfer into surface i when it is more than a step along z: in
+ * double-double and double from 288-bit MPFR. */
+static const sg_xfer *prepare_xfer(sg_tracer *t, int i)
+{
+    sg_xfer *x = &t->xf[i];
+    mpfr_t A[3][3], b[3], e;
+    int j, k;
+    for (j = 0; j < 3; j++) {
+        for (k = 0; k < 3; k++)
+            mpfr_init2(A[j][k], 256);
+        mpfr_init2(b[j], 256);
+    }
+    mpfr_init2(e, 256);
+    sg_xfer_mpfr(t->sys, i, A, b);
+    x->grow = 0.0;
+    for (j = 0; j < 3; j++) {
+        double row = 0.0;
+        for (k = 0; k < 3; k++) {
+            /* Stored transposed: row j of A^T gives coordinate j. */
+            x->At[j][k] = dd_from_mpfr(A[k][j], e);
+            x->Atd[j][k] = x->At[j][k].hi;
+            row += fabs(x->Atd[j][k]);
+        }
+        x->b[j] = dd_from_mpfr(b[j], e);
+        x->bd[j] = x->b[j].hi;
+        x->grow = fmax(x->grow, row);
+    }
+    /* A max-norm error grows by at most A^T's largest row sum; rounded
+     * up, with room for the rounding of the entries themselves. */
+    x->grow = x->grow * (1.0 + 0x1p-50);
+    for (j = 0; j < 3; j++) {
+        for (k = 0; k < 3; k++)
+            mpfr_clear(A[j][k]);
+        mpfr_clear(b[j]);
+    }
+    mpfr_clear(e);
+    return x;
+}
+
 static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
 {
     const sg_system *sys = t->sys;
@@ -554,16 +615,29 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
             p->shape = SHAPE_CONIC;
         else
             p->shape = SHAPE_PLANE;
-        p->mirror = s->mat.kind == SG_MAT_MIRROR;
-        p->sd = s->sd_fixed ? s->semi_diameter : 0.0;
-        p->aper = (int)s->aperture;
+        if (s->type == SG_SURF_COORDBRK) {
+            p->R = INFINITY;
+            p->c = 0.0;
+            p->k1 = dd_from(1.0);
+            p->nasph = 0;
+            p->shape = SHAPE_PLANE;
+        }
+        p->mirror = s->type != SG_SURF_COORDBRK && s->mat.kind == SG_MAT_MIRROR;
+        p->sd = s->sd_fixed && s->type != SG_SURF_COORDBRK ? s->semi_diameter : 0.0;
+        p->aper = s->type == SG_SURF_COORDBRK ? 0 : (int)s->aperture;
         p->ap_a = s->aperture == SG_APERTURE_CIRCULAR || s->aperture == SG_OBSCURATION_CIRCULAR
                       ? s->ap_rmin : s->ap_xhalf;
         p->ap_b = s->aperture == SG_APERTURE_CIRCULAR || s->aperture == SG_OBSCURATION_CIRCULAR
                       ? s->ap_rmax : s->ap_yhalf;
         p->ap_dx = s->ap_xdec;
         p->ap_dy = s->ap_ydec;
-        if (i >= 2)
+        p->xf = i >= 2 && sg_xfer_moves(sys, i) ? prepare_xfer(t, i) : NULL;
+        /* Classic traces in the frame of the last surface a transfer
+         * turned or moved (surface 1's until then): zg is the vertex's z
+         * there. */
+        if (p->xf)
+            zg = 0.0;
+        else if (i >= 2)
             zg += p->T;
         p->zg = i >= 1 ? zg : -p->T;
         t->nsigned[i] = mpfr_get_d(idx[i], MPFR_RNDN);
@@ -624,6 +698,16 @@ sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
         free(idx);
         goto fail;
     }
+    for (i = 2; i < n; i++)
+        if (sg_xfer_moves(sys, i)) {
+            t->xf = calloc((size_t)n, sizeof *t->xf);
+            if (!t->xf) {
+                sg_diag_set(d, SG_ENOMEM, "out of memory");
+                free(idx);
+                goto fail;
+            }
+            break;
+        }
     for (i = 0; i < n; i++)
         mpfr_init2(idx[i], 256);
     rc = sg_indices_mpfr(sys, cat, t->wave, idx, d);
@@ -676,6 +760,7 @@ void sg_tracer_free(sg_tracer *t)
     sg_tracer_free(t->prim);
     sg_system_free(t->sys);
     free(t->sp);
+    free(t->xf);
     free(t->nsigned);
     free(t->scratch);
     free(t);

@@ -23,6 +23,17 @@
 
 enum { SHAPE_PLANE = 0, SHAPE_CONIC = 1, SHAPE_ASPH = 2 };
 
+/* A transfer into a surface's frame that tilts or decenters (frame.c):
+ * p_i = A^T (p_{i-1} - b), d_i = A^T d_{i-1}.  The plain step along z of
+ * an untilted system has none, and keeps its exact subtraction. */
+typedef struct sg_xfer {
+    dd At[3][3];      /* A transposed, each entry rounded from MPFR */
+    dd b[3];
+    double Atd[3][3]; /* the same in double, for classic */
+    double bd[3];
+    double grow;      /* A^T's largest row sum, rounded up */
+} sg_xfer;
+
 /* One surface, reduced to what the per-ray code reads. */
 typedef struct sg_sprep {
     int shape;
@@ -39,7 +50,8 @@ typedef struct sg_sprep {
     int aper;    /* sg_aperture_type of the surface aperture */
     double ap_a, ap_b;   /* circular: min and max radius; else x and y half widths */
     double ap_dx, ap_dy; /* the aperture's decenter */
-    double zg;   /* vertex z in the global frame (surface 1 at 0), classic only */
+    double zg;   /* vertex z in classic's frame (surface 1's until a transfer turns it) */
+    const sg_xfer *xf; /* the transfer into this surface, when it turns or moves */
 } sg_sprep;
 
 /* 1 + conic is exactly 1 on spheres, where a product by it is the other
@@ -92,6 +104,7 @@ struct sg_tracer {
     int wave;
     int n;
     sg_sprep *sp;
+    sg_xfer *xf;       /* nsurf entries when any transfer turns or moves */
     double *nsigned;   /* index after each surface, negative after odd mirrors */
     sg_paraxial px;
     sg_launch ln;

@@ -15,9 +15,12 @@
 
 #include "trace_internal.h"
 
-enum { NT = 32, NA = 16 };
+enum { NT = 48, NA = 16 };
 
 typedef struct msurf {
+    int xf;           /* the transfer into it turns or moves the frame */
+    double bmax;      /* its largest offset, which the point's bound must cover */
+    mpfr_t A[3][3], b[3]; /* that transfer (frame.c), only where xf */
     mpfr_t R, k1, T, mu;
     mpfr_t nb; /* |index| before the surface */
     mpfr_t a[SG_NASPH];
@@ -106,6 +109,14 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
     if (m->s) {
         for (i = 0; i < m->n; i++) {
             mpfr_clears(m->s[i].R, m->s[i].k1, m->s[i].T, m->s[i].mu, m->s[i].nb, (mpfr_ptr)0);
+            if (m->s[i].xf) {
+                int j, k2;
+                for (j = 0; j < 3; j++) {
+                    for (k2 = 0; k2 < 3; k2++)
+                        mpfr_clear(m->s[i].A[j][k2]);
+                    mpfr_clear(m->s[i].b[j]);
+                }
+            }
             for (k = 0; k < SG_NASPH; k++)
                 mpfr_clear(m->s[i].a[k]);
         }
@@ -570,6 +581,28 @@ static double normal_turn(const sg_sprep *sp, double x, double y, double z, cons
  * as much, plus the turn of each normal by its point's error, carried on
  * through later bends (a refraction scales it by up to 1 + mu / cos of the
  * refracted angle). */
+/* Into a surface's frame through a transfer that turns or moves it:
+ * P = A^T (P - b), D = A^T D, at the context's precision (A and b come
+ * from frame.c 32 bits finer). */
+static void xfer_m(sg_mpfr_ctx *m, const msurf *s)
+{
+    mpfr_t *q = m->t + 40, *v = m->t + 43;
+    mpfr_ptr P[3] = {m->P.x, m->P.y, m->P.z}, D[3] = {m->D.x, m->D.y, m->D.z};
+    int j, k;
+    for (j = 0; j < 3; j++)
+        mpfr_sub(q[j], P[j], s->b[j], MPFR_RNDN);
+    for (j = 0; j < 3; j++) {
+        mpfr_set_zero(P[j], 1);
+        mpfr_set_zero(v[j], 1);
+        for (k = 0; k < 3; k++) {
+            mpfr_fma(P[j], s->A[k][j], q[k], P[j], MPFR_RNDN);
+            mpfr_fma(v[j], s->A[k][j], D[k], v[j], MPFR_RNDN);
+        }
+    }
+    for (j = 0; j < 3; j++)
+        mpfr_set(D[j], v[j], MPFR_RNDN);
+}
+
 static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
 {
     sg_mpfr_ctx *m = tr->mp;
@@ -580,7 +613,10 @@ static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
         sg_ray_surface *o = &out[i];
         double big;
         if (i > 1) {
-            mpfr_sub(m->P.z, m->P.z, m->s[i].T, MPFR_RNDN);
+            if (m->s[i].xf)
+                xfer_m(m, &m->s[i]);
+            else
+                mpfr_sub(m->P.z, m->P.z, m->s[i].T, MPFR_RNDN);
             mpfr_set_zero(m->path, 1);
         }
         rc = onto_surface(m, sp, &m->s[i], tr->o.max_iter);
@@ -603,7 +639,8 @@ static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
         }
         o->residual = sg_sprep_sag_resid(sp, o->x, o->y, o->z);
         big = fmax(fabs(o->x), fmax(fabs(o->y), fabs(o->z)));
-        o->error_bound = 0.5 * ulp_d(big) + ldexp(big + fabs(o->path), 16 - (int)m->prec);
+        o->error_bound = 0.5 * ulp_d(big) +
+                         ldexp(big + fabs(o->path) + m->s[i].bmax, 16 - (int)m->prec);
         /* As the point's: some 2^16 roundings of the path's size a surface. */
         o->opl_error_bound =
             sg_bound_up(ldexp((double)i * (big + fabs(o->opl) + fabs(o->path)), 16 - (int)m->prec));
@@ -1075,6 +1112,18 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
         mpfr_set_d(s->k1, sys->surf[i].conic, MPFR_RNDN);
         mpfr_add_ui(s->k1, s->k1, 1, MPFR_RNDN);
         mpfr_set_d(s->T, tr->sp[i].T, MPFR_RNDN);
+        if (tr->sp[i].xf) {
+            int j, k2;
+            for (j = 0; j < 3; j++) {
+                for (k2 = 0; k2 < 3; k2++)
+                    mpfr_init2(s->A[j][k2], prec);
+                mpfr_init2(s->b[j], prec);
+            }
+            s->xf = 1;
+            sg_xfer_mpfr(sys, i, s->A, s->b);
+            for (j = 0; j < 3; j++)
+                s->bmax = fmax(s->bmax, fabs(mpfr_get_d(s->b[j], MPFR_RNDU)));
+        }
         for (k = 0; k < SG_NASPH; k++)
             mpfr_set_d(s->a[k], tr->sp[i].a[k], MPFR_RNDN);
     }

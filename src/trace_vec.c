@@ -662,6 +662,38 @@ static __attribute__((noinline, cold)) vm rescue_v(const sg_tracer *t, const sg_
     return fail_lanes(bad, lost, live, SG_EUNCERT, st);
 }
 
+/* A transfer that turns or moves the frame (frame.c), in double-double:
+ * p = A^T (p - b), d = A^T d.  The rotation keeps lengths, so the carried
+ * errors grow at most by A^T's row sums (in the max norm the bounds use);
+ * the subtraction, three products and two sums per coordinate, and the
+ * rounding of A and b to double-double, add well under 16 DD_U of the
+ * terms' size.  The direction keeps its length to 2^-100, far inside eD,
+ * so it is not normalised again. */
+static void xfer_v(const sg_xfer *x, sg_vray *r)
+{
+    vdd q[3], p[3], d[3];
+    vd big, grow = vd_set(x->grow);
+    int j;
+    q[0] = vdd_sub(r->p.x, vdd_set(x->b[0]));
+    q[1] = vdd_sub(r->p.y, vdd_set(x->b[1]));
+    q[2] = vdd_sub(r->p.z, vdd_set(x->b[2]));
+    big = vd_fmax(vd_abs(r->p.x.hi), vd_fmax(vd_abs(r->p.y.hi), vd_abs(r->p.z.hi))) +
+          vd_set(fmax(fabs(x->bd[0]), fmax(fabs(x->bd[1]), fabs(x->bd[2]))));
+    for (j = 0; j < 3; j++) {
+        vdd a0 = vdd_set(x->At[j][0]), a1 = vdd_set(x->At[j][1]), a2 = vdd_set(x->At[j][2]);
+        p[j] = vdd_add(vdd_add(vdd_mul(a0, q[0]), vdd_mul(a1, q[1])), vdd_mul(a2, q[2]));
+        d[j] = vdd_add(vdd_add(vdd_mul(a0, r->d.x), vdd_mul(a1, r->d.y)), vdd_mul(a2, r->d.z));
+    }
+    r->p.x = p[0];
+    r->p.y = p[1];
+    r->p.z = p[2];
+    r->d.x = d[0];
+    r->d.y = d[1];
+    r->d.z = d[2];
+    r->eP = grow * (r->eP + 16.0 * DD_U * big);
+    r->eD = grow * (r->eD + 16.0 * DD_U);
+}
+
 /* One surface for every live lane; returns the lanes that stop here, with
  * their status in st[]. */
 static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
@@ -682,7 +714,10 @@ static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
     int it;
 
     /* Measure 1: into this surface's frame and onto its tangent plane. */
-    if (i > 1)
+    if (s->xf) {
+        xfer_v(s->xf, r);
+        dz = r->d.z.hi;
+    } else if (i > 1)
         r->p.z = vdd_add_d(r->p.z, vd_set(-s->T));
     base = r->p;
     eP0 = r->eP + DD_U * vd_abs(r->p.z.hi);

@@ -150,8 +150,8 @@ static void test_refusals(void **state)
 {
     /* Each line number is where grep -n finds the keyword in the file. */
     static const refusal cases[] = {
-        { "zmax_37992.zmx", SG_EUNSUPPORTED, { "zmax_37992.zmx:86: surface 2", "COORDBRK",
-                                               "coordinate break" } },
+        { "zmax_37992.zmx", SG_EUNSUPPORTED, { "zmax_37992.zmx:118: surface 3", "OBDC",
+                                               "decentred aperture" } },
         { "thorlabs_lj1598l1.zmx", SG_EUNSUPPORTED, { ":69: surface 1", "TOROIDAL", "toroid" } },
         { "US05331467-1.zmx", SG_EUNSUPPORTED, { ":90: surface 2", "OBSC", "obscuration" } },
         { "US00583336-2-scaled.zmx", SG_EUNSUPPORTED, { ":22:", "VDYN: field 2", "vignetting" } },
@@ -399,7 +399,10 @@ static void test_bad_inputs(void **state)
         {"stop missing", H S0 "SURF 1\n  DISZ 5\n" S2 S3, 0, SG_ENOSTOP, "no STOP line"},
         {"two stops", H S0 S1 "SURF 2\n  STOP\n" S3, 0, SG_ETWOSTOPS, "t.zmx:13: surface 2: STOP"},
         {"unknown type", H S0 "SURF 1\n  TYPE GRINSUR1\n", 0, SG_EUNSUPPORTED, "t.zmx:8: surface 1: TYPE GRINSUR1"},
-        {"coordbrk", H S0 "SURF 1\n  TYPE COORDBRK\n  PARM 3 45\n", 0, SG_EUNSUPPORTED, "coordinate break"},
+        {"coordbrk parm 7", H S0 S1 "SURF 2\n  TYPE COORDBRK\n  PARM 7 45\n", 0, SG_EUNSUPPORTED,
+         "t.zmx:14: surface 2: PARM 7 is 45; a coordinate break has parameters 1 to 6"},
+        {"coordbrk glass", H S0 S1 "SURF 2\n  TYPE COORDBRK\n  GLAS N-BK7\n", 0, SG_EUNSUPPORTED,
+         "t.zmx:13: surface 2: a coordinate break with a material"},
         {"tilt", H S0 "SURF 1\n  SCBD 1 0 0 0 0 90 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:8: surface 1: SCBD: a tilt"},
         {"annulus", H S0 "SURF 1\n  CLAP 1 5 0\n", 0, SG_EUNSUPPORTED, "t.zmx:8: surface 1: CLAP: an annular"},
         {"ellipse", H S0 "SURF 1\n  ELAP 5 3 0\n", 0, SG_EUNSUPPORTED, "elliptical aperture"},
@@ -451,6 +454,45 @@ static void test_bad_inputs(void **state)
 
 /* A failed import writes nothing: the engine's save is never reached, and a
  * save over an existing file is atomic. */
+/* Zemax's coordinate break: PARM 1 to 6 are decenter x and y, tilts about
+ * x, y and z in degrees, and the order flag.  A fold mirror written the
+ * way Zemax's manual builds one reads into breaks with exactly those
+ * numbers, traces, and goes back out and in again unchanged. */
+static void test_coordinate_breaks(void **state)
+{
+    static const char text[] = H S0 S1
+        "SURF 2\n  CURV -0.02\n  DISZ 20\n"
+        "SURF 3\n  TYPE COORDBRK\n  PARM 1 0.25\n  PARM 2 -0.5\n  PARM 3 45\n"
+        "  PARM 4 1.5\n  PARM 5 -2\n  PARM 6 1\n  DISZ 0\n"
+        "SURF 4\n  GLAS MIRROR 0 0 1.5 40\n  DISZ 0\n"
+        "SURF 5\n  TYPE COORDBRK\n  PARM 3 45\n  DISZ -30\n"
+        "SURF 6\n";
+    sg_catalog *cat = tu_catalog();
+    sg_system *s = sg_system_new();
+    sg_tracer *t;
+    sg_ray_surface out[7];
+    sg_diag d;
+    (void)state;
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(s, text, strlen(text), "cb.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_int_equal(s->surf[3].type, SG_SURF_COORDBRK);
+    assert_true(s->surf[3].before.dx == 0.25 && s->surf[3].before.dy == -0.5);
+    assert_true(s->surf[3].before.tx == 45.0 && s->surf[3].before.ty == 1.5 &&
+                s->surf[3].before.tz == -2.0);
+    assert_int_equal(s->surf[3].before.order, 1);
+    assert_int_equal(s->surf[5].type, SG_SURF_COORDBRK);
+    assert_true(s->surf[5].before.tx == 45.0 && s->surf[5].before.order == 0);
+    assert_true(s->surf[5].thickness == -30.0);
+    assert_int_equal(s->surf[4].mat.kind, SG_MAT_MIRROR);
+    t = tu_tracer(s, cat, SG_METHOD_PRECISE);
+    assert_int_equal(sg_trace_normalized(t, 0, 0, 0, 1, out), SG_OK);
+    sg_tracer_free(t);
+    roundtrip(s, cat, "cb.zmx");
+    sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
 static void test_failed_load_keeps_system(void **state)
 {
     sg_system *s = tu_example("singlet.json");
@@ -480,6 +522,7 @@ int main(void)
         cmocka_unit_test(test_zemax_asphere_temperature),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_failed_load_keeps_system),
+        cmocka_unit_test(test_coordinate_breaks),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

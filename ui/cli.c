@@ -3,6 +3,7 @@
 #include "cli.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
 #include <string.h>
@@ -142,6 +143,12 @@ int cli_next_opt(cli_iter *it, const cli_opt *opts, const char **val)
         }
         if (eq) {
             *val = eq + 1;
+            return o->id;
+        }
+        if (o->has_arg == CLI_OPT_NUM) {
+            const char *n = it->i < it->argc ? it->argv[it->i] : NULL;
+            if (n && n[0] && strspn(n, "0123456789") == strlen(n))
+                *val = it->argv[it->i++];
             return o->id;
         }
     } else {
@@ -378,6 +385,8 @@ static void trace_help(FILE *f)
 "                           --output FILE: hdf5 (one dataset per column)\n"
 "  -o, --output FILE        write to FILE instead of standard output\n"
 "  --no-clip                do not vignette rays outside fixed semi-diameters\n"
+"  --global [S]             rows in the global frame of surface S (default 1),\n"
+"                           Zemax's global coordinate reference surface\n"
 "  --threads N              threads for --rays; 0 (default) uses every core\n"
 "  -h, --help               show this help\n"
 "\n"
@@ -387,7 +396,7 @@ static void trace_help(FILE *f)
 
 enum {
     OPT_HELP = 1, OPT_METHOD, OPT_BITS, OPT_WAVE, OPT_FORMAT, OPT_OUTPUT,
-    OPT_START, OPT_DIR, OPT_RAY, OPT_RAYS, OPT_NOCLIP, OPT_THREADS
+    OPT_START, OPT_DIR, OPT_RAY, OPT_RAYS, OPT_NOCLIP, OPT_THREADS, OPT_GLOBAL
 };
 
 static const cli_opt trace_opts[] = {
@@ -403,6 +412,7 @@ static const cli_opt trace_opts[] = {
     { "--rays", 0, 1, OPT_RAYS },
     { "--no-clip", 0, 0, OPT_NOCLIP },
     { "--threads", 0, 1, OPT_THREADS },
+    { "--global", 0, CLI_OPT_NUM, OPT_GLOBAL },
     { NULL, 0, 0, 0 }
 };
 
@@ -410,6 +420,43 @@ static const cli_opt trace_opts[] = {
 
 /* --format hdf5: a ray table only, not one of report.c's text forms. */
 #define FMT_HDF5 100
+
+/* The frames of --global, or NULL (with the message printed) when the
+ * design refuses the reference surface. */
+static sg_frame *global_frames(const char *design, const sg_system *sys, int ref)
+{
+    sg_frame *gf = malloc((size_t)sys->nsurf * sizeof *gf);
+    sg_diag d;
+    sg_diag_clear(&d);
+    if (!gf) {
+        cli_error("out of memory");
+        return NULL;
+    }
+    if (sg_global_frames(sys, ref, gf, &d) != SG_OK) {
+        cli_error("--global: %s: %s", design, d.msg);
+        free(gf);
+        return NULL;
+    }
+    return gf;
+}
+
+/* Rows of n rays to the global frames; rows a ray did not reach, and the
+ * start row of an object at infinity, keep their NaN and infinities.  Row
+ * 0 of a normalized ray is in the object's frame, of a ray given by start
+ * and direction in surface 1's. */
+static void rows_to_global(const sg_frame *gf, sg_ray_surface *out, size_t n, int nsurf,
+                           sg_ray_kind kind)
+{
+    size_t r;
+    int i;
+    for (r = 0; r < n; r++)
+        for (i = 0; i < nsurf; i++) {
+            sg_ray_surface *o = &out[r * (size_t)nsurf + (size_t)i];
+            const sg_frame *f = &gf[i == 0 && kind == SG_RAYS_START_DIR ? 1 : i];
+            if (isfinite(o->x) && isfinite(o->y) && isfinite(o->z) && isfinite(f->o[2]))
+                sg_row_to_global(f, o);
+        }
+}
 
 /* Reports a trace that failed for a reason other than the ray's own fate,
  * and returns the exit status for it. */
@@ -527,7 +574,7 @@ static int open_rays(const char *path, FILE *spool, csvrays_reader **rd, sg_diag
  * are separate (reading, sg_batch_trace, report_rays) so that parsing and
  * formatting can later be split over the threads block by block too. */
 static int trace_rays(const char *design, const char *rays_path, const char *output, int fmt,
-                      const sg_trace_opts *opts_in, int wave1, int threads)
+                      const sg_trace_opts *opts_in, int wave1, int threads, int global)
 {
     csvrays_reader *rd = NULL;
     FILE *spool = NULL;
@@ -550,6 +597,7 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     sg_diag d;
     h5rays *h5 = NULL;
     char h5err[512];
+    sg_frame *gf = NULL;
 
     memset(&ro, 0, sizeof ro);
     sg_diag_clear(&d);
@@ -580,6 +628,10 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     if (rc != CLI_EXIT_OK)
         goto done;
     opts.wave = wave0;
+    if (global >= 0 && !(gf = global_frames(design, sys, global))) {
+        rc = CLI_EXIT_USAGE;
+        goto done;
+    }
 
     /* One tracer first, so a design the tracer refuses fails here once
      * and its warnings are printed once, not once a thread. */
@@ -632,6 +684,8 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     meta.wave_um = sys->wave[wave0].um;
     meta.wave_index = wave0 + 1;
     meta.opd = t != NULL;
+    meta.global = gf != NULL;
+    meta.global_ref = global;
     memset(&ref, 0, sizeof ref);
     ref.status = SG_EINVAL;
 
@@ -670,6 +724,9 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
         }
         if (t)
             report_opd_block(t, &ref, rays, n, out, nsurf, opd);
+        /* After the OPD, which is taken in the image surface's own frame. */
+        if (gf)
+            rows_to_global(gf, out, n, nsurf, csvrays_kind(rd));
         if (fmt != FMT_HDF5 && report_rays_opd(&rs, out, status, n, rays, opd) != 0)
             goto write_error;
         done += n;
@@ -732,6 +789,7 @@ done:
     free(out);
     free(status);
     free(opd);
+    free(gf);
     sg_tracer_free(t);
     sg_batch_free(b);
     cli_design_free(cat, sys);
@@ -744,8 +802,9 @@ int cmd_trace(int argc, char **argv)
     const char *val, *design = NULL, *output = NULL, *rays_path = NULL;
     int id, rc, method = SG_METHOD_PRECISE, bits = 0, wave1 = 0, wave0 = 0;
     int fmt = REPORT_TEXT, clip = 1, threads = 0;
-    int have_start = 0, have_dir = 0, have_ray = 0;
+    int have_start = 0, have_dir = 0, have_ray = 0, global = -1;
     double start[3] = { 0 }, dir[3] = { 0 }, ray4[4] = { 0 };
+    sg_frame *gf = NULL;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
     sg_tracer *t = NULL;
@@ -822,6 +881,11 @@ int cmd_trace(int argc, char **argv)
         case OPT_NOCLIP:
             clip = 0;
             break;
+        case OPT_GLOBAL:
+            global = 1;
+            if (val && cli_int_value("--global", val, 0, SG_MAX_SURFACES, &global))
+                return CLI_EXIT_USAGE;
+            break;
         case OPT_THREADS:
             if (cli_int_value("--threads", val, 0, 4096, &threads))
                 return CLI_EXIT_USAGE;
@@ -852,7 +916,7 @@ int cmd_trace(int argc, char **argv)
         if (bits)
             opts.mpfr_bits = bits;
         opts.clip = clip;
-        return trace_rays(design, rays_path, output, fmt, &opts, wave1, threads);
+        return trace_rays(design, rays_path, output, fmt, &opts, wave1, threads, global);
     }
     memset(&one, 0, sizeof one);
     if (have_ray) {
@@ -927,6 +991,13 @@ int cmd_trace(int argc, char **argv)
         goto done;
     }
     cli_print_warnings(&d, design);
+    if (global >= 0) {
+        if (!(gf = global_frames(design, sys, global))) {
+            rc = CLI_EXIT_USAGE;
+            goto done;
+        }
+        rows_to_global(gf, out, 1, nsurf, kind);
+    }
 
     memset(&meta, 0, sizeof meta);
     meta.design = design;
@@ -935,6 +1006,8 @@ int cmd_trace(int argc, char **argv)
     meta.wave_um = sys->wave[wave0].um;
     meta.wave_index = wave0 + 1;
     meta.opd = kind == SG_RAYS_NORMALIZED;
+    meta.global = gf != NULL;
+    meta.global_ref = global;
 
     /* The output is opened only now, so a failed trace leaves an existing
      * file as it was. */
@@ -956,6 +1029,7 @@ int cmd_trace(int argc, char **argv)
 done:
     free(out);
     free(status);
+    free(gf);
     sg_tracer_free(t);
     cli_design_free(cat, sys);
     return rc;

@@ -31,6 +31,7 @@ typedef struct cli_command {
 
 int cmd_trace(int argc, char **argv);
 int cmd_paraxial(int argc, char **argv);
+int cmd_semidiam(int argc, char **argv);
 /* Further subcommands live in their own files. */
 int cmd_verify(int argc, char **argv);
 int cmd_bench(int argc, char **argv);
@@ -70,10 +71,15 @@ int cli_usage_error(const char *cmd, const char *fmt, ...)
 
 /* ---- options ---------------------------------------------------------- */
 
+/* A long option whose value may be left out: "--name=N", or "--name N"
+ * when N is a whole number (so "--global 3" and "--global design.json"
+ * both read as meant); *val is NULL when it is left out. */
+#define CLI_OPT_NUM 2
+
 typedef struct cli_opt {
     const char *name; /* "--ray", or NULL to end the table */
     char shortc;      /* 'o' for -o, or 0 */
-    int has_arg;
+    int has_arg;      /* 0 none, 1 one, CLI_OPT_NUM an optional number */
     int id;           /* positive; returned by cli_next_opt */
 } cli_opt;
 

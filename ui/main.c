@@ -33,6 +33,7 @@ static const cli_command commands[] = {
     { "export", cmd_export, "write a design as a Zemax .zmx lens file" },
     { "seidel", cmd_seidel, "print Seidel sums: per surface, in waves and transverse" },
     { "fieldcurve", cmd_fieldcurve, "print field curvature and distortion against field" },
+    { "semidiam", cmd_semidiam, "automatic semi-diameters, as Zemax computes them" },
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
 

@@ -197,8 +197,12 @@ static void text_head(FILE *f, const report_meta *m, int multi, size_t total)
     if (m)
         fprintf(f, "Wavelength  : %s um (wave %d)\n",
                 shortest(m->wave_um, b, sizeof b), m->wave_index);
-    fputs("Coordinates are in each surface's local frame; L, M, N are the "
-          "direction cosines after the surface.\n", f);
+    if (m && m->global)
+        fprintf(f, "Coordinates are global, in the frame of surface %d; L, M, N are the "
+                "direction cosines after the surface.\n", m->global_ref);
+    else
+        fputs("Coordinates are in each surface's local frame; L, M, N are the "
+              "direction cosines after the surface.\n", f);
     if (is_estimate(m))
         fputs("ErrEst is the classic method's error estimate, not a bound: the true "
               "error can exceed it.\n", f);
@@ -352,6 +356,10 @@ static int json_meta(FILE *f, const report_meta *m)
         fputs(",\n  \"wavelength_um\": ", f);
         put_num(f, m->wave_um, 1);
         fprintf(f, ",\n  \"wave\": %d", m->wave_index);
+        /* Only said when it is not the usual local frame. */
+        if (m->global)
+            fprintf(f, ",\n  \"frame\": \"global\",\n  \"global_reference\": %d",
+                    m->global_ref);
     }
     return 0;
 }

@@ -27,6 +27,9 @@ typedef struct report_meta {
                            (hx,hy,px,py or x0,y0,z0,l0,m0,n0) */
     int opd;            /* each ray comes with an sg_opd (report_rays_opd):
                            its OPD and transverse aberration are written */
+    int global;         /* rows are in the global frame of surface
+                           global_ref (trace --global), not local ones */
+    int global_ref;
 } report_meta;
 
 /* The error column is error_bound (text: ErrBound) for precise and mpfr;

@@ -346,6 +346,14 @@ static const bad_case cases[] = {
       "t12.json", "{\"version\": 3, \"surfaces\": [{}, {\"stop\": true}, {}]}\n",
       NULL, NULL, ARGS("paraxial", "@F"), 3,
       "version: this is format version 3; this program reads version 2", NULL, NULL, NULL, 0 },
+    { "frame_break_first", "a coordinate break as surface 1 names the surface",
+      "t12b.json", "{\"surfaces\": [{}, {\"type\": \"coordinate_break\", \"stop\": true}, {}]}\n",
+      NULL, NULL, ARGS("paraxial", "@F"), 4,
+      "surface 1: the first surface cannot be a coordinate break", NULL, NULL, NULL, 0 },
+    { "frame_tilt_range", "a tilt beyond a turn names the surface and the tilt",
+      "t12c.json", "{\"surfaces\": [{}, {\"stop\": true}, {\"before\": {\"tilt\": [0, 0, 720]}}, {}]}\n",
+      NULL, NULL, ARGS("paraxial", "@F"), 4,
+      "surface 2: before tilt about z 720 is beyond 360 degrees", NULL, NULL, NULL, 0 },
     { "type_primary_range", "a primary wavelength beyond the list",
       "t13.json", "{\"wavelengths\": {\"primary\": 3, \"list\": [{\"um\": 0.5}]},"
       " \"surfaces\": [{}, {\"stop\": true}, {}]}\n", NULL, NULL, ARGS("paraxial", "@F"), 3,
@@ -507,10 +515,10 @@ static const bad_case cases[] = {
     /* ---- Zemax .zmx files (issue 17): exit 3 for what cannot be read or
      *      represented, 4 for an unknown glass, the line and surface named,
      *      and import writes nothing (here: no design on standard output) ---- */
-    { "zmx_coordbrk", "a coordinate break (TYPE on line 8) is refused there",
-      "cb.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  TYPE COORDBRK\n", NULL, NULL,
-      ARGS("import", "@F", "-o", "-"), 3, "@F:8: surface 1: TYPE COORDBRK", NULL, NULL,
-      "sagitta-design", 0 },
+    { "zmx_coordbrk", "a coordinate break's parameter 7 (line 9) is refused there",
+      "cb.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  TYPE COORDBRK\n  PARM 7 1\n", NULL, NULL,
+      ARGS("import", "@F", "-o", "-"), 3, "@F:9: surface 1: PARM 7 is 1; a coordinate break has "
+      "parameters 1 to 6", NULL, NULL, "sagitta-design", 0 },
     { "zmx_obscuration", "an obscuration on line 9 is refused, traced or imported",
       "obsc.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  OBSC 0 2 0\n", NULL, NULL,
       ARGS("trace", "@F", "--ray", "0,0,0,0"), 3, "@F:9: surface 1: OBSC", NULL, NULL,

@@ -149,9 +149,64 @@ static void live_trace(void **state)
     }
 }
 
+/* ":global" on a folded, tilted design: the live rows ("print ray") and
+ * an export both equal "trace --global" of the same ray, for reference
+ * surfaces 1 and 4; ":global off" gives the local rows back; a break
+ * cannot be the reference. */
+static void global_toggle(void **state)
+{
+    static const char *const refs[][2] = {{"global", "1"}, {"global 4", "4"}};
+    const char *root = getenv("SAGITTA_SOURCE_ROOT");
+    char fold[1024];
+    size_t k;
+    (void)state;
+    snprintf(fold, sizeof fold, "%s/tests/fuzz/corpus/fuzz_design/fold_tilts.json",
+             root ? root : ".");
+    for (k = 0; k < sizeof refs / sizeof refs[0]; k++) {
+        char sc[512], g[32];
+        ct_result r, t;
+        char *got;
+        snprintf(sc, sizeof sc, "ray 0.3 0.7 -0.4 0.2\n%s\nprint ray\nexport %s csv\n",
+                 refs[k][0], ct_path("out.csv"));
+        ct_run(&r, "edit", fold, "--batch", ct_file("global.cmd", sc), (char *)NULL);
+        assert_int_equal(r.code, 0);
+        snprintf(g, sizeof g, "--global=%s", refs[k][1]);
+        ct_run(&t, "trace", fold, "--ray", "0.3,0.7,-0.4,0.2", g, (char *)NULL);
+        assert_int_equal(t.code, 0);
+        if (strcmp(table_of(r.out), table_of(t.out)) != 0)
+            fail_msg("%s: the live rows differ from trace %s:\n%s\nvs\n%s", refs[k][0], g,
+                     table_of(r.out), table_of(t.out));
+        assert_non_null(strstr(r.out, "Coordinates are global"));
+        ct_free(&t);
+        ct_run(&t, "trace", fold, "--ray", "0.3,0.7,-0.4,0.2", g, "--format", "csv",
+               (char *)NULL);
+        got = slurp(ct_path("out.csv"));
+        assert_int_equal(same_csv(got, t.out), 8);
+        free(got);
+        ct_free(&r);
+        ct_free(&t);
+    }
+    {
+        ct_result r, t;
+        ct_run(&r, "edit", fold, "--batch",
+               ct_file("local.cmd", "ray 0.3 0.7 -0.4 0.2\nglobal\nglobal off\nprint ray\n"),
+               (char *)NULL);
+        ct_run(&t, "trace", fold, "--ray", "0.3,0.7,-0.4,0.2", (char *)NULL);
+        assert_int_equal(r.code, 0);
+        assert_string_equal(table_of(r.out), table_of(t.out));
+        ct_free(&r);
+        ct_free(&t);
+        ct_run(&r, "edit", fold, "--batch", ct_file("bad.cmd", "global 3\n"), (char *)NULL);
+        assert_int_not_equal(r.code, 0);
+        assert_non_null(strstr(r.err, "global reference surface 3 is a coordinate break"));
+        ct_free(&r);
+    }
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(global_toggle),
         cmocka_unit_test(ray_command),
         cmocka_unit_test(coordinate_commands),
         cmocka_unit_test(other_methods),

@@ -1242,6 +1242,8 @@ static void meta_of(ed *e, report_meta *m)
     m->wave_um = e->doc.sys->wave[e->wave].um;
     m->wave_index = e->wave + 1;
     m->opd = 0;
+    m->global = e->global >= 0;
+    m->global_ref = e->global;
 }
 
 /* The rays of a set, made a block at a time so that a grid of a million
@@ -1372,6 +1374,7 @@ static int c_export_any(ed *e, args *a, int bang)
     report_meta m;
     report_stream rs;
     rayset rset;
+    sg_frame *gf = NULL;
     outfile of;
     int flags;
     char size[32];
@@ -1425,6 +1428,15 @@ static int c_export_any(ed *e, args *a, int bang)
         return fail(e, "export: \"-\" (standard output) works only in batch mode");
 
     ed_opts(e);
+    if (e->global >= 0) {
+        sg_diag gd;
+        sg_diag_clear(&gd);
+        gf = malloc((size_t)e->doc.sys->nsurf * sizeof *gf);
+        if (!gf || sg_global_frames(e->doc.sys, e->global, gf, &gd) != SG_OK) {
+            free(gf);
+            return fail(e, "export: global frame: %s", gd.msg[0] ? gd.msg : "out of memory");
+        }
+    }
     memset(&rset, 0, sizeof rset);
     rset.kind = strcmp(set, "ray") == 0    ? SET_RAY
                 : strcmp(set, "fan") == 0  ? SET_FAN
@@ -1436,8 +1448,10 @@ static int c_export_any(ed *e, args *a, int bang)
     rset.px = e->ray[2];
     rset.py = e->ray[3];
     nray = rayset_count(&rset);
-    if (nray == 0)
+    if (nray == 0) {
+        free(gf);
         return fail(e, "export: the ray set is empty");
+    }
     multi = nray != 1;
     nsurf = e->doc.sys->nsurf;
     /* About 16 MiB of rows a block, and blocks small enough that progress
@@ -1517,6 +1531,18 @@ static int c_export_any(ed *e, args *a, int bang)
         e->progress(e->progress_ctx, path, 0, nray);
     for (;;) {
         report_opd_block(rt, &ref, rays, got, out, nsurf, opd);
+        /* :global: after the OPD, which is taken in the image's own frame. */
+        if (gf) {
+            size_t q;
+            int j;
+            for (q = 0; q < got; q++)
+                for (j = 0; j < nsurf; j++) {
+                    sg_ray_surface *o = &out[q * (size_t)nsurf + (size_t)j];
+                    if (isfinite(o->x) && isfinite(o->y) && isfinite(o->z) &&
+                        isfinite(gf[j].o[2]))
+                        sg_row_to_global(&gf[j], o);
+                }
+        }
         if (report_rays_opd(&rs, out, status, got, rays, opd) != 0)
             goto write_error;
         done += got;
@@ -1559,6 +1585,7 @@ done:
     free(rays);
     free(out);
     free(status);
+    free(gf);
     return flags;
 }
 
@@ -1792,6 +1819,40 @@ static int c_clip(ed *e, args *a)
     return OK_VIEW;
 }
 
+static int c_global(ed *e, args *a)
+{
+    const char *usage = "global [on|off|SURFACE]";
+    int ref;
+    if (!need(e, a, 0, 1, usage))
+        return ED_HANDLED | ED_ERROR;
+    if (a->n < 2 || strcasecmp(a->v[1], "toggle") == 0)
+        ref = e->global >= 0 ? -1 : 1;
+    else if (strcasecmp(a->v[1], "on") == 0)
+        ref = 1;
+    else if (strcasecmp(a->v[1], "off") == 0)
+        ref = -1;
+    else if (args_int(a->v[1], 0, e->doc.sys->nsurf - 1, &ref) != ARGS_OK)
+        return fail(e, "global: \"%s\" is not on, off or a surface from 0 to %d", a->v[1],
+                    e->doc.sys->nsurf - 1);
+    if (ref >= 0) {
+        sg_frame *gf = malloc((size_t)e->doc.sys->nsurf * sizeof *gf);
+        sg_diag d;
+        int rc;
+        sg_diag_clear(&d);
+        rc = gf ? sg_global_frames(e->doc.sys, ref, gf, &d) : SG_ENOMEM;
+        free(gf);
+        if (rc != SG_OK)
+            return fail(e, "global: %s", gf ? d.msg : "out of memory");
+    }
+    e->global = ref;
+    e->dirty = 1;
+    if (ref >= 0)
+        ed_msg(e, 0, "rows in the global frame of surface %d", ref);
+    else
+        ed_msg(e, 0, "rows in each surface's local frame");
+    return OK_VIEW;
+}
+
 static int c_view(ed *e, args *a)
 {
     const char *usage = "view layout|spot|fan|opd|wave|off|next";
@@ -1977,6 +2038,8 @@ static const command commands[] = {
     {"view", NULL, c_view, "view layout|spot|fan|opd|wave|off|next",
      "show an analysis below the sheet, live (g: next); export FILE.png|svg|pdf writes it"},
     {"clip", NULL, c_clip, "clip [on|off]", "vignette rays at fixed semi-diameters"},
+    {"global", NULL, c_global, "global [on|off|SURFACE]",
+     "rows in the global frame of SURFACE (on: 1, Zemax's reference) or each local frame"},
     {"wavelength", "wl", c_wavelength,
      "wavelength add UM [W] | set N UM [W] | delete N | primary N | move N TO | preset P",
      "edit the wavelengths; UM may be a line (F d C e g h i F' C' D r s t); presets FdC F'eC' d e"},

@@ -33,6 +33,7 @@ int ed_init(ed *e)
     e->method = SG_METHOD_PRECISE;
     e->bits = e->opts.mpfr_bits > 0 ? e->opts.mpfr_bits : 256;
     e->clip = e->opts.clip;
+    e->global = -1;
     e->out = stdout;
     e->dirty = 1;
     ed_opts(e);
@@ -64,6 +65,36 @@ void ed_opts(ed *e)
     e->opts.clip = e->clip;
 }
 
+/* :global: the rows of the ray (and of the reference) in the frame of
+ * surface e->global, as "sagitta trace --global" gives them.  A design
+ * that refuses the reference (now a coordinate break, say) turns it off. */
+static void to_global(ed *e)
+{
+    const sg_system *s = e->doc.sys;
+    sg_frame *gf;
+    sg_diag d;
+    int i, k;
+    if (!e->cmp.have || e->cmp.nsurf != s->nsurf)
+        return;
+    gf = malloc((size_t)s->nsurf * sizeof *gf);
+    sg_diag_clear(&d);
+    if (!gf || sg_global_frames(s, e->global, gf, &d) != SG_OK) {
+        ed_msg(e, 1, "global frame off: %s", gf ? d.msg : "out of memory");
+        e->global = -1;
+        free(gf);
+        return;
+    }
+    for (k = 0; k < 2; k++) {
+        sg_ray_surface *r = k == 0 ? e->cmp.res : e->cmp.ref_res;
+        if (k == 1 && !e->cmp.ref_have)
+            break;
+        for (i = 0; i < s->nsurf; i++)
+            if (isfinite(r[i].x) && isfinite(r[i].y) && isfinite(r[i].z) && isfinite(gf[i].o[2]))
+                sg_row_to_global(&gf[i], &r[i]);
+    }
+    free(gf);
+}
+
 void ed_recompute(ed *e)
 {
     int ref = 0;
@@ -75,6 +106,8 @@ void ed_recompute(ed *e)
     if (ref > 100000)
         ref = 100000;
     compute_run(&e->cmp, e->doc.sys, e->doc.id, e->cat, &e->opts, ref, e->ray);
+    if (e->global >= 0)
+        to_global(e);
     /* The view follows every edit too (it keeps its figure otherwise). */
     edview_update(&e->view, e->doc.sys, e->doc.id, e->cat, &e->opts, ed_view_field(e));
     e->dirty = 0;

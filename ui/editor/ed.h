@@ -56,6 +56,8 @@ typedef struct ed {
     int bits;                  /* MPFR precision, for the method and the digits */
     int clip;
     int digits;                /* also trace with MPFR and show agreement */
+    int global;                /* -1: each surface's local frame; else the
+                                  rows are in this surface's frame (:global) */
     sg_trace_opts opts;        /* built from the above by ed_opts() */
 
     compute cmp;

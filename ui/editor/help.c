@@ -79,7 +79,7 @@ const char *const ui_key_help[] = {
     "Esc q t         close",
     "",
     "#Results",
-    "x y z           intersection in the surface's local frame",
+    "x y z           intersection in the surface's local frame (:global, in surface S's)",
     "l m n           direction cosines after the surface",
     "residual        |z - sag(x, y)| of the reported point",
     "err bound       bound on the coordinate error against exact arithmetic",

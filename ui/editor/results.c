@@ -279,7 +279,11 @@ static void panel_draw(ui *u)
         return;
     }
     numfmt_shortest(r->path, num[0], sizeof num[0]);
-    snprintf(buf, sizeof buf, "Surface %d:  OK   path=%s", e->row, num[0]);
+    if (e->global >= 0)
+        snprintf(buf, sizeof buf, "Surface %d:  OK   path=%s   (global, surface %d's frame)",
+                 e->row, num[0], e->global);
+    else
+        snprintf(buf, sizeof buf, "Surface %d:  OK   path=%s", e->row, num[0]);
     term_text(y, 0, u->cols, T_GOOD, 1, buf);
 
     for (i = 0; i < 6; i++)

@@ -1,0 +1,159 @@
+/* semidiam.c - "sagitta semidiam": Zemax's automatic semi-diameters of a
+ * design (sg_semi_diameters) beside the ones it sets. */
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include <cjson/cJSON.h>
+#include <math.h>
+
+#include "cli.h"
+#include "report.h"
+
+/* The shortest %g text that reads back as v. */
+static const char *shortest(double v, char *buf, size_t n)
+{
+    int prec;
+    for (prec = 1; prec <= 17; prec++) {
+        snprintf(buf, n, "%.*g", prec, v);
+        if (strtod(buf, NULL) == v)
+            break;
+    }
+    return buf;
+}
+
+static void semidiam_help(FILE *f)
+{
+    fputs(
+"Usage: sagitta semidiam DESIGN.json [OPTIONS]\n"
+"Print each surface's automatic semi-diameter: the largest height of the real\n"
+"rays through the edge of the pupil, over every field and wavelength, as Zemax\n"
+"computes it, beside the semi-diameter the design sets.\n"
+"\n"
+"Options:\n"
+"  --method M               precise (default), classic or mpfr\n"
+"  --format F               text (default) or json\n"
+"  -o, --output FILE        write to FILE instead of standard output\n"
+"  -h, --help               show this help\n", f);
+}
+
+enum { SD_HELP = 1, SD_METHOD, SD_FORMAT, SD_OUTPUT };
+
+static const cli_opt semidiam_opts[] = {
+    { "--help", 'h', 0, SD_HELP },
+    { "--method", 0, 1, SD_METHOD },
+    { "--format", 0, 1, SD_FORMAT },
+    { "--output", 'o', 1, SD_OUTPUT },
+    { NULL, 0, 0, 0 }
+};
+
+int cmd_semidiam(int argc, char **argv)
+{
+    cli_iter it;
+    const char *val, *design = NULL, *output = NULL;
+    int id, rc, fmt = REPORT_TEXT, method = SG_METHOD_PRECISE, i;
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    sg_semidiam_opts o;
+    double *sd = NULL;
+    sg_diag d;
+    FILE *f;
+
+    cli_iter_init(&it, "semidiam", argc, argv);
+    while ((id = cli_next_opt(&it, semidiam_opts, &val)) != -1) {
+        switch (id) {
+        case 0:
+            if (design)
+                return cli_usage_error("semidiam", "unexpected argument \"%s\"", val);
+            design = val;
+            break;
+        case SD_HELP:
+            semidiam_help(stdout);
+            return CLI_EXIT_OK;
+        case SD_METHOD:
+            method = sg_method_parse(val);
+            if (method < 0) {
+                cli_error("--method: expected precise, classic or mpfr, got \"%s\"", val);
+                return CLI_EXIT_USAGE;
+            }
+            break;
+        case SD_FORMAT:
+            if (cli_format_value(val, 0, &fmt))
+                return CLI_EXIT_USAGE;
+            break;
+        case SD_OUTPUT:
+            output = val;
+            break;
+        default:
+            return -id;
+        }
+    }
+    if (!design)
+        return cli_usage_error("semidiam", "missing DESIGN.json");
+    rc = cli_load_design(design, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    sg_semidiam_opts_init(&o);
+    o.trace.method = (sg_method)method;
+    sd = calloc((size_t)sys->nsurf, sizeof *sd);
+    if (!sd) {
+        cli_error("out of memory");
+        rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    sg_diag_clear(&d);
+    rc = sg_semi_diameters(sys, cat, &o, sd, &d);
+    if (rc != SG_OK) {
+        cli_print_diag(design, &d, rc);
+        rc = cli_exit_for(rc);
+        if (rc == CLI_EXIT_OK)
+            rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    cli_print_warnings(&d, design);
+    f = cli_open_output(output);
+    if (!f) {
+        rc = CLI_EXIT_FILE;
+        goto done;
+    }
+    if (fmt == REPORT_JSON) {
+        cJSON *js = cJSON_CreateString(design);
+        char *q = js ? cJSON_PrintUnformatted(js) : NULL;
+        cJSON_Delete(js);
+        fprintf(f, "{\n  \"design\": %s", q ? q : "null");
+        cJSON_free(q);
+        fprintf(f, ",\n  \"method\": \"%s\",\n  \"surfaces\": [", sg_method_name((sg_method)method));
+        for (i = 1; i < sys->nsurf; i++) {
+            char a[40], b[40];
+            fprintf(f, "%s\n    {\"surface\": %d, \"auto\": %s, \"set\": %s, \"fixed\": %s}",
+                    i > 1 ? "," : "", i, shortest(sd[i], a, sizeof a),
+                    shortest(sys->surf[i].semi_diameter, b, sizeof b),
+                    sys->surf[i].sd_fixed ? "true" : "false");
+        }
+        fputs("\n  ]\n}\n", f);
+    } else {
+        fputs("Automatic semi-diameters: the largest height of the rays through the pupil's\n"
+              "edge over every field and wavelength (Zemax's rule); lengths in lens units.\n", f);
+        fprintf(f, "%-8s %24s %24s  %s\n", "Surface", "Automatic", "Set", "");
+        for (i = 1; i < sys->nsurf; i++) {
+            const sg_surface *s = &sys->surf[i];
+            char a[40], b[40];
+            const char *note = "";
+            if (s->type == SG_SURF_COORDBRK)
+                note = "coordinate break";
+            else if (s->sd_fixed && s->semi_diameter < sd[i] * (1.0 - 1e-12))
+                note = "fixed below the rays: vignettes";
+            else if (s->sd_fixed)
+                note = "fixed";
+            fprintf(f, "%-8d %24s %24s  %s\n", i, shortest(sd[i], a, sizeof a),
+                    s->semi_diameter > 0.0 ? shortest(s->semi_diameter, b, sizeof b) : "-",
+                    note);
+        }
+    }
+    rc = cli_close_output(f, output);
+done:
+    free(sd);
+    cli_design_free(cat, sys);
+    return rc;
+}
