@@ -674,11 +674,12 @@ static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, in
 }
 
 enum {
-    T_FORMAT, T_VERSION, T_TITLE, T_UNITS, T_WAVES, T_FIELDS, T_APER, T_AIM, T_SURFS, T_N
+    T_FORMAT, T_VERSION, T_TITLE, T_UNITS, T_WAVES, T_FIELDS, T_APER, T_AIM, T_SURFS,
+    T_TEMP, T_PRES, T_ADJUST, T_N
 };
 static const char *const top_keys[] = {
     "format", "version", "title", "units", "wavelengths", "fields", "aperture",
-    "ray_aiming", "surfaces"};
+    "ray_aiming", "surfaces", "temperature", "pressure", "adjust_index"};
 
 /* Fills tmp from the document; the caller's system is not touched. */
 static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
@@ -765,6 +766,22 @@ static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
             return rc;
         tmp->aim = (sg_aim)e;
     }
+    /* The environment (Zemax's ENVD). */
+    tmp->temperature = 20.0;
+    tmp->pressure = 1.0;
+    tmp->adjust_index = 0;
+    if (k[T_TEMP] && (rc = get_finite(c, k[T_TEMP], "temperature", &tmp->temperature)) != SG_OK)
+        return rc;
+    if (k[T_PRES] && (rc = get_nonneg(c, k[T_PRES], "pressure", &tmp->pressure)) != SG_OK)
+        return rc;
+    if (k[T_ADJUST] && (rc = get_bool(c, k[T_ADJUST], "adjust_index", &tmp->adjust_index)) != SG_OK)
+        return rc;
+    if (!(tmp->temperature >= SG_TEMP_MIN && tmp->temperature <= SG_TEMP_MAX))
+        return perr(c, SG_ERANGE, "temperature", "%.17g C is outside %g to %g C",
+                    tmp->temperature, SG_TEMP_MIN, SG_TEMP_MAX);
+    if (!(tmp->pressure <= SG_PRES_MAX))
+        return perr(c, SG_ERANGE, "pressure", "%.17g atm is outside 0 to %g atm",
+                    tmp->pressure, SG_PRES_MAX);
 
     i = 0;
     cJSON_ArrayForEach(it, k[T_SURFS]) {
@@ -1090,6 +1107,12 @@ static int check_writable(const sg_system *sys, sg_diag *d)
                            sys->aper_value);
     if ((unsigned)sys->aim >= (unsigned)NELEM(aim_names))
         return sg_diag_set(d, SG_EINVAL, "ray_aiming: unknown mode %d", (int)sys->aim);
+    if (!(sys->temperature >= SG_TEMP_MIN && sys->temperature <= SG_TEMP_MAX))
+        return sg_diag_set(d, SG_EINVAL, "temperature: %g C is outside %g to %g C",
+                           sys->temperature, SG_TEMP_MIN, SG_TEMP_MAX);
+    if (!(sys->pressure >= 0.0 && sys->pressure <= SG_PRES_MAX))
+        return sg_diag_set(d, SG_EINVAL, "pressure: %g atm is outside 0 to %g atm",
+                           sys->pressure, SG_PRES_MAX);
     if (sys->nsurf < 3 || sys->nsurf > SG_MAX_SURFACES || !sys->surf)
         return sg_diag_set(d, SG_EINVAL, "surfaces: %d given, 3 to %d allowed", sys->nsurf,
                            SG_MAX_SURFACES);
@@ -1192,6 +1215,15 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     sb_num(&b, sys->aper_value);
     sb_puts(&b, " },\n  \"ray_aiming\": ");
     sb_str(&b, aim_names[sys->aim]);
+    /* Written only away from the defaults, so older files save unchanged. */
+    if (sys->temperature != 20.0 || sys->pressure != 1.0 || sys->adjust_index) {
+        sb_puts(&b, ",\n  \"temperature\": ");
+        sb_num(&b, sys->temperature);
+        sb_puts(&b, ",\n  \"pressure\": ");
+        sb_num(&b, sys->pressure);
+        sb_puts(&b, ",\n  \"adjust_index\": ");
+        sb_puts(&b, sys->adjust_index ? "true" : "false");
+    }
     sb_puts(&b, ",\n  \"surfaces\": [\n");
 
     for (i = 0; i < sys->nsurf; i++) {

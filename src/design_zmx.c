@@ -53,8 +53,8 @@ static const char *const ignored_surface[] = {
     "FIMP", "HIDE", "MIRR", "SLAB", "POPS", "MEMA", "OEMA", "COAT", "SSID",
     "VPAR", "VCRV", "VDSZ", "VTHI", "VCON", "VGLS", "TCEX", "CONF",
     /* drawing, labels, physical optics, mechanical apertures, coatings,
-     * variable flags for optimisation, thermal expansion (no temperature
-     * in the model: ENVD is refused away from 20 C, 1 atm) */
+     * variable flags for optimisation, thermal expansion (Zemax applies it
+     * only in multi-configuration thermal analysis, which sagitta lacks) */
 };
 
 typedef struct ztok {
@@ -1055,17 +1055,18 @@ static int header_line(zctx *c, const zline *l)
         if ((rc = tok_num(c, l, 1, "temperature", &t)) != SG_OK ||
             (rc = opt_num(c, l, 2, "pressure", 1.0, &p)) != SG_OK)
             return rc;
-        if (t != 20.0 || p != 1.0)
-            return zerr(c, SG_EUNSUPPORTED, "ENVD: %.17g C and %.17g atm; sagitta has no "
-                        "temperature or pressure and traces at 20 C and 1 atm", t, p);
+        if (!(t >= SG_TEMP_MIN && t <= SG_TEMP_MAX))
+            return zerr(c, SG_ERANGE, "ENVD: temperature %.17g C is outside %g to %g C", t,
+                        SG_TEMP_MIN, SG_TEMP_MAX);
+        if (!(p >= 0.0 && p <= SG_PRES_MAX))
+            return zerr(c, SG_ERANGE, "ENVD: pressure %.17g atm is outside 0 to %g atm", p,
+                        SG_PRES_MAX);
         if ((rc = opt_num(c, l, 3, "index adjustment flag", 0.0, &f)) != SG_OK)
             return rc;
-        /* Zemax then corrects each glass measured at another temperature
-         * than 20 C; sagitta has no reference temperatures to do so. */
-        if (f != 0.0)
-            zwarn(c, "ENVD: Zemax adjusts catalog indices to 20 C and 1 atm; sagitta uses the "
-                  "catalog data as they are, so a glass measured at another temperature differs "
-                  "(by some 2e-5 in index for S-LAH64)");
+        /* The flag is Zemax's "Adjust Index Data To Environment". */
+        s->temperature = t;
+        s->pressure = p;
+        s->adjust_index = f != 0.0;
         return SG_OK;
     }
     if (tok_is(k, "GCAT")) {
@@ -1561,7 +1562,8 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         zb_add(b, "FLOA\n", 5);
         break;
     }
-    zb_add(b, "ENVD 20 1 0\n", 12);
+    zb_printf(b, "ENVD %s %s %d\n", num(n1, s->temperature), num(n2, s->pressure),
+              s->adjust_index ? 1 : 0);
     if (ngcat) {
         zb_add(b, "GCAT", 4);
         for (i = 0; i < ngcat; i++)

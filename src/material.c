@@ -334,6 +334,69 @@ double sg_glass_index(const sg_glass *g, double um)
     return v.hi + v.lo;
 }
 
+/* The air formula's decimal constants, as the dd nearest each. */
+static dd dd_dec(double num, double den)
+{
+    return dd_div_d(dd_from(num), den);
+}
+
+/* n_air - 1 in double-double (see sagitta.h). */
+static dd air_minus_one(double um, double temp, double pres)
+{
+    dd l2 = dd_two_prod(um, um), t, f;
+    t = dd_div(dd_mul_d(l2, 2949810.0), dd_sub(dd_mul_d(l2, 146.0), dd_from(1.0)));
+    t = dd_add(t, dd_div(dd_mul_d(l2, 25540.0), dd_sub(dd_mul_d(l2, 41.0), dd_from(1.0))));
+    t = dd_add(t, dd_dec(64328.0, 10.0));
+    t = dd_div_d(t, 1e8);
+    /* 1 + 3.4785e-3 (T - 15) */
+    f = dd_add(dd_from(1.0), dd_mul(dd_dec(34785.0, 1e7), dd_sub(dd_from(temp), dd_from(15.0))));
+    return dd_div(dd_mul_d(t, pres), f);
+}
+
+double sg_air_index(double um, double temp, double pres)
+{
+    dd v;
+    if (!(um > 0.0) || !isfinite(um) || !isfinite(temp) || !isfinite(pres))
+        return NAN;
+    v = dd_add(dd_from(1.0), air_minus_one(um, temp, pres));
+    return v.hi + v.lo;
+}
+
+double sg_glass_index_env(const sg_glass *g, double um, double temp, double pres)
+{
+    dd air_sys, air_ref, n, nabs, dt, s, e, dn, l2r;
+    double lref;
+    if (!g)
+        return NAN;
+    if (temp == g->tref && pres == 1.0)
+        return sg_glass_index(g, um);
+    if (!(um > 0.0) || !isfinite(um) || !isfinite(temp) || !isfinite(pres))
+        return NAN;
+    air_sys = dd_add(dd_from(1.0), air_minus_one(um, temp, pres));
+    air_ref = dd_add(dd_from(1.0), air_minus_one(um, g->tref, 1.0));
+    /* The wavelength in the catalog's reference air. */
+    lref = dd_div(dd_mul_d(air_sys, um), air_ref).hi;
+    n = dd_from(sg_glass_index(g, lref));
+    if (!isfinite(n.hi))
+        return NAN;
+    nabs = dd_mul(n, air_ref);
+    dt = dd_sub(dd_from(temp), dd_from(g->tref));
+    /* D0 dT + D1 dT^2 + D2 dT^3 */
+    s = dd_mul(dd_add(dd_mul(dd_add(dd_mul_d(dt, g->td[2]), dd_from(g->td[1])), dt),
+                      dd_from(g->td[0])),
+               dt);
+    /* (E0 dT + E1 dT^2) / (L^2 - Ltk^2) */
+    e = dd_mul(dd_add(dd_mul_d(dt, g->td[4]), dd_from(g->td[3])), dt);
+    l2r = dd_two_prod(lref, lref);
+    e = dd_div(e, dd_sub(l2r, dd_two_prod(g->td[5], g->td[5])));
+    dn = dd_div(dd_sub(dd_mul(n, n), dd_from(1.0)), dd_mul_d(n, 2.0));
+    dn = dd_mul(dn, dd_add(s, e));
+    n = dd_div(dd_add(nabs, dn), air_sys);
+    if (!isfinite(n.hi) || !(n.hi > 0.0))
+        return NAN;
+    return n.hi + n.lo;
+}
+
 int sg_glass_in_range(const sg_glass *g, double um)
 {
     if (!g)
@@ -547,6 +610,7 @@ static int parse_nm(agf_ctx *cx, const agf_line *ln, glass_list *l,
     sg_strlcpy(g->catalog, catname, sizeof g->catalog);
     g->lmin = 0.0;
     g->lmax = INFINITY;
+    g->tref = 20.0;
 
     rc = tok_number(cx, ln, 2, "formula number", &f);
     if (rc)
@@ -608,13 +672,65 @@ static int parse_ld(agf_ctx *cx, const agf_line *ln, sg_glass *g)
     rc = tok_number(cx, ln, 2, "LD maximum wavelength", &b);
     if (rc)
         return rc;
-    if (!(a > 0.0 && a <= b))
+    if (!(a >= 0.0 && a <= b))
         return sg_diag_set(cx->d, SG_EPARSE,
-                           "%s:%ld: glass %s: LD range %g..%g is not a "
-                           "positive interval",
+                           "%s:%ld: glass %s: LD range %g..%g is not an "
+                           "interval of wavelengths",
                            cx->path, cx->line, g->name, a, b);
+    /* "LD 0 0" (in NHG's catalog) gives no range at all. */
     g->lmin = a;
-    g->lmax = b;
+    g->lmax = b > 0.0 ? b : INFINITY;
+    return SG_OK;
+}
+
+/* TD D0 D1 D2 E0 E1 Ltk Tref.  Vendors' files also carry TD lines with
+ * fewer numbers (SCHOTT 2018 has an empty one, NIKON 2019 four): as in
+ * Zemax, a missing coefficient is 0 and a missing Tref 20 C. */
+static int parse_td(agf_ctx *cx, const agf_line *ln, sg_glass *g)
+{
+    static const char *const what[7] = {"TD D0", "TD D1", "TD D2", "TD E0", "TD E1",
+                                        "TD lambda_tk", "TD reference temperature"};
+    int k, rc;
+    if (ln->ntok > 8)
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: glass %s: TD line has %d numbers, at most 7 allowed",
+                           cx->path, cx->line, g->name, ln->ntok - 1);
+    memset(g->td, 0, sizeof g->td);
+    g->tref = 20.0;
+    for (k = 0; k + 1 < ln->ntok; k++)
+        if ((rc = tok_number(cx, ln, k + 1, what[k], k < 6 ? &g->td[k] : &g->tref)) != SG_OK)
+            return rc;
+    if (!(g->tref >= SG_TEMP_MIN && g->tref <= SG_TEMP_MAX))
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: glass %s: TD reference temperature %g C is outside "
+                           "%g to %g C",
+                           cx->path, cx->line, g->name, g->tref, SG_TEMP_MIN, SG_TEMP_MAX);
+    g->has_td = 1;
+    return SG_OK;
+}
+
+/* ED TCE(-30..70) TCE(100..300) density dPgF [ignore-thermal-expansion
+ * flag ...]: only the first four numbers are kept (0 for a "-"); vendors
+ * append one or two flags. */
+static int parse_ed(agf_ctx *cx, const agf_line *ln, sg_glass *g)
+{
+    static const char *const what[4] = {"ED expansion -30..70 C", "ED expansion 100..300 C",
+                                        "ED density", "ED dPgF"};
+    int k, rc;
+    if (ln->ntok < 5)
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: glass %s: ED line needs at least 4 numbers, has %d",
+                           cx->path, cx->line, g->name, ln->ntok - 1);
+    for (k = 0; k < 4; k++) {
+        /* SCHOTT writes "-" for a figure it does not give. */
+        if (ln->len[k + 1] == 1 && ln->tok[k + 1][0] == '-') {
+            g->ed[k] = 0.0;
+            continue;
+        }
+        if ((rc = tok_number(cx, ln, k + 1, what[k], &g->ed[k])) != SG_OK)
+            return rc;
+    }
+    g->has_ed = 1;
     return SG_OK;
 }
 
@@ -780,9 +896,17 @@ static int parse_text(agf_ctx *cx, const char *s, size_t n, glass_list *l,
             if (l->n == 0)
                 return agf_err(cx, "LD line before any NM line");
             rc = parse_ld(cx, &ln, &l->g[l->n - 1]);
+        } else if (tok_is(&ln, 0, "TD")) {
+            if (l->n == 0)
+                return agf_err(cx, "TD line before any NM line");
+            rc = parse_td(cx, &ln, &l->g[l->n - 1]);
+        } else if (tok_is(&ln, 0, "ED")) {
+            if (l->n == 0)
+                return agf_err(cx, "ED line before any NM line");
+            rc = parse_ed(cx, &ln, &l->g[l->n - 1]);
         } else {
-            /* CC, ED, TD, OD, IT, GC, BD and anything newer carry data
-             * the ray trace does not use. */
+            /* CC, GC, OD, IT, BD, '!' comments and anything newer carry
+             * data the ray trace does not use. */
             rc = SG_OK;
         }
         if (rc)

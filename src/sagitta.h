@@ -132,6 +132,15 @@ typedef struct sg_glass {
     double c[SG_GLASS_NCOEF];    /* CD line coefficients, in file order */
     double lmin, lmax;           /* valid range in um (LD line) */
     double nd, vd;               /* catalog nd and Abbe number (NM line) */
+    /* TD line: dn/dT coefficients D0, D1, D2, E0, E1 and lambda_tk (um),
+     * and the temperature (C) the catalog's data were measured at.  A
+     * glass without a TD line has zeros and 20 C. */
+    double td[6];
+    double tref;
+    /* ED line: expansion coefficients -30..+70 C and +100..+300 C (1e-6/K),
+     * density (g/cm^3) and relative partial dispersion deviation dPgF. */
+    double ed[4];
+    int has_td, has_ed;
 } sg_glass;
 
 typedef struct sg_catalog sg_catalog;
@@ -157,6 +166,21 @@ const sg_glass *sg_catalog_at(const sg_catalog *cat, size_t i);
  * unknown formula or a non-positive n^2. */
 double sg_glass_index(const sg_glass *g, double um);
 int sg_glass_in_range(const sg_glass *g, double um);
+
+/* Zemax's index of air at wavelength um, temperature temp (C) and relative
+ * pressure pres (atm): n = 1 + (n_ref - 1) P / (1 + 3.4785e-3 (T - 15)),
+ * n_ref = 1 + 1e-8 (6432.8 + 2949810 L^2 / (146 L^2 - 1)
+ *                   + 25540 L^2 / (41 L^2 - 1)). */
+double sg_air_index(double um, double temp, double pres);
+/* The glass's index relative to air at temp (C) and pres (atm), for a
+ * wavelength um measured in that air, by Zemax's thermal model: the
+ * wavelength is taken into the catalog's reference air (tref, 1 atm), the
+ * catalog index made absolute there, changed by the TD line's
+ *   dn_abs = (n^2 - 1) / (2 n) (D0 dT + D1 dT^2 + D2 dT^3
+ *            + (E0 dT + E1 dT^2) / (L^2 - Ltk^2)),  dT = temp - tref,
+ * and divided by the index of the air at temp and pres.  At the reference
+ * conditions (temp == tref, pres == 1) it is sg_glass_index() exactly. */
+double sg_glass_index_env(const sg_glass *g, double um, double temp, double pres);
 
 /* ------------------------------------------------------------------------
  * The optical system
@@ -236,6 +260,11 @@ typedef struct sg_field {
     double weight;
 } sg_field;
 
+/* Limits of the environment: temperature in C, pressure in atm. */
+#define SG_TEMP_MIN (-250.0)
+#define SG_TEMP_MAX 1000.0
+#define SG_PRES_MAX 100.0
+
 typedef struct sg_system {
     char title[128];
     char units[8]; /* "mm", "cm", "in" or "m" */
@@ -252,6 +281,15 @@ typedef struct sg_system {
     sg_aper_type aper_type;
     double aper_value;
     sg_aim aim;
+
+    /* The environment (Zemax's ENVD): temperature in C (20) and pressure
+     * in atm (1) of the air the wavelengths are measured in.  With
+     * adjust_index nonzero each glass's index follows them by Zemax's
+     * thermal model (sg_glass_index_env); with 0 (the default, Zemax's
+     * "Adjust Index Data To Environment" unchecked) catalog indices are
+     * used as they are. */
+    double temperature, pressure;
+    int adjust_index;
 
     int stop; /* surface index of the aperture stop */
     int nsurf;   /* surfaces 0..nsurf-1; object is 0, image is nsurf-1 */

@@ -59,6 +59,8 @@ int sg_system_reset(sg_system *sys, int nsurf)
     sys->aper_type = SG_APER_EPD;
     sys->aper_value = 10.0;
     sys->aim = SG_AIM_OFF;
+    sys->temperature = 20.0;
+    sys->pressure = 1.0;
     sys->nsurf = nsurf;
     for (i = 0; i < nsurf; i++)
         sg_surface_init(&sys->surf[i]);
@@ -251,6 +253,14 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
             return sg_diag_set(d, SG_ERANGE,
                                "wavelength %d: %g um is not a positive finite value",
                                k + 1, sys->wave[k].um);
+    /* The air formula's temperature factor stays positive down to about
+     * -272 C; the limits keep it well clear of that. */
+    if (!(sys->temperature >= SG_TEMP_MIN && sys->temperature <= SG_TEMP_MAX))
+        return sg_diag_set(d, SG_ERANGE, "temperature: %g C is outside %g to %g C",
+                           sys->temperature, SG_TEMP_MIN, SG_TEMP_MAX);
+    if (!(sys->pressure >= 0.0 && sys->pressure <= SG_PRES_MAX))
+        return sg_diag_set(d, SG_ERANGE, "pressure: %g atm is outside 0 to %g atm",
+                           sys->pressure, SG_PRES_MAX);
     if (sys->nfield < 1 || sys->nfield > SG_MAX_FIELDS)
         return sg_diag_set(d, SG_ERANGE, "fields: %d given, 1 to %d allowed",
                            sys->nfield, SG_MAX_FIELDS);

@@ -521,7 +521,7 @@ int sg_indices_mpfr(const sg_system *sys, const sg_catalog *cat, int wave,
                                  s->mat.name);
                 goto out;
             }
-            if (sg_glass_index_mpfr(g, idx[i], um) != SG_OK) {
+            if (sg_system_glass_index_mpfr(sys, g, idx[i], um) != SG_OK) {
                 rc = sg_diag_set(d, SG_ERANGE,
                                  "surface %d: glass %s has no real index at %g um", i,
                                  g->name, sys->wave[wave].um);

@@ -92,11 +92,12 @@ static void test_iso8859_asphere(void **state)
     sg_system *s = load_zmx("lens_thorlabs_iso_8859_1.zmx", &d, &rc);
     (void)state;
     assert_int_equal(rc, SG_OK);
-    /* ENVD 2.0E+1 1 1 (line 9): Zemax's index adjustment is not made, and
-     * the warning says so. */
+    /* ENVD 2.0E+1 1 1 (line 9): 20 C, 1 atm, and Zemax's "Adjust Index
+     * Data To Environment" on; nothing to warn about. */
     for (i = 0; i < d.nwarn && i < SG_DIAG_MAXWARN; i++)
-        warned |= strstr(d.warn[i], "lens_thorlabs_iso_8859_1.zmx:9: ENVD") != NULL;
-    assert_true(warned);
+        warned |= strstr(d.warn[i], "ENVD") != NULL;
+    assert_false(warned);
+    assert_true(s->temperature == 20.0 && s->pressure == 1.0 && s->adjust_index == 1);
     /* "Ø" is byte 0xD8 in the file; in the model it is UTF-8. */
     assert_non_null(strstr(s->title, "\xC3\x98" "18 mm"));
     assert_true(s->surf[1].type == SG_SURF_EVENASPH);
@@ -410,7 +411,8 @@ static void test_bad_inputs(void **state)
         {"model glass", H S0 "SURF 1\n  GLAS ___BLANK 1 0 1.6 40 0\n", 0, SG_EUNSUPPORTED, "model glass"},
         {"unknown glass", H S0 "SURF 1\n  GLAS NOSUCH 0 0 1.6 40.5\n", 0, SG_ENOGLASS, "NOSUCH"},
         {"cone angle", "OBNA 10 1\n" S0, 0, SG_EUNSUPPORTED, "t.zmx:1: OBNA: an object cone angle"},
-        {"temperature", "ENVD 25 1 0\n", 0, SG_EUNSUPPORTED, "t.zmx:1: ENVD"},
+        {"temperature", "ENVD -300 1 0\n", 0, SG_ERANGE, "t.zmx:1: ENVD: temperature -300 C"},
+        {"pressure", "ENVD 20 -1 0\n", 0, SG_ERANGE, "t.zmx:1: ENVD: pressure -1 atm"},
         {"configs", "MNUM 3 1\n", 0, SG_EUNSUPPORTED, "t.zmx:1: MNUM: 3 configurations"},
         {"pupil shift", "PUSH 1 0 0 0 0 0\n", 0, SG_EUNSUPPORTED, "PUSH"},
         {"two apertures", "ENPD 10\nFNUM 4 0\n", 0, SG_EPARSE, "t.zmx:2: a second aperture line"},

@@ -524,6 +524,8 @@ int doc_system_equal(const sg_system *a, const sg_system *b)
         a->field_type != b->field_type || a->field_norm != b->field_norm ||
         a->nfield != b->nfield || a->aper_type != b->aper_type ||
         !same_double(a->aper_value, b->aper_value) || a->aim != b->aim ||
+        !same_double(a->temperature, b->temperature) ||
+        !same_double(a->pressure, b->pressure) || a->adjust_index != b->adjust_index ||
         a->stop != b->stop || a->nsurf != b->nsurf)
         return 0;
     for (i = 0; i < a->nwave; i++)
