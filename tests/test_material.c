@@ -1045,6 +1045,51 @@ static void test_agf_bad(void **state)
     td_remove(&t, names, nb);
 }
 
+/* Forms met in vendors' catalogs (SCHOTT 2018, NIKON 2019, NHG, APEL):
+ * an empty TD line, a short one, "-" for an ED figure, "LD 0 0", a formula
+ * written as 1.00000000E+00, '!' comments, BD lines and tabs. */
+static void test_agf_vendor_forms(void **state)
+{
+    static const char text[] =
+        "! a comment line\n"
+        "CC\tUpdated\t2020\n"
+        "NM EMPTYTD 2 517642 1.5168 64.17 0 1\n"
+        "GC \t\t\t\n"
+        "ED 7.1 - 2.51 -0.0009 0\n"
+        "CD 1.03961212 0.00600069867 0.231792344 0.0200179144 1.01046945 103.560653\n"
+        "TD\n"
+        "OD - 1.0000 0.0000 1.0000 2.3000 2.3000\n"
+        "LD 0 0\n"
+        "BD 0.5\n"
+        "NM SHORTTD 1.00000000E+00 0.0 1.5444 56.0 0 0 0\n"
+        "CD 2.34529475E+00 -1.57028146E-03 1.35359873E-02 3.56770651E-04\n"
+        "TD 8.21e-07 1.2e-08 2.2e-12 8.9e-07\n"
+        "IT 0.3 0.5\n";
+    tmpdir t;
+    char p[256];
+    sg_diag d;
+    const sg_glass *g;
+    static const char *const names[] = {"VENDOR.agf"};
+    sg_catalog *cat = sg_catalog_new();
+    (void)state;
+    td_make(&t);
+    td_write(&t, "VENDOR.agf", text, strlen(text), p, sizeof p);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_catalog_load_agf(cat, p, &d), SG_OK);
+    g = sg_catalog_find(cat, "EMPTYTD");
+    assert_non_null(g);
+    assert_true(g->has_td && g->td[0] == 0.0 && g->td[5] == 0.0 && g->tref == 20.0);
+    assert_true(g->has_ed && g->ed[0] == 7.1 && g->ed[1] == 0.0 && g->ed[2] == 2.51);
+    assert_true(g->lmin == 0.0 && isinf(g->lmax));
+    g = sg_catalog_find(cat, "SHORTTD");
+    assert_non_null(g);
+    assert_int_equal(g->formula, 1);
+    assert_true(g->td[0] == 8.21e-07 && g->td[3] == 8.9e-07 && g->td[4] == 0.0 &&
+                g->td[5] == 0.0 && g->tref == 20.0);
+    sg_catalog_free(cat);
+    td_remove(&t, names, 1);
+}
+
 static void test_agf_replace_and_dir(void **state)
 {
     tmpdir t;
@@ -1302,6 +1347,7 @@ int main(void)
         cmocka_unit_test(test_locale),
         cmocka_unit_test(test_agf_many),
         cmocka_unit_test(test_agf_fuzz),
+        cmocka_unit_test(test_agf_vendor_forms),
         cmocka_unit_test(test_temperature),
         cmocka_unit_test(test_reference_conditions),
     };
