@@ -441,9 +441,39 @@ static int get_material(jctx *c, const cJSON *v, const char *where, sg_material 
             m->name[k] = (s[k] >= 'a' && s[k] <= 'z') ? (char)(s[k] - 'a' + 'A') : s[k];
         return SG_OK;
     }
+    if (cJSON_IsObject(v)) {
+        /* A model glass: { "nd": ..., "vd": ..., "dpgf": ... }. */
+        static const char *const keys[] = {"nd", "vd", "dpgf"};
+        const cJSON *k[3];
+        char at[96];
+        int rc;
+        pick_keys(c, v, where, keys, 3, k);
+        if (!k[0] || !k[1])
+            return perr(c, SG_EPARSE, where, "a model glass needs \"nd\" and \"vd\"");
+        m->kind = SG_MAT_MODEL;
+        snprintf(at, sizeof at, "%s.nd", where);
+        if ((rc = get_finite(c, k[0], at, &m->index)) != SG_OK)
+            return rc;
+        snprintf(at, sizeof at, "%s.vd", where);
+        if ((rc = get_finite(c, k[1], at, &m->vd)) != SG_OK)
+            return rc;
+        snprintf(at, sizeof at, "%s.dpgf", where);
+        if (k[2] && (rc = get_finite(c, k[2], at, &m->dpgf)) != SG_OK)
+            return rc;
+        if (!(m->index >= SG_MODEL_ND_MIN && m->index <= SG_MODEL_ND_MAX) ||
+            !(m->vd >= SG_MODEL_VD_MIN && m->vd <= SG_MODEL_VD_MAX) ||
+            !(fabs(m->dpgf) <= SG_MODEL_DPGF_MAX))
+            return perr(c, SG_ERANGE, where,
+                        "model glass nd %.17g, vd %.17g, dpgf %.17g: nd must be %g to %g, vd "
+                        "%g to %g and |dpgf| at most %g",
+                        m->index, m->vd, m->dpgf, SG_MODEL_ND_MIN, SG_MODEL_ND_MAX,
+                        SG_MODEL_VD_MIN, SG_MODEL_VD_MAX, SG_MODEL_DPGF_MAX);
+        return SG_OK;
+    }
     describe(v, got, sizeof got);
     return perr(c, SG_EPARSE, where,
-                "expected a glass name, \"AIR\", \"MIRROR\" or a number (a fixed index), got %s",
+                "expected a glass name, \"AIR\", \"MIRROR\", a number (a fixed index) or "
+                "{\"nd\", \"vd\", \"dpgf\"} (a model glass), got %s",
                 got);
 }
 
@@ -1145,6 +1175,11 @@ static int check_writable(const sg_system *sys, sg_diag *d)
                 return sg_diag_set(d, SG_EINVAL, "surface %d: material: index is %g", i,
                                    s->mat.index);
             break;
+        case SG_MAT_MODEL:
+            if (!isfinite(s->mat.index) || !isfinite(s->mat.vd) || !isfinite(s->mat.dpgf))
+                return sg_diag_set(d, SG_EINVAL, "surface %d: material: model glass nd %g, "
+                                   "vd %g, dpgf %g", i, s->mat.index, s->mat.vd, s->mat.dpgf);
+            break;
         default:
             return sg_diag_set(d, SG_EINVAL, "surface %d: material: unknown kind %d", i,
                                (int)s->mat.kind);
@@ -1247,6 +1282,15 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
             break;
         case SG_MAT_INDEX:
             sb_num(&b, s->mat.index);
+            break;
+        case SG_MAT_MODEL:
+            sb_puts(&b, "{ \"nd\": ");
+            sb_num(&b, s->mat.index);
+            sb_puts(&b, ", \"vd\": ");
+            sb_num(&b, s->mat.vd);
+            sb_puts(&b, ", \"dpgf\": ");
+            sb_num(&b, s->mat.dpgf);
+            sb_puts(&b, " }");
             break;
         default:
             sb_puts(&b, "\"AIR\"");

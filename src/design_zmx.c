@@ -679,11 +679,26 @@ static int read_glas(zctx *c, const zline *l, sg_surface *s)
         double dpgf = 0.0;
         if ((rc = opt_num(c, l, 6, "dPgF", 0.0, &dpgf)) != SG_OK)
             return rc;
-        if (vd != 0.0 || dpgf != 0.0)
-            return zerr(c, SG_EUNSUPPORTED,
-                        "GLAS: a model glass (nd %.17g, vd %.17g, dPgF %.17g) is dispersive; "
-                        "sagitta has catalog glasses and fixed indices only (%s)",
-                        nd, vd, dpgf, nearest_glass(c->cat, nd, vd, sug, sizeof sug));
+        if (vd != 0.0 || dpgf != 0.0) {
+            sg_glass probe;
+            if (sg_model_glass(nd, vd, dpgf, &probe) != SG_OK)
+                return zerr(c, SG_ERANGE,
+                            "GLAS: model glass nd %.15g, vd %.15g, dPgF %.15g is outside "
+                            "nd %g to %g, vd %g to %g, |dPgF| at most %g (%s)",
+                            nd, vd, dpgf, SG_MODEL_ND_MIN, SG_MODEL_ND_MAX, SG_MODEL_VD_MIN,
+                            SG_MODEL_VD_MAX, SG_MODEL_DPGF_MAX,
+                            nearest_glass(c->cat, nd, vd, sug, sizeof sug));
+            /* Zemax's model glass formula is not published. */
+            zwarn(c, "GLAS: model glass nd %.15g, vd %.15g, dPgF %.15g: sagitta's model "
+                  "(Conrady's formula through nd, vd and SCHOTT's normal line) is not Zemax's "
+                  "unpublished one; indices may differ by some 1e-4",
+                  nd, vd, dpgf);
+            s->mat.kind = SG_MAT_MODEL;
+            s->mat.index = nd;
+            s->mat.vd = vd;
+            s->mat.dpgf = dpgf;
+            return SG_OK;
+        }
         if (!(nd >= 1e-3 && nd < 100.0))
             return zerr(c, SG_ERANGE, "GLAS: model glass index %.17g is not physical", nd);
         s->mat.kind = SG_MAT_INDEX;
@@ -1621,6 +1636,12 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
             /* A model glass without dispersion. */
             zb_printf(b, "  GLAS ___BLANK 1 0 %s 0 0 0 0 0 0 0\n", num(n1, f->mat.index));
             break;
+        case SG_MAT_MODEL: {
+            char n3[40];
+            zb_printf(b, "  GLAS ___BLANK 1 0 %s %s %s 0 0 0 0 0\n", num(n1, f->mat.index),
+                      num(n2, f->mat.vd), num(n3, f->mat.dpgf));
+            break;
+        }
         default:
             break;
         }

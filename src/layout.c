@@ -141,7 +141,8 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
         int np = o->profile_pts;
         s->z0 = z0[i];
         s->mirror = su->mat.kind == SG_MAT_MIRROR;
-        s->glass_after = su->mat.kind == SG_MAT_GLASS || su->mat.kind == SG_MAT_INDEX;
+        s->glass_after = su->mat.kind == SG_MAT_GLASS || su->mat.kind == SG_MAT_INDEX ||
+                         su->mat.kind == SG_MAT_MODEL;
         if (!(sd > 0.0)) {
             /* Zemax's automatic semi-diameter: the largest ray height there. */
             sd = 0.0;

@@ -397,6 +397,44 @@ double sg_glass_index_env(const sg_glass *g, double um, double temp, double pres
     return n.hi + n.lo;
 }
 
+int sg_model_glass(double nd, double vd, double dpgf, sg_glass *out)
+{
+    /* The g, F, d and C lines (um), as Zemax and SCHOTT take them. */
+    static const double lg = 0.4358343, lf = 0.4861327, ld = 0.5875618, lc = 0.6562725;
+    double dfc, dgf, u1, v1, u2, v2, det, a, b;
+    if (!out)
+        return SG_EINVAL;
+    if (!(nd >= SG_MODEL_ND_MIN && nd <= SG_MODEL_ND_MAX) ||
+        !(vd >= SG_MODEL_VD_MIN && vd <= SG_MODEL_VD_MAX) || !(fabs(dpgf) <= SG_MODEL_DPGF_MAX))
+        return SG_ERANGE;
+    dfc = (nd - 1.0) / vd;
+    dgf = (0.6438 - 0.001682 * vd + dpgf) * dfc;
+    /* A (1/L_F - 1/L_C) + B (L_F^-3.5 - L_C^-3.5) = n(F) - n(C), and the
+     * same for g and F; then n0 from n(d). */
+    u1 = 1.0 / lf - 1.0 / lc;
+    v1 = 1.0 / (lf * lf * lf * sqrt(lf)) - 1.0 / (lc * lc * lc * sqrt(lc));
+    u2 = 1.0 / lg - 1.0 / lf;
+    v2 = 1.0 / (lg * lg * lg * sqrt(lg)) - 1.0 / (lf * lf * lf * sqrt(lf));
+    det = u1 * v2 - u2 * v1;
+    a = (dfc * v2 - dgf * v1) / det;
+    b = (u1 * dgf - u2 * dfc) / det;
+    memset(out, 0, sizeof *out);
+    sg_strlcpy(out->name, "MODEL", sizeof out->name);
+    sg_strlcpy(out->catalog, "MODEL", sizeof out->catalog);
+    out->formula = SG_FORMULA_CONRADY;
+    out->c[0] = nd - a / ld - b / (ld * ld * ld * sqrt(ld));
+    out->c[1] = a;
+    out->c[2] = b;
+    /* The model is fitted in the visible and meant for it. */
+    out->lmin = 0.4;
+    out->lmax = 0.75;
+    out->nd = nd;
+    out->vd = vd;
+    out->ed[3] = dpgf;
+    out->tref = 20.0;
+    return SG_OK;
+}
+
 int sg_glass_in_range(const sg_glass *g, double um)
 {
     if (!g)

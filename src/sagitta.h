@@ -182,6 +182,17 @@ double sg_air_index(double um, double temp, double pres);
  * conditions (temp == tref, pres == 1) it is sg_glass_index() exactly. */
 double sg_glass_index_env(const sg_glass *g, double um, double temp, double pres);
 
+/* A model glass from nd, vd and dPgF, as a catalog glass (named "MODEL") of
+ * the Conrady formula (5), n = n0 + A / L + B / L^3.5, whose three
+ * coefficients give exactly
+ *   n(d) = nd,  n(F) - n(C) = (nd - 1) / vd,
+ *   (n(g) - n(F)) / (n(F) - n(C)) = 0.6438 - 0.001682 vd + dPgF,
+ * the last SCHOTT's normal line of the partial dispersion P_g,F (TIE-29),
+ * from which catalogs' dPgF is measured.  Zemax's own model glass formula
+ * is not published; in the visible this one follows real glasses to about
+ * 1e-4.  Returns SG_ERANGE for values outside the SG_MODEL_* limits. */
+int sg_model_glass(double nd, double vd, double dpgf, sg_glass *out);
+
 /* ------------------------------------------------------------------------
  * The optical system
  * ------------------------------------------------------------------------ */
@@ -201,14 +212,23 @@ typedef enum sg_mat_kind {
     SG_MAT_AIR = 0,    /* index 1 (indices are relative to air) */
     SG_MAT_MIRROR = 1, /* reflect; the medium after keeps the index before */
     SG_MAT_GLASS = 2,  /* a catalog glass, by name */
-    SG_MAT_INDEX = 3   /* a fixed, non-dispersive index */
+    SG_MAT_INDEX = 3,  /* a fixed, non-dispersive index */
+    SG_MAT_MODEL = 4   /* a model glass: nd (in index), vd and dpgf */
 } sg_mat_kind;
 
 typedef struct sg_material {
     sg_mat_kind kind;
     char name[SG_GLASS_NAME]; /* glass name for SG_MAT_GLASS */
-    double index;             /* for SG_MAT_INDEX */
+    double index;             /* for SG_MAT_INDEX; nd for SG_MAT_MODEL */
+    double vd, dpgf;          /* for SG_MAT_MODEL */
 } sg_material;
+
+/* Limits of a model glass's nd, vd and |dPgF|. */
+#define SG_MODEL_ND_MIN 1.0
+#define SG_MODEL_ND_MAX 4.0
+#define SG_MODEL_VD_MIN 5.0
+#define SG_MODEL_VD_MAX 200.0
+#define SG_MODEL_DPGF_MAX 0.2
 
 typedef struct sg_surface {
     sg_surf_type type;

@@ -334,6 +334,23 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
         if (s->mat.kind == SG_MAT_INDEX && !(s->mat.index >= 1e-3 && s->mat.index < 100.0))
             return sg_diag_set(d, SG_ERANGE,
                                "surface %d: material index %g is not physical", i, s->mat.index);
+        if (s->mat.kind == SG_MAT_MODEL &&
+            !(s->mat.index >= SG_MODEL_ND_MIN && s->mat.index <= SG_MODEL_ND_MAX &&
+              s->mat.vd >= SG_MODEL_VD_MIN && s->mat.vd <= SG_MODEL_VD_MAX &&
+              fabs(s->mat.dpgf) <= SG_MODEL_DPGF_MAX))
+            return sg_diag_set(d, SG_ERANGE,
+                               "surface %d: model glass nd %g, vd %g, dPgF %g: nd must be %g to "
+                               "%g, vd %g to %g and |dPgF| at most %g",
+                               i, s->mat.index, s->mat.vd, s->mat.dpgf, SG_MODEL_ND_MIN,
+                               SG_MODEL_ND_MAX, SG_MODEL_VD_MIN, SG_MODEL_VD_MAX,
+                               SG_MODEL_DPGF_MAX);
+        if (s->mat.kind == SG_MAT_MODEL)
+            for (k = 0; k < sys->nwave; k++)
+                if (!(sys->wave[k].um >= 0.4 && sys->wave[k].um <= 0.75))
+                    sg_diag_warn(d,
+                                 "surface %d: wavelength %g um is outside 0.4 to 0.75 um, "
+                                 "where the model glass is fitted",
+                                 i, sys->wave[k].um);
         if (s->mat.kind == SG_MAT_MIRROR && (i == 0 || i == sys->nsurf - 1))
             return sg_diag_set(d, SG_ENONPHYS,
                                "surface %d: the %s cannot be a mirror", i,

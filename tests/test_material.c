@@ -640,6 +640,138 @@ static void test_reference_conditions(void **state)
     sg_catalog_free(cat);
 }
 
+/* ------------------------------------------------------------------------
+ * Model glasses: Conrady's n = n0 + A/L + B/L^3.5 through nd, vd and
+ * P_gF = 0.6438 - 0.001682 vd + dPgF, solved again here in MPFR by
+ * Cramer's rule.
+ * ------------------------------------------------------------------------ */
+
+static void conrady_basis(const mpfr_t l, mpfr_t u, mpfr_t v)
+{
+    mpfr_ui_div(u, 1, l, MPFR_RNDN);
+    mpfr_set_str(v, "-3.5", 10, MPFR_RNDN);
+    mpfr_pow(v, l, v, MPFR_RNDN);
+}
+
+/* out = the model's n at lam, from nd, vd, dpgf as decimal-exact doubles. */
+static void ref_model(double nd, double vd, double dpgf, const mpfr_t lam, mpfr_t out)
+{
+    static const char *const lines[4] = {"0.4358343", "0.4861327", "0.5875618", "0.6562725"};
+    mpfr_t l[4], u[4], v[4], dfc, dgf, t, det, a, b, n0;
+    int k;
+    for (k = 0; k < 4; k++) {
+        mpfr_inits2(PREC, l[k], u[k], v[k], (mpfr_ptr)0);
+        /* The program takes the lines as doubles; so does this. */
+        mpfr_set_d(l[k], strtod(lines[k], NULL), MPFR_RNDN);
+        conrady_basis(l[k], u[k], v[k]);
+    }
+    mpfr_inits2(PREC, dfc, dgf, t, det, a, b, n0, (mpfr_ptr)0);
+    mpfr_set_d(dfc, nd, MPFR_RNDN);
+    mpfr_sub_ui(dfc, dfc, 1, MPFR_RNDN);
+    mpfr_div_d(dfc, dfc, vd, MPFR_RNDN);
+    mpfr_set_d(t, vd, MPFR_RNDN);
+    mpfr_mul_d(t, t, -0.001682, MPFR_RNDN);
+    mpfr_add_d(t, t, 0.6438, MPFR_RNDN);
+    mpfr_add_d(t, t, dpgf, MPFR_RNDN);
+    mpfr_mul(dgf, t, dfc, MPFR_RNDN);
+    /* rows: F - C and g - F */
+    mpfr_sub(u[3], u[1], u[3], MPFR_RNDN);
+    mpfr_sub(v[3], v[1], v[3], MPFR_RNDN);
+    mpfr_sub(u[0], u[0], u[1], MPFR_RNDN);
+    mpfr_sub(v[0], v[0], v[1], MPFR_RNDN);
+    mpfr_mul(det, u[3], v[0], MPFR_RNDN);
+    mpfr_mul(t, u[0], v[3], MPFR_RNDN);
+    mpfr_sub(det, det, t, MPFR_RNDN);
+    mpfr_mul(a, dfc, v[0], MPFR_RNDN);
+    mpfr_mul(t, dgf, v[3], MPFR_RNDN);
+    mpfr_sub(a, a, t, MPFR_RNDN);
+    mpfr_div(a, a, det, MPFR_RNDN);
+    mpfr_mul(b, u[3], dgf, MPFR_RNDN);
+    mpfr_mul(t, u[0], dfc, MPFR_RNDN);
+    mpfr_sub(b, b, t, MPFR_RNDN);
+    mpfr_div(b, b, det, MPFR_RNDN);
+    /* n0 = nd - A u(d) - B v(d) */
+    mpfr_set_d(n0, nd, MPFR_RNDN);
+    mpfr_mul(t, a, u[2], MPFR_RNDN);
+    mpfr_sub(n0, n0, t, MPFR_RNDN);
+    mpfr_mul(t, b, v[2], MPFR_RNDN);
+    mpfr_sub(n0, n0, t, MPFR_RNDN);
+    conrady_basis(lam, u[0], v[0]);
+    mpfr_mul(a, a, u[0], MPFR_RNDN);
+    mpfr_mul(b, b, v[0], MPFR_RNDN);
+    mpfr_add(out, n0, a, MPFR_RNDN);
+    mpfr_add(out, out, b, MPFR_RNDN);
+    for (k = 0; k < 4; k++)
+        mpfr_clears(l[k], u[k], v[k], (mpfr_ptr)0);
+    mpfr_clears(dfc, dgf, t, det, a, b, n0, (mpfr_ptr)0);
+}
+
+static void test_model_glass(void **state)
+{
+    static const double waves[] = {0.4, 0.4358343, 0.4861327, 0.5875618, 0.6562725, 0.75};
+    static const double params[][3] = {
+        {1.5168, 64.17, -0.0009}, {1.80518, 25.36, 0.0146}, {1.691, 54.71, -0.0071},
+        {1.45, 90.0, 0.03}, {2.0, 20.0, 0.0}, {1.6, 40.0, 0.0}};
+    /* Real glasses: nd, vd from the NM line, dPgF from the ED line. */
+    static const char *const real[] = {"N-BK7", "N-SF6", "N-LAK9", "N-SF5", "N-SK16",
+                                       "N-BAF10", "N-LASF9", "N-FK5", "F2", "S-LAH64"};
+    sg_catalog *cat = tu_catalog();
+    sg_glass m;
+    mpfr_t lam, ref;
+    double worst = 0.0, worst_real = 0.0;
+    const char *wn = "";
+    size_t i, w;
+    (void)state;
+    mpfr_inits2(PREC, lam, ref, (mpfr_ptr)0);
+    for (i = 0; i < sizeof params / sizeof *params; i++) {
+        double nd = params[i][0], vd = params[i][1], dp = params[i][2];
+        double ng, nf, nc, n_d;
+        assert_int_equal(sg_model_glass(nd, vd, dp, &m), SG_OK);
+        assert_int_equal(m.formula, SG_FORMULA_CONRADY);
+        for (w = 0; w < sizeof waves / sizeof *waves; w++) {
+            double n = sg_glass_index(&m, waves[w]);
+            mpfr_set_d(lam, waves[w], MPFR_RNDN);
+            ref_model(nd, vd, dp, lam, ref);
+            worst = fmax(worst, fabs(n - mpfr_get_d(ref, MPFR_RNDN)));
+        }
+        /* The three definitions, from the program's own indices. */
+        ng = sg_glass_index(&m, 0.4358343);
+        nf = sg_glass_index(&m, 0.4861327);
+        n_d = sg_glass_index(&m, 0.5875618);
+        nc = sg_glass_index(&m, 0.6562725);
+        assert_true(fabs(n_d - nd) <= 4e-16 * nd);
+        assert_true(fabs((n_d - 1.0) / (nf - nc) - vd) <= 1e-11 * vd);
+        assert_true(fabs((ng - nf) / (nf - nc) - (0.6438 - 0.001682 * vd + dp)) <= 1e-11);
+    }
+    print_message("# model glass: 6 models x 6 wavelengths against the MPFR solution: worst "
+                  "|dn| %.2g (limit 1e-14)\n", worst);
+    assert_true(worst <= 1e-14);
+    for (i = 0; i < sizeof real / sizeof *real; i++) {
+        const sg_glass *g = sg_catalog_find(cat, real[i]);
+        double l;
+        assert_non_null(g);
+        assert_true(g->has_ed);
+        assert_int_equal(sg_model_glass(g->nd, g->vd, g->ed[3], &m), SG_OK);
+        for (l = 0.4047; l <= 0.7066; l += 0.0302) {
+            double dn = fabs(sg_glass_index(&m, l) - sg_glass_index(g, l));
+            if (dn > worst_real) {
+                worst_real = dn;
+                wn = g->name;
+            }
+        }
+    }
+    print_message("# model glass vs catalog, 10 glasses, 0.4047 to 0.7067 um: worst |dn| "
+                  "%.2g (%s), limit 4e-4\n", worst_real, wn);
+    assert_true(worst_real <= 4e-4);
+    assert_int_equal(sg_model_glass(0.9, 50.0, 0.0, &m), SG_ERANGE);
+    assert_int_equal(sg_model_glass(1.5, 2.0, 0.0, &m), SG_ERANGE);
+    assert_int_equal(sg_model_glass(1.5, 50.0, 0.5, &m), SG_ERANGE);
+    assert_int_equal(sg_model_glass(1.5, NAN, 0.0, &m), SG_ERANGE);
+    assert_int_equal(sg_model_glass(1.5, 50.0, 0.0, NULL), SG_EINVAL);
+    mpfr_clears(lam, ref, (mpfr_ptr)0);
+    sg_catalog_free(cat);
+}
+
 /* The MPFR version at a lower precision still rounds correctly enough. */
 static void test_mpfr_precisions(void **state)
 {
@@ -1349,6 +1481,7 @@ int main(void)
         cmocka_unit_test(test_agf_fuzz),
         cmocka_unit_test(test_agf_vendor_forms),
         cmocka_unit_test(test_temperature),
+        cmocka_unit_test(test_model_glass),
         cmocka_unit_test(test_reference_conditions),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

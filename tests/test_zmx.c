@@ -436,7 +436,7 @@ static void test_bad_inputs(void **state)
         {"parm on standard", H S0 "SURF 1\n  STOP\n  PARM 2 1e-5\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: PARM 2"},
         {"parm 9", H S0 "SURF 1\n  TYPE EVENASPH\n  STOP\n  PARM 9 1\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:10: surface 1: PARM 9"},
         {"vignetting", "FTYP 0 0 2 1 0 0 0\nYFLN 0 5\nVCYN 0 0.1\n" H S0 S1 S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:3: VCYN: field 2"},
-        {"model glass", H S0 "SURF 1\n  GLAS ___BLANK 1 0 1.6 40 0\n", 0, SG_EUNSUPPORTED, "model glass"},
+        {"model glass", H S0 "SURF 1\n  GLAS ___BLANK 1 0 1.6 1 0\n", 0, SG_ERANGE, "t.zmx:8: surface 1: GLAS: model glass nd 1.6, vd 1"},
         {"unknown glass", H S0 "SURF 1\n  GLAS NOSUCH 0 0 1.6 40.5\n", 0, SG_ENOGLASS, "NOSUCH"},
         {"cone angle", "OBNA 10 1\n" S0, 0, SG_EUNSUPPORTED, "t.zmx:1: OBNA: an object cone angle"},
         {"temperature", "ENVD -300 1 0\n", 0, SG_ERANGE, "t.zmx:1: ENVD: temperature -300 C"},
@@ -497,10 +497,40 @@ static void test_failed_load_keeps_system(void **state)
     sg_system_free(s);
 }
 
+/* A dispersive model glass reads as sagitta's model, with a warning that
+ * Zemax's formula is another; it is written back as Zemax wrote it; and
+ * ENVD's three fields are written as read. */
+static void test_model_glass_envd(void **state)
+{
+    static const char text[] = "ENVD 31.5 0.9 1\n" H S0
+        "SURF 1\n  STOP\n  CURV 0.02\n  DISZ 5\n  GLAS ___BLANK 1 0 1.5168 64.17 -0.0009\n" S2 S3;
+    sg_system *s = sg_system_new();
+    sg_diag d;
+    char *z;
+    int i, warned = 0;
+    (void)state;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_zmx_parse(s, text, strlen(text), "t.zmx", NULL, &d), SG_OK);
+    for (i = 0; i < d.nwarn && i < SG_DIAG_MAXWARN; i++)
+        warned |= strstr(d.warn[i], "t.zmx:12: surface 1: GLAS: model glass") != NULL;
+    assert_true(warned);
+    assert_int_equal(s->surf[1].mat.kind, SG_MAT_MODEL);
+    assert_true(s->surf[1].mat.index == 1.5168 && s->surf[1].mat.vd == 64.17 &&
+                s->surf[1].mat.dpgf == -0.0009);
+    assert_true(s->temperature == 31.5 && s->pressure == 0.9 && s->adjust_index == 1);
+    z = sg_zmx_to_text(s, NULL, &d);
+    assert_non_null(z);
+    assert_non_null(strstr(z, "GLAS ___BLANK 1 0 1.5168 64.17 -0.0009 "));
+    assert_non_null(strstr(z, "ENVD 31.5 0.9 1\n"));
+    free(z);
+    sg_system_free(s);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_cooke_triplet),
+        cmocka_unit_test(test_model_glass_envd),
         cmocka_unit_test(test_iso8859_asphere),
         cmocka_unit_test(test_utf16_no_type),
         cmocka_unit_test(test_refusals),

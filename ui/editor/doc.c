@@ -506,7 +506,8 @@ static int surface_equal(const sg_surface *a, const sg_surface *b)
     if (a->type != b->type || strcmp(a->comment, b->comment) != 0 ||
         !same_double(a->radius, b->radius) || !same_double(a->thickness, b->thickness) ||
         a->mat.kind != b->mat.kind || strcmp(a->mat.name, b->mat.name) != 0 ||
-        !same_double(a->mat.index, b->mat.index) ||
+        !same_double(a->mat.index, b->mat.index) || !same_double(a->mat.vd, b->mat.vd) ||
+        !same_double(a->mat.dpgf, b->mat.dpgf) ||
         !same_double(a->semi_diameter, b->semi_diameter) || a->sd_fixed != b->sd_fixed ||
         !same_double(a->conic, b->conic))
         return 0;
