@@ -41,7 +41,7 @@ wait_for "LA1509" 10 >/dev/null
 # The singlet's primary wavelength is d (0.5875618 um), so each n shown is
 # the catalog nd to its 5 decimals.
 first_is_nf2() {
-    wait_for 'Glasses for "1.6 40"' 5 &&
+    wait_for 'Glasses for "1.62005 36.43"' 5 &&
         screen | grep -Eq '^ +1  N-F2 +SCHOTT +nd 1\.62005  vd  36\.43  n 1\.62005'
 }
 # Characters, not bytes: the title bar's ellipsis is three bytes.
@@ -54,8 +54,8 @@ by_name() { wait_for 'Glasses for "n-sf1"' 5 && screen | grep -Eq '^ +1  N-SF10 
     screen | grep -Eq '^ +2  N-SF11 '; }
 
 command_line "goto 2"
-command_line "glasses 1.6 40"
-check "glasses 1.6 40 opens the list, N-F2 first with n = nd" first_is_nf2
+command_line "glasses 1.62005 36.43"
+check "glasses 1.62005 36.43 opens the list, N-F2 first with n = nd" first_is_nf2
 check "no line is wider than 80 columns" narrow
 
 # Down to F2 (nd 1.62004, vd 36.37), Enter: surface 2's material.
