@@ -676,24 +676,42 @@ static int parse_nm(agf_ctx *cx, const agf_line *ln, glass_list *l,
     return SG_OK;
 }
 
-static int parse_cd(agf_ctx *cx, const agf_line *ln, sg_glass *g)
+/* Parses the numbers of a CD line (first = 1) or of a line continuing one
+ * (first = 0) into g->c from *nc on; *nc counts the coefficients so far.
+ * NIKON's 2019 catalog wraps one CD line (LAF11) onto a second line. */
+static int parse_cd(agf_ctx *cx, const agf_line *ln, sg_glass *g, int first, int *nc)
 {
-    int k, rc;
-    if (ln->ntok - 1 > SG_GLASS_NCOEF)
+    int k, rc, n = ln->ntok - first;
+    if (first) {
+        memset(g->c, 0, sizeof g->c);
+        *nc = 0;
+    }
+    if (*nc + n > SG_GLASS_NCOEF)
         return sg_diag_set(cx->d, SG_EPARSE,
                            "%s:%ld: glass %s: %d coefficients, at most %d "
                            "allowed",
-                           cx->path, cx->line, g->name, ln->ntok - 1,
-                           SG_GLASS_NCOEF);
-    memset(g->c, 0, sizeof g->c);
-    for (k = 1; k < ln->ntok; k++) {
+                           cx->path, cx->line, g->name, *nc + n, SG_GLASS_NCOEF);
+    for (k = first; k < ln->ntok; k++) {
         char what[40];
-        snprintf(what, sizeof what, "CD coefficient %d", k);
-        rc = tok_number(cx, ln, k, what, &g->c[k - 1]);
+        snprintf(what, sizeof what, "CD coefficient %d", *nc + 1);
+        rc = tok_number(cx, ln, k, what, &g->c[*nc]);
         if (rc)
             return rc;
+        (*nc)++;
     }
     return SG_OK;
+}
+
+/* Nonzero when token k is a decimal number, as a continuation line's
+ * first token is. */
+static int tok_is_number(const agf_line *ln, int k)
+{
+    char buf[AGF_MAX_NUMBER + 1];
+    if (k >= ln->ntok || k >= AGF_MAX_TOKENS || ln->len[k] > AGF_MAX_NUMBER)
+        return 0;
+    memcpy(buf, ln->tok[k], ln->len[k]);
+    buf[ln->len[k]] = '\0';
+    return decimal_syntax_ok(buf);
 }
 
 static int parse_ld(agf_ctx *cx, const agf_line *ln, sg_glass *g)
@@ -896,7 +914,7 @@ static int parse_text(agf_ctx *cx, const char *s, size_t n, glass_list *l,
                       const char *catname)
 {
     size_t pos = 0;
-    int has_cd = 0, rc;
+    int has_cd = 0, rc, in_cd = 0, ncd = 0;
     agf_line ln;
 
     cx->line = 0;
@@ -918,6 +936,14 @@ static int parse_text(agf_ctx *cx, const char *s, size_t n, glass_list *l,
         split_line(s + start, end - start, &ln);
         if (ln.ntok == 0)
             continue;
+        /* A line of numbers right after a CD line continues it. */
+        if (in_cd && tok_is_number(&ln, 0)) {
+            rc = parse_cd(cx, &ln, &l->g[l->n - 1], 0, &ncd);
+            if (rc)
+                return rc;
+            continue;
+        }
+        in_cd = tok_is(&ln, 0, "CD");
         if (tok_is(&ln, 0, "NM")) {
             if (l->n > 0 && !has_cd)
                 return sg_diag_set(cx->d, SG_EPARSE,
@@ -928,7 +954,7 @@ static int parse_text(agf_ctx *cx, const char *s, size_t n, glass_list *l,
         } else if (tok_is(&ln, 0, "CD")) {
             if (l->n == 0)
                 return agf_err(cx, "CD line before any NM line");
-            rc = parse_cd(cx, &ln, &l->g[l->n - 1]);
+            rc = parse_cd(cx, &ln, &l->g[l->n - 1], 1, &ncd);
             has_cd = 1;
         } else if (tok_is(&ln, 0, "LD")) {
             if (l->n == 0)

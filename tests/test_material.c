@@ -1118,6 +1118,10 @@ static const bad_case bad_cases[] = {
     {"edbad.agf", "NM A 2 0 1.5 60 0 0\nED 7 8 2.5 q 0\nCD 1\n", SG_EPARSE,
      ":2: ED dPgF: not a number"},
     {"ldneg.agf", "NM A 2 0 1.5 60 0 0\nCD 1\nLD -0.3 2\n", SG_EPARSE, ":3:"},
+    {"cdwrap13.agf", "NM A 2 0 1.5 60 0 0\nCD 1 2 3 4 5 6 7 8\n9 10 11 12 13\n", SG_EPARSE,
+     ":3: glass A: 13 coefficients, at most 12"},
+    {"cdwrapbad.agf", "NM A 2 0 1.5 60 0 0\nCD 1 2\n3 x\n", SG_EPARSE,
+     ":3: CD coefficient 4: not a number"},
     {"binary.agf", "NM A 2 0 1.5 60 0 0\nCD 1\n\x01\x02\xffzz", SG_EPARSE,
      ":3:"},
     {"empty.agf", "", SG_EPARSE, ":1:"},
@@ -1218,7 +1222,11 @@ static void test_agf_vendor_forms(void **state)
         "NM SHORTTD 1.00000000E+00 0.0 1.5444 56.0 0 0 0\n"
         "CD 2.34529475E+00 -1.57028146E-03 1.35359873E-02 3.56770651E-04\n"
         "TD 8.21e-07 1.2e-08 2.2e-12 8.9e-07\n"
-        "IT 0.3 0.5\n";
+        "IT 0.3 0.5\n"
+        "NM WRAPPED 1 757317 1.756920 31.704801 0 2 0\n"
+        "CD 2.809631000E+000 1.142767000E-001 1.251064000E-001 -2.217090000E-002 \n"
+        "2.916176000E-003 -1.356855000E-004 0.000000000E+000 0.000000000E+000 \n"
+        "TD 0 0 0 0 0 0 25\n";
     tmpdir t;
     char p[256];
     sg_diag d;
@@ -1240,6 +1248,12 @@ static void test_agf_vendor_forms(void **state)
     assert_int_equal(g->formula, 1);
     assert_true(g->td[0] == 8.21e-07 && g->td[3] == 8.9e-07 && g->td[4] == 0.0 &&
                 g->td[5] == 0.0 && g->tref == 20.0);
+    /* NIKON's LAF11 (2019): a CD line wrapped onto the next line. */
+    g = sg_catalog_find(cat, "WRAPPED");
+    assert_non_null(g);
+    assert_true(g->c[3] == -2.21709e-02 && g->c[4] == 2.916176e-03 && g->c[5] == -1.356855e-04);
+    assert_true(fabs(sg_glass_index(g, 0.5875618) - 1.75692) < 1e-6);
+    assert_true(g->tref == 25.0);
     sg_catalog_free(cat);
     td_remove(&t, names, 1);
 }
