@@ -675,7 +675,7 @@ static int read_glas(zctx *c, const zline *l, sg_surface *s)
     }
     if (strcmp(name, "___BLANK") == 0) {
         /* A model glass: nd, vd (and dPgF).  Without dispersion (vd 0) it
-         * is a fixed index; with it, the model has no such material. */
+         * is a fixed index; with it, sagitta's model glass. */
         double dpgf = 0.0;
         if ((rc = opt_num(c, l, 6, "dPgF", 0.0, &dpgf)) != SG_OK)
             return rc;
