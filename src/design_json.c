@@ -443,9 +443,39 @@ static int get_material(jctx *c, const cJSON *v, const char *where, sg_material 
             m->name[k] = (s[k] >= 'a' && s[k] <= 'z') ? (char)(s[k] - 'a' + 'A') : s[k];
         return SG_OK;
     }
+    if (cJSON_IsObject(v)) {
+        /* A model glass: { "nd": ..., "vd": ..., "dpgf": ... }. */
+        static const char *const keys[] = {"nd", "vd", "dpgf"};
+        const cJSON *k[3];
+        char at[160];
+        int rc;
+        pick_keys(c, v, where, keys, 3, k);
+        if (!k[0] || !k[1])
+            return perr(c, SG_EPARSE, where, "a model glass needs \"nd\" and \"vd\"");
+        m->kind = SG_MAT_MODEL;
+        snprintf(at, sizeof at, "%s.nd", where);
+        if ((rc = get_finite(c, k[0], at, &m->index)) != SG_OK)
+            return rc;
+        snprintf(at, sizeof at, "%s.vd", where);
+        if ((rc = get_finite(c, k[1], at, &m->vd)) != SG_OK)
+            return rc;
+        snprintf(at, sizeof at, "%s.dpgf", where);
+        if (k[2] && (rc = get_finite(c, k[2], at, &m->dpgf)) != SG_OK)
+            return rc;
+        if (!(m->index >= SG_MODEL_ND_MIN && m->index <= SG_MODEL_ND_MAX) ||
+            !(m->vd >= SG_MODEL_VD_MIN && m->vd <= SG_MODEL_VD_MAX) ||
+            !(fabs(m->dpgf) <= SG_MODEL_DPGF_MAX))
+            return perr(c, SG_ERANGE, where,
+                        "model glass nd %.17g, vd %.17g, dpgf %.17g: nd must be %g to %g, vd "
+                        "%g to %g and |dpgf| at most %g",
+                        m->index, m->vd, m->dpgf, SG_MODEL_ND_MIN, SG_MODEL_ND_MAX,
+                        SG_MODEL_VD_MIN, SG_MODEL_VD_MAX, SG_MODEL_DPGF_MAX);
+        return SG_OK;
+    }
     describe(v, got, sizeof got);
     return perr(c, SG_EPARSE, where,
-                "expected a glass name, \"AIR\", \"MIRROR\" or a number (a fixed index), got %s",
+                "expected a glass name, \"AIR\", \"MIRROR\", a number (a fixed index) or "
+                "{\"nd\", \"vd\", \"dpgf\"} (a model glass), got %s",
                 got);
 }
 
@@ -796,11 +826,12 @@ static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, in
 }
 
 enum {
-    T_FORMAT, T_VERSION, T_TITLE, T_UNITS, T_WAVES, T_FIELDS, T_APER, T_AIM, T_SURFS, T_N
+    T_FORMAT, T_VERSION, T_TITLE, T_UNITS, T_WAVES, T_FIELDS, T_APER, T_AIM, T_SURFS,
+    T_TEMP, T_PRES, T_ADJUST, T_N
 };
 static const char *const top_keys[] = {
     "format", "version", "title", "units", "wavelengths", "fields", "aperture",
-    "ray_aiming", "surfaces"};
+    "ray_aiming", "surfaces", "temperature", "pressure", "adjust_index"};
 
 /* Fills tmp from the document; the caller's system is not touched. */
 static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
@@ -887,6 +918,22 @@ static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
             return rc;
         tmp->aim = (sg_aim)e;
     }
+    /* The environment (Zemax's ENVD). */
+    tmp->temperature = 20.0;
+    tmp->pressure = 1.0;
+    tmp->adjust_index = 0;
+    if (k[T_TEMP] && (rc = get_finite(c, k[T_TEMP], "temperature", &tmp->temperature)) != SG_OK)
+        return rc;
+    if (k[T_PRES] && (rc = get_nonneg(c, k[T_PRES], "pressure", &tmp->pressure)) != SG_OK)
+        return rc;
+    if (k[T_ADJUST] && (rc = get_bool(c, k[T_ADJUST], "adjust_index", &tmp->adjust_index)) != SG_OK)
+        return rc;
+    if (!(tmp->temperature >= SG_TEMP_MIN && tmp->temperature <= SG_TEMP_MAX))
+        return perr(c, SG_ERANGE, "temperature", "%.17g C is outside %g to %g C",
+                    tmp->temperature, SG_TEMP_MIN, SG_TEMP_MAX);
+    if (!(tmp->pressure <= SG_PRES_MAX))
+        return perr(c, SG_ERANGE, "pressure", "%.17g atm is outside 0 to %g atm",
+                    tmp->pressure, SG_PRES_MAX);
 
     i = 0;
     cJSON_ArrayForEach(it, k[T_SURFS]) {
@@ -1193,6 +1240,11 @@ static int check_param(const sg_param *p, const void *obj, const char *where, in
             if (!isfinite(m->index))
                 return sg_diag_set(d, SG_EINVAL, "%s: material: index is %g", where, m->index);
             return SG_OK;
+        case SG_MAT_MODEL:
+            if (!isfinite(m->index) || !isfinite(m->vd) || !isfinite(m->dpgf))
+                return sg_diag_set(d, SG_EINVAL, "%s: material: model glass nd %g, vd %g, "
+                                   "dpgf %g", where, m->index, m->vd, m->dpgf);
+            return SG_OK;
         default:
             return sg_diag_set(d, SG_EINVAL, "%s: material: unknown kind %d", where,
                                (int)m->kind);
@@ -1284,6 +1336,12 @@ static int check_writable(const sg_system *sys, sg_diag *d)
                            sys->aper_value);
     if ((unsigned)sys->aim >= (unsigned)sysp("ray_aiming")->nnames)
         return sg_diag_set(d, SG_EINVAL, "ray_aiming: unknown mode %d", (int)sys->aim);
+    if (!(sys->temperature >= SG_TEMP_MIN && sys->temperature <= SG_TEMP_MAX))
+        return sg_diag_set(d, SG_EINVAL, "temperature: %g C is outside %g to %g C",
+                           sys->temperature, SG_TEMP_MIN, SG_TEMP_MAX);
+    if (!(sys->pressure >= 0.0 && sys->pressure <= SG_PRES_MAX))
+        return sg_diag_set(d, SG_EINVAL, "pressure: %g atm is outside 0 to %g atm",
+                           sys->pressure, SG_PRES_MAX);
     if (sys->nsurf < 3 || sys->nsurf > SG_MAX_SURFACES || !sys->surf)
         return sg_diag_set(d, SG_EINVAL, "surfaces: %d given, 3 to %d allowed", sys->nsurf,
                            SG_MAX_SURFACES);
@@ -1319,6 +1377,15 @@ static void sb_param(sbuf *b, const sg_param *p, const void *obj)
         case SG_MAT_MIRROR: sb_puts(b, "\"MIRROR\""); break;
         case SG_MAT_GLASS: sb_str(b, m->name); break;
         case SG_MAT_INDEX: sb_num(b, m->index); break;
+        case SG_MAT_MODEL:
+            sb_puts(b, "{ \"nd\": ");
+            sb_num(b, m->index);
+            sb_puts(b, ", \"vd\": ");
+            sb_num(b, m->vd);
+            sb_puts(b, ", \"dpgf\": ");
+            sb_num(b, m->dpgf);
+            sb_puts(b, " }");
+            break;
         default: sb_puts(b, "\"AIR\""); break;
         }
         return;
@@ -1425,11 +1492,14 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     for (i = 0; i < sys->nsurf; i++) {
         const sg_surface *s = &sys->surf[i];
         version = needed_version(SG_SCOPE_SURFACE, s, version);
-        /* Coordinate breaks and tilts came with version 2. */
+        /* Coordinate breaks, tilts and model glasses came with version 2. */
         if (s->type == SG_SURF_COORDBRK || sg_surface_moves_frame(s) ||
-            s->after_mode != SG_AFTER_EXPLICIT)
+            s->after_mode != SG_AFTER_EXPLICIT || s->mat.kind == SG_MAT_MODEL)
             version = version < 2 ? 2 : version;
     }
+    /* So did the environment: a version-1 reader would trace at 20 C. */
+    if (sys->temperature != 20.0 || sys->pressure != 1.0 || sys->adjust_index)
+        version = version < 2 ? 2 : version;
     /* A file says the oldest format that reads it, so designs without the
      * newer keys stay readable by older programs. */
     snprintf(t, sizeof t, "  \"version\": %d,\n", version);
@@ -1465,6 +1535,15 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     sb_num(&b, sys->aper_value);
     sb_puts(&b, " },\n  \"ray_aiming\": ");
     sb_str(&b, aim_names[sys->aim]);
+    /* Written only away from the defaults, so older files save unchanged. */
+    if (sys->temperature != 20.0 || sys->pressure != 1.0 || sys->adjust_index) {
+        sb_puts(&b, ",\n  \"temperature\": ");
+        sb_num(&b, sys->temperature);
+        sb_puts(&b, ",\n  \"pressure\": ");
+        sb_num(&b, sys->pressure);
+        sb_puts(&b, ",\n  \"adjust_index\": ");
+        sb_puts(&b, sys->adjust_index ? "true" : "false");
+    }
     sb_puts(&b, ",\n  \"surfaces\": [\n");
 
     for (i = 0; i < sys->nsurf; i++) {

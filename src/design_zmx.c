@@ -53,8 +53,8 @@ static const char *const ignored_surface[] = {
     "FIMP", "HIDE", "MIRR", "SLAB", "POPS", "MEMA", "OEMA", "COAT", "SSID",
     "VPAR", "VCRV", "VDSZ", "VTHI", "VCON", "VGLS", "TCEX", "CONF",
     /* drawing, labels, physical optics, mechanical apertures, coatings,
-     * variable flags for optimisation, thermal expansion (no temperature
-     * in the model: ENVD is refused away from 20 C, 1 atm) */
+     * variable flags for optimisation, thermal expansion (Zemax applies it
+     * only in multi-configuration thermal analysis, which sagitta lacks) */
 };
 
 typedef struct ztok {
@@ -675,15 +675,30 @@ static int read_glas(zctx *c, const zline *l, sg_surface *s)
     }
     if (strcmp(name, "___BLANK") == 0) {
         /* A model glass: nd, vd (and dPgF).  Without dispersion (vd 0) it
-         * is a fixed index; with it, the model has no such material. */
+         * is a fixed index; with it, sagitta's model glass. */
         double dpgf = 0.0;
         if ((rc = opt_num(c, l, 6, "dPgF", 0.0, &dpgf)) != SG_OK)
             return rc;
-        if (vd != 0.0 || dpgf != 0.0)
-            return zerr(c, SG_EUNSUPPORTED,
-                        "GLAS: a model glass (nd %.17g, vd %.17g, dPgF %.17g) is dispersive; "
-                        "sagitta has catalog glasses and fixed indices only (%s)",
-                        nd, vd, dpgf, nearest_glass(c->cat, nd, vd, sug, sizeof sug));
+        if (vd != 0.0 || dpgf != 0.0) {
+            sg_glass probe;
+            if (sg_model_glass(nd, vd, dpgf, &probe) != SG_OK)
+                return zerr(c, SG_ERANGE,
+                            "GLAS: model glass nd %.15g, vd %.15g, dPgF %.15g is outside "
+                            "nd %g to %g, vd %g to %g, |dPgF| at most %g (%s)",
+                            nd, vd, dpgf, SG_MODEL_ND_MIN, SG_MODEL_ND_MAX, SG_MODEL_VD_MIN,
+                            SG_MODEL_VD_MAX, SG_MODEL_DPGF_MAX,
+                            nearest_glass(c->cat, nd, vd, sug, sizeof sug));
+            /* Zemax's model glass formula is not published. */
+            zwarn(c, "GLAS: model glass nd %.15g, vd %.15g, dPgF %.15g: sagitta's model "
+                  "(Conrady's formula through nd, vd and SCHOTT's normal line) is not Zemax's "
+                  "unpublished one; indices may differ by some 1e-4",
+                  nd, vd, dpgf);
+            s->mat.kind = SG_MAT_MODEL;
+            s->mat.index = nd;
+            s->mat.vd = vd;
+            s->mat.dpgf = dpgf;
+            return SG_OK;
+        }
         if (!(nd >= 1e-3 && nd < 100.0))
             return zerr(c, SG_ERANGE, "GLAS: model glass index %.17g is not physical", nd);
         s->mat.kind = SG_MAT_INDEX;
@@ -1087,17 +1102,18 @@ static int header_line(zctx *c, const zline *l)
         if ((rc = tok_num(c, l, 1, "temperature", &t)) != SG_OK ||
             (rc = opt_num(c, l, 2, "pressure", 1.0, &p)) != SG_OK)
             return rc;
-        if (t != 20.0 || p != 1.0)
-            return zerr(c, SG_EUNSUPPORTED, "ENVD: %.17g C and %.17g atm; sagitta has no "
-                        "temperature or pressure and traces at 20 C and 1 atm", t, p);
+        if (!(t >= SG_TEMP_MIN && t <= SG_TEMP_MAX))
+            return zerr(c, SG_ERANGE, "ENVD: temperature %.17g C is outside %g to %g C", t,
+                        SG_TEMP_MIN, SG_TEMP_MAX);
+        if (!(p >= 0.0 && p <= SG_PRES_MAX))
+            return zerr(c, SG_ERANGE, "ENVD: pressure %.17g atm is outside 0 to %g atm", p,
+                        SG_PRES_MAX);
         if ((rc = opt_num(c, l, 3, "index adjustment flag", 0.0, &f)) != SG_OK)
             return rc;
-        /* Zemax then corrects each glass measured at another temperature
-         * than 20 C; sagitta has no reference temperatures to do so. */
-        if (f != 0.0)
-            zwarn(c, "ENVD: Zemax adjusts catalog indices to 20 C and 1 atm; sagitta uses the "
-                  "catalog data as they are, so a glass measured at another temperature differs "
-                  "(by some 2e-5 in index for S-LAH64)");
+        /* The flag is Zemax's "Adjust Index Data To Environment". */
+        s->temperature = t;
+        s->pressure = p;
+        s->adjust_index = f != 0.0;
         return SG_OK;
     }
     if (tok_is(k, "GCAT")) {
@@ -1632,7 +1648,8 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         zb_add(b, "FLOA\n", 5);
         break;
     }
-    zb_add(b, "ENVD 20 1 0\n", 12);
+    zb_printf(b, "ENVD %s %s %d\n", num(n1, s->temperature), num(n2, s->pressure),
+              s->adjust_index ? 1 : 0);
     if (ngcat) {
         zb_add(b, "GCAT", 4);
         for (i = 0; i < ngcat; i++)
@@ -1699,6 +1716,12 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
             /* A model glass without dispersion. */
             zb_printf(b, "  GLAS ___BLANK 1 0 %s 0 0 0 0 0 0 0\n", num(n1, f->mat.index));
             break;
+        case SG_MAT_MODEL: {
+            char n3[40];
+            zb_printf(b, "  GLAS ___BLANK 1 0 %s %s %s 0 0 0 0 0\n", num(n1, f->mat.index),
+                      num(n2, f->mat.vd), num(n3, f->mat.dpgf));
+            break;
+        }
         default:
             break;
         }

@@ -17,6 +17,15 @@
  * Returns SG_OK, or SG_ERANGE when n^2 is not positive, or SG_EINVAL for an
  * unknown formula.  Every coefficient is taken exactly as its double. */
 int sg_glass_index_mpfr(const sg_glass *g, mpfr_t out, const mpfr_t um);
+/* sg_air_index and sg_glass_index_env in MPFR, rounded once into out. */
+int sg_air_index_mpfr(mpfr_t out, const mpfr_t um, double temp, double pres);
+int sg_glass_index_env_mpfr(const sg_glass *g, mpfr_t out, const mpfr_t um, double temp,
+                            double pres);
+/* The index a trace of sys uses for glass g: sg_glass_index_env_mpfr at the
+ * system's temperature and pressure when sys->adjust_index is set, else
+ * the catalog's sg_glass_index_mpfr. */
+int sg_system_glass_index_mpfr(const sg_system *sys, const sg_glass *g, mpfr_t out,
+                               const mpfr_t um);
 
 /* sg_system_validate for functions that validate on the caller's behalf:
  * the error, if any, without repeating the warnings. */

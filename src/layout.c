@@ -171,14 +171,16 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
         int np = o->profile_pts;
         s->z0 = z0[i];
         s->mirror = su->type != SG_SURF_COORDBRK && su->mat.kind == SG_MAT_MIRROR;
-        s->glass_after = su->mat.kind == SG_MAT_GLASS || su->mat.kind == SG_MAT_INDEX;
+        s->glass_after = su->mat.kind == SG_MAT_GLASS || su->mat.kind == SG_MAT_INDEX ||
+                         su->mat.kind == SG_MAT_MODEL;
         if (su->type == SG_SURF_COORDBRK) {
             /* A break has no profile; it still takes a place. */
             s->glass_after = 0;
             for (j = i - 1; j > 0 && sys->surf[j].type == SG_SURF_COORDBRK; j--)
                 ;
             s->glass_after = sys->surf[j].mat.kind == SG_MAT_GLASS ||
-                             sys->surf[j].mat.kind == SG_MAT_INDEX;
+                             sys->surf[j].mat.kind == SG_MAT_INDEX ||
+                             sys->surf[j].mat.kind == SG_MAT_MODEL;
             continue;
         }
         if (!(sd > 0.0)) {

@@ -334,6 +334,107 @@ double sg_glass_index(const sg_glass *g, double um)
     return v.hi + v.lo;
 }
 
+/* The air formula's decimal constants, as the dd nearest each. */
+static dd dd_dec(double num, double den)
+{
+    return dd_div_d(dd_from(num), den);
+}
+
+/* n_air - 1 in double-double (see sagitta.h). */
+static dd air_minus_one(double um, double temp, double pres)
+{
+    dd l2 = dd_two_prod(um, um), t, f;
+    t = dd_div(dd_mul_d(l2, 2949810.0), dd_sub(dd_mul_d(l2, 146.0), dd_from(1.0)));
+    t = dd_add(t, dd_div(dd_mul_d(l2, 25540.0), dd_sub(dd_mul_d(l2, 41.0), dd_from(1.0))));
+    t = dd_add(t, dd_dec(64328.0, 10.0));
+    t = dd_div_d(t, 1e8);
+    /* 1 + 3.4785e-3 (T - 15) */
+    f = dd_add(dd_from(1.0), dd_mul(dd_dec(34785.0, 1e7), dd_sub(dd_from(temp), dd_from(15.0))));
+    return dd_div(dd_mul_d(t, pres), f);
+}
+
+double sg_air_index(double um, double temp, double pres)
+{
+    dd v;
+    if (!(um > 0.0) || !isfinite(um) || !isfinite(temp) || !isfinite(pres))
+        return NAN;
+    v = dd_add(dd_from(1.0), air_minus_one(um, temp, pres));
+    return v.hi + v.lo;
+}
+
+double sg_glass_index_env(const sg_glass *g, double um, double temp, double pres)
+{
+    dd air_sys, air_ref, n, nabs, dt, s, e, dn, l2r;
+    double lref;
+    if (!g)
+        return NAN;
+    if (temp == g->tref && pres == 1.0)
+        return sg_glass_index(g, um);
+    if (!(um > 0.0) || !isfinite(um) || !isfinite(temp) || !isfinite(pres))
+        return NAN;
+    air_sys = dd_add(dd_from(1.0), air_minus_one(um, temp, pres));
+    air_ref = dd_add(dd_from(1.0), air_minus_one(um, g->tref, 1.0));
+    /* The wavelength in the catalog's reference air. */
+    lref = dd_div(dd_mul_d(air_sys, um), air_ref).hi;
+    n = dd_from(sg_glass_index(g, lref));
+    if (!isfinite(n.hi))
+        return NAN;
+    nabs = dd_mul(n, air_ref);
+    dt = dd_sub(dd_from(temp), dd_from(g->tref));
+    /* D0 dT + D1 dT^2 + D2 dT^3 */
+    s = dd_mul(dd_add(dd_mul(dd_add(dd_mul_d(dt, g->td[2]), dd_from(g->td[1])), dt),
+                      dd_from(g->td[0])),
+               dt);
+    /* (E0 dT + E1 dT^2) / (L^2 - Ltk^2) */
+    e = dd_mul(dd_add(dd_mul_d(dt, g->td[4]), dd_from(g->td[3])), dt);
+    l2r = dd_two_prod(lref, lref);
+    e = dd_div(e, dd_sub(l2r, dd_two_prod(g->td[5], g->td[5])));
+    dn = dd_div(dd_sub(dd_mul(n, n), dd_from(1.0)), dd_mul_d(n, 2.0));
+    dn = dd_mul(dn, dd_add(s, e));
+    n = dd_div(dd_add(nabs, dn), air_sys);
+    if (!isfinite(n.hi) || !(n.hi > 0.0))
+        return NAN;
+    return n.hi + n.lo;
+}
+
+int sg_model_glass(double nd, double vd, double dpgf, sg_glass *out)
+{
+    /* The g, F, d and C lines (um), as Zemax and SCHOTT take them. */
+    static const double lg = 0.4358343, lf = 0.4861327, ld = 0.5875618, lc = 0.6562725;
+    double dfc, dgf, u1, v1, u2, v2, det, a, b;
+    if (!out)
+        return SG_EINVAL;
+    if (!(nd >= SG_MODEL_ND_MIN && nd <= SG_MODEL_ND_MAX) ||
+        !(vd >= SG_MODEL_VD_MIN && vd <= SG_MODEL_VD_MAX) || !(fabs(dpgf) <= SG_MODEL_DPGF_MAX))
+        return SG_ERANGE;
+    dfc = (nd - 1.0) / vd;
+    dgf = (0.6438 - 0.001682 * vd + dpgf) * dfc;
+    /* A (1/L_F - 1/L_C) + B (L_F^-3.5 - L_C^-3.5) = n(F) - n(C), and the
+     * same for g and F; then n0 from n(d). */
+    u1 = 1.0 / lf - 1.0 / lc;
+    v1 = 1.0 / (lf * lf * lf * sqrt(lf)) - 1.0 / (lc * lc * lc * sqrt(lc));
+    u2 = 1.0 / lg - 1.0 / lf;
+    v2 = 1.0 / (lg * lg * lg * sqrt(lg)) - 1.0 / (lf * lf * lf * sqrt(lf));
+    det = u1 * v2 - u2 * v1;
+    a = (dfc * v2 - dgf * v1) / det;
+    b = (u1 * dgf - u2 * dfc) / det;
+    memset(out, 0, sizeof *out);
+    sg_strlcpy(out->name, "MODEL", sizeof out->name);
+    sg_strlcpy(out->catalog, "MODEL", sizeof out->catalog);
+    out->formula = SG_FORMULA_CONRADY;
+    out->c[0] = nd - a / ld - b / (ld * ld * ld * sqrt(ld));
+    out->c[1] = a;
+    out->c[2] = b;
+    /* The model is fitted in the visible and meant for it. */
+    out->lmin = 0.4;
+    out->lmax = 0.75;
+    out->nd = nd;
+    out->vd = vd;
+    out->ed[3] = dpgf;
+    out->tref = 20.0;
+    return SG_OK;
+}
+
 int sg_glass_in_range(const sg_glass *g, double um)
 {
     if (!g)
@@ -547,6 +648,7 @@ static int parse_nm(agf_ctx *cx, const agf_line *ln, glass_list *l,
     sg_strlcpy(g->catalog, catname, sizeof g->catalog);
     g->lmin = 0.0;
     g->lmax = INFINITY;
+    g->tref = 20.0;
 
     rc = tok_number(cx, ln, 2, "formula number", &f);
     if (rc)
@@ -574,24 +676,42 @@ static int parse_nm(agf_ctx *cx, const agf_line *ln, glass_list *l,
     return SG_OK;
 }
 
-static int parse_cd(agf_ctx *cx, const agf_line *ln, sg_glass *g)
+/* Parses the numbers of a CD line (first = 1) or of a line continuing one
+ * (first = 0) into g->c from *nc on; *nc counts the coefficients so far.
+ * NIKON's 2019 catalog wraps one CD line (LAF11) onto a second line. */
+static int parse_cd(agf_ctx *cx, const agf_line *ln, sg_glass *g, int first, int *nc)
 {
-    int k, rc;
-    if (ln->ntok - 1 > SG_GLASS_NCOEF)
+    int k, rc, n = ln->ntok - first;
+    if (first) {
+        memset(g->c, 0, sizeof g->c);
+        *nc = 0;
+    }
+    if (*nc + n > SG_GLASS_NCOEF)
         return sg_diag_set(cx->d, SG_EPARSE,
                            "%s:%ld: glass %s: %d coefficients, at most %d "
                            "allowed",
-                           cx->path, cx->line, g->name, ln->ntok - 1,
-                           SG_GLASS_NCOEF);
-    memset(g->c, 0, sizeof g->c);
-    for (k = 1; k < ln->ntok; k++) {
+                           cx->path, cx->line, g->name, *nc + n, SG_GLASS_NCOEF);
+    for (k = first; k < ln->ntok; k++) {
         char what[40];
-        snprintf(what, sizeof what, "CD coefficient %d", k);
-        rc = tok_number(cx, ln, k, what, &g->c[k - 1]);
+        snprintf(what, sizeof what, "CD coefficient %d", *nc + 1);
+        rc = tok_number(cx, ln, k, what, &g->c[*nc]);
         if (rc)
             return rc;
+        (*nc)++;
     }
     return SG_OK;
+}
+
+/* Nonzero when token k is a decimal number, as a continuation line's
+ * first token is. */
+static int tok_is_number(const agf_line *ln, int k)
+{
+    char buf[AGF_MAX_NUMBER + 1];
+    if (k >= ln->ntok || k >= AGF_MAX_TOKENS || ln->len[k] > AGF_MAX_NUMBER)
+        return 0;
+    memcpy(buf, ln->tok[k], ln->len[k]);
+    buf[ln->len[k]] = '\0';
+    return decimal_syntax_ok(buf);
 }
 
 static int parse_ld(agf_ctx *cx, const agf_line *ln, sg_glass *g)
@@ -608,13 +728,65 @@ static int parse_ld(agf_ctx *cx, const agf_line *ln, sg_glass *g)
     rc = tok_number(cx, ln, 2, "LD maximum wavelength", &b);
     if (rc)
         return rc;
-    if (!(a > 0.0 && a <= b))
+    if (!(a >= 0.0 && a <= b))
         return sg_diag_set(cx->d, SG_EPARSE,
-                           "%s:%ld: glass %s: LD range %g..%g is not a "
-                           "positive interval",
+                           "%s:%ld: glass %s: LD range %g..%g is not an "
+                           "interval of wavelengths",
                            cx->path, cx->line, g->name, a, b);
+    /* "LD 0 0" (in NHG's catalog) gives no range at all. */
     g->lmin = a;
-    g->lmax = b;
+    g->lmax = b > 0.0 ? b : INFINITY;
+    return SG_OK;
+}
+
+/* TD D0 D1 D2 E0 E1 Ltk Tref.  Vendors' files also carry TD lines with
+ * fewer numbers (SCHOTT 2018 has an empty one, NIKON 2019 four): as in
+ * Zemax, a missing coefficient is 0 and a missing Tref 20 C. */
+static int parse_td(agf_ctx *cx, const agf_line *ln, sg_glass *g)
+{
+    static const char *const what[7] = {"TD D0", "TD D1", "TD D2", "TD E0", "TD E1",
+                                        "TD lambda_tk", "TD reference temperature"};
+    int k, rc;
+    if (ln->ntok > 8)
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: glass %s: TD line has %d numbers, at most 7 allowed",
+                           cx->path, cx->line, g->name, ln->ntok - 1);
+    memset(g->td, 0, sizeof g->td);
+    g->tref = 20.0;
+    for (k = 0; k + 1 < ln->ntok; k++)
+        if ((rc = tok_number(cx, ln, k + 1, what[k], k < 6 ? &g->td[k] : &g->tref)) != SG_OK)
+            return rc;
+    if (!(g->tref >= SG_TEMP_MIN && g->tref <= SG_TEMP_MAX))
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: glass %s: TD reference temperature %g C is outside "
+                           "%g to %g C",
+                           cx->path, cx->line, g->name, g->tref, SG_TEMP_MIN, SG_TEMP_MAX);
+    g->has_td = 1;
+    return SG_OK;
+}
+
+/* ED TCE(-30..70) TCE(100..300) density dPgF [ignore-thermal-expansion
+ * flag ...]: only the first four numbers are kept (0 for a "-"); vendors
+ * append one or two flags. */
+static int parse_ed(agf_ctx *cx, const agf_line *ln, sg_glass *g)
+{
+    static const char *const what[4] = {"ED expansion -30..70 C", "ED expansion 100..300 C",
+                                        "ED density", "ED dPgF"};
+    int k, rc;
+    if (ln->ntok < 5)
+        return sg_diag_set(cx->d, SG_EPARSE,
+                           "%s:%ld: glass %s: ED line needs at least 4 numbers, has %d",
+                           cx->path, cx->line, g->name, ln->ntok - 1);
+    for (k = 0; k < 4; k++) {
+        /* SCHOTT writes "-" for a figure it does not give. */
+        if (ln->len[k + 1] == 1 && ln->tok[k + 1][0] == '-') {
+            g->ed[k] = 0.0;
+            continue;
+        }
+        if ((rc = tok_number(cx, ln, k + 1, what[k], &g->ed[k])) != SG_OK)
+            return rc;
+    }
+    g->has_ed = 1;
     return SG_OK;
 }
 
@@ -742,7 +914,7 @@ static int parse_text(agf_ctx *cx, const char *s, size_t n, glass_list *l,
                       const char *catname)
 {
     size_t pos = 0;
-    int has_cd = 0, rc;
+    int has_cd = 0, rc, in_cd = 0, ncd = 0;
     agf_line ln;
 
     cx->line = 0;
@@ -764,6 +936,14 @@ static int parse_text(agf_ctx *cx, const char *s, size_t n, glass_list *l,
         split_line(s + start, end - start, &ln);
         if (ln.ntok == 0)
             continue;
+        /* A line of numbers right after a CD line continues it. */
+        if (in_cd && tok_is_number(&ln, 0)) {
+            rc = parse_cd(cx, &ln, &l->g[l->n - 1], 0, &ncd);
+            if (rc)
+                return rc;
+            continue;
+        }
+        in_cd = tok_is(&ln, 0, "CD");
         if (tok_is(&ln, 0, "NM")) {
             if (l->n > 0 && !has_cd)
                 return sg_diag_set(cx->d, SG_EPARSE,
@@ -774,15 +954,23 @@ static int parse_text(agf_ctx *cx, const char *s, size_t n, glass_list *l,
         } else if (tok_is(&ln, 0, "CD")) {
             if (l->n == 0)
                 return agf_err(cx, "CD line before any NM line");
-            rc = parse_cd(cx, &ln, &l->g[l->n - 1]);
+            rc = parse_cd(cx, &ln, &l->g[l->n - 1], 1, &ncd);
             has_cd = 1;
         } else if (tok_is(&ln, 0, "LD")) {
             if (l->n == 0)
                 return agf_err(cx, "LD line before any NM line");
             rc = parse_ld(cx, &ln, &l->g[l->n - 1]);
+        } else if (tok_is(&ln, 0, "TD")) {
+            if (l->n == 0)
+                return agf_err(cx, "TD line before any NM line");
+            rc = parse_td(cx, &ln, &l->g[l->n - 1]);
+        } else if (tok_is(&ln, 0, "ED")) {
+            if (l->n == 0)
+                return agf_err(cx, "ED line before any NM line");
+            rc = parse_ed(cx, &ln, &l->g[l->n - 1]);
         } else {
-            /* CC, ED, TD, OD, IT, GC, BD and anything newer carry data
-             * the ray trace does not use. */
+            /* CC, GC, OD, IT, BD, '!' comments and anything newer carry
+             * data the ray trace does not use. */
             rc = SG_OK;
         }
         if (rc)

@@ -6,6 +6,7 @@
  * double stored in the catalog, evaluated with 32 guard bits beyond the
  * precision of the result and rounded once into it.
  */
+#include <math.h>
 #include <mpfr.h>
 
 #include "internal.h"
@@ -188,4 +189,125 @@ int sg_glass_index_mpfr(const sg_glass *g, mpfr_t out, const mpfr_t um)
     }
     mpfr_clears(w.l2, w.inv, w.t, w.u, w.v, (mpfr_ptr)0);
     return rc;
+}
+
+/* out = n_air - 1 at wavelength um (see sg_air_index), in out's precision
+ * plus the caller's guard bits; the decimal constants are exact decimals. */
+static void air_minus_one(mpfr_t out, const mpfr_t um, double temp, double pres)
+{
+    mpfr_prec_t p = mpfr_get_prec(out);
+    mpfr_t l2, a, b;
+    mpfr_inits2(p, l2, a, b, (mpfr_ptr)0);
+    mpfr_sqr(l2, um, MPFR_RNDN);
+    /* 2949810 L^2 / (146 L^2 - 1) */
+    mpfr_mul_ui(a, l2, 146, MPFR_RNDN);
+    mpfr_sub_ui(a, a, 1, MPFR_RNDN);
+    mpfr_mul_ui(b, l2, 2949810, MPFR_RNDN);
+    mpfr_div(out, b, a, MPFR_RNDN);
+    /* + 25540 L^2 / (41 L^2 - 1) */
+    mpfr_mul_ui(a, l2, 41, MPFR_RNDN);
+    mpfr_sub_ui(a, a, 1, MPFR_RNDN);
+    mpfr_mul_ui(b, l2, 25540, MPFR_RNDN);
+    mpfr_div(b, b, a, MPFR_RNDN);
+    mpfr_add(out, out, b, MPFR_RNDN);
+    /* + 6432.8, then 1e-8 */
+    mpfr_set_str(a, "6432.8", 10, MPFR_RNDN);
+    mpfr_add(out, out, a, MPFR_RNDN);
+    mpfr_div_ui(out, out, 100000000, MPFR_RNDN);
+    /* P / (1 + 3.4785e-3 (T - 15)) */
+    mpfr_mul_d(out, out, pres, MPFR_RNDN);
+    mpfr_set_d(a, temp, MPFR_RNDN);
+    mpfr_sub_ui(a, a, 15, MPFR_RNDN);
+    mpfr_set_str(b, "3.4785e-3", 10, MPFR_RNDN);
+    mpfr_mul(a, a, b, MPFR_RNDN);
+    mpfr_add_ui(a, a, 1, MPFR_RNDN);
+    mpfr_div(out, out, a, MPFR_RNDN);
+    mpfr_clears(l2, a, b, (mpfr_ptr)0);
+}
+
+int sg_air_index_mpfr(mpfr_t out, const mpfr_t um, double temp, double pres)
+{
+    mpfr_t t;
+    if (!mpfr_number_p(um) || mpfr_sgn(um) <= 0 || !isfinite(temp) || !isfinite(pres)) {
+        mpfr_set_nan(out);
+        return SG_EINVAL;
+    }
+    mpfr_init2(t, mpfr_get_prec(out) + 32);
+    air_minus_one(t, um, temp, pres);
+    mpfr_add_ui(out, t, 1, MPFR_RNDN);
+    mpfr_clear(t);
+    return SG_OK;
+}
+
+int sg_glass_index_env_mpfr(const sg_glass *g, mpfr_t out, const mpfr_t um, double temp,
+                            double pres)
+{
+    mpfr_prec_t prec = mpfr_get_prec(out), wp;
+    mpfr_t as, ar, lr, n, dt, s, e, t;
+    int rc, k;
+
+    if (!g || !mpfr_number_p(um) || mpfr_sgn(um) <= 0 || !isfinite(temp) || !isfinite(pres)) {
+        mpfr_set_nan(out);
+        return SG_EINVAL;
+    }
+    if (temp == g->tref && pres == 1.0)
+        return sg_glass_index_mpfr(g, out, um);
+    wp = (prec > 53 ? prec : 53) + 32;
+    mpfr_inits2(wp, as, ar, lr, n, dt, s, e, t, (mpfr_ptr)0);
+    air_minus_one(as, um, temp, pres);
+    mpfr_add_ui(as, as, 1, MPFR_RNDN);
+    air_minus_one(ar, um, g->tref, 1.0);
+    mpfr_add_ui(ar, ar, 1, MPFR_RNDN);
+    /* The wavelength in the catalog's reference air. */
+    mpfr_mul(lr, um, as, MPFR_RNDN);
+    mpfr_div(lr, lr, ar, MPFR_RNDN);
+    rc = sg_glass_index_mpfr(g, n, lr);
+    if (rc == SG_OK) {
+        /* dT and D0 dT + D1 dT^2 + D2 dT^3 by Horner's rule */
+        mpfr_set_d(dt, temp, MPFR_RNDN);
+        mpfr_sub_d(dt, dt, g->tref, MPFR_RNDN);
+        mpfr_set_d(s, g->td[2], MPFR_RNDN);
+        for (k = 1; k >= 0; k--) {
+            mpfr_mul(s, s, dt, MPFR_RNDN);
+            mpfr_add_d(s, s, g->td[k], MPFR_RNDN);
+        }
+        mpfr_mul(s, s, dt, MPFR_RNDN);
+        /* (E0 dT + E1 dT^2) / (L^2 - Ltk^2) */
+        mpfr_mul_d(e, dt, g->td[4], MPFR_RNDN);
+        mpfr_add_d(e, e, g->td[3], MPFR_RNDN);
+        mpfr_mul(e, e, dt, MPFR_RNDN);
+        mpfr_set_d(t, g->td[5], MPFR_RNDN);
+        mpfr_sqr(t, t, MPFR_RNDN);
+        mpfr_neg(t, t, MPFR_RNDN);
+        mpfr_fma(t, lr, lr, t, MPFR_RNDN);
+        mpfr_div(e, e, t, MPFR_RNDN);
+        mpfr_add(s, s, e, MPFR_RNDN);
+        /* dn = (n^2 - 1) / (2 n) * s */
+        mpfr_sqr(t, n, MPFR_RNDN);
+        mpfr_sub_ui(t, t, 1, MPFR_RNDN);
+        mpfr_div(t, t, n, MPFR_RNDN);
+        mpfr_div_2ui(t, t, 1, MPFR_RNDN);
+        mpfr_mul(t, t, s, MPFR_RNDN);
+        /* (n n_air(ref) + dn) / n_air(system) */
+        mpfr_fma(t, n, ar, t, MPFR_RNDN);
+        mpfr_div(t, t, as, MPFR_RNDN);
+        if (!mpfr_number_p(t) || mpfr_sgn(t) <= 0) {
+            mpfr_set_nan(out);
+            rc = SG_ERANGE;
+        } else {
+            mpfr_set(out, t, MPFR_RNDN);
+        }
+    } else {
+        mpfr_set_nan(out);
+    }
+    mpfr_clears(as, ar, lr, n, dt, s, e, t, (mpfr_ptr)0);
+    return rc;
+}
+
+int sg_system_glass_index_mpfr(const sg_system *sys, const sg_glass *g, mpfr_t out,
+                               const mpfr_t um)
+{
+    if (sys && sys->adjust_index)
+        return sg_glass_index_env_mpfr(g, out, um, sys->temperature, sys->pressure);
+    return sg_glass_index_mpfr(g, out, um);
 }

@@ -330,7 +330,8 @@ int sg_param_equal(sg_param_scope scope, const void *a, const void *b)
         case SG_PARAM_MATERIAL: {
             const sg_material *ma = qa, *mb = qb;
             if (ma->kind != mb->kind || strncmp(ma->name, mb->name, sizeof ma->name) != 0 ||
-                !same_bits(ma->index, mb->index))
+                !same_bits(ma->index, mb->index) || !same_bits(ma->vd, mb->vd) ||
+                !same_bits(ma->dpgf, mb->dpgf))
                 return 0;
             break;
         }
@@ -352,6 +353,10 @@ static int same_change(const sg_frame_change *a, const sg_frame_change *b)
 int sg_system_equal(const sg_system *a, const sg_system *b)
 {
     int i;
+    /* The environment is read and written beside the table (design_json.c). */
+    if (!same_bits(a->temperature, b->temperature) || !same_bits(a->pressure, b->pressure) ||
+        a->adjust_index != b->adjust_index)
+        return 0;
     if (!sg_param_equal(SG_SCOPE_SYSTEM, a, b) || a->nwave != b->nwave ||
         a->primary_wave != b->primary_wave || a->nfield != b->nfield || a->stop != b->stop ||
         a->nsurf != b->nsurf)

@@ -134,6 +134,15 @@ typedef struct sg_glass {
     double c[SG_GLASS_NCOEF];    /* CD line coefficients, in file order */
     double lmin, lmax;           /* valid range in um (LD line) */
     double nd, vd;               /* catalog nd and Abbe number (NM line) */
+    /* TD line: dn/dT coefficients D0, D1, D2, E0, E1 and lambda_tk (um),
+     * and the temperature (C) the catalog's data were measured at.  A
+     * glass without a TD line has zeros and 20 C. */
+    double td[6];
+    double tref;
+    /* ED line: expansion coefficients -30..+70 C and +100..+300 C (1e-6/K),
+     * density (g/cm^3) and relative partial dispersion deviation dPgF. */
+    double ed[4];
+    int has_td, has_ed;
 } sg_glass;
 
 typedef struct sg_catalog sg_catalog;
@@ -159,6 +168,32 @@ const sg_glass *sg_catalog_at(const sg_catalog *cat, size_t i);
  * unknown formula or a non-positive n^2. */
 double sg_glass_index(const sg_glass *g, double um);
 int sg_glass_in_range(const sg_glass *g, double um);
+
+/* Zemax's index of air at wavelength um, temperature temp (C) and relative
+ * pressure pres (atm): n = 1 + (n_ref - 1) P / (1 + 3.4785e-3 (T - 15)),
+ * n_ref = 1 + 1e-8 (6432.8 + 2949810 L^2 / (146 L^2 - 1)
+ *                   + 25540 L^2 / (41 L^2 - 1)). */
+double sg_air_index(double um, double temp, double pres);
+/* The glass's index relative to air at temp (C) and pres (atm), for a
+ * wavelength um measured in that air, by Zemax's thermal model: the
+ * wavelength is taken into the catalog's reference air (tref, 1 atm), the
+ * catalog index made absolute there, changed by the TD line's
+ *   dn_abs = (n^2 - 1) / (2 n) (D0 dT + D1 dT^2 + D2 dT^3
+ *            + (E0 dT + E1 dT^2) / (L^2 - Ltk^2)),  dT = temp - tref,
+ * and divided by the index of the air at temp and pres.  At the reference
+ * conditions (temp == tref, pres == 1) it is sg_glass_index() exactly. */
+double sg_glass_index_env(const sg_glass *g, double um, double temp, double pres);
+
+/* A model glass from nd, vd and dPgF, as a catalog glass (named "MODEL") of
+ * the Conrady formula (5), n = n0 + A / L + B / L^3.5, whose three
+ * coefficients give exactly
+ *   n(d) = nd,  n(F) - n(C) = (nd - 1) / vd,
+ *   (n(g) - n(F)) / (n(F) - n(C)) = 0.6438 - 0.001682 vd + dPgF,
+ * the last SCHOTT's normal line of the partial dispersion P_g,F (TIE-29),
+ * from which catalogs' dPgF is measured.  Zemax's own model glass formula
+ * is not published; in the visible this one follows real glasses to about
+ * 1e-4.  Returns SG_ERANGE for values outside the SG_MODEL_* limits. */
+int sg_model_glass(double nd, double vd, double dpgf, sg_glass *out);
 
 /* ------------------------------------------------------------------------
  * The optical system
@@ -194,13 +229,15 @@ typedef enum sg_mat_kind {
     SG_MAT_AIR = 0,    /* index 1 (indices are relative to air) */
     SG_MAT_MIRROR = 1, /* reflect; the medium after keeps the index before */
     SG_MAT_GLASS = 2,  /* a catalog glass, by name */
-    SG_MAT_INDEX = 3   /* a fixed, non-dispersive index */
+    SG_MAT_INDEX = 3,  /* a fixed, non-dispersive index */
+    SG_MAT_MODEL = 4   /* a model glass: nd (in index), vd and dpgf */
 } sg_mat_kind;
 
 typedef struct sg_material {
     sg_mat_kind kind;
     char name[SG_GLASS_NAME]; /* glass name for SG_MAT_GLASS */
-    double index;             /* for SG_MAT_INDEX */
+    double index;             /* for SG_MAT_INDEX; nd for SG_MAT_MODEL */
+    double vd, dpgf;          /* for SG_MAT_MODEL */
 } sg_material;
 
 /* A change of coordinate frame, as Zemax defines it (its coordinate break
@@ -219,6 +256,12 @@ typedef enum sg_after_mode {
     SG_AFTER_EXPLICIT = 0, /* the after change is as given */
     SG_AFTER_REVERSE = 1   /* the after change undoes the before change */
 } sg_after_mode;
+/* Limits of a model glass's nd, vd and |dPgF|. */
+#define SG_MODEL_ND_MIN 1.0
+#define SG_MODEL_ND_MAX 4.0
+#define SG_MODEL_VD_MIN 5.0
+#define SG_MODEL_VD_MAX 200.0
+#define SG_MODEL_DPGF_MAX 0.2
 
 typedef struct sg_surface {
     sg_surf_type type;
@@ -283,6 +326,11 @@ typedef struct sg_field {
     double vdx, vdy, vcx, vcy, van;
 } sg_field;
 
+/* Limits of the environment: temperature in C, pressure in atm. */
+#define SG_TEMP_MIN (-250.0)
+#define SG_TEMP_MAX 1000.0
+#define SG_PRES_MAX 100.0
+
 typedef struct sg_system {
     char title[128];
     char units[8]; /* "mm", "cm", "in" or "m" */
@@ -299,6 +347,15 @@ typedef struct sg_system {
     sg_aper_type aper_type;
     double aper_value;
     sg_aim aim;
+
+    /* The environment (Zemax's ENVD): temperature in C (20) and pressure
+     * in atm (1) of the air the wavelengths are measured in.  With
+     * adjust_index nonzero each glass's index follows them by Zemax's
+     * thermal model (sg_glass_index_env); with 0 (the default, Zemax's
+     * "Adjust Index Data To Environment" unchecked) catalog indices are
+     * used as they are. */
+    double temperature, pressure;
+    int adjust_index;
 
     int stop; /* surface index of the aperture stop */
     int nsurf;   /* surfaces 0..nsurf-1; object is 0, image is nsurf-1 */

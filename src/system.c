@@ -57,6 +57,8 @@ int sg_system_reset(sg_system *sys, int nsurf)
     sys->aper_type = SG_APER_EPD;
     sys->aper_value = 10.0;
     sys->aim = SG_AIM_OFF;
+    sys->temperature = 20.0;
+    sys->pressure = 1.0;
     sys->nsurf = nsurf;
     for (i = 0; i < nsurf; i++)
         sg_surface_init(&sys->surf[i]);
@@ -335,6 +337,14 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
             return sg_diag_set(d, SG_ERANGE,
                                "wavelength %d: %g um is not a positive finite value",
                                k + 1, sys->wave[k].um);
+    /* The air formula's temperature factor stays positive down to about
+     * -272 C; the limits keep it well clear of that. */
+    if (!(sys->temperature >= SG_TEMP_MIN && sys->temperature <= SG_TEMP_MAX))
+        return sg_diag_set(d, SG_ERANGE, "temperature: %g C is outside %g to %g C",
+                           sys->temperature, SG_TEMP_MIN, SG_TEMP_MAX);
+    if (!(sys->pressure >= 0.0 && sys->pressure <= SG_PRES_MAX))
+        return sg_diag_set(d, SG_ERANGE, "pressure: %g atm is outside 0 to %g atm",
+                           sys->pressure, SG_PRES_MAX);
     if (sys->nfield < 1 || sys->nfield > SG_MAX_FIELDS)
         return sg_diag_set(d, SG_ERANGE, "fields: %d given, 1 to %d allowed",
                            sys->nfield, SG_MAX_FIELDS);
@@ -445,6 +455,23 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
         if (s->mat.kind == SG_MAT_INDEX && !(s->mat.index >= 1e-3 && s->mat.index < 100.0))
             return sg_diag_set(d, SG_ERANGE,
                                "surface %d: material index %g is not physical", i, s->mat.index);
+        if (s->mat.kind == SG_MAT_MODEL &&
+            !(s->mat.index >= SG_MODEL_ND_MIN && s->mat.index <= SG_MODEL_ND_MAX &&
+              s->mat.vd >= SG_MODEL_VD_MIN && s->mat.vd <= SG_MODEL_VD_MAX &&
+              fabs(s->mat.dpgf) <= SG_MODEL_DPGF_MAX))
+            return sg_diag_set(d, SG_ERANGE,
+                               "surface %d: model glass nd %g, vd %g, dPgF %g: nd must be %g to "
+                               "%g, vd %g to %g and |dPgF| at most %g",
+                               i, s->mat.index, s->mat.vd, s->mat.dpgf, SG_MODEL_ND_MIN,
+                               SG_MODEL_ND_MAX, SG_MODEL_VD_MIN, SG_MODEL_VD_MAX,
+                               SG_MODEL_DPGF_MAX);
+        if (s->mat.kind == SG_MAT_MODEL)
+            for (k = 0; k < sys->nwave; k++)
+                if (!(sys->wave[k].um >= 0.4 && sys->wave[k].um <= 0.75))
+                    sg_diag_warn(d,
+                                 "surface %d: wavelength %g um is outside 0.4 to 0.75 um, "
+                                 "where the model glass is fitted",
+                                 i, sys->wave[k].um);
         if (s->mat.kind == SG_MAT_MIRROR && (i == 0 || i == sys->nsurf - 1))
             return sg_diag_set(d, SG_ENONPHYS,
                                "surface %d: the %s cannot be a mirror", i,

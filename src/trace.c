@@ -522,15 +522,26 @@ int sg_indices_mpfr(const sg_system *sys, const sg_catalog *cat, int wave,
             sign = -sign;
             mpfr_neg(idx[i], idx[i - 1], MPFR_RNDN);
             break;
-        case SG_MAT_GLASS: {
-            const sg_glass *g = cat ? sg_catalog_find(cat, s->mat.name) : NULL;
+        case SG_MAT_GLASS:
+        case SG_MAT_MODEL: {
+            sg_glass model;
+            const sg_glass *g = s->mat.kind == SG_MAT_MODEL
+                                    ? (sg_model_glass(s->mat.index, s->mat.vd, s->mat.dpgf,
+                                                      &model) == SG_OK ? &model : NULL)
+                                : cat ? sg_catalog_find(cat, s->mat.name) : NULL;
+            if (!g && s->mat.kind == SG_MAT_MODEL) {
+                rc = sg_diag_set(d, SG_ERANGE, "surface %d: model glass nd %g, vd %g, dPgF %g "
+                                 "is outside the model's limits", i, s->mat.index, s->mat.vd,
+                                 s->mat.dpgf);
+                goto out;
+            }
             if (!g) {
                 rc = sg_diag_set(d, SG_ENOGLASS,
                                  "surface %d: material \"%s\" is not in the catalog", i,
                                  s->mat.name);
                 goto out;
             }
-            if (sg_glass_index_mpfr(g, idx[i], um) != SG_OK) {
+            if (sg_system_glass_index_mpfr(sys, g, idx[i], um) != SG_OK) {
                 rc = sg_diag_set(d, SG_ERANGE,
                                  "surface %d: glass %s has no real index at %g um", i,
                                  g->name, sys->wave[wave].um);

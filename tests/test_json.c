@@ -703,6 +703,60 @@ static void expect_error(const char *text, int code, const char *want)
     sg_system_free(s);
 }
 
+/* The environment and model glasses read, write and read back unchanged;
+ * bad values name their key. */
+static void test_environment_and_model(void **state)
+{
+    static const char text[] =
+        "{ \"format\": \"sagitta-design\", \"temperature\": 35.5, \"pressure\": 0.8,\n"
+        "  \"adjust_index\": true,\n"
+        "  \"surfaces\": [ { \"thickness\": \"inf\" },\n"
+        "    { \"radius\": 50, \"thickness\": 5, \"stop\": true,\n"
+        "      \"material\": { \"nd\": 1.5168, \"vd\": 64.17, \"dpgf\": -0.0009 } },\n"
+        "    { \"thickness\": 40 }, {} ] }\n";
+    sg_system *s = sg_system_new(), *r = sg_system_new();
+    sg_diag d;
+    char *out;
+    (void)state;
+    assert_int_equal(parse_text(s, text, &d), SG_OK);
+    assert_true(s->temperature == 35.5 && s->pressure == 0.8 && s->adjust_index == 1);
+    assert_int_equal(s->surf[1].mat.kind, SG_MAT_MODEL);
+    assert_true(s->surf[1].mat.index == 1.5168 && s->surf[1].mat.vd == 64.17 &&
+                s->surf[1].mat.dpgf == -0.0009);
+    out = sg_design_to_json(s);
+    assert_non_null(out);
+    assert_int_equal(parse_text(r, out, &d), SG_OK);
+    assert_true(same_bits(r->temperature, 35.5) && same_bits(r->pressure, 0.8) &&
+                r->adjust_index == 1);
+    assert_int_equal(r->surf[1].mat.kind, SG_MAT_MODEL);
+    assert_true(same_bits(r->surf[1].mat.index, 1.5168) && same_bits(r->surf[1].mat.vd, 64.17) &&
+                same_bits(r->surf[1].mat.dpgf, -0.0009));
+    free(out);
+    /* Defaults are not written, so older designs save as before. */
+    sg_system_free(r);
+    r = sg_system_new();
+    out = sg_design_to_json(r);
+    assert_null(strstr(out, "temperature"));
+    assert_null(strstr(out, "adjust_index"));
+    free(out);
+    assert_true(r->temperature == 20.0 && r->pressure == 1.0 && r->adjust_index == 0);
+    sg_system_free(s);
+    sg_system_free(r);
+
+    expect_error("{\"temperature\": -300, \"surfaces\": [{}, {\"stop\": true}, {}]}", SG_ERANGE,
+                 "temperature: -300 C is outside -250 to 1000 C");
+    expect_error("{\"pressure\": -1, \"surfaces\": [{}, {\"stop\": true}, {}]}", SG_EPARSE,
+                 "pressure");
+    expect_error("{\"pressure\": 101, \"surfaces\": [{}, {\"stop\": true}, {}]}", SG_ERANGE,
+                 "pressure: 101 atm is outside 0 to 100 atm");
+    expect_error("{\"adjust_index\": 1, \"surfaces\": [{}, {\"stop\": true}, {}]}", SG_EPARSE,
+                 "adjust_index: expected true or false");
+    expect_error("{\"surfaces\": [{}, {\"stop\": true, \"material\": {\"nd\": 1.5}}, {}]}",
+                 SG_EPARSE, "a model glass needs \"nd\" and \"vd\"");
+    expect_error("{\"surfaces\": [{}, {\"stop\": true, \"material\": {\"nd\": 1.5, \"vd\": 2}},"
+                 " {}]}", SG_ERANGE, "model glass nd 1.5, vd 2");
+}
+
 static void test_content_errors(void **state)
 {
     size_t i;
@@ -1172,6 +1226,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_known_values),
         cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_environment_and_model),
         cmocka_unit_test(test_roundtrip_random),
         cmocka_unit_test(test_syntax_errors),
         cmocka_unit_test(test_content_errors),

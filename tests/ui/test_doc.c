@@ -646,6 +646,88 @@ static void test_numfmt(void **state)
                   "its width\n", sizeof v / sizeof v[0]);
 }
 
+/* The glass picker through the command path: by name and by nd and vd,
+ * each glass with its index at the primary wavelength (checked against
+ * sg_glass_index and, with "adjust on", sg_glass_index_env); "pick" goes
+ * through "set" and undoes as one change; the environment commands. */
+static void test_glass_picker(void **state)
+{
+    ed *e = new_ed();
+    const gp_list *l = &e->glasses;
+    const sg_glass *g;
+    double um;
+    int i, f;
+    (void)state;
+    if (!e->cat) {
+        print_message("# SKIP no glass catalog: %s\n", e->cat_msg);
+        free_ed(e);
+        return;
+    }
+    um = e->doc.sys->wave[e->doc.sys->primary_wave].um;
+    ok(e, "glasses n-sf");
+    assert_true(l->n >= 5);
+    for (i = 0; i < l->n; i++) {
+        assert_non_null(strstr(l->hit[i].g->name, "N-SF"));
+        assert_true(l->hit[i].n == sg_glass_index(l->hit[i].g, um));
+        if (i > 0)
+            assert_true(strcmp(l->hit[i - 1].g->name, l->hit[i].g->name) <= 0);
+    }
+    /* Nearest by nd and vd: N-BK7's own figures find it (or BK7, its
+     * twin) first, then H-K9L (nd 1.5168, vd 64.20). */
+    ok(e, "glasses 1.5168 64.17");
+    assert_true(l->n == (int)sg_catalog_count(e->cat));
+    assert_true(strcmp(l->hit[0].g->name, "BK7") == 0 || strcmp(l->hit[0].g->name, "N-BK7") == 0);
+    assert_true(l->hit[0].dist == 0.0 && l->hit[1].dist == 0.0);
+    assert_string_equal(l->hit[2].g->name, "H-K9L");
+    for (i = 1; i < l->n; i++)
+        assert_true(l->hit[i - 1].dist <= l->hit[i].dist);
+
+    /* pick sets the cursor surface's material through "set". */
+    ok(e, "goto 1");
+    ok(e, "glasses n-bk7");
+    assert_int_equal(l->n, 1);
+    ok(e, "pick 1");
+    assert_int_equal(e->doc.sys->surf[1].mat.kind, SG_MAT_GLASS);
+    assert_string_equal(e->doc.sys->surf[1].mat.name, "N-BK7");
+    ok(e, "undo");
+    assert_int_equal(e->doc.sys->surf[1].mat.kind, SG_MAT_AIR);
+    f = cmd_exec(e, "pick 2");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "not one of 1 to 1"));
+    f = cmd_exec(e, "pick 1.5");
+    assert_true(f & ED_ERROR);
+    ok(e, "goto 0");
+    f = cmd_exec(e, "pick 1");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "cursor is on surface 0"));
+    ok(e, "glasses nosuchglass");
+    assert_int_equal(l->n, 0);
+    f = cmd_exec(e, "pick 1");
+    assert_true(f & ED_ERROR);
+
+    /* The environment: indices in the list follow it once adjusted. */
+    ok(e, "temperature 40");
+    ok(e, "pressure 0.5");
+    ok(e, "adjust on");
+    assert_true(e->doc.sys->temperature == 40.0 && e->doc.sys->pressure == 0.5 &&
+                e->doc.sys->adjust_index == 1);
+    ok(e, "glasses S-LAH64");
+    g = sg_catalog_find(e->cat, "S-LAH64");
+    assert_int_equal(l->n, 1);
+    assert_true(l->hit[0].n == sg_glass_index_env(g, um, 40.0, 0.5));
+    assert_true(l->hit[0].n != sg_glass_index(g, um));
+    f = cmd_exec(e, "temperature -300");
+    assert_true(f & ED_ERROR);
+    f = cmd_exec(e, "pressure 1000");
+    assert_true(f & ED_ERROR);
+    ok(e, "undo");
+    ok(e, "undo");
+    ok(e, "undo");
+    assert_true(e->doc.sys->temperature == 20.0 && e->doc.sys->pressure == 1.0 &&
+                e->doc.sys->adjust_index == 0);
+    free_ed(e);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -659,6 +741,7 @@ int main(void)
         cmocka_unit_test(test_modified_save),
         cmocka_unit_test(test_save_load_exact),
         cmocka_unit_test(test_batch),
+        cmocka_unit_test(test_glass_picker),
         cmocka_unit_test(test_export_matches_trace),
     };
     static const char *const files[] = {"mod.json", "rt.json", "script.txt", "stderr.txt",

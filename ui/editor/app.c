@@ -192,7 +192,8 @@ void status_draw(ui *u)
         term_text(y, 0, u->cols, e->msg_err ? T_ERROR : T_NORMAL, 1, e->msg);
         return;
     }
-    if (u->mode == MODE_SETTINGS || u->mode == MODE_EXAMPLES || u->mode == MODE_SYSDATA)
+    if (u->mode == MODE_SETTINGS || u->mode == MODE_EXAMPLES || u->mode == MODE_SYSDATA ||
+        u->mode == MODE_GLASSES)
         return;
     if (u->cmd_key) {
         term_text(y, 0, u->cols, T_EDIT, 1, "Esc: the next key is a command (Esc again: none)");
@@ -263,6 +264,7 @@ static void draw(ui *u)
     switch (u->mode) {
     case MODE_HELP: help_draw(u); break;
     case MODE_SYSDATA: sysdata_draw(u); break;
+    case MODE_GLASSES: glasses_draw(u); break;
     case MODE_SETTINGS: settings_draw(u); status_draw(u); break;
     case MODE_EXAMPLES: examples_draw(u); status_draw(u); break;
     case MODE_COMMAND:
@@ -523,6 +525,7 @@ static int dispatch(ui *u, int key)
         return settings_key(u, key);
     case MODE_EXAMPLES: return examples_key(u, key);
     case MODE_SYSDATA: return sysdata_key(u, key);
+    case MODE_GLASSES: return glasses_key(u, key);
     default: break;
     }
     /* A fresh key clears the last message; the key's own command may set a
@@ -579,6 +582,10 @@ static int act(ui *u, int f)
     if (f & ED_SHOW_SYSDATA) {
         u->sys_top = 0;
         u->mode = MODE_SYSDATA;
+    }
+    if (f & ED_SHOW_GLASSES) {
+        u->glass_top = 0;
+        u->mode = MODE_GLASSES;
     }
     if (f & ED_RECOMPUTE)
         u->e->dirty = 1;

@@ -825,6 +825,100 @@ static int c_aim(ed *e, args *a)
     return end(e, "ray aiming %s", ed_aim_name(k));
 }
 
+/* The environment: Zemax's system temperature and pressure, and whether
+ * glass indices follow them (sagitta-design(5), GLASS INDICES). */
+static int c_temperature(ed *e, args *a)
+{
+    double t;
+    if (!need(e, a, 1, 1, "temperature CELSIUS") ||
+        !parse_num(e, a->v[1], "temperature", &t))
+        return ED_HANDLED | ED_ERROR;
+    if (!(t >= SG_TEMP_MIN && t <= SG_TEMP_MAX))
+        return fail(e, "temperature: %g C is outside %g to %g C", t, SG_TEMP_MIN, SG_TEMP_MAX);
+    if (!begin(e, e->row))
+        return ED_HANDLED | ED_ERROR;
+    e->doc.sys->temperature = t;
+    return end(e, "temperature %g C%s", t,
+               e->doc.sys->adjust_index ? "" : " (glass indices follow it after \"adjust on\")");
+}
+
+static int c_pressure(ed *e, args *a)
+{
+    double p;
+    if (!need(e, a, 1, 1, "pressure ATM") || !parse_num(e, a->v[1], "pressure", &p))
+        return ED_HANDLED | ED_ERROR;
+    if (!(p >= 0.0 && p <= SG_PRES_MAX))
+        return fail(e, "pressure: %g atm is outside 0 to %g atm", p, SG_PRES_MAX);
+    if (!begin(e, e->row))
+        return ED_HANDLED | ED_ERROR;
+    e->doc.sys->pressure = p;
+    return end(e, "pressure %g atm", p);
+}
+
+static int c_adjust(ed *e, args *a)
+{
+    int on;
+    if (!need(e, a, 0, 1, "adjust on|off|toggle") ||
+        !parse_switch(e, a->n > 1 ? a->v[1] : NULL, e->doc.sys->adjust_index, &on, "adjust"))
+        return ED_HANDLED | ED_ERROR;
+    if (!begin(e, e->row))
+        return ED_HANDLED | ED_ERROR;
+    e->doc.sys->adjust_index = on;
+    return end(e, "glass indices %s", on ? "follow the temperature and pressure"
+                                         : "are the catalog's");
+}
+
+/* The glass picker: "glasses N-BK" by name, "glasses 1.5168 64.17" by nd
+ * and vd; "pick N" makes hit N the material of the cursor's surface. */
+static int c_glasses(ed *e, args *a)
+{
+    char q[ED_LINE];
+    const sg_system *s = e->doc.sys;
+    double um = s->wave[s->primary_wave].um;
+    int n, i;
+    if (!e->cat)
+        return fail(e, "no glass catalog: %s", e->cat_msg);
+    if (a->n > 1)
+        rest_of(a, 1, q, sizeof q);
+    else
+        q[0] = '\0';
+    n = gp_search(e->cat, s, um, q, &e->glasses);
+    if (n < 0)
+        return fail(e, "glasses: out of memory");
+    e->glass_sel = 0;
+    if (e->batch) {
+        for (i = 0; i < n; i++) {
+            const gp_hit *h = &e->glasses.hit[i];
+            fprintf(e->out, "%d %s %s %.17g %.17g %.17g\n", i + 1, h->g->name, h->g->catalog,
+                    h->g->nd, h->g->vd, h->n);
+        }
+        fflush(e->out);
+    }
+    ed_msg(e, 0, "%d glass%s for \"%s\", n at %g um; \"pick N\" sets surface %d's material", n,
+           n == 1 ? "" : "es", q, um, e->row);
+    return ED_HANDLED | ED_REDRAW | (e->batch || n == 0 ? 0 : ED_SHOW_GLASSES);
+}
+
+static int c_pick(ed *e, args *a)
+{
+    double k;
+    char line[ED_LINE];
+    if (!need(e, a, 1, 1, "pick N") || !parse_num(e, a->v[1], "pick", &k))
+        return ED_HANDLED | ED_ERROR;
+    if (e->glasses.n == 0)
+        return fail(e, "pick: no glasses listed; search with \"glasses NAME\" or "
+                       "\"glasses ND VD\" first");
+    if (k != floor(k) || k < 1 || k > e->glasses.n)
+        return fail(e, "pick: %g is not one of 1 to %d", k, e->glasses.n);
+    if (e->row < 1 || e->row >= e->doc.sys->nsurf - 1)
+        return fail(e, "pick: the cursor is on surface %d; a glass goes on surfaces 1 to %d",
+                     e->row, e->doc.sys->nsurf - 2);
+    /* Through "set", so undo, messages and checks are the cell's. */
+    snprintf(line, sizeof line, "set %d material %s", e->row,
+             e->glasses.hit[(int)k - 1].g->name);
+    return cmd_exec(e, line);
+}
+
 /* ------------------------------------------------------------------------
  * Files
  * ------------------------------------------------------------------------ */
@@ -2051,6 +2145,14 @@ static const command commands[] = {
     {"aperture", NULL, c_aperture, "aperture [epd|fnum|na|float|pwfnum] [VALUE]",
      "set the system aperture"},
     {"aim", NULL, c_aim, "aim off|paraxial|real", "set ray aiming"},
+    {"temperature", NULL, c_temperature, "temperature CELSIUS",
+     "set the system temperature (default 20)"},
+    {"pressure", NULL, c_pressure, "pressure ATM", "set the air pressure (default 1)"},
+    {"adjust", NULL, c_adjust, "adjust on|off|toggle",
+     "make glass indices follow temperature and pressure (Zemax's thermal model)"},
+    {"glasses", NULL, c_glasses, "glasses [NAME | ND VD]",
+     "find catalog glasses by name, or nearest by nd and vd"},
+    {"pick", NULL, c_pick, "pick N", "make glass N of the last search the cursor's material"},
     {"title", NULL, c_title, "title TEXT", "set the design's title"},
     {"units", NULL, c_units, "units mm|cm|in|m", "set the lens units"},
     {"goto", "g", c_goto, "goto SURFACE [COLUMN]", "move the cursor"},

@@ -44,6 +44,7 @@ void ed_free(ed *e)
 {
     compute_free(&e->cmp);
     edview_free(&e->view);
+    gp_free(&e->glasses);
     doc_free(&e->doc);
     sg_catalog_free(e->cat);
     e->cat = NULL;

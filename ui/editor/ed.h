@@ -12,6 +12,7 @@
 
 #include "compute.h"
 #include "doc.h"
+#include "glasspick.h"
 #include "recover.h"
 #include "sagitta.h"
 #include "view.h"
@@ -28,7 +29,8 @@ enum {
     ED_SHOW_SETTINGS = 1 << 7,
     ED_SHOW_EXAMPLES = 1 << 8,
     ED_PROMPT = 1 << 9,        /* open the ':' line with ed.prompt_init */
-    ED_SHOW_SYSDATA = 1 << 10  /* the system data (paraxial) view */
+    ED_SHOW_SYSDATA = 1 << 10, /* the system data (paraxial) view */
+    ED_SHOW_GLASSES = 1 << 11  /* the glass picker (ed.glasses) */
 };
 
 /* What a confirmation asks. */
@@ -80,6 +82,9 @@ typedef struct ed {
     int quit;                  /* set by quit in batch mode */
 
     recov rec;                 /* the recovery file (recover.h) */
+
+    gp_list glasses;           /* the last "glasses" search */
+    int glass_sel;             /* the picker's cursor in it */
 
     /* Long work (an export) reports done of total rays to the screen; a
      * nonzero return cancels it (Esc).  NULL in batch mode. */

@@ -22,7 +22,8 @@ enum {
     MODE_HELP,
     MODE_SETTINGS,
     MODE_EXAMPLES,
-    MODE_SYSDATA     /* the system data view */
+    MODE_SYSDATA,    /* the system data view */
+    MODE_GLASSES     /* the glass picker */
 };
 
 /* Items of the ray selector. */
@@ -62,6 +63,7 @@ typedef struct ui {
     /* Overlays. */
     int help_top;
     int sys_top;
+    int glass_top;
     int set_sel, set_top;
     char **ex;
     int nex, ex_sel, ex_top;
@@ -110,6 +112,9 @@ int results_panel_height(const ui *u);
 
 void title_draw(ui *u);
 void status_draw(ui *u);
+
+void glasses_draw(ui *u);
+int glasses_key(ui *u, int key);
 
 void sysdata_draw(ui *u);
 int sysdata_key(ui *u, int key);
