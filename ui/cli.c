@@ -653,7 +653,9 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
                 if (!h5)
                     goto h5_error;
             }
-            if (h5rays_write(h5, out, status, n, rays, h5err, sizeof h5err) != 0)
+            if (t)
+                report_opd_block(t, &ref, rays, n, out, nsurf, opd);
+            if (h5rays_write(h5, out, status, n, rays, t ? opd : NULL, h5err, sizeof h5err) != 0)
                 goto h5_error;
         } else if (!opened) {
             int err = outfile_open(&ro, output, stdout);
@@ -668,7 +670,7 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
                 goto write_error;
             report_set_threads(&rs, threads);
         }
-        if (t)
+        if (t && fmt != FMT_HDF5)
             report_opd_block(t, &ref, rays, n, out, nsurf, opd);
         if (fmt != FMT_HDF5 && report_rays_opd(&rs, out, status, n, rays, opd) != 0)
             goto write_error;
