@@ -957,7 +957,7 @@ static int bench_spot(const bench_cfg *cfg, const char *path, cJSON *arr)
     sg_system *sys = NULL;
     size_t nray = cfg->quick ? 100000 : 1000000, cur, k, nall;
     int rc, f, last, rep;
-    double *ts = NULL, *tb = NULL, *ratio = NULL;
+    double *ts = NULL, *tb = NULL, *ratio = NULL, la0 = -1.0, la1;
     sg_ray_in *rays = NULL;
     sg_ray_surface *rows = NULL;
     int *st = NULL;
@@ -1003,6 +1003,7 @@ static int bench_spot(const bench_cfg *cfg, const char *path, cJSON *arr)
     so.wave = sys->primary_wave;
     so.nthreads = cfg->threads;
     last = sys->nsurf - 1;
+    la0 = load_average();
     for (rep = 0; rep < cfg->repeat; rep++) {
         sg_spot spot;
         sg_batch *bt;
@@ -1033,6 +1034,7 @@ static int bench_spot(const bench_cfg *cfg, const char *path, cJSON *arr)
             rc = CLI_EXIT_INTERNAL;
         goto done;
     }
+    la1 = load_average();
     a = stats(ts, cfg->repeat);
     b = stats(tb, cfg->repeat);
     r = stats(ratio, cfg->repeat);
@@ -1045,6 +1047,7 @@ static int bench_spot(const bench_cfg *cfg, const char *path, cJSON *arr)
                b.med, b.min, b.max);
         printf("  spot / batch: %.3f (median of %d alternating pairs; min %.3f, max %.3f)\n",
                r.med, cfg->repeat, r.min, r.max);
+        printf("  load: %.2f before, %.2f after (1-minute average)\n", la0, la1);
     } else {
         cJSON *o = cJSON_CreateObject();
         cJSON_AddStringToObject(o, "design", path);
@@ -1054,6 +1057,8 @@ static int bench_spot(const bench_cfg *cfg, const char *path, cJSON *arr)
         cJSON_AddItemToObject(o, "spot_s", json_stat(&a));
         cJSON_AddItemToObject(o, "batch_s", json_stat(&b));
         cJSON_AddItemToObject(o, "ratio", json_stat(&r));
+        cJSON_AddNumberToObject(o, "load_before", la0);
+        cJSON_AddNumberToObject(o, "load_after", la1);
         cJSON_AddItemToArray(arr, o);
     }
     rc = CLI_EXIT_OK;

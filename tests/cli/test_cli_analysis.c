@@ -328,6 +328,20 @@ static void test_bench_view(void **state)
     assert_non_null(strstr(r.out, "median"));
     assert_non_null(strstr(r.out, "load"));
     ct_free(&r);
+    /* The spot mode names the load too. */
+    ct_run(&r, "bench", d, "--spot", "--quick", "--repeat", "1", "--threads", "1", "--format",
+           "json", NULL);
+    assert_int_equal(r.code, 0);
+    j = cJSON_Parse(r.out);
+    assert_non_null(j);
+    v = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(j, "spot"), 0);
+    assert_non_null(v);
+    assert_true(cJSON_IsNumber(cJSON_GetObjectItemCaseSensitive(v, "load_before")));
+    assert_true(cJSON_IsNumber(cJSON_GetObjectItemCaseSensitive(v, "load_after")));
+    assert_true(cJSON_GetObjectItemCaseSensitive(
+                    cJSON_GetObjectItemCaseSensitive(v, "ratio"), "median")->valuedouble > 0.0);
+    cJSON_Delete(j);
+    ct_free(&r);
     ct_run(&r, "bench", d, "--view", "nope", NULL);
     assert_int_equal(r.code, 2);
     assert_non_null(strstr(r.err, "--view"));
