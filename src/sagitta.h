@@ -1101,7 +1101,9 @@ void sg_wavefront_opts_init(sg_wavefront_opts *o);
 /* The traced wavefront of one field at one wavelength: the OPD of the
  * grid's pupil points against the field's reference sphere (sg_opd_ref,
  * copied to *ref when ref is not NULL), through the batch in blocks with
- * only the image surface kept.  Rays that fail are left out, as in Zemax.
+ * only the image surface kept.  At a wavelength other than the primary,
+ * less that wavelength's chief ray's OPD, so the map is zero at its chief
+ * ray, as Zemax's.  Rays that fail are left out, as in Zemax.
  * A chief ray that fails is an error naming the field. */
 int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
                        const sg_wavefront_opts *o, sg_wavefront *out, sg_opd_ref *ref,

@@ -133,7 +133,7 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
     sg_ray_in *rays = NULL;
     sg_ray_surface *rows = NULL;
     int *st = NULL, last, rc;
-    double hx, hy, *opd = NULL;
+    double hx, hy, *opd = NULL, piston = 0.0;
     unsigned char *ok = NULL;
     size_t n, blk, k, start;
     grid_opd g;
@@ -172,6 +172,29 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
     }
     if (ref_out)
         *ref_out = ref;
+    if (to.wave != sys->primary_wave) {
+        /* At another wavelength the map is referred to that wavelength's own
+         * chief ray, as Zemax's map of one wavelength is to its chief ray:
+         * the chief ray's OPD against the primary sphere (a chromatic
+         * piston) is taken away, as the OPD fan does. */
+        sg_ray_surface *cr = malloc((size_t)sys->nsurf * sizeof *cr);
+        sg_opd c0;
+        if (!cr) {
+            rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
+            goto done;
+        }
+        rc = sg_trace_opd(t, &ref, 0.0, 0.0, cr, &c0);
+        free(cr);
+        if (rc == SG_OK && c0.status != SG_OK)
+            rc = c0.status;
+        if (rc != SG_OK) {
+            rc = sg_diag_set(d, rc, "wavefront: the chief ray of field (%.6g, %.6g) at "
+                                    "wavelength %d fails: %s", hx, hy, to.wave + 1,
+                             sg_strerror(rc));
+            goto done;
+        }
+        piston = c0.opd_waves;
+    }
     n = (size_t)o->grid * (size_t)o->grid;
     blk = o->block ? o->block : 65536;
     if (blk > n)
@@ -210,7 +233,7 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
             if (st[k] != SG_OK || sg_opd_of_ray(t, &ref, &rows[k], &r) != SG_OK ||
                 r.status != SG_OK || !isfinite(r.opd_waves))
                 continue;
-            opd[start + k] = r.opd_waves;
+            opd[start + k] = r.opd_waves - piston;
             ok[start + k] = 1;
         }
     }

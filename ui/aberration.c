@@ -1,25 +1,25 @@
 /*
  * aberration.c - the "seidel" and "fieldcurve" subcommands: the engine's
- * sg_seidel_compute and sg_fieldcurve written as text, CSV or JSON.
+ * sg_seidel_compute and sg_fieldcurve written as text, CSV, JSON or a
+ * picture (views.c), with the options and output every analysis command
+ * shares (ancmd.c).
  *
  * Text output passes the design's name through safe_fputs; files are
  * written through outfile, so a failed write leaves an old file whole.
  */
-#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-#include "cli.h"
-#include "outfile.h"
+#include "ancmd.h"
 #include "report.h"
 #include "safetext.h"
+#include "views.h"
 
-enum { A_HELP = 1, A_FORMAT, A_OUTPUT, A_WAVE, A_METHOD, A_POINTS, A_STEP };
+enum { A_WAVE = 1, A_METHOD, A_POINTS, A_STEP };
 
-static const char *const seidel_names[SG_SEIDEL_N] = { "SI", "SII", "SIII", "SIV",
-                                                       "SV", "CI",  "CII" };
+#define seidel_names view_seidel_names
 static const char *const wave_names[SG_NWCOEF] = { "W040", "W131", "W222",  "W220P", "W311",
                                                    "W020", "W111", "W220S", "W220M", "W220T" };
 static const char *const trans_names[SG_NTCOEF] = { "TSPH", "TSCO", "TTCO", "TAST", "TPFC",
@@ -50,35 +50,6 @@ static void num(FILE *f, double v, int json)
         fputs("null", f);
 }
 
-static int open_out(outfile *o, const char *output)
-{
-    int err = outfile_open(o, output && strcmp(output, "-") ? output : NULL, stdout);
-    if (err) {
-        cli_error("%s: %s", output, strerror(err));
-        return CLI_EXIT_FILE;
-    }
-    return CLI_EXIT_OK;
-}
-
-static int close_out(outfile *o, const char *output)
-{
-    int err = outfile_commit(o);
-    if (err) {
-        cli_error("%s: %s", output && strcmp(output, "-") ? output : "standard output",
-                  strerror(err));
-        return CLI_EXIT_FILE;
-    }
-    return CLI_EXIT_OK;
-}
-
-/* Exit status and message for an engine failure. */
-static int engine_error(const char *design, const sg_diag *d, int rc)
-{
-    cli_print_diag(design, d, rc);
-    rc = cli_exit_for(rc);
-    return rc == CLI_EXIT_OK ? CLI_EXIT_INTERNAL : rc;
-}
-
 /* ------------------------------------------------------------------- seidel */
 
 static void seidel_help(FILE *f)
@@ -92,16 +63,17 @@ static void seidel_help(FILE *f)
 "Taken at the primary wavelength, the full aperture and the largest field;\n"
 "colour between the shortest and the longest wavelength.  See sagitta(1).\n"
 "\n"
+"A picture (png, svg, pdf) is Zemax's Seidel diagram: SI to CII of each\n"
+"surface and the total as bars; text on a terminal adds one braille panel\n"
+"per sum.\n"
+"\n"
 "Options:\n"
-"  --format F               text (default), csv or json\n"
-"  -o, --output FILE        write to FILE instead of standard output\n"
-"  -h, --help               show this help\n", f);
+AN_COMMON_HELP
+"  -h, --help         show this help\n", f);
 }
 
 static const cli_opt seidel_opts[] = {
-    { "--help", 'h', 0, A_HELP },
-    { "--format", 0, 1, A_FORMAT },
-    { "--output", 'o', 1, A_OUTPUT },
+    AN_COMMON_OPTS,
     { NULL, 0, 0, 0 }
 };
 
@@ -239,64 +211,65 @@ static void seidel_json(FILE *f, const char *design, const sg_system *sys, const
     fputs("}\n}\n", f);
 }
 
+typedef struct seidel_ctx {
+    const an_cmd *a;
+    const sg_seidel *s;
+} seidel_ctx;
+
+static int seidel_fig(void *ctx, plot_figure *f)
+{
+    const seidel_ctx *c = ctx;
+    /* Files get the grouped chart; a terminal one panel per sum. */
+    return view_seidel_figure(c->a->sys, c->s, c->a->fmt >= AN_FMT_PNG, f);
+}
+
+static int seidel_write(void *ctx, FILE *f, int fmt)
+{
+    const seidel_ctx *c = ctx;
+    if (fmt == AN_FMT_CSV)
+        seidel_csv(f, c->s);
+    else if (fmt == AN_FMT_JSON)
+        seidel_json(f, c->a->design, c->a->sys, c->s);
+    else
+        seidel_text(f, c->a->design, c->a->sys, c->s);
+    return 0;
+}
+
 int cmd_seidel(int argc, char **argv)
 {
     cli_iter it;
-    const char *val, *design = NULL, *output = NULL;
-    int id, rc, fmt = REPORT_TEXT;
-    sg_catalog *cat = NULL;
-    sg_system *sys = NULL;
+    const char *val;
+    int id, rc;
     sg_seidel s;
     sg_diag d;
-    outfile o;
+    an_cmd a;
+    seidel_ctx c = {&a, &s};
+    an_writer w = {seidel_fig, seidel_write, &c};
 
+    an_cmd_init(&a, "seidel");
     cli_iter_init(&it, "seidel", argc, argv);
-    while ((id = cli_next_opt(&it, seidel_opts, &val)) != -1) {
-        switch (id) {
-        case 0:
-            if (design)
-                return cli_usage_error("seidel", "unexpected argument \"%s\"", val);
-            design = val;
-            break;
-        case A_HELP:
-            seidel_help(stdout);
-            return CLI_EXIT_OK;
-        case A_FORMAT:
-            if (cli_format_value(val, 1, &fmt))
-                return CLI_EXIT_USAGE;
-            break;
-        case A_OUTPUT:
-            output = val;
-            break;
-        default:
-            return -id;
-        }
+    while ((id = an_cmd_next(&a, &it, seidel_opts, &val)) >= 0) {
+        if (id != AN_OPT_HELP)
+            return CLI_EXIT_USAGE;
+        seidel_help(stdout);
+        return CLI_EXIT_OK;
     }
-    if (!design)
-        return cli_usage_error("seidel", "missing DESIGN.json");
-    rc = cli_load_design(design, &cat, &sys);
+    if (id < -1)
+        return -id;
+    rc = an_cmd_load(&a);
     if (rc != CLI_EXIT_OK)
         return rc;
     sg_diag_clear(&d);
-    rc = sg_seidel_compute(sys, cat, &s, &d);
+    rc = sg_seidel_compute(a.sys, a.cat, &s, &d);
     if (rc != SG_OK) {
-        rc = engine_error(design, &d, rc);
+        rc = an_cmd_engine_error(&a, &d, rc);
         goto done;
     }
-    cli_print_warnings(&d, design);
-    rc = open_out(&o, output);
-    if (rc == CLI_EXIT_OK) {
-        if (fmt == REPORT_CSV)
-            seidel_csv(o.f, &s);
-        else if (fmt == REPORT_JSON)
-            seidel_json(o.f, design, sys, &s);
-        else
-            seidel_text(o.f, design, sys, &s);
-        rc = close_out(&o, output);
-    }
+    cli_print_warnings(&d, a.design);
+    rc = an_cmd_write(&a, &w);
     sg_seidel_free(&s);
 done:
-    cli_design_free(cat, sys);
+    an_cmd_free(&a);
     return rc;
 }
 
@@ -312,20 +285,20 @@ static void fieldcurve_help(FILE *f)
 "+y.  The foci come from real rays a small pupil step either side of the\n"
 "chief ray.  See sagitta(1).\n"
 "\n"
+"A picture (png, svg, pdf; braille after text on a terminal) shows both\n"
+"foci against field beside the distortion against field.\n"
+"\n"
 "Options:\n"
-"  --points N               number of fields, 2 to 100000 (default 21)\n"
-"  --step D                 normalized pupil step, (0, 0.1] (default 0.01)\n"
-"  --wave N                 wavelength number, from 1 (default: the primary)\n"
-"  --method M               precise (default), classic or mpfr\n"
-"  --format F               text (default), csv or json\n"
-"  -o, --output FILE        write to FILE instead of standard output\n"
-"  -h, --help               show this help\n", f);
+"  --points N         number of fields, 2 to 100000 (default 21)\n"
+"  --step D           normalized pupil step, (0, 0.1] (default 0.01)\n"
+"  --wave N           wavelength number, from 1 (default: the primary)\n"
+"  --method M         precise (default), classic or mpfr\n"
+AN_COMMON_HELP
+"  -h, --help         show this help\n", f);
 }
 
 static const cli_opt fieldcurve_opts[] = {
-    { "--help", 'h', 0, A_HELP },
-    { "--format", 0, 1, A_FORMAT },
-    { "--output", 'o', 1, A_OUTPUT },
+    AN_COMMON_OPTS,
     { "--wave", 0, 1, A_WAVE },
     { "--method", 0, 1, A_METHOD },
     { "--points", 0, 1, A_POINTS },
@@ -338,7 +311,7 @@ static void fieldcurve_write(FILE *f, int fmt, const char *design, const sg_syst
 {
     int i;
     const char *fu = sys->field_type == SG_FIELD_ANGLE ? "deg" : sys->units;
-    if (fmt == REPORT_CSV) {
+    if (fmt == AN_FMT_CSV) {
         fputs("hy,field,tan_focus,sag_focus,real_y,parax_y,distortion_pct,status\n", f);
         for (i = 0; i < n; i++) {
             int ok = p[i].status == SG_OK;
@@ -359,7 +332,7 @@ static void fieldcurve_write(FILE *f, int fmt, const char *design, const sg_syst
         }
         return;
     }
-    if (fmt == REPORT_JSON) {
+    if (fmt == AN_FMT_JSON) {
         fputs("{\n  \"design\": ", f);
         json_str(f, design);
         fputs(",\n  \"units\": ", f);
@@ -409,38 +382,46 @@ static void fieldcurve_write(FILE *f, int fmt, const char *design, const sg_syst
     }
 }
 
+typedef struct fc_ctx {
+    const an_cmd *a;
+    int wave0, n;
+    const sg_fieldcurve_pt *p;
+} fc_ctx;
+
+static int fc_fig(void *ctx, plot_figure *f)
+{
+    const fc_ctx *c = ctx;
+    return view_fieldcurve_figure(c->a->sys, c->p, c->n, c->a->sys->wave[c->wave0].um, f);
+}
+
+static int fc_write(void *ctx, FILE *f, int fmt)
+{
+    const fc_ctx *c = ctx;
+    fieldcurve_write(f, fmt, c->a->design, c->a->sys, c->wave0, c->p, c->n);
+    return 0;
+}
+
 int cmd_fieldcurve(int argc, char **argv)
 {
     cli_iter it;
-    const char *val, *design = NULL, *output = NULL;
-    int id, rc, fmt = REPORT_TEXT, wave1 = 0, wave0 = 0, npts = 21, m;
+    const char *val;
+    int id, rc, wave1 = 0, wave0 = 0, npts = 21, m;
     double step = 0.01;
-    sg_catalog *cat = NULL;
-    sg_system *sys = NULL;
     sg_fieldcurve_pt *pts = NULL;
     sg_trace_opts opts;
     sg_diag d;
-    outfile o;
+    an_cmd a;
+    fc_ctx c;
+    an_writer w = {fc_fig, fc_write, &c};
 
     sg_trace_opts_init(&opts);
+    an_cmd_init(&a, "fieldcurve");
     cli_iter_init(&it, "fieldcurve", argc, argv);
-    while ((id = cli_next_opt(&it, fieldcurve_opts, &val)) != -1) {
+    while ((id = an_cmd_next(&a, &it, fieldcurve_opts, &val)) >= 0) {
         switch (id) {
-        case 0:
-            if (design)
-                return cli_usage_error("fieldcurve", "unexpected argument \"%s\"", val);
-            design = val;
-            break;
-        case A_HELP:
+        case AN_OPT_HELP:
             fieldcurve_help(stdout);
             return CLI_EXIT_OK;
-        case A_FORMAT:
-            if (cli_format_value(val, 1, &fmt))
-                return CLI_EXIT_USAGE;
-            break;
-        case A_OUTPUT:
-            output = val;
-            break;
         case A_WAVE:
             if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))
                 return CLI_EXIT_USAGE;
@@ -463,15 +444,15 @@ int cmd_fieldcurve(int argc, char **argv)
                 return cli_usage_error("fieldcurve", "--step: %g is not in (0, 0.1]", step);
             break;
         default:
-            return -id;
+            return CLI_EXIT_USAGE;
         }
     }
-    if (!design)
-        return cli_usage_error("fieldcurve", "missing DESIGN.json");
-    rc = cli_load_design(design, &cat, &sys);
+    if (id < -1)
+        return -id;
+    rc = an_cmd_load(&a);
     if (rc != CLI_EXIT_OK)
         return rc;
-    rc = cli_check_wave(design, sys, wave1, &wave0);
+    rc = cli_check_wave(a.design, a.sys, wave1, &wave0);
     if (rc != CLI_EXIT_OK)
         goto done;
     opts.wave = wave0;
@@ -482,19 +463,19 @@ int cmd_fieldcurve(int argc, char **argv)
         goto done;
     }
     sg_diag_clear(&d);
-    rc = sg_fieldcurve(sys, cat, &opts, npts, step, pts, &d);
+    rc = sg_fieldcurve(a.sys, a.cat, &opts, npts, step, pts, &d);
     if (rc != SG_OK) {
-        rc = engine_error(design, &d, rc);
+        rc = an_cmd_engine_error(&a, &d, rc);
         goto done;
     }
-    cli_print_warnings(&d, design);
-    rc = open_out(&o, output);
-    if (rc == CLI_EXIT_OK) {
-        fieldcurve_write(o.f, fmt, design, sys, wave0, pts, npts);
-        rc = close_out(&o, output);
-    }
+    cli_print_warnings(&d, a.design);
+    c.a = &a;
+    c.wave0 = wave0;
+    c.n = npts;
+    c.p = pts;
+    rc = an_cmd_write(&a, &w);
 done:
     free(pts);
-    cli_design_free(cat, sys);
+    an_cmd_free(&a);
     return rc;
 }

@@ -4,45 +4,33 @@
  * (with a picture on a terminal), CSV, JSON, or a PNG, SVG or PDF picture.
  * Every output goes through outfile, so a file appears whole or not at all.
  */
-/* TIOCGWINSZ, for the terminal's width (the build defines _DEFAULT_SOURCE). */
-#include <sys/ioctl.h>
-
 #include <cjson/cJSON.h>
-#include <errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-#include <unistd.h>
 
-#include "args.h"
-#include "cli.h"
-#include "outfile.h"
+#include "ancmd.h"
 #include "plot.h"
 #include "safetext.h"
 #include "views.h"
 
 enum { AN_SPOT, AN_FAN, AN_LAYOUT, AN_WAVEFRONT };
-enum { FMT_TEXT, FMT_CSV, FMT_JSON, FMT_PNG, FMT_SVG, FMT_PDF };
 
 enum {
-    O_HELP = 1, O_WAVE, O_FIELD, O_FORMAT, O_OUTPUT, O_METHOD, O_PATTERN, O_DENSITY,
-    O_REFERENCE, O_POINTS, O_RAYS, O_SIZE, O_THREADS, O_NOCLIP, O_GRID, O_ZERNIKE,
-    O_TERMS, O_OPD
+    O_WAVE = 1, O_FIELD, O_METHOD, O_PATTERN, O_DENSITY, O_REFERENCE, O_POINTS, O_RAYS,
+    O_THREADS, O_NOCLIP, O_GRID, O_ZERNIKE, O_TERMS, O_OPD
 };
 
 static const cli_opt an_opts[] = {
-    { "--help", 'h', 0, O_HELP },
+    AN_COMMON_OPTS,
     { "--wave", 0, 1, O_WAVE },
     { "--field", 0, 1, O_FIELD },
-    { "--format", 0, 1, O_FORMAT },
-    { "--output", 'o', 1, O_OUTPUT },
     { "--method", 0, 1, O_METHOD },
     { "--pattern", 0, 1, O_PATTERN },
     { "--density", 0, 1, O_DENSITY },
     { "--reference", 0, 1, O_REFERENCE },
     { "--points", 0, 1, O_POINTS },
     { "--rays", 0, 1, O_RAYS },
-    { "--size", 0, 1, O_SIZE },
     { "--threads", 0, 1, O_THREADS },
     { "--no-clip", 0, 0, O_NOCLIP },
     { "--grid", 0, 1, O_GRID },
@@ -68,11 +56,7 @@ static void an_help(int kind, FILE *f)
         "against the reference sphere, its RMS and P-V (to the chief ray, and\n"
         "with piston and tilt removed) and its Zernike coefficients.\n"};
     fprintf(f, "Usage: sagitta %s DESIGN.json [OPTIONS]\n%s\n", an_name[kind], what[kind]);
-    fputs("  --format F         text (default), csv, json, png, svg or pdf\n"
-          "  -o, --output FILE  write to FILE (default: standard output)\n"
-          "  --size WxH         picture size in pixels (png) or points (svg, pdf);\n"
-          "                     default 1000x750\n"
-          "  --field N          one field (default: every field)\n", f);
+    fputs(AN_COMMON_HELP "  --field N          one field (default: every field)\n", f);
     if (kind == AN_WAVEFRONT)
         fputs("  --wave N           the wavelength (default: the primary); --field\n"
               "                     defaults to field 1\n"
@@ -99,19 +83,6 @@ static void an_help(int kind, FILE *f)
           "  -h, --help         show this help\n"
           "\nText on a terminal includes a picture (braille dots, a colour per\n"
           "wavelength unless NO_COLOR is set).  See sagitta(1).\n", f);
-}
-
-static int parse_format(const char *s, int *fmt)
-{
-    static const char *const names[] = {"text", "csv", "json", "png", "svg", "pdf"};
-    int k;
-    for (k = 0; k < 6; k++)
-        if (strcmp(s, names[k]) == 0) {
-            *fmt = k;
-            return CLI_EXIT_OK;
-        }
-    cli_error("--format: expected text, csv, json, png, svg or pdf, got \"%s\"", s);
-    return CLI_EXIT_USAGE;
 }
 
 /* A number with every digit a double holds, for CSV and JSON. */
@@ -512,64 +483,100 @@ static cJSON *wavefront_json(const sg_system *sys, const sg_wavefront *w,
 
 /* ---- the command ---- */
 
-static int terminal_picture(const plot_figure *fig, FILE *f, int colour)
+/* One command's results, for its writer. */
+typedef struct an_res {
+    int kind, field1, wave1;
+    const char *design;
+    const sg_system *sys;
+    sg_spot spot;
+    sg_spot_opts so;
+    sg_fan fan;
+    sg_layout lay;
+    sg_wavefront wf;
+    sg_opd_ref wref;
+} an_res;
+
+static int res_fig(void *ctx, plot_figure *fig)
 {
-    plot_grid g;
-    const char *cols = getenv("COLUMNS");
-    struct winsize ws;
-    int w = 80, h, rc;
-    long c;
-    /* COLUMNS first (a user's choice), then the terminal's own width. */
-    if (cols && args_long(cols, 40, 1000, &c) == ARGS_OK)
-        w = (int)c;
-    else if (ioctl(fileno(f), TIOCGWINSZ, &ws) == 0 && ws.ws_col >= 40)
-        w = ws.ws_col;
-    if (w > 160)
-        w = 160;
-    h = fig->npanel > 2 ? 40 : 24;
-    if (plot_grid_init(&g, w - 1, h))
-        return -1;
-    plot_draw_cells(fig, &g, 0, 0, w - 1, h);
-    fputc('\n', f);
-    rc = plot_grid_print(&g, f, colour);
-    plot_grid_free(&g);
-    return rc;
+    const an_res *r = ctx;
+    const sg_system *sys = r->sys;
+    switch (r->kind) {
+    case AN_SPOT:
+        return view_spot_figure(sys, &r->spot, fig);
+    case AN_FAN:
+        return view_fan_figure(sys, &r->fan, fig);
+    case AN_WAVEFRONT:
+        return view_wavefront_figure(
+            sys, &r->wf, &r->wref, r->field1 - 1,
+            sys->wave[r->wave1 > 0 ? r->wave1 - 1 : sys->primary_wave].um, fig);
+    default:
+        return view_layout_figure(sys, &r->lay, fig);
+    }
+}
+
+static int res_text(void *ctx, FILE *f, int fmt)
+{
+    const an_res *r = ctx;
+    const sg_system *sys = r->sys;
+    if (fmt == AN_FMT_JSON) {
+        cJSON *j = r->kind == AN_SPOT  ? spot_json(sys, &r->spot, &r->so)
+                   : r->kind == AN_FAN ? fan_json(sys, &r->fan)
+                   : r->kind == AN_WAVEFRONT
+                       ? wavefront_json(sys, &r->wf, &r->wref, r->field1, r->wave1)
+                       : layout_json(sys, &r->lay);
+        char *s;
+        if (j)
+            cJSON_AddStringToObject(j, "design", r->design);
+        s = j ? cJSON_Print(j) : NULL;
+        if (s) {
+            fputs(s, f);
+            fputc('\n', f);
+        }
+        free(s);
+        cJSON_Delete(j);
+        return s ? 0 : -1;
+    }
+    if (r->kind == AN_SPOT) {
+        if (fmt == AN_FMT_CSV)
+            spot_csv(f, &r->spot);
+        else
+            spot_text(f, sys, &r->spot, &r->so);
+    } else if (r->kind == AN_FAN) {
+        fan_rows(f, sys, &r->fan, fmt == AN_FMT_CSV);
+    } else if (r->kind == AN_WAVEFRONT) {
+        if (fmt == AN_FMT_CSV)
+            wavefront_csv(f, &r->wf);
+        else
+            wavefront_text(f, sys, &r->wf, &r->wref, r->field1, r->wave1);
+    } else {
+        layout_rows(f, sys, &r->lay, fmt == AN_FMT_CSV);
+    }
+    return 0;
 }
 
 static int run(int kind, int argc, char **argv)
 {
     cli_iter it;
-    const char *val, *design = NULL, *output = NULL, *cmd = an_name[kind];
-    int id, rc, fmt = FMT_TEXT, wave1 = 0, field1 = 0, method = SG_METHOD_PRECISE;
+    const char *val, *cmd = an_name[kind];
+    int id, rc, wave1 = 0, field1 = 0, method = SG_METHOD_PRECISE;
     int pattern = SG_PUPIL_HEXAPOLAR, density = 6, ref = SG_SPOT_REF_CHIEF, points = 21;
-    int nrays = 7, threads = 0, noclip = 0, pw = 1000, ph = 750, tty;
+    int nrays = 7, threads = 0, noclip = 0;
     int grid = 64, zkind = SG_ZERNIKE_FRINGE, terms = 37, opdfan = 0;
-    sg_wavefront wf;
     sg_wavefront_opts wo;
-    sg_opd_ref wref;
-    sg_catalog *cat = NULL;
-    sg_system *sys = NULL;
-    sg_diag d;
-    sg_trace_opts to;
-    sg_spot spot;
-    sg_spot_opts so;
-    sg_fan fan;
     sg_fan_opts fo;
-    sg_layout lay;
     sg_layout_opts lo;
-    plot_figure fig;
-    outfile of;
-    int have_fig = 0, have_res = 0, err;
+    sg_trace_opts to;
+    sg_diag d;
+    an_cmd a;
+    an_res r;
+    an_writer w = {res_fig, res_text, &r};
 
+    memset(&r, 0, sizeof r);
+    an_cmd_init(&a, cmd);
     cli_iter_init(&it, cmd, argc, argv);
-    while ((id = cli_next_opt(&it, an_opts, &val)) != -1) {
+    while ((id = an_cmd_next(&a, &it, an_opts, &val)) >= 0) {
         switch (id) {
-        case 0:
-            if (design)
-                return cli_usage_error(cmd, "unexpected argument \"%s\"", val);
-            design = val;
-            break;
-        case O_HELP:
+        case AN_OPT_HELP:
             an_help(kind, stdout);
             return CLI_EXIT_OK;
         case O_WAVE:
@@ -579,13 +586,6 @@ static int run(int kind, int argc, char **argv)
         case O_FIELD:
             if (cli_int_value("--field", val, 1, SG_MAX_FIELDS, &field1))
                 return CLI_EXIT_USAGE;
-            break;
-        case O_FORMAT:
-            if (parse_format(val, &fmt))
-                return CLI_EXIT_USAGE;
-            break;
-        case O_OUTPUT:
-            output = val;
             break;
         case O_METHOD:
             method = sg_method_parse(val);
@@ -629,19 +629,6 @@ static int run(int kind, int argc, char **argv)
             if (cli_int_value("--rays", val, 1, 10000, &nrays))
                 return CLI_EXIT_USAGE;
             break;
-        case O_SIZE: {
-            char *x = strchr(val, 'x');
-            char a[32];
-            if (!x || (size_t)(x - val) >= sizeof a)
-                return cli_usage_error(cmd, "--size: expected WIDTHxHEIGHT, got \"%s\"", val);
-            memcpy(a, val, (size_t)(x - val));
-            a[x - val] = '\0';
-            if (args_int(a, 100, 20000, &pw) != ARGS_OK ||
-                args_int(x + 1, 100, 20000, &ph) != ARGS_OK)
-                return cli_usage_error(cmd, "--size: expected WIDTHxHEIGHT, each from 100 to "
-                                            "20000, got \"%s\"", val);
-            break;
-        }
         case O_THREADS:
             if (cli_int_value("--threads", val, 0, 256, &threads))
                 return CLI_EXIT_USAGE;
@@ -678,44 +665,47 @@ static int run(int kind, int argc, char **argv)
                 return CLI_EXIT_USAGE;
             break;
         default:
-            return -id;
+            return CLI_EXIT_USAGE;
         }
     }
-    if (!design)
-        return cli_usage_error(cmd, "missing DESIGN.json");
-    if (kind == AN_SPOT) {
+    if (id < -1)
+        return -id;
+    if (kind == AN_SPOT && a.design) {
         sg_diag_clear(&d);
         if (sg_pupil_check(pattern, density, &d) != SG_OK)
             return cli_usage_error(cmd, "--density: %s", d.msg);
     }
-    if (fmt >= FMT_PNG && (!output || strcmp(output, "-") == 0) && isatty(STDOUT_FILENO))
-        return cli_usage_error(cmd, "a %s picture needs -o FILE (standard output is a "
-                                    "terminal)", fmt == FMT_PNG ? "PNG" : fmt == FMT_SVG ? "SVG" : "PDF");
-    rc = cli_load_design(design, &cat, &sys);
+    rc = an_cmd_load(&a);
     if (rc != CLI_EXIT_OK)
         return rc;
-    if (wave1 > sys->nwave || field1 > sys->nfield) {
-        rc = cli_usage_error(cmd, "%s: %s %d is not one of 1 to %d", design,
-                             wave1 > sys->nwave ? "--wave" : "--field",
-                             wave1 > sys->nwave ? wave1 : field1,
-                             wave1 > sys->nwave ? sys->nwave : sys->nfield);
+    if (wave1 > a.sys->nwave || field1 > a.sys->nfield) {
+        rc = cli_usage_error(cmd, "%s: %s %d is not one of 1 to %d", a.design,
+                             wave1 > a.sys->nwave ? "--wave" : "--field",
+                             wave1 > a.sys->nwave ? wave1 : field1,
+                             wave1 > a.sys->nwave ? a.sys->nwave : a.sys->nfield);
         goto done;
     }
+    r.kind = kind;
+    r.sys = a.sys;
+    r.design = a.design;
+    r.wave1 = wave1;
+    /* The wavefront's text always carries its shaded map. */
+    a.text_picture = kind == AN_WAVEFRONT;
     sg_trace_opts_init(&to);
     to.method = (sg_method)method;
     to.clip = !noclip;
     sg_diag_clear(&d);
     if (kind == AN_SPOT) {
-        sg_spot_opts_init(&so);
-        so.trace = to;
-        so.pattern = pattern;
-        so.density = density;
-        so.reference = ref;
-        so.wave = wave1 - 1;
-        so.field = field1 - 1;
-        so.nthreads = threads;
-        so.max_points = 20000;
-        rc = sg_spot_compute(sys, cat, &so, &spot, &d);
+        sg_spot_opts_init(&r.so);
+        r.so.trace = to;
+        r.so.pattern = pattern;
+        r.so.density = density;
+        r.so.reference = ref;
+        r.so.wave = wave1 - 1;
+        r.so.field = field1 - 1;
+        r.so.nthreads = threads;
+        r.so.max_points = 20000;
+        rc = sg_spot_compute(a.sys, a.cat, &r.so, &r.spot, &d);
     } else if (kind == AN_FAN) {
         sg_fan_opts_init(&fo);
         fo.trace = to;
@@ -724,7 +714,7 @@ static int run(int kind, int argc, char **argv)
         fo.field = field1 - 1;
         fo.nthreads = threads;
         fo.opd = opdfan;
-        rc = sg_fan_compute(sys, cat, &fo, &fan, &d);
+        rc = sg_fan_compute(a.sys, a.cat, &fo, &r.fan, &d);
     } else if (kind == AN_WAVEFRONT) {
         if (field1 == 0)
             field1 = 1;
@@ -736,7 +726,7 @@ static int run(int kind, int argc, char **argv)
         wo.kind = zkind;
         wo.nterms = terms;
         wo.nthreads = threads;
-        rc = sg_wavefront_trace(sys, cat, &wo, &wf, &wref, &d);
+        rc = sg_wavefront_trace(a.sys, a.cat, &wo, &r.wf, &r.wref, &d);
     } else {
         sg_layout_opts_init(&lo);
         lo.trace = to;
@@ -744,109 +734,25 @@ static int run(int kind, int argc, char **argv)
         lo.nrays = nrays;
         lo.field = field1 - 1;
         lo.nthreads = threads;
-        rc = sg_layout_compute(sys, cat, &lo, &lay, &d);
+        rc = sg_layout_compute(a.sys, a.cat, &lo, &r.lay, &d);
     }
+    r.field1 = field1;
     if (rc != SG_OK) {
-        cli_print_diag(design, &d, rc);
-        rc = cli_exit_for(rc);
-        if (rc == CLI_EXIT_OK)
-            rc = CLI_EXIT_INTERNAL;
+        rc = an_cmd_engine_error(&a, &d, rc);
         goto done;
     }
-    have_res = 1;
-    cli_print_warnings(&d, design);
-    if ((err = outfile_open(&of, output, stdout)) != 0) {
-        cli_error("%s: %s", output, strerror(err));
-        rc = CLI_EXIT_FILE;
-        goto done;
-    }
-    /* The wavefront's text always carries its shaded map. */
-    tty = fmt == FMT_TEXT && (kind == AN_WAVEFRONT || isatty(fileno(of.f)));
-    if (fmt >= FMT_PNG || tty) {
-        int r = kind == AN_SPOT  ? view_spot_figure(sys, &spot, &fig)
-                : kind == AN_FAN ? view_fan_figure(sys, &fan, &fig)
-                : kind == AN_WAVEFRONT
-                    ? view_wavefront_figure(sys, &wf, &wref, field1 - 1,
-                                            sys->wave[wave1 > 0 ? wave1 - 1 : sys->primary_wave].um,
-                                            &fig)
-                    : view_layout_figure(sys, &lay, &fig);
-        have_fig = 1;
-        if (r) {
-            cli_error("out of memory");
-            outfile_abort(&of);
-            rc = CLI_EXIT_INTERNAL;
-            goto done;
-        }
-    }
-    rc = CLI_EXIT_OK;
-    if (fmt >= FMT_PNG) {
-        char msg[256];
-        if (plot_write(&fig, fmt - FMT_PNG, pw, ph, of.f, msg, sizeof msg)) {
-            cli_error("%s: %s", output ? output : "standard output", msg);
-            outfile_abort(&of);
-            rc = CLI_EXIT_FILE;
-            goto done;
-        }
-    } else if (fmt == FMT_JSON) {
-        cJSON *j = kind == AN_SPOT  ? spot_json(sys, &spot, &so)
-                   : kind == AN_FAN ? fan_json(sys, &fan)
-                   : kind == AN_WAVEFRONT ? wavefront_json(sys, &wf, &wref, field1, wave1)
-                                    : layout_json(sys, &lay);
-        char *s;
-        if (j)
-            cJSON_AddStringToObject(j, "design", design);
-        s = j ? cJSON_Print(j) : NULL;
-        if (s) {
-            fputs(s, of.f);
-            fputc('\n', of.f);
-        }
-        free(s);
-        cJSON_Delete(j);
-        if (!s) {
-            cli_error("out of memory");
-            outfile_abort(&of);
-            rc = CLI_EXIT_INTERNAL;
-            goto done;
-        }
-    } else if (kind == AN_SPOT) {
-        if (fmt == FMT_CSV)
-            spot_csv(of.f, &spot);
-        else
-            spot_text(of.f, sys, &spot, &so);
-    } else if (kind == AN_FAN) {
-        fan_rows(of.f, sys, &fan, fmt == FMT_CSV);
-    } else if (kind == AN_WAVEFRONT) {
-        if (fmt == FMT_CSV)
-            wavefront_csv(of.f, &wf);
-        else
-            wavefront_text(of.f, sys, &wf, &wref, field1, wave1);
-    } else {
-        layout_rows(of.f, sys, &lay, fmt == FMT_CSV);
-    }
-    if (tty && terminal_picture(&fig, of.f, plot_use_colour(of.f))) {
-        cli_error("out of memory");
-        outfile_abort(&of);
-        rc = CLI_EXIT_INTERNAL;
-        goto done;
-    }
-    if ((err = outfile_commit(&of)) != 0) {
-        cli_error("%s: %s", output ? output : "standard output", strerror(err));
-        rc = CLI_EXIT_FILE;
-    }
+    cli_print_warnings(&d, a.design);
+    rc = an_cmd_write(&a, &w);
+    if (kind == AN_SPOT)
+        sg_spot_free(&r.spot);
+    else if (kind == AN_FAN)
+        sg_fan_free(&r.fan);
+    else if (kind == AN_WAVEFRONT)
+        sg_wavefront_free(&r.wf);
+    else
+        sg_layout_free(&r.lay);
 done:
-    if (have_fig)
-        plot_figure_free(&fig);
-    if (have_res) {
-        if (kind == AN_SPOT)
-            sg_spot_free(&spot);
-        else if (kind == AN_FAN)
-            sg_fan_free(&fan);
-        else if (kind == AN_WAVEFRONT)
-            sg_wavefront_free(&wf);
-        else
-            sg_layout_free(&lay);
-    }
-    cli_design_free(cat, sys);
+    an_cmd_free(&a);
     return rc;
 }
 

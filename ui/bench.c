@@ -26,6 +26,9 @@
 #include <cjson/cJSON.h>
 
 #include "cli.h"
+#ifdef SG_HAVE_EDITOR
+#include "editor/view.h"
+#endif
 #include "report.h"
 #include "safetext.h"
 #include "sg_config.h"
@@ -909,6 +912,10 @@ static void bench_help(FILE *f)
 "  --spot          instead: a spot diagram of 1e6 rays (1e5 with --quick) on\n"
 "                  the designs (default: the Cassegrain) against the batch\n"
 "                  trace of the same rays to the image, and their ratio\n"
+"  --view V        instead: the editor's view V (spot, fan, opd, wave, layout\n"
+"                  or all) rebuilt after an edit, with its default sampling,\n"
+"                  on the designs (default: the double Gauss); --repeat\n"
+"                  edits (at least 25)\n"
 "  -h, --help      show this help\n"
 "\n"
 "Throughput is in ray-surfaces per second: rays that reached the image times\n"
@@ -922,7 +929,8 @@ static void bench_help(FILE *f)
           f);
 }
 
-enum { OPT_HELP = 1, OPT_FORMAT, OPT_REPEAT, OPT_QUICK, OPT_THREADS, OPT_RAYS, OPT_SPOT };
+enum { OPT_HELP = 1, OPT_FORMAT, OPT_REPEAT, OPT_QUICK, OPT_THREADS, OPT_RAYS, OPT_SPOT,
+       OPT_VIEW };
 
 static const cli_opt bench_opts[] = {
     { "--help", 'h', 0, OPT_HELP },
@@ -932,6 +940,7 @@ static const cli_opt bench_opts[] = {
     { "--threads", 0, 1, OPT_THREADS },
     { "--rays", 0, 1, OPT_RAYS },
     { "--spot", 0, 0, OPT_SPOT },
+    { "--view", 0, 1, OPT_VIEW },
     { NULL, 0, 0, 0 }
 };
 
@@ -948,7 +957,7 @@ static int bench_spot(const bench_cfg *cfg, const char *path, cJSON *arr)
     sg_system *sys = NULL;
     size_t nray = cfg->quick ? 100000 : 1000000, cur, k, nall;
     int rc, f, last, rep;
-    double *ts = NULL, *tb = NULL, *ratio = NULL;
+    double *ts = NULL, *tb = NULL, *ratio = NULL, la0 = -1.0, la1;
     sg_ray_in *rays = NULL;
     sg_ray_surface *rows = NULL;
     int *st = NULL;
@@ -994,6 +1003,7 @@ static int bench_spot(const bench_cfg *cfg, const char *path, cJSON *arr)
     so.wave = sys->primary_wave;
     so.nthreads = cfg->threads;
     last = sys->nsurf - 1;
+    la0 = load_average();
     for (rep = 0; rep < cfg->repeat; rep++) {
         sg_spot spot;
         sg_batch *bt;
@@ -1024,6 +1034,7 @@ static int bench_spot(const bench_cfg *cfg, const char *path, cJSON *arr)
             rc = CLI_EXIT_INTERNAL;
         goto done;
     }
+    la1 = load_average();
     a = stats(ts, cfg->repeat);
     b = stats(tb, cfg->repeat);
     r = stats(ratio, cfg->repeat);
@@ -1036,6 +1047,7 @@ static int bench_spot(const bench_cfg *cfg, const char *path, cJSON *arr)
                b.med, b.min, b.max);
         printf("  spot / batch: %.3f (median of %d alternating pairs; min %.3f, max %.3f)\n",
                r.med, cfg->repeat, r.min, r.max);
+        printf("  load: %.2f before, %.2f after (1-minute average)\n", la0, la1);
     } else {
         cJSON *o = cJSON_CreateObject();
         cJSON_AddStringToObject(o, "design", path);
@@ -1045,6 +1057,8 @@ static int bench_spot(const bench_cfg *cfg, const char *path, cJSON *arr)
         cJSON_AddItemToObject(o, "spot_s", json_stat(&a));
         cJSON_AddItemToObject(o, "batch_s", json_stat(&b));
         cJSON_AddItemToObject(o, "ratio", json_stat(&r));
+        cJSON_AddNumberToObject(o, "load_before", la0);
+        cJSON_AddNumberToObject(o, "load_after", la1);
         cJSON_AddItemToArray(arr, o);
     }
     rc = CLI_EXIT_OK;
@@ -1120,6 +1134,86 @@ static void bench_design(const bench_cfg *cfg, const char *path, design_res *r)
                     : r->recompute.rc ? r->recompute.rc : r->recompute_digits.rc;
 }
 
+/* ------------------------------------------------------------ view mode */
+
+#ifdef SG_HAVE_EDITOR
+/* The editor's view rebuilt after an edit, as the editor does it
+ * (ui/editor/view.c, its default sampling, precise, one thread): each
+ * sample makes a real edit (surface 1's radius, or its thickness when
+ * flat, scaled by 1 + 1e-9 and back in turn), then times edview_update.
+ * The figure is built, not drawn; drawing is the terminal's. */
+static int bench_view(const bench_cfg *cfg, const char *path, int kind, int first, cJSON *arr)
+{
+    int n = cfg->repeat > SHORT_MIN_SAMPLES ? cfg->repeat : SHORT_MIN_SAMPLES, i, rc, s1;
+    double *ms = calloc((size_t)n, sizeof *ms), la0, la1, *val;
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    sg_trace_opts o;
+    edview v;
+    stat3 st;
+
+    if (!ms) {
+        cli_error("out of memory");
+        return CLI_EXIT_INTERNAL;
+    }
+    rc = cli_load_design(path, &cat, &sys);
+    if (rc != CLI_EXIT_OK) {
+        free(ms);
+        return rc;
+    }
+    s1 = sys->nsurf > 2 ? 1 : 0;
+    val = isfinite(sys->surf[s1].radius) && sys->surf[s1].radius != 0.0
+              ? &sys->surf[s1].radius
+              : &sys->surf[s1].thickness;
+    sg_trace_opts_init(&o);
+    edview_init(&v);
+    v.kind = kind;
+    la0 = load_average();
+    /* One build first, so the samples see a warm cache, as edits after
+     * the first do. */
+    rc = edview_update(&v, sys, 1, cat, &o, sys->nfield - 1);
+    for (i = 0; i < n && rc == SG_OK; i++) {
+        double t0;
+        *val *= i % 2 ? 1.0 / (1.0 + 1e-9) : 1.0 + 1e-9;
+        t0 = now_s();
+        rc = edview_update(&v, sys, (unsigned long)i + 2, cat, &o, sys->nfield - 1);
+        ms[i] = 1e3 * (now_s() - t0);
+    }
+    la1 = load_average();
+    if (rc != SG_OK) {
+        cli_error("%s: view %s: %s", path, view_name(kind), v.msg);
+        rc = cli_exit_for(rc);
+        if (rc == CLI_EXIT_OK)
+            rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    st = stats(ms, n);
+    if (cfg->fmt == BENCH_TEXT) {
+        char t[96];
+        if (first)
+            printf("%s\n  %s\n", path, safe_text(sys->title, t, sizeof t));
+        printf("  view %-7s rebuilt after an edit: median %.3f ms (min %.3f, max %.3f; "
+               "%d edits; load %.2f before, %.2f after)\n",
+               view_name(kind), st.med, st.min, st.max, n, la0, la1);
+    } else {
+        cJSON *jo = cJSON_CreateObject();
+        cJSON_AddStringToObject(jo, "design", path);
+        cJSON_AddStringToObject(jo, "view", view_name(kind));
+        cJSON_AddNumberToObject(jo, "edits", n);
+        cJSON_AddItemToObject(jo, "ms", json_stat(&st));
+        cJSON_AddNumberToObject(jo, "load_before", la0);
+        cJSON_AddNumberToObject(jo, "load_after", la1);
+        cJSON_AddItemToArray(arr, jo);
+    }
+    rc = CLI_EXIT_OK;
+done:
+    edview_free(&v);
+    free(ms);
+    cli_design_free(cat, sys);
+    return rc;
+}
+#endif
+
 int cmd_bench(int argc, char **argv)
 {
     cli_iter it;
@@ -1127,7 +1221,7 @@ int cmd_bench(int argc, char **argv)
     const char **designs = NULL;
     char **examples = NULL;
     size_t ndesign = 0, nex = 0, k;
-    int id, rc = CLI_EXIT_OK, worst = CLI_EXIT_OK, nrays = 0, spot_mode = 0;
+    int id, rc = CLI_EXIT_OK, worst = CLI_EXIT_OK, nrays = 0, spot_mode = 0, view_kind = -1;
     bench_cfg cfg;
     design_res *res = NULL;
     cJSON *root = NULL, *arr = NULL;
@@ -1177,6 +1271,19 @@ int cmd_bench(int argc, char **argv)
         case OPT_SPOT:
             spot_mode = 1;
             break;
+        case OPT_VIEW:
+#ifdef SG_HAVE_EDITOR
+            view_kind = strcmp(val, "all") == 0 ? VIEW_COUNT : view_parse(val);
+            if (view_kind <= VIEW_OFF) {
+                free(designs);
+                return cli_usage_error("bench", "--view: expected spot, fan, opd, wave, "
+                                                "layout or all, got \"%s\"", val);
+            }
+            break;
+#else
+            free(designs);
+            return cli_usage_error("bench", "--view: this build has no editor");
+#endif
         case OPT_THREADS:
             if (cli_int_value("--threads", val, 0, 256, &cfg.threads)) {
                 free(designs);
@@ -1189,6 +1296,50 @@ int cmd_bench(int argc, char **argv)
         }
     }
 
+#ifdef SG_HAVE_EDITOR
+    if (view_kind > VIEW_OFF) {
+        static char dg[4096];
+        cJSON *varr = NULL;
+        int kind;
+        if (ndesign == 0) {
+            snprintf(dg, sizeof dg, "%s/double_gauss.json", SG_SOURCE_EXAMPLES);
+            if (!is_dir(SG_SOURCE_EXAMPLES))
+                snprintf(dg, sizeof dg, "%s/double_gauss.json", SG_INSTALL_EXAMPLES);
+            designs[ndesign++] = dg;
+        }
+        if (cfg.fmt == BENCH_JSON) {
+            root = cJSON_CreateObject();
+            varr = root ? cJSON_AddArrayToObject(root, "views") : NULL;
+            if (!varr) {
+                cli_error("out of memory");
+                rc = CLI_EXIT_INTERNAL;
+                goto done;
+            }
+        } else {
+            printf("build:   %s; one thread, as the editor; figures built, not drawn\n",
+                   build_type());
+        }
+        for (k = 0; k < ndesign; k++)
+            for (kind = VIEW_LAYOUT; kind < VIEW_COUNT; kind++) {
+                if (view_kind != VIEW_COUNT && kind != view_kind)
+                    continue;
+                rc = bench_view(&cfg, designs[k], kind,
+                                kind == VIEW_LAYOUT || kind == view_kind, varr);
+                if (rc > worst)
+                    worst = rc;
+            }
+        if (root) {
+            char *txt = cJSON_Print(root);
+            if (txt)
+                puts(txt);
+            free(txt);
+        }
+        rc = cli_close_output(stdout, NULL);
+        if (rc == CLI_EXIT_OK)
+            rc = worst;
+        goto done;
+    }
+#endif
     if (spot_mode) {
         static char cass[4096];
         cJSON *sarr = NULL;

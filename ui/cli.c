@@ -707,7 +707,12 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
                 if (!h5)
                     goto h5_error;
             }
-            if (h5rays_write(h5, out, status, n, rays, h5err, sizeof h5err) != 0)
+            if (t)
+                report_opd_block(t, &ref, rays, n, out, nsurf, opd);
+            /* After the OPD, which is taken in the image surface's own frame. */
+            if (gf)
+                rows_to_global(gf, out, n, nsurf, csvrays_kind(rd));
+            if (h5rays_write(h5, out, status, n, rays, t ? opd : NULL, h5err, sizeof h5err) != 0)
                 goto h5_error;
         } else if (!opened) {
             int err = outfile_open(&ro, output, stdout);
@@ -722,10 +727,9 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
                 goto write_error;
             report_set_threads(&rs, threads);
         }
-        if (t)
+        if (t && fmt != FMT_HDF5)
             report_opd_block(t, &ref, rays, n, out, nsurf, opd);
-        /* After the OPD, which is taken in the image surface's own frame. */
-        if (gf)
+        if (gf && fmt != FMT_HDF5)
             rows_to_global(gf, out, n, nsurf, csvrays_kind(rd));
         if (fmt != FMT_HDF5 && report_rays_opd(&rs, out, status, n, rays, opd) != 0)
             goto write_error;

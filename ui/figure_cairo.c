@@ -114,7 +114,7 @@ static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, d
     }
     /* Grid lines and ticks. */
     cairo_set_line_width(cr, 0.5);
-    n = plot_ticks(p.xmin, p.xmax, bw > 300 ? 6 : 4, t, 16);
+    n = plot_xticks(&p, p.ncat ? (int)(bw / 60) : bw > 300 ? 6 : 4, t, 16);
     step = n > 1 ? t[1] - t[0] : 1.0;
     for (k = 0; k < n; k++) {
         double px = bx + (t[k] - p.xmin) / (p.xmax - p.xmin) * bw;
@@ -123,7 +123,7 @@ static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, d
         cairo_line_to(cr, px, by + bh);
         cairo_stroke(cr);
         set_colour(cr, PLOT_FG);
-        plot_tick_label(t[k], step, lab, sizeof lab);
+        plot_xtick_label(&p, t[k], step, lab, sizeof lab);
         text_at(cr, px, by + bh + 4, lab, 0.5, 0.0);
     }
     n = plot_ticks(p.ymin, p.ymax, bh > 300 ? 6 : 4, t, 16);
@@ -158,6 +158,22 @@ static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, d
         int have = 0;
         set_colour(cr, s->color);
         cairo_set_line_width(cr, 1.2);
+        if (s->kind == PLOT_BARS) {
+            for (i = 0; i < s->n; i++) {
+                double xa = bx + (s->x[i] - 0.5 * s->width - p.xmin) / (p.xmax - p.xmin) * bw;
+                double xb = bx + (s->x[i] + 0.5 * s->width - p.xmin) / (p.xmax - p.xmin) * bw;
+                double y0 = by + p.ymax / (p.ymax - p.ymin) * bh;
+                double y1 = by + (p.ymax - s->y[i]) / (p.ymax - p.ymin) * bh;
+                if (!isfinite(xa) || !isfinite(xb) || !isfinite(y0) || !isfinite(y1))
+                    continue;
+                /* Clamped, so a huge bar stays a finite rectangle. */
+                y0 = fmin(by + bh + 1, fmax(by - 1, y0));
+                y1 = fmin(by + bh + 1, fmax(by - 1, y1));
+                cairo_rectangle(cr, xa, fmin(y0, y1), fmax(xb - xa, 0.5), fabs(y1 - y0));
+                cairo_fill(cr);
+            }
+            continue;
+        }
         for (i = 0; i < s->n; i++) {
             double px = bx + (s->x[i] - p.xmin) / (p.xmax - p.xmin) * bw;
             double py = by + (p.ymax - s->y[i]) / (p.ymax - p.ymin) * bh;

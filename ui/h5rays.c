@@ -15,12 +15,13 @@
 #define H5R_CHUNK 65536
 
 enum { C_RAY, C_IN0, C_SURFACE = C_IN0 + 6, C_X, C_Y, C_Z, C_L, C_M, C_N, C_RESIDUAL,
-       C_ERROR, C_PATH, C_STATUS, C_MAX };
+       C_ERROR, C_PATH, C_OPL, C_OPLB, C_STATUS, C_OPD, C_OPDB, C_EX, C_EY, C_MAX };
 
 struct h5rays {
     hid_t file, status_type;
     hid_t ds[C_MAX];
     int nin, nsurf;
+    int opd; /* the OPD columns (normalized rays) */
     size_t rows, next_ray;
     char path[4096], tmp[4096 + 32];
     void *buf; /* one column of a block */
@@ -134,15 +135,16 @@ h5rays *h5rays_open(const char *path, const report_meta *m, const char *units,
     hsize_t chunk = rows_hint > 0 && rows_hint < H5R_CHUNK ? rows_hint : H5R_CHUNK;
     static const char *const norm[4] = { "hx", "hy", "px", "py" };
     static const char *const sd[6] = { "x0", "y0", "z0", "l0", "m0", "n0" };
-    static const char *const out_name[9] = { "x", "y", "z", "l", "m", "n",
-                                             "residual", NULL, "path" };
-    static const char *const out_what[9] = {
+    static const char *const out_name[11] = { "x", "y", "z", "l", "m", "n",
+                                              "residual", NULL, "path", "opl", NULL };
+    static const char *const out_what[11] = {
         "intersection point x in the surface's local frame",
         "intersection point y in the surface's local frame",
         "intersection point z in the surface's local frame",
         "direction cosine l after the surface", "direction cosine m after the surface",
         "direction cosine n after the surface", "|z - sag(x, y)| of the reported point",
-        NULL, "geometric distance from the previous surface"
+        NULL, "geometric distance from the previous surface",
+        "optical path from the start of the path (sagitta(1), OPTICAL PATH DIFFERENCE)", NULL
     };
     h5rays *h;
     int k, ok = 1, v;
@@ -188,20 +190,44 @@ h5rays *h5rays_open(const char *path, const report_meta *m, const char *units,
     if (ok)
         h->ds[C_SURFACE] = make_column(h->file, "surface", H5T_STD_I32LE, NULL,
                                        "surface number, 0 the object", chunk);
-    for (k = 0; ok && k < 9; k++) {
+    for (k = 0; ok && k < 11; k++) {
         int est = m && m->method && strcmp(m->method, "classic") == 0;
-        const char *nm = k == 7 ? (est ? "error_estimate" : "error_bound") : out_name[k];
-        const char *what = k == 7 ? (est ? "classic's error estimate of the point (not a bound)"
-                                         : "bound on the point's largest coordinate error")
-                                  : out_what[k];
+        const char *nm = k == 7    ? (est ? "error_estimate" : "error_bound")
+                         : k == 10 ? (est ? "opl_error_estimate" : "opl_error_bound")
+                                   : out_name[k];
+        const char *what = k == 7    ? (est ? "classic's error estimate of the point (not a bound)"
+                                            : "bound on the point's largest coordinate error")
+                           : k == 10 ? (est ? "classic's error estimate of opl (not a bound)"
+                                            : "bound on opl's error")
+                                     : out_what[k];
         h->ds[C_X + k] = make_column(h->file, nm, H5T_IEEE_F64LE,
                                      k >= 3 && k <= 5 ? "1" : u, what, chunk);
     }
     if (ok)
         h->ds[C_STATUS] = make_column(h->file, "status", h->status_type, NULL,
                                       "the ray's state at the surface", chunk);
+    h->opd = m && m->opd;
+    if (ok && h->opd) {
+        int est = m->method && strcmp(m->method, "classic") == 0;
+        /* As CSV: the ray's OPD and transverse aberration on its image
+         * row, NaN on the others. */
+        h->ds[C_OPD] = make_column(h->file, "opd_waves", H5T_IEEE_F64LE, "waves",
+                                   "OPD against the field's reference sphere, in waves of "
+                                   "the ray's wavelength (image row only)", chunk);
+        h->ds[C_OPDB] = make_column(h->file, est ? "opd_error_estimate" : "opd_error_bound",
+                                    H5T_IEEE_F64LE, "waves",
+                                    est ? "classic's error estimate of opd_waves (not a bound)"
+                                        : "bound on opd_waves' error", chunk);
+        h->ds[C_EX] = make_column(h->file, "ex", H5T_IEEE_F64LE, u,
+                                  "transverse aberration x: image point minus the primary "
+                                  "chief ray's (image row only)", chunk);
+        h->ds[C_EY] = make_column(h->file, "ey", H5T_IEEE_F64LE, u,
+                                  "transverse aberration y: image point minus the primary "
+                                  "chief ray's (image row only)", chunk);
+    }
     for (k = 0; ok && k < C_MAX; k++)
-        if ((k < C_IN0 + h->nin || k >= C_SURFACE) && h->ds[k] <= 0)
+        if ((k < C_IN0 + h->nin || (k >= C_SURFACE && k <= C_STATUS) || (h->opd && k > C_STATUS)) &&
+            h->ds[k] <= 0)
             ok = 0;
     if (ok) {
         hid_t root = h->file;
@@ -253,7 +279,7 @@ static int append(h5rays *h, int col, hid_t memtype, const void *buf, size_t n)
 }
 
 int h5rays_write(h5rays *h, const sg_ray_surface *out, const int *status, size_t n,
-                 const sg_ray_in *rays, char *err, size_t errlen)
+                 const sg_ray_in *rays, const sg_opd *opd, char *err, size_t errlen)
 {
     size_t rows = n * (size_t)h->nsurf, r, i, j;
     int k;
@@ -271,7 +297,7 @@ int h5rays_write(h5rays *h, const sg_ray_surface *out, const int *status, size_t
      * block, whatever the column count. */
     for (k = 0; k < C_MAX; k++) {
         hid_t mt = H5T_NATIVE_DOUBLE;
-        if (k >= C_IN0 + h->nin && k < C_SURFACE)
+        if ((k >= C_IN0 + h->nin && k < C_SURFACE) || (k > C_STATUS && !h->opd))
             continue;
         for (r = 0, j = 0; r < n; r++)
             for (i = 0; i < (size_t)h->nsurf; i++, j++) {
@@ -289,11 +315,18 @@ int h5rays_write(h5rays *h, const sg_ray_surface *out, const int *status, size_t
                 }
                 if (k < C_SURFACE)
                     v = rays ? rays[r].v[k - C_IN0] : nan;
-                else if (e->status == SG_OK) {
+                else if (k > C_STATUS) {
+                    if (opd && i == (size_t)h->nsurf - 1 && opd[r].status == SG_OK) {
+                        const double all[4] = { opd[r].opd_waves, opd[r].error_bound,
+                                                opd[r].ex, opd[r].ey };
+                        v = all[k - C_OPD];
+                    }
+                } else if (e->status == SG_OK) {
                     /* A failed surface's numbers mean nothing: NaN, as
                      * CSV leaves the fields empty. */
-                    const double all[9] = { e->x, e->y, e->z, e->l, e->m, e->n,
-                                            e->residual, e->error_bound, e->path };
+                    const double all[11] = { e->x, e->y, e->z, e->l, e->m, e->n,
+                                             e->residual, e->error_bound, e->path,
+                                             e->opl, e->opl_error_bound };
                     v = all[k - C_X];
                 }
                 ((double *)h->buf)[j] = v;

@@ -24,9 +24,11 @@ typedef struct h5rays h5rays;
 h5rays *h5rays_open(const char *path, const report_meta *m, const char *units,
                     int nsurf, sg_ray_kind kind, size_t rows_hint, char *err,
                     size_t errlen);
-/* Appends n rays (rows out[r * nsurf], status[r], launch rays[r]). */
+/* Appends n rays (rows out[r * nsurf], status[r], launch rays[r]), with
+ * each ray's OPD opd[r] on its image row when the file has OPD columns
+ * (m->opd at open; opd may be NULL otherwise). */
 int h5rays_write(h5rays *h, const sg_ray_surface *out, const int *status, size_t n,
-                 const sg_ray_in *rays, char *err, size_t errlen);
+                 const sg_ray_in *rays, const sg_opd *opd, char *err, size_t errlen);
 /* Writes the row count, closes and renames into place; 0, or -1 with err.
  * The handle is freed either way. */
 int h5rays_close(h5rays *h, char *err, size_t errlen);

@@ -26,6 +26,7 @@ void plot_figure_free(plot_figure *f)
         }
         free(p->s);
         free(p->map);
+        free(p->cat);
     }
     free(f->panel);
     memset(f, 0, sizeof *f);
@@ -66,6 +67,7 @@ int plot_add_series(plot_panel *p, int kind, int color, const double *x, const d
     s = &p->s[p->nseries];
     s->kind = kind;
     s->color = color;
+    s->width = 0.0;
     s->n = n;
     s->x = malloc((n ? n : 1) * sizeof *s->x);
     s->y = malloc((n ? n : 1) * sizeof *s->y);
@@ -80,6 +82,61 @@ int plot_add_series(plot_panel *p, int kind, int color, const double *x, const d
     }
     p->nseries++;
     return 0;
+}
+
+int plot_add_bars(plot_panel *p, int color, const double *x, const double *y, size_t n,
+                  double width)
+{
+    if (plot_add_series(p, PLOT_BARS, color, x, y, n))
+        return -1;
+    p->s[p->nseries - 1].width = width;
+    return 0;
+}
+
+int plot_panel_categories(plot_panel *p, int n, const char *const *labels)
+{
+    int k;
+    free(p->cat);
+    p->ncat = 0;
+    p->cat = malloc((size_t)(n > 0 ? n : 1) * sizeof *p->cat);
+    if (!p->cat)
+        return -1;
+    for (k = 0; k < n; k++)
+        snprintf(p->cat[k], sizeof p->cat[k], "%s", labels[k]);
+    p->ncat = n;
+    return 0;
+}
+
+int plot_xticks(const plot_panel *p, int n, double *t, int max)
+{
+    int k, m = 0, every;
+    if (!p->ncat)
+        return plot_ticks(p->xmin, p->xmax, n, t, max);
+    if (n < 1)
+        n = 1;
+    /* Every category when they fit, else every second, third, ...; the
+     * last one (a total) always. */
+    every = (p->ncat + 2 * n - 1) / (2 * n);
+    if (max > 1 && every < (p->ncat + max - 2) / (max - 1))
+        every = (p->ncat + max - 2) / (max - 1); /* room for the last */
+    if (every < 1)
+        every = 1;
+    for (k = 1; k <= p->ncat && m < max; k++)
+        if ((k - 1) % every == 0 || k == p->ncat) {
+            if (k == p->ncat && m > 0 && k - t[m - 1] < every)
+                m--; /* the total replaces a tick too close to it */
+            t[m++] = k;
+        }
+    return m;
+}
+
+void plot_xtick_label(const plot_panel *p, double v, double step, char *buf, size_t n)
+{
+    long k = lround(v);
+    if (p->ncat && k >= 1 && k <= p->ncat)
+        snprintf(buf, n, "%s", p->cat[k - 1]);
+    else
+        plot_tick_label(v, step, buf, n);
 }
 
 void plot_add_legend(plot_figure *f, int color, const char *label)
@@ -100,11 +157,17 @@ void plot_panel_limits(plot_panel *p, double aspect)
         goto fit;
     for (k = 0; k < p->nseries; k++)
         for (i = 0; i < p->s[k].n; i++) {
-            double x = p->s[k].x[i], y = p->s[k].y[i];
+            double x = p->s[k].x[i], y = p->s[k].y[i], hw = 0.0;
             if (!isfinite(x) || !isfinite(y))
                 continue;
-            x0 = fmin(x0, x);
-            x1 = fmax(x1, x);
+            if (p->s[k].kind == PLOT_BARS) {
+                /* A bar stands on zero. */
+                hw = 0.5 * p->s[k].width;
+                y0 = fmin(y0, 0.0);
+                y1 = fmax(y1, 0.0);
+            }
+            x0 = fmin(x0, x - hw);
+            x1 = fmax(x1, x + hw);
             y0 = fmin(y0, y);
             y1 = fmax(y1, y);
         }
@@ -293,6 +356,31 @@ static void line(dots *d, long x0, long y0, long x1, long y1, int color)
     }
 }
 
+/* Each bar as every dot between zero and its top, at least one dot wide. */
+static void bars(dots *d, const plot_panel *p, const plot_series *s, int W, int H)
+{
+    size_t i;
+    for (i = 0; i < s->n; i++) {
+        double sx = (2.0 * W - 1) / (p->xmax - p->xmin), sy = (4.0 * H - 1) / (p->ymax - p->ymin);
+        double fa = (s->x[i] - 0.5 * s->width - p->xmin) * sx,
+               fb = (s->x[i] + 0.5 * s->width - p->xmin) * sx;
+        double f0 = (p->ymax - fmax(p->ymin, fmin(p->ymax, 0.0))) * sy,
+               f1 = (p->ymax - fmax(p->ymin, fmin(p->ymax, s->y[i]))) * sy;
+        long xa, xb, ya, yb, x, y;
+        if (!isfinite(fa) || !isfinite(fb) || !isfinite(f0) || !isfinite(f1))
+            continue;
+        xa = lround(fmax(-1.0, fa));
+        xb = lround(fmin(2.0 * W, fb)) - 1;
+        if (xb < xa)
+            xb = xa;
+        ya = lround(fmin(f0, f1));
+        yb = lround(fmax(f0, f1));
+        for (x = xa; x <= xb; x++)
+            for (y = ya; y <= yb; y++)
+                dot(d, x, y, s->color);
+    }
+}
+
 /* Centred in w columns, and cut to them. */
 static void center_text(plot_grid *g, int x, int w, int y, const char *s, int color)
 {
@@ -340,7 +428,7 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
     plot_panel_limits(&p, (2.0 * W) / (4.0 * H));
     nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 3, yt, 16);
     ystep = nyt > 1 ? yt[1] - yt[0] : p.ymax - p.ymin;
-    nxt = plot_ticks(p.xmin, p.xmax, W >= 40 ? 5 : 3, xt, 16);
+    nxt = plot_xticks(&p, W >= 40 ? 5 : 3, xt, 16);
     xstep = nxt > 1 ? xt[1] - xt[0] : p.xmax - p.xmin;
     center_text(g, x0, w, y0, p.title, PLOT_FG);
     ax = x0 + lw;     /* the y axis's column */
@@ -361,7 +449,7 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
         for (k = 0; k < nxt; k++) {
             int col = ax + 1 + (int)lround((xt[k] - p.xmin) / (p.xmax - p.xmin) * (W - 1));
             int len, at;
-            plot_tick_label(xt[k], xstep, lab, sizeof lab);
+            plot_xtick_label(&p, xt[k], xstep, lab, sizeof lab);
             len = (int)strlen(lab);
             at = col - len / 2;
             plot_grid_text(g, col, ay, "┬", PLOT_FG);
@@ -413,6 +501,10 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
         const plot_series *s = &p.s[k];
         long lx = 0, ly = 0;
         int have = 0;
+        if (s->kind == PLOT_BARS) {
+            bars(&d, &p, s, W, H);
+            continue;
+        }
         for (i = 0; i < s->n; i++) {
             double fx = (s->x[i] - p.xmin) / (p.xmax - p.xmin) * (2.0 * W - 1);
             double fy = (p.ymax - s->y[i]) / (p.ymax - p.ymin) * (4.0 * H - 1);

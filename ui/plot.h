@@ -16,14 +16,16 @@
 #include <stddef.h>
 #include <stdio.h>
 
-enum { PLOT_POINTS = 0, PLOT_LINES = 1 };
+/* PLOT_BARS: a bar from y = 0 to each y, width wide about each x. */
+enum { PLOT_POINTS = 0, PLOT_LINES = 1, PLOT_BARS = 2 };
 #define PLOT_FG (-1)     /* the foreground colour */
 #define PLOT_NPALETTE 6  /* colours before they repeat */
 #define PLOT_MAXLEGEND 32
 
 typedef struct plot_series {
-    int kind;     /* PLOT_POINTS, or PLOT_LINES (a NaN in x or y breaks the line) */
+    int kind;     /* PLOT_POINTS, PLOT_LINES (a NaN in x or y breaks the line), PLOT_BARS */
     int color;    /* palette index, or PLOT_FG */
+    double width; /* a bar's width in x's units (PLOT_BARS) */
     size_t n;
     double *x, *y; /* owned by the panel */
 } plot_series;
@@ -39,6 +41,10 @@ typedef struct plot_panel {
      * at ymax; NaN is no data.  Drawn with a colour map and a scale. */
     int mw, mh;
     double *map, map_lo, map_hi;
+    /* Categories on x (bar charts): ticks at x = 1 .. ncat, labelled cat[k-1]
+     * instead of by number. */
+    int ncat;
+    char (*cat)[12];
 } plot_panel;
 
 typedef struct plot_figure {
@@ -60,6 +66,15 @@ plot_panel *plot_add_panel(plot_figure *f, const char *title, const char *xlabel
 /* Copies n points; 0, or -1 when out of memory. */
 int plot_add_series(plot_panel *p, int kind, int color, const double *x, const double *y,
                     size_t n);
+/* Bars of the given width about each x; 0, or -1 when out of memory. */
+int plot_add_bars(plot_panel *p, int color, const double *x, const double *y, size_t n,
+                  double width);
+/* Names the x positions 1 .. n (copied, cut to 11 bytes); 0, or -1. */
+int plot_panel_categories(plot_panel *p, int n, const char *const *labels);
+/* The tick values and step of an x axis: the categories, or plot_ticks. */
+int plot_xticks(const plot_panel *p, int n, double *t, int max);
+/* A tick's label on the x axis: a category's name, or plot_tick_label. */
+void plot_xtick_label(const plot_panel *p, double v, double step, char *buf, size_t n);
 void plot_add_legend(plot_figure *f, int color, const char *label);
 /* Sets the panel's limits from its data with a margin (or to lo..hi when
  * lo < hi), widening the shorter axis of an equal panel. */

@@ -269,3 +269,134 @@ int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_
     plot_add_legend(f, PLOT_FG, sc);
     return 0;
 }
+
+const char *const view_seidel_names[SG_SEIDEL_N] = {"SI", "SII", "SIII", "SIV",
+                                                   "SV", "CI", "CII"};
+
+/* One colour per sum: the six palette colours, then the foreground. */
+static int seidel_colour(int k)
+{
+    return k < PLOT_NPALETTE ? k : PLOT_FG;
+}
+
+int view_seidel_figure(const sg_system *sys, const sg_seidel *s, int grouped, plot_figure *f)
+{
+    static const char *const what[SG_SEIDEL_N] = {
+        "SI spherical", "SII coma", "SIII astigmatism", "SIV Petzval",
+        "SV distortion", "CI axial colour", "CII lateral colour"};
+    char title[200], lab[64], yl[32], (*cats)[12];
+    const char **cp;
+    const char *u = sys->units[0] ? sys->units : "mm";
+    int ng = s->nsurf, j, k, rc = -1; /* surfaces 1 .. nsurf-1 and the total */
+    double *x = malloc((size_t)ng * sizeof *x), *y = malloc((size_t)ng * sizeof *y);
+    cats = malloc((size_t)ng * sizeof *cats);
+    cp = malloc((size_t)ng * sizeof *cp);
+    snprintf(title, sizeof title, "Seidel diagram: %s", safe_text(sys->title, lab, sizeof lab));
+    plot_figure_init(f, title);
+    if (!x || !y || !cats || !cp || ng < 2)
+        goto out;
+    for (j = 1; j <= ng; j++) {
+        if (j < ng)
+            snprintf(cats[j - 1], sizeof cats[0], "%d", j);
+        else
+            snprintf(cats[j - 1], sizeof cats[0], "TOT");
+        cp[j - 1] = cats[j - 1];
+    }
+    snprintf(yl, sizeof yl, "sum (%s)", u);
+    for (k = 0; k < SG_SEIDEL_N; k++)
+        plot_add_legend(f, seidel_colour(k), view_seidel_names[k]);
+    if (grouped) {
+        /* Seven bars in 0.8 of each surface's unit of x, as Zemax groups them. */
+        plot_panel *p = plot_add_panel(f, "", "surface (TOT: the sum)", yl);
+        double zx[2] = {0.5, ng + 0.5}, zy[2] = {0.0, 0.0};
+        if (!p || plot_panel_categories(p, ng, cp))
+            goto out;
+        for (k = 0; k < SG_SEIDEL_N; k++) {
+            for (j = 1; j <= ng; j++) {
+                const double *row = j < ng ? s->surf + (size_t)j * SG_SEIDEL_N : s->total;
+                x[j - 1] = j - 0.4 + (k + 0.5) * 0.8 / SG_SEIDEL_N;
+                y[j - 1] = row[k];
+            }
+            if (plot_add_bars(p, seidel_colour(k), x, y, (size_t)ng, 0.8 / SG_SEIDEL_N))
+                goto out;
+        }
+        if (plot_add_series(p, PLOT_LINES, PLOT_FG, zx, zy, 2))
+            goto out;
+        plot_panel_limits(p, 0.0);
+        p->xmin = 0.5;
+        p->xmax = ng + 0.5;
+    } else {
+        for (k = 0; k < SG_SEIDEL_N; k++) {
+            plot_panel *p = plot_add_panel(f, what[k], "surface", yl);
+            if (!p || plot_panel_categories(p, ng, cp))
+                goto out;
+            for (j = 1; j <= ng; j++) {
+                const double *row = j < ng ? s->surf + (size_t)j * SG_SEIDEL_N : s->total;
+                x[j - 1] = j;
+                y[j - 1] = row[k];
+            }
+            if (plot_add_bars(p, seidel_colour(k), x, y, (size_t)ng, 0.6))
+                goto out;
+            plot_panel_limits(p, 0.0);
+            p->xmin = 0.5;
+            p->xmax = ng + 0.5;
+        }
+    }
+    rc = 0;
+out:
+    free(x);
+    free(y);
+    free(cats);
+    free(cp);
+    return rc;
+}
+
+int view_fieldcurve_figure(const sg_system *sys, const sg_fieldcurve_pt *pt, int n, double um,
+                           plot_figure *f)
+{
+    char title[200], lab[64], wl[32], fl[32], xl[32];
+    const char *u = sys->units[0] ? sys->units : "mm";
+    double *yv = malloc((size_t)(n > 0 ? n : 1) * sizeof *yv),
+           *xv = malloc((size_t)(n > 0 ? n : 1) * sizeof *xv);
+    plot_panel *p;
+    int i, side, rc = -1;
+    view_wave_label(um, wl, sizeof wl);
+    snprintf(title, sizeof title, "Field curvature and distortion: %s, %s",
+             safe_text(sys->title, lab, sizeof lab), wl);
+    plot_figure_init(f, title);
+    if (!yv || !xv)
+        goto out;
+    if (sys->field_type == SG_FIELD_ANGLE)
+        snprintf(fl, sizeof fl, "field (deg)");
+    else
+        snprintf(fl, sizeof fl, "field (%s)", u);
+    for (i = 0; i < n; i++)
+        yv[i] = pt[i].field;
+    snprintf(xl, sizeof xl, "focus (%s)", u);
+    p = plot_add_panel(f, "Field curvature", xl, fl);
+    if (!p)
+        goto out;
+    for (side = 0; side < 2; side++) {
+        for (i = 0; i < n; i++)
+            xv[i] = pt[i].status != SG_OK ? NAN : side ? pt[i].sag_focus : pt[i].tan_focus;
+        if (plot_add_series(p, PLOT_LINES, side, xv, yv, (size_t)n))
+            goto out;
+    }
+    plot_panel_limits(p, 0.0);
+    p = plot_add_panel(f, "Distortion", "distortion (%)", fl);
+    if (!p)
+        goto out;
+    for (i = 0; i < n; i++)
+        xv[i] = pt[i].status != SG_OK ? NAN : pt[i].distortion;
+    if (plot_add_series(p, PLOT_LINES, 2, xv, yv, (size_t)n))
+        goto out;
+    plot_panel_limits(p, 0.0);
+    plot_add_legend(f, 0, "tangential");
+    plot_add_legend(f, 1, "sagittal");
+    plot_add_legend(f, 2, "distortion");
+    rc = 0;
+out:
+    free(xv);
+    free(yv);
+    return rc;
+}

@@ -28,4 +28,16 @@ int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f)
 int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_opd_ref *ref,
                           int field, double um, plot_figure *f);
 
+/* The Seidel sums SI..SV, CI, CII (lens units) of every surface and their
+ * total.  grouped: one chart with the seven bars side by side at each
+ * surface, as Zemax's Seidel diagram (files); otherwise one small panel
+ * per sum (a terminal cell holds one colour). */
+extern const char *const view_seidel_names[SG_SEIDEL_N];
+int view_seidel_figure(const sg_system *sys, const sg_seidel *s, int grouped, plot_figure *f);
+/* Tangential and sagittal focus against field beside distortion (%)
+ * against field, field on the vertical axis as Zemax draws them; failed
+ * fields break the curves. */
+int view_fieldcurve_figure(const sg_system *sys, const sg_fieldcurve_pt *p, int n, double um,
+                           plot_figure *f);
+
 #endif

@@ -122,6 +122,74 @@ static void fieldcurve_json(void **state)
     ct_free(&r);
 }
 
+static char *slurp(const char *path, size_t *len)
+{
+    FILE *f = fopen(path, "rb");
+    long n;
+    char *b;
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    n = ftell(f);
+    rewind(f);
+    b = malloc((size_t)n + 1);
+    assert_int_equal(fread(b, 1, (size_t)n, f), (size_t)n);
+    b[n] = '\0';
+    fclose(f);
+    *len = (size_t)n;
+    return b;
+}
+
+/* Whether needle is in the n bytes at s (a PDF holds NULs). */
+static int has(const char *s, size_t n, const char *needle)
+{
+    size_t m = strlen(needle), k;
+    for (k = 0; k + m <= n; k++)
+        if (memcmp(s + k, needle, m) == 0)
+            return 1;
+    return 0;
+}
+
+/* Both pictures at a fixed size in each format: the PNG's IHDR width and
+ * height, the SVG's size in points, the PDF's header. */
+static void pictures(void **state)
+{
+    static const char *const cmd[2] = {"seidel", "fieldcurve"};
+    int k;
+    (void)state;
+    for (k = 0; k < 2; k++) {
+        const char *png = ct_path("a.png"), *svg = ct_path("a.svg"), *pdf = ct_path("a.pdf");
+        ct_result r;
+        unsigned char *u;
+        size_t n;
+        char *b;
+        ct_run(&r, cmd[k], mirror(), "--format", "png", "--size", "321x234", "-o", png, NULL);
+        assert_int_equal(r.code, 0);
+        ct_free(&r);
+        b = slurp(png, &n);
+        u = (unsigned char *)b;
+        assert_true(n > 24 && memcmp(b, "\x89PNG\r\n\x1a\n", 8) == 0);
+        assert_int_equal((u[16] << 24) | (u[17] << 16) | (u[18] << 8) | u[19], 321);
+        assert_int_equal((u[20] << 24) | (u[21] << 16) | (u[22] << 8) | u[23], 234);
+        free(b);
+        ct_run(&r, cmd[k], mirror(), "--format", "svg", "--size", "640x480", "-o", svg, NULL);
+        assert_int_equal(r.code, 0);
+        ct_free(&r);
+        b = slurp(svg, &n);
+        assert_true(strncmp(b, "<?xml", 5) == 0 && strstr(b, "</svg>"));
+        assert_non_null(strstr(b, "width=\"640pt\""));
+        assert_non_null(strstr(b, "height=\"480pt\""));
+        free(b);
+        ct_run(&r, cmd[k], mirror(), "--format", "pdf", "-o", pdf, NULL);
+        assert_int_equal(r.code, 0);
+        ct_free(&r);
+        b = slurp(pdf, &n);
+        assert_true(n > 100 && strncmp(b, "%PDF-", 5) == 0);
+        /* The default size, 1000 x 750 points. */
+        assert_true(has(b, n, "/MediaBox [ 0 0 1000 750 ]"));
+        free(b);
+    }
+}
+
 static void errors(void **state)
 {
     ct_result r;
@@ -131,8 +199,14 @@ static void errors(void **state)
     assert_int_equal(r.code, 2);
     assert_non_null(strstr(r.err, "--step"));
     ct_free(&r);
-    ct_run(&r, "seidel", mirror(), "--format", "png", NULL);
+    ct_run(&r, "seidel", mirror(), "--format", "bmp", NULL);
     assert_int_equal(r.code, 2);
+    assert_non_null(strstr(r.err, "png, svg or pdf"));
+    ct_free(&r);
+    ct_run(&r, "fieldcurve", mirror(), "--size", "5x5", "--format", "png", "-o",
+           ct_path("x.png"), NULL);
+    assert_int_equal(r.code, 2);
+    assert_non_null(strstr(r.err, "--size"));
     ct_free(&r);
     ct_run(&r, "seidel", NULL);
     assert_int_equal(r.code, 2);
@@ -164,6 +238,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(seidel_json),
         cmocka_unit_test(seidel_text_csv),
         cmocka_unit_test(fieldcurve_json),
+        cmocka_unit_test(pictures),
         cmocka_unit_test(errors),
     };
     int rc;

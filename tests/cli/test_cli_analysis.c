@@ -292,12 +292,69 @@ static void test_bad_options(void **state)
     ct_free(&r);
 }
 
+/* bench --view: every view of the editor rebuilt after edits, the median
+ * between the extremes, 25 edits at least, the load named. */
+static void test_bench_view(void **state)
+{
+    const char *d = ct_design("mirror.json", MIRROR);
+    static const char *const kinds[] = {"layout", "spot", "fan", "opd", "wave"};
+    ct_result r;
+    cJSON *j, *v, *ms;
+    int k = 0;
+    (void)state;
+    ct_run(&r, "bench", d, "--view", "all", "--repeat", "1", "--format", "json", NULL);
+    assert_int_equal(r.code, 0);
+    j = cJSON_Parse(r.out);
+    assert_non_null(j);
+    v = cJSON_GetObjectItemCaseSensitive(j, "views");
+    assert_int_equal(cJSON_GetArraySize(v), 5);
+    for (k = 0; k < 5; k++) {
+        cJSON *o = cJSON_GetArrayItem(v, k);
+        double med, lo, hi;
+        assert_string_equal(cJSON_GetObjectItemCaseSensitive(o, "view")->valuestring, kinds[k]);
+        assert_int_equal(cJSON_GetObjectItemCaseSensitive(o, "edits")->valueint, 25);
+        ms = cJSON_GetObjectItemCaseSensitive(o, "ms");
+        med = cJSON_GetObjectItemCaseSensitive(ms, "median")->valuedouble;
+        lo = cJSON_GetObjectItemCaseSensitive(ms, "min")->valuedouble;
+        hi = cJSON_GetObjectItemCaseSensitive(ms, "max")->valuedouble;
+        assert_true(lo > 0.0 && lo <= med && med <= hi);
+        assert_true(cJSON_IsNumber(cJSON_GetObjectItemCaseSensitive(o, "load_before")));
+    }
+    cJSON_Delete(j);
+    ct_free(&r);
+    ct_run(&r, "bench", d, "--view", "spot", NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.out, "view spot"));
+    assert_non_null(strstr(r.out, "median"));
+    assert_non_null(strstr(r.out, "load"));
+    ct_free(&r);
+    /* The spot mode names the load too. */
+    ct_run(&r, "bench", d, "--spot", "--quick", "--repeat", "1", "--threads", "1", "--format",
+           "json", NULL);
+    assert_int_equal(r.code, 0);
+    j = cJSON_Parse(r.out);
+    assert_non_null(j);
+    v = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(j, "spot"), 0);
+    assert_non_null(v);
+    assert_true(cJSON_IsNumber(cJSON_GetObjectItemCaseSensitive(v, "load_before")));
+    assert_true(cJSON_IsNumber(cJSON_GetObjectItemCaseSensitive(v, "load_after")));
+    assert_true(cJSON_GetObjectItemCaseSensitive(
+                    cJSON_GetObjectItemCaseSensitive(v, "ratio"), "median")->valuedouble > 0.0);
+    cJSON_Delete(j);
+    ct_free(&r);
+    ct_run(&r, "bench", d, "--view", "nope", NULL);
+    assert_int_equal(r.code, 2);
+    assert_non_null(strstr(r.err, "--view"));
+    ct_free(&r);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_spot_csv_mirror),
         cmocka_unit_test(test_fan_json_mirror),
         cmocka_unit_test(test_pictures),
+        cmocka_unit_test(test_bench_view),
         cmocka_unit_test(test_layout_csv),
         cmocka_unit_test(test_wavefront_formats),
         cmocka_unit_test(test_fan_opd),

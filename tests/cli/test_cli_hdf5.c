@@ -99,9 +99,13 @@ static const char *ray_list(int n)
 
 static void compare(const char *design, const char *method, int nray, const char *block)
 {
+    /* NULL: the bound's column, named as the method's (classic: an estimate);
+     * "~" prefixes the same for opl and opd. */
     static const char *const cols[] = { "ray", "hx", "hy", "px", "py", "surface", "x",
                                         "y", "z", "l", "m", "n", "residual", NULL, "path",
-                                        "status" };
+                                        "status", "opl", "~opl_", "opd_waves", "~opd_",
+                                        "ex", "ey" };
+    const char *est = strcmp(method, "classic") == 0 ? "error_estimate" : "error_bound";
     const char *rays = ray_list(nray), *h5 = ct_path("out.h5");
     ct_result csv, r;
     size_t c, rows = 0;
@@ -119,10 +123,15 @@ static void compare(const char *design, const char *method, int nray, const char
     assert_int_equal(r.code, 0);
     ct_free(&r);
     for (c = 0; c < sizeof cols / sizeof cols[0]; c++) {
-        const char *name = cols[c] ? cols[c]
-                                   : strcmp(method, "classic") == 0 ? "error_estimate"
-                                                                     : "error_bound";
-        const char *csvname = c >= 1 && c <= 4 ? NULL : name;
+        char nm[64];
+        const char *name = nm, *csvname;
+        if (!cols[c])
+            snprintf(nm, sizeof nm, "%s", est);
+        else if (cols[c][0] == '~')
+            snprintf(nm, sizeof nm, "%s%s", cols[c] + 1, est);
+        else
+            snprintf(nm, sizeof nm, "%s", cols[c]);
+        csvname = c >= 1 && c <= 4 ? NULL : name;
         size_t n, k;
         char **v = h5_column(h5, name, &n);
         if (c == 0)

@@ -17,36 +17,6 @@ cp "$ROOT/examples/cooke_triplet.json" "$WORK/cooke.json"
 RAY="0.3 0.7 -0.2 0.4"
 RAYC=0.3,0.7,-0.2,0.4
 
-wait_for() {
-    n=$(( ${2:-10} * 10 ))
-    while [ "$n" -gt 0 ]; do
-        screen | grep -qF -- "$1" && return 0
-        if ! $T has-session -t =main 2>/dev/null; then
-            echo "# the tmux session is gone"
-            return 1
-        fi
-        sleep 0.1
-        n=$((n - 1))
-    done
-    echo "# timed out waiting for: $1"
-    return 1
-}
-
-command_line() {
-    keys Escape
-    type_text ":$1"
-    keys Enter
-}
-
-start() { # file, width, height
-    $T new-session -d -s fresh -x "$2" -y "$3" \
-        "cd '$WORK' && sh -c 'echo \$\$ >pid; exec \"\$0\" \"\$1\"' '$SAGITTA' '$1'; echo \"EXITED \$?\"; sleep 60"
-    $T kill-session -t =main >/dev/null 2>&1
-    $T rename-session -t =fresh main 2>/dev/null
-    sleep 0.2
-    started "$(cat "$WORK/pid" 2>/dev/null)"
-}
-
 # The value after "NAME=" in the detail panel (a word of its own).
 panel() {
     screen | grep -o "\(^\| \)$1=[^ ]*" | head -n 1 | sed 's/^ *[^=]*=//'

@@ -16,36 +16,6 @@ tmux_setup 12 views
 
 cp "$ROOT/examples/cooke_triplet.json" "$WORK/cooke.json"
 
-wait_for() {
-    n=$(( ${2:-10} * 10 ))
-    while [ "$n" -gt 0 ]; do
-        screen | grep -qF -- "$1" && return 0
-        if ! $T has-session -t =main 2>/dev/null; then
-            echo "# the tmux session is gone"
-            return 1
-        fi
-        sleep 0.1
-        n=$((n - 1))
-    done
-    echo "# timed out waiting for: $1"
-    return 1
-}
-
-command_line() {
-    keys Escape
-    type_text ":$1"
-    keys Enter
-}
-
-start() { # file, width, height, environment
-    $T new-session -d -s fresh -x "$2" -y "$3" \
-        "cd '$WORK' && $4 sh -c 'echo \$\$ >pid; exec \"\$0\" \"\$1\"' '$SAGITTA' '$1'; echo \"EXITED \$?\"; sleep 60"
-    $T kill-session -t =main >/dev/null 2>&1
-    $T rename-session -t =fresh main 2>/dev/null
-    sleep 0.2
-    started "$(cat "$WORK/pid" 2>/dev/null)"
-}
-
 # Lines with a braille character (U+2800 to U+28FF: bytes E2 A0-A3 ..).
 braille_lines() { screen | LC_ALL=C grep -c "$(printf '\342')[$(printf '\240\241\242\243')]"; }
 # Lines wider than 80 characters (not bytes).

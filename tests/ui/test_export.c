@@ -170,6 +170,58 @@ static void test_grid2_csv(void **state)
     free_ed(e);
 }
 
+/* export FILE.h5 writes sagitta trace's HDF5 table: its opd_waves column,
+ * read back by h5dump, holds on each ray's image row the OPD the JSON
+ * export gives (report.c's writer, another path), NaN on the other rows. */
+static void test_fan_hdf5(void **state)
+{
+    char path[600], h5[512], cmd[2048], *text, *p;
+    ed *e = new_ed();
+    cJSON *j, *rays;
+    double want[5];
+    int k = 0, nnum = 0, nnan = 0;
+    (void)state;
+    if (system("h5dump --version >/dev/null 2>&1") != 0 && !(getenv("CI") && getenv("CI")[0])) {
+        print_message("# SKIP h5dump not installed (hdf5-tools)\n");
+        free_ed(e);
+        return;
+    }
+    assert_false(run(e, "export %s %s", tmp_path("f.json", path, sizeof path), "fan 5") &
+                 ED_ERROR);
+    text = slurp(path);
+    j = cJSON_Parse(text);
+    assert_non_null(j);
+    rays = cJSON_GetObjectItem(j, "rays");
+    assert_int_equal(cJSON_GetArraySize(rays), 5);
+    for (k = 0; k < 5; k++)
+        want[k] = cJSON_GetObjectItem(cJSON_GetArrayItem(rays, k), "opd_waves")->valuedouble;
+    cJSON_Delete(j);
+    free(text);
+    assert_false(run(e, "export %s %s", tmp_path("f.h5", h5, sizeof h5), "fan 5") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "exported 5 rays"));
+    snprintf(cmd, sizeof cmd, "h5dump -d /opd_waves -y -w 0 -m %%.17g -o %s.txt %s >/dev/null",
+             h5, h5);
+    assert_int_equal(system(cmd), 0);
+    snprintf(path, sizeof path, "%s.txt", h5);
+    text = slurp(path);
+    k = 0;
+    for (p = strtok(text, ", \n"); p; p = strtok(NULL, ", \n")) {
+        if (strcmp(p, "nan") == 0) {
+            nnan++;
+            continue;
+        }
+        assert_true(k < 5);
+        if (strtod(p, NULL) != want[k])
+            fail_msg("ray %d: HDF5 opd_waves %s, JSON %.17g", k, p, want[k]);
+        k++;
+        nnum++;
+    }
+    assert_int_equal(nnum, 5);
+    assert_true(nnan > 0);
+    free(text);
+    free_ed(e);
+}
+
 /* A y fan in JSON and text carries each ray's coordinates too. */
 static void test_fan_json_text(void **state)
 {
@@ -285,6 +337,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_grid_counts),
         cmocka_unit_test(test_grid2_csv),
+        cmocka_unit_test(test_fan_hdf5),
         cmocka_unit_test(test_fan_json_text),
         cmocka_unit_test(test_large_asks),
         cmocka_unit_test(test_cancel_leaves_no_file),

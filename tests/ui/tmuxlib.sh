@@ -64,6 +64,41 @@ tmux_cleanup() {
 # Records an editor's pid so tmux_cleanup can make sure it is gone.
 started() { [ -n "$1" ] && echo "$1" >>"$WORK/started"; }
 
+# Waits up to $2 seconds (default 10) for text $1 on the screen.
+wait_for() {
+    n=$(( ${2:-10} * 10 ))
+    while [ "$n" -gt 0 ]; do
+        screen | grep -qF -- "$1" && return 0
+        if ! $T has-session -t =main 2>/dev/null; then
+            echo "# the tmux session is gone"
+            return 1
+        fi
+        sleep 0.1
+        n=$((n - 1))
+    done
+    echo "# timed out waiting for: $1"
+    return 1
+}
+
+# Types a ':' command and Enter, from the spreadsheet.
+command_line() {
+    keys Escape
+    type_text ":$1"
+    keys Enter
+}
+
+# Starts the editor on file $1 in a window $2 x $3 as the session "main",
+# with the environment assignments $4 (may be empty), replacing any
+# earlier session, and records its pid.
+start() {
+    $T new-session -d -s fresh -x "$2" -y "$3" \
+        "cd '$WORK' && $4 sh -c 'echo \$\$ >pid; exec \"\$0\" \"\$1\"' '$SAGITTA' '$1'; echo \"EXITED \$?\"; sleep 60"
+    $T kill-session -t =main >/dev/null 2>&1
+    $T rename-session -t =fresh main 2>/dev/null
+    sleep 0.2
+    started "$(cat "$WORK/pid" 2>/dev/null)"
+}
+
 screen() { $T capture-pane -p -t =main: 2>/dev/null; }
 keys() { $T send-keys -t =main: "$@" 2>/dev/null; }
 type_text() { $T send-keys -t =main: -l -- "$1" 2>/dev/null; }

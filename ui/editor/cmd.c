@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "../args.h"
+#include "../h5rays.h"
 #include "../outfile.h"
 #include "../plot.h"
 #include "../report.h"
@@ -1452,7 +1453,7 @@ static int export_picture(ed *e, const char *path, int format);
 
 static int c_export_any(ed *e, args *a, int bang)
 {
-    const char *usage = "export FILE [csv|json|text] [ray | fan [N] | xfan [N] | grid N] | "
+    const char *usage = "export FILE [csv|json|text|hdf5] [ray | fan [N] | xfan [N] | grid N] | "
                         "export FILE png|svg|pdf";
     const char *path, *set = "ray";
     int fmt = -1, n = 0, i, rc, tostd, nsurf, multi, err;
@@ -1470,8 +1471,9 @@ static int c_export_any(ed *e, args *a, int bang)
     rayset rset;
     sg_frame *gf = NULL;
     outfile of;
-    int flags;
-    char size[32];
+    int flags, hdf5 = 0;
+    h5rays *h5 = NULL;
+    char size[32], h5err[256];
 
     if (a->n < 2) {
         if (e->batch)
@@ -1497,7 +1499,9 @@ static int c_export_any(ed *e, args *a, int bang)
         int f2 = report_parse_fmt(a->v[i]);
         if (f2 < 0 && strcasecmp(a->v[i], "txt") == 0)
             f2 = REPORT_TEXT;
-        if (f2 >= 0) {
+        if (strcasecmp(a->v[i], "hdf5") == 0) {
+            hdf5 = 1;
+        } else if (f2 >= 0) {
             fmt = f2;
         } else if (strcmp(a->v[i], "ray") == 0 || strcmp(a->v[i], "fan") == 0 ||
                    strcmp(a->v[i], "xfan") == 0 || strcmp(a->v[i], "grid") == 0) {
@@ -1515,11 +1519,21 @@ static int c_export_any(ed *e, args *a, int bang)
         return fail(e, "export: grid needs a size, e.g. grid 11");
     if (n == 0)
         n = 11;
+    {
+        const char *dot = strrchr(path, '.');
+        if (fmt < 0 && dot && (strcasecmp(dot, ".h5") == 0 || strcasecmp(dot, ".hdf5") == 0))
+            hdf5 = 1;
+    }
     if (fmt < 0)
         fmt = fmt_from_name(path);
     tostd = strcmp(path, "-") == 0;
     if (tostd && !e->batch)
         return fail(e, "export: \"-\" (standard output) works only in batch mode");
+    /* HDF5 seeks about its file, as in sagitta trace. */
+    if (tostd && hdf5)
+        return fail(e, "export: an HDF5 table needs a file, not \"-\"");
+    if (hdf5)
+        fmt = REPORT_CSV; /* for the size estimate: about the same bytes */
 
     ed_opts(e);
     if (e->global >= 0) {
@@ -1613,14 +1627,24 @@ static int c_export_any(ed *e, args *a, int bang)
             goto done;
         }
     }
-    err = outfile_open(&of, tostd ? NULL : path, e->out);
-    if (err != 0) {
-        flags = fail(e, "export: %s: %s", path, strerror(err));
-        goto done;
+    if (hdf5) {
+        /* The same table as sagitta trace --format hdf5, OPD included. */
+        h5 = h5rays_open(path, &m, e->doc.sys->units, nsurf, SG_RAYS_NORMALIZED,
+                         got * (size_t)nsurf, h5err, sizeof h5err);
+        if (!h5) {
+            flags = fail(e, "export: %s: %s", path, h5err);
+            goto done;
+        }
+    } else {
+        err = outfile_open(&of, tostd ? NULL : path, e->out);
+        if (err != 0) {
+            flags = fail(e, "export: %s: %s", path, strerror(err));
+            goto done;
+        }
+        if (report_begin(&rs, of.f, (report_fmt)fmt, &m, nsurf, SG_RAYS_NORMALIZED, multi,
+                         nray) != 0)
+            goto write_error;
     }
-    if (report_begin(&rs, of.f, (report_fmt)fmt, &m, nsurf, SG_RAYS_NORMALIZED, multi,
-                     nray) != 0)
-        goto write_error;
     if (e->progress)
         e->progress(e->progress_ctx, path, 0, nray);
     for (;;) {
@@ -1637,11 +1661,21 @@ static int c_export_any(ed *e, args *a, int bang)
                         sg_row_to_global(&gf[j], o);
                 }
         }
-        if (report_rays_opd(&rs, out, status, got, rays, opd) != 0)
+
+        if (h5) {
+            if (h5rays_write(h5, out, status, got, rays, opd, h5err, sizeof h5err) != 0) {
+                flags = fail(e, "export: %s: %s", path, h5err);
+                goto done;
+            }
+        } else if (report_rays_opd(&rs, out, status, got, rays, opd) != 0)
             goto write_error;
         done += got;
         if (e->progress && e->progress(e->progress_ctx, path, done, nray)) {
-            outfile_abort(&of);
+            if (h5) {
+                h5rays_abort(h5);
+                h5 = NULL;
+            } else
+                outfile_abort(&of);
             ed_msg(e, 0, "export cancelled after %zu of %zu rays; %s not written", done,
                    nray, path);
             flags = ED_HANDLED | ED_REDRAW;
@@ -1652,17 +1686,27 @@ static int c_export_any(ed *e, args *a, int bang)
             break;
         rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, got, NULL, 0, out, status, &d);
         if (rc != SG_EOK) {
-            outfile_abort(&of);
+            if (!h5)
+                outfile_abort(&of);
             flags = fail(e, "export: %s", d.msg[0] ? d.msg : sg_strerror(rc));
             goto done;
         }
     }
-    if (report_end(&rs) != 0)
-        goto write_error;
-    err = outfile_commit(&of);
-    if (err != 0) {
-        flags = fail(e, "export: %s: %s", path, strerror(err));
-        goto done;
+    if (h5) {
+        rc = h5rays_close(h5, h5err, sizeof h5err);
+        h5 = NULL;
+        if (rc != 0) {
+            flags = fail(e, "export: %s: %s", path, h5err);
+            goto done;
+        }
+    } else {
+        if (report_end(&rs) != 0)
+            goto write_error;
+        err = outfile_commit(&of);
+        if (err != 0) {
+            flags = fail(e, "export: %s: %s", path, strerror(err));
+            goto done;
+        }
     }
     ed_msg(e, 0, "exported %zu ray%s (%s) to %s", nray, nray == 1 ? "" : "s", size,
            tostd ? "standard output" : path);
@@ -1673,6 +1717,7 @@ write_error:
     outfile_abort(&of);
     flags = fail(e, "export: %s: %s", path, strerror(err));
 done:
+    h5rays_abort(h5);
     sg_batch_free(b);
     sg_tracer_free(rt);
     free(opd);
@@ -1934,9 +1979,11 @@ static int c_global(ed *e, args *a)
         int rc;
         sg_diag_clear(&d);
         rc = gf ? sg_global_frames(e->doc.sys, ref, gf, &d) : SG_ENOMEM;
+        if (!gf)
+            sg_diag_set(&d, SG_ENOMEM, "out of memory");
         free(gf);
         if (rc != SG_OK)
-            return fail(e, "global: %s", gf ? d.msg : "out of memory");
+            return fail(e, "global: %s", d.msg);
     }
     e->global = ref;
     e->dirty = 1;
@@ -2109,7 +2156,7 @@ static const command commands[] = {
     {"recover!", NULL, c_recover1, "recover! N|FILE", "load a recovery file, discarding changes"},
     {"quit", "q", c_quit0, "quit", "quit (asks about unsaved changes)"},
     {"quit!", "q!", c_quit1, "quit!", "quit, discarding unsaved changes"},
-    {"export", NULL, c_export, "export FILE [csv|json|text] [ray|fan N|xfan N|grid N]",
+    {"export", NULL, c_export, "export FILE [csv|json|text|hdf5] [ray|fan N|xfan N|grid N]",
      "write the ray table of the current ray or a ray set"},
     {"export!", NULL, c_export1, "export! FILE ...", "export without asking about its size"},
     {"print", NULL, c_print, "print [ray|paraxial|cell SURFACE COLUMN]",

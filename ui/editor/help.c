@@ -19,7 +19,7 @@ const char *const ui_key_help[] = {
     "o               open a design file",
     "e               open a bundled example",
     "n               new design",
-    "x               export the ray table (:export FILE [csv|json|text] [ray|fan N|xfan N|grid N])",
+    "x               export the ray table (:export FILE [csv|json|text|hdf5] [ray|fan N|xfan N|grid N])",
     "                or the analysis view on show (:export FILE.png|svg|pdf)",
     "g               analysis view below the sheet (layout, spot, fan, opd, wave)",
     "                (:view layout|spot|fan|opd|wave|off); it follows every edit",
