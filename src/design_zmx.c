@@ -83,8 +83,13 @@ typedef struct zsurf {
     long xdat_line;      /* first nonzero XDAT */
     double xdat;
     int ap;              /* 0 none, 1 CLAP, 2 FLAP */
-    double ap_max;
+    double ap_min, ap_max;
     long ap_line;
+    int apk;             /* another aperture or obscuration: an sg_aperture_type */
+    double apk_a, apk_b; /* its radii or half widths */
+    long apk_line;
+    double obdc_x, obdc_y; /* the aperture's decenter (OBDC) */
+    long obdc_line;
 } zsurf;
 
 typedef struct zctx {
@@ -103,6 +108,9 @@ typedef struct zctx {
     long ftyp_line;
     double xfln[SG_MAX_FIELDS], yfln[SG_MAX_FIELDS], fwgn[SG_MAX_FIELDS];
     int nxfln, nyfln, nfwgn;
+    /* Zemax's vignetting factors, VDXN VDYN VCXN VCYN VANN, per field. */
+    double vig[5][SG_MAX_FIELDS];
+    int nvig[5];
     long xfln_line, yfln_line;
     double wum[ZMX_NWSLOT], wwt[ZMX_NWSLOT];
     int whave[ZMX_NWSLOT];
@@ -824,7 +832,40 @@ static int end_surface(zctx *c)
         return zerr(c, SG_EUNSUPPORTED, "XDAT: extra data %.17g; sagitta's surfaces have no "
                     "extra data", z->xdat);
     }
-    if (z->ap) {
+    if (z->apk && z->ap) {
+        c->line = z->apk_line;
+        return zerr(c, SG_EUNSUPPORTED, "two apertures on one surface (line %ld and this one); "
+                    "Zemax keeps one", z->ap_line);
+    }
+    if (z->apk || (z->ap == 1 && (z->ap_min != 0.0 || z->obdc_x != 0.0 || z->obdc_y != 0.0))) {
+        /* A surface aperture of the model: an annulus or a decentred disc
+         * (CLAP with a minimum radius or an OBDC line), or another kind. */
+        if (z->apk) {
+            s->aperture = (sg_aperture_type)z->apk;
+            if (z->apk == SG_OBSCURATION_CIRCULAR) {
+                s->ap_rmin = z->apk_a;
+                s->ap_rmax = z->apk_b;
+            } else {
+                s->ap_xhalf = z->apk_a;
+                s->ap_yhalf = z->apk_b;
+            }
+        } else {
+            s->aperture = SG_APERTURE_CIRCULAR;
+            s->ap_rmin = z->ap_min;
+            s->ap_rmax = z->ap_max;
+        }
+        s->ap_xdec = z->obdc_x;
+        s->ap_ydec = z->obdc_y;
+        if (z->have_diam) {
+            s->semi_diameter = z->diam;
+            s->sd_fixed = 0;
+        }
+    } else if (z->obdc_x != 0.0 || z->obdc_y != 0.0) {
+        c->line = z->obdc_line;
+        return zerr(c, SG_EUNSUPPORTED, "OBDC: an aperture decenter with no circular, "
+                    "rectangular or elliptical aperture or obscuration to move%s",
+                    z->ap == 2 ? " (a floating aperture is centred)" : "");
+    } else if (z->ap) {
         if (z->have_diam && z->diam != z->ap_max) {
             c->line = z->ap_line;
             zwarn(c, "the %s aperture of radius %.17g vignettes; the semi-diameter shown "
@@ -931,35 +972,50 @@ static int surface_line(zctx *c, const zline *l)
         if ((rc = tok_num(c, l, 1, "minimum radius", &mn)) != SG_OK ||
             (rc = tok_num(c, l, 2, "maximum radius", &mx)) != SG_OK)
             return rc;
-        if (mn != 0.0)
-            return pend(c, SG_EUNSUPPORTED, "%.4s: an annular aperture (minimum radius %.17g); "
-                        "sagitta's apertures are full discs", k->p, mn);
-        if (!(mx >= 0.0))
-            return zerr(c, SG_ERANGE, "%.4s: maximum radius %.17g is negative", k->p, mx);
+        if (!(mn >= 0.0) || !(mx >= 0.0))
+            return zerr(c, SG_ERANGE, "%.4s: radii %.17g and %.17g must not be negative", k->p,
+                        mn, mx);
+        if (mn != 0.0 && tok_is(k, "FLAP"))
+            return pend(c, SG_EUNSUPPORTED, "FLAP: a floating aperture with a minimum radius "
+                        "%.17g; sagitta's floating aperture is a full disc", mn);
         z->ap = tok_is(k, "CLAP") ? 1 : 2;
+        z->ap_min = mn;
         z->ap_max = mx;
         z->ap_line = c->line;
         return SG_OK;
     }
     if (tok_is(k, "OBDC")) {
-        nz = !all_zero(c, l, 1, &rc);
-        if (rc != SG_OK)
+        /* The aperture's decenter: x, then y. */
+        if ((rc = tok_num(c, l, 1, "aperture x decenter", &z->obdc_x)) != SG_OK ||
+            (rc = tok_num(c, l, 2, "aperture y decenter", &z->obdc_y)) != SG_OK)
             return rc;
-        if (nz)
-            return pend(c, SG_EUNSUPPORTED, "OBDC: a decentred aperture; sagitta's apertures are "
-                        "centred on the axis");
+        z->obdc_line = c->line;
         return SG_OK;
     }
     if (tok_is(k, "OBSC") || tok_is(k, "SQAP") || tok_is(k, "ELAP") || tok_is(k, "SQOB") ||
-        tok_is(k, "ELOB") || tok_is(k, "UDAD") || tok_is(k, "UDOD"))
-        return pend(c, SG_EUNSUPPORTED, "%.4s: %s; sagitta has circular clear apertures only",
-                    k->p,
-                    tok_is(k, "OBSC") ? "a circular obscuration"
-                    : tok_is(k, "SQAP") ? "a rectangular aperture"
-                    : tok_is(k, "ELAP") ? "an elliptical aperture"
-                    : tok_is(k, "SQOB") ? "a rectangular obscuration"
-                    : tok_is(k, "ELOB") ? "an elliptical obscuration"
-                                        : "a user-defined aperture");
+        tok_is(k, "ELOB")) {
+        /* OBSC min max; the others x and y half widths. */
+        double a, b2;
+        if ((rc = tok_num(c, l, 1, tok_is(k, "OBSC") ? "minimum radius" : "x half width", &a)) !=
+                SG_OK ||
+            (rc = tok_num(c, l, 2, tok_is(k, "OBSC") ? "maximum radius" : "y half width", &b2)) !=
+                SG_OK)
+            return rc;
+        if (!(a >= 0.0) || !(b2 >= 0.0))
+            return zerr(c, SG_ERANGE, "%.4s: %.17g and %.17g must not be negative", k->p, a, b2);
+        z->apk = tok_is(k, "OBSC")   ? SG_OBSCURATION_CIRCULAR
+                 : tok_is(k, "SQAP") ? SG_APERTURE_RECTANGULAR
+                 : tok_is(k, "SQOB") ? SG_OBSCURATION_RECTANGULAR
+                 : tok_is(k, "ELAP") ? SG_APERTURE_ELLIPTICAL
+                                     : SG_OBSCURATION_ELLIPTICAL;
+        z->apk_a = a;
+        z->apk_b = b2;
+        z->apk_line = c->line;
+        return SG_OK;
+    }
+    if (tok_is(k, "UDAD") || tok_is(k, "UDOD"))
+        return pend(c, SG_EUNSUPPORTED, "%.4s: a user-defined aperture; sagitta has circular, "
+                    "rectangular and elliptical apertures and obscurations", k->p);
     if (tok_is(k, "COMM")) {
         int cut;
         rest_copy(l, s->comment, sizeof s->comment, &cut);
@@ -1023,19 +1079,28 @@ static int read_list(zctx *c, const zline *l, double *dst, int cap, int *n)
     return SG_OK;
 }
 
-static int vignetting(zctx *c, const zline *l, const char *what)
+/* VDXN, VDYN, VCXN, VCYN, VANN (which = 0 to 4): one value a field slot,
+ * kept for the fields FTYP or the field lists settle at the end.  The old
+ * ZVDX ... forms (which < 0), whose layout could not be checked, must be
+ * zero. */
+static int vignetting(zctx *c, const zline *l, int which, const char *what)
 {
     double v;
     int k, rc;
-    /* Slots past the fields in use are ignored; FTYP may come later, so
-     * the field count is checked at the end from the line kept here. */
     for (k = 1; k < l->n && k <= SG_MAX_FIELDS; k++) {
         if ((rc = tok_num(c, l, k, what, &v)) != SG_OK)
             return rc;
-        if (v != 0.0 && (!c->have_ftyp || k <= c->ftyp_nfield))
-            return zerr(c, SG_EUNSUPPORTED, "%.4s: field %d has the vignetting factor %s %.17g; "
-                        "sagitta has no vignetting factors", l->t[0].p, k, what, v);
+        if (which < 0) {
+            if (v != 0.0 && (!c->have_ftyp || k <= c->ftyp_nfield))
+                return zerr(c, SG_EUNSUPPORTED, "%.4s: field %d has the vignetting factor %.17g "
+                            "in Zemax's old form, which sagitta does not read; its VDXN ... "
+                            "lines are read", l->t[0].p, k, v);
+            continue;
+        }
+        c->vig[which][k - 1] = v;
     }
+    if (which >= 0 && k - 1 > c->nvig[which])
+        c->nvig[which] = k - 1;
     return SG_OK;
 }
 
@@ -1180,8 +1245,15 @@ static int header_line(zctx *c, const zline *l)
     if (tok_is(k, "VDXN") || tok_is(k, "VDYN") || tok_is(k, "VCXN") || tok_is(k, "VCYN") ||
         tok_is(k, "VANN") || tok_is(k, "ZVDX") || tok_is(k, "ZVDY") || tok_is(k, "ZVCX") ||
         tok_is(k, "ZVCY") || tok_is(k, "ZVAN"))
-        return vignetting(c, l, k->p[0] == 'Z' ? "(old form)" : k->p[1] == 'D' ? "decenter"
-                                 : k->p[1] == 'C' ? "compression" : "angle");
+        return vignetting(c, l,
+                          k->p[0] == 'Z'     ? -1
+                          : tok_is(k, "VDXN") ? 0
+                          : tok_is(k, "VDYN") ? 1
+                          : tok_is(k, "VCXN") ? 2
+                          : tok_is(k, "VCYN") ? 3
+                                              : 4,
+                          k->p[0] == 'Z' ? "vignetting factor" : k->p[1] == 'D' ? "vignetting decenter"
+                          : k->p[1] == 'C' ? "vignetting compression" : "vignetting angle");
     if (tok_is(k, "WAVM")) {
         if ((rc = tok_int(c, l, 1, "wavelength number", 1, ZMX_NWSLOT, &n)) != SG_OK ||
             (rc = tok_num(c, l, 2, "wavelength", &c->wum[n - 1])) != SG_OK ||
@@ -1246,6 +1318,11 @@ static int finish(zctx *c)
         s->field[i].x = c->nxfln ? c->xfln[i] : 0.0;
         s->field[i].y = c->nyfln ? c->yfln[i] : 0.0;
         s->field[i].weight = i < c->nfwgn ? c->fwgn[i] : 1.0;
+        s->field[i].vdx = i < c->nvig[0] ? c->vig[0][i] : 0.0;
+        s->field[i].vdy = i < c->nvig[1] ? c->vig[1][i] : 0.0;
+        s->field[i].vcx = i < c->nvig[2] ? c->vig[2][i] : 0.0;
+        s->field[i].vcy = i < c->nvig[3] ? c->vig[3][i] : 0.0;
+        s->field[i].van = i < c->nvig[4] ? c->vig[4][i] : 0.0;
         if (!(s->field[i].weight >= 0.0)) {
             return zerr(c, SG_ERANGE, "FWGN: field %d has the negative weight %.17g", i + 1,
                         s->field[i].weight);
@@ -1545,28 +1622,12 @@ static void zb_list(zbuf *b, const char *kw, const sg_system *s, int what)
     int i;
     zb_add(b, kw, strlen(kw));
     for (i = 0; i < s->nfield; i++)
-        zb_printf(b, " %s", num(n, what == 0 ? s->field[i].x : what == 1 ? s->field[i].y
-                                                                           : s->field[i].weight));
-    zb_add(b, "\n", 1);
-}
-
-/* The first parameter of the table's newer rows (those written only when
- * set) that obj holds away from its default, or NULL: the writer does not
- * write them yet, and must not drop them silently. */
-static const sg_param *unwritten(sg_param_scope scope, const void *obj)
-{
-    int i, k;
-    for (i = 0; i < sg_param_count(scope); i++) {
-        const sg_param *p = sg_param_at(scope, i);
-        if (!(p->flags & SG_PARAM_OPTIONAL))
-            continue;
-        for (k = 0; k < p->count; k++) {
-            double v = sg_param_get(p, obj, k), def = p->def;
-            if (memcmp(&v, &def, sizeof v) != 0)
-                return p;
-        }
+    {
+        const sg_field *f = &s->field[i];
+        const double v[8] = {f->x, f->y, f->weight, f->vdx, f->vdy, f->vcx, f->vcy, f->van};
+        zb_printf(b, " %s", num(n, v[what]));
     }
-    return NULL;
+    zb_add(b, "\n", 1);
 }
 
 static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_diag *d)
@@ -1581,20 +1642,14 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
     if (s->nwave < 1 || s->nwave > SG_MAX_WAVES || s->nfield < 1 || s->nfield > SG_MAX_FIELDS ||
         s->primary_wave < 0 || s->primary_wave >= s->nwave)
         return sg_diag_set(d, SG_ERANGE, "export: wavelengths or fields out of range");
-    for (i = 0; i < s->nfield; i++) {
-        const sg_param *p = unwritten(SG_SCOPE_FIELD, &s->field[i]);
-        if (p)
-            return sg_diag_set(d, SG_EUNSUPPORTED, "export: field %d: %s (%s): the .zmx writer "
-                               "does not write vignetting factors yet; save the design as JSON",
-                               i + 1, p->key, p->zmx);
-    }
+
     for (i = 0; i < s->nsurf; i++) {
         const sg_surface *f = &s->surf[i];
-        const sg_param *p = unwritten(SG_SCOPE_SURFACE, f);
-        if (p)
-            return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: %s (%s): the .zmx writer "
-                               "does not write surface apertures yet; save the design as JSON",
-                               i, p->key, p->zmx);
+        if (f->aperture != SG_APERTURE_NONE && f->sd_fixed)
+            return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: a fixed semi-diameter "
+                               "and a surface aperture; a .zmx surface holds one aperture (make "
+                               "the semi-diameter free, or put the aperture on a dummy surface)",
+                               i);
         if (isnan(f->radius) || isnan(f->thickness) || !isfinite(f->conic) ||
             (!isfinite(f->thickness) && !(i == 0 && f->thickness > 0)))
             return sg_diag_set(d, SG_ERANGE, "export: surface %d: a value a .zmx file cannot "
@@ -1662,6 +1717,19 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
     zb_list(b, "XFLN", s, 0);
     zb_list(b, "YFLN", s, 1);
     zb_list(b, "FWGN", s, 2);
+    /* Vignetting factors only when some field has one, as Zemax's files
+     * list them in any case. */
+    for (i = 0; i < s->nfield; i++)
+        if (s->field[i].vdx != 0.0 || s->field[i].vdy != 0.0 || s->field[i].vcx != 0.0 ||
+            s->field[i].vcy != 0.0 || s->field[i].van != 0.0)
+            break;
+    if (i < s->nfield) {
+        zb_list(b, "VDXN", s, 3);
+        zb_list(b, "VDYN", s, 4);
+        zb_list(b, "VCXN", s, 5);
+        zb_list(b, "VCYN", s, 6);
+        zb_list(b, "VANN", s, 7);
+    }
     for (i = 0; i < s->nwave; i++)
         zb_printf(b, "WAVM %d %s %s\n", i + 1, num(n1, s->wave[i].um), num(n2, s->wave[i].weight));
     zb_printf(b, "PWAV %d\n", s->primary_wave + 1);
@@ -1729,6 +1797,18 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         zb_printf(b, "  DIAM %s %d 0 0 1 \"\"\n", num(n1, f->semi_diameter), f->sd_fixed ? 1 : 0);
         if (f->sd_fixed)
             zb_printf(b, "  CLAP 0 %s 0\n", num(n1, f->semi_diameter));
+        if (f->aperture != SG_APERTURE_NONE) {
+            /* Zemax's lines: CLAP and OBSC take the radii, the others the
+             * half widths; OBDC the decenter. */
+            static const char *const kw[] = {"", "CLAP", "OBSC", "SQAP", "SQOB", "ELAP", "ELOB"};
+            int circ = f->aperture == SG_APERTURE_CIRCULAR ||
+                       f->aperture == SG_OBSCURATION_CIRCULAR;
+            zb_printf(b, "  %s %s %s 0\n", kw[f->aperture],
+                      num(n1, circ ? f->ap_rmin : f->ap_xhalf),
+                      num(n2, circ ? f->ap_rmax : f->ap_yhalf));
+            if (f->ap_xdec != 0.0 || f->ap_ydec != 0.0)
+                zb_printf(b, "  OBDC %s %s\n", num(n1, f->ap_xdec), num(n2, f->ap_ydec));
+        }
     }
     mpfr_clear(q);
     if (changed)

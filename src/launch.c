@@ -1271,9 +1271,15 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
         osp_from_values(t, dd_from(0.0), dd_from(0.0), 0, &o);
         if (sys->field_type == SG_FIELD_ANGLE && t->ln.obj_inf)
             osp_from_values(t, dd_from(0.0), dd_from(0.0), 1, &o);
+        int clip = t->o.clip;
         q_aim_off(t, &o, 0.0, 1.0, q);
+        /* The stop's size is the unvignetted marginal ray's, as in every
+         * other landing: an off-axis system's apertures may stop the
+         * on-axis beam. */
+        t->o.clip = 0;
         rc = saved ? land_classic(t, &o, q, at, &noise, t->scratch)
                    : land_precise(t, &o, q, at, &noise, t->scratch);
+        t->o.clip = clip;
         if (rc != SG_OK)
             return sg_diag_set(d, SG_EAIM,
                                "ray aiming: the on-axis marginal ray does not reach the stop "
