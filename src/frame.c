@@ -303,3 +303,17 @@ void sg_row_to_global(const sg_frame *f, sg_ray_surface *row)
     row->error_bound = grow * row->error_bound + 6.0 * 0x1p-53 * big;
     row->dir_error_bound = grow * row->dir_error_bound + 6.0 * 0x1p-53 * grow;
 }
+
+void sg_rows_to_global(const sg_frame *gf, sg_ray_surface *rows, size_t nray, int nsurf,
+                       int start_dir)
+{
+    size_t r;
+    int i;
+    for (r = 0; r < nray; r++)
+        for (i = 0; i < nsurf; i++) {
+            sg_ray_surface *o = &rows[r * (size_t)nsurf + (size_t)i];
+            const sg_frame *f = &gf[i == 0 && start_dir ? 1 : i];
+            if (isfinite(o->x) && isfinite(o->y) && isfinite(o->z) && isfinite(f->o[2]))
+                sg_row_to_global(f, o);
+        }
+}

@@ -601,6 +601,13 @@ int sg_global_frames(const sg_system *sys, int ref, sg_frame *out, sg_diag *d);
  * direction and their bounds (a rotation can grow a coordinate's error by
  * the rows of R; the conversion's rounding is added). */
 void sg_row_to_global(const sg_frame *f, sg_ray_surface *row);
+/* The rows of nray rays (nsurf each, as the batch writes them) to the
+ * frames gf of sg_global_frames.  Rows a ray did not reach keep their NaN,
+ * and an object at infinity its infinities.  Row 0 of a ray given by start
+ * and direction (start_dir nonzero) is in surface 1's frame, of a
+ * normalized ray in the object's. */
+void sg_rows_to_global(const sg_frame *gf, sg_ray_surface *rows, size_t nray, int nsurf,
+                       int start_dir);
 
 /* Zemax's automatic semi-diameters. */
 typedef struct sg_semidiam_opts {

@@ -440,24 +440,6 @@ static sg_frame *global_frames(const char *design, const sg_system *sys, int ref
     return gf;
 }
 
-/* Rows of n rays to the global frames; rows a ray did not reach, and the
- * start row of an object at infinity, keep their NaN and infinities.  Row
- * 0 of a normalized ray is in the object's frame, of a ray given by start
- * and direction in surface 1's. */
-static void rows_to_global(const sg_frame *gf, sg_ray_surface *out, size_t n, int nsurf,
-                           sg_ray_kind kind)
-{
-    size_t r;
-    int i;
-    for (r = 0; r < n; r++)
-        for (i = 0; i < nsurf; i++) {
-            sg_ray_surface *o = &out[r * (size_t)nsurf + (size_t)i];
-            const sg_frame *f = &gf[i == 0 && kind == SG_RAYS_START_DIR ? 1 : i];
-            if (isfinite(o->x) && isfinite(o->y) && isfinite(o->z) && isfinite(f->o[2]))
-                sg_row_to_global(f, o);
-        }
-}
-
 /* Reports a trace that failed for a reason other than the ray's own fate,
  * and returns the exit status for it. */
 static int trace_failed(const char *design, const sg_diag *d, int rc)
@@ -711,7 +693,7 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
                 report_opd_block(t, &ref, rays, n, out, nsurf, opd);
             /* After the OPD, which is taken in the image surface's own frame. */
             if (gf)
-                rows_to_global(gf, out, n, nsurf, csvrays_kind(rd));
+                sg_rows_to_global(gf, out, n, nsurf, csvrays_kind(rd) == SG_RAYS_START_DIR);
             if (h5rays_write(h5, out, status, n, rays, t ? opd : NULL, h5err, sizeof h5err) != 0)
                 goto h5_error;
         } else if (!opened) {
@@ -730,7 +712,7 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
         if (t && fmt != FMT_HDF5)
             report_opd_block(t, &ref, rays, n, out, nsurf, opd);
         if (gf && fmt != FMT_HDF5)
-            rows_to_global(gf, out, n, nsurf, csvrays_kind(rd));
+            sg_rows_to_global(gf, out, n, nsurf, csvrays_kind(rd) == SG_RAYS_START_DIR);
         if (fmt != FMT_HDF5 && report_rays_opd(&rs, out, status, n, rays, opd) != 0)
             goto write_error;
         done += n;
@@ -1000,7 +982,7 @@ int cmd_trace(int argc, char **argv)
             rc = CLI_EXIT_USAGE;
             goto done;
         }
-        rows_to_global(gf, out, 1, nsurf, kind);
+        sg_rows_to_global(gf, out, 1, nsurf, kind == SG_RAYS_START_DIR);
     }
 
     memset(&meta, 0, sizeof meta);

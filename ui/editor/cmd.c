@@ -1650,17 +1650,8 @@ static int c_export_any(ed *e, args *a, int bang)
     for (;;) {
         report_opd_block(rt, &ref, rays, got, out, nsurf, opd);
         /* :global: after the OPD, which is taken in the image's own frame. */
-        if (gf) {
-            size_t q;
-            int j;
-            for (q = 0; q < got; q++)
-                for (j = 0; j < nsurf; j++) {
-                    sg_ray_surface *o = &out[q * (size_t)nsurf + (size_t)j];
-                    if (isfinite(o->x) && isfinite(o->y) && isfinite(o->z) &&
-                        isfinite(gf[j].o[2]))
-                        sg_row_to_global(&gf[j], o);
-                }
-        }
+        if (gf)
+            sg_rows_to_global(gf, out, got, nsurf, 0);
 
         if (h5) {
             if (h5rays_write(h5, out, status, got, rays, opd, h5err, sizeof h5err) != 0) {

@@ -74,7 +74,6 @@ static void to_global(ed *e)
     const sg_system *s = e->doc.sys;
     sg_frame *gf;
     sg_diag d;
-    int i, k;
     if (!e->cmp.have || e->cmp.nsurf != s->nsurf)
         return;
     gf = malloc((size_t)s->nsurf * sizeof *gf);
@@ -85,14 +84,9 @@ static void to_global(ed *e)
         free(gf);
         return;
     }
-    for (k = 0; k < 2; k++) {
-        sg_ray_surface *r = k == 0 ? e->cmp.res : e->cmp.ref_res;
-        if (k == 1 && !e->cmp.ref_have)
-            break;
-        for (i = 0; i < s->nsurf; i++)
-            if (isfinite(r[i].x) && isfinite(r[i].y) && isfinite(r[i].z) && isfinite(gf[i].o[2]))
-                sg_row_to_global(&gf[i], &r[i]);
-    }
+    sg_rows_to_global(gf, e->cmp.res, 1, s->nsurf, 0);
+    if (e->cmp.ref_have)
+        sg_rows_to_global(gf, e->cmp.ref_res, 1, s->nsurf, 0);
     free(gf);
 }
 
