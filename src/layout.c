@@ -109,9 +109,8 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
     }
     for (i = 2; i < ns; i++)
         z0[i] = z0[i - 1] + sys->surf[i - 1].thickness;
-    for (i = 1; i < ns && !sg_surface_moves_frame(&sys->surf[i]) &&
-                sys->surf[i].after_mode == SG_AFTER_EXPLICIT;
-         i++)
+    /* "reverse" moves nothing unless its before change does. */
+    for (i = 1; i < ns && !sg_surface_moves_frame(&sys->surf[i]); i++)
         ;
     if (i < ns) {
         if (!(gf = malloc((size_t)ns * sizeof *gf))) {

@@ -1189,13 +1189,9 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
         mpfr_set_zero(m->t[12], 1);
         mpfr_set_zero(m->t[13], 1);
         m_osp(tr, 0);
-        int clip = tr->o.clip, rc2;
         m_q_off(tr, 0.0, 1.0);
-        /* Unvignetted, as the precise launch's. */
-        tr->o.clip = 0;
-        rc2 = m_land(tr, sys->stop, m->t[14], m->t[15]);
-        tr->o.clip = clip;
-        if (rc2 != SG_OK)
+        /* m_land lands unvignetted, as the precise launch does. */
+        if (m_land(tr, sys->stop, m->t[14], m->t[15]) != SG_OK)
             return sg_diag_set(d, SG_EAIM,
                                "ray aiming: the on-axis marginal ray does not reach the stop "
                                "(surface %d)", sys->stop);

@@ -1469,7 +1469,7 @@ static int c_export_any(ed *e, args *a, int bang)
     report_meta m;
     report_stream rs;
     rayset rset;
-    sg_frame *gf = NULL;
+    const sg_frame *gf = NULL; /* ed_global_frames', not freed here */
     outfile of;
     int flags, hdf5 = 0;
     h5rays *h5 = NULL;
@@ -1539,11 +1539,8 @@ static int c_export_any(ed *e, args *a, int bang)
     if (e->global >= 0) {
         sg_diag gd;
         sg_diag_clear(&gd);
-        gf = malloc((size_t)e->doc.sys->nsurf * sizeof *gf);
-        if (!gf || sg_global_frames(e->doc.sys, e->global, gf, &gd) != SG_OK) {
-            free(gf);
-            return fail(e, "export: global frame: %s", gd.msg[0] ? gd.msg : "out of memory");
-        }
+        if (!(gf = ed_global_frames(e, e->global, &gd)))
+            return fail(e, "export: global frame: %s", gd.msg);
     }
     memset(&rset, 0, sizeof rset);
     rset.kind = strcmp(set, "ray") == 0    ? SET_RAY
@@ -1556,10 +1553,8 @@ static int c_export_any(ed *e, args *a, int bang)
     rset.px = e->ray[2];
     rset.py = e->ray[3];
     nray = rayset_count(&rset);
-    if (nray == 0) {
-        free(gf);
+    if (nray == 0)
         return fail(e, "export: the ray set is empty");
-    }
     multi = nray != 1;
     nsurf = e->doc.sys->nsurf;
     /* About 16 MiB of rows a block, and blocks small enough that progress
@@ -1715,7 +1710,6 @@ done:
     free(rays);
     free(out);
     free(status);
-    free(gf);
     return flags;
 }
 
@@ -1965,15 +1959,9 @@ static int c_global(ed *e, args *a)
         return fail(e, "global: \"%s\" is not on, off or a surface from 0 to %d", a->v[1],
                     e->doc.sys->nsurf - 1);
     if (ref >= 0) {
-        sg_frame *gf = malloc((size_t)e->doc.sys->nsurf * sizeof *gf);
         sg_diag d;
-        int rc;
         sg_diag_clear(&d);
-        rc = gf ? sg_global_frames(e->doc.sys, ref, gf, &d) : SG_ENOMEM;
-        if (!gf)
-            sg_diag_set(&d, SG_ENOMEM, "out of memory");
-        free(gf);
-        if (rc != SG_OK)
+        if (!ed_global_frames(e, ref, &d))
             return fail(e, "global: %s", d.msg);
     }
     e->global = ref;

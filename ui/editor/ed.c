@@ -42,6 +42,8 @@ int ed_init(ed *e)
 
 void ed_free(ed *e)
 {
+    free(e->gframes);
+    e->gframes = NULL;
     compute_free(&e->cmp);
     edview_free(&e->view);
     gp_free(&e->glasses);
@@ -66,28 +68,49 @@ void ed_opts(ed *e)
     e->opts.clip = e->clip;
 }
 
+const sg_frame *ed_global_frames(ed *e, int ref, sg_diag *d)
+{
+    const sg_system *s = e->doc.sys;
+    if (e->gframes && e->gframes_id == e->doc.id && e->gframes_ref == ref &&
+        e->gframes_n == s->nsurf)
+        return e->gframes;
+    free(e->gframes);
+    e->gframes_id = 0;
+    e->gframes = malloc((size_t)s->nsurf * sizeof *e->gframes);
+    if (!e->gframes) {
+        sg_diag_set(d, SG_ENOMEM, "out of memory");
+        return NULL;
+    }
+    if (sg_global_frames(s, ref, e->gframes, d) != SG_OK) {
+        free(e->gframes);
+        e->gframes = NULL;
+        return NULL;
+    }
+    e->gframes_id = e->doc.id;
+    e->gframes_ref = ref;
+    e->gframes_n = s->nsurf;
+    return e->gframes;
+}
+
 /* :global: the rows of the ray (and of the reference) in the frame of
  * surface e->global, as "sagitta trace --global" gives them.  A design
  * that refuses the reference (now a coordinate break, say) turns it off. */
 static void to_global(ed *e)
 {
     const sg_system *s = e->doc.sys;
-    sg_frame *gf;
+    const sg_frame *gf;
     sg_diag d;
     if (!e->cmp.have || e->cmp.nsurf != s->nsurf)
         return;
-    gf = malloc((size_t)s->nsurf * sizeof *gf);
     sg_diag_clear(&d);
-    if (!gf || sg_global_frames(s, e->global, gf, &d) != SG_OK) {
-        ed_msg(e, 1, "global frame off: %s", gf ? d.msg : "out of memory");
+    if (!(gf = ed_global_frames(e, e->global, &d))) {
+        ed_msg(e, 1, "global frame off: %s", d.msg);
         e->global = -1;
-        free(gf);
         return;
     }
     sg_rows_to_global(gf, e->cmp.res, 1, s->nsurf, 0);
     if (e->cmp.ref_have)
         sg_rows_to_global(gf, e->cmp.ref_res, 1, s->nsurf, 0);
-    free(gf);
 }
 
 void ed_recompute(ed *e)

@@ -60,6 +60,9 @@ typedef struct ed {
     int digits;                /* also trace with MPFR and show agreement */
     int global;                /* -1: each surface's local frame; else the
                                   rows are in this surface's frame (:global) */
+    sg_frame *gframes;         /* ed_global_frames' frames, kept for ... */
+    unsigned long gframes_id;  /* ... this document state (0: none) */
+    int gframes_ref, gframes_n; /* ... reference surface and surface count */
     sg_trace_opts opts;        /* built from the above by ed_opts() */
 
     compute cmp;
@@ -97,6 +100,10 @@ void ed_free(ed *e);
 /* Sets e->opts from the ray and method choices and clamps them to the
  * design (a deleted wavelength, say). */
 void ed_opts(ed *e);
+/* The global frames of the design relative to surface ref, made in MPFR
+ * only when the design or ref changed since the last call; NULL with d
+ * set when the design refuses ref.  Owned by e. */
+const sg_frame *ed_global_frames(ed *e, int ref, sg_diag *d);
 /* Recomputes the live trace if anything changed. */
 void ed_recompute(ed *e);
 
