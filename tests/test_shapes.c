@@ -30,8 +30,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "shape.h"
 #include "testutil.h"
+#include "trace_internal.h"
 
 #define PREC 512
 
@@ -332,6 +332,9 @@ static void random_shape(sg_surface *f, int type, double s)
     int k;
     f->type = type;
     f->radius = (urand() < 0.5 ? -1.0 : 1.0) * (20.0 + 80.0 * urand()) * s;
+    /* A flat base now and then: the terms alone make the sag. */
+    if (urand() < 0.2)
+        f->radius = INFINITY;
     f->conic = urand() < 0.3 ? 0.0 : srand1(2.0);
     memset(f->asph, 0, sizeof f->asph);
     memset(f->odd, 0, sizeof f->odd);
@@ -493,7 +496,8 @@ static double err_of(double a, const double hl[2])
  * and the direction after refraction from n1 = 1 into n2 (or reflection
  * for a mirror); 0 when Newton does not settle. */
 static int ray_ref(const sg_surface *f, const double S[3], const double D[3], double t0,
-                   double scale, int mirror, double n2, double P[3][2], double Dout[3][2])
+                   double scale, int mirror, double n2, double P[3][2], double Dout[3][2],
+                   mpfr_t *Pm)
 {
     mpfr_t t, x, y, z, gx, gy, F, Fp, a, d[3], g[3], gg, dg, k;
     int it, ok = 0, j;
@@ -539,6 +543,11 @@ static int ray_ref(const sg_surface *f, const double S[3], const double D[3], do
         split(x, P[0]);
         split(y, P[1]);
         split(z, P[2]);
+        if (Pm) {
+            mpfr_set(Pm[0], x, MPFR_RNDN);
+            mpfr_set(Pm[1], y, MPFR_RNDN);
+            mpfr_set(Pm[2], z, MPFR_RNDN);
+        }
         sag_grad_ref(f, x, y, scale, a, gx, gy);
         /* The normal (-f_x, -f_y, 1) and the vector law. */
         mpfr_neg(g[0], gx, MPFR_RNDN);
@@ -650,7 +659,7 @@ static void check_ray(const sg_surface *f, int mirror, double scale, sg_tracer *
     if (op[1].status != SG_OK && om[1].status != SG_OK)
         return;
     ref = ray_ref(f, S, D, op[1].status == SG_OK ? op[1].path : om[1].path, scale, mirror, 1.5,
-                  P, Dr);
+                  P, Dr, NULL);
     if (!ref)
         return;
     if (op[1].status == SG_OK) {
@@ -668,8 +677,9 @@ static void check_ray(const sg_surface *f, int mirror, double scale, sg_tracer *
             ty->exact++;
         else if (ordinary)
             fail_msg("precise point of an ordinary ray is not the reference rounded: "
-                     "(%.17g %.17g %.17g) against (%.17g %.17g %.17g), type %d", op[1].x, op[1].y,
-                     op[1].z, P[0][0], P[1][0], P[2][0], f->type);
+                     "(%.17g %.17g %.17g) against (%.17g %.17g %.17g), type %d, R %g, Rx %g, "
+                     "S %a %a %a, D %a %a %a", op[1].x, op[1].y, op[1].z, P[0][0], P[1][0],
+                     P[2][0], f->type, f->radius, f->radius_x, S[0], S[1], S[2], D[0], D[1], D[2]);
         if (op[1].l == Dr[0][0] && op[1].m == Dr[1][0] && op[1].n == Dr[2][0])
             ty->dir_ok++;
     }
@@ -711,7 +721,13 @@ static void trace_sets(void **state)
                 for (k = 0; k < 30; k++) {
                     /* Ordinary rays: from 5 scale in front, within 6 scale of
                      * the axis, within about 11 degrees of it. */
-                    double S[3] = {srand1(6.0 * s), srand1(6.0 * s), -5.0 * s};
+                    /* The start's z is not a round number: a plane 5 units
+                     * ahead along D_z = 1 would put x = S_x + 5 D_x exactly
+                     * on a rounding tie now and then, where the last bit of
+                     * double-double decides (a flat base with no terms is a
+                     * plane, which the standard surface traces exactly). */
+                    double S[3] = {srand1(6.0 * s), srand1(6.0 * s),
+                                   -5.0 * s * (1.0 + 0.1 * urand())};
                     double D[3] = {srand1(0.2), srand1(0.2), 1.0};
                     check_ray(&f, mirror, s, tp, tm, tc, S, D, 0.0, 1, &ty);
                 }
@@ -773,6 +789,82 @@ static void trace_sets(void **state)
     sg_catalog_free(cat);
 }
 
+/* The state precise carries to the next surface, before it is rounded to
+ * the printed double: the double-double point within its bound eP of the
+ * reference.  On surfaces whose terms cancel (a paraboloid whose r^2 term
+ * nearly undoes it, a Zernike defocus that nearly flattens its base, an XY
+ * x^2 + y^2 that nearly cancels the conic) the sag in double-double
+ * carries the rounding of the large terms, and the root's own error,
+ * ferr / |F'|, is what the bound must cover: rounded to doubles, it
+ * vanishes under the half ulp of the printed bound. */
+static void carried_error(void **state)
+{
+    mpfr_t Pm[3], e;
+    int it, j, n = 0;
+    double worst = 0.0;
+    (void)state;
+    rng_state = 0x0ddba11c0ffeeULL;
+    mpfr_inits2(PREC, Pm[0], Pm[1], Pm[2], e, (mpfr_ptr)0);
+    for (it = 0; it < 900; it++) {
+        int kind = it % 3;
+        double R = pow(10.0, -3.0 + 4.0 * urand()) * (urand() < 0.5 ? -1.0 : 1.0);
+        double delta = pow(10.0, -1.0 - 6.0 * urand()), S[3], D[3], P[3][2], Dr[3][2], gap;
+        sg_surface f;
+        sg_system *sys;
+        sg_tracer *tp;
+        sg_ray_surface out[3];
+        sg_pray r;
+        memset(&f, 0, sizeof f);
+        f.conic = -1.0;
+        f.radius = R;
+        f.radius_x = INFINITY;
+        f.norm_radius = 1.0;
+        if (kind == 0) {
+            /* sag = r^2 / 2R + b2 r^2 = delta r^2 / 2R */
+            f.type = SG_SURF_ODDASPH;
+            f.odd[1] = -(1.0 - delta) / (2.0 * R);
+        } else if (kind == 1) {
+            /* Fringe Z4 = 2 rho^2 - 1 with norm 1: A4 (2 r^2 - 1) */
+            f.type = SG_SURF_ZERNIKE_FRINGE;
+            f.terms[3] = -(1.0 - delta) / (4.0 * R);
+        } else {
+            f.type = SG_SURF_XYPOLY;
+            f.terms[2] = -(1.0 - delta) / (2.0 * R);
+            f.terms[4] = f.terms[2];
+        }
+        sys = one_shape(&f, it % 2, 1.0);
+        tp = tu_tracer(sys, NULL, SG_METHOD_PRECISE);
+        S[0] = srand1(0.5);
+        S[1] = srand1(0.5);
+        S[2] = it % 4 < 2 ? 0.0 : -pow(10.0, -2.0 * urand());
+        D[0] = srand1(0.5);
+        D[1] = srand1(0.5);
+        D[2] = 1.0;
+        if (sg_start_precise_prep(tp, S, D, out, &r) == SG_OK &&
+            sg_precise_run_to(tp, &r, 0.0, out, 1) == SG_OK && out[1].status == SG_OK &&
+            ray_ref(&f, S, D, out[1].path, 1.0, it % 2, 1.5, P, Dr, Pm)) {
+            const dd *c[3] = {&r.p.x, &r.p.y, &r.p.z};
+            for (j = 0; j < 3; j++) {
+                mpfr_set_d(e, c[j]->hi, MPFR_RNDN);
+                mpfr_add_d(e, e, c[j]->lo, MPFR_RNDN);
+                mpfr_sub(e, e, Pm[j], MPFR_RNDN);
+                gap = fabs(mpfr_get_d(e, MPFR_RNDN));
+                if (!(gap <= r.eP))
+                    fail_msg("kind %d, delta %g: carried error %g above eP %g (coordinate %d)",
+                             kind, delta, gap, r.eP, j);
+                if (r.eP > 0.0 && gap / r.eP > worst)
+                    worst = gap / r.eP;
+            }
+            n++;
+        }
+        sg_tracer_free(tp);
+        sg_system_free(sys);
+    }
+    print_message("cancelling shapes: %d rays; carried error at most %.3g of eP\n", n, worst);
+    assert_true(n > 600);
+    mpfr_clears(Pm[0], Pm[1], Pm[2], e, (mpfr_ptr)0);
+}
+
 /* Surfaces that are another in other words trace bit for bit as it. */
 static void reductions(void **state)
 {
@@ -788,6 +880,11 @@ static void reductions(void **state)
         random_shape(&f, SG_SURF_ZERNIKE_FRINGE + it % 4 % 3, 1.0);
         memset(f.terms, 0, sizeof f.terms);
         memset(f.asph, 0, sizeof f.asph);
+        /* A curved base: with no terms on a flat one, the shape is a plane,
+         * whose z the standard surface gets exactly 0 and a sag function
+         * to within its bound. */
+        if (isinf(f.radius))
+            f.radius = 60.0;
         if (it % 4 == 3) {
             /* A biconic with equal sections is the conic. */
             f.type = SG_SURF_BICONIC;
@@ -807,7 +904,8 @@ static void reductions(void **state)
         for (m = 0; m < 3; m++) {
             sg_tracer *ta = tu_tracer(a, cat, (sg_method)m), *tb = tu_tracer(b, cat, (sg_method)m);
             for (k = 0; k < 40; k++) {
-                double S[3] = {srand1(6.0), srand1(6.0), -5.0}, D[3] = {srand1(0.2), srand1(0.2), 1.0};
+                double S[3] = {srand1(6.0), srand1(6.0), -5.0 * (1.0 + 0.1 * urand())};
+                double D[3] = {srand1(0.2), srand1(0.2), 1.0};
                 sg_ray_surface oa[3], ob[3];
                 int ra = sg_trace_start(ta, S, D, oa), rb = sg_trace_start(tb, S, D, ob);
                 assert_int_equal(ra, rb);
@@ -841,6 +939,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(kernel_bounds),
         cmocka_unit_test(trace_sets),
+        cmocka_unit_test(carried_error),
         cmocka_unit_test(reductions),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
