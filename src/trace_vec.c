@@ -101,7 +101,7 @@ static inline dd lane_dd(vdd a, int k)
 }
 
 /* F = z - f(x, y) in double-double and the bound on its rounding. */
-static void gen_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
+__attribute__((noinline)) static void gen_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
 {
     int k;
     for (k = 0; k < SG_VL; k++) {
@@ -124,7 +124,7 @@ static void gen_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
 
 /* F' along d at the double point p, the size of its terms, and a bound on
  * F'' from the bound on f's second derivatives. */
-static vd gen_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd *fpp)
+__attribute__((noinline)) static vd gen_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd *fpp)
 {
     vd Fp;
     int k;
@@ -147,7 +147,7 @@ static vd gen_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd 
  * asph_root_v: a step long beside F' / F'' grows a difference in the
  * iterate, and past a growth of 4 (or near a double root) the root is
  * left to the rescue. */
-static vd gen_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, int max_iter,
+__attribute__((noinline)) static vd gen_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, int max_iter,
                      vm active, vm *fail, vm *noconv, vm *wild)
 {
     vd sv = s0;
@@ -199,7 +199,7 @@ static vd gen_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, int
 /* The gradient of F = z - f in double-double, (-f_x, -f_y, 1), with the
  * bound on f's second derivatives (how fast the normal turns) and each
  * component's rounding. */
-static vdd3 gen_grad_v(const sg_sprep *s, vdd3 p, vd *gsens, vd *gerr)
+__attribute__((noinline)) static vdd3 gen_grad_v(const sg_sprep *s, vdd3 p, vd *gsens, vd *gerr)
 {
     vdd3 g;
     int k;
@@ -223,8 +223,23 @@ static vdd3 gen_grad_v(const sg_sprep *s, vdd3 p, vd *gsens, vd *gerr)
     return g;
 }
 
+/* The normal's direction (-f_x, -f_y, 1) at the double point p. */
+__attribute__((noinline)) static void gen_normal_v(const sg_sprep *s, const vd p[3],
+                                                         vd g[3])
+{
+    int k;
+    for (k = 0; k < SG_VL; k++) {
+        double f, gg[2], h;
+        if (!s->shp->ops->sag_d(s->shp, p[0][k], p[1][k], &f, gg, &h))
+            gg[0] = gg[1] = NAN;
+        g[0][k] = -gg[0];
+        g[1][k] = -gg[1];
+    }
+    g[2] = vd_set(1.0);
+}
+
 /* |Z - f(X, Y)| of the reported point, in double-double. */
-static vd gen_resid_v(const sg_sprep *s, vdd3 p)
+__attribute__((noinline)) static vd gen_resid_v(const sg_sprep *s, vdd3 p)
 {
     vd r;
     int k;
@@ -262,12 +277,12 @@ vdd sg_sag_xy_v(const sg_sprep *s, vdd x, vdd y, vm *bad)
  * so the residual is what the rounding moved the point off the surface:
  * to first order w (x lo_x + y lo_y) - lo_z, with w = sag'(r) / r, and the
  * rest is of the order of DD_U times the point. */
-static vd resid_v(const sg_sprep *s, vdd3 p)
+static inline __attribute__((always_inline)) vd resid_v(const sg_sprep *s, vdd3 p)
 {
     vd x = p.x.hi, y = p.y.hi, w, dw;
     if (s->shape == SHAPE_PLANE)
         return vd_abs(p.z.hi);
-    if (s->shape == SHAPE_GEN)
+    if (__builtin_expect(s->shape == SHAPE_GEN, 0))
         return gen_resid_v(s, p);
     slope_v(s, x * x + y * y, &w, &dw);
     return vd_abs(w * (x * p.x.lo + y * p.y.lo) - p.z.lo);
@@ -430,8 +445,17 @@ static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, in
 
 static void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
 {
-    if (s->shape == SHAPE_GEN) {
-        gen_F_v(s, p, F, err, bad);
+    if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
+        /* Through locals, so that the caller's F, err and bad never have
+         * their address taken by an out-of-line call (they stay in
+         * registers on the other shapes' path). */
+        vdd f;
+        vd e;
+        vm b;
+        gen_F_v(s, p, &f, &e, &b);
+        *F = f;
+        *err = e;
+        *bad = b;
         return;
     }
     if (s->shape == SHAPE_CONIC) {
@@ -459,8 +483,12 @@ static void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
  * *mag, and in *fpp a bound on F''; an asphere's slope serves both. */
 static vd surf_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd *fpp)
 {
-    if (s->shape == SHAPE_GEN)
-        return gen_Fp_v(s, p, d, mag, fpp);
+    if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
+        vd m, f, Fp = gen_Fp_v(s, p, d, &m, &f);
+        *mag = m;
+        *fpp = f;
+        return Fp;
+    }
     if (s->shape == SHAPE_CONIC) {
         vd a = p[0] * d[0], b = p[1] * d[1], c = s->k1.hi * p[2] * d[2], e = s->R * d[2];
         *mag = 2.0 * (vd_abs(a) + vd_abs(b) + vd_abs(c) + vd_abs(e));
@@ -490,16 +518,8 @@ static vd surf_sec_v(const sg_sprep *s, const vd p[3], const vd d[3])
         g[0] = p[0];
         g[1] = p[1];
         g[2] = s->k1.hi * p[2] - s->R;
-    } else if (s->shape == SHAPE_GEN) {
-        int k;
-        for (k = 0; k < SG_VL; k++) {
-            double f, gg[2], h;
-            if (!s->shp->ops->sag_d(s->shp, p[0][k], p[1][k], &f, gg, &h))
-                gg[0] = gg[1] = NAN;
-            g[0][k] = -gg[0];
-            g[1][k] = -gg[1];
-        }
-        g[2] = vd_set(1.0);
+    } else if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
+        gen_normal_v(s, p, g);
     } else {
         vd w, dw;
         slope_v(s, p[0] * p[0] + p[1] * p[1], &w, &dw);
@@ -562,10 +582,14 @@ static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir, vm *unsu
     *unsure = vm_set(0);
     if (sg_sprep_passes(s))
         return;
-    if (s->shape == SHAPE_GEN)
-        g = gen_grad_v(s, r->p, &gsens, &gerr);
-    else
+    if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
+        vd gs, ge;
+        g = gen_grad_v(s, r->p, &gs, &ge);
+        gsens = gs;
+        gerr = ge;
+    } else {
         g = surf_grad_v(s, r->p, &gsens);
+    }
     /* A flat surface's normal (0, 0, -1) has g.g = 1 exactly and d.g =
      * -d.z exactly, and a product by exactly 1 is its other factor: all
      * three are skipped there.  Elsewhere 1 / g.g is formed as soon as g
@@ -583,7 +607,7 @@ static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir, vm *unsu
     dN = gsens * r->eP / gn;
     /* A shape of its own also rounds its gradient by up to gerr a
      * component. */
-    if (s->shape == SHAPE_GEN)
+    if (__builtin_expect(s->shape == SHAPE_GEN, 0))
         dN = (gsens * r->eP + 2.0 * gerr) / gn;
     if (s->mirror) {
         vdd f = vdd_mul_d(dg, vd_set(2.0));
@@ -1009,10 +1033,14 @@ static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
         if (s->shape == SHAPE_ASPH || s->shape == SHAPE_GEN) {
             vm nohit, noconv, wild;
             /* Where the base conic misses, Newton starts on the plane. */
-            if (s->shape == SHAPE_GEN)
+            if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
+                vm a, b, c;
                 sd = gen_root_v(s, ps, ds, vsel(miss, tgt, sd), t->o.max_iter,
-                                live & ~bad & ~resc, &nohit, &noconv, &wild);
-            else
+                                live & ~bad & ~resc, &a, &b, &c);
+                nohit = a;
+                noconv = b;
+                wild = c;
+            } else
                 sd = asph_root_v(s, ps, ds, vsel(miss, tgt, sd), t->o.max_iter,
                                  live & ~bad & ~resc, &nohit, &noconv, &wild);
             resc |= (noconv | wild) & live & ~bad;
