@@ -1492,6 +1492,9 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     for (i = 0; i < sys->nsurf; i++) {
         const sg_surface *s = &sys->surf[i];
         version = needed_version(SG_SCOPE_SURFACE, s, version);
+        /* The shapes beyond the even asphere came with version 3. */
+        if (s->type >= SG_SURF_ODDASPH)
+            version = version < 3 ? 3 : version;
         /* Coordinate breaks, tilts and model glasses came with version 2. */
         if (s->type == SG_SURF_COORDBRK || sg_surface_moves_frame(s) ||
             s->after_mode != SG_AFTER_EXPLICIT || s->mat.kind == SG_MAT_MODEL)

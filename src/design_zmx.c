@@ -35,6 +35,7 @@
 #define ZMX_MAX_NUMBER 80    /* characters of one number */
 #define ZMX_NPARM 8          /* even-asphere PARM 1..8 */
 #define ZMX_MAX_PARM 64      /* PARM numbers accepted at all */
+#define ZMX_MAX_XDAT 250     /* XDAT numbers accepted at all */
 #define ZMX_NWSLOT 24        /* WAVM slots */
 #define ZMX_MAX_GCAT 16
 
@@ -82,6 +83,9 @@ typedef struct zsurf {
     char pend_msg[SG_DIAG_MSG];
     long xdat_line;      /* first nonzero XDAT */
     double xdat;
+    /* Every XDAT value by number, for the types that read extra data. */
+    double xd[ZMX_MAX_XDAT + 1];
+    long xd_line[ZMX_MAX_XDAT + 1];
     int ap;              /* 0 none, 1 CLAP, 2 FLAP */
     double ap_min, ap_max;
     long ap_line;
@@ -747,6 +751,110 @@ static int read_glas(zctx *c, const zline *l, sg_surface *s)
     return SG_OK;
 }
 
+/* PARM k of z must be 0 unless lo <= k <= hi: what the type reads. */
+static int parm_only(zctx *c, zsurf *z, int lo, int hi, const char *what)
+{
+    int k;
+    for (k = 0; k <= ZMX_MAX_PARM; k++)
+        if ((k < lo || k > hi) && z->parm[k] != 0.0) {
+            c->line = z->parm_line[k];
+            return zerr(c, SG_EUNSUPPORTED, "PARM %d is %.17g; %s", k, z->parm[k], what);
+        }
+    return SG_OK;
+}
+
+/* The shapes of sagitta-design(5), SURFACE TYPES, from their Zemax
+ * parameters (PARM) and extra data (XDAT); SG_EUNSUPPORTED with the
+ * message otherwise. */
+static int zmx_shape(zctx *c, zsurf *z, sg_surface *s)
+{
+    int k;
+    if (strcmp(z->type, "ODDASPHE") == 0) {
+        s->type = SG_SURF_ODDASPH;
+        if ((k = parm_only(c, z, 1, SG_NODD, "the odd asphere has terms r^1 to r^8 "
+                                             "(PARM 1 to 8)")) != SG_OK)
+            return k;
+        for (k = 0; k < SG_NODD; k++)
+            s->odd[k] = z->parm[k + 1];
+    } else if (strcmp(z->type, "TOROIDAL") == 0) {
+        /* PARM 0 the extrapolate flag of its Zernike terms, 1 the radius
+         * of rotation (0: a cylinder), 2 to 8 the y^2 ... y^14 terms. */
+        s->type = SG_SURF_TOROIDAL;
+        if ((k = parm_only(c, z, 0, 8, "a toroid has parameters 0 to 8")) != SG_OK)
+            return k;
+        s->radius_x = z->parm[1] == 0.0 ? INFINITY : z->parm[1];
+        for (k = 0; k < 7; k++)
+            s->asph[k] = z->parm[k + 2];
+        for (k = 3; k <= ZMX_MAX_XDAT; k++)
+            if (z->xd[k] != 0.0) {
+                c->line = z->xd_line[k];
+                return zerr(c, SG_EUNSUPPORTED, "XDAT %d is %.17g: a toroid's Zernike terms "
+                            "are not supported", k, z->xd[k]);
+            }
+    } else if (strcmp(z->type, "BICONICX") == 0) {
+        s->type = SG_SURF_BICONIC;
+        if ((k = parm_only(c, z, 1, 2, "a biconic has the x radius and x conic (PARM 1 and "
+                                       "2)")) != SG_OK)
+            return k;
+        s->radius_x = z->parm[1] == 0.0 ? INFINITY : z->parm[1];
+        s->conic_x = z->parm[2];
+    } else if (strcmp(z->type, "FZERNSAG") == 0 || strcmp(z->type, "SZERNSAG") == 0 ||
+               strcmp(z->type, "XPOLYNOM") == 0) {
+        /* XDAT 1 the number of terms, 2 the normalization radius, 3 on the
+         * coefficients; Zernike: PARM 1 to 8 the even terms r^2 ... r^16. */
+        int xy = z->type[0] == 'X', n = (int)z->xd[1], max;
+        s->type = xy ? SG_SURF_XYPOLY
+                     : z->type[0] == 'F' ? SG_SURF_ZERNIKE_FRINGE : SG_SURF_ZERNIKE_STANDARD;
+        max = s->type == SG_SURF_ZERNIKE_FRINGE ? SG_ZERNIKE_FRINGE_MAX
+              : xy                              ? SG_NTERMS - 1
+                                                : SG_NTERMS;
+        k = xy ? parm_only(c, z, 1, 0, "an XY polynomial has no parameters")
+               : parm_only(c, z, 0, SG_NASPH,
+                           "the Zernike sag has terms r^2 to r^16 (PARM 1 to 8); its "
+                           "Zernike decenters are not supported");
+        if (k != SG_OK)
+            return k;
+        if (!xy && z->parm_line[0] && z->parm[0] == 0.0)
+            zwarn(c, "PARM 0: extrapolate is 0, so Zemax drops the Zernike terms beyond the "
+                  "normalization radius; sagitta applies them at every radius");
+        for (k = 0; k < SG_NASPH && !xy; k++)
+            s->asph[k] = z->parm[k + 1];
+        if (z->xd[1] != (double)n || n < 0 || n > max) {
+            c->line = z->xd_line[1];
+            return zerr(c, SG_EUNSUPPORTED, "XDAT 1: %.17g terms; sagitta reads 0 to %d here",
+                        z->xd[1], max);
+        }
+        s->norm_radius = z->xd[2];
+        if (!(s->norm_radius > 0.0) || !isfinite(s->norm_radius)) {
+            c->line = z->xd_line[2];
+            return zerr(c, SG_ERANGE, "XDAT 2: normalization radius %.17g must be positive",
+                        z->xd[2]);
+        }
+        for (k = 3; k <= ZMX_MAX_XDAT; k++)
+            if (z->xd[k] != 0.0 && k - 2 > n) {
+                c->line = z->xd_line[k];
+                return zerr(c, SG_EUNSUPPORTED, "XDAT %d is %.17g, beyond the %d terms XDAT 1 "
+                            "gives", k, z->xd[k], n);
+            }
+        for (k = 0; k < n; k++)
+            s->terms[k] = z->xd[k + 3];
+    } else {
+        const char *what = strcmp(z->type, "BICONIC") == 0      ? "an old biconic"
+                           : strcmp(z->type, "PARAXIAL") == 0   ? "a paraxial surface"
+                           : strcmp(z->type, "DGRATING") == 0   ? "a diffraction grating"
+                           : strcmp(z->type, "EXTPOLY") == 0    ? "an extended polynomial"
+                           : strcmp(z->type, "GRID_SAG") == 0   ? "a grid sag"
+                                                                : "this surface type";
+        return zerr(c, SG_EUNSUPPORTED,
+                    "TYPE %s is %s; sagitta has the standard, even and odd asphere, toroidal, "
+                    "biconic, Zernike sag, XY polynomial and coordinate-break surfaces",
+                    z->type, what);
+    }
+    /* Their extra data are read above; no other check applies. */
+    z->xdat_line = 0;
+    return SG_OK;
+}
+
 /* Ends the current surface block: its type, parameters and aperture. */
 static int end_surface(zctx *c)
 {
@@ -808,20 +916,8 @@ static int end_surface(zctx *c)
                         "Zemax keeps the medium before it");
         }
         s->radius = INFINITY;
-    } else {
-        const char *what = strcmp(z->type, "TOROIDAL") == 0 ? "a toroid"
-                           : strcmp(z->type, "BICONICX") == 0 || strcmp(z->type, "BICONIC") == 0
-                               ? "a biconic"
-                           : strcmp(z->type, "ODDASPHE") == 0 ? "an odd asphere"
-                           : strcmp(z->type, "PARAXIAL") == 0 ? "a paraxial surface"
-                           : strcmp(z->type, "DGRATING") == 0 ? "a diffraction grating"
-                           : strncmp(z->type, "SZERNSAG", 8) == 0 || strncmp(z->type, "FZERNSAG", 8) == 0
-                               ? "a Zernike sag"
-                           : strcmp(z->type, "XPOLYNOM") == 0 ? "an XY polynomial"
-                                                               : "this surface type";
-        return zerr(c, SG_EUNSUPPORTED,
-                    "TYPE %s is %s; sagitta has standard (sphere, conic), even-asphere "
-                    "and coordinate-break surfaces only", z->type, what);
+    } else if ((k = zmx_shape(c, z, s)) != SG_OK) {
+        return k;
     }
     if (z->pend_line) {
         c->line = z->pend_line;
@@ -942,10 +1038,18 @@ static int surface_line(zctx *c, const zline *l)
         return SG_OK;
     }
     if (tok_is(k, "XDAT")) {
-        /* Extra data belong to types sagitta refuses, which the end of the
-         * block reports first; zeros change nothing. */
+        /* Extra data: the Zernike and XY types read theirs at the end of
+         * the block, which refuses them on any other type; zeros change
+         * nothing. */
+        int n;
         if (l->n >= 3 && (rc = tok_num(c, l, 2, "extra data value", &v)) != SG_OK)
             return rc;
+        if ((rc = tok_int(c, l, 1, "extra data number", 1, ZMX_MAX_XDAT, &n)) != SG_OK)
+            return rc;
+        if (l->n >= 3) {
+            z->xd[n] = v;
+            z->xd_line[n] = c->line;
+        }
         if (l->n >= 3 && v != 0.0 && !z->xdat_line) {
             z->xdat_line = c->line;
             z->xdat = v;
@@ -1629,6 +1733,46 @@ static void zb_list(zbuf *b, const char *kw, const sg_system *s, int what)
     }
     zb_add(b, "\n", 1);
 }
+/* A shape's PARM and XDAT lines, as zmx_shape reads them. */
+static void zb_shape(zbuf *b, const sg_surface *f)
+{
+    char n1[40];
+    int k, n = 0;
+    switch (f->type) {
+    case SG_SURF_ODDASPH:
+        for (k = 0; k < SG_NODD; k++)
+            zb_printf(b, "  PARM %d %s\n", k + 1, num(n1, f->odd[k]));
+        return;
+    case SG_SURF_TOROIDAL:
+        zb_printf(b, "  PARM 1 %s\n", num(n1, isinf(f->radius_x) ? 0.0 : f->radius_x));
+        for (k = 0; k < 7; k++)
+            zb_printf(b, "  PARM %d %s\n", k + 2, num(n1, f->asph[k]));
+        return;
+    case SG_SURF_BICONIC:
+        zb_printf(b, "  PARM 1 %s\n", num(n1, isinf(f->radius_x) ? 0.0 : f->radius_x));
+        zb_printf(b, "  PARM 2 %s\n", num(n1, f->conic_x));
+        return;
+    case SG_SURF_ZERNIKE_FRINGE:
+    case SG_SURF_ZERNIKE_STANDARD:
+        /* Extrapolate set: the terms apply at every radius, as sagitta's. */
+        zb_add(b, "  PARM 0 1\n", 11);
+        for (k = 0; k < SG_NASPH; k++)
+            zb_printf(b, "  PARM %d %s\n", k + 1, num(n1, f->asph[k]));
+        /* fall through */
+    case SG_SURF_XYPOLY:
+        for (k = 0; k < SG_NTERMS; k++)
+            if (f->terms[k] != 0.0)
+                n = k + 1;
+        zb_printf(b, "  XDAT 1 %d 0 0 0 0 0 0\n", n);
+        zb_printf(b, "  XDAT 2 %s 0 0 0 0 0 0\n", num(n1, f->norm_radius));
+        for (k = 0; k < n; k++)
+            zb_printf(b, "  XDAT %d %s 0 0 0 0 0 0\n", k + 3, num(n1, f->terms[k]));
+        return;
+    default:
+        return;
+    }
+}
+
 
 static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_diag *d)
 {
@@ -1736,10 +1880,9 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
     mpfr_init2(q, 128);
     for (i = 0; i < s->nsurf; i++) {
         const sg_surface *f = &s->surf[i];
+        /* The .zmx keyword of each type is the name the editor shows. */
         zb_printf(b, "SURF %d\n  TYPE %s\n", i,
-                  f->type == SG_SURF_EVENASPH   ? "EVENASPH"
-                  : f->type == SG_SURF_COORDBRK ? "COORDBRK"
-                                                : "STANDARD");
+                  sg_param_find(SG_SCOPE_SURFACE, "type")->shown[f->type]);
         if (f->comment[0]) {
             zb_add(b, "  COMM ", 7);
             zb_text(b, f->comment, &changed);
@@ -1766,6 +1909,7 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
             for (k = 0; k < 6; k++)
                 zb_printf(b, "  PARM %d %s\n", k + 1, num(n1, v[k]));
         }
+        zb_shape(b, f);
         if (isinf(f->thickness))
             zb_add(b, "  DISZ INFINITY\n", 16);
         else

@@ -21,6 +21,7 @@
 #define sg_precise_run_from SG_ISA_CAT(sg_precise_run_from, SG_ISA)
 #define sg_precise_run_to SG_ISA_CAT(sg_precise_run_to, SG_ISA)
 #define sg_sag_v SG_ISA_CAT(sg_sag_v, SG_ISA)
+#define sg_sag_xy_v SG_ISA_CAT(sg_sag_xy_v, SG_ISA)
 #define sg_launch_classic SG_ISA_CAT(sg_launch_classic, SG_ISA)
 #define sg_launch_precise SG_ISA_CAT(sg_launch_precise, SG_ISA)
 #define sg_launch_precise_block SG_ISA_CAT(sg_launch_precise_block, SG_ISA)

@@ -118,7 +118,7 @@ static void q_aim_start_v(const sg_tracer *t, const osp *o, vd px, vd py, const 
         q_aim_off_v(t, o, px, py, q);
         return;
     }
-    z = sg_sag_v(&t->sp[t->sys->stop], vdd_add(vdd_sqr(tg[0]), vdd_sqr(tg[1])), &bad);
+    z = sg_sag_xy_v(&t->sp[t->sys->stop], tg[0], tg[1], &bad);
     z = vdd_add(z, vdd_set(t->ln.zstop));
     if (o->inf) {
         vdd s = vdd_mul(z, vdd_recip(vdd_set(o->dir.z)));

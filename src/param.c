@@ -14,8 +14,13 @@
 #include "internal.h"
 
 static const char *const units_names[] = {"mm", "cm", "in", "m"};
-static const char *const surf_type_names[] = {"standard", "even_asphere", "coordinate_break"};
-static const char *const surf_type_shown[] = {"STANDARD", "EVENASPH", "COORDBRK"};
+static const char *const surf_type_names[] = {
+    "standard", "even_asphere", "coordinate_break", "odd_asphere", "toroidal", "biconic",
+    "zernike_fringe", "zernike_standard", "xy_polynomial"};
+/* The editor shows the .zmx keyword of each. */
+static const char *const surf_type_shown[] = {"STANDARD", "EVENASPH", "COORDBRK",
+                                              "ODDASPHE", "TOROIDAL", "BICONICX",
+                                              "FZERNSAG", "SZERNSAG", "XPOLYNOM"};
 static const char *const aperture_names[] = {
     "none", "circular_aperture", "circular_obscuration", "rectangular_aperture",
     "rectangular_obscuration", "elliptical_aperture", "elliptical_obscuration"};
@@ -81,7 +86,7 @@ static const sg_param field_params[] = {
 
 static const sg_param surface_params[] = {
     {"type", "type", "Type", "type", "TYPE", SG_PARAM_ENUM, 0, offsetof(sg_surface, type), 0, 1,
-     0, 0, 0, 0, SG_SURF_STANDARD, surf_type_names, surf_type_shown, 3, 1},
+     0, 0, 0, 0, SG_SURF_STANDARD, surf_type_names, surf_type_shown, SG_SURF_NTYPES, 1},
     {"comment", "comment", "Comment", "comment", "COMM", SG_PARAM_TEXT, 0,
      offsetof(sg_surface, comment), SG_COMMENT, 1, 0, 0, 0, 0, 0, NONAMES, 1},
     REAL1(sg_surface, "radius", "radius", "Radius", "radius", "CURV", SG_PARAM_INF, radius,
@@ -98,6 +103,20 @@ static const sg_param surface_params[] = {
           0.0),
     {"asphere", "asphere term r^%d", "r^%d", "a%d", "PARM", SG_PARAM_REAL, 0,
      offsetof(sg_surface, asph), 0, SG_NASPH, 2, 2, -INFINITY, INFINITY, 0.0, NONAMES, 1},
+    /* Format version 3: the shapes beyond the even asphere; each type
+     * reads only its own (sagitta-design(5), SURFACE TYPES). */
+    {"odd", "odd asphere term r^%d", "b%d", "b%d", "PARM", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+     offsetof(sg_surface, odd), 0, SG_NODD, 1, 1, -INFINITY, INFINITY, 0.0, NONAMES, 3},
+    {"radius_x", "x radius", "Radius X", "rx", "PARM", SG_PARAM_REAL,
+     SG_PARAM_INF | SG_PARAM_OPTIONAL, offsetof(sg_surface, radius_x), 0, 1, 0, 0, -SG_MAX_LEN,
+     SG_MAX_LEN, INFINITY, NONAMES, 3},
+    {"conic_x", "x conic", "Conic X", "kx", "PARM", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+     offsetof(sg_surface, conic_x), 0, 1, 0, 0, -INFINITY, INFINITY, 0.0, NONAMES, 3},
+    {"norm_radius", "normalization radius", "Norm R", "norm", "XDAT", SG_PARAM_REAL,
+     SG_PARAM_POSITIVE | SG_PARAM_OPTIONAL, offsetof(sg_surface, norm_radius), 0, 1, 0, 0, 0.0,
+     SG_MAX_LEN, 1.0, NONAMES, 3},
+    {"terms", "term %d", "T%d", "t%d", "XDAT", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+     offsetof(sg_surface, terms), 0, SG_NTERMS, 1, 1, -INFINITY, INFINITY, 0.0, NONAMES, 3},
     /* Format version 2: surface apertures and obscurations. */
     {"aperture", "aperture", "Aperture", "aperture", "CLAP|OBSC|SQAP|SQOB|ELAP|ELOB",
      SG_PARAM_ENUM, SG_PARAM_OPTIONAL,
@@ -373,5 +392,25 @@ int sg_system_equal(const sg_system *a, const sg_system *b)
             !same_change(&a->surf[i].after, &b->surf[i].after) ||
             a->surf[i].after_mode != b->surf[i].after_mode)
             return 0;
+    return 1;
+}
+
+int sg_param_used(const sg_param *p, int k, int type)
+{
+    const char *key = p->key;
+    int zern = type == SG_SURF_ZERNIKE_FRINGE || type == SG_SURF_ZERNIKE_STANDARD;
+    if (strcmp(key, "asphere") == 0)
+        return type == SG_SURF_EVENASPH || zern || (type == SG_SURF_TOROIDAL && k < 7);
+    if (strcmp(key, "odd") == 0)
+        return type == SG_SURF_ODDASPH;
+    if (strcmp(key, "radius_x") == 0)
+        return type == SG_SURF_TOROIDAL || type == SG_SURF_BICONIC;
+    if (strcmp(key, "conic_x") == 0)
+        return type == SG_SURF_BICONIC;
+    if (strcmp(key, "norm_radius") == 0)
+        return zern || type == SG_SURF_XYPOLY;
+    if (strcmp(key, "terms") == 0)
+        return type == SG_SURF_XYPOLY || type == SG_SURF_ZERNIKE_STANDARD ||
+               (type == SG_SURF_ZERNIKE_FRINGE && k < SG_ZERNIKE_FRINGE_MAX);
     return 1;
 }

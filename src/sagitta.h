@@ -29,7 +29,7 @@ extern "C" {
 /* The JSON design format version this library reads and writes. */
 /* Version 2 adds coordinate breaks and surface tilts and decenters; a
  * design without them is still written as version 1. */
-#define SG_DESIGN_FORMAT_VERSION 2
+#define SG_DESIGN_FORMAT_VERSION 3
 
 /* ------------------------------------------------------------------------
  * Errors.  One table yields the enum, the names and the messages, so the
@@ -200,6 +200,8 @@ int sg_model_glass(double nd, double vd, double dpgf, sg_glass *out);
  * ------------------------------------------------------------------------ */
 
 #define SG_NASPH 8        /* even asphere terms on r^2, r^4, ... r^16 */
+#define SG_NODD 8         /* odd asphere terms on r^1, r^2, ... r^8 */
+#define SG_NTERMS 66      /* Zernike (to radial order 10) or x^i y^j (orders 1 to 10) terms */
 #define SG_MAX_WAVES 24
 #define SG_MAX_FIELDS 64
 #define SG_COMMENT 64
@@ -208,8 +210,15 @@ int sg_model_glass(double nd, double vd, double dpgf, sg_glass *out);
 typedef enum sg_surf_type {
     SG_SURF_STANDARD = 0, /* sphere, plane or conic */
     SG_SURF_EVENASPH = 1, /* conic plus even polynomial in r */
-    SG_SURF_COORDBRK = 2  /* Zemax's coordinate break: a new frame, no optics */
+    SG_SURF_COORDBRK = 2, /* Zemax's coordinate break: a new frame, no optics */
+    SG_SURF_ODDASPH = 3,  /* conic plus a polynomial in r^1 ... r^8 */
+    SG_SURF_TOROIDAL = 4, /* a y-z conic asphere curve turned about an axis parallel to y */
+    SG_SURF_BICONIC = 5,  /* conic sections of their own in x and in y */
+    SG_SURF_ZERNIKE_FRINGE = 6,   /* even asphere plus Fringe Zernike terms */
+    SG_SURF_ZERNIKE_STANDARD = 7, /* even asphere plus Standard (Noll) Zernike terms */
+    SG_SURF_XYPOLY = 8    /* conic plus a polynomial in x and y */
 } sg_surf_type;
+#define SG_SURF_NTYPES 9
 
 /* Surface apertures and obscurations, as Zemax defines them: one a surface
  * (a dummy surface of zero thickness adds another), each about its own
@@ -272,7 +281,14 @@ typedef struct sg_surface {
     double semi_diameter;  /* clear semi-diameter; 0 means not set */
     int sd_fixed;          /* nonzero: rays beyond semi_diameter are vignetted */
     double conic;
-    double asph[SG_NASPH]; /* coefficients of r^2, r^4, ..., r^16 */
+    double asph[SG_NASPH]; /* coefficients of r^2, r^4, ..., r^16 (toroid: y^2 ... y^14) */
+    /* The shapes beyond the even asphere (sagitta-design(5), SURFACE
+     * TYPES); each type reads only its own. */
+    double odd[SG_NODD];   /* odd asphere: coefficients of r^1 ... r^8 */
+    double radius_x;       /* biconic: x radius; toroid: radius of rotation; inf: flat */
+    double conic_x;        /* biconic: x conic */
+    double norm_radius;    /* Zernike and XY: x and y are divided by it */
+    double terms[SG_NTERMS]; /* Zernike Z1 ...; XY: x, y, x^2, xy, y^2, x^3, ... */
     sg_aperture_type aperture; /* the surface aperture or obscuration */
     double ap_rmin, ap_rmax;   /* circular: the annulus's radii */
     double ap_xhalf, ap_yhalf; /* rectangular and elliptical: half widths */
@@ -436,6 +452,9 @@ int sg_param_check(const sg_param *p, int k, double v, int object, char *msg, si
 void sg_param_label(const sg_param *p, int k, char *buf, size_t n);
 void sg_param_heading(const sg_param *p, int k, char *buf, size_t n);
 void sg_param_cell(const sg_param *p, int k, char *buf, size_t n);
+/* Whether a surface of type reads element k of surface parameter p (each
+ * shape reads only its own; the editor shows the rest dim). */
+int sg_param_used(const sg_param *p, int k, int type);
 /* Every parameter of obj at its default. */
 void sg_param_defaults(sg_param_scope scope, void *obj);
 /* Nonzero when every parameter of a and b is the same, bit for bit. */

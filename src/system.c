@@ -4,6 +4,7 @@
 #include <string.h>
 
 #include "internal.h"
+#include "shape.h"
 
 void sg_surface_init(sg_surface *s)
 {
@@ -163,6 +164,13 @@ double sg_surface_curvature(const sg_surface *s)
 
 double sg_surface_sag(const sg_surface *s, double x, double y)
 {
+    if (sg_shape_ops_of(s->type)) {
+        sg_shape sh;
+        double z, g[2], h;
+        if (sg_shape_prepare(s, &sh, 0, NULL) != SG_OK || !sh.ops->sag_d(&sh, x, y, &z, g, &h))
+            return NAN;
+        return z;
+    }
     double c = sg_surface_curvature(s);
     double r2 = x * x + y * y;
     double arg = 1.0 - (1.0 + s->conic) * c * c * r2;
@@ -384,8 +392,16 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
         const sg_surface *s = &sys->surf[i];
         if (!finite_or_inf_radius(s->radius))
             return sg_diag_set(d, SG_ERANGE, "surface %d: radius is not a number", i);
-        if ((int)s->type < SG_SURF_STANDARD || (int)s->type > SG_SURF_COORDBRK)
+        if ((int)s->type < SG_SURF_STANDARD || (int)s->type >= SG_SURF_NTYPES)
             return sg_diag_set(d, SG_ERANGE, "surface %d: type %d is unknown", i, (int)s->type);
+        if (sg_shape_ops_of(s->type)) {
+            /* What only the shape itself knows: its normalization radius
+             * and terms. */
+            sg_shape sh;
+            int rc = sg_shape_prepare(s, &sh, i, d);
+            if (rc != SG_OK)
+                return rc;
+        }
         {
             int rc = check_frames(sys, i, d);
             if (rc != SG_OK)

@@ -154,7 +154,13 @@ double sg_sprep_sag_resid(const sg_sprep *s, double x, double y, double z)
          * |G| / |grad G|, is what is left to report. */
         return fabs(dd_to_d(G)) / (2.0 * sqrt(x * x + y * y));
     }
-    sag = sag_dd(s, r2, &ok);
+    if (s->shape == SHAPE_GEN) {
+        dd g[2];
+        double ez, eg;
+        ok = s->shp->ops->sag_dd(s->shp, dd_from(x), dd_from(y), &sag, g, &ez, &eg);
+    } else {
+        sag = sag_dd(s, r2, &ok);
+    }
     if (!ok)
         return NAN;
     return fabs(dd_to_d(dd_sub(dd_from(z), sag)));
@@ -165,9 +171,11 @@ double sg_sprep_sag_resid(const sg_sprep *s, double x, double y, double z)
  * precise method itself is in trace_vec.c.
  * ------------------------------------------------------------------------ */
 
-/* Newton in double on F(s) = z(s) - sag(r(s)) for an even asphere. */
+/* Newton in double on F(s) = z(s) - sag(r(s)) for an even asphere, or
+ * z(s) - f(x(s), y(s)) for a shape of its own (shape.h), whose bound on
+ * f's second derivatives at the root goes to *h. */
 static int asph_root_d(const sg_sprep *s, const double p[3], const double d[3],
-                       double s0, int max_iter, double *sout)
+                       double s0, int max_iter, double *sout, double *h)
 {
     double sv = s0;
     int it;
@@ -175,6 +183,14 @@ static int asph_root_d(const sg_sprep *s, const double p[3], const double d[3],
         double x = p[0] + sv * d[0], y = p[1] + sv * d[1], z = p[2] + sv * d[2];
         double r2 = x * x + y * y;
         double sag = 0.0, w, dw, F, Fp, step;
+        if (s->shape == SHAPE_GEN) {
+            double g[2];
+            if (!s->shp->ops->sag_d(s->shp, x, y, &sag, g, h))
+                return 0;
+            F = z - sag;
+            Fp = d[2] - g[0] * d[0] - g[1] * d[1];
+            goto step;
+        }
         if (isfinite(s->R)) {
             double q = s->R * s->R - s->k1.hi * r2;
             if (q < 0.0)
@@ -191,6 +207,7 @@ static int asph_root_d(const sg_sprep *s, const double p[3], const double d[3],
         slope_d(s, r2, &w, &dw);
         F = z - sag;
         Fp = d[2] - w * (x * d[0] + y * d[1]);
+    step:
         if (Fp == 0.0 || !isfinite(Fp))
             return 0;
         step = F / Fp;
@@ -218,6 +235,13 @@ static void grad_d(const sg_sprep *s, const double p[3], double g[3])
         g[0] = p[0];
         g[1] = p[1];
         g[2] = s->k1.hi * p[2] - s->R;
+    } else if (s->shape == SHAPE_GEN) {
+        double f, gg[2], h;
+        if (!s->shp->ops->sag_d(s->shp, p[0], p[1], &f, gg, &h))
+            gg[0] = gg[1] = NAN;
+        g[0] = -gg[0];
+        g[1] = -gg[1];
+        g[2] = 1.0;
     } else {
         double w, dw;
         slope_d(s, p[0] * p[0] + p[1] * p[1], &w, &dw);
@@ -349,21 +373,17 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
         double A = c * (d[0] * d[0] + d[1] * d[1] + k1 * d[2] * d[2]);
         double B = 2.0 * c * (P[0] * d[0] + P[1] * d[1] + k1 * zl * d[2]) - 2.0 * d[2];
         double C = c * (P[0] * P[0] + P[1] * P[1] + k1 * zl * zl) - 2.0 * zl;
-        double sigA, sigB, sigC, eta_t, dlen;
+        double sigA, sigB, sigC, eta_t, dlen, hgen = 0.0;
         if (A == 0.0) {
-            if (B == 0.0) {
-                sg_fail_rest(out, i, t->n, SG_EMISS);
-                return SG_EMISS;
-            }
+            if (B == 0.0)
+                goto miss;
             tt = -C / B;
         } else {
             double disc = B * B - 4.0 * A * C;
             double t1, t2, tl = B != 0.0 ? -C / B : 0.0;
             int ok1, ok2;
-            if (disc < 0.0) {
-                sg_fail_rest(out, i, t->n, SG_EMISS);
-                return SG_EMISS;
-            }
+            if (disc < 0.0)
+                goto miss;
             if (fabs(4.0 * A * C) <= 0x1p-20 * (B * B)) {
                 /* A nearly flat surface (|R| of 1e15 and more on a lens):
                  * the textbook near root -B + sqrt(disc) would cancel
@@ -385,14 +405,22 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
                 tt = t1;
             else if (ok2)
                 tt = t2;
-            else {
+            else
+                goto miss;
+        }
+        if (0) {
+        miss:
+            /* A shape of its own may meet a ray its base conic misses:
+             * Newton starts on the tangent plane. */
+            if (s->shape != SHAPE_GEN || d[2] == 0.0) {
                 sg_fail_rest(out, i, t->n, SG_EMISS);
                 return SG_EMISS;
             }
+            tt = -zl / d[2];
         }
-        if (s->shape == SHAPE_ASPH) {
+        if (s->shape == SHAPE_ASPH || s->shape == SHAPE_GEN) {
             double pl[3] = {P[0], P[1], zl};
-            int rc2 = asph_root_d(s, pl, d, tt, t->o.max_iter, &tt);
+            int rc2 = asph_root_d(s, pl, d, tt, t->o.max_iter, &tt, &hgen);
             if (rc2 <= 0) {
                 sg_fail_rest(out, i, t->n, rc2 < 0 ? SG_ENOCONV : SG_EMISS);
                 return rc2 < 0 ? SG_ENOCONV : SG_EMISS;
@@ -412,7 +440,7 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
             double slope = fabs(2.0 * A * tt + B);
             double num = sigA * tt * tt + sigB * fabs(tt) + sigC;
             eta_t = slope > 0.0 ? num / slope : INFINITY;
-            if (s->shape == SHAPE_ASPH)
+            if (s->shape == SHAPE_ASPH || s->shape == SHAPE_GEN)
                 eta_t += 8.0 * U53 * fabs(tt);
         }
         dlen = sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
@@ -468,6 +496,8 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
                 slope_d(s, x * x + y * y, &w, &dw);
                 gsens = fabs(w) + 2.0 * dw;
             }
+            if (s->shape == SHAPE_GEN)
+                gsens = hgen;
             rc = classic_bend(s, pl, d, &dn);
             if (rc != SG_OK) {
                 sg_fail_rest(out, i, t->n, rc);
@@ -626,6 +656,19 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
             p->shape = SHAPE_CONIC;
         else
             p->shape = SHAPE_PLANE;
+        if (sg_shape_ops_of(s->type)) {
+            int rc = sg_shape_prepare(s, &t->shp[i], i, d);
+            if (rc != SG_OK) {
+                mpfr_clear(q);
+                mpfr_clear(tmp);
+                return rc;
+            }
+            /* Its base conic (the y-z section's for a toroid or biconic)
+             * seeds the root, as an asphere's does. */
+            p->shp = &t->shp[i];
+            p->shape = SHAPE_GEN;
+            p->nasph = 0;
+        }
         if (s->type == SG_SURF_COORDBRK) {
             p->R = INFINITY;
             p->c = 0.0;
@@ -720,6 +763,16 @@ sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
             break;
         }
     for (i = 0; i < n; i++)
+        if (sg_shape_ops_of(sys->surf[i].type)) {
+            t->shp = calloc((size_t)n, sizeof *t->shp);
+            if (!t->shp) {
+                sg_diag_set(d, SG_ENOMEM, "out of memory");
+                free(idx);
+                goto fail;
+            }
+            break;
+        }
+    for (i = 0; i < n; i++)
         mpfr_init2(idx[i], 256);
     rc = sg_indices_mpfr(sys, cat, t->wave, idx, d);
     if (rc == SG_OK)
@@ -772,6 +825,7 @@ void sg_tracer_free(sg_tracer *t)
     sg_system_free(t->sys);
     free(t->sp);
     free(t->xf);
+    free(t->shp);
     free(t->nsigned);
     free(t->scratch);
     free(t);

@@ -17,11 +17,15 @@
 
 #include "dd.h"
 #include "internal.h"
+#include "shape.h"
 #include "vdd.h"
 
 #define U53 1.1102230246251565e-16 /* unit roundoff of double */
 
-enum { SHAPE_PLANE = 0, SHAPE_CONIC = 1, SHAPE_ASPH = 2 };
+/* The plane, conic and even asphere have kernels of their own in each
+ * method; every other shape is SHAPE_GEN, traced through its sg_shape_ops
+ * (shape.h), seeded from its base conic as an asphere is. */
+enum { SHAPE_PLANE = 0, SHAPE_CONIC = 1, SHAPE_ASPH = 2, SHAPE_GEN = 3 };
 
 /* A transfer into a surface's frame that tilts or decenters (frame.c):
  * p_i = A^T (p_{i-1} - b), d_i = A^T d_{i-1}.  The plain step along z of
@@ -52,6 +56,7 @@ typedef struct sg_sprep {
     double ap_dx, ap_dy; /* the aperture's decenter */
     double zg;   /* vertex z in classic's frame (surface 1's until a transfer turns it) */
     const sg_xfer *xf; /* the transfer into this surface, when it turns or moves */
+    const sg_shape *shp; /* SHAPE_GEN: the shape and its ops */
 } sg_sprep;
 
 /* 1 + conic is exactly 1 on spheres, where a product by it is the other
@@ -105,6 +110,7 @@ struct sg_tracer {
     int n;
     sg_sprep *sp;
     sg_xfer *xf;       /* nsurf entries when any transfer turns or moves */
+    sg_shape *shp;     /* nsurf entries when any surface is SHAPE_GEN */
     double *nsigned;   /* index after each surface, negative after odd mirrors */
     sg_paraxial px;
     sg_launch ln;
@@ -283,6 +289,9 @@ void sg_set_start_row(sg_ray_surface *o, const double S[3], const double u[3]);
 
 /* Surface evaluation shared by the methods. */
 double sg_sprep_sag_resid(const sg_sprep *s, double x, double y, double z);
+/* The sag of s at (x, y) in double-double on SG_VL lanes, as
+ * sg_sag_v for every shape; *bad marks lanes outside its domain. */
+vdd sg_sag_xy_v(const sg_sprep *s, vdd x, vdd y, vm *bad);
 
 /* The batch on nt prepared tracers, one per thread (in batch.c).  With
  * sel, ray r keeps surfaces sel[0..nsel-1] at out[r * nsel]; scratch

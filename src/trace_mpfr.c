@@ -24,6 +24,7 @@ typedef struct msurf {
     mpfr_t R, k1, T, mu;
     mpfr_t nb; /* |index| before the surface */
     mpfr_t a[SG_NASPH];
+    mpfr_t *mc; /* SHAPE_GEN: its coefficients (SG_SHAPE_MPC), else NULL */
 } msurf;
 
 typedef struct mvec {
@@ -119,6 +120,10 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
             }
             for (k = 0; k < SG_NASPH; k++)
                 mpfr_clear(m->s[i].a[k]);
+            if (m->s[i].mc) {
+                sg_shape_mp_clear(m->s[i].mc);
+                free(m->s[i].mc);
+            }
         }
         free(m->s);
     }
@@ -253,6 +258,17 @@ static int eval_F(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, mpfr_t F, 
         mpfr_mul(t[0], t[0], m->D.z, MPFR_RNDN);
         mpfr_add(Fp, Fp, t[0], MPFR_RNDN);
         mpfr_mul_2ui(Fp, Fp, 1, MPFR_RNDN);
+        return 1;
+    }
+    if (sp->shape == SHAPE_GEN) {
+        /* z - f(x, y), and F' = D_z - f_x D_x - f_y D_y. */
+        if (!sp->shp->ops->sag_mp(sp->shp, s->mc, m->P.x, m->P.y, t[1], t[2], t[3], m->t + 28))
+            return 0;
+        mpfr_sub(F, m->P.z, t[1], MPFR_RNDN);
+        mpfr_mul(Fp, t[2], m->D.x, MPFR_RNDN);
+        mpfr_mul(t[0], t[3], m->D.y, MPFR_RNDN);
+        mpfr_add(Fp, Fp, t[0], MPFR_RNDN);
+        mpfr_sub(Fp, m->D.z, Fp, MPFR_RNDN);
         return 1;
     }
     mpfr_sqr(t[1], m->P.x, MPFR_RNDN);
@@ -447,6 +463,25 @@ int sg_mpfr_rescue_root(sg_mpfr_ctx *m, const sg_sprep *sp, dd3 P, dd3 D, int ma
     mpfr_set_dd(s->k1, sp->k1);
     for (k = 0; k < SG_NASPH; k++)
         mpfr_set_d(s->a[k], sp->a[k], MPFR_RNDN);
+    /* A shape of its own brings its coefficients at this precision. */
+    if (sp->shp) {
+        mpfr_t mc[SG_SHAPE_MPC];
+        sg_shape_mp_coefs(sp->shp, mc, m->prec);
+        s->mc = mc;
+        mpfr_set_dd(m->P.x, P.x);
+        mpfr_set_dd(m->P.y, P.y);
+        mpfr_set_dd(m->P.z, P.z);
+        mpfr_set_dd(m->D.x, D.x);
+        mpfr_set_dd(m->D.y, D.y);
+        mpfr_set_dd(m->D.z, D.z);
+        mpfr_set_zero(m->path, 1);
+        rc = onto_surface(m, sp, s, max_iter);
+        if (rc == SG_OK)
+            *step = dd_from_mpfr(m->path, m->t[0]);
+        s->mc = NULL;
+        sg_shape_mp_clear(mc);
+        return rc;
+    }
     mpfr_set_dd(m->P.x, P.x);
     mpfr_set_dd(m->P.y, P.y);
     mpfr_set_dd(m->P.z, P.z);
@@ -477,6 +512,13 @@ static int bend(sg_tracer *tr, int i)
         mpfr_set(m->G.y, m->P.y, MPFR_RNDN);
         mpfr_mul(m->G.z, s->k1, m->P.z, MPFR_RNDN);
         mpfr_sub(m->G.z, m->G.z, s->R, MPFR_RNDN);
+    } else if (sp->shape == SHAPE_GEN) {
+        if (!sp->shp->ops->sag_mp(sp->shp, s->mc, m->P.x, m->P.y, t[1], m->G.x, m->G.y,
+                                  m->t + 28))
+            return SG_EMISS;
+        mpfr_neg(m->G.x, m->G.x, MPFR_RNDN);
+        mpfr_neg(m->G.y, m->G.y, MPFR_RNDN);
+        mpfr_set_ui(m->G.z, 1, MPFR_RNDN);
     } else {
         mpfr_sqr(t[1], m->P.x, MPFR_RNDN);
         mpfr_sqr(t[0], m->P.y, MPFR_RNDN);
@@ -546,6 +588,16 @@ static double normal_turn(const sg_sprep *sp, double x, double y, double z, cons
         g[1] = y;
         g[2] = sp->k1.hi * z - sp->R;
         sens = 2.0 * fmax(1.0, fabs(sp->k1.hi));
+    } else if (sp->shape == SHAPE_GEN) {
+        double f, gg[2], h;
+        if (!sp->shp->ops->sag_d(sp->shp, x, y, &f, gg, &h)) {
+            *cos = 0.0;
+            return INFINITY;
+        }
+        g[0] = -gg[0];
+        g[1] = -gg[1];
+        g[2] = 1.0;
+        sens = 2.0 * h;
     } else {
         /* w = sag'(r) / r and its derivative in r^2, conic and polynomial. */
         double w = 0.0, dw = 0.0, rk = 1.0;
@@ -1126,6 +1178,14 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
         }
         for (k = 0; k < SG_NASPH; k++)
             mpfr_set_d(s->a[k], tr->sp[i].a[k], MPFR_RNDN);
+        if (tr->sp[i].shp) {
+            s->mc = malloc(SG_SHAPE_MPC * sizeof *s->mc);
+            if (!s->mc) {
+                free(idx);
+                return sg_diag_set(d, SG_ENOMEM, "out of memory");
+            }
+            sg_shape_mp_coefs(tr->sp[i].shp, s->mc, prec);
+        }
     }
     mpfr_const_pi(m->pi, MPFR_RNDN);
     rc = sg_indices_mpfr(sys, tr->cat, tr->wave, idx, d);

@@ -88,16 +88,202 @@ vdd sg_sag_v(const sg_sprep *s, vdd r2, vm *bad)
     return sag_v(s, r2, bad);
 }
 
+/* ------------------------------------------------------------------------
+ * Shapes of their own (shape.h), lane by lane through their ops: each
+ * lane's arithmetic is its own, so a ray gets the same bits alone or in a
+ * batch.
+ * ------------------------------------------------------------------------ */
+
+static inline dd lane_dd(vdd a, int k)
+{
+    dd r = {a.hi[k], a.lo[k]};
+    return r;
+}
+
+/* F = z - f(x, y) in double-double and the bound on its rounding. */
+__attribute__((noinline)) static void gen_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
+{
+    int k;
+    for (k = 0; k < SG_VL; k++) {
+        dd z = lane_dd(p.z, k), f, g[2], Fk;
+        double ez, eg;
+        if (!s->shp->ops->sag_dd(s->shp, lane_dd(p.x, k), lane_dd(p.y, k), &f, g, &ez, &eg)) {
+            (*bad)[k] = -1;
+            F->hi[k] = NAN;
+            F->lo[k] = 0.0;
+            (*err)[k] = INFINITY;
+            continue;
+        }
+        Fk = dd_sub(z, f);
+        (*bad)[k] = 0;
+        F->hi[k] = Fk.hi;
+        F->lo[k] = Fk.lo;
+        (*err)[k] = ez + 4.0 * DD_U * (fabs(z.hi) + fabs(f.hi));
+    }
+}
+
+/* F' along d at the double point p, the size of its terms, and a bound on
+ * F'' from the bound on f's second derivatives. */
+__attribute__((noinline)) static vd gen_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd *fpp)
+{
+    vd Fp;
+    int k;
+    for (k = 0; k < SG_VL; k++) {
+        double f, g[2], h;
+        if (!s->shp->ops->sag_d(s->shp, p[0][k], p[1][k], &f, g, &h)) {
+            Fp[k] = NAN;
+            (*mag)[k] = 0.0;
+            (*fpp)[k] = INFINITY;
+            continue;
+        }
+        Fp[k] = d[2][k] - g[0] * d[0][k] - g[1] * d[1][k];
+        (*mag)[k] = fabs(d[2][k]) + fabs(g[0] * d[0][k]) + fabs(g[1] * d[1][k]);
+        (*fpp)[k] = h * (d[0][k] * d[0][k] + d[1][k] * d[1][k]) + 1e-300;
+    }
+    return Fp;
+}
+
+/* Newton in double from s0 for the active lanes, with the rules of
+ * asph_root_v: a step long beside F' / F'' grows a difference in the
+ * iterate, and past a growth of 4 (or near a double root) the root is
+ * left to the rescue. */
+__attribute__((noinline)) static vd gen_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, int max_iter,
+                     vm active, vm *fail, vm *noconv, vm *wild)
+{
+    vd sv = s0;
+    int k;
+    *fail = vm_set(0);
+    *noconv = vm_set(0);
+    *wild = vm_set(0);
+    for (k = 0; k < SG_VL; k++) {
+        double v = s0[k], growth = 1.0, hprev = 0.0;
+        int it, done = 0;
+        if (!active[k])
+            continue;
+        for (it = 0; it < max_iter && !done; it++) {
+            double x = p[0][k] + v * d[0][k], y = p[1][k] + v * d[1][k], z = p[2][k] + v * d[2][k];
+            double f, g[2], hh, F, Fp, step, snew, h;
+            int conv;
+            if (!s->shp->ops->sag_d(s->shp, x, y, &f, g, &hh)) {
+                (*fail)[k] = -1;
+                break;
+            }
+            F = z - f;
+            Fp = d[2][k] - g[0] * d[0][k] - g[1] * d[1][k];
+            if (Fp == 0.0 || !isfinite(Fp)) {
+                (*fail)[k] = -1;
+                break;
+            }
+            step = F / Fp;
+            snew = v - step;
+            if (!isfinite(snew)) {
+                (*fail)[k] = -1;
+                break;
+            }
+            h = hh * (d[0][k] * d[0][k] + d[1][k] * d[1][k]) * fabs(step) / fabs(Fp);
+            growth *= fmax(1.0, h);
+            conv = fabs(step) <= 4.0 * U53 * (fabs(snew) + fabs(x) + fabs(y) + fabs(z));
+            if (growth > 4.0 || (conv && fmax(h, hprev) > 0.25))
+                (*wild)[k] = -1;
+            hprev = h;
+            v = snew;
+            done = conv || (*wild)[k];
+        }
+        if (!done && !(*fail)[k])
+            (*noconv)[k] = -1;
+        sv[k] = v;
+    }
+    return sv;
+}
+
+/* The gradient of F = z - f in double-double, (-f_x, -f_y, 1), with the
+ * bound on f's second derivatives (how fast the normal turns) and each
+ * component's rounding. */
+__attribute__((noinline)) static vdd3 gen_grad_v(const sg_sprep *s, vdd3 p, vd *gsens, vd *gerr)
+{
+    vdd3 g;
+    int k;
+    for (k = 0; k < SG_VL; k++) {
+        dd f, gg[2];
+        double ez, eg, fd, gd[2], h = INFINITY;
+        if (!s->shp->ops->sag_dd(s->shp, lane_dd(p.x, k), lane_dd(p.y, k), &f, gg, &ez, &eg)) {
+            gg[0] = gg[1] = dd_from(NAN);
+            eg = INFINITY;
+        }
+        if (!s->shp->ops->sag_d(s->shp, p.x.hi[k], p.y.hi[k], &fd, gd, &h))
+            h = INFINITY;
+        g.x.hi[k] = -gg[0].hi;
+        g.x.lo[k] = -gg[0].lo;
+        g.y.hi[k] = -gg[1].hi;
+        g.y.lo[k] = -gg[1].lo;
+        (*gsens)[k] = h;
+        (*gerr)[k] = eg;
+    }
+    g.z = vdd_from(vd_set(1.0));
+    return g;
+}
+
+/* The normal's direction (-f_x, -f_y, 1) at the double point p. */
+__attribute__((noinline)) static void gen_normal_v(const sg_sprep *s, const vd p[3],
+                                                         vd g[3])
+{
+    int k;
+    for (k = 0; k < SG_VL; k++) {
+        double f, gg[2], h;
+        if (!s->shp->ops->sag_d(s->shp, p[0][k], p[1][k], &f, gg, &h))
+            gg[0] = gg[1] = NAN;
+        g[0][k] = -gg[0];
+        g[1][k] = -gg[1];
+    }
+    g[2] = vd_set(1.0);
+}
+
+/* |Z - f(X, Y)| of the reported point, in double-double. */
+__attribute__((noinline)) static vd gen_resid_v(const sg_sprep *s, vdd3 p)
+{
+    vd r;
+    int k;
+    for (k = 0; k < SG_VL; k++) {
+        dd f, g[2];
+        double ez, eg;
+        if (!s->shp->ops->sag_dd(s->shp, dd_from(p.x.hi[k]), dd_from(p.y.hi[k]), &f, g, &ez,
+                                 &eg))
+            r[k] = NAN;
+        else
+            r[k] = fabs(dd_to_d(dd_sub(dd_from(p.z.hi[k]), f)));
+    }
+    return r;
+}
+
+vdd sg_sag_xy_v(const sg_sprep *s, vdd x, vdd y, vm *bad)
+{
+    vdd z;
+    int k;
+    if (s->shape != SHAPE_GEN)
+        return sg_sag_v(s, vdd_add(vdd_sqr(x), vdd_sqr(y)), bad);
+    for (k = 0; k < SG_VL; k++) {
+        dd f, g[2];
+        double ez, eg;
+        int ok = s->shp->ops->sag_dd(s->shp, lane_dd(x, k), lane_dd(y, k), &f, g, &ez, &eg);
+        (*bad)[k] = ok ? 0 : -1;
+        z.hi[k] = ok ? f.hi : NAN;
+        z.lo[k] = ok ? f.lo : 0.0;
+    }
+    return z;
+}
+
 /* |Z - sag(X, Y)| of the reported point, P = hi + lo rounded to hi.  P
  * lies on the surface within the root's bound, far below that rounding,
  * so the residual is what the rounding moved the point off the surface:
  * to first order w (x lo_x + y lo_y) - lo_z, with w = sag'(r) / r, and the
  * rest is of the order of DD_U times the point. */
-static vd resid_v(const sg_sprep *s, vdd3 p)
+static inline __attribute__((always_inline)) vd resid_v(const sg_sprep *s, vdd3 p)
 {
     vd x = p.x.hi, y = p.y.hi, w, dw;
     if (s->shape == SHAPE_PLANE)
         return vd_abs(p.z.hi);
+    if (__builtin_expect(s->shape == SHAPE_GEN, 0))
+        return gen_resid_v(s, p);
     slope_v(s, x * x + y * y, &w, &dw);
     return vd_abs(w * (x * p.x.lo + y * p.y.lo) - p.z.lo);
 }
@@ -259,6 +445,19 @@ static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, in
 
 static void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
 {
+    if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
+        /* Through locals, so that the caller's F, err and bad never have
+         * their address taken by an out-of-line call (they stay in
+         * registers on the other shapes' path). */
+        vdd f;
+        vd e;
+        vm b;
+        gen_F_v(s, p, &f, &e, &b);
+        *F = f;
+        *err = e;
+        *bad = b;
+        return;
+    }
     if (s->shape == SHAPE_CONIC) {
         vdd xx = vdd_sqr(p.x), yy = vdd_sqr(p.y), zz = k1_mul(s, vdd_sqr(p.z));
         vdd rz = vdd_mul_d(p.z, vd_set(2.0 * s->R));
@@ -284,6 +483,12 @@ static void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
  * *mag, and in *fpp a bound on F''; an asphere's slope serves both. */
 static vd surf_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd *fpp)
 {
+    if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
+        vd m, f, Fp = gen_Fp_v(s, p, d, &m, &f);
+        *mag = m;
+        *fpp = f;
+        return Fp;
+    }
     if (s->shape == SHAPE_CONIC) {
         vd a = p[0] * d[0], b = p[1] * d[1], c = s->k1.hi * p[2] * d[2], e = s->R * d[2];
         *mag = 2.0 * (vd_abs(a) + vd_abs(b) + vd_abs(c) + vd_abs(e));
@@ -313,6 +518,8 @@ static vd surf_sec_v(const sg_sprep *s, const vd p[3], const vd d[3])
         g[0] = p[0];
         g[1] = p[1];
         g[2] = s->k1.hi * p[2] - s->R;
+    } else if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
+        gen_normal_v(s, p, g);
     } else {
         vd w, dw;
         slope_v(s, p[0] * p[0] + p[1] * p[1], &w, &dw);
@@ -366,7 +573,7 @@ static vdd3 surf_grad_v(const sg_sprep *s, vdd3 p, vd *gsens)
  * whose normal vanishes go to *nonphys, those reflected totally to *tir. */
 static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir, vm *unsure)
 {
-    vd gsens, gn, cosI, dN;
+    vd gsens, gn, cosI, dN, gerr = vd_set(0.0);
     vdd3 g, nd;
     vdd gg, rgg, dg;
     int flat;
@@ -375,7 +582,14 @@ static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir, vm *unsu
     *unsure = vm_set(0);
     if (sg_sprep_passes(s))
         return;
-    g = surf_grad_v(s, r->p, &gsens);
+    if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
+        vd gs, ge;
+        g = gen_grad_v(s, r->p, &gs, &ge);
+        gsens = gs;
+        gerr = ge;
+    } else {
+        g = surf_grad_v(s, r->p, &gsens);
+    }
     /* A flat surface's normal (0, 0, -1) has g.g = 1 exactly and d.g =
      * -d.z exactly, and a product by exactly 1 is its other factor: all
      * three are skipped there.  Elsewhere 1 / g.g is formed as soon as g
@@ -391,6 +605,10 @@ static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir, vm *unsu
     gn = vd_sqrt(gg.hi);
     cosI = dg.hi / gn;
     dN = gsens * r->eP / gn;
+    /* A shape of its own also rounds its gradient by up to gerr a
+     * component. */
+    if (__builtin_expect(s->shape == SHAPE_GEN, 0))
+        dN = (gsens * r->eP + 2.0 * gerr) / gn;
     if (s->mirror) {
         vdd f = vdd_mul_d(dg, vd_set(2.0));
         if (!flat)
@@ -805,18 +1023,26 @@ static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
             vdd rt = conic_root_dd(s, r->p, r->d, r->eP, r->eD, s0t, &miss2, &unsure2);
             resc |= unsure & unsure2;
             miss = (unsure & miss2) | (~unsure & miss);
-            if (s->shape == SHAPE_ASPH) {
+            if (s->shape == SHAPE_ASPH || s->shape == SHAPE_GEN) {
                 sd = vsel(unsure, rt.hi - s0d, sd);
             } else {
                 exact = vdd_sel(unsure, rt, exact);
                 seeded = unsure;
             }
         }
-        if (s->shape == SHAPE_ASPH) {
+        if (s->shape == SHAPE_ASPH || s->shape == SHAPE_GEN) {
             vm nohit, noconv, wild;
             /* Where the base conic misses, Newton starts on the plane. */
-            sd = asph_root_v(s, ps, ds, vsel(miss, tgt, sd), t->o.max_iter,
-                             live & ~bad & ~resc, &nohit, &noconv, &wild);
+            if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
+                vm a, b, c;
+                sd = gen_root_v(s, ps, ds, vsel(miss, tgt, sd), t->o.max_iter,
+                                live & ~bad & ~resc, &a, &b, &c);
+                nohit = a;
+                noconv = b;
+                wild = c;
+            } else
+                sd = asph_root_v(s, ps, ds, vsel(miss, tgt, sd), t->o.max_iter,
+                                 live & ~bad & ~resc, &nohit, &noconv, &wild);
             resc |= (noconv | wild) & live & ~bad;
             bad = fail_lanes(bad, nohit & ~resc, live, SG_EMISS, st);
         } else {

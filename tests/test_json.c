@@ -594,7 +594,7 @@ static const err_case err_cases[] = {
     {"{\"title\": 7, " S3 "}", SG_EPARSE, "t.json: title: expected a string, got number 7"},
     {"{\"format\": \"zemax\", " S3 "}", SG_EPARSE,
      "t.json: format: expected \"sagitta-design\", got string \"zemax\""},
-    {"{\"version\": 3, " S3 "}", SG_EUNSUPPORTED, "t.json: version: this is format version 3; this program reads version 2 and older"},
+    {"{\"version\": 4, " S3 "}", SG_EUNSUPPORTED, "t.json: version: this is format version 4; this program reads version 3 and older"},
     {"{\"version\": \"1\", " S3 "}", SG_EPARSE, "t.json: version: expected an integer"},
     {"{\"title\": \"no surfaces\"}", SG_EPARSE, "t.json: surfaces: required key is missing"},
     {"{\"surfaces\": {}}", SG_EPARSE, "t.json: surfaces: expected an array"},
@@ -629,8 +629,9 @@ static const err_case err_cases[] = {
     {"{\"surfaces\": [{}, {\"stop\": true, \"sd_fixed\": \"yes\"}, {}]}", SG_EPARSE,
      "t.json: surface 1: sd_fixed: expected true or false, got string \"yes\""},
     {"{\"surfaces\": [{}, {\"stop\": true, \"type\": \"toroid\"}, {}]}", SG_EPARSE,
-     "t.json: surface 1: type: expected \"standard\", \"even_asphere\" or \"coordinate_break\", "
-     "got string \"toroid\""},
+     "t.json: surface 1: type: expected \"standard\", \"even_asphere\", \"coordinate_break\", "
+     "\"odd_asphere\", \"toroidal\", \"biconic\", \"zernike_fringe\", \"zernike_standard\" or "
+     "\"xy_polynomial\", got string \"toroid\""},
     /* Coordinate breaks and tilts: each message names the surface and key. */
     {"{\"surfaces\": [{}, {\"stop\": true}, {\"break\": {\"tilt\": [1, 2, 3]}}, {}]}", SG_EPARSE,
      "t.json: surface 2: break: only a coordinate_break has a break; use \"before\""},
@@ -755,6 +756,90 @@ static void test_environment_and_model(void **state)
                  SG_EPARSE, "a model glass needs \"nd\" and \"vd\"");
     expect_error("{\"surfaces\": [{}, {\"stop\": true, \"material\": {\"nd\": 1.5, \"vd\": 2}},"
                  " {}]}", SG_ERANGE, "model glass nd 1.5, vd 2");
+}
+
+/* The shapes beyond the even asphere (format version 3) read, write and
+ * read back bit for bit; only the keys a surface uses are written; bad
+ * values name the surface and key. */
+static void test_shapes(void **state)
+{
+    static const char text[] =
+        "{ \"format\": \"sagitta-design\",\n"
+        "  \"surfaces\": [ { \"thickness\": \"inf\" },\n"
+        "    { \"type\": \"odd_asphere\", \"radius\": 50, \"thickness\": 5, \"stop\": true,\n"
+        "      \"odd\": [1e-3, -2e-4, 3e-6], \"material\": \"N-BK7\" },\n"
+        "    { \"type\": \"toroidal\", \"radius\": -40, \"radius_x\": -35.5, \"conic\": -0.5,\n"
+        "      \"asphere\": [0, 1e-7], \"thickness\": 2 },\n"
+        "    { \"type\": \"biconic\", \"radius\": 80, \"radius_x\": \"inf\", \"conic_x\": -1,\n"
+        "      \"thickness\": 3, \"material\": \"N-BK7\" },\n"
+        "    { \"type\": \"zernike_fringe\", \"radius\": -70, \"norm_radius\": 12.5,\n"
+        "      \"terms\": [0, 0, 0, 1e-3, 2e-4, 0, 0, 3e-5], \"thickness\": 4 },\n"
+        "    { \"type\": \"zernike_standard\", \"norm_radius\": 11, \"terms\": [0, 1e-4, 0, 2e-3],\n"
+        "      \"thickness\": 4 },\n"
+        "    { \"type\": \"xy_polynomial\", \"radius\": 300, \"norm_radius\": 10,\n"
+        "      \"terms\": [0, 0, 1e-3, 0, -2e-3, 0, 4e-5], \"thickness\": 30 }, {} ] }\n";
+    sg_system *s = sg_system_new(), *r = sg_system_new();
+    sg_diag d;
+    char *out;
+    (void)state;
+    assert_int_equal(parse_text(s, text, &d), SG_OK);
+    assert_int_equal(s->surf[1].type, SG_SURF_ODDASPH);
+    assert_true(s->surf[1].odd[1] == -2e-4);
+    assert_int_equal(s->surf[2].type, SG_SURF_TOROIDAL);
+    assert_true(s->surf[2].radius_x == -35.5 && s->surf[2].asph[1] == 1e-7);
+    assert_int_equal(s->surf[3].type, SG_SURF_BICONIC);
+    assert_true(isinf(s->surf[3].radius_x) && s->surf[3].conic_x == -1.0);
+    assert_int_equal(s->surf[4].type, SG_SURF_ZERNIKE_FRINGE);
+    assert_true(s->surf[4].norm_radius == 12.5 && s->surf[4].terms[7] == 3e-5);
+    assert_int_equal(s->surf[5].type, SG_SURF_ZERNIKE_STANDARD);
+    assert_int_equal(s->surf[6].type, SG_SURF_XYPOLY);
+    assert_true(s->surf[6].terms[6] == 4e-5);
+    out = sg_design_to_json(s);
+    assert_non_null(out);
+    assert_non_null(strstr(out, "\"version\": 3"));
+    assert_int_equal(parse_text(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(s, r));
+    free(out);
+    /* A design without the new shapes is still written as version 1 or 2. */
+    sg_system_free(r);
+    r = sg_system_new();
+    out = sg_design_to_json(r);
+    assert_null(strstr(out, "\"version\": 3"));
+    assert_null(strstr(out, "norm_radius"));
+    assert_null(strstr(out, "terms"));
+    free(out);
+    sg_system_free(s);
+    sg_system_free(r);
+
+    expect_error("{\"surfaces\": [{}, {\"stop\": true, \"type\": \"toric\"}, {}]}", SG_EPARSE,
+                 "surface 1: type: expected");
+    expect_error("{\"surfaces\": [{}, {\"stop\": true, \"type\": \"xy_polynomial\", "
+                 "\"norm_radius\": 0}, {}]}", SG_EPARSE, "norm_radius");
+    /* What only the shape knows, sg_system_validate asks it. */
+    {
+        static const char *const bad[][2] = {
+            {"{\"surfaces\": [{}, {\"stop\": true, \"type\": \"zernike_fringe\", \"terms\": ["
+             "0,0,0,0,0,0,0,0,0,0, 0,0,0,0,0,0,0,0,0,0, 0,0,0,0,0,0,0,0,0,0, 0,0,0,0,0,0,0,1]},"
+             " {}]}", "surface 1: Fringe Zernike term 38; there are 37"},
+            {"{\"surfaces\": [{}, {\"stop\": true, \"type\": \"toroidal\", "
+             "\"asphere\": [0,0,0,0,0,0,0,1]}, {}]}", "surface 1: a toroid's y curve has terms "
+             "up to y^14; the y^16 term must be 0"}};
+        size_t b;
+        for (b = 0; b < sizeof bad / sizeof bad[0]; b++) {
+            s = sg_system_new();
+            assert_int_equal(parse_text(s, bad[b][0], &d), SG_OK);
+            sg_diag_clear(&d);
+            assert_int_equal(sg_system_validate(s, NULL, &d), SG_ERANGE);
+            if (!strstr(d.msg, bad[b][1]))
+                fail_msg("expected \"%s\", got \"%s\"", bad[b][1], d.msg);
+            print_message("# %s\n", d.msg);
+            sg_system_free(s);
+        }
+    }
+    expect_error("{\"surfaces\": [{}, {\"stop\": true, \"terms\": [" 
+                 "0,0,0,0,0,0,0,0,0,0, 0,0,0,0,0,0,0,0,0,0, 0,0,0,0,0,0,0,0,0,0,"
+                 "0,0,0,0,0,0,0,0,0,0, 0,0,0,0,0,0,0,0,0,0, 0,0,0,0,0,0,0,0,0,0, 0,0,0,0,0,0,1]}, "
+                 "{}]}", SG_EPARSE, "67 terms; at most 66");
 }
 
 static void test_content_errors(void **state)
@@ -1230,6 +1315,7 @@ int main(void)
         cmocka_unit_test(test_roundtrip_random),
         cmocka_unit_test(test_syntax_errors),
         cmocka_unit_test(test_content_errors),
+        cmocka_unit_test(test_shapes),
         cmocka_unit_test(test_limits_accepted),
         cmocka_unit_test(test_warnings),
         cmocka_unit_test(test_file_errors),

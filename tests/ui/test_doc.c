@@ -104,6 +104,42 @@ static int sys_bytes_equal(const sg_system *a, const sg_system *b)
 
 /* ------------------------------------------------------------------------ */
 
+/* The shapes beyond the even asphere by name, and their own columns; an
+ * asphere term typed into a toroid leaves it a toroid. */
+static void test_set_shapes(void **state)
+{
+    static const struct {
+        const char *name;
+        int type;
+    } types[] = {{"TOROIDAL", SG_SURF_TOROIDAL}, {"odd_asphere", SG_SURF_ODDASPH},
+                 {"biconicx", SG_SURF_BICONIC}, {"FZERNSAG", SG_SURF_ZERNIKE_FRINGE},
+                 {"zernike_standard", SG_SURF_ZERNIKE_STANDARD}, {"XPOLYNOM", SG_SURF_XYPOLY}};
+    ed *e = new_ed();
+    size_t i;
+    (void)state;
+    ok(e, "insert 1");
+    for (i = 0; i < sizeof types / sizeof types[0]; i++) {
+        if (run(e, "set 1 type %s", types[i].name) & ED_ERROR)
+            fail_msg("set 1 type %s: %s", types[i].name, e->msg);
+        assert_int_equal(e->doc.sys->surf[1].type, types[i].type);
+    }
+    ok(e, "set 1 type toroidal");
+    ok(e, "set 1 rx -35.5");
+    ok(e, "set 1 a4 1e-7");
+    ok(e, "set 1 b3 2e-5");
+    ok(e, "set 1 t4 0.001");
+    ok(e, "set 1 norm 12.5");
+    assert_int_equal(e->doc.sys->surf[1].type, SG_SURF_TOROIDAL);
+    assert_true(same_bits(e->doc.sys->surf[1].radius_x, -35.5));
+    assert_true(same_bits(e->doc.sys->surf[1].asph[1], 1e-7));
+    assert_true(same_bits(e->doc.sys->surf[1].odd[2], 2e-5));
+    assert_true(same_bits(e->doc.sys->surf[1].terms[3], 0.001));
+    assert_true(same_bits(e->doc.sys->surf[1].norm_radius, 12.5));
+    /* A normalization radius must be positive. */
+    assert_true(run(e, "set 1 norm 0") & ED_ERROR);
+    free_ed(e);
+}
+
 static void test_set_exact(void **state)
 {
     static const char *const texts[] = {
@@ -215,7 +251,7 @@ static void test_bad_values(void **state)
         "set 1 semi nan",         "set 1 semi 5 X",         "set 1 conic inf",
         "set 1 a4 NaN",           "set 1 material NOT-A-GLASS-XYZ",
         "set 0 material mirror",  "set ima material mirror", "set 1 material 0",
-        "set 1 type toroidal",    "set 1 wibble 3",         "set 7 radius 3",
+        "set 1 type toric",       "set 1 wibble 3",           "set 7 radius 3",
         "set -1 radius 3",        "set x radius 3",         "delete 0",
         "delete 2",               "insert 0",               "insert 3",
         "stop 0",                 "stop 2",                 "undo",
@@ -733,6 +769,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_numfmt),
         cmocka_unit_test(test_set_exact),
+        cmocka_unit_test(test_set_shapes),
         cmocka_unit_test(test_set_text_cells),
         cmocka_unit_test(test_bad_values),
         cmocka_unit_test(test_insert_delete_stop),

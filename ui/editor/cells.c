@@ -105,13 +105,33 @@ int cell_numeric(int col)
     return p && p->kind == SG_PARAM_REAL;
 }
 
+/* Copies s without surrounding blanks into buf; 0 when it does not fit. */
+static int trimmed(const char *s, char *buf, size_t n)
+{
+    size_t len;
+    while (isspace((unsigned char)*s))
+        s++;
+    len = strlen(s);
+    while (len > 0 && isspace((unsigned char)s[len - 1]))
+        len--;
+    if (len >= n)
+        return 0;
+    memcpy(buf, s, len);
+    buf[len] = '\0';
+    return 1;
+}
+
 const char *cell_type_name(int type)
 {
-    return type == SG_SURF_EVENASPH ? "EVENASPH" : "STANDARD";
+    const sg_param *p = sg_param_find(SG_SCOPE_SURFACE, "type");
+    return type >= 0 && type < p->nnames ? p->shown[type] : "STANDARD";
 }
 
 int cell_type_parse(const char *s)
 {
+    const sg_param *p = sg_param_find(SG_SCOPE_SURFACE, "type");
+    char buf[64];
+    int k;
     while (isspace((unsigned char)*s))
         s++;
     if (strcasecmp(s, "standard") == 0 || strcasecmp(s, "std") == 0 ||
@@ -121,6 +141,13 @@ int cell_type_parse(const char *s)
         strcasecmp(s, "asph") == 0 || strcasecmp(s, "asphere") == 0 ||
         strcasecmp(s, "even") == 0 || strcasecmp(s, "e") == 0)
         return SG_SURF_EVENASPH;
+    if (!trimmed(s, buf, sizeof buf))
+        return -1;
+    /* The other shapes by their .zmx or JSON name; a coordinate break has
+     * commands of its own. */
+    for (k = SG_SURF_ODDASPH; k < p->nnames; k++)
+        if (strcasecmp(buf, p->names[k]) == 0 || strcasecmp(buf, p->shown[k]) == 0)
+            return k;
     return -1;
 }
 
@@ -177,22 +204,6 @@ void cell_text(const sg_system *sys, int row, int col, char *buf, size_t n)
 void cell_edit_text(const sg_system *sys, int row, int col, char *buf, size_t n)
 {
     text(sys, row, col, 1, buf, n);
-}
-
-/* Copies s without surrounding blanks into buf; 0 when it does not fit. */
-static int trimmed(const char *s, char *buf, size_t n)
-{
-    size_t len;
-    while (isspace((unsigned char)*s))
-        s++;
-    len = strlen(s);
-    while (len > 0 && isspace((unsigned char)s[len - 1]))
-        len--;
-    if (len >= n)
-        return 0;
-    memcpy(buf, s, len);
-    buf[len] = '\0';
-    return 1;
 }
 
 /* A number for a cell: finite unless inf_ok.  The message names the
@@ -311,8 +322,9 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
         }
         rc = cell_type_parse(text);
         if (rc < 0) {
-            snprintf(err, errn, "surface %d type: \"%s\" is not STANDARD or EVENASPH",
-                     row, text);
+            snprintf(err, errn,
+                     "surface %d type: \"%s\" is not STANDARD, EVENASPH, ODDASPHE, TOROIDAL, "
+                     "BICONICX, FZERNSAG, SZERNSAG or XPOLYNOM", row, text);
             return SG_EPARSE;
         }
         s->type = (sg_surf_type)rc;
@@ -391,7 +403,7 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
     /* A standard surface ignores its polynomial, so a term typed into
      * one means the user wants an asphere. */
     if (col >= COL_ASPH0 && col < COL_ASPH0 + SG_NASPH && v != 0.0 &&
-        s->type != SG_SURF_EVENASPH) {
+        s->type == SG_SURF_STANDARD) {
         s->type = SG_SURF_EVENASPH;
         if (info && infon)
             snprintf(info, infon, "surface %d is now EVENASPH", row);

@@ -25,7 +25,7 @@ typedef enum cell_col {
     COL_SEMI,
     COL_CONIC,
     COL_ASPH0, /* r^2; COL_ASPH0 + k is the r^(2k+2) term */
-    COL_MAX = 96 /* room for every column the table can give */
+    COL_MAX = 128 /* room for every column the table can give */
 } cell_col;
 
 /* How many columns the table gives. */

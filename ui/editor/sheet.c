@@ -161,9 +161,14 @@ void sheet_draw(ui *u)
             int w = u->colw[c] - 1, style = T_NORMAL, x = u->colx[c];
             char cell[LE_MAX];
             cell_show(u, r, c, w, cell, sizeof cell);
-            /* A STANDARD surface ignores its r^n terms: shown, but dim. */
-            if (c >= COL_ASPH0 && c < COL_ASPH0 + SG_NASPH && s->surf[r].type == SG_SURF_STANDARD)
-                style = T_DIM;
+            /* A surface ignores the parameters of other shapes (a STANDARD
+             * surface its r^n terms): shown, but dim. */
+            {
+                int k;
+                const sg_param *p = cell_param(c, &k);
+                if (p && !sg_param_used(p, k, s->surf[r].type))
+                    style = T_DIM;
+            }
             if (r == e->row && c == e->col)
                 style = u->focus == FOCUS_SHEET ? T_CURSOR : T_ROWSEL;
             if (cell_numeric(c)) {

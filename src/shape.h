@@ -1,0 +1,133 @@
+/*
+ * shape.h - the surface-kernel interface.
+ *
+ * A shape beyond the plane, the conic and the even asphere (which the
+ * methods trace with kernels of their own, written for speed) is a sag
+ * z = f(x, y) in its vertex frame.  Each such shape is one file
+ * (shape_odd.c, shape_toroid.c, shape_biconic.c, shape_zernike.c,
+ * shape_xypoly.c) that fills an sg_shape and supplies f and its gradient
+ * in the three arithmetics the methods use:
+ *
+ *   - double, with a bound on the second derivatives: classic's trace, the
+ *     Newton seeds of precise, and the sizes that scale bounds;
+ *   - double-double, with bounds on the rounding of f and of its
+ *     gradient: the precise method (lane by lane; lanes stay independent);
+ *   - MPFR at any precision: the mpfr method and precise's rescue.
+ *
+ * shape.c registers them (sg_shape_ops_of) and holds what they share: the
+ * rotational conic and even polynomial, and polynomials in x and y with
+ * double-double and MPFR coefficients.  tests/test_shapes.c checks every
+ * registered shape against its own definition in 512-bit MPFR.
+ */
+#ifndef SG_SHAPE_H
+#define SG_SHAPE_H
+
+#include "isa.h"
+
+#include <mpfr.h>
+
+#include "dd.h"
+#include "internal.h"
+
+/* Polynomials in u = x / norm and v = y / norm up to this degree (the
+ * 37th Fringe Zernike term is of degree 12). */
+#define SG_P2_DEG 12
+#define SG_P2_N ((SG_P2_DEG + 1) * (SG_P2_DEG + 2) / 2)
+/* Index of the coefficient of u^i v^j. */
+#define SG_P2_AT(i, j) (((i) + (j)) * ((i) + (j) + 1) / 2 + (j))
+
+/* Scratch an sg_shape_ops.sag_mp may use. */
+#define SG_SHAPE_MPTMP 12
+/* MPFR variables sg_shape_mp_coefs makes: the coefficients, then room for
+ * the powers of u and v. */
+#define SG_SHAPE_MPC (SG_P2_N + 2 * (SG_P2_DEG + 1))
+
+typedef struct sg_shape sg_shape;
+
+typedef struct sg_shape_ops {
+    const char *name;
+    /* Fills what is the shape's own in s from f (shape.c has set the
+     * rest); SG_OK, or SG_ERANGE with a message naming surface isurf.
+     * May be NULL. */
+    int (*prepare)(const sg_surface *f, sg_shape *s, int isurf, sg_diag *d);
+    /* Sets the polynomial's coefficients in mc (initialised to zero at
+     * their precision) from s->src.  May be NULL. */
+    void (*mp_coefs)(const sg_shape *s, mpfr_t *mc);
+    /* f at (x, y), its gradient g = (df/dx, df/dy) and in *h a bound on
+     * the second derivatives (the largest absolute row sum of the Hessian),
+     * in double.  Returns 0 outside the shape's domain. */
+    int (*sag_d)(const sg_shape *s, double x, double y, double *z, double g[2], double *h);
+    /* The same in double-double, with *ez bounding |z - f(x, y)| and *eg
+     * each component's error, for the x and y given. */
+    int (*sag_dd)(const sg_shape *s, dd x, dd y, dd *z, dd g[2], double *ez, double *eg);
+    /* The same in MPFR at z's precision; mc holds the coefficients that
+     * sg_shape_mp_coefs made, tmp SG_SHAPE_MPTMP variables of scratch. */
+    int (*sag_mp)(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, mpfr_ptr z,
+                  mpfr_ptr gx, mpfr_ptr gy, mpfr_t *tmp);
+} sg_shape_ops;
+
+/* A prepared shape: what its ops read. */
+struct sg_shape {
+    const sg_shape_ops *ops;
+    int type;     /* sg_surf_type */
+    double R;     /* base radius (the y-z section's for toroid and biconic); inf: flat */
+    double k1;    /* 1 + its conic */
+    double Rx;    /* biconic: x radius; toroid: radius of rotation; inf: flat */
+    double kx1;   /* biconic: 1 + x conic */
+    int na;       /* even terms in use: a[k] on r^(2k+2) (toroid: y^(2k+2)) */
+    double a[SG_NASPH];
+    int nodd;     /* odd asphere terms in use: odd[k] on r^(k+1) */
+    double odd[SG_NODD];
+    int deg;      /* polynomial in u, v: degree, 0 for none */
+    double norm;  /* u = x / norm, v = y / norm */
+    int nz;       /* terms summed into each coefficient */
+    dd c[SG_P2_N]; /* its coefficients, rounded to double-double from exact sums */
+    double cm[SG_P2_N]; /* the magnitude of each coefficient's terms, for bounds */
+    const sg_surface *src; /* the surface, for MPFR coefficients */
+};
+
+/* The ops of a surface type, or NULL for the types the methods trace with
+ * their own kernels (standard, even asphere, coordinate break). */
+const sg_shape_ops *sg_shape_ops_of(int type);
+/* Fills s from surface f; returns SG_OK or SG_ERANGE with a message. */
+int sg_shape_prepare(const sg_surface *f, sg_shape *s, int isurf, sg_diag *d);
+/* The polynomial's coefficients at precision prec into mc[SG_SHAPE_MPC] (each
+ * initialised here; the caller clears them with sg_shape_mp_clear). */
+void sg_shape_mp_coefs(const sg_shape *s, mpfr_t *mc, mpfr_prec_t prec);
+void sg_shape_mp_clear(mpfr_t *mc);
+
+/* What the shapes share (shape.c). */
+
+/* The rotational conic and even polynomial at r2 = x^2 + y^2: sag, w =
+ * sag'(r) / r and w' = dw / d(r^2) in double; 0 outside the conic. */
+int sg_rot_d(const sg_shape *s, double r2, double *z, double *w, double *dw);
+/* In double-double: sag and w, and bounds on their errors. */
+int sg_rot_dd(const sg_shape *s, dd r2, dd *z, dd *w, double *ez, double *ew);
+int sg_rot_mp(const sg_shape *s, mpfr_srcptr r2, mpfr_ptr z, mpfr_ptr w, mpfr_t *tmp);
+
+/* Adds A (of terms of size mag) to the coefficient at index at. */
+void sg_p2_add(sg_shape *s, int at, dd A, double mag);
+/* Checks f's normalization radius and sets s->nz from its terms. */
+int sg_p2_terms(const sg_surface *f, sg_shape *s, int isurf, sg_diag *d);
+/* The polynomial in u, v: value and gradient in x and y. */
+void sg_p2_d(const sg_shape *s, double x, double y, double *z, double g[2], double *h);
+void sg_p2_dd(const sg_shape *s, dd x, dd y, dd *z, dd g[2], double *ez, double *eg);
+void sg_p2_mp(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, mpfr_ptr z,
+              mpfr_ptr gx, mpfr_ptr gy, mpfr_t *tmp);
+
+/* The rotational part plus the polynomial: the whole sag of the Zernike
+ * and XY shapes, in the three arithmetics of sg_shape_ops. */
+int sg_rot_p2_d(const sg_shape *s, double x, double y, double *z, double g[2], double *h);
+int sg_rot_p2_dd(const sg_shape *s, dd x, dd y, dd *z, dd g[2], double *ez, double *eg);
+int sg_rot_p2_mp(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, mpfr_ptr z,
+                 mpfr_ptr gx, mpfr_ptr gy, mpfr_t *tmp);
+
+/* The ops of each shape file. */
+extern const sg_shape_ops sg_shape_odd_ops, sg_shape_toroid_ops, sg_shape_biconic_ops,
+    sg_shape_zernike_ops, sg_shape_xypoly_ops;
+
+/* The Zernike term j of kind as a polynomial in u, v: integer
+ * coefficients e[SG_P2_N] times sqrt(*nsq) (shape_zernike.c). */
+int sg_zernike_poly(int standard, int j, long long *e, long *nsq);
+
+#endif

@@ -1,0 +1,51 @@
+/*
+ * shape_odd.c - Zemax's odd asphere: a conic plus b_1 r + b_2 r^2 + ...
+ * + b_8 r^8 (sagitta-design(5), SURFACE TYPES).  Rotational: the sag and
+ * its slope come from the shared rotational part in shape.c.
+ */
+#include <math.h>
+
+#include "shape.h"
+
+/* The gradient of a rotational sag is w (x, y); its Hessian w I + 2 w'
+ * (x, y)(x, y)^T has row sums at most |w| + 4 |w'| r^2. */
+static int odd_d(const sg_shape *s, double x, double y, double *z, double g[2], double *h)
+{
+    double r2 = x * x + y * y, w, dw;
+    if (!sg_rot_d(s, r2, z, &w, &dw))
+        return 0;
+    g[0] = w * x;
+    g[1] = w * y;
+    *h = 1.5 * (fabs(w) + 4.0 * dw * r2);
+    return 1;
+}
+
+static int odd_dd(const sg_shape *s, dd x, dd y, dd *z, dd g[2], double *ez, double *eg)
+{
+    dd r2 = dd_add(dd_sqr(x), dd_sqr(y)), w;
+    double ew, m = fmax(fabs(x.hi), fabs(y.hi));
+    if (!sg_rot_dd(s, r2, z, &w, ez, &ew))
+        return 0;
+    /* r^2's own rounding moves the sag by dz/dr^2 = w / 2 times it. */
+    *ez += 4.0 * DD_U * fabs(w.hi) * r2.hi;
+    g[0] = dd_mul(w, x);
+    g[1] = dd_mul(w, y);
+    *eg = (ew + 8.0 * DD_U * fabs(w.hi)) * m;
+    return 1;
+}
+
+static int odd_mp(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, mpfr_ptr z,
+                  mpfr_ptr gx, mpfr_ptr gy, mpfr_t *t)
+{
+    (void)mc;
+    mpfr_sqr(t[8], x, MPFR_RNDN);
+    mpfr_sqr(t[9], y, MPFR_RNDN);
+    mpfr_add(t[8], t[8], t[9], MPFR_RNDN);
+    if (!sg_rot_mp(s, t[8], z, t[10], t))
+        return 0;
+    mpfr_mul(gx, t[10], x, MPFR_RNDN);
+    mpfr_mul(gy, t[10], y, MPFR_RNDN);
+    return 1;
+}
+
+const sg_shape_ops sg_shape_odd_ops = {"odd asphere", NULL, NULL, odd_d, odd_dd, odd_mp};
