@@ -151,8 +151,6 @@ static void test_refusals(void **state)
 {
     /* Each line number is where grep -n finds the keyword in the file. */
     static const refusal cases[] = {
-        { "zmax_37992.zmx", SG_EUNSUPPORTED, { "zmax_37992.zmx:127: surface 4", "SCBD",
-                                               "coordinate breaks" } },
         { "thorlabs_lj1598l1.zmx", SG_EUNSUPPORTED, { ":69: surface 1", "TOROIDAL", "toroid" } },
         { "US05331467-1.zmx", SG_ENOGLASS, { ":169: surface 9", "J-LAK02", "HIKARI" } },
         { "US00583336-2-scaled.zmx", SG_ENOGLASS, { ":82: surface 2", "N-BAK1", "N-BAK4" } },
@@ -431,7 +429,12 @@ static void test_bad_inputs(void **state)
          "t.zmx:14: surface 2: PARM 7 is 45; a coordinate break has parameters 1 to 6"},
         {"coordbrk glass", H S0 S1 "SURF 2\n  TYPE COORDBRK\n  GLAS N-BK7\n", 0, SG_EUNSUPPORTED,
          "t.zmx:13: surface 2: a coordinate break with a material"},
-        {"tilt", H S0 "SURF 1\n  SCBD 1 0 0 0 0 90 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:8: surface 1: SCBD: a tilt"},
+        {"tilt after", H S0 "SURF 1\n  SCAD 1 0 0 0 0 90 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:8: surface 1: SCAD: a tilt or decenter after"},
+        {"tilt flags", H S0 "SURF 1\n  STOP\n  SCBD 1 1 0 0 0 90 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: SCBD: flags 1 1 0"},
+        {"tilt short", H S0 "SURF 1\n  STOP\n  SCBD 1 0 0 0 0 90\n" S2 S3, 0, SG_EPARSE, "t.zmx:9: surface 1: SCBD: 6 of its 8 values"},
+        {"tilt number", H S0 "SURF 1\n  STOP\n  SCBD 1 0 0 0 0 9x 0 0\n" S2 S3, 0, SG_EPARSE, "t.zmx:9: surface 1: tilt about x: not a number"},
+        {"tilt extra", H S0 "SURF 1\n  STOP\n  SCBD 1 0 0 0 0 9 0 0 1\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: SCBD: more than 8 values"},
+        {"tilt on break", H S0 S1 "SURF 2\n  TYPE COORDBRK\n  SCBD 1 0 0 1 0 0 0 0\n" S3, 0, SG_EUNSUPPORTED, "t.zmx:14: surface 2: SCBD: a tilt or decenter on a coordinate break"},
         {"floating annulus", H S0 "SURF 1\n  FLAP 1 5 0\n", 0, SG_EUNSUPPORTED,
          "t.zmx:8: surface 1: FLAP: a floating aperture with a minimum radius"},
         {"two apertures", H S0 S1 "SURF 2\n  CLAP 0 5 0\n  ELAP 5 3 0\n" S3, 0, SG_EUNSUPPORTED,
@@ -620,6 +623,112 @@ static void test_apertures_vignetting(void **state)
     sg_catalog_free(cat);
 }
 
+/* Zemax's tilt and decenter before a surface (SCBD): three flags, then
+ * decenter x and y and the tilts about x, y and z.  The layout was checked
+ * on zmax_37992.zmx (Zemax 18.5), whose image surface is tilted 90 degrees
+ * by "SCBD 1 0 0 0 0 90 0 0" to face the beam of a 90-degree off-axis
+ * parabola, and on a public script that edits Zemax files (its fourth and
+ * fifth values after "SCBD 1" are tilts about x and y).  A tilt before a
+ * surface is, by Zemax's definition, a coordinate break before it: the
+ * same system built with a break traces to the same image points. */
+static void test_surface_tilt(void **state)
+{
+    static const char tilted[] = H S0 S1
+        "SURF 2\n  CURV -0.02\n  DISZ 50\n"
+        "  SCBD 1 0 0 0.25 -0.5 3 -1.5 20\n"
+        "SURF 3\n";
+    static const char broken[] = H S0 S1
+        "SURF 2\n  TYPE COORDBRK\n  PARM 1 0.25\n  PARM 2 -0.5\n  PARM 3 3\n"
+        "  PARM 4 -1.5\n  PARM 5 20\n  DISZ 0\n"
+        "SURF 3\n  CURV -0.02\n  DISZ 50\n"
+        "SURF 4\n";
+    sg_catalog *cat = tu_catalog();
+    sg_system *a = sg_system_new(), *b = sg_system_new();
+    sg_diag d;
+    char *z;
+    int m, p, q, nray = 0;
+    double worst = 0.0;
+    (void)state;
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(a, tilted, strlen(tilted), "tilt.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(a->surf[2].type == SG_SURF_STANDARD);
+    assert_true(a->surf[2].before.dx == 0.25 && a->surf[2].before.dy == -0.5);
+    assert_true(a->surf[2].before.tx == 3.0 && a->surf[2].before.ty == -1.5 &&
+                a->surf[2].before.tz == 20.0 && a->surf[2].before.order == 0);
+    assert_true(sg_frame_change_is_zero(&a->surf[2].after) &&
+                a->surf[2].after_mode == SG_AFTER_EXPLICIT);
+    z = sg_zmx_to_text(a, cat, &d);
+    assert_non_null(z);
+    assert_non_null(strstr(z, "  SCBD 1 0 0 0.25 -0.5 3 -1.5 20\n"));
+    free(z);
+    roundtrip(a, cat, "tilt.zmx");
+    assert_int_equal(sg_zmx_parse(b, broken, strlen(broken), "break.zmx", cat, &d), SG_OK);
+    for (m = 0; m < 3; m++) {
+        sg_tracer *ta = tu_tracer(a, cat, (sg_method)m), *tb = tu_tracer(b, cat, (sg_method)m);
+        sg_ray_surface ra[4], rb[5];
+        for (p = -2; p <= 2; p++)
+            for (q = -2; q <= 2; q++) {
+                double e;
+                assert_int_equal(sg_trace_normalized(ta, 0, 0.5, p / 2.5, q / 2.5, ra), SG_OK);
+                assert_int_equal(sg_trace_normalized(tb, 0, 0.5, p / 2.5, q / 2.5, rb), SG_OK);
+                e = fmax(fabs(ra[3].x - rb[4].x), fabs(ra[3].y - rb[4].y));
+                e = fmax(e, fabs(ra[2].z - rb[3].z));
+                worst = fmax(worst, e);
+                nray++;
+            }
+        sg_tracer_free(ta);
+        sg_tracer_free(tb);
+    }
+    print_message("# SCBD against a coordinate break: %d rays, worst difference %.3g\n", nray,
+                  worst);
+    assert_true(worst < 1e-12);
+    {
+        /* A tilt order Zemax's SCBD line is not checked for stays out. */
+        a->surf[2].before.order = 1;
+        sg_diag_clear(&d);
+        z = sg_zmx_to_text(a, cat, &d);
+        assert_null(z);
+        assert_non_null(strstr(d.msg, "surface 2: a tilt before the surface in order 1"));
+        a->surf[2].before.order = 0;
+        a->surf[2].after.tx = 1.0;
+        sg_diag_clear(&d);
+        z = sg_zmx_to_text(a, cat, &d);
+        assert_null(z);
+        assert_non_null(strstr(d.msg, "surface 2: a tilt or decenter after a surface"));
+    }
+    sg_system_free(a);
+    sg_system_free(b);
+    {
+        /* The real file: its image faces the beam, which leaves the
+         * parabola at 90 degrees to the parent axis; the chief ray meets
+         * the image along the image's normal only if the 90 is a tilt
+         * about x.  Zemax stored the stop's automatic semi-diameter as
+         * 25.399999999907415 and the image's as 1.67e-13 (a point). */
+        sg_system *u = must_load("zmax_37992.zmx");
+        sg_tracer *t = tu_tracer(u, cat, SG_METHOD_PRECISE);
+        sg_ray_surface o[5];
+        double sd[5];
+        assert_int_equal(u->nsurf, 5);
+        assert_true(u->surf[4].before.tx == 90.0 && u->surf[4].before.dx == 0.0 &&
+                    u->surf[4].before.ty == 0.0 && u->surf[4].before.tz == 0.0);
+        assert_true(u->surf[2].type == SG_SURF_COORDBRK && u->surf[2].before.dy == -190.6);
+        assert_int_equal(sg_trace_normalized(t, 0, 0, 0, 0, o), SG_OK);
+        print_message("# zmax_37992: chief ray at the image: (%.3g, %.3g, %.17g)\n", o[4].l,
+                      o[4].m, o[4].n);
+        assert_true(fabs(o[4].l) < 1e-15 && fabs(o[4].m) < 1e-15 && fabs(fabs(o[4].n) - 1) < 1e-15);
+        sg_tracer_free(t);
+        assert_int_equal(sg_semi_diameters(u, cat, NULL, sd, &d), SG_OK);
+        print_message("# zmax_37992: stop %.17g (Zemax 25.399999999907415), image %.3g "
+                      "(Zemax 1.67e-13)\n", sd[1], sd[4]);
+        assert_true(fabs(sd[1] - 25.399999999907415) < 1e-9);
+        assert_true(sd[4] < 1e-11);
+        roundtrip(u, cat, "zmax_37992.zmx");
+        sg_system_free(u);
+    }
+    sg_catalog_free(cat);
+}
+
 static void test_failed_load_keeps_system(void **state)
 {
     sg_system *s = tu_example("singlet.json");
@@ -680,6 +789,7 @@ int main(void)
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_failed_load_keeps_system),
         cmocka_unit_test(test_coordinate_breaks),
+        cmocka_unit_test(test_surface_tilt),
         cmocka_unit_test(test_apertures_vignetting),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
