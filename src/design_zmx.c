@@ -1271,9 +1271,9 @@ static int header_line(zctx *c, const zline *l)
             return zerr(c, SG_EUNSUPPORTED, "FTYP: field type %d (%s); sagitta has angle, object "
                         "height, paraxial and real image height", t,
                         t == 4 ? "theodolite angle" : "unknown");
-        if (tel)
-            return zerr(c, SG_EUNSUPPORTED, "FTYP: object space is telecentric; sagitta has no "
-                        "entrance pupil at infinity");
+        /* Telecentric object space: checked with the aperture and the
+         * object distance when the design is validated. */
+        s->telecentric = tel;
         if (afocal)
             return zerr(c, SG_EUNSUPPORTED, "FTYP: afocal image space; sagitta traces to an "
                         "image surface");
@@ -1432,6 +1432,20 @@ static int finish(zctx *c)
     s->stop = c->stop;
     if (s->surf[s->nsurf - 1].mat.kind != SG_MAT_AIR && s->surf[s->nsurf - 1].mat.kind != SG_MAT_GLASS)
         return zerr(c, SG_ENONPHYS, "the image surface cannot be a mirror");
+    if (s->telecentric) {
+        /* Zemax's own rules for telecentric object space, at FTYP's line. */
+        c->line = c->ftyp_line;
+        if (s->aper_type != SG_APER_OBJECT_NA)
+            return zerr(c, SG_EUNSUPPORTED, "FTYP: telecentric object space with a system "
+                        "aperture other than the object NA (line %ld); the entrance pupil is "
+                        "at infinity", c->aper_line);
+        if (!isfinite(s->surf[0].thickness))
+            return zerr(c, SG_EUNSUPPORTED, "FTYP: telecentric object space with the object "
+                        "at infinity");
+        if (s->field_type == SG_FIELD_ANGLE)
+            return zerr(c, SG_EUNSUPPORTED, "FTYP: telecentric object space with angle "
+                        "fields; its chief rays are parallel to the axis");
+    }
     return SG_OK;
 }
 
@@ -1772,7 +1786,8 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         zb_add(b, "\n", 1);
     }
     zb_printf(b, "RAIM 0 %d 1 1 0 0 0 0 0\n", s->aim == SG_AIM_REAL ? 2 : s->aim == SG_AIM_PARAXIAL ? 1 : 0);
-    zb_printf(b, "FTYP %d 0 %d %d %d 0 0\n", (int)s->field_type, s->nfield, s->nwave,
+    zb_printf(b, "FTYP %d %d %d %d %d 0 0\n", (int)s->field_type, s->telecentric ? 1 : 0,
+              s->nfield, s->nwave,
               s->field_norm == SG_NORM_RECT ? 1 : 0);
     zb_list(b, "XFLN", s, 0);
     zb_list(b, "YFLN", s, 1);

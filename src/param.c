@@ -52,6 +52,9 @@ static const sg_param system_params[] = {
           aper_value, 0.0, SG_MAX_LEN, 10.0),
     {"ray_aiming", "ray aiming", NULL, NULL, "RAIM", SG_PARAM_ENUM, 0, offsetof(sg_system, aim),
      0, 1, 0, 0, 0, 0, SG_AIM_OFF, NAMES(aim_names), 1},
+    /* Format version 3: object-space telecentric (in "aperture"). */
+    {"aperture.telecentric", "object-space telecentric", NULL, NULL, "FTYP", SG_PARAM_BOOL,
+     SG_PARAM_OPTIONAL, offsetof(sg_system, telecentric), 0, 1, 0, 0, 0, 0, 0, NONAMES, 3},
 };
 
 static const sg_param wave_params[] = {

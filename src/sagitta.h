@@ -29,7 +29,7 @@ extern "C" {
 /* The JSON design format version this library reads and writes. */
 /* Version 2 adds coordinate breaks and surface tilts and decenters; a
  * design without them is still written as version 1. */
-#define SG_DESIGN_FORMAT_VERSION 2
+#define SG_DESIGN_FORMAT_VERSION 3
 
 /* ------------------------------------------------------------------------
  * Errors.  One table yields the enum, the names and the messages, so the
@@ -347,6 +347,12 @@ typedef struct sg_system {
     sg_aper_type aper_type;
     double aper_value;
     sg_aim aim;
+    /* Object-space telecentric (Zemax's "Telecentric Object Space"): the
+     * entrance pupil is at infinity whatever the stop, every chief ray
+     * leaves the object parallel to the axis, the aperture is an object
+     * NA, the object is at a finite distance, fields are heights, and ray
+     * aiming does not apply (the rays are fixed in object space). */
+    int telecentric;
 
     /* The environment (Zemax's ENVD): temperature in C (20) and pressure
      * in atm (1) of the air the wavelengths are measured in.  With

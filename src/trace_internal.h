@@ -80,6 +80,11 @@ typedef struct sg_launch {
     dd pimg_slope;   /* paraxial image height per unit object-space tan or height */
     int straight;    /* every surface between 1 and the stop leaves a ray straight */
     dd zstop;        /* the stop's vertex in surface 1's frame */
+    /* Object-space telecentric: pupil point (px, py) is the direction of
+     * slope (px, py) times tslope = tan(asin(NA / n0)) from the object
+     * point, the limit of the paraxial pupil plane moved to infinity. */
+    int tele;
+    dd tslope;
 } sg_launch;
 
 typedef struct sg_mpfr_ctx sg_mpfr_ctx;
@@ -90,7 +95,8 @@ typedef struct osp {
     int inf;
     dd3 dir;
     dd3 obj;
-    dd lam; /* aiming off: enp / dir.z at infinity, else -obj.z / (enp - obj.z) */
+    dd lam; /* aiming off: enp / dir.z at infinity, else -obj.z / (enp - obj.z);
+             * telecentric: -obj.z, the object point's distance to surface 1 */
     double n0; /* |index| of object space */
     /* At infinity, the optical path's start plane: the primary chief
      * ray's point on surface 1 dotted with dir (0 until the field's chief
