@@ -69,6 +69,14 @@ static void test_paraxial(void **state)
     assert_true(fabs(p.object_na - NA) <= 2e-16);
     assert_true(fabs(p.stop_radius - u * F) <= 4e-16 * u * F);
     assert_true(fabs(p.magnification + 0.5) <= 4e-16);
+    /* The exit pupil, the image of a pupil at infinity, is the focal plane:
+     * the stop, 50 before the image, of the stop's diameter; the largest
+     * field, sqrt(109) high, is imaged at m times that. */
+    print_message("# exit pupil %.17g from the image, diameter %.17g; image height %.17g\n",
+                  p.exp_pos, p.exp_diam, p.parax_image_height);
+    assert_true(fabs(p.exp_pos - 50.0) <= 1e-13);
+    assert_true(fabs(p.exp_diam - 2.0 * u * F) <= 1e-14 * u * F);
+    assert_true(fabs(p.parax_image_height + 0.5 * sqrt(109.0)) <= 1e-14);
     /* The image-space slope is u / |m| = 2 u: working F/# 1 / (4 u). */
     assert_true(fabs(p.working_fnum - 1.0 / (4.0 * u)) <= 1e-14 * p.working_fnum);
     /* Without the flag the same system has its entrance pupil at

@@ -667,6 +667,9 @@ static int c_field(ed *e, args *a)
         if (k < 0)
             return fail(e, "field type: \"%s\" is not angle, object, paraximage or realimage",
                         a->v[2]);
+        if (k == SG_FIELD_ANGLE && s->telecentric)
+            return fail(e, "field type: a telecentric object space has height fields, not "
+                        "angles (telecentric off first)");
         if (k == SG_FIELD_ANGLE)
             for (i = 0; i < s->nfield; i++)
                 if (!field_check(e, k, s->field[i].x, s->field[i].y, 1.0))
@@ -802,6 +805,9 @@ static int c_aperture(ed *e, args *a)
         return fail(e, "aperture: object NA %g must be below 1", v);
     if (type == SG_APER_OBJECT_NA && isinf(e->doc.sys->surf[0].thickness))
         return fail(e, "aperture: an object NA needs a finite object distance");
+    if (type != SG_APER_OBJECT_NA && e->doc.sys->telecentric)
+        return fail(e, "aperture: a telecentric object space's aperture is the object NA "
+                    "(telecentric off first)");
     if (!begin(e, e->row))
         return ED_HANDLED | ED_ERROR;
     e->doc.sys->aper_type = (sg_aper_type)type;
@@ -824,6 +830,29 @@ static int c_aim(ed *e, args *a)
         return ED_HANDLED | ED_ERROR;
     e->doc.sys->aim = (sg_aim)k;
     return end(e, "ray aiming %s", ed_aim_name(k));
+}
+
+/* Zemax's "Telecentric Object Space": the entrance pupil at infinity.  It
+ * needs an object NA, a finite object and height fields, as in Zemax. */
+static int c_telecentric(ed *e, args *a)
+{
+    const sg_system *s = e->doc.sys;
+    int on;
+    if (!need(e, a, 0, 1, "telecentric on|off|toggle") ||
+        !parse_switch(e, a->n > 1 ? a->v[1] : NULL, s->telecentric, &on, "telecentric"))
+        return ED_HANDLED | ED_ERROR;
+    if (on && s->aper_type != SG_APER_OBJECT_NA)
+        return fail(e, "telecentric: the aperture must be the object NA (aperture na VALUE)");
+    if (on && isinf(s->surf[0].thickness))
+        return fail(e, "telecentric: the object must be at a finite distance");
+    if (on && s->field_type == SG_FIELD_ANGLE)
+        return fail(e, "telecentric: the fields must be heights (field type object, "
+                    "paraximage or realimage)");
+    if (!begin(e, e->row))
+        return ED_HANDLED | ED_ERROR;
+    e->doc.sys->telecentric = on;
+    return end(e, "object space %s", on ? "telecentric: the entrance pupil at infinity"
+                                        : "not telecentric");
 }
 
 /* The environment: Zemax's system temperature and pressure, and whether
@@ -2171,6 +2200,8 @@ static const command commands[] = {
     {"aperture", NULL, c_aperture, "aperture [epd|fnum|na|float|pwfnum] [VALUE]",
      "set the system aperture"},
     {"aim", NULL, c_aim, "aim off|paraxial|real", "set ray aiming"},
+    {"telecentric", NULL, c_telecentric, "telecentric on|off|toggle",
+     "object space telecentric: the entrance pupil at infinity (object NA, height fields)"},
     {"temperature", NULL, c_temperature, "temperature CELSIUS",
      "set the system temperature (default 20)"},
     {"pressure", NULL, c_pressure, "pressure ATM", "set the air pressure (default 1)"},

@@ -54,7 +54,8 @@ static void text(const ui *u, item it, char *label, char *val, size_t n)
     case IT_UNITS: snprintf(label, n, "Lens units"); snprintf(val, n, "%s", s->units); break;
     case IT_APER_TYPE:
         snprintf(label, n, "Aperture type");
-        snprintf(val, n, "%s", ed_aper_name(s->aper_type));
+        snprintf(val, n, "%s%s", ed_aper_name(s->aper_type),
+                 s->telecentric ? " (telecentric object space)" : "");
         break;
     case IT_APER_VALUE:
         snprintf(label, n, "Aperture value");
