@@ -1499,8 +1499,11 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
             s->after_mode != SG_AFTER_EXPLICIT || s->mat.kind == SG_MAT_MODEL)
             version = version < 2 ? 2 : version;
     }
-    /* System keys newer than version 1 (object-space telecentric). */
+    /* System keys newer than version 1 (object-space telecentric), and
+     * the object cone angle, version 3's aperture type. */
     version = needed_version(SG_SCOPE_SYSTEM, sys, version);
+    if (sys->aper_type == SG_APER_OBJECT_CONE)
+        version = version < 3 ? 3 : version;
     /* So did the environment: a version-1 reader would trace at 20 C. */
     if (sys->temperature != 20.0 || sys->pressure != 1.0 || sys->adjust_index)
         version = version < 2 ? 2 : version;

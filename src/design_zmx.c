@@ -1205,9 +1205,13 @@ static int header_line(zctx *c, const zline *l)
             return set_aper(c, fn ? SG_APER_IMAGE_FNUM : SG_APER_OBJECT_NA, v);
         if (f == 1.0 && fn)
             return set_aper(c, SG_APER_PARAX_WORKING_FNUM, v);
-        if (f == 1.0)
-            return zerr(c, SG_EUNSUPPORTED, "OBNA: an object cone angle of %.17g degrees; sagitta "
-                        "has the object NA, and converting would round", v);
+        if (f == 1.0) {
+            /* The half angle of the axial object point's cone, in degrees. */
+            if (!(v > 0.0 && v < 90.0))
+                return zerr(c, SG_EUNSUPPORTED, "OBNA: an object cone angle of %.17g degrees; "
+                            "sagitta takes angles below 90", v);
+            return set_aper(c, SG_APER_OBJECT_CONE, v);
+        }
         return zerr(c, SG_EUNSUPPORTED, "%.4s: aperture kind %.17g is not one sagitta knows",
                     k->p, f);
     }
@@ -1435,10 +1439,10 @@ static int finish(zctx *c)
     if (s->telecentric) {
         /* Zemax's own rules for telecentric object space, at FTYP's line. */
         c->line = c->ftyp_line;
-        if (s->aper_type != SG_APER_OBJECT_NA)
+        if (s->aper_type != SG_APER_OBJECT_NA && s->aper_type != SG_APER_OBJECT_CONE)
             return zerr(c, SG_EUNSUPPORTED, "FTYP: telecentric object space with a system "
-                        "aperture other than the object NA (line %ld); the entrance pupil is "
-                        "at infinity", c->aper_line);
+                        "aperture other than the object NA or cone angle (line %ld); the "
+                        "entrance pupil is at infinity", c->aper_line);
         if (!isfinite(s->surf[0].thickness))
             return zerr(c, SG_EUNSUPPORTED, "FTYP: telecentric object space with the object "
                         "at infinity");
@@ -1772,6 +1776,9 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         break;
     case SG_APER_OBJECT_NA:
         zb_printf(b, "OBNA %s 0\n", num(n1, s->aper_value));
+        break;
+    case SG_APER_OBJECT_CONE:
+        zb_printf(b, "OBNA %s 1\n", num(n1, s->aper_value));
         break;
     default:
         zb_add(b, "FLOA\n", 5);

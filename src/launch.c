@@ -1180,8 +1180,9 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
     }
 }
 
-static const char *const aper_names[5] = {"entrance pupil diameter", "image F/#", "object NA",
-                                          "stop size", "paraxial working F/#"};
+static const char *const aper_names[6] = {"entrance pupil diameter", "image F/#", "object NA",
+                                          "stop size", "paraxial working F/#",
+                                          "object cone angle"};
 
 /* Launch constants from a 128-bit paraxial trace. */
 int sg_launch_prepare(sg_tracer *t, sg_diag *d)
@@ -1219,13 +1220,9 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
         t->ln.epr = dd_from_mpfr(v, tmp);
         t->ln.tele = sys->telecentric && !t->ln.obj_inf;
         if (t->ln.tele) {
-            /* The marginal slope, tan(asin(NA / n0)), as the paraxial
-             * trace takes it (which has checked NA < n0). */
-            mpfr_set_d(v, sys->aper_value, MPFR_RNDN);
-            mpfr_abs(tmp, idx[0], MPFR_RNDN);
-            mpfr_div(v, v, tmp, MPFR_RNDN);
-            mpfr_asin(v, v, MPFR_RNDN);
-            mpfr_tan(v, v, MPFR_RNDN);
+            /* The marginal slope, as the paraxial trace takes it (which has
+             * checked the aperture). */
+            rc = sg_object_slope_mpfr(sys, idx[0], v, d);
             t->ln.tslope = dd_from_mpfr(v, tmp);
         }
         t->ln.stop_r = dd_from_mpfr(p.stop_r, tmp);
@@ -1280,7 +1277,7 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
         return sg_diag_set(d, SG_ERANGE,
                            "aperture: %s %g gives an entrance pupil of radius %g at %g "
                            "from surface 1, beyond 1e+150 lens units (a trace squares it)",
-                           aper_names[sys->aper_type < 5 ? sys->aper_type : 0],
+                           aper_names[sys->aper_type < 6 ? sys->aper_type : 0],
                            sys->aper_value, t->ln.epr.hi, t->ln.enp.hi);
     if (t->prim) {
         /* As in Zemax, the pupil's position and size, the aperture and the

@@ -25,7 +25,8 @@ static const char *const field_type_names[] = {
     "angle", "object_height", "paraxial_image_height", "real_image_height"};
 static const char *const field_norm_names[] = {"radial", "rectangular"};
 static const char *const aper_type_names[] = {
-    "epd", "image_fnum", "object_na", "float_by_stop", "paraxial_working_fnum"};
+    "epd", "image_fnum", "object_na", "float_by_stop", "paraxial_working_fnum",
+    "object_cone_angle"};
 static const char *const aim_names[] = {"off", "paraxial", "real"};
 
 #define NAMES(a) (a), NULL, (int)(sizeof(a) / sizeof((a)[0]))

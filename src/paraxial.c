@@ -75,6 +75,40 @@ void sg_parax_mp_clear(sg_parax_mp *p)
                 p->stop_r, p->pimg_slope, (mpfr_ptr)0);
 }
 
+/* The axial object point's marginal slope: tan(asin(NA / |n0|)) for an
+ * object NA, the tangent of the cone's half angle for an object cone angle
+ * (no NA between them, so no rounding of one), at out's precision. */
+int sg_object_slope_mpfr(const sg_system *sys, const mpfr_t n0, mpfr_t out, sg_diag *d)
+{
+    mpfr_t a;
+    int rc = SG_OK;
+    mpfr_init2(a, mpfr_get_prec(out));
+    mpfr_set_d(out, sys->aper_value, MPFR_RNDN);
+    if (sys->aper_type == SG_APER_OBJECT_CONE) {
+        if (!(sys->aper_value > 0.0 && sys->aper_value < 90.0)) {
+            rc = sg_diag_set(d, SG_ERANGE, "aperture: object cone angle %g is not between 0 "
+                             "and 90 degrees", sys->aper_value);
+        } else {
+            mpfr_const_pi(a, MPFR_RNDN);
+            mpfr_mul(out, out, a, MPFR_RNDN);
+            mpfr_div_ui(out, out, 180, MPFR_RNDN);
+            mpfr_tan(out, out, MPFR_RNDN);
+        }
+    } else {
+        mpfr_abs(a, n0, MPFR_RNDN);
+        mpfr_div(out, out, a, MPFR_RNDN);
+        if (sys->aper_type != SG_APER_OBJECT_NA || mpfr_cmp_ui(out, 1) >= 0) {
+            rc = sg_diag_set(d, SG_ERANGE, "aperture: object NA %g exceeds the object index",
+                             sys->aper_value);
+        } else {
+            mpfr_asin(out, out, MPFR_RNDN);
+            mpfr_tan(out, out, MPFR_RNDN);
+        }
+    }
+    mpfr_clear(a);
+    return rc;
+}
+
 /* Largest field in the system's normalization, for the y direction. */
 static void field_max(const sg_system *sys, mpfr_t out)
 {
@@ -186,18 +220,10 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
 
     /* Entrance pupil radius from the aperture definition. */
     if (tele) {
-        /* Validation allows the object NA alone; the pupil is infinite and
-         * u0 is the marginal slope, tan(asin(NA / n0)). */
-        mpfr_set_d(t1, sys->aper_value, MPFR_RNDN);
-        mpfr_abs(t2, idx[0], MPFR_RNDN);
-        mpfr_div(t1, t1, t2, MPFR_RNDN);
-        if (sys->aper_type != SG_APER_OBJECT_NA || mpfr_cmp_ui(t1, 1) >= 0) {
-            rc = sg_diag_set(d, SG_ERANGE, "aperture: a telecentric object space needs an "
-                             "object NA below the object index (%g)", sys->aper_value);
+        /* Validation allows the object NA and cone angle alone; the pupil
+         * is infinite and u0 is the marginal slope. */
+        if ((rc = sg_object_slope_mpfr(sys, idx[0], u0, d)) != SG_OK)
             goto out;
-        }
-        mpfr_asin(t1, t1, MPFR_RNDN);
-        mpfr_tan(u0, t1, MPFR_RNDN);
         mpfr_set_inf(epr, 1);
     } else switch (sys->aper_type) {
     case SG_APER_EPD:
@@ -213,22 +239,16 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
         mpfr_div_d(epr, epr, 2.0 * sys->aper_value, MPFR_RNDN);
         break;
     case SG_APER_OBJECT_NA:
+    case SG_APER_OBJECT_CONE:
         if (inf_obj) {
-            rc = sg_diag_set(d, SG_ENONPHYS,
-                             "aperture: object-space NA needs an object at a finite distance");
+            rc = sg_diag_set(d, SG_ENONPHYS, "aperture: object-space %s needs an object at a "
+                             "finite distance",
+                             sys->aper_type == SG_APER_OBJECT_NA ? "NA" : "cone angle");
             goto out;
         }
-        /* epr = (enp + T0) tan(asin(NA / n0)) */
-        mpfr_set_d(t1, sys->aper_value, MPFR_RNDN);
-        mpfr_abs(t2, idx[0], MPFR_RNDN);
-        mpfr_div(t1, t1, t2, MPFR_RNDN);
-        if (mpfr_cmp_ui(t1, 1) >= 0) {
-            rc = sg_diag_set(d, SG_ERANGE, "aperture: object NA %g exceeds the object index",
-                             sys->aper_value);
+        /* epr = (enp + T0) tan(asin(NA / n0)), or tan of the cone angle */
+        if ((rc = sg_object_slope_mpfr(sys, idx[0], t1, d)) != SG_OK)
             goto out;
-        }
-        mpfr_asin(t1, t1, MPFR_RNDN);
-        mpfr_tan(t1, t1, MPFR_RNDN);
         mpfr_add(t2, o->enp, T0, MPFR_RNDN);
         mpfr_abs(t2, t2, MPFR_RNDN);
         mpfr_mul(epr, t1, t2, MPFR_RNDN);

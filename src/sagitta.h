@@ -303,7 +303,11 @@ typedef enum sg_aper_type {
     SG_APER_IMAGE_FNUM = 1,
     SG_APER_OBJECT_NA = 2,
     SG_APER_FLOAT_STOP = 3,
-    SG_APER_PARAX_WORKING_FNUM = 4
+    SG_APER_PARAX_WORKING_FNUM = 4,
+    /* Zemax's object cone angle: the half angle, in degrees, of the cone
+     * of light from the axial object point (below 90); n sin of it is the
+     * object NA.  Format version 3. */
+    SG_APER_OBJECT_CONE = 5
 } sg_aper_type;
 
 typedef enum sg_aim {

@@ -67,7 +67,9 @@ static void launch(const sg_system *sys, const sg_paraxial *p, double n0, double
     if (sys->telecentric && isfinite(T0)) {
         /* The pupil at infinity: the marginal ray at the object NA's
          * slope, the chief ray a unit height parallel to the axis. */
-        double u0 = tan(asin(sys->aper_value / fabs(n0)));
+        double u0 = sys->aper_type == SG_APER_OBJECT_CONE
+                        ? tan(sys->aper_value * 3.14159265358979323846 / 180.0)
+                        : tan(asin(sys->aper_value / fabs(n0)));
         *y = u0 * T0;
         *w = u0 * n0;
         *yb = 1.0;

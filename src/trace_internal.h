@@ -353,6 +353,9 @@ typedef struct sg_parax_mp {
 void sg_parax_mp_init(sg_parax_mp *p, mpfr_prec_t prec);
 void sg_parax_mp_clear(sg_parax_mp *p);
 void sg_parax_to_double(const sg_parax_mp *p, sg_paraxial *o);
+/* The axial object point's marginal slope for an object NA or cone angle
+ * aperture (paraxial.c). */
+int sg_object_slope_mpfr(const sg_system *sys, const mpfr_t n0, mpfr_t out, sg_diag *d);
 int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
                      sg_parax_mp *out, sg_diag *d);
 /* Signed indices after every surface at wavelength wave, into idx[0..n-1]. */

@@ -1162,13 +1162,8 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             mpfr_set(m->stop_r, p.stop_r, MPFR_RNDN);
             mpfr_set(m->pimg_slope, p.pimg_slope, MPFR_RNDN);
             m->tele = sys->telecentric && isfinite(sys->surf[0].thickness);
-            if (m->tele) {
-                mpfr_set_d(m->tslope, sys->aper_value, MPFR_RNDN);
-                mpfr_abs(m->t[0], idx[0], MPFR_RNDN);
-                mpfr_div(m->tslope, m->tslope, m->t[0], MPFR_RNDN);
-                mpfr_asin(m->tslope, m->tslope, MPFR_RNDN);
-                mpfr_tan(m->tslope, m->tslope, MPFR_RNDN);
-            }
+            if (m->tele)
+                rc = sg_object_slope_mpfr(sys, idx[0], m->tslope, d);
         }
         sg_parax_mp_clear(&p);
     }

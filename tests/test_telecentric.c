@@ -208,6 +208,86 @@ static void test_batch(void **state)
     sg_catalog_free(cat);
 }
 
+/* Zemax's object cone angle (OBNA v 1): the half angle of the axial object
+ * point's cone, in degrees.  The marginal ray leaves at exactly that angle
+ * (checked in MPFR), telecentric or not, and the paraxial object NA is its
+ * sine; the aperture reads from and goes back to .zmx and JSON as written. */
+static void test_cone_angle(void **state)
+{
+    static const char zmx[] = "MODE SEQ\nOBNA 6 1\nFTYP 1 1 1 1 0 0 0\nXFLN 0\nYFLN 0\nWAVM 1 0.55 1\n"
+                              "PWAV 1\nSURF 0\n  DISZ 300\nSURF 1\n  STOP\n  DISZ 10\nSURF 2\n";
+    sg_catalog *cat = tu_catalog();
+    mpfr_t a, pi;
+    double sn, tn;
+    int tele;
+    sg_diag d;
+    (void)state;
+    mpfr_inits2(256, a, pi, (mpfr_ptr)0);
+    mpfr_const_pi(pi, MPFR_RNDN);
+    mpfr_mul_ui(a, pi, 6, MPFR_RNDN);
+    mpfr_div_ui(a, a, 180, MPFR_RNDN);
+    mpfr_sin(pi, a, MPFR_RNDN);
+    sn = mpfr_get_d(pi, MPFR_RNDN);
+    mpfr_tan(pi, a, MPFR_RNDN);
+    tn = mpfr_get_d(pi, MPFR_RNDN);
+    for (tele = 0; tele < 2; tele++) {
+        sg_system *s = paraboloid(tele);
+        sg_paraxial p;
+        sg_ray_surface o[4];
+        sg_tracer *t;
+        int m;
+        s->aper_type = SG_APER_OBJECT_CONE;
+        s->aper_value = 6.0;
+        if (!tele)
+            s->stop = 1; /* the pupil on the mirror, at a finite place */
+        sg_diag_clear(&d);
+        if (sg_paraxial_compute(s, cat, -1, &p, &d) != SG_OK)
+            fail_msg("%s", d.msg);
+        assert_true(fabs(p.object_na - sn) <= 2e-16);
+        if (tele)
+            assert_true(fabs(p.stop_radius - tn * F) <= 4e-16 * F);
+        for (m = 0; m < 3; m++) {
+            t = tu_tracer(s, cat, (sg_method)m);
+            assert_int_equal(sg_trace_normalized(t, 0, 0, 0, 1, o), SG_OK);
+            print_message("# cone 6 degrees, %s, method %d: marginal direction m %.17g "
+                          "(sin 6 = %.17g)\n", tele ? "telecentric" : "pupil on the mirror", m,
+                          o[0].m, sn);
+            assert_true(fabs(o[0].m - sn) <= 4e-16 && o[0].l == 0.0);
+            sg_tracer_free(t);
+        }
+        sg_system_free(s);
+    }
+    {
+        sg_system *s = sg_system_new(), *b = sg_system_new();
+        char *z, *j;
+        sg_diag_clear(&d);
+        if (sg_zmx_parse(s, zmx, strlen(zmx), "cone.zmx", cat, &d) != SG_OK)
+            fail_msg("%s", d.msg);
+        assert_int_equal(s->aper_type, SG_APER_OBJECT_CONE);
+        assert_true(s->aper_value == 6.0 && s->telecentric == 1);
+        z = sg_zmx_to_text(s, cat, &d);
+        assert_non_null(z);
+        assert_non_null(strstr(z, "OBNA 6 1\n"));
+        assert_non_null(strstr(z, "FTYP 1 1 1 1 0 0 0\n"));
+        free(z);
+        j = sg_design_to_json(s);
+        assert_non_null(strstr(j, "\"object_cone_angle\""));
+        assert_non_null(strstr(j, "\"version\": 3"));
+        sg_diag_clear(&d);
+        assert_int_equal(sg_design_parse(b, j, strlen(j), "cone.json", &d), SG_OK);
+        assert_true(sg_system_equal(s, b));
+        free(j);
+        s->aper_value = 90.0;
+        sg_diag_clear(&d);
+        assert_int_equal(sg_system_validate(s, NULL, &d), SG_ERANGE);
+        assert_non_null(strstr(d.msg, "object cone angle 90 must be below 90 degrees"));
+        sg_system_free(s);
+        sg_system_free(b);
+    }
+    mpfr_clears(a, pi, (mpfr_ptr)0);
+    sg_catalog_free(cat);
+}
+
 /* What Zemax refuses with telecentric object space is refused: an aperture
  * other than the object NA, angle fields, an object at infinity; the flag
  * goes out to JSON (format version 3) and back. */
@@ -220,7 +300,7 @@ static void test_rules(void **state)
     s->aper_type = SG_APER_EPD;
     sg_diag_clear(&d);
     assert_int_equal(sg_system_validate(s, NULL, &d), SG_EUNSUPPORTED);
-    assert_non_null(strstr(d.msg, "its aperture is an object NA, not an entrance pupil"));
+    assert_non_null(strstr(d.msg, "its aperture is an object NA or cone angle, not an entrance pupil"));
     s->aper_type = SG_APER_OBJECT_NA;
     s->field_type = SG_FIELD_ANGLE;
     sg_diag_clear(&d);
@@ -273,6 +353,7 @@ int main(void)
         cmocka_unit_test(test_paraxial),
         cmocka_unit_test(test_rays),
         cmocka_unit_test(test_batch),
+        cmocka_unit_test(test_cone_angle),
         cmocka_unit_test(test_rules),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

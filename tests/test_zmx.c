@@ -445,7 +445,7 @@ static void test_bad_inputs(void **state)
         {"old vignetting", "FTYP 0 0 2 1 0 0 0\nYFLN 0 5\nZVCY 0 0.1\n" H S0 S1 S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:3: ZVCY: field 2"},
         {"model glass", H S0 "SURF 1\n  GLAS ___BLANK 1 0 1.6 1 0\n", 0, SG_ERANGE, "t.zmx:8: surface 1: GLAS: model glass nd 1.6, vd 1"},
         {"unknown glass", H S0 "SURF 1\n  GLAS NOSUCH 0 0 1.6 40.5\n", 0, SG_ENOGLASS, "NOSUCH"},
-        {"cone angle", "OBNA 10 1\n" S0, 0, SG_EUNSUPPORTED, "t.zmx:1: OBNA: an object cone angle"},
+        {"cone angle", "OBNA 90 1\n" S0, 0, SG_EUNSUPPORTED, "t.zmx:1: OBNA: an object cone angle of 90 degrees; sagitta takes angles below 90"},
         {"temperature", "ENVD -300 1 0\n", 0, SG_ERANGE, "t.zmx:1: ENVD: temperature -300 C"},
         {"pressure", "ENVD 20 -1 0\n", 0, SG_ERANGE, "t.zmx:1: ENVD: pressure -1 atm"},
         {"configs", "MNUM 3 1\n", 0, SG_EUNSUPPORTED, "t.zmx:1: MNUM: 3 configurations"},
@@ -467,7 +467,7 @@ static void test_bad_inputs(void **state)
         {"field type", "FTYP 4 0 1 1 0 0 0\n", 0, SG_EUNSUPPORTED, "theodolite"},
         {"telecentric flag", "FTYP 1 2 1 1 0 0 0\n", 0, SG_ERANGE, "t.zmx:1: telecentric flag: 2 is not a whole number from 0 to 1"},
         {"telecentric epd", "FTYP 1 1 1 1 0 0 0\n" H S0 S1 S2 S3, 0, SG_EUNSUPPORTED,
-         "t.zmx:1: FTYP: telecentric object space with a system aperture other than the object NA (line 3)"},
+         "t.zmx:1: FTYP: telecentric object space with a system aperture other than the object NA or cone angle (line 3)"},
         {"telecentric infinity", "FTYP 1 1 1 1 0 0 0\nOBNA 0.1 0\nMODE SEQ\nWAVM 1 0.55 1\nPWAV 1\n" S0 S1 S2 S3, 0,
          SG_EUNSUPPORTED, "t.zmx:1: FTYP: telecentric object space with the object at infinity"},
         {"telecentric angle", "FTYP 0 1 1 1 0 0 0\nOBNA 0.1 0\nMODE SEQ\nWAVM 1 0.55 1\nPWAV 1\nSURF 0\n  DISZ 100\n"

@@ -550,7 +550,7 @@ static const bad_case cases[] = {
       "tele.zmx", "FTYP 1 1 1 1 0 0 0\n" ZH "SURF 0\n  DISZ 100\nSURF 1\n  STOP\n  DISZ 5\n"
       "SURF 2\n", NULL, NULL, ARGS("import", "@F", "-o", "-"), 3,
       "@F:1: FTYP: telecentric object space with a system aperture other than the object NA "
-      "(line 3)", NULL, NULL, "sagitta-design", 0 },
+      "or cone angle (line 3)", NULL, NULL, "sagitta-design", 0 },
     { "json_telecentric_number", "\"telecentric\" must be true or false",
       "tele1.json", "{\"aperture\": {\"type\": \"object_na\", \"value\": 0.1, \"telecentric\": 2},"
       " \"surfaces\": [{\"thickness\": 100}, {\"stop\": true}, {}]}\n", NULL, NULL,
@@ -560,8 +560,18 @@ static const bad_case cases[] = {
       "tele2.json", "{\"aperture\": {\"type\": \"epd\", \"value\": 10, \"telecentric\": true},"
       " \"fields\": {\"type\": \"object_height\", \"list\": [{\"y\": 0}]},"
       " \"surfaces\": [{\"thickness\": 100}, {\"stop\": true}, {}]}\n", NULL, NULL,
-      ARGS("paraxial", "@F"), 4, "its aperture is an object NA, not an entrance pupil diameter",
+      ARGS("paraxial", "@F"), 4, "its aperture is an object NA or cone angle, not an entrance pupil diameter",
       NULL, NULL, NULL, 0 },
+    { "json_cone_90", "an object cone angle of 90 degrees (exit 4, as an NA of 1)",
+      "cone.json", "{\"aperture\": {\"type\": \"object_cone_angle\", \"value\": 90},"
+      " \"surfaces\": [{\"thickness\": 100}, {\"stop\": true}, {}]}\n", NULL, NULL,
+      ARGS("paraxial", "@F"), 4, "aperture: object cone angle 90 must be below 90 degrees",
+      NULL, NULL, NULL, 0 },
+    { "json_cone_infinite", "an object cone angle with the object at infinity (exit 4)",
+      "cone2.json", "{\"aperture\": {\"type\": \"object_cone_angle\", \"value\": 9},"
+      " \"surfaces\": [{}, {\"stop\": true}, {}]}\n", NULL, NULL, ARGS("paraxial", "@F"), 4,
+      "aperture: object-space cone angle needs an object at a finite distance", NULL, NULL,
+      NULL, 0 },
     { "zmx_no_stop", "a lens file without STOP is a design error, exit 4",
       "nostop.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  DISZ 1\nSURF 2\n", NULL, NULL,
       ARGS("import", "@F", "-o", "-"), 4, "no STOP line", NULL, NULL, "sagitta-design", 0 },
