@@ -836,6 +836,12 @@ static int end_surface(zctx *c)
         if (s->type == SG_SURF_COORDBRK)
             return zerr(c, SG_EUNSUPPORTED, "SCBD: a tilt or decenter on a coordinate break; "
                         "its parameters are the break");
+        /* sagitta's rays start in surface 1's frame, in front of the object. */
+        if (c->cur < 2)
+            return zerr(c, SG_EUNSUPPORTED, "SCBD: a tilt or decenter before surface %d; "
+                        "sagitta's rays start in surface 1's frame, so the object and surface 1 "
+                        "cannot be moved (in Zemax, add a dummy surface and tilt from surface "
+                        "2 on)", c->cur);
         s->before = z->scbd;
     }
     if (z->xdat_line) {
@@ -1048,6 +1054,9 @@ static int surface_line(zctx *c, const zline *l)
             return rc;
         if (!nz)
             return SG_OK;
+        if (z->scbd_line)
+            return zerr(c, SG_EPARSE, "SCBD: a second line in one surface (line %ld)",
+                        z->scbd_line);
         if (l->n < 9)
             return zerr(c, SG_EPARSE, "SCBD: %d of its 8 values (three flags, decenter x and y, "
                         "tilts about x, y and z)", l->n - 1);
