@@ -756,6 +756,13 @@ static void test_telecentric(void **state)
     f = cmd_exec(e, "field type angle");
     assert_true(f & ED_ERROR);
     assert_non_null(strstr(e->msg, "telecentric off first"));
+    /* Zemax's object cone angle, in degrees, is the other aperture allowed. */
+    ok(e, "aperture cone 6");
+    assert_true(e->doc.sys->aper_type == SG_APER_OBJECT_CONE && e->doc.sys->aper_value == 6.0);
+    f = cmd_exec(e, "aperture cone 90");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "below 90 degrees"));
+    ok(e, "undo");
     ok(e, "undo");
     assert_int_equal(e->doc.sys->telecentric, 0);
     ok(e, "telecentric toggle");
