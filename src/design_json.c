@@ -687,8 +687,8 @@ static int read_fields(jctx *c, const cJSON *v, sg_system *sys)
     return SG_OK;
 }
 
-enum { A_TYPE, A_VALUE, A_N };
-static const char *const aper_keys[] = {"type", "value"};
+enum { A_TYPE, A_VALUE, A_TELE, A_N };
+static const char *const aper_keys[] = {"type", "value", "telecentric"};
 
 static int read_aperture(jctx *c, const cJSON *v, sg_system *sys)
 {
@@ -704,6 +704,8 @@ static int read_aperture(jctx *c, const cJSON *v, sg_system *sys)
         sys->aper_type = (sg_aper_type)e;
     }
     if (k[A_VALUE] && (rc = get_nonneg(c, k[A_VALUE], "aperture: value", &sys->aper_value)) != SG_OK)
+        return rc;
+    if (k[A_TELE] && (rc = get_bool(c, k[A_TELE], "aperture: telecentric", &sys->telecentric)) != SG_OK)
         return rc;
     return SG_OK;
 }
@@ -1500,6 +1502,11 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
             s->after_mode != SG_AFTER_EXPLICIT || s->mat.kind == SG_MAT_MODEL)
             version = version < 2 ? 2 : version;
     }
+    /* System keys newer than version 1 (object-space telecentric), and
+     * the object cone angle, version 3's aperture type. */
+    version = needed_version(SG_SCOPE_SYSTEM, sys, version);
+    if (sys->aper_type == SG_APER_OBJECT_CONE)
+        version = version < 3 ? 3 : version;
     /* So did the environment: a version-1 reader would trace at 20 C. */
     if (sys->temperature != 20.0 || sys->pressure != 1.0 || sys->adjust_index)
         version = version < 2 ? 2 : version;
@@ -1536,6 +1543,8 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     sb_str(&b, aper_type_names[sys->aper_type]);
     sb_puts(&b, ", \"value\": ");
     sb_num(&b, sys->aper_value);
+    if (sys->telecentric)
+        sb_puts(&b, ", \"telecentric\": true");
     sb_puts(&b, " },\n  \"ray_aiming\": ");
     sb_str(&b, aim_names[sys->aim]);
     /* Written only away from the defaults, so older files save unchanged. */

@@ -94,6 +94,8 @@ typedef struct zsurf {
     long apk_line;
     double obdc_x, obdc_y; /* the aperture's decenter (OBDC) */
     long obdc_line;
+    sg_frame_change scbd;  /* the tilt and decenter before the surface (SCBD) */
+    long scbd_line;        /* 0: none, or all zero */
 } zsurf;
 
 typedef struct zctx {
@@ -923,6 +925,21 @@ static int end_surface(zctx *c)
         c->line = z->pend_line;
         return zerr(c, z->pend_code, "%s", z->pend_msg);
     }
+    if (z->scbd_line) {
+        /* The frame moves before the surface and stays moved after it,
+         * as in Zemax when the after-surface tilt is zero. */
+        c->line = z->scbd_line;
+        if (s->type == SG_SURF_COORDBRK)
+            return zerr(c, SG_EUNSUPPORTED, "SCBD: a tilt or decenter on a coordinate break; "
+                        "its parameters are the break");
+        /* sagitta's rays start in surface 1's frame, in front of the object. */
+        if (c->cur < 2)
+            return zerr(c, SG_EUNSUPPORTED, "SCBD: a tilt or decenter before surface %d; "
+                        "sagitta's rays start in surface 1's frame, so the object and surface 1 "
+                        "cannot be moved (in Zemax, add a dummy surface and tilt from surface "
+                        "2 on)", c->cur);
+        s->before = z->scbd;
+    }
     if (z->xdat_line) {
         c->line = z->xdat_line;
         return zerr(c, SG_EUNSUPPORTED, "XDAT: extra data %.17g; sagitta's surfaces have no "
@@ -1127,19 +1144,62 @@ static int surface_line(zctx *c, const zline *l)
             zwarn(c, "COMM: the comment is cut to %d bytes", SG_COMMENT - 1);
         return SG_OK;
     }
-    if (tok_is(k, "SCBD") || tok_is(k, "SCAD") || tok_is(k, "TLTX") || tok_is(k, "DECX")) {
-        /* Tilts and decenters before or after the surface: the order flag
-         * first, then the motions; all zero is the identity. */
-        nz = !all_zero(c, l, 2, &rc);
+    if (tok_is(k, "SCBD")) {
+        /* Zemax writes the tilt and decenter before a surface as three
+         * flags, then decenter x and y and the tilts about x, y and z in
+         * degrees.  Its files carry the flags 1 0 0 with the default order
+         * (decenter, then tilt); other flags are refused, not guessed. */
+        static const char *const what[5] = {"decenter x", "decenter y", "tilt about x",
+                                            "tilt about y", "tilt about z"};
+        double sv[5];
+        int f[3], i;
+        nz = !all_zero(c, l, 1, &rc);
         if (rc != SG_OK)
             return rc;
-        /* The fields of these lines are not documented where this reader
-         * could check them; a guess could tilt the wrong way silently. */
+        if (!nz)
+            return SG_OK;
+        if (z->scbd_line)
+            return zerr(c, SG_EPARSE, "SCBD: a second line in one surface (line %ld)",
+                        z->scbd_line);
+        if (l->n < 9)
+            return zerr(c, SG_EPARSE, "SCBD: %d of its 8 values (three flags, decenter x and y, "
+                        "tilts about x, y and z)", l->n - 1);
+        for (i = 0; i < 3; i++)
+            if ((rc = tok_int(c, l, 1 + i, "SCBD flag", -1000, 1000, &f[i])) != SG_OK)
+                return rc;
+        for (i = 0; i < 5; i++)
+            if ((rc = tok_num(c, l, 4 + i, what[i], &sv[i])) != SG_OK)
+                return rc;
+        if (f[0] != 1 || f[1] != 0 || f[2] != 0)
+            return pend(c, SG_EUNSUPPORTED, "SCBD: flags %d %d %d; sagitta reads the tilt and "
+                        "decenter before a surface with the flags Zemax writes for its default "
+                        "order, 1 0 0 (decenter, then tilt), and cannot check what others mean: "
+                        "in Zemax, convert the tilt to coordinate breaks", f[0], f[1], f[2]);
+        if (l->n > 9 && !all_zero(c, l, 9, &rc))
+            return rc != SG_OK ? rc
+                               : zerr(c, SG_EUNSUPPORTED, "SCBD: more than 8 values; sagitta "
+                                      "cannot tell what the others mean");
+        z->scbd.dx = sv[0];
+        z->scbd.dy = sv[1];
+        z->scbd.tx = sv[2];
+        z->scbd.ty = sv[3];
+        z->scbd.tz = sv[4];
+        z->scbd.order = 0;
+        z->scbd_line = c->line;
+        return SG_OK;
+    }
+    if (tok_is(k, "SCAD") || tok_is(k, "TLTX") || tok_is(k, "DECX")) {
+        /* The tilt and decenter after a surface (and the old TLTX/DECX):
+         * no file written by Zemax with these lines was found to check
+         * their fields against; all zero is the identity. */
+        nz = !all_zero(c, l, 1, &rc);
+        if (rc != SG_OK)
+            return rc;
         if (nz)
             return pend(c, SG_EUNSUPPORTED, "%.4s: a tilt or decenter %s the surface; sagitta "
-                        "reads Zemax's coordinate breaks (TYPE COORDBRK) but not the surface "
-                        "tilt/decenter lines, whose fields it cannot check: in Zemax, convert "
-                        "them to coordinate breaks", k->p,
+                        "reads Zemax's coordinate breaks (TYPE COORDBRK) and the tilt before a "
+                        "surface (SCBD), but not this line, whose fields it cannot check: in "
+                        "Zemax, convert the tilt to coordinate breaks", k->p,
                         tok_is(k, "SCAD") ? "after" : "before");
         return SG_OK;
     }
@@ -1258,9 +1318,13 @@ static int header_line(zctx *c, const zline *l)
             return set_aper(c, fn ? SG_APER_IMAGE_FNUM : SG_APER_OBJECT_NA, v);
         if (f == 1.0 && fn)
             return set_aper(c, SG_APER_PARAX_WORKING_FNUM, v);
-        if (f == 1.0)
-            return zerr(c, SG_EUNSUPPORTED, "OBNA: an object cone angle of %.17g degrees; sagitta "
-                        "has the object NA, and converting would round", v);
+        if (f == 1.0) {
+            /* The half angle of the axial object point's cone, in degrees. */
+            if (!(v > 0.0 && v < 90.0))
+                return zerr(c, SG_EUNSUPPORTED, "OBNA: an object cone angle of %.17g degrees; "
+                            "sagitta takes angles below 90", v);
+            return set_aper(c, SG_APER_OBJECT_CONE, v);
+        }
         return zerr(c, SG_EUNSUPPORTED, "%.4s: aperture kind %.17g is not one sagitta knows",
                     k->p, f);
     }
@@ -1324,9 +1388,9 @@ static int header_line(zctx *c, const zline *l)
             return zerr(c, SG_EUNSUPPORTED, "FTYP: field type %d (%s); sagitta has angle, object "
                         "height, paraxial and real image height", t,
                         t == 4 ? "theodolite angle" : "unknown");
-        if (tel)
-            return zerr(c, SG_EUNSUPPORTED, "FTYP: object space is telecentric; sagitta has no "
-                        "entrance pupil at infinity");
+        /* Telecentric object space: checked with the aperture and the
+         * object distance when the design is validated. */
+        s->telecentric = tel;
         if (afocal)
             return zerr(c, SG_EUNSUPPORTED, "FTYP: afocal image space; sagitta traces to an "
                         "image surface");
@@ -1485,6 +1549,20 @@ static int finish(zctx *c)
     s->stop = c->stop;
     if (s->surf[s->nsurf - 1].mat.kind != SG_MAT_AIR && s->surf[s->nsurf - 1].mat.kind != SG_MAT_GLASS)
         return zerr(c, SG_ENONPHYS, "the image surface cannot be a mirror");
+    if (s->telecentric) {
+        /* Zemax's own rules for telecentric object space, at FTYP's line. */
+        c->line = c->ftyp_line;
+        if (s->aper_type != SG_APER_OBJECT_NA && s->aper_type != SG_APER_OBJECT_CONE)
+            return zerr(c, SG_EUNSUPPORTED, "FTYP: telecentric object space with a system "
+                        "aperture other than the object NA or cone angle (line %ld); the "
+                        "entrance pupil is at infinity", c->aper_line);
+        if (!isfinite(s->surf[0].thickness))
+            return zerr(c, SG_EUNSUPPORTED, "FTYP: telecentric object space with the object "
+                        "at infinity");
+        if (s->field_type == SG_FIELD_ANGLE)
+            return zerr(c, SG_EUNSUPPORTED, "FTYP: telecentric object space with angle "
+                        "fields; its chief rays are parallel to the axis");
+    }
     return SG_OK;
 }
 
@@ -1799,14 +1877,23 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
             return sg_diag_set(d, SG_ERANGE, "export: surface %d: a value a .zmx file cannot "
                                "hold (thickness %g, radius %g, conic %g)", i, f->thickness,
                                f->radius, f->conic);
-        if (f->type != SG_SURF_COORDBRK && sg_surface_moves_frame(f))
+        /* The tilt before a surface goes out as Zemax's SCBD line in its
+         * default order; the after side's SCAD line is not checked. */
+        if (f->type != SG_SURF_COORDBRK && f->after_mode == SG_AFTER_EXPLICIT &&
+            !sg_frame_change_is_zero(&f->after))
             return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: a tilt or decenter "
-                               "before or after a surface is not written to .zmx (its "
-                               "SCBD/SCAD lines are not checked); use coordinate breaks", i);
+                               "after a surface is not written to .zmx (its SCAD line is not "
+                               "checked); use coordinate breaks", i);
         if (f->type != SG_SURF_COORDBRK && f->after_mode == SG_AFTER_REVERSE &&
             !sg_frame_change_is_zero(&f->before))
             return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: a reversed tilt or "
                                "decenter is not written to .zmx; use coordinate breaks", i);
+        if (f->type != SG_SURF_COORDBRK && f->before.order != 0 &&
+            !sg_frame_change_is_zero(&f->before))
+            return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: a tilt before the "
+                               "surface in order 1 (tilt, then decenter) is not written to .zmx "
+                               "(only SCBD's default order is checked); use coordinate breaks",
+                               i);
         if (f->type == SG_SURF_EVENASPH)
             for (k = 0; k < SG_NASPH; k++)
                 if (!isfinite(f->asph[k]))
@@ -1843,6 +1930,9 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
     case SG_APER_OBJECT_NA:
         zb_printf(b, "OBNA %s 0\n", num(n1, s->aper_value));
         break;
+    case SG_APER_OBJECT_CONE:
+        zb_printf(b, "OBNA %s 1\n", num(n1, s->aper_value));
+        break;
     default:
         zb_add(b, "FLOA\n", 5);
         break;
@@ -1856,7 +1946,8 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         zb_add(b, "\n", 1);
     }
     zb_printf(b, "RAIM 0 %d 1 1 0 0 0 0 0\n", s->aim == SG_AIM_REAL ? 2 : s->aim == SG_AIM_PARAXIAL ? 1 : 0);
-    zb_printf(b, "FTYP %d 0 %d %d %d 0 0\n", (int)s->field_type, s->nfield, s->nwave,
+    zb_printf(b, "FTYP %d %d %d %d %d 0 0\n", (int)s->field_type, s->telecentric ? 1 : 0,
+              s->nfield, s->nwave,
               s->field_norm == SG_NORM_RECT ? 1 : 0);
     zb_list(b, "XFLN", s, 0);
     zb_list(b, "YFLN", s, 1);
@@ -1908,6 +1999,12 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
                                  f->before.tz, f->before.order ? 1.0 : 0.0};
             for (k = 0; k < 6; k++)
                 zb_printf(b, "  PARM %d %s\n", k + 1, num(n1, v[k]));
+        }
+        if (f->type != SG_SURF_COORDBRK && !sg_frame_change_is_zero(&f->before)) {
+            char n3[40], n4[40], n5[40];
+            zb_printf(b, "  SCBD 1 0 0 %s %s %s %s %s\n", num(n1, f->before.dx),
+                      num(n2, f->before.dy), num(n3, f->before.tx), num(n4, f->before.ty),
+                      num(n5, f->before.tz));
         }
         zb_shape(b, f);
         if (isinf(f->thickness))

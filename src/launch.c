@@ -23,6 +23,14 @@ static int inf_object(const sg_tracer *t)
     return !isfinite(t->sys->surf[0].thickness);
 }
 
+/* Rays go where the pupil coordinates point, without iterating: aiming is
+ * off, or the object space is telecentric, where it does not apply (as in
+ * Zemax, the rays are fixed in object space). */
+static int aim_off(const sg_tracer *t)
+{
+    return t->sys->aim == SG_AIM_OFF || t->ln.tele;
+}
+
 /* Object point or direction from object-space field values (vx, vy):
  * tangents for an object at infinity, heights for a finite object, or
  * degrees when deg is set.  As in Zemax, an angle is the chief ray's slope
@@ -78,7 +86,8 @@ static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
             if (isfinite(sag))
                 o->obj.z = dd_add_d(o->obj.z, sag);
         }
-        o->lam = dd_div(dd_neg(o->obj.z), dd_sub(t->ln.enp, o->obj.z));
+        o->lam = t->ln.tele ? dd_neg(o->obj.z)
+                            : dd_div(dd_neg(o->obj.z), dd_sub(t->ln.enp, o->obj.z));
         o->n0 = fabs(t->nsigned[0]);
     }
 }
@@ -87,8 +96,17 @@ static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
  * point (px, py). */
 static void q_aim_off_v(const sg_tracer *t, const osp *o, vd px, vd py, vdd q[2])
 {
-    vdd ex = vdd_mul_d(vdd_set(t->ln.epr), px), ey = vdd_mul_d(vdd_set(t->ln.epr), py);
-    vdd lam = vdd_set(o->lam);
+    vdd ex, ey, lam = vdd_set(o->lam);
+    if (t->ln.tele) {
+        /* The object point plus its distance times the slopes. */
+        ex = vdd_mul_d(vdd_set(t->ln.tslope), px);
+        ey = vdd_mul_d(vdd_set(t->ln.tslope), py);
+        q[0] = vdd_add(vdd_set(o->obj.x), vdd_mul(lam, ex));
+        q[1] = vdd_add(vdd_set(o->obj.y), vdd_mul(lam, ey));
+        return;
+    }
+    ex = vdd_mul_d(vdd_set(t->ln.epr), px);
+    ey = vdd_mul_d(vdd_set(t->ln.epr), py);
     if (o->inf) {
         q[0] = vdd_sub(ex, vdd_mul(lam, vdd_set(o->dir.x)));
         q[1] = vdd_sub(ey, vdd_mul(lam, vdd_set(o->dir.y)));
@@ -165,7 +183,10 @@ static vd aim_off_err_v(const sg_tracer *t, const osp *o, vd px, vd py)
 {
     vd ex = vd_abs(t->ln.epr.hi * px), ey = vd_abs(t->ln.epr.hi * py), s;
     double lam = fabs(o->lam.hi);
-    if (o->inf) {
+    if (t->ln.tele) {
+        vd sx = vd_abs(t->ln.tslope.hi * px), sy = vd_abs(t->ln.tslope.hi * py);
+        s = vd_set(fabs(o->obj.x.hi) + fabs(o->obj.y.hi)) + lam * (sx + sy);
+    } else if (o->inf) {
         s = ex + ey + vd_set(lam * (fabs(o->dir.x.hi) + fabs(o->dir.y.hi)));
     } else {
         vd ox = vd_set(fabs(o->obj.x.hi)), oy = vd_set(fabs(o->obj.y.hi));
@@ -688,7 +709,7 @@ static int launch_q(sg_tracer *t, land_fn land, const osp *o, double px, double 
     int clip, rc;
     if (eaim)
         *eaim = 0.0;
-    if (t->sys->aim == SG_AIM_OFF) {
+    if (aim_off(t)) {
         q_aim_off(t, o, px, py, q);
     } else {
         /* The target keeps every bit of Px times the stop radius. */
@@ -912,7 +933,7 @@ int sg_launch_precise_prep(sg_tracer *t, double hx, double hy, double px, double
         sg_fail_rest(out, 0, t->n, SG_EAIM);
         return SG_EAIM;
     }
-    if (t->sys->aim == SG_AIM_OFF) {
+    if (aim_off(t)) {
         /* As the batch does it, lane by lane. */
         sg_vray v;
         vdd qv[2] = {vdd_set(q[0]), vdd_set(q[1])};
@@ -1092,7 +1113,7 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
         px[k] = pupil[k < nl ? k : 0][0];
         py[k] = pupil[k < nl ? k : 0][1];
     }
-    if (t->sys->aim == SG_AIM_OFF) {
+    if (aim_off(t)) {
         q_aim_off_v(t, &o, px, py, qv);
     } else {
         /* The targets keep every bit of Px times the stop radius. */
@@ -1101,8 +1122,8 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
         q_aim_start_v(t, &o, px, py, tg, qv);
     }
     for (k = 0; k < nl; k++)
-        done[k] = t->sys->aim == SG_AIM_OFF;
-    if (t->sys->aim != SG_AIM_OFF) {
+        done[k] = aim_off(t);
+    if (!aim_off(t)) {
         /* Apertures do not bend rays, so the iteration ignores them; the
          * final trace applies them. */
         clip = t->o.clip;
@@ -1124,7 +1145,7 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
         all = all && done[k] == 1;
     if (!all)
         pray_from_v(&o, qv, &launch, &p0);
-    if (t->sys->aim == SG_AIM_OFF)
+    if (aim_off(t))
         add_aim_off_err_v(t, &o, px, py, &launch, p0);
     for (k = 0; k < nl; k++) {
         if (done[k]) {
@@ -1159,8 +1180,9 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
     }
 }
 
-static const char *const aper_names[5] = {"entrance pupil diameter", "image F/#", "object NA",
-                                          "stop size", "paraxial working F/#"};
+static const char *const aper_names[6] = {"entrance pupil diameter", "image F/#", "object NA",
+                                          "stop size", "paraxial working F/#",
+                                          "object cone angle"};
 
 /* Launch constants from a 128-bit paraxial trace. */
 int sg_launch_prepare(sg_tracer *t, sg_diag *d)
@@ -1196,6 +1218,13 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
         t->ln.enp = dd_from_mpfr(p.enp, tmp);
         mpfr_div_2ui(v, p.epd, 1, MPFR_RNDN);
         t->ln.epr = dd_from_mpfr(v, tmp);
+        t->ln.tele = sys->telecentric && !t->ln.obj_inf;
+        if (t->ln.tele) {
+            /* The marginal slope, as the paraxial trace takes it (which has
+             * checked the aperture). */
+            rc = sg_object_slope_mpfr(sys, idx[0], v, d);
+            t->ln.tslope = dd_from_mpfr(v, tmp);
+        }
         t->ln.stop_r = dd_from_mpfr(p.stop_r, tmp);
         t->ln.pimg_slope = dd_from_mpfr(p.pimg_slope, tmp);
         if ((sys->field_type == SG_FIELD_PARAX_IMAGE_HEIGHT ||
@@ -1243,12 +1272,12 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
     free(idx);
     if (rc != SG_OK)
         return rc;
-    if (!(fabs(t->ln.enp.hi) <= 1e150) || !(t->ln.epr.hi <= 1e150) ||
-        !(fabs(t->ln.stop_r.hi) <= 1e150))
+    if (!t->ln.tele && (!(fabs(t->ln.enp.hi) <= 1e150) || !(t->ln.epr.hi <= 1e150) ||
+                        !(fabs(t->ln.stop_r.hi) <= 1e150)))
         return sg_diag_set(d, SG_ERANGE,
                            "aperture: %s %g gives an entrance pupil of radius %g at %g "
                            "from surface 1, beyond 1e+150 lens units (a trace squares it)",
-                           aper_names[sys->aper_type < 5 ? sys->aper_type : 0],
+                           aper_names[sys->aper_type < 6 ? sys->aper_type : 0],
                            sys->aper_value, t->ln.epr.hi, t->ln.enp.hi);
     if (t->prim) {
         /* As in Zemax, the pupil's position and size, the aperture and the
@@ -1256,6 +1285,7 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
          * launch through the primary's pupil, towards its stop radius. */
         t->ln.enp = t->prim->ln.enp;
         t->ln.epr = t->prim->ln.epr;
+        t->ln.tslope = t->prim->ln.tslope;
         t->ln.stop_r = t->prim->ln.stop_r;
         t->ln.pimg_slope = t->prim->ln.pimg_slope;
         return SG_OK;
@@ -1263,7 +1293,7 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
 
     /* Real aiming with a pupil set by anything but the stop size lands the
      * marginal ray where the real on-axis marginal ray meets the stop. */
-    if (sys->aim == SG_AIM_REAL && sys->aper_type != SG_APER_FLOAT_STOP) {
+    if (sys->aim == SG_AIM_REAL && sys->aper_type != SG_APER_FLOAT_STOP && !t->ln.tele) {
         osp o;
         dd q[2], at[2];
         int saved = t->o.method == SG_METHOD_CLASSIC;

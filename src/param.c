@@ -30,7 +30,8 @@ static const char *const field_type_names[] = {
     "angle", "object_height", "paraxial_image_height", "real_image_height"};
 static const char *const field_norm_names[] = {"radial", "rectangular"};
 static const char *const aper_type_names[] = {
-    "epd", "image_fnum", "object_na", "float_by_stop", "paraxial_working_fnum"};
+    "epd", "image_fnum", "object_na", "float_by_stop", "paraxial_working_fnum",
+    "object_cone_angle"};
 static const char *const aim_names[] = {"off", "paraxial", "real"};
 
 #define NAMES(a) (a), NULL, (int)(sizeof(a) / sizeof((a)[0]))
@@ -57,6 +58,9 @@ static const sg_param system_params[] = {
           aper_value, 0.0, SG_MAX_LEN, 10.0),
     {"ray_aiming", "ray aiming", NULL, NULL, "RAIM", SG_PARAM_ENUM, 0, offsetof(sg_system, aim),
      0, 1, 0, 0, 0, 0, SG_AIM_OFF, NAMES(aim_names), 1},
+    /* Format version 3: object-space telecentric (in "aperture"). */
+    {"aperture.telecentric", "object-space telecentric", NULL, NULL, "FTYP", SG_PARAM_BOOL,
+     SG_PARAM_OPTIONAL, offsetof(sg_system, telecentric), 0, 1, 0, 0, 0, 0, 0, NONAMES, 3},
 };
 
 static const sg_param wave_params[] = {

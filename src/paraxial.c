@@ -75,6 +75,40 @@ void sg_parax_mp_clear(sg_parax_mp *p)
                 p->stop_r, p->pimg_slope, (mpfr_ptr)0);
 }
 
+/* The axial object point's marginal slope: tan(asin(NA / |n0|)) for an
+ * object NA, the tangent of the cone's half angle for an object cone angle
+ * (no NA between them, so no rounding of one), at out's precision. */
+int sg_object_slope_mpfr(const sg_system *sys, const mpfr_t n0, mpfr_t out, sg_diag *d)
+{
+    mpfr_t a;
+    int rc = SG_OK;
+    mpfr_init2(a, mpfr_get_prec(out));
+    mpfr_set_d(out, sys->aper_value, MPFR_RNDN);
+    if (sys->aper_type == SG_APER_OBJECT_CONE) {
+        if (!(sys->aper_value > 0.0 && sys->aper_value < 90.0)) {
+            rc = sg_diag_set(d, SG_ERANGE, "aperture: object cone angle %g is not between 0 "
+                             "and 90 degrees", sys->aper_value);
+        } else {
+            mpfr_const_pi(a, MPFR_RNDN);
+            mpfr_mul(out, out, a, MPFR_RNDN);
+            mpfr_div_ui(out, out, 180, MPFR_RNDN);
+            mpfr_tan(out, out, MPFR_RNDN);
+        }
+    } else {
+        mpfr_abs(a, n0, MPFR_RNDN);
+        mpfr_div(out, out, a, MPFR_RNDN);
+        if (sys->aper_type != SG_APER_OBJECT_NA || mpfr_cmp_ui(out, 1) >= 0) {
+            rc = sg_diag_set(d, SG_ERANGE, "aperture: object NA %g exceeds the object index",
+                             sys->aper_value);
+        } else {
+            mpfr_asin(out, out, MPFR_RNDN);
+            mpfr_tan(out, out, MPFR_RNDN);
+        }
+    }
+    mpfr_clear(a);
+    return rc;
+}
+
 /* Largest field in the system's normalization, for the y direction. */
 static void field_max(const sg_system *sys, mpfr_t out)
 {
@@ -111,6 +145,10 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
     mpfr_t A, B, T0, t1, t2, epr, u0;
     int n = sys->nsurf, last = n - 2, stop = sys->stop, j, rc = SG_OK;
     int inf_obj = !isfinite(sys->surf[0].thickness);
+    /* Object-space telecentric: the entrance pupil is at infinity whatever
+     * the stop; the marginal ray leaves the axial object point at the
+     * object NA's slope, the chief ray a unit height parallel to the axis. */
+    int tele = sys->telecentric && !inf_obj;
     double tlast = sys->surf[n - 2].thickness;
 
     c.sys = sys;
@@ -144,14 +182,17 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
     mpfr_set(r.w, idx[0], MPFR_RNDN);
     trace(&c, &r, 1, stop);
     mpfr_set(B, r.y, MPFR_RNDN);
-    if (mpfr_zero_p(A)) {
+    if (tele) {
+        mpfr_set_inf(o->enp, 1);
+    } else if (mpfr_zero_p(A)) {
         rc = sg_diag_set(d, SG_ENONPHYS,
                          "the entrance pupil is at infinity (the stop on surface %d is "
                          "imaged to infinity in object space)", stop);
         goto out;
     }
-    mpfr_div(o->enp, B, A, MPFR_RNDN);
-    if (!inf_obj) {
+    if (!tele)
+        mpfr_div(o->enp, B, A, MPFR_RNDN);
+    if (!inf_obj && !tele) {
         mpfr_add(t1, o->enp, T0, MPFR_RNDN);
         if (mpfr_zero_p(t1)) {
             rc = sg_diag_set(d, SG_ENONPHYS,
@@ -178,7 +219,13 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
     }
 
     /* Entrance pupil radius from the aperture definition. */
-    switch (sys->aper_type) {
+    if (tele) {
+        /* Validation allows the object NA and cone angle alone; the pupil
+         * is infinite and u0 is the marginal slope. */
+        if ((rc = sg_object_slope_mpfr(sys, idx[0], u0, d)) != SG_OK)
+            goto out;
+        mpfr_set_inf(epr, 1);
+    } else switch (sys->aper_type) {
     case SG_APER_EPD:
         mpfr_set_d(epr, sys->aper_value, MPFR_RNDN);
         mpfr_div_2ui(epr, epr, 1, MPFR_RNDN);
@@ -192,22 +239,16 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
         mpfr_div_d(epr, epr, 2.0 * sys->aper_value, MPFR_RNDN);
         break;
     case SG_APER_OBJECT_NA:
+    case SG_APER_OBJECT_CONE:
         if (inf_obj) {
-            rc = sg_diag_set(d, SG_ENONPHYS,
-                             "aperture: object-space NA needs an object at a finite distance");
+            rc = sg_diag_set(d, SG_ENONPHYS, "aperture: object-space %s needs an object at a "
+                             "finite distance",
+                             sys->aper_type == SG_APER_OBJECT_NA ? "NA" : "cone angle");
             goto out;
         }
-        /* epr = (enp + T0) tan(asin(NA / n0)) */
-        mpfr_set_d(t1, sys->aper_value, MPFR_RNDN);
-        mpfr_abs(t2, idx[0], MPFR_RNDN);
-        mpfr_div(t1, t1, t2, MPFR_RNDN);
-        if (mpfr_cmp_ui(t1, 1) >= 0) {
-            rc = sg_diag_set(d, SG_ERANGE, "aperture: object NA %g exceeds the object index",
-                             sys->aper_value);
+        /* epr = (enp + T0) tan(asin(NA / n0)), or tan of the cone angle */
+        if ((rc = sg_object_slope_mpfr(sys, idx[0], t1, d)) != SG_OK)
             goto out;
-        }
-        mpfr_asin(t1, t1, MPFR_RNDN);
-        mpfr_tan(t1, t1, MPFR_RNDN);
         mpfr_add(t2, o->enp, T0, MPFR_RNDN);
         mpfr_abs(t2, t2, MPFR_RNDN);
         mpfr_mul(epr, t1, t2, MPFR_RNDN);
@@ -246,17 +287,28 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
         mpfr_div_d(epr, t1, sys->aper_value, MPFR_RNDN);
         break;
     }
-    if (!(mpfr_number_p(epr) && mpfr_sgn(epr) > 0)) {
+    if (!tele && !(mpfr_number_p(epr) && mpfr_sgn(epr) > 0)) {
         rc = sg_diag_set(d, SG_ENONPHYS, "aperture: the entrance pupil diameter is not "
                                          "positive and finite");
         goto out;
     }
     mpfr_mul_2ui(o->epd, epr, 1, MPFR_RNDN);
-    mpfr_mul(o->stop_r, epr, A, MPFR_RNDN);
-    mpfr_abs(o->stop_r, o->stop_r, MPFR_RNDN);
+    if (tele) {
+        /* The stop radius is the marginal ray's height there. */
+        mpfr_mul(m.y, u0, T0, MPFR_RNDN);
+        mpfr_mul(m.w, u0, idx[0], MPFR_RNDN);
+        trace(&c, &m, 1, stop);
+        mpfr_abs(o->stop_r, m.y, MPFR_RNDN);
+    } else {
+        mpfr_mul(o->stop_r, epr, A, MPFR_RNDN);
+        mpfr_abs(o->stop_r, o->stop_r, MPFR_RNDN);
+    }
 
     /* The marginal ray. */
-    if (inf_obj) {
+    if (tele) {
+        mpfr_mul(m.y, u0, T0, MPFR_RNDN);
+        mpfr_mul(m.w, u0, idx[0], MPFR_RNDN);
+    } else if (inf_obj) {
         mpfr_set(m.y, epr, MPFR_RNDN);
         mpfr_set_zero(m.w, 1);
         mpfr_set_zero(u0, 1);
@@ -299,6 +351,7 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
         mpfr_mul(o->object_na, t1, t2, MPFR_RNDN);
     }
     if (mpfr_number_p(o->efl)) {
+        /* EFL over the entrance pupil diameter: 0 when that is infinite. */
         mpfr_abs(t1, o->efl, MPFR_RNDN);
         mpfr_div(o->image_fnum, t1, o->epd, MPFR_RNDN);
     } else {
@@ -307,7 +360,10 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
 
     /* The chief ray through the pupil centre with unit slope (or from a
      * unit object height), for the exit pupil and image heights. */
-    if (inf_obj) {
+    if (tele) {
+        mpfr_set_ui(ch.y, 1, MPFR_RNDN);
+        mpfr_set_zero(ch.w, 1);
+    } else if (inf_obj) {
         mpfr_neg(ch.y, o->enp, MPFR_RNDN);
         mpfr_set(ch.w, idx[0], MPFR_RNDN);
     } else {

@@ -319,7 +319,11 @@ typedef enum sg_aper_type {
     SG_APER_IMAGE_FNUM = 1,
     SG_APER_OBJECT_NA = 2,
     SG_APER_FLOAT_STOP = 3,
-    SG_APER_PARAX_WORKING_FNUM = 4
+    SG_APER_PARAX_WORKING_FNUM = 4,
+    /* Zemax's object cone angle: the half angle, in degrees, of the cone
+     * of light from the axial object point (below 90); n sin of it is the
+     * object NA.  Format version 3. */
+    SG_APER_OBJECT_CONE = 5
 } sg_aper_type;
 
 typedef enum sg_aim {
@@ -363,6 +367,12 @@ typedef struct sg_system {
     sg_aper_type aper_type;
     double aper_value;
     sg_aim aim;
+    /* Object-space telecentric (Zemax's "Telecentric Object Space"): the
+     * entrance pupil is at infinity whatever the stop, every chief ray
+     * leaves the object parallel to the axis, the aperture is an object
+     * NA, the object is at a finite distance, fields are heights, and ray
+     * aiming does not apply (the rays are fixed in object space). */
+    int telecentric;
 
     /* The environment (Zemax's ENVD): temperature in C (20) and pressure
      * in atm (1) of the air the wavelengths are measured in.  With

@@ -64,7 +64,17 @@ static void launch(const sg_system *sys, const sg_paraxial *p, double n0, double
                    double *w, double *yb, double *wb)
 {
     double epr = 0.5 * p->epd, T0 = sys->surf[0].thickness;
-    if (!isfinite(T0)) {
+    if (sys->telecentric && isfinite(T0)) {
+        /* The pupil at infinity: the marginal ray at the object NA's
+         * slope, the chief ray a unit height parallel to the axis. */
+        double u0 = sys->aper_type == SG_APER_OBJECT_CONE
+                        ? tan(sys->aper_value * 3.14159265358979323846 / 180.0)
+                        : tan(asin(sys->aper_value / fabs(n0)));
+        *y = u0 * T0;
+        *w = u0 * n0;
+        *yb = 1.0;
+        *wb = 0.0;
+    } else if (!isfinite(T0)) {
         *y = epr;
         *w = 0.0;
         /* Unit slope through the pupil's centre. */

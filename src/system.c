@@ -379,9 +379,36 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
     if (sys->aper_type == SG_APER_OBJECT_NA && !(sys->aper_value < 1.0))
         return sg_diag_set(d, SG_ERANGE, "aperture: object NA %g must be below 1",
                            sys->aper_value);
+    if (sys->aper_type == SG_APER_OBJECT_CONE && !(sys->aper_value < 90.0))
+        return sg_diag_set(d, SG_ERANGE, "aperture: object cone angle %g must be below 90 "
+                           "degrees", sys->aper_value);
     if (sys->aper_type != SG_APER_FLOAT_STOP && sys->aper_value > SG_MAX_LEN)
         return sg_diag_set(d, SG_ERANGE, "aperture: value %g is beyond %g", sys->aper_value,
                            SG_MAX_LEN);
+    if (sys->telecentric) {
+        /* Zemax's rules for telecentric object space: the pupil is at
+         * infinity, so the aperture is an object NA and the field a height
+         * on an object at a finite distance. */
+        if (sys->telecentric != 1)
+            return sg_diag_set(d, SG_ERANGE, "aperture: telecentric is %d; it is 0 or 1",
+                               sys->telecentric);
+        if (sys->aper_type != SG_APER_OBJECT_NA && sys->aper_type != SG_APER_OBJECT_CONE)
+            return sg_diag_set(d, SG_EUNSUPPORTED, "aperture: an object-space telecentric "
+                               "system has its entrance pupil at infinity, so its aperture is "
+                               "an object NA or cone angle, not %s",
+                               sys->aper_type == SG_APER_EPD          ? "an entrance pupil diameter"
+                               : sys->aper_type == SG_APER_IMAGE_FNUM ? "an image F/#"
+                               : sys->aper_type == SG_APER_FLOAT_STOP ? "the stop's size"
+                                                                      : "a working F/#");
+        if (!isfinite(sys->surf[0].thickness))
+            return sg_diag_set(d, SG_EUNSUPPORTED, "aperture: an object-space telecentric "
+                               "system needs an object at a finite distance (surface 0's "
+                               "thickness is infinite)");
+        if (sys->field_type == SG_FIELD_ANGLE)
+            return sg_diag_set(d, SG_EUNSUPPORTED, "fields: an object-space telecentric "
+                               "system's chief rays are parallel to the axis, so its fields "
+                               "are heights, not angles");
+    }
     for (k = 0; k < sys->nfield; k++)
         if (sys->field_type != SG_FIELD_ANGLE &&
             (fabs(sys->field[k].x) > SG_MAX_LEN || fabs(sys->field[k].y) > SG_MAX_LEN))

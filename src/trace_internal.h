@@ -85,6 +85,11 @@ typedef struct sg_launch {
     dd pimg_slope;   /* paraxial image height per unit object-space tan or height */
     int straight;    /* every surface between 1 and the stop leaves a ray straight */
     dd zstop;        /* the stop's vertex in surface 1's frame */
+    /* Object-space telecentric: pupil point (px, py) is the direction of
+     * slope (px, py) times tslope = tan(asin(NA / n0)) from the object
+     * point, the limit of the paraxial pupil plane moved to infinity. */
+    int tele;
+    dd tslope;
 } sg_launch;
 
 typedef struct sg_mpfr_ctx sg_mpfr_ctx;
@@ -95,7 +100,8 @@ typedef struct osp {
     int inf;
     dd3 dir;
     dd3 obj;
-    dd lam; /* aiming off: enp / dir.z at infinity, else -obj.z / (enp - obj.z) */
+    dd lam; /* aiming off: enp / dir.z at infinity, else -obj.z / (enp - obj.z);
+             * telecentric: -obj.z, the object point's distance to surface 1 */
     double n0; /* |index| of object space */
     /* At infinity, the optical path's start plane: the primary chief
      * ray's point on surface 1 dotted with dir (0 until the field's chief
@@ -356,6 +362,9 @@ typedef struct sg_parax_mp {
 void sg_parax_mp_init(sg_parax_mp *p, mpfr_prec_t prec);
 void sg_parax_mp_clear(sg_parax_mp *p);
 void sg_parax_to_double(const sg_parax_mp *p, sg_paraxial *o);
+/* The axial object point's marginal slope for an object NA or cone angle
+ * aperture (paraxial.c). */
+int sg_object_slope_mpfr(const sg_system *sys, const mpfr_t n0, mpfr_t out, sg_diag *d);
 int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
                      sg_parax_mp *out, sg_diag *d);
 /* Signed indices after every surface at wavelength wave, into idx[0..n-1]. */

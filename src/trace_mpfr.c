@@ -38,6 +38,10 @@ struct sg_mpfr_ctx {
     msurf *s;
     /* launch constants */
     mpfr_t T0, enp, epr, stop_r, fx, fy, pimg_slope, pi;
+    /* Object-space telecentric: the marginal slope tan(asin(NA / n0)),
+     * as in the precise launch (sg_launch). */
+    int tele;
+    mpfr_t tslope;
     /* ray state and scratch */
     mvec P, D, G, obj, dir, sv_P, sv_D;
     mpfr_t q[2], t[NT];
@@ -127,7 +131,7 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
         }
         free(m->s);
     }
-    mpfr_clears(m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi,
+    mpfr_clears(m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi, m->tslope,
                 m->q[0], m->q[1], m->path, m->opl, m->plane, m->c1dot, (mpfr_ptr)0);
     for (k = 0; k < 2; k++)
         mpfr_clears(m->fv[k], m->tgt[k], m->qb[k], m->dq[k], m->qo[k], (mpfr_ptr)0);
@@ -160,7 +164,7 @@ static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
     m->prec = prec;
     m->n = n;
     m->s = s;
-    mpfr_inits2(prec, m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi,
+    mpfr_inits2(prec, m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi, m->tslope,
                 m->q[0], m->q[1], m->path, m->opl, m->plane, m->c1dot, (mpfr_ptr)0);
     mpfr_set_zero(m->opl, 1);
     mpfr_set_zero(m->plane, 1);
@@ -828,6 +832,18 @@ static void m_q_off(sg_tracer *tr, double px, double py)
 {
     sg_mpfr_ctx *m = tr->mp;
     mpfr_t *t = m->t;
+    if (m->tele) {
+        /* The object point plus its distance to surface 1 times the
+         * slopes. */
+        mpfr_neg(t[2], m->obj.z, MPFR_RNDN);
+        mpfr_mul_d(t[14], m->tslope, px, MPFR_RNDN);
+        mpfr_mul_d(t[15], m->tslope, py, MPFR_RNDN);
+        mpfr_mul(t[3], t[2], t[14], MPFR_RNDN);
+        mpfr_add(m->q[0], m->obj.x, t[3], MPFR_RNDN);
+        mpfr_mul(t[3], t[2], t[15], MPFR_RNDN);
+        mpfr_add(m->q[1], m->obj.y, t[3], MPFR_RNDN);
+        return;
+    }
     mpfr_mul_d(t[14], m->epr, px, MPFR_RNDN);
     mpfr_mul_d(t[15], m->epr, py, MPFR_RNDN);
     if (!isfinite(tr->sys->surf[0].thickness)) {
@@ -1117,7 +1133,7 @@ int sg_mpfr_trace_normalized(sg_tracer *tr, double hx, double hy, double px, dou
     m->fdeg = deg;
     m_osp(tr, deg);
     m_q_off(tr, px, py);
-    if (tr->sys->aim != SG_AIM_OFF && m_aim(tr, px, py) != SG_OK) {
+    if (tr->sys->aim != SG_AIM_OFF && !m->tele && m_aim(tr, px, py) != SG_OK) {
         sg_fail_rest(out, 0, tr->n, SG_EAIM);
         return SG_EAIM;
     }
@@ -1205,6 +1221,9 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             mpfr_div_2ui(m->epr, p.epd, 1, MPFR_RNDN);
             mpfr_set(m->stop_r, p.stop_r, MPFR_RNDN);
             mpfr_set(m->pimg_slope, p.pimg_slope, MPFR_RNDN);
+            m->tele = sys->telecentric && isfinite(sys->surf[0].thickness);
+            if (m->tele)
+                rc = sg_object_slope_mpfr(sys, idx[0], m->tslope, d);
         }
         sg_parax_mp_clear(&p);
     }
@@ -1241,11 +1260,12 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
         mpfr_set(m->epr, pm->epr, MPFR_RNDN);
         mpfr_set(m->stop_r, pm->stop_r, MPFR_RNDN);
         mpfr_set(m->pimg_slope, pm->pimg_slope, MPFR_RNDN);
+        mpfr_set(m->tslope, pm->tslope, MPFR_RNDN);
         return SG_OK;
     }
     /* Real aiming with a pupil not set by the stop: the stop radius is
      * where the real on-axis marginal ray meets the stop. */
-    if (sys->aim == SG_AIM_REAL && sys->aper_type != SG_APER_FLOAT_STOP) {
+    if (sys->aim == SG_AIM_REAL && sys->aper_type != SG_APER_FLOAT_STOP && !m->tele) {
         mpfr_set_zero(m->t[12], 1);
         mpfr_set_zero(m->t[13], 1);
         m_osp(tr, 0);

@@ -538,6 +538,40 @@ static const bad_case cases[] = {
     { "zmx_utf16_cut", "UTF-16 text of an odd length is refused",
       "odd.zmx", "\xFF\xFEM\0O", NULL, NULL, ARGS("import", "@F", "-o", "-"), 3,
       "odd number of bytes", NULL, NULL, "sagitta-design", 0 },
+    { "zmx_scbd_flags", "a surface tilt with flags other than Zemax's 1 0 0, line 9",
+      "scbd.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  SCBD 2 0 0 0 0 1 0 0\n", NULL,
+      NULL, ARGS("import", "@F", "-o", "-"), 3, "@F:9: surface 1: SCBD: flags 2 0 0", NULL, NULL,
+      "sagitta-design", 0 },
+    { "zmx_scad", "a tilt after a surface (SCAD, line 9) is refused, not guessed",
+      "scad.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  SCAD 1 0 0 0 0 1 0 0\n", NULL,
+      NULL, ARGS("import", "@F", "-o", "-"), 3, "@F:9: surface 1: SCAD: a tilt or decenter after",
+      NULL, NULL, "sagitta-design", 0 },
+    { "zmx_telecentric_epd", "telecentric object space (FTYP, line 1) with an EPD (line 3)",
+      "tele.zmx", "FTYP 1 1 1 1 0 0 0\n" ZH "SURF 0\n  DISZ 100\nSURF 1\n  STOP\n  DISZ 5\n"
+      "SURF 2\n", NULL, NULL, ARGS("import", "@F", "-o", "-"), 3,
+      "@F:1: FTYP: telecentric object space with a system aperture other than the object NA "
+      "or cone angle (line 3)", NULL, NULL, "sagitta-design", 0 },
+    { "json_telecentric_number", "\"telecentric\" must be true or false",
+      "tele1.json", "{\"aperture\": {\"type\": \"object_na\", \"value\": 0.1, \"telecentric\": 2},"
+      " \"surfaces\": [{\"thickness\": 100}, {\"stop\": true}, {}]}\n", NULL, NULL,
+      ARGS("paraxial", "@F"), 3, "aperture: telecentric: expected true or false, got number 2",
+      NULL, NULL, NULL, 0 },
+    { "json_telecentric_epd", "a telecentric object space needs an object NA (exit 4)",
+      "tele2.json", "{\"aperture\": {\"type\": \"epd\", \"value\": 10, \"telecentric\": true},"
+      " \"fields\": {\"type\": \"object_height\", \"list\": [{\"y\": 0}]},"
+      " \"surfaces\": [{\"thickness\": 100}, {\"stop\": true}, {}]}\n", NULL, NULL,
+      ARGS("paraxial", "@F"), 4, "its aperture is an object NA or cone angle, not an entrance pupil diameter",
+      NULL, NULL, NULL, 0 },
+    { "json_cone_90", "an object cone angle of 90 degrees (exit 4, as an NA of 1)",
+      "cone.json", "{\"aperture\": {\"type\": \"object_cone_angle\", \"value\": 90},"
+      " \"surfaces\": [{\"thickness\": 100}, {\"stop\": true}, {}]}\n", NULL, NULL,
+      ARGS("paraxial", "@F"), 4, "aperture: object cone angle 90 must be below 90 degrees",
+      NULL, NULL, NULL, 0 },
+    { "json_cone_infinite", "an object cone angle with the object at infinity (exit 4)",
+      "cone2.json", "{\"aperture\": {\"type\": \"object_cone_angle\", \"value\": 9},"
+      " \"surfaces\": [{}, {\"stop\": true}, {}]}\n", NULL, NULL, ARGS("paraxial", "@F"), 4,
+      "aperture: object-space cone angle needs an object at a finite distance", NULL, NULL,
+      NULL, 0 },
     { "zmx_no_stop", "a lens file without STOP is a design error, exit 4",
       "nostop.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  DISZ 1\nSURF 2\n", NULL, NULL,
       ARGS("import", "@F", "-o", "-"), 4, "no STOP line", NULL, NULL, "sagitta-design", 0 },

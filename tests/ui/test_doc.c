@@ -99,7 +99,8 @@ static int sys_bytes_equal(const sg_system *a, const sg_system *b)
            memcmp(x.wave, y.wave, sizeof x.wave) == 0 && x.field_type == y.field_type &&
            x.field_norm == y.field_norm && x.nfield == y.nfield &&
            memcmp(x.field, y.field, sizeof x.field) == 0 && x.aper_type == y.aper_type &&
-           same_bits(x.aper_value, y.aper_value) && x.aim == y.aim && x.stop == y.stop;
+           same_bits(x.aper_value, y.aper_value) && x.aim == y.aim && x.stop == y.stop &&
+           x.telecentric == y.telecentric;
 }
 
 /* ------------------------------------------------------------------------ */
@@ -764,6 +765,47 @@ static void test_glass_picker(void **state)
     free_ed(e);
 }
 
+/* "telecentric on" turns on Zemax's telecentric object space only with
+ * what Zemax requires (an object NA, a finite object, height fields), which
+ * then stay so; undo turns it off again. */
+static void test_telecentric(void **state)
+{
+    ed *e = new_ed();
+    int f;
+    (void)state;
+    ok(e, "set 0 thickness 100");
+    ok(e, "aperture epd 10");
+    f = cmd_exec(e, "telecentric on");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "the aperture must be the object NA"));
+    ok(e, "aperture na 0.1");
+    ok(e, "field type angle");
+    f = cmd_exec(e, "telecentric on");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "the fields must be heights"));
+    ok(e, "field type object");
+    ok(e, "telecentric on");
+    assert_int_equal(e->doc.sys->telecentric, 1);
+    f = cmd_exec(e, "aperture epd 10");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "telecentric off first"));
+    f = cmd_exec(e, "field type angle");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "telecentric off first"));
+    /* Zemax's object cone angle, in degrees, is the other aperture allowed. */
+    ok(e, "aperture cone 6");
+    assert_true(e->doc.sys->aper_type == SG_APER_OBJECT_CONE && e->doc.sys->aper_value == 6.0);
+    f = cmd_exec(e, "aperture cone 90");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "below 90 degrees"));
+    ok(e, "undo");
+    ok(e, "undo");
+    assert_int_equal(e->doc.sys->telecentric, 0);
+    ok(e, "telecentric toggle");
+    assert_int_equal(e->doc.sys->telecentric, 1);
+    free_ed(e);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -779,6 +821,7 @@ int main(void)
         cmocka_unit_test(test_save_load_exact),
         cmocka_unit_test(test_batch),
         cmocka_unit_test(test_glass_picker),
+        cmocka_unit_test(test_telecentric),
         cmocka_unit_test(test_export_matches_trace),
     };
     static const char *const files[] = {"mod.json", "rt.json", "script.txt", "stderr.txt",

@@ -667,6 +667,9 @@ static int c_field(ed *e, args *a)
         if (k < 0)
             return fail(e, "field type: \"%s\" is not angle, object, paraximage or realimage",
                         a->v[2]);
+        if (k == SG_FIELD_ANGLE && s->telecentric)
+            return fail(e, "field type: a telecentric object space has height fields, not "
+                        "angles (telecentric off first)");
         if (k == SG_FIELD_ANGLE)
             for (i = 0; i < s->nfield; i++)
                 if (!field_check(e, k, s->field[i].x, s->field[i].y, 1.0))
@@ -771,9 +774,10 @@ static int parse_aper(const char *s)
         {"na", "object_na", "objna"},
         {"float", "float_by_stop", "stop"},
         {"pwfnum", "paraxial_working_fnum", "working"},
+        {"cone", "object_cone_angle", "coneangle"},
     };
     int i, j;
-    for (i = 0; i < 5; i++)
+    for (i = 0; i < 6; i++)
         for (j = 0; j < 3; j++)
             if (n[i][j] && strcasecmp(s, n[i][j]) == 0)
                 return i;
@@ -782,7 +786,7 @@ static int parse_aper(const char *s)
 
 static int c_aperture(ed *e, args *a)
 {
-    const char *usage = "aperture epd|fnum|na|float|pwfnum [VALUE] | aperture VALUE";
+    const char *usage = "aperture epd|fnum|na|float|pwfnum|cone [VALUE] | aperture VALUE";
     int type = e->doc.sys->aper_type, vi = 1;
     double v = e->doc.sys->aper_value;
     char shown[NUMFMT_MAX];
@@ -792,7 +796,7 @@ static int c_aperture(ed *e, args *a)
         type = parse_aper(a->v[1]);
         vi = 2;
     } else if (a->n > 2) {
-        return fail(e, "aperture: \"%s\" is not epd, fnum, na, float or pwfnum", a->v[1]);
+        return fail(e, "aperture: \"%s\" is not epd, fnum, na, float, pwfnum or cone", a->v[1]);
     }
     if (vi < a->n && !parse_num(e, a->v[vi], "aperture value", &v))
         return ED_HANDLED | ED_ERROR;
@@ -800,8 +804,15 @@ static int c_aperture(ed *e, args *a)
         return fail(e, "aperture: value %g must be positive", v);
     if (type == SG_APER_OBJECT_NA && !(v < 1.0))
         return fail(e, "aperture: object NA %g must be below 1", v);
-    if (type == SG_APER_OBJECT_NA && isinf(e->doc.sys->surf[0].thickness))
-        return fail(e, "aperture: an object NA needs a finite object distance");
+    if (type == SG_APER_OBJECT_CONE && !(v < 90.0))
+        return fail(e, "aperture: object cone angle %g must be below 90 degrees", v);
+    if ((type == SG_APER_OBJECT_NA || type == SG_APER_OBJECT_CONE) &&
+        isinf(e->doc.sys->surf[0].thickness))
+        return fail(e, "aperture: an object %s needs a finite object distance",
+                    type == SG_APER_OBJECT_NA ? "NA" : "cone angle");
+    if (type != SG_APER_OBJECT_NA && type != SG_APER_OBJECT_CONE && e->doc.sys->telecentric)
+        return fail(e, "aperture: a telecentric object space's aperture is the object NA or "
+                    "cone angle (telecentric off first)");
     if (!begin(e, e->row))
         return ED_HANDLED | ED_ERROR;
     e->doc.sys->aper_type = (sg_aper_type)type;
@@ -824,6 +835,30 @@ static int c_aim(ed *e, args *a)
         return ED_HANDLED | ED_ERROR;
     e->doc.sys->aim = (sg_aim)k;
     return end(e, "ray aiming %s", ed_aim_name(k));
+}
+
+/* Zemax's "Telecentric Object Space": the entrance pupil at infinity.  It
+ * needs an object NA, a finite object and height fields, as in Zemax. */
+static int c_telecentric(ed *e, args *a)
+{
+    const sg_system *s = e->doc.sys;
+    int on;
+    if (!need(e, a, 0, 1, "telecentric on|off|toggle") ||
+        !parse_switch(e, a->n > 1 ? a->v[1] : NULL, s->telecentric, &on, "telecentric"))
+        return ED_HANDLED | ED_ERROR;
+    if (on && s->aper_type != SG_APER_OBJECT_NA && s->aper_type != SG_APER_OBJECT_CONE)
+        return fail(e, "telecentric: the aperture must be the object NA or cone angle "
+                    "(aperture na VALUE, aperture cone DEGREES)");
+    if (on && isinf(s->surf[0].thickness))
+        return fail(e, "telecentric: the object must be at a finite distance");
+    if (on && s->field_type == SG_FIELD_ANGLE)
+        return fail(e, "telecentric: the fields must be heights (field type object, "
+                    "paraximage or realimage)");
+    if (!begin(e, e->row))
+        return ED_HANDLED | ED_ERROR;
+    e->doc.sys->telecentric = on;
+    return end(e, "object space %s", on ? "telecentric: the entrance pupil at infinity"
+                                        : "not telecentric");
 }
 
 /* The environment: Zemax's system temperature and pressure, and whether
@@ -2168,9 +2203,11 @@ static const command commands[] = {
      "field type T | norm radial|rect | add X Y [W] | set N X Y [W] | delete N | "
      "vignette N VDX VDY VCX VCY [VAN]",
      "edit the fields; vignette sets Zemax's vignetting factors"},
-    {"aperture", NULL, c_aperture, "aperture [epd|fnum|na|float|pwfnum] [VALUE]",
+    {"aperture", NULL, c_aperture, "aperture [epd|fnum|na|float|pwfnum|cone] [VALUE]",
      "set the system aperture"},
     {"aim", NULL, c_aim, "aim off|paraxial|real", "set ray aiming"},
+    {"telecentric", NULL, c_telecentric, "telecentric on|off|toggle",
+     "object space telecentric: the entrance pupil at infinity (object NA, height fields)"},
     {"temperature", NULL, c_temperature, "temperature CELSIUS",
      "set the system temperature (default 20)"},
     {"pressure", NULL, c_pressure, "pressure ATM", "set the air pressure (default 1)"},

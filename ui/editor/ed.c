@@ -228,8 +228,8 @@ void ed_examples_free(char **names, int n)
 
 const char *ed_aper_name(int t)
 {
-    static const char *const n[] = {"epd", "fnum", "na", "float", "pwfnum"};
-    return t >= 0 && t < 5 ? n[t] : "?";
+    static const char *const n[] = {"epd", "fnum", "na", "float", "pwfnum", "cone"};
+    return t >= 0 && t < 6 ? n[t] : "?";
 }
 
 const char *ed_field_type_name(int t)

@@ -54,7 +54,8 @@ static void text(const ui *u, item it, char *label, char *val, size_t n)
     case IT_UNITS: snprintf(label, n, "Lens units"); snprintf(val, n, "%s", s->units); break;
     case IT_APER_TYPE:
         snprintf(label, n, "Aperture type");
-        snprintf(val, n, "%s", ed_aper_name(s->aper_type));
+        snprintf(val, n, "%s%s", ed_aper_name(s->aper_type),
+                 s->telecentric ? " (telecentric object space)" : "");
         break;
     case IT_APER_VALUE:
         snprintf(label, n, "Aperture value");
@@ -148,8 +149,8 @@ static int cycle(ui *u, item it, int dir)
          * type that cannot apply (an NA with the object at infinity) is
          * skipped: the cycle never sticks. */
         int i, f = ED_HANDLED;
-        for (i = 1; i < 5; i++) {
-            int t = (((int)s->aper_type + dir * i) % 5 + 5) % 5;
+        for (i = 1; i < 6; i++) {
+            int t = (((int)s->aper_type + dir * i) % 6 + 6) % 6;
             double v = s->aper_value, par = 0.0;
             if (e->cmp.par_ok)
                 par = t == SG_APER_EPD           ? e->cmp.par.epd
@@ -158,7 +159,8 @@ static int cycle(ui *u, item it, int dir)
                       : t == SG_APER_PARAX_WORKING_FNUM ? e->cmp.par.working_fnum
                                                  : 0.0;
             if (t != SG_APER_FLOAT_STOP &&
-                !(v > 0.0 && (t != SG_APER_OBJECT_NA || v < 1.0))) {
+                !(v > 0.0 && (t != SG_APER_OBJECT_NA || v < 1.0) &&
+                  (t != SG_APER_OBJECT_CONE || v < 90.0))) {
                 if (!(par > 0.0 && isfinite(par) && (t != SG_APER_OBJECT_NA || par < 1.0)))
                     continue;
                 v = par;
