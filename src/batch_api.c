@@ -19,7 +19,8 @@ void sg_batch_free(sg_batch *b)
     int k;
     if (!b)
         return;
-    for (k = 0; b->t && k < b->nt; k++)
+    /* Forks first: they share the first tracer's model. */
+    for (k = b->nt - 1; b->t && k >= 0; k--)
         sg_tracer_free(b->t[k]);
     free(b->t);
     free(b->scratch);
@@ -50,11 +51,15 @@ sg_batch *sg_batch_new(const sg_system *sys, const sg_catalog *cat,
         return NULL;
     }
     b->nt = nt;
+    /* One tracer prepares the model (glass indices and paraxial data in
+     * MPFR, aiming's stop radius); the other threads' fork it, sharing it
+     * with workspaces of their own. */
     for (k = 0; k < nt; k++) {
-        b->t[k] = sg_tracer_new(sys, cat, opts, d);
-        if (!b->t[k]) {
+        int rc = k == 0 ? sg_tracer_open(sys, cat, opts, &b->t[0], d)
+                        : sg_tracer_fork(b->t[0], &b->t[k], d);
+        if (rc != SG_OK) {
             if (d && d->code == SG_OK)
-                sg_diag_set(d, SG_ENOMEM, "out of memory");
+                sg_diag_set(d, rc, "%s", sg_strerror(rc));
             sg_batch_free(b);
             return NULL;
         }

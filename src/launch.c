@@ -723,14 +723,14 @@ static int launch_q(sg_tracer *t, land_fn land, const osp *o, double px, double 
         q_lane(v, 0, q);
         /* Apertures do not bend rays, so the iteration ignores them; the
          * final trace applies them. */
-        clip = t->o.clip;
-        t->o.clip = 0;
+        clip = t->unclipped;
+        t->unclipped = 1;
         if (cache && !t->have_aimJ)
             field_jacobian(t, land, o, scratch);
         rc = aim_robust(t, land, o, px, py, target,
                         cache && t->have_aimJ > 0 ? (const double (*)[2])t->aimJ : NULL, q,
                         scratch, eaim);
-        t->o.clip = clip;
+        t->unclipped = clip;
         if (rc != SG_OK)
             return SG_EAIM;
     }
@@ -1126,8 +1126,8 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
     if (!aim_off(t)) {
         /* Apertures do not bend rays, so the iteration ignores them; the
          * final trace applies them. */
-        clip = t->o.clip;
-        t->o.clip = 0;
+        clip = t->unclipped;
+        t->unclipped = 1;
         if (!t->have_aimJ)
             field_jacobian(t, land_precise, &o, t->scratch);
         if (t->have_aimJ > 0) {
@@ -1137,7 +1137,7 @@ void sg_launch_precise_block(sg_tracer *t, double hx, double hy, const double (*
             aim_newton_vec(t, &o, qv, tg, nl, out, done, &at, &launch, &p0);
             aimed = 1;
         }
-        t->o.clip = clip;
+        t->unclipped = clip;
     }
     /* Lanes whose last landing was at their final Q already have its
      * launch; the rest are launched here. */
@@ -1301,15 +1301,15 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
         osp_from_values(t, dd_from(0.0), dd_from(0.0), 0, &o);
         if (sys->field_type == SG_FIELD_ANGLE && t->ln.obj_inf)
             osp_from_values(t, dd_from(0.0), dd_from(0.0), 1, &o);
-        int clip = t->o.clip;
+        int clip = t->unclipped;
         q_aim_off(t, &o, 0.0, 1.0, q);
         /* The stop's size is the unvignetted marginal ray's, as in every
          * other landing: an off-axis system's apertures may stop the
          * on-axis beam. */
-        t->o.clip = 0;
+        t->unclipped = 1;
         rc = saved ? land_classic(t, &o, q, at, &noise, t->scratch)
                    : land_precise(t, &o, q, at, &noise, t->scratch);
-        t->o.clip = clip;
+        t->unclipped = clip;
         if (rc != SG_OK)
             return sg_diag_set(d, SG_EAIM,
                                "ray aiming: the on-axis marginal ray does not reach the stop "

@@ -661,6 +661,14 @@ int sg_semi_diameters(const sg_system *sys, const sg_catalog *cat, const sg_semi
  * thread at a time; make one per thread. */
 typedef struct sg_tracer sg_tracer;
 
+/* Makes a tracer for sys: *out, and SG_OK; or NULL in *out and the error
+ * (also in d when given): the system's validation code, SG_ENOGLASS for a
+ * glass the catalog lacks, SG_ERANGE for options out of range, SG_EAIM
+ * when aiming cannot land the marginal ray, SG_ENOMEM.  The tracer copies
+ * sys and opts; cat must outlive it. */
+int sg_tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
+                   sg_tracer **out, sg_diag *d);
+/* sg_tracer_open returning the tracer, or NULL (the code in d). */
 sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
                          const sg_trace_opts *opts, sg_diag *d);
 void sg_tracer_free(sg_tracer *t);

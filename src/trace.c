@@ -272,7 +272,7 @@ static double surf_cos_d(const sg_sprep *s, const double p[3], const double d[3]
 
 int sg_past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y)
 {
-    return t->o.clip && sg_clip_point(s, x, y, t->o.clip_rtol);
+    return t->o.clip && !t->unclipped && sg_clip_point(s, x, y, t->o.clip_rtol);
 }
 
 void sg_fail_rest(sg_ray_surface *out, int from, int n, int status)
@@ -716,17 +716,41 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
 sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
                          const sg_trace_opts *opts, sg_diag *d)
 {
+    sg_tracer *t = NULL;
+    sg_diag own;
+    /* The code must reach a caller who passed no diagnostic only through
+     * sg_tracer_open; here NULL says it failed. */
+    if (!d) {
+        sg_diag_clear(&own);
+        d = &own;
+    }
+    return sg_tracer_open(sys, cat, opts, &t, d) == SG_OK ? t : NULL;
+}
+
+int sg_tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
+                   sg_tracer **out, sg_diag *d)
+{
     sg_tracer *t;
     mpfr_t *idx = NULL;
     int i, rc, n;
+    sg_diag own;
+    if (!out)
+        return sg_diag_set(d, SG_EINVAL, "tracer: nowhere to put it");
+    *out = NULL;
+    /* Every failure below sets a code; without the caller's diagnostic it
+     * is kept here so that the right one is returned. */
+    if (!d) {
+        sg_diag_clear(&own);
+        d = &own;
+    }
+    if (!sys)
+        return sg_diag_set(d, SG_EINVAL, "tracer: no system");
     rc = sg_system_check(sys, cat, d);
     if (rc != SG_OK)
-        return NULL;
+        return rc;
     t = calloc(1, sizeof *t);
-    if (!t) {
-        sg_diag_set(d, SG_ENOMEM, "out of memory");
-        return NULL;
-    }
+    if (!t)
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
     if (opts)
         t->o = *opts;
     else
@@ -807,10 +831,49 @@ sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
         goto fail;
     if (t->o.method == SG_METHOD_MPFR && sg_mpfr_prepare(t, d) != SG_OK)
         goto fail;
-    return t;
+    *out = t;
+    return SG_OK;
 fail:
     sg_tracer_free(t);
-    return NULL;
+    return d->code != SG_OK ? d->code : SG_ENOMEM;
+}
+
+int sg_tracer_fork(const sg_tracer *m, sg_tracer **out, sg_diag *d)
+{
+    sg_tracer *t = calloc(1, sizeof *t);
+    int rc;
+    *out = NULL;
+    if (!t)
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    /* The prepared model, shared; the workspace starts empty. */
+    t->model = m->model ? m->model : m;
+    t->sys = m->sys;
+    t->o = m->o;
+    t->wave = m->wave;
+    t->n = m->n;
+    t->sp = m->sp;
+    t->xf = m->xf;
+    t->shp = m->shp;
+    t->nsigned = m->nsigned;
+    t->px = m->px;
+    t->ln = m->ln;
+    t->cat = m->cat;
+    if (m->prim && (rc = sg_tracer_fork(m->prim, &t->prim, d)) != SG_OK)
+        goto fail;
+    t->scratch = calloc((size_t)t->n, sizeof *t->scratch);
+    if (!t->scratch || !(t->rescue = sg_mpfr_rescue_new())) {
+        rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
+        goto fail;
+    }
+    /* The mpfr method's context holds its own prepared values and its
+     * scratch together: each fork makes one. */
+    if (t->o.method == SG_METHOD_MPFR && (rc = sg_mpfr_prepare(t, d)) != SG_OK)
+        goto fail;
+    *out = t;
+    return SG_OK;
+fail:
+    sg_tracer_free(t);
+    return rc;
 }
 
 void sg_tracer_free(sg_tracer *t)
@@ -822,11 +885,13 @@ void sg_tracer_free(sg_tracer *t)
     if (t->rescue)
         sg_mpfr_free(t->rescue);
     sg_tracer_free(t->prim);
-    sg_system_free(t->sys);
-    free(t->sp);
-    free(t->xf);
-    free(t->shp);
-    free(t->nsigned);
+    if (!t->model) {
+        sg_system_free(t->sys);
+        free(t->sp);
+        free(t->xf);
+        free(t->shp);
+        free(t->nsigned);
+    }
     free(t->scratch);
     free(t);
 }

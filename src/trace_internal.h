@@ -109,7 +109,14 @@ typedef struct osp {
     dd plane;
 } osp;
 
+/* A tracer is two parts.  The prepared model (sys, o, wave, n, sp, xf,
+ * shp, nsigned, px, ln, cat) is made once by sg_tracer_open and never
+ * changes afterwards, so forks (sg_tracer_fork) share it and a thread
+ * never writes it.  The workspace (unclipped, the field and aiming
+ * caches, scratch, mp, rescue, and prim, a fork's own) belongs to one
+ * tracer.  The options stay as the caller gave them. */
 struct sg_tracer {
+    const sg_tracer *model; /* the tracer whose prepared part this one shares, or NULL */
     sg_system *sys;
     sg_trace_opts o;
     int wave;
@@ -120,6 +127,9 @@ struct sg_tracer {
     double *nsigned;   /* index after each surface, negative after odd mirrors */
     sg_paraxial px;
     sg_launch ln;
+    /* Workspace.  While aiming lands rays, apertures do not stop them:
+     * unclipped is then set (the options' clip stays as given). */
+    int unclipped;
     /* The last field point's object-space launch, so a grid over the pupil
      * pays for the field's tangent once. */
     int have_field;
@@ -308,6 +318,12 @@ vdd sg_sag_xy_v(const sg_sprep *s, vdd x, vdd y, vm *bad);
 int sg_batch_run(sg_tracer *const *t, int nt, sg_ray_kind kind, const sg_ray_in *rays,
                  size_t nray, const int *sel, int nsel, sg_ray_surface *scratch,
                  sg_ray_surface *out, int *status);
+
+/* A tracer sharing t's prepared model, with a workspace of its own (its
+ * own MPFR context for the mpfr method, and a fork of t's primary-
+ * wavelength tracer): what a thread of the batch traces with.  t must
+ * outlive it.  SG_OK, or SG_ENOMEM. */
+int sg_tracer_fork(const sg_tracer *t, sg_tracer **out, sg_diag *d);
 
 /* Launch of normalized rays, in launch.c. */
 int sg_launch_prepare(sg_tracer *t, sg_diag *d);

@@ -701,7 +701,7 @@ static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
         o->opl_error_bound =
             sg_bound_up(ldexp((double)i * (big + fabs(o->opl) + fabs(o->path)), 16 - (int)m->prec));
         o->status = SG_OK;
-        if (tr->o.clip && sg_clip_point(sp, o->x, o->y, tr->o.clip_rtol)) {
+        if (tr->o.clip && !tr->unclipped && sg_clip_point(sp, o->x, o->y, tr->o.clip_rtol)) {
             sg_fail_rest(out, i, tr->n, SG_EVIGNETTED);
             return SG_EVIGNETTED;
         }
@@ -869,11 +869,11 @@ static void m_q_off(sg_tracer *tr, double px, double py)
 static int m_land(sg_tracer *tr, int upto, mpfr_t a, mpfr_t b)
 {
     sg_mpfr_ctx *m = tr->mp;
-    int rc, clip = tr->o.clip;
+    int rc, clip = tr->unclipped;
     m_start(tr);
-    tr->o.clip = 0;
+    tr->unclipped = 1;
     rc = run(tr, tr->scratch, upto);
-    tr->o.clip = clip;
+    tr->unclipped = clip;
     mpfr_set(a, m->P.x, MPFR_RNDN);
     mpfr_set(b, m->P.y, MPFR_RNDN);
     return rc;

@@ -817,7 +817,7 @@ static vm fail_lanes(vm bad, vm m, vm live, int code, int *st)
 static vm clip_v(const sg_tracer *t, const sg_sprep *s, vd x, vd y, vm live, vm bad, int *st)
 {
     int k;
-    if (t->o.clip && (s->sd > 0.0 || s->aper))
+    if (t->o.clip && !t->unclipped && (s->sd > 0.0 || s->aper))
         for (k = 0; k < SG_VL; k++)
             if (live[k] && !bad[k] && sg_past_clip(t, s, x[k], y[k])) {
                 bad[k] = -1;

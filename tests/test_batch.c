@@ -319,6 +319,91 @@ static void error_code_without_diag(void **state)
     sg_system_free(sys);
 }
 
+/* sg_tracer_open returns the failure's code, with or without a
+ * diagnostic, and leaves NULL behind; a success gives the tracer. */
+static void open_returns_codes(void **state)
+{
+    sg_system *sys = tu_example("singlet.json");
+    sg_catalog *cat = tu_catalog();
+    sg_trace_opts o;
+    sg_tracer *t = (sg_tracer *)&o; /* not NULL, so the test sees it cleared */
+    sg_diag d;
+    (void)state;
+    assert_int_equal(sg_tracer_open(sys, cat, NULL, &t, NULL), SG_OK);
+    assert_non_null(t);
+    sg_tracer_free(t);
+    assert_int_equal(sg_tracer_open(NULL, cat, NULL, &t, NULL), SG_EINVAL);
+    assert_null(t);
+    sg_trace_opts_init(&o);
+    o.mpfr_bits = 7;
+    assert_int_equal(sg_tracer_open(sys, cat, &o, &t, NULL), SG_ERANGE);
+    assert_null(t);
+    sys->surf[1].mat.kind = SG_MAT_GLASS;
+    strcpy(sys->surf[1].mat.name, "NO-SUCH-GLASS");
+    assert_int_equal(sg_tracer_open(sys, cat, NULL, &t, NULL), SG_ENOGLASS);
+    assert_null(t);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_tracer_open(sys, cat, NULL, &t, &d), SG_ENOGLASS);
+    assert_non_null(strstr(d.msg, "NO-SUCH-GLASS"));
+    assert_null(sg_tracer_new(sys, cat, NULL, NULL));
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
+/* A fork shares the prepared model (the same arrays, not copies), keeps
+ * the options as given, and traces every ray to the same bits as the
+ * tracer it came from, in every method, at another wavelength than the
+ * primary (so the primary's tracer is forked too), on a design with
+ * real aiming and vignetting. */
+static void fork_shares_model(void **state)
+{
+    static const char *const ex[] = {"double_gauss.json", "tma.json"};
+    sg_catalog *cat = tu_catalog();
+    size_t e;
+    int m, k, n = 0;
+    (void)state;
+    for (e = 0; e < 2; e++) {
+        sg_system *sys = tu_example(ex[e]);
+        sys->aim = SG_AIM_REAL;
+        for (m = 0; m < 3; m++) {
+            sg_trace_opts o;
+            sg_tracer *t, *f;
+            sg_ray_surface *a, *b;
+            sg_trace_opts_init(&o);
+            o.method = (sg_method)m;
+            o.wave = sys->nwave > 1 ? (sys->primary_wave + 1) % sys->nwave : 0;
+            assert_int_equal(sg_tracer_open(sys, cat, &o, &t, NULL), SG_OK);
+            assert_int_equal(sg_tracer_fork(t, &f, NULL), SG_OK);
+            assert_ptr_equal(f->sp, t->sp);
+            assert_ptr_equal(f->sys, t->sys);
+            assert_ptr_equal(f->model, t);
+            if (t->prim)
+                assert_ptr_equal(f->prim->sp, t->prim->sp);
+            a = calloc((size_t)t->n, sizeof *a);
+            b = calloc((size_t)t->n, sizeof *b);
+            for (k = 0; k < 60; k++) {
+                double hy = (k % 5) / 4.0, px = ((k * 7) % 11) / 5.0 - 1.0, py = ((k * 3) % 13) / 6.0 - 1.0;
+                int r1 = sg_trace_normalized(t, 0.1, hy, px, py, a);
+                int r2 = sg_trace_normalized(f, 0.1, hy, px, py, b);
+                assert_int_equal(r1, r2);
+                assert_memory_equal(a, b, (size_t)t->n * sizeof *a);
+                n++;
+            }
+            /* Aiming landed rays unclipped; the options did not change. */
+            assert_int_equal(t->o.clip, o.clip);
+            assert_int_equal(f->o.clip, o.clip);
+            assert_int_equal(t->unclipped, 0);
+            free(a);
+            free(b);
+            sg_tracer_free(f);
+            sg_tracer_free(t);
+        }
+        sg_system_free(sys);
+    }
+    print_message("# %d rays: a fork traces as its model, to the bit\n", n);
+    sg_catalog_free(cat);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -330,6 +415,8 @@ int main(void)
         cmocka_unit_test(handoff),
         cmocka_unit_test(clip_edge),
         cmocka_unit_test(error_code_without_diag),
+        cmocka_unit_test(open_returns_codes),
+        cmocka_unit_test(fork_shares_model),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
