@@ -16,7 +16,6 @@
  * PLDI 2019, but with a fallback in place of its exactness proof. */
 #include "numfmt.h"
 
-#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -46,22 +45,29 @@ static int clz128(u128 h)
     return hi ? __builtin_clzll(hi) : 64 + __builtin_clzll((uint64_t)h);
 }
 
-static const char digit_pairs[201] =
-    "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
-    "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
-    "8081828384858687888990919293949596979899";
-
-/* The 17 digits of n (10^16 <= n < 10^17). */
-static void digits17(uint64_t n, char *d)
+/* The eight digits of x < 10^8 as ASCII bytes in a word, first digit in
+ * the lowest byte (memory order on a little-endian machine), with no
+ * division: each step splits every lane by a multiply and shift that is
+ * exact for the lane's range (v / 100 = v 10486 >> 20 for v < 10^4,
+ * v / 10 = v 103 >> 10 for v < 100).  D. Lemire, "Converting integers to
+ * fixed-digit representations quickly" (2021); test_numfmt checks every
+ * x below 10^8. */
+static uint64_t digits8_word(uint32_t x)
 {
-    int i = 17;
-    while (i > 1) {
-        unsigned r = (unsigned)(n % 100);
-        n /= 100;
-        d[--i] = digit_pairs[2 * r + 1];
-        d[--i] = digit_pairs[2 * r];
-    }
-    d[0] = (char)('0' + n);
+    uint64_t merged = (uint64_t)(x / 10000) | ((uint64_t)(x % 10000) << 32);
+    uint64_t top = ((merged * 10486) >> 20) & ((UINT64_C(0x7f) << 32) | UINT64_C(0x7f));
+    uint64_t bot = merged - 100 * top;
+    uint64_t hundreds = (bot << 16) + top;
+    uint64_t tens = (hundreds * 103) >> 10;
+    tens &= (UINT64_C(0xf) << 48) | (UINT64_C(0xf) << 32) | (UINT64_C(0xf) << 16) | 0xf;
+    tens += (hundreds - 10 * tens) << 8;
+    return tens;
+}
+
+void numfmt_digits8(uint32_t x, char out[8])
+{
+    uint64_t w = digits8_word(x) + UINT64_C(0x3030303030303030);
+    memcpy(out, &w, 8);
 }
 
 static size_t fallback_g17(double v, char *buf)
@@ -75,7 +81,9 @@ static size_t fallback_g17(double v, char *buf)
  * the product cannot decide the rounding. */
 static int round17(uint64_t w, int e, uint64_t *n, int *k)
 {
-    int kk = (int)floor((double)(e + 63) * 0.30102999566398120);
+    /* floor((e + 63) log10 2) (exact for |e + 63| < 1650), the exponent
+     * of 2^(e+63) <= v; v's own is that or one more, which the loop finds. */
+    int kk = ((e + 63) * 78913) >> 18;
     int guard;
     for (guard = 0; guard < 4; guard++) {
         int q = 16 - kk, t, sh;
@@ -119,9 +127,10 @@ static int round17(uint64_t w, int e, uint64_t *n, int *k)
 
 size_t numfmt_g17(double v, char *buf)
 {
-    uint64_t bits, m, n;
-    int e, k, lz, last, i;
-    char d[17], *p = buf;
+    uint64_t bits, m, n, w1, w2;
+    int e, k, lz, last;
+    uint32_t d0, hi8, lo8;
+    char *p = buf;
 
     memcpy(&bits, &v, sizeof bits);
     m = bits & ((UINT64_C(1) << 52) - 1);
@@ -146,38 +155,70 @@ size_t numfmt_g17(double v, char *buf)
     e -= lz;
     if (!round17(m, e, &n, &k))
         return fallback_g17(v, buf);
-    digits17(n, d);
-    for (last = 16; last > 0 && d[last] == '0'; last--)
-        ;
+    /* The digits: one, then two words of eight. */
+    d0 = (uint32_t)(n / UINT64_C(10000000000000000));
+    n -= (uint64_t)d0 * UINT64_C(10000000000000000);
+    hi8 = (uint32_t)(n / 100000000);
+    lo8 = (uint32_t)(n - (uint64_t)hi8 * 100000000);
+    w1 = digits8_word(hi8);
+    w2 = digits8_word(lo8);
+    /* The last non-zero digit: a zero digit is a zero byte, and the
+     * word's high bytes are its last digits. */
+    if (w2)
+        last = 16 - __builtin_clzll(w2) / 8;
+    else if (w1)
+        last = 8 - __builtin_clzll(w1) / 8;
+    else
+        last = 0;
+    w1 += UINT64_C(0x3030303030303030);
+    w2 += UINT64_C(0x3030303030303030);
+    /* Stores only, each word written whole (no reload of bytes just
+     * stored); bytes past the end are scratch within NUMFMT_G17_MAX. */
     if (k < -4 || k >= 17) {
         unsigned x = (unsigned)(k < 0 ? -k : k);
-        *p++ = d[0];
-        if (last > 0) {
-            *p++ = '.';
-            memcpy(p, d + 1, (size_t)last);
-            p += last;
+        uint64_t ex;
+        p[0] = (char)('0' + d0);
+        p[1] = '.';
+        memcpy(p + 2, &w1, 8);
+        memcpy(p + 10, &w2, 8);
+        p += last > 0 ? last + 2 : 1;
+        /* "e-dd" or "e-ddd" in one word, first byte lowest. */
+        ex = (uint64_t)'e' | (uint64_t)(k < 0 ? '-' : '+') << 8;
+        if (x >= 100) {
+            ex |= (uint64_t)('0' + x / 100) << 16 | (uint64_t)('0' + x / 10 % 10) << 24 |
+                  (uint64_t)('0' + x % 10) << 32;
+            memcpy(p, &ex, 8);
+            p += 5;
+        } else {
+            ex |= (uint64_t)('0' + x / 10) << 16 | (uint64_t)('0' + x % 10) << 24;
+            memcpy(p, &ex, 8);
+            p += 4;
         }
-        *p++ = 'e';
-        *p++ = k < 0 ? '-' : '+';
-        if (x >= 100)
-            *p++ = (char)('0' + x / 100);
-        *p++ = (char)('0' + x / 10 % 10);
-        *p++ = (char)('0' + x % 10);
     } else if (k >= 0) {
-        memcpy(p, d, (size_t)k + 1);
-        p += k + 1;
+        p[0] = (char)('0' + d0);
+        memcpy(p + 1, &w1, 8);
+        memcpy(p + 9, &w2, 8);
         if (last > k) {
-            *p++ = '.';
-            memcpy(p, d + k + 1, (size_t)(last - k));
-            p += last - k;
+            /* The digits after the point move one place on; k < 16. */
+            if (k < 8) {
+                uint64_t t = w1 >> (8 * k);
+                memcpy(p + k + 2, &t, 8);
+                memcpy(p + 10, &w2, 8);
+            } else {
+                uint64_t t = w2 >> (8 * (k - 8));
+                memcpy(p + k + 2, &t, 8);
+            }
+            p[k + 1] = '.';
+            p += last + 2;
+        } else {
+            p += k + 1;
         }
     } else {
-        *p++ = '0';
-        *p++ = '.';
-        for (i = 0; i < -k - 1; i++)
-            *p++ = '0';
-        memcpy(p, d, (size_t)last + 1);
-        p += last + 1;
+        memcpy(p, "0.000000", 8);
+        p[1 - k] = (char)('0' + d0);
+        memcpy(p + 2 - k, &w1, 8);
+        memcpy(p + 10 - k, &w2, 8);
+        p += 1 - k + last + 1;
     }
     *p = '\0';
     return (size_t)(p - buf);

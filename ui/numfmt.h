@@ -10,8 +10,10 @@
 #define SG_UI_NUMFMT_H
 
 #include <stddef.h>
+#include <stdint.h>
 
-/* Room numfmt_g17 needs, with its terminating NUL. */
+/* Room numfmt_g17 needs, with its terminating NUL (at most 25 bytes are
+ * text; it writes scratch bytes after the NUL, within this room). */
 #define NUMFMT_G17_MAX 32
 
 /* Writes v as "%.17g" (C locale; "-0", "inf", "-inf", "nan" and "-nan" as
@@ -23,6 +25,10 @@ size_t numfmt_g17(double v, char *buf);
  * decimal point.  Returns 1 with *out the correctly rounded double, or 0
  * when the text is not of that form or its value is out of the normal
  * range (the caller then asks strtod, which also judges the syntax). */
+/* The eight decimal digits of x < 10^8, leading zeros included, as
+ * ASCII; no NUL (numfmt_g17's digit step, exposed for its test). */
+void numfmt_digits8(uint32_t x, char out[8]);
+
 int numfmt_parse(const char *s, size_t n, double *out);
 
 #endif

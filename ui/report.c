@@ -273,51 +273,111 @@ static void csv_head(FILE *f, const report_meta *m, int multi, int inputs, sg_ra
     fputc('\n', f);
 }
 
+/* Room one CSV row needs: the index, six inputs, the surface, 15 numbers
+ * of at most NUMFMT_G17_MAX bytes each (numfmt_g17's scratch included),
+ * a status name, commas and the newline. */
+#define CSV_ROW_MAX (24 + 22 * NUMFMT_G17_MAX + 64 + 32)
+
+/* put_num's CSV bytes at p; returns the end. */
+static char *mem_num(char *p, double v)
+{
+    if (isnan(v))
+        return p;
+    if (isinf(v)) {
+        if (v > 0) {
+            memcpy(p, "inf", 3);
+            return p + 3;
+        }
+        memcpy(p, "-inf", 4);
+        return p + 4;
+    }
+    return p + numfmt_g17(v, p);
+}
+
+/* A non-negative integer as %zu or %d writes it. */
+static char *mem_uint(char *p, size_t v)
+{
+    char t[24];
+    int n = 0;
+    do {
+        t[n++] = (char)('0' + v % 10);
+        v /= 10;
+    } while (v);
+    while (n)
+        *p++ = t[--n];
+    return p;
+}
+
+/* Surface i of a ray as one CSV row at p (CSV_ROW_MAX bytes of room);
+ * returns the end.  Written into memory, not through stdio, because a
+ * list's rows are most of a run's time. */
+static char *csv_row(char *p, int multi, size_t index, int i, int nsurf,
+                     const sg_ray_surface *e, sg_ray_kind kind, const sg_ray_in *ray,
+                     const sg_opd *opd)
+{
+    int k, nin = ray ? (kind == SG_RAYS_NORMALIZED ? 4 : 6) : 0;
+    const char *st;
+    size_t len;
+    if (multi) {
+        p = mem_uint(p, index);
+        *p++ = ',';
+    }
+    for (k = 0; k < nin; k++) {
+        p = mem_num(p, ray->v[k]);
+        *p++ = ',';
+    }
+    p = mem_uint(p, (size_t)i);
+    *p++ = ',';
+    if (e->status == SG_OK) {
+        const double v[9] = { e->x, e->y, e->z, e->l, e->m, e->n,
+                              e->residual, e->error_bound, e->path };
+        for (k = 0; k < 9; k++) {
+            p = mem_num(p, v[k]);
+            *p++ = ',';
+        }
+    } else {
+        memcpy(p, ",,,,,,,,,", 9);
+        p += 9;
+    }
+    st = report_status_name(e->status);
+    len = strlen(st);
+    if (len > 64)
+        len = 64;
+    memcpy(p, st, len);
+    p += len;
+    *p++ = ',';
+    if (e->status == SG_OK) {
+        p = mem_num(p, e->opl);
+        *p++ = ',';
+        p = mem_num(p, e->opl_error_bound);
+    } else {
+        *p++ = ',';
+    }
+    if (opd) {
+        /* A ray's OPD belongs to its image row. */
+        if (i == nsurf - 1 && opd->status == SG_OK) {
+            const double v[4] = { opd->opd_waves, opd->error_bound, opd->ex, opd->ey };
+            for (k = 0; k < 4; k++) {
+                *p++ = ',';
+                p = mem_num(p, v[k]);
+            }
+        } else {
+            memcpy(p, ",,,,", 4);
+            p += 4;
+        }
+    }
+    *p++ = '\n';
+    return p;
+}
+
 static void csv_ray(FILE *f, int multi, size_t index, int nsurf, const sg_ray_surface *s,
                     sg_ray_kind kind, const sg_ray_in *ray, const sg_opd *opd)
 {
-    int i, k, nin = ray ? (kind == SG_RAYS_NORMALIZED ? 4 : 6) : 0;
+    char row[CSV_ROW_MAX];
+    int i;
     for (i = 0; i < nsurf; i++) {
-        const sg_ray_surface *e = &s[i];
-        if (multi)
-            fprintf(f, "%zu,", index);
-        for (k = 0; k < nin; k++) {
-            put_num(f, ray->v[k], 0);
-            fputc(',', f);
-        }
-        fprintf(f, "%d,", i);
-        if (e->status == SG_OK) {
-            const double v[9] = { e->x, e->y, e->z, e->l, e->m, e->n,
-                                  e->residual, e->error_bound, e->path };
-            for (k = 0; k < 9; k++) {
-                put_num(f, v[k], 0);
-                fputc(',', f);
-            }
-        } else {
-            fputs(",,,,,,,,,", f);
-        }
-        fputs(report_status_name(e->status), f);
-        fputc(',', f);
-        if (e->status == SG_OK) {
-            put_num(f, e->opl, 0);
-            fputc(',', f);
-            put_num(f, e->opl_error_bound, 0);
-        } else {
-            fputc(',', f);
-        }
-        if (opd) {
-            /* A ray's OPD belongs to its image row. */
-            if (i == nsurf - 1 && opd->status == SG_OK) {
-                const double v[4] = { opd->opd_waves, opd->error_bound, opd->ex, opd->ey };
-                for (k = 0; k < 4; k++) {
-                    fputc(',', f);
-                    put_num(f, v[k], 0);
-                }
-            } else {
-                fputs(",,,,", f);
-            }
-        }
-        fputc('\n', f);
+        char *end = csv_row(row, multi, index, i, nsurf, &s[i], kind, ray, opd);
+        fwrite(row, 1, (size_t)(end - row), f);
     }
 }
 
@@ -580,6 +640,42 @@ static ssize_t job_write(void *cookie, const char *buf, size_t n)
     return (ssize_t)n;
 }
 
+/* A CSV share straight into the job's memory. */
+static void fmt_csv(fmt_job *j)
+{
+    const report_stream *s = j->s;
+    const sg_opd none = { SG_EINVAL, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN };
+    const int inputs = s->m && s->m->csv_inputs;
+    size_t r;
+    int i;
+    for (r = j->from; r < j->to; r++) {
+        const sg_ray_surface *o = j->out + r * (size_t)s->nsurf;
+        const sg_ray_in *in = inputs && j->rays ? &j->rays[r] : NULL;
+        const sg_opd *opd = s->m && s->m->opd ? (j->opds ? &j->opds[r] : &none) : NULL;
+        size_t index = s->next + r;
+        for (i = 0; i < s->nsurf; i++) {
+            char *end;
+            if (j->cap - j->len < CSV_ROW_MAX) {
+                size_t cap = j->cap ? 2 * j->cap : 256 * (size_t)s->nsurf * (j->to - j->from);
+                char *p;
+                if (cap < j->len + CSV_ROW_MAX)
+                    cap = j->len + CSV_ROW_MAX;
+                p = realloc(j->text, cap);
+                if (!p) {
+                    j->failed = 1;
+                    errno = ENOMEM;
+                    return;
+                }
+                j->text = p;
+                j->cap = cap;
+            }
+            end = csv_row(j->text + j->len, s->multi, index, i, s->nsurf, &o[i], s->kind,
+                          in, opd);
+            j->len = (size_t)(end - j->text);
+        }
+    }
+}
+
 static void *fmt_main(void *arg)
 {
     fmt_job *j = arg;
@@ -588,6 +684,10 @@ static void *fmt_main(void *arg)
     j->len = 0;
     if (j->from == j->to)
         return NULL;
+    if (j->s->fmt == REPORT_CSV) {
+        fmt_csv(j);
+        return NULL;
+    }
     f = fopencookie(j, "w", io);
     if (!f) {
         j->failed = 1;
@@ -608,8 +708,9 @@ static void *fmt_main(void *arg)
 #define PAR_MIN_RAYS 64
 #define PAR_MAX_THREADS 64
 /* Rows a thread formats in a round: its text (about 200 bytes a CSV row)
- * stays in a buffer of under a megabyte that the next round reuses. */
-#define PAR_ROUND_ROWS 4096
+ * stays in a buffer of about two megabytes that the next round reuses;
+ * rounds this long make the threads' start a small part of the time. */
+#define PAR_ROUND_ROWS 8192
 
 /* Formats the block in rounds; in each, nthreads contiguous shares go
  * each into its own memory and are written in order: the bytes of the
@@ -718,9 +819,107 @@ int report_end(report_stream *s)
 void report_opd_block(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
                       const sg_ray_surface *out, int nsurf, sg_opd *opd)
 {
-    size_t r;
+    report_opd_block_mt(t, ref, rays, n, out, nsurf, opd, 1);
+}
+
+/* A run of rays of one field: its first ray and its sphere. */
+typedef struct opd_run {
+    size_t from;
+    sg_opd_ref ref;
+} opd_run;
+
+typedef struct opd_job {
+    const sg_tracer *t;
+    const opd_run *runs;
+    size_t nrun, from, to;
+    const sg_ray_surface *out;
+    int nsurf;
+    sg_opd *opd;
+} opd_job;
+
+static void *opd_main(void *arg)
+{
+    const opd_job *j = arg;
+    size_t r, k = 0;
+    /* The run holding the share's first ray. */
+    while (k + 1 < j->nrun && j->runs[k + 1].from <= j->from)
+        k++;
+    for (r = j->from; r < j->to; r++) {
+        while (k + 1 < j->nrun && j->runs[k + 1].from <= r)
+            k++;
+        sg_opd_of_ray(j->t, &j->runs[k].ref,
+                      &j->out[r * (size_t)j->nsurf + (size_t)j->nsurf - 1], &j->opd[r]);
+    }
+    return NULL;
+}
+
+/* Below this many rays, or without memory for the runs, one thread. */
+#define OPD_PAR_MIN 256
+
+void report_opd_block_mt(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
+                         const sg_ray_surface *out, int nsurf, sg_opd *opd, int threads)
+{
+    opd_run *runs = NULL;
+    size_t r, nrun = 0, cap = 0;
+    int nt = resolve_threads(threads), k;
+    opd_job job[PAR_MAX_THREADS];
+    pthread_t tid[PAR_MAX_THREADS];
+    int started[PAR_MAX_THREADS];
+    const sg_opd_ref first = *ref;
+
     /* A reference is found once for a run of rays of one field (sets and
-     * ray lists are usually field-major). */
+     * ray lists are usually field-major), in order, as the serial loop
+     * finds it; *ref ends as the last field's. */
+    if (nt > 1 && n >= OPD_PAR_MIN) {
+        for (r = 0; r < n; r++) {
+            if (ref->status == SG_EINVAL || ref->hx != rays[r].v[0] || ref->hy != rays[r].v[1]) {
+                sg_opd_reference(t, rays[r].v[0], rays[r].v[1], ref, NULL);
+                if (ref->status == SG_EINVAL)
+                    ref->status = SG_ERANGE;
+            } else if (nrun > 0) {
+                continue;
+            }
+            if (nrun == cap) {
+                size_t c = cap ? 2 * cap : 16;
+                opd_run *p = realloc(runs, c * sizeof *p);
+                if (!p)
+                    break;
+                runs = p;
+                cap = c;
+            }
+            runs[nrun].from = r;
+            runs[nrun].ref = *ref;
+            nrun++;
+        }
+        if (r == n) {
+            if ((size_t)nt > n / (OPD_PAR_MIN / 2))
+                nt = (int)(n / (OPD_PAR_MIN / 2));
+            for (k = 0; k < nt; k++) {
+                job[k].t = t;
+                job[k].runs = runs;
+                job[k].nrun = nrun;
+                job[k].from = n * (size_t)k / (size_t)nt;
+                job[k].to = n * (size_t)(k + 1) / (size_t)nt;
+                job[k].out = out;
+                job[k].nsurf = nsurf;
+                job[k].opd = opd;
+                started[k] = k > 0 && pthread_create(&tid[k], NULL, opd_main, &job[k]) == 0;
+            }
+            opd_main(&job[0]);
+            for (k = 1; k < nt; k++) {
+                if (started[k])
+                    pthread_join(tid[k], NULL);
+                else
+                    opd_main(&job[k]);
+            }
+            free(runs);
+            return;
+        }
+        /* Out of memory for the runs: all on this thread, from the
+         * sphere the block began with. */
+        free(runs);
+        *ref = first;
+    }
     for (r = 0; r < n; r++) {
         if (ref->status == SG_EINVAL || ref->hx != rays[r].v[0] || ref->hy != rays[r].v[1]) {
             sg_opd_reference(t, rays[r].v[0], rays[r].v[1], ref, NULL);

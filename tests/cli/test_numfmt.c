@@ -151,6 +151,22 @@ static void test_g17_random(void **state)
     assert_int_equal(fmt_failures, 0);
 }
 
+/* Every x below 10^8 against snprintf's "%08u". */
+static void test_digits8_all(void **state)
+{
+    uint32_t x;
+    long bad = 0;
+    (void)state;
+    for (x = 0; x < 100000000u; x++) {
+        char want[16], got[8];
+        numfmt_digits8(x, got);
+        snprintf(want, sizeof want, "%08u", (unsigned)x);
+        if (memcmp(want, got, 8) != 0 && bad++ < 10)
+            print_error("%u: want %s, got %.8s\n", (unsigned)x, want, got);
+    }
+    assert_int_equal(bad, 0);
+}
+
 static void parse_forms(double v)
 {
     char b[64];
@@ -238,6 +254,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_g17_edges),
         cmocka_unit_test(test_g17_random),
+        cmocka_unit_test(test_digits8_all),
         cmocka_unit_test(test_parse_edges),
         cmocka_unit_test(test_parse_random),
     };
