@@ -5,7 +5,8 @@
  * pressure and the adjust setting on the bundled designs; after each,
  * tracers of every method at several wavelengths are made with the cache
  * the earlier edits filled and without it, and their rows, indices and
- * paraxial data compared bit for bit. */
+ * paraxial data compared bit for bit; and a tracer's paraxial data at the
+ * primary wavelength, which the editor uses, with sg_paraxial_compute's. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -107,6 +108,14 @@ static int compare(const sg_system *sys, const sg_catalog *cat, sg_index_cache *
             }
             assert_memory_equal(sg_tracer_paraxial(tf), sg_tracer_paraxial(tc),
                                 sizeof(sg_paraxial));
+            /* The editor takes the primary wavelength's paraxial data from
+             * its tracer: they are sg_paraxial_compute's. */
+            if (w == sys->primary_wave) {
+                sg_paraxial p;
+                memset(&p, 0, sizeof p);
+                assert_int_equal(sg_paraxial_compute(sys, cat, w, &p, &df), SG_OK);
+                assert_memory_equal(&p, sg_tracer_paraxial(tf), sizeof p);
+            }
             for (r = 0; r < (int)(sizeof rays / sizeof rays[0]); r++) {
                 int ra = sg_trace_normalized(tf, rays[r][0], rays[r][1], rays[r][2],
                                              rays[r][3], a);

@@ -527,7 +527,8 @@ done:
 }
 
 /* The editor's recompute after an edit, as ui/editor/compute.c does it:
- * a new precise tracer, the edge ray, the paraxial data; with digits,
+ * a new precise tracer, the edge ray, the paraxial data (the tracer's);
+ * with digits,
  * also an MPFR tracer and its trace of the same ray.  Each sample makes a
  * real edit first (surface 1's radius, or its thickness when flat, scaled
  * by 1 + 1e-9 and back in turn), and the glass indices come from a cache
@@ -544,7 +545,6 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
     sg_ray_surface *ref = malloc((size_t)sys0->nsurf * sizeof *ref);
     double *sec = malloc((size_t)n * sizeof *sec), *val;
     sg_trace_opts o, mo;
-    sg_paraxial px;
     sg_diag d;
 
     memset(r, 0, sizeof *r);
@@ -577,7 +577,9 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
         }
         r->status = sg_trace_normalized(t, edge_ray[0], edge_ray[1], edge_ray[2],
                                         edge_ray[3], out);
-        rc = sg_paraxial_compute_cached(sys, cat, sys->primary_wave, ic, &px, &d);
+        /* The editor copies the primary wavelength's paraxial data from
+         * its tracer's launch, which computed them. */
+        rc = sg_tracer_paraxial(t) ? SG_OK : SG_EINVAL;
         if (rc == SG_OK && digits) {
             mt = sg_tracer_new_cached(sys, cat, &mo, ic, &d);
             if (mt)

@@ -108,8 +108,15 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
                 snprintf(c->warn, sizeof c->warn, "%s", d.warn[0]);
             sg_diag_clear(&d);
             c->par_wave = sys->primary_wave;
-            c->par_ok = sg_paraxial_compute_cached(sys, cat, c->par_wave, c->icache, &c->par,
-                                                   &d) == SG_OK;
+            if (o->wave < 0 || o->wave == sys->primary_wave) {
+                /* The tracer's launch computed them already, the same way
+                 * (test_index_cache checks they are sg_paraxial_compute's). */
+                c->par = *sg_tracer_paraxial(c->t);
+                c->par_ok = 1;
+            } else {
+                c->par_ok = sg_paraxial_compute_cached(sys, cat, c->par_wave, c->icache,
+                                                       &c->par, &d) == SG_OK;
+            }
         }
     }
     c->have = c->ref_have = 0;
