@@ -16,6 +16,7 @@
  * PLDI 2019, but with a fallback in place of its exactness proof. */
 #include "numfmt.h"
 
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
@@ -51,8 +52,8 @@ static int clz128(u128 h)
  * exact for the lane's range (v / 100 = v 10486 >> 20 for v < 10^4,
  * v / 10 = v 103 >> 10 for v < 100).  D. Lemire, "Converting integers to
  * fixed-digit representations quickly" (2021); test_numfmt checks every
- * x below 10^8. */
-static uint64_t digits8_word(uint32_t x)
+ * x below 10^8.  Inlined: a call would cost as much as the work. */
+static inline __attribute__((always_inline)) uint64_t digits8_word(uint32_t x)
 {
     uint64_t merged = (uint64_t)(x / 10000) | ((uint64_t)(x % 10000) << 32);
     uint64_t top = ((merged * 10486) >> 20) & ((UINT64_C(0x7f) << 32) | UINT64_C(0x7f));
@@ -76,14 +77,48 @@ static size_t fallback_g17(double v, char *buf)
     return n > 0 ? (size_t)n : 0;
 }
 
+/* 10^0 .. 10^22, each exact in a double. */
+static const double exact_pow10[23] = {
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11,
+    1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+};
+
+/* The same for 10^-6 <= v < 10^17 (q = 16 - k in 0..22), where 10^q is
+ * a double: v 10^q = hi + lo exactly (hi = v 10^q rounded, lo by one fused
+ * multiply-add, |lo| <= ulp(hi) / 2), and hi >= 2^53 is an even integer,
+ * so N = hi + lo rounded half to even = hi + (lo rounded half to even):
+ * exact, with no case left undecided.  0 outside that range. */
+static int round17_fma(double v, int kk, uint64_t *n, int *k)
+{
+    int q = 16 - kk;
+    while (q >= 0 && q <= 22) {
+        double hi = v * exact_pow10[q], lo = fma(v, exact_pow10[q], -hi);
+        /* lo to the nearest integer, ties to even (|lo| <= 8 << 2^51). */
+        double r = (lo + 0x1.8p52) - 0x1.8p52;
+        uint64_t nn = (uint64_t)hi + (uint64_t)(int64_t)r;
+        if (nn > UINT64_C(100000000000000000)) {
+            /* v >= 10^(k+1): one digit more before the point. */
+            q--;
+            continue;
+        }
+        if (nn == UINT64_C(100000000000000000)) {
+            /* Rounded up to 10^17: 1 followed by zeros, one place on. */
+            *n = UINT64_C(10000000000000000);
+            *k = 16 - q + 1;
+            return 1;
+        }
+        *n = nn;
+        *k = 16 - q;
+        return 1;
+    }
+    return 0;
+}
+
 /* The 17 correctly rounded digits N (10^16 <= N < 10^17) and decimal
  * exponent k of v = W 2^e (W >= 2^63), v = N 10^(k-16) rounded; 0 when
  * the product cannot decide the rounding. */
-static int round17(uint64_t w, int e, uint64_t *n, int *k)
+static int round17(uint64_t w, int e, int kk, uint64_t *n, int *k)
 {
-    /* floor((e + 63) log10 2) (exact for |e + 63| < 1650), the exponent
-     * of 2^(e+63) <= v; v's own is that or one more, which the loop finds. */
-    int kk = ((e + 63) * 78913) >> 18;
     int guard;
     for (guard = 0; guard < 4; guard++) {
         int q = 16 - kk, t, sh;
@@ -153,8 +188,13 @@ size_t numfmt_g17(double v, char *buf)
     lz = __builtin_clzll(m);
     m <<= lz;
     e -= lz;
-    if (!round17(m, e, &n, &k))
-        return fallback_g17(v, buf);
+    {
+        /* floor((e + 63) log10 2) (exact for |e + 63| < 1650): the decimal
+         * exponent of 2^(e+63) <= |v|; |v|'s own is that or one more. */
+        int kk = ((e + 63) * 78913) >> 18;
+        if (!round17_fma(fabs(v), kk, &n, &k) && !round17(m, e, kk, &n, &k))
+            return fallback_g17(v, buf);
+    }
     /* The digits: one, then two words of eight. */
     d0 = (uint32_t)(n / UINT64_C(10000000000000000));
     n -= (uint64_t)d0 * UINT64_C(10000000000000000);
@@ -224,11 +264,6 @@ size_t numfmt_g17(double v, char *buf)
     return (size_t)(p - buf);
 }
 
-/* 10^0 .. 10^22, each exact in a double. */
-static const double exact_pow10[23] = {
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11,
-    1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-};
 
 int numfmt_parse(const char *s, size_t n, double *out)
 {

@@ -123,6 +123,26 @@ static void edge_values(void (*fn)(double))
         fn(nextafter(p, 0));
         fn(nextafter(p, INFINITY));
     }
+    /* The same where numfmt_g17 takes its fused multiply-add path
+     * (10^-6 <= |v| < 10^17), where such ties and near-ties are common. */
+    for (k = 0; k < 200000; k++) {
+        uint64_t d17 = UINT64_C(10000000000000000) + next() % UINT64_C(90000000000000000);
+        char b[64];
+        snprintf(b, sizeof b, "%s%llu5e%d", k % 2 ? "-" : "", (unsigned long long)d17,
+                 (int)(next() % 24) - 23);
+        p = strtod(b, NULL);
+        fn(p);
+        fn(nextafter(p, 0));
+        fn(nextafter(p, INFINITY));
+    }
+    /* Integers and halves near 2^53..2^57, where hi's spacing changes. */
+    for (k = 0; k < 20000; k++) {
+        int sh = 53 + (int)(next() % 5);
+        p = ldexp(1.0, sh) + (double)(int64_t)(next() % 4096) - 2048.0;
+        fn(p);
+        fn(p / 10.0);
+        fn(p / 1e16);
+    }
 }
 
 static void fmt_one(double v) { check_fmt(v); }
@@ -146,8 +166,11 @@ static void test_g17_random(void **state)
         /* Doubles of ordinary size, the numbers ray files hold. */
         check_fmt(from_bits((b & ~(UINT64_C(0x7ff) << 52)) |
                             ((UINT64_C(1023) - 20 + (b >> 58)) << 52)));
+        /* From 2^-24 to 2^63: every binade of the fused multiply-add path. */
+        check_fmt(from_bits((b & ~(UINT64_C(0x7ff) << 52)) |
+                            ((UINT64_C(1023) - 24 + (b >> 57) % 88) << 52)));
     }
-    print_message("# %ld random doubles, %ld failures\n", 2 * n, fmt_failures);
+    print_message("# %ld random doubles, %ld failures\n", 3 * n, fmt_failures);
     assert_int_equal(fmt_failures, 0);
 }
 
