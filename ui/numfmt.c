@@ -55,7 +55,10 @@ static int clz128(u128 h)
  * x below 10^8.  Inlined: a call would cost as much as the work. */
 static inline __attribute__((always_inline)) uint64_t digits8_word(uint32_t x)
 {
-    uint64_t merged = (uint64_t)(x / 10000) | ((uint64_t)(x % 10000) << 32);
+    /* x / 10^4 as x ceil(2^40 / 10^4) >> 40, which the 8-lane path
+     * uses too (it has no division). */
+    uint64_t q4 = ((uint64_t)x * 109951163) >> 40;
+    uint64_t merged = q4 | (((uint64_t)x - 10000 * q4) << 32);
     uint64_t top = ((merged * 10486) >> 20) & ((UINT64_C(0x7f) << 32) | UINT64_C(0x7f));
     uint64_t bot = merged - 100 * top;
     uint64_t hundreds = (bot << 16) + top;
@@ -160,48 +163,13 @@ static int round17(uint64_t w, int e, int kk, uint64_t *n, int *k)
     return 0;
 }
 
-size_t numfmt_g17(double v, char *buf)
+/* The text of N = d0 w1 w2 (one digit, two words of eight digit values,
+ * first digit in the lowest byte) times 10^(k-16), as %.17g writes it,
+ * at p (after any sign); returns the end, where it puts a NUL. */
+static inline __attribute__((always_inline)) char *layout17(char *p, uint32_t d0, uint64_t w1,
+                                                            uint64_t w2, int k)
 {
-    uint64_t bits, m, n, w1, w2;
-    int e, k, lz, last;
-    uint32_t d0, hi8, lo8;
-    char *p = buf;
-
-    memcpy(&bits, &v, sizeof bits);
-    m = bits & ((UINT64_C(1) << 52) - 1);
-    e = (int)((bits >> 52) & 0x7ff);
-    if (e == 0x7ff)
-        return fallback_g17(v, buf);
-    if (bits >> 63)
-        *p++ = '-';
-    if (e == 0) {
-        if (m == 0) {
-            *p++ = '0';
-            *p = '\0';
-            return (size_t)(p - buf);
-        }
-        e = -1074;
-    } else {
-        m |= UINT64_C(1) << 52;
-        e -= 1075;
-    }
-    lz = __builtin_clzll(m);
-    m <<= lz;
-    e -= lz;
-    {
-        /* floor((e + 63) log10 2) (exact for |e + 63| < 1650): the decimal
-         * exponent of 2^(e+63) <= |v|; |v|'s own is that or one more. */
-        int kk = ((e + 63) * 78913) >> 18;
-        if (!round17_fma(fabs(v), kk, &n, &k) && !round17(m, e, kk, &n, &k))
-            return fallback_g17(v, buf);
-    }
-    /* The digits: one, then two words of eight. */
-    d0 = (uint32_t)(n / UINT64_C(10000000000000000));
-    n -= (uint64_t)d0 * UINT64_C(10000000000000000);
-    hi8 = (uint32_t)(n / 100000000);
-    lo8 = (uint32_t)(n - (uint64_t)hi8 * 100000000);
-    w1 = digits8_word(hi8);
-    w2 = digits8_word(lo8);
+    int last;
     /* The last non-zero digit: a zero digit is a zero byte, and the
      * word's high bytes are its last digits. */
     if (w2)
@@ -261,7 +229,223 @@ size_t numfmt_g17(double v, char *buf)
         p += 1 - k + last + 1;
     }
     *p = '\0';
-    return (size_t)(p - buf);
+    return p;
+}
+
+size_t numfmt_g17(double v, char *buf)
+{
+    uint64_t bits, m, n, w1, w2;
+    int e, k, lz;
+    uint32_t d0, hi8, lo8;
+    char *p = buf;
+
+    memcpy(&bits, &v, sizeof bits);
+    m = bits & ((UINT64_C(1) << 52) - 1);
+    e = (int)((bits >> 52) & 0x7ff);
+    if (e == 0x7ff) {
+        if (m == 0) {
+            /* glibc's %.17g of an infinity, without its cost. */
+            if (bits >> 63) {
+                memcpy(buf, "-inf", 5);
+                return 4;
+            }
+            memcpy(buf, "inf", 4);
+            return 3;
+        }
+        return fallback_g17(v, buf);
+    }
+    if (bits >> 63)
+        *p++ = '-';
+    if (e == 0) {
+        if (m == 0) {
+            *p++ = '0';
+            *p = '\0';
+            return (size_t)(p - buf);
+        }
+        e = -1074;
+    } else {
+        m |= UINT64_C(1) << 52;
+        e -= 1075;
+    }
+    lz = __builtin_clzll(m);
+    m <<= lz;
+    e -= lz;
+    {
+        /* floor((e + 63) log10 2) (exact for |e + 63| < 1650): the decimal
+         * exponent of 2^(e+63) <= |v|; |v|'s own is that or one more. */
+        int kk = ((e + 63) * 78913) >> 18;
+        if (!round17_fma(fabs(v), kk, &n, &k) && !round17(m, e, kk, &n, &k))
+            return fallback_g17(v, buf);
+    }
+    /* The digits: one, then two words of eight. */
+    d0 = (uint32_t)(n / UINT64_C(10000000000000000));
+    n -= (uint64_t)d0 * UINT64_C(10000000000000000);
+    hi8 = (uint32_t)(n / 100000000);
+    lo8 = (uint32_t)(n - (uint64_t)hi8 * 100000000);
+    w1 = digits8_word(hi8);
+    w2 = digits8_word(lo8);
+    return (size_t)(layout17(p, d0, w1, w2, k) - buf);
+}
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define NUMFMT_X8 1
+
+#define X8_TARGET __attribute__((target("avx512f,avx512dq")))
+
+/* digits8_word on eight lanes of 64 bits, by the same multiplies. */
+X8_TARGET static inline __m512i digits8_x8(__m512i x)
+{
+    const __m512i m7 = _mm512_set1_epi64((INT64_C(0x7f) << 32) | 0x7f);
+    const __m512i m4 = _mm512_set1_epi64((INT64_C(0xf) << 48) | (INT64_C(0xf) << 32) |
+                                         (INT64_C(0xf) << 16) | 0xf);
+    __m512i q4 = _mm512_srli_epi64(_mm512_mullo_epi64(x, _mm512_set1_epi64(109951163)), 40);
+    __m512i r4 = _mm512_sub_epi64(x, _mm512_mullo_epi64(q4, _mm512_set1_epi64(10000)));
+    __m512i merged = _mm512_or_si512(q4, _mm512_slli_epi64(r4, 32));
+    __m512i top = _mm512_and_si512(
+        _mm512_srli_epi64(_mm512_mullo_epi64(merged, _mm512_set1_epi64(10486)), 20), m7);
+    __m512i bot = _mm512_sub_epi64(merged, _mm512_mullo_epi64(top, _mm512_set1_epi64(100)));
+    __m512i hundreds = _mm512_add_epi64(_mm512_slli_epi64(bot, 16), top);
+    __m512i tens = _mm512_and_si512(
+        _mm512_srli_epi64(_mm512_mullo_epi64(hundreds, _mm512_set1_epi64(103)), 10), m4);
+    __m512i ones = _mm512_sub_epi64(hundreds, _mm512_mullo_epi64(tens, _mm512_set1_epi64(10)));
+    return _mm512_add_epi64(tens, _mm512_slli_epi64(ones, 8));
+}
+
+/* N = v 10^q for eight lanes, as round17_fma forms it. */
+X8_TARGET static inline __m512i n17_x8(__m512d a, __m512i q)
+{
+    const __m512d magic = _mm512_set1_pd(0x1.8p52);
+    /* exact_pow10[q] by two permutes of the table in registers (a gather
+     * is slower), the second for q >= 16. */
+    __m512d t0 = _mm512_loadu_pd(exact_pow10), t1 = _mm512_loadu_pd(exact_pow10 + 8);
+    __m512d t2 = _mm512_loadu_pd(exact_pow10 + 15);
+    __m512d lo16 = _mm512_permutex2var_pd(t0, q, t1);
+    __m512d hi7 = _mm512_permutexvar_pd(_mm512_sub_epi64(q, _mm512_set1_epi64(15)), t2);
+    __m512d p = _mm512_mask_mov_pd(lo16, _mm512_cmp_epu64_mask(q, _mm512_set1_epi64(16),
+                                                               _MM_CMPINT_GE), hi7);
+    __m512d hi = _mm512_mul_pd(a, p);
+    __m512d lo = _mm512_fmsub_pd(a, p, hi);
+    __m512d r = _mm512_sub_pd(_mm512_add_pd(lo, magic), magic);
+    return _mm512_add_epi64(_mm512_cvttpd_epu64(hi), _mm512_cvttpd_epi64(r));
+}
+
+/* Eight numbers into eight slots: the lanes with 10^-6 <= |v| < 10^17 by
+ * round17_fma's arithmetic on all eight at once, the others by
+ * numfmt_g17; the digits of all by digits8_x8; the text by layout17. */
+X8_TARGET static void g17_x8(const double *v, char *out, unsigned char *len)
+{
+    const __m512i e16 = _mm512_set1_epi64(INT64_C(10000000000000000));
+    const __m512i e17 = _mm512_set1_epi64(INT64_C(100000000000000000));
+    const __m512i e8 = _mm512_set1_epi64(100000000);
+    const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi64(1);
+    __m512d x = _mm512_loadu_pd(v), a = _mm512_abs_pd(x);
+    __m512i e2, kk, q, n, d0, r, hi8, lo8, k;
+    __mmask8 ok, big, top;
+    uint64_t W1[8], W2[8], D0[8];
+    int64_t K[8];
+    int i;
+
+    /* The ordered compares leave out NaN, infinities, zeros, subnormals. */
+    ok = _mm512_cmp_pd_mask(a, _mm512_set1_pd(1e-7), _CMP_GE_OQ) &
+         _mm512_cmp_pd_mask(a, _mm512_set1_pd(1e18), _CMP_LT_OQ);
+    e2 = _mm512_sub_epi64(_mm512_srli_epi64(_mm512_castpd_si512(a), 52),
+                          _mm512_set1_epi64(1023));
+    kk = _mm512_srai_epi64(_mm512_mullo_epi64(e2, _mm512_set1_epi64(78913)), 18);
+    q = _mm512_sub_epi64(_mm512_set1_epi64(16), kk);
+    ok &= _mm512_cmp_epu64_mask(q, _mm512_set1_epi64(22), _MM_CMPINT_LE);
+    if (!ok) {
+        /* None on this path (a run of error bounds, say). */
+        for (i = 0; i < 8; i++)
+            len[i] = (unsigned char)numfmt_g17(v[i], out + (size_t)i * NUMFMT_G17_MAX);
+        return;
+    }
+    q = _mm512_maskz_mov_epi64(ok, q);
+    n = n17_x8(a, q);
+    /* v >= 10^(k+1): one place on, as round17_fma's loop. */
+    big = _mm512_cmp_epu64_mask(n, e17, _MM_CMPINT_GT) & ok;
+    if (big) {
+        ok &= ~(big & _mm512_cmp_epi64_mask(q, zero, _MM_CMPINT_EQ));
+        q = _mm512_mask_sub_epi64(q, big & ok, q, one);
+        n = _mm512_mask_mov_epi64(n, big & ok, n17_x8(a, q));
+        ok &= ~_mm512_cmp_epu64_mask(n, e17, _MM_CMPINT_GT);
+    }
+    k = _mm512_sub_epi64(_mm512_set1_epi64(16), q);
+    /* Rounded up to 10^17: 1 followed by zeros, one place on. */
+    top = _mm512_cmp_epu64_mask(n, e17, _MM_CMPINT_EQ);
+    n = _mm512_mask_mov_epi64(n, top, e16);
+    k = _mm512_mask_add_epi64(k, top, k, one);
+    /* d0 = n / 10^16 and hi8 = r / 10^8 by a double product, off by at
+     * most one, and put right by the remainder's sign and size. */
+    d0 = _mm512_cvttpd_epi64(_mm512_mul_pd(_mm512_cvtepu64_pd(n), _mm512_set1_pd(1e-16)));
+    r = _mm512_sub_epi64(n, _mm512_mullo_epi64(d0, e16));
+    {
+        __mmask8 lo = _mm512_cmp_epi64_mask(r, zero, _MM_CMPINT_LT);
+        __mmask8 hi;
+        d0 = _mm512_mask_sub_epi64(d0, lo, d0, one);
+        r = _mm512_mask_add_epi64(r, lo, r, e16);
+        hi = _mm512_cmp_epi64_mask(r, e16, _MM_CMPINT_GE);
+        d0 = _mm512_mask_add_epi64(d0, hi, d0, one);
+        r = _mm512_mask_sub_epi64(r, hi, r, e16);
+    }
+    hi8 = _mm512_cvttpd_epi64(_mm512_mul_pd(_mm512_cvtepi64_pd(r), _mm512_set1_pd(1e-8)));
+    lo8 = _mm512_sub_epi64(r, _mm512_mullo_epi64(hi8, e8));
+    {
+        __mmask8 lo = _mm512_cmp_epi64_mask(lo8, zero, _MM_CMPINT_LT);
+        __mmask8 hi;
+        hi8 = _mm512_mask_sub_epi64(hi8, lo, hi8, one);
+        lo8 = _mm512_mask_add_epi64(lo8, lo, lo8, e8);
+        hi = _mm512_cmp_epi64_mask(lo8, e8, _MM_CMPINT_GE);
+        hi8 = _mm512_mask_add_epi64(hi8, hi, hi8, one);
+        lo8 = _mm512_mask_sub_epi64(lo8, hi, lo8, e8);
+    }
+    /* Lanes outside the path hold anything: keep their digit words sane. */
+    hi8 = _mm512_maskz_mov_epi64(ok, hi8);
+    lo8 = _mm512_maskz_mov_epi64(ok, lo8);
+    _mm512_storeu_si512(W1, digits8_x8(hi8));
+    _mm512_storeu_si512(W2, digits8_x8(lo8));
+    _mm512_storeu_si512(D0, d0);
+    _mm512_storeu_si512(K, k);
+    for (i = 0; i < 8; i++) {
+        char *p = out + (size_t)i * NUMFMT_G17_MAX;
+        if (ok >> i & 1) {
+            char *q0 = p;
+            if (v[i] < 0)
+                *p++ = '-';
+            len[i] = (unsigned char)(layout17(p, (uint32_t)D0[i], W1[i], W2[i], (int)K[i]) - q0);
+        } else {
+            len[i] = (unsigned char)numfmt_g17(v[i], p);
+        }
+    }
+}
+#endif
+
+void numfmt_g17_n(const double *v, size_t n, char *out, unsigned char *len)
+{
+    size_t i = 0;
+#ifdef NUMFMT_X8
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq")) {
+        for (; i + 8 <= n; i += 8)
+            g17_x8(v + i, out + i * NUMFMT_G17_MAX, len + i);
+        if (i < n) {
+            /* The last few through a padded copy. */
+            double t[8] = { 1, 1, 1, 1, 1, 1, 1, 1 };
+            char slot[8 * NUMFMT_G17_MAX];
+            unsigned char tl[8];
+            size_t j;
+            memcpy(t, v + i, (n - i) * sizeof *t);
+            g17_x8(t, slot, tl);
+            for (j = 0; i + j < n; j++) {
+                memcpy(out + (i + j) * NUMFMT_G17_MAX, slot + j * NUMFMT_G17_MAX,
+                       NUMFMT_G17_MAX);
+                len[i + j] = tl[j];
+            }
+            i = n;
+        }
+    }
+#endif
+    for (; i < n; i++)
+        len[i] = (unsigned char)numfmt_g17(v[i], out + i * NUMFMT_G17_MAX);
 }
 
 

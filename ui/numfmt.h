@@ -25,6 +25,12 @@ size_t numfmt_g17(double v, char *buf);
  * decimal point.  Returns 1 with *out the correctly rounded double, or 0
  * when the text is not of that form or its value is out of the normal
  * range (the caller then asks strtod, which also judges the syntax). */
+/* numfmt_g17 of v[0..n-1], each into its own slot of NUMFMT_G17_MAX bytes
+ * (slot i at out + i NUMFMT_G17_MAX, NUL-terminated) and its length into
+ * len[i]: the same bytes, eight numbers at a time where the processor has
+ * AVX-512. */
+void numfmt_g17_n(const double *v, size_t n, char *out, unsigned char *len);
+
 /* The eight decimal digits of x < 10^8, leading zeros included, as
  * ASCII; no NUL (numfmt_g17's digit step, exposed for its test). */
 void numfmt_digits8(uint32_t x, char out[8]);

@@ -278,22 +278,6 @@ static void csv_head(FILE *f, const report_meta *m, int multi, int inputs, sg_ra
  * a status name, commas and the newline. */
 #define CSV_ROW_MAX (24 + 22 * NUMFMT_G17_MAX + 64 + 32)
 
-/* put_num's CSV bytes at p; returns the end. */
-static char *mem_num(char *p, double v)
-{
-    if (isnan(v))
-        return p;
-    if (isinf(v)) {
-        if (v > 0) {
-            memcpy(p, "inf", 3);
-            return p + 3;
-        }
-        memcpy(p, "-inf", 4);
-        return p + 4;
-    }
-    return p + numfmt_g17(v, p);
-}
-
 /* A non-negative integer as %zu or %d writes it. */
 static char *mem_uint(char *p, size_t v)
 {
@@ -308,14 +292,63 @@ static char *mem_uint(char *p, size_t v)
     return p;
 }
 
-/* Surface i of a ray as one CSV row at p (CSV_ROW_MAX bytes of room);
- * returns the end.  Written into memory, not through stdio, because a
- * list's rows are most of a run's time. */
-static char *csv_row(char *p, int multi, size_t index, int i, int nsurf,
-                     const sg_ray_surface *e, sg_ray_kind kind, const sg_ray_in *ray,
-                     const sg_opd *opd)
+/* The numbers of one CSV row, in the row's order, into v; returns how
+ * many (at most CSV_ROW_NUMS).  csv_row writes them in the same order. */
+#define CSV_ROW_NUMS 21
+static int csv_row_nums(double *v, int i, int nsurf, const sg_ray_surface *e, int nin,
+                        const sg_ray_in *ray, const sg_opd *opd)
 {
-    int k, nin = ray ? (kind == SG_RAYS_NORMALIZED ? 4 : 6) : 0;
+    int k, n = 0;
+    for (k = 0; k < nin; k++)
+        v[n++] = ray->v[k];
+    if (e->status == SG_OK) {
+        v[n++] = e->x;
+        v[n++] = e->y;
+        v[n++] = e->z;
+        v[n++] = e->l;
+        v[n++] = e->m;
+        v[n++] = e->n;
+        v[n++] = e->residual;
+        v[n++] = e->error_bound;
+        v[n++] = e->path;
+        v[n++] = e->opl;
+        v[n++] = e->opl_error_bound;
+    }
+    if (opd && i == nsurf - 1 && opd->status == SG_OK) {
+        v[n++] = opd->opd_waves;
+        v[n++] = opd->error_bound;
+        v[n++] = opd->ex;
+        v[n++] = opd->ey;
+    }
+    return n;
+}
+
+/* The next formatted number of a row (put_num's CSV bytes): its slot
+ * copied whole (the room allows it), then the end moved to its length. */
+typedef struct csv_nums {
+    const double *v;
+    const char *txt;
+    const unsigned char *len;
+    int at;
+} csv_nums;
+
+static char *take_num(char *p, csv_nums *c)
+{
+    int k = c->at++;
+    if (isnan(c->v[k]))
+        return p;
+    memcpy(p, c->txt + (size_t)k * NUMFMT_G17_MAX, NUMFMT_G17_MAX);
+    return p + c->len[k];
+}
+
+/* Surface i of a ray as one CSV row at p (CSV_ROW_MAX bytes of room), its
+ * numbers taken in csv_row_nums' order from c; returns the end.  Written
+ * into memory, not through stdio, because a list's rows are most of a
+ * run's time. */
+static char *csv_row(char *p, int multi, size_t index, int i, int nsurf,
+                     const sg_ray_surface *e, int nin, const sg_opd *opd, csv_nums *c)
+{
+    int k;
     const char *st;
     size_t len;
     if (multi) {
@@ -323,16 +356,14 @@ static char *csv_row(char *p, int multi, size_t index, int i, int nsurf,
         *p++ = ',';
     }
     for (k = 0; k < nin; k++) {
-        p = mem_num(p, ray->v[k]);
+        p = take_num(p, c);
         *p++ = ',';
     }
     p = mem_uint(p, (size_t)i);
     *p++ = ',';
     if (e->status == SG_OK) {
-        const double v[9] = { e->x, e->y, e->z, e->l, e->m, e->n,
-                              e->residual, e->error_bound, e->path };
         for (k = 0; k < 9; k++) {
-            p = mem_num(p, v[k]);
+            p = take_num(p, c);
             *p++ = ',';
         }
     } else {
@@ -347,19 +378,18 @@ static char *csv_row(char *p, int multi, size_t index, int i, int nsurf,
     p += len;
     *p++ = ',';
     if (e->status == SG_OK) {
-        p = mem_num(p, e->opl);
+        p = take_num(p, c);
         *p++ = ',';
-        p = mem_num(p, e->opl_error_bound);
+        p = take_num(p, c);
     } else {
         *p++ = ',';
     }
     if (opd) {
         /* A ray's OPD belongs to its image row. */
         if (i == nsurf - 1 && opd->status == SG_OK) {
-            const double v[4] = { opd->opd_waves, opd->error_bound, opd->ex, opd->ey };
             for (k = 0; k < 4; k++) {
                 *p++ = ',';
-                p = mem_num(p, v[k]);
+                p = take_num(p, c);
             }
         } else {
             memcpy(p, ",,,,", 4);
@@ -370,14 +400,43 @@ static char *csv_row(char *p, int multi, size_t index, int i, int nsurf,
     return p;
 }
 
+/* Rows a group formats together: their numbers go through numfmt_g17_n
+ * at once (eight at a time on AVX-512). */
+#define CSV_GROUP 16
+
+/* Surfaces [i0, i1) of a ray (at most CSV_GROUP) as CSV rows at p, with
+ * (i1 - i0) CSV_ROW_MAX bytes of room; returns the end. */
+static char *csv_rows(char *p, int multi, size_t index, int i0, int i1, int nsurf,
+                      const sg_ray_surface *s, sg_ray_kind kind, const sg_ray_in *ray,
+                      const sg_opd *opd)
+{
+    double v[CSV_GROUP * CSV_ROW_NUMS];
+    char txt[CSV_GROUP * CSV_ROW_NUMS * NUMFMT_G17_MAX];
+    unsigned char len[CSV_GROUP * CSV_ROW_NUMS];
+    int nin = ray ? (kind == SG_RAYS_NORMALIZED ? 4 : 6) : 0, i, n = 0;
+    csv_nums c;
+    for (i = i0; i < i1; i++)
+        n += csv_row_nums(v + n, i, nsurf, &s[i], nin, ray, opd);
+    if (n > 0)
+        numfmt_g17_n(v, (size_t)n, txt, len);
+    c.v = v;
+    c.txt = txt;
+    c.len = len;
+    c.at = 0;
+    for (i = i0; i < i1; i++)
+        p = csv_row(p, multi, index, i, nsurf, &s[i], nin, opd, &c);
+    return p;
+}
+
 static void csv_ray(FILE *f, int multi, size_t index, int nsurf, const sg_ray_surface *s,
                     sg_ray_kind kind, const sg_ray_in *ray, const sg_opd *opd)
 {
-    char row[CSV_ROW_MAX];
+    char rows[CSV_GROUP * CSV_ROW_MAX];
     int i;
-    for (i = 0; i < nsurf; i++) {
-        char *end = csv_row(row, multi, index, i, nsurf, &s[i], kind, ray, opd);
-        fwrite(row, 1, (size_t)(end - row), f);
+    for (i = 0; i < nsurf; i += CSV_GROUP) {
+        int i1 = nsurf - i < CSV_GROUP ? nsurf : i + CSV_GROUP;
+        char *end = csv_rows(rows, multi, index, i, i1, nsurf, s, kind, ray, opd);
+        fwrite(rows, 1, (size_t)(end - rows), f);
     }
 }
 
@@ -653,13 +712,15 @@ static void fmt_csv(fmt_job *j)
         const sg_ray_in *in = inputs && j->rays ? &j->rays[r] : NULL;
         const sg_opd *opd = s->m && s->m->opd ? (j->opds ? &j->opds[r] : &none) : NULL;
         size_t index = s->next + r;
-        for (i = 0; i < s->nsurf; i++) {
+        for (i = 0; i < s->nsurf; i += CSV_GROUP) {
+            int i1 = s->nsurf - i < CSV_GROUP ? s->nsurf : i + CSV_GROUP;
+            size_t room = (size_t)(i1 - i) * CSV_ROW_MAX;
             char *end;
-            if (j->cap - j->len < CSV_ROW_MAX) {
+            if (j->cap - j->len < room) {
                 size_t cap = j->cap ? 2 * j->cap : 256 * (size_t)s->nsurf * (j->to - j->from);
                 char *p;
-                if (cap < j->len + CSV_ROW_MAX)
-                    cap = j->len + CSV_ROW_MAX;
+                if (cap < j->len + room)
+                    cap = j->len + room;
                 p = realloc(j->text, cap);
                 if (!p) {
                     j->failed = 1;
@@ -669,8 +730,8 @@ static void fmt_csv(fmt_job *j)
                 j->text = p;
                 j->cap = cap;
             }
-            end = csv_row(j->text + j->len, s->multi, index, i, s->nsurf, &o[i], s->kind,
-                          in, opd);
+            end = csv_rows(j->text + j->len, s->multi, index, i, i1, s->nsurf, o, s->kind, in,
+                           opd);
             j->len = (size_t)(end - j->text);
         }
     }

@@ -174,6 +174,73 @@ static void test_g17_random(void **state)
     assert_int_equal(fmt_failures, 0);
 }
 
+/* numfmt_g17_n, eight at a time where the processor has AVX-512, against
+ * snprintf: runs of 1 to 40 numbers (the padded tail too) mixing every
+ * kind of value, so lanes of both paths meet in one call. */
+static double mixed(void)
+{
+    uint64_t b = next();
+    char t[64];
+    switch (next() % 8) {
+    case 0:
+        return from_bits(b);
+    case 1:
+        return from_bits((b & ~(UINT64_C(0x7ff) << 52)) |
+                         ((UINT64_C(1023) - 24 + (b >> 57) % 88) << 52));
+    case 2: {
+        uint64_t d17 = UINT64_C(10000000000000000) + b % UINT64_C(90000000000000000);
+        double p;
+        snprintf(t, sizeof t, "%llu5e%d", (unsigned long long)d17, (int)(next() % 26) - 24);
+        p = strtod(t, NULL);
+        return next() % 3 == 0 ? p : nextafter(p, next() % 2 ? 0 : INFINITY);
+    }
+    case 3: {
+        static const double special[] = { 0.0, -0.0, INFINITY, -INFINITY, NAN, 1e-6, 1e17,
+                                          1e-7, 99999999999999999.0, 1e16, 0.1, DBL_MIN,
+                                          DBL_TRUE_MIN, DBL_MAX, 1.0, -1.0 };
+        double p = special[b % (sizeof special / sizeof special[0])];
+        return next() % 2 || isnan(p) || isinf(p) || p == 0.0 ? p : nextafter(p, 0);
+    }
+    case 4:
+        return ldexp((double)(b >> 11), -(int)(next() % 120));
+    case 5:
+        return (double)(int64_t)(b >> (next() % 64));
+    default:
+        return from_bits((b & ~(UINT64_C(0x7ff) << 52)) |
+                         ((UINT64_C(1023) - 20 + (b >> 58)) << 52));
+    }
+}
+
+static void test_g17_n(void **state)
+{
+    long i, n = count() / 8, bad = 0, total = 0;
+    (void)state;
+    for (i = 0; i < n; i++) {
+        double v[40];
+        char slot[40 * NUMFMT_G17_MAX + 8];
+        unsigned char len[40];
+        size_t m = 1 + next() % 40, j;
+        for (j = 0; j < m; j++)
+            v[j] = mixed();
+        memset(slot, 'X', sizeof slot);
+        numfmt_g17_n(v, m, slot, len);
+        for (j = 0; j < m; j++) {
+            char want[64];
+            const char *got = slot + j * NUMFMT_G17_MAX;
+            snprintf(want, sizeof want, "%.17g", v[j]);
+            total++;
+            if ((strcmp(want, got) != 0 || len[j] != strlen(want)) && bad++ < 10)
+                print_error("%%.17g of %a (%zu of %zu): want \"%s\", got \"%.32s\"\n", v[j],
+                            j, m, want, got);
+        }
+        /* Nothing written past the last slot. */
+        if (slot[m * NUMFMT_G17_MAX] != 'X' && bad++ < 10)
+            print_error("written past %zu slots\n", m);
+    }
+    print_message("# %ld numbers in runs, %ld failures\n", total, bad);
+    assert_int_equal(bad, 0);
+}
+
 /* Every x below 10^8 against snprintf's "%08u". */
 static void test_digits8_all(void **state)
 {
@@ -278,6 +345,7 @@ int main(void)
         cmocka_unit_test(test_g17_edges),
         cmocka_unit_test(test_g17_random),
         cmocka_unit_test(test_digits8_all),
+        cmocka_unit_test(test_g17_n),
         cmocka_unit_test(test_parse_edges),
         cmocka_unit_test(test_parse_random),
     };
