@@ -312,27 +312,31 @@ X8_TARGET static inline __m512i digits8_x8(__m512i x)
     return _mm512_add_epi64(tens, _mm512_slli_epi64(ones, 8));
 }
 
-/* N = v 10^q for eight lanes, as round17_fma forms it. */
-X8_TARGET static inline __m512i n17_x8(__m512d a, __m512i q)
+/* N = v 10^q rounded, for eight lanes with 0 <= q <= 47: hi = v P1
+ * rounded and t = v P2 + (v P1 - hi) by fused multiply-adds, where
+ * 10^q = P1 + P2 + d (gen_pow10.c).  For q <= 22, P2 = d = 0 and t is
+ * exact, as in round17_fma.  Beyond, |v 10^q - hi - t| <= v |d| + ulp(t)/2
+ * < 4e-14 (v 10^q < 10^18, |d| <= 2^-106 10^q, |t| < 2^8), and *unsure
+ * marks the lanes whose t lies that close to a half. */
+X8_TARGET static inline __m512i n17_x8(__m512d a, __m512i q, __mmask8 *unsure)
 {
     const __m512d magic = _mm512_set1_pd(0x1.8p52);
-    /* exact_pow10[q] by two permutes of the table in registers (a gather
-     * is slower), the second for q >= 16. */
-    __m512d t0 = _mm512_loadu_pd(exact_pow10), t1 = _mm512_loadu_pd(exact_pow10 + 8);
-    __m512d t2 = _mm512_loadu_pd(exact_pow10 + 15);
-    __m512d lo16 = _mm512_permutex2var_pd(t0, q, t1);
-    __m512d hi7 = _mm512_permutexvar_pd(_mm512_sub_epi64(q, _mm512_set1_epi64(15)), t2);
-    __m512d p = _mm512_mask_mov_pd(lo16, _mm512_cmp_epu64_mask(q, _mm512_set1_epi64(16),
-                                                               _MM_CMPINT_GE), hi7);
-    __m512d hi = _mm512_mul_pd(a, p);
-    __m512d lo = _mm512_fmsub_pd(a, p, hi);
-    __m512d r = _mm512_sub_pd(_mm512_add_pd(lo, magic), magic);
+    __m512d p1 = _mm512_i64gather_pd(q, numfmt_pow10_dd[0], 8);
+    __m512d p2 = _mm512_i64gather_pd(q, numfmt_pow10_dd[1], 8);
+    __m512d hi = _mm512_mul_pd(a, p1);
+    __m512d t = _mm512_fmadd_pd(a, p2, _mm512_fmsub_pd(a, p1, hi));
+    __m512d r = _mm512_sub_pd(_mm512_add_pd(t, magic), magic);
+    /* |t - r| is 1/2 within the bound: the rounding is not known. */
+    __m512d off = _mm512_abs_pd(_mm512_sub_pd(_mm512_abs_pd(_mm512_sub_pd(t, r)),
+                                              _mm512_set1_pd(0.5)));
+    *unsure = _mm512_cmp_epu64_mask(q, _mm512_set1_epi64(22), _MM_CMPINT_GT) &
+              _mm512_cmp_pd_mask(off, _mm512_set1_pd(4e-14), _CMP_LE_OQ);
     return _mm512_add_epi64(_mm512_cvttpd_epu64(hi), _mm512_cvttpd_epi64(r));
 }
 
-/* Eight numbers into eight slots: the lanes with 10^-6 <= |v| < 10^17 by
- * round17_fma's arithmetic on all eight at once, the others by
- * numfmt_g17; the digits of all by digits8_x8; the text by layout17. */
+/* Eight numbers into eight slots: the lanes with about 10^-31 <= |v| <
+ * 10^17 (0 <= q <= 47) by n17_x8 on all eight at once, the others and the
+ * few it is unsure of by numfmt_g17; the digits of all by digits8_x8; the text by layout17. */
 X8_TARGET static void g17_x8(const double *v, char *out, unsigned char *len)
 {
     const __m512i e16 = _mm512_set1_epi64(INT64_C(10000000000000000));
@@ -341,19 +345,19 @@ X8_TARGET static void g17_x8(const double *v, char *out, unsigned char *len)
     const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi64(1);
     __m512d x = _mm512_loadu_pd(v), a = _mm512_abs_pd(x);
     __m512i e2, kk, q, n, d0, r, hi8, lo8, k;
-    __mmask8 ok, big, top;
+    __mmask8 ok, big, top, unsure;
     uint64_t W1[8], W2[8], D0[8];
     int64_t K[8];
     int i;
 
     /* The ordered compares leave out NaN, infinities, zeros, subnormals. */
-    ok = _mm512_cmp_pd_mask(a, _mm512_set1_pd(1e-7), _CMP_GE_OQ) &
+    ok = _mm512_cmp_pd_mask(a, _mm512_set1_pd(1e-33), _CMP_GE_OQ) &
          _mm512_cmp_pd_mask(a, _mm512_set1_pd(1e18), _CMP_LT_OQ);
     e2 = _mm512_sub_epi64(_mm512_srli_epi64(_mm512_castpd_si512(a), 52),
                           _mm512_set1_epi64(1023));
     kk = _mm512_srai_epi64(_mm512_mullo_epi64(e2, _mm512_set1_epi64(78913)), 18);
     q = _mm512_sub_epi64(_mm512_set1_epi64(16), kk);
-    ok &= _mm512_cmp_epu64_mask(q, _mm512_set1_epi64(22), _MM_CMPINT_LE);
+    ok &= _mm512_cmp_epu64_mask(q, _mm512_set1_epi64(NUMFMT_DDMAX), _MM_CMPINT_LE);
     if (!ok) {
         /* None on this path (a run of error bounds, say). */
         for (i = 0; i < 8; i++)
@@ -361,13 +365,15 @@ X8_TARGET static void g17_x8(const double *v, char *out, unsigned char *len)
         return;
     }
     q = _mm512_maskz_mov_epi64(ok, q);
-    n = n17_x8(a, q);
+    n = n17_x8(a, q, &unsure);
     /* v >= 10^(k+1): one place on, as round17_fma's loop. */
     big = _mm512_cmp_epu64_mask(n, e17, _MM_CMPINT_GT) & ok;
+    ok &= ~(unsure & ~big);
     if (big) {
         ok &= ~(big & _mm512_cmp_epi64_mask(q, zero, _MM_CMPINT_EQ));
         q = _mm512_mask_sub_epi64(q, big & ok, q, one);
-        n = _mm512_mask_mov_epi64(n, big & ok, n17_x8(a, q));
+        n = _mm512_mask_mov_epi64(n, big & ok, n17_x8(a, q, &unsure));
+        ok &= ~(big & unsure);
         ok &= ~_mm512_cmp_epu64_mask(n, e17, _MM_CMPINT_GT);
     }
     k = _mm512_sub_epi64(_mm512_set1_epi64(16), q);

@@ -145,13 +145,59 @@ static void edge_values(void (*fn)(double))
     }
 }
 
+/* Doubles v = m 2^-(j+q) whose v 10^q = m 5^q / 2^j lies 2^-j above or
+ * below a half (near-ties no random draw meets), with 10^16 <= v 10^q <
+ * 10^17 so that q is %.17g's own: m = (2^(j-1) +- 1) / 5^q mod 2^j, plus
+ * multiples of 2^j. */
+__extension__ typedef unsigned __int128 u128;
+
+static int near_ties(double *out, int max)
+{
+    int q, j, sgn, n = 0;
+    for (q = 17; q <= 40 && n < max; q++) {
+        u128 p5 = 1;
+        uint64_t inv, five;
+        int i;
+        for (i = 0; i < q; i++)
+            p5 *= 5;
+        five = (uint64_t)p5;
+        /* The inverse of an odd number mod 2^64 by Newton's iteration. */
+        inv = five;
+        for (i = 0; i < 6; i++)
+            inv *= 2 - five * inv;
+        for (j = 40; j <= 62 && n < max; j++)
+            for (sgn = -1; sgn <= 1; sgn += 2) {
+                uint64_t mask = (UINT64_C(1) << j) - 1;
+                uint64_t t0 = (((UINT64_C(1) << (j - 1)) + (uint64_t)(int64_t)sgn) * inv) & mask;
+                uint64_t m;
+                int got = 0;
+                /* A few for each q, j and side. */
+                for (m = t0; m < (UINT64_C(1) << 53) && n < max && got < 8;
+                     m += UINT64_C(1) << j) {
+                    long double x = (long double)m * (long double)p5 / ldexpl(1.0L, j);
+                    if (m == 0 || x < 1e16L || x >= 1e17L)
+                        continue;
+                    out[n++] = ldexp((double)m, -(j + q));
+                    got++;
+                }
+            }
+    }
+    return n;
+}
+
 static void fmt_one(double v) { check_fmt(v); }
 
 static void test_g17_edges(void **state)
 {
+    static double nt[20000];
+    int k, n = near_ties(nt, 20000);
     (void)state;
     fmt_failures = 0;
     edge_values(fmt_one);
+    print_message("# %d constructed near-ties\n", n);
+    assert_true(n > 500);
+    for (k = 0; k < n; k++)
+        check_fmt(nt[k]);
     assert_int_equal(fmt_failures, 0);
 }
 
@@ -181,7 +227,7 @@ static double mixed(void)
 {
     uint64_t b = next();
     char t[64];
-    switch (next() % 8) {
+    switch (next() % 9) {
     case 0:
         return from_bits(b);
     case 1:
@@ -190,7 +236,7 @@ static double mixed(void)
     case 2: {
         uint64_t d17 = UINT64_C(10000000000000000) + b % UINT64_C(90000000000000000);
         double p;
-        snprintf(t, sizeof t, "%llu5e%d", (unsigned long long)d17, (int)(next() % 26) - 24);
+        snprintf(t, sizeof t, "%llu5e%d", (unsigned long long)d17, (int)(next() % 60) - 58);
         p = strtod(t, NULL);
         return next() % 3 == 0 ? p : nextafter(p, next() % 2 ? 0 : INFINITY);
     }
@@ -202,7 +248,14 @@ static double mixed(void)
         return next() % 2 || isnan(p) || isinf(p) || p == 0.0 ? p : nextafter(p, 0);
     }
     case 4:
-        return ldexp((double)(b >> 11), -(int)(next() % 120));
+        return ldexp((double)(b >> 11), -(int)(next() % 150));
+    case 7:
+        /* The only exact ties of 17 digits below 10^-6: m 2^-24 and m 2^-25
+         * for odd m (m 5^23 / 2 and m 5^24 / 2), and other small powers
+         * of two. */
+        if (next() % 2)
+            return ldexp((double)(2 * (next() % 16) + 1), -24 - (int)(next() % 2));
+        return ldexp(next() % 2 ? 1.0 : 3.0, -(int)(next() % 120));
     case 5:
         return (double)(int64_t)(b >> (next() % 64));
     default:
@@ -236,6 +289,22 @@ static void test_g17_n(void **state)
         /* Nothing written past the last slot. */
         if (slot[m * NUMFMT_G17_MAX] != 'X' && bad++ < 10)
             print_error("written past %zu slots\n", m);
+    }
+    /* The constructed near-ties, where the 8-lane path must hand over. */
+    {
+        static double nt[20000];
+        static char slot[20000 * NUMFMT_G17_MAX];
+        static unsigned char len[20000];
+        int m = near_ties(nt, 20000), k;
+        numfmt_g17_n(nt, (size_t)m, slot, len);
+        for (k = 0; k < m; k++) {
+            char want[64];
+            snprintf(want, sizeof want, "%.17g", nt[k]);
+            total++;
+            if (strcmp(want, slot + (size_t)k * NUMFMT_G17_MAX) != 0 && bad++ < 10)
+                print_error("near-tie %a: want \"%s\", got \"%s\"\n", nt[k], want,
+                            slot + (size_t)k * NUMFMT_G17_MAX);
+        }
     }
     print_message("# %ld numbers in runs, %ld failures\n", total, bad);
     assert_int_equal(bad, 0);
