@@ -13,7 +13,15 @@
  * numbers accurately", PLDI 1990, for small significands and exponents.
  * The printing direction uses the same bound the other way round: 17
  * correctly rounded digits of v 10^q, as in U. Adams, "Ryu printf",
- * PLDI 2019, but with a fallback in place of its exactness proof. */
+ * PLDI 2019, but with a fallback in place of its exactness proof.
+ *
+ * Where 10^q is a double (10^-6 <= |v| < 10^17, most of a ray file),
+ * printing forms v 10^q exactly as a product and its fused multiply-add
+ * remainder instead, which decides every rounding (round17_fma).
+ * numfmt_g17_n does that on eight lanes at once on AVX-512, further down
+ * (to q = 47) with 10^q as two doubles, handing a lane within its error
+ * bound of a tie to numfmt_g17.  The digits come eight at a time from
+ * multiplies and shifts in one word (digits8_word), never a division. */
 #include "numfmt.h"
 
 #include <math.h>

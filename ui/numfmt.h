@@ -3,8 +3,9 @@
  *
  * numfmt_g17 writes the bytes snprintf("%.17g") writes in the C locale;
  * numfmt_parse reads a plain decimal number to the double strtod returns.
- * Both decide with a 128-bit product and hand the rare cases they cannot
- * decide to the C library, so the results are the library's, bit for bit.
+ * Both decide with a 128-bit product (printing: or an exact fused
+ * multiply-add) and hand the rare cases they cannot decide to the C
+ * library, so the results are the library's, bit for bit.
  */
 #ifndef SG_UI_NUMFMT_H
 #define SG_UI_NUMFMT_H
