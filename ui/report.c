@@ -283,6 +283,10 @@ static char *mem_uint(char *p, size_t v)
 {
     char t[24];
     int n = 0;
+    if (v < 10) {
+        *p = (char)('0' + v);
+        return p + 1;
+    }
     do {
         t[n++] = (char)('0' + v % 10);
         v /= 10;
@@ -341,20 +345,20 @@ static char *take_num(char *p, csv_nums *c)
     return p + c->len[k];
 }
 
-/* Surface i of a ray as one CSV row at p (CSV_ROW_MAX bytes of room), its
- * numbers taken in csv_row_nums' order from c; returns the end.  Written
+/* Surface i of a ray as one CSV row at p (CSV_ROW_MAX bytes of room),
+ * after the text ix (nix bytes: the ray's number and a comma, or none),
+ * its numbers taken in csv_row_nums' order from c; returns the end.  Written
  * into memory, not through stdio, because a list's rows are most of a
  * run's time. */
-static char *csv_row(char *p, int multi, size_t index, int i, int nsurf,
+static char *csv_row(char *p, const char *ix, size_t nix, int i, int nsurf,
                      const sg_ray_surface *e, int nin, const sg_opd *opd, csv_nums *c)
 {
     int k;
     const char *st;
     size_t len;
-    if (multi) {
-        p = mem_uint(p, index);
-        *p++ = ',';
-    }
+    /* The ray's number and its comma, made once for its rows. */
+    memcpy(p, ix, nix);
+    p += nix;
     for (k = 0; k < nin; k++) {
         p = take_num(p, c);
         *p++ = ',';
@@ -414,7 +418,13 @@ static char *csv_rows(char *p, int multi, size_t index, int i0, int i1, int nsur
     char txt[CSV_GROUP * CSV_ROW_NUMS * NUMFMT_G17_MAX];
     unsigned char len[CSV_GROUP * CSV_ROW_NUMS];
     int nin = ray ? (kind == SG_RAYS_NORMALIZED ? 4 : 6) : 0, i, n = 0;
+    char ix[24];
+    size_t nix = 0;
     csv_nums c;
+    if (multi) {
+        nix = (size_t)(mem_uint(ix, index) - ix);
+        ix[nix++] = ',';
+    }
     for (i = i0; i < i1; i++)
         n += csv_row_nums(v + n, i, nsurf, &s[i], nin, ray, opd);
     if (n > 0)
@@ -424,7 +434,7 @@ static char *csv_rows(char *p, int multi, size_t index, int i0, int i1, int nsur
     c.len = len;
     c.at = 0;
     for (i = i0; i < i1; i++)
-        p = csv_row(p, multi, index, i, nsurf, &s[i], nin, opd, &c);
+        p = csv_row(p, ix, nix, i, nsurf, &s[i], nin, opd, &c);
     return p;
 }
 
