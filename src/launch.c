@@ -1201,7 +1201,7 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
         mpfr_init2(idx[i], 128);
     mpfr_inits2(128, tmp, fx, fy, v, (mpfr_ptr)0);
     sg_parax_mp_init(&p, 128);
-    rc = sg_indices_mpfr(sys, t->cat, t->wave, idx, d);
+    rc = sg_indices_mpfr_cached(sys, t->cat, t->wave, idx, t->icache, d);
     if (rc == SG_OK)
         rc = sg_paraxial_mpfr(sys, idx, 128, &p, d);
     if (rc == SG_OK && inf_object(t) && sys->field_type == SG_FIELD_OBJECT_HEIGHT)

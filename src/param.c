@@ -248,25 +248,31 @@ int sg_param_check(const sg_param *p, int k, double v, int object, char *msg, si
 {
     char lab[64];
     int inf_ok = (p->flags & SG_PARAM_INF) || ((p->flags & SG_PARAM_OBJ_INF) && object && v > 0);
-    sg_param_label(p, k, lab, sizeof lab);
+    /* The label is made only for a message: a valid design has every
+     * value of every surface checked each time a tracer is made. */
     if (p->kind == SG_PARAM_BOOL) {
         if (v == 0.0 || v == 1.0)
             return SG_OK;
-        if (msg)
+        if (msg) {
+            sg_param_label(p, k, lab, sizeof lab);
             snprintf(msg, n, "%s: %g is not 0 or 1", lab, v);
+        }
         return SG_ERANGE;
     }
     if (p->kind == SG_PARAM_ENUM) {
         if (v >= 0 && v < p->nnames && v == floor(v))
             return SG_OK;
-        if (msg)
+        if (msg) {
+            sg_param_label(p, k, lab, sizeof lab);
             snprintf(msg, n, "%s: %g is not one of 0 to %d", lab, v, p->nnames - 1);
+        }
         return SG_ERANGE;
     }
     if (p->kind != SG_PARAM_REAL)
         return SG_OK;
     if (isnan(v) || (isinf(v) && !inf_ok)) {
         if (msg) {
+            sg_param_label(p, k, lab, sizeof lab);
             if (p->flags & (SG_PARAM_NONNEG | SG_PARAM_POSITIVE))
                 snprintf(msg, n, "%s %g must be finite and %s", lab, v,
                          p->flags & SG_PARAM_POSITIVE ? "positive" : "not negative");
@@ -277,13 +283,16 @@ int sg_param_check(const sg_param *p, int k, double v, int object, char *msg, si
     }
     if (((p->flags & SG_PARAM_NONNEG) && v < 0.0) ||
         ((p->flags & SG_PARAM_POSITIVE) && !(v > 0.0))) {
-        if (msg)
+        if (msg) {
+            sg_param_label(p, k, lab, sizeof lab);
             snprintf(msg, n, "%s %g must be finite and %s", lab, v,
                      p->flags & SG_PARAM_POSITIVE ? "positive" : "not negative");
+        }
         return SG_ERANGE;
     }
     if (isfinite(v) && (v < p->min || v > p->max)) {
         if (msg) {
+            sg_param_label(p, k, lab, sizeof lab);
             if (p->max == SG_MAX_LEN && v > p->max)
                 snprintf(msg, n, "%s %g is beyond %g lens units", lab, v, p->max);
             else if (v > p->max)

@@ -451,6 +451,12 @@ void sg_parax_to_double(const sg_parax_mp *p, sg_paraxial *o)
 int sg_paraxial_compute(const sg_system *sys, const sg_catalog *cat, int wave,
                         sg_paraxial *out, sg_diag *d)
 {
+    return sg_paraxial_compute_cached(sys, cat, wave, NULL, out, d);
+}
+
+int sg_paraxial_compute_cached(const sg_system *sys, const sg_catalog *cat, int wave,
+                               sg_index_cache *cache, sg_paraxial *out, sg_diag *d)
+{
     mpfr_t *idx;
     sg_parax_mp p;
     int i, rc;
@@ -467,7 +473,7 @@ int sg_paraxial_compute(const sg_system *sys, const sg_catalog *cat, int wave,
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
     for (i = 0; i < sys->nsurf; i++)
         mpfr_init2(idx[i], 128);
-    rc = sg_indices_mpfr(sys, cat, wave, idx, d);
+    rc = sg_indices_mpfr_cached(sys, cat, wave, idx, cache, d);
     if (rc == SG_OK) {
         sg_parax_mp_init(&p, 128);
         rc = sg_paraxial_mpfr(sys, idx, 128, &p, d);

@@ -671,6 +671,27 @@ int sg_tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
 /* sg_tracer_open returning the tracer, or NULL (the code in d). */
 sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
                          const sg_trace_opts *opts, sg_diag *d);
+
+/* Glass indices kept between the tracers and paraxial data of one design
+ * (the editor makes new ones after every edit): a tracer or paraxial
+ * computation given a cache takes each glass index it already holds for
+ * the same inputs (every number of the glass, the wavelength, the
+ * system's temperature, pressure and adjust setting, the precision), and
+ * gets the same bits as without it.  The caller owns the cache; it is used
+ * only during the call, by one thread at a time. */
+typedef struct sg_index_cache sg_index_cache;
+sg_index_cache *sg_index_cache_new(void);
+void sg_index_cache_free(sg_index_cache *c);
+void sg_index_cache_clear(sg_index_cache *c);
+/* Lookups answered from the cache and computed, since it was made. */
+void sg_index_cache_stats(const sg_index_cache *c, unsigned long *hits,
+                          unsigned long *misses);
+/* sg_tracer_new and sg_paraxial_compute with a cache (NULL: none). */
+sg_tracer *sg_tracer_new_cached(const sg_system *sys, const sg_catalog *cat,
+                                const sg_trace_opts *opts, sg_index_cache *cache,
+                                sg_diag *d);
+int sg_paraxial_compute_cached(const sg_system *sys, const sg_catalog *cat, int wave,
+                               sg_index_cache *cache, sg_paraxial *out, sg_diag *d);
 void sg_tracer_free(sg_tracer *t);
 int sg_tracer_nsurf(const sg_tracer *t);
 const sg_paraxial *sg_tracer_paraxial(const sg_tracer *t);

@@ -522,6 +522,12 @@ int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
 int sg_indices_mpfr(const sg_system *sys, const sg_catalog *cat, int wave,
                     mpfr_t *idx, sg_diag *d)
 {
+    return sg_indices_mpfr_cached(sys, cat, wave, idx, NULL, d);
+}
+
+int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave,
+                           mpfr_t *idx, sg_index_cache *cache, sg_diag *d)
+{
     mpfr_t um;
     int i, sign = 1, rc = SG_OK;
     mpfr_init2(um, mpfr_get_prec(idx[0]));
@@ -571,7 +577,7 @@ int sg_indices_mpfr(const sg_system *sys, const sg_catalog *cat, int wave,
                                  s->mat.name);
                 goto out;
             }
-            if (sg_system_glass_index_mpfr(sys, g, idx[i], um) != SG_OK) {
+            if (sg_index_cache_glass(cache, sys, g, idx[i], um) != SG_OK) {
                 rc = sg_diag_set(d, SG_ERANGE,
                                  "surface %d: glass %s has no real index at %g um", i,
                                  g->name, sys->wave[wave].um);
@@ -716,6 +722,16 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
 sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
                          const sg_trace_opts *opts, sg_diag *d)
 {
+    return sg_tracer_new_cached(sys, cat, opts, NULL, d);
+}
+
+static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
+                       sg_index_cache *cache, sg_tracer **out, sg_diag *d);
+
+sg_tracer *sg_tracer_new_cached(const sg_system *sys, const sg_catalog *cat,
+                                const sg_trace_opts *opts, sg_index_cache *cache,
+                                sg_diag *d)
+{
     sg_tracer *t = NULL;
     sg_diag own;
     /* The code must reach a caller who passed no diagnostic only through
@@ -724,11 +740,17 @@ sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
         sg_diag_clear(&own);
         d = &own;
     }
-    return sg_tracer_open(sys, cat, opts, &t, d) == SG_OK ? t : NULL;
+    return tracer_open(sys, cat, opts, cache, &t, d) == SG_OK ? t : NULL;
 }
 
 int sg_tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
                    sg_tracer **out, sg_diag *d)
+{
+    return tracer_open(sys, cat, opts, NULL, out, d);
+}
+
+static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
+                       sg_index_cache *cache, sg_tracer **out, sg_diag *d)
 {
     sg_tracer *t;
     mpfr_t *idx = NULL;
@@ -798,7 +820,9 @@ int sg_tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
         }
     for (i = 0; i < n; i++)
         mpfr_init2(idx[i], 256);
-    rc = sg_indices_mpfr(sys, cat, t->wave, idx, d);
+    /* Only while it is made: the caller owns the cache. */
+    t->icache = cache;
+    rc = sg_indices_mpfr_cached(sys, cat, t->wave, idx, cache, d);
     if (rc == SG_OK)
         rc = prepare_surfaces(t, idx, d);
     for (i = 0; i < n; i++)
@@ -813,7 +837,7 @@ int sg_tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
         sg_diag pd;
         po.wave = sys->primary_wave;
         sg_diag_clear(&pd);
-        t->prim = sg_tracer_new(sys, cat, &po, &pd);
+        t->prim = sg_tracer_new_cached(sys, cat, &po, cache, &pd);
         if (!t->prim) {
             sg_diag_set(d, pd.code != SG_OK ? pd.code : SG_ENOMEM,
                         "primary wavelength %d, which defines the pupil and fields: %s",
@@ -831,6 +855,7 @@ int sg_tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
         goto fail;
     if (t->o.method == SG_METHOD_MPFR && sg_mpfr_prepare(t, d) != SG_OK)
         goto fail;
+    t->icache = NULL;
     *out = t;
     return SG_OK;
 fail:

@@ -16,6 +16,7 @@
 #include <string.h>
 
 #include "dd.h"
+#include "index_cache.h"
 #include "internal.h"
 #include "shape.h"
 #include "vdd.h"
@@ -144,6 +145,8 @@ struct sg_tracer {
     /* The same system at the primary wavelength, when this tracer's is
      * another: pupil, aperture and fields are defined there. */
     struct sg_tracer *prim;
+    /* The caller's glass indices, only while the tracer is made. */
+    sg_index_cache *icache;
 };
 
 /* Ray state of the precise method: position on the current surface in its

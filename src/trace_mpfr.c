@@ -1204,7 +1204,7 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
         }
     }
     mpfr_const_pi(m->pi, MPFR_RNDN);
-    rc = sg_indices_mpfr(sys, tr->cat, tr->wave, idx, d);
+    rc = sg_indices_mpfr_cached(sys, tr->cat, tr->wave, idx, tr->icache, d);
     if (rc == SG_OK) {
         for (i = 1; i < tr->n; i++) {
             mpfr_abs(m->t[0], idx[i - 1], MPFR_RNDN);

@@ -690,7 +690,7 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
                     goto h5_error;
             }
             if (t)
-                report_opd_block(t, &ref, rays, n, out, nsurf, opd);
+                report_opd_block_mt(t, &ref, rays, n, out, nsurf, opd, threads);
             /* After the OPD, which is taken in the image surface's own frame. */
             if (gf)
                 sg_rows_to_global(gf, out, n, nsurf, csvrays_kind(rd) == SG_RAYS_START_DIR);
@@ -710,7 +710,7 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
             report_set_threads(&rs, threads);
         }
         if (t && fmt != FMT_HDF5)
-            report_opd_block(t, &ref, rays, n, out, nsurf, opd);
+            report_opd_block_mt(t, &ref, rays, n, out, nsurf, opd, threads);
         if (gf && fmt != FMT_HDF5)
             sg_rows_to_global(gf, out, n, nsurf, csvrays_kind(rd) == SG_RAYS_START_DIR);
         if (fmt != FMT_HDF5 && report_rays_opd(&rs, out, status, n, rays, opd) != 0)

@@ -77,6 +77,29 @@ int main(int argc, char **argv)
                 t, q);
     }
     fprintf(f, "};\n");
+    /* 10^q = P1 + P2 + d for q in [0, 47]: P1 the double nearest 10^q,
+     * P2 the double nearest 10^q - P1 (0 while 10^q is a double), both
+     * rounded by strtod (correctly rounded) from exact decimal text. */
+    fprintf(f, "#define NUMFMT_DDMAX 47\n");
+    fprintf(f, "static const double numfmt_pow10_dd[2][48] = {\n");
+    for (int part = 0; part < 2; part++) {
+        fprintf(f, "    {\n");
+        for (q = 0; q <= 47; q++) {
+            char txt[128], *dec;
+            double p1, p2;
+            snprintf(txt, sizeof txt, "1e%d", q);
+            p1 = strtod(txt, NULL);
+            mpz_ui_pow_ui(n, 10, (unsigned long)q);
+            mpz_set_d(d, p1); /* p1 is an integer: exact */
+            mpz_sub(n, n, d);
+            dec = mpz_get_str(NULL, 10, n);
+            p2 = strtod(dec, NULL);
+            free(dec);
+            fprintf(f, "        %a, /* 1e%d */\n", part ? p2 : p1, q);
+        }
+        fprintf(f, "    },\n");
+    }
+    fprintf(f, "};\n");
     mpz_clears(n, d, p, lim_lo, lim_hi, hi, lo, mask, NULL);
     if (fclose(f) != 0) {
         perror(argv[1]);

@@ -294,43 +294,50 @@ int h5rays_write(h5rays *h, const sg_ray_surface *out, const int *status, size_t
         h->bufrows = rows;
     }
     /* Column by column through one buffer: memory is one column of a
-     * block, whatever the column count. */
+     * block, whatever the column count.  The type is taken once a column:
+     * each H5T_NATIVE_* is a call into HDF5 (H5open) behind its lock. */
     for (k = 0; k < C_MAX; k++) {
-        hid_t mt = H5T_NATIVE_DOUBLE;
+        hid_t mt;
         if ((k >= C_IN0 + h->nin && k < C_SURFACE) || (k > C_STATUS && !h->opd))
             continue;
-        for (r = 0, j = 0; r < n; r++)
-            for (i = 0; i < (size_t)h->nsurf; i++, j++) {
-                const sg_ray_surface *e = &out[r * (size_t)h->nsurf + i];
-                double nan = NAN, v = nan;
-                if (k == C_RAY) {
-                    ((uint64_t *)h->buf)[j] = h->next_ray + r;
-                    mt = H5T_NATIVE_UINT64;
-                    continue;
-                }
-                if (k == C_SURFACE || k == C_STATUS) {
-                    ((int *)h->buf)[j] = k == C_SURFACE ? (int)i : e->status;
-                    mt = k == C_SURFACE ? H5T_NATIVE_INT : h->status_type;
-                    continue;
-                }
-                if (k < C_SURFACE)
-                    v = rays ? rays[r].v[k - C_IN0] : nan;
-                else if (k > C_STATUS) {
-                    if (opd && i == (size_t)h->nsurf - 1 && opd[r].status == SG_OK) {
-                        const double all[4] = { opd[r].opd_waves, opd[r].error_bound,
-                                                opd[r].ex, opd[r].ey };
-                        v = all[k - C_OPD];
+        if (k == C_RAY) {
+            uint64_t *b = h->buf;
+            mt = H5T_NATIVE_UINT64;
+            for (r = 0, j = 0; r < n; r++)
+                for (i = 0; i < (size_t)h->nsurf; i++, j++)
+                    b[j] = h->next_ray + r;
+        } else if (k == C_SURFACE || k == C_STATUS) {
+            int *b = h->buf;
+            mt = k == C_SURFACE ? H5T_NATIVE_INT : h->status_type;
+            for (r = 0, j = 0; r < n; r++)
+                for (i = 0; i < (size_t)h->nsurf; i++, j++)
+                    b[j] = k == C_SURFACE ? (int)i : out[j].status;
+        } else {
+            double *b = h->buf;
+            mt = H5T_NATIVE_DOUBLE;
+            for (r = 0, j = 0; r < n; r++)
+                for (i = 0; i < (size_t)h->nsurf; i++, j++) {
+                    const sg_ray_surface *e = &out[j];
+                    double v = NAN;
+                    if (k < C_SURFACE)
+                        v = rays ? rays[r].v[k - C_IN0] : NAN;
+                    else if (k > C_STATUS) {
+                        if (opd && i == (size_t)h->nsurf - 1 && opd[r].status == SG_OK) {
+                            const double all[4] = { opd[r].opd_waves, opd[r].error_bound,
+                                                    opd[r].ex, opd[r].ey };
+                            v = all[k - C_OPD];
+                        }
+                    } else if (e->status == SG_OK) {
+                        /* A failed surface's numbers mean nothing: NaN, as
+                         * CSV leaves the fields empty. */
+                        const double all[11] = { e->x, e->y, e->z, e->l, e->m, e->n,
+                                                 e->residual, e->error_bound, e->path,
+                                                 e->opl, e->opl_error_bound };
+                        v = all[k - C_X];
                     }
-                } else if (e->status == SG_OK) {
-                    /* A failed surface's numbers mean nothing: NaN, as
-                     * CSV leaves the fields empty. */
-                    const double all[11] = { e->x, e->y, e->z, e->l, e->m, e->n,
-                                             e->residual, e->error_bound, e->path,
-                                             e->opl, e->opl_error_bound };
-                    v = all[k - C_X];
+                    b[j] = v;
                 }
-                ((double *)h->buf)[j] = v;
-            }
+        }
         if (append(h, k, mt, h->buf, rows) < 0)
             return fail(err, errlen, "HDF5 write failed");
     }

@@ -13,7 +13,15 @@
  * numbers accurately", PLDI 1990, for small significands and exponents.
  * The printing direction uses the same bound the other way round: 17
  * correctly rounded digits of v 10^q, as in U. Adams, "Ryu printf",
- * PLDI 2019, but with a fallback in place of its exactness proof. */
+ * PLDI 2019, but with a fallback in place of its exactness proof.
+ *
+ * Where 10^q is a double (10^-6 <= |v| < 10^17, most of a ray file),
+ * printing forms v 10^q exactly as a product and its fused multiply-add
+ * remainder instead, which decides every rounding (round17_fma).
+ * numfmt_g17_n does that on eight lanes at once on AVX-512, further down
+ * (to q = 47) with 10^q as two doubles, handing a lane within its error
+ * bound of a tie to numfmt_g17.  The digits come eight at a time from
+ * multiplies and shifts in one word (digits8_word), never a division. */
 #include "numfmt.h"
 
 #include <math.h>
@@ -46,22 +54,32 @@ static int clz128(u128 h)
     return hi ? __builtin_clzll(hi) : 64 + __builtin_clzll((uint64_t)h);
 }
 
-static const char digit_pairs[201] =
-    "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
-    "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
-    "8081828384858687888990919293949596979899";
-
-/* The 17 digits of n (10^16 <= n < 10^17). */
-static void digits17(uint64_t n, char *d)
+/* The eight digits of x < 10^8 as ASCII bytes in a word, first digit in
+ * the lowest byte (memory order on a little-endian machine), with no
+ * division: each step splits every lane by a multiply and shift that is
+ * exact for the lane's range (v / 100 = v 10486 >> 20 for v < 10^4,
+ * v / 10 = v 103 >> 10 for v < 100).  D. Lemire, "Converting integers to
+ * fixed-digit representations quickly" (2021); test_numfmt checks every
+ * x below 10^8.  Inlined: a call would cost as much as the work. */
+static inline __attribute__((always_inline)) uint64_t digits8_word(uint32_t x)
 {
-    int i = 17;
-    while (i > 1) {
-        unsigned r = (unsigned)(n % 100);
-        n /= 100;
-        d[--i] = digit_pairs[2 * r + 1];
-        d[--i] = digit_pairs[2 * r];
-    }
-    d[0] = (char)('0' + n);
+    /* x / 10^4 as x ceil(2^40 / 10^4) >> 40, which the 8-lane path
+     * uses too (it has no division). */
+    uint64_t q4 = ((uint64_t)x * 109951163) >> 40;
+    uint64_t merged = q4 | (((uint64_t)x - 10000 * q4) << 32);
+    uint64_t top = ((merged * 10486) >> 20) & ((UINT64_C(0x7f) << 32) | UINT64_C(0x7f));
+    uint64_t bot = merged - 100 * top;
+    uint64_t hundreds = (bot << 16) + top;
+    uint64_t tens = (hundreds * 103) >> 10;
+    tens &= (UINT64_C(0xf) << 48) | (UINT64_C(0xf) << 32) | (UINT64_C(0xf) << 16) | 0xf;
+    tens += (hundreds - 10 * tens) << 8;
+    return tens;
+}
+
+void numfmt_digits8(uint32_t x, char out[8])
+{
+    uint64_t w = digits8_word(x) + UINT64_C(0x3030303030303030);
+    memcpy(out, &w, 8);
 }
 
 static size_t fallback_g17(double v, char *buf)
@@ -70,12 +88,48 @@ static size_t fallback_g17(double v, char *buf)
     return n > 0 ? (size_t)n : 0;
 }
 
+/* 10^0 .. 10^22, each exact in a double. */
+static const double exact_pow10[23] = {
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11,
+    1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+};
+
+/* The same for 10^-6 <= v < 10^17 (q = 16 - k in 0..22), where 10^q is
+ * a double: v 10^q = hi + lo exactly (hi = v 10^q rounded, lo by one fused
+ * multiply-add, |lo| <= ulp(hi) / 2), and hi >= 2^53 is an even integer,
+ * so N = hi + lo rounded half to even = hi + (lo rounded half to even):
+ * exact, with no case left undecided.  0 outside that range. */
+static int round17_fma(double v, int kk, uint64_t *n, int *k)
+{
+    int q = 16 - kk;
+    while (q >= 0 && q <= 22) {
+        double hi = v * exact_pow10[q], lo = fma(v, exact_pow10[q], -hi);
+        /* lo to the nearest integer, ties to even (|lo| <= 8 << 2^51). */
+        double r = (lo + 0x1.8p52) - 0x1.8p52;
+        uint64_t nn = (uint64_t)hi + (uint64_t)(int64_t)r;
+        if (nn > UINT64_C(100000000000000000)) {
+            /* v >= 10^(k+1): one digit more before the point. */
+            q--;
+            continue;
+        }
+        if (nn == UINT64_C(100000000000000000)) {
+            /* Rounded up to 10^17: 1 followed by zeros, one place on. */
+            *n = UINT64_C(10000000000000000);
+            *k = 16 - q + 1;
+            return 1;
+        }
+        *n = nn;
+        *k = 16 - q;
+        return 1;
+    }
+    return 0;
+}
+
 /* The 17 correctly rounded digits N (10^16 <= N < 10^17) and decimal
  * exponent k of v = W 2^e (W >= 2^63), v = N 10^(k-16) rounded; 0 when
  * the product cannot decide the rounding. */
-static int round17(uint64_t w, int e, uint64_t *n, int *k)
+static int round17(uint64_t w, int e, int kk, uint64_t *n, int *k)
 {
-    int kk = (int)floor((double)(e + 63) * 0.30102999566398120);
     int guard;
     for (guard = 0; guard < 4; guard++) {
         int q = 16 - kk, t, sh;
@@ -117,17 +171,97 @@ static int round17(uint64_t w, int e, uint64_t *n, int *k)
     return 0;
 }
 
+/* The text of N = d0 w1 w2 (one digit, two words of eight digit values,
+ * first digit in the lowest byte) times 10^(k-16), as %.17g writes it,
+ * at p (after any sign); returns the end, where it puts a NUL. */
+static inline __attribute__((always_inline)) char *layout17(char *p, uint32_t d0, uint64_t w1,
+                                                            uint64_t w2, int k)
+{
+    int last;
+    /* The last non-zero digit: a zero digit is a zero byte, and the
+     * word's high bytes are its last digits. */
+    if (w2)
+        last = 16 - __builtin_clzll(w2) / 8;
+    else if (w1)
+        last = 8 - __builtin_clzll(w1) / 8;
+    else
+        last = 0;
+    w1 += UINT64_C(0x3030303030303030);
+    w2 += UINT64_C(0x3030303030303030);
+    /* Stores only, each word written whole (no reload of bytes just
+     * stored); bytes past the end are scratch within NUMFMT_G17_MAX. */
+    if (k < -4 || k >= 17) {
+        unsigned x = (unsigned)(k < 0 ? -k : k);
+        uint64_t ex;
+        p[0] = (char)('0' + d0);
+        p[1] = '.';
+        memcpy(p + 2, &w1, 8);
+        memcpy(p + 10, &w2, 8);
+        p += last > 0 ? last + 2 : 1;
+        /* "e-dd" or "e-ddd" in one word, first byte lowest. */
+        ex = (uint64_t)'e' | (uint64_t)(k < 0 ? '-' : '+') << 8;
+        if (x >= 100) {
+            ex |= (uint64_t)('0' + x / 100) << 16 | (uint64_t)('0' + x / 10 % 10) << 24 |
+                  (uint64_t)('0' + x % 10) << 32;
+            memcpy(p, &ex, 8);
+            p += 5;
+        } else {
+            ex |= (uint64_t)('0' + x / 10) << 16 | (uint64_t)('0' + x % 10) << 24;
+            memcpy(p, &ex, 8);
+            p += 4;
+        }
+    } else if (k >= 0) {
+        p[0] = (char)('0' + d0);
+        memcpy(p + 1, &w1, 8);
+        memcpy(p + 9, &w2, 8);
+        if (last > k) {
+            /* The digits after the point move one place on; k < 16. */
+            if (k < 8) {
+                uint64_t t = w1 >> (8 * k);
+                memcpy(p + k + 2, &t, 8);
+                memcpy(p + 10, &w2, 8);
+            } else {
+                uint64_t t = w2 >> (8 * (k - 8));
+                memcpy(p + k + 2, &t, 8);
+            }
+            p[k + 1] = '.';
+            p += last + 2;
+        } else {
+            p += k + 1;
+        }
+    } else {
+        memcpy(p, "0.000000", 8);
+        p[1 - k] = (char)('0' + d0);
+        memcpy(p + 2 - k, &w1, 8);
+        memcpy(p + 10 - k, &w2, 8);
+        p += 1 - k + last + 1;
+    }
+    *p = '\0';
+    return p;
+}
+
 size_t numfmt_g17(double v, char *buf)
 {
-    uint64_t bits, m, n;
-    int e, k, lz, last, i;
-    char d[17], *p = buf;
+    uint64_t bits, m, n, w1, w2;
+    int e, k, lz;
+    uint32_t d0, hi8, lo8;
+    char *p = buf;
 
     memcpy(&bits, &v, sizeof bits);
     m = bits & ((UINT64_C(1) << 52) - 1);
     e = (int)((bits >> 52) & 0x7ff);
-    if (e == 0x7ff)
+    if (e == 0x7ff) {
+        if (m == 0) {
+            /* glibc's %.17g of an infinity, without its cost. */
+            if (bits >> 63) {
+                memcpy(buf, "-inf", 5);
+                return 4;
+            }
+            memcpy(buf, "inf", 4);
+            return 3;
+        }
         return fallback_g17(v, buf);
+    }
     if (bits >> 63)
         *p++ = '-';
     if (e == 0) {
@@ -144,50 +278,190 @@ size_t numfmt_g17(double v, char *buf)
     lz = __builtin_clzll(m);
     m <<= lz;
     e -= lz;
-    if (!round17(m, e, &n, &k))
-        return fallback_g17(v, buf);
-    digits17(n, d);
-    for (last = 16; last > 0 && d[last] == '0'; last--)
-        ;
-    if (k < -4 || k >= 17) {
-        unsigned x = (unsigned)(k < 0 ? -k : k);
-        *p++ = d[0];
-        if (last > 0) {
-            *p++ = '.';
-            memcpy(p, d + 1, (size_t)last);
-            p += last;
-        }
-        *p++ = 'e';
-        *p++ = k < 0 ? '-' : '+';
-        if (x >= 100)
-            *p++ = (char)('0' + x / 100);
-        *p++ = (char)('0' + x / 10 % 10);
-        *p++ = (char)('0' + x % 10);
-    } else if (k >= 0) {
-        memcpy(p, d, (size_t)k + 1);
-        p += k + 1;
-        if (last > k) {
-            *p++ = '.';
-            memcpy(p, d + k + 1, (size_t)(last - k));
-            p += last - k;
-        }
-    } else {
-        *p++ = '0';
-        *p++ = '.';
-        for (i = 0; i < -k - 1; i++)
-            *p++ = '0';
-        memcpy(p, d, (size_t)last + 1);
-        p += last + 1;
+    {
+        /* floor((e + 63) log10 2) (exact for |e + 63| < 1650): the decimal
+         * exponent of 2^(e+63) <= |v|; |v|'s own is that or one more. */
+        int kk = ((e + 63) * 78913) >> 18;
+        if (!round17_fma(fabs(v), kk, &n, &k) && !round17(m, e, kk, &n, &k))
+            return fallback_g17(v, buf);
     }
-    *p = '\0';
-    return (size_t)(p - buf);
+    /* The digits: one, then two words of eight. */
+    d0 = (uint32_t)(n / UINT64_C(10000000000000000));
+    n -= (uint64_t)d0 * UINT64_C(10000000000000000);
+    hi8 = (uint32_t)(n / 100000000);
+    lo8 = (uint32_t)(n - (uint64_t)hi8 * 100000000);
+    w1 = digits8_word(hi8);
+    w2 = digits8_word(lo8);
+    return (size_t)(layout17(p, d0, w1, w2, k) - buf);
 }
 
-/* 10^0 .. 10^22, each exact in a double. */
-static const double exact_pow10[23] = {
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11,
-    1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-};
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define NUMFMT_X8 1
+
+#define X8_TARGET __attribute__((target("avx512f,avx512dq")))
+
+/* digits8_word on eight lanes of 64 bits, by the same multiplies. */
+X8_TARGET static inline __m512i digits8_x8(__m512i x)
+{
+    const __m512i m7 = _mm512_set1_epi64((INT64_C(0x7f) << 32) | 0x7f);
+    const __m512i m4 = _mm512_set1_epi64((INT64_C(0xf) << 48) | (INT64_C(0xf) << 32) |
+                                         (INT64_C(0xf) << 16) | 0xf);
+    __m512i q4 = _mm512_srli_epi64(_mm512_mullo_epi64(x, _mm512_set1_epi64(109951163)), 40);
+    __m512i r4 = _mm512_sub_epi64(x, _mm512_mullo_epi64(q4, _mm512_set1_epi64(10000)));
+    __m512i merged = _mm512_or_si512(q4, _mm512_slli_epi64(r4, 32));
+    __m512i top = _mm512_and_si512(
+        _mm512_srli_epi64(_mm512_mullo_epi64(merged, _mm512_set1_epi64(10486)), 20), m7);
+    __m512i bot = _mm512_sub_epi64(merged, _mm512_mullo_epi64(top, _mm512_set1_epi64(100)));
+    __m512i hundreds = _mm512_add_epi64(_mm512_slli_epi64(bot, 16), top);
+    __m512i tens = _mm512_and_si512(
+        _mm512_srli_epi64(_mm512_mullo_epi64(hundreds, _mm512_set1_epi64(103)), 10), m4);
+    __m512i ones = _mm512_sub_epi64(hundreds, _mm512_mullo_epi64(tens, _mm512_set1_epi64(10)));
+    return _mm512_add_epi64(tens, _mm512_slli_epi64(ones, 8));
+}
+
+/* N = v 10^q rounded, for eight lanes with 0 <= q <= 47: hi = v P1
+ * rounded and t = v P2 + (v P1 - hi) by fused multiply-adds, where
+ * 10^q = P1 + P2 + d (gen_pow10.c).  For q <= 22, P2 = d = 0 and t is
+ * exact, as in round17_fma.  Beyond, |v 10^q - hi - t| <= v |d| + ulp(t)/2
+ * < 4e-14 (v 10^q < 10^18, |d| <= 2^-106 10^q, |t| < 2^8), and *unsure
+ * marks the lanes whose t lies that close to a half. */
+X8_TARGET static inline __m512i n17_x8(__m512d a, __m512i q, __mmask8 *unsure)
+{
+    const __m512d magic = _mm512_set1_pd(0x1.8p52);
+    __m512d p1 = _mm512_i64gather_pd(q, numfmt_pow10_dd[0], 8);
+    __m512d p2 = _mm512_i64gather_pd(q, numfmt_pow10_dd[1], 8);
+    __m512d hi = _mm512_mul_pd(a, p1);
+    __m512d t = _mm512_fmadd_pd(a, p2, _mm512_fmsub_pd(a, p1, hi));
+    __m512d r = _mm512_sub_pd(_mm512_add_pd(t, magic), magic);
+    /* |t - r| is 1/2 within the bound: the rounding is not known. */
+    __m512d off = _mm512_abs_pd(_mm512_sub_pd(_mm512_abs_pd(_mm512_sub_pd(t, r)),
+                                              _mm512_set1_pd(0.5)));
+    *unsure = _mm512_cmp_epu64_mask(q, _mm512_set1_epi64(22), _MM_CMPINT_GT) &
+              _mm512_cmp_pd_mask(off, _mm512_set1_pd(4e-14), _CMP_LE_OQ);
+    return _mm512_add_epi64(_mm512_cvttpd_epu64(hi), _mm512_cvttpd_epi64(r));
+}
+
+/* Eight numbers into eight slots: the lanes with about 10^-31 <= |v| <
+ * 10^17 (0 <= q <= 47) by n17_x8 on all eight at once, the others and the
+ * few it is unsure of by numfmt_g17; the digits of all by digits8_x8; the text by layout17. */
+X8_TARGET static void g17_x8(const double *v, char *out, unsigned char *len)
+{
+    const __m512i e16 = _mm512_set1_epi64(INT64_C(10000000000000000));
+    const __m512i e17 = _mm512_set1_epi64(INT64_C(100000000000000000));
+    const __m512i e8 = _mm512_set1_epi64(100000000);
+    const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi64(1);
+    __m512d x = _mm512_loadu_pd(v), a = _mm512_abs_pd(x);
+    __m512i e2, kk, q, n, d0, r, hi8, lo8, k;
+    __mmask8 ok, big, top, unsure;
+    uint64_t W1[8], W2[8], D0[8];
+    int64_t K[8];
+    int i;
+
+    /* The ordered compares leave out NaN, infinities, zeros, subnormals. */
+    ok = _mm512_cmp_pd_mask(a, _mm512_set1_pd(1e-33), _CMP_GE_OQ) &
+         _mm512_cmp_pd_mask(a, _mm512_set1_pd(1e18), _CMP_LT_OQ);
+    e2 = _mm512_sub_epi64(_mm512_srli_epi64(_mm512_castpd_si512(a), 52),
+                          _mm512_set1_epi64(1023));
+    kk = _mm512_srai_epi64(_mm512_mullo_epi64(e2, _mm512_set1_epi64(78913)), 18);
+    q = _mm512_sub_epi64(_mm512_set1_epi64(16), kk);
+    ok &= _mm512_cmp_epu64_mask(q, _mm512_set1_epi64(NUMFMT_DDMAX), _MM_CMPINT_LE);
+    if (!ok) {
+        /* None on this path (a run of error bounds, say). */
+        for (i = 0; i < 8; i++)
+            len[i] = (unsigned char)numfmt_g17(v[i], out + (size_t)i * NUMFMT_G17_MAX);
+        return;
+    }
+    q = _mm512_maskz_mov_epi64(ok, q);
+    n = n17_x8(a, q, &unsure);
+    /* v >= 10^(k+1): one place on, as round17_fma's loop. */
+    big = _mm512_cmp_epu64_mask(n, e17, _MM_CMPINT_GT) & ok;
+    ok &= ~(unsure & ~big);
+    if (big) {
+        ok &= ~(big & _mm512_cmp_epi64_mask(q, zero, _MM_CMPINT_EQ));
+        q = _mm512_mask_sub_epi64(q, big & ok, q, one);
+        n = _mm512_mask_mov_epi64(n, big & ok, n17_x8(a, q, &unsure));
+        ok &= ~(big & unsure);
+        ok &= ~_mm512_cmp_epu64_mask(n, e17, _MM_CMPINT_GT);
+    }
+    k = _mm512_sub_epi64(_mm512_set1_epi64(16), q);
+    /* Rounded up to 10^17: 1 followed by zeros, one place on. */
+    top = _mm512_cmp_epu64_mask(n, e17, _MM_CMPINT_EQ);
+    n = _mm512_mask_mov_epi64(n, top, e16);
+    k = _mm512_mask_add_epi64(k, top, k, one);
+    /* d0 = n / 10^16 and hi8 = r / 10^8 by a double product, off by at
+     * most one, and put right by the remainder's sign and size. */
+    d0 = _mm512_cvttpd_epi64(_mm512_mul_pd(_mm512_cvtepu64_pd(n), _mm512_set1_pd(1e-16)));
+    r = _mm512_sub_epi64(n, _mm512_mullo_epi64(d0, e16));
+    {
+        __mmask8 lo = _mm512_cmp_epi64_mask(r, zero, _MM_CMPINT_LT);
+        __mmask8 hi;
+        d0 = _mm512_mask_sub_epi64(d0, lo, d0, one);
+        r = _mm512_mask_add_epi64(r, lo, r, e16);
+        hi = _mm512_cmp_epi64_mask(r, e16, _MM_CMPINT_GE);
+        d0 = _mm512_mask_add_epi64(d0, hi, d0, one);
+        r = _mm512_mask_sub_epi64(r, hi, r, e16);
+    }
+    hi8 = _mm512_cvttpd_epi64(_mm512_mul_pd(_mm512_cvtepi64_pd(r), _mm512_set1_pd(1e-8)));
+    lo8 = _mm512_sub_epi64(r, _mm512_mullo_epi64(hi8, e8));
+    {
+        __mmask8 lo = _mm512_cmp_epi64_mask(lo8, zero, _MM_CMPINT_LT);
+        __mmask8 hi;
+        hi8 = _mm512_mask_sub_epi64(hi8, lo, hi8, one);
+        lo8 = _mm512_mask_add_epi64(lo8, lo, lo8, e8);
+        hi = _mm512_cmp_epi64_mask(lo8, e8, _MM_CMPINT_GE);
+        hi8 = _mm512_mask_add_epi64(hi8, hi, hi8, one);
+        lo8 = _mm512_mask_sub_epi64(lo8, hi, lo8, e8);
+    }
+    /* Lanes outside the path hold anything: keep their digit words sane. */
+    hi8 = _mm512_maskz_mov_epi64(ok, hi8);
+    lo8 = _mm512_maskz_mov_epi64(ok, lo8);
+    _mm512_storeu_si512(W1, digits8_x8(hi8));
+    _mm512_storeu_si512(W2, digits8_x8(lo8));
+    _mm512_storeu_si512(D0, d0);
+    _mm512_storeu_si512(K, k);
+    for (i = 0; i < 8; i++) {
+        char *p = out + (size_t)i * NUMFMT_G17_MAX;
+        if (ok >> i & 1) {
+            char *q0 = p;
+            if (v[i] < 0)
+                *p++ = '-';
+            len[i] = (unsigned char)(layout17(p, (uint32_t)D0[i], W1[i], W2[i], (int)K[i]) - q0);
+        } else {
+            len[i] = (unsigned char)numfmt_g17(v[i], p);
+        }
+    }
+}
+#endif
+
+void numfmt_g17_n(const double *v, size_t n, char *out, unsigned char *len)
+{
+    size_t i = 0;
+#ifdef NUMFMT_X8
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq")) {
+        for (; i + 8 <= n; i += 8)
+            g17_x8(v + i, out + i * NUMFMT_G17_MAX, len + i);
+        if (i < n) {
+            /* The last few through a padded copy. */
+            double t[8] = { 1, 1, 1, 1, 1, 1, 1, 1 };
+            char slot[8 * NUMFMT_G17_MAX];
+            unsigned char tl[8];
+            size_t j;
+            memcpy(t, v + i, (n - i) * sizeof *t);
+            g17_x8(t, slot, tl);
+            for (j = 0; i + j < n; j++) {
+                memcpy(out + (i + j) * NUMFMT_G17_MAX, slot + j * NUMFMT_G17_MAX,
+                       NUMFMT_G17_MAX);
+                len[i + j] = tl[j];
+            }
+            i = n;
+        }
+    }
+#endif
+    for (; i < n; i++)
+        len[i] = (unsigned char)numfmt_g17(v[i], out + i * NUMFMT_G17_MAX);
+}
+
 
 int numfmt_parse(const char *s, size_t n, double *out)
 {

@@ -3,15 +3,18 @@
  *
  * numfmt_g17 writes the bytes snprintf("%.17g") writes in the C locale;
  * numfmt_parse reads a plain decimal number to the double strtod returns.
- * Both decide with a 128-bit product and hand the rare cases they cannot
- * decide to the C library, so the results are the library's, bit for bit.
+ * Both decide with a 128-bit product (printing: or an exact fused
+ * multiply-add) and hand the rare cases they cannot decide to the C
+ * library, so the results are the library's, bit for bit.
  */
 #ifndef SG_UI_NUMFMT_H
 #define SG_UI_NUMFMT_H
 
 #include <stddef.h>
+#include <stdint.h>
 
-/* Room numfmt_g17 needs, with its terminating NUL. */
+/* Room numfmt_g17 needs, with its terminating NUL (at most 25 bytes are
+ * text; it writes scratch bytes after the NUL, within this room). */
 #define NUMFMT_G17_MAX 32
 
 /* Writes v as "%.17g" (C locale; "-0", "inf", "-inf", "nan" and "-nan" as
@@ -23,6 +26,16 @@ size_t numfmt_g17(double v, char *buf);
  * decimal point.  Returns 1 with *out the correctly rounded double, or 0
  * when the text is not of that form or its value is out of the normal
  * range (the caller then asks strtod, which also judges the syntax). */
+/* numfmt_g17 of v[0..n-1], each into its own slot of NUMFMT_G17_MAX bytes
+ * (slot i at out + i NUMFMT_G17_MAX, NUL-terminated) and its length into
+ * len[i]: the same bytes, eight numbers at a time where the processor has
+ * AVX-512. */
+void numfmt_g17_n(const double *v, size_t n, char *out, unsigned char *len);
+
+/* The eight decimal digits of x < 10^8, leading zeros included, as
+ * ASCII; no NUL (numfmt_g17's digit step, exposed for its test). */
+void numfmt_digits8(uint32_t x, char out[8]);
+
 int numfmt_parse(const char *s, size_t n, double *out);
 
 #endif

@@ -273,51 +273,180 @@ static void csv_head(FILE *f, const report_meta *m, int multi, int inputs, sg_ra
     fputc('\n', f);
 }
 
+/* Room one CSV row needs: the index, six inputs, the surface, 15 numbers
+ * of at most NUMFMT_G17_MAX bytes each (numfmt_g17's scratch included),
+ * a status name, commas and the newline. */
+#define CSV_ROW_MAX (24 + 22 * NUMFMT_G17_MAX + 64 + 32)
+
+/* A non-negative integer as %zu or %d writes it. */
+static char *mem_uint(char *p, size_t v)
+{
+    char t[24];
+    int n = 0;
+    if (v < 10) {
+        *p = (char)('0' + v);
+        return p + 1;
+    }
+    do {
+        t[n++] = (char)('0' + v % 10);
+        v /= 10;
+    } while (v);
+    while (n)
+        *p++ = t[--n];
+    return p;
+}
+
+/* The numbers of one CSV row, in the row's order, into v; returns how
+ * many (at most CSV_ROW_NUMS).  csv_row writes them in the same order. */
+#define CSV_ROW_NUMS 21
+static int csv_row_nums(double *v, int i, int nsurf, const sg_ray_surface *e, int nin,
+                        const sg_ray_in *ray, const sg_opd *opd)
+{
+    int k, n = 0;
+    for (k = 0; k < nin; k++)
+        v[n++] = ray->v[k];
+    if (e->status == SG_OK) {
+        v[n++] = e->x;
+        v[n++] = e->y;
+        v[n++] = e->z;
+        v[n++] = e->l;
+        v[n++] = e->m;
+        v[n++] = e->n;
+        v[n++] = e->residual;
+        v[n++] = e->error_bound;
+        v[n++] = e->path;
+        v[n++] = e->opl;
+        v[n++] = e->opl_error_bound;
+    }
+    if (opd && i == nsurf - 1 && opd->status == SG_OK) {
+        v[n++] = opd->opd_waves;
+        v[n++] = opd->error_bound;
+        v[n++] = opd->ex;
+        v[n++] = opd->ey;
+    }
+    return n;
+}
+
+/* The next formatted number of a row (put_num's CSV bytes): its slot
+ * copied whole (the room allows it), then the end moved to its length. */
+typedef struct csv_nums {
+    const double *v;
+    const char *txt;
+    const unsigned char *len;
+    int at;
+} csv_nums;
+
+static char *take_num(char *p, csv_nums *c)
+{
+    int k = c->at++;
+    if (isnan(c->v[k]))
+        return p;
+    memcpy(p, c->txt + (size_t)k * NUMFMT_G17_MAX, NUMFMT_G17_MAX);
+    return p + c->len[k];
+}
+
+/* Surface i of a ray as one CSV row at p (CSV_ROW_MAX bytes of room),
+ * after the text ix (nix bytes: the ray's number and a comma, or none),
+ * its numbers taken in csv_row_nums' order from c; returns the end.  Written
+ * into memory, not through stdio, because a list's rows are most of a
+ * run's time. */
+static char *csv_row(char *p, const char *ix, size_t nix, int i, int nsurf,
+                     const sg_ray_surface *e, int nin, const sg_opd *opd, csv_nums *c)
+{
+    int k;
+    const char *st;
+    size_t len;
+    /* The ray's number and its comma, made once for its rows. */
+    memcpy(p, ix, nix);
+    p += nix;
+    for (k = 0; k < nin; k++) {
+        p = take_num(p, c);
+        *p++ = ',';
+    }
+    p = mem_uint(p, (size_t)i);
+    *p++ = ',';
+    if (e->status == SG_OK) {
+        for (k = 0; k < 9; k++) {
+            p = take_num(p, c);
+            *p++ = ',';
+        }
+    } else {
+        memcpy(p, ",,,,,,,,,", 9);
+        p += 9;
+    }
+    st = report_status_name(e->status);
+    len = strlen(st);
+    if (len > 64)
+        len = 64;
+    memcpy(p, st, len);
+    p += len;
+    *p++ = ',';
+    if (e->status == SG_OK) {
+        p = take_num(p, c);
+        *p++ = ',';
+        p = take_num(p, c);
+    } else {
+        *p++ = ',';
+    }
+    if (opd) {
+        /* A ray's OPD belongs to its image row. */
+        if (i == nsurf - 1 && opd->status == SG_OK) {
+            for (k = 0; k < 4; k++) {
+                *p++ = ',';
+                p = take_num(p, c);
+            }
+        } else {
+            memcpy(p, ",,,,", 4);
+            p += 4;
+        }
+    }
+    *p++ = '\n';
+    return p;
+}
+
+/* Rows a group formats together: their numbers go through numfmt_g17_n
+ * at once (eight at a time on AVX-512). */
+#define CSV_GROUP 16
+
+/* Surfaces [i0, i1) of a ray (at most CSV_GROUP) as CSV rows at p, with
+ * (i1 - i0) CSV_ROW_MAX bytes of room; returns the end. */
+static char *csv_rows(char *p, int multi, size_t index, int i0, int i1, int nsurf,
+                      const sg_ray_surface *s, sg_ray_kind kind, const sg_ray_in *ray,
+                      const sg_opd *opd)
+{
+    double v[CSV_GROUP * CSV_ROW_NUMS];
+    char txt[CSV_GROUP * CSV_ROW_NUMS * NUMFMT_G17_MAX];
+    unsigned char len[CSV_GROUP * CSV_ROW_NUMS];
+    int nin = ray ? (kind == SG_RAYS_NORMALIZED ? 4 : 6) : 0, i, n = 0;
+    char ix[24];
+    size_t nix = 0;
+    csv_nums c;
+    if (multi) {
+        nix = (size_t)(mem_uint(ix, index) - ix);
+        ix[nix++] = ',';
+    }
+    for (i = i0; i < i1; i++)
+        n += csv_row_nums(v + n, i, nsurf, &s[i], nin, ray, opd);
+    if (n > 0)
+        numfmt_g17_n(v, (size_t)n, txt, len);
+    c.v = v;
+    c.txt = txt;
+    c.len = len;
+    c.at = 0;
+    for (i = i0; i < i1; i++)
+        p = csv_row(p, ix, nix, i, nsurf, &s[i], nin, opd, &c);
+    return p;
+}
+
 static void csv_ray(FILE *f, int multi, size_t index, int nsurf, const sg_ray_surface *s,
                     sg_ray_kind kind, const sg_ray_in *ray, const sg_opd *opd)
 {
-    int i, k, nin = ray ? (kind == SG_RAYS_NORMALIZED ? 4 : 6) : 0;
-    for (i = 0; i < nsurf; i++) {
-        const sg_ray_surface *e = &s[i];
-        if (multi)
-            fprintf(f, "%zu,", index);
-        for (k = 0; k < nin; k++) {
-            put_num(f, ray->v[k], 0);
-            fputc(',', f);
-        }
-        fprintf(f, "%d,", i);
-        if (e->status == SG_OK) {
-            const double v[9] = { e->x, e->y, e->z, e->l, e->m, e->n,
-                                  e->residual, e->error_bound, e->path };
-            for (k = 0; k < 9; k++) {
-                put_num(f, v[k], 0);
-                fputc(',', f);
-            }
-        } else {
-            fputs(",,,,,,,,,", f);
-        }
-        fputs(report_status_name(e->status), f);
-        fputc(',', f);
-        if (e->status == SG_OK) {
-            put_num(f, e->opl, 0);
-            fputc(',', f);
-            put_num(f, e->opl_error_bound, 0);
-        } else {
-            fputc(',', f);
-        }
-        if (opd) {
-            /* A ray's OPD belongs to its image row. */
-            if (i == nsurf - 1 && opd->status == SG_OK) {
-                const double v[4] = { opd->opd_waves, opd->error_bound, opd->ex, opd->ey };
-                for (k = 0; k < 4; k++) {
-                    fputc(',', f);
-                    put_num(f, v[k], 0);
-                }
-            } else {
-                fputs(",,,,", f);
-            }
-        }
-        fputc('\n', f);
+    char rows[CSV_GROUP * CSV_ROW_MAX];
+    int i;
+    for (i = 0; i < nsurf; i += CSV_GROUP) {
+        int i1 = nsurf - i < CSV_GROUP ? nsurf : i + CSV_GROUP;
+        char *end = csv_rows(rows, multi, index, i, i1, nsurf, s, kind, ray, opd);
+        fwrite(rows, 1, (size_t)(end - rows), f);
     }
 }
 
@@ -580,6 +709,44 @@ static ssize_t job_write(void *cookie, const char *buf, size_t n)
     return (ssize_t)n;
 }
 
+/* A CSV share straight into the job's memory. */
+static void fmt_csv(fmt_job *j)
+{
+    const report_stream *s = j->s;
+    const sg_opd none = { SG_EINVAL, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN };
+    const int inputs = s->m && s->m->csv_inputs;
+    size_t r;
+    int i;
+    for (r = j->from; r < j->to; r++) {
+        const sg_ray_surface *o = j->out + r * (size_t)s->nsurf;
+        const sg_ray_in *in = inputs && j->rays ? &j->rays[r] : NULL;
+        const sg_opd *opd = s->m && s->m->opd ? (j->opds ? &j->opds[r] : &none) : NULL;
+        size_t index = s->next + r;
+        for (i = 0; i < s->nsurf; i += CSV_GROUP) {
+            int i1 = s->nsurf - i < CSV_GROUP ? s->nsurf : i + CSV_GROUP;
+            size_t room = (size_t)(i1 - i) * CSV_ROW_MAX;
+            char *end;
+            if (j->cap - j->len < room) {
+                size_t cap = j->cap ? 2 * j->cap : 256 * (size_t)s->nsurf * (j->to - j->from);
+                char *p;
+                if (cap < j->len + room)
+                    cap = j->len + room;
+                p = realloc(j->text, cap);
+                if (!p) {
+                    j->failed = 1;
+                    errno = ENOMEM;
+                    return;
+                }
+                j->text = p;
+                j->cap = cap;
+            }
+            end = csv_rows(j->text + j->len, s->multi, index, i, i1, s->nsurf, o, s->kind, in,
+                           opd);
+            j->len = (size_t)(end - j->text);
+        }
+    }
+}
+
 static void *fmt_main(void *arg)
 {
     fmt_job *j = arg;
@@ -588,6 +755,10 @@ static void *fmt_main(void *arg)
     j->len = 0;
     if (j->from == j->to)
         return NULL;
+    if (j->s->fmt == REPORT_CSV) {
+        fmt_csv(j);
+        return NULL;
+    }
     f = fopencookie(j, "w", io);
     if (!f) {
         j->failed = 1;
@@ -608,8 +779,9 @@ static void *fmt_main(void *arg)
 #define PAR_MIN_RAYS 64
 #define PAR_MAX_THREADS 64
 /* Rows a thread formats in a round: its text (about 200 bytes a CSV row)
- * stays in a buffer of under a megabyte that the next round reuses. */
-#define PAR_ROUND_ROWS 4096
+ * stays in a buffer of about two megabytes that the next round reuses;
+ * rounds this long make the threads' start a small part of the time. */
+#define PAR_ROUND_ROWS 8192
 
 /* Formats the block in rounds; in each, nthreads contiguous shares go
  * each into its own memory and are written in order: the bytes of the
@@ -718,9 +890,107 @@ int report_end(report_stream *s)
 void report_opd_block(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
                       const sg_ray_surface *out, int nsurf, sg_opd *opd)
 {
-    size_t r;
+    report_opd_block_mt(t, ref, rays, n, out, nsurf, opd, 1);
+}
+
+/* A run of rays of one field: its first ray and its sphere. */
+typedef struct opd_run {
+    size_t from;
+    sg_opd_ref ref;
+} opd_run;
+
+typedef struct opd_job {
+    const sg_tracer *t;
+    const opd_run *runs;
+    size_t nrun, from, to;
+    const sg_ray_surface *out;
+    int nsurf;
+    sg_opd *opd;
+} opd_job;
+
+static void *opd_main(void *arg)
+{
+    const opd_job *j = arg;
+    size_t r, k = 0;
+    /* The run holding the share's first ray. */
+    while (k + 1 < j->nrun && j->runs[k + 1].from <= j->from)
+        k++;
+    for (r = j->from; r < j->to; r++) {
+        while (k + 1 < j->nrun && j->runs[k + 1].from <= r)
+            k++;
+        sg_opd_of_ray(j->t, &j->runs[k].ref,
+                      &j->out[r * (size_t)j->nsurf + (size_t)j->nsurf - 1], &j->opd[r]);
+    }
+    return NULL;
+}
+
+/* Below this many rays, or without memory for the runs, one thread. */
+#define OPD_PAR_MIN 256
+
+void report_opd_block_mt(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
+                         const sg_ray_surface *out, int nsurf, sg_opd *opd, int threads)
+{
+    opd_run *runs = NULL;
+    size_t r, nrun = 0, cap = 0;
+    int nt = resolve_threads(threads), k;
+    opd_job job[PAR_MAX_THREADS];
+    pthread_t tid[PAR_MAX_THREADS];
+    int started[PAR_MAX_THREADS];
+    const sg_opd_ref first = *ref;
+
     /* A reference is found once for a run of rays of one field (sets and
-     * ray lists are usually field-major). */
+     * ray lists are usually field-major), in order, as the serial loop
+     * finds it; *ref ends as the last field's. */
+    if (nt > 1 && n >= OPD_PAR_MIN) {
+        for (r = 0; r < n; r++) {
+            if (ref->status == SG_EINVAL || ref->hx != rays[r].v[0] || ref->hy != rays[r].v[1]) {
+                sg_opd_reference(t, rays[r].v[0], rays[r].v[1], ref, NULL);
+                if (ref->status == SG_EINVAL)
+                    ref->status = SG_ERANGE;
+            } else if (nrun > 0) {
+                continue;
+            }
+            if (nrun == cap) {
+                size_t c = cap ? 2 * cap : 16;
+                opd_run *p = realloc(runs, c * sizeof *p);
+                if (!p)
+                    break;
+                runs = p;
+                cap = c;
+            }
+            runs[nrun].from = r;
+            runs[nrun].ref = *ref;
+            nrun++;
+        }
+        if (r == n) {
+            if ((size_t)nt > n / (OPD_PAR_MIN / 2))
+                nt = (int)(n / (OPD_PAR_MIN / 2));
+            for (k = 0; k < nt; k++) {
+                job[k].t = t;
+                job[k].runs = runs;
+                job[k].nrun = nrun;
+                job[k].from = n * (size_t)k / (size_t)nt;
+                job[k].to = n * (size_t)(k + 1) / (size_t)nt;
+                job[k].out = out;
+                job[k].nsurf = nsurf;
+                job[k].opd = opd;
+                started[k] = k > 0 && pthread_create(&tid[k], NULL, opd_main, &job[k]) == 0;
+            }
+            opd_main(&job[0]);
+            for (k = 1; k < nt; k++) {
+                if (started[k])
+                    pthread_join(tid[k], NULL);
+                else
+                    opd_main(&job[k]);
+            }
+            free(runs);
+            return;
+        }
+        /* Out of memory for the runs: all on this thread, from the
+         * sphere the block began with. */
+        free(runs);
+        *ref = first;
+    }
     for (r = 0; r < n; r++) {
         if (ref->status == SG_EINVAL || ref->hx != rays[r].v[0] || ref->hy != rays[r].v[1]) {
             sg_opd_reference(t, rays[r].v[0], rays[r].v[1], ref, NULL);

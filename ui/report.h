@@ -48,6 +48,10 @@ int report_write(FILE *f, report_fmt fmt, const report_meta *m, int nsurf,
  * sphere from block to block (ref->status = SG_EINVAL before the first). */
 void report_opd_block(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
                       const sg_ray_surface *out, int nsurf, sg_opd *opd);
+/* The same on threads (0: every core): the spheres are found in order,
+ * then each ray's OPD in contiguous shares; the same values. */
+void report_opd_block_mt(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
+                         const sg_ray_surface *out, int nsurf, sg_opd *opd, int threads);
 /* report_write with each ray's OPD (see report_rays_opd). */
 int report_write_opd(FILE *f, report_fmt fmt, const report_meta *m, int nsurf,
                      const sg_ray_surface *out, const int *status, size_t nray,

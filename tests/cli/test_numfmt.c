@@ -123,15 +123,81 @@ static void edge_values(void (*fn)(double))
         fn(nextafter(p, 0));
         fn(nextafter(p, INFINITY));
     }
+    /* The same where numfmt_g17 takes its fused multiply-add path
+     * (10^-6 <= |v| < 10^17), where such ties and near-ties are common. */
+    for (k = 0; k < 200000; k++) {
+        uint64_t d17 = UINT64_C(10000000000000000) + next() % UINT64_C(90000000000000000);
+        char b[64];
+        snprintf(b, sizeof b, "%s%llu5e%d", k % 2 ? "-" : "", (unsigned long long)d17,
+                 (int)(next() % 24) - 23);
+        p = strtod(b, NULL);
+        fn(p);
+        fn(nextafter(p, 0));
+        fn(nextafter(p, INFINITY));
+    }
+    /* Integers and halves near 2^53..2^57, where hi's spacing changes. */
+    for (k = 0; k < 20000; k++) {
+        int sh = 53 + (int)(next() % 5);
+        p = ldexp(1.0, sh) + (double)(int64_t)(next() % 4096) - 2048.0;
+        fn(p);
+        fn(p / 10.0);
+        fn(p / 1e16);
+    }
+}
+
+/* Doubles v = m 2^-(j+q) whose v 10^q = m 5^q / 2^j lies 2^-j above or
+ * below a half (near-ties no random draw meets), with 10^16 <= v 10^q <
+ * 10^17 so that q is %.17g's own: m = (2^(j-1) +- 1) / 5^q mod 2^j, plus
+ * multiples of 2^j. */
+__extension__ typedef unsigned __int128 u128;
+
+static int near_ties(double *out, int max)
+{
+    int q, j, sgn, n = 0;
+    for (q = 17; q <= 40 && n < max; q++) {
+        u128 p5 = 1;
+        uint64_t inv, five;
+        int i;
+        for (i = 0; i < q; i++)
+            p5 *= 5;
+        five = (uint64_t)p5;
+        /* The inverse of an odd number mod 2^64 by Newton's iteration. */
+        inv = five;
+        for (i = 0; i < 6; i++)
+            inv *= 2 - five * inv;
+        for (j = 40; j <= 62 && n < max; j++)
+            for (sgn = -1; sgn <= 1; sgn += 2) {
+                uint64_t mask = (UINT64_C(1) << j) - 1;
+                uint64_t t0 = (((UINT64_C(1) << (j - 1)) + (uint64_t)(int64_t)sgn) * inv) & mask;
+                uint64_t m;
+                int got = 0;
+                /* A few for each q, j and side. */
+                for (m = t0; m < (UINT64_C(1) << 53) && n < max && got < 8;
+                     m += UINT64_C(1) << j) {
+                    long double x = (long double)m * (long double)p5 / ldexpl(1.0L, j);
+                    if (m == 0 || x < 1e16L || x >= 1e17L)
+                        continue;
+                    out[n++] = ldexp((double)m, -(j + q));
+                    got++;
+                }
+            }
+    }
+    return n;
 }
 
 static void fmt_one(double v) { check_fmt(v); }
 
 static void test_g17_edges(void **state)
 {
+    static double nt[20000];
+    int k, n = near_ties(nt, 20000);
     (void)state;
     fmt_failures = 0;
     edge_values(fmt_one);
+    print_message("# %d constructed near-ties\n", n);
+    assert_true(n > 500);
+    for (k = 0; k < n; k++)
+        check_fmt(nt[k]);
     assert_int_equal(fmt_failures, 0);
 }
 
@@ -146,9 +212,118 @@ static void test_g17_random(void **state)
         /* Doubles of ordinary size, the numbers ray files hold. */
         check_fmt(from_bits((b & ~(UINT64_C(0x7ff) << 52)) |
                             ((UINT64_C(1023) - 20 + (b >> 58)) << 52)));
+        /* From 2^-24 to 2^63: every binade of the fused multiply-add path. */
+        check_fmt(from_bits((b & ~(UINT64_C(0x7ff) << 52)) |
+                            ((UINT64_C(1023) - 24 + (b >> 57) % 88) << 52)));
     }
-    print_message("# %ld random doubles, %ld failures\n", 2 * n, fmt_failures);
+    print_message("# %ld random doubles, %ld failures\n", 3 * n, fmt_failures);
     assert_int_equal(fmt_failures, 0);
+}
+
+/* numfmt_g17_n, eight at a time where the processor has AVX-512, against
+ * snprintf: runs of 1 to 40 numbers (the padded tail too) mixing every
+ * kind of value, so lanes of both paths meet in one call. */
+static double mixed(void)
+{
+    uint64_t b = next();
+    char t[64];
+    switch (next() % 9) {
+    case 0:
+        return from_bits(b);
+    case 1:
+        return from_bits((b & ~(UINT64_C(0x7ff) << 52)) |
+                         ((UINT64_C(1023) - 24 + (b >> 57) % 88) << 52));
+    case 2: {
+        uint64_t d17 = UINT64_C(10000000000000000) + b % UINT64_C(90000000000000000);
+        double p;
+        snprintf(t, sizeof t, "%llu5e%d", (unsigned long long)d17, (int)(next() % 60) - 58);
+        p = strtod(t, NULL);
+        return next() % 3 == 0 ? p : nextafter(p, next() % 2 ? 0 : INFINITY);
+    }
+    case 3: {
+        static const double special[] = { 0.0, -0.0, INFINITY, -INFINITY, NAN, 1e-6, 1e17,
+                                          1e-7, 99999999999999999.0, 1e16, 0.1, DBL_MIN,
+                                          DBL_TRUE_MIN, DBL_MAX, 1.0, -1.0 };
+        double p = special[b % (sizeof special / sizeof special[0])];
+        return next() % 2 || isnan(p) || isinf(p) || p == 0.0 ? p : nextafter(p, 0);
+    }
+    case 4:
+        return ldexp((double)(b >> 11), -(int)(next() % 150));
+    case 7:
+        /* The only exact ties of 17 digits below 10^-6: m 2^-24 and m 2^-25
+         * for odd m (m 5^23 / 2 and m 5^24 / 2), and other small powers
+         * of two. */
+        if (next() % 2)
+            return ldexp((double)(2 * (next() % 16) + 1), -24 - (int)(next() % 2));
+        return ldexp(next() % 2 ? 1.0 : 3.0, -(int)(next() % 120));
+    case 5:
+        return (double)(int64_t)(b >> (next() % 64));
+    default:
+        return from_bits((b & ~(UINT64_C(0x7ff) << 52)) |
+                         ((UINT64_C(1023) - 20 + (b >> 58)) << 52));
+    }
+}
+
+static void test_g17_n(void **state)
+{
+    long i, n = count() / 8, bad = 0, total = 0;
+    (void)state;
+    for (i = 0; i < n; i++) {
+        double v[40];
+        char slot[40 * NUMFMT_G17_MAX + 8];
+        unsigned char len[40];
+        size_t m = 1 + next() % 40, j;
+        for (j = 0; j < m; j++)
+            v[j] = mixed();
+        memset(slot, 'X', sizeof slot);
+        numfmt_g17_n(v, m, slot, len);
+        for (j = 0; j < m; j++) {
+            char want[64];
+            const char *got = slot + j * NUMFMT_G17_MAX;
+            snprintf(want, sizeof want, "%.17g", v[j]);
+            total++;
+            if ((strcmp(want, got) != 0 || len[j] != strlen(want)) && bad++ < 10)
+                print_error("%%.17g of %a (%zu of %zu): want \"%s\", got \"%.32s\"\n", v[j],
+                            j, m, want, got);
+        }
+        /* Nothing written past the last slot. */
+        if (slot[m * NUMFMT_G17_MAX] != 'X' && bad++ < 10)
+            print_error("written past %zu slots\n", m);
+    }
+    /* The constructed near-ties, where the 8-lane path must hand over. */
+    {
+        static double nt[20000];
+        static char slot[20000 * NUMFMT_G17_MAX];
+        static unsigned char len[20000];
+        int m = near_ties(nt, 20000), k;
+        numfmt_g17_n(nt, (size_t)m, slot, len);
+        for (k = 0; k < m; k++) {
+            char want[64];
+            snprintf(want, sizeof want, "%.17g", nt[k]);
+            total++;
+            if (strcmp(want, slot + (size_t)k * NUMFMT_G17_MAX) != 0 && bad++ < 10)
+                print_error("near-tie %a: want \"%s\", got \"%s\"\n", nt[k], want,
+                            slot + (size_t)k * NUMFMT_G17_MAX);
+        }
+    }
+    print_message("# %ld numbers in runs, %ld failures\n", total, bad);
+    assert_int_equal(bad, 0);
+}
+
+/* Every x below 10^8 against snprintf's "%08u". */
+static void test_digits8_all(void **state)
+{
+    uint32_t x;
+    long bad = 0;
+    (void)state;
+    for (x = 0; x < 100000000u; x++) {
+        char want[16], got[8];
+        numfmt_digits8(x, got);
+        snprintf(want, sizeof want, "%08u", (unsigned)x);
+        if (memcmp(want, got, 8) != 0 && bad++ < 10)
+            print_error("%u: want %s, got %.8s\n", (unsigned)x, want, got);
+    }
+    assert_int_equal(bad, 0);
 }
 
 static void parse_forms(double v)
@@ -238,6 +413,8 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_g17_edges),
         cmocka_unit_test(test_g17_random),
+        cmocka_unit_test(test_digits8_all),
+        cmocka_unit_test(test_g17_n),
         cmocka_unit_test(test_parse_edges),
         cmocka_unit_test(test_parse_random),
     };

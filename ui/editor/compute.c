@@ -29,6 +29,7 @@ void compute_invalidate(compute *c)
 void compute_free(compute *c)
 {
     compute_invalidate(c);
+    sg_index_cache_free(c->icache);
     free(c->res);
     free(c->ref_res);
     memset(c, 0, sizeof *c);
@@ -65,7 +66,7 @@ static sg_tracer *build(const sg_system *sys, const sg_catalog *cat,
     sg_diag d;
     sg_tracer *t;
     sg_diag_clear(&d);
-    t = sg_tracer_new(sys, cat, o, &d);
+    t = sg_tracer_new_cached(sys, cat, o, c->icache, &d);
     if (!t) {
         c->build_rc = d.code != SG_EOK ? d.code : SG_ENOMEM;
         snprintf(c->build_msg, sizeof c->build_msg, "%s",
@@ -83,6 +84,8 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
     double t0 = compute_now_ms();
     int rc;
 
+    if (!c->icache)
+        c->icache = sg_index_cache_new();
     if (!c->t || c->t_id != id || !same_opts(&c->t_opts, o)) {
         sg_tracer_free(c->t);
         c->t = NULL;
@@ -105,7 +108,15 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
                 snprintf(c->warn, sizeof c->warn, "%s", d.warn[0]);
             sg_diag_clear(&d);
             c->par_wave = sys->primary_wave;
-            c->par_ok = sg_paraxial_compute(sys, cat, c->par_wave, &c->par, &d) == SG_OK;
+            if (o->wave < 0 || o->wave == sys->primary_wave) {
+                /* The tracer's launch computed them already, the same way
+                 * (test_index_cache checks they are sg_paraxial_compute's). */
+                c->par = *sg_tracer_paraxial(c->t);
+                c->par_ok = 1;
+            } else {
+                c->par_ok = sg_paraxial_compute_cached(sys, cat, c->par_wave, c->icache,
+                                                       &c->par, &d) == SG_OK;
+            }
         }
     }
     c->have = c->ref_have = 0;

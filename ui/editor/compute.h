@@ -27,6 +27,9 @@ typedef struct compute {
     int par_ok;
     int par_wave;               /* 0-based: the primary when it was computed */
     double ms_last, ms_max;     /* wall time of recomputes */
+    /* Glass indices kept across edits (NULL: none could be made); the
+     * tracers and paraxial data take them from here, same bits. */
+    sg_index_cache *icache;
 } compute;
 
 void compute_init(compute *c);
@@ -40,7 +43,8 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
                 const sg_catalog *cat, const sg_trace_opts *o, int ref_bits,
                 const double ray[4]);
 
-/* Forgets the tracers so the next run rebuilds them (for the benchmark). */
+/* Forgets the tracers so the next run rebuilds them (for the benchmark);
+ * the glass indices stay, as after an edit. */
 void compute_invalidate(compute *c);
 
 /* Monotonic clock in milliseconds. */

@@ -1,0 +1,182 @@
+/* index_cache.c - glass indices kept between tracers of one design.
+ *
+ * The editor makes new tracers after every edit, and each computes every
+ * glass's index in MPFR several times (the tracer, its launch, the
+ * paraxial data, the mpfr method).  An edit seldom changes a glass or a
+ * wavelength, so the caller keeps an sg_index_cache and passes it in; an
+ * index is computed once per set of inputs.  The key is every number the
+ * computation reads, so a hit is the fresh value exactly. */
+#include "index_cache.h"
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* prec, um, adjust, temperature, pressure, formula, the coefficients,
+ * lmin, lmax, nd, vd, td, tref, ed, has_td, has_ed. */
+#define KEY_N (5 + 1 + SG_GLASS_NCOEF + 4 + 6 + 1 + 4 + 2)
+
+/* Past this many indices the cache starts again (a design has a few
+ * glasses and wavelengths; this only bounds a long session's memory). */
+#define CACHE_MAX 4096
+
+typedef struct entry {
+    double key[KEY_N];
+    uint64_t hash;
+    mpfr_t val;
+    int used;
+} entry;
+
+struct sg_index_cache {
+    entry *e;
+    size_t cap, n; /* cap a power of two, or 0 */
+    unsigned long hits, misses;
+};
+
+sg_index_cache *sg_index_cache_new(void)
+{
+    return calloc(1, sizeof(sg_index_cache));
+}
+
+void sg_index_cache_clear(sg_index_cache *c)
+{
+    size_t i;
+    if (!c)
+        return;
+    for (i = 0; i < c->cap; i++)
+        if (c->e[i].used)
+            mpfr_clear(c->e[i].val);
+    free(c->e);
+    c->e = NULL;
+    c->cap = c->n = 0;
+}
+
+void sg_index_cache_free(sg_index_cache *c)
+{
+    sg_index_cache_clear(c);
+    free(c);
+}
+
+void sg_index_cache_stats(const sg_index_cache *c, unsigned long *hits, unsigned long *misses)
+{
+    if (hits)
+        *hits = c ? c->hits : 0;
+    if (misses)
+        *misses = c ? c->misses : 0;
+}
+
+static void make_key(double *k, const sg_system *sys, const sg_glass *g, mpfr_prec_t prec,
+                     double um)
+{
+    int i, n = 0;
+    k[n++] = (double)prec;
+    k[n++] = um;
+    k[n++] = sys && sys->adjust_index ? 1.0 : 0.0;
+    k[n++] = sys ? sys->temperature : 0.0;
+    k[n++] = sys ? sys->pressure : 0.0;
+    k[n++] = (double)g->formula;
+    for (i = 0; i < SG_GLASS_NCOEF; i++)
+        k[n++] = g->c[i];
+    k[n++] = g->lmin;
+    k[n++] = g->lmax;
+    k[n++] = g->nd;
+    k[n++] = g->vd;
+    for (i = 0; i < 6; i++)
+        k[n++] = g->td[i];
+    k[n++] = g->tref;
+    for (i = 0; i < 4; i++)
+        k[n++] = g->ed[i];
+    k[n++] = (double)g->has_td;
+    k[n++] = (double)g->has_ed;
+}
+
+/* A multiply-xor over the key's words: equal bits, equal hash. */
+static uint64_t key_hash(const double *k)
+{
+    uint64_t h = UINT64_C(0x9e3779b97f4a7c15), w;
+    size_t i;
+    for (i = 0; i < KEY_N; i++) {
+        memcpy(&w, &k[i], sizeof w);
+        h = (h ^ w) * UINT64_C(0xff51afd7ed558ccd);
+        h ^= h >> 29;
+    }
+    return h;
+}
+
+static entry *find(sg_index_cache *c, const double *k, uint64_t h)
+{
+    size_t i;
+    if (!c->cap)
+        return NULL;
+    for (i = (size_t)h & (c->cap - 1);; i = (i + 1) & (c->cap - 1)) {
+        entry *e = &c->e[i];
+        if (!e->used)
+            return e;
+        if (e->hash == h && memcmp(e->key, k, sizeof e->key) == 0)
+            return e;
+    }
+}
+
+/* Room for one more entry, growing or starting again; 0 without memory. */
+static int make_room(sg_index_cache *c)
+{
+    size_t i, oldcap;
+    entry *old;
+    if (c->n >= CACHE_MAX)
+        sg_index_cache_clear(c);
+    if (c->cap && 2 * (c->n + 1) <= c->cap)
+        return 1;
+    old = c->e;
+    oldcap = c->cap;
+    c->cap = oldcap ? 2 * oldcap : 64;
+    c->e = calloc(c->cap, sizeof *c->e);
+    if (!c->e) {
+        c->e = old;
+        c->cap = oldcap;
+        return 0;
+    }
+    for (i = 0; i < oldcap; i++)
+        if (old[i].used)
+            /* mpfr_t is a one-element array: the struct moves whole. */
+            *find(c, old[i].key, old[i].hash) = old[i];
+    free(old);
+    return 1;
+}
+
+int sg_index_cache_glass(sg_index_cache *c, const sg_system *sys, const sg_glass *g,
+                         mpfr_t out, const mpfr_t um)
+{
+    double k[KEY_N], umd;
+    uint64_t h;
+    entry *e;
+    int rc;
+
+    if (!c || !g || !mpfr_number_p(um))
+        return sg_system_glass_index_mpfr(sys, g, out, um);
+    /* The wavelength is a double in every caller; one that is not is not
+     * kept. */
+    umd = mpfr_get_d(um, MPFR_RNDN);
+    if (mpfr_cmp_d(um, umd) != 0)
+        return sg_system_glass_index_mpfr(sys, g, out, um);
+    make_key(k, sys, g, mpfr_get_prec(out), umd);
+    h = key_hash(k);
+    e = find(c, k, h);
+    if (e && e->used) {
+        c->hits++;
+        mpfr_set(out, e->val, MPFR_RNDN);
+        return SG_OK;
+    }
+    c->misses++;
+    rc = sg_system_glass_index_mpfr(sys, g, out, um);
+    /* Failures are not kept: the caller reports them, and they are rare. */
+    if (rc != SG_OK || !make_room(c))
+        return rc;
+    e = find(c, k, h);
+    memcpy(e->key, k, sizeof e->key);
+    e->hash = h;
+    mpfr_init2(e->val, mpfr_get_prec(out));
+    mpfr_set(e->val, out, MPFR_RNDN);
+    e->used = 1;
+    c->n++;
+    return rc;
+}

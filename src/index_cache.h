@@ -1,0 +1,21 @@
+/* index_cache.h - the engine's side of sg_index_cache (see sagitta.h). */
+#ifndef SG_INDEX_CACHE_H
+#define SG_INDEX_CACHE_H
+
+#include <mpfr.h>
+
+#include "internal.h"
+#include "sagitta.h"
+
+/* sg_system_glass_index_mpfr(sys, g, out, um), from the cache when it
+ * holds the same inputs (every number of g, um's value, the system's
+ * environment, out's precision), computed and kept otherwise.  The value
+ * is the one a fresh computation gives, bit for bit.  cache may be NULL. */
+int sg_index_cache_glass(sg_index_cache *cache, const sg_system *sys, const sg_glass *g,
+                         mpfr_t out, const mpfr_t um);
+
+/* sg_indices_mpfr (trace_internal.h) with its glass indices from cache. */
+int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave,
+                           mpfr_t *idx, sg_index_cache *cache, sg_diag *d);
+
+#endif

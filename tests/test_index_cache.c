@@ -1,0 +1,235 @@
+/* test_index_cache.c - a tracer or paraxial computation given an
+ * sg_index_cache gives the bits a fresh one gives (the independent
+ * source: the same computation without the cache).  Random edits of
+ * radius, thickness, glass, model glass, wavelength, temperature,
+ * pressure and the adjust setting on the bundled designs; after each,
+ * tracers of every method at several wavelengths are made with the cache
+ * the earlier edits filled and without it, and their rows, indices and
+ * paraxial data compared bit for bit; and a tracer's paraxial data at the
+ * primary wavelength, which the editor uses, with sg_paraxial_compute's. */
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "testutil.h"
+
+static uint64_t rng = UINT64_C(0x2545f4914f6cdd1d);
+
+static uint64_t next(void)
+{
+    rng ^= rng >> 12;
+    rng ^= rng << 25;
+    rng ^= rng >> 27;
+    return rng * UINT64_C(2685821657736338717);
+}
+
+static double uniform(void)
+{
+    return (double)(next() >> 11) * 0x1p-53;
+}
+
+static const char *const glasses[] = { "N-BK7", "N-SF5", "N-LAK9", "F2", "N-SK16", "N-SF6" };
+
+/* One random edit that keeps the design traceable most of the time. */
+static void edit(sg_system *sys)
+{
+    int i = 1 + (int)(next() % (uint64_t)(sys->nsurf - 2));
+    sg_surface *s = &sys->surf[i];
+    switch (next() % 8) {
+    case 0:
+        if (isfinite(s->radius) && s->radius != 0.0)
+            s->radius *= 1.0 + 0.01 * (uniform() - 0.5);
+        break;
+    case 1:
+        s->thickness *= 1.0 + 0.01 * (uniform() - 0.5);
+        break;
+    case 2:
+        if (s->mat.kind == SG_MAT_GLASS)
+            snprintf(s->mat.name, sizeof s->mat.name, "%s",
+                     glasses[next() % (sizeof glasses / sizeof glasses[0])]);
+        break;
+    case 3:
+        if (s->mat.kind == SG_MAT_GLASS || s->mat.kind == SG_MAT_MODEL) {
+            s->mat.kind = SG_MAT_MODEL;
+            s->mat.index = 1.5 + 0.2 * uniform();
+            s->mat.vd = 40.0 + 20.0 * uniform();
+            s->mat.dpgf = 0.0;
+        }
+        break;
+    case 4:
+        sys->wave[next() % (uint64_t)sys->nwave].um *= 1.0 + 0.02 * (uniform() - 0.5);
+        break;
+    case 5:
+        sys->temperature = 20.0 + 30.0 * (uniform() - 0.5);
+        break;
+    case 6:
+        sys->pressure = 1.0 + 0.2 * (uniform() - 0.5);
+        break;
+    default:
+        sys->adjust_index = !sys->adjust_index;
+        break;
+    }
+}
+
+static const double rays[][4] = {
+    { 0, 0, 0, 0 }, { 0, 1, 0, 1 }, { 0, 0.7, 0.3, -0.5 }, { 0, -0.4, -0.8, 0.1 },
+};
+
+/* Fresh and cached tracers of sys agree; returns how many were compared. */
+static int compare(const sg_system *sys, const sg_catalog *cat, sg_index_cache *ic)
+{
+    static const sg_method methods[] = { SG_METHOD_PRECISE, SG_METHOD_CLASSIC, SG_METHOD_MPFR };
+    sg_ray_surface a[64], b[64];
+    int m, w, r, i, n = 0;
+    for (m = 0; m < 3; m++) {
+        for (w = 0; w < sys->nwave; w++) {
+            sg_trace_opts o;
+            sg_tracer *tf, *tc;
+            sg_diag df, dc;
+            sg_trace_opts_init(&o);
+            o.method = methods[m];
+            o.wave = w;
+            sg_diag_clear(&df);
+            sg_diag_clear(&dc);
+            tf = sg_tracer_new(sys, cat, &o, &df);
+            tc = sg_tracer_new_cached(sys, cat, &o, ic, &dc);
+            /* The same success or failure, with the same message. */
+            assert_int_equal(tf != NULL, tc != NULL);
+            assert_int_equal(df.code, dc.code);
+            assert_string_equal(df.msg, dc.msg);
+            if (!tf)
+                continue;
+            assert_int_equal(sg_tracer_nsurf(tf), sg_tracer_nsurf(tc));
+            assert_true(sg_tracer_nsurf(tf) <= 64);
+            for (i = 0; i < sg_tracer_nsurf(tf); i++) {
+                double x = sg_tracer_index(tf, i), y = sg_tracer_index(tc, i);
+                assert_memory_equal(&x, &y, sizeof x);
+            }
+            assert_memory_equal(sg_tracer_paraxial(tf), sg_tracer_paraxial(tc),
+                                sizeof(sg_paraxial));
+            /* The editor takes the primary wavelength's paraxial data from
+             * its tracer: they are sg_paraxial_compute's. */
+            if (w == sys->primary_wave) {
+                sg_paraxial p;
+                memset(&p, 0, sizeof p);
+                assert_int_equal(sg_paraxial_compute(sys, cat, w, &p, &df), SG_OK);
+                assert_memory_equal(&p, sg_tracer_paraxial(tf), sizeof p);
+            }
+            for (r = 0; r < (int)(sizeof rays / sizeof rays[0]); r++) {
+                int ra = sg_trace_normalized(tf, rays[r][0], rays[r][1], rays[r][2],
+                                             rays[r][3], a);
+                int rb = sg_trace_normalized(tc, rays[r][0], rays[r][1], rays[r][2],
+                                             rays[r][3], b);
+                assert_int_equal(ra, rb);
+                for (i = 0; i < sg_tracer_nsurf(tf); i++)
+                    assert_true(tu_same_row(&a[i], &b[i]));
+            }
+            sg_tracer_free(tf);
+            sg_tracer_free(tc);
+            n++;
+        }
+    }
+    for (w = 0; w < sys->nwave; w++) {
+        sg_paraxial pf, pc;
+        sg_diag df, dc;
+        int rf, rcc;
+        memset(&pf, 0, sizeof pf);
+        memset(&pc, 0, sizeof pc);
+        sg_diag_clear(&df);
+        sg_diag_clear(&dc);
+        rf = sg_paraxial_compute(sys, cat, w, &pf, &df);
+        rcc = sg_paraxial_compute_cached(sys, cat, w, ic, &pc, &dc);
+        assert_int_equal(rf, rcc);
+        assert_memory_equal(&pf, &pc, sizeof pf);
+    }
+    return n;
+}
+
+static void run_design(const char *file, int nedit)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = tu_example(file);
+    sg_index_cache *ic = sg_index_cache_new();
+    unsigned long hits, misses;
+    int k, n = 0;
+    assert_non_null(ic);
+    n += compare(sys, cat, ic);
+    for (k = 0; k < nedit; k++) {
+        edit(sys);
+        n += compare(sys, cat, ic);
+    }
+    sg_index_cache_stats(ic, &hits, &misses);
+    print_message("# %s: %d edits, %d tracer pairs, %lu indices from the cache, %lu computed\n",
+                  file, nedit, n, hits, misses);
+    /* The cache was used, or the comparison proved nothing. */
+    assert_true(hits > misses);
+    sg_index_cache_free(ic);
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
+static void test_cooke(void **state)
+{
+    (void)state;
+    run_design("cooke_triplet.json", 40);
+}
+
+static void test_double_gauss(void **state)
+{
+    (void)state;
+    run_design("double_gauss.json", 30);
+}
+
+static void test_singlet(void **state)
+{
+    (void)state;
+    run_design("singlet.json", 40);
+}
+
+/* The cache's own bound: past its limit it starts again, and still gives
+ * fresh bits. */
+static void test_many_wavelengths(void **state)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = tu_example("cooke_triplet.json");
+    sg_index_cache *ic = sg_index_cache_new();
+    int k;
+    (void)state;
+    for (k = 0; k < 2500; k++) {
+        sg_trace_opts o;
+        sg_tracer *tf, *tc;
+        sg_diag d;
+        sys->wave[0].um = 0.45 + 0.2 * uniform();
+        sg_trace_opts_init(&o);
+        o.wave = 0;
+        sg_diag_clear(&d);
+        tf = sg_tracer_new(sys, cat, &o, &d);
+        tc = sg_tracer_new_cached(sys, cat, &o, ic, &d);
+        assert_non_null(tf);
+        assert_non_null(tc);
+        {
+            int i;
+            for (i = 0; i < sg_tracer_nsurf(tf); i++) {
+                double x = sg_tracer_index(tf, i), y = sg_tracer_index(tc, i);
+                assert_memory_equal(&x, &y, sizeof x);
+            }
+        }
+        sg_tracer_free(tf);
+        sg_tracer_free(tc);
+    }
+    sg_index_cache_free(ic);
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_cooke),
+        cmocka_unit_test(test_double_gauss),
+        cmocka_unit_test(test_singlet),
+        cmocka_unit_test(test_many_wavelengths),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
