@@ -527,10 +527,11 @@ char *sg_design_to_json(const sg_system *sys);
  * one when the name ends in .zmx.  The functions below do the same with a
  * catalog of the caller's: the reader checks each glass in it (NULL: the
  * default catalog) and names the nearest by nd and vd for one it lacks.
- * What the model cannot hold (coordinate breaks, tilts, toroids,
- * obscurations, vignetting factors...) is refused with SG_EUNSUPPORTED and
- * a message "FILE:LINE: surface N: KEYWORD: ..."; solves and pickups are
- * kept at their stored values, with a warning.  See sagitta-design(5). */
+ * What the model cannot hold (a tilt after a surface, surface types
+ * beyond sagitta-design(5)'s, several configurations...) is refused with
+ * SG_EUNSUPPORTED and a message "FILE:LINE: surface N: KEYWORD: ...";
+ * solves and pickups are kept at their stored values, with a warning.
+ * See sagitta-design(5), ZEMAX FILES. */
 int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name,
                  const sg_catalog *cat, sg_diag *d);
 int sg_zmx_load(sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
