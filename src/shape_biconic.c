@@ -67,6 +67,22 @@ static int bic_dd(const sg_shape *s, dd x, dd y, dd *z, dd g[2], double *ez, dou
     return 1;
 }
 
+/* One section's slope, (2 c u D + N k1 c (c u) / S) / D^2, with cu = c u
+ * and k1 = 1 + its conic; t[8] and t[11] are scratch. */
+static void slope_mp(mpfr_ptr g, mpfr_srcptr k1, mpfr_srcptr c, mpfr_srcptr cu, mpfr_srcptr N,
+                     mpfr_srcptr S, mpfr_srcptr D, mpfr_t *t)
+{
+    mpfr_mul(t[8], k1, c, MPFR_RNDN);
+    mpfr_mul(t[8], t[8], cu, MPFR_RNDN);
+    mpfr_mul(t[8], t[8], N, MPFR_RNDN);
+    mpfr_div(t[8], t[8], S, MPFR_RNDN);
+    mpfr_mul(t[11], cu, D, MPFR_RNDN);
+    mpfr_mul_2ui(t[11], t[11], 1, MPFR_RNDN);
+    mpfr_add(g, t[11], t[8], MPFR_RNDN);
+    mpfr_div(g, g, D, MPFR_RNDN);
+    mpfr_div(g, g, D, MPFR_RNDN);
+}
+
 static int bic_mp(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, mpfr_ptr z,
                   mpfr_ptr gx, mpfr_ptr gy, mpfr_t *t)
 {
@@ -105,25 +121,8 @@ static int bic_mp(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, m
     mpfr_sqrt(S, Q, MPFR_RNDN);
     mpfr_add_ui(D, S, 1, MPFR_RNDN);
     mpfr_div(z, N, D, MPFR_RNDN);
-    /* dz/dx = (2 cx x D + N kx1 cx (cx x) / S) / D^2 */
-    mpfr_mul(t[8], t[9], cx, MPFR_RNDN);
-    mpfr_mul(t[8], t[8], t[6], MPFR_RNDN);
-    mpfr_mul(t[8], t[8], N, MPFR_RNDN);
-    mpfr_div(t[8], t[8], S, MPFR_RNDN);
-    mpfr_mul(t[11], t[6], D, MPFR_RNDN);
-    mpfr_mul_2ui(t[11], t[11], 1, MPFR_RNDN);
-    mpfr_add(gx, t[11], t[8], MPFR_RNDN);
-    mpfr_div(gx, gx, D, MPFR_RNDN);
-    mpfr_div(gx, gx, D, MPFR_RNDN);
-    mpfr_mul(t[8], t[10], cy, MPFR_RNDN);
-    mpfr_mul(t[8], t[8], t[7], MPFR_RNDN);
-    mpfr_mul(t[8], t[8], N, MPFR_RNDN);
-    mpfr_div(t[8], t[8], S, MPFR_RNDN);
-    mpfr_mul(t[11], t[7], D, MPFR_RNDN);
-    mpfr_mul_2ui(t[11], t[11], 1, MPFR_RNDN);
-    mpfr_add(gy, t[11], t[8], MPFR_RNDN);
-    mpfr_div(gy, gy, D, MPFR_RNDN);
-    mpfr_div(gy, gy, D, MPFR_RNDN);
+    slope_mp(gx, t[9], cx, t[6], N, S, D, t);
+    slope_mp(gy, t[10], cy, t[7], N, S, D, t);
     return 1;
 }
 

@@ -460,6 +460,7 @@ int sg_mpfr_rescue_root(sg_mpfr_ctx *m, const sg_sprep *sp, dd3 P, dd3 D, int ma
                         dd *step)
 {
     msurf *s = &m->s[0];
+    mpfr_t mc[SG_SHAPE_MPC];
     int k, rc;
     m->nrescue++;
     /* Every input is a double or a double-double: exact at 320 bits. */
@@ -468,24 +469,9 @@ int sg_mpfr_rescue_root(sg_mpfr_ctx *m, const sg_sprep *sp, dd3 P, dd3 D, int ma
     for (k = 0; k < SG_NASPH; k++)
         mpfr_set_d(s->a[k], sp->a[k], MPFR_RNDN);
     /* A shape of its own brings its coefficients at this precision. */
-    if (sp->shp) {
-        mpfr_t mc[SG_SHAPE_MPC];
+    if (sp->shp)
         sg_shape_mp_coefs(sp->shp, mc, m->prec);
-        s->mc = mc;
-        mpfr_set_dd(m->P.x, P.x);
-        mpfr_set_dd(m->P.y, P.y);
-        mpfr_set_dd(m->P.z, P.z);
-        mpfr_set_dd(m->D.x, D.x);
-        mpfr_set_dd(m->D.y, D.y);
-        mpfr_set_dd(m->D.z, D.z);
-        mpfr_set_zero(m->path, 1);
-        rc = onto_surface(m, sp, s, max_iter);
-        if (rc == SG_OK)
-            *step = dd_from_mpfr(m->path, m->t[0]);
-        s->mc = NULL;
-        sg_shape_mp_clear(mc);
-        return rc;
-    }
+    s->mc = sp->shp ? mc : NULL;
     mpfr_set_dd(m->P.x, P.x);
     mpfr_set_dd(m->P.y, P.y);
     mpfr_set_dd(m->P.z, P.z);
@@ -496,6 +482,10 @@ int sg_mpfr_rescue_root(sg_mpfr_ctx *m, const sg_sprep *sp, dd3 P, dd3 D, int ma
     rc = onto_surface(m, sp, s, max_iter);
     if (rc == SG_OK)
         *step = dd_from_mpfr(m->path, m->t[0]);
+    if (sp->shp) {
+        s->mc = NULL;
+        sg_shape_mp_clear(mc);
+    }
     return rc;
 }
 
