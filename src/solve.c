@@ -5,6 +5,7 @@
  * The marginal-ray solves follow the y-nu trace of paraxial.c in 128-bit
  * MPFR, so a solved value is rounded once when it is stored.
  */
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -99,15 +100,30 @@ static double *target_ptr(sg_surface *s, sg_solve_target t)
     }
 }
 
+/* How a stored value moved: not at all, by a few units in the last place
+ * (rounding of a pupil computed from values still settling), or more. */
+#define MOVED_LITTLE 1
+#define MOVED_MORE 3
+#define SETTLE_ULPS 4.0
+
+static int moved(double v, double old)
+{
+    if (memcmp(&v, &old, sizeof v) == 0)
+        return 0;
+    if (isfinite(v) && isfinite(old) && fabs(v - old) <= SETTLE_ULPS * DBL_EPSILON * fabs(v))
+        return MOVED_LITTLE;
+    return MOVED_MORE;
+}
+
 /* Stores x rounded once; a radius of 0 or beyond the limits is flat, as
- * the reader reads it.  Returns whether the stored bits changed. */
+ * the reader reads it.  Returns how the stored value moved. */
 static int store(double *p, const mpfr_t x, sg_solve_target t)
 {
     double v = mpfr_get_d(x, MPFR_RNDN), old = *p;
     if (t == SG_SOLVE_RADIUS && (v == 0.0 || !(fabs(v) <= SG_MAX_LEN)))
         v = INFINITY;
     *p = v;
-    return memcmp(&v, &old, sizeof v) != 0;
+    return moved(v, old);
 }
 
 /* The pickup: scale * source + offset; an infinite radius stays infinite
@@ -131,7 +147,7 @@ static int pickup(sg_system *sys, int i, sg_solve_target t, mpfr_t a, int *chang
     }
     if (!mpfr_number_p(a)) {
         double x = mpfr_get_d(a, MPFR_RNDN);
-        *changed |= memcmp(dst, &x, sizeof x) != 0;
+        *changed |= moved(x, *dst);
         *dst = x;
         return SG_OK;
     }
@@ -171,7 +187,7 @@ static int marginal_launch(const sg_system *sys, mpfr_t *idx, mpfr_t y, mpfr_t w
     return rc;
 }
 
-/* One pass over the surfaces; *changed is set when a stored value moved. */
+/* One pass over the surfaces; *changed collects how stored values moved. */
 static int pass(sg_system *sys, mpfr_t *idx, int need_ray, int *changed, sg_diag *d)
 {
     mpfr_t y, w, a, b;
@@ -267,7 +283,7 @@ out:
 int sg_system_apply_solves(sg_system *sys, const sg_catalog *cat, sg_diag *d)
 {
     mpfr_t *idx;
-    int i, t, rc = SG_OK, need_ray = 0, npass, changed = 1;
+    int i, t, rc = SG_OK, need_ray = 0, npass, changed = MOVED_MORE;
     if (!sg_system_has_solves(sys))
         return SG_OK;
     for (i = 0; i < sys->nsurf; i++)
@@ -286,15 +302,15 @@ int sg_system_apply_solves(sg_system *sys, const sg_catalog *cat, sg_diag *d)
         mpfr_init2(idx[i], SOLVE_PREC);
     rc = sg_indices_mpfr(sys, cat, sys->primary_wave, idx, d);
     /* Pickups alone settle in one pass; the marginal ray's launch depends
-     * on values solved after it, so those passes repeat until nothing
-     * moves. */
-    for (npass = 0; rc == SG_OK && changed && npass < SOLVE_MAX_PASSES; npass++) {
+     * on values solved after it, so those passes repeat until no value
+     * moves by more than a few units in the last place. */
+    for (npass = 0; rc == SG_OK && (changed & 2) && npass < SOLVE_MAX_PASSES; npass++) {
         changed = 0;
         rc = pass(sys, idx, need_ray, &changed, d);
         if (!need_ray)
             changed = 0;
     }
-    if (rc == SG_OK && changed)
+    if (rc == SG_OK && (changed & 2))
         rc = sg_diag_set(d, SG_ENONPHYS, "solves: the solved values do not settle after %d "
                          "passes", SOLVE_MAX_PASSES);
     for (i = 0; i < sys->nsurf; i++)

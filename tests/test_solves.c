@@ -222,6 +222,23 @@ static void test_fnum_and_angle(void **state)
     }
 }
 
+/* A solve before the stop moves the entrance pupil, so the solves repeat:
+ * the object 100 before surface 1, the stop on surface 2; an angle solve
+ * of 0 on surface 1 (index 1 to 1.5) collimates the axial cone, which puts
+ * the object at the surface's front focus: 0.5 / R1 = 1 / 100, R1 = 50,
+ * whatever the pupil. */
+static void test_pupil_iteration(void **state)
+{
+    sg_system *sys = singlet("100", 20, -80, 5,
+                             ", \"solves\": {\"radius\": {\"type\": \"marginal_angle\", "
+                             "\"value\": 0}}", "");
+    (void)state;
+    sys->stop = 2;
+    apply(sys);
+    near(sys->surf[1].radius, 50.0);
+    sg_system_free(sys);
+}
+
 static void test_pickups(void **state)
 {
     sg_system *sys = singlet("\"inf\"", 40, 100, 5, ", \"conic\": -0.75",
@@ -490,6 +507,7 @@ int main(void)
         cmocka_unit_test(test_marginal_height_focus),
         cmocka_unit_test(test_marginal_height_value),
         cmocka_unit_test(test_fnum_and_angle),
+        cmocka_unit_test(test_pupil_iteration),
         cmocka_unit_test(test_pickups),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_json_kinds),
