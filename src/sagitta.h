@@ -296,6 +296,9 @@ typedef enum sg_solve_kind {
     /* radius: the marginal ray leaves with slope -1 / (2 value), value
      * the F/#; Zemax's F number solve */
     SG_SOLVE_FNUM = 4,
+    /* thickness: the paraxial chief ray of the largest field meets the next
+     * surface at height `value`; Zemax's chief ray height */
+    SG_SOLVE_CHIEF_HEIGHT = 5,
     SG_SOLVE_NKINDS
 } sg_solve_kind;
 
@@ -538,8 +541,8 @@ double sg_surface_sag(const sg_surface *s, double x, double y);
 /* Whether a frame change moves or turns anything. */
 int sg_frame_change_is_zero(const sg_frame_change *c);
 /* Solves.  Names are the JSON and editor words ("pickup", "marginal_height",
- * "marginal_angle", "fnum"; "radius", "thickness", "conic"); NULL when out
- * of range. */
+ * "marginal_angle", "fnum", "chief_height"; "radius", "thickness",
+ * "conic"); NULL when out of range. */
 const char *sg_solve_kind_name(sg_solve_kind k);
 const char *sg_solve_target_name(sg_solve_target t);
 /* Whether kind may sit on target. */

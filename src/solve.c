@@ -13,7 +13,7 @@
 #include "trace_internal.h"
 
 static const char *const kind_names[SG_SOLVE_NKINDS] = {
-    "none", "pickup", "marginal_height", "marginal_angle", "fnum"};
+    "none", "pickup", "marginal_height", "marginal_angle", "fnum", "chief_height"};
 static const char *const target_names[SG_SOLVE_NTARGETS] = {"radius", "thickness", "conic"};
 
 /* Bit k: kind k may sit on the target. */
@@ -21,7 +21,7 @@ static const unsigned allowed[SG_SOLVE_NTARGETS] = {
     [SG_SOLVE_RADIUS] = 1u << SG_SOLVE_NONE | 1u << SG_SOLVE_PICKUP |
                         1u << SG_SOLVE_MARGINAL_ANGLE | 1u << SG_SOLVE_FNUM,
     [SG_SOLVE_THICKNESS] = 1u << SG_SOLVE_NONE | 1u << SG_SOLVE_PICKUP |
-                           1u << SG_SOLVE_MARGINAL_HEIGHT,
+                           1u << SG_SOLVE_MARGINAL_HEIGHT | 1u << SG_SOLVE_CHIEF_HEIGHT,
     [SG_SOLVE_CONIC] = 1u << SG_SOLVE_NONE | 1u << SG_SOLVE_PICKUP,
 };
 
@@ -156,8 +156,11 @@ static int pickup(sg_system *sys, int i, sg_solve_target t, mpfr_t a, int *chang
 }
 
 /* The paraxial marginal ray at surface 1, before it refracts: height y and
- * reduced slope w = n u, from the current system's entrance pupil. */
-static int marginal_launch(const sg_system *sys, mpfr_t *idx, mpfr_t y, mpfr_t w, sg_diag *d)
+ * reduced slope w = n u, from the current system's entrance pupil; and the
+ * chief ray of the largest field (cy, cw), as paraxial.c launches it per
+ * unit field and scales it to the paraxial image height it gives. */
+static int marginal_launch(const sg_system *sys, mpfr_t *idx, mpfr_t y, mpfr_t w, mpfr_t cy,
+                           mpfr_t cw, sg_diag *d)
 {
     sg_parax_mp p;
     mpfr_t u0, t;
@@ -167,6 +170,28 @@ static int marginal_launch(const sg_system *sys, mpfr_t *idx, mpfr_t y, mpfr_t w
     mpfr_inits2(SOLVE_PREC, u0, t, (mpfr_ptr)0);
     rc = sg_paraxial_mpfr(sys, idx, SOLVE_PREC, &p, d);
     if (rc == SG_OK) {
+        if (sys->telecentric && !inf_obj) {
+            mpfr_set_ui(cy, 1, MPFR_RNDN);
+            mpfr_set_zero(cw, 1);
+        } else if (inf_obj) {
+            mpfr_neg(cy, p.enp, MPFR_RNDN);
+            mpfr_set(cw, idx[0], MPFR_RNDN);
+        } else {
+            mpfr_add_d(t, p.enp, T0, MPFR_RNDN);
+            mpfr_si_div(t, -1, t, MPFR_RNDN);
+            mpfr_mul_d(cy, t, T0, MPFR_RNDN);
+            mpfr_add_ui(cy, cy, 1, MPFR_RNDN);
+            mpfr_mul(cw, t, idx[0], MPFR_RNDN);
+        }
+        /* The field scale: image height over image height per unit. */
+        if (mpfr_zero_p(p.pimg_slope)) {
+            mpfr_set_zero(cy, 1);
+            mpfr_set_zero(cw, 1);
+        } else {
+            mpfr_div(t, p.pimg_h, p.pimg_slope, MPFR_RNDN);
+            mpfr_mul(cy, cy, t, MPFR_RNDN);
+            mpfr_mul(cw, cw, t, MPFR_RNDN);
+        }
         if (sys->telecentric && !inf_obj) {
             rc = sg_object_slope_mpfr(sys, idx[0], u0, d);
         } else if (inf_obj) {
@@ -190,10 +215,10 @@ static int marginal_launch(const sg_system *sys, mpfr_t *idx, mpfr_t y, mpfr_t w
 /* One pass over the surfaces; *changed collects how stored values moved. */
 static int pass(sg_system *sys, mpfr_t *idx, int need_ray, int *changed, sg_diag *d)
 {
-    mpfr_t y, w, a, b;
+    mpfr_t y, w, cy, cw, a, b;
     int i, t, rc = SG_OK, n = sys->nsurf;
-    mpfr_inits2(SOLVE_PREC, y, w, a, b, (mpfr_ptr)0);
-    if (need_ray && (rc = marginal_launch(sys, idx, y, w, d)) != SG_OK)
+    mpfr_inits2(SOLVE_PREC, y, w, cy, cw, a, b, (mpfr_ptr)0);
+    if (need_ray && (rc = marginal_launch(sys, idx, y, w, cy, cw, d)) != SG_OK)
         goto out;
     for (i = 1; i < n; i++) {
         sg_surface *s = &sys->surf[i];
@@ -238,6 +263,8 @@ static int pass(sg_system *sys, mpfr_t *idx, int need_ray, int *changed, sg_diag
         if (need_ray && s->type != SG_SURF_COORDBRK && isfinite(s->radius) && s->radius != 0.0) {
             mpfr_sub(a, idx[i], idx[i - 1], MPFR_RNDN);
             mpfr_div_d(a, a, s->radius, MPFR_RNDN);
+            mpfr_mul(b, a, cy, MPFR_RNDN);
+            mpfr_sub(cw, cw, b, MPFR_RNDN);
             mpfr_mul(a, a, y, MPFR_RNDN);
             mpfr_sub(w, w, a, MPFR_RNDN);
         }
@@ -249,22 +276,25 @@ static int pass(sg_system *sys, mpfr_t *idx, int need_ray, int *changed, sg_diag
                                  s->solve[SG_SOLVE_THICKNESS].from);
                 goto out;
             }
-        } else if (s->solve[SG_SOLVE_THICKNESS].kind == SG_SOLVE_MARGINAL_HEIGHT) {
+        } else if (s->solve[SG_SOLVE_THICKNESS].kind == SG_SOLVE_MARGINAL_HEIGHT ||
+                   s->solve[SG_SOLVE_THICKNESS].kind == SG_SOLVE_CHIEF_HEIGHT) {
             /* y + t w / n' = h, so t = (h - y) n' / w. */
-            if (mpfr_zero_p(w)) {
-                rc = sg_diag_set(d, SG_ENONPHYS, "surface %d: thickness: the marginal_height "
-                                 "solve has no solution: the paraxial marginal ray leaves the "
-                                 "surface parallel to the axis", i);
+            int chief = s->solve[SG_SOLVE_THICKNESS].kind == SG_SOLVE_CHIEF_HEIGHT;
+            if (mpfr_zero_p(chief ? cw : w)) {
+                rc = sg_diag_set(d, SG_ENONPHYS, "surface %d: thickness: the %s solve has no "
+                                 "solution: the paraxial %s ray leaves the surface parallel to "
+                                 "the axis", i, chief ? "chief_height" : "marginal_height",
+                                 chief ? "chief" : "marginal");
                 goto out;
             }
             mpfr_set_d(a, s->solve[SG_SOLVE_THICKNESS].value, MPFR_RNDN);
-            mpfr_sub(a, a, y, MPFR_RNDN);
+            mpfr_sub(a, a, chief ? cy : y, MPFR_RNDN);
             mpfr_mul(a, a, idx[i], MPFR_RNDN);
-            mpfr_div(a, a, w, MPFR_RNDN);
+            mpfr_div(a, a, chief ? cw : w, MPFR_RNDN);
             if (!(fabs(mpfr_get_d(a, MPFR_RNDN)) <= SG_MAX_LEN)) {
-                rc = sg_diag_set(d, SG_ENONPHYS, "surface %d: thickness: the marginal_height "
-                                 "solve gives %g, beyond %g lens units", i, mpfr_get_d(a, MPFR_RNDN),
-                                 SG_MAX_LEN);
+                rc = sg_diag_set(d, SG_ENONPHYS, "surface %d: thickness: the %s solve gives "
+                                 "%g, beyond %g lens units", i, chief ? "chief_height" :
+                                 "marginal_height", mpfr_get_d(a, MPFR_RNDN), SG_MAX_LEN);
                 goto out;
             }
             *changed |= store(&s->thickness, a, SG_SOLVE_THICKNESS);
@@ -273,10 +303,13 @@ static int pass(sg_system *sys, mpfr_t *idx, int need_ray, int *changed, sg_diag
             mpfr_mul_d(a, w, s->thickness, MPFR_RNDN);
             mpfr_div(a, a, idx[i], MPFR_RNDN);
             mpfr_add(y, y, a, MPFR_RNDN);
+            mpfr_mul_d(a, cw, s->thickness, MPFR_RNDN);
+            mpfr_div(a, a, idx[i], MPFR_RNDN);
+            mpfr_add(cy, cy, a, MPFR_RNDN);
         }
     }
 out:
-    mpfr_clears(y, w, a, b, (mpfr_ptr)0);
+    mpfr_clears(y, w, cy, cw, a, b, (mpfr_ptr)0);
     return rc;
 }
 

@@ -239,6 +239,48 @@ static void test_pupil_iteration(void **state)
     sg_system_free(sys);
 }
 
+static void expect_error(sg_system *sys, int code, const char *text)
+{
+    sg_diag d;
+    int rc;
+    sg_diag_clear(&d);
+    rc = sg_system_validate(sys, NULL, &d);
+    if (rc == SG_OK)
+        rc = sg_system_apply_solves(sys, NULL, &d);
+    assert_int_equal(rc, code);
+    if (!strstr(d.msg, text))
+        fail_msg("'%s' does not say '%s'", d.msg, text);
+}
+
+/* The chief_height solve with the stop on surface 1 and a field of 10
+ * degrees: height 0 puts the next surface on the exit pupil, the image of
+ * surface 1 by surface 2 (vergence: 1 / l' = -n / T + (1 - n) / R2); a
+ * height h, by the chief ray's y-nu steps in long double: y2 = T tan / n,
+ * w2 = tan - y2 (1 - n) / R2, t = (h - y2) / w2. */
+static void test_chief_height(void **state)
+{
+    const double R1 = 50, R2 = -50, T = 5;
+    long double tn = tanl(10.0L * 3.14159265358979323846264338327950288L / 180.0L);
+    long double y2 = T * tn / 1.5L, w2 = tn - y2 * (1.0L - 1.5L) / R2;
+    sg_system *sys = singlet("\"inf\"", R1, R2, T, "",
+                             ", \"solves\": {\"thickness\": {\"type\": \"chief_height\", "
+                             "\"value\": 0}}");
+    double want = (double)(1.0L / (-1.5L / T + (1.0L - 1.5L) / R2));
+    (void)state;
+    sys->field[0].y = 10.0;
+    apply(sys);
+    assert_true(fabs(sys->surf[2].thickness - want) < 1e-15 * fabs(want));
+    sys->surf[2].solve[SG_SOLVE_THICKNESS].value = 2.5;
+    apply(sys);
+    want = (double)((2.5L - y2) / w2);
+    assert_true(fabs(sys->surf[2].thickness - want) < 1e-15 * fabs(want));
+    /* No field: the chief ray runs along the axis, no solution. */
+    sys->field[0].y = 0.0;
+    expect_error(sys, SG_ENONPHYS, "surface 2: thickness: the chief_height solve has no "
+                 "solution");
+    sg_system_free(sys);
+}
+
 static void test_pickups(void **state)
 {
     sg_system *sys = singlet("\"inf\"", 40, 100, 5, ", \"conic\": -0.75",
@@ -261,18 +303,6 @@ static void test_pickups(void **state)
     sg_system_free(sys);
 }
 
-static void expect_error(sg_system *sys, int code, const char *text)
-{
-    sg_diag d;
-    int rc;
-    sg_diag_clear(&d);
-    rc = sg_system_validate(sys, NULL, &d);
-    if (rc == SG_OK)
-        rc = sg_system_apply_solves(sys, NULL, &d);
-    assert_int_equal(rc, code);
-    if (!strstr(d.msg, text))
-        fail_msg("'%s' does not say '%s'", d.msg, text);
-}
 
 static void test_errors(void **state)
 {
@@ -508,6 +538,7 @@ int main(void)
         cmocka_unit_test(test_marginal_height_value),
         cmocka_unit_test(test_fnum_and_angle),
         cmocka_unit_test(test_pupil_iteration),
+        cmocka_unit_test(test_chief_height),
         cmocka_unit_test(test_pickups),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_json_kinds),

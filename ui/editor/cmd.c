@@ -380,7 +380,7 @@ static int c_stop(ed *e, args *a)
 static int c_solve(ed *e, args *a)
 {
     static const char usage[] = "solve SURFACE radius|thickness|conic none|pickup FROM [SCALE "
-                                "[OFFSET]]|marginal_height H|marginal_angle U|fnum F";
+                                "[OFFSET]]|marginal_height H|chief_height H|marginal_angle U|fnum F";
     sg_solve v;
     sg_diag d;
     int row, t, k, rc;
@@ -398,8 +398,8 @@ static int c_solve(ed *e, args *a)
         if (strcasecmp(a->v[3], sg_solve_kind_name((sg_solve_kind)k)) == 0)
             break;
     if (k == SG_SOLVE_NKINDS)
-        return fail(e, "solve: '%s' is not none, pickup, marginal_height, marginal_angle or "
-                    "fnum", a->v[3]);
+        return fail(e, "solve: '%s' is not none, pickup, marginal_height, chief_height, "
+                    "marginal_angle or fnum", a->v[3]);
     if (!sg_solve_allowed((sg_solve_target)t, (sg_solve_kind)k))
         return fail(e, "solve: a %s solve cannot sit on the %s", a->v[3], a->v[2]);
     memset(&v, 0, sizeof v);
@@ -2224,8 +2224,8 @@ static const command commands[] = {
     {"stop", NULL, c_stop, "stop [SURFACE]", "make a surface the aperture stop"},
     {"solve", NULL, c_solve,
      "solve SURFACE radius|thickness|conic TYPE [ARGS]",
-     "set a solve: none, pickup FROM [SCALE [OFFSET]], marginal_height H (thickness), "
-     "marginal_angle U or fnum F (radius)"},
+     "set a solve: none, pickup FROM [SCALE [OFFSET]], marginal_height H or chief_height H "
+     "(thickness), marginal_angle U or fnum F (radius)"},
     {"undo", "u", c_undo, "undo [N]", "undo the last change(s)"},
     {"redo", NULL, c_redo, "redo [N]", "redo undone change(s)"},
     {"open", "e", c_open0, "open FILE", "open a design (open! discards changes)"},
