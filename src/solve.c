@@ -269,8 +269,8 @@ static int pass(sg_system *sys, mpfr_t *idx, int need_ray, int *changed, sg_diag
             mpfr_sub(w, w, a, MPFR_RNDN);
         }
         if (s->solve[SG_SOLVE_THICKNESS].kind == SG_SOLVE_PICKUP) {
-            (void)pickup(sys, i, SG_SOLVE_THICKNESS, a, changed);
-            if (!isfinite(s->thickness)) {
+            if (pickup(sys, i, SG_SOLVE_THICKNESS, a, changed) != SG_OK ||
+                !isfinite(s->thickness)) {
                 rc = sg_diag_set(d, SG_ENONPHYS, "surface %d: thickness: the pickup from "
                                  "surface %d is not finite", i,
                                  s->solve[SG_SOLVE_THICKNESS].from);

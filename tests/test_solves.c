@@ -321,6 +321,12 @@ static void test_errors(void **state)
     expect_error(sys, SG_ENONPHYS, "surface 2: thickness: the marginal_height solve has no "
                  "solution");
     sg_system_free(sys);
+    /* A thickness picked up from the object at infinity. */
+    sys = singlet("\"inf\"", 40, 100, 5, "",
+                  ", \"solves\": {\"thickness\": {\"type\": \"pickup\", \"from\": 0}}");
+    expect_error(sys, SG_ENONPHYS, "surface 2: thickness: the pickup from surface 0 is not "
+                 "finite");
+    sg_system_free(sys);
     /* An F/# of 0. */
     sys = singlet("\"inf\"", 40, 100, 5, "",
                   ", \"solves\": {\"radius\": {\"type\": \"fnum\", \"value\": 0}}");
