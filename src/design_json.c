@@ -769,9 +769,74 @@ static int get_change(jctx *c, const cJSON *v, const char *where, sg_frame_chang
     return SG_OK;
 }
 
+/* A surface's solves: {"radius": {...}, "thickness": {...}, "conic": {...}},
+ * each {"type": KIND, "from": N, "scale": S, "offset": O} for a pickup or
+ * {"type": KIND, "value": V} for a solve (sagitta-design(5), SOLVES).
+ * Their values are one nested object, not rows of the parameter table;
+ * sg_solve_check checks them with the rest of the design. */
+enum { V_TYPE, V_FROM, V_SCALE, V_OFFSET, V_VALUE, V_N };
+static const char *const solve_keys[V_N] = {"type", "from", "scale", "offset", "value"};
+
+static int get_solves(jctx *c, const cJSON *v, const char *where, sg_surface *s)
+{
+    const char *kinds[SG_SOLVE_NKINDS];
+    const cJSON *t[SG_SOLVE_NTARGETS], *k[V_N];
+    const char *targets[SG_SOLVE_NTARGETS];
+    char at[96], at2[128];
+    int i, rc, e;
+    for (i = 0; i < SG_SOLVE_NKINDS; i++)
+        kinds[i] = sg_solve_kind_name((sg_solve_kind)i);
+    for (i = 0; i < SG_SOLVE_NTARGETS; i++)
+        targets[i] = sg_solve_target_name((sg_solve_target)i);
+    if ((rc = expect_object(c, v, where)) != SG_OK)
+        return rc;
+    pick_keys(c, v, where, targets, SG_SOLVE_NTARGETS, t);
+    for (i = 0; i < SG_SOLVE_NTARGETS; i++) {
+        sg_solve *o = &s->solve[i];
+        if (!t[i])
+            continue;
+        join(at, sizeof at, where, targets[i]);
+        if ((rc = expect_object(c, t[i], at)) != SG_OK)
+            return rc;
+        pick_keys(c, t[i], at, solve_keys, V_N, k);
+        memset(o, 0, sizeof *o);
+        if (!k[V_TYPE])
+            return perr(c, SG_EPARSE, at, "a solve needs a \"type\"");
+        if ((rc = get_enum(c, k[V_TYPE], join(at2, sizeof at2, at, "type"), kinds,
+                           SG_SOLVE_NKINDS, &e)) != SG_OK)
+            return rc;
+        o->kind = (sg_solve_kind)e;
+        if (o->kind == SG_SOLVE_PICKUP) {
+            o->scale = 1.0;
+            if (!k[V_FROM])
+                return perr(c, SG_EPARSE, at, "a pickup needs \"from\", its source surface");
+            if ((rc = get_int(c, k[V_FROM], join(at2, sizeof at2, at, "from"), &o->from)) !=
+                SG_OK)
+                return rc;
+            if (k[V_SCALE] && (rc = get_finite(c, k[V_SCALE], join(at2, sizeof at2, at, "scale"),
+                                               &o->scale)) != SG_OK)
+                return rc;
+            if (k[V_OFFSET] && (rc = get_finite(c, k[V_OFFSET],
+                                                join(at2, sizeof at2, at, "offset"),
+                                                &o->offset)) != SG_OK)
+                return rc;
+        } else if (o->kind != SG_SOLVE_NONE) {
+            if (!k[V_VALUE])
+                return perr(c, SG_EPARSE, at, "a %s solve needs a \"value\"", kinds[e]);
+            if ((rc = get_finite(c, k[V_VALUE], join(at2, sizeof at2, at, "value"),
+                                 &o->value)) != SG_OK)
+                return rc;
+        }
+        if (!sg_solve_allowed((sg_solve_target)i, o->kind))
+            return perr(c, SG_EPARSE, at, "a %s solve cannot sit on the %s", kinds[e],
+                        targets[i]);
+    }
+    return SG_OK;
+}
+
 /* The surface keys outside the parameter table. */
-enum { X_STOP, X_BREAK, X_BEFORE, X_AFTER, X_N };
-static const char *const surf_extra[X_N] = {"stop", "break", "before", "after"};
+enum { X_STOP, X_BREAK, X_BEFORE, X_AFTER, X_SOLVES, X_N };
+static const char *const surf_extra[X_N] = {"stop", "break", "before", "after", "solves"};
 
 static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, int *is_stop)
 {
@@ -816,6 +881,9 @@ static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, in
         else if ((rc = get_change(c, x[X_AFTER], at, &s->after)) != SG_OK)
             return rc;
     }
+    if (x[X_SOLVES] &&
+        (rc = get_solves(c, x[X_SOLVES], join(at, sizeof at, where, "solves"), s)) != SG_OK)
+        return rc;
     stop = x[X_STOP];
     if (stop) {
         if ((rc = get_bool(c, stop, join(at, sizeof at, where, "stop"), is_stop)) != SG_OK)
@@ -1432,6 +1500,36 @@ static void sb_change(sbuf *b, const sg_frame_change *f)
     sb_puts(b, "\"}");
 }
 
+/* A surface's solves as get_solves reads them; nothing without one. */
+static void sb_solves(sbuf *b, const sg_surface *s)
+{
+    int t, n = 0;
+    char buf[32];
+    for (t = 0; t < SG_SOLVE_NTARGETS; t++) {
+        const sg_solve *v = &s->solve[t];
+        if (v->kind == SG_SOLVE_NONE)
+            continue;
+        sb_puts(b, n++ ? ", \"" : ",\n      \"solves\": { \"");
+        sb_puts(b, sg_solve_target_name((sg_solve_target)t));
+        sb_puts(b, "\": {\"type\": \"");
+        sb_puts(b, sg_solve_kind_name(v->kind));
+        if (v->kind == SG_SOLVE_PICKUP) {
+            snprintf(buf, sizeof buf, "\", \"from\": %d", v->from);
+            sb_puts(b, buf);
+            sb_puts(b, ", \"scale\": ");
+            sb_num(b, v->scale);
+            sb_puts(b, ", \"offset\": ");
+            sb_num(b, v->offset);
+        } else {
+            sb_puts(b, "\", \"value\": ");
+            sb_num(b, v->value);
+        }
+        sb_puts(b, "}");
+    }
+    if (n)
+        sb_puts(b, " }");
+}
+
 /* Whether an optional parameter is at its default, so not written. */
 static int at_default(const sg_param *p, const void *obj)
 {
@@ -1576,6 +1674,7 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
                 sb_change(&b, &s->after);
             }
         }
+        sb_solves(&b, s);
         sb_puts(&b, i == sys->stop ? ",\n      \"stop\": true\n" : ",\n      \"stop\": false\n");
         sb_puts(&b, i + 1 < sys->nsurf ? "    },\n" : "    }\n");
     }

@@ -129,6 +129,7 @@ typedef struct zctx {
     char gcat[ZMX_MAX_GCAT][SG_GLASS_NAME];
     int ngcat;
     int nfrozen;
+    int nlive; /* solves and pickups kept (sagitta-design(5), SOLVES) */
 } zctx;
 
 /* ------------------------------------------------------------------------
@@ -1020,6 +1021,32 @@ static int surface_line(zctx *c, const zline *l)
             return rc;
         if ((rc = opt_num(c, l, 2, "curvature solve", 0.0, &v)) != SG_OK)
             return rc;
+        if (v == 4.0) {
+            /* A pickup: CURV c 4 from scale offset.  The radius and the
+             * curvature agree on it only at scale +-1 and offset 0, so
+             * only that one is kept. */
+            double from, scale, off;
+            if ((rc = opt_num(c, l, 3, "pickup surface", -1.0, &from)) != SG_OK ||
+                (rc = opt_num(c, l, 4, "pickup scale", 1.0, &scale)) != SG_OK ||
+                (rc = opt_num(c, l, 5, "pickup offset", 0.0, &off)) != SG_OK)
+                return rc;
+            if (from == floor(from) && from >= 0 && from < c->cur && fabs(scale) == 1.0 &&
+                off == 0.0) {
+                sg_solve *o = &s->solve[SG_SOLVE_RADIUS];
+                memset(o, 0, sizeof *o);
+                o->kind = SG_SOLVE_PICKUP;
+                o->from = (int)from;
+                o->scale = scale;
+                c->nlive++;
+                zwarn(c, "CURV: note: the pickup from surface %d is kept", o->from);
+                return SG_OK;
+            }
+            c->nfrozen++;
+            zwarn(c, "CURV: the curvature pickup from surface %g (scale %g, offset %g) is frozen "
+                  "at the stored value: sagitta keeps pickups from an earlier surface with "
+                  "scale 1 or -1 and offset 0", from, scale, off);
+            return SG_OK;
+        }
         if (v != 0.0 && v != 1.0) {
             c->nfrozen++;
             zwarn(c, "CURV: the curvature solve (type %g) is frozen at the stored value", v);
@@ -1203,7 +1230,52 @@ static int surface_line(zctx *c, const zline *l)
                         tok_is(k, "SCAD") ? "after" : "before");
         return SG_OK;
     }
-    if (tok_is(k, "PZUP") || tok_is(k, "PPAR") || tok_is(k, "MAZH")) {
+    if (tok_is(k, "MAZH")) {
+        /* MAZH height zone: zone 0 is the paraxial marginal ray. */
+        double h, zone;
+        if ((rc = opt_num(c, l, 1, "marginal ray height", 0.0, &h)) != SG_OK ||
+            (rc = opt_num(c, l, 2, "pupil zone", 0.0, &zone)) != SG_OK)
+            return rc;
+        if (zone == 0.0 && c->cur >= 1) {
+            sg_solve *o = &s->solve[SG_SOLVE_THICKNESS];
+            memset(o, 0, sizeof *o);
+            o->kind = SG_SOLVE_MARGINAL_HEIGHT;
+            o->value = h;
+            c->nlive++;
+            zwarn(c, "MAZH: note: the marginal ray height solve (height %g) is kept", h);
+            return SG_OK;
+        }
+        c->nfrozen++;
+        zwarn(c, "MAZH: the marginal ray height solve at pupil zone %g (a real ray) is frozen at "
+              "the value stored in the file", zone);
+        return SG_OK;
+    }
+    if (tok_is(k, "PZUP")) {
+        /* PZUP from scale offset column: column 0 picks up a thickness. */
+        double from, scale, off, col;
+        if ((rc = opt_num(c, l, 1, "pickup surface", -1.0, &from)) != SG_OK ||
+            (rc = opt_num(c, l, 2, "pickup scale", 1.0, &scale)) != SG_OK ||
+            (rc = opt_num(c, l, 3, "pickup offset", 0.0, &off)) != SG_OK ||
+            (rc = opt_num(c, l, 4, "pickup column", 0.0, &col)) != SG_OK)
+            return rc;
+        if (from == floor(from) && from >= 0 && from < c->cur && col == 0.0) {
+            sg_solve *o = &s->solve[SG_SOLVE_THICKNESS];
+            memset(o, 0, sizeof *o);
+            o->kind = SG_SOLVE_PICKUP;
+            o->from = (int)from;
+            o->scale = scale;
+            o->offset = off;
+            c->nlive++;
+            zwarn(c, "PZUP: note: the thickness pickup from surface %d is kept", o->from);
+            return SG_OK;
+        }
+        c->nfrozen++;
+        zwarn(c, "PZUP: the thickness pickup from surface %g (column %g) is frozen at the value "
+              "stored in the file: sagitta keeps pickups of a thickness from an earlier surface",
+              from, col);
+        return SG_OK;
+    }
+    if (tok_is(k, "PPAR")) {
         c->nfrozen++;
         zwarn(c, "%.4s: the solve or pickup is frozen at the value stored in the file", k->p);
         return SG_OK;
@@ -1708,6 +1780,10 @@ int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name
         uselocale(old);
         freelocale(cloc);
     }
+    if (rc == SG_OK && c->nlive)
+        sg_diag_warn(d, "%s: note: %d solve or pickup line%s kept; sagitta recomputes %s from "
+                     "the design (sagitta-design(5), Solves and pickups)", name, c->nlive,
+                     c->nlive == 1 ? "" : "s", c->nlive == 1 ? "it" : "them");
     if (rc == SG_OK && c->nfrozen)
         sg_diag_warn(d, "%s: %d solve%s and pickup%s frozen at the values the file stores; "
                      "sagitta does not evaluate them", name, c->nfrozen,
@@ -1812,6 +1888,43 @@ static void zb_list(zbuf *b, const char *kw, const sg_system *s, int what)
     zb_add(b, "\n", 1);
 }
 /* A shape's PARM and XDAT lines, as zmx_shape reads them. */
+/* The solve fields after a CURV value: a radius pickup that the .zmx
+ * reader keeps (scale +-1, offset 0); else nothing, the value frozen. */
+static const char *zb_curv_solve(char out[40], const sg_surface *f)
+{
+    const sg_solve *v = &f->solve[SG_SOLVE_RADIUS];
+    out[0] = '\0';
+    if (v->kind == SG_SOLVE_PICKUP && fabs(v->scale) == 1.0 && v->offset == 0.0)
+        snprintf(out, 40, " 4 %d %d 0 \"\"", v->from, v->scale > 0 ? 1 : -1);
+    return out;
+}
+
+/* Whether the export keeps a solve (the others are written as values). */
+static int zmx_keeps(const sg_surface *f, int t)
+{
+    const sg_solve *v = &f->solve[t];
+    switch (t) {
+    case SG_SOLVE_RADIUS:
+        return v->kind == SG_SOLVE_PICKUP && fabs(v->scale) == 1.0 && v->offset == 0.0;
+    case SG_SOLVE_THICKNESS:
+        return v->kind == SG_SOLVE_PICKUP || v->kind == SG_SOLVE_MARGINAL_HEIGHT;
+    default:
+        return 0;
+    }
+}
+
+/* The thickness solve's line after DISZ: MAZH height 0 (the paraxial
+ * marginal ray) or PZUP from scale offset 0 (a thickness). */
+static void zb_disz_solve(zbuf *b, const sg_surface *f)
+{
+    const sg_solve *v = &f->solve[SG_SOLVE_THICKNESS];
+    char n1[40], n2[40];
+    if (v->kind == SG_SOLVE_MARGINAL_HEIGHT)
+        zb_printf(b, "  MAZH %s 0\n", num(n1, v->value));
+    else if (v->kind == SG_SOLVE_PICKUP)
+        zb_printf(b, "  PZUP %d %s %s 0\n", v->from, num(n1, v->scale), num(n2, v->offset));
+}
+
 static void zb_shape(zbuf *b, const sg_surface *f)
 {
     char n1[40];
@@ -1982,14 +2095,14 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         if (i == s->stop)
             zb_add(b, "  STOP\n", 7);
         if (f->radius == 0.0 || isinf(f->radius)) {
-            zb_add(b, "  CURV 0\n", 9);
+            zb_printf(b, "  CURV 0%s\n", zb_curv_solve(n1, f));
         } else {
             /* 1/R to 25 digits: its exact reciprocal rounds back to R. */
             char cv[64];
             mpfr_set_d(q, f->radius, MPFR_RNDN);
             mpfr_ui_div(q, 1, q, MPFR_RNDN);
             mpfr_snprintf(cv, sizeof cv, "%.24Re", q);
-            zb_printf(b, "  CURV %s\n", cv);
+            zb_printf(b, "  CURV %s%s\n", cv, zb_curv_solve(n1, f));
         }
         if (f->type == SG_SURF_EVENASPH)
             for (k = 0; k < SG_NASPH; k++)
@@ -2011,6 +2124,7 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
             zb_add(b, "  DISZ INFINITY\n", 16);
         else
             zb_printf(b, "  DISZ %s\n", num(n1, f->thickness));
+        zb_disz_solve(b, f);
         switch (f->mat.kind) {
         case SG_MAT_MIRROR:
             zb_add(b, "  GLAS MIRROR 0 0 1.5 40 0 0 0 0 0 0\n", 37);
@@ -2054,6 +2168,14 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
     mpfr_clear(q);
     if (changed)
         sg_diag_warn(d, "export: control characters in the title or a comment became spaces");
+    for (i = 0; i < s->nsurf; i++)
+        for (k = 0; k < SG_SOLVE_NTARGETS; k++)
+            if (s->surf[i].solve[k].kind != SG_SOLVE_NONE && !zmx_keeps(&s->surf[i], k))
+                sg_diag_warn(d, "export: surface %d: the %s %s solve is written as its value; "
+                             "sagitta writes .zmx solves for marginal_height thicknesses and "
+                             "pickups of a thickness or (scale 1 or -1, offset 0) a radius", i,
+                             sg_solve_target_name((sg_solve_target)k),
+                             sg_solve_kind_name(s->surf[i].solve[k].kind));
     if (b->oom)
         return sg_diag_set(d, SG_ENOMEM, "export: out of memory");
     return SG_OK;

@@ -382,6 +382,19 @@ static int same_change(const sg_frame_change *a, const sg_frame_change *b)
            memcmp(&a->tz, &b->tz, sizeof a->tz) == 0 && a->order == b->order;
 }
 
+/* Solves are one nested JSON object ("solves"), read and written by
+ * design_json.c outside this table. */
+static int same_solves(const sg_solve *a, const sg_solve *b)
+{
+    int t;
+    for (t = 0; t < SG_SOLVE_NTARGETS; t++)
+        if (a[t].kind != b[t].kind || a[t].from != b[t].from ||
+            !same_bits(a[t].scale, b[t].scale) || !same_bits(a[t].offset, b[t].offset) ||
+            !same_bits(a[t].value, b[t].value))
+            return 0;
+    return 1;
+}
+
 int sg_system_equal(const sg_system *a, const sg_system *b)
 {
     int i;
@@ -403,7 +416,8 @@ int sg_system_equal(const sg_system *a, const sg_system *b)
         if (!sg_param_equal(SG_SCOPE_SURFACE, &a->surf[i], &b->surf[i]) ||
             !same_change(&a->surf[i].before, &b->surf[i].before) ||
             !same_change(&a->surf[i].after, &b->surf[i].after) ||
-            a->surf[i].after_mode != b->surf[i].after_mode)
+            a->surf[i].after_mode != b->surf[i].after_mode ||
+            !same_solves(a->surf[i].solve, b->surf[i].solve))
             return 0;
     return 1;
 }

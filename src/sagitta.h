@@ -272,6 +272,43 @@ typedef enum sg_after_mode {
 #define SG_MODEL_VD_MAX 200.0
 #define SG_MODEL_DPGF_MAX 0.2
 
+/* Solves and pickups (Zemax's): a parameter of a surface computed from the
+ * rest of the design by sg_system_apply_solves, in surface order.  The
+ * kinds each parameter may hold are in sg_solve_allowed. */
+typedef enum sg_solve_target {
+    SG_SOLVE_RADIUS = 0,
+    SG_SOLVE_THICKNESS = 1,
+    SG_SOLVE_CONIC = 2,
+    SG_SOLVE_NTARGETS
+} sg_solve_target;
+
+typedef enum sg_solve_kind {
+    SG_SOLVE_NONE = 0,
+    /* scale * (the same parameter of surface `from`) + offset; from is an
+     * earlier surface */
+    SG_SOLVE_PICKUP = 1,
+    /* thickness: the paraxial marginal ray meets the next surface at
+     * height `value` (0: the paraxial focus); Zemax's marginal ray height */
+    SG_SOLVE_MARGINAL_HEIGHT = 2,
+    /* radius: the paraxial marginal ray leaves the surface with slope
+     * `value` (u'); Zemax's marginal ray angle */
+    SG_SOLVE_MARGINAL_ANGLE = 3,
+    /* radius: the marginal ray leaves with slope -1 / (2 value), value
+     * the F/#; Zemax's F number solve */
+    SG_SOLVE_FNUM = 4,
+    /* thickness: the paraxial chief ray of the largest field meets the next
+     * surface at height `value`; Zemax's chief ray height */
+    SG_SOLVE_CHIEF_HEIGHT = 5,
+    SG_SOLVE_NKINDS
+} sg_solve_kind;
+
+typedef struct sg_solve {
+    sg_solve_kind kind;
+    int from;            /* pickup: the source surface */
+    double scale, offset; /* pickup */
+    double value;        /* height, angle or F/# */
+} sg_solve;
+
 typedef struct sg_surface {
     sg_surf_type type;
     char comment[SG_COMMENT];
@@ -300,6 +337,7 @@ typedef struct sg_surface {
     sg_frame_change before;
     sg_frame_change after;
     sg_after_mode after_mode;
+    sg_solve solve[SG_SOLVE_NTARGETS]; /* by sg_solve_target; kind 0: none */
 } sg_surface;
 
 typedef enum sg_field_type {
@@ -502,6 +540,26 @@ double sg_surface_curvature(const sg_surface *s);
 double sg_surface_sag(const sg_surface *s, double x, double y);
 /* Whether a frame change moves or turns anything. */
 int sg_frame_change_is_zero(const sg_frame_change *c);
+/* Solves.  Names are the JSON and editor words ("pickup", "marginal_height",
+ * "marginal_angle", "fnum", "chief_height"; "radius", "thickness",
+ * "conic"); NULL when out of range. */
+const char *sg_solve_kind_name(sg_solve_kind k);
+const char *sg_solve_target_name(sg_solve_target t);
+/* Whether kind may sit on target. */
+int sg_solve_allowed(sg_solve_target t, sg_solve_kind k);
+/* Checks the solve on target of surface i (kind, source surface, value):
+ * SG_ERANGE with a message naming the surface. */
+int sg_solve_check(const sg_system *sys, int i, sg_solve_target t, sg_diag *d);
+/* Whether any surface holds a solve. */
+int sg_system_has_solves(const sg_system *sys);
+/* Evaluates every solve and pickup in surface order, at the primary
+ * wavelength, in 128-bit MPFR, and stores the values (rounded once) in the
+ * surfaces.  Solves that depend on the entrance pupil are repeated until
+ * no value changes.  A solve without a solution (the marginal ray on the
+ * axis, parallel to it, or a surface without power) is SG_ENONPHYS naming
+ * the surface; the system is then left with the values of the last pass. */
+int sg_system_apply_solves(sg_system *sys, const sg_catalog *cat, sg_diag *d);
+
 /* Whether a surface changes the frame: a coordinate break, or a tilt or
  * decenter before or after it. */
 int sg_surface_moves_frame(const sg_surface *s);
@@ -530,8 +588,10 @@ char *sg_design_to_json(const sg_system *sys);
  * What the model cannot hold (a tilt after a surface, surface types
  * beyond sagitta-design(5)'s, several configurations...) is refused with
  * SG_EUNSUPPORTED and a message "FILE:LINE: surface N: KEYWORD: ...";
- * solves and pickups are kept at their stored values, with a warning.
- * See sagitta-design(5), ZEMAX FILES. */
+ * values are read as the file stores them; the solves sagitta evaluates
+ * (MAZH at zone 0, PZUP of a thickness, a CURV pickup at scale +-1 and
+ * offset 0) are kept in the surfaces' solve[] with a note, the others
+ * frozen with a warning.  See sagitta-design(5), ZEMAX FILES. */
 int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name,
                  const sg_catalog *cat, sg_diag *d);
 int sg_zmx_load(sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);

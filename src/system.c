@@ -122,6 +122,24 @@ sg_system *sg_system_clone(const sg_system *sys)
     return c;
 }
 
+/* After inserting (dir 1) or deleting (dir -1) surface at: pickups from
+ * later surfaces follow them; a pickup from the deleted surface becomes a
+ * plain value, as it holds. */
+static void renumber_pickups(sg_system *sys, int at, int dir)
+{
+    int i, t;
+    for (i = 0; i < sys->nsurf; i++)
+        for (t = 0; t < SG_SOLVE_NTARGETS; t++) {
+            sg_solve *v = &sys->surf[i].solve[t];
+            if (v->kind != SG_SOLVE_PICKUP)
+                continue;
+            if (dir < 0 && v->from == at)
+                memset(v, 0, sizeof *v);
+            else if (v->from >= at + (dir < 0))
+                v->from += dir;
+        }
+}
+
 int sg_system_insert(sg_system *sys, int at)
 {
     int rc;
@@ -134,6 +152,8 @@ int sg_system_insert(sg_system *sys, int at)
             (size_t)(sys->nsurf - at) * sizeof *sys->surf);
     sg_surface_init(&sys->surf[at]);
     sys->nsurf++;
+    /* A pickup follows its source surface. */
+    renumber_pickups(sys, at, 1);
     /* The stop is a property of a physical surface, so it follows it. */
     if (sys->stop >= at)
         sys->stop++;
@@ -147,6 +167,7 @@ int sg_system_delete(sg_system *sys, int at)
     memmove(&sys->surf[at], &sys->surf[at + 1],
             (size_t)(sys->nsurf - at - 1) * sizeof *sys->surf);
     sys->nsurf--;
+    renumber_pickups(sys, at, -1);
     /* Deleting the stop leaves the stop on the surface that took its row. */
     if (sys->stop > at)
         sys->stop--;
@@ -324,7 +345,7 @@ int sg_field_check(const sg_system *sys, double hx, double hy, sg_diag *d)
 int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
 {
     double track;
-    int i, k, p;
+    int i, k, p, src;
     if (sys->nsurf < 3)
         return sg_diag_set(d, SG_ENOSYS,
                            "the system has %d surfaces; it needs an object, "
@@ -340,6 +361,10 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
     if (sys->primary_wave < 0 || sys->primary_wave >= sys->nwave)
         return sg_diag_set(d, SG_ERANGE, "wavelengths: primary %d is not one of 1 to %d",
                            sys->primary_wave + 1, sys->nwave);
+    for (i = 0; i < sys->nsurf; i++)
+        for (k = 0; k < SG_SOLVE_NTARGETS; k++)
+            if ((src = sg_solve_check(sys, i, (sg_solve_target)k, d)) != SG_OK)
+                return src;
     for (k = 0; k < sys->nwave; k++)
         if (!(sys->wave[k].um > 0.0) || !isfinite(sys->wave[k].um))
             return sg_diag_set(d, SG_ERANGE,

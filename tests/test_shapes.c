@@ -464,7 +464,7 @@ static void kernel_bounds(void **state)
                     checked++;
                 }
             }
-    print_message("kernel points checked: %d\n", checked);
+    print_message("# kernel points checked: %d\n", checked);
     assert_true(checked > NTYPES * 3 * 40 * 5);
     mpfr_clears(x, y, z, gx, gy, e, mz, mgx, mgy, (mpfr_ptr)0);
     for (k = 0; k < SG_SHAPE_MPTMP; k++)
@@ -780,7 +780,7 @@ static void trace_sets(void **state)
                 sg_tracer_free(tc);
                 sg_system_free(sys);
             }
-    print_message("rays %ld: precise OK %ld, point the reference rounded %ld, direction %ld; "
+    print_message("# rays %ld: precise OK %ld, point the reference rounded %ld, direction %ld; "
                   "mpfr rounded %ld; status disagreements %ld; classic lost %ld\n",
                   all.rays, all.ok, all.exact, all.dir_ok, all.mpfr_exact, all.disagree,
                   all.classic_lost);
@@ -860,7 +860,7 @@ static void carried_error(void **state)
         sg_tracer_free(tp);
         sg_system_free(sys);
     }
-    print_message("cancelling shapes: %d rays; carried error at most %.3g of eP\n", n, worst);
+    print_message("# cancelling shapes: %d rays; carried error at most %.3g of eP\n", n, worst);
     assert_true(n > 600);
     mpfr_clears(Pm[0], Pm[1], Pm[2], e, (mpfr_ptr)0);
 }

@@ -312,6 +312,14 @@ int cli_load_design(const char *path, sg_catalog **catp, sg_system **sysp)
         return rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
     }
     cli_print_warnings(&d, path);
+    /* Solved values follow the design they are solved on. */
+    sg_diag_clear(&d);
+    rc = sg_system_apply_solves(sys, cat, &d);
+    if (rc != SG_OK) {
+        cli_print_diag(path, &d, rc);
+        cli_design_free(cat, sys);
+        return rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
+    }
     *catp = cat;
     *sysp = sys;
     return CLI_EXIT_OK;

@@ -89,6 +89,45 @@ static void test_efl_text(void **state)
     }
 }
 
+/* A marginal_height solve on the last thickness: the CLI applies it when it
+ * loads the design, so the total track is d + BFL whatever thickness the
+ * file stores; a pickup from a later surface is refused, naming it. */
+static void test_solve_on_load(void **state)
+{
+    const lens *L = &lenses[1];
+    long double f = efl(L);
+    long double bfl = f * (1 - (L->n - 1) * L->d / (L->n * L->r1));
+    char s[1024];
+    const char *d;
+    ct_result r;
+    (void)state;
+    snprintf(s, sizeof s,
+             "    {\"radius\": \"inf\", \"thickness\": \"inf\"},\n"
+             "    {\"radius\": %.17g, \"thickness\": %.17g, \"material\": %.17g, \"stop\": true},\n"
+             "    {\"radius\": %.17g, \"thickness\": 1, \"solves\": {\"thickness\": "
+             "{\"type\": \"marginal_height\", \"value\": 0}}},\n"
+             "    {\"radius\": \"inf\", \"thickness\": 0}",
+             (double)L->r1, (double)L->d, (double)L->n, (double)L->r2);
+    d = ct_design("solved.json", s);
+    ct_run(&r, "paraxial", d, NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    ct_close(text_value(r.out, "Total track"), (double)(L->d + bfl), 1e-15, 0, "total track");
+    ct_free(&r);
+    snprintf(s, sizeof s,
+             "    {\"radius\": \"inf\", \"thickness\": \"inf\"},\n"
+             "    {\"radius\": 50, \"thickness\": 5, \"material\": 1.5, \"stop\": true, "
+             "\"solves\": {\"radius\": {\"type\": \"pickup\", \"from\": 2}}},\n"
+             "    {\"radius\": -50, \"thickness\": 40},\n"
+             "    {\"radius\": \"inf\", \"thickness\": 0}");
+    d = ct_design("badpickup.json", s);
+    ct_run(&r, "paraxial", d, NULL);
+    assert_int_not_equal(r.code, 0);
+    if (!strstr(r.err, "surface 1: radius: the pickup's source surface 2"))
+        fail_msg("message: %s", r.err);
+    ct_free(&r);
+}
+
 static double jnum(const cJSON *o, const char *key)
 {
     const cJSON *j = cJSON_GetObjectItem(o, key);
@@ -128,6 +167,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_efl_text),
         cmocka_unit_test(test_json),
+        cmocka_unit_test(test_solve_on_load),
     };
     int rc;
     ct_init(argc, argv);

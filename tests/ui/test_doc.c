@@ -346,6 +346,56 @@ static void test_insert_delete_stop(void **state)
     free_ed(e);
 }
 
+/* The back focal distance of a lens of index n, radii R1, R2 and centre
+ * thickness T (thick-lens formulas, in long double). */
+static double bfd(long double n, long double R1, long double R2, long double T)
+{
+    long double p1 = (n - 1) / R1, p2 = (1 - n) / R2, p = p1 + p2 - T * p1 * p2 / n;
+    return (double)((1 - T * p1 / n) / p);
+}
+
+/* The solve command: a marginal_height solve follows every edit in the
+ * same undo step, shows an M, and a value typed over it removes it. */
+static void test_solve_command(void **state)
+{
+    ed *e = new_ed();
+    sg_system *s;
+    char buf[64];
+    (void)state;
+    ok(e, "insert 1");
+    ok(e, "set 1 radius 50");
+    ok(e, "set 1 thickness 5");
+    ok(e, "set 1 material 1.5");
+    ok(e, "set 2 radius -50");
+    ok(e, "solve 2 thickness marginal_height 0");
+    s = e->doc.sys;
+    assert_true(fabs(s->surf[2].thickness - bfd(1.5L, 50, -50, 5)) < 1e-13 * s->surf[2].thickness);
+    cell_text(s, 2, COL_THICKNESS, buf, sizeof buf);
+    assert_int_equal(buf[strlen(buf) - 1], 'M');
+    ok(e, "set 1 radius 40");
+    s = e->doc.sys;
+    assert_true(fabs(s->surf[2].thickness - bfd(1.5L, 40, -50, 5)) < 1e-13 * s->surf[2].thickness);
+    ok(e, "undo");
+    s = e->doc.sys;
+    assert_true(fabs(s->surf[2].thickness - bfd(1.5L, 50, -50, 5)) < 1e-13 * s->surf[2].thickness);
+    /* A pickup of the radius, shown P. */
+    ok(e, "solve 2 radius pickup 1 -1");
+    assert_true(e->doc.sys->surf[2].radius == -50.0);
+    cell_text(e->doc.sys, 2, COL_RADIUS, buf, sizeof buf);
+    assert_string_equal(buf, "-50 P");
+    /* Refusals, naming the surface. */
+    assert_true(cmd_exec(e, "solve 1 radius pickup 2") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 1"));
+    assert_true(cmd_exec(e, "solve 2 radius marginal_height 0") & ED_ERROR);
+    /* A typed value replaces the solve. */
+    ok(e, "set 2 thickness 7");
+    assert_true(e->doc.sys->surf[2].thickness == 7.0);
+    assert_int_equal(e->doc.sys->surf[2].solve[SG_SOLVE_THICKNESS].kind, SG_SOLVE_NONE);
+    ok(e, "solve 2 radius none");
+    assert_int_equal(e->doc.sys->surf[2].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_NONE);
+    free_ed(e);
+}
+
 static void test_undo_redo_exact(void **state)
 {
     static const char *const steps[] = {
@@ -815,6 +865,7 @@ int main(void)
         cmocka_unit_test(test_set_text_cells),
         cmocka_unit_test(test_bad_values),
         cmocka_unit_test(test_insert_delete_stop),
+        cmocka_unit_test(test_solve_command),
         cmocka_unit_test(test_undo_redo_exact),
         cmocka_unit_test(test_modified_flag),
         cmocka_unit_test(test_modified_save),

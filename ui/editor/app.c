@@ -760,6 +760,10 @@ int sg_editor_main(int argc, char **argv)
                 return 1;
             }
             e.wave = e.doc.sys->primary_wave;
+            /* Solved values follow the design as it is opened. */
+            sg_diag_clear(&d);
+            if (sg_system_apply_solves(e.doc.sys, e.cat, &d) != SG_OK)
+                ed_msg(&e, 1, "solves: %s", d.msg);
         }
     }
     /* A script is its own record of the edits, so batch mode writes no

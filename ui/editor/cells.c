@@ -162,6 +162,16 @@ static void mat_text(const sg_material *m, char *buf, size_t n)
     }
 }
 
+/* The solve a parameter can hold, or -1. */
+static int solve_target(const sg_param *p)
+{
+    int t;
+    for (t = 0; t < SG_SOLVE_NTARGETS; t++)
+        if (strcmp(p->key, sg_solve_target_name((sg_solve_target)t)) == 0)
+            return t;
+    return -1;
+}
+
 static void text(const sg_system *sys, int row, int col, int edit, char *buf, size_t n)
 {
     const sg_surface *s = &sys->surf[row];
@@ -182,7 +192,16 @@ static void text(const sg_system *sys, int row, int col, int edit, char *buf, si
     case SG_PARAM_BOOL: snprintf(buf, n, "%s", sg_param_get(p, s, 0) != 0.0 ? "on" : "off"); break;
     case SG_PARAM_REAL: {
         double x = sg_param_get(p, s, k);
-        if ((p->flags & SG_PARAM_INF) && !edit && (x == 0.0 || isinf(x))) {
+        int t = solve_target(p);
+        if (t >= 0 && !edit && s->solve[t].kind != SG_SOLVE_NONE) {
+            /* Zemax marks a solved cell with a letter after the value. */
+            static const char mark[SG_SOLVE_NKINDS] = {' ', 'P', 'M', 'A', 'F', 'C'};
+            if ((p->flags & SG_PARAM_INF) && (x == 0.0 || isinf(x)))
+                snprintf(num, sizeof num, "Infinity");
+            else
+                numfmt_shortest(x, num, sizeof num);
+            snprintf(buf, n, "%s %c", num, mark[s->solve[t].kind]);
+        } else if ((p->flags & SG_PARAM_INF) && !edit && (x == 0.0 || isinf(x))) {
             snprintf(buf, n, "Infinity");
         } else if (col == COL_SEMI) {
             /* Zemax marks a fixed semi-diameter with a U. */
@@ -400,6 +419,14 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
     sg_param_set(p, s, k, v);
     if (col == COL_SEMI)
         s->sd_fixed = fixed;
+    /* A value typed over a solve replaces it, as in Zemax. */
+    k = solve_target(p);
+    if (k >= 0 && s->solve[k].kind != SG_SOLVE_NONE) {
+        if (info && infon)
+            snprintf(info, infon, "surface %d %s: the %s solve was removed", row, cell_name(col),
+                     sg_solve_kind_name(s->solve[k].kind));
+        memset(&s->solve[k], 0, sizeof s->solve[k]);
+    }
     /* A standard surface ignores its polynomial, so a term typed into
      * one means the user wants an asphere. */
     if (col >= COL_ASPH0 && col < COL_ASPH0 + SG_NASPH && v != 0.0 &&

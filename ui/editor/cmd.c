@@ -245,7 +245,12 @@ static int end(ed *e, const char *fmt, ...)
 static int end(ed *e, const char *fmt, ...)
 {
     va_list ap;
-    int changed = doc_end(&e->doc);
+    sg_diag d;
+    int changed, src;
+    /* Solved values follow every edit, in the same undo step. */
+    sg_diag_clear(&d);
+    src = sg_system_apply_solves(e->doc.sys, e->cat, &d);
+    changed = doc_end(&e->doc);
     va_start(ap, fmt);
     vsnprintf(e->msg, sizeof e->msg, fmt, ap);
     va_end(ap);
@@ -254,6 +259,11 @@ static int end(ed *e, const char *fmt, ...)
         snprintf(e->msg + len, sizeof e->msg - len, " (unchanged)");
     }
     e->msg_err = 0;
+    if (src != SG_OK) {
+        size_t len = strlen(e->msg);
+        snprintf(e->msg + len, sizeof e->msg - len, "; solves: %s", d.msg);
+        e->msg_err = 1;
+    }
     e->dirty = 1;
     return OK_VIEW;
 }
@@ -363,6 +373,65 @@ static int c_stop(ed *e, args *a)
     e->doc.sys->stop = at;
     e->row = at;
     return end(e, "surface %d is the stop", at);
+}
+
+/* solve SURFACE radius|thickness|conic TYPE [ARGS]: sets or clears a solve
+ * (sagitta-design(5), Solves and pickups). */
+static int c_solve(ed *e, args *a)
+{
+    static const char usage[] = "solve SURFACE radius|thickness|conic none|pickup FROM [SCALE "
+                                "[OFFSET]]|marginal_height H|chief_height H|marginal_angle U|fnum F";
+    sg_solve v;
+    sg_diag d;
+    int row, t, k, rc;
+    double x;
+    if (!need(e, a, 3, 6, usage))
+        return ED_HANDLED | ED_ERROR;
+    if (!parse_row(e, a->v[1], 0, e->doc.sys->nsurf - 1, &row))
+        return ED_HANDLED | ED_ERROR;
+    for (t = 0; t < SG_SOLVE_NTARGETS; t++)
+        if (strcasecmp(a->v[2], sg_solve_target_name((sg_solve_target)t)) == 0)
+            break;
+    if (t == SG_SOLVE_NTARGETS)
+        return fail(e, "solve: '%s' is not radius, thickness or conic", a->v[2]);
+    for (k = 0; k < SG_SOLVE_NKINDS; k++)
+        if (strcasecmp(a->v[3], sg_solve_kind_name((sg_solve_kind)k)) == 0)
+            break;
+    if (k == SG_SOLVE_NKINDS)
+        return fail(e, "solve: '%s' is not none, pickup, marginal_height, chief_height, "
+                    "marginal_angle or fnum", a->v[3]);
+    if (!sg_solve_allowed((sg_solve_target)t, (sg_solve_kind)k))
+        return fail(e, "solve: a %s solve cannot sit on the %s", a->v[3], a->v[2]);
+    memset(&v, 0, sizeof v);
+    v.kind = (sg_solve_kind)k;
+    if (k == SG_SOLVE_PICKUP) {
+        v.scale = 1.0;
+        if (a->n < 5 || !parse_row(e, a->v[4], 0, e->doc.sys->nsurf - 1, &v.from))
+            return a->n < 5 ? fail(e, "usage: %s", usage) : (ED_HANDLED | ED_ERROR);
+        if (a->n > 5 && !parse_num(e, a->v[5], "scale", &v.scale))
+            return ED_HANDLED | ED_ERROR;
+        if (a->n > 6 && !parse_num(e, a->v[6], "offset", &v.offset))
+            return ED_HANDLED | ED_ERROR;
+    } else if (k != SG_SOLVE_NONE) {
+        if (a->n != 5)
+            return fail(e, "usage: %s", usage);
+        if (!parse_num(e, a->v[4], "value", &x))
+            return ED_HANDLED | ED_ERROR;
+        v.value = x;
+    } else if (a->n != 4) {
+        return fail(e, "usage: %s", usage);
+    }
+    if (!begin(e, row))
+        return ED_HANDLED | ED_ERROR;
+    e->doc.sys->surf[row].solve[t] = v;
+    sg_diag_clear(&d);
+    if ((rc = sg_solve_check(e->doc.sys, row, (sg_solve_target)t, &d)) != SG_OK)
+        return cancel(e, d.msg);
+    e->row = row;
+    if (k == SG_SOLVE_NONE)
+        return end(e, "surface %d: the %s holds no solve", row, a->v[2]);
+    return end(e, "surface %d: %s solve on the %s", row, sg_solve_kind_name(v.kind),
+               sg_solve_target_name((sg_solve_target)t));
 }
 
 static int undo_redo(ed *e, args *a, int redo)
@@ -1037,6 +1106,10 @@ static int open_path(ed *e, const char *path)
     if (doc_load(&e->doc, path, &d) != SG_EOK)
         return fail(e, "%s", d.msg[0] ? d.msg : sg_strerror(d.code));
     f = opened(e, path);
+    /* Solved values follow the design as it is opened. */
+    sg_diag_clear(&d);
+    if (sg_system_apply_solves(e->doc.sys, e->cat, &d) != SG_OK)
+        ed_msg(e, 1, "solves: %s", d.msg);
     note_orphans(e, path);
     ed_note_holders(e, path);
     return f;
@@ -2149,6 +2222,10 @@ static const command commands[] = {
     {"insert", "i", c_insert, "insert [SURFACE]", "insert a flat air surface before SURFACE"},
     {"delete", "d", c_delete, "delete [SURFACE]", "delete a surface"},
     {"stop", NULL, c_stop, "stop [SURFACE]", "make a surface the aperture stop"},
+    {"solve", NULL, c_solve,
+     "solve SURFACE radius|thickness|conic TYPE [ARGS]",
+     "set a solve: none, pickup FROM [SCALE [OFFSET]], marginal_height H or chief_height H "
+     "(thickness), marginal_angle U or fnum F (radius)"},
     {"undo", "u", c_undo, "undo [N]", "undo the last change(s)"},
     {"redo", NULL, c_redo, "redo [N]", "redo undone change(s)"},
     {"open", "e", c_open0, "open FILE", "open a design (open! discards changes)"},
