@@ -82,7 +82,8 @@ static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
         o->obj.z = dd_neg(t->ln.T0);
         if (R != 0.0 && isfinite(R)) {
             /* A curved object surface: the point lies on its sag. */
-            double sag = sg_surface_sag(s0, vx.hi, vy.hi);
+            double sag = t->sp[0].shp ? sg_shape_sag(t->sp[0].shp, vx.hi, vy.hi)
+                                      : sg_surface_sag(s0, vx.hi, vy.hi);
             if (isfinite(sag))
                 o->obj.z = dd_add_d(o->obj.z, sag);
         }

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "analysis_internal.h"
+#include "shape.h"
 
 void sg_layout_opts_init(sg_layout_opts *o)
 {
@@ -166,6 +167,8 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
     for (i = 1; i < ns; i++) {
         sg_layout_surface *s = &out->surf[i - 1];
         const sg_surface *su = &sys->surf[i];
+        sg_shape sh;
+        int gen;
         double sd = su->semi_diameter;
         int np = o->profile_pts;
         s->z0 = z0[i];
@@ -198,9 +201,11 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
             rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
             goto done;
         }
+        /* A shape of its own is prepared once for the profile's points. */
+        gen = sg_shape_ops_of(su->type) && sg_shape_prepare(su, &sh, i, NULL) == SG_OK;
         for (j = 0; j < np; j++) {
             double y = -sd + 2.0 * sd * (double)j / (double)(np - 1);
-            double z = sg_surface_sag(su, 0.0, y);
+            double z = gen ? sg_shape_sag(&sh, 0.0, y) : sg_surface_sag(su, 0.0, y);
             if (!isfinite(z))
                 continue; /* beyond the conic's domain: nothing to draw */
             to_yz(gf, z0, i, 0.0, y, z, &s->y[s->npts], &s->z[s->npts]);

@@ -21,6 +21,12 @@ const sg_shape_ops *sg_shape_ops_of(int type)
     }
 }
 
+double sg_shape_sag(const sg_shape *s, double x, double y)
+{
+    double z, g[2], h;
+    return s->ops->sag_d(s, x, y, &z, g, &h) ? z : NAN;
+}
+
 static double flat_inf(double r)
 {
     return r == 0.0 || isinf(r) ? INFINITY : r;

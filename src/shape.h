@@ -96,6 +96,9 @@ int sg_shape_prepare(const sg_surface *f, sg_shape *s, int isurf, sg_diag *d);
 void sg_shape_mp_coefs(const sg_shape *s, mpfr_t *mc, mpfr_prec_t prec);
 void sg_shape_mp_clear(mpfr_t *mc);
 
+/* The sag of a prepared shape at (x, y) in double, NaN outside it. */
+double sg_shape_sag(const sg_shape *s, double x, double y);
+
 /* What the shapes share (shape.c). */
 
 /* The rotational conic and even polynomial at r2 = x^2 + y^2: sag, w =

@@ -185,12 +185,11 @@ double sg_surface_curvature(const sg_surface *s)
 
 double sg_surface_sag(const sg_surface *s, double x, double y)
 {
+    /* Prepared for one point: callers with many prepare the shape once
+     * and ask sg_shape_sag. */
     if (sg_shape_ops_of(s->type)) {
         sg_shape sh;
-        double z, g[2], h;
-        if (sg_shape_prepare(s, &sh, 0, NULL) != SG_OK || !sh.ops->sag_d(&sh, x, y, &z, g, &h))
-            return NAN;
-        return z;
+        return sg_shape_prepare(s, &sh, 0, NULL) == SG_OK ? sg_shape_sag(&sh, x, y) : NAN;
     }
     double c = sg_surface_curvature(s);
     double r2 = x * x + y * y;

@@ -784,8 +784,9 @@ static void m_osp(sg_tracer *tr, int deg)
         mpfr_set(m->obj.y, t[13], MPFR_RNDN);
         mpfr_neg(m->obj.z, m->T0, MPFR_RNDN);
         if (s0->radius != 0.0 && isfinite(s0->radius)) {
-            double sag = sg_surface_sag(s0, mpfr_get_d(t[12], MPFR_RNDN),
-                                        mpfr_get_d(t[13], MPFR_RNDN));
+            double ox = mpfr_get_d(t[12], MPFR_RNDN), oy = mpfr_get_d(t[13], MPFR_RNDN);
+            double sag = tr->sp[0].shp ? sg_shape_sag(tr->sp[0].shp, ox, oy)
+                                       : sg_surface_sag(s0, ox, oy);
             if (isfinite(sag))
                 mpfr_add_d(m->obj.z, m->obj.z, sag, MPFR_RNDN);
         }
