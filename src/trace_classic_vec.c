@@ -14,8 +14,9 @@
  * that differs between lanes is taken by all of them and the result
  * selected per lane.  A ray alone is a block with one live lane.
  *
- * Shapes of their own (SHAPE_GEN), the residual (double-double) and the
- * clip test run lane by lane through the scalar functions, as before.
+ * Shapes of their own (SHAPE_GEN), the residual on aspheres and those
+ * shapes (double-double), and the clip test run lane by lane through the
+ * scalar functions, as before.
  */
 #include <math.h>
 #include <string.h>
@@ -177,6 +178,30 @@ static vd grad_len(vd g[3])
     return gn;
 }
 
+/* |z - sag| at the lanes' points, as sg_sprep_sag_resid gives it: on a
+ * plane or a conic here, in vdd.h's double-double (the same roundings as
+ * dd.h's), on other shapes lane by lane on the lanes of live. */
+static vd resid_v(const sg_sprep *s, vd x, vd y, vd z, vm live)
+{
+    vd r = vd_set(0.0);
+    int k;
+    if (s->shape == SHAPE_PLANE)
+        return vd_abs(z);
+    if (s->shape == SHAPE_CONIC) {
+        vdd r2 = vdd_add(vdd_two_prod(x, x), vdd_two_prod(y, y));
+        vdd G = vdd_add(r2, vdd_mul(vdd_set(s->k1), vdd_two_prod(z, z)));
+        vd gz = 2.0 * (s->k1.hi * z - s->R), g;
+        G = vdd_sub(G, vdd_two_prod(z, vd_set(2.0 * s->R)));
+        g = G.hi + G.lo;
+        /* At the rim of the vertex sheet, the distance along the normal. */
+        return vsel((vm)(gz != 0.0), vd_abs(g / gz), vd_abs(g) / (2.0 * vd_sqrt(x * x + y * y)));
+    }
+    for (k = 0; k < SG_VL; k++)
+        if (live[k])
+            r[k] = sg_sprep_sag_resid(s, x[k], y[k], z[k]);
+    return r;
+}
+
 /* Lane k of the block fails at surface i with status st. */
 static void fail_lane(const sg_tracer *t, sg_ray_surface *const *out, int k, int i, int st,
                       int *rc, vm *act)
@@ -207,7 +232,7 @@ void sg_classic_block(const sg_tracer *t, const double (*S)[3], const double (*D
         const sg_sprep *s = &t->sp[i];
         const double c = s->c, k1 = s->k1.hi;
         const int newton = s->shape == SHAPE_ASPH || s->shape == SHAPE_GEN;
-        vd zl, A, B, C, tt, sigA, sigB, sigC, eta_t, dlen, x, y, z, oz, path, dn;
+        vd zl, A, B, C, tt, sigA, sigB, sigC, eta_t, dlen, x, y, z, oz, path, dn, res;
         vd hgen = vd_set(0.0);
         vm miss;
         if (s->xf) {
@@ -343,6 +368,7 @@ void sg_classic_block(const sg_tracer *t, const double (*S)[3], const double (*D
             opl += nb * path;
             eO += nb * (eta_t * dlen + 4.0 * U53 * vd_abs(path)) + 2.0 * U53 * vd_abs(opl);
         }
+        res = resid_v(s, x, y, oz, act);
         for (k = 0; k < nl; k++) {
             sg_ray_surface *o = &out[k][i];
             if (!act[k])
@@ -354,7 +380,7 @@ void sg_classic_block(const sg_tracer *t, const double (*S)[3], const double (*D
             o->opl = opl[k];
             o->opl_lo = 0.0;
             o->opl_error_bound = sg_bound_up(eO[k]);
-            o->residual = sg_sprep_sag_resid(s, o->x, o->y, o->z);
+            o->residual = res[k];
             o->error_bound = sg_bound_up(eP[k]);
             o->status = SG_OK;
             if (sg_past_clip(t, s, o->x, o->y))
