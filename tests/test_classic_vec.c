@@ -306,6 +306,10 @@ static sg_system *shape_system(int type, int tilt)
     f->radius = (urand() < 0.5 ? -1.0 : 1.0) * (20.0 + 80.0 * urand());
     if (urand() < 0.2)
         f->radius = INFINITY;
+    /* Nearly flat spheres (|R| from 1e15 to 1e19), where the root takes
+     * its cancellation-free form. */
+    if (type == SG_SURF_STANDARD && urand() < 0.5)
+        f->radius = (urand() < 0.5 ? -1.0 : 1.0) * pow(10.0, 15.0 + 4.0 * urand());
     f->conic = urand() < 0.3 ? 0.0 : srand1(2.0);
     f->radius_x = INFINITY;
     f->norm_radius = 1.0;
