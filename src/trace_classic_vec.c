@@ -14,9 +14,8 @@
  * that differs between lanes is taken by all of them and the result
  * selected per lane.  A ray alone is a block with one live lane.
  *
- * Shapes of their own (SHAPE_GEN), the residual on aspheres and those
- * shapes (double-double), and the clip test run lane by lane through the
- * scalar functions, as before.
+ * Shapes of their own (SHAPE_GEN), with their residual, and the clip test
+ * run lane by lane through the scalar functions, as before.
  */
 #include <math.h>
 #include <string.h>
@@ -178,9 +177,21 @@ static vd grad_len(vd g[3])
     return gn;
 }
 
+/* dd_div of dd.h, lane by lane: three quotients, the same roundings. */
+static vdd div_tw(vdd a, vdd b)
+{
+    vd q1 = a.hi / b.hi, q2, q3;
+    vdd r = vdd_sub(a, vdd_mul_d(b, q1));
+    q2 = r.hi / b.hi;
+    r = vdd_sub(r, vdd_mul_d(b, q2));
+    q3 = r.hi / b.hi;
+    return vdd_add_d(vdd_fast_two_sum(q1, q2), q3);
+}
+
 /* |z - sag| at the lanes' points, as sg_sprep_sag_resid gives it: on a
- * plane or a conic here, in vdd.h's double-double (the same roundings as
- * dd.h's), on other shapes lane by lane on the lanes of live. */
+ * plane, a conic or an even asphere here, in vdd.h's double-double (the
+ * same roundings as dd.h's), on shapes of their own lane by lane on the
+ * lanes of live. */
 static vd resid_v(const sg_sprep *s, vd x, vd y, vd z, vm live)
 {
     vd r = vd_set(0.0);
@@ -195,6 +206,27 @@ static vd resid_v(const sg_sprep *s, vd x, vd y, vd z, vm live)
         g = G.hi + G.lo;
         /* At the rim of the vertex sheet, the distance along the normal. */
         return vsel((vm)(gz != 0.0), vd_abs(g / gz), vd_abs(g) / (2.0 * vd_sqrt(x * x + y * y)));
+    }
+    if (s->shape == SHAPE_ASPH) {
+        vdd r2 = vdd_add(vdd_two_prod(x, x), vdd_two_prod(y, y)), sag = vdd_from(vd_set(0.0));
+        vm bad = vm_set(0);
+        if (isfinite(s->R)) {
+            vdd R = vdd_from(vd_set(s->R));
+            vdd disc = vdd_sub(vdd_sqr(R), vdd_mul(vdd_set(s->k1), r2));
+            vdd root = vdd_sqrt(disc);
+            bad = (vm)(disc.hi < 0.0);
+            if (s->R < 0)
+                root = vdd_neg(root);
+            sag = div_tw(r2, vdd_add(R, root));
+        }
+        if (s->nasph) {
+            vdd p = vdd_from(vd_set(0.0));
+            for (k = s->nasph - 1; k >= 0; k--)
+                p = vdd_add_d(vdd_mul(p, r2), vd_set(s->a[k]));
+            sag = vdd_add(sag, vdd_mul(p, r2));
+        }
+        sag = vdd_sub(vdd_from(z), sag);
+        return vsel(bad, vd_set(NAN), vd_abs(sag.hi + sag.lo));
     }
     for (k = 0; k < SG_VL; k++)
         if (live[k])
