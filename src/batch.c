@@ -196,6 +196,65 @@ static void run_precise(job *j)
     }
 }
 
+/* The classic method: up to SG_VL consecutive rays are launched (and
+ * aimed) one by one, as the single-ray call launches them, then traced
+ * together by the vector kernel. */
+static void run_classic(job *j)
+{
+    sg_tracer *t = j->t;
+    double S[SG_VL][3], D[SG_VL][3], off[SG_VL];
+    sg_ray_surface *o[SG_VL];
+    size_t idx[SG_VL], r = j->first, end = j->first + j->count;
+    int rc[SG_VL], inf[SG_VL], nl, k;
+    while (r < end) {
+        nl = 0;
+        for (; r < end && nl < SG_VL; r++) {
+            const double *v = j->rays[r].v;
+            sg_ray_surface *out = rows(j, r, nl);
+            int prc;
+            inf[nl] = 0;
+            if (j->kind == SG_RAYS_START_DIR) {
+                prc = sg_start_classic_prep(t, v, v + 3, out);
+                for (k = 0; k < 3; k++) {
+                    S[nl][k] = v[k];
+                    D[nl][k] = v[3 + k];
+                }
+            } else if (!finite4(v)) {
+                /* The single-ray call reports a bad ray. */
+                prc = sg_trace_normalized(t, v[0], v[1], v[2], v[3], out);
+            } else {
+                double px, py;
+                sg_field_vignette(t->sys, v[0], v[1], v[2], v[3], &px, &py);
+                prc = sg_launch_classic_prep(t, v[0], v[1], px, py, out, S[nl], D[nl], &off[nl],
+                                             &inf[nl]);
+                if (prc != SG_OK)
+                    prc = sg_guard_rows(t, out, prc);
+            }
+            if (prc != SG_OK) {
+                keep(j, r, nl);
+                if (j->status)
+                    j->status[r] = prc;
+                continue;
+            }
+            o[nl] = out;
+            idx[nl++] = r;
+        }
+        if (nl == 0)
+            continue;
+        sg_classic_block(t, (const double(*)[3])S, (const double(*)[3])D, o, nl, t->n - 1, rc);
+        for (k = 0; k < nl; k++) {
+            if (inf[k])
+                sg_launch_classic_path(t, off[k], o[k]);
+            if (o[k][0].status == SG_OK &&
+                !(row0_finite(t, o[k]) && rows_finite(o[k], t->n)))
+                rc[k] = sg_guard_rows(t, o[k], rc[k]);
+            keep(j, idx[k], k);
+            if (j->status)
+                j->status[idx[k]] = rc[k];
+        }
+    }
+}
+
 static void run_job(job *j)
 {
     for (;;) {
@@ -206,6 +265,8 @@ static void run_job(job *j)
         j->count = j->nray - first < j->chunk ? j->nray - first : j->chunk;
         if (j->t->o.method == SG_METHOD_PRECISE)
             run_precise(j);
+        else if (j->t->o.method == SG_METHOD_CLASSIC)
+            run_classic(j);
         else
             run_one_by_one(j);
     }

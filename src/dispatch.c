@@ -3,7 +3,7 @@
  * processor.
  *
  * Such a build (meson -Dnative=false on x86-64, as a distribution makes it)
- * compiles trace_vec.c, launch.c and batch.c three times, see isa.h: for
+ * compiles trace_vec.c, trace_classic_vec.c, launch.c and batch.c three times, see isa.h: for
  * x86-64-v4 (AVX-512, eight lanes), x86-64-v3 (AVX2 and FMA, four lanes)
  * and the baseline (SSE2).  These functions, the only ways into those
  * files from the rest of the library, call the variant that the running
@@ -19,6 +19,14 @@
                                 sg_ray_surface *out);                                        \
     int sg_launch_classic_##isa(sg_tracer *t, double hx, double hy, double px, double py,    \
                                 sg_ray_surface *out);                                        \
+    int sg_classic_run_to_##isa(const sg_tracer *t, const double S[3], const double D[3],   \
+                                sg_ray_surface *out, int upto);                              \
+    void sg_classic_block_##isa(const sg_tracer *t, const double (*S)[3],                    \
+                                const double (*D)[3], sg_ray_surface *const *out, int nl,    \
+                                int upto, int *rc);                                          \
+    int sg_launch_classic_prep_##isa(sg_tracer *t, double hx, double hy, double px,          \
+                                     double py, sg_ray_surface *out, double S[3],            \
+                                     double D[3], double *off, int *inf);                    \
     int sg_precise_run_to_##isa(const sg_tracer *t, sg_pray *r, double path0,                \
                                 sg_ray_surface *out, int upto);                              \
     int sg_batch_run_##isa(sg_tracer *const *t, int nt, sg_ray_kind kind,                    \
@@ -66,6 +74,36 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
                       sg_ray_surface *out)
 {
     SG_DISPATCH_CALL(sg_launch_classic, t, hx, hy, px, py, out)
+}
+
+int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
+                      sg_ray_surface *out, int upto)
+{
+    SG_DISPATCH_CALL(sg_classic_run_to, t, S, D, out, upto)
+}
+
+/* The classic kernel and launch by name, for tests/test_classic_vec.c. */
+void sg_classic_block(const sg_tracer *t, const double (*S)[3], const double (*D)[3],
+                      sg_ray_surface *const *out, int nl, int upto, int *rc)
+{
+    switch (isa()) {
+    case ISA_V4:
+        sg_classic_block_v4(t, S, D, out, nl, upto, rc);
+        break;
+    case ISA_V3:
+        sg_classic_block_v3(t, S, D, out, nl, upto, rc);
+        break;
+    default:
+        sg_classic_block_base(t, S, D, out, nl, upto, rc);
+        break;
+    }
+}
+
+int sg_launch_classic_prep(sg_tracer *t, double hx, double hy, double px, double py,
+                           sg_ray_surface *out, double S[3], double D[3], double *off,
+                           int *inf)
+{
+    SG_DISPATCH_CALL(sg_launch_classic_prep, t, hx, hy, px, py, out, S, D, off, inf)
 }
 
 int sg_precise_run_to(const sg_tracer *t, sg_pray *r, double path0, sg_ray_surface *out,

@@ -3,7 +3,7 @@
  * variant.
  *
  * A build without -march=native (a distribution's) compiles trace_vec.c,
- * launch.c and batch.c once per instruction set, with SG_ISA naming the
+ * trace_classic_vec.c, launch.c and batch.c once per instruction set, with SG_ISA naming the
  * set, and dispatch.c picks a variant at run time: the double-double
  * kernels run several times faster with eight lanes and FMA than with
  * SSE2's two.  Every operation is correctly rounded in every variant, so
@@ -22,6 +22,10 @@
 #define sg_precise_run_to SG_ISA_CAT(sg_precise_run_to, SG_ISA)
 #define sg_sag_v SG_ISA_CAT(sg_sag_v, SG_ISA)
 #define sg_sag_xy_v SG_ISA_CAT(sg_sag_xy_v, SG_ISA)
+#define sg_classic_block SG_ISA_CAT(sg_classic_block, SG_ISA)
+#define sg_classic_run_to SG_ISA_CAT(sg_classic_run_to, SG_ISA)
+#define sg_launch_classic_prep SG_ISA_CAT(sg_launch_classic_prep, SG_ISA)
+#define sg_launch_classic_path SG_ISA_CAT(sg_launch_classic_path, SG_ISA)
 #define sg_launch_classic SG_ISA_CAT(sg_launch_classic, SG_ISA)
 #define sg_launch_precise SG_ISA_CAT(sg_launch_precise, SG_ISA)
 #define sg_launch_precise_block SG_ISA_CAT(sg_launch_precise_block, SG_ISA)

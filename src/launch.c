@@ -966,13 +966,16 @@ int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
     return rc != SG_OK ? rc : sg_precise_run_to(t, &r, path0, out, t->n - 1);
 }
 
-int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
-                      sg_ray_surface *out)
+int sg_launch_classic_prep(sg_tracer *t, double hx, double hy, double px, double py,
+                           sg_ray_surface *out, double S[3], double D[3], double *off,
+                           int *inf)
 {
-    double S[3], D[3], u[3], len;
+    double u[3], len;
     dd q[2];
     osp o;
     int rc = field_cached(t, land_classic, hx, hy, &o, out);
+    *inf = 0;
+    *off = 0.0;
     if (rc != SG_OK)
         return rc;
     if (launch_q(t, land_classic, &o, px, py, q, 1, t->scratch, NULL) != SG_OK) {
@@ -988,21 +991,35 @@ int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
         sg_pray r;
         r.d = o.dir;
         object_row(t, &o, &r, &out[0]);
+        /* The optical path from the field's start plane to Q. */
+        *inf = 1;
+        *off = o.n0 * (q[0].hi * o.dir.x.hi + q[1].hi * o.dir.y.hi - o.plane.hi);
     } else {
         sg_set_start_row(&out[0], S, u);
         out[0].z = S[2] + t->ln.T0.hi;
     }
-    vd_leave();
-    rc = sg_classic_run_to(t, S, D, out, t->n - 1);
-    if (o.inf) {
-        /* The optical path from the field's start plane to Q. */
-        double off = o.n0 * (q[0].hi * o.dir.x.hi + q[1].hi * o.dir.y.hi - o.plane.hi);
-        int i;
-        for (i = 1; i < t->n && out[i].status == SG_OK; i++) {
-            out[i].opl += off;
-            out[i].opl_error_bound += sg_bound_up(4.0 * U53 * (fabs(off) + fabs(out[i].opl)));
-        }
+    return SG_OK;
+}
+
+void sg_launch_classic_path(const sg_tracer *t, double off, sg_ray_surface *out)
+{
+    int i;
+    for (i = 1; i < t->n && out[i].status == SG_OK; i++) {
+        out[i].opl += off;
+        out[i].opl_error_bound += sg_bound_up(4.0 * U53 * (fabs(off) + fabs(out[i].opl)));
     }
+}
+
+int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
+                      sg_ray_surface *out)
+{
+    double S[3], D[3], off;
+    int inf, rc = sg_launch_classic_prep(t, hx, hy, px, py, out, S, D, &off, &inf);
+    if (rc != SG_OK)
+        return rc;
+    rc = sg_classic_run_to(t, S, D, out, t->n - 1);
+    if (inf)
+        sg_launch_classic_path(t, off, out);
     return rc;
 }
 

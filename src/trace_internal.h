@@ -260,6 +260,14 @@ vdd sg_sag_v(const sg_sprep *s, vdd r2, vm *bad);
 int sg_clip_point(const sg_sprep *s, double x, double y, double rtol);
 /* Whether clipping at s stops a ray meeting it at (x, y). */
 int sg_past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y);
+/* The classic method (trace_classic_vec.c) on nl <= SG_VL rays at once:
+ * lane k < nl starts at S[k] along D[k] (not necessarily unit) in
+ * surface 1's frame, fills out[k][1..upto] and gets its status in rc[k].
+ * The lanes do not interact: a ray gets the same bits whatever rays share
+ * its call. */
+void sg_classic_block(const sg_tracer *t, const double (*S)[3], const double (*D)[3],
+                      sg_ray_surface *const *out, int nl, int upto, int *rc);
+/* One ray by sg_classic_block, alone in its block. */
 int sg_classic_run_to(const sg_tracer *t, const double S[3], const double D[3],
                       sg_ray_surface *out, int upto);
 
@@ -351,6 +359,21 @@ int sg_start_precise_prep(const sg_tracer *t, const double start[3], const doubl
                           sg_ray_surface *out, sg_pray *r);
 int sg_launch_classic(sg_tracer *t, double hx, double hy, double px, double py,
                       sg_ray_surface *out);
+/* The launch of the classic method up to its start: fills the object row,
+ * the start point S and direction D that sg_classic_block takes, and for
+ * an object at infinity (*inf set) the optical path *off from the field's
+ * start plane to the start; or fails every row and returns the status. */
+int sg_launch_classic_prep(sg_tracer *t, double hx, double hy, double px, double py,
+                           sg_ray_surface *out, double S[3], double D[3], double *off,
+                           int *inf);
+/* Adds the path off to the optical path of every surface a classic ray
+ * reached (an object at infinity, after sg_launch_classic_prep). */
+void sg_launch_classic_path(const sg_tracer *t, double off, sg_ray_surface *out);
+/* The start of the classic method for a ray given by a start point and a
+ * direction: checks the ray and fills the object row, or fails every row
+ * and returns SG_EINVAL. */
+int sg_start_classic_prep(const sg_tracer *t, const double start[3], const double dir[3],
+                          sg_ray_surface *out);
 
 /* The MPFR method, in trace_mpfr.c. */
 int sg_mpfr_prepare(sg_tracer *t, sg_diag *d);

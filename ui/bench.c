@@ -940,8 +940,10 @@ static void bench_help(FILE *f)
 "Throughput is in ray-surfaces per second: rays that reached the image times\n"
 "(surfaces - 1), over the wall time of one batch trace of the set.  Each design\n"
 "is traced with the precise and the classic method, on one thread and on\n"
-"all, and the ratio precise/classic of the same run is printed.  Rays are\n"
-"ordered field by field, as a spot diagram traces them.  A set is made and\n"
+"all, and the ratio precise/classic of the same run is printed; both trace\n"
+"blocks of rays in vector registers, classic in double, precise in\n"
+"double-double.  Rays are ordered field by field, as a spot diagram traces\n"
+"them.  A set is made and\n"
 "traced in blocks of about 131072 ray-surfaces, every surface of each ray\n"
 "written, so memory does not grow with N.  Timings vary with the\n"
 "machine's load; the bench never fails on a slow figure.  See sagitta(1).\n",
