@@ -430,22 +430,29 @@ out:
     return rc;
 }
 
+/* A figure in double; a zero is +0, since -y/u at a height of exactly
+ * zero (a surface at the focus) would otherwise print as "-0". */
+static double pd(mpfr_srcptr x)
+{
+    return mpfr_get_d(x, MPFR_RNDN) + 0.0;
+}
+
 void sg_parax_to_double(const sg_parax_mp *p, sg_paraxial *o)
 {
-    o->efl = mpfr_get_d(p->efl, MPFR_RNDN);
-    o->bfl = mpfr_get_d(p->bfl, MPFR_RNDN);
-    o->image_dist = mpfr_get_d(p->image_dist, MPFR_RNDN);
-    o->epd = mpfr_get_d(p->epd, MPFR_RNDN);
-    o->enp_pos = mpfr_get_d(p->enp, MPFR_RNDN);
-    o->exp_diam = mpfr_get_d(p->exp_diam, MPFR_RNDN);
-    o->exp_pos = mpfr_get_d(p->exp_pos, MPFR_RNDN);
-    o->image_fnum = mpfr_get_d(p->image_fnum, MPFR_RNDN);
-    o->working_fnum = mpfr_get_d(p->working_fnum, MPFR_RNDN);
-    o->object_na = mpfr_get_d(p->object_na, MPFR_RNDN);
-    o->parax_image_height = mpfr_get_d(p->pimg_h, MPFR_RNDN);
-    o->magnification = mpfr_get_d(p->mag, MPFR_RNDN);
-    o->total_track = mpfr_get_d(p->track, MPFR_RNDN);
-    o->stop_radius = mpfr_get_d(p->stop_r, MPFR_RNDN);
+    o->efl = pd(p->efl);
+    o->bfl = pd(p->bfl);
+    o->image_dist = pd(p->image_dist);
+    o->epd = pd(p->epd);
+    o->enp_pos = pd(p->enp);
+    o->exp_diam = pd(p->exp_diam);
+    o->exp_pos = pd(p->exp_pos);
+    o->image_fnum = pd(p->image_fnum);
+    o->working_fnum = pd(p->working_fnum);
+    o->object_na = pd(p->object_na);
+    o->parax_image_height = pd(p->pimg_h);
+    o->magnification = pd(p->mag);
+    o->total_track = pd(p->track);
+    o->stop_radius = pd(p->stop_r);
 }
 
 int sg_paraxial_compute(const sg_system *sys, const sg_catalog *cat, int wave,

@@ -19,6 +19,7 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "shape_vdd.h"
 #include "trace_internal.h"
 #include "vdd.h"
 
@@ -104,6 +105,16 @@ static inline dd lane_dd(vdd a, int k)
 __attribute__((noinline)) static void gen_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
 {
     int k;
+    if (svd_handles(s->shp)) {
+        vdd f, g[2], Fk;
+        vd ez, eg;
+        svd_rot_p2(s->shp, p.x, p.y, &f, g, &ez, &eg, bad);
+        Fk = vdd_sub(p.z, f);
+        F->hi = vsel(*bad, vd_set(NAN), Fk.hi);
+        F->lo = vsel(*bad, vd_set(0.0), Fk.lo);
+        *err = vsel(*bad, vd_set(INFINITY), ez + 4.0 * DD_U * (vd_abs(p.z.hi) + vd_abs(f.hi)));
+        return;
+    }
     for (k = 0; k < SG_VL; k++) {
         dd z = lane_dd(p.z, k), f, g[2], Fk;
         double ez, eg;
@@ -203,6 +214,25 @@ __attribute__((noinline)) static vdd3 gen_grad_v(const sg_sprep *s, vdd3 p, vd *
 {
     vdd3 g;
     int k;
+    if (svd_handles(s->shp)) {
+        vdd f, gg[2];
+        vd ez, eg;
+        vm bad;
+        svd_rot_p2(s->shp, p.x, p.y, &f, gg, &ez, &eg, &bad);
+        g.x.hi = vsel(bad, vd_set(NAN), vd_neg(gg[0].hi));
+        g.x.lo = vsel(bad, vd_set(0.0), vd_neg(gg[0].lo));
+        g.y.hi = vsel(bad, vd_set(NAN), vd_neg(gg[1].hi));
+        g.y.lo = vsel(bad, vd_set(0.0), vd_neg(gg[1].lo));
+        *gerr = vsel(bad, vd_set(INFINITY), eg);
+        for (k = 0; k < SG_VL; k++) {
+            double fd, gd[2], h = INFINITY;
+            if (!s->shp->ops->sag_d(s->shp, p.x.hi[k], p.y.hi[k], &fd, gd, &h))
+                h = INFINITY;
+            (*gsens)[k] = h;
+        }
+        g.z = vdd_from(vd_set(1.0));
+        return g;
+    }
     for (k = 0; k < SG_VL; k++) {
         dd f, gg[2];
         double ez, eg, fd, gd[2], h = INFINITY;
@@ -243,6 +273,14 @@ __attribute__((noinline)) static vd gen_resid_v(const sg_sprep *s, vdd3 p)
 {
     vd r;
     int k;
+    if (svd_handles(s->shp)) {
+        vdd f, g[2], df;
+        vd ez, eg;
+        vm bad;
+        svd_rot_p2(s->shp, vdd_from(p.x.hi), vdd_from(p.y.hi), &f, g, &ez, &eg, &bad);
+        df = vdd_sub(vdd_from(p.z.hi), f);
+        return vsel(bad, vd_set(NAN), vd_abs(df.hi + df.lo));
+    }
     for (k = 0; k < SG_VL; k++) {
         dd f, g[2];
         double ez, eg;
@@ -261,6 +299,14 @@ vdd sg_sag_xy_v(const sg_sprep *s, vdd x, vdd y, vm *bad)
     int k;
     if (s->shape != SHAPE_GEN)
         return sg_sag_v(s, vdd_add(vdd_sqr(x), vdd_sqr(y)), bad);
+    if (svd_handles(s->shp)) {
+        vdd g[2];
+        vd ez, eg;
+        svd_rot_p2(s->shp, x, y, &z, g, &ez, &eg, bad);
+        z.hi = vsel(*bad, vd_set(NAN), z.hi);
+        z.lo = vsel(*bad, vd_set(0.0), z.lo);
+        return z;
+    }
     for (k = 0; k < SG_VL; k++) {
         dd f, g[2];
         double ez, eg;

@@ -170,6 +170,29 @@ static void finite_conjugate(void **state)
     sg_system_free(sys);
 }
 
+/* A mirror of radius -128 brings a parallel ray to its focus 64 before
+ * it, exactly in binary; a dummy surface there is the last before the
+ * image, so the back focal length and the image distance are exactly
+ * zero, and positive: -y/u at y = 0 once came out as -0 and printed so. */
+static void focus_on_last(void **state)
+{
+    sg_system *sys = sg_system_new();
+    sg_paraxial p;
+    (void)state;
+    assert_int_equal(sg_system_reset(sys, 4), SG_OK);
+    sys->surf[1].radius = -128.0;
+    sys->surf[1].thickness = -64.0;
+    sys->surf[1].mat.kind = SG_MAT_MIRROR;
+    sys->surf[2].thickness = 0.0;
+    sys->stop = 1;
+    sys->aper_value = 10.0;
+    paraxial(sys, NULL, &p);
+    assert_true(p.efl == 64.0);
+    assert_true(p.bfl == 0.0 && !signbit(p.bfl));
+    assert_true(p.image_dist == 0.0 && !signbit(p.image_dist));
+    sg_system_free(sys);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -177,6 +200,7 @@ int main(void)
         cmocka_unit_test(cassegrain),
         cmocka_unit_test(singlet),
         cmocka_unit_test(finite_conjugate),
+        cmocka_unit_test(focus_on_last),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -30,6 +30,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shape_vdd.h"
 #include "testutil.h"
 #include "trace_internal.h"
 
@@ -934,6 +935,104 @@ static void reductions(void **state)
     sg_catalog_free(cat);
 }
 
+
+/* ------------------------------------------------------------------------
+ * The vector kernel (shape_vdd.h) against the scalar one, bit for bit.
+ * ------------------------------------------------------------------------ */
+
+/* Same double, NaN matching any NaN. */
+static int same_bits(double a, double b)
+{
+    return (a != a && b != b) || memcmp(&a, &b, sizeof a) == 0;
+}
+
+/* A point's coordinate of the kinds the trace meets: ordinary, with a low
+ * part; beyond the conic's edge; zero of either sign; tiny; huge. */
+static void point_dd(double s, double *hi, double *lo)
+{
+    double u = urand();
+    *lo = 0.0;
+    if (u < 0.55) {
+        *hi = srand1(9.0 * s);
+        *lo = *hi * srand1(0x1p-54);
+    } else if (u < 0.75) {
+        *hi = srand1(400.0 * s);
+        *lo = *hi * srand1(0x1p-54);
+    } else if (u < 0.82) {
+        *hi = urand() < 0.5 ? 0.0 : -0.0;
+    } else if (u < 0.9) {
+        *hi = srand1(1e-200 * s);
+    } else if (u < 0.96) {
+        *hi = srand1(1e150);
+    } else {
+        *hi = srand1(2.0 * s);
+        *lo = srand1(0x1p-60) * s;
+    }
+}
+
+/* Every lane of svd_rot_p2 gives what sg_rot_p2_dd gives that point
+ * alone: the same sag, slopes and bounds to the bit, and a lane marked
+ * bad exactly where the scalar kernel leaves the shape's domain.  Lanes
+ * of one block mix ordinary points with failing and extreme ones. */
+static void vector_kernel(void **state)
+{
+    static const double scales[] = {1e-3, 1.0, 1e4};
+    static const int types[] = {SG_SURF_ZERNIKE_FRINGE, SG_SURF_ZERNIKE_STANDARD, SG_SURF_XYPOLY};
+    int ti, si, it, blk, k, lanes = 0, bad_lanes = 0;
+    (void)state;
+    rng_state = 0x7ec7ec7ec7ULL;
+    for (ti = 0; ti < 3; ti++)
+        for (si = 0; si < 3; si++)
+            for (it = 0; it < 30; it++) {
+                sg_surface f;
+                sg_shape sh;
+                double sc = scales[si];
+                memset(&f, 0, sizeof f);
+                random_shape(&f, types[ti], sc);
+                if (types[ti] == SG_SURF_XYPOLY && urand() < 0.5)
+                    for (k = 0; k < 4; k++)
+                        f.asph[k] = srand1(1e-6) / pow(sc, 2 * k + 1);
+                assert_int_equal(sg_shape_prepare(&f, &sh, 1, NULL), SG_OK);
+                assert_true(svd_handles(&sh));
+                for (blk = 0; blk < 8; blk++) {
+                    vdd x, y, z, g[2];
+                    vd ez, eg;
+                    vm bad;
+                    for (k = 0; k < SG_VL; k++) {
+                        point_dd(sc, &x.hi[k], &x.lo[k]);
+                        point_dd(sc, &y.hi[k], &y.lo[k]);
+                    }
+                    svd_rot_p2(&sh, x, y, &z, g, &ez, &eg, &bad);
+                    for (k = 0; k < SG_VL; k++) {
+                        dd xs = {x.hi[k], x.lo[k]}, ys = {y.hi[k], y.lo[k]}, zs, gs[2];
+                        double ezs, egs;
+                        int ok = sg_rot_p2_dd(&sh, xs, ys, &zs, gs, &ezs, &egs);
+                        lanes++;
+                        if (!ok) {
+                            bad_lanes++;
+                            if (!bad[k])
+                                fail_msg("lane %d at (%g, %g): scalar outside, vector not", k,
+                                         xs.hi, ys.hi);
+                            continue;
+                        }
+                        if (bad[k])
+                            fail_msg("lane %d at (%g, %g): vector outside, scalar not", k, xs.hi,
+                                     ys.hi);
+                        if (!same_bits(zs.hi, z.hi[k]) || !same_bits(zs.lo, z.lo[k]) ||
+                            !same_bits(gs[0].hi, g[0].hi[k]) || !same_bits(gs[0].lo, g[0].lo[k]) ||
+                            !same_bits(gs[1].hi, g[1].hi[k]) || !same_bits(gs[1].lo, g[1].lo[k]) ||
+                            !same_bits(ezs, ez[k]) || !same_bits(egs, eg[k]))
+                            fail_msg("%s lane %d at (%a + %a, %a + %a): sag %a %a vs %a %a, "
+                                     "bounds %a %a vs %a %a", sh.ops->name, k, xs.hi, xs.lo,
+                                     ys.hi, ys.lo, zs.hi, zs.lo, z.hi[k], z.lo[k], ezs, egs,
+                                     ez[k], eg[k]);
+                    }
+                }
+            }
+    print_message("# vector kernel: %d lanes, %d outside the shape\n", lanes, bad_lanes);
+    assert_true(bad_lanes > lanes / 20 && bad_lanes < lanes / 2);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -941,6 +1040,7 @@ int main(void)
         cmocka_unit_test(trace_sets),
         cmocka_unit_test(carried_error),
         cmocka_unit_test(reductions),
+        cmocka_unit_test(vector_kernel),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

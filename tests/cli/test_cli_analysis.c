@@ -348,6 +348,51 @@ static void test_bench_view(void **state)
     ct_free(&r);
 }
 
+/* bench --clock: the clock is named in the text and in the JSON
+ * settings, the figures stay positive and ordered, and a clock it does
+ * not know is a usage error naming the option. */
+static void test_bench_clock(void **state)
+{
+    const char *d = ct_design("mirror.json", MIRROR);
+    ct_result r;
+    cJSON *j, *set, *des, *tp;
+    int k;
+    (void)state;
+    ct_run(&r, "bench", d, "--rays", "2000", "--repeat", "3", "--threads", "1", "--clock", "cpu",
+           "--format", "json", NULL);
+    assert_int_equal(r.code, 0);
+    j = cJSON_Parse(r.out);
+    assert_non_null(j);
+    set = cJSON_GetObjectItemCaseSensitive(j, "settings");
+    assert_string_equal(cJSON_GetObjectItemCaseSensitive(set, "clock")->valuestring, "cpu");
+    des = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(j, "designs"), 0);
+    assert_non_null(des);
+    tp = cJSON_GetObjectItemCaseSensitive(des, "throughput");
+    assert_true(cJSON_GetArraySize(tp) > 0);
+    for (k = 0; k < cJSON_GetArraySize(tp); k++) {
+        cJSON *c = cJSON_GetArrayItem(tp, k), *sec = cJSON_GetObjectItemCaseSensitive(c, "seconds");
+        double lo, med, hi;
+        assert_non_null(sec);
+        lo = cJSON_GetObjectItemCaseSensitive(sec, "min")->valuedouble;
+        med = cJSON_GetObjectItemCaseSensitive(sec, "median")->valuedouble;
+        hi = cJSON_GetObjectItemCaseSensitive(sec, "max")->valuedouble;
+        assert_true(lo > 0.0 && lo <= med && med <= hi);
+    }
+    cJSON_Delete(j);
+    ct_free(&r);
+    ct_run(&r, "bench", d, "--rays", "100", "--repeat", "1", "--threads", "1", "--clock", "wall",
+           NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.out, "clock:   wall"));
+    assert_non_null(strstr(r.out, "over wall time"));
+    ct_free(&r);
+    ct_run(&r, "bench", d, "--clock", "tsc", NULL);
+    assert_int_equal(r.code, 2);
+    assert_non_null(strstr(r.err, "--clock"));
+    assert_non_null(strstr(r.err, "tsc"));
+    ct_free(&r);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -355,6 +400,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_fan_json_mirror),
         cmocka_unit_test(test_pictures),
         cmocka_unit_test(test_bench_view),
+        cmocka_unit_test(test_bench_clock),
         cmocka_unit_test(test_layout_csv),
         cmocka_unit_test(test_wavefront_formats),
         cmocka_unit_test(test_fan_opd),
