@@ -141,6 +141,132 @@ static void test_set_shapes(void **state)
     free_ed(e);
 }
 
+/* The chief ray's row at surface i in surface 1's (the global) frame. */
+static sg_ray_surface chief_global(ed *e, int i)
+{
+    sg_frame *gf = calloc((size_t)e->doc.sys->nsurf, sizeof *gf);
+    sg_ray_surface row;
+    sg_diag d;
+    assert_non_null(gf);
+    ok(e, "ray 0 0 0 0");
+    ed_recompute(e);
+    if (e->cmp.build_rc != SG_EOK || e->cmp.rc != SG_EOK)
+        fail_msg("trace: %d %d %s", e->cmp.build_rc, e->cmp.rc, e->cmp.build_msg);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_global_frames(e->doc.sys, 1, gf, &d), SG_OK);
+    row = e->cmp.res[i];
+    sg_row_to_global(&gf[i], &row);
+    free(gf);
+    return row;
+}
+
+/* Zemax's coordinate-break columns (Decenter X ... Order) and a surface's
+ * tilt and decenter before and after it, typed through the command path:
+ * a 45-degree fold mirror built both ways must turn the chief ray from +z
+ * to +y (the axes turn right-handed about x, sagitta.h: the mirror's
+ * normal is (0, -sin 45, cos 45), so d - 2 (d.n) n = (0, 1, 0)), and the
+ * image 20 beyond the fold at z = 10 lies at (0, 20, 10).  Cells that do
+ * not apply are dim and refuse values with the surface and column named;
+ * undo and redo return the exact bytes. */
+static void test_frame_columns(void **state)
+{
+    ed *e = new_ed();
+    sg_system *before, *after;
+    sg_ray_surface r;
+    char path[512];
+    int c;
+    (void)state;
+    ok(e, "insert 2");
+    ok(e, "insert 2");
+    ok(e, "insert 2");
+    before = sg_system_clone(e->doc.sys);
+    ok(e, "set 2 type COORDBRK");
+    ok(e, "set 2 tx 45");
+    ok(e, "set 3 material mirror");
+    ok(e, "set 4 type cb");
+    ok(e, "set 4 tx 45");
+    ok(e, "set 4 thickness -20");
+    assert_int_equal(e->doc.sys->surf[2].type, SG_SURF_COORDBRK);
+    assert_true(same_bits(e->doc.sys->surf[2].before.tx, 45.0));
+    assert_true(same_bits(e->doc.sys->surf[4].before.tx, 45.0));
+    r = chief_global(e, 5);
+    print_message("# fold by breaks: chief at image (%.17g, %.17g, %.17g) dir (%.17g, %.17g, "
+                  "%.17g)\n", r.x, r.y, r.z, r.l, r.m, r.n);
+    assert_true(fabs(r.x) < 1e-14 && fabs(r.y - 20.0) < 1e-13 && fabs(r.z - 10.0) < 1e-13);
+    assert_true(fabs(r.l) < 1e-15 && fabs(r.m - 1.0) < 1e-15 && fabs(r.n) < 1e-15);
+    /* The image's own frame faces back along the beam. */
+    assert_true(fabs(e->cmp.res[5].n + 1.0) < 1e-15);
+
+    /* Order and the dim cells of a break. */
+    ok(e, "set 2 order 1");
+    assert_int_equal(e->doc.sys->surf[2].before.order, 1);
+    ok(e, "set 2 order decenter_then_tilt");
+    assert_int_equal(e->doc.sys->surf[2].before.order, 0);
+    assert_true(run(e, "set 2 order 2") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 2 order"));
+    assert_false(cell_used(&e->doc.sys->surf[2], cell_parse_name("radius")));
+    assert_false(cell_used(&e->doc.sys->surf[2], cell_parse_name("adx")));
+    assert_true(cell_used(&e->doc.sys->surf[2], cell_parse_name("tz")));
+    assert_true(cell_used(&e->doc.sys->surf[3], cell_parse_name("adx")));
+    assert_true(run(e, "set 2 adx 1") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 2 adx"));
+    assert_true(run(e, "set 2 tx 400") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 2 tx"));
+    assert_true(run(e, "set 1 type coordbrk") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 1 type"));
+    assert_true(same_bits(e->doc.sys->surf[2].before.tx, 45.0));
+
+    /* Saved and read back: the same design, frames in their JSON objects. */
+    run(e, "save %s", tmp_path("fold.json", path, sizeof path));
+    assert_false(e->msg_err);
+    {
+        sg_system *back = sg_system_new();
+        sg_diag d;
+        sg_diag_clear(&d);
+        assert_int_equal(sg_design_load(back, path, &d), SG_OK);
+        assert_true(sg_system_equal(back, e->doc.sys));
+        sg_system_free(back);
+    }
+
+    /* Undone to the start, byte for byte; redone to the fold. */
+    after = sg_system_clone(e->doc.sys);
+    for (c = 0; c < 8; c++)
+        ok(e, "undo");
+    assert_true(sys_bytes_equal(e->doc.sys, before));
+    for (c = 0; c < 8; c++)
+        ok(e, "redo");
+    assert_true(sys_bytes_equal(e->doc.sys, after));
+
+    /* The same fold as one surface: the mirror tilted before and after. */
+    ok(e, "delete 4");
+    ok(e, "delete 2");
+    ok(e, "set 2 tx 45");
+    ok(e, "set 2 after reverse");
+    assert_int_equal(e->doc.sys->surf[2].after_mode, SG_AFTER_REVERSE);
+    assert_false(cell_used(&e->doc.sys->surf[2], cell_parse_name("atx")));
+    assert_true(run(e, "set 2 atx 45") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 2 atx"));
+    ok(e, "set 2 after explicit");
+    ok(e, "set 2 atx 45");
+    ok(e, "set 2 thickness -20");
+    assert_true(same_bits(e->doc.sys->surf[2].after.tx, 45.0));
+    r = chief_global(e, 3);
+    print_message("# fold by tilts: chief at image (%.17g, %.17g, %.17g) dir (%.17g, %.17g, "
+                  "%.17g)\n", r.x, r.y, r.z, r.l, r.m, r.n);
+    assert_true(fabs(r.x) < 1e-14 && fabs(r.y - 20.0) < 1e-13 && fabs(r.z - 10.0) < 1e-13);
+    assert_true(fabs(r.l) < 1e-15 && fabs(r.m - 1.0) < 1e-15 && fabs(r.n) < 1e-15);
+    /* A decenter before the mirror moves the fold point along its x. */
+    ok(e, "set 2 dx 1.5");
+    r = chief_global(e, 3);
+    assert_true(fabs(r.x) < 1e-14);
+    /* The chief ray still leaves along +y from the axis at z = 10. */
+    assert_true(fabs(r.m - 1.0) < 1e-15 && fabs(r.z - 10.0) < 1e-13);
+    assert_true(same_bits(e->doc.sys->surf[2].before.dx, 1.5));
+    sg_system_free(before);
+    sg_system_free(after);
+    free_ed(e);
+}
+
 static void test_set_exact(void **state)
 {
     static const char *const texts[] = {
@@ -862,6 +988,7 @@ int main(void)
         cmocka_unit_test(test_numfmt),
         cmocka_unit_test(test_set_exact),
         cmocka_unit_test(test_set_shapes),
+        cmocka_unit_test(test_frame_columns),
         cmocka_unit_test(test_set_text_cells),
         cmocka_unit_test(test_bad_values),
         cmocka_unit_test(test_insert_delete_stop),

@@ -163,12 +163,8 @@ void sheet_draw(ui *u)
             cell_show(u, r, c, w, cell, sizeof cell);
             /* A surface ignores the parameters of other shapes (a STANDARD
              * surface its r^n terms): shown, but dim. */
-            {
-                int k;
-                const sg_param *p = cell_param(c, &k);
-                if (p && !sg_param_used(p, k, s->surf[r].type))
-                    style = T_DIM;
-            }
+            if (!cell_used(&s->surf[r], c))
+                style = T_DIM;
             if (r == e->row && c == e->col)
                 style = u->focus == FOCUS_SHEET ? T_CURSOR : T_ROWSEL;
             if (cell_numeric(c)) {
