@@ -138,6 +138,44 @@ static void test_set_shapes(void **state)
     assert_true(same_bits(e->doc.sys->surf[1].norm_radius, 12.5));
     /* A normalization radius must be positive. */
     assert_true(run(e, "set 1 norm 0") & ED_ERROR);
+    /* Zernike decenters are a Zernike sag's own: dim on a toroid. */
+    assert_false(cell_used(&e->doc.sys->surf[1], cell_parse_name("zdx")));
+    free_ed(e);
+
+    /* Fringe Z1 + Z4 with equal coefficients c is 2 c rho^2: decentred to
+     * (1.5, -0.75) with c = -R^2 / (8 F) it is a paraboloid of focal length
+     * F about that point, so as a mirror it sends every axial ray through
+     * (1.5, -0.75) at -F, wherever it strikes (the live trace, any pupil
+     * point). */
+    e = new_ed();
+    ok(e, "set 1 type FZERNSAG");
+    ok(e, "set 1 norm 10");
+    ok(e, "set 1 t1 -0.5");
+    ok(e, "set 1 t4 -0.5");
+    ok(e, "set 1 zdx 1.5");
+    ok(e, "set 1 zdy -0.75");
+    ok(e, "set 1 material mirror");
+    ok(e, "set 1 thickness -25");
+    assert_true(same_bits(e->doc.sys->surf[1].zern_dx, 1.5) &&
+                same_bits(e->doc.sys->surf[1].zern_dy, -0.75));
+    assert_true(cell_used(&e->doc.sys->surf[1], cell_parse_name("zdy")));
+    assert_true(run(e, "set 1 zdx inf") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 1 zdx"));
+    for (i = 0; i < 3; i++) {
+        static const char *const rays[] = {"ray 0 0 0.5 0.3", "ray 0 0 -0.8 0.1",
+                                           "ray 0 0 0 -0.6"};
+        const sg_ray_surface *im;
+        ok(e, rays[i]);
+        ed_recompute(e);
+        assert_int_equal(e->cmp.rc, SG_OK);
+        im = &e->cmp.res[2];
+        if (!(fabs(im->x - 1.5) <= im->error_bound && fabs(im->y + 0.75) <= im->error_bound))
+            fail_msg("%s: (%.17g, %.17g), not the focus (1.5, -0.75) within %g", rays[i], im->x,
+                     im->y, im->error_bound);
+    }
+    /* Undone, the terms are centred again. */
+    ok(e, "undo 4");
+    assert_true(e->doc.sys->surf[1].zern_dx == 0.0 && e->doc.sys->surf[1].zern_dy == 0.0);
     free_ed(e);
 }
 
