@@ -318,6 +318,14 @@ static int key_impl(ui *u, int key, int typing)
         if (e->col == COL_TYPE)
             return ui_run(u, "set %d type %s", e->row,
                           s->surf[e->row].type == SG_SURF_STANDARD ? "evenasph" : "standard");
+        {
+            /* A frame change's order (0, 1) and after mode (explicit,
+             * reverse) toggle. */
+            const sg_param *p = cell_param(e->col, NULL);
+            if (p && p->kind == SG_PARAM_ENUM && (p->flags & SG_PARAM_NESTED) && p->nnames == 2)
+                return ui_run(u, "set %d %s %s", e->row, cell_name(e->col),
+                              p->names[!*(const int *)sg_param_cptr(p, &s->surf[e->row])]);
+        }
         return ED_HANDLED;
     default:
         if (typing && starts_edit(e->col, key)) {
