@@ -300,6 +300,18 @@ static void test_frame_columns(void **state)
     /* The chief ray still leaves along +y from the axis at z = 10. */
     assert_true(fabs(r.m - 1.0) < 1e-15 && fabs(r.z - 10.0) < 1e-13);
     assert_true(same_bits(e->doc.sys->surf[2].before.dx, 1.5));
+    /* A mirror made a break loses what a break cannot hold, says so, and
+     * gets it back on undo. */
+    ok(e, "set 2 radius 100");
+    ok(e, "set 2 type COORDBRK");
+    assert_non_null(strstr(e->msg, "radius, material, after change"));
+    assert_true(isinf(e->doc.sys->surf[2].radius) && e->doc.sys->surf[2].mat.kind == SG_MAT_AIR &&
+                sg_frame_change_is_zero(&e->doc.sys->surf[2].after));
+    assert_true(same_bits(e->doc.sys->surf[2].before.tx, 45.0));
+    ok(e, "undo");
+    assert_true(e->doc.sys->surf[2].radius == 100.0 &&
+                e->doc.sys->surf[2].mat.kind == SG_MAT_MIRROR &&
+                same_bits(e->doc.sys->surf[2].after.tx, 45.0));
     sg_system_free(before);
     sg_system_free(after);
     free_ed(e);
