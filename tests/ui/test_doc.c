@@ -139,7 +139,7 @@ static void test_set_shapes(void **state)
     /* A normalization radius must be positive. */
     assert_true(run(e, "set 1 norm 0") & ED_ERROR);
     /* Zernike decenters are a Zernike sag's own: dim on a toroid. */
-    assert_false(cell_used(&e->doc.sys->surf[1], cell_parse_name("zdx")));
+    assert_false(cell_used(e->doc.sys, 1, cell_parse_name("zdx")));
     free_ed(e);
 
     /* Fringe Z1 + Z4 with equal coefficients c is 2 c rho^2: decentred to
@@ -158,7 +158,7 @@ static void test_set_shapes(void **state)
     ok(e, "set 1 thickness -25");
     assert_true(same_bits(e->doc.sys->surf[1].zern_dx, 1.5) &&
                 same_bits(e->doc.sys->surf[1].zern_dy, -0.75));
-    assert_true(cell_used(&e->doc.sys->surf[1], cell_parse_name("zdy")));
+    assert_true(cell_used(e->doc.sys, 1, cell_parse_name("zdy")));
     assert_true(run(e, "set 1 zdx inf") & ED_ERROR);
     assert_non_null(strstr(e->msg, "surface 1 zdx"));
     for (i = 0; i < 3; i++) {
@@ -242,10 +242,21 @@ static void test_frame_columns(void **state)
     assert_int_equal(e->doc.sys->surf[2].before.order, 0);
     assert_true(run(e, "set 2 order 2") & ED_ERROR);
     assert_non_null(strstr(e->msg, "surface 2 order"));
-    assert_false(cell_used(&e->doc.sys->surf[2], cell_parse_name("radius")));
-    assert_false(cell_used(&e->doc.sys->surf[2], cell_parse_name("adx")));
-    assert_true(cell_used(&e->doc.sys->surf[2], cell_parse_name("tz")));
-    assert_true(cell_used(&e->doc.sys->surf[3], cell_parse_name("adx")));
+    assert_false(cell_used(e->doc.sys, 2, cell_parse_name("radius")));
+    assert_false(cell_used(e->doc.sys, 2, cell_parse_name("adx")));
+    assert_true(cell_used(e->doc.sys, 2, cell_parse_name("tz")));
+    assert_true(cell_used(e->doc.sys, 3, cell_parse_name("adx")));
+    /* Where no frame change may stand: dim, and refused by name. */
+    assert_false(cell_used(e->doc.sys, 0, cell_parse_name("dx")));
+    assert_false(cell_used(e->doc.sys, 1, cell_parse_name("tx")));
+    assert_true(cell_used(e->doc.sys, 1, cell_parse_name("atx")));
+    assert_false(cell_used(e->doc.sys, 5, cell_parse_name("ady")));
+    assert_true(run(e, "set 0 dx 1") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 0 dx: the object cannot be tilted"));
+    assert_true(run(e, "set 1 tx 5") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 1 tx: rays start in surface 1's frame"));
+    assert_true(run(e, "set 5 after reverse") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 5 after: nothing follows the image"));
     assert_true(run(e, "set 2 adx 1") & ED_ERROR);
     assert_non_null(strstr(e->msg, "surface 2 adx"));
     assert_true(run(e, "set 2 tx 400") & ED_ERROR);
@@ -281,7 +292,7 @@ static void test_frame_columns(void **state)
     ok(e, "set 2 tx 45");
     ok(e, "set 2 after reverse");
     assert_int_equal(e->doc.sys->surf[2].after_mode, SG_AFTER_REVERSE);
-    assert_false(cell_used(&e->doc.sys->surf[2], cell_parse_name("atx")));
+    assert_false(cell_used(e->doc.sys, 2, cell_parse_name("atx")));
     assert_true(run(e, "set 2 atx 45") & ED_ERROR);
     assert_non_null(strstr(e->msg, "surface 2 atx"));
     ok(e, "set 2 after explicit");

@@ -105,11 +105,29 @@ int cell_numeric(int col)
     return p && p->kind == SG_PARAM_REAL;
 }
 
-int cell_used(const sg_surface *s, int col)
+/* Where a frame change may not stand (as sg_system_validate says): the
+ * object moves nothing, rays start in surface 1's frame, and nothing
+ * follows the image.  NULL where it may. */
+static const char *frame_refused(const sg_system *sys, int row, const sg_param *p)
+{
+    if (!(p->flags & SG_PARAM_NESTED))
+        return NULL;
+    if (row == 0)
+        return "the object cannot be tilted or decentered";
+    if (row == 1 && strncmp(p->key, "before.", 7) == 0)
+        return "rays start in surface 1's frame, which cannot be tilted or decentered before "
+               "it; tilt after it, or from surface 2 on";
+    if (row == sys->nsurf - 1 && strncmp(p->key, "after.", 6) == 0)
+        return "nothing follows the image, so it takes no after change";
+    return NULL;
+}
+
+int cell_used(const sg_system *sys, int row, int col)
 {
     int k;
     const sg_param *p = cell_param(col, &k);
-    if (!p)
+    const sg_surface *s = &sys->surf[row];
+    if (!p || frame_refused(sys, row, p))
         return 0;
     /* A reverse after change is computed, not typed. */
     if (s->after_mode == SG_AFTER_REVERSE && (p->flags & SG_PARAM_NESTED) &&
@@ -312,10 +330,16 @@ static int set_material(sg_system *sys, const sg_catalog *cat, int row,
 /* Whether a frame change's cell may be typed into: a coordinate break has
  * no after change, and a reverse after change takes no values of its own.
  * Else 0 with a message naming the surface and column. */
-static int frame_ok(const sg_surface *s, int row, int col, const sg_param *p, char *err,
+static int frame_ok(const sg_system *sys, int row, int col, const sg_param *p, char *err,
                     size_t errn)
 {
+    const sg_surface *s = &sys->surf[row];
     int after = strncmp(p->key, "after.", 6) == 0;
+    const char *why = frame_refused(sys, row, p);
+    if (why) {
+        snprintf(err, errn, "surface %d %s: %s", row, cell_name(col), why);
+        return 0;
+    }
     if (!(p->flags & SG_PARAM_NESTED) || !after)
         return 1;
     if (s->type == SG_SURF_COORDBRK) {
@@ -413,7 +437,7 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
                 }
                 return SG_EPARSE;
             }
-            if (!frame_ok(s, row, col, p, err, errn))
+            if (!frame_ok(sys, row, col, p, err, errn))
                 return SG_EINVAL;
             sg_param_set(p, s, 0, k);
             if (p->offset == offsetof(sg_surface, after_mode) && k == SG_AFTER_REVERSE &&
@@ -473,7 +497,7 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
     case SG_PARAM_REAL:
         break;
     }
-    if (!frame_ok(s, row, col, p, err, errn))
+    if (!frame_ok(sys, row, col, p, err, errn))
         return SG_EINVAL;
     if (!trimmed(text, buf, sizeof buf)) {
         snprintf(err, errn, "surface %d %s: text is too long", row, cell_name(col));

@@ -163,7 +163,7 @@ void sheet_draw(ui *u)
             cell_show(u, r, c, w, cell, sizeof cell);
             /* A surface ignores the parameters of other shapes (a STANDARD
              * surface its r^n terms): shown, but dim. */
-            if (!cell_used(&s->surf[r], c))
+            if (!cell_used(s, r, c))
                 style = T_DIM;
             if (r == e->row && c == e->col)
                 style = u->focus == FOCUS_SHEET ? T_CURSOR : T_ROWSEL;
