@@ -295,6 +295,10 @@ static void test_frame_columns(void **state)
     assert_false(cell_used(e->doc.sys, 2, cell_parse_name("atx")));
     assert_true(run(e, "set 2 atx 45") & ED_ERROR);
     assert_non_null(strstr(e->msg, "surface 2 atx"));
+    /* Its order too: "reverse" in the file has none of its own. */
+    assert_false(cell_used(e->doc.sys, 2, cell_parse_name("aorder")));
+    assert_true(run(e, "set 2 aorder 1") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 2 aorder"));
     ok(e, "set 2 after explicit");
     ok(e, "set 2 atx 45");
     ok(e, "set 2 thickness -20");

@@ -129,9 +129,10 @@ int cell_used(const sg_system *sys, int row, int col)
     const sg_surface *s = &sys->surf[row];
     if (!p || frame_refused(sys, row, p))
         return 0;
-    /* A reverse after change is computed, not typed. */
+    /* A reverse after change is computed, not typed: its values and
+     * order are dim, the mode itself not. */
     if (s->after_mode == SG_AFTER_REVERSE && (p->flags & SG_PARAM_NESTED) &&
-        p->kind == SG_PARAM_REAL && strncmp(p->key, "after.", 6) == 0)
+        p->offset != offsetof(sg_surface, after_mode) && strncmp(p->key, "after.", 6) == 0)
         return 0;
     return sg_param_used(p, k, s->type);
 }
@@ -347,7 +348,7 @@ static int frame_ok(const sg_system *sys, int row, int col, const sg_param *p, c
                             "use another break", row, cell_name(col));
         return 0;
     }
-    if (s->after_mode == SG_AFTER_REVERSE && p->kind == SG_PARAM_REAL) {
+    if (s->after_mode == SG_AFTER_REVERSE && p->offset != offsetof(sg_surface, after_mode)) {
         snprintf(err, errn, "surface %d %s: the after change is \"reverse\" (it undoes the "
                             "before change); set after to explicit first", row, cell_name(col));
         return 0;
@@ -441,7 +442,7 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
                 return SG_EINVAL;
             sg_param_set(p, s, 0, k);
             if (p->offset == offsetof(sg_surface, after_mode) && k == SG_AFTER_REVERSE &&
-                !sg_frame_change_is_zero(&s->after)) {
+                (!sg_frame_change_is_zero(&s->after) || s->after.order)) {
                 /* Reverse computes the after change; values of its own
                  * would contradict it. */
                 memset(&s->after, 0, sizeof s->after);
