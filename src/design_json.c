@@ -571,6 +571,11 @@ static int read_scope(jctx *c, sg_param_scope scope, const cJSON *v, const char 
     pick_keys(c, v, where, names, n, k);
     for (i = 0; i < sg_param_count(scope); i++) {
         const sg_param *p = sg_param_at(scope, i);
+        /* A frame change's values are read from its nested object. */
+        if (k[i] && (p->flags & SG_PARAM_NESTED)) {
+            pwarn(c, where, "unknown key \"%s\" ignored", p->key);
+            continue;
+        }
         if (!k[i]) {
             if (p->flags & SG_PARAM_REQUIRED)
                 return perr(c, SG_EPARSE, where, "required key \"%s\" is missing", p->key);
@@ -1551,7 +1556,7 @@ static void sb_scope(sbuf *b, sg_param_scope scope, const void *obj, const char 
     int i, n = 0;
     for (i = 0; i < sg_param_count(scope); i++) {
         const sg_param *p = sg_param_at(scope, i);
-        if (at_default(p, obj))
+        if ((p->flags & SG_PARAM_NESTED) || at_default(p, obj))
             continue;
         sb_puts(b, n++ ? sep : first);
         sb_puts(b, "\"");
@@ -1567,7 +1572,7 @@ static int needed_version(sg_param_scope scope, const void *obj, int v)
     int i;
     for (i = 0; i < sg_param_count(scope); i++) {
         const sg_param *p = sg_param_at(scope, i);
-        if (p->version > v && !at_default(p, obj))
+        if (p->version > v && !(p->flags & SG_PARAM_NESTED) && !at_default(p, obj))
             v = p->version;
     }
     return v;

@@ -812,9 +812,9 @@ static int zmx_shape(zctx *c, zsurf *z, sg_surface *s)
               : xy                              ? SG_NTERMS - 1
                                                 : SG_NTERMS;
         k = xy ? parm_only(c, z, 1, 0, "an XY polynomial has no parameters")
-               : parm_only(c, z, 0, SG_NASPH,
-                           "the Zernike sag has terms r^2 to r^16 (PARM 1 to 8); its "
-                           "Zernike decenters are not supported");
+               : parm_only(c, z, 0, SG_NASPH + 2,
+                           "the Zernike sag has terms r^2 to r^16 (PARM 1 to 8) and the "
+                           "Zernike decenters x and y (PARM 9 and 10)");
         if (k != SG_OK)
             return k;
         if (!xy && z->parm_line[0] && z->parm[0] == 0.0)
@@ -822,6 +822,11 @@ static int zmx_shape(zctx *c, zsurf *z, sg_surface *s)
                   "normalization radius; sagitta applies them at every radius");
         for (k = 0; k < SG_NASPH && !xy; k++)
             s->asph[k] = z->parm[k + 1];
+        /* PARM 9 and 10: where the Zernike terms are centred (Decenter X, Y). */
+        if (!xy) {
+            s->zern_dx = z->parm[SG_NASPH + 1];
+            s->zern_dy = z->parm[SG_NASPH + 2];
+        }
         if (z->xd[1] != (double)n || n < 0 || n > max) {
             c->line = z->xd_line[1];
             return zerr(c, SG_EUNSUPPORTED, "XDAT 1: %.17g terms; sagitta reads 0 to %d here",
@@ -1949,6 +1954,12 @@ static void zb_shape(zbuf *b, const sg_surface *f)
         zb_add(b, "  PARM 0 1\n", 11);
         for (k = 0; k < SG_NASPH; k++)
             zb_printf(b, "  PARM %d %s\n", k + 1, num(n1, f->asph[k]));
+        /* Decenter X and Y, only when set, so centred surfaces write as
+         * before. */
+        if (f->zern_dx != 0.0 || f->zern_dy != 0.0) {
+            zb_printf(b, "  PARM %d %s\n", SG_NASPH + 1, num(n1, f->zern_dx));
+            zb_printf(b, "  PARM %d %s\n", SG_NASPH + 2, num(n1, f->zern_dy));
+        }
         /* fall through */
     case SG_SURF_XYPOLY:
         for (k = 0; k < SG_NTERMS; k++)

@@ -33,6 +33,10 @@ static const char *const aper_type_names[] = {
     "epd", "image_fnum", "object_na", "float_by_stop", "paraxial_working_fnum",
     "object_cone_angle"};
 static const char *const aim_names[] = {"off", "paraxial", "real"};
+/* A frame change's order as JSON writes it, and as Zemax shows it. */
+static const char *const order_names[] = {"decenter_then_tilt", "tilt_then_decenter"};
+static const char *const order_shown[] = {"0", "1"};
+static const char *const after_names[] = {"explicit", "reverse"};
 
 #define NAMES(a) (a), NULL, (int)(sizeof(a) / sizeof((a)[0]))
 #define NONAMES NULL, NULL, 0
@@ -42,6 +46,20 @@ static const char *const aim_names[] = {"off", "paraxial", "real"};
 #define REAL1(st, key, label, head, cell, zmx, flags, member, lo, hi, def)                   \
     {key, label, head, cell, zmx, SG_PARAM_REAL, flags, offsetof(st, member), 0, 1, 0, 0,  \
      lo, hi, def, NONAMES, 1}
+
+/* The six values of a frame change: keys "before.dx" ..., labels
+ * "decenter x" ..., cells "dx" ... (after: "adx" ...). */
+#define FRAME_REAL(m, key, label, head, cell, lo, hi)                                         \
+    {key, label, head, cell, NULL, SG_PARAM_REAL, SG_PARAM_NESTED, offsetof(sg_surface, m), 0, \
+     1, 0, 0, lo, hi, 0.0, NONAMES, 2}
+#define FRAME(m, key, lab, hdx, hdy, htx, hty, htz, hor, pre)                                 \
+    FRAME_REAL(m.dx, key ".dx", lab "decenter x", hdx, pre "dx", -SG_MAX_LEN, SG_MAX_LEN),      \
+    FRAME_REAL(m.dy, key ".dy", lab "decenter y", hdy, pre "dy", -SG_MAX_LEN, SG_MAX_LEN),      \
+    FRAME_REAL(m.tx, key ".tx", lab "tilt about x", htx, pre "tx", -360.0, 360.0),              \
+    FRAME_REAL(m.ty, key ".ty", lab "tilt about y", hty, pre "ty", -360.0, 360.0),              \
+    FRAME_REAL(m.tz, key ".tz", lab "tilt about z", htz, pre "tz", -360.0, 360.0),              \
+    {key ".order", lab "order", hor, pre "order", NULL, SG_PARAM_ENUM, SG_PARAM_NESTED,           \
+     offsetof(sg_surface, m.order), 0, 1, 0, 0, 0, 0, 0, order_names, order_shown, 2, 2}
 
 static const sg_param system_params[] = {
     {"title", "title", NULL, NULL, NULL, SG_PARAM_TEXT, 0, offsetof(sg_system, title),
@@ -119,6 +137,14 @@ static const sg_param surface_params[] = {
     {"norm_radius", "normalization radius", "Norm R", "norm", "XDAT", SG_PARAM_REAL,
      SG_PARAM_POSITIVE | SG_PARAM_OPTIONAL, offsetof(sg_surface, norm_radius), 0, 1, 0, 0, 0.0,
      SG_MAX_LEN, 1.0, NONAMES, 3},
+    /* Zemax's Decenter X and Y of a Zernike sag: where its terms are
+     * centred (the conic and r^n terms stay on the vertex). */
+    {"zernike_decenter_x", "Zernike decenter x", "Zern dX", "zdx", "PARM", SG_PARAM_REAL,
+     SG_PARAM_OPTIONAL, offsetof(sg_surface, zern_dx), 0, 1, 0, 0, -SG_MAX_LEN, SG_MAX_LEN, 0.0,
+     NONAMES, 3},
+    {"zernike_decenter_y", "Zernike decenter y", "Zern dY", "zdy", "PARM", SG_PARAM_REAL,
+     SG_PARAM_OPTIONAL, offsetof(sg_surface, zern_dy), 0, 1, 0, 0, -SG_MAX_LEN, SG_MAX_LEN, 0.0,
+     NONAMES, 3},
     {"terms", "term %d", "T%d", "t%d", "XDAT", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
      offsetof(sg_surface, terms), 0, SG_NTERMS, 1, 1, -INFINITY, INFINITY, 0.0, NONAMES, 3},
     /* Format version 2: surface apertures and obscurations. */
@@ -144,6 +170,17 @@ static const sg_param surface_params[] = {
     {"aperture_y_decenter", "aperture y decenter", "Ap y-dec", "ap_ydec", "OBDC", SG_PARAM_REAL,
      SG_PARAM_OPTIONAL, offsetof(sg_surface, ap_ydec), 0, 1, 0, 0, -SG_MAX_LEN, SG_MAX_LEN, 0.0,
      NONAMES, 2},
+    /* Format version 2: the frame changes, Zemax's coordinate break
+     * (Decenter X ... Order, the break itself, in "before") and a surface's
+     * tilt and decenter before and after it.  design_json.c reads and
+     * writes them as the nested objects "break", "before" and "after";
+     * here for the editor's columns, validation and equality. */
+    FRAME(before, "before", "", "Dec X", "Dec Y", "Tilt X", "Tilt Y", "Tilt Z", "Order", ""),
+    {"after.mode", "after mode", "After", "after", NULL, SG_PARAM_ENUM, SG_PARAM_NESTED,
+     offsetof(sg_surface, after_mode), 0, 1, 0, 0, 0, 0, SG_AFTER_EXPLICIT, after_names,
+     after_names, 2, 2},
+    FRAME(after, "after", "after ", "Aft dX", "Aft dY", "Aft tX", "Aft tY", "Aft tZ", "Aft Ord",
+          "a"),
 };
 
 #define NROWS(a) ((int)(sizeof(a) / sizeof((a)[0])))
@@ -426,6 +463,11 @@ int sg_param_used(const sg_param *p, int k, int type)
 {
     const char *key = p->key;
     int zern = type == SG_SURF_ZERNIKE_FRINGE || type == SG_SURF_ZERNIKE_STANDARD;
+    /* A coordinate break is its before change (Zemax's Decenter X ...
+     * Order) and a thickness; no optics, no after change. */
+    if (type == SG_SURF_COORDBRK)
+        return strcmp(key, "type") == 0 || strcmp(key, "comment") == 0 ||
+               strcmp(key, "thickness") == 0 || strncmp(key, "before.", 7) == 0;
     if (strcmp(key, "asphere") == 0)
         return type == SG_SURF_EVENASPH || zern || (type == SG_SURF_TOROIDAL && k < 7);
     if (strcmp(key, "odd") == 0)
@@ -436,6 +478,8 @@ int sg_param_used(const sg_param *p, int k, int type)
         return type == SG_SURF_BICONIC;
     if (strcmp(key, "norm_radius") == 0)
         return zern || type == SG_SURF_XYPOLY;
+    if (strcmp(key, "zernike_decenter_x") == 0 || strcmp(key, "zernike_decenter_y") == 0)
+        return zern;
     if (strcmp(key, "terms") == 0)
         return type == SG_SURF_XYPOLY || type == SG_SURF_ZERNIKE_STANDARD ||
                (type == SG_SURF_ZERNIKE_FRINGE && k < SG_ZERNIKE_FRINGE_MAX);

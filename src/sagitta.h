@@ -326,6 +326,8 @@ typedef struct sg_surface {
     double conic_x;        /* biconic: x conic */
     double norm_radius;    /* Zernike and XY: x and y are divided by it */
     double terms[SG_NTERMS]; /* Zernike Z1 ...; XY: x, y, x^2, xy, y^2, x^3, ... */
+    double zern_dx, zern_dy; /* Zernike: the terms' centre (Zemax's Decenter X, Y);
+                              * the conic and r^n terms stay on the vertex */
     sg_aperture_type aperture; /* the surface aperture or obscuration */
     double ap_rmin, ap_rmax;   /* circular: the annulus's radii */
     double ap_xhalf, ap_yhalf; /* rectangular and elliptical: half widths */
@@ -457,6 +459,8 @@ typedef enum sg_param_kind {
 #define SG_PARAM_OBJ_INF 0x08u   /* +inf allowed on the object surface alone */
 #define SG_PARAM_OPTIONAL 0x10u  /* written only when not at its default */
 #define SG_PARAM_REQUIRED 0x20u  /* a JSON object must give it */
+#define SG_PARAM_NESTED 0x40u    /* not a JSON key of its own: design_json.c reads and
+                                  * writes it inside a nested object (a frame change) */
 
 typedef struct sg_param {
     const char *key;       /* JSON key, e.g. "semi_diameter" */

@@ -391,13 +391,15 @@ void sg_p2_mp(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, mpfr_
  * A rotational part plus a polynomial in x and y (Zernike and XY shapes).
  * ------------------------------------------------------------------------ */
 
-/* The conic and the polynomial add, and so do their derivatives. */
+/* The conic and the polynomial add, and so do their derivatives.  The
+ * polynomial is centred on (px, py), the conic on the vertex; a shift
+ * leaves the polynomial's derivatives as they are at the shifted point. */
 int sg_rot_p2_d(const sg_shape *s, double x, double y, double *z, double g[2], double *h)
 {
     double r2 = x * x + y * y, w, dw, zp, gp[2], hp;
     if (!sg_rot_d(s, r2, z, &w, &dw))
         return 0;
-    sg_p2_d(s, x, y, &zp, gp, &hp);
+    sg_p2_d(s, x - s->px, y - s->py, &zp, gp, &hp);
     *z += zp;
     g[0] = w * x + gp[0];
     g[1] = w * y + gp[1];
@@ -412,7 +414,21 @@ int sg_rot_p2_dd(const sg_shape *s, dd x, dd y, dd *z, dd g[2], double *ez, doub
     if (!sg_rot_dd(s, r2, z, &w, ez, &ew))
         return 0;
     *ez += 4.0 * DD_U * fabs(w.hi) * r2.hi;
-    sg_p2_dd(s, x, y, &zp, gp, &ezp, &egp);
+    if (s->px != 0.0 || s->py != 0.0) {
+        /* The shifted point is rounded by at most ex, ey (one sum each,
+         * bounded by its operands since they may cancel): the polynomial
+         * then moves by its gradient times that, and its gradient by the
+         * second derivatives' bound times that. */
+        dd xs = dd_add_d(x, -s->px), ys = dd_add_d(y, -s->py);
+        double ex = 2.0 * DD_U * (fabs(x.hi) + fabs(s->px)),
+               ey = 2.0 * DD_U * (fabs(y.hi) + fabs(s->py)), zd, gd[2], hd;
+        sg_p2_dd(s, xs, ys, &zp, gp, &ezp, &egp);
+        sg_p2_d(s, xs.hi, ys.hi, &zd, gd, &hd);
+        ezp += 2.0 * (fabs(gp[0].hi) * ex + fabs(gp[1].hi) * ey);
+        egp += 2.0 * hd * fmax(ex, ey);
+    } else {
+        sg_p2_dd(s, x, y, &zp, gp, &ezp, &egp);
+    }
     *z = dd_add(*z, zp);
     g[0] = dd_add(dd_mul(w, x), gp[0]);
     g[1] = dd_add(dd_mul(w, y), gp[1]);
@@ -430,7 +446,10 @@ int sg_rot_p2_mp(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, mp
     mpfr_add(t[8], t[8], t[9], MPFR_RNDN);
     if (!sg_rot_mp(s, t[8], z, t[10], t))
         return 0;
-    sg_p2_mp(s, mc, x, y, t[4], t[5], t[6], t);
+    /* r2 is used: t[8] and t[9] take the polynomial's shifted point. */
+    mpfr_sub_d(t[8], x, s->px, MPFR_RNDN);
+    mpfr_sub_d(t[9], y, s->py, MPFR_RNDN);
+    sg_p2_mp(s, mc, t[8], t[9], t[4], t[5], t[6], t);
     mpfr_add(z, z, t[4], MPFR_RNDN);
     mpfr_mul(gx, t[10], x, MPFR_RNDN);
     mpfr_add(gx, gx, t[5], MPFR_RNDN);

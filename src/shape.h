@@ -79,7 +79,8 @@ struct sg_shape {
     int nodd;     /* odd asphere terms in use: odd[k] on r^(k+1) */
     double odd[SG_NODD];
     int deg;      /* polynomial in u, v: degree, 0 for none */
-    double norm;  /* u = x / norm, v = y / norm */
+    double norm;  /* u = (x - px) / norm, v = (y - py) / norm */
+    double px, py; /* the polynomial's centre: a Zernike sag's decenter, else 0 */
     int nz;       /* terms summed into each coefficient */
     dd c[SG_P2_N]; /* its coefficients, rounded to double-double from exact sums */
     double cm[SG_P2_N]; /* the magnitude of each coefficient's terms, for bounds */

@@ -125,7 +125,7 @@ static inline void svd_p2(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd 
     g[1] = svd_div_d(gy, s->norm);
 }
 
-/* sg_rot_p2_dd. */
+/* sg_rot_p2_dd, with a Zernike sag's decenter as there. */
 static inline void svd_rot_p2(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd *ez, vd *eg,
                               vm *bad)
 {
@@ -133,7 +133,25 @@ static inline void svd_rot_p2(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2],
     vd ew, ezp, egp, m = vd_fmax(vd_abs(x.hi), vd_abs(y.hi));
     svd_rot(s, r2, z, &w, ez, &ew, bad);
     *ez += 4.0 * DD_U * vd_abs(w.hi) * r2.hi;
-    svd_p2(s, x, y, &zp, gp, &ezp, &egp);
+    if (s->px != 0.0 || s->py != 0.0) {
+        /* A Zernike sag's decenter, with the scalar code's bounds on the
+         * shift; the second-derivative bound comes from the double
+         * kernel, lane by lane. */
+        vdd xs = vdd_add_d(x, vd_set(-s->px)), ys = vdd_add_d(y, vd_set(-s->py));
+        vd ex = 2.0 * DD_U * (vd_abs(x.hi) + fabs(s->px)),
+           ey = 2.0 * DD_U * (vd_abs(y.hi) + fabs(s->py)), hd;
+        int k;
+        svd_p2(s, xs, ys, &zp, gp, &ezp, &egp);
+        for (k = 0; k < SG_VL; k++) {
+            double zd, gd[2], h;
+            sg_p2_d(s, xs.hi[k], ys.hi[k], &zd, gd, &h);
+            hd[k] = h;
+        }
+        ezp += 2.0 * (vd_abs(gp[0].hi) * ex + vd_abs(gp[1].hi) * ey);
+        egp += 2.0 * hd * vd_fmax(ex, ey);
+    } else {
+        svd_p2(s, x, y, &zp, gp, &ezp, &egp);
+    }
     *z = vdd_add(*z, zp);
     g[0] = vdd_add(vdd_mul(w, x), gp[0]);
     g[1] = vdd_add(vdd_mul(w, y), gp[1]);

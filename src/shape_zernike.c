@@ -1,8 +1,9 @@
 /*
  * shape_zernike.c - Zemax's Zernike Fringe Sag and Zernike Standard Sag:
  * an even asphere (conic and a_1 r^2 ... a_8 r^16) plus sum A_j Z_j(rho,
- * theta), rho = r / the normalization radius, theta from the x axis
- * (sagitta-design(5), SURFACE TYPES).  Fringe: the 37 terms of the
+ * theta), rho = r / the normalization radius, theta from the x axis, r and
+ * theta about Zemax's Decenter X and Y (the conic and r^n terms stay on the
+ * vertex; sagitta-design(5), SURFACE TYPES).  Fringe: the 37 terms of the
  * University of Arizona order, not normalized.  Standard: Noll's order
  * and normalization, sqrt(n + 1) or sqrt(2 (n + 1)).
  *
@@ -75,6 +76,12 @@ static int zern_prepare(const sg_surface *f, sg_shape *s, int isurf, sg_diag *d)
     int rc = sg_p2_terms(f, s, isurf, d);
     if (rc != SG_OK)
         return rc;
+    /* Zemax's Decenter X and Y move the terms, not the conic. */
+    if (!isfinite(f->zern_dx) || !isfinite(f->zern_dy))
+        return sg_diag_set(d, SG_ERANGE, "surface %d: Zernike decenter (%g, %g) must be finite",
+                           isurf, f->zern_dx, f->zern_dy);
+    s->px = f->zern_dx;
+    s->py = f->zern_dy;
     if (!std && s->nz > SG_ZERNIKE_FRINGE_MAX)
         return sg_diag_set(d, SG_ERANGE, "surface %d: Fringe Zernike term %d; there are %d",
                            isurf, s->nz, SG_ZERNIKE_FRINGE_MAX);

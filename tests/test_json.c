@@ -775,7 +775,7 @@ static void test_shapes(void **state)
         "    { \"type\": \"zernike_fringe\", \"radius\": -70, \"norm_radius\": 12.5,\n"
         "      \"terms\": [0, 0, 0, 1e-3, 2e-4, 0, 0, 3e-5], \"thickness\": 4 },\n"
         "    { \"type\": \"zernike_standard\", \"norm_radius\": 11, \"terms\": [0, 1e-4, 0, 2e-3],\n"
-        "      \"thickness\": 4 },\n"
+        "      \"zernike_decenter_x\": -2.5, \"zernike_decenter_y\": 0.375, \"thickness\": 4 },\n"
         "    { \"type\": \"xy_polynomial\", \"radius\": 300, \"norm_radius\": 10,\n"
         "      \"terms\": [0, 0, 1e-3, 0, -2e-3, 0, 4e-5], \"thickness\": 30 }, {} ] }\n";
     sg_system *s = sg_system_new(), *r = sg_system_new();
@@ -792,6 +792,8 @@ static void test_shapes(void **state)
     assert_int_equal(s->surf[4].type, SG_SURF_ZERNIKE_FRINGE);
     assert_true(s->surf[4].norm_radius == 12.5 && s->surf[4].terms[7] == 3e-5);
     assert_int_equal(s->surf[5].type, SG_SURF_ZERNIKE_STANDARD);
+    assert_true(s->surf[5].zern_dx == -2.5 && s->surf[5].zern_dy == 0.375);
+    assert_true(s->surf[4].zern_dx == 0.0 && s->surf[4].zern_dy == 0.0);
     assert_int_equal(s->surf[6].type, SG_SURF_XYPOLY);
     assert_true(s->surf[6].terms[6] == 4e-5);
     out = sg_design_to_json(s);
@@ -799,6 +801,14 @@ static void test_shapes(void **state)
     assert_non_null(strstr(out, "\"version\": 3"));
     assert_int_equal(parse_text(r, out, &d), SG_OK);
     assert_true(sg_system_equal(s, r));
+    /* The decenters are written where they are set, and only there. */
+    {
+        const char *x = strstr(out, "\"zernike_decenter_x\": -2.5");
+        assert_non_null(x);
+        assert_null(strstr(x + 4, "zernike_decenter_x"));
+        assert_true(strstr(out, "zernike_decenter_x") == x + 1);
+        assert_non_null(strstr(out, "\"zernike_decenter_y\": 0.375"));
+    }
     free(out);
     /* A design without the new shapes is still written as version 1 or 2. */
     sg_system_free(r);
@@ -807,6 +817,7 @@ static void test_shapes(void **state)
     assert_null(strstr(out, "\"version\": 3"));
     assert_null(strstr(out, "norm_radius"));
     assert_null(strstr(out, "terms"));
+    assert_null(strstr(out, "zernike_decenter"));
     free(out);
     sg_system_free(s);
     sg_system_free(r);

@@ -22,6 +22,12 @@
  *   - reductions: a Zernike or XY surface with no terms, a biconic with
  *     equal sections and a toroid whose radius of rotation is its radius
  *     trace bit for bit as the conic or sphere they are.
+ *
+ * Half the random Zernike surfaces are decentred (their terms about
+ * Zemax's Decenter X, Y; the reference shifts the point before its polar
+ * form).  A closed form: Fringe Z1 + Z4 decentred is a paraboloid off the
+ * vertex, whose sag and slope are checked against the formula in MPFR and
+ * whose focus every axial ray must reach.
  */
 #include <math.h>
 #include <mpfr.h>
@@ -241,9 +247,13 @@ static int sag_ref(const sg_surface *f, const mpfr_t x, const mpfr_t y, mpfr_t z
         mpfr_inits2(PREC, rho, th, zt, (mpfr_ptr)0);
         ok = conic_ref(z, f->radius, f->conic, r2);
         even_ref(z, f->asph, SG_NASPH, r2);
-        mpfr_sqrt(rho, r2, MPFR_RNDN);
+        /* The terms about the decenter (Zemax's Decenter X, Y), the
+         * conic and r^n terms about the vertex. */
+        mpfr_sub_d(u, x, f->zern_dx, MPFR_RNDN);
+        mpfr_sub_d(t, y, f->zern_dy, MPFR_RNDN);
+        mpfr_hypot(rho, u, t, MPFR_RNDN);
         mpfr_div_d(rho, rho, f->norm_radius, MPFR_RNDN);
-        mpfr_atan2(th, y, x, MPFR_RNDN);
+        mpfr_atan2(th, t, u, MPFR_RNDN);
         for (k = 0; k < SG_NTERMS; k++) {
             int n, m;
             if (f->terms[k] == 0.0)
@@ -367,6 +377,12 @@ static void random_shape(sg_surface *f, int type, double s)
             if (urand() < 0.5)
                 f->terms[k] = srand1(0.02) * s / (1.0 + k);
         f->asph[1] = srand1(1e-6) / (s * s * s);
+        /* Half of them decentred: the terms about (dx, dy), the conic and
+         * r^n terms about the vertex. */
+        if (urand() < 0.5) {
+            f->zern_dx = srand1(2.0) * s;
+            f->zern_dy = srand1(2.0) * s;
+        }
         break;
     case SG_SURF_XYPOLY:
         f->norm_radius = (8.0 + 4.0 * urand()) * s;
@@ -619,6 +635,8 @@ static sg_system *one_shape(const sg_surface *f, int mirror, double scale)
     s->radius_x = f->radius_x;
     s->conic_x = f->conic_x;
     s->norm_radius = f->norm_radius;
+    s->zern_dx = f->zern_dx;
+    s->zern_dy = f->zern_dy;
     s->thickness = (mirror ? -10.0 : 10.0) * scale;
     if (mirror) {
         s->mat.kind = SG_MAT_MIRROR;
@@ -866,6 +884,117 @@ static void carried_error(void **state)
     mpfr_clears(Pm[0], Pm[1], Pm[2], e, (mpfr_ptr)0);
 }
 
+/* A closed form: Fringe Z1 + Z4 = 2 rho^2 with equal coefficients c, so
+ * a flat Zernike sag decentred to (a, b) is the paraboloid z = 2c ((x -
+ * a)^2 + (y - b)^2) / R^2 = -((x - a)^2 + (y - b)^2) / (4 F) with c = -R^2
+ * / (8 F).  Its sag and slope in the three arithmetics against that
+ * formula in MPFR here, and as a mirror: every ray along the axis meets
+ * the plane at -F in the paraboloid's focus (a, b), within its bound. */
+static void zernike_decenter_closed_form(void **state)
+{
+    const double R = 10.0, F = 25.0, a = 1.5, b = -0.75;
+    mpfr_t x, y, z, gx, gy, e, w, tmp[SG_SHAPE_MPTMP], mc[SG_SHAPE_MPC];
+    sg_catalog *cat = tu_catalog();
+    sg_surface f;
+    sg_shape sh;
+    sg_system *sys;
+    double worst = 0.0;
+    int k, j, m, nray = 0;
+    (void)state;
+    rng_state = 0xdece47e5ULL;
+    memset(&f, 0, sizeof f);
+    f.type = SG_SURF_ZERNIKE_FRINGE;
+    f.radius = INFINITY;
+    f.norm_radius = R;
+    f.terms[0] = f.terms[3] = -R * R / (8.0 * F);
+    f.zern_dx = a;
+    f.zern_dy = b;
+    assert_int_equal(sg_shape_prepare(&f, &sh, 1, NULL), SG_OK);
+    mpfr_inits2(PREC, x, y, z, gx, gy, e, w, (mpfr_ptr)0);
+    for (k = 0; k < SG_SHAPE_MPTMP; k++)
+        mpfr_init2(tmp[k], PREC);
+    sg_shape_mp_coefs(&sh, mc, PREC);
+    for (j = 0; j < 200; j++) {
+        double px = srand1(9.0), py = srand1(9.0), zd, gd[2], h, ez, eg, want, wgx, wgy;
+        dd zz, gg[2];
+        /* z = -((x - a)^2 + (y - b)^2) / (4 F), slope -(x - a) / (2 F). */
+        mpfr_set_d(x, px, MPFR_RNDN);
+        mpfr_set_d(y, py, MPFR_RNDN);
+        mpfr_sub_d(gx, x, a, MPFR_RNDN);
+        mpfr_sub_d(gy, y, b, MPFR_RNDN);
+        mpfr_sqr(z, gx, MPFR_RNDN);
+        mpfr_sqr(w, gy, MPFR_RNDN);
+        mpfr_add(z, z, w, MPFR_RNDN);
+        mpfr_div_d(z, z, -4.0 * F, MPFR_RNDN);
+        mpfr_div_d(gx, gx, -2.0 * F, MPFR_RNDN);
+        mpfr_div_d(gy, gy, -2.0 * F, MPFR_RNDN);
+        want = mpfr_get_d(z, MPFR_RNDN);
+        wgx = mpfr_get_d(gx, MPFR_RNDN);
+        wgy = mpfr_get_d(gy, MPFR_RNDN);
+        assert_true(sh.ops->sag_d(&sh, px, py, &zd, gd, &h));
+        assert_true(fabs(zd - want) <= 1e-13 && fabs(gd[0] - wgx) <= 1e-14 &&
+                    fabs(gd[1] - wgy) <= 1e-14);
+        /* The paraboloid's second derivatives are 1 / (2 F) on the diagonal. */
+        assert_true(h >= 1.0 / (2.0 * F));
+        assert_true(sh.ops->sag_dd(&sh, dd_from(px), dd_from(py), &zz, gg, &ez, &eg));
+        mpfr_set_d(e, zz.hi, MPFR_RNDN);
+        mpfr_add_d(e, e, zz.lo, MPFR_RNDN);
+        mpfr_sub(e, e, z, MPFR_RNDN);
+        if (!(fabs(mpfr_get_d(e, MPFR_RNDN)) <= ez))
+            fail_msg("double-double sag error %g above its bound %g at (%g, %g)",
+                     mpfr_get_d(e, MPFR_RNDN), ez, px, py);
+        if (fabs(mpfr_get_d(e, MPFR_RNDN)) > worst)
+            worst = fabs(mpfr_get_d(e, MPFR_RNDN));
+        mpfr_set_d(e, gg[0].hi, MPFR_RNDN);
+        mpfr_add_d(e, e, gg[0].lo, MPFR_RNDN);
+        mpfr_sub(e, e, gx, MPFR_RNDN);
+        assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= eg);
+        mpfr_set_d(e, gg[1].hi, MPFR_RNDN);
+        mpfr_add_d(e, e, gg[1].lo, MPFR_RNDN);
+        mpfr_sub(e, e, gy, MPFR_RNDN);
+        assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= eg);
+        /* The MPFR kernel. */
+        {
+            mpfr_t mz, mgx, mgy;
+            mpfr_inits2(PREC, mz, mgx, mgy, (mpfr_ptr)0);
+            assert_true(sh.ops->sag_mp(&sh, mc, x, y, mz, mgx, mgy, tmp));
+            mpfr_sub(e, mz, z, MPFR_RNDN);
+            assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= 0x1p-400);
+            mpfr_sub(e, mgx, gx, MPFR_RNDN);
+            assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= 0x1p-400);
+            mpfr_sub(e, mgy, gy, MPFR_RNDN);
+            assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= 0x1p-400);
+            mpfr_clears(mz, mgx, mgy, (mpfr_ptr)0);
+        }
+    }
+    sg_shape_mp_clear(mc);
+
+    /* The mirror: the image plane at the focus, F before it. */
+    sys = one_shape(&f, 1, 1.0);
+    sys->surf[1].thickness = -F;
+    for (m = 0; m < 2; m++) {
+        sg_tracer *t = tu_tracer(sys, cat, m == 0 ? SG_METHOD_PRECISE : SG_METHOD_MPFR);
+        for (j = 0; j < 50; j++) {
+            double S[3] = {srand1(6.0), srand1(6.0), -5.0}, D[3] = {0.0, 0.0, 1.0};
+            sg_ray_surface o[3];
+            assert_int_equal(sg_trace_start(t, S, D, o), SG_OK);
+            if (!(fabs(o[2].x - a) <= o[2].error_bound && fabs(o[2].y - b) <= o[2].error_bound))
+                fail_msg("method %d: ray at (%g, %g) meets the focal plane at (%.17g, %.17g), "
+                         "not the focus (%g, %g) within %g", m, S[0], S[1], o[2].x, o[2].y, a,
+                         b, o[2].error_bound);
+            nray++;
+        }
+        sg_tracer_free(t);
+    }
+    print_message("# decentred Zernike paraboloid: 200 points within bounds (worst double-double "
+                  "sag error %g); %d axial rays through the focus (%g, %g)\n", worst, nray, a, b);
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+    mpfr_clears(x, y, z, gx, gy, e, w, (mpfr_ptr)0);
+    for (k = 0; k < SG_SHAPE_MPTMP; k++)
+        mpfr_clear(tmp[k]);
+}
+
 /* Surfaces that are another in other words trace bit for bit as it. */
 static void reductions(void **state)
 {
@@ -1041,6 +1170,7 @@ int main(void)
         cmocka_unit_test(carried_error),
         cmocka_unit_test(reductions),
         cmocka_unit_test(vector_kernel),
+        cmocka_unit_test(zernike_decenter_closed_form),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

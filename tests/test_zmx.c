@@ -325,7 +325,8 @@ static void test_roundtrip_shapes(void **state)
         "    { \"type\": \"biconic\", \"radius\": 80, \"radius_x\": \"inf\", \"conic_x\": -1,\n"
         "      \"thickness\": 3, \"material\": \"N-BK7\" },\n"
         "    { \"type\": \"zernike_fringe\", \"radius\": -70, \"norm_radius\": 12.5,\n"
-        "      \"terms\": [0, 0, 0, 1e-3, 2e-4, 0, 0, 3e-5], \"asphere\": [0, 1e-7], \"thickness\": 4 },\n"
+        "      \"terms\": [0, 0, 0, 1e-3, 2e-4, 0, 0, 3e-5], \"asphere\": [0, 1e-7], \"thickness\": 4,\n"
+        "      \"zernike_decenter_x\": 1.25, \"zernike_decenter_y\": -0.75 },\n"
         "    { \"type\": \"zernike_standard\", \"norm_radius\": 11, \"terms\": [0, 1e-4, 0, 2e-3],\n"
         "      \"thickness\": 4 },\n"
         "    { \"type\": \"xy_polynomial\", \"radius\": 300, \"norm_radius\": 10,\n"
@@ -343,7 +344,11 @@ static void test_roundtrip_shapes(void **state)
     assert_non_null(z);
     assert_non_null(strstr(z, "TYPE XPOLYNOM"));
     assert_non_null(strstr(z, "TYPE SZERNSAG"));
+    /* Zemax's Decenter X and Y of a Zernike sag are PARM 9 and 10. */
+    assert_non_null(strstr(z, "PARM 9 1.25\n  PARM 10 -0.75\n"));
     assert_int_equal(sg_zmx_parse(b, z, strlen(z), "shapes.zmx", cat, &d), SG_OK);
+    assert_true(b->surf[4].zern_dx == 1.25 && b->surf[4].zern_dy == -0.75);
+    assert_true(b->surf[5].zern_dx == 0.0 && b->surf[5].zern_dy == 0.0);
     free(z);
     for (m = 0; m < 3; m++) {
         sg_tracer *ta = tu_tracer(a, cat, (sg_method)m), *tb = tu_tracer(b, cat, (sg_method)m);
@@ -525,8 +530,9 @@ static void test_bad_inputs(void **state)
         {"unknown type", H S0 "SURF 1\n  TYPE GRINSUR1\n", 0, SG_EUNSUPPORTED, "t.zmx:8: surface 1: TYPE GRINSUR1"},
         {"zernike too many", H S0 "SURF 1\n  TYPE FZERNSAG\n  XDAT 1 40 0 0 0 0 0 0\n  XDAT 2 10\n",
          0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: XDAT 1: 40 terms; sagitta reads 0 to 37 here"},
-        {"zernike decenter", H S0 "SURF 1\n  TYPE SZERNSAG\n  PARM 9 0.5\n", 0, SG_EUNSUPPORTED,
-         "t.zmx:9: surface 1: PARM 9 is 0.5; the Zernike sag has terms r^2 to r^16"},
+        {"zernike beyond decenter", H S0 "SURF 1\n  TYPE SZERNSAG\n  PARM 11 0.5\n", 0,
+         SG_EUNSUPPORTED, "t.zmx:9: surface 1: PARM 11 is 0.5; the Zernike sag has terms r^2 "
+         "to r^16 (PARM 1 to 8) and the Zernike decenters x and y (PARM 9 and 10)"},
         {"zernike no radius", H S0 "SURF 1\n  TYPE FZERNSAG\n  XDAT 1 4\n  XDAT 2 0\n", 0,
          SG_ERANGE, "t.zmx:10: surface 1: XDAT 2: normalization radius 0 must be positive"},
         {"xy term beyond", H S0 "SURF 1\n  TYPE XPOLYNOM\n  XDAT 1 2\n  XDAT 2 10\n  XDAT 5 1\n",

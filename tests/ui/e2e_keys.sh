@@ -14,7 +14,7 @@
 
 SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
-tmux_setup 25 keys
+tmux_setup 26 keys
 RECDIR=$XDG_STATE_HOME/sagitta
 
 # Waits up to $2 seconds (default 10) for fixed text $1 on the screen.
@@ -329,6 +329,26 @@ infinity() {
     screen | grep -E "^ +0 " | grep -q -- "-Infinity"
 }
 check "infinite values show as -Infinity, as sagitta trace prints them" infinity
+
+# 14b. Space toggles a frame change's order and after mode, as Enter on a
+# choice would; the columns carry Zemax's headings and a coordinate
+# break's after cells are dim.
+frame_space() {
+    $T resize-window -t =main: -x 250 -y 30 2>/dev/null
+    command_line "open! c.json"
+    wait_for "c.json: " || return 1
+    command_line "goto 2 aorder"
+    keys Space
+    wait_for "surface 2 aorder = 1" || return 1
+    command_line "goto 2 after"
+    keys Space
+    wait_for "surface 2 after = reverse" || return 1
+    screen | grep -qF "Aft Ord" || { WHY="no Aft Ord heading"; return 1; }
+    keys Space
+    wait_for "surface 2 after = explicit" || return 1
+    $T resize-window -t =main: -x 110 -y 30 2>/dev/null
+}
+check "Space toggles a frame change's order and after mode; Zemax's headings show" frame_space
 
 # 15. The title is cut at a word.
 title_cut() {

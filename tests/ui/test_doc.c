@@ -138,6 +138,197 @@ static void test_set_shapes(void **state)
     assert_true(same_bits(e->doc.sys->surf[1].norm_radius, 12.5));
     /* A normalization radius must be positive. */
     assert_true(run(e, "set 1 norm 0") & ED_ERROR);
+    /* Zernike decenters are a Zernike sag's own: dim on a toroid. */
+    assert_false(cell_used(e->doc.sys, 1, cell_parse_name("zdx")));
+    free_ed(e);
+
+    /* Fringe Z1 + Z4 with equal coefficients c is 2 c rho^2: decentred to
+     * (1.5, -0.75) with c = -R^2 / (8 F) it is a paraboloid of focal length
+     * F about that point, so as a mirror it sends every axial ray through
+     * (1.5, -0.75) at -F, wherever it strikes (the live trace, any pupil
+     * point). */
+    e = new_ed();
+    ok(e, "set 1 type FZERNSAG");
+    ok(e, "set 1 norm 10");
+    ok(e, "set 1 t1 -0.5");
+    ok(e, "set 1 t4 -0.5");
+    ok(e, "set 1 zdx 1.5");
+    ok(e, "set 1 zdy -0.75");
+    ok(e, "set 1 material mirror");
+    ok(e, "set 1 thickness -25");
+    assert_true(same_bits(e->doc.sys->surf[1].zern_dx, 1.5) &&
+                same_bits(e->doc.sys->surf[1].zern_dy, -0.75));
+    assert_true(cell_used(e->doc.sys, 1, cell_parse_name("zdy")));
+    assert_true(run(e, "set 1 zdx inf") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 1 zdx"));
+    for (i = 0; i < 3; i++) {
+        static const char *const rays[] = {"ray 0 0 0.5 0.3", "ray 0 0 -0.8 0.1",
+                                           "ray 0 0 0 -0.6"};
+        const sg_ray_surface *im;
+        ok(e, rays[i]);
+        ed_recompute(e);
+        assert_int_equal(e->cmp.rc, SG_OK);
+        im = &e->cmp.res[2];
+        if (!(fabs(im->x - 1.5) <= im->error_bound && fabs(im->y + 0.75) <= im->error_bound))
+            fail_msg("%s: (%.17g, %.17g), not the focus (1.5, -0.75) within %g", rays[i], im->x,
+                     im->y, im->error_bound);
+    }
+    /* Undone, the terms are centred again. */
+    ok(e, "undo 4");
+    assert_true(e->doc.sys->surf[1].zern_dx == 0.0 && e->doc.sys->surf[1].zern_dy == 0.0);
+    free_ed(e);
+}
+
+/* The chief ray's row at surface i in surface 1's (the global) frame. */
+static sg_ray_surface chief_global(ed *e, int i)
+{
+    sg_frame *gf = calloc((size_t)e->doc.sys->nsurf, sizeof *gf);
+    sg_ray_surface row;
+    sg_diag d;
+    assert_non_null(gf);
+    ok(e, "ray 0 0 0 0");
+    ed_recompute(e);
+    if (e->cmp.build_rc != SG_EOK || e->cmp.rc != SG_EOK)
+        fail_msg("trace: %d %d %s", e->cmp.build_rc, e->cmp.rc, e->cmp.build_msg);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_global_frames(e->doc.sys, 1, gf, &d), SG_OK);
+    row = e->cmp.res[i];
+    sg_row_to_global(&gf[i], &row);
+    free(gf);
+    return row;
+}
+
+/* Zemax's coordinate-break columns (Decenter X ... Order) and a surface's
+ * tilt and decenter before and after it, typed through the command path:
+ * a 45-degree fold mirror built both ways must turn the chief ray from +z
+ * to +y (the axes turn right-handed about x, sagitta.h: the mirror's
+ * normal is (0, -sin 45, cos 45), so d - 2 (d.n) n = (0, 1, 0)), and the
+ * image 20 beyond the fold at z = 10 lies at (0, 20, 10).  Cells that do
+ * not apply are dim and refuse values with the surface and column named;
+ * undo and redo return the exact bytes. */
+static void test_frame_columns(void **state)
+{
+    ed *e = new_ed();
+    sg_system *before, *after;
+    sg_ray_surface r;
+    char path[512];
+    int c;
+    (void)state;
+    ok(e, "insert 2");
+    ok(e, "insert 2");
+    ok(e, "insert 2");
+    before = sg_system_clone(e->doc.sys);
+    ok(e, "set 2 type COORDBRK");
+    ok(e, "set 2 tx 45");
+    ok(e, "set 3 material mirror");
+    ok(e, "set 4 type cb");
+    ok(e, "set 4 tx 45");
+    ok(e, "set 4 thickness -20");
+    assert_int_equal(e->doc.sys->surf[2].type, SG_SURF_COORDBRK);
+    assert_true(same_bits(e->doc.sys->surf[2].before.tx, 45.0));
+    assert_true(same_bits(e->doc.sys->surf[4].before.tx, 45.0));
+    r = chief_global(e, 5);
+    print_message("# fold by breaks: chief at image (%.17g, %.17g, %.17g) dir (%.17g, %.17g, "
+                  "%.17g)\n", r.x, r.y, r.z, r.l, r.m, r.n);
+    assert_true(fabs(r.x) < 1e-14 && fabs(r.y - 20.0) < 1e-13 && fabs(r.z - 10.0) < 1e-13);
+    assert_true(fabs(r.l) < 1e-15 && fabs(r.m - 1.0) < 1e-15 && fabs(r.n) < 1e-15);
+    /* The image's own frame faces back along the beam. */
+    assert_true(fabs(e->cmp.res[5].n + 1.0) < 1e-15);
+
+    /* Order and the dim cells of a break. */
+    ok(e, "set 2 order 1");
+    assert_int_equal(e->doc.sys->surf[2].before.order, 1);
+    ok(e, "set 2 order decenter_then_tilt");
+    assert_int_equal(e->doc.sys->surf[2].before.order, 0);
+    assert_true(run(e, "set 2 order 2") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 2 order"));
+    assert_false(cell_used(e->doc.sys, 2, cell_parse_name("radius")));
+    assert_false(cell_used(e->doc.sys, 2, cell_parse_name("adx")));
+    assert_true(cell_used(e->doc.sys, 2, cell_parse_name("tz")));
+    assert_true(cell_used(e->doc.sys, 3, cell_parse_name("adx")));
+    /* Where no frame change may stand: dim, and refused by name. */
+    assert_false(cell_used(e->doc.sys, 0, cell_parse_name("dx")));
+    assert_false(cell_used(e->doc.sys, 1, cell_parse_name("tx")));
+    assert_true(cell_used(e->doc.sys, 1, cell_parse_name("atx")));
+    assert_false(cell_used(e->doc.sys, 5, cell_parse_name("ady")));
+    assert_true(run(e, "set 0 dx 1") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 0 dx: the object cannot be tilted"));
+    assert_true(run(e, "set 1 tx 5") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 1 tx: rays start in surface 1's frame"));
+    assert_true(run(e, "set 5 after reverse") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 5 after: nothing follows the image"));
+    assert_true(run(e, "set 2 adx 1") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 2 adx"));
+    assert_true(run(e, "set 2 tx 400") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 2 tx"));
+    assert_true(run(e, "set 1 type coordbrk") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 1 type"));
+    assert_true(same_bits(e->doc.sys->surf[2].before.tx, 45.0));
+
+    /* Saved and read back: the same design, frames in their JSON objects. */
+    run(e, "save %s", tmp_path("fold.json", path, sizeof path));
+    assert_false(e->msg_err);
+    {
+        sg_system *back = sg_system_new();
+        sg_diag d;
+        sg_diag_clear(&d);
+        assert_int_equal(sg_design_load(back, path, &d), SG_OK);
+        assert_true(sg_system_equal(back, e->doc.sys));
+        sg_system_free(back);
+    }
+
+    /* Undone to the start, byte for byte; redone to the fold. */
+    after = sg_system_clone(e->doc.sys);
+    for (c = 0; c < 8; c++)
+        ok(e, "undo");
+    assert_true(sys_bytes_equal(e->doc.sys, before));
+    for (c = 0; c < 8; c++)
+        ok(e, "redo");
+    assert_true(sys_bytes_equal(e->doc.sys, after));
+
+    /* The same fold as one surface: the mirror tilted before and after. */
+    ok(e, "delete 4");
+    ok(e, "delete 2");
+    ok(e, "set 2 tx 45");
+    ok(e, "set 2 after reverse");
+    assert_int_equal(e->doc.sys->surf[2].after_mode, SG_AFTER_REVERSE);
+    assert_false(cell_used(e->doc.sys, 2, cell_parse_name("atx")));
+    assert_true(run(e, "set 2 atx 45") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 2 atx"));
+    /* Its order too: "reverse" in the file has none of its own. */
+    assert_false(cell_used(e->doc.sys, 2, cell_parse_name("aorder")));
+    assert_true(run(e, "set 2 aorder 1") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 2 aorder"));
+    ok(e, "set 2 after explicit");
+    ok(e, "set 2 atx 45");
+    ok(e, "set 2 thickness -20");
+    assert_true(same_bits(e->doc.sys->surf[2].after.tx, 45.0));
+    r = chief_global(e, 3);
+    print_message("# fold by tilts: chief at image (%.17g, %.17g, %.17g) dir (%.17g, %.17g, "
+                  "%.17g)\n", r.x, r.y, r.z, r.l, r.m, r.n);
+    assert_true(fabs(r.x) < 1e-14 && fabs(r.y - 20.0) < 1e-13 && fabs(r.z - 10.0) < 1e-13);
+    assert_true(fabs(r.l) < 1e-15 && fabs(r.m - 1.0) < 1e-15 && fabs(r.n) < 1e-15);
+    /* A decenter before the mirror moves the fold point along its x. */
+    ok(e, "set 2 dx 1.5");
+    r = chief_global(e, 3);
+    assert_true(fabs(r.x) < 1e-14);
+    /* The chief ray still leaves along +y from the axis at z = 10. */
+    assert_true(fabs(r.m - 1.0) < 1e-15 && fabs(r.z - 10.0) < 1e-13);
+    assert_true(same_bits(e->doc.sys->surf[2].before.dx, 1.5));
+    /* A mirror made a break loses what a break cannot hold, says so, and
+     * gets it back on undo. */
+    ok(e, "set 2 radius 100");
+    ok(e, "set 2 type COORDBRK");
+    assert_non_null(strstr(e->msg, "radius, material, after change"));
+    assert_true(isinf(e->doc.sys->surf[2].radius) && e->doc.sys->surf[2].mat.kind == SG_MAT_AIR &&
+                sg_frame_change_is_zero(&e->doc.sys->surf[2].after));
+    assert_true(same_bits(e->doc.sys->surf[2].before.tx, 45.0));
+    ok(e, "undo");
+    assert_true(e->doc.sys->surf[2].radius == 100.0 &&
+                e->doc.sys->surf[2].mat.kind == SG_MAT_MIRROR &&
+                same_bits(e->doc.sys->surf[2].after.tx, 45.0));
+    sg_system_free(before);
+    sg_system_free(after);
     free_ed(e);
 }
 
@@ -862,6 +1053,7 @@ int main(void)
         cmocka_unit_test(test_numfmt),
         cmocka_unit_test(test_set_exact),
         cmocka_unit_test(test_set_shapes),
+        cmocka_unit_test(test_frame_columns),
         cmocka_unit_test(test_set_text_cells),
         cmocka_unit_test(test_bad_values),
         cmocka_unit_test(test_insert_delete_stop),

@@ -105,6 +105,38 @@ int cell_numeric(int col)
     return p && p->kind == SG_PARAM_REAL;
 }
 
+/* Where a frame change may not stand (as sg_system_validate says): the
+ * object moves nothing, rays start in surface 1's frame, and nothing
+ * follows the image.  NULL where it may. */
+static const char *frame_refused(const sg_system *sys, int row, const sg_param *p)
+{
+    if (!(p->flags & SG_PARAM_NESTED))
+        return NULL;
+    if (row == 0)
+        return "the object cannot be tilted or decentered";
+    if (row == 1 && strncmp(p->key, "before.", 7) == 0)
+        return "rays start in surface 1's frame, which cannot be tilted or decentered before "
+               "it; tilt after it, or from surface 2 on";
+    if (row == sys->nsurf - 1 && strncmp(p->key, "after.", 6) == 0)
+        return "nothing follows the image, so it takes no after change";
+    return NULL;
+}
+
+int cell_used(const sg_system *sys, int row, int col)
+{
+    int k;
+    const sg_param *p = cell_param(col, &k);
+    const sg_surface *s = &sys->surf[row];
+    if (!p || frame_refused(sys, row, p))
+        return 0;
+    /* A reverse after change is computed, not typed: its values and
+     * order are dim, the mode itself not. */
+    if (s->after_mode == SG_AFTER_REVERSE && (p->flags & SG_PARAM_NESTED) &&
+        p->offset != offsetof(sg_surface, after_mode) && strncmp(p->key, "after.", 6) == 0)
+        return 0;
+    return sg_param_used(p, k, s->type);
+}
+
 /* Copies s without surrounding blanks into buf; 0 when it does not fit. */
 static int trimmed(const char *s, char *buf, size_t n)
 {
@@ -143,9 +175,10 @@ int cell_type_parse(const char *s)
         return SG_SURF_EVENASPH;
     if (!trimmed(s, buf, sizeof buf))
         return -1;
-    /* The other shapes by their .zmx or JSON name; a coordinate break has
-     * commands of its own. */
-    for (k = SG_SURF_ODDASPH; k < p->nnames; k++)
+    if (strcasecmp(buf, "cb") == 0 || strcasecmp(buf, "break") == 0)
+        return SG_SURF_COORDBRK;
+    /* The other types by their .zmx or JSON name. */
+    for (k = SG_SURF_COORDBRK; k < p->nnames; k++)
         if (strcasecmp(buf, p->names[k]) == 0 || strcasecmp(buf, p->shown[k]) == 0)
             return k;
     return -1;
@@ -295,6 +328,75 @@ static int set_material(sg_system *sys, const sg_catalog *cat, int row,
     return SG_EOK;
 }
 
+/* Whether a frame change's cell may be typed into: a coordinate break has
+ * no after change, and a reverse after change takes no values of its own.
+ * Else 0 with a message naming the surface and column. */
+static int frame_ok(const sg_system *sys, int row, int col, const sg_param *p, char *err,
+                    size_t errn)
+{
+    const sg_surface *s = &sys->surf[row];
+    int after = strncmp(p->key, "after.", 6) == 0;
+    const char *why = frame_refused(sys, row, p);
+    if (why) {
+        snprintf(err, errn, "surface %d %s: %s", row, cell_name(col), why);
+        return 0;
+    }
+    if (!(p->flags & SG_PARAM_NESTED) || !after)
+        return 1;
+    if (s->type == SG_SURF_COORDBRK) {
+        snprintf(err, errn, "surface %d %s: a coordinate break has no after change; "
+                            "use another break", row, cell_name(col));
+        return 0;
+    }
+    if (s->after_mode == SG_AFTER_REVERSE && p->offset != offsetof(sg_surface, after_mode)) {
+        snprintf(err, errn, "surface %d %s: the after change is \"reverse\" (it undoes the "
+                            "before change); set after to explicit first", row, cell_name(col));
+        return 0;
+    }
+    return 1;
+}
+
+/* A surface made a coordinate break (Zemax's COORDBRK): a plane in the
+ * medium before it, with no aperture and no after change.  What it cannot
+ * hold is cleared and said; undo brings it back. */
+static int to_break(sg_system *sys, int row, char *err, size_t errn, char *info, size_t infon)
+{
+    sg_surface *s = &sys->surf[row];
+    char lost[160] = "";
+    if (row <= 1 || row == sys->nsurf - 1 || row == sys->stop) {
+        snprintf(err, errn, "surface %d type: the %s cannot be a coordinate break", row,
+                 row == 0 ? "object" : row == 1 ? "first surface" :
+                 row == sys->stop ? "stop" : "image");
+        return SG_EINVAL;
+    }
+#define LOST(what) snprintf(lost + strlen(lost), sizeof lost - strlen(lost), "%s%s", \
+                            lost[0] ? ", " : "", what)
+    if (isfinite(s->radius) && s->radius != 0.0)
+        LOST("radius");
+    if (s->mat.kind != SG_MAT_AIR)
+        LOST("material");
+    if (s->aperture != SG_APERTURE_NONE)
+        LOST("aperture");
+    if (!sg_frame_change_is_zero(&s->after) || s->after_mode != SG_AFTER_EXPLICIT)
+        LOST("after change");
+    if (s->solve[SG_SOLVE_RADIUS].kind != SG_SOLVE_NONE ||
+        s->solve[SG_SOLVE_CONIC].kind != SG_SOLVE_NONE)
+        LOST("radius or conic solve");
+#undef LOST
+    s->type = SG_SURF_COORDBRK;
+    s->radius = INFINITY;
+    memset(&s->mat, 0, sizeof s->mat);
+    s->mat.kind = SG_MAT_AIR;
+    s->aperture = SG_APERTURE_NONE;
+    memset(&s->after, 0, sizeof s->after);
+    s->after_mode = SG_AFTER_EXPLICIT;
+    memset(&s->solve[SG_SOLVE_RADIUS], 0, sizeof s->solve[SG_SOLVE_RADIUS]);
+    memset(&s->solve[SG_SOLVE_CONIC], 0, sizeof s->solve[SG_SOLVE_CONIC]);
+    if (lost[0] && info && infon)
+        snprintf(info, infon, "a coordinate break holds no %s: cleared", lost);
+    return SG_EOK;
+}
+
 int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
              const char *text, char *err, size_t errn, char *info, size_t infon)
 {
@@ -336,16 +438,29 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
                 }
                 return SG_EPARSE;
             }
+            if (!frame_ok(sys, row, col, p, err, errn))
+                return SG_EINVAL;
             sg_param_set(p, s, 0, k);
+            if (p->offset == offsetof(sg_surface, after_mode) && k == SG_AFTER_REVERSE &&
+                (!sg_frame_change_is_zero(&s->after) || s->after.order)) {
+                /* Reverse computes the after change; values of its own
+                 * would contradict it. */
+                memset(&s->after, 0, sizeof s->after);
+                if (info && infon)
+                    snprintf(info, infon, "its after values were cleared: reverse undoes the "
+                                          "before change");
+            }
             return SG_EOK;
         }
         rc = cell_type_parse(text);
         if (rc < 0) {
             snprintf(err, errn,
-                     "surface %d type: \"%s\" is not STANDARD, EVENASPH, ODDASPHE, TOROIDAL, "
-                     "BICONICX, FZERNSAG, SZERNSAG or XPOLYNOM", row, text);
+                     "surface %d type: \"%s\" is not STANDARD, EVENASPH, COORDBRK, ODDASPHE, "
+                     "TOROIDAL, BICONICX, FZERNSAG, SZERNSAG or XPOLYNOM", row, text);
             return SG_EPARSE;
         }
+        if (rc == SG_SURF_COORDBRK && s->type != SG_SURF_COORDBRK)
+            return to_break(sys, row, err, errn, info, infon);
         s->type = (sg_surf_type)rc;
         if (rc == SG_SURF_STANDARD && info && infon) {
             for (k = 0; k < SG_NASPH && s->asph[k] == 0.0; k++)
@@ -383,6 +498,8 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
     case SG_PARAM_REAL:
         break;
     }
+    if (!frame_ok(sys, row, col, p, err, errn))
+        return SG_EINVAL;
     if (!trimmed(text, buf, sizeof buf)) {
         snprintf(err, errn, "surface %d %s: text is too long", row, cell_name(col));
         return SG_EPARSE;

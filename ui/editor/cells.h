@@ -39,6 +39,10 @@ const char *cell_name(int col);
 /* Column of a name or alias ("radius", "r", "thickness", "thick", "t",
  * "material", "glass", "semi", "sd", "a4", "r4", ...); -1 if none. */
 int cell_parse_name(const char *s);
+/* Whether surface row uses the column's value (else it is shown dim): its
+ * type's parameters, and a frame change's values where one may stand and
+ * is typed. */
+int cell_used(const sg_system *sys, int row, int col);
 /* Nonzero for the columns that hold numbers. */
 int cell_numeric(int col);
 

@@ -300,7 +300,8 @@ static int c_set(ed *e, args *a)
     if (col < 0)
         return fail(e, "no column \"%s\" (type, comment, radius, thickness, material, "
                        "semi, conic, a2 ... a16, aperture, ap_rmin, ap_rmax, ap_xhalf, "
-                       "ap_yhalf, ap_xdec, ap_ydec)", a->v[2]);
+                       "ap_yhalf, ap_xdec, ap_ydec, norm, zdx, zdy, t1 ..., dx, dy, tx, ty, tz, order, "
+                       "after, adx, ady, atx, aty, atz, aorder)", a->v[2]);
     if (a->n > 3)
         rest_of(a, 3, val, sizeof val);
     else

@@ -163,12 +163,8 @@ void sheet_draw(ui *u)
             cell_show(u, r, c, w, cell, sizeof cell);
             /* A surface ignores the parameters of other shapes (a STANDARD
              * surface its r^n terms): shown, but dim. */
-            {
-                int k;
-                const sg_param *p = cell_param(c, &k);
-                if (p && !sg_param_used(p, k, s->surf[r].type))
-                    style = T_DIM;
-            }
+            if (!cell_used(s, r, c))
+                style = T_DIM;
             if (r == e->row && c == e->col)
                 style = u->focus == FOCUS_SHEET ? T_CURSOR : T_ROWSEL;
             if (cell_numeric(c)) {
@@ -322,6 +318,14 @@ static int key_impl(ui *u, int key, int typing)
         if (e->col == COL_TYPE)
             return ui_run(u, "set %d type %s", e->row,
                           s->surf[e->row].type == SG_SURF_STANDARD ? "evenasph" : "standard");
+        {
+            /* A frame change's order (0, 1) and after mode (explicit,
+             * reverse) toggle. */
+            const sg_param *p = cell_param(e->col, NULL);
+            if (p && p->kind == SG_PARAM_ENUM && (p->flags & SG_PARAM_NESTED) && p->nnames == 2)
+                return ui_run(u, "set %d %s %s", e->row, cell_name(e->col),
+                              p->names[!*(const int *)sg_param_cptr(p, &s->surf[e->row])]);
+        }
         return ED_HANDLED;
     default:
         if (typing && starts_edit(e->col, key)) {
