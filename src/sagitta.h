@@ -754,6 +754,25 @@ sg_tracer *sg_tracer_new_cached(const sg_system *sys, const sg_catalog *cat,
 int sg_paraxial_compute_cached(const sg_system *sys, const sg_catalog *cat, int wave,
                                sg_index_cache *cache, sg_paraxial *out, sg_diag *d);
 void sg_tracer_free(sg_tracer *t);
+/* The mpfr method's ray kept between the tracers of one design (the
+ * editor's digits check, after every edit): an mpfr tracer given a memo
+ * keeps in it the state of its last normalized or started ray after each
+ * surface, with what that state was computed from (the ray's launch bit
+ * for bit, the precision, each surface and the one before it, the indices
+ * on both sides, the trace options).  The next tracer's ray that launches
+ * the same resumes after the last surface before the first that differs,
+ * with the same bits as a full trace.  Memory: about 600 bytes a surface
+ * at 256 bits, plus a copy of the surfaces.  The caller owns the memo; a
+ * tracer uses it only from sg_tracer_use_memo until it is freed or given
+ * another, from one thread; other methods ignore it. */
+typedef struct sg_mpfr_memo sg_mpfr_memo;
+sg_mpfr_memo *sg_mpfr_memo_new(void);
+void sg_mpfr_memo_free(sg_mpfr_memo *memo);
+void sg_tracer_use_memo(sg_tracer *t, sg_mpfr_memo *memo);
+/* The surface the last ray resumed at (1 when it was traced in full), and
+ * how many rays resumed later than surface 1, since the memo was made. */
+int sg_mpfr_memo_last_resume(const sg_mpfr_memo *memo);
+unsigned long sg_mpfr_memo_resumes(const sg_mpfr_memo *memo);
 int sg_tracer_nsurf(const sg_tracer *t);
 const sg_paraxial *sg_tracer_paraxial(const sg_tracer *t);
 /* Index of the medium after surface i at the tracer's wavelength

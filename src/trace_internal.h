@@ -147,6 +147,8 @@ struct sg_tracer {
     struct sg_tracer *prim;
     /* The caller's glass indices, only while the tracer is made. */
     sg_index_cache *icache;
+    /* The caller's mpfr ray memo (sg_tracer_use_memo), never a fork's. */
+    sg_mpfr_memo *memo;
 };
 
 /* Ray state of the precise method: position on the current surface in its

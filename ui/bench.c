@@ -93,6 +93,7 @@ typedef struct bench_cfg {
     int cores;
     int nthr_all; /* threads that "all cores" resolves to */
     int progress; /* report progress on stderr */
+    int edit_surf; /* the surface the recompute's edits change; 0: surface 1 */
     size_t sizes[MAXSIZES];
     size_t nsizes;
 } bench_cfg;
@@ -541,6 +542,7 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
     int n = cfg->repeat > SHORT_MIN_SAMPLES ? cfg->repeat : SHORT_MIN_SAMPLES, i, s1;
     sg_system *sys = sg_system_clone(sys0);
     sg_index_cache *ic = sg_index_cache_new();
+    sg_mpfr_memo *memo = sg_mpfr_memo_new();
     sg_ray_surface *out = malloc((size_t)sys0->nsurf * sizeof *out);
     sg_ray_surface *ref = malloc((size_t)sys0->nsurf * sizeof *ref);
     double *sec = malloc((size_t)n * sizeof *sec), *val;
@@ -548,11 +550,13 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
     sg_diag d;
 
     memset(r, 0, sizeof *r);
-    if (!sys || !ic || !out || !ref || !sec) {
+    if (!sys || !ic || !memo || !out || !ref || !sec) {
         set_err(r, SG_ENOMEM, NULL);
         goto done;
     }
     s1 = sys->nsurf > 2 ? 1 : 0;
+    if (cfg->edit_surf > 0 && cfg->edit_surf < sys->nsurf - 1)
+        s1 = cfg->edit_surf;
     val = isfinite(sys->surf[s1].radius) && sys->surf[s1].radius != 0.0
               ? &sys->surf[s1].radius
               : &sys->surf[s1].thickness;
@@ -582,6 +586,8 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
         rc = sg_tracer_paraxial(t) ? SG_OK : SG_EINVAL;
         if (rc == SG_OK && digits) {
             mt = sg_tracer_new_cached(sys, cat, &mo, ic, &d);
+            /* The editor keeps the reference ray's states across edits. */
+            sg_tracer_use_memo(mt, memo);
             if (mt)
                 sg_trace_normalized(mt, edge_ray[0], edge_ray[1], edge_ray[2], edge_ray[3],
                                     ref);
@@ -602,6 +608,7 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
 done:
     sg_system_free(sys);
     sg_index_cache_free(ic);
+    sg_mpfr_memo_free(memo);
     free(out);
     free(ref);
     free(sec);
@@ -902,6 +909,7 @@ static cJSON *json_top(const bench_cfg *cfg, double load0, double load1)
     set = cJSON_AddObjectToObject(o, "settings");
     cJSON_AddNumberToObject(set, "repeat", cfg->repeat);
     cJSON_AddBoolToObject(set, "quick", cfg->quick);
+    cJSON_AddNumberToObject(set, "edit_surface", cfg->edit_surf > 0 ? cfg->edit_surf : 1);
     cJSON_AddNumberToObject(set, "threads_all", cfg->nthr_all);
     cJSON_AddNumberToObject(set, "short_samples_min", SHORT_MIN_SAMPLES);
     cJSON_AddStringToObject(set, "ray_order", "field-major");
@@ -928,6 +936,8 @@ static void bench_help(FILE *f)
 "  --quick         ray sets of 1e3 and 1e4 rays instead of 1e3, 1e5 and 1e6\n"
 "  --rays N        one ray set of N rays, 1 to 1e9, instead\n"
 "  --threads N     threads of the multi-threaded runs; 0 (default) is every core\n"
+"  --edit-surface S  the surface whose radius (or thickness) the live\n"
+"                  recompute's edits change (default 1)\n"
 "  --spot          instead: a spot diagram of 1e6 rays (1e5 with --quick) on\n"
 "                  the designs (default: the Cassegrain) against the batch\n"
 "                  trace of the same rays to the image, and their ratio\n"
@@ -949,7 +959,7 @@ static void bench_help(FILE *f)
 }
 
 enum { OPT_HELP = 1, OPT_FORMAT, OPT_REPEAT, OPT_QUICK, OPT_THREADS, OPT_RAYS, OPT_SPOT,
-       OPT_VIEW };
+       OPT_VIEW, OPT_EDIT_SURF };
 
 static const cli_opt bench_opts[] = {
     { "--help", 'h', 0, OPT_HELP },
@@ -960,6 +970,7 @@ static const cli_opt bench_opts[] = {
     { "--rays", 0, 1, OPT_RAYS },
     { "--spot", 0, 0, OPT_SPOT },
     { "--view", 0, 1, OPT_VIEW },
+    { "--edit-surface", 0, 1, OPT_EDIT_SURF },
     { NULL, 0, 0, 0 }
 };
 
@@ -1280,6 +1291,12 @@ int cmd_bench(int argc, char **argv)
             break;
         case OPT_QUICK:
             cfg.quick = 1;
+            break;
+        case OPT_EDIT_SURF:
+            if (cli_int_value("--edit-surface", val, 1, 1000000, &cfg.edit_surf)) {
+                free(designs);
+                return CLI_EXIT_USAGE;
+            }
             break;
         case OPT_RAYS:
             if (cli_int_value("--rays", val, 1, 1000000000, &nrays)) {

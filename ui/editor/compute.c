@@ -30,6 +30,7 @@ void compute_free(compute *c)
 {
     compute_invalidate(c);
     sg_index_cache_free(c->icache);
+    sg_mpfr_memo_free(c->memo);
     free(c->res);
     free(c->ref_res);
     memset(c, 0, sizeof *c);
@@ -146,6 +147,10 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
             c->ref = build(sys, cat, &ro, c);
             c->ref_id = c->ref ? id : 0;
             c->ref_opts = ro;
+            if (!c->memo)
+                c->memo = sg_mpfr_memo_new();
+            /* Without a memo the ray is traced in full, same bits. */
+            sg_tracer_use_memo(c->ref, c->memo);
         }
         if (c->ref && sg_tracer_nsurf(c->ref) == c->nsurf) {
             c->ref_rc = sg_trace_normalized(c->ref, ray[0], ray[1], ray[2], ray[3],
@@ -157,6 +162,8 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
         sg_tracer_free(c->ref);
         c->ref = NULL;
         c->ref_id = 0;
+        sg_mpfr_memo_free(c->memo);
+        c->memo = NULL;
     }
     c->ms_last = compute_now_ms() - t0;
     if (c->ms_last > c->ms_max)
