@@ -747,6 +747,11 @@ void sg_index_cache_clear(sg_index_cache *c);
 /* Lookups answered from the cache and computed, since it was made. */
 void sg_index_cache_stats(const sg_index_cache *c, unsigned long *hits,
                           unsigned long *misses);
+/* The cache also keeps the paraxial y-nu traces' state after each surface
+ * (the launch's, the mpfr method's, sg_paraxial_compute_cached's): a trace
+ * whose start and surfaces up to the first changed one are as before
+ * resumes there, with the same bits.  How many have resumed: */
+unsigned long sg_index_cache_resumes(const sg_index_cache *c);
 /* sg_tracer_new and sg_paraxial_compute with a cache (NULL: none). */
 sg_tracer *sg_tracer_new_cached(const sg_system *sys, const sg_catalog *cat,
                                 const sg_trace_opts *opts, sg_index_cache *cache,
@@ -765,6 +770,15 @@ void sg_tracer_free(sg_tracer *t);
  * at 256 bits, plus a copy of the surfaces.  The caller owns the memo; a
  * tracer uses it only from sg_tracer_use_memo until it is freed or given
  * another, from one thread; other methods ignore it. */
+/* A tracer of t's system, wavelength and options but with method
+ * `method` (mpfr at mpfr_bits bits): it shares t's prepared surfaces,
+ * paraxial data and launch, which a tracer of the precise or mpfr method
+ * computes the same way, so it gives the bits sg_tracer_new would, and
+ * prepares only what the new method adds (glass indices from cache when
+ * given).  t must outlive it.  A classic tracer on either side makes a
+ * new tracer from t's system instead.  NULL on failure, with d set. */
+sg_tracer *sg_tracer_new_method(const sg_tracer *t, sg_method method, int mpfr_bits,
+                                sg_index_cache *cache, sg_diag *d);
 typedef struct sg_mpfr_memo sg_mpfr_memo;
 sg_mpfr_memo *sg_mpfr_memo_new(void);
 void sg_mpfr_memo_free(sg_mpfr_memo *memo);

@@ -901,6 +901,61 @@ fail:
     return rc;
 }
 
+sg_tracer *sg_tracer_new_method(const sg_tracer *m, sg_method method, int mpfr_bits,
+                                sg_index_cache *cache, sg_diag *d)
+{
+    sg_trace_opts o = m->o;
+    sg_tracer *t;
+    sg_diag own;
+    if (!d) {
+        sg_diag_clear(&own);
+        d = &own;
+    }
+    o.method = method;
+    o.mpfr_bits = mpfr_bits;
+    /* Classic lands the real-aim stop radius its own way (launch.c), and
+     * the precision's range is tracer_open's to check. */
+    if (m->o.method == SG_METHOD_CLASSIC || method == SG_METHOD_CLASSIC ||
+        mpfr_bits < 53 || mpfr_bits > 100000)
+        return sg_tracer_new_cached(m->sys, m->cat, &o, cache, d);
+    t = calloc(1, sizeof *t);
+    if (!t) {
+        sg_diag_set(d, SG_ENOMEM, "out of memory");
+        return NULL;
+    }
+    /* The prepared model, shared as a fork shares it; only the options'
+     * method and precision differ, which the model does not read. */
+    t->model = m->model ? m->model : m;
+    t->sys = m->sys;
+    t->o = o;
+    t->wave = m->wave;
+    t->n = m->n;
+    t->sp = m->sp;
+    t->xf = m->xf;
+    t->shp = m->shp;
+    t->nsigned = m->nsigned;
+    t->px = m->px;
+    t->ln = m->ln;
+    t->cat = m->cat;
+    if (m->prim && !(t->prim = sg_tracer_new_method(m->prim, method, mpfr_bits, cache, d)))
+        goto fail;
+    t->scratch = calloc((size_t)t->n, sizeof *t->scratch);
+    if (!t->scratch || !(t->rescue = sg_mpfr_rescue_new())) {
+        sg_diag_set(d, SG_ENOMEM, "out of memory");
+        goto fail;
+    }
+    t->icache = cache;
+    if (t->o.method == SG_METHOD_MPFR && sg_mpfr_prepare(t, d) != SG_OK)
+        goto fail;
+    t->icache = NULL;
+    return t;
+fail:
+    if (d->code == SG_OK)
+        sg_diag_set(d, SG_ENOMEM, "out of memory");
+    sg_tracer_free(t);
+    return NULL;
+}
+
 void sg_tracer_free(sg_tracer *t)
 {
     if (!t)

@@ -1484,7 +1484,7 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             mpfr_set(m->s[i].nb, m->t[0], MPFR_RNDN);
         }
         sg_parax_mp_init(&p, prec);
-        rc = sg_paraxial_mpfr(sys, idx, prec, &p, d);
+        rc = sg_paraxial_mpfr_memo(sys, idx, prec, &p, d, sg_index_cache_parax(tr->icache));
         if (rc == SG_OK) {
             if (isfinite(sys->surf[0].thickness))
                 mpfr_set_d(m->T0, sys->surf[0].thickness, MPFR_RNDN);

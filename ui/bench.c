@@ -585,8 +585,9 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
          * its tracer's launch, which computed them. */
         rc = sg_tracer_paraxial(t) ? SG_OK : SG_EINVAL;
         if (rc == SG_OK && digits) {
-            mt = sg_tracer_new_cached(sys, cat, &mo, ic, &d);
-            /* The editor keeps the reference ray's states across edits. */
+            /* As the editor: from the precise tracer's prepared model,
+             * and the reference ray's states kept across edits. */
+            mt = sg_tracer_new_method(t, mo.method, mo.mpfr_bits, ic, &d);
             sg_tracer_use_memo(mt, memo);
             if (mt)
                 sg_trace_normalized(mt, edge_ray[0], edge_ray[1], edge_ray[2], edge_ray[3],
@@ -596,8 +597,8 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
         }
         if (i >= 0)
             sec[i] = now_s() - t0;
-        sg_tracer_free(t);
         sg_tracer_free(mt);
+        sg_tracer_free(t);
         if (rc != SG_OK) {
             set_err(r, rc, &d);
             goto done;

@@ -88,6 +88,10 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
     if (!c->icache)
         c->icache = sg_index_cache_new();
     if (!c->t || c->t_id != id || !same_opts(&c->t_opts, o)) {
+        /* The reference shares the precise tracer's prepared model. */
+        sg_tracer_free(c->ref);
+        c->ref = NULL;
+        c->ref_id = 0;
         sg_tracer_free(c->t);
         c->t = NULL;
         c->t_id = 0;
@@ -143,8 +147,17 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
         ro.method = SG_METHOD_MPFR;
         ro.mpfr_bits = ref_bits;
         if (!c->ref || c->ref_id != id || !same_opts(&c->ref_opts, &ro)) {
+            sg_diag d;
             sg_tracer_free(c->ref);
-            c->ref = build(sys, cat, &ro, c);
+            /* From the live tracer: its surfaces, paraxial data and launch
+             * are the reference's too (same bits as a new tracer). */
+            sg_diag_clear(&d);
+            c->ref = sg_tracer_new_method(c->t, ro.method, ro.mpfr_bits, c->icache, &d);
+            if (!c->ref) {
+                c->build_rc = d.code != SG_EOK ? d.code : SG_ENOMEM;
+                snprintf(c->build_msg, sizeof c->build_msg, "%s",
+                         d.msg[0] ? d.msg : sg_strerror(c->build_rc));
+            }
             c->ref_id = c->ref ? id : 0;
             c->ref_opts = ro;
             if (!c->memo)
