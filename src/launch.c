@@ -1192,14 +1192,12 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
     mpfr_t *idx, tmp, fx, fy, v;
     sg_parax_mp p;
     int i, k, rc;
-    idx = calloc((size_t)t->n, sizeof *idx);
+    idx = sg_mp_block_new((size_t)t->n, 128);
     t->scratch = calloc((size_t)t->n, sizeof *t->scratch);
     if (!idx || !t->scratch) {
         free(idx);
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
     }
-    for (i = 0; i < t->n; i++)
-        mpfr_init2(idx[i], 128);
     mpfr_inits2(128, tmp, fx, fy, v, (mpfr_ptr)0);
     sg_parax_mp_init(&p, 128);
     rc = sg_indices_mpfr_cached(sys, t->cat, t->wave, idx, t->icache, d);
@@ -1268,8 +1266,6 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
     }
     sg_parax_mp_clear(&p);
     mpfr_clears(tmp, fx, fy, v, (mpfr_ptr)0);
-    for (i = 0; i < t->n; i++)
-        mpfr_clear(idx[i]);
     free(idx);
     if (rc != SG_OK)
         return rc;

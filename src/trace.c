@@ -792,7 +792,7 @@ static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_tra
     t->sys = sg_system_clone(sys);
     t->sp = calloc((size_t)n, sizeof *t->sp);
     t->nsigned = calloc((size_t)n, sizeof *t->nsigned);
-    idx = calloc((size_t)n, sizeof *idx);
+    idx = sg_mp_block_new((size_t)n, 256);
     if (!t->sys || !t->sp || !t->nsigned || !idx) {
         sg_diag_set(d, SG_ENOMEM, "out of memory");
         free(idx);
@@ -818,15 +818,11 @@ static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_tra
             }
             break;
         }
-    for (i = 0; i < n; i++)
-        mpfr_init2(idx[i], 256);
     /* Only while it is made: the caller owns the cache. */
     t->icache = cache;
     rc = sg_indices_mpfr_cached(sys, cat, t->wave, idx, cache, d);
     if (rc == SG_OK)
         rc = prepare_surfaces(t, idx, d);
-    for (i = 0; i < n; i++)
-        mpfr_clear(idx[i]);
     free(idx);
     if (rc != SG_OK)
         goto fail;

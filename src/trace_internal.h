@@ -400,6 +400,34 @@ unsigned long sg_parax_memo_resumes(const sg_parax_memo *memo);
 int sg_indices_mpfr(const sg_system *sys, const sg_catalog *cat, int wave,
                     mpfr_t *idx, sg_diag *d);
 
+/* n MPFR numbers at precision prec, zero, in one allocation that free()
+ * releases: a tracer needs thousands (an index a surface), and one
+ * allocation each costs as much as the arithmetic.  Never give them to
+ * mpfr_clear, mpfr_set_prec or mpfr_swap with another number.  NULL when
+ * out of memory. */
+static inline size_t sg_mp_limb_bytes(mpfr_prec_t prec)
+{
+    return (mpfr_custom_get_size(prec) + 15) & ~(size_t)15;
+}
+
+static inline void sg_mp_place(mpfr_ptr x, void *limbs, mpfr_prec_t prec)
+{
+    mpfr_custom_init(limbs, prec);
+    mpfr_custom_init_set(x, MPFR_ZERO_KIND, 0, prec, limbs);
+}
+
+static inline mpfr_t *sg_mp_block_new(size_t n, mpfr_prec_t prec)
+{
+    size_t head = (n * sizeof(mpfr_t) + 15) & ~(size_t)15, sz = sg_mp_limb_bytes(prec), i;
+    char *b = malloc(head + n * sz + 1);
+    mpfr_t *v = (mpfr_t *)(void *)b;
+    if (!b)
+        return NULL;
+    for (i = 0; i < n; i++)
+        sg_mp_place(v[i], b + head + i * sz, prec);
+    return v;
+}
+
 static inline dd dd_from_mpfr(const mpfr_t x, mpfr_t tmp)
 {
     dd r;

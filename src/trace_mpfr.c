@@ -58,7 +58,12 @@ struct sg_mpfr_ctx {
     mpfr_t fv[2], tgt[2], qb[2], dq[2], qo[2];
     mpfr_t a[NA]; /* aiming's scratch: the landings reuse every t[] */
     int fdeg;
+    /* The limbs of every surface's R, k1, T, mu, nb and a[] (MSV a
+     * surface), one allocation (sg_mp_block_new). */
+    void *arena;
 };
+
+enum { MSV = 5 + SG_NASPH };
 
 static void mvec_init(mvec *v, mpfr_prec_t p)
 {
@@ -113,7 +118,6 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
         return;
     if (m->s) {
         for (i = 0; i < m->n; i++) {
-            mpfr_clears(m->s[i].R, m->s[i].k1, m->s[i].T, m->s[i].mu, m->s[i].nb, (mpfr_ptr)0);
             if (m->s[i].xf) {
                 int j, k2;
                 for (j = 0; j < 3; j++) {
@@ -122,8 +126,6 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
                     mpfr_clear(m->s[i].b[j]);
                 }
             }
-            for (k = 0; k < SG_NASPH; k++)
-                mpfr_clear(m->s[i].a[k]);
             if (m->s[i].mc) {
                 sg_shape_mp_clear(m->s[i].mc);
                 free(m->s[i].mc);
@@ -131,6 +133,7 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
         }
         free(m->s);
     }
+    free(m->arena);
     mpfr_clears(m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi, m->tslope,
                 m->q[0], m->q[1], m->path, m->opl, m->plane, m->c1dot, (mpfr_ptr)0);
     for (k = 0; k < 2; k++)
@@ -155,12 +158,16 @@ static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
 {
     sg_mpfr_ctx *m = calloc(1, sizeof *m);
     msurf *s = calloc((size_t)n, sizeof *s);
+    size_t sz = sg_mp_limb_bytes(prec);
+    char *ar = malloc((size_t)n * MSV * sz + 1);
     int i, k;
-    if (!m || !s) {
+    if (!m || !s || !ar) {
         free(m);
         free(s);
+        free(ar);
         return NULL;
     }
+    m->arena = ar;
     m->prec = prec;
     m->n = n;
     m->s = s;
@@ -183,10 +190,15 @@ static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
     mvec_init(&m->sv_P, prec);
     mvec_init(&m->sv_D, prec);
     for (i = 0; i < n; i++) {
-        mpfr_inits2(prec, s[i].R, s[i].k1, s[i].T, s[i].mu, s[i].nb, (mpfr_ptr)0);
+        char *b = ar + (size_t)i * MSV * sz;
+        sg_mp_place(s[i].R, b, prec);
+        sg_mp_place(s[i].k1, b + sz, prec);
+        sg_mp_place(s[i].T, b + 2 * sz, prec);
+        sg_mp_place(s[i].mu, b + 3 * sz, prec);
+        sg_mp_place(s[i].nb, b + 4 * sz, prec);
         mpfr_set_ui(s[i].nb, 1, MPFR_RNDN);
         for (k = 0; k < SG_NASPH; k++)
-            mpfr_init2(s[i].a[k], prec);
+            sg_mp_place(s[i].a[k], b + (size_t)(5 + k) * sz, prec);
     }
     return m;
 }
@@ -1441,12 +1453,11 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
     if (!m)
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
     tr->mp = m;
-    idx = calloc((size_t)tr->n, sizeof *idx);
+    idx = sg_mp_block_new((size_t)tr->n, prec);
     if (!idx)
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
     for (i = 0; i < tr->n; i++) {
         msurf *s = &m->s[i];
-        mpfr_init2(idx[i], prec);
         mpfr_set_d(s->R, tr->sp[i].R, MPFR_RNDN);
         mpfr_set_d(s->k1, sys->surf[i].conic, MPFR_RNDN);
         mpfr_add_ui(s->k1, s->k1, 1, MPFR_RNDN);
@@ -1498,8 +1509,6 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
         }
         sg_parax_mp_clear(&p);
     }
-    for (i = 0; i < tr->n; i++)
-        mpfr_clear(idx[i]);
     free(idx);
     if (rc != SG_OK)
         return rc;
