@@ -6,6 +6,7 @@
  * wavelength, so the caller keeps an sg_index_cache and passes it in; an
  * index is computed once per set of inputs.  The key is every number the
  * computation reads, so a hit is the fresh value exactly. */
+#include "trace_internal.h"
 #include "index_cache.h"
 
 #include <stdint.h>
@@ -36,8 +37,6 @@ struct sg_index_cache {
     struct sg_parax_memo *pm;
 };
 
-void sg_parax_memo_free(struct sg_parax_memo *memo);
-struct sg_parax_memo *sg_parax_memo_new(void);
 
 struct sg_parax_memo *sg_index_cache_parax(sg_index_cache *cache)
 {
@@ -78,8 +77,6 @@ void sg_index_cache_free(sg_index_cache *c)
     sg_index_cache_clear(c);
     free(c);
 }
-
-unsigned long sg_parax_memo_resumes(const struct sg_parax_memo *memo);
 
 unsigned long sg_index_cache_resumes(const sg_index_cache *c)
 {

@@ -81,8 +81,7 @@ static void set_clear(pm_set *st)
     memset(st, 0, sizeof *st);
 }
 
-struct sg_parax_memo *sg_parax_memo_new(void);
-struct sg_parax_memo *sg_parax_memo_new(void)
+sg_parax_memo *sg_parax_memo_new(void)
 {
     return calloc(1, sizeof(struct sg_parax_memo));
 }
@@ -183,14 +182,11 @@ static pm_set *memo_pick(sg_parax_memo *pm, const sg_system *sys, mpfr_t *idx, m
             }
         }
     }
-    if (!best || bk < 2) {
-        /* Nothing to resume from: the least recently used set, afresh. */
-        if (!best || bk == 0) {
-            if (!set_make(old, sys->nsurf, prec))
-                return NULL;
-            best = old;
-            bk = 0;
-        }
+    if (!best || bk == 0) {
+        /* Nothing in common: the least recently used set, afresh. */
+        if (!set_make(old, sys->nsurf, prec))
+            return NULL;
+        best = old;
     }
     best->stamp = ++pm->clock;
     *kf = bk;

@@ -933,8 +933,18 @@ sg_tracer *sg_tracer_new_method(const sg_tracer *m, sg_method method, int mpfr_b
     t->px = m->px;
     t->ln = m->ln;
     t->cat = m->cat;
-    if (m->prim && !(t->prim = sg_tracer_new_method(m->prim, method, mpfr_bits, cache, d)))
-        goto fail;
+    if (m->prim) {
+        /* Named as tracer_open names the primary wavelength's failure. */
+        sg_diag pd;
+        sg_diag_clear(&pd);
+        t->prim = sg_tracer_new_method(m->prim, method, mpfr_bits, cache, &pd);
+        if (!t->prim) {
+            sg_diag_set(d, pd.code != SG_OK ? pd.code : SG_ENOMEM,
+                        "primary wavelength %d, which defines the pupil and fields: %s",
+                        t->sys->primary_wave + 1, pd.msg);
+            goto fail;
+        }
+    }
     t->scratch = calloc((size_t)t->n, sizeof *t->scratch);
     if (!t->scratch || !(t->rescue = sg_mpfr_rescue_new())) {
         sg_diag_set(d, SG_ENOMEM, "out of memory");

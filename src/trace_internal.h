@@ -395,6 +395,7 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
 typedef struct sg_parax_memo sg_parax_memo;
 int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
                           sg_parax_mp *out, sg_diag *d, sg_parax_memo *memo);
+sg_parax_memo *sg_parax_memo_new(void);
 void sg_parax_memo_free(sg_parax_memo *memo);
 unsigned long sg_parax_memo_resumes(const sg_parax_memo *memo);
 /* Signed indices after every surface at wavelength wave, into idx[0..n-1]. */
