@@ -6,6 +6,7 @@
  * wavelength, so the caller keeps an sg_index_cache and passes it in; an
  * index is computed once per set of inputs.  The key is every number the
  * computation reads, so a hit is the fresh value exactly. */
+#include "trace_internal.h"
 #include "index_cache.h"
 
 #include <stdint.h>
@@ -31,18 +32,29 @@ struct sg_index_cache {
     entry *e;
     size_t cap, n; /* cap a power of two, or 0 */
     unsigned long hits, misses;
+    /* The paraxial traces' states after each surface, for the next
+     * tracer of the same design (paraxial.c). */
+    struct sg_parax_memo *pm;
 };
+
+
+struct sg_parax_memo *sg_index_cache_parax(sg_index_cache *cache)
+{
+    if (!cache)
+        return NULL;
+    if (!cache->pm)
+        cache->pm = sg_parax_memo_new();
+    return cache->pm;
+}
 
 sg_index_cache *sg_index_cache_new(void)
 {
     return calloc(1, sizeof(sg_index_cache));
 }
 
-void sg_index_cache_clear(sg_index_cache *c)
+static void clear_entries(sg_index_cache *c)
 {
     size_t i;
-    if (!c)
-        return;
     for (i = 0; i < c->cap; i++)
         if (c->e[i].used)
             mpfr_clear(c->e[i].val);
@@ -51,10 +63,24 @@ void sg_index_cache_clear(sg_index_cache *c)
     c->cap = c->n = 0;
 }
 
+void sg_index_cache_clear(sg_index_cache *c)
+{
+    if (!c)
+        return;
+    clear_entries(c);
+    sg_parax_memo_free(c->pm);
+    c->pm = NULL;
+}
+
 void sg_index_cache_free(sg_index_cache *c)
 {
     sg_index_cache_clear(c);
     free(c);
+}
+
+unsigned long sg_index_cache_resumes(const sg_index_cache *c)
+{
+    return c ? sg_parax_memo_resumes(c->pm) : 0;
 }
 
 void sg_index_cache_stats(const sg_index_cache *c, unsigned long *hits, unsigned long *misses)
@@ -123,7 +149,7 @@ static int make_room(sg_index_cache *c)
     size_t i, oldcap;
     entry *old;
     if (c->n >= CACHE_MAX)
-        sg_index_cache_clear(c);
+        clear_entries(c);
     if (c->cap && 2 * (c->n + 1) <= c->cap)
         return 1;
     old = c->e;

@@ -14,6 +14,10 @@
 int sg_index_cache_glass(sg_index_cache *cache, const sg_system *sys, const sg_glass *g,
                          mpfr_t out, const mpfr_t um);
 
+/* The cache's paraxial memo (sg_paraxial_mpfr_memo), made on first use;
+ * NULL without a cache or memory. */
+struct sg_parax_memo *sg_index_cache_parax(sg_index_cache *cache);
+
 /* sg_indices_mpfr (trace_internal.h) with its glass indices from cache. */
 int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave,
                            mpfr_t *idx, sg_index_cache *cache, sg_diag *d);

@@ -1209,19 +1209,17 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
     mpfr_t *idx, tmp, fx, fy, v;
     sg_parax_mp p;
     int i, k, rc;
-    idx = calloc((size_t)t->n, sizeof *idx);
+    idx = sg_mp_block_new((size_t)t->n, 128);
     t->scratch = calloc((size_t)t->n, sizeof *t->scratch);
     if (!idx || !t->scratch) {
         free(idx);
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
     }
-    for (i = 0; i < t->n; i++)
-        mpfr_init2(idx[i], 128);
     mpfr_inits2(128, tmp, fx, fy, v, (mpfr_ptr)0);
     sg_parax_mp_init(&p, 128);
     rc = sg_indices_mpfr_cached(sys, t->cat, t->wave, idx, t->icache, d);
     if (rc == SG_OK)
-        rc = sg_paraxial_mpfr(sys, idx, 128, &p, d);
+        rc = sg_paraxial_mpfr_memo(sys, idx, 128, &p, d, sg_index_cache_parax(t->icache));
     if (rc == SG_OK && inf_object(t) && sys->field_type == SG_FIELD_OBJECT_HEIGHT)
         rc = sg_diag_set(d, SG_ENONPHYS,
                          "fields: object heights need an object at a finite distance "
@@ -1285,8 +1283,6 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
     }
     sg_parax_mp_clear(&p);
     mpfr_clears(tmp, fx, fy, v, (mpfr_ptr)0);
-    for (i = 0; i < t->n; i++)
-        mpfr_clear(idx[i]);
     free(idx);
     if (rc != SG_OK)
         return rc;

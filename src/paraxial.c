@@ -10,6 +10,7 @@
  */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "trace_internal.h"
 
@@ -17,12 +18,215 @@ typedef struct yn {
     mpfr_t y, w; /* height and reduced angle n u */
 } yn;
 
+/* The paraxial memo: for each of a few precisions and designs (the
+ * launch's 128 bits, the mpfr method's, other wavelengths), the inputs of
+ * every surface's step and, for each trace in the order sg_paraxial_mpfr
+ * makes them, its start and its state after every surface.  A step reads
+ * the surface's radius and index and the thickness and index before it. */
+enum { PM_SETS = 4, PM_SLOTS = 8 };
+
+typedef struct pm_slot {
+    int used, good; /* states kept after surfaces 1..good */
+    int touched;    /* traced in the current computation */
+    mpfr_t y0, w0;
+    mpfr_t *y, *w;
+} pm_slot;
+
+typedef struct pm_set {
+    mpfr_prec_t prec; /* 0: empty */
+    int n;
+    unsigned long stamp;
+    double *R, *T;
+    mpfr_t *ix;
+    pm_slot s[PM_SLOTS];
+} pm_set;
+
+struct sg_parax_memo {
+    pm_set set[PM_SETS];
+    unsigned long clock;
+    unsigned long resumes; /* traces resumed after surface 1 */
+};
+
 typedef struct pctx {
     const sg_system *sys;
     mpfr_t *idx;
-    mpfr_t *phi; /* power of each surface */
+    mpfr_t *phi; /* power of each surface, made when a step needs it */
+    char *phi_ok;
+    mpfr_prec_t prec;
     mpfr_t a, b;
+    sg_parax_memo *memo;
+    pm_set *pm; /* NULL: no memo */
+    int kf;     /* steps 1..kf-1 read what the memo saw */
+    int slot;   /* the next trace's slot */
 } pctx;
+
+static void set_clear(pm_set *st)
+{
+    int j, k;
+    if (st->prec) {
+        for (k = 0; k < PM_SLOTS; k++) {
+            pm_slot *sl = &st->s[k];
+            mpfr_clears(sl->y0, sl->w0, (mpfr_ptr)0);
+            for (j = 0; j < st->n; j++)
+                mpfr_clears(sl->y[j], sl->w[j], (mpfr_ptr)0);
+            free(sl->y);
+            free(sl->w);
+        }
+        for (j = 0; j < st->n; j++)
+            mpfr_clear(st->ix[j]);
+    }
+    free(st->R);
+    free(st->T);
+    free(st->ix);
+    memset(st, 0, sizeof *st);
+}
+
+sg_parax_memo *sg_parax_memo_new(void)
+{
+    return calloc(1, sizeof(struct sg_parax_memo));
+}
+
+unsigned long sg_parax_memo_resumes(const sg_parax_memo *memo)
+{
+    return memo ? memo->resumes : 0;
+}
+
+void sg_parax_memo_free(sg_parax_memo *memo)
+{
+    int k;
+    if (!memo)
+        return;
+    for (k = 0; k < PM_SETS; k++)
+        set_clear(&memo->set[k]);
+    free(memo);
+}
+
+/* An empty set for n surfaces at prec; 0 when out of memory. */
+static int set_make(pm_set *st, int n, mpfr_prec_t prec)
+{
+    int j, k;
+    set_clear(st);
+    st->R = calloc((size_t)n, sizeof *st->R);
+    st->T = calloc((size_t)n, sizeof *st->T);
+    st->ix = calloc((size_t)n, sizeof *st->ix);
+    for (k = 0; k < PM_SLOTS; k++) {
+        st->s[k].y = calloc((size_t)n, sizeof(mpfr_t));
+        st->s[k].w = calloc((size_t)n, sizeof(mpfr_t));
+        if (!st->s[k].y || !st->s[k].w) {
+            for (; k >= 0; k--) {
+                free(st->s[k].y);
+                free(st->s[k].w);
+            }
+            free(st->R);
+            free(st->T);
+            free(st->ix);
+            memset(st, 0, sizeof *st);
+            return 0;
+        }
+    }
+    if (!st->R || !st->T || !st->ix) {
+        set_clear(st);
+        return 0;
+    }
+    st->prec = prec;
+    st->n = n;
+    for (j = 0; j < n; j++) {
+        mpfr_init2(st->ix[j], prec);
+        /* A NaN key matches nothing until the surface is seen. */
+        st->R[j] = st->T[j] = NAN;
+    }
+    for (k = 0; k < PM_SLOTS; k++) {
+        mpfr_inits2(prec, st->s[k].y0, st->s[k].w0, (mpfr_ptr)0);
+        for (j = 0; j < n; j++)
+            mpfr_inits2(prec, st->s[k].y[j], st->s[k].w[j], (mpfr_ptr)0);
+    }
+    return 1;
+}
+
+static int same_mp(mpfr_srcptr a, mpfr_srcptr b)
+{
+    return mpfr_equal_p(a, b) && mpfr_signbit(a) == mpfr_signbit(b);
+}
+
+static int same_d(double a, double b)
+{
+    return memcmp(&a, &b, sizeof a) == 0;
+}
+
+/* The first surface whose inputs differ from the set's. */
+static int set_first_change(const pm_set *st, const sg_system *sys, mpfr_t *idx)
+{
+    int j, n = st->n < sys->nsurf ? st->n : sys->nsurf;
+    for (j = 0; j < n; j++)
+        if (!same_d(st->R[j], sys->surf[j].radius) ||
+            !same_d(st->T[j], sys->surf[j].thickness) || !same_mp(st->ix[j], idx[j]))
+            break;
+    return j;
+}
+
+/* Picks the set that shares the most surfaces with sys, or makes one. */
+static pm_set *memo_pick(sg_parax_memo *pm, const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
+                         int *kf)
+{
+    pm_set *best = NULL, *old = NULL;
+    int k, bk = 0;
+    for (k = 0; k < PM_SETS; k++) {
+        pm_set *st = &pm->set[k];
+        if (!old || st->stamp < old->stamp)
+            old = st;
+        if (st->prec == prec && st->n == sys->nsurf) {
+            int f = set_first_change(st, sys, idx);
+            if (!best || f > bk) {
+                best = st;
+                bk = f;
+            }
+        }
+    }
+    if (!best || bk == 0) {
+        /* Nothing in common: the least recently used set, afresh. */
+        if (!set_make(old, sys->nsurf, prec))
+            return NULL;
+        best = old;
+    }
+    best->stamp = ++pm->clock;
+    *kf = bk;
+    return best;
+}
+
+/* After a computation: the keys become sys's, and the states of traces
+ * not made this time stay only where the keys did not change. */
+static void memo_done(pctx *c)
+{
+    pm_set *st = c->pm;
+    int j, k;
+    for (k = 0; k < PM_SLOTS; k++) {
+        pm_slot *sl = &st->s[k];
+        if (!sl->touched && sl->good > c->kf - 1)
+            sl->good = c->kf - 1 > 0 ? c->kf - 1 : 0;
+        sl->touched = 0;
+    }
+    for (j = c->kf; j < st->n; j++) {
+        st->R[j] = c->sys->surf[j].radius;
+        st->T[j] = c->sys->surf[j].thickness;
+        mpfr_set(st->ix[j], c->idx[j], MPFR_RNDN);
+    }
+}
+
+static mpfr_srcptr phi_of(pctx *c, int j)
+{
+    if (!c->phi_ok[j]) {
+        double R = c->sys->surf[j].radius;
+        mpfr_init2(c->phi[j], c->prec);
+        if (j == 0 || R == 0.0 || isinf(R)) {
+            mpfr_set_zero(c->phi[j], 1);
+        } else {
+            mpfr_sub(c->phi[j], c->idx[j], c->idx[j - 1], MPFR_RNDN);
+            mpfr_div_d(c->phi[j], c->phi[j], R, MPFR_RNDN);
+        }
+        c->phi_ok[j] = 1;
+    }
+    return c->phi[j];
+}
 
 static void yn_init(yn *r, mpfr_prec_t p)
 {
@@ -40,17 +244,51 @@ static void yn_clear(yn *r)
  * ends just after surface last, at its vertex plane. */
 static void trace(pctx *c, yn *r, int first, int last)
 {
-    int j;
-    for (j = first; j <= last; j++) {
+    pm_slot *sl = NULL;
+    int j, from = first;
+    if (c->pm && first == 1 && c->slot < PM_SLOTS) {
+        sl = &c->pm->s[c->slot++];
+        if (sl->used && same_mp(sl->y0, r->y) && same_mp(sl->w0, r->w)) {
+            /* The states after the surfaces whose steps read what they
+             * read before. */
+            int k = sl->good;
+            if (k > c->kf - 1)
+                k = c->kf - 1;
+            if (k > last)
+                k = last;
+            if (k >= 1) {
+                mpfr_set(r->y, sl->y[k], MPFR_RNDN);
+                mpfr_set(r->w, sl->w[k], MPFR_RNDN);
+                from = k + 1;
+                c->memo->resumes++;
+            }
+            /* What stays valid: the kept states before the change. */
+            if (sl->good > c->kf - 1)
+                sl->good = c->kf - 1 > 0 ? c->kf - 1 : 0;
+        } else {
+            mpfr_set(sl->y0, r->y, MPFR_RNDN);
+            mpfr_set(sl->w0, r->w, MPFR_RNDN);
+            sl->used = 1;
+            sl->good = 0;
+        }
+        sl->touched = 1;
+    }
+    for (j = from; j <= last; j++) {
         if (j > first) {
             /* y += t w / n over the gap from j-1 to j */
             mpfr_mul_d(c->a, r->w, c->sys->surf[j - 1].thickness, MPFR_RNDN);
             mpfr_div(c->a, c->a, c->idx[j - 1], MPFR_RNDN);
             mpfr_add(r->y, r->y, c->a, MPFR_RNDN);
         }
-        mpfr_mul(c->a, r->y, c->phi[j], MPFR_RNDN);
+        mpfr_mul(c->a, r->y, phi_of(c, j), MPFR_RNDN);
         mpfr_sub(r->w, r->w, c->a, MPFR_RNDN);
+        if (sl) {
+            mpfr_set(sl->y[j], r->y, MPFR_RNDN);
+            mpfr_set(sl->w[j], r->w, MPFR_RNDN);
+        }
     }
+    if (sl && last > sl->good)
+        sl->good = last;
 }
 
 /* Height after moving the ray that left surface j by distance dist. */
@@ -140,6 +378,12 @@ static void field_max(const sg_system *sys, mpfr_t out)
 int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
                      sg_parax_mp *o, sg_diag *d)
 {
+    return sg_paraxial_mpfr_memo(sys, idx, prec, o, d, NULL);
+}
+
+int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
+                          sg_parax_mp *o, sg_diag *d, sg_parax_memo *memo)
+{
     pctx c;
     yn r, m, ch;
     mpfr_t A, B, T0, t1, t2, epr, u0;
@@ -153,23 +397,21 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
 
     c.sys = sys;
     c.idx = idx;
+    c.prec = prec;
     c.phi = calloc((size_t)n, sizeof *c.phi);
-    if (!c.phi)
+    c.phi_ok = calloc((size_t)n, 1);
+    if (!c.phi || !c.phi_ok) {
+        free(c.phi);
+        free(c.phi_ok);
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    }
+    c.memo = memo;
+    c.pm = memo ? memo_pick(memo, sys, idx, prec, &c.kf) : NULL;
+    c.slot = 0;
     mpfr_inits2(prec, c.a, c.b, A, B, T0, t1, t2, epr, u0, (mpfr_ptr)0);
     yn_init(&r, prec);
     yn_init(&m, prec);
     yn_init(&ch, prec);
-    for (j = 0; j < n; j++) {
-        double R = sys->surf[j].radius;
-        mpfr_init2(c.phi[j], prec);
-        if (j == 0 || R == 0.0 || isinf(R)) {
-            mpfr_set_zero(c.phi[j], 1);
-        } else {
-            mpfr_sub(c.phi[j], idx[j], idx[j - 1], MPFR_RNDN);
-            mpfr_div_d(c.phi[j], c.phi[j], R, MPFR_RNDN);
-        }
-    }
     if (!inf_obj)
         mpfr_set_d(T0, sys->surf[0].thickness, MPFR_RNDN);
 
@@ -420,9 +662,13 @@ int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
         mpfr_add_d(o->track, o->track, sys->surf[j].thickness, MPFR_RNDN);
 
 out:
+    if (c.pm)
+        memo_done(&c);
     for (j = 0; j < n; j++)
-        mpfr_clear(c.phi[j]);
+        if (c.phi_ok[j])
+            mpfr_clear(c.phi[j]);
     free(c.phi);
+    free(c.phi_ok);
     yn_clear(&r);
     yn_clear(&m);
     yn_clear(&ch);
@@ -483,7 +729,7 @@ int sg_paraxial_compute_cached(const sg_system *sys, const sg_catalog *cat, int 
     rc = sg_indices_mpfr_cached(sys, cat, wave, idx, cache, d);
     if (rc == SG_OK) {
         sg_parax_mp_init(&p, 128);
-        rc = sg_paraxial_mpfr(sys, idx, 128, &p, d);
+        rc = sg_paraxial_mpfr_memo(sys, idx, 128, &p, d, sg_index_cache_parax(cache));
         if (rc == SG_OK)
             sg_parax_to_double(&p, out);
         sg_parax_mp_clear(&p);

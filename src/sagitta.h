@@ -751,6 +751,11 @@ void sg_index_cache_clear(sg_index_cache *c);
 /* Lookups answered from the cache and computed, since it was made. */
 void sg_index_cache_stats(const sg_index_cache *c, unsigned long *hits,
                           unsigned long *misses);
+/* The cache also keeps the paraxial y-nu traces' state after each surface
+ * (the launch's, the mpfr method's, sg_paraxial_compute_cached's): a trace
+ * whose start and surfaces up to the first changed one are as before
+ * resumes there, with the same bits.  How many have resumed: */
+unsigned long sg_index_cache_resumes(const sg_index_cache *c);
 /* sg_tracer_new and sg_paraxial_compute with a cache (NULL: none). */
 sg_tracer *sg_tracer_new_cached(const sg_system *sys, const sg_catalog *cat,
                                 const sg_trace_opts *opts, sg_index_cache *cache,
@@ -758,6 +763,34 @@ sg_tracer *sg_tracer_new_cached(const sg_system *sys, const sg_catalog *cat,
 int sg_paraxial_compute_cached(const sg_system *sys, const sg_catalog *cat, int wave,
                                sg_index_cache *cache, sg_paraxial *out, sg_diag *d);
 void sg_tracer_free(sg_tracer *t);
+/* The mpfr method's ray kept between the tracers of one design (the
+ * editor's digits check, after every edit): an mpfr tracer given a memo
+ * keeps in it the state of its last normalized or started ray after each
+ * surface, with what that state was computed from (the ray's launch bit
+ * for bit, the precision, each surface and the one before it, the indices
+ * on both sides, the trace options).  The next tracer's ray that launches
+ * the same resumes after the last surface before the first that differs,
+ * with the same bits as a full trace.  Memory: about 600 bytes a surface
+ * at 256 bits, plus a copy of the surfaces.  The caller owns the memo; a
+ * tracer uses it only from sg_tracer_use_memo until it is freed or given
+ * another, from one thread; other methods ignore it. */
+/* A tracer of t's system, wavelength and options but with method
+ * `method` (mpfr at mpfr_bits bits): it shares t's prepared surfaces,
+ * paraxial data and launch, which a tracer of the precise or mpfr method
+ * computes the same way, so it gives the bits sg_tracer_new would, and
+ * prepares only what the new method adds (glass indices from cache when
+ * given).  t must outlive it.  A classic tracer on either side makes a
+ * new tracer from t's system instead.  NULL on failure, with d set. */
+sg_tracer *sg_tracer_new_method(const sg_tracer *t, sg_method method, int mpfr_bits,
+                                sg_index_cache *cache, sg_diag *d);
+typedef struct sg_mpfr_memo sg_mpfr_memo;
+sg_mpfr_memo *sg_mpfr_memo_new(void);
+void sg_mpfr_memo_free(sg_mpfr_memo *memo);
+void sg_tracer_use_memo(sg_tracer *t, sg_mpfr_memo *memo);
+/* The surface the last ray resumed at (1 when it was traced in full), and
+ * how many rays resumed later than surface 1, since the memo was made. */
+int sg_mpfr_memo_last_resume(const sg_mpfr_memo *memo);
+unsigned long sg_mpfr_memo_resumes(const sg_mpfr_memo *memo);
 int sg_tracer_nsurf(const sg_tracer *t);
 const sg_paraxial *sg_tracer_paraxial(const sg_tracer *t);
 /* Index of the medium after surface i at the tracer's wavelength

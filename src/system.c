@@ -341,10 +341,13 @@ int sg_field_check(const sg_system *sys, double hx, double hy, sg_diag *d)
     return SG_OK;
 }
 
+enum { ZERO_MAX = 256 };
+
 int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
 {
     double track;
-    int i, k, p, src;
+    int i, k, p, src, np;
+    unsigned char zero_ok[ZERO_MAX][2];
     if (sys->nsurf < 3)
         return sg_diag_set(d, SG_ENOSYS,
                            "the system has %d surfaces; it needs an object, "
@@ -438,6 +441,20 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
             (fabs(sys->field[k].x) > SG_MAX_LEN || fabs(sys->field[k].y) > SG_MAX_LEN))
             return sg_diag_set(d, SG_ERANGE, "field %d: height (%g, %g) is beyond %g lens units",
                                k + 1, sys->field[k].x, sys->field[k].y, SG_MAX_LEN);
+    /* Whether a zero passes each surface number, on the object and
+     * elsewhere: the check of a real number reads only its value (the
+     * element only names it in a message), and most elements are zero
+     * (unused terms), so a zero is checked once a number, not a surface. */
+    np = sg_param_count(SG_SCOPE_SURFACE);
+    if (np > ZERO_MAX)
+        np = 0;
+    for (p = 0; p < np; p++) {
+        const sg_param *pp = sg_param_at(SG_SCOPE_SURFACE, p);
+        zero_ok[p][0] = pp->kind == SG_PARAM_REAL &&
+                        sg_param_check(pp, 0, 0.0, 0, NULL, 0) == SG_OK;
+        zero_ok[p][1] = pp->kind == SG_PARAM_REAL &&
+                        sg_param_check(pp, 0, 0.0, 1, NULL, 0) == SG_OK;
+    }
     track = 0.0;
     for (i = 0; i < sys->nsurf; i++) {
         const sg_surface *s = &sys->surf[i];
@@ -489,14 +506,18 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
         for (p = 0; p < sg_param_count(SG_SCOPE_SURFACE); p++) {
             const sg_param *pp = sg_param_at(SG_SCOPE_SURFACE, p);
             char msg[160];
+            const double *v;
             /* Frame changes are checked by check_frames, by their JSON names. */
             if (pp->kind != SG_PARAM_REAL ||
                 (pp->flags & (SG_PARAM_INF | SG_PARAM_OBJ_INF | SG_PARAM_NESTED)))
                 continue;
-            for (k = 0; k < pp->count; k++)
-                if (sg_param_check(pp, k, sg_param_get(pp, s, k), i == 0, msg, sizeof msg) !=
-                    SG_OK)
+            v = sg_param_cptr(pp, s);
+            for (k = 0; k < pp->count; k++) {
+                if (v[k] == 0.0 && p < np && zero_ok[p][i == 0])
+                    continue;
+                if (sg_param_check(pp, k, v[k], i == 0, msg, sizeof msg) != SG_OK)
                     return sg_diag_set(d, SG_ERANGE, "surface %d: %s", i, msg);
+            }
         }
         switch (s->aperture) {
         case SG_APERTURE_NONE:

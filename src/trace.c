@@ -442,7 +442,7 @@ static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_tra
     t->sys = sg_system_clone(sys);
     t->sp = calloc((size_t)n, sizeof *t->sp);
     t->nsigned = calloc((size_t)n, sizeof *t->nsigned);
-    idx = calloc((size_t)n, sizeof *idx);
+    idx = sg_mp_block_new((size_t)n, 256);
     if (!t->sys || !t->sp || !t->nsigned || !idx) {
         sg_diag_set(d, SG_ENOMEM, "out of memory");
         free(idx);
@@ -468,15 +468,11 @@ static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_tra
             }
             break;
         }
-    for (i = 0; i < n; i++)
-        mpfr_init2(idx[i], 256);
     /* Only while it is made: the caller owns the cache. */
     t->icache = cache;
     rc = sg_indices_mpfr_cached(sys, cat, t->wave, idx, cache, d);
     if (rc == SG_OK)
         rc = prepare_surfaces(t, idx, d);
-    for (i = 0; i < n; i++)
-        mpfr_clear(idx[i]);
     free(idx);
     if (rc != SG_OK)
         goto fail;
@@ -549,6 +545,71 @@ int sg_tracer_fork(const sg_tracer *m, sg_tracer **out, sg_diag *d)
 fail:
     sg_tracer_free(t);
     return rc;
+}
+
+sg_tracer *sg_tracer_new_method(const sg_tracer *m, sg_method method, int mpfr_bits,
+                                sg_index_cache *cache, sg_diag *d)
+{
+    sg_trace_opts o = m->o;
+    sg_tracer *t;
+    sg_diag own;
+    if (!d) {
+        sg_diag_clear(&own);
+        d = &own;
+    }
+    o.method = method;
+    o.mpfr_bits = mpfr_bits;
+    /* Classic lands the real-aim stop radius its own way (launch.c), and
+     * the precision's range is tracer_open's to check. */
+    if (m->o.method == SG_METHOD_CLASSIC || method == SG_METHOD_CLASSIC ||
+        mpfr_bits < 53 || mpfr_bits > 100000)
+        return sg_tracer_new_cached(m->sys, m->cat, &o, cache, d);
+    t = calloc(1, sizeof *t);
+    if (!t) {
+        sg_diag_set(d, SG_ENOMEM, "out of memory");
+        return NULL;
+    }
+    /* The prepared model, shared as a fork shares it; only the options'
+     * method and precision differ, which the model does not read. */
+    t->model = m->model ? m->model : m;
+    t->sys = m->sys;
+    t->o = o;
+    t->wave = m->wave;
+    t->n = m->n;
+    t->sp = m->sp;
+    t->xf = m->xf;
+    t->shp = m->shp;
+    t->nsigned = m->nsigned;
+    t->px = m->px;
+    t->ln = m->ln;
+    t->cat = m->cat;
+    if (m->prim) {
+        /* Named as tracer_open names the primary wavelength's failure. */
+        sg_diag pd;
+        sg_diag_clear(&pd);
+        t->prim = sg_tracer_new_method(m->prim, method, mpfr_bits, cache, &pd);
+        if (!t->prim) {
+            sg_diag_set(d, pd.code != SG_OK ? pd.code : SG_ENOMEM,
+                        "primary wavelength %d, which defines the pupil and fields: %s",
+                        t->sys->primary_wave + 1, pd.msg);
+            goto fail;
+        }
+    }
+    t->scratch = calloc((size_t)t->n, sizeof *t->scratch);
+    if (!t->scratch || !(t->rescue = sg_mpfr_rescue_new())) {
+        sg_diag_set(d, SG_ENOMEM, "out of memory");
+        goto fail;
+    }
+    t->icache = cache;
+    if (t->o.method == SG_METHOD_MPFR && sg_mpfr_prepare(t, d) != SG_OK)
+        goto fail;
+    t->icache = NULL;
+    return t;
+fail:
+    if (d->code == SG_OK)
+        sg_diag_set(d, SG_ENOMEM, "out of memory");
+    sg_tracer_free(t);
+    return NULL;
 }
 
 void sg_tracer_free(sg_tracer *t)

@@ -13,6 +13,7 @@
 
 #include <float.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "dd.h"
@@ -147,6 +148,8 @@ struct sg_tracer {
     struct sg_tracer *prim;
     /* The caller's glass indices, only while the tracer is made. */
     sg_index_cache *icache;
+    /* The caller's mpfr ray memo (sg_tracer_use_memo), never a fork's. */
+    sg_mpfr_memo *memo;
 };
 
 /* Ray state of the precise method: position on the current surface in its
@@ -409,9 +412,46 @@ void sg_parax_to_double(const sg_parax_mp *p, sg_paraxial *o);
 int sg_object_slope_mpfr(const sg_system *sys, const mpfr_t n0, mpfr_t out, sg_diag *d);
 int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
                      sg_parax_mp *out, sg_diag *d);
+/* The same, resuming each y-nu trace after the last surface whose inputs
+ * (radius, thickness, index, and the one before) and the trace's start
+ * are those memo last saw: the same bits.  memo may be NULL. */
+typedef struct sg_parax_memo sg_parax_memo;
+int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
+                          sg_parax_mp *out, sg_diag *d, sg_parax_memo *memo);
+sg_parax_memo *sg_parax_memo_new(void);
+void sg_parax_memo_free(sg_parax_memo *memo);
+unsigned long sg_parax_memo_resumes(const sg_parax_memo *memo);
 /* Signed indices after every surface at wavelength wave, into idx[0..n-1]. */
 int sg_indices_mpfr(const sg_system *sys, const sg_catalog *cat, int wave,
                     mpfr_t *idx, sg_diag *d);
+
+/* n MPFR numbers at precision prec, zero, in one allocation that free()
+ * releases: a tracer needs thousands (an index a surface), and one
+ * allocation each costs as much as the arithmetic.  Never give them to
+ * mpfr_clear, mpfr_set_prec or mpfr_swap with another number.  NULL when
+ * out of memory. */
+static inline size_t sg_mp_limb_bytes(mpfr_prec_t prec)
+{
+    return (mpfr_custom_get_size(prec) + 15) & ~(size_t)15;
+}
+
+static inline void sg_mp_place(mpfr_ptr x, void *limbs, mpfr_prec_t prec)
+{
+    mpfr_custom_init(limbs, prec);
+    mpfr_custom_init_set(x, MPFR_ZERO_KIND, 0, prec, limbs);
+}
+
+static inline mpfr_t *sg_mp_block_new(size_t n, mpfr_prec_t prec)
+{
+    size_t head = (n * sizeof(mpfr_t) + 15) & ~(size_t)15, sz = sg_mp_limb_bytes(prec), i;
+    char *b = malloc(head + n * sz + 1);
+    mpfr_t *v = (mpfr_t *)(void *)b;
+    if (!b)
+        return NULL;
+    for (i = 0; i < n; i++)
+        sg_mp_place(v[i], b + head + i * sz, prec);
+    return v;
+}
 
 static inline dd dd_from_mpfr(const mpfr_t x, mpfr_t tmp)
 {

@@ -58,7 +58,12 @@ struct sg_mpfr_ctx {
     mpfr_t fv[2], tgt[2], qb[2], dq[2], qo[2];
     mpfr_t a[NA]; /* aiming's scratch: the landings reuse every t[] */
     int fdeg;
+    /* The limbs of every surface's R, k1, T, mu, nb and a[] (MSV a
+     * surface), one allocation (sg_mp_block_new). */
+    void *arena;
 };
+
+enum { MSV = 5 + SG_NASPH };
 
 static void mvec_init(mvec *v, mpfr_prec_t p)
 {
@@ -113,7 +118,6 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
         return;
     if (m->s) {
         for (i = 0; i < m->n; i++) {
-            mpfr_clears(m->s[i].R, m->s[i].k1, m->s[i].T, m->s[i].mu, m->s[i].nb, (mpfr_ptr)0);
             if (m->s[i].xf) {
                 int j, k2;
                 for (j = 0; j < 3; j++) {
@@ -122,8 +126,6 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
                     mpfr_clear(m->s[i].b[j]);
                 }
             }
-            for (k = 0; k < SG_NASPH; k++)
-                mpfr_clear(m->s[i].a[k]);
             if (m->s[i].mc) {
                 sg_shape_mp_clear(m->s[i].mc);
                 free(m->s[i].mc);
@@ -131,6 +133,7 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
         }
         free(m->s);
     }
+    free(m->arena);
     mpfr_clears(m->T0, m->enp, m->epr, m->stop_r, m->fx, m->fy, m->pimg_slope, m->pi, m->tslope,
                 m->q[0], m->q[1], m->path, m->opl, m->plane, m->c1dot, (mpfr_ptr)0);
     for (k = 0; k < 2; k++)
@@ -155,12 +158,16 @@ static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
 {
     sg_mpfr_ctx *m = calloc(1, sizeof *m);
     msurf *s = calloc((size_t)n, sizeof *s);
+    size_t sz = sg_mp_limb_bytes(prec);
+    char *ar = malloc((size_t)n * MSV * sz + 1);
     int i, k;
-    if (!m || !s) {
+    if (!m || !s || !ar) {
         free(m);
         free(s);
+        free(ar);
         return NULL;
     }
+    m->arena = ar;
     m->prec = prec;
     m->n = n;
     m->s = s;
@@ -183,10 +190,15 @@ static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
     mvec_init(&m->sv_P, prec);
     mvec_init(&m->sv_D, prec);
     for (i = 0; i < n; i++) {
-        mpfr_inits2(prec, s[i].R, s[i].k1, s[i].T, s[i].mu, s[i].nb, (mpfr_ptr)0);
+        char *b = ar + (size_t)i * MSV * sz;
+        sg_mp_place(s[i].R, b, prec);
+        sg_mp_place(s[i].k1, b + sz, prec);
+        sg_mp_place(s[i].T, b + 2 * sz, prec);
+        sg_mp_place(s[i].mu, b + 3 * sz, prec);
+        sg_mp_place(s[i].nb, b + 4 * sz, prec);
         mpfr_set_ui(s[i].nb, 1, MPFR_RNDN);
         for (k = 0; k < SG_NASPH; k++)
-            mpfr_init2(s[i].a[k], prec);
+            sg_mp_place(s[i].a[k], b + (size_t)(5 + k) * sz, prec);
     }
     return m;
 }
@@ -649,12 +661,17 @@ static void xfer_m(sg_mpfr_ctx *m, const msurf *s)
         mpfr_set(D[j], v[j], MPFR_RNDN);
 }
 
-static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
+static void memo_save(sg_mpfr_memo *mm, const sg_mpfr_ctx *m, int i, double dD,
+                      const sg_ray_surface *o);
+
+/* From surface `from` on, with the direction's error bound dD so far; a
+ * memo, when given, keeps the state after each surface. */
+static int run_from(sg_tracer *tr, sg_ray_surface *out, int from, int upto, double dD,
+                    sg_mpfr_memo *save)
 {
     sg_mpfr_ctx *m = tr->mp;
     int i, rc;
-    double dD = 0.0;
-    for (i = 1; i <= upto; i++) {
+    for (i = from; i <= upto; i++) {
         const sg_sprep *sp = &tr->sp[i];
         sg_ray_surface *o = &out[i];
         double big;
@@ -715,8 +732,279 @@ static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
         o->dir_error_bound = sg_bound_up(
             0.5 * ulp_d(fmax(fabs(o->l), fmax(fabs(o->m), fabs(o->n)))) +
             fmax(dD, ldexp(1.0, 16 - (int)m->prec)));
+        if (save && i < upto)
+            memo_save(save, m, i, dD, o);
     }
     return SG_OK;
+}
+
+static int run(sg_tracer *tr, sg_ray_surface *out, int upto)
+{
+    return run_from(tr, out, 1, upto, 0.0, NULL);
+}
+
+/* ------------------------------------------------------------------------
+ * The ray memo (sg_mpfr_memo): the state after each surface of the last
+ * ray, and what it was computed from.
+ * ------------------------------------------------------------------------ */
+
+enum { MS = 7 }; /* P, D and the optical path after a surface */
+
+struct sg_mpfr_memo {
+    mpfr_prec_t prec; /* 0: nothing kept */
+    int cap;          /* surfaces allocated */
+    int n;            /* surfaces of the system last traced */
+    int good;         /* states kept for surfaces 1..good */
+    int max_iter, clip, unclipped;
+    double clip_rtol;
+    mpfr_t launch[8]; /* P, D, opl and path entering surface 1 */
+    mpfr_t c1dot;
+    sg_surface *surf; /* each surface as it was */
+    dd *mu;           /* the prepared mu and mu2 of each surface */
+    mpfr_t *ix;       /* the mpfr mu and nb of each surface */
+    mpfr_t *st;       /* MS a surface */
+    double *dD;
+    sg_ray_surface *row;
+    int last;
+    unsigned long resumes;
+};
+
+sg_mpfr_memo *sg_mpfr_memo_new(void)
+{
+    return calloc(1, sizeof(sg_mpfr_memo));
+}
+
+static void memo_clear(sg_mpfr_memo *mm)
+{
+    int i, k;
+    if (mm->prec) {
+        for (k = 0; k < 8; k++)
+            mpfr_clear(mm->launch[k]);
+        mpfr_clear(mm->c1dot);
+        for (i = 0; i < mm->cap; i++) {
+            mpfr_clear(mm->ix[2 * i]);
+            mpfr_clear(mm->ix[2 * i + 1]);
+            for (k = 0; k < MS; k++)
+                mpfr_clear(mm->st[i * MS + k]);
+        }
+    }
+    free(mm->surf);
+    free(mm->mu);
+    free(mm->ix);
+    free(mm->st);
+    free(mm->dD);
+    free(mm->row);
+    mm->surf = NULL;
+    mm->mu = NULL;
+    mm->ix = mm->st = NULL;
+    mm->dD = NULL;
+    mm->row = NULL;
+    mm->prec = 0;
+    mm->cap = mm->n = mm->good = 0;
+}
+
+void sg_mpfr_memo_free(sg_mpfr_memo *memo)
+{
+    if (!memo)
+        return;
+    memo_clear(memo);
+    free(memo);
+}
+
+void sg_tracer_use_memo(sg_tracer *t, sg_mpfr_memo *memo)
+{
+    if (t)
+        t->memo = memo;
+}
+
+int sg_mpfr_memo_last_resume(const sg_mpfr_memo *memo)
+{
+    return memo ? memo->last : 0;
+}
+
+unsigned long sg_mpfr_memo_resumes(const sg_mpfr_memo *memo)
+{
+    return memo ? memo->resumes : 0;
+}
+
+/* Room for n surfaces at precision prec, keeping what is there when the
+ * precision is the same (a changed one empties the memo); 0 when out of
+ * memory, and the memo is then empty. */
+static int memo_fit(sg_mpfr_memo *mm, int n, mpfr_prec_t prec)
+{
+    int i, k;
+    if (mm->prec != prec) {
+        memo_clear(mm);
+        mm->prec = prec;
+        for (k = 0; k < 8; k++)
+            mpfr_init2(mm->launch[k], prec);
+        mpfr_init2(mm->c1dot, prec);
+    }
+    if (n > mm->cap) {
+        sg_surface *sf = realloc(mm->surf, (size_t)n * sizeof *sf);
+        dd *mu;
+        mpfr_t *ix, *st;
+        double *dD;
+        sg_ray_surface *row;
+        if (sf)
+            mm->surf = sf;
+        mu = realloc(mm->mu, (size_t)n * 2 * sizeof *mu);
+        if (mu)
+            mm->mu = mu;
+        dD = realloc(mm->dD, (size_t)n * sizeof *dD);
+        if (dD)
+            mm->dD = dD;
+        row = realloc(mm->row, (size_t)n * sizeof *row);
+        if (row)
+            mm->row = row;
+        /* An mpfr_t holds a pointer to its limbs, so it may move. */
+        ix = realloc(mm->ix, (size_t)n * 2 * sizeof *ix);
+        if (ix)
+            mm->ix = ix;
+        st = ix ? realloc(mm->st, (size_t)n * MS * sizeof *st) : NULL;
+        if (st)
+            mm->st = st;
+        if (!sf || !mu || !dD || !row || !ix || !st) {
+            /* Only the first cap entries of ix and st are initialised. */
+            memo_clear(mm);
+            return 0;
+        }
+        for (i = mm->cap; i < n; i++) {
+            mpfr_init2(mm->ix[2 * i], prec);
+            mpfr_init2(mm->ix[2 * i + 1], prec);
+            for (k = 0; k < MS; k++)
+                mpfr_init2(mm->st[i * MS + k], prec);
+        }
+        mm->cap = n;
+    }
+    return 1;
+}
+
+/* The same number with the same sign, NaN never. */
+static int same_mp(mpfr_srcptr a, mpfr_srcptr b)
+{
+    return mpfr_equal_p(a, b) && mpfr_signbit(a) == mpfr_signbit(b);
+}
+
+static int same_dd(dd a, dd b)
+{
+    return memcmp(&a.hi, &b.hi, sizeof a.hi) == 0 && memcmp(&a.lo, &b.lo, sizeof a.lo) == 0;
+}
+
+/* The ray state entering surface 1, as the memo keys it. */
+static void launch_vars(sg_mpfr_ctx *m, mpfr_ptr v[8])
+{
+    v[0] = m->P.x;
+    v[1] = m->P.y;
+    v[2] = m->P.z;
+    v[3] = m->D.x;
+    v[4] = m->D.y;
+    v[5] = m->D.z;
+    v[6] = m->opl;
+    v[7] = m->path;
+}
+
+/* The first surface whose state the memo cannot give: 1 for a full
+ * trace, else k with the states after surfaces 1..k-1 unchanged.  A
+ * surface's step reads the surface, the one before it (the transfer and
+ * thickness), the indices on both sides and the options; the state
+ * entering it is the launch's and the steps' before. */
+static int memo_resume(const sg_tracer *tr, mpfr_ptr L[8])
+{
+    const sg_mpfr_memo *mm = tr->memo;
+    const sg_mpfr_ctx *m = tr->mp;
+    int i, k, lim = mm->good < tr->n - 2 ? mm->good : tr->n - 2;
+    if (lim < 1 || mm->max_iter != tr->o.max_iter || mm->clip != tr->o.clip ||
+        mm->unclipped != tr->unclipped ||
+        memcmp(&mm->clip_rtol, &tr->o.clip_rtol, sizeof mm->clip_rtol) != 0)
+        return 1;
+    for (k = 0; k < 8; k++)
+        if (!same_mp(mm->launch[k], L[k]))
+            return 1;
+    for (i = 0; i <= lim; i++) {
+        if (memcmp(&mm->surf[i], &tr->sys->surf[i], sizeof mm->surf[i]) != 0)
+            break;
+        if (i >= 1 && (!same_mp(mm->ix[2 * i], m->s[i].mu) ||
+                       !same_mp(mm->ix[2 * i + 1], m->s[i].nb) ||
+                       !same_dd(mm->mu[2 * i], tr->sp[i].mu) ||
+                       !same_dd(mm->mu[2 * i + 1], tr->sp[i].mu2)))
+            break;
+    }
+    /* A change in surface i changes its own step and, through the
+     * thickness and transfer, the next one's. */
+    return i >= 2 ? i : 1;
+}
+
+static void memo_save(sg_mpfr_memo *mm, const sg_mpfr_ctx *m, int i, double dD,
+                      const sg_ray_surface *o)
+{
+    mpfr_t *st = mm->st + (size_t)i * MS;
+    mpfr_set(st[0], m->P.x, MPFR_RNDN);
+    mpfr_set(st[1], m->P.y, MPFR_RNDN);
+    mpfr_set(st[2], m->P.z, MPFR_RNDN);
+    mpfr_set(st[3], m->D.x, MPFR_RNDN);
+    mpfr_set(st[4], m->D.y, MPFR_RNDN);
+    mpfr_set(st[5], m->D.z, MPFR_RNDN);
+    mpfr_set(st[6], m->opl, MPFR_RNDN);
+    if (i == 1)
+        mpfr_set(mm->c1dot, m->c1dot, MPFR_RNDN);
+    mm->dD[i] = dD;
+    mm->row[i] = *o;
+    mm->good = i;
+}
+
+/* The whole system from the launch in P, D, opl and path, through the
+ * memo when the tracer has one: the states it keeps up to the first
+ * changed surface, then a trace from there that it keeps in turn. */
+static int run_memo(sg_tracer *tr, sg_ray_surface *out)
+{
+    sg_mpfr_memo *mm = tr->memo;
+    sg_mpfr_ctx *m = tr->mp;
+    mpfr_ptr L[8];
+    int i, k, upto = tr->n - 1;
+    double dD = 0.0;
+    if (!mm || m->plane_busy || !memo_fit(mm, tr->n, m->prec))
+        return run(tr, out, upto);
+    launch_vars(m, L);
+    k = memo_resume(tr, L);
+    if (k >= 2) {
+        mpfr_t *st = mm->st + (size_t)(k - 1) * MS;
+        for (i = 1; i < k; i++)
+            out[i] = mm->row[i];
+        mpfr_set(m->P.x, st[0], MPFR_RNDN);
+        mpfr_set(m->P.y, st[1], MPFR_RNDN);
+        mpfr_set(m->P.z, st[2], MPFR_RNDN);
+        mpfr_set(m->D.x, st[3], MPFR_RNDN);
+        mpfr_set(m->D.y, st[4], MPFR_RNDN);
+        mpfr_set(m->D.z, st[5], MPFR_RNDN);
+        mpfr_set(m->opl, st[6], MPFR_RNDN);
+        mpfr_set(m->c1dot, mm->c1dot, MPFR_RNDN);
+        dD = mm->dD[k - 1];
+        mm->resumes++;
+    } else {
+        k = 1;
+        for (i = 0; i < 8; i++)
+            mpfr_set(mm->launch[i], L[i], MPFR_RNDN);
+        mm->max_iter = tr->o.max_iter;
+        mm->clip = tr->o.clip;
+        mm->clip_rtol = tr->o.clip_rtol;
+        mm->unclipped = tr->unclipped;
+    }
+    mm->last = k;
+    mm->good = k - 1;
+    mm->n = tr->n;
+    /* The keys of the surfaces from k on, as this trace sees them (the
+     * ones before are equal). */
+    for (i = k > 1 ? k : 0; i < tr->n; i++) {
+        mm->surf[i] = tr->sys->surf[i];
+        if (i >= 1) {
+            mpfr_set(mm->ix[2 * i], m->s[i].mu, MPFR_RNDN);
+            mpfr_set(mm->ix[2 * i + 1], m->s[i].nb, MPFR_RNDN);
+            mm->mu[2 * i] = tr->sp[i].mu;
+            mm->mu[2 * i + 1] = tr->sp[i].mu2;
+        }
+    }
+    return run_from(tr, out, k, upto, dD, mm);
 }
 
 int sg_mpfr_trace_start(sg_tracer *tr, const double S[3], const double Dv[3],
@@ -737,7 +1025,7 @@ int sg_mpfr_trace_start(sg_tracer *tr, const double S[3], const double Dv[3],
     sg_set_start_row(&out[0], S, u);
     mpfr_set_zero(m->path, 1);
     mpfr_set_zero(m->opl, 1);
-    return run(tr, out, tr->n - 1);
+    return run_memo(tr, out);
 }
 
 /* ------------------------------------------------------------------------
@@ -1143,7 +1431,11 @@ int sg_mpfr_trace_normalized(sg_tracer *tr, double hx, double hy, double px, dou
         S[2] = mpfr_get_d(t[0], MPFR_RNDN);
     }
     sg_set_start_row(&out[0], S, u);
-    return run(tr, out, tr->n - 1);
+    /* The plane's chief ray needs only its point on surface 1 (c1dot and
+     * the row's status there). */
+    if (m->plane_busy)
+        return run(tr, out, 1);
+    return run_memo(tr, out);
 }
 
 /* ------------------------------------------------------------------------
@@ -1161,12 +1453,11 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
     if (!m)
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
     tr->mp = m;
-    idx = calloc((size_t)tr->n, sizeof *idx);
+    idx = sg_mp_block_new((size_t)tr->n, prec);
     if (!idx)
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
     for (i = 0; i < tr->n; i++) {
         msurf *s = &m->s[i];
-        mpfr_init2(idx[i], prec);
         mpfr_set_d(s->R, tr->sp[i].R, MPFR_RNDN);
         mpfr_set_d(s->k1, sys->surf[i].conic, MPFR_RNDN);
         mpfr_add_ui(s->k1, s->k1, 1, MPFR_RNDN);
@@ -1204,7 +1495,7 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             mpfr_set(m->s[i].nb, m->t[0], MPFR_RNDN);
         }
         sg_parax_mp_init(&p, prec);
-        rc = sg_paraxial_mpfr(sys, idx, prec, &p, d);
+        rc = sg_paraxial_mpfr_memo(sys, idx, prec, &p, d, sg_index_cache_parax(tr->icache));
         if (rc == SG_OK) {
             if (isfinite(sys->surf[0].thickness))
                 mpfr_set_d(m->T0, sys->surf[0].thickness, MPFR_RNDN);
@@ -1218,8 +1509,6 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
         }
         sg_parax_mp_clear(&p);
     }
-    for (i = 0; i < tr->n; i++)
-        mpfr_clear(idx[i]);
     free(idx);
     if (rc != SG_OK)
         return rc;

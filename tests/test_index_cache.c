@@ -187,6 +187,78 @@ static void test_singlet(void **state)
     run_design("singlet.json", 40);
 }
 
+/* A long chain of weak menisci, as bench/many_surfaces.py writes it (n
+ * surfaces, stop on surface 1). */
+static sg_system *many(int n)
+{
+    sg_system *sys = tu_example("singlet.json");
+    int i;
+    assert_non_null(sys);
+    while (sys->nsurf < n)
+        assert_int_equal(sg_system_insert(sys, 1), SG_OK);
+    for (i = 1; i < n - 1; i++) {
+        sg_surface *s = &sys->surf[i];
+        memset(s->asph, 0, sizeof s->asph);
+        s->conic = 0.0;
+        s->radius = i % 2 ? ((i / 2) % 2 ? -400.0 : 400.0) : ((i / 2) % 2 ? -380.0 : 450.0);
+        s->thickness = i % 2 ? 2.0 : 1.0;
+        s->mat.kind = i % 2 ? SG_MAT_GLASS : SG_MAT_AIR;
+        if (i % 2)
+            snprintf(s->mat.name, sizeof s->mat.name, "%s", glasses[(i / 2) % 5]);
+        s->semi_diameter = 20.0;
+        s->sd_fixed = 0;
+    }
+    sys->stop = 1;
+    return sys;
+}
+
+/* The paraxial traces the cache keeps resume after the surfaces an edit
+ * left alone, with a fresh computation's bits: random edits (and moves of
+ * the stop, inserted and deleted surfaces) on a long design, every
+ * method and wavelength compared as above. */
+static void test_many_surfaces(void **state)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = many(40);
+    sg_index_cache *ic = sg_index_cache_new();
+    unsigned long r0;
+    int k, n = 0;
+    (void)state;
+    n += compare(sys, cat, ic);
+    for (k = 0; k < 30; k++) {
+        int i = 1 + (int)(next() % (uint64_t)(sys->nsurf - 2));
+        switch (next() % 6) {
+        case 0:
+            sys->stop = i;
+            break;
+        case 1:
+            if (sys->nsurf < 60)
+                sg_system_insert(sys, i);
+            break;
+        case 2:
+            if (sys->stop != i)
+                sg_system_delete(sys, i);
+            break;
+        default:
+            edit(sys);
+            break;
+        }
+        n += compare(sys, cat, ic);
+    }
+    /* An edit far behind the stop: the traces resume. */
+    sys->stop = 1;
+    n += compare(sys, cat, ic);
+    r0 = sg_index_cache_resumes(ic);
+    sys->surf[sys->nsurf - 3].radius *= 1.0 + 1e-6;
+    n += compare(sys, cat, ic);
+    print_message("# %d tracer pairs, %lu paraxial traces resumed\n", n,
+                  sg_index_cache_resumes(ic));
+    assert_true(sg_index_cache_resumes(ic) > r0);
+    sg_index_cache_free(ic);
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
 /* The cache's own bound: past its limit it starts again, and still gives
  * fresh bits. */
 static void test_many_wavelengths(void **state)
@@ -230,6 +302,7 @@ int main(void)
         cmocka_unit_test(test_double_gauss),
         cmocka_unit_test(test_singlet),
         cmocka_unit_test(test_many_wavelengths),
+        cmocka_unit_test(test_many_surfaces),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -94,6 +94,7 @@ typedef struct bench_cfg {
     int nthr_all; /* threads that "all cores" resolves to */
     int progress; /* report progress on stderr */
     int cpu_clock; /* time by the process's CPU time, not the wall clock */
+    int edit_surf; /* the surface the recompute's edits change; 0: surface 1 */
     size_t sizes[MAXSIZES];
     size_t nsizes;
 } bench_cfg;
@@ -545,6 +546,7 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
     int n = cfg->repeat > SHORT_MIN_SAMPLES ? cfg->repeat : SHORT_MIN_SAMPLES, i, s1;
     sg_system *sys = sg_system_clone(sys0);
     sg_index_cache *ic = sg_index_cache_new();
+    sg_mpfr_memo *memo = sg_mpfr_memo_new();
     sg_ray_surface *out = malloc((size_t)sys0->nsurf * sizeof *out);
     sg_ray_surface *ref = malloc((size_t)sys0->nsurf * sizeof *ref);
     double *sec = malloc((size_t)n * sizeof *sec), *val;
@@ -552,11 +554,13 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
     sg_diag d;
 
     memset(r, 0, sizeof *r);
-    if (!sys || !ic || !out || !ref || !sec) {
+    if (!sys || !ic || !memo || !out || !ref || !sec) {
         set_err(r, SG_ENOMEM, NULL);
         goto done;
     }
     s1 = sys->nsurf > 2 ? 1 : 0;
+    if (cfg->edit_surf > 0 && cfg->edit_surf < sys->nsurf - 1)
+        s1 = cfg->edit_surf;
     val = isfinite(sys->surf[s1].radius) && sys->surf[s1].radius != 0.0
               ? &sys->surf[s1].radius
               : &sys->surf[s1].thickness;
@@ -585,7 +589,10 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
          * its tracer's launch, which computed them. */
         rc = sg_tracer_paraxial(t) ? SG_OK : SG_EINVAL;
         if (rc == SG_OK && digits) {
-            mt = sg_tracer_new_cached(sys, cat, &mo, ic, &d);
+            /* As the editor: from the precise tracer's prepared model,
+             * and the reference ray's states kept across edits. */
+            mt = sg_tracer_new_method(t, mo.method, mo.mpfr_bits, ic, &d);
+            sg_tracer_use_memo(mt, memo);
             if (mt)
                 sg_trace_normalized(mt, edge_ray[0], edge_ray[1], edge_ray[2], edge_ray[3],
                                     ref);
@@ -594,8 +601,8 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
         }
         if (i >= 0)
             sec[i] = now_s(cfg->cpu_clock) - t0;
-        sg_tracer_free(t);
         sg_tracer_free(mt);
+        sg_tracer_free(t);
         if (rc != SG_OK) {
             set_err(r, rc, &d);
             goto done;
@@ -606,6 +613,7 @@ static void bench_recompute(const bench_cfg *cfg, const sg_system *sys0,
 done:
     sg_system_free(sys);
     sg_index_cache_free(ic);
+    sg_mpfr_memo_free(memo);
     free(out);
     free(ref);
     free(sec);
@@ -909,6 +917,7 @@ static cJSON *json_top(const bench_cfg *cfg, double load0, double load1)
     cJSON_AddNumberToObject(set, "repeat", cfg->repeat);
     cJSON_AddBoolToObject(set, "quick", cfg->quick);
     cJSON_AddStringToObject(set, "clock", cfg->cpu_clock ? "cpu" : "wall");
+    cJSON_AddNumberToObject(set, "edit_surface", cfg->edit_surf > 0 ? cfg->edit_surf : 1);
     cJSON_AddNumberToObject(set, "threads_all", cfg->nthr_all);
     cJSON_AddNumberToObject(set, "short_samples_min", SHORT_MIN_SAMPLES);
     cJSON_AddStringToObject(set, "ray_order", "field-major");
@@ -938,6 +947,8 @@ static void bench_help(FILE *f)
 "  --clock C       wall (default) or cpu: time by the process's CPU time, the\n"
 "                  sum over its threads, which a shared machine's load moves\n"
 "                  far less than the wall time\n"
+"  --edit-surface S  the surface whose radius (or thickness) the live\n"
+"                  recompute's edits change (default 1)\n"
 "  --spot          instead: a spot diagram of 1e6 rays (1e5 with --quick) on\n"
 "                  the designs (default: the Cassegrain) against the batch\n"
 "                  trace of the same rays to the image, and their ratio\n"
@@ -961,7 +972,7 @@ static void bench_help(FILE *f)
 }
 
 enum { OPT_HELP = 1, OPT_FORMAT, OPT_REPEAT, OPT_QUICK, OPT_THREADS, OPT_RAYS, OPT_SPOT,
-       OPT_VIEW, OPT_CLOCK };
+       OPT_VIEW, OPT_CLOCK, OPT_EDIT_SURF };
 
 static const cli_opt bench_opts[] = {
     { "--help", 'h', 0, OPT_HELP },
@@ -973,6 +984,7 @@ static const cli_opt bench_opts[] = {
     { "--spot", 0, 0, OPT_SPOT },
     { "--view", 0, 1, OPT_VIEW },
     { "--clock", 0, 1, OPT_CLOCK },
+    { "--edit-surface", 0, 1, OPT_EDIT_SURF },
     { NULL, 0, 0, 0 }
 };
 
@@ -1303,6 +1315,12 @@ int cmd_bench(int argc, char **argv)
                 return cli_usage_error("bench", "--clock: expected wall or cpu, got \"%s\"", val);
             }
             cfg.cpu_clock = strcmp(val, "cpu") == 0;
+            break;
+        case OPT_EDIT_SURF:
+            if (cli_int_value("--edit-surface", val, 1, 1000000, &cfg.edit_surf)) {
+                free(designs);
+                return CLI_EXIT_USAGE;
+            }
             break;
         case OPT_RAYS:
             if (cli_int_value("--rays", val, 1, 1000000000, &nrays)) {

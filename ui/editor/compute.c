@@ -30,6 +30,7 @@ void compute_free(compute *c)
 {
     compute_invalidate(c);
     sg_index_cache_free(c->icache);
+    sg_mpfr_memo_free(c->memo);
     free(c->res);
     free(c->ref_res);
     memset(c, 0, sizeof *c);
@@ -87,6 +88,10 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
     if (!c->icache)
         c->icache = sg_index_cache_new();
     if (!c->t || c->t_id != id || !same_opts(&c->t_opts, o)) {
+        /* The reference shares the precise tracer's prepared model. */
+        sg_tracer_free(c->ref);
+        c->ref = NULL;
+        c->ref_id = 0;
         sg_tracer_free(c->t);
         c->t = NULL;
         c->t_id = 0;
@@ -142,10 +147,23 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
         ro.method = SG_METHOD_MPFR;
         ro.mpfr_bits = ref_bits;
         if (!c->ref || c->ref_id != id || !same_opts(&c->ref_opts, &ro)) {
+            sg_diag d;
             sg_tracer_free(c->ref);
-            c->ref = build(sys, cat, &ro, c);
+            /* From the live tracer: its surfaces, paraxial data and launch
+             * are the reference's too (same bits as a new tracer). */
+            sg_diag_clear(&d);
+            c->ref = sg_tracer_new_method(c->t, ro.method, ro.mpfr_bits, c->icache, &d);
+            if (!c->ref) {
+                c->build_rc = d.code != SG_EOK ? d.code : SG_ENOMEM;
+                snprintf(c->build_msg, sizeof c->build_msg, "%s",
+                         d.msg[0] ? d.msg : sg_strerror(c->build_rc));
+            }
             c->ref_id = c->ref ? id : 0;
             c->ref_opts = ro;
+            if (!c->memo)
+                c->memo = sg_mpfr_memo_new();
+            /* Without a memo the ray is traced in full, same bits. */
+            sg_tracer_use_memo(c->ref, c->memo);
         }
         if (c->ref && sg_tracer_nsurf(c->ref) == c->nsurf) {
             c->ref_rc = sg_trace_normalized(c->ref, ray[0], ray[1], ray[2], ray[3],
@@ -157,6 +175,8 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
         sg_tracer_free(c->ref);
         c->ref = NULL;
         c->ref_id = 0;
+        sg_mpfr_memo_free(c->memo);
+        c->memo = NULL;
     }
     c->ms_last = compute_now_ms() - t0;
     if (c->ms_last > c->ms_max)

@@ -30,6 +30,10 @@ typedef struct compute {
     /* Glass indices kept across edits (NULL: none could be made); the
      * tracers and paraxial data take them from here, same bits. */
     sg_index_cache *icache;
+    /* The reference ray's state after each surface, kept across edits so
+     * the digits check resumes at the first changed surface (NULL: none
+     * yet, or the check is off). */
+    sg_mpfr_memo *memo;
 } compute;
 
 void compute_init(compute *c);
