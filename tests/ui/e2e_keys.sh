@@ -338,12 +338,14 @@ frame_space() {
     command_line "open! c.json"
     wait_for "c.json: " || return 1
     command_line "goto 2 aorder"
+    # The cursor's column is in view, so its heading shows, whatever the
+    # horizontal scroll the resize left.
+    wait_for "Aft Ord" || { WHY="no Aft Ord heading"; return 1; }
     keys Space
     wait_for "surface 2 aorder = 1" || return 1
     command_line "goto 2 after"
     keys Space
     wait_for "surface 2 after = reverse" || return 1
-    screen | grep -qF "Aft Ord" || { WHY="no Aft Ord heading"; return 1; }
     keys Space
     wait_for "surface 2 after = explicit" || return 1
     $T resize-window -t =main: -x 110 -y 30 2>/dev/null
