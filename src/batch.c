@@ -120,6 +120,18 @@ static int row0_finite(const sg_tracer *t, const sg_ray_surface *o)
     return s == s;
 }
 
+/* A vector trace's lane k done with ray r: the guard on rows that claim
+ * OK (the cheap finiteness test first), the chosen surfaces kept, the
+ * status stored. */
+static void finish(const job *j, const sg_tracer *t, sg_ray_surface *o, size_t r, int k, int rc)
+{
+    if (o[0].status == SG_OK && !(row0_finite(t, o) && rows_finite(o, t->n)))
+        rc = sg_guard_rows(t, o, rc);
+    keep(j, r, k);
+    if (j->status)
+        j->status[r] = rc;
+}
+
 /* The precise method: up to SG_VL consecutive rays (of one field, when
  * normalized) are launched (and aimed) together, then traced together in
  * vector form. */
@@ -186,12 +198,7 @@ static void run_precise(job *j)
             o[k] = o[0];
         sg_precise_block(t, &vs, p0, o, nl, start, t->n - 1, rc);
         for (k = 0; k < nl; k++) {
-            if (o[k][0].status == SG_OK &&
-                !(row0_finite(t, o[k]) && rows_finite(o[k], t->n)))
-                rc[k] = sg_guard_rows(t, o[k], rc[k]);
-            keep(j, idx[k], k);
-            if (j->status)
-                j->status[idx[k]] = rc[k];
+            finish(j, t, o[k], idx[k], k, rc[k]);
         }
     }
 }
@@ -245,12 +252,7 @@ static void run_classic(job *j)
         for (k = 0; k < nl; k++) {
             if (inf[k])
                 sg_launch_classic_path(t, off[k], o[k]);
-            if (o[k][0].status == SG_OK &&
-                !(row0_finite(t, o[k]) && rows_finite(o[k], t->n)))
-                rc[k] = sg_guard_rows(t, o[k], rc[k]);
-            keep(j, idx[k], k);
-            if (j->status)
-                j->status[idx[k]] = rc[k];
+            finish(j, t, o[k], idx[k], k, rc[k]);
         }
     }
 }

@@ -509,17 +509,13 @@ fail:
     return d->code != SG_OK ? d->code : SG_ENOMEM;
 }
 
-int sg_tracer_fork(const sg_tracer *m, sg_tracer **out, sg_diag *d)
+/* t takes m's prepared model (never written again, so shared) with
+ * options o; its workspace is its own. */
+static void share_model(sg_tracer *t, const sg_tracer *m, const sg_trace_opts *o)
 {
-    sg_tracer *t = calloc(1, sizeof *t);
-    int rc;
-    *out = NULL;
-    if (!t)
-        return sg_diag_set(d, SG_ENOMEM, "out of memory");
-    /* The prepared model, shared; the workspace starts empty. */
     t->model = m->model ? m->model : m;
     t->sys = m->sys;
-    t->o = m->o;
+    t->o = *o;
     t->wave = m->wave;
     t->n = m->n;
     t->sp = m->sp;
@@ -529,6 +525,17 @@ int sg_tracer_fork(const sg_tracer *m, sg_tracer **out, sg_diag *d)
     t->px = m->px;
     t->ln = m->ln;
     t->cat = m->cat;
+}
+
+int sg_tracer_fork(const sg_tracer *m, sg_tracer **out, sg_diag *d)
+{
+    sg_tracer *t = calloc(1, sizeof *t);
+    int rc;
+    *out = NULL;
+    if (!t)
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    /* The prepared model, shared; the workspace starts empty. */
+    share_model(t, m, &m->o);
     if (m->prim && (rc = sg_tracer_fork(m->prim, &t->prim, d)) != SG_OK)
         goto fail;
     t->scratch = calloc((size_t)t->n, sizeof *t->scratch);
@@ -571,18 +578,7 @@ sg_tracer *sg_tracer_new_method(const sg_tracer *m, sg_method method, int mpfr_b
     }
     /* The prepared model, shared as a fork shares it; only the options'
      * method and precision differ, which the model does not read. */
-    t->model = m->model ? m->model : m;
-    t->sys = m->sys;
-    t->o = o;
-    t->wave = m->wave;
-    t->n = m->n;
-    t->sp = m->sp;
-    t->xf = m->xf;
-    t->shp = m->shp;
-    t->nsigned = m->nsigned;
-    t->px = m->px;
-    t->ln = m->ln;
-    t->cat = m->cat;
+    share_model(t, m, &o);
     if (m->prim) {
         /* Named as tracer_open names the primary wavelength's failure. */
         sg_diag pd;

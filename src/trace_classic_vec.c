@@ -20,33 +20,8 @@
 #include <math.h>
 #include <string.h>
 
+#include "slope_vec.h"
 #include "trace_internal.h"
-
-/* w = sag'(r)/r and the bound on |dw/dr^2| r^2 for an even asphere, as
- * trace.c's slope in double had them. */
-static void slope_v(const sg_sprep *s, vd r2, vd *w, vd *dw)
-{
-    vd ww = vd_set(0.0), dd2 = vd_set(0.0), rk = vd_set(1.0);
-    int k;
-    if (isfinite(s->R)) {
-        vd q = s->R * s->R - s->k1.hi * r2;
-        vd sq = vd_sqrt(vd_abs(q));
-        ww = (s->R < 0 ? -1.0 : 1.0) / sq;
-        dd2 = fabs(s->k1.hi) / (2.0 * vd_abs(q) * sq) * r2;
-    }
-    /* Powers by running product, the same rounding as the precise trace. */
-    for (k = 1; k < s->nasph; k++) {
-        vd p;
-        rk = rk * r2;
-        p = (double)(2 * (k + 1)) * s->a[k] * rk;
-        ww += p;
-        dd2 += vd_abs(p) * (double)(k);
-    }
-    if (s->nasph)
-        ww += 2.0 * s->a[0];
-    *w = ww;
-    *dw = dd2;
-}
 
 /* Newton in double for a shape of its own, one ray: F(s) = z(s) -
  * f(x(s), y(s)), with f's bound on its second derivatives at the root
@@ -90,23 +65,12 @@ static void asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *svp
     int it;
     for (it = 0; it < max_iter && vm_any(run); it++) {
         vd x = p[0] + sv * d[0], y = p[1] + sv * d[1], z = p[2] + sv * d[2];
-        vd r2 = x * x + y * y;
-        vd sag = vd_set(0.0), pp = vd_set(0.0), w, dw, F, Fp, step, nsv;
+        vd w, dw, F, Fp, step, nsv;
         vm m;
-        int k;
-        if (isfinite(s->R)) {
-            vd q = s->R * s->R - s->k1.hi * r2;
-            m = run & (q < 0.0);
-            b |= m;
-            run &= ~m;
-            sag = r2 / (s->R + vd_copysign(vd_sqrt(q), vd_set(s->R)));
-        }
-        for (k = s->nasph - 1; k >= 0; k--)
-            pp = pp * r2 + s->a[k];
-        sag += pp * r2;
-        slope_v(s, r2, &w, &dw);
-        F = z - sag;
-        Fp = d[2] - w * (x * d[0] + y * d[1]);
+        asph_F_v(s, x, y, z, d, &F, &Fp, &w, &dw, &m);
+        m &= run;
+        b |= m;
+        run &= ~m;
         m = run & ((Fp == 0.0) | ~vd_isfinite(Fp));
         b |= m;
         run &= ~m;

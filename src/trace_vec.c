@@ -20,6 +20,7 @@
 #include <string.h>
 
 #include "shape_vdd.h"
+#include "slope_vec.h"
 #include "trace_internal.h"
 #include "vdd.h"
 
@@ -27,29 +28,6 @@
  * Surface functions in double-double, and the double estimates that start
  * their Newton steps.
  * ------------------------------------------------------------------------ */
-
-static void slope_v(const sg_sprep *s, vd r2, vd *w, vd *dw)
-{
-    vd ww = vd_set(0.0), dd2 = vd_set(0.0), rk = vd_set(1.0);
-    int k;
-    if (isfinite(s->R)) {
-        vd q = s->R * s->R - s->k1.hi * r2;
-        vd sq = vd_sqrt(vd_abs(q));
-        ww = (s->R < 0 ? -1.0 : 1.0) / sq;
-        dd2 = fabs(s->k1.hi) / (2.0 * vd_abs(q) * sq) * r2;
-    }
-    for (k = 1; k < s->nasph; k++) {
-        vd p;
-        rk = rk * r2;
-        p = (double)(2 * (k + 1)) * s->a[k] * rk;
-        ww += p;
-        dd2 += vd_abs(p) * (double)(k);
-    }
-    if (s->nasph)
-        ww += 2.0 * s->a[0];
-    *w = ww;
-    *dw = dd2;
-}
 
 /* (1 + conic) a; the product by an exact 1 is a itself. */
 static vdd k1_mul(const sg_sprep *s, vdd a)
@@ -448,21 +426,9 @@ static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, in
     *wild = vm_set(0);
     for (it = 0; it < max_iter && vm_any(active); it++) {
         vd x = p[0] + sv * d[0], y = p[1] + sv * d[1], z = p[2] + sv * d[2];
-        vd r2 = x * x + y * y;
-        vd sag = vd_set(0.0), w, dw, F, Fp, step, snew, h, pp = vd_set(0.0);
-        vm bad = vm_set(0), conv;
-        int k;
-        if (isfinite(s->R)) {
-            vd q = s->R * s->R - s->k1.hi * r2;
-            bad = (vm)(q < 0.0);
-            sag = r2 / (s->R + vd_copysign(vd_sqrt(q), vd_set(s->R)));
-        }
-        for (k = s->nasph - 1; k >= 0; k--)
-            pp = pp * r2 + s->a[k];
-        sag += pp * r2;
-        slope_v(s, r2, &w, &dw);
-        F = z - sag;
-        Fp = d[2] - w * (x * d[0] + y * d[1]);
+        vd w, dw, F, Fp, step, snew, h;
+        vm bad, conv;
+        asph_F_v(s, x, y, z, d, &F, &Fp, &w, &dw, &bad);
         bad |= (vm)(Fp == 0.0) | ~vd_isfinite(Fp);
         step = F / Fp;
         snew = sv - step;
