@@ -1601,8 +1601,8 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
         if (s->type >= SG_SURF_ODDASPH)
             version = version < 3 ? 3 : version;
         /* Coordinate breaks, tilts and model glasses came with version 2. */
-        if (s->type == SG_SURF_COORDBRK || sg_surface_moves_frame(s) ||
-            s->after_mode != SG_AFTER_EXPLICIT || s->mat.kind == SG_MAT_MODEL)
+        if (s->type == SG_SURF_COORDBRK || sg_surface_moves_frame(s) || s->before.order ||
+            s->after.order || s->after_mode != SG_AFTER_EXPLICIT || s->mat.kind == SG_MAT_MODEL)
             version = version < 2 ? 2 : version;
     }
     /* System keys newer than version 1 (object-space telecentric), and
@@ -1668,13 +1668,15 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
             sb_puts(&b, ",\n      \"break\": ");
             sb_change(&b, &s->before);
         } else {
-            if (!sg_frame_change_is_zero(&s->before)) {
+            /* An order alone moves nothing but is the user's setting:
+             * it is written, or a save and load would lose it. */
+            if (!sg_frame_change_is_zero(&s->before) || s->before.order) {
                 sb_puts(&b, ",\n      \"before\": ");
                 sb_change(&b, &s->before);
             }
             if (s->after_mode == SG_AFTER_REVERSE) {
                 sb_puts(&b, ",\n      \"after\": \"reverse\"");
-            } else if (!sg_frame_change_is_zero(&s->after)) {
+            } else if (!sg_frame_change_is_zero(&s->after) || s->after.order) {
                 sb_puts(&b, ",\n      \"after\": ");
                 sb_change(&b, &s->after);
             }

@@ -758,6 +758,35 @@ static void test_environment_and_model(void **state)
                  " {}]}", SG_ERANGE, "model glass nd 1.5, vd 2");
 }
 
+/* A frame change whose values are all zero but whose order is set moves
+ * nothing, yet it is the user's setting: a save and load keeps it (it was
+ * once dropped, and sg_system_equal then told the two apart). */
+static void test_frame_order_kept(void **state)
+{
+    static const char text[] =
+        "{ \"format\": \"sagitta-design\",\n"
+        "  \"surfaces\": [ { \"thickness\": \"inf\" },\n"
+        "    { \"radius\": 50, \"thickness\": 5, \"stop\": true },\n"
+        "    { \"radius\": -50, \"thickness\": 40 }, {} ] }\n";
+    sg_system *s = sg_system_new(), *r = sg_system_new();
+    sg_diag d;
+    char *out;
+    (void)state;
+    assert_int_equal(parse_text(s, text, &d), SG_OK);
+    s->surf[1].before.order = 1;
+    s->surf[2].after.order = 1;
+    out = sg_design_to_json(s);
+    assert_non_null(out);
+    assert_null(strstr(out, "\"version\": 1"));
+    assert_int_equal(parse_text(r, out, &d), SG_OK);
+    assert_int_equal(r->surf[1].before.order, 1);
+    assert_int_equal(r->surf[2].after.order, 1);
+    assert_true(sg_system_equal(s, r));
+    free(out);
+    sg_system_free(s);
+    sg_system_free(r);
+}
+
 /* The shapes beyond the even asphere (format version 3) read, write and
  * read back bit for bit; only the keys a surface uses are written; bad
  * values name the surface and key. */
@@ -1327,6 +1356,7 @@ int main(void)
         cmocka_unit_test(test_syntax_errors),
         cmocka_unit_test(test_content_errors),
         cmocka_unit_test(test_shapes),
+        cmocka_unit_test(test_frame_order_kept),
         cmocka_unit_test(test_limits_accepted),
         cmocka_unit_test(test_warnings),
         cmocka_unit_test(test_file_errors),
