@@ -320,6 +320,21 @@ X8_TARGET static inline __m512i digits8_x8(__m512i x)
     return _mm512_add_epi64(tens, _mm512_slli_epi64(ones, 8));
 }
 
+/* x / d and its remainder *r, from an estimate q of the quotient off by
+ * at most one, put right by the remainder's sign and size. */
+X8_TARGET static inline __m512i divmod_x8(__m512i x, __m512i q, __m512i d, __m512i *r)
+{
+    const __m512i zero = _mm512_setzero_si512(), one = _mm512_set1_epi64(1);
+    __m512i rem = _mm512_sub_epi64(x, _mm512_mullo_epi64(q, d));
+    __mmask8 lo = _mm512_cmp_epi64_mask(rem, zero, _MM_CMPINT_LT), hi;
+    q = _mm512_mask_sub_epi64(q, lo, q, one);
+    rem = _mm512_mask_add_epi64(rem, lo, rem, d);
+    hi = _mm512_cmp_epi64_mask(rem, d, _MM_CMPINT_GE);
+    q = _mm512_mask_add_epi64(q, hi, q, one);
+    *r = _mm512_mask_sub_epi64(rem, hi, rem, d);
+    return q;
+}
+
 /* N = v 10^q rounded, for eight lanes with 0 <= q <= 47: hi = v P1
  * rounded and t = v P2 + (v P1 - hi) by fused multiply-adds, where
  * 10^q = P1 + P2 + d (gen_pow10.c).  For q <= 22, P2 = d = 0 and t is
@@ -389,30 +404,14 @@ X8_TARGET static void g17_x8(const double *v, char *out, unsigned char *len)
     top = _mm512_cmp_epu64_mask(n, e17, _MM_CMPINT_EQ);
     n = _mm512_mask_mov_epi64(n, top, e16);
     k = _mm512_mask_add_epi64(k, top, k, one);
-    /* d0 = n / 10^16 and hi8 = r / 10^8 by a double product, off by at
-     * most one, and put right by the remainder's sign and size. */
-    d0 = _mm512_cvttpd_epi64(_mm512_mul_pd(_mm512_cvtepu64_pd(n), _mm512_set1_pd(1e-16)));
-    r = _mm512_sub_epi64(n, _mm512_mullo_epi64(d0, e16));
-    {
-        __mmask8 lo = _mm512_cmp_epi64_mask(r, zero, _MM_CMPINT_LT);
-        __mmask8 hi;
-        d0 = _mm512_mask_sub_epi64(d0, lo, d0, one);
-        r = _mm512_mask_add_epi64(r, lo, r, e16);
-        hi = _mm512_cmp_epi64_mask(r, e16, _MM_CMPINT_GE);
-        d0 = _mm512_mask_add_epi64(d0, hi, d0, one);
-        r = _mm512_mask_sub_epi64(r, hi, r, e16);
-    }
-    hi8 = _mm512_cvttpd_epi64(_mm512_mul_pd(_mm512_cvtepi64_pd(r), _mm512_set1_pd(1e-8)));
-    lo8 = _mm512_sub_epi64(r, _mm512_mullo_epi64(hi8, e8));
-    {
-        __mmask8 lo = _mm512_cmp_epi64_mask(lo8, zero, _MM_CMPINT_LT);
-        __mmask8 hi;
-        hi8 = _mm512_mask_sub_epi64(hi8, lo, hi8, one);
-        lo8 = _mm512_mask_add_epi64(lo8, lo, lo8, e8);
-        hi = _mm512_cmp_epi64_mask(lo8, e8, _MM_CMPINT_GE);
-        hi8 = _mm512_mask_add_epi64(hi8, hi, hi8, one);
-        lo8 = _mm512_mask_sub_epi64(lo8, hi, lo8, e8);
-    }
+    /* d0 = n / 10^16 and hi8 = r / 10^8, each estimated by a double
+     * product. */
+    d0 = divmod_x8(n, _mm512_cvttpd_epi64(_mm512_mul_pd(_mm512_cvtepu64_pd(n),
+                                                         _mm512_set1_pd(1e-16))),
+                   e16, &r);
+    hi8 = divmod_x8(r, _mm512_cvttpd_epi64(_mm512_mul_pd(_mm512_cvtepi64_pd(r),
+                                                         _mm512_set1_pd(1e-8))),
+                    e8, &lo8);
     /* Lanes outside the path hold anything: keep their digit words sane. */
     hi8 = _mm512_maskz_mov_epi64(ok, hi8);
     lo8 = _mm512_maskz_mov_epi64(ok, lo8);
