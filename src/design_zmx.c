@@ -114,6 +114,10 @@ typedef struct zctx {
     long ftyp_line;
     double xfln[SG_MAX_FIELDS], yfln[SG_MAX_FIELDS], fwgn[SG_MAX_FIELDS];
     int nxfln, nyfln, nfwgn;
+    /* The old XFLD, YFLD and FWGT lists (older files write both forms). */
+    double oldf[3][SG_MAX_FIELDS];
+    int noldf[3];
+    long oldf_line[3];
     /* Zemax's vignetting factors, VDXN VDYN VCXN VCYN VANN, per field. */
     double vig[5][SG_MAX_FIELDS];
     int nvig[5];
@@ -122,6 +126,11 @@ typedef struct zctx {
     int whave[ZMX_NWSLOT];
     int nwavl, nwwgt;
     double wavl[ZMX_NWSLOT], wwgt[ZMX_NWSLOT];
+    /* WAVN and WWGN: the twelve slots of an older layout, checked against
+     * the wavelengths read. */
+    int nwavn, nwwgn;
+    double wavn[ZMX_NWSLOT], wwgn[ZMX_NWSLOT];
+    long wavn_line, wwgn_line;
     int pwav;
     long pwav_line;
     int have_aper;
@@ -1477,6 +1486,11 @@ static int header_line(zctx *c, const zline *l)
         c->ftyp_line = c->line;
         return SG_OK;
     }
+    if (tok_is(k, "XFLD") || tok_is(k, "YFLD") || tok_is(k, "FWGT")) {
+        int w = tok_is(k, "XFLD") ? 0 : tok_is(k, "YFLD") ? 1 : 2;
+        c->oldf_line[w] = c->line;
+        return read_list(c, l, c->oldf[w], SG_MAX_FIELDS, &c->noldf[w]);
+    }
     if (tok_is(k, "XFLN") || tok_is(k, "YFLN") || tok_is(k, "FWGN")) {
         int x = tok_is(k, "XFLN"), y = tok_is(k, "YFLN");
         rc = read_list(c, l, x ? c->xfln : y ? c->yfln : c->fwgn, SG_MAX_FIELDS,
@@ -1511,6 +1525,14 @@ static int header_line(zctx *c, const zline *l)
         return read_list(c, l, c->wavl, ZMX_NWSLOT, &c->nwavl);
     if (tok_is(k, "WWGT"))
         return read_list(c, l, c->wwgt, ZMX_NWSLOT, &c->nwwgt);
+    if (tok_is(k, "WAVN")) {
+        c->wavn_line = c->line;
+        return read_list(c, l, c->wavn, ZMX_NWSLOT, &c->nwavn);
+    }
+    if (tok_is(k, "WWGN")) {
+        c->wwgn_line = c->line;
+        return read_list(c, l, c->wwgn, ZMX_NWSLOT, &c->nwwgn);
+    }
     if (tok_is(k, "PWAV")) {
         c->pwav_line = c->line;
         return tok_int(c, l, 1, "primary wavelength", 1, ZMX_NWSLOT, &c->pwav);
@@ -1558,6 +1580,34 @@ static int finish(zctx *c)
         return zerr(c, SG_EPARSE, "%s: %d values for %d fields", c->nxfln < nf ? "XFLN" : "YFLN",
                     c->nxfln < nf ? c->nxfln : c->nyfln, nf);
     }
+    /* The old lists: alone, they give the fields; beside the new ones,
+     * each value they hold for a field must be the same. */
+    for (i = 0; i < 3; i++) {
+        double *nv = i == 0 ? c->xfln : i == 1 ? c->yfln : c->fwgn;
+        int *nn = i == 0 ? &c->nxfln : i == 1 ? &c->nyfln : &c->nfwgn, j;
+        static const char *const kw[3][2] = { { "XFLD", "XFLN" }, { "YFLD", "YFLN" },
+                                               { "FWGT", "FWGN" } };
+        if (!c->noldf[i])
+            continue;
+        if (!*nn) {
+            if (c->noldf[i] < nf && i < 2) {
+                c->line = c->oldf_line[i];
+                return zerr(c, SG_EPARSE, "%s: %d values for %d fields", kw[i][0], c->noldf[i],
+                            nf);
+            }
+            memcpy(nv, c->oldf[i], sizeof c->oldf[i]);
+            *nn = c->noldf[i];
+            continue;
+        }
+        for (j = 0; j < nf && j < c->noldf[i] && j < *nn; j++)
+            if (c->oldf[i][j] != nv[j]) {
+                c->line = c->oldf_line[i];
+                return zerr(c, SG_EPARSE, "%s: field %d is %.17g here but %.17g in %s; sagitta "
+                            "cannot tell which one Zemax uses", kw[i][0], j + 1, c->oldf[i][j],
+                            nv[j], kw[i][1]);
+            }
+    }
+    c->line = 0;
     s->nfield = nf;
     for (i = 0; i < nf; i++) {
         s->field[i].x = c->nxfln ? c->xfln[i] : 0.0;
@@ -1598,6 +1648,23 @@ static int finish(zctx *c)
         }
     }
     s->nwave = nw;
+    /* The slot lists repeat the wavelengths and weights; one that says
+     * otherwise leaves sagitta unable to tell which one Zemax uses. */
+    for (i = 0; i < nw; i++) {
+        if (i < c->nwavn && c->wavn[i] != s->wave[i].um) {
+            c->line = c->wavn_line;
+            return zerr(c, SG_EPARSE, "WAVN: wavelength %d is %.17g here but %.17g in the "
+                        "WAVL or WAVM lines; sagitta cannot tell which one Zemax uses", i + 1,
+                        c->wavn[i], s->wave[i].um);
+        }
+        if (i < c->nwwgn && c->wwgn[i] != s->wave[i].weight) {
+            c->line = c->wwgn_line;
+            return zerr(c, SG_EPARSE, "WWGN: wavelength %d has the weight %.17g here but "
+                        "%.17g in the WWGT or WAVM lines; sagitta cannot tell which one Zemax "
+                        "uses", i + 1, c->wwgn[i], s->wave[i].weight);
+        }
+    }
+    c->line = 0;
     for (i = 0; i < nw; i++)
         if (!(s->wave[i].um > 0.0) || !(s->wave[i].weight >= 0.0))
             return zerr(c, SG_ERANGE, "wavelength %d: %.17g um, weight %.17g", i + 1,

@@ -547,6 +547,14 @@ static void test_bad_inputs(void **state)
          "t.zmx:14: surface 2: PARM 7 is 45; a coordinate break has parameters 1 to 6"},
         {"coordbrk glass", H S0 S1 "SURF 2\n  TYPE COORDBRK\n  GLAS N-BK7\n", 0, SG_EUNSUPPORTED,
          "t.zmx:13: surface 2: a coordinate break with a material"},
+        {"old field list differs", H "XFLN 0 0\nYFLN 0 5\nFTYP 0 0 2 1 0 0 0\nYFLD 0 4\n" S0 S1 S2 S3,
+         0, SG_EPARSE, "t.zmx:8: YFLD: field 2 is 4 here but 5 in YFLN"},
+        {"old field list short", H "FTYP 0 0 2 1 0 0 0\nXFLD 0 0\nYFLD 3\n" S0 S1 S2 S3, 0,
+         SG_EPARSE, "t.zmx:7: YFLD: 1 values for 2 fields"},
+        {"wavelength slots differ", H "WAVN 0.56 0.55\n" S0 S1 S2 S3, 0, SG_EPARSE,
+         "t.zmx:5: WAVN: wavelength 1 is 0.56000000000000005 here but 0.55000000000000004"},
+        {"weight slots differ", H "WWGN 0.5 1\n" S0 S1 S2 S3, 0, SG_EPARSE,
+         "t.zmx:5: WWGN: wavelength 1 has the weight 0.5 here but 1 in"},
         {"tilt after", H S0 "SURF 1\n  SCAD 1 0 0 0 0 90 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:8: surface 1: SCAD: a tilt or decenter after"},
         {"tilt flags", H S0 "SURF 1\n  STOP\n  SCBD 1 1 0 0 0 90 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: SCBD: flags 1 1 0"},
         {"tilt short", H S0 "SURF 1\n  STOP\n  SCBD 1 0 0 0 0 90\n" S2 S3, 0, SG_EPARSE, "t.zmx:9: surface 1: SCBD: 6 of its 8 values"},
@@ -614,8 +622,41 @@ static void test_bad_inputs(void **state)
     sg_catalog_free(cat);
 }
 
-/* A failed import writes nothing: the engine's save is never reached, and a
- * save over an existing file is atomic. */
+/* Older files write the field and wavelength lists twice: XFLD, YFLD and
+ * FWGT beside XFLN, YFLN and FWGN, and the twelve-slot WAVN and WWGN beside
+ * WAVM (seen in a lens file Thorlabs published, VERS 100414).  Lists that
+ * agree read as the file without them; the old field lists alone give the
+ * fields. */
+static void test_old_lists(void **state)
+{
+    static const char plain[] = "MODE SEQ\nENPD 10\nWAVM 1 0.55 1\nWAVM 2 0.65 0.5\nPWAV 1\n"
+                                "FTYP 0 0 2 2 0 0 0\nXFLN 0 1\nYFLN 0 5\nFWGN 1 2\n" S0 S1 S2 S3;
+    static const char both[] = "MODE SEQ\nENPD 10\nWAVM 1 0.55 1\nWAVM 2 0.65 0.5\nPWAV 1\n"
+                               "FTYP 0 0 2 2 0 0 0\nXFLD 0 1\nXFLN 0 1 0 0\nYFLD 0 5\n"
+                               "YFLN 0 5 0 0\nFWGT 1 2\nFWGN 1 2 0 0\n"
+                               "WAVN 0.55 0.65 0.55 0.55\nWWGN 1 0.5 1 1\n" S0 S1 S2 S3;
+    static const char old[] = "MODE SEQ\nENPD 10\nWAVM 1 0.55 1\nWAVM 2 0.65 0.5\nPWAV 1\n"
+                              "FTYP 0 0 2 2 0 0 0\nXFLD 0 1\nYFLD 0 5\nFWGT 1 2\n" S0 S1 S2 S3;
+    sg_catalog *cat = tu_catalog();
+    sg_system *a = sg_system_new(), *b = sg_system_new(), *c = sg_system_new();
+    sg_diag d;
+    (void)state;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_zmx_parse(a, plain, strlen(plain), "plain.zmx", cat, &d), SG_OK);
+    if (sg_zmx_parse(b, both, strlen(both), "both.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    if (sg_zmx_parse(c, old, strlen(old), "old.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_int_equal(a->nfield, 2);
+    assert_true(a->field[1].x == 1.0 && a->field[1].y == 5.0 && a->field[1].weight == 2.0);
+    assert_true(sg_system_equal(a, b));
+    assert_true(sg_system_equal(a, c));
+    sg_system_free(a);
+    sg_system_free(b);
+    sg_system_free(c);
+    sg_catalog_free(cat);
+}
+
 /* Zemax's coordinate break: PARM 1 to 6 are decenter x and y, tilts about
  * x, y and z in degrees, and the order flag.  A fold mirror written the
  * way Zemax's manual builds one reads into breaks with exactly those
@@ -983,6 +1024,7 @@ int main(void)
         cmocka_unit_test(test_zemax_semi_diameters),
         cmocka_unit_test(test_zemax_asphere_temperature),
         cmocka_unit_test(test_bad_inputs),
+        cmocka_unit_test(test_old_lists),
         cmocka_unit_test(test_failed_load_keeps_system),
         cmocka_unit_test(test_coordinate_breaks),
         cmocka_unit_test(test_surface_tilt),
