@@ -1202,8 +1202,10 @@ int sg_design_load(sg_system *sys, const char *path, sg_diag *d)
     rc = sg_read_file(path, DESIGN_MAX_BYTES, &buf, &len, d);
     if (rc != SG_OK)
         return rc;
-    /* A Zemax lens file, by its name or its first bytes. */
-    if (sg_zmx_detect(path, buf, len))
+    /* A Zemax archive or lens file, by its name or its first bytes. */
+    if (sg_zar_detect(path, buf, len))
+        rc = sg_zar_parse(sys, buf, len, path, NULL, d);
+    else if (sg_zmx_detect(path, buf, len))
         rc = sg_zmx_parse(sys, buf, len, path, NULL, d);
     else
         rc = sg_design_parse(sys, buf ? buf : "", len, path, d);
@@ -1748,6 +1750,12 @@ int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
 
     if (!sys || !path || !path[0])
         return sg_diag_set(d, SG_EINVAL, "save: no system or no path");
+    /* An archive is read, never written: its other members (catalogs,
+     * coatings) would be lost. */
+    if (sg_zar_detect(path, NULL, 0))
+        return sg_diag_set(d, SG_EUNSUPPORTED,
+                           "%s: sagitta reads Zemax archives but does not write them; save as "
+                           ".json or .zmx", path);
     /* A name ending in .zmx is written as a Zemax lens file. */
     if (sg_zmx_detect(path, NULL, 0))
         return sg_zmx_save(sys, path, NULL, d);

@@ -607,6 +607,23 @@ int sg_zmx_save(const sg_system *sys, const char *path, const sg_catalog *cat, s
  * (may be NULL) look like a lens file rather than JSON. */
 int sg_zmx_detect(const char *path, const void *head, size_t n);
 
+/* Zemax archives (.zar): the one lens file inside is read by sg_zmx_parse,
+ * its messages naming "ARCHIVE:LENS.ZMX:LINE".  Glasses still come from
+ * cat (NULL: the default catalog); a glass missing there is reported with
+ * the archive's own catalogs named.  Damaged or hostile archives get
+ * SG_EPARSE naming the member and byte; at most 64 MiB is unpacked.  See
+ * sagitta-design(5), ZEMAX ARCHIVES. */
+int sg_zar_parse(sg_system *sys, const void *bytes, size_t len, const char *path,
+                 const sg_catalog *cat, sg_diag *d);
+int sg_zar_load(sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
+/* One member unpacked into *out (malloc'd, NUL after its *outlen bytes):
+ * the one named want (any case, without ".LZW"), or with want NULL the
+ * lens file; name (may be NULL) gets its name. */
+int sg_zar_member(const void *bytes, size_t len, const char *path, const char *want,
+                  void **out, size_t *outlen, char name[256], sg_diag *d);
+/* Nonzero when path ends in .zar (any case) or head starts as an archive. */
+int sg_zar_detect(const char *path, const void *head, size_t n);
+
 /* ------------------------------------------------------------------------
  * Paraxial data (y-nu trace)
  * ------------------------------------------------------------------------ */

@@ -27,8 +27,9 @@ static void convert_help(FILE *f, int to_zmx)
               "Write a design as a Zemax lens file (sagitta-design(5), ZEMAX FILES).\n"
               "-o - writes to standard output.\n", f);
     else
-        fputs("Usage: sagitta import FILE.zmx -o DESIGN.json\n"
-              "Read a Zemax lens file and write it as a sagitta design.  What sagitta\n"
+        fputs("Usage: sagitta import FILE.zmx|FILE.zar -o DESIGN.json\n"
+              "Read a Zemax lens file (or the one in a Zemax archive) and write it as a\n"
+              "sagitta design.  What sagitta\n"
               "cannot represent is refused with the file, line, surface and keyword;\n"
               "solves are kept at their stored values, with a warning.  -o - writes to\n"
               "standard output.  See sagitta-design(5), ZEMAX FILES.\n", f);

@@ -29,7 +29,7 @@ static const cli_command commands[] = {
     { "layout", cmd_layout, "a y-z cross-section of surfaces and rays" },
     { "verify", cmd_verify, "check a design's traces against the MPFR reference" },
     { "bench", cmd_bench, "measure trace throughput" },
-    { "import", cmd_import, "read a Zemax .zmx lens file into a JSON design" },
+    { "import", cmd_import, "read a Zemax .zmx lens file or .zar archive into a JSON design" },
     { "export", cmd_export, "write a design as a Zemax .zmx lens file" },
     { "seidel", cmd_seidel, "print Seidel sums: per surface, in waves and transverse" },
     { "fieldcurve", cmd_fieldcurve, "print field curvature and distortion against field" },
@@ -40,8 +40,8 @@ static const cli_command commands[] = {
 static void usage(FILE *f)
 {
     size_t k;
-    fputs("Usage: sagitta [FILE.json | FILE.zmx]\n"
-          "       sagitta edit [FILE.json | FILE.zmx]\n"
+    fputs("Usage: sagitta [FILE.json | FILE.zmx | FILE.zar]\n"
+          "       sagitta edit [FILE.json | FILE.zmx | FILE.zar]\n"
           "       sagitta COMMAND [ARGS]\n"
           "       sagitta help COMMAND | --help | --version\n"
           "\n"
@@ -82,7 +82,7 @@ static int looks_like_file(const char *a)
     struct stat st;
     size_t n = strlen(a);
     return strchr(a, '/') != NULL || (n > 5 && strcmp(a + n - 5, ".json") == 0) ||
-           sg_zmx_detect(a, NULL, 0) || stat(a, &st) == 0;
+           sg_zmx_detect(a, NULL, 0) || sg_zar_detect(a, NULL, 0) || stat(a, &st) == 0;
 }
 
 int main(int argc, char **argv)

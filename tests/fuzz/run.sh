@@ -43,7 +43,7 @@ while [ $# -gt 0 ]; do
     *) echo "run.sh: unknown argument $1" >&2; exit 2 ;;
     esac
 done
-[ -n "$harnesses" ] || harnesses="fuzz_design fuzz_csvrays fuzz_args fuzz_zmx"
+[ -n "$harnesses" ] || harnesses="fuzz_design fuzz_csvrays fuzz_args fuzz_zmx fuzz_zar"
 
 CC=${FUZZ_CC:-clang}
 mkdir -p "$build/obj" "$build/artifacts" || exit 1

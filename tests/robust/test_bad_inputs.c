@@ -21,6 +21,7 @@
 #include <spawn.h>
 #include <stdarg.h>
 #include <stddef.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -256,6 +257,40 @@ static void gen_csv_nul(const char *path)
 {
     static const char t[] = "hx,hy,px,py\n0,0,\0,0\n";
     write_or_die(path, t, sizeof t - 1);
+}
+
+/* A Zemax archive of one stored member (the 0xEC layout, sagitta-design(5)
+ * ZEMAX ARCHIVES) holding text; cut leaves the header's last bytes off. */
+static void write_zar(const char *path, const char *name, const char *text, int cut)
+{
+    unsigned char h[0x288];
+    size_t n = strlen(text), i;
+    FILE *f = fopen(path, "wb");
+    if (!f)
+        abort();
+    memset(h, 0, sizeof h);
+    h[0] = 0xEC;
+    h[1] = 0x03;
+    for (i = 0; i < 8; i++) {
+        h[0x10 + i] = (unsigned char)((uint64_t)n >> (8 * i));
+        h[0x18 + i] = (unsigned char)((uint64_t)n >> (8 * i));
+    }
+    for (i = 0; name[i]; i++)
+        h[0x30 + 2 * i] = (unsigned char)name[i];
+    if (fwrite(h, 1, cut ? 100 : sizeof h, f) != (cut ? 100 : sizeof h) ||
+        (!cut && fwrite(text, 1, n, f) != n) || fclose(f) != 0)
+        abort();
+}
+
+static void gen_zar_cut(const char *path)
+{
+    write_zar(path, "L.ZMX", "", 1);
+}
+
+static void gen_zar_bad_line(const char *path)
+{
+    write_zar(path, "L.ZMX",
+              "MODE SEQ\nENPD 10\nWAVM 1 0.55 1\nPWAV 1\nSURF 0\nSURF 1\n  CURV 1..2\n", 0);
 }
 
 /* --------------------------------------------------------------- the table */
@@ -542,6 +577,13 @@ static const bad_case cases[] = {
       "scbd.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  SCBD 2 0 0 0 0 1 0 0\n", NULL,
       NULL, ARGS("import", "@F", "-o", "-"), 3, "@F:9: surface 1: SCBD: flags 2 0 0", NULL, NULL,
       "sagitta-design", 0 },
+    { "zar_cut", "an archive whose first member's header is cut off (exit 3)",
+      "cut.zar", NULL, gen_zar_cut, NULL, ARGS("import", "@F", "-o", "-"), 3,
+      "@F: byte 0: an archive member's header of 648 bytes is cut off after 100", NULL, NULL,
+      "sagitta-design", 0 },
+    { "zar_bad_line", "a bad line of the lens file in an archive names both, and the line",
+      "bad.zar", NULL, gen_zar_bad_line, NULL, ARGS("import", "@F", "-o", "-"), 3,
+      "@F:L.ZMX:7: surface 1: curvature: not a number", NULL, NULL, "sagitta-design", 0 },
     { "zmx_scad", "a tilt after a surface (SCAD, line 9) is refused, not guessed",
       "scad.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  SCAD 1 0 0 0 0 1 0 0\n", NULL,
       NULL, ARGS("import", "@F", "-o", "-"), 3, "@F:9: surface 1: SCAD: a tilt or decenter after",

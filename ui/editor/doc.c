@@ -475,6 +475,9 @@ int doc_save(doc *d, const char *path, sg_diag *dg)
         path = d->path;
     if (!path)
         return sg_diag_set(dg, SG_EINVAL, "no file name: give one to save as");
+    if (sg_zar_detect(path, NULL, 0))
+        return sg_diag_set(dg, SG_EUNSUPPORTED, "%s: sagitta reads Zemax archives but does not "
+                                                "write them: save as .json or .zmx", path);
     t = doc_target(path, &nlink);
     if (t == DOC_TARGET_READONLY)
         return sg_diag_set(dg, SG_EIO, "%s is read-only: not saved (save under another name, "
