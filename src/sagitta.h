@@ -738,6 +738,31 @@ void sg_semidiam_opts_init(sg_semidiam_opts *o);
 int sg_semi_diameters(const sg_system *sys, const sg_catalog *cat, const sg_semidiam_opts *o,
                       double *sd, sg_diag *d);
 
+/* Zemax's "Set Vignetting": each field's vignetting factors, found at the
+ * primary wavelength with the field's own factors cleared.  A grid of
+ * grid x grid rays over the unit pupil finds the rays that pass every
+ * aperture (and fixed semi-diameter, with trace.clip on, the default);
+ * through their centroid, the pupil's top, bottom, left and right edges
+ * are bracketed by line samples and bisected to tol.  Then
+ *   vdy = (top + bottom) / 2, vcy = 1 - (top - bottom) / 2,
+ * likewise in x, and van = 0.  SG_EVIGNETTED names a field no grid ray
+ * passes. */
+typedef struct sg_setvig_opts {
+    sg_trace_opts trace; /* method, clip, aiming tolerances; wave is the primary */
+    int grid;            /* rays across the pupil for the centroid (64) */
+    int line;            /* samples along an edge's line before bisecting (256) */
+    double tol;          /* bisection tolerance in pupil units (1e-12) */
+} sg_setvig_opts;
+typedef struct sg_vigfactors {
+    double vdx, vdy, vcx, vcy, van;
+    double cx, cy; /* the centroid of the grid rays that pass */
+    long pass;     /* how many grid rays pass */
+} sg_vigfactors;
+void sg_setvig_opts_init(sg_setvig_opts *o);
+/* out[k] for every field k.  o NULL takes the defaults. */
+int sg_set_vignetting(const sg_system *sys, const sg_catalog *cat, const sg_setvig_opts *o,
+                      sg_vigfactors *out, sg_diag *d);
+
 /* A prepared system: indices, paraxial data and work buffers, computed
  * once so the per-ray path allocates nothing.  A tracer is used by one
  * thread at a time; make one per thread. */

@@ -221,12 +221,113 @@ static void test_json(void **state)
     sg_system_free(back);
 }
 
+/* Set Vignetting (sg_set_vignetting) against the closed form.  The stop is
+ * flat on surface 1 (object at infinity, EPD 10, so the pupil is surface 1
+ * itself), and a flat surface L = 20 behind it has a fixed semi-diameter
+ * A.  A ray of field angle t through pupil point (px, py) meets it at
+ * (5 px, 5 py + L tan t): the pupil that passes is the disc of radius A/5
+ * about (0, -L tan t / 5).  Inside the unit pupil, its top and bottom are
+ * that centre plus and minus A/5, and along the horizontal line through
+ * the centroid y = cy the function reports, its half-width is
+ * sqrt((A/5)^2 - (cy - c0)^2); the factors follow from the edges. */
+static void test_set_vignetting(void **state)
+{
+    const long double pi = 3.141592653589793238462643383279502884L;
+    const double L = 20.0, R = 5.0;
+    sg_catalog *cat = tu_catalog();
+    size_t m;
+    (void)state;
+    for (m = 0; m < sizeof methods / sizeof *methods; m++) {
+        int big;
+        for (big = 0; big < 2; big++) {
+            sg_system *sys = sg_system_new();
+            sg_setvig_opts o;
+            sg_vigfactors vf[2];
+            double A = big ? 7.0 : 2.0;
+            sg_diag d;
+            int f;
+            assert_int_equal(sg_system_reset(sys, 4), SG_OK);
+            sys->surf[0].thickness = INFINITY;
+            sys->surf[1].thickness = L;
+            sys->surf[2].thickness = 10.0;
+            sys->surf[2].semi_diameter = A;
+            sys->surf[2].sd_fixed = 1;
+            sys->stop = 1;
+            sys->aper_value = 2.0 * R;
+            sys->field_type = SG_FIELD_ANGLE;
+            sys->nfield = 2;
+            sys->field[0] = (sg_field){0.0, 0.0, 1.0, 0.3, 0.1, 0.2, 0.1, 10.0};
+            sys->field[1] = (sg_field){0.0, (double)(atanl(0.075L) * 180.0L / pi), 1.0, 0, 0, 0, 0, 0};
+            sg_setvig_opts_init(&o);
+            o.trace.method = methods[m];
+            sg_diag_clear(&d);
+            if (sg_set_vignetting(sys, cat, &o, vf, &d) != SG_OK)
+                fail_msg("%s: %s", method_names[m], d.msg);
+            for (f = 0; f < 2; f++) {
+                long double t = (long double)sys->field[f].y * pi / 180.0L;
+                long double c0 = -(long double)L * tanl(t) / R, a = (long double)A / R;
+                long double half = sqrtl(a * a - ((long double)vf[f].cy - c0) * ((long double)vf[f].cy - c0));
+                double tol = 2e-9;
+                if (big) {
+                    /* A 7 mm aperture clears the whole pupil (1.5 + 5 < 7):
+                     * no factor, exactly. */
+                    assert_true(vf[f].vdx == 0.0 && vf[f].vdy == 0.0 && vf[f].vcx == 0.0 &&
+                                vf[f].vcy == 0.0 && vf[f].van == 0.0);
+                    continue;
+                }
+                if (fabsl(vf[f].cy - c0) > 0.01 || fabs(vf[f].cx) > 1e-15)
+                    fail_msg("%s field %d: centroid (%g, %g), disc centre (0, %Lg)",
+                             method_names[m], f + 1, vf[f].cx, vf[f].cy, c0);
+                if (fabsl(vf[f].vdy - c0) > tol || fabsl(vf[f].vcy - (1.0L - a)) > tol ||
+                    fabs(vf[f].vdx) > tol || fabsl(vf[f].vcx - (1.0L - half)) > tol)
+                    fail_msg("%s field %d: VDX %.12g VDY %.12g VCX %.12g VCY %.12g; closed form "
+                             "0 %.12Lg %.12Lg %.12Lg", method_names[m], f + 1, vf[f].vdx,
+                             vf[f].vdy, vf[f].vcx, vf[f].vcy, c0, 1.0L - half, 1.0L - a);
+                /* The factors found, set on the field, put its four edge rays
+                 * on the aperture's rim. */
+                sys->field[f].vdx = vf[f].vdx;
+                sys->field[f].vdy = vf[f].vdy;
+                sys->field[f].vcx = vf[f].vcx;
+                sys->field[f].vcy = vf[f].vcy;
+                sys->field[f].van = 0.0;
+            }
+            if (!big) {
+                sg_trace_opts to;
+                sg_tracer *t;
+                sg_ray_surface row[4];
+                sg_trace_opts_init(&to);
+                to.method = methods[m];
+                to.clip = 0;
+                t = sg_tracer_new(sys, cat, &to, &d);
+                assert_non_null(t);
+                for (f = 0; f < 2; f++) {
+                    double hx, hy, e[4][2] = {{0, 1}, {0, -1}, {1, 0}, {-1, 0}};
+                    int k;
+                    sg_field_normalized(sys, f, &hx, &hy);
+                    for (k = 0; k < 4; k++) {
+                        double r;
+                        assert_int_equal(sg_trace_normalized(t, hx, hy, e[k][0], e[k][1], row), SG_OK);
+                        r = hypot(row[2].x, row[2].y);
+                        if (fabs(r - A) > 1e-8 * A && !(k >= 2 && r < A))
+                            fail_msg("%s field %d edge ray %d meets the aperture at radius %.12g, "
+                                     "not %g", method_names[m], f + 1, k, r, A);
+                    }
+                }
+                sg_tracer_free(t);
+            }
+            sg_system_free(sys);
+        }
+    }
+    sg_catalog_free(cat);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_single_rays),
         cmocka_unit_test(test_batch),
         cmocka_unit_test(test_json),
+        cmocka_unit_test(test_set_vignetting),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -32,6 +32,7 @@ typedef struct cli_command {
 int cmd_trace(int argc, char **argv);
 int cmd_paraxial(int argc, char **argv);
 int cmd_semidiam(int argc, char **argv);
+int cmd_vignetting(int argc, char **argv);
 /* Further subcommands live in their own files. */
 int cmd_verify(int argc, char **argv);
 int cmd_bench(int argc, char **argv);

@@ -34,6 +34,7 @@ static const cli_command commands[] = {
     { "seidel", cmd_seidel, "print Seidel sums: per surface, in waves and transverse" },
     { "fieldcurve", cmd_fieldcurve, "print field curvature and distortion against field" },
     { "semidiam", cmd_semidiam, "automatic semi-diameters, as Zemax computes them" },
+    { "vignetting", cmd_vignetting, "vignetting factors from the apertures (Zemax's Set Vignetting)" },
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
 

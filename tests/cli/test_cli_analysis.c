@@ -393,6 +393,92 @@ static void test_bench_clock(void **state)
     ct_free(&r);
 }
 
+static char *read_text(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    char *buf;
+    long n;
+    if (!f)
+        fail_msg("cannot read %s", path);
+    fseek(f, 0, SEEK_END);
+    n = ftell(f);
+    rewind(f);
+    buf = malloc((size_t)n + 1);
+    assert_non_null(buf);
+    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
+    buf[n] = '\0';
+    fclose(f);
+    return buf;
+}
+
+/* "sagitta vignetting" (Zemax's Set Vignetting) on a flat stop (EPD 10)
+ * with a fixed semi-diameter of 2 at 20 behind it: at 5 degrees the pupil
+ * that passes is the disc of radius 0.4 about (0, -20 tan 5 / 5), so
+ * VDY = -4 tan 5 degrees and VCY = 0.6 (closed form).  --save and the
+ * editor's "field setvig" write the same design, and undo takes it back. */
+static void test_vignetting_command(void **state)
+{
+    const char *d = ct_design("apert.json",
+        "    {\"radius\": \"inf\", \"thickness\": \"inf\"},\n"
+        "    {\"radius\": \"inf\", \"thickness\": 20, \"stop\": true},\n"
+        "    {\"radius\": \"inf\", \"thickness\": 10, \"semi_diameter\": 2, "
+        "\"sd_fixed\": true},\n"
+        "    {\"radius\": \"inf\", \"thickness\": 0}");
+    char saved[1024], script_text[3 * 1024], plain_text[1024];
+    const char *script, *plain;
+    ct_result r;
+    cJSON *js, *f2;
+    long double vdy = -4.0L * tanl(5.0L * 3.141592653589793238462643383279502884L / 180.0L);
+    char *a, *b;
+    (void)state;
+    snprintf(saved, sizeof saved, "%s", ct_path("cli_set.json"));
+    snprintf(script_text, sizeof script_text, "field setvig\nsave %s\nundo\nsave %s\n",
+             ct_path("ed_set.json"), ct_path("ed_undo.json"));
+    snprintf(plain_text, sizeof plain_text, "save %s\n", ct_path("ed_plain.json"));
+    script = ct_file("setvig.txt", script_text);
+    plain = ct_file("plain.txt", plain_text);
+    ct_run(&r, "vignetting", d, "--format", "json", "--save", saved, NULL);
+    if (r.code != 0)
+        fail_msg("vignetting: exit %d: %s", r.code, r.err);
+    js = cJSON_Parse(r.out);
+    assert_non_null(js);
+    f2 = cJSON_GetArrayItem(cJSON_GetObjectItem(js, "fields"), 1);
+    assert_non_null(f2);
+    if (fabsl(cJSON_GetObjectItem(f2, "vdy")->valuedouble - vdy) > 2e-9L ||
+        fabs(cJSON_GetObjectItem(f2, "vcy")->valuedouble - 0.6) > 2e-9 ||
+        fabs(cJSON_GetObjectItem(f2, "vdx")->valuedouble) > 2e-9)
+        fail_msg("field 2: %s; closed form VDY %.12Lg VCY 0.6", r.out, vdy);
+    print_message("# vignetting: field 2 VDY %.12g (closed form %.12Lg), VCY %.12g (0.6)\n",
+                  cJSON_GetObjectItem(f2, "vdy")->valuedouble, vdy,
+                  cJSON_GetObjectItem(f2, "vcy")->valuedouble);
+    cJSON_Delete(js);
+    ct_free(&r);
+    /* The editor, by the command path its keys and : line share. */
+    ct_run(&r, "edit", d, "--batch", script, NULL);
+    if (r.code != 0)
+        fail_msg("edit --batch: exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    ct_run(&r, "edit", d, "--batch", plain, NULL);
+    if (r.code != 0)
+        fail_msg("edit --batch (plain save): exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    a = read_text(saved);
+    b = read_text(ct_path("ed_set.json"));
+    assert_string_equal(a, b);
+    free(a);
+    free(b);
+    a = read_text(ct_path("ed_undo.json"));
+    b = read_text(ct_path("ed_plain.json"));
+    assert_string_equal(a, b);
+    free(a);
+    free(b);
+    /* A bad grid is a usage error naming the option. */
+    ct_run(&r, "vignetting", d, "--grid", "2", NULL);
+    assert_int_equal(r.code, 2);
+    assert_non_null(strstr(r.err, "--grid"));
+    ct_free(&r);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -405,6 +491,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_wavefront_formats),
         cmocka_unit_test(test_fan_opd),
         cmocka_unit_test(test_bad_options),
+        cmocka_unit_test(test_vignetting_command),
     };
     int rc;
     ct_init(argc, argv);

@@ -706,7 +706,7 @@ static int c_field(ed *e, args *a)
     sg_system *s = e->doc.sys;
     const char *usage = "field type angle|object|paraximage|realimage | norm radial|rect | "
                         "add X Y [WEIGHT] | set N X Y [WEIGHT] | delete N | "
-                        "vignette N VDX VDY VCX VCY [VAN]";
+                        "vignette N VDX VDY VCX VCY [VAN] | setvig | clearvig";
     const char *sub = a->n > 1 ? a->v[1] : "";
     double x, y, w = 1.0;
     int k, i;
@@ -818,6 +818,44 @@ static int c_field(ed *e, args *a)
             sg_param_set(sg_param_find(SG_SCOPE_FIELD, keys[i]), &s->field[k - 1], 0, v[i]);
         return end(e, "field %d: vignetting VDX %g VDY %g VCX %g VCY %g VAN %g", k, v[0], v[1],
                    v[2], v[3], v[4]);
+    }
+    if (strcasecmp(sub, "setvig") == 0) {
+        /* Zemax's Set Vignetting: every field's factors from the apertures,
+         * as one edit (one undo). */
+        sg_vigfactors vf[SG_MAX_FIELDS];
+        sg_setvig_opts o;
+        sg_diag d;
+        if (!need(e, a, 1, 1, usage))
+            return ED_HANDLED | ED_ERROR;
+        if (!e->cat)
+            return fail(e, "no glass catalog: %s", e->cat_msg);
+        sg_setvig_opts_init(&o);
+        sg_diag_clear(&d);
+        if (sg_set_vignetting(s, e->cat, &o, vf, &d) != SG_OK)
+            return fail(e, "field setvig: %s", d.msg[0] ? d.msg : sg_strerror(d.code));
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        s = e->doc.sys;
+        for (i = 0; i < s->nfield; i++) {
+            s->field[i].vdx = vf[i].vdx;
+            s->field[i].vdy = vf[i].vdy;
+            s->field[i].vcx = vf[i].vcx;
+            s->field[i].vcy = vf[i].vcy;
+            s->field[i].van = vf[i].van;
+        }
+        return end(e, "vignetting factors set for %d field%s from the apertures (field N shows "
+                   "them)", s->nfield, s->nfield == 1 ? "" : "s");
+    }
+    if (strcasecmp(sub, "clearvig") == 0) {
+        if (!need(e, a, 1, 1, usage))
+            return ED_HANDLED | ED_ERROR;
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        s = e->doc.sys;
+        for (i = 0; i < s->nfield; i++)
+            s->field[i].vdx = s->field[i].vdy = s->field[i].vcx = s->field[i].vcy =
+                s->field[i].van = 0.0;
+        return end(e, "vignetting factors cleared");
     }
     if (strcasecmp(sub, "delete") == 0 || strcasecmp(sub, "del") == 0) {
         if (!need(e, a, 2, 2, usage) || !parse_int(e, a->v[2], "field", 1, s->nfield, &k))
@@ -2279,8 +2317,9 @@ static const command commands[] = {
     {"field", NULL, c_field, "field N", "trace the ray at field N of the design (sets Hx, Hy)"},
     {"field", NULL, c_field,
      "field type T | norm radial|rect | add X Y [W] | set N X Y [W] | delete N | "
-     "vignette N VDX VDY VCX VCY [VAN]",
-     "edit the fields; vignette sets Zemax's vignetting factors"},
+     "vignette N VDX VDY VCX VCY [VAN] | setvig | clearvig",
+     "edit the fields; vignette sets Zemax's vignetting factors, setvig computes them "
+     "from the apertures (Set Vignetting), clearvig clears them"},
     {"aperture", NULL, c_aperture, "aperture [epd|fnum|na|float|pwfnum|cone] [VALUE]",
      "set the system aperture"},
     {"aim", NULL, c_aim, "aim off|paraxial|real", "set ray aiming"},
