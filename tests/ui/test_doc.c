@@ -954,7 +954,9 @@ static void test_glass_picker(void **state)
      * twin) first, then CDGM's H-K9LA (nd 1.5168, vd 64.1987; lensdb/CDGM.agf),
      * which ties with H-K9LAGT and is listed first by name. */
     ok(e, "glasses 1.5168 64.17");
-    assert_true(l->n == (int)sg_catalog_count(e->cat));
+    /* Every glass, or the GP_MAX nearest of a larger catalog. */
+    assert_true(l->n == (sg_catalog_count(e->cat) < GP_MAX ? (int)sg_catalog_count(e->cat)
+                                                            : GP_MAX));
     assert_true(strcmp(l->hit[0].g->name, "BK7") == 0 || strcmp(l->hit[0].g->name, "N-BK7") == 0);
     assert_true(l->hit[0].dist == 0.0 && l->hit[1].dist == 0.0);
     assert_string_equal(l->hit[2].g->name, "H-K9LA");
