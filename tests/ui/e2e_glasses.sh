@@ -6,8 +6,9 @@
 # Usage: e2e_glasses.sh PATH/TO/sagitta
 #
 # Independent reference: the catalog's own figures (lensdb/SCHOTT.agf: N-F2
-# has nd 1.62005, F2 nd 1.62004, vd 36.37), and the material written to the
-# saved design file.
+# has nd 1.62005, F2 nd 1.62004, vd 36.37; between them lensdb/CDGM.agf's
+# F4GTI, nd 1.62005, vd 36.4308, and lensdb/HIKARI.agf's J-F2, nd 1.62004,
+# vd 36.3968), and the material written to the saved design file.
 
 SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
@@ -58,7 +59,12 @@ command_line "glasses 1.62005 36.43"
 check "glasses 1.62005 36.43 opens the list, N-F2 first with n = nd" first_is_nf2
 check "no line is wider than 80 columns" narrow
 
-# Down to F2 (nd 1.62004, vd 36.37), Enter: surface 2's material.
+# Down past F4GTI and J-F2 to F2 (nd 1.62004, vd 36.37), Enter: surface 2's
+# material.
+keys Down
+sleep 0.2
+keys Down
+sleep 0.2
 keys Down
 sleep 0.2
 keys Enter

@@ -951,12 +951,15 @@ static void test_glass_picker(void **state)
             assert_true(strcmp(l->hit[i - 1].g->name, l->hit[i].g->name) <= 0);
     }
     /* Nearest by nd and vd: N-BK7's own figures find it (or BK7, its
-     * twin) first, then H-K9L (nd 1.5168, vd 64.20). */
+     * twin) first, then CDGM's H-K9LA (nd 1.5168, vd 64.1987; lensdb/CDGM.agf),
+     * which ties with H-K9LAGT and is listed first by name. */
     ok(e, "glasses 1.5168 64.17");
-    assert_true(l->n == (int)sg_catalog_count(e->cat));
+    /* Every glass, or the GP_MAX nearest of a larger catalog. */
+    assert_true(l->n == (sg_catalog_count(e->cat) < GP_MAX ? (int)sg_catalog_count(e->cat)
+                                                            : GP_MAX));
     assert_true(strcmp(l->hit[0].g->name, "BK7") == 0 || strcmp(l->hit[0].g->name, "N-BK7") == 0);
     assert_true(l->hit[0].dist == 0.0 && l->hit[1].dist == 0.0);
-    assert_string_equal(l->hit[2].g->name, "H-K9L");
+    assert_string_equal(l->hit[2].g->name, "H-K9LA");
     for (i = 1; i < l->n; i++)
         assert_true(l->hit[i - 1].dist <= l->hit[i].dist);
 
