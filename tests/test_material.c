@@ -4,6 +4,7 @@
  * outside this project, manufacturers' published nd and vd, and every
  * formula written out again here in MPFR.
  */
+#include <dirent.h>
 #include <errno.h>
 #include <float.h>
 #include <locale.h>
@@ -11,6 +12,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -360,6 +362,74 @@ static void test_catalog_nd_vd_hoya_sumita_exceptions(void **state)
         assert_true(fabs(nd - g->nd) > 5e-5);
     }
     sg_catalog_free(cat);
+}
+
+/* ------------------------------------------------------------------------
+ * One glass per name across the .agf files of lensdb/.  The reader keeps the last glass
+ * of a name (files in name order), so a vendor file can silently replace
+ * another vendor's glass.  Every glass of every file must be the one the
+ * bundled catalog finds under its name, except the pairs listed here.
+ * ------------------------------------------------------------------------ */
+
+static const char *const shadowed_glasses[][2] = {
+    /* {file stem, name}: the glass in that file that another file's glass
+     * of the same name replaces. */
+    {"HOYA", "F2"},        /* SCHOTT's F2 */
+    {"HOYA", "BAF2"},      /* INFRARED's barium fluoride crystal */
+    {"INFRARED", "CAF2"},  /* MISC's */
+    {"INFRARED", "SAPPHIRE"}, /* MISC's */
+};
+
+static void test_catalog_no_silent_shadowing(void **state)
+{
+    sg_catalog *all = tu_catalog();
+    const char *dir = sg_catalog_dir(all);
+    DIR *dp;
+    struct dirent *e;
+    size_t files = 0, glasses = 0, shadowed = 0;
+    (void)state;
+    assert_non_null(dir);
+    dp = opendir(dir);
+    assert_non_null(dp);
+    while ((e = readdir(dp)) != NULL) {
+        size_t len = strlen(e->d_name), i, k;
+        char path[4096];
+        sg_catalog *one;
+        sg_diag d;
+        if (len < 5 || strcasecmp(e->d_name + len - 4, ".agf") != 0)
+            continue;
+        snprintf(path, sizeof path, "%s/%s", dir, e->d_name);
+        one = sg_catalog_new();
+        sg_diag_clear(&d);
+        assert_int_equal(sg_catalog_load_agf(one, path, &d), SG_OK);
+        files++;
+        for (i = 0; i < sg_catalog_count(one); i++) {
+            const sg_glass *g = sg_catalog_at(one, i);
+            const sg_glass *w = sg_catalog_find(all, g->name);
+            int listed = 0;
+            assert_non_null(w);
+            glasses++;
+            if (strcmp(w->catalog, g->catalog) == 0)
+                continue;
+            for (k = 0; k < sizeof shadowed_glasses / sizeof shadowed_glasses[0]; k++)
+                if (strcmp(g->catalog, shadowed_glasses[k][0]) == 0 &&
+                    strcasecmp(g->name, shadowed_glasses[k][1]) == 0)
+                    listed = 1;
+            if (!listed)
+                fail_msg("%s/%s is replaced by %s/%s (same name in two catalog "
+                         "files)",
+                         g->catalog, g->name, w->catalog, w->name);
+            shadowed++;
+        }
+        sg_catalog_free(one);
+    }
+    closedir(dp);
+    print_message("# %zu catalog files, %zu glasses, %zu replaced by a later "
+                  "file's glass of the same name (all listed)\n",
+                  files, glasses, shadowed);
+    assert_int_equal(shadowed, sizeof shadowed_glasses / sizeof shadowed_glasses[0]);
+    assert_int_equal(glasses - shadowed, sg_catalog_count(all));
+    sg_catalog_free(all);
 }
 
 static void test_catalog_nd_vd(void **state)
@@ -1564,6 +1634,7 @@ int main(void)
         cmocka_unit_test(test_reference_values),
         cmocka_unit_test(test_catalog_nd_vd),
         cmocka_unit_test(test_catalog_nd_vd_hoya_sumita_exceptions),
+        cmocka_unit_test(test_catalog_no_silent_shadowing),
         cmocka_unit_test(test_formulas),
         cmocka_unit_test(test_mpfr_precisions),
         cmocka_unit_test(test_bad_values),
