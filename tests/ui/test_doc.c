@@ -953,7 +953,9 @@ static void test_glass_picker(void **state)
     /* Nearest by nd and vd: N-BK7's own figures find it (or BK7, its
      * twin) first, then H-K9L (nd 1.5168, vd 64.20). */
     ok(e, "glasses 1.5168 64.17");
-    assert_true(l->n == (int)sg_catalog_count(e->cat));
+    /* Every glass, or the nearest GP_MAX of a larger catalog. */
+    assert_true(l->n == (int)(sg_catalog_count(e->cat) < GP_MAX ? sg_catalog_count(e->cat)
+                                                                : GP_MAX));
     assert_true(strcmp(l->hit[0].g->name, "BK7") == 0 || strcmp(l->hit[0].g->name, "N-BK7") == 0);
     assert_true(l->hit[0].dist == 0.0 && l->hit[1].dist == 0.0);
     assert_string_equal(l->hit[2].g->name, "H-K9L");
