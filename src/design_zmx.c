@@ -1052,6 +1052,26 @@ static int surface_line(zctx *c, const zline *l)
                   "scale 1 or -1 and offset 0", from, scale, off);
             return SG_OK;
         }
+        if (v == 2.0) {
+            /* The marginal ray angle: CURV c 2 angle ...; a Cooke triplet
+             * written by OpticStudio stores the curvature this gives. */
+            double ang;
+            if ((rc = opt_num(c, l, 3, "marginal ray angle", 0.0, &ang)) != SG_OK)
+                return rc;
+            if (c->cur >= 1 && strcmp(z->type, "COORDBRK") != 0) {
+                sg_solve *o = &s->solve[SG_SOLVE_RADIUS];
+                memset(o, 0, sizeof *o);
+                o->kind = SG_SOLVE_MARGINAL_ANGLE;
+                o->value = ang;
+                c->nlive++;
+                zwarn(c, "CURV: note: the marginal ray angle solve (angle %g) is kept", ang);
+                return SG_OK;
+            }
+            c->nfrozen++;
+            zwarn(c, "CURV: the marginal ray angle solve on the %s is frozen at the stored value",
+                  c->cur < 1 ? "object" : "coordinate break");
+            return SG_OK;
+        }
         if (v != 0.0 && v != 1.0) {
             c->nfrozen++;
             zwarn(c, "CURV: the curvature solve (type %g) is frozen at the stored value", v);
@@ -1895,12 +1915,15 @@ static void zb_list(zbuf *b, const char *kw, const sg_system *s, int what)
 /* A shape's PARM and XDAT lines, as zmx_shape reads them. */
 /* The solve fields after a CURV value: a radius pickup that the .zmx
  * reader keeps (scale +-1, offset 0); else nothing, the value frozen. */
-static const char *zb_curv_solve(char out[40], const sg_surface *f)
+static const char *zb_curv_solve(char out[80], const sg_surface *f)
 {
     const sg_solve *v = &f->solve[SG_SOLVE_RADIUS];
     out[0] = '\0';
+    char n1[40];
     if (v->kind == SG_SOLVE_PICKUP && fabs(v->scale) == 1.0 && v->offset == 0.0)
-        snprintf(out, 40, " 4 %d %d 0 \"\"", v->from, v->scale > 0 ? 1 : -1);
+        snprintf(out, 80, " 4 %d %d 0 \"\"", v->from, v->scale > 0 ? 1 : -1);
+    else if (v->kind == SG_SOLVE_MARGINAL_ANGLE)
+        snprintf(out, 80, " 2 %s 0 0 \"\"", num(n1, v->value));
     return out;
 }
 
@@ -1910,7 +1933,8 @@ static int zmx_keeps(const sg_surface *f, int t)
     const sg_solve *v = &f->solve[t];
     switch (t) {
     case SG_SOLVE_RADIUS:
-        return v->kind == SG_SOLVE_PICKUP && fabs(v->scale) == 1.0 && v->offset == 0.0;
+        return (v->kind == SG_SOLVE_PICKUP && fabs(v->scale) == 1.0 && v->offset == 0.0) ||
+               v->kind == SG_SOLVE_MARGINAL_ANGLE;
     case SG_SOLVE_THICKNESS:
         return v->kind == SG_SOLVE_PICKUP || v->kind == SG_SOLVE_MARGINAL_HEIGHT;
     default:
@@ -1978,7 +2002,7 @@ static void zb_shape(zbuf *b, const sg_surface *f)
 
 static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_diag *d)
 {
-    char n1[40], n2[40], gcat[ZMX_MAX_GCAT][SG_GLASS_NAME];
+    char n1[40], n2[40], cs[80], gcat[ZMX_MAX_GCAT][SG_GLASS_NAME];
     int ngcat = 0, i, k, changed = 0;
     mpfr_t q;
 
@@ -2106,14 +2130,14 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         if (i == s->stop)
             zb_add(b, "  STOP\n", 7);
         if (f->radius == 0.0 || isinf(f->radius)) {
-            zb_printf(b, "  CURV 0%s\n", zb_curv_solve(n1, f));
+            zb_printf(b, "  CURV 0%s\n", zb_curv_solve(cs, f));
         } else {
             /* 1/R to 25 digits: its exact reciprocal rounds back to R. */
             char cv[64];
             mpfr_set_d(q, f->radius, MPFR_RNDN);
             mpfr_ui_div(q, 1, q, MPFR_RNDN);
             mpfr_snprintf(cv, sizeof cv, "%.24Re", q);
-            zb_printf(b, "  CURV %s%s\n", cv, zb_curv_solve(n1, f));
+            zb_printf(b, "  CURV %s%s\n", cv, zb_curv_solve(cs, f));
         }
         if (f->type == SG_SURF_EVENASPH)
             for (k = 0; k < SG_NASPH; k++)
@@ -2183,8 +2207,9 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         for (k = 0; k < SG_SOLVE_NTARGETS; k++)
             if (s->surf[i].solve[k].kind != SG_SOLVE_NONE && !zmx_keeps(&s->surf[i], k))
                 sg_diag_warn(d, "export: surface %d: the %s %s solve is written as its value; "
-                             "sagitta writes .zmx solves for marginal_height thicknesses and "
-                             "pickups of a thickness or (scale 1 or -1, offset 0) a radius", i,
+                             "sagitta writes .zmx solves for marginal_height thicknesses, "
+                             "marginal_angle radii and pickups of a thickness or (scale 1 or "
+                             "-1, offset 0) a radius", i,
                              sg_solve_target_name((sg_solve_target)k),
                              sg_solve_kind_name(s->surf[i].solve[k].kind));
     if (b->oom)

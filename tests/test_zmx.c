@@ -968,6 +968,181 @@ static void test_model_glass_envd(void **state)
     sg_system_free(s);
 }
 
+/* Zemax's marginal ray angle solve (CURV c 2 angle 0 0).  The fixture
+ * restates, in sagitta's own text, the lines that matter of eleven files
+ * OpticStudio wrote (tests/data/zmx/README.md: the Cooke triplet sample
+ * with the glass thickness of surface 3 swept from 0 to 2): ENPD 10,
+ * object at infinity, PWAV 2 of 0.48, 0.55 and 0.65 um, glasses SK16 and
+ * F2, and on surface 6 "CURV c 2 -0.10000000100000001 0 0", whose c is
+ * the curvature Zemax solved.  SK16, an old SCHOTT glass sagitta does not
+ * ship, is given its SCHOTT catalog formula (README) in a catalog here. */
+static const char *const cooke_head =
+    "MODE SEQ\nNAME A SIMPLE COOKE TRIPLET.\nUNIT MM X W X CM MR CPMM\nENPD 10\n"
+    "ENVD 20 1 0\nGCAT SCHOTT\nFTYP 0 0 3 3 0 0 0 3\nXFLN 0 0 0\nYFLN 0 14 20\n"
+    "FWGN 1 1 1\nWAVM 1 0.47999999999999998 0.80000001200000004\n"
+    "WAVM 2 0.55000000000000004 1\nWAVM 3 0.65000000000000002 0.80000001200000004\n"
+    "PWAV 2\n"
+    "SURF 0\n  TYPE STANDARD\n  CURV 0.0 0 0 0 0 \"\"\n  DISZ INFINITY\n"
+    "SURF 1\n  TYPE STANDARD\n  CURV 4.542647910000000011E-02 1 0 0 0 \"\"\n"
+    "  DISZ 3.2589558300000001\n  GLAS SK16 0 0 0 0 0 0 0 0 0 0\n"
+    "SURF 2\n  TYPE STANDARD\n  CURV -2.294838899999999873E-03 1 0 0 0 \"\"\n"
+    "  DISZ 6.0075510999999997\n"
+    "SURF 3\n  TYPE STANDARD\n  CURV -4.501812100000000122E-02 1 0 0 0 \"\"\n";
+/* Then "  DISZ t3" (the swept thickness), and: */
+static const char *const cooke_tail =
+    "  GLAS F2 0 0 0 0 0 0 0 0 0 0\n"
+    "SURF 4\n  STOP\n  TYPE STANDARD\n  CURV 4.928068890000000118E-02 1 0 0 0 \"\"\n"
+    "  DISZ 4.7504089299999999\n"
+    "SURF 5\n  TYPE STANDARD\n  CURV 1.254963339999999941E-02 1 0 0 0 \"\"\n"
+    "  DISZ 2.9520756399999999\n  GLAS SK16 0 0 0 0 0 0 0 0 0 0\n"
+    "SURF 6\n  TYPE STANDARD\n  CURV %s %s\n  DISZ 42.207780100000001\n"
+    "SURF 7\n  TYPE STANDARD\n  CURV 0.0 0 0 0 0 \"\"\n  DISZ 0\n";
+
+/* SCHOTT's SK16 (formula 2, Sellmeier), from its Zemax catalog. */
+static const char *const sk16_agf =
+    "NM SK16 2 620603 1.620410 60.323649 0 2 0\n"
+    "CD 1.343177740E+000 7.046873390E-003 2.411443990E-001 2.290050000E-002 "
+    "9.943179690E-001 9.275085260E+001 0 0 0 0\n"
+    "LD 0.31 2.325\n";
+
+static char *cooke_text(const char *t3, const char *curv, const char *solve)
+{
+    char tail[1024];
+    size_t n;
+    char *t;
+    snprintf(tail, sizeof tail, cooke_tail, curv, solve);
+    n = strlen(cooke_head) + strlen(tail) + 64;
+    t = malloc(n);
+    assert_non_null(t);
+    snprintf(t, n, "%s  DISZ %s\n%s", cooke_head, t3, tail);
+    return t;
+}
+
+static sg_catalog *cooke_catalog(void)
+{
+    char path[] = "/tmp/sagitta_sk16_XXXXXX";
+    sg_catalog *cat = tu_catalog();
+    sg_diag d;
+    int fd = mkstemp(path);
+    FILE *f;
+    assert_true(fd >= 0);
+    f = fdopen(fd, "w");
+    assert_non_null(f);
+    fputs(sk16_agf, f);
+    fclose(f);
+    sg_diag_clear(&d);
+    if (sg_catalog_load_agf(cat, path, &d) != SG_OK)
+        fail_msg("SK16: %s", d.msg);
+    unlink(path);
+    assert_non_null(sg_catalog_find(cat, "SK16"));
+    return cat;
+}
+
+static int has_warning(const sg_diag *d, const char *a, const char *b)
+{
+    int i;
+    for (i = 0; i < d->nwarn && i < SG_DIAG_MAXWARN; i++)
+        if (strstr(d->warn[i], a) && (!b || strstr(d->warn[i], b)))
+            return 1;
+    return 0;
+}
+
+static void test_zemax_angle_solve(void **state)
+{
+    /* Surface 3's DISZ and surface 6's CURV, as each file stores them. */
+    static const char *const cases[][2] = {
+        {"-2.5433000000019101e-05", "-5.418850530030527163E-02"},
+        {"0.19997456699999999", "-5.422293419800957442E-02"},
+        {"0.399974567", "-5.425745927320992784E-02"},
+        {"0.59997456699999996", "-5.429208092947927083E-02"},
+        {"0.79997456700000003", "-5.432679957265172666E-02"},
+        {"0.99997456699999998", "-5.436161561083831251E-02"},
+        {"1.1999745669999999", "-5.439652945444302390E-02"},
+        {"1.3999745669999999", "-5.443154151617884962E-02"},
+        {"1.5999745670000001", "-5.446665221108416832E-02"},
+        {"1.799974567", "-5.450186195653902721E-02"},
+        {"1.999974567", "-5.453717117228178840E-02"},
+    };
+    sg_catalog *cat = cooke_catalog();
+    double angle = strtod("-0.10000000100000001", NULL), worst = 0.0;
+    size_t i;
+    (void)state;
+    for (i = 0; i < sizeof cases / sizeof *cases; i++) {
+        char *text = cooke_text(cases[i][0], cases[i][1], "2 -0.10000000100000001 0 0 \"\"");
+        sg_system *s = sg_system_new();
+        sg_diag d;
+        double stored, c, cs, rel;
+        char *z;
+        sg_diag_clear(&d);
+        if (sg_zmx_parse(s, text, strlen(text), "cooke.zmx", cat, &d) != SG_OK)
+            fail_msg("%s: %s", cases[i][0], d.msg);
+        free(text);
+        assert_true(has_warning(&d, "cooke.zmx:45: surface 6: CURV: note: the marginal ray "
+                                    "angle solve", "is kept"));
+        assert_int_equal(s->surf[6].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_MARGINAL_ANGLE);
+        assert_true(s->surf[6].solve[SG_SOLVE_RADIUS].value == angle);
+        stored = recip_text(cases[i][1]);
+        assert_true(s->surf[6].radius == stored);
+        /* Import, export, import: the solve comes back on the CURV line. */
+        sg_diag_clear(&d);
+        z = sg_zmx_to_text(s, cat, &d);
+        assert_non_null(z);
+        assert_non_null(strstr(z, " 2 -0.100000001 0 0 \"\"\n"));
+        assert_int_equal(d.nwarn, 0);
+        free(z);
+        roundtrip(s, cat, "cooke.zmx");
+        /* Zemax's solution is the curvature sagitta's solve gives: the two
+         * round separately, so they may differ in the last bits. */
+        s->surf[6].radius = 99.0;
+        sg_diag_clear(&d);
+        if (sg_system_apply_solves(s, cat, &d) != SG_OK)
+            fail_msg("%s: %s", cases[i][0], d.msg);
+        c = 1.0 / s->surf[6].radius;
+        cs = 1.0 / stored;
+        rel = fabs(c - cs) / fabs(cs);
+        if (rel > worst)
+            worst = rel;
+        if (rel > 5e-16)
+            fail_msg("t3 %s: solved curvature %.17g, Zemax's %.17g", cases[i][0], c, cs);
+        sg_system_free(s);
+    }
+    print_message("# marginal ray angle: 11 Zemax curvatures, worst relative difference %.3g\n",
+                  worst);
+    sg_catalog_free(cat);
+}
+
+/* Solves whose .zmx codes are not confirmed stay at the stored value, with
+ * a warning: never dropped in silence. */
+static void test_zemax_unconfirmed_solves(void **state)
+{
+    static const struct {
+        const char *fields, *warn;
+    } cases[] = {
+        {"3 0.5 0 0 \"\"", "CURV: the curvature solve (type 3) is frozen"},
+        {"4 5 2 0 \"\"", "CURV: the curvature pickup from surface 5 (scale 2, offset 0) is frozen"},
+        {"4 5 -1 0.01 \"\"", "(scale -1, offset 0.01) is frozen"},
+    };
+    sg_catalog *cat = cooke_catalog();
+    size_t i;
+    (void)state;
+    for (i = 0; i < sizeof cases / sizeof *cases; i++) {
+        char *text = cooke_text("1", "-5.4E-02", cases[i].fields);
+        sg_system *s = sg_system_new();
+        sg_diag d;
+        sg_diag_clear(&d);
+        if (sg_zmx_parse(s, text, strlen(text), "u.zmx", cat, &d) != SG_OK)
+            fail_msg("%s: %s", cases[i].fields, d.msg);
+        free(text);
+        if (!has_warning(&d, "u.zmx:45: surface 6: ", cases[i].warn))
+            fail_msg("%s: no warning \"%s\"", cases[i].fields, cases[i].warn);
+        assert_true(has_warning(&d, "u.zmx: 1 solve and pickup frozen", NULL));
+        assert_int_equal(s->surf[6].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_NONE);
+        assert_true(s->surf[6].radius == recip_text("-5.4E-02"));
+        sg_system_free(s);
+    }
+    sg_catalog_free(cat);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -988,6 +1163,8 @@ int main(void)
         cmocka_unit_test(test_surface_tilt),
         cmocka_unit_test(test_telecentric_file),
         cmocka_unit_test(test_apertures_vignetting),
+        cmocka_unit_test(test_zemax_angle_solve),
+        cmocka_unit_test(test_zemax_unconfirmed_solves),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
