@@ -1119,7 +1119,8 @@ static void test_zemax_unconfirmed_solves(void **state)
         const char *fields, *warn;
     } cases[] = {
         {"3 0.5 0 0 \"\"", "CURV: the curvature solve (type 3) is frozen"},
-        {"4 5 2 0 \"\"", "CURV: the curvature pickup from surface 5 (scale 2, offset 0) is frozen"},
+        {"8 3.33333333E-3 0 0 \"\"", "CURV: the curvature solve (type 8) is frozen"},
+        {"4 5 0 0 \"\"", "CURV: the curvature pickup from surface 5 (scale 0, offset 0) is frozen"},
         {"4 5 -1 0.01 \"\"", "(scale -1, offset 0.01) is frozen"},
     };
     sg_catalog *cat = cooke_catalog();
@@ -1140,6 +1141,113 @@ static void test_zemax_unconfirmed_solves(void **state)
         assert_true(s->surf[6].radius == recip_text("-5.4E-02"));
         sg_system_free(s);
     }
+    sg_catalog_free(cat);
+}
+
+/* Zemax's F number solve (CURV c 11 F 0 0), restated from a singlet
+ * Zemax wrote (tests/data/zmx/README.md, sc_singlet_end.ZMX): N-BK7,
+ * ENPD 40, object at infinity, 0.5875618 um; surface 3 is F/10 and its
+ * stored curvature (line 47 there) is Zemax's solution. */
+static const char *const singlet_fnum =
+    "MODE SEQ\nUNIT MM X W X CM MR CPMM\nENPD 4.0E+1\nENVD 2.0E+1 1 0\nGCAT SCHOTT\n"
+    "FTYP 0 0 2 1 0 0 0\nXFLN 0 0\nYFLN 0 5.0\nFWGN 1 1\nWAVM 1 5.875618E-1 1\nPWAV 1\n"
+    "SURF 0\n  TYPE STANDARD\n  CURV 0.0 0 0 0 0 \"\"\n  DISZ INFINITY\n"
+    "SURF 1\n  STOP\n  TYPE STANDARD\n  CURV 0.0 0 0 0 0 \"\"\n  DISZ 1.461955988833E+2\n"
+    "SURF 2\n  TYPE STANDARD\n  CURV 1.043369633661854700E-003 1 0 0 0 \"\"\n"
+    "  DISZ 1.500000096926E+1\n  GLAS N-BK7 0 0 1.5 4.0E+1 0 0 0 0 0 0\n"
+    "SURF 3\n  TYPE STANDARD\n  CURV -3.814431463204915000E-003 11 1.0E+1 0 0 \"\"\n"
+    "  DISZ 3.952566487579E+2\n"
+    "SURF 4\n  TYPE STANDARD\n  CURV 0.0 0 0 0 0 \"\"\n  DISZ 0\n";
+
+static void test_zemax_fnum_solve(void **state)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *s = sg_system_new();
+    sg_diag d;
+    double stored = recip_text("-3.814431463204915000E-003"), c, cs, rel;
+    char *z;
+    (void)state;
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(s, singlet_fnum, strlen(singlet_fnum), "f10.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(has_warning(&d, "f10.zmx:28: surface 3: CURV: note: the F number solve (10) "
+                                "is kept", NULL));
+    assert_int_equal(s->surf[3].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_FNUM);
+    assert_true(s->surf[3].solve[SG_SOLVE_RADIUS].value == 10.0);
+    assert_true(s->surf[3].radius == stored);
+    sg_diag_clear(&d);
+    z = sg_zmx_to_text(s, cat, &d);
+    assert_non_null(z);
+    assert_non_null(strstr(z, " 11 10 0 0 \"\"\n"));
+    free(z);
+    roundtrip(s, cat, "f10.zmx");
+    s->surf[3].radius = 99.0;
+    sg_diag_clear(&d);
+    if (sg_system_apply_solves(s, cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    c = 1.0 / s->surf[3].radius;
+    cs = 1.0 / stored;
+    rel = fabs(c - cs) / fabs(cs);
+    print_message("# F number: solved curvature %.17g, Zemax's %.17g (%.2g)\n", c, cs, rel);
+    assert_true(rel <= 5e-16);
+    sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
+/* Curvature pickups of scale 2 and -2 (CURV c 4 6 2 0, CURV c 4 6 -2. 0)
+ * beside scale 1 and -1, restated from a file Zemax wrote (README:
+ * Gratingstrecker12.0.ZMX, lines 141, 152, 164, 373, 385, 397): Zemax
+ * stores twice the curvature, so the scale is the curvature's (the
+ * radius's 1 / scale).  The surfaces are renumbered 1 to 6 here. */
+static void test_zemax_curvature_pickup_scale(void **state)
+{
+    static const char *const curv[6][2] = {
+        {"7.692307692308000200E-004", "0 0 0 0"},
+        {"1.538461538461600000E-003", "4 1 2 0"},
+        {"7.692307692308000200E-004", "4 1 1 0"},
+        {"-7.692307692308000200E-004", "4 1 -1. 0"},
+        {"-1.538461538461600000E-003", "4 1 -2. 0"},
+        {"-7.692307692308000200E-004", "4 1 -1. 0"},
+    };
+    char text[4096];
+    size_t n;
+    int i;
+    sg_system *s = sg_system_new();
+    sg_catalog *cat = tu_catalog();
+    sg_diag d;
+    char *z;
+    (void)state;
+    n = (size_t)snprintf(text, sizeof text,
+                         "MODE SEQ\nUNIT MM X W X CM MR CPMM\nENPD 10\nWAVM 1 0.55 1\nPWAV 1\n"
+                         "SURF 0\n  CURV 0.0\n  DISZ INFINITY\n");
+    for (i = 0; i < 6; i++)
+        n += (size_t)snprintf(text + n, sizeof text - n, "SURF %d\n%s  CURV %s %s \"\"\n"
+                              "  DISZ 10\n", i + 1, i == 0 ? "  STOP\n" : "", curv[i][0],
+                              curv[i][1]);
+    snprintf(text + n, sizeof text - n, "SURF 7\n  CURV 0.0\n  DISZ 0\n");
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(s, text, strlen(text), "pk.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(s->surf[2].solve[SG_SOLVE_RADIUS].scale == 0.5);
+    assert_true(s->surf[5].solve[SG_SOLVE_RADIUS].scale == -0.5);
+    sg_diag_clear(&d);
+    z = sg_zmx_to_text(s, cat, &d);
+    assert_non_null(z);
+    assert_non_null(strstr(z, " 4 1 2 0 \"\"\n"));
+    assert_non_null(strstr(z, " 4 1 -2 0 \"\"\n"));
+    free(z);
+    roundtrip(s, cat, "pk.zmx");
+    for (i = 2; i <= 6; i++) {
+        assert_int_equal(s->surf[i].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_PICKUP);
+        s->surf[i].radius = 99.0;
+    }
+    sg_diag_clear(&d);
+    assert_int_equal(sg_system_apply_solves(s, cat, &d), SG_OK);
+    for (i = 1; i <= 6; i++)
+        if (s->surf[i].radius != recip_text(curv[i - 1][0]))
+            fail_msg("surface %d: radius %.17g, Zemax's curvature %s", i, s->surf[i].radius,
+                     curv[i - 1][0]);
+    sg_system_free(s);
     sg_catalog_free(cat);
 }
 
@@ -1165,6 +1273,8 @@ int main(void)
         cmocka_unit_test(test_apertures_vignetting),
         cmocka_unit_test(test_zemax_angle_solve),
         cmocka_unit_test(test_zemax_unconfirmed_solves),
+        cmocka_unit_test(test_zemax_fnum_solve),
+        cmocka_unit_test(test_zemax_curvature_pickup_scale),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
