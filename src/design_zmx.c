@@ -1288,6 +1288,28 @@ static int surface_line(zctx *c, const zline *l)
               "the value stored in the file", zone);
         return SG_OK;
     }
+    if (tok_is(k, "CHZH")) {
+        /* CHZH height x: the paraxial chief ray height solve on the
+         * thickness; only the second field's 0, the one seen in files
+         * written by Zemax, is kept. */
+        double h, x;
+        if ((rc = opt_num(c, l, 1, "chief ray height", 0.0, &h)) != SG_OK ||
+            (rc = opt_num(c, l, 2, "chief ray height parameter", 0.0, &x)) != SG_OK)
+            return rc;
+        if (x == 0.0 && c->cur >= 1) {
+            sg_solve *o = &s->solve[SG_SOLVE_THICKNESS];
+            memset(o, 0, sizeof *o);
+            o->kind = SG_SOLVE_CHIEF_HEIGHT;
+            o->value = h;
+            c->nlive++;
+            zwarn(c, "CHZH: note: the chief ray height solve (height %g) is kept", h);
+            return SG_OK;
+        }
+        c->nfrozen++;
+        zwarn(c, "CHZH: the chief ray height solve (second field %g) is frozen at the value "
+              "stored in the file", x);
+        return SG_OK;
+    }
     if (tok_is(k, "PZUP")) {
         /* PZUP from scale offset column: column 0 picks up a thickness. */
         double from, scale, off, col;
@@ -1682,7 +1704,7 @@ static int is_surface_kw(const ztok *k)
     static const char *const kw[] = {
         "TYPE", "CURV", "DISZ", "GLAS", "CONI", "PARM", "XDAT", "DIAM", "STOP", "CLAP",
         "FLAP", "OBDC", "OBSC", "SQAP", "ELAP", "SQOB", "ELOB", "COMM", "SCBD", "SCAD",
-        "PZUP", "PPAR", "MAZH"};
+        "PZUP", "PPAR", "MAZH", "CHZH"};
     return in_list(k, kw, sizeof kw / sizeof *kw) ||
            in_list(k, ignored_surface, sizeof ignored_surface / sizeof *ignored_surface);
 }
@@ -1951,14 +1973,16 @@ static int zmx_keeps(const sg_surface *f, int t)
         return (v->kind == SG_SOLVE_PICKUP && v->offset == 0.0 && curv_scale_ok(v->scale)) ||
                v->kind == SG_SOLVE_MARGINAL_ANGLE || v->kind == SG_SOLVE_FNUM;
     case SG_SOLVE_THICKNESS:
-        return v->kind == SG_SOLVE_PICKUP || v->kind == SG_SOLVE_MARGINAL_HEIGHT;
+        return v->kind == SG_SOLVE_PICKUP || v->kind == SG_SOLVE_MARGINAL_HEIGHT ||
+               v->kind == SG_SOLVE_CHIEF_HEIGHT;
     default:
         return 0;
     }
 }
 
 /* The thickness solve's line after DISZ: MAZH height 0 (the paraxial
- * marginal ray) or PZUP from scale offset 0 (a thickness). */
+ * marginal ray), CHZH height 0 (the paraxial chief ray) or PZUP from
+ * scale offset 0 (a thickness). */
 static void zb_disz_solve(zbuf *b, const sg_surface *f)
 {
     const sg_solve *v = &f->solve[SG_SOLVE_THICKNESS];
@@ -1967,6 +1991,8 @@ static void zb_disz_solve(zbuf *b, const sg_surface *f)
         zb_printf(b, "  MAZH %s 0\n", num(n1, v->value));
     else if (v->kind == SG_SOLVE_PICKUP)
         zb_printf(b, "  PZUP %d %s %s 0\n", v->from, num(n1, v->scale), num(n2, v->offset));
+    else if (v->kind == SG_SOLVE_CHIEF_HEIGHT)
+        zb_printf(b, "  CHZH %s 0\n", num(n1, v->value));
 }
 
 static void zb_shape(zbuf *b, const sg_surface *f)
@@ -2222,7 +2248,8 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         for (k = 0; k < SG_SOLVE_NTARGETS; k++)
             if (s->surf[i].solve[k].kind != SG_SOLVE_NONE && !zmx_keeps(&s->surf[i], k))
                 sg_diag_warn(d, "export: surface %d: the %s %s solve is written as its value; "
-                             "sagitta writes .zmx solves for marginal_height thicknesses, "
+                             "sagitta writes .zmx solves for marginal_height and chief_height "
+                             "thicknesses, "
                              "marginal_angle and fnum radii, and pickups of a thickness or "
                              "(offset 0) a radius", i,
                              sg_solve_target_name((sg_solve_target)k),

@@ -1251,6 +1251,104 @@ static void test_zemax_curvature_pickup_scale(void **state)
     sg_catalog_free(cat);
 }
 
+/* Zemax's chief ray height solve (CHZH height 0), restated from a
+ * riflescope Zemax wrote (tests/data/zmx/README.md, Afocal Riflescope.ZMX,
+ * line 251): surface 17's thickness puts the image (the eye) where the
+ * paraxial chief ray crosses the axis; Zemax stored 9.095135769303E+1.
+ * The file's afocal image space flag (FTYP, 7th field) is left out here:
+ * sagitta refuses it, and the paraxial chief ray does not depend on it.
+ * Its old SCHOTT glasses beyond the bundled catalog are given SCHOTT's
+ * Sellmeier coefficients (README). */
+static const char *const rifle_zmx =
+    "MODE SEQ\nUNIT MM X W X CM AM CPMM\nENPD 1.6002E+1\nENVD 2.0E+1 1 0\n"
+    "GCAT SCHOTT OHARA\nFTYP 0 0 3 3 0 0 0\nXFLN 0 0 0\nYFLN 0 1.75 2.5\nFWGN 2 1 1\n"
+    "WAVM 1 4.86E-1 1\nWAVM 2 5.87E-1 1\nWAVM 3 6.56E-1 1\nPWAV 2\n"
+    "SURF 0\n  CURV 0.0\n  DISZ INFINITY\n"
+    "SURF 1\n  CURV 1.461344369999999900E-002\n  DISZ 3.6068\n  GLAS BK7\n"
+    "SURF 2\n  CURV -1.505778269999999900E-002\n  DISZ 2.4892\n  GLAS F2\n"
+    "SURF 3\n  CURV 1.813236500000000000E-004\n  DISZ 1.482852E+2\n"
+    "SURF 4\n  CURV 6.780929870000000600E-002\n  DISZ 5.00379999\n  GLAS BK7\n"
+    "SURF 5\n  CURV 0.0\n  DISZ 7.004120019\n"
+    "SURF 6\n  CURV 0.0\n  DISZ 1.9462679981E+1\n"
+    "SURF 7\n  CURV 1.709512750000000100E-001\n  DISZ 2.3114\n  GLAS SSK4A\n"
+    "SURF 8\n  STOP\n  CURV 1.760973240000000100E-002\n  DISZ 1.3462\n"
+    "SURF 9\n  CURV -1.490161949999999900E-001\n  DISZ 8.12799999E-1\n  GLAS SF2\n"
+    "SURF 10\n  CURV 2.076480950000000000E-001\n  DISZ 1.016\n"
+    "SURF 11\n  CURV 8.917345140000000600E-002\n  DISZ 2.3876\n  GLAS SSK4A\n"
+    "SURF 12\n  CURV -1.778233009999999900E-001\n  DISZ 6.64463999E+1\n"
+    "SURF 13\n  CURV -1.232703320000000000E-002\n  DISZ 4.5212\n  GLAS SF4\n"
+    "SURF 14\n  CURV 2.631689760000000000E-002\n  DISZ 9.34719999\n  GLAS SK2\n"
+    "SURF 15\n  CURV -2.631689760000000000E-002\n  DISZ 8.53439999\n"
+    "SURF 16\n  CURV 1.752585409999999800E-002\n  DISZ 6.98499999\n  GLAS BAF3\n"
+    "SURF 17\n  CURV -1.120824420000000000E-002\n  DISZ 9.095135769303E+1\n  CHZH 0 0\n"
+    "SURF 18\n  CURV 0.0\n  DISZ 0\n"
+;
+
+static const char *const rifle_agf =
+    "NM SSK4A 2 618551 1.617650 55.141867 0 2 0\n"
+    "CD 1.383361690E+000 7.871549850E-003 1.871251070E-001 2.893522210E-002 "
+    "9.441709020E-001 1.057424240E+002 0 0 0 0\nLD 0.334 2.325\n"
+    "NM SF2 2 648339.386 1.64769 33.85 0 1\n"
+    "CD 1.403018210E+00 1.057954660E-02 2.317675040E-01 4.932269780E-02 "
+    "9.390565860E-01 1.124059550E+02 0 0\nLD 0.35 2.5\n"
+    "NM SF4 2 755276.479 1.7552 27.58 0 1\n"
+    "CD 1.619578260E+00 1.255021040E-02 3.394931890E-01 5.445598220E-02 "
+    "1.025669310E+00 1.176522220E+02 0 0\nLD 0.365 2.5\n"
+    "NM SK2 2 607567 1.607381 56.650108 0 2 0\n"
+    "CD 1.281890120E+000 7.271916400E-003 2.577382580E-001 2.428235270E-002 "
+    "9.681860400E-001 1.103777730E+002 0 0 0 0\nLD 0.31 2.325\n"
+    "NM BAF3 2 583465 1.582670 46.469988 0 2 0\n"
+    "CD 1.320642670E+000 8.877987150E-003 1.335726830E-001 4.202903460E-002 "
+    "8.855218210E-001 1.117291670E+002 0 0 0 0\nLD 0.334 2.325\n";
+
+static void test_zemax_chief_height_solve(void **state)
+{
+    char path[] = "/tmp/sagitta_rifle_XXXXXX";
+    sg_catalog *cat = tu_catalog();
+    sg_system *s = sg_system_new();
+    sg_diag d;
+    double stored = strtod("9.095135769303E+1", NULL), rel;
+    int fd = mkstemp(path);
+    FILE *f;
+    char *z;
+    (void)state;
+    assert_true(fd >= 0);
+    f = fdopen(fd, "w");
+    assert_non_null(f);
+    fputs(rifle_agf, f);
+    fclose(f);
+    sg_diag_clear(&d);
+    if (sg_catalog_load_agf(cat, path, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    unlink(path);
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(s, rifle_zmx, strlen(rifle_zmx), "rifle.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(has_warning(&d, "surface 17: CHZH: note: the chief ray height solve (height 0) "
+                                "is kept", NULL));
+    assert_int_equal(s->surf[17].solve[SG_SOLVE_THICKNESS].kind, SG_SOLVE_CHIEF_HEIGHT);
+    assert_true(s->surf[17].solve[SG_SOLVE_THICKNESS].value == 0.0);
+    assert_true(s->surf[17].thickness == stored);
+    sg_diag_clear(&d);
+    z = sg_zmx_to_text(s, cat, &d);
+    assert_non_null(z);
+    assert_non_null(strstr(z, "  CHZH 0 0\n"));
+    free(z);
+    roundtrip(s, cat, "rifle.zmx");
+    s->surf[17].thickness = 10.0;
+    sg_diag_clear(&d);
+    if (sg_system_apply_solves(s, cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    rel = fabs(s->surf[17].thickness - stored) / stored;
+    print_message("# CHZH: solved %.17g, Zemax's %.13g (%.2g)\n", s->surf[17].thickness, stored,
+                  rel);
+    /* Zemax stores 13 digits; its glass data (2013) and the 2020 catalog's
+     * may differ in the last digits too. */
+    assert_true(rel <= 1e-12);
+    sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1275,6 +1373,7 @@ int main(void)
         cmocka_unit_test(test_zemax_unconfirmed_solves),
         cmocka_unit_test(test_zemax_fnum_solve),
         cmocka_unit_test(test_zemax_curvature_pickup_scale),
+        cmocka_unit_test(test_zemax_chief_height_solve),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
