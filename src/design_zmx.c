@@ -1335,7 +1335,9 @@ static int surface_line(zctx *c, const zline *l)
               from, col);
         return SG_OK;
     }
-    if (tok_is(k, "PPAR")) {
+    if (tok_is(k, "PPAR") || tok_is(k, "EDGE")) {
+        /* A parameter pickup, an edge thickness solve: the stored value
+         * stays. */
         c->nfrozen++;
         zwarn(c, "%.4s: the solve or pickup is frozen at the value stored in the file", k->p);
         return SG_OK;
@@ -1704,7 +1706,7 @@ static int is_surface_kw(const ztok *k)
     static const char *const kw[] = {
         "TYPE", "CURV", "DISZ", "GLAS", "CONI", "PARM", "XDAT", "DIAM", "STOP", "CLAP",
         "FLAP", "OBDC", "OBSC", "SQAP", "ELAP", "SQOB", "ELOB", "COMM", "SCBD", "SCAD",
-        "PZUP", "PPAR", "MAZH", "CHZH"};
+        "PZUP", "PPAR", "MAZH", "CHZH", "EDGE"};
     return in_list(k, kw, sizeof kw / sizeof *kw) ||
            in_list(k, ignored_surface, sizeof ignored_surface / sizeof *ignored_surface);
 }

@@ -1141,6 +1141,27 @@ static void test_zemax_unconfirmed_solves(void **state)
         assert_true(s->surf[6].radius == recip_text("-5.4E-02"));
         sg_system_free(s);
     }
+    /* An edge thickness solve (EDGE, as in Zemax's Houghton sample) keeps
+     * the stored thickness. */
+    {
+        char *text = cooke_text("1", "-5.4E-02", "0 0 0 0 \"\""), *e, buf[4096];
+        const char *disz = "  DISZ 42.207780100000001\n";
+        sg_system *s = sg_system_new();
+        sg_diag d;
+        e = strstr(text, disz);
+        assert_non_null(e);
+        e += strlen(disz);
+        snprintf(buf, sizeof buf, "%.*s  EDGE 1.00000001E-1 3.0\n%s", (int)(e - text), text, e);
+        free(text);
+        sg_diag_clear(&d);
+        if (sg_zmx_parse(s, buf, strlen(buf), "e.zmx", cat, &d) != SG_OK)
+            fail_msg("%s", d.msg);
+        assert_true(has_warning(&d, "e.zmx:47: surface 6: EDGE: the solve or pickup is frozen",
+                                NULL));
+        assert_true(s->surf[6].thickness == strtod("42.207780100000001", NULL));
+        assert_int_equal(s->surf[6].solve[SG_SOLVE_THICKNESS].kind, SG_SOLVE_NONE);
+        sg_system_free(s);
+    }
     sg_catalog_free(cat);
 }
 
