@@ -454,6 +454,14 @@ static int opt_num(zctx *c, const zline *l, int k, const char *what, double dflt
     return tok_num(c, l, k, what, out);
 }
 
+/* Whether a curvature pickup's scale k maps to the radius pickup scale
+ * 1 / k and back to k in doubles, so that the pickup round-trips. */
+static int curv_scale_ok(double k)
+{
+    double r = 1.0 / k;
+    return k != 0.0 && isfinite(k) && isfinite(r) && r != 0.0 && 1.0 / r == k;
+}
+
 /* The radius nearest the exact decimal curvature in tok: 1/D rounded once,
  * by rational arithmetic. */
 static int tok_curv(zctx *c, const zline *l, int k, double *radius)
@@ -1036,29 +1044,54 @@ static int surface_line(zctx *c, const zline *l)
         if ((rc = opt_num(c, l, 2, "curvature solve", 0.0, &v)) != SG_OK)
             return rc;
         if (v == 4.0) {
-            /* A pickup: CURV c 4 from scale offset.  The radius and the
-             * curvature agree on it only at scale +-1 and offset 0, so
-             * only that one is kept. */
+            /* A pickup: CURV c 4 from scale offset, of the curvature (a
+             * Zemax file stores 2 c for scale 2).  Without an offset it is
+             * a radius pickup of scale 1 / scale; with one it is no
+             * radius pickup, so it stays frozen. */
             double from, scale, off;
             if ((rc = opt_num(c, l, 3, "pickup surface", -1.0, &from)) != SG_OK ||
                 (rc = opt_num(c, l, 4, "pickup scale", 1.0, &scale)) != SG_OK ||
                 (rc = opt_num(c, l, 5, "pickup offset", 0.0, &off)) != SG_OK)
                 return rc;
-            if (from == floor(from) && from >= 0 && from < c->cur && fabs(scale) == 1.0 &&
-                off == 0.0) {
+            if (from == floor(from) && from >= 0 && from < c->cur && off == 0.0 &&
+                curv_scale_ok(scale)) {
                 sg_solve *o = &s->solve[SG_SOLVE_RADIUS];
                 memset(o, 0, sizeof *o);
                 o->kind = SG_SOLVE_PICKUP;
                 o->from = (int)from;
-                o->scale = scale;
+                o->scale = 1.0 / scale;
                 c->nlive++;
                 zwarn(c, "CURV: note: the pickup from surface %d is kept", o->from);
                 return SG_OK;
             }
             c->nfrozen++;
             zwarn(c, "CURV: the curvature pickup from surface %g (scale %g, offset %g) is frozen "
-                  "at the stored value: sagitta keeps pickups from an earlier surface with "
-                  "scale 1 or -1 and offset 0", from, scale, off);
+                  "at the stored value: sagitta keeps curvature pickups from an earlier surface "
+                  "with offset 0 and a scale whose reciprocal is exact both ways", from, scale,
+                  off);
+            return SG_OK;
+        }
+        if (v == 2.0 || v == 11.0) {
+            /* The marginal ray angle (CURV c 2 angle ...) and the F number
+             * (CURV c 11 F ...): files written by Zemax store the
+             * curvatures these give (sagitta-design(5), ZEMAX FILES). */
+            const char *what = v == 2.0 ? "marginal ray angle" : "F number";
+            double val;
+            if ((rc = opt_num(c, l, 3, what, 0.0, &val)) != SG_OK)
+                return rc;
+            if (c->cur >= 1 && strcmp(z->type, "COORDBRK") != 0 && (v == 2.0 || val != 0.0)) {
+                sg_solve *o = &s->solve[SG_SOLVE_RADIUS];
+                memset(o, 0, sizeof *o);
+                o->kind = v == 2.0 ? SG_SOLVE_MARGINAL_ANGLE : SG_SOLVE_FNUM;
+                o->value = val;
+                c->nlive++;
+                zwarn(c, "CURV: note: the %s solve (%g) is kept", what, val);
+                return SG_OK;
+            }
+            c->nfrozen++;
+            zwarn(c, "CURV: the %s solve %s is frozen at the stored value", what,
+                  c->cur < 1 ? "on the object" : val == 0.0 && v == 11.0 ? "of F/0" :
+                  "on a coordinate break");
             return SG_OK;
         }
         if (v != 0.0 && v != 1.0) {
@@ -1264,6 +1297,28 @@ static int surface_line(zctx *c, const zline *l)
               "the value stored in the file", zone);
         return SG_OK;
     }
+    if (tok_is(k, "CHZH")) {
+        /* CHZH height x: the paraxial chief ray height solve on the
+         * thickness; only the second field's 0, the one seen in files
+         * written by Zemax, is kept. */
+        double h, x;
+        if ((rc = opt_num(c, l, 1, "chief ray height", 0.0, &h)) != SG_OK ||
+            (rc = opt_num(c, l, 2, "chief ray height parameter", 0.0, &x)) != SG_OK)
+            return rc;
+        if (x == 0.0 && c->cur >= 1) {
+            sg_solve *o = &s->solve[SG_SOLVE_THICKNESS];
+            memset(o, 0, sizeof *o);
+            o->kind = SG_SOLVE_CHIEF_HEIGHT;
+            o->value = h;
+            c->nlive++;
+            zwarn(c, "CHZH: note: the chief ray height solve (height %g) is kept", h);
+            return SG_OK;
+        }
+        c->nfrozen++;
+        zwarn(c, "CHZH: the chief ray height solve (second field %g) is frozen at the value "
+              "stored in the file", x);
+        return SG_OK;
+    }
     if (tok_is(k, "PZUP")) {
         /* PZUP from scale offset column: column 0 picks up a thickness. */
         double from, scale, off, col;
@@ -1289,7 +1344,9 @@ static int surface_line(zctx *c, const zline *l)
               from, col);
         return SG_OK;
     }
-    if (tok_is(k, "PPAR")) {
+    if (tok_is(k, "PPAR") || tok_is(k, "EDGE")) {
+        /* A parameter pickup, an edge thickness solve: the stored value
+         * stays. */
         c->nfrozen++;
         zwarn(c, "%.4s: the solve or pickup is frozen at the value stored in the file", k->p);
         return SG_OK;
@@ -1716,7 +1773,7 @@ static int is_surface_kw(const ztok *k)
     static const char *const kw[] = {
         "TYPE", "CURV", "DISZ", "GLAS", "CONI", "PARM", "XDAT", "DIAM", "STOP", "CLAP",
         "FLAP", "OBDC", "OBSC", "SQAP", "ELAP", "SQOB", "ELOB", "COMM", "SCBD", "SCAD",
-        "PZUP", "PPAR", "MAZH"};
+        "PZUP", "PPAR", "MAZH", "CHZH", "EDGE"};
     return in_list(k, kw, sizeof kw / sizeof *kw) ||
            in_list(k, ignored_surface, sizeof ignored_surface / sizeof *ignored_surface);
 }
@@ -1960,14 +2017,19 @@ static void zb_list(zbuf *b, const char *kw, const sg_system *s, int what)
     zb_add(b, "\n", 1);
 }
 /* A shape's PARM and XDAT lines, as zmx_shape reads them. */
-/* The solve fields after a CURV value: a radius pickup that the .zmx
- * reader keeps (scale +-1, offset 0); else nothing, the value frozen. */
-static const char *zb_curv_solve(char out[40], const sg_surface *f)
+/* The solve fields after a CURV value, as the .zmx reader keeps them: a
+ * radius pickup of offset 0 (Zemax's scale is the curvature's, 1 / ours),
+ * the marginal ray angle or the F number; else nothing, the value frozen. */
+static const char *zb_curv_solve(char out[80], const sg_surface *f)
 {
     const sg_solve *v = &f->solve[SG_SOLVE_RADIUS];
     out[0] = '\0';
-    if (v->kind == SG_SOLVE_PICKUP && fabs(v->scale) == 1.0 && v->offset == 0.0)
-        snprintf(out, 40, " 4 %d %d 0 \"\"", v->from, v->scale > 0 ? 1 : -1);
+    char n1[40];
+    if (v->kind == SG_SOLVE_PICKUP && v->offset == 0.0 && curv_scale_ok(v->scale))
+        snprintf(out, 80, " 4 %d %s 0 \"\"", v->from, num(n1, 1.0 / v->scale));
+    else if (v->kind == SG_SOLVE_MARGINAL_ANGLE || v->kind == SG_SOLVE_FNUM)
+        snprintf(out, 80, " %d %s 0 0 \"\"", v->kind == SG_SOLVE_FNUM ? 11 : 2,
+                 num(n1, v->value));
     return out;
 }
 
@@ -1977,16 +2039,19 @@ static int zmx_keeps(const sg_surface *f, int t)
     const sg_solve *v = &f->solve[t];
     switch (t) {
     case SG_SOLVE_RADIUS:
-        return v->kind == SG_SOLVE_PICKUP && fabs(v->scale) == 1.0 && v->offset == 0.0;
+        return (v->kind == SG_SOLVE_PICKUP && v->offset == 0.0 && curv_scale_ok(v->scale)) ||
+               v->kind == SG_SOLVE_MARGINAL_ANGLE || v->kind == SG_SOLVE_FNUM;
     case SG_SOLVE_THICKNESS:
-        return v->kind == SG_SOLVE_PICKUP || v->kind == SG_SOLVE_MARGINAL_HEIGHT;
+        return v->kind == SG_SOLVE_PICKUP || v->kind == SG_SOLVE_MARGINAL_HEIGHT ||
+               v->kind == SG_SOLVE_CHIEF_HEIGHT;
     default:
         return 0;
     }
 }
 
 /* The thickness solve's line after DISZ: MAZH height 0 (the paraxial
- * marginal ray) or PZUP from scale offset 0 (a thickness). */
+ * marginal ray), CHZH height 0 (the paraxial chief ray) or PZUP from
+ * scale offset 0 (a thickness). */
 static void zb_disz_solve(zbuf *b, const sg_surface *f)
 {
     const sg_solve *v = &f->solve[SG_SOLVE_THICKNESS];
@@ -1995,6 +2060,8 @@ static void zb_disz_solve(zbuf *b, const sg_surface *f)
         zb_printf(b, "  MAZH %s 0\n", num(n1, v->value));
     else if (v->kind == SG_SOLVE_PICKUP)
         zb_printf(b, "  PZUP %d %s %s 0\n", v->from, num(n1, v->scale), num(n2, v->offset));
+    else if (v->kind == SG_SOLVE_CHIEF_HEIGHT)
+        zb_printf(b, "  CHZH %s 0\n", num(n1, v->value));
 }
 
 static void zb_shape(zbuf *b, const sg_surface *f)
@@ -2045,7 +2112,7 @@ static void zb_shape(zbuf *b, const sg_surface *f)
 
 static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_diag *d)
 {
-    char n1[40], n2[40], gcat[ZMX_MAX_GCAT][SG_GLASS_NAME];
+    char n1[40], n2[40], cs[80], gcat[ZMX_MAX_GCAT][SG_GLASS_NAME];
     int ngcat = 0, i, k, changed = 0;
     mpfr_t q;
 
@@ -2173,14 +2240,14 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         if (i == s->stop)
             zb_add(b, "  STOP\n", 7);
         if (f->radius == 0.0 || isinf(f->radius)) {
-            zb_printf(b, "  CURV 0%s\n", zb_curv_solve(n1, f));
+            zb_printf(b, "  CURV 0%s\n", zb_curv_solve(cs, f));
         } else {
             /* 1/R to 25 digits: its exact reciprocal rounds back to R. */
             char cv[64];
             mpfr_set_d(q, f->radius, MPFR_RNDN);
             mpfr_ui_div(q, 1, q, MPFR_RNDN);
             mpfr_snprintf(cv, sizeof cv, "%.24Re", q);
-            zb_printf(b, "  CURV %s%s\n", cv, zb_curv_solve(n1, f));
+            zb_printf(b, "  CURV %s%s\n", cv, zb_curv_solve(cs, f));
         }
         if (f->type == SG_SURF_EVENASPH)
             for (k = 0; k < SG_NASPH; k++)
@@ -2250,8 +2317,10 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         for (k = 0; k < SG_SOLVE_NTARGETS; k++)
             if (s->surf[i].solve[k].kind != SG_SOLVE_NONE && !zmx_keeps(&s->surf[i], k))
                 sg_diag_warn(d, "export: surface %d: the %s %s solve is written as its value; "
-                             "sagitta writes .zmx solves for marginal_height thicknesses and "
-                             "pickups of a thickness or (scale 1 or -1, offset 0) a radius", i,
+                             "sagitta writes .zmx solves for marginal_height and chief_height "
+                             "thicknesses, "
+                             "marginal_angle and fnum radii, and pickups of a thickness or "
+                             "(offset 0) a radius", i,
                              sg_solve_target_name((sg_solve_target)k),
                              sg_solve_kind_name(s->surf[i].solve[k].kind));
     if (b->oom)

@@ -593,9 +593,9 @@ char *sg_design_to_json(const sg_system *sys);
  * beyond sagitta-design(5)'s, several configurations...) is refused with
  * SG_EUNSUPPORTED and a message "FILE:LINE: surface N: KEYWORD: ...";
  * values are read as the file stores them; the solves sagitta evaluates
- * (MAZH at zone 0, PZUP of a thickness, a CURV pickup at scale +-1 and
- * offset 0) are kept in the surfaces' solve[] with a note, the others
- * frozen with a warning.  See sagitta-design(5), ZEMAX FILES. */
+ * (MAZH at zone 0, CHZH, PZUP of a thickness, a CURV pickup of offset 0,
+ * the CURV marginal ray angle and F number, types 2 and 11) are kept in the
+ * surfaces' solve[] with a note, the others frozen with a warning.  See sagitta-design(5), ZEMAX FILES. */
 int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name,
                  const sg_catalog *cat, sg_diag *d);
 int sg_zmx_load(sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
