@@ -307,62 +307,6 @@ static void test_reference_values(void **state)
  * The bundled catalog against published nd and vd.
  * ------------------------------------------------------------------------ */
 
-/* ------------------------------------------------------------------------
- * HOYA and SUMITA (lensdb/HOYA.agf, lensdb/SUMITA.agf): glasses whose own
- * vendor file disagrees with itself.  test_catalog_nd_vd skips them;
- * test_catalog_nd_vd_hoya_sumita_exceptions checks that each is still
- * there, still reads as described, and still disagrees (so the entry is
- * dropped once the data is right).  Kept apart from any other list.
- * ------------------------------------------------------------------------ */
-
-typedef struct {
-    const char *catalog, *name;
-    double file_nd;    /* the NM line's nd */
-    double formula_nd; /* what the file's CD coefficients give at d */
-    const char *why;
-} nd_vd_exception;
-
-static const nd_vd_exception hoya_sumita_nd_vd_exceptions[] = {
-    {"SUMITA", "SF18", 1.712510, 1.721507,
-     "Sumita.agf (2019/11/20) prints nd 1.712510 on SF18's NM line, but its "
-     "code 722293 and its CD coefficients give 1.7215 (SCHOTT's SF18 is "
-     "1.72151): a typo in the NM line"},
-};
-
-static int is_hoya_sumita_nd_vd_exception(const sg_glass *g)
-{
-    size_t k;
-    for (k = 0; k < sizeof hoya_sumita_nd_vd_exceptions /
-                        sizeof hoya_sumita_nd_vd_exceptions[0];
-         k++)
-        if (strcmp(g->catalog, hoya_sumita_nd_vd_exceptions[k].catalog) == 0 &&
-            strcmp(g->name, hoya_sumita_nd_vd_exceptions[k].name) == 0)
-            return 1;
-    return 0;
-}
-
-static void test_catalog_nd_vd_hoya_sumita_exceptions(void **state)
-{
-    sg_catalog *cat = tu_catalog();
-    size_t k;
-    (void)state;
-    for (k = 0; k < sizeof hoya_sumita_nd_vd_exceptions /
-                        sizeof hoya_sumita_nd_vd_exceptions[0];
-         k++) {
-        const nd_vd_exception *x = &hoya_sumita_nd_vd_exceptions[k];
-        const sg_glass *g = sg_catalog_find(cat, x->name);
-        double nd;
-        assert_non_null(g);
-        assert_string_equal(g->catalog, x->catalog);
-        nd = sg_glass_index(g, 0.5875618);
-        print_message("# exception %s/%s: file nd %.6f, formula nd %.6f: %s\n",
-                      x->catalog, x->name, g->nd, nd, x->why);
-        assert_true(fabs(g->nd - x->file_nd) <= 1e-9);
-        assert_true(fabs(nd - x->formula_nd) <= 1e-6);
-        assert_true(fabs(nd - g->nd) > 5e-5);
-    }
-    sg_catalog_free(cat);
-}
 
 /* ------------------------------------------------------------------------
  * One glass per name across the .agf files of lensdb/.  The reader keeps the last glass
@@ -374,7 +318,6 @@ static void test_catalog_nd_vd_hoya_sumita_exceptions(void **state)
 static const char *const shadowed_glasses[][2] = {
     /* {file stem, name}: the glass in that file that another file's glass
      * of the same name replaces. */
-    {"HOYA", "F2"},        /* SCHOTT's F2 */
     {"HOYA", "BAF2"},      /* INFRARED's barium fluoride crystal */
     {"INFRARED", "CAF2"},  /* MISC's */
     {"INFRARED", "SAPPHIRE"}, /* MISC's */
@@ -452,8 +395,6 @@ static void test_catalog_nd_vd(void **state)
             skipped++;
             continue;
         }
-        if (is_hoya_sumita_nd_vd_exception(g))
-            continue; /* see hoya_sumita_nd_vd_exceptions */
         nd = sg_glass_index(g, 0.5875618);
         nf = sg_glass_index(g, LAMBDA_F);
         nc = sg_glass_index(g, LAMBDA_C);
@@ -1633,7 +1574,6 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_reference_values),
         cmocka_unit_test(test_catalog_nd_vd),
-        cmocka_unit_test(test_catalog_nd_vd_hoya_sumita_exceptions),
         cmocka_unit_test(test_catalog_no_silent_shadowing),
         cmocka_unit_test(test_formulas),
         cmocka_unit_test(test_mpfr_precisions),

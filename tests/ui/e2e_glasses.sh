@@ -51,8 +51,9 @@ narrow() {
 }
 row2_is_f2() { wait_for "Surf" 5 && screen | grep -Eq '^ +2 STANDARD .* F2 '; }
 saved_f2() { grep -q '"material": "F2"' "$WORK/singlet.json"; }
-by_name() { wait_for 'Glasses for "n-sf1"' 5 && screen | grep -Eq '^ +1  N-SF10 ' &&
-    screen | grep -Eq '^ +2  N-SF11 '; }
+# lensdb/SCHOTT.agf names N-SF1, N-SF10, N-SF11, N-SF14, N-SF15 and N-SF19.
+by_name() { wait_for 'Glasses for "n-sf1"' 5 && screen | grep -Eq '^ +1  N-SF1 ' &&
+    screen | grep -Eq '^ +2  N-SF10 ' && screen | grep -Eq '^ +3  N-SF11 '; }
 
 command_line "goto 2"
 command_line "glasses 1.62005 36.43"
@@ -81,7 +82,7 @@ sleep 0.5
 check "Esc changes nothing; the saved design has F2 after surface 2" saved_f2
 
 command_line "glasses n-sf1"
-check "glasses n-sf1 lists N-SF10 then N-SF11 by name" by_name
+check "glasses n-sf1 lists N-SF1, N-SF10, N-SF11 by name" by_name
 keys Escape
 command_line "q!"
 [ "$FAILED" -eq 0 ]
