@@ -32,12 +32,11 @@ int sg_system_glass_index_mpfr(const sg_system *sys, const sg_glass *g, mpfr_t o
 int sg_system_check(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
 
 /* What sg_system_validate found of each surface last time (kept in an
- * sg_index_cache): surface i's own checks, the ones that read only its
- * bits and whether it is the object, the image or between them, passed
- * for the surface bits surf[i] when ok[i] names that place (1 object,
- * 2 between, 3 image; 0 none).  The checks that read other things (its
- * frame changes against the stop, the track, the catalog, the warnings)
- * run every time. */
+ * sg_index_cache, for one number of surfaces n): surface i's own checks,
+ * the ones that read only its bits and whether it is the object, the
+ * image or between them, passed for the surface bits surf[i] when ok[i]
+ * is set.  The checks that read other things (its frame changes against
+ * the stop, the track, the catalog, the warnings) run every time. */
 typedef struct sg_valid_memo {
     int n;
     sg_surface *surf;

@@ -466,11 +466,11 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
         m = NULL;
     for (i = 0; i < sys->nsurf; i++) {
         const sg_surface *s = &sys->surf[i];
-        int place = i == 0 ? 1 : i == sys->nsurf - 1 ? 3 : 2;
-        /* Its own checks passed before for these bits at this place:
-         * they pass again, and what else can fail comes in the same
-         * order. */
-        int known = m && m->ok[i] == place && memcmp(&m->surf[i], s, sizeof *s) == 0;
+        /* Its own checks passed before for these bits at this place (a
+         * memo is for one number of surfaces, so i is the object, the
+         * image or neither as it was): they pass again, and what else
+         * can fail comes in the same order. */
+        int known = m && m->ok[i] && memcmp(&m->surf[i], s, sizeof *s) == 0;
         if (known) {
             m->reused++;
             goto frames;
@@ -593,7 +593,7 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
         if (m && !known) {
             /* Its own checks passed (the catalog's is the loop's last). */
             memcpy(&m->surf[i], s, sizeof *s);
-            m->ok[i] = (unsigned char)place;
+            m->ok[i] = 1;
         }
         if (s->mat.kind == SG_MAT_GLASS && cat) {
             const sg_glass *g = sg_catalog_find(cat, s->mat.name);

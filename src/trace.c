@@ -360,7 +360,7 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
     sg_prep_memo *m = sg_index_cache_prep(t->icache, t->n);
     mpfr_t q, tmp;
     double zg = 0.0;
-    int i, rc = SG_OK, prev_same = 0;
+    int i, rc = SG_OK;
     mpfr_init2(q, 256);
     mpfr_init2(tmp, 256);
     for (i = 0; i < t->n; i++) {
@@ -368,8 +368,9 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
         const sg_surface *s = &sys->surf[i];
         int same = m && memcmp(&m->surf[i], s, sizeof *s) == 0 &&
                    same_mp256(m->idx[i], idx[i]);
-        if (m && m->ok[i] && same && (i == 0 || prev_same)) {
-            /* Made from the same bits of surfaces i - 1 and i. */
+        /* ok[i] is cleared whenever surface i - 1's bits change, so an
+         * entry still marked was made from these surfaces i - 1 and i. */
+        if (m && m->ok[i] && same) {
             *p = m->sp[i];
             if (m->has_xf[i]) {
                 t->xf[i] = m->xf[i];
@@ -382,7 +383,8 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
                 break;
             if (m) {
                 if (!same) {
-                    /* Entry i + 1 was made from the old surface i. */
+                    /* Entry i + 1 was made from the old surface i (a
+                     * surface that fails below leaves its own copy old). */
                     memcpy(&m->surf[i], s, sizeof *s);
                     mpfr_set(m->idx[i], idx[i], MPFR_RNDN);
                     if (i + 1 < t->n)
@@ -397,7 +399,6 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
                 m->nsigned[i] = t->nsigned[i];
             }
         }
-        prev_same = same;
         /* Classic traces in the frame of the last surface a transfer
          * turned or moved (surface 1's until then): zg is the vertex's z
          * there. */
