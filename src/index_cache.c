@@ -35,7 +35,91 @@ struct sg_index_cache {
     /* The paraxial traces' states after each surface, for the next
      * tracer of the same design (paraxial.c). */
     struct sg_parax_memo *pm;
+    /* The last tracer's prepared surfaces (trace.c). */
+    sg_prep_memo *prep;
+    /* What the last validation found of each surface (system.c). */
+    sg_valid_memo *valid;
 };
+
+void sg_index_cache_reused(const sg_index_cache *cache, unsigned long *prep,
+                           unsigned long *valid)
+{
+    if (prep)
+        *prep = cache && cache->prep ? cache->prep->reused : 0;
+    if (valid)
+        *valid = cache && cache->valid ? cache->valid->reused : 0;
+}
+
+static void valid_free(sg_valid_memo *m)
+{
+    if (!m)
+        return;
+    free(m->surf);
+    free(m->ok);
+    free(m);
+}
+
+sg_valid_memo *sg_index_cache_valid(sg_index_cache *cache, int n)
+{
+    sg_valid_memo *m;
+    if (!cache || n < 1)
+        return NULL;
+    if (cache->valid && cache->valid->n == n)
+        return cache->valid;
+    valid_free(cache->valid);
+    cache->valid = m = calloc(1, sizeof *m);
+    if (!m)
+        return NULL;
+    m->n = n;
+    m->surf = calloc((size_t)n, sizeof *m->surf);
+    m->ok = calloc((size_t)n, 1);
+    if (!m->surf || !m->ok) {
+        valid_free(m);
+        cache->valid = NULL;
+    }
+    return cache->valid;
+}
+
+static void prep_free(sg_prep_memo *m)
+{
+    if (!m)
+        return;
+    free(m->surf);
+    free(m->idx); /* sg_mp_block_new: one allocation, nothing to clear */
+    free(m->sp);
+    free(m->xf);
+    free(m->nsigned);
+    free(m->ok);
+    free(m->has_xf);
+    free(m);
+}
+
+struct sg_prep_memo *sg_index_cache_prep(sg_index_cache *cache, int n)
+{
+    sg_prep_memo *m;
+    if (!cache || n < 1)
+        return NULL;
+    if (cache->prep && cache->prep->n == n)
+        return cache->prep;
+    prep_free(cache->prep);
+    cache->prep = m = calloc(1, sizeof *m);
+    if (!m)
+        return NULL;
+    m->n = n;
+    m->surf = calloc((size_t)n, sizeof *m->surf);
+    m->idx = sg_mp_block_new((size_t)n, 256);
+    m->sp = calloc((size_t)n, sizeof *m->sp);
+    m->xf = calloc((size_t)n, sizeof *m->xf);
+    m->nsigned = calloc((size_t)n, sizeof *m->nsigned);
+    m->ok = calloc((size_t)n, 1);
+    m->has_xf = calloc((size_t)n, 1);
+    if (!m->surf || !m->idx || !m->sp || !m->xf || !m->nsigned || !m->ok || !m->has_xf) {
+        prep_free(m);
+        cache->prep = NULL;
+        return NULL;
+    }
+    return m;
+}
 
 
 struct sg_parax_memo *sg_index_cache_parax(sg_index_cache *cache)
@@ -70,6 +154,10 @@ void sg_index_cache_clear(sg_index_cache *c)
     clear_entries(c);
     sg_parax_memo_free(c->pm);
     c->pm = NULL;
+    prep_free(c->prep);
+    c->prep = NULL;
+    valid_free(c->valid);
+    c->valid = NULL;
 }
 
 void sg_index_cache_free(sg_index_cache *c)

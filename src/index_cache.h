@@ -18,6 +18,19 @@ int sg_index_cache_glass(sg_index_cache *cache, const sg_system *sys, const sg_g
  * NULL without a cache or memory. */
 struct sg_parax_memo *sg_index_cache_parax(sg_index_cache *cache);
 
+/* The cache's prepared-surface memo (trace_internal.h) for n surfaces,
+ * made on first use and emptied when n changes; NULL without a cache or
+ * memory. */
+struct sg_prep_memo *sg_index_cache_prep(sg_index_cache *cache, int n);
+
+/* The cache's validation memo (internal.h) for n surfaces, as above. */
+sg_valid_memo *sg_index_cache_valid(sg_index_cache *cache, int n);
+
+/* How many surfaces the prepared-surface and validation memos gave so
+ * far (tests check the memos are used). */
+void sg_index_cache_reused(const sg_index_cache *cache, unsigned long *prep,
+                           unsigned long *valid);
+
 /* sg_indices_mpfr (trace_internal.h) with its glass indices from cache. */
 int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave,
                            mpfr_t *idx, sg_index_cache *cache, sg_diag *d);

@@ -31,6 +31,24 @@ int sg_system_glass_index_mpfr(const sg_system *sys, const sg_glass *g, mpfr_t o
  * the error, if any, without repeating the warnings. */
 int sg_system_check(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
 
+/* What sg_system_validate found of each surface last time (kept in an
+ * sg_index_cache, for one number of surfaces n): surface i's own checks,
+ * the ones that read only its bits and whether it is the object, the
+ * image or between them, passed for the surface bits surf[i] when ok[i]
+ * is set.  The checks that read other things (its frame changes against
+ * the stop, the track, the catalog, the warnings) run every time. */
+typedef struct sg_valid_memo {
+    int n;
+    sg_surface *surf;
+    unsigned char *ok;
+    unsigned long reused; /* surfaces whose own checks were skipped, for tests */
+} sg_valid_memo;
+
+/* sg_system_validate with a memo (NULL: none): the same result, message
+ * and warnings. */
+int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag *d,
+                            sg_valid_memo *m);
+
 /* Whether the transfer into surface i (i >= 1) from surface i-1's frame
  * is more than the thickness along z. */
 int sg_xfer_moves(const sg_system *sys, int i);

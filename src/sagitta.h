@@ -798,7 +798,10 @@ void sg_index_cache_stats(const sg_index_cache *c, unsigned long *hits,
  * whose start and surfaces up to the first changed one are as before
  * resumes there, with the same bits.  How many have resumed: */
 unsigned long sg_index_cache_resumes(const sg_index_cache *c);
-/* sg_tracer_new and sg_paraxial_compute with a cache (NULL: none). */
+/* sg_tracer_new and sg_paraxial_compute with a cache (NULL: none).  With
+ * a cache, sg_tracer_new_cached also leaves the validation's warnings (a
+ * glass used beyond its range) in d, so its caller need not validate
+ * the system a second time for them. */
 sg_tracer *sg_tracer_new_cached(const sg_system *sys, const sg_catalog *cat,
                                 const sg_trace_opts *opts, sg_index_cache *cache,
                                 sg_diag *d);

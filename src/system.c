@@ -345,6 +345,12 @@ enum { ZERO_MAX = 256 };
 
 int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
 {
+    return sg_system_validate_memo(sys, cat, d, NULL);
+}
+
+int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag *d,
+                            sg_valid_memo *m)
+{
     double track;
     int i, k, p, src, np;
     unsigned char zero_ok[ZERO_MAX][2];
@@ -456,8 +462,19 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
                         sg_param_check(pp, 0, 0.0, 1, NULL, 0) == SG_OK;
     }
     track = 0.0;
+    if (m && m->n != sys->nsurf)
+        m = NULL;
     for (i = 0; i < sys->nsurf; i++) {
         const sg_surface *s = &sys->surf[i];
+        /* Its own checks passed before for these bits at this place (a
+         * memo is for one number of surfaces, so i is the object, the
+         * image or neither as it was): they pass again, and what else
+         * can fail comes in the same order. */
+        int known = m && m->ok[i] && memcmp(&m->surf[i], s, sizeof *s) == 0;
+        if (known) {
+            m->reused++;
+            goto frames;
+        }
         if (!finite_or_inf_radius(s->radius))
             return sg_diag_set(d, SG_ERANGE, "surface %d: radius is not a number", i);
         if ((int)s->type < SG_SURF_STANDARD || (int)s->type >= SG_SURF_NTYPES)
@@ -470,11 +487,14 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
             if (rc != SG_OK)
                 return rc;
         }
+    frames:
         {
             int rc = check_frames(sys, i, d);
             if (rc != SG_OK)
                 return rc;
         }
+        if (known)
+            goto track;
         /* Beyond this a trace's squares overflow: such a surface is flat
          * to every digit, and "inf" says so. */
         if (isfinite(s->radius) && fabs(s->radius) > SG_MAX_LEN)
@@ -485,6 +505,7 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
             return sg_diag_set(d, SG_ERANGE,
                                "surface %d: thickness %g is beyond %g lens units", i,
                                s->thickness, SG_MAX_LEN);
+    track:
         if (i > 0 && i < sys->nsurf - 1) {
             /* Decenters move the rays as far as thicknesses do. */
             track += fabs(s->thickness) + fabs(s->before.dx) + fabs(s->before.dy) +
@@ -494,6 +515,8 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
                                    "surface %d: thickness: the system is longer than %g lens "
                                    "units from surface 1 to here", i, SG_MAX_LEN);
         }
+        if (known)
+            goto warnings;
         if (i > 0 && i < sys->nsurf - 1 && !isfinite(s->thickness))
             return sg_diag_set(d, SG_ERANGE, "surface %d: thickness must be finite", i);
         if (i == 0 && isnan(s->thickness))
@@ -555,6 +578,7 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
                                i, s->mat.index, s->mat.vd, s->mat.dpgf, SG_MODEL_ND_MIN,
                                SG_MODEL_ND_MAX, SG_MODEL_VD_MIN, SG_MODEL_VD_MAX,
                                SG_MODEL_DPGF_MAX);
+    warnings:
         if (s->mat.kind == SG_MAT_MODEL)
             for (k = 0; k < sys->nwave; k++)
                 if (!(sys->wave[k].um >= 0.4 && sys->wave[k].um <= 0.75))
@@ -562,10 +586,15 @@ int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
                                  "surface %d: wavelength %g um is outside 0.4 to 0.75 um, "
                                  "where the model glass is fitted",
                                  i, sys->wave[k].um);
-        if (s->mat.kind == SG_MAT_MIRROR && (i == 0 || i == sys->nsurf - 1))
+        if (!known && s->mat.kind == SG_MAT_MIRROR && (i == 0 || i == sys->nsurf - 1))
             return sg_diag_set(d, SG_ENONPHYS,
                                "surface %d: the %s cannot be a mirror", i,
                                i == 0 ? "object" : "image");
+        if (m && !known) {
+            /* Its own checks passed (the catalog's is the loop's last). */
+            memcpy(&m->surf[i], s, sizeof *s);
+            m->ok[i] = 1;
+        }
         if (s->mat.kind == SG_MAT_GLASS && cat) {
             const sg_glass *g = sg_catalog_find(cat, s->mat.name);
             if (!g)

@@ -283,65 +283,122 @@ static const sg_xfer *prepare_xfer(sg_tracer *t, int i)
     return x;
 }
 
+/* Surface i's sg_sprep but zg, its transfer and its signed index, from
+ * surfaces i - 1 and i and their indices only (sg_prep_memo relies on it). */
+static int prepare_one(sg_tracer *t, int i, mpfr_t *idx, mpfr_t q, mpfr_t tmp, sg_diag *d)
+{
+    const sg_system *sys = t->sys;
+    const sg_surface *s = &sys->surf[i];
+    sg_sprep *p = &t->sp[i];
+    int k;
+    memset(p, 0, sizeof *p);
+    p->R = (s->radius == 0.0 || isinf(s->radius)) ? INFINITY : s->radius;
+    p->c = isfinite(p->R) ? 1.0 / p->R : 0.0;
+    p->k1 = dd_two_sum(1.0, s->conic);
+    p->T = i > 0 ? sys->surf[i - 1].thickness : 0.0;
+    p->nasph = 0;
+    if (s->type == SG_SURF_EVENASPH)
+        for (k = 0; k < SG_NASPH; k++) {
+            p->a[k] = s->asph[k];
+            if (s->asph[k] != 0.0)
+                p->nasph = k + 1;
+        }
+    if (p->nasph)
+        p->shape = SHAPE_ASPH;
+    else if (isfinite(p->R))
+        p->shape = SHAPE_CONIC;
+    else
+        p->shape = SHAPE_PLANE;
+    if (sg_shape_ops_of(s->type)) {
+        int rc = sg_shape_prepare(s, &t->shp[i], i, d);
+        if (rc != SG_OK)
+            return rc;
+        /* Its base conic (the y-z section's for a toroid or biconic)
+         * seeds the root, as an asphere's does. */
+        p->shp = &t->shp[i];
+        p->shape = SHAPE_GEN;
+        p->nasph = 0;
+    }
+    if (s->type == SG_SURF_COORDBRK) {
+        p->R = INFINITY;
+        p->c = 0.0;
+        p->k1 = dd_from(1.0);
+        p->nasph = 0;
+        p->shape = SHAPE_PLANE;
+    }
+    p->mirror = s->type != SG_SURF_COORDBRK && s->mat.kind == SG_MAT_MIRROR;
+    p->sd = s->sd_fixed && s->type != SG_SURF_COORDBRK ? s->semi_diameter : 0.0;
+    p->aper = s->type == SG_SURF_COORDBRK ? 0 : (int)s->aperture;
+    p->ap_a = s->aperture == SG_APERTURE_CIRCULAR || s->aperture == SG_OBSCURATION_CIRCULAR
+                  ? s->ap_rmin : s->ap_xhalf;
+    p->ap_b = s->aperture == SG_APERTURE_CIRCULAR || s->aperture == SG_OBSCURATION_CIRCULAR
+                  ? s->ap_rmax : s->ap_yhalf;
+    p->ap_dx = s->ap_xdec;
+    p->ap_dy = s->ap_ydec;
+    p->xf = i >= 2 && sg_xfer_moves(sys, i) ? prepare_xfer(t, i) : NULL;
+    t->nsigned[i] = mpfr_get_d(idx[i], MPFR_RNDN);
+    if (i > 0) {
+        mpfr_abs(q, idx[i - 1], MPFR_RNDN);
+        mpfr_abs(tmp, idx[i], MPFR_RNDN);
+        if (mpfr_zero_p(tmp))
+            return sg_diag_set(d, SG_ENONPHYS, "surface %d: index is zero", i);
+        mpfr_div(q, q, tmp, MPFR_RNDN);
+        p->mu = dd_from_mpfr(q, tmp);
+        p->mu2 = dd_sqr(p->mu);
+    }
+    return SG_OK;
+}
+
+static int same_mp256(mpfr_srcptr a, mpfr_srcptr b)
+{
+    return mpfr_equal_p(a, b) && mpfr_signbit(a) == mpfr_signbit(b);
+}
+
 static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
 {
     const sg_system *sys = t->sys;
+    sg_prep_memo *m = sg_index_cache_prep(t->icache, t->n);
     mpfr_t q, tmp;
     double zg = 0.0;
-    int i, k;
+    int i, rc = SG_OK;
     mpfr_init2(q, 256);
     mpfr_init2(tmp, 256);
     for (i = 0; i < t->n; i++) {
-        const sg_surface *s = &sys->surf[i];
         sg_sprep *p = &t->sp[i];
-        memset(p, 0, sizeof *p);
-        p->R = (s->radius == 0.0 || isinf(s->radius)) ? INFINITY : s->radius;
-        p->c = isfinite(p->R) ? 1.0 / p->R : 0.0;
-        p->k1 = dd_two_sum(1.0, s->conic);
-        p->T = i > 0 ? sys->surf[i - 1].thickness : 0.0;
-        p->nasph = 0;
-        if (s->type == SG_SURF_EVENASPH)
-            for (k = 0; k < SG_NASPH; k++) {
-                p->a[k] = s->asph[k];
-                if (s->asph[k] != 0.0)
-                    p->nasph = k + 1;
+        const sg_surface *s = &sys->surf[i];
+        int same = m && memcmp(&m->surf[i], s, sizeof *s) == 0 &&
+                   same_mp256(m->idx[i], idx[i]);
+        /* ok[i] is cleared whenever surface i - 1's bits change, so an
+         * entry still marked was made from these surfaces i - 1 and i. */
+        if (m && m->ok[i] && same) {
+            *p = m->sp[i];
+            if (m->has_xf[i]) {
+                t->xf[i] = m->xf[i];
+                p->xf = &t->xf[i];
             }
-        if (p->nasph)
-            p->shape = SHAPE_ASPH;
-        else if (isfinite(p->R))
-            p->shape = SHAPE_CONIC;
-        else
-            p->shape = SHAPE_PLANE;
-        if (sg_shape_ops_of(s->type)) {
-            int rc = sg_shape_prepare(s, &t->shp[i], i, d);
-            if (rc != SG_OK) {
-                mpfr_clear(q);
-                mpfr_clear(tmp);
-                return rc;
+            t->nsigned[i] = m->nsigned[i];
+            m->reused++;
+        } else {
+            if ((rc = prepare_one(t, i, idx, q, tmp, d)) != SG_OK)
+                break;
+            if (m) {
+                if (!same) {
+                    /* Entry i + 1 was made from the old surface i (a
+                     * surface that fails below leaves its own copy old). */
+                    memcpy(&m->surf[i], s, sizeof *s);
+                    mpfr_set(m->idx[i], idx[i], MPFR_RNDN);
+                    if (i + 1 < t->n)
+                        m->ok[i + 1] = 0;
+                }
+                m->ok[i] = !p->shp;
+                m->sp[i] = *p;
+                m->sp[i].xf = NULL;
+                m->has_xf[i] = p->xf != NULL;
+                if (p->xf)
+                    m->xf[i] = *p->xf;
+                m->nsigned[i] = t->nsigned[i];
             }
-            /* Its base conic (the y-z section's for a toroid or biconic)
-             * seeds the root, as an asphere's does. */
-            p->shp = &t->shp[i];
-            p->shape = SHAPE_GEN;
-            p->nasph = 0;
         }
-        if (s->type == SG_SURF_COORDBRK) {
-            p->R = INFINITY;
-            p->c = 0.0;
-            p->k1 = dd_from(1.0);
-            p->nasph = 0;
-            p->shape = SHAPE_PLANE;
-        }
-        p->mirror = s->type != SG_SURF_COORDBRK && s->mat.kind == SG_MAT_MIRROR;
-        p->sd = s->sd_fixed && s->type != SG_SURF_COORDBRK ? s->semi_diameter : 0.0;
-        p->aper = s->type == SG_SURF_COORDBRK ? 0 : (int)s->aperture;
-        p->ap_a = s->aperture == SG_APERTURE_CIRCULAR || s->aperture == SG_OBSCURATION_CIRCULAR
-                      ? s->ap_rmin : s->ap_xhalf;
-        p->ap_b = s->aperture == SG_APERTURE_CIRCULAR || s->aperture == SG_OBSCURATION_CIRCULAR
-                      ? s->ap_rmax : s->ap_yhalf;
-        p->ap_dx = s->ap_xdec;
-        p->ap_dy = s->ap_ydec;
-        p->xf = i >= 2 && sg_xfer_moves(sys, i) ? prepare_xfer(t, i) : NULL;
         /* Classic traces in the frame of the last surface a transfer
          * turned or moved (surface 1's until then): zg is the vertex's z
          * there. */
@@ -350,23 +407,10 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
         else if (i >= 2)
             zg += p->T;
         p->zg = i >= 1 ? zg : -p->T;
-        t->nsigned[i] = mpfr_get_d(idx[i], MPFR_RNDN);
-        if (i > 0) {
-            mpfr_abs(q, idx[i - 1], MPFR_RNDN);
-            mpfr_abs(tmp, idx[i], MPFR_RNDN);
-            if (mpfr_zero_p(tmp)) {
-                mpfr_clear(q);
-                mpfr_clear(tmp);
-                return sg_diag_set(d, SG_ENONPHYS, "surface %d: index is zero", i);
-            }
-            mpfr_div(q, q, tmp, MPFR_RNDN);
-            p->mu = dd_from_mpfr(q, tmp);
-            p->mu2 = dd_sqr(p->mu);
-        }
     }
     mpfr_clear(q);
     mpfr_clear(tmp);
-    return SG_OK;
+    return rc;
 }
 
 sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
@@ -417,7 +461,10 @@ static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_tra
     }
     if (!sys)
         return sg_diag_set(d, SG_EINVAL, "tracer: no system");
-    rc = sg_system_check(sys, cat, d);
+    /* With a cache (the editor, which validates nowhere else) the
+     * warnings go to the caller too; others validated before. */
+    rc = cache ? sg_system_validate_memo(sys, cat, d, sg_index_cache_valid(cache, sys->nsurf))
+               : sg_system_check(sys, cat, d);
     if (rc != SG_OK)
         return rc;
     t = calloc(1, sizeof *t);

@@ -61,6 +61,23 @@ typedef struct sg_sprep {
     const sg_shape *shp; /* SHAPE_GEN: the shape and its ops */
 } sg_sprep;
 
+/* The prepared surfaces of the last tracer made with an sg_index_cache,
+ * for the next one (prepare_surfaces in trace.c).  Surface i's sg_sprep
+ * (but zg, the one sum over surfaces), transfer and signed index are read
+ * from surfaces i - 1 and i and their 256-bit indices only, so entry i is
+ * reused when those are the same bits as when it was made.  Surfaces with
+ * a shape of their own (sg_shape_ops_of) are always prepared afresh. */
+typedef struct sg_prep_memo {
+    int n;
+    sg_surface *surf; /* the surfaces the entries were made from */
+    mpfr_t *idx;      /* their indices, 256 bits, one block */
+    sg_sprep *sp;     /* xf and shp not kept: has_xf says whether xf is set */
+    sg_xfer *xf;
+    double *nsigned;
+    unsigned char *ok, *has_xf;
+    unsigned long reused; /* surfaces taken from the memo, for tests */
+} sg_prep_memo;
+
 /* 1 + conic is exactly 1 on spheres, where a product by it is the other
  * factor itself and is skipped. */
 static inline int sg_sprep_sphere(const sg_sprep *s)

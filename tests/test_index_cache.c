@@ -6,12 +6,18 @@
  * tracers of every method at several wavelengths are made with the cache
  * the earlier edits filled and without it, and their rows, indices and
  * paraxial data compared bit for bit; and a tracer's paraxial data at the
- * primary wavelength, which the editor uses, with sg_paraxial_compute's. */
+ * primary wavelength, which the editor uses, with sg_paraxial_compute's.
+ * The cache also keeps each surface's validation and prepared surface:
+ * edits of the conic, frame changes, apertures (some invalid), clipping,
+ * asphere terms and wavelengths beyond a glass's range check that a
+ * cached tracer's error, message and warnings are sg_system_validate's
+ * and its rows a fresh tracer's. */
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
+#include "index_cache.h"
 #include "testutil.h"
 
 static uint64_t rng = UINT64_C(0x2545f4914f6cdd1d);
@@ -36,7 +42,35 @@ static void edit(sg_system *sys)
 {
     int i = 1 + (int)(next() % (uint64_t)(sys->nsurf - 2));
     sg_surface *s = &sys->surf[i];
-    switch (next() % 8) {
+    switch (next() % 14) {
+    case 8:
+        s->conic = next() % 3 ? -0.5 + uniform() : 0.0;
+        break;
+    case 9:
+        /* A frame change before (from surface 2 on) or after. */
+        if (i >= 2 && next() % 2)
+            s->before.tx = next() % 3 ? 0.5 * (uniform() - 0.5) : 0.0;
+        else
+            s->after.dy = next() % 3 ? 0.1 * (uniform() - 0.5) : 0.0;
+        break;
+    case 10:
+        /* A circular aperture, invalid one time in four (rmax <= rmin). */
+        s->aperture = next() % 3 ? SG_APERTURE_CIRCULAR : SG_APERTURE_NONE;
+        s->ap_rmin = next() % 4 ? 0.0 : 50.0;
+        s->ap_rmax = 20.0 + 10.0 * uniform();
+        break;
+    case 11:
+        s->sd_fixed = !s->sd_fixed;
+        s->semi_diameter = 5.0 + 20.0 * uniform();
+        break;
+    case 12:
+        s->type = next() % 2 ? SG_SURF_EVENASPH : SG_SURF_STANDARD;
+        s->asph[1] = 1e-7 * (uniform() - 0.5);
+        break;
+    case 13:
+        /* Beyond every glass's range: warnings, then back. */
+        sys->wave[next() % (uint64_t)sys->nwave].um = next() % 2 ? 3.0 : 0.55;
+        break;
     case 0:
         if (isfinite(s->radius) && s->radius != 0.0)
             s->radius *= 1.0 + 0.01 * (uniform() - 0.5);
@@ -98,6 +132,18 @@ static int compare(const sg_system *sys, const sg_catalog *cat, sg_index_cache *
             assert_int_equal(tf != NULL, tc != NULL);
             assert_int_equal(df.code, dc.code);
             assert_string_equal(df.msg, dc.msg);
+            {
+                /* With a cache the validation's warnings come too, as
+                 * sg_system_validate gives them. */
+                sg_diag dv;
+                int k;
+                sg_diag_clear(&dv);
+                if (sg_system_validate(sys, cat, &dv) != SG_OK)
+                    assert_string_equal(dv.msg, dc.msg);
+                assert_int_equal(dv.nwarn, dc.nwarn);
+                for (k = 0; k < dv.nwarn && k < SG_DIAG_MAXWARN; k++)
+                    assert_string_equal(dv.warn[k], dc.warn[k]);
+            }
             if (!tf)
                 continue;
             assert_int_equal(sg_tracer_nsurf(tf), sg_tracer_nsurf(tc));
@@ -156,14 +202,30 @@ static void run_design(const char *file, int nedit)
     assert_non_null(ic);
     n += compare(sys, cat, ic);
     for (k = 0; k < nedit; k++) {
+        sg_system *before = sg_system_clone(sys);
+        int got;
+        assert_non_null(before);
         edit(sys);
-        n += compare(sys, cat, ic);
+        got = compare(sys, cat, ic);
+        /* An edit that no tracer accepts is compared, then undone, so
+         * that the next ones are traced. */
+        if (got == 0)
+            assert_int_equal(sg_system_assign(sys, before), SG_OK);
+        sg_system_free(before);
+        n += got;
     }
     sg_index_cache_stats(ic, &hits, &misses);
     print_message("# %s: %d edits, %d tracer pairs, %lu indices from the cache, %lu computed\n",
                   file, nedit, n, hits, misses);
     /* The cache was used, or the comparison proved nothing. */
     assert_true(hits > misses);
+    {
+        unsigned long prep, valid;
+        sg_index_cache_reused(ic, &prep, &valid);
+        print_message("# %lu prepared surfaces and %lu validations from the cache\n", prep,
+                      valid);
+        assert_true(prep > 0 && valid > 0);
+    }
     sg_index_cache_free(ic);
     sg_system_free(sys);
     sg_catalog_free(cat);

@@ -105,12 +105,8 @@ int compute_run(compute *c, const sg_system *sys, unsigned long id,
             c->t_id = id;
             c->t_opts = *o;
             /* First-order data at the primary wavelength, as Zemax and
-             * "sagitta paraxial" give them, whatever the ray's. */
-            /* The tracer keeps no warnings; the checks that raise them
-             * (a glass used beyond its range) run here, as the CLI's do. */
-            sg_diag_clear(&d);
-            if (sg_system_validate(sys, cat, &d) == SG_OK && d.nwarn > 0 && !c->warn[0])
-                snprintf(c->warn, sizeof c->warn, "%s", d.warn[0]);
+             * "sagitta paraxial" give them, whatever the ray's.  (The
+             * validation's warnings came with the tracer, in build.) */
             sg_diag_clear(&d);
             c->par_wave = sys->primary_wave;
             if (o->wave < 0 || o->wave == sys->primary_wave) {
