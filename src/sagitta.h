@@ -762,6 +762,8 @@ void sg_setvig_opts_init(sg_setvig_opts *o);
 /* out[k] for every field k.  o NULL takes the defaults. */
 int sg_set_vignetting(const sg_system *sys, const sg_catalog *cat, const sg_setvig_opts *o,
                       sg_vigfactors *out, sg_diag *d);
+/* Sets every field's factors to vf[field]. */
+void sg_set_vignetting_apply(sg_system *sys, const sg_vigfactors *vf);
 
 /* A prepared system: indices, paraxial data and work buffers, computed
  * once so the per-ray path allocates nothing.  A tracer is used by one

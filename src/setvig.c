@@ -181,3 +181,15 @@ done:
     sg_system_free(plain);
     return rc;
 }
+
+void sg_set_vignetting_apply(sg_system *sys, const sg_vigfactors *vf)
+{
+    int i;
+    for (i = 0; i < sys->nfield; i++) {
+        sys->field[i].vdx = vf[i].vdx;
+        sys->field[i].vdy = vf[i].vdy;
+        sys->field[i].vcx = vf[i].vcx;
+        sys->field[i].vcy = vf[i].vcy;
+        sys->field[i].van = vf[i].van;
+    }
+}

@@ -1133,3 +1133,14 @@ done:
     cli_design_free(cat, sys);
     return rc;
 }
+
+const char *cli_shortest(double v, char *buf, size_t n)
+{
+    int prec;
+    for (prec = 1; prec <= 17; prec++) {
+        snprintf(buf, n, "%.*g", prec, v);
+        if (strtod(buf, NULL) == v)
+            break;
+    }
+    return buf;
+}

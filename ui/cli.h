@@ -31,6 +31,8 @@ typedef struct cli_command {
 
 int cmd_trace(int argc, char **argv);
 int cmd_paraxial(int argc, char **argv);
+/* The shortest %g text that reads back as v, in buf. */
+const char *cli_shortest(double v, char *buf, size_t n);
 int cmd_semidiam(int argc, char **argv);
 int cmd_vignetting(int argc, char **argv);
 /* Further subcommands live in their own files. */

@@ -11,17 +11,6 @@
 #include "cli.h"
 #include "report.h"
 
-/* The shortest %g text that reads back as v. */
-static const char *shortest(double v, char *buf, size_t n)
-{
-    int prec;
-    for (prec = 1; prec <= 17; prec++) {
-        snprintf(buf, n, "%.*g", prec, v);
-        if (strtod(buf, NULL) == v)
-            break;
-    }
-    return buf;
-}
 
 static void semidiam_help(FILE *f)
 {
@@ -127,8 +116,8 @@ int cmd_semidiam(int argc, char **argv)
         for (i = 1; i < sys->nsurf; i++) {
             char a[40], b[40];
             fprintf(f, "%s\n    {\"surface\": %d, \"auto\": %s, \"set\": %s, \"fixed\": %s}",
-                    i > 1 ? "," : "", i, shortest(sd[i], a, sizeof a),
-                    shortest(sys->surf[i].semi_diameter, b, sizeof b),
+                    i > 1 ? "," : "", i, cli_shortest(sd[i], a, sizeof a),
+                    cli_shortest(sys->surf[i].semi_diameter, b, sizeof b),
                     sys->surf[i].sd_fixed ? "true" : "false");
         }
         fputs("\n  ]\n}\n", f);
@@ -146,8 +135,8 @@ int cmd_semidiam(int argc, char **argv)
                 note = "fixed below the rays: vignettes";
             else if (s->sd_fixed)
                 note = "fixed";
-            fprintf(f, "%-8d %24s %24s  %s\n", i, shortest(sd[i], a, sizeof a),
-                    s->semi_diameter > 0.0 ? shortest(s->semi_diameter, b, sizeof b) : "-",
+            fprintf(f, "%-8d %24s %24s  %s\n", i, cli_shortest(sd[i], a, sizeof a),
+                    s->semi_diameter > 0.0 ? cli_shortest(s->semi_diameter, b, sizeof b) : "-",
                     note);
         }
     }

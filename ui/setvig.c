@@ -40,17 +40,6 @@ static const cli_opt setvig_opts[] = {
     { NULL, 0, 0, 0 }
 };
 
-/* The shortest %g text that reads back as v. */
-static const char *shortest(double v, char *buf, size_t n)
-{
-    int prec;
-    for (prec = 1; prec <= 17; prec++) {
-        snprintf(buf, n, "%.*g", prec, v);
-        if (strtod(buf, NULL) == v)
-            break;
-    }
-    return buf;
-}
 
 int cmd_vignetting(int argc, char **argv)
 {
@@ -132,13 +121,7 @@ int cmd_vignetting(int argc, char **argv)
     if (save) {
         /* The design is written first: a table on the screen for a design
          * that was not saved would mislead. */
-        for (i = 0; i < sys->nfield; i++) {
-            sys->field[i].vdx = vf[i].vdx;
-            sys->field[i].vdy = vf[i].vdy;
-            sys->field[i].vcx = vf[i].vcx;
-            sys->field[i].vcy = vf[i].vcy;
-            sys->field[i].van = vf[i].van;
-        }
+        sg_set_vignetting_apply(sys, vf);
         sg_diag_clear(&d);
         if ((rc = sg_design_save(sys, save, &d)) != SG_OK) {
             cli_error("%s", d.msg[0] ? d.msg : sg_strerror(rc));
@@ -163,9 +146,9 @@ int cmd_vignetting(int argc, char **argv)
             char a[5][40];
             fprintf(f, "%s\n    {\"field\": %d, \"vdx\": %s, \"vdy\": %s, \"vcx\": %s, "
                        "\"vcy\": %s, \"van\": %s, \"grid_rays_passing\": %ld}",
-                    i ? "," : "", i + 1, shortest(vf[i].vdx, a[0], 40),
-                    shortest(vf[i].vdy, a[1], 40), shortest(vf[i].vcx, a[2], 40),
-                    shortest(vf[i].vcy, a[3], 40), shortest(vf[i].van, a[4], 40), vf[i].pass);
+                    i ? "," : "", i + 1, cli_shortest(vf[i].vdx, a[0], 40),
+                    cli_shortest(vf[i].vdy, a[1], 40), cli_shortest(vf[i].vcx, a[2], 40),
+                    cli_shortest(vf[i].vcy, a[3], 40), cli_shortest(vf[i].van, a[4], 40), vf[i].pass);
         }
         fputs("\n  ]\n}\n", f);
     } else {

@@ -99,7 +99,7 @@ const char *ct_design(const char *name, const char *surfaces)
     return p;
 }
 
-static char *slurp(const char *path)
+char *ct_read(const char *path)
 {
     FILE *f = fopen(path, "rb");
     char *buf = NULL;
@@ -150,8 +150,8 @@ void ct_runv(ct_result *r, const char *const *args)
         r->maxrss_kb = ru.ru_maxrss;
     }
     r->code = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
-    r->out = slurp(outp);
-    r->err = slurp(errp);
+    r->out = ct_read(outp);
+    r->err = ct_read(errp);
 }
 
 void ct_run(ct_result *r, ...)

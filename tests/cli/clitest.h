@@ -25,6 +25,8 @@ void ct_cleanup(void);
 const char *ct_file(const char *name, const char *text);
 /* A path in the temporary directory that ct_cleanup will remove. */
 const char *ct_path(const char *name);
+/* A whole file as a NUL-terminated string (free it); fails the test if it cannot be read. */
+char *ct_read(const char *path);
 
 /* Writes a design file NAME whose "surfaces" array is the JSON text
  * surfaces; one wavelength (0.55 um), fields 0 and 5 degrees, EPD 10, no

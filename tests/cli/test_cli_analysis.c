@@ -393,24 +393,6 @@ static void test_bench_clock(void **state)
     ct_free(&r);
 }
 
-static char *read_text(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    char *buf;
-    long n;
-    if (!f)
-        fail_msg("cannot read %s", path);
-    fseek(f, 0, SEEK_END);
-    n = ftell(f);
-    rewind(f);
-    buf = malloc((size_t)n + 1);
-    assert_non_null(buf);
-    assert_int_equal(fread(buf, 1, (size_t)n, f), (size_t)n);
-    buf[n] = '\0';
-    fclose(f);
-    return buf;
-}
-
 /* "sagitta vignetting" (Zemax's Set Vignetting) on a flat stop (EPD 10)
  * with a fixed semi-diameter of 2 at 20 behind it: at 5 degrees the pupil
  * that passes is the disc of radius 0.4 about (0, -20 tan 5 / 5), so
@@ -462,13 +444,13 @@ static void test_vignetting_command(void **state)
     if (r.code != 0)
         fail_msg("edit --batch (plain save): exit %d: %s", r.code, r.err);
     ct_free(&r);
-    a = read_text(saved);
-    b = read_text(ct_path("ed_set.json"));
+    a = ct_read(saved);
+    b = ct_read(ct_path("ed_set.json"));
     assert_string_equal(a, b);
     free(a);
     free(b);
-    a = read_text(ct_path("ed_undo.json"));
-    b = read_text(ct_path("ed_plain.json"));
+    a = ct_read(ct_path("ed_undo.json"));
+    b = ct_read(ct_path("ed_plain.json"));
     assert_string_equal(a, b);
     free(a);
     free(b);

@@ -836,13 +836,7 @@ static int c_field(ed *e, args *a)
         if (!begin(e, e->row))
             return ED_HANDLED | ED_ERROR;
         s = e->doc.sys;
-        for (i = 0; i < s->nfield; i++) {
-            s->field[i].vdx = vf[i].vdx;
-            s->field[i].vdy = vf[i].vdy;
-            s->field[i].vcx = vf[i].vcx;
-            s->field[i].vcy = vf[i].vcy;
-            s->field[i].van = vf[i].van;
-        }
+        sg_set_vignetting_apply(s, vf);
         return end(e, "vignetting factors set for %d field%s from the apertures (field N shows "
                    "them)", s->nfield, s->nfield == 1 ? "" : "s");
     }
