@@ -11,7 +11,8 @@
  *   - double, with a bound on the second derivatives: classic's trace, the
  *     Newton seeds of precise, and the sizes that scale bounds;
  *   - double-double, with bounds on the rounding of f and of its
- *     gradient: the precise method (lane by lane; lanes stay independent);
+ *     gradient: the precise method, which evaluates it on all lanes at
+ *     once through shape_vdd.h's vector twin of each, to the same bits;
  *   - MPFR at any precision: the mpfr method and precise's rescue.
  *
  * shape.c registers them (sg_shape_ops_of) and holds what they share: the

@@ -1,16 +1,18 @@
 /*
- * shape_vdd.h - the Zernike and XY polynomial shapes (a rotational conic
- * and even polynomial plus a polynomial in x and y) in double-double on
+ * shape_vdd.h - the double-double sags of the shapes beyond the even
+ * asphere (odd asphere, toroid, biconic, Zernike, XY polynomial) on
  * SG_VL lanes at once.
  *
- * Each function repeats shape.c's scalar one (sg_rot_dd, sg_p2_dd,
- * sg_rot_p2_dd) operation for operation in the vector twins of dd.h's
- * operations, so every lane gets the bits the scalar code gives it: the
- * precise trace takes them from here instead of calling the shape's ops
- * lane by lane.  A lane outside the conic is marked in *bad and its
- * numbers are not to be read, as the scalar code returns 0 there.
- * tests/test_shapes.c compares the two bit for bit.  Included by the
- * vector trace only, so each instruction set gets its own copy.
+ * Each function repeats its scalar twin (shape.c's sg_rot_dd, sg_p2_dd,
+ * sg_rot_p2_dd; the sag_dd of shape_odd.c, shape_toroid.c and
+ * shape_biconic.c) operation for operation in the vector twins of dd.h's
+ * operations, branches becoming selections, so every lane gets the bits
+ * the scalar code gives it: the precise trace takes them from here
+ * instead of calling the shape's ops lane by lane.  A lane outside the
+ * shape's domain is marked in *bad and its numbers are not to be read,
+ * as the scalar code returns 0 there.  tests/test_shapes.c compares the
+ * two bit for bit.  Included by the vector trace only, so each
+ * instruction set gets its own copy.
  */
 #ifndef SG_SHAPE_VDD_H
 #define SG_SHAPE_VDD_H
@@ -39,19 +41,12 @@ static inline vdd svd_div_d(vdd a, double b)
     return vdd_fast_two_sum(q1, r / bv);
 }
 
-/* Whether a shape's double-double sag is sg_rot_p2_dd with nothing this
- * file lacks (odd terms). */
-static inline int svd_handles(const sg_shape *s)
-{
-    return s->ops && s->ops->sag_dd == sg_rot_p2_dd && s->nodd == 0;
-}
-
-/* sg_rot_dd without odd terms. */
+/* sg_rot_dd. */
 static inline void svd_rot(const sg_shape *s, vdd r2, vdd *z, vdd *w, vd *ez, vd *ew, vm *bad)
 {
     vdd zz = vdd_from(vd_set(0.0)), ww = vdd_from(vd_set(0.0)), rk = vdd_from(vd_set(1.0));
     vd mz = vd_set(0.0), mw = vd_set(0.0), r2d = r2.hi;
-    int k, n = s->na;
+    int k, n = s->na + s->nodd;
     *ez = vd_set(0.0);
     *ew = vd_set(0.0);
     *bad = vm_set(0);
@@ -76,6 +71,32 @@ static inline void svd_rot(const sg_shape *s, vdd r2, vdd *z, vdd *w, vd *ez, vd
         mz += vd_abs(t.hi * r2d);
         mw += vd_abs(t.hi) * (2.0 * k + 2.0);
         rk = vdd_mul(rk, r2);
+    }
+    if (s->nodd) {
+        /* The scalar code's branch on r^2 > 0 is a selection per lane;
+         * 1 / r^2 is formed everywhere and kept only there. */
+        vdd r = vdd_sqrt(r2), rp = vdd_from(vd_set(1.0)),
+            rm = vdd_from(vd_set(0.0));
+        vm pos = (vm)(r2d > 0.0);
+        rm = vdd_sel(pos, svd_div(vdd_from(vd_set(1.0)), r2), rm);
+        for (k = 0; k < s->nodd; k++) {
+            vdd t, tw, wz;
+            vd mwz;
+            rp = vdd_mul(rp, r);
+            t = vdd_mul_d(rp, vd_set(s->odd[k]));
+            zz = vdd_add(zz, t);
+            mz += vd_abs(t.hi);
+            tw = vdd_mul(vdd_mul_d(t, vd_set(k + 1.0)), rm);
+            /* At r = 0 only the r^2 term has a slope over r. */
+            wz = ww;
+            mwz = mw;
+            if (k == 1) {
+                wz = vdd_add(ww, vdd_from(vd_set(2.0 * s->odd[k])));
+                mwz = mw + fabs(2.0 * s->odd[k]);
+            }
+            ww = vdd_sel(pos, vdd_add(ww, tw), wz);
+            mw = vsel(pos, mw + vd_abs(tw.hi), mwz);
+        }
     }
     *ez += (16.0 + 6.0 * n) * DD_U * mz;
     *ew += (16.0 + 6.0 * n) * DD_U * mw;
@@ -158,6 +179,114 @@ static inline void svd_rot_p2(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2],
     *ez += ezp + 2.0 * DD_U * (vd_abs(z->hi) + vd_abs(zp.hi));
     *eg = (ew + 8.0 * DD_U * vd_abs(w.hi)) * m + egp +
           2.0 * DD_U * (vd_abs(g[0].hi) + vd_abs(g[1].hi) + vd_abs(gp[0].hi) + vd_abs(gp[1].hi));
+}
+
+/* shape_odd.c's odd_dd. */
+static inline void svd_odd(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd *ez, vd *eg,
+                           vm *bad)
+{
+    vdd r2 = vdd_add(vdd_sqr(x), vdd_sqr(y)), w;
+    vd ew, m = vd_fmax(vd_abs(x.hi), vd_abs(y.hi));
+    svd_rot(s, r2, z, &w, ez, &ew, bad);
+    *ez += 4.0 * DD_U * vd_abs(w.hi) * r2.hi;
+    g[0] = vdd_mul(w, x);
+    g[1] = vdd_mul(w, y);
+    *eg = (ew + 8.0 * DD_U * vd_abs(w.hi)) * m;
+}
+
+/* shape_toroid.c's tor_dd. */
+static inline void svd_tor(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd *ez, vd *eg,
+                           vm *bad)
+{
+    vdd y2 = vdd_sqr(y), zy, w, zp, u, disc, q, zt;
+    vd ezy, ew, ezp, eu, cond, aq;
+    svd_rot(s, y2, &zy, &w, &ezy, &ew, bad);
+    ezy += 4.0 * DD_U * vd_abs(w.hi) * y2.hi;
+    zp = vdd_mul(w, y);
+    ezp = (ew + 4.0 * DD_U * vd_abs(w.hi)) * vd_abs(y.hi);
+    if (!isfinite(s->Rx)) {
+        *z = zy;
+        g[0] = vdd_from(vd_set(0.0));
+        g[1] = zp;
+        *ez = ezy;
+        *eg = ezp;
+        return;
+    }
+    u = vdd_sub(vdd_from(vd_set(s->Rx)), zy);
+    disc = vdd_sub(vdd_sqr(u), vdd_sqr(x));
+    *bad |= (vm)(disc.hi <= 0.0);
+    q = vdd_sqrt(disc);
+    q = vdd_sel((vm)(u.hi < 0.0), vdd_neg(q), q);
+    zt = svd_div(vdd_sqr(x), vdd_add(u, q));
+    *z = vdd_add(zy, zt);
+    g[0] = svd_div(x, q);
+    g[1] = svd_div(vdd_mul(u, zp), q);
+    eu = ezy + 2.0 * DD_U * (fabs(s->Rx) + vd_abs(zy.hi));
+    cond = (u.hi * u.hi + x.hi * x.hi) / disc.hi;
+    aq = vd_abs(q.hi);
+    *ez = ezy + eu * vd_abs(u.hi) / aq +
+          16.0 * DD_U * (vd_abs(zy.hi) + vd_abs(zt.hi) * (1.0 + cond));
+    *eg = 16.0 * DD_U * (vd_abs(g[0].hi) + vd_abs(g[1].hi)) * (1.0 + cond) +
+          eu * (vd_abs(x.hi * u.hi) + vd_abs(zp.hi) * (u.hi * u.hi + disc.hi)) / (disc.hi * aq) +
+          ezp * vd_abs(u.hi) / aq;
+}
+
+/* shape_biconic.c's bic_dd.  The curvatures are the same on every lane:
+ * they are formed once in scalar double-double, as there. */
+static inline void svd_bic(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd *ez, vd *eg,
+                           vm *bad)
+{
+    dd cxs = isfinite(s->Rx) ? dd_div(dd_from(1.0), dd_from(s->Rx)) : dd_from(0.0);
+    dd cys = isfinite(s->R) ? dd_div(dd_from(1.0), dd_from(s->R)) : dd_from(0.0);
+    vdd one = vdd_from(vd_set(1.0)), cx = vdd_set(cxs), cy = vdd_set(cys);
+    vdd ax = vdd_mul(cx, vdd_sqr(x)), ay = vdd_mul(cy, vdd_sqr(y));
+    vdd N = vdd_add(ax, ay);
+    vdd px = vdd_mul_d(vdd_mul(ax, cx), vd_set(s->kx1)),
+        py = vdd_mul_d(vdd_mul(ay, cy), vd_set(s->k1));
+    vdd Q = vdd_sub(vdd_sub(one, px), py), S, D, D2, tx, ty;
+    vd cond, gm;
+    *bad = (vm)(Q.hi < 0.0);
+    S = vdd_sqrt(Q);
+    D = vdd_add(one, S);
+    *z = svd_div(N, D);
+    *bad |= (vm)(S.hi <= 0.0);
+    D2 = vdd_sqr(D);
+    tx = vdd_add(vdd_mul(vdd_mul_d(vdd_mul(cx, x), vd_set(2.0)), D),
+                 svd_div(vdd_mul(N, vdd_mul_d(vdd_mul(vdd_mul(cx, cx), x), vd_set(s->kx1))), S));
+    ty = vdd_add(vdd_mul(vdd_mul_d(vdd_mul(cy, y), vd_set(2.0)), D),
+                 svd_div(vdd_mul(N, vdd_mul_d(vdd_mul(vdd_mul(cy, cy), y), vd_set(s->k1))), S));
+    g[0] = svd_div(tx, D2);
+    g[1] = svd_div(ty, D2);
+    cond = (1.0 + vd_abs(px.hi) + vd_abs(py.hi)) / Q.hi;
+    *ez = 24.0 * DD_U * vd_abs(z->hi) * (1.0 + cond) +
+          8.0 * DD_U * (vd_abs(ax.hi) + vd_abs(ay.hi));
+    gm = (vd_abs(tx.hi) + vd_abs(ty.hi) +
+          2.0 * vd_abs(N.hi) *
+              (vd_abs(s->kx1 * cxs.hi * cxs.hi * x.hi) + vd_abs(s->k1 * cys.hi * cys.hi * y.hi)) /
+              (S.hi * Q.hi)) /
+         (D.hi * D.hi);
+    *eg = 48.0 * DD_U * gm * (1.0 + cond);
+}
+
+/* Whether this file has the shape's double-double sag. */
+static inline int svd_handles(const sg_shape *s)
+{
+    return s->ops && (s->ops->sag_dd == sg_rot_p2_dd || s->ops == &sg_shape_odd_ops ||
+                      s->ops == &sg_shape_toroid_ops || s->ops == &sg_shape_biconic_ops);
+}
+
+/* The shape's sag_dd on every lane, for a shape svd_handles. */
+static inline void svd_sag(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd *ez, vd *eg,
+                           vm *bad)
+{
+    if (s->ops == &sg_shape_odd_ops)
+        svd_odd(s, x, y, z, g, ez, eg, bad);
+    else if (s->ops == &sg_shape_toroid_ops)
+        svd_tor(s, x, y, z, g, ez, eg, bad);
+    else if (s->ops == &sg_shape_biconic_ops)
+        svd_bic(s, x, y, z, g, ez, eg, bad);
+    else
+        svd_rot_p2(s, x, y, z, g, ez, eg, bad);
 }
 
 #endif

@@ -79,6 +79,14 @@ static inline dd lane_dd(vdd a, int k)
     return r;
 }
 
+/* A shape's double-double sag on every lane (shape_vdd.h), for a shape
+ * svd_handles: one copy of the shapes' code for the four callers. */
+__attribute__((noinline)) static void gen_sag_v(const sg_shape *s, vdd x, vdd y, vdd *z,
+                                                vdd g[2], vd *ez, vd *eg, vm *bad)
+{
+    svd_sag(s, x, y, z, g, ez, eg, bad);
+}
+
 /* F = z - f(x, y) in double-double and the bound on its rounding. */
 __attribute__((noinline)) static void gen_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
 {
@@ -86,7 +94,7 @@ __attribute__((noinline)) static void gen_F_v(const sg_sprep *s, vdd3 p, vdd *F,
     if (svd_handles(s->shp)) {
         vdd f, g[2], Fk;
         vd ez, eg;
-        svd_rot_p2(s->shp, p.x, p.y, &f, g, &ez, &eg, bad);
+        gen_sag_v(s->shp, p.x, p.y, &f, g, &ez, &eg, bad);
         Fk = vdd_sub(p.z, f);
         F->hi = vsel(*bad, vd_set(NAN), Fk.hi);
         F->lo = vsel(*bad, vd_set(0.0), Fk.lo);
@@ -196,7 +204,7 @@ __attribute__((noinline)) static vdd3 gen_grad_v(const sg_sprep *s, vdd3 p, vd *
         vdd f, gg[2];
         vd ez, eg;
         vm bad;
-        svd_rot_p2(s->shp, p.x, p.y, &f, gg, &ez, &eg, &bad);
+        gen_sag_v(s->shp, p.x, p.y, &f, gg, &ez, &eg, &bad);
         g.x.hi = vsel(bad, vd_set(NAN), vd_neg(gg[0].hi));
         g.x.lo = vsel(bad, vd_set(0.0), vd_neg(gg[0].lo));
         g.y.hi = vsel(bad, vd_set(NAN), vd_neg(gg[1].hi));
@@ -255,7 +263,7 @@ __attribute__((noinline)) static vd gen_resid_v(const sg_sprep *s, vdd3 p)
         vdd f, g[2], df;
         vd ez, eg;
         vm bad;
-        svd_rot_p2(s->shp, vdd_from(p.x.hi), vdd_from(p.y.hi), &f, g, &ez, &eg, &bad);
+        gen_sag_v(s->shp, vdd_from(p.x.hi), vdd_from(p.y.hi), &f, g, &ez, &eg, &bad);
         df = vdd_sub(vdd_from(p.z.hi), f);
         return vsel(bad, vd_set(NAN), vd_abs(df.hi + df.lo));
     }
@@ -280,7 +288,7 @@ vdd sg_sag_xy_v(const sg_sprep *s, vdd x, vdd y, vm *bad)
     if (svd_handles(s->shp)) {
         vdd g[2];
         vd ez, eg;
-        svd_rot_p2(s->shp, x, y, &z, g, &ez, &eg, bad);
+        gen_sag_v(s->shp, x, y, &z, g, &ez, &eg, bad);
         z.hi = vsel(*bad, vd_set(NAN), z.hi);
         z.lo = vsel(*bad, vd_set(0.0), z.lo);
         return z;

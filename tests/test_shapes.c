@@ -1099,28 +1099,43 @@ static void point_dd(double s, double *hi, double *lo)
     }
 }
 
-/* Every lane of svd_rot_p2 gives what sg_rot_p2_dd gives that point
- * alone: the same sag, slopes and bounds to the bit, and a lane marked
- * bad exactly where the scalar kernel leaves the shape's domain.  Lanes
- * of one block mix ordinary points with failing and extreme ones. */
+/* Every lane of svd_sag gives what the shape's scalar sag_dd gives that
+ * point alone: the same sag, slopes and bounds to the bit, and a lane
+ * marked bad exactly where the scalar kernel leaves the shape's domain.
+ * Lanes of one block mix ordinary points with failing and extreme ones;
+ * the first shape of each kind and scale has power-of-two radii, so that
+ * a lane on its rim meets the scalar code's exact-zero branches (q = 0 of
+ * the conic, the toroid's u^2 - x^2 = 0, the biconic's S = 0), and a lane
+ * at x = y = 0 of either sign the odd asphere's r = 0 branch. */
 static void vector_kernel(void **state)
 {
     static const double scales[] = {1e-3, 1.0, 1e4};
-    static const int types[] = {SG_SURF_ZERNIKE_FRINGE, SG_SURF_ZERNIKE_STANDARD, SG_SURF_XYPOLY};
-    int ti, si, it, blk, k, lanes = 0, bad_lanes = 0;
+    static const int types[] = {SG_SURF_ZERNIKE_FRINGE, SG_SURF_ZERNIKE_STANDARD, SG_SURF_XYPOLY,
+                                SG_SURF_ODDASPH,        SG_SURF_TOROIDAL,         SG_SURF_BICONIC};
+    enum { NT = sizeof types / sizeof types[0] };
+    int ti, si, it, blk, k, lanes[NT] = {0}, bad_lanes[NT] = {0};
     (void)state;
     rng_state = 0x7ec7ec7ec7ULL;
-    for (ti = 0; ti < 3; ti++)
+    for (ti = 0; ti < NT; ti++)
         for (si = 0; si < 3; si++)
             for (it = 0; it < 30; it++) {
                 sg_surface f;
                 sg_shape sh;
-                double sc = scales[si];
+                double sc = scales[si], rim;
                 memset(&f, 0, sizeof f);
                 random_shape(&f, types[ti], sc);
                 if (types[ti] == SG_SURF_XYPOLY && urand() < 0.5)
                     for (k = 0; k < 4; k++)
                         f.asph[k] = srand1(1e-6) / pow(sc, 2 * k + 1);
+                if (it == 0) {
+                    f.radius = ldexp(4.0, ilogb(sc));
+                    f.conic = 0.0;
+                    if (types[ti] == SG_SURF_TOROIDAL || types[ti] == SG_SURF_BICONIC) {
+                        f.radius_x = f.radius;
+                        f.conic_x = 0.0;
+                    }
+                }
+                rim = types[ti] == SG_SURF_TOROIDAL ? f.radius_x : f.radius;
                 assert_int_equal(sg_shape_prepare(&f, &sh, 1, NULL), SG_OK);
                 assert_true(svd_handles(&sh));
                 for (blk = 0; blk < 8; blk++) {
@@ -1131,35 +1146,48 @@ static void vector_kernel(void **state)
                         point_dd(sc, &x.hi[k], &x.lo[k]);
                         point_dd(sc, &y.hi[k], &y.lo[k]);
                     }
-                    svd_rot_p2(&sh, x, y, &z, g, &ez, &eg, &bad);
+                    if (blk == 0) {
+                        x.hi[1] = isfinite(rim) ? fabs(rim) : 0.0;
+                        x.lo[1] = y.hi[1] = y.lo[1] = 0.0;
+                        x.hi[2] = urand() < 0.5 ? 0.0 : -0.0;
+                        y.hi[2] = urand() < 0.5 ? 0.0 : -0.0;
+                        x.lo[2] = y.lo[2] = 0.0;
+                    }
+                    svd_sag(&sh, x, y, &z, g, &ez, &eg, &bad);
                     for (k = 0; k < SG_VL; k++) {
                         dd xs = {x.hi[k], x.lo[k]}, ys = {y.hi[k], y.lo[k]}, zs, gs[2];
                         double ezs, egs;
-                        int ok = sg_rot_p2_dd(&sh, xs, ys, &zs, gs, &ezs, &egs);
-                        lanes++;
+                        int ok = sh.ops->sag_dd(&sh, xs, ys, &zs, gs, &ezs, &egs);
+                        lanes[ti]++;
                         if (!ok) {
-                            bad_lanes++;
+                            bad_lanes[ti]++;
                             if (!bad[k])
-                                fail_msg("lane %d at (%g, %g): scalar outside, vector not", k,
-                                         xs.hi, ys.hi);
+                                fail_msg("%s lane %d at (%g, %g): scalar outside, vector not",
+                                         sh.ops->name, k, xs.hi, ys.hi);
                             continue;
                         }
                         if (bad[k])
-                            fail_msg("lane %d at (%g, %g): vector outside, scalar not", k, xs.hi,
-                                     ys.hi);
+                            fail_msg("%s lane %d at (%g, %g): vector outside, scalar not",
+                                     sh.ops->name, k, xs.hi, ys.hi);
                         if (!same_bits(zs.hi, z.hi[k]) || !same_bits(zs.lo, z.lo[k]) ||
                             !same_bits(gs[0].hi, g[0].hi[k]) || !same_bits(gs[0].lo, g[0].lo[k]) ||
                             !same_bits(gs[1].hi, g[1].hi[k]) || !same_bits(gs[1].lo, g[1].lo[k]) ||
                             !same_bits(ezs, ez[k]) || !same_bits(egs, eg[k]))
                             fail_msg("%s lane %d at (%a + %a, %a + %a): sag %a %a vs %a %a, "
-                                     "bounds %a %a vs %a %a", sh.ops->name, k, xs.hi, xs.lo,
-                                     ys.hi, ys.lo, zs.hi, zs.lo, z.hi[k], z.lo[k], ezs, egs,
+                                     "slopes %a %a, %a %a vs %a %a, %a %a, "
+                                     "bounds %a %a vs %a %a",
+                                     sh.ops->name, k, xs.hi, xs.lo, ys.hi, ys.lo, zs.hi, zs.lo,
+                                     z.hi[k], z.lo[k], gs[0].hi, gs[0].lo, gs[1].hi, gs[1].lo,
+                                     g[0].hi[k], g[0].lo[k], g[1].hi[k], g[1].lo[k], ezs, egs,
                                      ez[k], eg[k]);
                     }
                 }
             }
-    print_message("# vector kernel: %d lanes, %d outside the shape\n", lanes, bad_lanes);
-    assert_true(bad_lanes > lanes / 20 && bad_lanes < lanes / 2);
+    for (ti = 0; ti < NT; ti++) {
+        print_message("# vector kernel, type %d: %d lanes, %d outside the shape\n", types[ti],
+                      lanes[ti], bad_lanes[ti]);
+        assert_true(bad_lanes[ti] > lanes[ti] / 20 && bad_lanes[ti] < lanes[ti] / 2);
+    }
 }
 
 int main(void)
