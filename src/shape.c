@@ -66,7 +66,9 @@ int sg_shape_prepare(const sg_surface *f, sg_shape *s, int isurf, sg_diag *d)
 
 int sg_rot_d(const sg_shape *s, double r2, double *z, double *w, double *dw)
 {
-    double zz = 0.0, ww = 0.0, dd2 = 0.0, rk = 1.0;
+    /* rk = r^(2k) and rkm = r^(2k-2), each a product of r2: a quotient
+     * rk / r2 would be 0 / 0 on the axis. */
+    double zz = 0.0, ww = 0.0, dd2 = 0.0, rk = 1.0, rkm = 0.0;
     int k;
     if (isfinite(s->R)) {
         double q = s->R * s->R - s->k1 * r2, sq;
@@ -82,7 +84,8 @@ int sg_rot_d(const sg_shape *s, double r2, double *z, double *w, double *dw)
         zz += s->a[k] * rk * r2;
         ww += (2.0 * k + 2.0) * s->a[k] * rk;
         if (k > 0)
-            dd2 += fabs(k * (2.0 * k + 2.0) * s->a[k]) * rk / r2;
+            dd2 += fabs(k * (2.0 * k + 2.0) * s->a[k]) * rkm;
+        rkm = rk;
         rk *= r2;
     }
     if (s->nodd) {
