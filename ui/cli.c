@@ -826,12 +826,8 @@ int cmd_trace(int argc, char **argv)
             trace_help(stdout);
             return CLI_EXIT_OK;
         case OPT_METHOD:
-            method = sg_method_parse(val);
-            if (method < 0)
-            {
-                cli_error("--method: expected precise, classic or mpfr, got \"%s\"", val);
+            if (cli_method_value(val, &method))
                 return CLI_EXIT_USAGE;
-            }
             break;
         case OPT_BITS:
             if (cli_int_value("--bits", val, 53, 100000, &bits))
@@ -1143,4 +1139,15 @@ const char *cli_shortest(double v, char *buf, size_t n)
             break;
     }
     return buf;
+}
+
+int cli_method_value(const char *s, int *method)
+{
+    int m = sg_method_parse(s);
+    if (m < 0) {
+        cli_error("--method: expected precise, classic or mpfr, got \"%s\"", s);
+        return CLI_EXIT_USAGE;
+    }
+    *method = m;
+    return CLI_EXIT_OK;
 }

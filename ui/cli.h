@@ -113,6 +113,8 @@ int cli_doubles_value(const char *opt, const char *s, int n, const char *what,
 /* --format: "text" or "json", and "csv" too when allow_csv; sets *fmt to a
  * report_fmt value. */
 int cli_format_value(const char *s, int allow_csv, int *fmt);
+/* --method: precise, classic or mpfr; sets *method to an sg_method. */
+int cli_method_value(const char *s, int *method);
 
 /* ---- designs ---------------------------------------------------------- */
 

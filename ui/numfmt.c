@@ -329,6 +329,9 @@ X8_TARGET static inline __m512i divmod_x8(__m512i x, __m512i q, __m512i d, __m51
     __mmask8 lo = _mm512_cmp_epi64_mask(rem, zero, _MM_CMPINT_LT), hi;
     q = _mm512_mask_sub_epi64(q, lo, q, one);
     rem = _mm512_mask_add_epi64(rem, lo, rem, d);
+    /* rem == d would need an exact multiple estimated one low, which no
+     * multiple of 10^16 or 10^8 formed here is (checked for all of them);
+     * >= keeps the step right regardless. */
     hi = _mm512_cmp_epi64_mask(rem, d, _MM_CMPINT_GE);
     q = _mm512_mask_add_epi64(q, hi, q, one);
     *r = _mm512_mask_sub_epi64(rem, hi, rem, d);

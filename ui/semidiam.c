@@ -61,11 +61,8 @@ int cmd_semidiam(int argc, char **argv)
             semidiam_help(stdout);
             return CLI_EXIT_OK;
         case SD_METHOD:
-            method = sg_method_parse(val);
-            if (method < 0) {
-                cli_error("--method: expected precise, classic or mpfr, got \"%s\"", val);
+            if (cli_method_value(val, &method))
                 return CLI_EXIT_USAGE;
-            }
             break;
         case SD_FORMAT:
             if (cli_format_value(val, 0, &fmt))

@@ -67,22 +67,13 @@ int cmd_vignetting(int argc, char **argv)
         case SV_SAVE:
             save = val;
             break;
-        case SV_GRID: {
-            char *end;
-            long g = strtol(val, &end, 10);
-            if (end == val || *end || g < 4 || g > 4096) {
-                cli_error("--grid: expected a whole number from 4 to 4096, got \"%s\"", val);
+        case SV_GRID:
+            if (cli_int_value("--grid", val, 4, 4096, &grid))
                 return CLI_EXIT_USAGE;
-            }
-            grid = (int)g;
             break;
-        }
         case SV_METHOD:
-            method = sg_method_parse(val);
-            if (method < 0) {
-                cli_error("--method: expected precise, classic or mpfr, got \"%s\"", val);
+            if (cli_method_value(val, &method))
                 return CLI_EXIT_USAGE;
-            }
             break;
         case SV_FORMAT:
             if (cli_format_value(val, 0, &fmt))

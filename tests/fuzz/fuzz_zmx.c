@@ -14,46 +14,26 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "fuzz_common.h"
 #include "sagitta.h"
 
 #define NAME "fuzz.zmx"
 
 static sg_catalog *cat;
 
-static void die(const char *what, const char *detail)
-{
-    fprintf(stderr, "fuzz_zmx: %s\n%s\n", what, detail ? detail : "");
-    abort();
-}
-
 int LLVMFuzzerInitialize(int *argc, char ***argv);
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
 int LLVMFuzzerInitialize(int *argc, char ***argv)
 {
-    sg_diag d;
     (void)argc;
     (void)argv;
-    cat = sg_catalog_new();
-    sg_diag_clear(&d);
-    if (!cat || sg_catalog_load_default(cat, &d) != SG_OK || sg_catalog_count(cat) == 0) {
-        fprintf(stderr, "fuzz_zmx: no glass catalog (%s); set SAGITTA_LENSDB\n", d.msg);
-        exit(1);
-    }
+    cat = fuzz_catalog("fuzz_zmx");
     return 0;
 }
 
-static void check_diag(const sg_diag *d, int rc)
-{
-    int k, n = d->nwarn < SG_DIAG_MAXWARN ? d->nwarn : SG_DIAG_MAXWARN;
-    if (!memchr(d->msg, '\0', sizeof d->msg))
-        die("unterminated message", NULL);
-    for (k = 0; k < n; k++)
-        if (!memchr(d->warn[k], '\0', sizeof d->warn[k]))
-            die("unterminated warning", NULL);
-    if (rc != SG_OK && rc != SG_ENOMEM && strstr(d->msg, NAME) == NULL)
-        die("a failure whose message does not name the input", d->msg);
-}
+#define die(what, detail) fuzz_die("fuzz_zmx", what, detail)
+#define check_diag(d, rc) fuzz_check_diag("fuzz_zmx", NAME, d, rc)
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
