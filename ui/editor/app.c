@@ -632,10 +632,12 @@ static int loop(ui *u)
 
 static void usage(FILE *f)
 {
-    fputs("Usage: sagitta [edit] [FILE.json] [--batch SCRIPT]\n"
-          "The lens data editor.  Without --batch it needs a terminal; press F1 or ?\n"
-          "inside for every key.  --batch runs the commands in SCRIPT (one a line,\n"
-          "'-' for standard input) without a screen and stops at the first error.\n"
+    fputs("Usage: sagitta [edit] [FILE.json | FILE.zmx | FILE.zar] [--batch SCRIPT]\n"
+          "The lens data editor.  A Zemax lens file or archive opens as a design (an\n"
+          "archive is saved under another name).  Without --batch it needs a terminal;\n"
+          "press F1 or ? inside for every key.  --batch runs the commands in SCRIPT\n"
+          "(one a line, '-' for standard input) without a screen and stops at the\n"
+          "first error.\n"
           "\n"
           "While a design has unsaved changes the editor keeps a copy in\n"
           "$XDG_STATE_HOME/sagitta/ (default ~/.local/state/sagitta/), removed when the\n"
