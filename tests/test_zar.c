@@ -109,6 +109,8 @@ typedef struct arch {
 
 static void arch_put(arch *a, const void *b, size_t n)
 {
+    if (n == 0)
+        return;
     if (a->n + n > a->cap) {
         a->cap = (a->n + n) * 2 + 1024;
         a->p = realloc(a->p, a->cap);
