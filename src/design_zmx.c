@@ -2023,8 +2023,8 @@ static void zb_list(zbuf *b, const char *kw, const sg_system *s, int what)
 static const char *zb_curv_solve(char out[80], const sg_surface *f)
 {
     const sg_solve *v = &f->solve[SG_SOLVE_RADIUS];
-    out[0] = '\0';
     char n1[40];
+    out[0] = '\0';
     if (v->kind == SG_SOLVE_PICKUP && v->offset == 0.0 && curv_scale_ok(v->scale))
         snprintf(out, 80, " 4 %d %s 0 \"\"", v->from, num(n1, 1.0 / v->scale));
     else if (v->kind == SG_SOLVE_MARGINAL_ANGLE || v->kind == SG_SOLVE_FNUM)

@@ -31,7 +31,6 @@
 
 typedef struct zar_member {
     char name[ZAR_NAME]; /* UTF-8, ".LZW" kept */
-    size_t offset;       /* of the header */
     const unsigned char *data;
     size_t size;      /* packed */
     size_t unpacked;  /* from the header; SIZE_MAX when it has none */
@@ -118,11 +117,11 @@ static int member_at(const unsigned char *b, size_t len, size_t off, const char 
                            "after %zu",
                            path, off, hdr, len - off);
     memset(m, 0, sizeof *m);
-    m->offset = off;
     if (hdr == 0x288) {
+        uint64_t u = le(b + off + 0x18, 8);
         size = le(b + off + 0x10, 8);
-        m->unpacked = (size_t)(le(b + off + 0x18, 8) > ZAR_MAX_BYTES ? ZAR_MAX_BYTES + 1
-                                                                     : le(b + off + 0x18, 8));
+        /* Anything past the cap is refused in unpack; one more says so. */
+        m->unpacked = u > ZAR_MAX_BYTES ? ZAR_MAX_BYTES + 1 : (size_t)u;
         name_utf16(b + off + 0x30, hdr - 0x30, m->name);
     } else {
         size = le(b + off + 0x0C, 4);
