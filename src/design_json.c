@@ -412,6 +412,23 @@ static int get_thickness(jctx *c, const cJSON *v, const char *where, int isurf, 
     return perr(c, SG_EPARSE, where, "expected a number, got %s", got);
 }
 
+/* A glass or catalog name into out, upper case (catalog names are; ASCII
+ * only, so no locale matters). */
+static int get_upper_name(jctx *c, const char *s, const char *where, const char *what,
+                          char *out, size_t n)
+{
+    char got[64];
+    size_t k, len = strlen(s);
+    if (len >= n) {
+        show_text(got, 48, s);
+        return perr(c, SG_EPARSE, where, "%s \"%s\" is too long (%zu bytes; the limit is %zu)",
+                    what, got, len, n - 1);
+    }
+    for (k = 0; k <= len; k++)
+        out[k] = (s[k] >= 'a' && s[k] <= 'z') ? (char)(s[k] - 'a' + 'A') : s[k];
+    return SG_OK;
+}
+
 static int get_material(jctx *c, const cJSON *v, const char *where, sg_material *m)
 {
     char got[80];
@@ -422,8 +439,7 @@ static int get_material(jctx *c, const cJSON *v, const char *where, sg_material 
     }
     if (cJSON_IsString(v) && v->valuestring) {
         const char *s = v->valuestring;
-        size_t k, len = strlen(s);
-        if (len == 0 || ascii_casecmp(s, "AIR") == 0) {
+        if (s[0] == '\0' || ascii_casecmp(s, "AIR") == 0) {
             m->kind = SG_MAT_AIR;
             return SG_OK;
         }
@@ -431,17 +447,34 @@ static int get_material(jctx *c, const cJSON *v, const char *where, sg_material 
             m->kind = SG_MAT_MIRROR;
             return SG_OK;
         }
-        if (len >= sizeof m->name) {
-            show_text(got, 48, s);
-            return perr(c, SG_EPARSE, where,
-                        "glass name \"%s\" is too long (%zu bytes; the limit is %zu)", got,
-                        len, sizeof m->name - 1);
-        }
         m->kind = SG_MAT_GLASS;
-        /* Catalog names are upper case; ASCII only, so no locale matters. */
-        for (k = 0; k <= len; k++)
-            m->name[k] = (s[k] >= 'a' && s[k] <= 'z') ? (char)(s[k] - 'a' + 'A') : s[k];
-        return SG_OK;
+        return get_upper_name(c, s, where, "glass name", m->name, sizeof m->name);
+    }
+    if (cJSON_IsObject(v) && cJSON_GetObjectItemCaseSensitive(v, "glass")) {
+        /* A catalog's glass: { "glass": ..., "catalog": ... }. */
+        static const char *const keys[] = {"glass", "catalog"};
+        const cJSON *k[2];
+        char at[160];
+        int rc;
+        pick_keys(c, v, where, keys, 2, k);
+        m->kind = SG_MAT_GLASS;
+        snprintf(at, sizeof at, "%s.glass", where);
+        if (!cJSON_IsString(k[0]) || !k[0]->valuestring || !k[0]->valuestring[0]) {
+            describe(k[0], got, sizeof got);
+            return perr(c, SG_EPARSE, at, "expected a glass name, got %s", got);
+        }
+        if ((rc = get_upper_name(c, k[0]->valuestring, at, "glass name", m->name,
+                                 sizeof m->name)) != SG_OK)
+            return rc;
+        if (!k[1])
+            return SG_OK;
+        snprintf(at, sizeof at, "%s.catalog", where);
+        if (!cJSON_IsString(k[1]) || !k[1]->valuestring) {
+            describe(k[1], got, sizeof got);
+            return perr(c, SG_EPARSE, at, "expected a catalog name, got %s", got);
+        }
+        return get_upper_name(c, k[1]->valuestring, at, "catalog name", m->catalog,
+                              sizeof m->catalog);
     }
     if (cJSON_IsObject(v)) {
         /* A model glass: { "nd": ..., "vd": ..., "dpgf": ... }. */
@@ -1312,6 +1345,9 @@ static int check_param(const sg_param *p, const void *obj, const char *where, in
         case SG_MAT_GLASS:
             if (!terminated(m->name, sizeof m->name) || m->name[0] == '\0')
                 return sg_diag_set(d, SG_EINVAL, "%s: material: glass has no name", where);
+            if (!terminated(m->catalog, sizeof m->catalog))
+                return sg_diag_set(d, SG_EINVAL, "%s: material: catalog is not a terminated "
+                                   "string", where);
             return SG_OK;
         case SG_MAT_INDEX:
             if (!isfinite(m->index))
@@ -1452,7 +1488,17 @@ static void sb_param(sbuf *b, const sg_param *p, const void *obj)
         const sg_material *m = q;
         switch (m->kind) {
         case SG_MAT_MIRROR: sb_puts(b, "\"MIRROR\""); break;
-        case SG_MAT_GLASS: sb_str(b, m->name); break;
+        case SG_MAT_GLASS:
+            if (!m->catalog[0]) {
+                sb_str(b, m->name);
+                break;
+            }
+            sb_puts(b, "{ \"glass\": ");
+            sb_str(b, m->name);
+            sb_puts(b, ", \"catalog\": ");
+            sb_str(b, m->catalog);
+            sb_puts(b, " }");
+            break;
         case SG_MAT_INDEX: sb_num(b, m->index); break;
         case SG_MAT_MODEL:
             sb_puts(b, "{ \"nd\": ");
@@ -1612,6 +1658,10 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     version = needed_version(SG_SCOPE_SYSTEM, sys, version);
     if (sys->aper_type == SG_APER_OBJECT_CONE)
         version = version < 3 ? 3 : version;
+    /* A glass named with its catalog came with version 4. */
+    for (i = 0; i < sys->nsurf; i++)
+        if (sys->surf[i].mat.kind == SG_MAT_GLASS && sys->surf[i].mat.catalog[0])
+            version = version < 4 ? 4 : version;
     /* So did the environment: a version-1 reader would trace at 20 C. */
     if (sys->temperature != 20.0 || sys->pressure != 1.0 || sys->adjust_index)
         version = version < 2 ? 2 : version;

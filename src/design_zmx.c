@@ -680,7 +680,8 @@ static int read_glas(zctx *c, const zline *l, sg_surface *s)
     double flag = 0.0, nd = 0.0, vd = 0.0;
     const sg_glass *g;
     size_t i;
-    int rc;
+    int rc, k;
+    s->mat.catalog[0] = '\0';
     if (l->n < 2) {
         s->mat.kind = SG_MAT_AIR;
         return SG_OK;
@@ -745,10 +746,15 @@ static int read_glas(zctx *c, const zline *l, sg_surface *s)
     sg_strlcpy(s->mat.name, name, sizeof s->mat.name);
     if (!c->cat)
         return SG_OK;
-    g = sg_catalog_find(c->cat, name);
+    /* Zemax takes a glass from the first catalog of the GCAT line that
+     * has one of its name; sagitta's order decides only when none does. */
+    g = NULL;
+    for (k = 0; k < c->ngcat && !g; k++)
+        g = sg_catalog_find_in(c->cat, c->gcat[k], name);
+    if (!g)
+        g = sg_catalog_find(c->cat, name);
     if (!g) {
         char cats[128] = "";
-        int k;
         for (k = 0; k < c->ngcat; k++) {
             if (k)
                 strncat(cats, " ", sizeof cats - strlen(cats) - 1);
@@ -768,6 +774,10 @@ static int read_glas(zctx *c, const zline *l, sg_surface *s)
     if (c->ngcat && !gcat_has(c, g->catalog))
         zwarn(c, "GLAS: %s is taken from sagitta's %s catalog, which the file's GCAT line "
               "does not list", name, g->catalog);
+    /* The design names the catalog only where the name alone would mean
+     * another catalog's glass. */
+    if (g != sg_catalog_find(c->cat, name))
+        sg_strlcpy(s->mat.catalog, g->catalog, sizeof s->mat.catalog);
     return SG_OK;
 }
 
@@ -2110,6 +2120,72 @@ static void zb_shape(zbuf *b, const sg_surface *f)
 }
 
 
+/* The GCAT line's catalogs: each glass's catalog, in the order of first
+ * use, except that Zemax takes a name from the first listed catalog that
+ * holds it, so a glass's catalog must precede every other listed catalog
+ * with a glass of that name.  A design whose glasses no order satisfies
+ * (HOYA's F2 beside SCHOTT's F5: both catalogs have both names) cannot be
+ * a .zmx file. */
+static int gcat_order(const sg_system *s, const sg_catalog *cat,
+                      char gcat[ZMX_MAX_GCAT][SG_GLASS_NAME], int *ngcat, sg_diag *d)
+{
+    char used[ZMX_MAX_GCAT][SG_GLASS_NAME];
+    int nused = 0, placed[ZMX_MAX_GCAT] = {0}, i, j, k, n = 0;
+    for (i = 0; i < s->nsurf; i++) {
+        const sg_material *m = &s->surf[i].mat;
+        const sg_glass *g = cat ? sg_material_glass(cat, m) : NULL;
+        const char *c = g ? g->catalog : m->catalog;
+        if (m->kind != SG_MAT_GLASS || !c[0])
+            continue;
+        for (j = 0; j < nused && strcmp(used[j], c) != 0; j++)
+            ;
+        if (j < nused)
+            continue;
+        if (nused == ZMX_MAX_GCAT)
+            return sg_diag_set(d, SG_ERANGE, "export: surface %d: glasses from more than %d "
+                               "catalogs", i, ZMX_MAX_GCAT);
+        sg_strlcpy(used[nused++], c, SG_GLASS_NAME);
+    }
+    /* Place, each time, the first catalog in use order that no unplaced
+     * catalog must precede. */
+    while (n < nused) {
+        int pick = -1, why = -1;
+        for (j = 0; j < nused && pick < 0; j++) {
+            int blocked = 0;
+            if (placed[j])
+                continue;
+            for (i = 0; i < s->nsurf && !blocked && cat; i++) {
+                const sg_glass *g = sg_material_glass(cat, &s->surf[i].mat);
+                if (!g || strcmp(g->catalog, used[j]) == 0)
+                    continue;
+                for (k = 0; k < nused; k++)
+                    if (!placed[k] && strcmp(g->catalog, used[k]) == 0)
+                        break;
+                /* Surface i's glass comes from unplaced catalog k, and
+                 * catalog j also has a glass of its name. */
+                if (k < nused && sg_catalog_find_in(cat, used[j], g->name)) {
+                    blocked = 1;
+                    why = i;
+                }
+            }
+            if (!blocked)
+                pick = j;
+        }
+        if (pick < 0) {
+            const sg_material *m = &s->surf[why].mat;
+            return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: glass %s of catalog %s: "
+                               "no order of the GCAT line gives every surface its catalog's "
+                               "glass (Zemax takes a name from the first catalog listed that "
+                               "has it); use glasses of other names", why, m->name,
+                               sg_material_glass(cat, m)->catalog);
+        }
+        placed[pick] = 1;
+        sg_strlcpy(gcat[n++], used[pick], SG_GLASS_NAME);
+    }
+    *ngcat = n;
+    return SG_OK;
+}
+
 static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_diag *d)
 {
     char n1[40], n2[40], cs[80], gcat[ZMX_MAX_GCAT][SG_GLASS_NAME];
@@ -2157,17 +2233,9 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
                 if (!isfinite(f->asph[k]))
                     return sg_diag_set(d, SG_ERANGE, "export: surface %d: asphere term r^%d is "
                                        "not finite", i, 2 * k + 2);
-        if (f->mat.kind == SG_MAT_GLASS && cat) {
-            const sg_glass *g = sg_catalog_find(cat, f->mat.name);
-            int j, have = 0;
-            if (!g)
-                continue;
-            for (j = 0; j < ngcat; j++)
-                have |= strcmp(gcat[j], g->catalog) == 0;
-            if (!have && ngcat < ZMX_MAX_GCAT)
-                sg_strlcpy(gcat[ngcat++], g->catalog, SG_GLASS_NAME);
-        }
     }
+    if ((k = gcat_order(s, cat, gcat, &ngcat, d)) != SG_OK)
+        return k;
     /* No VERS line: Zemax reads a file without one, and a made-up version
      * number could select an old reading of the keywords. */
     zb_add(b, "MODE SEQ\nNAME ", 14);
@@ -2275,7 +2343,7 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
             zb_add(b, "  GLAS MIRROR 0 0 1.5 40 0 0 0 0 0 0\n", 37);
             break;
         case SG_MAT_GLASS: {
-            const sg_glass *g = cat ? sg_catalog_find(cat, f->mat.name) : NULL;
+            const sg_glass *g = cat ? sg_material_glass(cat, &f->mat) : NULL;
             zb_printf(b, "  GLAS %s 0 0 %s %s 0 0 0 0 0 0\n", f->mat.name,
                       num(n1, g ? g->nd : 0.0), num(n2, g ? g->vd : 0.0));
             break;

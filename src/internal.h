@@ -58,6 +58,9 @@ int sg_xfer_mpfr(const sg_system *sys, int i, mpfr_t A[3][3], mpfr_t b[3]);
 
 /* Copies at most n-1 bytes and always terminates. */
 void sg_strlcpy(char *dst, const char *src, size_t n);
+/* For messages: " (catalog X)" after a glass named with its catalog,
+ * noting a catalog cat does not hold at all; "" otherwise. */
+void sg_material_where(const sg_catalog *cat, const sg_material *m, char *buf, size_t n);
 
 /* Reads a whole file of at most max bytes into *out (free() it). */
 int sg_read_file(const char *path, size_t max, char **out, size_t *len, sg_diag *d);

@@ -55,15 +55,33 @@
  * pathological file from taking gigabytes. */
 #define AGF_MAX_GLASSES 65536
 
-/* Glasses in load order, with an open-addressing hash of their names so
- * that loading and lookup stay linear in the catalog size. */
+/* Glasses in load order, with two open-addressing hashes so that loading
+ * and lookup stay linear in the catalog size: one keyed by catalog and
+ * name (every glass), one keyed by name alone (the glass an unqualified
+ * name means: the one whose catalog comes first in the search order). */
 struct sg_catalog {
     sg_glass *glass;
+    int *rank;     /* search-order rank of each glass's catalog */
     size_t n, cap;
-    size_t *slot; /* index + 1 into glass, 0 when empty */
-    size_t nslot; /* a power of two, at least twice n */
-    char *dir;    /* set by sg_catalog_load_default() */
+    size_t *slot;  /* by name: index + 1 into glass, 0 when empty */
+    size_t *qslot; /* by catalog and name */
+    size_t nslot;  /* size of both, a power of two, at least twice n */
+    char (*cats)[SG_GLASS_NAME]; /* catalog names in load order */
+    size_t ncats, capcats;
+    char *dir; /* set by sg_catalog_load_default() */
 };
+
+/* The order in which an unqualified glass name searches the shipped
+ * catalogs, as a lens file's GCAT line orders them in Zemax.  Where two
+ * vendors use one name, the glass the name has always meant in sagitta
+ * comes first: SCHOTT's old names before HOYA's, SUMITA's, CDGM's and
+ * HIKARI's; MISC's fitted CaF2 and sapphire before INFRARED's; INFRARED's
+ * barium fluoride before HOYA's and CDGM's glass BAF2.  Other catalogs
+ * follow in the order they were loaded. */
+static const char *const search_order[] = {
+    "SCHOTT", "OHARA", "MISC", "INFRARED", "HOYA", "SUMITA", "CDGM", "HIKARI",
+};
+#define NSEARCH ((int)(sizeof search_order / sizeof search_order[0]))
 
 /* ------------------------------------------------------------------------
  * Catalog container
@@ -79,7 +97,10 @@ void sg_catalog_free(sg_catalog *cat)
     if (!cat)
         return;
     free(cat->glass);
+    free(cat->rank);
     free(cat->slot);
+    free(cat->qslot);
+    free(cat->cats);
     free(cat->dir);
     free(cat);
 }
@@ -115,24 +136,43 @@ static int name_equal(const char *a, const char *b)
     return *a == *b;
 }
 
-/* FNV-1a of the upper-cased name. */
-static size_t name_hash(const char *s)
+/* FNV-1a of the upper-cased text, continued from h. */
+static uint64_t fnv_upper(uint64_t h, const char *s)
 {
-    uint64_t h = 14695981039346656037ull;
     for (; *s; s++) {
         h ^= (uint64_t)ascii_upper((unsigned char)*s);
         h *= 1099511628211ull;
     }
-    return (size_t)h;
+    return h;
 }
 
-/* The slot holding name, or the empty slot where it would go. */
+#define FNV_START 14695981039346656037ull
+
+/* The slot holding name's unqualified glass, or the empty slot where it
+ * would go. */
 static size_t *find_slot(const sg_catalog *cat, const char *name)
 {
-    size_t mask = cat->nslot - 1, i = name_hash(name) & mask;
+    size_t mask = cat->nslot - 1, i = (size_t)fnv_upper(FNV_START, name) & mask;
     while (cat->slot[i] && !name_equal(cat->glass[cat->slot[i] - 1].name, name))
         i = (i + 1) & mask;
     return &cat->slot[i];
+}
+
+/* The slot holding catalog's glass name, or the empty slot for it.  The
+ * separator keeps "AB"+"C" and "A"+"BC" apart. */
+static size_t *find_qslot(const sg_catalog *cat, const char *catalog, const char *name)
+{
+    size_t mask = cat->nslot - 1, i;
+    uint64_t h = fnv_upper(FNV_START, catalog);
+    h = (h ^ (uint64_t)':') * 1099511628211ull;
+    i = (size_t)fnv_upper(h, name) & mask;
+    while (cat->qslot[i]) {
+        const sg_glass *g = &cat->glass[cat->qslot[i] - 1];
+        if (name_equal(g->name, name) && name_equal(g->catalog, catalog))
+            break;
+        i = (i + 1) & mask;
+    }
+    return &cat->qslot[i];
 }
 
 const sg_glass *sg_catalog_find(const sg_catalog *cat, const char *name)
@@ -144,51 +184,146 @@ const sg_glass *sg_catalog_find(const sg_catalog *cat, const char *name)
     return *s ? &cat->glass[*s - 1] : NULL;
 }
 
+const sg_glass *sg_catalog_find_in(const sg_catalog *cat, const char *catalog,
+                                   const char *name)
+{
+    size_t *s;
+    if (!catalog || !catalog[0])
+        return sg_catalog_find(cat, name);
+    if (!cat || !name || cat->nslot == 0)
+        return NULL;
+    s = find_qslot(cat, catalog, name);
+    return *s ? &cat->glass[*s - 1] : NULL;
+}
+
+const sg_glass *sg_material_glass(const sg_catalog *cat, const sg_material *m)
+{
+    if (!m || m->kind != SG_MAT_GLASS)
+        return NULL;
+    return sg_catalog_find_in(cat, m->catalog, m->name);
+}
+
+void sg_material_where(const sg_catalog *cat, const sg_material *m, char *buf, size_t n)
+{
+    size_t i;
+    if (!m->catalog[0]) {
+        if (n)
+            buf[0] = '\0';
+        return;
+    }
+    for (i = 0; cat && i < cat->ncats && !name_equal(cat->cats[i], m->catalog); i++)
+        ;
+    snprintf(buf, n, cat && i < cat->ncats ? " (catalog %s)" : " (catalog %s, which is not loaded)",
+             m->catalog);
+}
+
+size_t sg_catalog_ncatalogs(const sg_catalog *cat)
+{
+    return cat ? cat->ncats : 0;
+}
+
+const char *sg_catalog_catalog_at(const sg_catalog *cat, size_t i)
+{
+    return cat && i < cat->ncats ? cat->cats[i] : NULL;
+}
+
+/* Records g's catalog as newly seen (load order) and gives its rank in the
+ * search order. */
+static int catalog_rank(sg_catalog *cat, const char *catalog, int *rank)
+{
+    size_t i;
+    int k;
+    for (i = 0; i < cat->ncats && !name_equal(cat->cats[i], catalog); i++)
+        ;
+    if (i == cat->ncats) {
+        if (cat->ncats == cat->capcats) {
+            size_t ncap = cat->capcats ? 2 * cat->capcats : 16;
+            char(*p)[SG_GLASS_NAME] = realloc(cat->cats, ncap * sizeof *p);
+            if (!p)
+                return SG_ENOMEM;
+            cat->cats = p;
+            cat->capcats = ncap;
+        }
+        sg_strlcpy(cat->cats[cat->ncats++], catalog, SG_GLASS_NAME);
+    }
+    for (k = 0; k < NSEARCH; k++)
+        if (name_equal(search_order[k], catalog)) {
+            *rank = k;
+            return SG_OK;
+        }
+    *rank = NSEARCH + (int)i;
+    return SG_OK;
+}
+
+/* Enters glass i into both hashes. */
+static void index_glass(sg_catalog *cat, size_t i)
+{
+    size_t *q = find_qslot(cat, cat->glass[i].catalog, cat->glass[i].name);
+    size_t *s = find_slot(cat, cat->glass[i].name);
+    *q = i + 1;
+    if (!*s || cat->rank[i] < cat->rank[*s - 1])
+        *s = i + 1;
+}
+
 static int rehash(sg_catalog *cat, size_t nslot)
 {
-    size_t *old = cat->slot, i;
+    size_t *old = cat->slot, *oldq = cat->qslot, i;
     if (nslot > SIZE_MAX / sizeof *old)
         return SG_ENOMEM;
     cat->slot = calloc(nslot, sizeof *old);
-    if (!cat->slot) {
+    cat->qslot = calloc(nslot, sizeof *old);
+    if (!cat->slot || !cat->qslot) {
+        free(cat->slot);
+        free(cat->qslot);
         cat->slot = old;
+        cat->qslot = oldq;
         return SG_ENOMEM;
     }
     cat->nslot = nslot;
     for (i = 0; i < cat->n; i++)
-        *find_slot(cat, cat->glass[i].name) = i + 1;
+        index_glass(cat, i);
     free(old);
+    free(oldq);
     return SG_OK;
 }
 
-/* Adds g, or overwrites the glass of the same name so that the last file
- * loaded wins, as in Zemax. */
+/* Adds g, or overwrites the glass of the same name in the same catalog so
+ * that the last file loaded wins, as in Zemax. */
 static int catalog_put(sg_catalog *cat, const sg_glass *g)
 {
-    size_t *s;
+    size_t *q;
+    int rank, rc;
     if (2 * (cat->n + 1) > cat->nslot) {
-        int rc = rehash(cat, cat->nslot ? 2 * cat->nslot : 256);
+        rc = rehash(cat, cat->nslot ? 2 * cat->nslot : 256);
         if (rc)
             return rc;
     }
-    s = find_slot(cat, g->name);
-    if (*s) {
-        cat->glass[*s - 1] = *g;
+    q = find_qslot(cat, g->catalog, g->name);
+    if (*q) {
+        cat->glass[*q - 1] = *g;
         return SG_OK;
     }
+    if ((rc = catalog_rank(cat, g->catalog, &rank)) != SG_OK)
+        return rc;
     if (cat->n == cat->cap) {
         size_t ncap = cat->cap ? 2 * cat->cap : 64;
         sg_glass *p;
+        int *r;
         if (ncap > SIZE_MAX / sizeof *p)
             return SG_ENOMEM;
         p = realloc(cat->glass, ncap * sizeof *p);
         if (!p)
             return SG_ENOMEM;
         cat->glass = p;
+        r = realloc(cat->rank, ncap * sizeof *r);
+        if (!r)
+            return SG_ENOMEM;
+        cat->rank = r;
         cat->cap = ncap;
     }
     cat->glass[cat->n] = *g;
-    *s = ++cat->n;
+    cat->rank[cat->n] = rank;
+    index_glass(cat, cat->n++);
     return SG_OK;
 }
 

@@ -399,6 +399,7 @@ int sg_param_equal(sg_param_scope scope, const void *a, const void *b)
         case SG_PARAM_MATERIAL: {
             const sg_material *ma = qa, *mb = qb;
             if (ma->kind != mb->kind || strncmp(ma->name, mb->name, sizeof ma->name) != 0 ||
+                strncmp(ma->catalog, mb->catalog, sizeof ma->catalog) != 0 ||
                 !same_bits(ma->index, mb->index) || !same_bits(ma->vd, mb->vd) ||
                 !same_bits(ma->dpgf, mb->dpgf))
                 return 0;

@@ -29,7 +29,7 @@ extern "C" {
 /* The JSON design format version this library reads and writes. */
 /* Version 2 adds coordinate breaks and surface tilts and decenters; a
  * design without them is still written as version 1. */
-#define SG_DESIGN_FORMAT_VERSION 3
+#define SG_DESIGN_FORMAT_VERSION 4
 
 /* ------------------------------------------------------------------------
  * Errors.  One table yields the enum, the names and the messages, so the
@@ -149,8 +149,10 @@ typedef struct sg_catalog sg_catalog;
 
 sg_catalog *sg_catalog_new(void);
 void sg_catalog_free(sg_catalog *cat);
-/* Appends the glasses of one AGF file.  A later glass with the same name
- * replaces an earlier one. */
+/* Appends the glasses of one AGF file; the file's stem (upper case) is
+ * the glasses' catalog.  A later glass of the same name in the same
+ * catalog replaces an earlier one; glasses of one name in different
+ * catalogs are all kept. */
 int sg_catalog_load_agf(sg_catalog *cat, const char *path, sg_diag *d);
 /* Loads every *.agf in a directory. */
 int sg_catalog_load_dir(sg_catalog *cat, const char *dir, sg_diag *d);
@@ -160,7 +162,16 @@ int sg_catalog_load_dir(sg_catalog *cat, const char *dir, sg_diag *d);
 int sg_catalog_load_default(sg_catalog *cat, sg_diag *d);
 /* The directory sg_catalog_load_default() used, or NULL. */
 const char *sg_catalog_dir(const sg_catalog *cat);
+/* The glass an unqualified name means: of the catalogs holding it, the
+ * first in the search order SCHOTT, OHARA, MISC, INFRARED, HOYA, SUMITA,
+ * CDGM, HIKARI, then other catalogs in load order.  Case-insensitive. */
 const sg_glass *sg_catalog_find(const sg_catalog *cat, const char *name);
+/* The glass name of one catalog (NULL or "" means sg_catalog_find). */
+const sg_glass *sg_catalog_find_in(const sg_catalog *cat, const char *catalog,
+                                   const char *name);
+/* The catalogs loaded, in load order. */
+size_t sg_catalog_ncatalogs(const sg_catalog *cat);
+const char *sg_catalog_catalog_at(const sg_catalog *cat, size_t i);
 size_t sg_catalog_count(const sg_catalog *cat);
 const sg_glass *sg_catalog_at(const sg_catalog *cat, size_t i);
 
@@ -245,9 +256,16 @@ typedef enum sg_mat_kind {
 typedef struct sg_material {
     sg_mat_kind kind;
     char name[SG_GLASS_NAME]; /* glass name for SG_MAT_GLASS */
+    /* The glass's catalog, or "" for the glass the name alone means
+     * (sg_catalog_find); upper case. */
+    char catalog[SG_GLASS_NAME];
     double index;             /* for SG_MAT_INDEX; nd for SG_MAT_MODEL */
     double vd, dpgf;          /* for SG_MAT_MODEL */
 } sg_material;
+
+/* The catalog glass of a glass material (its catalog's if it names one),
+ * or NULL: not a glass, or not in cat. */
+const sg_glass *sg_material_glass(const sg_catalog *cat, const sg_material *m);
 
 /* A change of coordinate frame, as Zemax defines it (its coordinate break
  * and surface tilt/decenter).  Order 0: decenter the frame in x and y,

@@ -596,11 +596,14 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
             m->ok[i] = 1;
         }
         if (s->mat.kind == SG_MAT_GLASS && cat) {
-            const sg_glass *g = sg_catalog_find(cat, s->mat.name);
-            if (!g)
+            const sg_glass *g = sg_material_glass(cat, &s->mat);
+            if (!g) {
+                char where[96];
+                sg_material_where(cat, &s->mat, where, sizeof where);
                 return sg_diag_set(d, SG_ENOGLASS,
-                                   "surface %d: material \"%s\" is not in the catalog",
-                                   i, s->mat.name);
+                                   "surface %d: material \"%s\"%s is not in the catalog",
+                                   i, s->mat.name, where);
+            }
             for (k = 0; k < sys->nwave; k++)
                 if (!sg_glass_in_range(g, sys->wave[k].um))
                     sg_diag_warn(d,

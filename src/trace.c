@@ -214,7 +214,7 @@ int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave
             const sg_glass *g = s->mat.kind == SG_MAT_MODEL
                                     ? (sg_model_glass(s->mat.index, s->mat.vd, s->mat.dpgf,
                                                       &model) == SG_OK ? &model : NULL)
-                                : cat ? sg_catalog_find(cat, s->mat.name) : NULL;
+                                : cat ? sg_material_glass(cat, &s->mat) : NULL;
             if (!g && s->mat.kind == SG_MAT_MODEL) {
                 rc = sg_diag_set(d, SG_ERANGE, "surface %d: model glass nd %g, vd %g, dPgF %g "
                                  "is outside the model's limits", i, s->mat.index, s->mat.vd,
@@ -222,9 +222,11 @@ int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave
                 goto out;
             }
             if (!g) {
+                char where[96];
+                sg_material_where(cat, &s->mat, where, sizeof where);
                 rc = sg_diag_set(d, SG_ENOGLASS,
-                                 "surface %d: material \"%s\" is not in the catalog", i,
-                                 s->mat.name);
+                                 "surface %d: material \"%s\"%s is not in the catalog", i,
+                                 s->mat.name, where);
                 goto out;
             }
             if (sg_index_cache_glass(cache, sys, g, idx[i], um) != SG_OK) {

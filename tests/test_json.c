@@ -594,7 +594,7 @@ static const err_case err_cases[] = {
     {"{\"title\": 7, " S3 "}", SG_EPARSE, "t.json: title: expected a string, got number 7"},
     {"{\"format\": \"zemax\", " S3 "}", SG_EPARSE,
      "t.json: format: expected \"sagitta-design\", got string \"zemax\""},
-    {"{\"version\": 4, " S3 "}", SG_EUNSUPPORTED, "t.json: version: this is format version 4; this program reads version 3 and older"},
+    {"{\"version\": 5, " S3 "}", SG_EUNSUPPORTED, "t.json: version: this is format version 5; this program reads version 4 and older"},
     {"{\"version\": \"1\", " S3 "}", SG_EPARSE, "t.json: version: expected an integer"},
     {"{\"title\": \"no surfaces\"}", SG_EPARSE, "t.json: surfaces: required key is missing"},
     {"{\"surfaces\": {}}", SG_EPARSE, "t.json: surfaces: expected an array"},
@@ -756,6 +756,58 @@ static void test_environment_and_model(void **state)
                  SG_EPARSE, "a model glass needs \"nd\" and \"vd\"");
     expect_error("{\"surfaces\": [{}, {\"stop\": true, \"material\": {\"nd\": 1.5, \"vd\": 2}},"
                  " {}]}", SG_ERANGE, "model glass nd 1.5, vd 2");
+}
+
+/* A glass named with its catalog (format version 4) reads, writes and
+ * reads back; without a catalog the file stays as older versions wrote
+ * it; bad values name their key. */
+static void test_catalog_glass(void **state)
+{
+    static const char text[] =
+        "{ \"format\": \"sagitta-design\",\n"
+        "  \"surfaces\": [ { \"thickness\": \"inf\" },\n"
+        "    { \"radius\": 50, \"thickness\": 5, \"stop\": true,\n"
+        "      \"material\": { \"glass\": \"baf2\", \"catalog\": \"hoya\" } },\n"
+        "    { \"radius\": -50, \"thickness\": 3, \"material\": { \"glass\": \"F2\" } },\n"
+        "    { \"thickness\": 40 }, {} ] }\n";
+    sg_system *s = sg_system_new(), *r = sg_system_new();
+    sg_diag d;
+    char *out;
+    (void)state;
+    assert_int_equal(parse_text(s, text, &d), SG_OK);
+    assert_int_equal(s->surf[1].mat.kind, SG_MAT_GLASS);
+    assert_string_equal(s->surf[1].mat.name, "BAF2");
+    assert_string_equal(s->surf[1].mat.catalog, "HOYA");
+    assert_string_equal(s->surf[2].mat.name, "F2");
+    assert_string_equal(s->surf[2].mat.catalog, "");
+    out = sg_design_to_json(s);
+    assert_non_null(out);
+    assert_non_null(strstr(out, "\"version\": 4"));
+    assert_non_null(strstr(out, "{ \"glass\": \"BAF2\", \"catalog\": \"HOYA\" }"));
+    assert_non_null(strstr(out, "\"material\": \"F2\""));
+    assert_int_equal(parse_text(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(s, r));
+    /* The catalog is part of the design: another makes another design. */
+    snprintf(r->surf[1].mat.catalog, sizeof r->surf[1].mat.catalog, "CDGM");
+    assert_false(sg_system_equal(s, r));
+    free(out);
+    s->surf[1].mat.catalog[0] = '\0';
+    out = sg_design_to_json(s);
+    assert_non_null(strstr(out, "\"version\": 1"));
+    free(out);
+    sg_system_free(s);
+    sg_system_free(r);
+
+    expect_error("{\"surfaces\": [{}, {\"stop\": true, \"material\": {\"glass\": 7}}, {}]}",
+                 SG_EPARSE, "surface 1: material.glass: expected a glass name, got number 7");
+    expect_error("{\"surfaces\": [{}, {\"stop\": true, \"material\": {\"glass\": \"\"}}, {}]}",
+                 SG_EPARSE, "material.glass: expected a glass name");
+    expect_error("{\"surfaces\": [{}, {\"stop\": true, \"material\": {\"glass\": \"F2\", "
+                 "\"catalog\": [1]}}, {}]}",
+                 SG_EPARSE, "surface 1: material.catalog: expected a catalog name, got");
+    expect_error("{\"surfaces\": [{}, {\"stop\": true, \"material\": {\"glass\": \"F2\", "
+                 "\"catalog\": \"ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789\"}}, {}]}",
+                 SG_EPARSE, "catalog name \"ABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789\" is too long");
 }
 
 /* A frame change whose values are all zero but whose order is set moves
@@ -1357,6 +1409,7 @@ int main(void)
         cmocka_unit_test(test_content_errors),
         cmocka_unit_test(test_shapes),
         cmocka_unit_test(test_frame_order_kept),
+        cmocka_unit_test(test_catalog_glass),
         cmocka_unit_test(test_limits_accepted),
         cmocka_unit_test(test_warnings),
         cmocka_unit_test(test_file_errors),

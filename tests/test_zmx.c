@@ -734,6 +734,84 @@ static void test_coordinate_breaks(void **state)
     sg_catalog_free(cat);
 }
 
+/* Zemax takes a glass from the first catalog of the GCAT line that has
+ * one of its name.  BAF2 is a HOYA glass (nd 1.569650 on HOYA.agf's NM
+ * line) and INFRARED's barium fluoride (1.474478); F2 is SCHOTT's
+ * (1.620040) and HOYA's (1.620040, another formula).  The design names the
+ * catalog where the name alone means another's glass, the export's GCAT
+ * line puts each glass's catalog first, and a design no order can write
+ * is refused. */
+#define GLASSES "SURF 1\n  STOP\n  CURV 0.02\n  DISZ 5\n  GLAS BAF2\n" \
+                "SURF 2\n  CURV -0.01\n  DISZ 2\n  GLAS F2\n"             \
+                "SURF 3\n  DISZ 3\n  GLAS N-BK7\n"                         \
+                "SURF 4\n  CURV -0.02\n  DISZ 50\n"                        \
+                "SURF 5\n"
+
+static void test_gcat_order(void **state)
+{
+    static const struct {
+        const char *gcat, *cat1, *cat2; /* surfaces 1 and 2's catalogs */
+        const char *q1, *q2;            /* the design's qualifiers */
+    } cases[] = {
+        {"GCAT HOYA SCHOTT\n", "HOYA", "HOYA", "HOYA", "HOYA"},
+        {"GCAT SCHOTT HOYA\n", "HOYA", "SCHOTT", "HOYA", ""},
+        {"GCAT SCHOTT INFRARED HOYA\n", "INFRARED", "SCHOTT", "", ""},
+        {"", "INFRARED", "SCHOTT", "", ""},
+    };
+    sg_catalog *cat = tu_catalog();
+    char text[1024];
+    size_t i;
+    (void)state;
+    for (i = 0; i < sizeof cases / sizeof *cases; i++) {
+        sg_system *s = sg_system_new();
+        const sg_glass *g1, *g2;
+        sg_diag d;
+        char *z;
+        snprintf(text, sizeof text, "%s%s%s%s", H, cases[i].gcat, S0, GLASSES);
+        sg_diag_clear(&d);
+        if (sg_zmx_parse(s, text, strlen(text), "gcat.zmx", cat, &d) != SG_OK)
+            fail_msg("%s", d.msg);
+        g1 = sg_material_glass(cat, &s->surf[1].mat);
+        g2 = sg_material_glass(cat, &s->surf[2].mat);
+        assert_non_null(g1);
+        assert_non_null(g2);
+        assert_string_equal(g1->catalog, cases[i].cat1);
+        assert_string_equal(g2->catalog, cases[i].cat2);
+        assert_string_equal(s->surf[1].mat.catalog, cases[i].q1);
+        assert_string_equal(s->surf[2].mat.catalog, cases[i].q2);
+        assert_string_equal(s->surf[3].mat.catalog, "");
+        /* The index is the listed catalog's glass's. */
+        assert_true(fabs(sg_glass_index(g1, 0.5875618) -
+                         (strcmp(cases[i].cat1, "HOYA") == 0 ? 1.569650 : 1.474478)) < 5e-6);
+        z = sg_zmx_to_text(s, cat, &d);
+        assert_non_null(z);
+        print_message("# %-28.*s BAF2 from %-8s F2 from %-6s; export: %.*s\n",
+                      (int)strcspn(cases[i].gcat[0] ? cases[i].gcat : "(no GCAT line)", "\n"),
+                      cases[i].gcat[0] ? cases[i].gcat : "(no GCAT line)", g1->catalog,
+                      g2->catalog, (int)strcspn(strstr(z, "GCAT"), "\n"), strstr(z, "GCAT"));
+        free(z);
+        roundtrip(s, cat, "gcat.zmx");
+        sg_system_free(s);
+    }
+    /* HOYA's F2 beside SCHOTT's F5: each catalog has both names, so no
+     * GCAT order gives both. */
+    {
+        sg_system *s = sg_system_new();
+        sg_diag d;
+        snprintf(text, sizeof text, "%s%s%s%s", H, "GCAT HOYA SCHOTT\n", S0, GLASSES);
+        assert_int_equal(sg_zmx_parse(s, text, strlen(text), "gcat.zmx", cat, &d), SG_OK);
+        snprintf(s->surf[3].mat.name, sizeof s->surf[3].mat.name, "F5");
+        snprintf(s->surf[3].mat.catalog, sizeof s->surf[3].mat.catalog, "SCHOTT");
+        sg_diag_clear(&d);
+        assert_null(sg_zmx_to_text(s, cat, &d));
+        assert_int_equal(d.code, SG_EUNSUPPORTED);
+        assert_non_null(strstr(d.msg, "no order of the GCAT line"));
+        print_message("# HOYA's F2 with SCHOTT's F5: %s\n", d.msg);
+        sg_system_free(s);
+    }
+    sg_catalog_free(cat);
+}
+
 /* Apertures, obscurations and vignetting factors as Zemax writes them:
  * CLAP and OBSC take minimum and maximum radius, SQAP, SQOB, ELAP and ELOB
  * the x and y half widths, OBDC the decenter; VDXN ... VANN one value a
@@ -1476,6 +1554,7 @@ int main(void)
         cmocka_unit_test(test_zemax_fnum_solve),
         cmocka_unit_test(test_zemax_curvature_pickup_scale),
         cmocka_unit_test(test_zemax_chief_height_solve),
+        cmocka_unit_test(test_gcat_order),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

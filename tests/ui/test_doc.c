@@ -994,6 +994,35 @@ static void test_glass_picker(void **state)
     f = cmd_exec(e, "pick 1");
     assert_true(f & ED_ERROR);
 
+    /* A name several catalogs use: every catalog's glass is listed, and
+     * picking one the name alone does not mean (INFRARED's barium
+     * fluoride, by the search order) names its catalog. */
+    ok(e, "goto 1");
+    ok(e, "glasses baf2");
+    f = -1;
+    for (i = 0; i < l->n; i++)
+        if (strcmp(l->hit[i].g->name, "BAF2") == 0 && strcmp(l->hit[i].g->catalog, "HOYA") == 0)
+            f = i;
+    assert_true(f >= 0);
+    snprintf(cmd, sizeof cmd, "pick %d", f + 1);
+    ok(e, cmd);
+    assert_string_equal(e->doc.sys->surf[1].mat.name, "BAF2");
+    assert_string_equal(e->doc.sys->surf[1].mat.catalog, "HOYA");
+    g = sg_material_glass(e->cat, &e->doc.sys->surf[1].mat);
+    assert_true(fabs(g->nd - 1.569650) < 1e-9);
+    /* Typed: CATALOG:NAME, or the name alone. */
+    ok(e, "set 1 material infrared:baf2");
+    assert_string_equal(e->doc.sys->surf[1].mat.catalog, "");
+    ok(e, "set 1 material cdgm:baf2");
+    assert_string_equal(e->doc.sys->surf[1].mat.catalog, "CDGM");
+    f = cmd_exec(e, "set 1 material schott:baf2");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "surface 1 material: catalog schott has no glass \"baf2\""));
+    ok(e, "undo");
+    ok(e, "undo");
+    ok(e, "undo");
+    assert_int_equal(e->doc.sys->surf[1].mat.kind, SG_MAT_AIR);
+
     /* The environment: indices in the list follow it once adjusted. */
     ok(e, "temperature 40");
     ok(e, "pressure 0.5");

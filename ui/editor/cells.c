@@ -189,7 +189,14 @@ static void mat_text(const sg_material *m, char *buf, size_t n)
     switch (m->kind) {
     case SG_MAT_AIR: snprintf(buf, n, "%s", ""); break;
     case SG_MAT_MIRROR: snprintf(buf, n, "MIRROR"); break;
-    case SG_MAT_GLASS: snprintf(buf, n, "%s", m->name); break;
+    case SG_MAT_GLASS:
+        /* CATALOG:NAME, as typed, when the glass is not the one the name
+         * alone means. */
+        if (m->catalog[0])
+            snprintf(buf, n, "%s:%s", m->catalog, m->name);
+        else
+            snprintf(buf, n, "%s", m->name);
+        break;
     case SG_MAT_INDEX: numfmt_shortest(m->index, buf, n); break;
     default: snprintf(buf, n, "?"); break;
     }
@@ -276,7 +283,7 @@ static int set_material(sg_system *sys, const sg_catalog *cat, int row,
                         const char *text, char *err, size_t errn)
 {
     sg_surface *s = &sys->surf[row];
-    char buf[128];
+    char buf[128], *colon;
     double v;
     const sg_glass *g;
     if (!trimmed(text, buf, sizeof buf)) {
@@ -286,6 +293,7 @@ static int set_material(sg_system *sys, const sg_catalog *cat, int row,
     if (buf[0] == '\0' || strcasecmp(buf, "air") == 0) {
         s->mat.kind = SG_MAT_AIR;
         memset(s->mat.name, 0, sizeof s->mat.name);
+        memset(s->mat.catalog, 0, sizeof s->mat.catalog);
         s->mat.index = 0.0;
         return SG_EOK;
     }
@@ -297,6 +305,7 @@ static int set_material(sg_system *sys, const sg_catalog *cat, int row,
         }
         s->mat.kind = SG_MAT_MIRROR;
         memset(s->mat.name, 0, sizeof s->mat.name);
+        memset(s->mat.catalog, 0, sizeof s->mat.catalog);
         s->mat.index = 0.0;
         return SG_EOK;
     }
@@ -307,6 +316,7 @@ static int set_material(sg_system *sys, const sg_catalog *cat, int row,
         }
         s->mat.kind = SG_MAT_INDEX;
         memset(s->mat.name, 0, sizeof s->mat.name);
+        memset(s->mat.catalog, 0, sizeof s->mat.catalog);
         s->mat.index = v;
         return SG_EOK;
     }
@@ -316,14 +326,27 @@ static int set_material(sg_system *sys, const sg_catalog *cat, int row,
                  "(set SAGITTA_LENSDB)", row, buf);
         return SG_ENOGLASS;
     }
-    g = sg_catalog_find(cat, buf);
-    if (!g) {
+    /* "HOYA:BAF2" names a catalog's glass; "BAF2" the one the name alone
+     * means (sg_catalog_find's search order). */
+    colon = strchr(buf, ':');
+    if (colon) {
+        *colon = '\0';
+        g = sg_catalog_find_in(cat, buf, colon + 1);
+        if (!g) {
+            snprintf(err, errn, "surface %d material: catalog %s has no glass \"%s\"", row, buf,
+                     colon + 1);
+            return SG_ENOGLASS;
+        }
+    } else if (!(g = sg_catalog_find(cat, buf))) {
         snprintf(err, errn, "surface %d material: \"%s\" is not in the catalog", row, buf);
         return SG_ENOGLASS;
     }
     s->mat.kind = SG_MAT_GLASS;
     memset(s->mat.name, 0, sizeof s->mat.name);
+    memset(s->mat.catalog, 0, sizeof s->mat.catalog);
     snprintf(s->mat.name, sizeof s->mat.name, "%s", g->name);
+    if (g != sg_catalog_find(cat, g->name))
+        snprintf(s->mat.catalog, sizeof s->mat.catalog, "%s", g->catalog);
     s->mat.index = 0.0;
     return SG_EOK;
 }

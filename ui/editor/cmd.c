@@ -1041,6 +1041,7 @@ static int c_pick(ed *e, args *a)
 {
     double k;
     char line[ED_LINE];
+    const sg_glass *g;
     if (!need(e, a, 1, 1, "pick N") || !parse_num(e, a->v[1], "pick", &k))
         return ED_HANDLED | ED_ERROR;
     if (e->glasses.n == 0)
@@ -1051,9 +1052,13 @@ static int c_pick(ed *e, args *a)
     if (e->row < 1 || e->row >= e->doc.sys->nsurf - 1)
         return fail(e, "pick: the cursor is on surface %d; a glass goes on surfaces 1 to %d",
                      e->row, e->doc.sys->nsurf - 2);
-    /* Through "set", so undo, messages and checks are the cell's. */
-    snprintf(line, sizeof line, "set %d material %s", e->row,
-             e->glasses.hit[(int)k - 1].g->name);
+    /* Through "set", so undo, messages and checks are the cell's; the
+     * catalog is named when the name alone means another's glass. */
+    g = e->glasses.hit[(int)k - 1].g;
+    if (g == sg_catalog_find(e->cat, g->name))
+        snprintf(line, sizeof line, "set %d material %s", e->row, g->name);
+    else
+        snprintf(line, sizeof line, "set %d material %s:%s", e->row, g->catalog, g->name);
     return cmd_exec(e, line);
 }
 

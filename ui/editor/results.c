@@ -347,7 +347,7 @@ static int out_of_range(const ui *u, int row)
     if (!e->cat || row < 0 || row >= e->doc.sys->nsurf)
         return 0;
     s = &e->doc.sys->surf[row];
-    if (s->mat.kind != SG_MAT_GLASS || !(g = sg_catalog_find(e->cat, s->mat.name)))
+    if (s->mat.kind != SG_MAT_GLASS || !(g = sg_material_glass(e->cat, &s->mat)))
         return 0;
     return !sg_glass_in_range(g, e->doc.sys->wave[e->wave].um);
 }
