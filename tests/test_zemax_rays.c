@@ -96,7 +96,7 @@ static int zemax_number(const char *tok, double *v, double *half)
     return 1;
 }
 
-/* The value after the last ':' of a header line. */
+/* The number after the first ':' that follows key in the header. */
 static double header_value(const char *text, const char *key)
 {
     const char *p = strstr(text, key);
