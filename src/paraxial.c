@@ -32,6 +32,13 @@ typedef struct pm_slot {
     mpfr_t *y, *w;
 } pm_slot;
 
+/* The product of the steps after surface 1 as a tree (see steps()). */
+typedef struct ptree {
+    int L, size;      /* leaves in use (steps 2..last), a power of two >= L */
+    mpfr_t (*m)[4];   /* 2 size nodes, node 1 the root, leaf i at size + i */
+    char *ident;      /* the node is the identity (leaves past L only) */
+} ptree;
+
 typedef struct pm_set {
     mpfr_prec_t prec; /* 0: empty */
     int n;
@@ -39,6 +46,8 @@ typedef struct pm_set {
     double *R, *T;
     mpfr_t *ix;
     pm_slot s[PM_SLOTS];
+    ptree tree;
+    int dlo, dhi; /* leaves to recompute (dlo > dhi: none) */
 } pm_set;
 
 struct sg_parax_memo {
@@ -58,7 +67,41 @@ typedef struct pctx {
     pm_set *pm; /* NULL: no memo */
     int kf;     /* steps 1..kf-1 read what the memo saw */
     int slot;   /* the next trace's slot */
+    ptree own;  /* the tree when there is no memo */
+    ptree *tree; /* built: c->pm's or own; NULL until a trace needs it */
 } pctx;
+
+static void tree_free(ptree *t)
+{
+    int k;
+    if (t->m)
+        for (k = 0; k < 2 * t->size; k++)
+            mpfr_clears(t->m[k][0], t->m[k][1], t->m[k][2], t->m[k][3], (mpfr_ptr)0);
+    free(t->m);
+    free(t->ident);
+    memset(t, 0, sizeof *t);
+}
+
+/* A tree for the steps 2..last at prec; 0 when out of memory. */
+static int tree_make(ptree *t, int last, mpfr_prec_t prec)
+{
+    int k;
+    memset(t, 0, sizeof *t);
+    t->L = last >= 2 ? last - 1 : 0;
+    for (t->size = 1; t->size < t->L; t->size *= 2)
+        ;
+    t->m = calloc((size_t)(2 * t->size), sizeof *t->m);
+    t->ident = calloc((size_t)(2 * t->size), 1);
+    if (!t->m || !t->ident) {
+        free(t->m);
+        free(t->ident);
+        memset(t, 0, sizeof *t);
+        return 0;
+    }
+    for (k = 0; k < 2 * t->size; k++)
+        mpfr_inits2(prec, t->m[k][0], t->m[k][1], t->m[k][2], t->m[k][3], (mpfr_ptr)0);
+    return 1;
+}
 
 static void set_clear(pm_set *st)
 {
@@ -75,6 +118,7 @@ static void set_clear(pm_set *st)
         for (j = 0; j < st->n; j++)
             mpfr_clear(st->ix[j]);
     }
+    tree_free(&st->tree);
     free(st->R);
     free(st->T);
     free(st->ix);
@@ -124,12 +168,14 @@ static int set_make(pm_set *st, int n, mpfr_prec_t prec)
             return 0;
         }
     }
-    if (!st->R || !st->T || !st->ix) {
+    if (!st->R || !st->T || !st->ix || !tree_make(&st->tree, n - 2, prec)) {
         set_clear(st);
         return 0;
     }
     st->prec = prec;
     st->n = n;
+    st->dlo = 0;
+    st->dhi = st->tree.size - 1;
     for (j = 0; j < n; j++) {
         mpfr_init2(st->ix[j], prec);
         /* A NaN key matches nothing until the surface is seen. */
@@ -164,6 +210,17 @@ static int set_first_change(const pm_set *st, const sg_system *sys, mpfr_t *idx)
     return j;
 }
 
+/* The last surface whose inputs differ from the set's (-1: none). */
+static int set_last_change(const pm_set *st, const sg_system *sys, mpfr_t *idx)
+{
+    int j;
+    for (j = st->n - 1; j >= 0; j--)
+        if (!same_d(st->R[j], sys->surf[j].radius) ||
+            !same_d(st->T[j], sys->surf[j].thickness) || !same_mp(st->ix[j], idx[j]))
+            break;
+    return j;
+}
+
 /* Picks the set that shares the most surfaces with sys, or makes one. */
 static pm_set *memo_pick(sg_parax_memo *pm, const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
                          int *kf)
@@ -190,6 +247,24 @@ static pm_set *memo_pick(sg_parax_memo *pm, const sg_system *sys, mpfr_t *idx, m
     }
     best->stamp = ++pm->clock;
     *kf = bk;
+    if (bk < best->n) {
+        /* Step j reads surface j and the gap before it: a change on
+         * surfaces kf..kl reaches steps kf..kl + 1, leaves j - 2. */
+        int lo = bk - 2, hi = set_last_change(best, sys, idx) + 1 - 2;
+        if (lo < 0)
+            lo = 0;
+        if (hi > best->tree.size - 1)
+            hi = best->tree.size - 1;
+        if (lo <= hi) {
+            if (best->dlo > best->dhi) {
+                best->dlo = lo;
+                best->dhi = hi;
+            } else {
+                best->dlo = lo < best->dlo ? lo : best->dlo;
+                best->dhi = hi > best->dhi ? hi : best->dhi;
+            }
+        }
+    }
     return best;
 }
 
@@ -289,6 +364,114 @@ static void trace(pctx *c, yn *r, int first, int last)
     }
     if (sl && last > sl->good)
         sl->good = last;
+}
+
+/* The y-nu step of surface j (the gap from j - 1, then the surface) is
+ * linear: S[j] = [[1, tau], [-phi, q]], tau = t[j-1] / n[j-1] and
+ * q = 1 - phi tau.  A trace from surface 1 to the last is surface 1's
+ * refraction and then the product S[last] ... S[2], made as a balanced
+ * tree over the steps: each node the product of its two halves, higher
+ * steps on the left.  An edit of surfaces k..l changes the leaves of
+ * steps k..l + 1 and their ancestors only, and the memo keeps the rest;
+ * the tree's shape depends on the surface count alone, so a product from
+ * the memo has the bits of one made afresh. */
+static void leaf(pctx *c, mpfr_t *m, int j)
+{
+    mpfr_srcptr phi = phi_of(c, j);
+    mpfr_set_ui(m[0], 1, MPFR_RNDN);
+    mpfr_d_div(m[1], c->sys->surf[j - 1].thickness, c->idx[j - 1], MPFR_RNDN);
+    mpfr_neg(m[2], phi, MPFR_RNDN);
+    /* q = 1 - phi tau, rounded once */
+    mpfr_fms(m[3], phi, m[1], m[0], MPFR_RNDN);
+    mpfr_neg(m[3], m[3], MPFR_RNDN);
+}
+
+/* Node k of t from its children: the higher steps' product times the
+ * lower's; an identity child leaves the other one's bits. */
+static void combine(ptree *t, int k, mpfr_t tmp)
+{
+    mpfr_t *hi = t->m[2 * k + 1], *lo = t->m[2 * k], *m = t->m[k];
+    int i;
+    t->ident[k] = t->ident[2 * k] && t->ident[2 * k + 1];
+    if (t->ident[k])
+        return;
+    if (t->ident[2 * k + 1] || t->ident[2 * k]) {
+        mpfr_t *src = t->ident[2 * k + 1] ? lo : hi;
+        for (i = 0; i < 4; i++)
+            mpfr_set(m[i], src[i], MPFR_RNDN);
+        return;
+    }
+    /* [a b; c d] = hi lo, each entry one product and one fused step */
+    mpfr_mul(tmp, hi[1], lo[2], MPFR_RNDN);
+    mpfr_fma(m[0], hi[0], lo[0], tmp, MPFR_RNDN);
+    mpfr_mul(tmp, hi[1], lo[3], MPFR_RNDN);
+    mpfr_fma(m[1], hi[0], lo[1], tmp, MPFR_RNDN);
+    mpfr_mul(tmp, hi[3], lo[2], MPFR_RNDN);
+    mpfr_fma(m[2], hi[2], lo[0], tmp, MPFR_RNDN);
+    mpfr_mul(tmp, hi[3], lo[3], MPFR_RNDN);
+    mpfr_fma(m[3], hi[2], lo[1], tmp, MPFR_RNDN);
+}
+
+/* Recomputes leaves lo..hi of t and their ancestors. */
+static void tree_update(pctx *c, ptree *t, int lo, int hi)
+{
+    mpfr_t tmp;
+    int i, a, b;
+    mpfr_init2(tmp, c->prec);
+    for (i = lo; i <= hi; i++) {
+        t->ident[t->size + i] = i >= t->L;
+        if (i < t->L)
+            leaf(c, t->m[t->size + i], i + 2);
+    }
+    for (a = (t->size + lo) / 2, b = (t->size + hi) / 2; a >= 1; a /= 2, b /= 2)
+        for (i = a; i <= b; i++)
+            combine(t, i, tmp);
+    mpfr_clear(tmp);
+}
+
+/* The tree of this system's steps, brought up to date. */
+static ptree *steps(pctx *c)
+{
+    if (c->tree)
+        return c->tree;
+    if (c->pm) {
+        pm_set *st = c->pm;
+        if (st->dlo <= st->dhi) {
+            tree_update(c, &st->tree, st->dlo, st->dhi);
+            if (st->dlo > 0 || st->dhi < st->tree.size - 1)
+                c->memo->resumes++;
+            st->dlo = 1;
+            st->dhi = 0;
+        } else {
+            c->memo->resumes++;
+        }
+        c->tree = &st->tree;
+    } else {
+        if (!tree_make(&c->own, c->sys->nsurf - 2, c->prec))
+            return NULL;
+        tree_update(c, &c->own, 0, c->own.size - 1);
+        c->tree = &c->own;
+    }
+    return c->tree;
+}
+
+/* trace(c, r, 1, last) as surface 1 and the product of the rest; 0 when
+ * out of memory. */
+static int trace_all(pctx *c, yn *r)
+{
+    ptree *t = steps(c);
+    if (!t)
+        return 0;
+    mpfr_mul(c->a, r->y, phi_of(c, 1), MPFR_RNDN);
+    mpfr_sub(r->w, r->w, c->a, MPFR_RNDN);
+    if (t->ident[1])
+        return 1;
+    mpfr_mul(c->a, t->m[1][1], r->w, MPFR_RNDN);
+    mpfr_fma(c->a, t->m[1][0], r->y, c->a, MPFR_RNDN);
+    mpfr_mul(c->b, t->m[1][3], r->w, MPFR_RNDN);
+    mpfr_fma(r->w, t->m[1][2], r->y, c->b, MPFR_RNDN);
+    mpfr_swap(r->y, c->a);
+    return 1;
 }
 
 /* Height after moving the ray that left surface j by distance dist. */
@@ -408,6 +591,8 @@ int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
     c.memo = memo;
     c.pm = memo ? memo_pick(memo, sys, idx, prec, &c.kf) : NULL;
     c.slot = 0;
+    c.tree = NULL;
+    memset(&c.own, 0, sizeof c.own);
     mpfr_inits2(prec, c.a, c.b, A, B, T0, t1, t2, epr, u0, (mpfr_ptr)0);
     yn_init(&r, prec);
     yn_init(&m, prec);
@@ -447,7 +632,10 @@ int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
     /* EFL and BFL from a unit parallel ray. */
     mpfr_set_ui(r.y, 1, MPFR_RNDN);
     mpfr_set_zero(r.w, 1);
-    trace(&c, &r, 1, last);
+    if (!trace_all(&c, &r)) {
+        rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
+        goto out;
+    }
     if (mpfr_zero_p(r.w)) {
         mpfr_set_inf(o->efl, 1);
         mpfr_set_inf(o->bfl, 1);
@@ -517,7 +705,10 @@ int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
             mpfr_mul(m.y, u0, T0, MPFR_RNDN);
             mpfr_mul(m.w, u0, idx[0], MPFR_RNDN);
         }
-        trace(&c, &m, 1, last);
+        if (!trace_all(&c, &m)) {
+            rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
+            goto out;
+        }
         if (mpfr_zero_p(m.w)) {
             rc = sg_diag_set(d, SG_ENONPHYS, "aperture: the system is afocal; working F/# "
                                              "is undefined");
@@ -564,7 +755,11 @@ int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
         mpfr_t w0;
         mpfr_init2(w0, prec);
         mpfr_set(w0, m.w, MPFR_RNDN);
-        trace(&c, &m, 1, last);
+        if (!trace_all(&c, &m)) {
+            mpfr_clear(w0);
+            rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
+            goto out;
+        }
         if (mpfr_zero_p(m.w)) {
             mpfr_set_inf(o->image_dist, 1);
             mpfr_set_inf(o->working_fnum, 1);
@@ -616,7 +811,10 @@ int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
         mpfr_add_ui(ch.y, ch.y, 1, MPFR_RNDN);
         mpfr_mul(ch.w, t1, idx[0], MPFR_RNDN);
     }
-    trace(&c, &ch, 1, last);
+    if (!trace_all(&c, &ch)) {
+        rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
+        goto out;
+    }
     mpfr_set_d(t1, tlast, MPFR_RNDN);
     transfer(&c, o->pimg_slope, &ch, last, t1);
     if (mpfr_zero_p(ch.w)) {
@@ -667,6 +865,7 @@ out:
     for (j = 0; j < n; j++)
         if (c.phi_ok[j])
             mpfr_clear(c.phi[j]);
+    tree_free(&c.own);
     free(c.phi);
     free(c.phi_ok);
     yn_clear(&r);

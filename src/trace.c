@@ -179,6 +179,12 @@ int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave
                            mpfr_t *idx, sg_index_cache *cache, sg_diag *d)
 {
     mpfr_t um;
+    /* Catalog glasses met before in this call, with the surface whose
+     * index holds theirs: a design uses few glasses on many surfaces, and
+     * within one call a glass is one pointer with one index. */
+    enum { SEEN = 8 };
+    const sg_glass *seen_g[SEEN];
+    int seen_at[SEEN], seen_sign[SEEN], nseen = 0, k;
     int i, sign = 1, rc = SG_OK;
     mpfr_init2(um, mpfr_get_prec(idx[0]));
     mpfr_set_d(um, sys->wave[wave].um, MPFR_RNDN);
@@ -229,6 +235,16 @@ int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave
                                  s->mat.name, where);
                 goto out;
             }
+            for (k = 0; s->mat.kind == SG_MAT_GLASS && k < nseen && seen_g[k] != g; k++)
+                ;
+            if (s->mat.kind == SG_MAT_GLASS && k < nseen) {
+                /* The same bits the cache or the formula gave there. */
+                if (seen_sign[k] == sign)
+                    mpfr_set(idx[i], idx[seen_at[k]], MPFR_RNDN);
+                else
+                    mpfr_neg(idx[i], idx[seen_at[k]], MPFR_RNDN);
+                break;
+            }
             if (sg_index_cache_glass(cache, sys, g, idx[i], um) != SG_OK) {
                 rc = sg_diag_set(d, SG_ERANGE,
                                  "surface %d: glass %s has no real index at %g um", i,
@@ -237,6 +253,11 @@ int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave
             }
             if (sign < 0)
                 mpfr_neg(idx[i], idx[i], MPFR_RNDN);
+            if (s->mat.kind == SG_MAT_GLASS && nseen < SEEN) {
+                seen_g[nseen] = g;
+                seen_at[nseen] = i;
+                seen_sign[nseen++] = sign;
+            }
             break;
         }
         }

@@ -18,6 +18,7 @@
 #include <string.h>
 
 #include "index_cache.h"
+#include "internal.h"
 #include "testutil.h"
 
 static uint64_t rng = UINT64_C(0x2545f4914f6cdd1d);
@@ -357,6 +358,64 @@ static void test_many_wavelengths(void **state)
     sg_catalog_free(cat);
 }
 
+/* A glass met again on a later surface takes the index the first one got,
+ * with the sign of its own side of a mirror: N-BK7 before a fold mirror
+ * and again after it (travelled backwards, so negative), and F2 between.
+ * Each index is checked against the glass's own MPFR formula. */
+static void test_repeated_glass_signs(void **state)
+{
+    static const char text[] =
+        "{ \"format\": \"sagitta-design\", \"surfaces\": [ { \"thickness\": \"inf\" },\n"
+        "  { \"radius\": 50, \"thickness\": 5, \"stop\": true, \"material\": \"N-BK7\" },\n"
+        "  { \"radius\": -50, \"thickness\": 2, \"material\": \"F2\" },\n"
+        "  { \"thickness\": 20 },\n"
+        "  { \"thickness\": -10, \"material\": \"MIRROR\" },\n"
+        "  { \"radius\": -40, \"thickness\": -4, \"material\": \"N-BK7\" },\n"
+        "  { \"radius\": 40, \"thickness\": -3, \"material\": \"F2\" },\n"
+        "  { \"thickness\": -30 }, {} ] }\n";
+    static const struct {
+        int surf;
+        const char *glass;
+        int sign;
+    } want[] = {{1, "N-BK7", 1}, {2, "F2", 1}, {5, "N-BK7", -1}, {6, "F2", -1}};
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = sg_system_new();
+    sg_index_cache *ic = sg_index_cache_new();
+    mpfr_t idx[9], n, um;
+    sg_diag d;
+    int i, pass;
+    (void)state;
+    assert_int_equal(sg_design_parse(sys, text, strlen(text), "fold.json", &d), SG_OK);
+    assert_int_equal(sys->nsurf, 9);
+    mpfr_inits2(128, n, um, (mpfr_ptr)0);
+    for (i = 0; i < 9; i++)
+        mpfr_init2(idx[i], 128);
+    mpfr_set_d(um, sys->wave[sys->primary_wave].um, MPFR_RNDN);
+    /* Without a cache, then with one (twice: the second from its entries). */
+    for (pass = 0; pass < 3; pass++) {
+        sg_diag_clear(&d);
+        assert_int_equal(sg_indices_mpfr_cached(sys, cat, sys->primary_wave, idx,
+                                                pass ? ic : NULL, &d),
+                         SG_OK);
+        for (i = 0; i < 4; i++) {
+            assert_int_equal(sg_glass_index_mpfr(sg_catalog_find(cat, want[i].glass), n, um), 0);
+            if (want[i].sign < 0)
+                mpfr_neg(n, n, MPFR_RNDN);
+            if (!mpfr_equal_p(idx[want[i].surf], n))
+                fail_msg("pass %d: surface %d: index %.20g, want %.20g", pass, want[i].surf,
+                         mpfr_get_d(idx[want[i].surf], MPFR_RNDN), mpfr_get_d(n, MPFR_RNDN));
+        }
+        assert_true(mpfr_cmp_si(idx[3], 1) == 0 && mpfr_cmp_si(idx[4], -1) == 0 &&
+                    mpfr_cmp_si(idx[7], -1) == 0);
+    }
+    for (i = 0; i < 9; i++)
+        mpfr_clear(idx[i]);
+    mpfr_clears(n, um, (mpfr_ptr)0);
+    sg_index_cache_free(ic);
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -365,6 +424,7 @@ int main(void)
         cmocka_unit_test(test_singlet),
         cmocka_unit_test(test_many_wavelengths),
         cmocka_unit_test(test_many_surfaces),
+        cmocka_unit_test(test_repeated_glass_signs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
