@@ -988,7 +988,7 @@ static int c_thermal(ed *e, args *a)
     sg_system *hot;
     sg_diag d;
     double from;
-    if (!need(e, a, 2, 3, "thermal CELSIUS [ATM]") ||
+    if (!need(e, a, 1, 2, "thermal CELSIUS [ATM]") ||
         !parse_num(e, a->v[1], "temperature", &t))
         return ED_HANDLED | ED_ERROR;
     p = e->doc.sys->pressure;
