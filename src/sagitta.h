@@ -143,6 +143,9 @@ typedef struct sg_glass {
      * density (g/cm^3) and relative partial dispersion deviation dPgF. */
     double ed[4];
     int has_td, has_ed;
+    /* The ED line's fifth field, Zemax's "ignore thermal expansion" (a
+     * liquid or gas): its surfaces expand with their mounts' TCE. */
+    int ignore_expansion;
 } sg_glass;
 
 typedef struct sg_catalog sg_catalog;
@@ -791,7 +794,7 @@ void sg_set_vignetting_apply(sg_system *sys, const sg_vigfactors *vf);
  *   decenters of a coordinate break or a surface: its own tce.
  * A catalog glass's TCE is its ED line's -30..+70 C figure (0 without
  * one, with a warning); a model glass or fixed index, which carry none,
- * take the tce of their surface. */
+ * and a glass flagged to ignore expansion take the tce of their surface. */
 typedef struct sg_thermal_tce {
     double shape; /* 1e-6/K: radius, shape terms, semi-diameter, aperture */
     double space; /* the thickness after the surface */

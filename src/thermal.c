@@ -28,8 +28,9 @@ static int medium_of(const sg_system *sys, int i)
 }
 
 /* The TCE of the solid that surface j's material is: a catalog glass's ED
- * figure, or for a model glass or fixed index (no expansion data) the
- * surface's own tce. */
+ * figure; for a model glass or fixed index (no expansion data), or a
+ * material its catalog marks to ignore expansion (a liquid or gas, whose
+ * shape its mount sets), the surface's own tce. */
 static int solid_tce(const sg_system *sys, const sg_catalog *cat, int j, double *tce,
                      sg_diag *d)
 {
@@ -44,7 +45,7 @@ static int solid_tce(const sg_system *sys, const sg_catalog *cat, int j, double 
         return sg_diag_set(d, SG_ENOGLASS,
                            "surface %d: material \"%s\" is not in the catalog, so its "
                            "expansion is not known", j, s->mat.name);
-    *tce = g->has_ed ? g->ed[0] : 0.0;
+    *tce = g->ignore_expansion ? s->tce : g->has_ed ? g->ed[0] : 0.0;
     return SG_OK;
 }
 
@@ -208,7 +209,7 @@ int sg_thermal(const sg_system *sys, const sg_catalog *cat, double temp, double 
             }
         if (sys->surf[i].type != SG_SURF_COORDBRK && sys->surf[i].mat.kind == SG_MAT_GLASS) {
             const sg_glass *g = sg_catalog_find(cat, sys->surf[i].mat.name);
-            if (g && !(g->has_ed && g->ed[0] != 0.0)) {
+            if (g && !g->ignore_expansion && !(g->has_ed && g->ed[0] != 0.0)) {
                 nbare++;
                 sg_strlcpy(bare, g->name, sizeof bare);
             }

@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "testutil.h"
 
@@ -470,6 +471,52 @@ static void test_rules(void **state)
     sg_system_free(s);
 }
 
+/* A material its catalog marks to ignore thermal expansion (the ED line's
+ * fifth field, a liquid's or gas's) expands with its surface's tce, as the
+ * OpticStudio help's TCE topic says; the same glass unmarked keeps its ED
+ * figure. */
+static void test_ignore_expansion(void **state)
+{
+    static const char agf[] =
+        "CC test catalog\n"
+        "NM LIQ 2 517642 1.5168 64.17 0 1\n"
+        "ED 7.1 8.3 2.51 -0.0009 1\n"
+        "CD 1.03961212 0.00600069867 0.231792344 0.0200179144 1.01046945 103.560653 0 0 0 0\n"
+        "LD 0.3 2.5\n"
+        "NM SOLID 2 517642 1.5168 64.17 0 1\n"
+        "ED 7.1 8.3 2.51 -0.0009 0\n"
+        "CD 1.03961212 0.00600069867 0.231792344 0.0200179144 1.01046945 103.560653 0 0 0 0\n"
+        "LD 0.3 2.5\n";
+    char path[] = "/tmp/sg-thermal-XXXXXX";
+    sg_catalog *c = sg_catalog_new();
+    sg_system *s = singlet(50.0, -50.0, 4.0, 0.0, 90.0, 0.0);
+    sg_thermal_tce t[4];
+    sg_diag d;
+    int fd = mkstemp(path);
+    FILE *f;
+    (void)state;
+    assert_true(fd >= 0 && c);
+    f = fdopen(fd, "w");
+    assert_non_null(f);
+    fputs(agf, f);
+    fclose(f);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_catalog_load_agf(c, path, &d), SG_OK);
+    unlink(path);
+    assert_true(sg_catalog_find(c, "LIQ")->ignore_expansion == 1);
+    assert_true(sg_catalog_find(c, "SOLID")->ignore_expansion == 0);
+    s->surf[1].tce = 300.0;
+    snprintf(s->surf[1].mat.name, SG_GLASS_NAME, "LIQ");
+    sg_diag_clear(&d);
+    assert_int_equal(sg_thermal_tces(s, c, t, &d), SG_OK);
+    assert_true(t[1].shape == 300.0 && t[1].space == 300.0 && t[2].shape == 300.0);
+    snprintf(s->surf[1].mat.name, SG_GLASS_NAME, "SOLID");
+    assert_int_equal(sg_thermal_tces(s, c, t, &d), SG_OK);
+    assert_true(t[1].shape == 7.1 && t[1].space == 7.1 && t[2].shape == 7.1);
+    sg_system_free(s);
+    sg_catalog_free(c);
+}
+
 static void expect_refusal(const sg_system *s, double temp, double pres, int code,
                            const char *want)
 {
@@ -565,6 +612,7 @@ int main(void)
         cmocka_unit_test(test_zemax_forum_example),
         cmocka_unit_test(test_shapes_scale),
         cmocka_unit_test(test_rules),
+        cmocka_unit_test(test_ignore_expansion),
         cmocka_unit_test(test_refusals),
         cmocka_unit_test(test_json),
     };
