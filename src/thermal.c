@@ -233,7 +233,9 @@ int sg_thermal(const sg_system *sys, const sg_catalog *cat, double temp, double 
             (rc = sag_at(&w->surf[i], ha * sm[i], i, &za1, d)) != SG_OK ||
             (rc = sag_at(&w->surf[i + 1], hb * sm[i], i + 1, &zb1, d)) != SG_OK)
             goto done;
-        w->surf[i].thickness = (th + zb - za) * sm[i] - zb1 + za1;
+        /* (th + zb - za) sm - zb1 + za1, as a change to th: exact where
+         * nothing moves, and without the sags' cancellation. */
+        w->surf[i].thickness = th + ((th + zb - za) * (sm[i] - 1.0) + (zb - zb1) + (za1 - za));
     }
     w->temperature = temp;
     w->pressure = pres;
