@@ -27,6 +27,13 @@ static int medium_of(const sg_system *sys, int i)
     return i;
 }
 
+/* The catalog glass of a glass material: the one place thermal.c looks
+ * a glass up. */
+static const sg_glass *glass_of(const sg_catalog *cat, const sg_material *m)
+{
+    return cat && m->kind == SG_MAT_GLASS ? sg_catalog_find(cat, m->name) : NULL;
+}
+
 /* The TCE of the solid that surface j's material is: a catalog glass's ED
  * figure; for a model glass or fixed index (no expansion data), or a
  * material its catalog marks to ignore expansion (a liquid or gas, whose
@@ -40,7 +47,7 @@ static int solid_tce(const sg_system *sys, const sg_catalog *cat, int j, double 
         *tce = s->tce;
         return SG_OK;
     }
-    g = cat ? sg_catalog_find(cat, s->mat.name) : NULL;
+    g = glass_of(cat, &s->mat);
     if (!g)
         return sg_diag_set(d, SG_ENOGLASS,
                            "surface %d: material \"%s\" is not in the catalog, so its "
@@ -208,7 +215,7 @@ int sg_thermal(const sg_system *sys, const sg_catalog *cat, double temp, double 
                 nsolve++;
             }
         if (sys->surf[i].type != SG_SURF_COORDBRK && sys->surf[i].mat.kind == SG_MAT_GLASS) {
-            const sg_glass *g = sg_catalog_find(cat, sys->surf[i].mat.name);
+            const sg_glass *g = glass_of(cat, &sys->surf[i].mat);
             if (g && !g->ignore_expansion && !(g->has_ed && g->ed[0] != 0.0)) {
                 nbare++;
                 sg_strlcpy(bare, g->name, sizeof bare);
