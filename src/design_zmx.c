@@ -2381,6 +2381,18 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
     mpfr_clear(q);
     if (changed)
         sg_diag_warn(d, "export: control characters in the title or a comment became spaces");
+    {
+        /* Zemax keeps the TCE column in a TCEX line whose layout no file
+         * at hand showed, so it is left out rather than guessed. */
+        int ntce = 0, first = -1;
+        for (i = 0; i < s->nsurf; i++)
+            if (s->surf[i].tce != 0.0 && ntce++ == 0)
+                first = i;
+        if (ntce)
+            sg_diag_warn(d, "export: the tce of %d surface%s (the first: surface %d, %g) is "
+                         "not written: the .zmx TCEX line is not supported", ntce,
+                         ntce == 1 ? "" : "s", first, s->surf[first].tce);
+    }
     for (i = 0; i < s->nsurf; i++)
         for (k = 0; k < SG_SOLVE_NTARGETS; k++)
             if (s->surf[i].solve[k].kind != SG_SOLVE_NONE && !zmx_keeps(&s->surf[i], k))

@@ -901,8 +901,8 @@ static int parse_td(agf_ctx *cx, const agf_line *ln, sg_glass *g)
 }
 
 /* ED TCE(-30..70) TCE(100..300) density dPgF [ignore-thermal-expansion
- * flag ...]: only the first four numbers are kept (0 for a "-"); vendors
- * append one or two flags. */
+ * flag ...]: the first four numbers (0 for a "-") and the flag are kept;
+ * vendors append one or two flags. */
 static int parse_ed(agf_ctx *cx, const agf_line *ln, sg_glass *g)
 {
     static const char *const what[4] = {"ED expansion -30..70 C", "ED expansion 100..300 C",
@@ -920,6 +920,13 @@ static int parse_ed(agf_ctx *cx, const agf_line *ln, sg_glass *g)
         }
         if ((rc = tok_number(cx, ln, k + 1, what[k], &g->ed[k])) != SG_OK)
             return rc;
+    }
+    g->ignore_expansion = 0;
+    if (ln->ntok > 5 && !(ln->len[5] == 1 && ln->tok[5][0] == '-')) {
+        double flag;
+        if ((rc = tok_number(cx, ln, 5, "ED ignore-thermal-expansion flag", &flag)) != SG_OK)
+            return rc;
+        g->ignore_expansion = flag != 0.0;
     }
     g->has_ed = 1;
     return SG_OK;

@@ -181,6 +181,11 @@ static const sg_param surface_params[] = {
      after_names, 2, 2},
     FRAME(after, "after", "after ", "Aft dX", "Aft dY", "Aft tX", "Aft tY", "Aft tZ", "Aft Ord",
           "a"),
+    /* Format version 3: Zemax's TCE column, 1e-6/K, read by sg_thermal
+     * alone (sagitta-design(5), THERMAL EXPANSION).  Zemax's .zmx keyword
+     * is TCEX; its line is not read or written (see ZEMAX FILES). */
+    {"tce", "TCE", "TCE", "tce", NULL, SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+     offsetof(sg_surface, tce), 0, 1, 0, 0, -SG_TCE_MAX, SG_TCE_MAX, 0.0, NONAMES, 3},
 };
 
 #define NROWS(a) ((int)(sizeof(a) / sizeof((a)[0])))
@@ -468,7 +473,8 @@ int sg_param_used(const sg_param *p, int k, int type)
      * Order) and a thickness; no optics, no after change. */
     if (type == SG_SURF_COORDBRK)
         return strcmp(key, "type") == 0 || strcmp(key, "comment") == 0 ||
-               strcmp(key, "thickness") == 0 || strncmp(key, "before.", 7) == 0;
+               strcmp(key, "thickness") == 0 || strncmp(key, "before.", 7) == 0 ||
+               strcmp(key, "tce") == 0;
     if (strcmp(key, "asphere") == 0)
         return type == SG_SURF_EVENASPH || zern || (type == SG_SURF_TOROIDAL && k < 7);
     if (strcmp(key, "odd") == 0)

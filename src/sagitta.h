@@ -143,6 +143,9 @@ typedef struct sg_glass {
      * density (g/cm^3) and relative partial dispersion deviation dPgF. */
     double ed[4];
     int has_td, has_ed;
+    /* The ED line's fifth field, Zemax's "ignore thermal expansion" (a
+     * liquid or gas): its surfaces expand with their mounts' TCE. */
+    int ignore_expansion;
 } sg_glass;
 
 typedef struct sg_catalog sg_catalog;
@@ -358,6 +361,11 @@ typedef struct sg_surface {
     sg_frame_change after;
     sg_after_mode after_mode;
     sg_solve solve[SG_SOLVE_NTARGETS]; /* by sg_solve_target; kind 0: none */
+    /* Zemax's TCE column, 1e-6/K: the expansion of the mount that holds
+     * the surface (the air space after it, a mirror's substrate, a
+     * dummy's or coordinate break's placement).  Only sg_thermal reads
+     * it; traces do not.  Default 0. */
+    double tce;
 } sg_surface;
 
 typedef enum sg_field_type {
@@ -408,6 +416,8 @@ typedef struct sg_field {
 #define SG_TEMP_MIN (-250.0)
 #define SG_TEMP_MAX 1000.0
 #define SG_PRES_MAX 100.0
+/* Limit of a surface's |tce|, in 1e-6/K. */
+#define SG_TCE_MAX 1000.0
 
 typedef struct sg_system {
     char title[128];
@@ -782,6 +792,46 @@ int sg_set_vignetting(const sg_system *sys, const sg_catalog *cat, const sg_setv
                       sg_vigfactors *out, sg_diag *d);
 /* Sets every field's factors to vf[field]. */
 void sg_set_vignetting_apply(sg_system *sys, const sg_vigfactors *vf);
+
+/* Thermal expansion, as Zemax's thermal analysis applies it (its Make
+ * Thermal tool and thermal pickups; sagitta-design(5), THERMAL
+ * EXPANSION).  Every length of a part grows by s = 1 + TCE 1e-6 dT, dT =
+ * temp - sys->temperature (the design's own temperature is the reference),
+ * and every parameter in lens units to the power k by s^k, so a surface's
+ * sag becomes z'(x, y) = s z(x / s, y / s).  Which TCE a value takes:
+ *   shape (radius, shape terms, semi-diameter, aperture): the glass after
+ *     the surface; else the glass before it (a lens's rear surface, a
+ *     back-surface mirror); else the surface's own tce (a mirror's
+ *     substrate, a dummy);
+ *   thickness: inside a glass, the glass's (the centre thickness scales);
+ *     an air space, the tce of the surface where it starts (the mount),
+ *     whose spacer touches the surfaces at their semi-diameters: the
+ *     spacer's length between those points scales, the points move to
+ *     the scaled surfaces at the spacer's scaled radius, and the centre
+ *     thickness follows;
+ *   decenters of a coordinate break or a surface: its own tce.
+ * A catalog glass's TCE is its ED line's -30..+70 C figure (0 without
+ * one, with a warning); a model glass or fixed index, which carry none,
+ * and a glass flagged to ignore expansion take the tce of their surface. */
+typedef struct sg_thermal_tce {
+    double shape; /* 1e-6/K: radius, shape terms, semi-diameter, aperture */
+    double space; /* the thickness after the surface */
+    double place; /* decenters (the surface's own tce) */
+    int solid;    /* nonzero: the thickness after lies inside a glass */
+} sg_thermal_tce;
+/* out[i] for every surface i.  SG_ENOGLASS names a surface whose glass
+ * is not in cat (NULL refuses every catalog glass). */
+int sg_thermal_tces(const sg_system *sys, const sg_catalog *cat, sg_thermal_tce *out,
+                    sg_diag *d);
+/* The design sys as built at temp (C) and pres (atm), into out (an
+ * sg_system_new; may be sys): every surface scaled as above, temperature
+ * and pressure set, adjust_index on.  Solves and pickups are frozen at
+ * their values (the built lens does not refocus), with a warning.
+ * SG_ERANGE names the temperature or pressure outside their limits, or
+ * the surface whose expansion factor is not positive or whose sag at a
+ * spacer's contact height does not exist; on any error out is unchanged. */
+int sg_thermal(const sg_system *sys, const sg_catalog *cat, double temp, double pres,
+               sg_system *out, sg_diag *d);
 
 /* A prepared system: indices, paraxial data and work buffers, computed
  * once so the per-ray path allocates nothing.  A tracer is used by one

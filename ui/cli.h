@@ -35,6 +35,7 @@ int cmd_paraxial(int argc, char **argv);
 const char *cli_shortest(double v, char *buf, size_t n);
 int cmd_semidiam(int argc, char **argv);
 int cmd_vignetting(int argc, char **argv);
+int cmd_thermal(int argc, char **argv); /* thermal.c */
 /* Further subcommands live in their own files. */
 int cmd_verify(int argc, char **argv);
 int cmd_bench(int argc, char **argv);

@@ -35,6 +35,7 @@ static const cli_command commands[] = {
     { "fieldcurve", cmd_fieldcurve, "print field curvature and distortion against field" },
     { "semidiam", cmd_semidiam, "automatic semi-diameters, as Zemax computes them" },
     { "vignetting", cmd_vignetting, "vignetting factors from the apertures (Zemax's Set Vignetting)" },
+    { "thermal", cmd_thermal, "the design as built at another temperature (thermal expansion)" },
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
 

@@ -99,6 +99,45 @@ static void test_unknown_glass(void **state)
     (void)state;
     expect(4, ARGS("trace", path, "--ray", "0,0,0,0"), "surface 1", "NO-SUCH-GLASS-42");
     expect(4, ARGS("paraxial", path), "surface 1", NULL);
+    expect(4, ARGS("thermal", path, "--temperature", "40", "-o", ct_path("hot.json")),
+           "surface 1", "NO-SUCH-GLASS-42");
+}
+
+/* sagitta thermal: the N-BK7 singlet at 60 C from 20 C has its first radius
+ * grown by the glass's catalog TCE, 7.1e-6/K (ED line), the environment
+ * set, and the file written; bad options are usage errors. */
+static void test_thermal(void **state)
+{
+    const char *path = ct_design("bk7.json",
+        "    {\"radius\": \"inf\", \"thickness\": \"inf\"},\n"
+        "    {\"radius\": 50, \"thickness\": 5, \"material\": \"N-BK7\", \"stop\": true},\n"
+        "    {\"radius\": -50, \"thickness\": 45, \"tce\": 23.6},\n"
+        "    {\"radius\": \"inf\", \"thickness\": 0}");
+    const char *out = ct_path("bk7-60.json");
+    ct_result r;
+    char *text, *p;
+    (void)state;
+    ct_run(&r, "thermal", path, "--temperature", "60", "-o", out, (const char *)NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    assert_non_null(strstr(r.out, "Saved: "));
+    text = ct_read(out);
+    assert_non_null(strstr(text, "\"temperature\": 60"));
+    assert_non_null(strstr(text, "\"adjust_index\": true"));
+    assert_non_null(strstr(text, "\"tce\": 23.6"));
+    p = strstr(text, "\"radius\": 5");
+    assert_non_null(p);
+    assert_true(strtod(p + 10, NULL) == 50.0 * (1.0 + 7.1 * 1e-6 * 40.0));
+    free(text);
+    ct_free(&r);
+    expect(2, ARGS("thermal", path, "--temperature", "1001", "-o", out), "--temperature",
+           "outside -250 to 1000 C");
+    expect(2, ARGS("thermal", path, "--temperature", "20", "--pressure", "-1", "-o", out),
+           "--pressure", NULL);
+    expect(2, ARGS("thermal", path, "-o", out), "missing --temperature", NULL);
+    expect(2, ARGS("thermal", path, "--temperature", "40"), "missing -o", NULL);
+    expect(3, ARGS("thermal", ct_path("none.json"), "--temperature", "40", "-o", out),
+           "none.json", NULL);
 }
 
 static void test_bad_values(void **state)
@@ -230,6 +269,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_csv_errors),
         cmocka_unit_test(test_output_errors),
         cmocka_unit_test(test_output_full),
+        cmocka_unit_test(test_thermal),
     };
     int rc;
     ct_init(argc, argv);

@@ -236,6 +236,28 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     if (!j2 || strcmp(j1, j2) != 0)
         die("writing the design twice gives different text", j1);
 
+    if (rc == SG_OK) {
+        /* The design as built hot: refused with a message, or a design
+         * that validates and writes. */
+        sg_system *h = sg_system_new();
+        char *j3;
+        if (!h)
+            die("out of memory", NULL);
+        sg_diag_clear(&d);
+        rc = sg_thermal(a, cat, a->temperature + 55.0 <= SG_TEMP_MAX ? a->temperature + 55.0
+                                                                    : SG_TEMP_MIN, 1.0, h, &d);
+        check_diag(&d, rc, 0);
+        if (rc == SG_OK) {
+            sg_diag_clear(&d);
+            if (sg_system_validate(h, cat, &d) != SG_OK)
+                die("the thermal design does not validate", d.msg);
+            if (!(j3 = sg_design_to_json(h)))
+                die("the thermal design cannot be written", NULL);
+            free(j3);
+        }
+        sg_system_free(h);
+        rc = SG_OK;
+    }
     if (rc == SG_OK && do_trace)
         trace_some(a);
 done:

@@ -1046,6 +1046,36 @@ static void test_glass_picker(void **state)
     free_ed(e);
 }
 
+/* ":thermal T" is the engine's sg_thermal as one edit: the singlet's
+ * radius grows by N-BK7's catalog TCE (7.1e-6/K, its ED line), the mount's
+ * tce typed in the TCE column is kept, one undo restores every byte, and a
+ * temperature beyond the limits changes nothing. */
+static void test_thermal(void **state)
+{
+    ed *e = new_ed();
+    char ex[512];
+    sg_system *before;
+    int f;
+    (void)state;
+    run(e, "open %s", tu_path("examples/singlet.json", ex, sizeof ex));
+    ok(e, "set 2 tce 23.6");
+    assert_true(e->doc.sys->surf[2].tce == 23.6);
+    before = sg_system_clone(e->doc.sys);
+    f = cmd_exec(e, "thermal 1001");
+    assert_true(f & ED_ERROR);
+    if (!strstr(e->msg, "temperature 1001 C is outside"))
+        fail_msg("message: %s", e->msg);
+    assert_true(sys_bytes_equal(e->doc.sys, before));
+    ok(e, "thermal 60");
+    assert_true(e->doc.sys->surf[1].radius == 51.5 * (1.0 + 7.1 * 1e-6 * 40.0));
+    assert_true(e->doc.sys->temperature == 60.0 && e->doc.sys->adjust_index == 1 &&
+                e->doc.sys->surf[2].tce == 23.6);
+    ok(e, "undo");
+    assert_true(sys_bytes_equal(e->doc.sys, before));
+    sg_system_free(before);
+    free_ed(e);
+}
+
 /* "telecentric on" turns on Zemax's telecentric object space only with
  * what Zemax requires (an object NA, a finite object, height fields), which
  * then stay so; undo turns it off again. */
@@ -1105,6 +1135,7 @@ int main(void)
         cmocka_unit_test(test_batch),
         cmocka_unit_test(test_glass_picker),
         cmocka_unit_test(test_telecentric),
+        cmocka_unit_test(test_thermal),
         cmocka_unit_test(test_export_matches_trace),
     };
     static const char *const files[] = {"mod.json", "rt.json", "script.txt", "stderr.txt",
