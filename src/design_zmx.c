@@ -1354,6 +1354,33 @@ static int surface_line(zctx *c, const zline *l)
               from, col);
         return SG_OK;
     }
+    if (tok_is(k, "PKUP")) {
+        /* PKUP from scale offset [column]: a conic pickup, laid out as
+         * PZUP (a Zemax 13 file writes "PKUP 2 1 0" for surface 2's conic
+         * at scale 1; tests/data/zmx/README.md). */
+        double from, scale, off, col;
+        if ((rc = opt_num(c, l, 1, "pickup surface", -1.0, &from)) != SG_OK ||
+            (rc = opt_num(c, l, 2, "pickup scale", 1.0, &scale)) != SG_OK ||
+            (rc = opt_num(c, l, 3, "pickup offset", 0.0, &off)) != SG_OK ||
+            (rc = opt_num(c, l, 4, "pickup column", 0.0, &col)) != SG_OK)
+            return rc;
+        if (from == floor(from) && from >= 0 && from < c->cur && col == 0.0) {
+            sg_solve *o = &s->solve[SG_SOLVE_CONIC];
+            memset(o, 0, sizeof *o);
+            o->kind = SG_SOLVE_PICKUP;
+            o->from = (int)from;
+            o->scale = scale;
+            o->offset = off;
+            c->nlive++;
+            zwarn(c, "PKUP: note: the conic pickup from surface %d is kept", o->from);
+            return SG_OK;
+        }
+        c->nfrozen++;
+        zwarn(c, "PKUP: the conic pickup from surface %g (column %g) is frozen at the value "
+              "stored in the file: sagitta keeps pickups of a conic from an earlier surface",
+              from, col);
+        return SG_OK;
+    }
     if (tok_is(k, "PPAR") || tok_is(k, "EDGE")) {
         /* A parameter pickup, an edge thickness solve: the stored value
          * stays. */
@@ -1783,7 +1810,7 @@ static int is_surface_kw(const ztok *k)
     static const char *const kw[] = {
         "TYPE", "CURV", "DISZ", "GLAS", "CONI", "PARM", "XDAT", "DIAM", "STOP", "CLAP",
         "FLAP", "OBDC", "OBSC", "SQAP", "ELAP", "SQOB", "ELOB", "COMM", "SCBD", "SCAD",
-        "PZUP", "PPAR", "MAZH", "CHZH", "EDGE"};
+        "PZUP", "PKUP", "PPAR", "MAZH", "CHZH", "EDGE"};
     return in_list(k, kw, sizeof kw / sizeof *kw) ||
            in_list(k, ignored_surface, sizeof ignored_surface / sizeof *ignored_surface);
 }
@@ -2054,6 +2081,8 @@ static int zmx_keeps(const sg_surface *f, int t)
     case SG_SOLVE_THICKNESS:
         return v->kind == SG_SOLVE_PICKUP || v->kind == SG_SOLVE_MARGINAL_HEIGHT ||
                v->kind == SG_SOLVE_CHIEF_HEIGHT;
+    case SG_SOLVE_CONIC:
+        return v->kind == SG_SOLVE_PICKUP;
     default:
         return 0;
     }
@@ -2362,6 +2391,10 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
             break;
         }
         zb_printf(b, "  CONI %s\n", num(n1, f->conic));
+        if (f->solve[SG_SOLVE_CONIC].kind == SG_SOLVE_PICKUP) {
+            const sg_solve *v = &f->solve[SG_SOLVE_CONIC];
+            zb_printf(b, "  PKUP %d %s %s 0\n", v->from, num(n1, v->scale), num(n2, v->offset));
+        }
         zb_printf(b, "  DIAM %s %d 0 0 1 \"\"\n", num(n1, f->semi_diameter), f->sd_fixed ? 1 : 0);
         if (f->sd_fixed)
             zb_printf(b, "  CLAP 0 %s 0\n", num(n1, f->semi_diameter));

@@ -734,6 +734,65 @@ static void test_coordinate_breaks(void **state)
     sg_catalog_free(cat);
 }
 
+/* A conic pickup as Zemax writes it: "PKUP from scale offset" after the
+ * CONI line (the layout of the Zemax 13 file "Mach Zender
+ * Interferometer.zmx", whose surface 18 picks up surface 2's radius at
+ * scale -1 and its conic at scale 1: tests/data/zmx/README.md).  Kept as
+ * a conic pickup, recomputed as scale * conic + offset, written back. */
+static void test_zemax_conic_pickup(void **state)
+{
+    static const char text[] = H S0
+        "SURF 1\n  CURV 0.0\n  DISZ 2\n  GLAS N-BK7 0 0 1.5 4.0E+1 0 0 0 0 0 0\n"
+        "SURF 2\n  STOP\n  CURV -1.704311259049000000E-001 1 0 0 0 \"\"\n  DISZ 1.0E+1\n"
+        "  CONI -5.7473253732E-1\n  DIAM 3.0 1 0 0 1 \"\"\n"
+        "SURF 3\n  CURV 1.704311259049000000E-001 4 2 -1. 0 \"\"\n  DISZ 2\n"
+        "  GLAS N-BK7 0 0 1.5 4.0E+1 0 0 0 0 0 0\n  CONI -5.7473253732E-1\n"
+        "  DIAM 3.0 1 0 0 1 \"\"\n  PKUP 2 1.000000000000E+000 0\n"
+        "SURF 4\n  CURV 0.0\n  DISZ 20\n  CONI 0.5\n  PKUP 2 2 0.25\n"
+        "SURF 5\n  CURV 0.0\n  DISZ 10\n  CONI 3\n  PKUP 4 1 0 1\n"
+        "SURF 6\n";
+    sg_catalog *cat = tu_catalog();
+    sg_system *s = sg_system_new();
+    sg_diag d;
+    char *z;
+    int i, warned = 0;
+    (void)state;
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(s, text, strlen(text), "pkup.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_int_equal(s->surf[3].solve[SG_SOLVE_CONIC].kind, SG_SOLVE_PICKUP);
+    assert_int_equal(s->surf[3].solve[SG_SOLVE_CONIC].from, 2);
+    assert_true(s->surf[3].solve[SG_SOLVE_CONIC].scale == 1.0 &&
+                s->surf[3].solve[SG_SOLVE_CONIC].offset == 0.0);
+    assert_int_equal(s->surf[3].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_PICKUP);
+    assert_true(s->surf[4].solve[SG_SOLVE_CONIC].scale == 2.0 &&
+                s->surf[4].solve[SG_SOLVE_CONIC].offset == 0.25);
+    /* Another column than the conic's (column 1): frozen, with a warning. */
+    assert_int_equal(s->surf[5].solve[SG_SOLVE_CONIC].kind, SG_SOLVE_NONE);
+    assert_true(s->surf[5].conic == 3.0);
+    for (i = 0; i < d.nwarn && i < SG_DIAG_MAXWARN; i++)
+        warned |= strstr(d.warn[i], "PKUP: the conic pickup from surface 4 (column 1) is "
+                                    "frozen") != NULL;
+    assert_true(warned);
+    /* Recomputed from the design: surface 3 mirrors surface 2. */
+    s->surf[3].conic = s->surf[4].conic = 9.0;
+    s->surf[3].radius = 9.0;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_system_apply_solves(s, cat, &d), SG_OK);
+    assert_true(s->surf[3].conic == -5.7473253732E-1);
+    assert_true(s->surf[3].radius == -s->surf[2].radius);
+    assert_true(s->surf[4].conic == 2.0 * -5.7473253732E-1 + 0.25);
+    sg_diag_clear(&d);
+    z = sg_zmx_to_text(s, cat, &d);
+    assert_non_null(z);
+    assert_non_null(strstr(z, "  PKUP 2 1 0 0\n"));
+    assert_non_null(strstr(z, "  PKUP 2 2 0.25 0\n"));
+    free(z);
+    roundtrip(s, cat, "pkup.zmx");
+    sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
 /* Zemax takes a glass from the first catalog of the GCAT line that has
  * one of its name.  BAF2 is a HOYA glass (nd 1.569650 on HOYA.agf's NM
  * line) and INFRARED's barium fluoride (1.474478); F2 is SCHOTT's
@@ -1555,6 +1614,7 @@ int main(void)
         cmocka_unit_test(test_zemax_curvature_pickup_scale),
         cmocka_unit_test(test_zemax_chief_height_solve),
         cmocka_unit_test(test_gcat_order),
+        cmocka_unit_test(test_zemax_conic_pickup),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
