@@ -51,7 +51,7 @@ static const char *const ignored_header[] = {
     "TOL", "MOFF", "TCMM", /* tolerances; multi-configuration rows of MNUM 1 */
 };
 static const char *const ignored_surface[] = {
-    "FIMP", "HIDE", "MIRR", "SLAB", "POPS", "MEMA", "OEMA", "COAT", "SSID",
+    "FIMP", "HIDE", "MIRR", "SLAB", "SCOL", "POPS", "MEMA", "OEMA", "COAT", "SSID",
     "VPAR", "VCRV", "VDSZ", "VTHI", "VCON", "VGLS", "TCEX", "CONF",
     /* drawing, labels, physical optics, mechanical apertures, coatings,
      * variable flags for optimisation, thermal expansion (Zemax applies it
@@ -879,6 +879,7 @@ static int zmx_shape(zctx *c, zsurf *z, sg_surface *s)
                            : strcmp(z->type, "DGRATING") == 0   ? "a diffraction grating"
                            : strcmp(z->type, "EXTPOLY") == 0    ? "an extended polynomial"
                            : strcmp(z->type, "GRID_SAG") == 0   ? "a grid sag"
+                           : strcmp(z->type, "NONSEQCO") == 0   ? "a non-sequential component"
                                                                 : "this surface type";
         return zerr(c, SG_EUNSUPPORTED,
                     "TYPE %s is %s; sagitta has the standard, even and odd asphere, toroidal, "
@@ -888,6 +889,19 @@ static int zmx_shape(zctx *c, zsurf *z, sg_surface *s)
     /* Their extra data are read above; no other check applies. */
     z->xdat_line = 0;
     return SG_OK;
+}
+
+/* The TYPE names sagitta reads (end_surface, zmx_shape). */
+static int known_type(const char *t)
+{
+    static const char *const names[] = {"STANDARD", "EVENASPH", "COORDBRK", "ODDASPHE",
+                                        "TOROIDAL", "BICONICX", "FZERNSAG", "SZERNSAG",
+                                        "XPOLYNOM"};
+    size_t i;
+    for (i = 0; i < sizeof names / sizeof *names; i++)
+        if (strcmp(t, names[i]) == 0)
+            return 1;
+    return 0;
 }
 
 /* Ends the current surface block: its type, parameters and aperture. */
@@ -1354,6 +1368,26 @@ static int surface_line(zctx *c, const zline *l)
               from, col);
         return SG_OK;
     }
+    if (tok_is(k, "TCED")) {
+        /* TCED tce 0 0: the TCE column (1e-6/K), the mount's expansion
+         * for the air after the surface (Zemax 8 and 13 files write
+         * "TCED 2.35E+1 0 0", aluminium, on the surface after a lens). */
+        double tce, f2, f3;
+        if ((rc = opt_num(c, l, 1, "TCE", 0.0, &tce)) != SG_OK ||
+            (rc = opt_num(c, l, 2, "TCE solve", 0.0, &f2)) != SG_OK ||
+            (rc = opt_num(c, l, 3, "TCE solve parameter", 0.0, &f3)) != SG_OK)
+            return rc;
+        if (!(fabs(tce) <= SG_TCE_MAX))
+            return zerr(c, SG_ERANGE, "TCED: TCE %.17g (1e-6/K) is outside -%g to %g", tce,
+                        SG_TCE_MAX, SG_TCE_MAX);
+        s->tce = tce;
+        if (f2 != 0.0 || f3 != 0.0) {
+            c->nfrozen++;
+            zwarn(c, "TCED: the TCE's solve (%g %g) is frozen at the value stored in the file",
+                  f2, f3);
+        }
+        return SG_OK;
+    }
     if (tok_is(k, "PKUP")) {
         /* PKUP from scale offset [column]: a conic pickup, laid out as
          * PZUP (a Zemax 13 file writes "PKUP 2 1 0" for surface 2's conic
@@ -1390,6 +1424,12 @@ static int surface_line(zctx *c, const zline *l)
     }
     if (in_list(k, ignored_surface, sizeof ignored_surface / sizeof *ignored_surface))
         return SG_OK;
+    /* A keyword of a surface type sagitta lacks (NSOH of a non-sequential
+     * component, GDAT of a grating): the type is the reason. */
+    if (z->type[0] && !known_type(z->type)) {
+        c->line = z->type_line;
+        return zmx_shape(c, z, s);
+    }
     tok_show(k, q, sizeof q);
     return zerr(c, SG_EUNSUPPORTED, "unknown surface keyword '%s'; sagitta cannot tell whether "
                 "it changes the trace, so the file is refused", q);
@@ -1810,7 +1850,7 @@ static int is_surface_kw(const ztok *k)
     static const char *const kw[] = {
         "TYPE", "CURV", "DISZ", "GLAS", "CONI", "PARM", "XDAT", "DIAM", "STOP", "CLAP",
         "FLAP", "OBDC", "OBSC", "SQAP", "ELAP", "SQOB", "ELOB", "COMM", "SCBD", "SCAD",
-        "PZUP", "PKUP", "PPAR", "MAZH", "CHZH", "EDGE"};
+        "PZUP", "PKUP", "PPAR", "MAZH", "CHZH", "EDGE", "TCED"};
     return in_list(k, kw, sizeof kw / sizeof *kw) ||
            in_list(k, ignored_surface, sizeof ignored_surface / sizeof *ignored_surface);
 }
@@ -2395,6 +2435,8 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
             const sg_solve *v = &f->solve[SG_SOLVE_CONIC];
             zb_printf(b, "  PKUP %d %s %s 0\n", v->from, num(n1, v->scale), num(n2, v->offset));
         }
+        if (f->tce != 0.0)
+            zb_printf(b, "  TCED %s 0 0\n", num(n1, f->tce));
         zb_printf(b, "  DIAM %s %d 0 0 1 \"\"\n", num(n1, f->semi_diameter), f->sd_fixed ? 1 : 0);
         if (f->sd_fixed)
             zb_printf(b, "  CLAP 0 %s 0\n", num(n1, f->semi_diameter));
@@ -2414,18 +2456,6 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
     mpfr_clear(q);
     if (changed)
         sg_diag_warn(d, "export: control characters in the title or a comment became spaces");
-    {
-        /* Zemax keeps the TCE column in a TCEX line whose layout no file
-         * at hand showed, so it is left out rather than guessed. */
-        int ntce = 0, first = -1;
-        for (i = 0; i < s->nsurf; i++)
-            if (s->surf[i].tce != 0.0 && ntce++ == 0)
-                first = i;
-        if (ntce)
-            sg_diag_warn(d, "export: the tce of %d surface%s (the first: surface %d, %g) is "
-                         "not written: the .zmx TCEX line is not supported", ntce,
-                         ntce == 1 ? "" : "s", first, s->surf[first].tce);
-    }
     for (i = 0; i < s->nsurf; i++)
         for (k = 0; k < SG_SOLVE_NTARGETS; k++)
             if (s->surf[i].solve[k].kind != SG_SOLVE_NONE && !zmx_keeps(&s->surf[i], k))

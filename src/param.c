@@ -182,9 +182,8 @@ static const sg_param surface_params[] = {
     FRAME(after, "after", "after ", "Aft dX", "Aft dY", "Aft tX", "Aft tY", "Aft tZ", "Aft Ord",
           "a"),
     /* Format version 3: Zemax's TCE column, 1e-6/K, read by sg_thermal
-     * alone (sagitta-design(5), THERMAL EXPANSION).  Zemax's .zmx keyword
-     * is TCEX; its line is not read or written (see ZEMAX FILES). */
-    {"tce", "TCE", "TCE", "tce", NULL, SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+     * alone (sagitta-design(5), THERMAL EXPANSION); the .zmx line TCED. */
+    {"tce", "TCE", "TCE", "tce", "TCED", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
      offsetof(sg_surface, tce), 0, 1, 0, 0, -SG_TCE_MAX, SG_TCE_MAX, 0.0, NONAMES, 3},
 };
 

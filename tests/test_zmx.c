@@ -557,6 +557,10 @@ static void test_bad_inputs(void **state)
         {"empty", "", 0, SG_EPARSE, "no SURF line"},
         {"json", "{\"format\": \"sagitta-design\"}\n", 0, SG_EUNSUPPORTED, "t.zmx:1: unknown keyword"},
         {"nsc", "MODE NSC\n" S0, 0, SG_EUNSUPPORTED, "t.zmx:1: MODE"},
+        /* A non-sequential component's own keywords: the type is named,
+         * at its line. */
+        {"nsc component", H S0 S1 "SURF 2\n  TYPE NONSEQCO\n  CURV 0.0\n  NSOH NSC_NULL 0 0\n",
+         0, SG_EUNSUPPORTED, "t.zmx:13: surface 2: TYPE NONSEQCO is a non-sequential component"},
         {"bad number", H S0 "SURF 1\n  CURV 0.0x2\n", 0, SG_EPARSE, "t.zmx:8: surface 1: curvature: not a number: '0.0x2'"},
         {"nan", H S0 "SURF 1\n  DISZ nan\n", 0, SG_EPARSE, "t.zmx:8: surface 1: thickness: not a number"},
         {"huge", H S0 "SURF 1\n  DISZ 1e999\n", 0, SG_ERANGE, "t.zmx:8: surface 1: thickness"},
@@ -789,6 +793,47 @@ static void test_zemax_conic_pickup(void **state)
     assert_non_null(strstr(z, "  PKUP 2 2 0.25 0\n"));
     free(z);
     roundtrip(s, cat, "pkup.zmx");
+    sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
+/* Zemax's TCE column as Zemax 8 and 13 files write it, "TCED 2.35E+1 0 0"
+ * on the surface after a doublet (its mount: aluminium, 23.5e-6/K; see
+ * tests/data/zmx/README.md): read into the surface's tce, written back,
+ * and bounded as the design's key is. */
+static void test_zemax_tce(void **state)
+{
+    static const char text[] = H S0 S1
+        "SURF 2\n  CURV -0.02\n  DISZ 50\n  TCED 2.350000000000E+001 0 0\n"
+        "SURF 3\n  DISZ 1\n  TCED -3.5 1 2\n"
+        "SURF 4\n";
+    static const char big[] = H S0 S1 "SURF 2\n  CURV -0.02\n  DISZ 50\n  TCED 2000 0 0\n"
+        "SURF 3\n";
+    sg_catalog *cat = tu_catalog();
+    sg_system *s = sg_system_new();
+    sg_diag d;
+    char *z;
+    int i, warned = 0;
+    (void)state;
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(s, text, strlen(text), "tce.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(s->surf[2].tce == 23.5 && s->surf[3].tce == -3.5 && s->surf[1].tce == 0.0);
+    for (i = 0; i < d.nwarn && i < SG_DIAG_MAXWARN; i++)
+        warned |= strstr(d.warn[i], "TCED: the TCE's solve (1 2) is frozen") != NULL;
+    assert_true(warned);
+    sg_diag_clear(&d);
+    z = sg_zmx_to_text(s, cat, &d);
+    assert_non_null(z);
+    assert_non_null(strstr(z, "  TCED 23.5 0 0\n"));
+    assert_int_equal(d.nwarn, 0);
+    free(z);
+    roundtrip(s, cat, "tce.zmx");
+    sg_diag_clear(&d);
+    assert_int_equal(sg_zmx_parse(s, big, strlen(big), "big.zmx", cat, &d), SG_ERANGE);
+    print_message("# %s\n", d.msg);
+    assert_non_null(strstr(d.msg, "big.zmx:"));
+    assert_non_null(strstr(d.msg, "surface 2: TCED: TCE 2000 (1e-6/K) is outside -1000 to 1000"));
     sg_system_free(s);
     sg_catalog_free(cat);
 }
@@ -1615,6 +1660,7 @@ int main(void)
         cmocka_unit_test(test_zemax_chief_height_solve),
         cmocka_unit_test(test_gcat_order),
         cmocka_unit_test(test_zemax_conic_pickup),
+        cmocka_unit_test(test_zemax_tce),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
