@@ -94,8 +94,11 @@ typedef struct zsurf {
     long apk_line;
     double obdc_x, obdc_y; /* the aperture's decenter (OBDC) */
     long obdc_line;
-    sg_frame_change scbd;  /* the tilt and decenter before the surface (SCBD) */
+    sg_frame_change scbd;  /* the tilt and decenter before the surface (SCBD 1) */
     long scbd_line;        /* 0: none, or all zero */
+    sg_frame_change scad;  /* after the surface (SCBD 2) */
+    int scad_mode;         /* its Zemax mode: 0 explicit, 1 pickup, 2 reverse */
+    long scad_line;
 } zsurf;
 
 typedef struct zctx {
@@ -987,6 +990,30 @@ static int end_surface(zctx *c)
                         "2 on)", c->cur);
         s->before = z->scbd;
     }
+    if (z->scad_line) {
+        c->line = z->scad_line;
+        if (s->type == SG_SURF_COORDBRK)
+            return zerr(c, SG_EUNSUPPORTED, "SCBD: a tilt or decenter on a coordinate break; "
+                        "its parameters are the break");
+        if (c->cur < 1)
+            return zerr(c, SG_EUNSUPPORTED, "SCBD: a tilt or decenter after the object; "
+                        "sagitta's rays start in surface 1's frame (in Zemax, add a dummy "
+                        "surface and tilt from surface 2 on)");
+        if (z->scad_mode == 2) {
+            /* Reverse: Zemax stores the inverse, which must be it. */
+            const sg_frame_change *b = &s->before;
+            const sg_frame_change *a = &z->scad;
+            if (!(a->dx == -b->dx && a->dy == -b->dy && a->tx == -b->tx && a->ty == -b->ty &&
+                  a->tz == -b->tz && a->order == (b->order ^ 1)))
+                return zerr(c, SG_EPARSE, "SCBD: the after side is \"reverse\" but its values "
+                            "are not the before side's, negated, in the other order");
+            s->after_mode = SG_AFTER_REVERSE;
+            memset(&s->after, 0, sizeof s->after);
+        } else {
+            s->after = z->scad;
+            s->after_mode = SG_AFTER_EXPLICIT;
+        }
+    }
     if (z->xdat_line) {
         c->line = z->xdat_line;
         return zerr(c, SG_EUNSUPPORTED, "XDAT: extra data %.17g; sagitta's surfaces have no "
@@ -1243,47 +1270,61 @@ static int surface_line(zctx *c, const zline *l)
         return SG_OK;
     }
     if (tok_is(k, "SCBD")) {
-        /* Zemax writes the tilt and decenter before a surface as three
-         * flags, then decenter x and y and the tilts about x, y and z in
-         * degrees.  Its files carry the flags 1 0 0 with the default order
-         * (decenter, then tilt); other flags are refused, not guessed. */
+        /* SCBD side order mode dx dy tx ty tz (tilts in degrees).  Side 1
+         * is before the surface, 2 after it; order 0 decenters then tilts,
+         * 1 tilts then decenters; the after side's mode is 0 explicit, 1
+         * pickup (the before values, as stored) or 2 reverse (the inverse
+         * of the before change: the values negated, the order flipped).
+         * Zemax 13 writes "SCBD 1 0 0 ... 45 ..." and "SCBD 2 0 1 ... 45
+         * ..." for a fold mirror, "SCBD 2 1 2 -0 ..." for a reversed
+         * after side (tests/data/zmx/README.md). */
         static const char *const what[5] = {"decenter x", "decenter y", "tilt about x",
                                             "tilt about y", "tilt about z"};
         double sv[5];
         int f[3], i;
+        sg_frame_change fc;
         nz = !all_zero(c, l, 1, &rc);
         if (rc != SG_OK)
             return rc;
         if (!nz)
             return SG_OK;
-        if (z->scbd_line)
-            return zerr(c, SG_EPARSE, "SCBD: a second line in one surface (line %ld)",
-                        z->scbd_line);
         if (l->n < 9)
-            return zerr(c, SG_EPARSE, "SCBD: %d of its 8 values (three flags, decenter x and y, "
-                        "tilts about x, y and z)", l->n - 1);
+            return zerr(c, SG_EPARSE, "SCBD: %d of its 8 values (side, order and mode, decenter x "
+                        "and y, tilts about x, y and z)", l->n - 1);
         for (i = 0; i < 3; i++)
             if ((rc = tok_int(c, l, 1 + i, "SCBD flag", -1000, 1000, &f[i])) != SG_OK)
                 return rc;
         for (i = 0; i < 5; i++)
             if ((rc = tok_num(c, l, 4 + i, what[i], &sv[i])) != SG_OK)
                 return rc;
-        if (f[0] != 1 || f[1] != 0 || f[2] != 0)
-            return pend(c, SG_EUNSUPPORTED, "SCBD: flags %d %d %d; sagitta reads the tilt and "
-                        "decenter before a surface with the flags Zemax writes for its default "
-                        "order, 1 0 0 (decenter, then tilt), and cannot check what others mean: "
-                        "in Zemax, convert the tilt to coordinate breaks", f[0], f[1], f[2]);
+        if ((f[0] != 1 && f[0] != 2) || (f[1] != 0 && f[1] != 1) ||
+            (f[0] == 1 && f[2] != 0) || (f[0] == 2 && (f[2] < 0 || f[2] > 2)))
+            return pend(c, SG_EUNSUPPORTED, "SCBD: flags %d %d %d; sagitta reads side 1 (before) "
+                        "or 2 (after), order 0 or 1, and the after side's mode 0, 1 or 2, and "
+                        "cannot check what others mean: in Zemax, convert the tilt to "
+                        "coordinate breaks", f[0], f[1], f[2]);
         if (l->n > 9 && !all_zero(c, l, 9, &rc))
             return rc != SG_OK ? rc
                                : zerr(c, SG_EUNSUPPORTED, "SCBD: more than 8 values; sagitta "
                                       "cannot tell what the others mean");
-        z->scbd.dx = sv[0];
-        z->scbd.dy = sv[1];
-        z->scbd.tx = sv[2];
-        z->scbd.ty = sv[3];
-        z->scbd.tz = sv[4];
-        z->scbd.order = 0;
-        z->scbd_line = c->line;
+        if (f[0] == 1 ? z->scbd_line != 0 : z->scad_line != 0)
+            return zerr(c, SG_EPARSE, "SCBD: a second line for the %s side in one surface "
+                        "(line %ld)", f[0] == 1 ? "before" : "after",
+                        f[0] == 1 ? z->scbd_line : z->scad_line);
+        fc.dx = sv[0];
+        fc.dy = sv[1];
+        fc.tx = sv[2];
+        fc.ty = sv[3];
+        fc.tz = sv[4];
+        fc.order = f[1];
+        if (f[0] == 1) {
+            z->scbd = fc;
+            z->scbd_line = c->line;
+        } else {
+            z->scad = fc;
+            z->scad_mode = f[2];
+            z->scad_line = c->line;
+        }
         return SG_OK;
     }
     if (tok_is(k, "SCAD") || tok_is(k, "TLTX") || tok_is(k, "DECX")) {
@@ -2280,23 +2321,16 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
             return sg_diag_set(d, SG_ERANGE, "export: surface %d: a value a .zmx file cannot "
                                "hold (thickness %g, radius %g, conic %g)", i, f->thickness,
                                f->radius, f->conic);
-        /* The tilt before a surface goes out as Zemax's SCBD line in its
-         * default order; the after side's SCAD line is not checked. */
-        if (f->type != SG_SURF_COORDBRK && f->after_mode == SG_AFTER_EXPLICIT &&
-            !sg_frame_change_is_zero(&f->after))
+        /* A tilt or decenter before or after a surface goes out as Zemax's
+         * SCBD lines (side 1 and 2), which the reader checks. */
+        if (f->type != SG_SURF_COORDBRK &&
+            ((i < 2 && !sg_frame_change_is_zero(&f->before)) ||
+             (i == 0 && f->after_mode == SG_AFTER_EXPLICIT &&
+              !sg_frame_change_is_zero(&f->after))))
             return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: a tilt or decenter "
-                               "after a surface is not written to .zmx (its SCAD line is not "
-                               "checked); use coordinate breaks", i);
-        if (f->type != SG_SURF_COORDBRK && f->after_mode == SG_AFTER_REVERSE &&
-            !sg_frame_change_is_zero(&f->before))
-            return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: a reversed tilt or "
-                               "decenter is not written to .zmx; use coordinate breaks", i);
-        if (f->type != SG_SURF_COORDBRK && f->before.order != 0 &&
-            !sg_frame_change_is_zero(&f->before))
-            return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: a tilt before the "
-                               "surface in order 1 (tilt, then decenter) is not written to .zmx "
-                               "(only SCBD's default order is checked); use coordinate breaks",
-                               i);
+                               "before surface 1 or around the object, which sagitta's .zmx "
+                               "reader does not take (its rays start in surface 1's frame); "
+                               "use coordinate breaks", i);
         if (f->type == SG_SURF_EVENASPH)
             for (k = 0; k < SG_NASPH; k++)
                 if (!isfinite(f->asph[k]))
@@ -2397,9 +2431,23 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         }
         if (f->type != SG_SURF_COORDBRK && !sg_frame_change_is_zero(&f->before)) {
             char n3[40], n4[40], n5[40];
-            zb_printf(b, "  SCBD 1 0 0 %s %s %s %s %s\n", num(n1, f->before.dx),
-                      num(n2, f->before.dy), num(n3, f->before.tx), num(n4, f->before.ty),
-                      num(n5, f->before.tz));
+            zb_printf(b, "  SCBD 1 %d 0 %s %s %s %s %s\n", f->before.order ? 1 : 0,
+                      num(n1, f->before.dx), num(n2, f->before.dy), num(n3, f->before.tx),
+                      num(n4, f->before.ty), num(n5, f->before.tz));
+        }
+        if (f->type != SG_SURF_COORDBRK &&
+            (f->after_mode == SG_AFTER_REVERSE
+                 ? !sg_frame_change_is_zero(&f->before)
+                 : !sg_frame_change_is_zero(&f->after))) {
+            /* Reverse is written as Zemax does: the before change's values
+             * negated, in the other order, mode 2. */
+            char n3[40], n4[40], n5[40];
+            int rev = f->after_mode == SG_AFTER_REVERSE;
+            const sg_frame_change *a = rev ? &f->before : &f->after;
+            double sg = rev ? -1.0 : 1.0;
+            zb_printf(b, "  SCBD 2 %d %d %s %s %s %s %s\n", rev ? !a->order : a->order ? 1 : 0,
+                      rev ? 2 : 0, num(n1, sg * a->dx), num(n2, sg * a->dy),
+                      num(n3, sg * a->tx), num(n4, sg * a->ty), num(n5, sg * a->tz));
         }
         zb_shape(b, f);
         if (isinf(f->thickness))

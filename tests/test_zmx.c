@@ -598,11 +598,16 @@ static void test_bad_inputs(void **state)
         {"weight slots differ", H "WWGN 0.5 1\n" S0 S1 S2 S3, 0, SG_EPARSE,
          "t.zmx:5: WWGN: wavelength 1 has the weight 0.5 here but 1 in"},
         {"tilt after", H S0 "SURF 1\n  SCAD 1 0 0 0 0 90 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:8: surface 1: SCAD: a tilt or decenter after"},
-        {"tilt flags", H S0 "SURF 1\n  STOP\n  SCBD 1 1 0 0 0 90 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: SCBD: flags 1 1 0"},
+        {"tilt flags", H S0 "SURF 1\n  STOP\n  SCBD 1 0 1 0 0 90 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: SCBD: flags 1 0 1"},
+        {"tilt side", H S0 "SURF 1\n  STOP\n  SCBD 3 0 0 0 0 90 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: SCBD: flags 3 0 0"},
+        {"tilt mode", H S0 S1 "SURF 2\n  SCBD 2 0 3 0 0 9 0 0\n" S3, 0, SG_EUNSUPPORTED, "t.zmx:13: surface 2: SCBD: flags 2 0 3"},
+        {"tilt reverse", H S0 S1 "SURF 2\n  SCBD 1 0 0 0 0 5 0 0\n  SCBD 2 1 2 0 0 5 0 0\n" S3, 0, SG_EPARSE, "t.zmx:14: surface 2: SCBD: the after side is \"reverse\" but its values are not"},
+        {"tilt after object", H "SURF 0\n  DISZ INFINITY\n  SCBD 2 0 0 0 0 5 0 0\n" S1 S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:7: surface 0: SCBD: a tilt or decenter after the object"},
+        {"tilt after twice", H S0 S1 "SURF 2\n  SCBD 2 0 0 0 0 5 0 0\n  SCBD 2 0 0 0 0 7 0 0\n" S3, 0, SG_EPARSE, "t.zmx:14: surface 2: SCBD: a second line for the after side in one surface (line 13)"},
         {"tilt short", H S0 "SURF 1\n  STOP\n  SCBD 1 0 0 0 0 90\n" S2 S3, 0, SG_EPARSE, "t.zmx:9: surface 1: SCBD: 6 of its 8 values"},
         {"tilt number", H S0 "SURF 1\n  STOP\n  SCBD 1 0 0 0 0 9x 0 0\n" S2 S3, 0, SG_EPARSE, "t.zmx:9: surface 1: tilt about x: not a number"},
         {"tilt extra", H S0 "SURF 1\n  STOP\n  SCBD 1 0 0 0 0 9 0 0 1\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: SCBD: more than 8 values"},
-        {"tilt twice", H S0 S1 "SURF 2\n  SCBD 1 0 0 0 0 5 0 0\n  SCBD 1 0 0 0 0 7 0 0\n" S3, 0, SG_EPARSE, "t.zmx:14: surface 2: SCBD: a second line in one surface (line 13)"},
+        {"tilt twice", H S0 S1 "SURF 2\n  SCBD 1 0 0 0 0 5 0 0\n  SCBD 1 0 0 0 0 7 0 0\n" S3, 0, SG_EPARSE, "t.zmx:14: surface 2: SCBD: a second line for the before side in one surface (line 13)"},
         {"tilt surface 1", H S0 "SURF 1\n  STOP\n  SCBD 1 0 0 0 0 5 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: SCBD: a tilt or decenter before surface 1"},
         {"tilt on break", H S0 S1 "SURF 2\n  TYPE COORDBRK\n  SCBD 1 0 0 1 0 0 0 0\n" S3, 0, SG_EUNSUPPORTED, "t.zmx:14: surface 2: SCBD: a tilt or decenter on a coordinate break"},
         {"floating annulus", H S0 "SURF 1\n  FLAP 1 5 0\n", 0, SG_EUNSUPPORTED,
@@ -834,6 +839,74 @@ static void test_zemax_tce(void **state)
     print_message("# %s\n", d.msg);
     assert_non_null(strstr(d.msg, "big.zmx:"));
     assert_non_null(strstr(d.msg, "surface 2: TCED: TCE 2000 (1e-6/K) is outside -1000 to 1000"));
+    sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
+/* Zemax's tilts before and after a surface (SCBD side 1 and 2) on Zemax's
+ * own fold mirror sample, "Fold Mirror Using Surface Tilts" as Zemax 13
+ * wrote it (tests/data/zmx/README.md): a lens, then a flat mirror tilted
+ * 45 degrees before it and 45 after it ("SCBD 2 0 1", the after side
+ * picking up the before values), then the image, 24.15 behind the mirror
+ * along the folded beam.  Its glass N15 is not in sagitta's catalogs;
+ * the file's own numbers fix its index: the mirror-to-image distance
+ * Zemax stored, 24.15254237288, plus the 25 before the mirror, is the back
+ * focal distance of the biconvex lens (radii 50 and -50, 5 thick) for
+ * n = 1.5 exactly (49.152542372881...), so the test gives the lens that
+ * index.  Zemax's automatic semi-diameter of the image, 4.002190430767e-2
+ * (13 digits), is then what sagitta's real rays give only if the beam is
+ * folded by both tilts. */
+static void test_zemax_fold_mirror(void **state)
+{
+    char rel[] = "tests/data/zmx/fold_mirror_pre_post_tilts.zmx", path[1024], *text, *g;
+    const char *glas = "GLAS N15 0 0 1.5 4.0E+1 0 0 0 0 0 0", *model = "GLAS ___BLANK 1 0 1.5 0";
+    unsigned char *raw;
+    size_t n = 0, i, k = 0;
+    FILE *f;
+    sg_catalog *cat = tu_catalog();
+    sg_system *s = sg_system_new();
+    double sd[8];
+    sg_diag d;
+    (void)state;
+    f = fopen(tu_path(rel, path, sizeof path), "rb");
+    assert_non_null(f);
+    raw = malloc(1 << 16);
+    n = fread(raw, 1, 1 << 16, f);
+    fclose(f);
+    /* UTF-16LE with a byte-order mark, all ASCII: every other byte. */
+    assert_true(n > 2 && raw[0] == 0xFF && raw[1] == 0xFE);
+    text = malloc(n);
+    for (i = 2; i + 1 < n; i += 2) {
+        assert_int_equal(raw[i + 1], 0);
+        text[k++] = (char)raw[i];
+    }
+    text[k] = '\0';
+    free(raw);
+    g = strstr(text, glas);
+    assert_non_null(g);
+    memcpy(g, model, strlen(model));
+    memset(g + strlen(model), ' ', strlen(glas) - strlen(model));
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(s, text, strlen(text), "fold.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_int_equal(s->nsurf, 6);
+    assert_true(s->surf[4].before.tx == 45.0 && s->surf[4].before.order == 0);
+    assert_true(s->surf[4].after.tx == 45.0 && s->surf[4].after.order == 0 &&
+                s->surf[4].after_mode == SG_AFTER_EXPLICIT);
+    assert_int_equal(s->surf[4].mat.kind, SG_MAT_MIRROR);
+    /* The image distance is a marginal ray height solve (MAZH 0 0), which
+     * Zemax solved in full before it traced the semi-diameters; the file
+     * stores it to 13 digits.  The paraxial solve sees the fold, too. */
+    assert_int_equal(s->surf[4].solve[SG_SOLVE_THICKNESS].kind, SG_SOLVE_MARGINAL_HEIGHT);
+    assert_int_equal(sg_system_apply_solves(s, cat, &d), SG_OK);
+    print_message("# fold mirror: solved image distance %.17g (file -2.415254237288E+1)\n",
+                  s->surf[4].thickness);
+    assert_true(fabs(s->surf[4].thickness + 24.15254237288) < 0.5e-11);
+    assert_int_equal(sg_semi_diameters(s, cat, NULL, sd, &d), SG_OK);
+    print_message("# fold mirror: image semi-diameter %.17g (Zemax 4.002190430767e-2)\n", sd[5]);
+    assert_true(fabs(sd[5] - 4.002190430767e-2) <= 0.5e-14);
+    roundtrip(s, cat, "fold.zmx");
+    free(text);
     sg_system_free(s);
     sg_catalog_free(cat);
 }
@@ -1072,18 +1145,30 @@ static void test_surface_tilt(void **state)
                   worst);
     assert_true(worst < 1e-12);
     {
-        /* A tilt order Zemax's SCBD line is not checked for stays out. */
+        /* The other order, an explicit after side and a reversed one go
+         * out as SCBD side 1 and 2 lines and come back the same. */
         a->surf[2].before.order = 1;
         sg_diag_clear(&d);
         z = sg_zmx_to_text(a, cat, &d);
-        assert_null(z);
-        assert_non_null(strstr(d.msg, "surface 2: a tilt before the surface in order 1"));
+        assert_non_null(z);
+        assert_non_null(strstr(z, "  SCBD 1 1 0 0.25 -0.5 3 -1.5 20\n"));
+        free(z);
+        roundtrip(a, cat, "tilt.zmx");
         a->surf[2].before.order = 0;
         a->surf[2].after.tx = 1.0;
-        sg_diag_clear(&d);
+        a->surf[2].after.order = 1;
         z = sg_zmx_to_text(a, cat, &d);
-        assert_null(z);
-        assert_non_null(strstr(d.msg, "surface 2: a tilt or decenter after a surface"));
+        assert_non_null(z);
+        assert_non_null(strstr(z, "  SCBD 2 1 0 0 0 1 0 0\n"));
+        free(z);
+        roundtrip(a, cat, "tilt.zmx");
+        memset(&a->surf[2].after, 0, sizeof a->surf[2].after);
+        a->surf[2].after_mode = SG_AFTER_REVERSE;
+        z = sg_zmx_to_text(a, cat, &d);
+        assert_non_null(z);
+        assert_non_null(strstr(z, "  SCBD 2 1 2 -0.25 0.5 -3 1.5 -20\n"));
+        free(z);
+        roundtrip(a, cat, "tilt.zmx");
     }
     sg_system_free(a);
     sg_system_free(b);
@@ -1661,6 +1746,7 @@ int main(void)
         cmocka_unit_test(test_gcat_order),
         cmocka_unit_test(test_zemax_conic_pickup),
         cmocka_unit_test(test_zemax_tce),
+        cmocka_unit_test(test_zemax_fold_mirror),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
