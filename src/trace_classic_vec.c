@@ -14,15 +14,16 @@
  * that differs between lanes is taken by all of them and the result
  * selected per lane.  A ray alone is a block with one live lane.
  *
- * Shapes of their own (SHAPE_GEN) take their double sag from shape_vd.h,
- * the vector twin of each shape's sag_d, on all lanes at once; their
- * residual and the clip test run lane by lane through the scalar
- * functions, as before.
+ * Shapes of their own (SHAPE_GEN) take their double sag from shape_vd.h
+ * and their residual's double-double sag from shape_vdd.h, the vector
+ * twins of each shape's sag_d and sag_dd, on all lanes at once.  The clip
+ * test runs lane by lane through the scalar function, as before.
  */
 #include <math.h>
 #include <string.h>
 
 #include "shape_vd.h"
+#include "shape_vdd.h"
 #include "slope_vec.h"
 #include "trace_internal.h"
 
@@ -161,8 +162,8 @@ static vdd div_tw(vdd a, vdd b)
 
 /* |z - sag| at the lanes' points, as sg_sprep_sag_resid gives it: on a
  * plane, a conic or an even asphere here, in vdd.h's double-double (the
- * same roundings as dd.h's), on shapes of their own lane by lane on the
- * lanes of live. */
+ * same roundings as dd.h's), on shapes of their own through shape_vdd.h's
+ * twin of their sag_dd, on the lanes of live. */
 static vd resid_v(const sg_sprep *s, vd x, vd y, vd z, vm live)
 {
     vd r = vd_set(0.0);
@@ -198,6 +199,15 @@ static vd resid_v(const sg_sprep *s, vd x, vd y, vd z, vm live)
         }
         sag = vdd_sub(vdd_from(z), sag);
         return vsel(bad, vd_set(NAN), vd_abs(sag.hi + sag.lo));
+    }
+    if (svd_handles(s->shp)) {
+        /* sg_sprep_sag_resid's double-double sag, on every lane at once. */
+        vdd f, g[2], df;
+        vd ez, eg;
+        vm bad;
+        svd_sag(s->shp, vdd_from(x), vdd_from(y), &f, g, &ez, &eg, &bad);
+        df = vdd_sub(vdd_from(z), f);
+        return vsel(live, vsel(bad, vd_set(NAN), vd_abs(df.hi + df.lo)), r);
     }
     for (k = 0; k < SG_VL; k++)
         if (live[k])
