@@ -197,4 +197,32 @@ static inline void sv_sag_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h
         sv_rot_p2_d(s, x, y, z, g, h, bad);
 }
 
+/* The shape's sag_d on every lane: sv_sag_d for a shape sv_handles_d,
+ * else the scalar sag_d lane by lane on the lanes of live (z, g and h 0
+ * elsewhere). */
+static inline void sv_sag_d_live(const sg_shape *s, vd x, vd y, vm live, vd *z, vd g[2], vd *h,
+                                 vm *bad)
+{
+    int k;
+    if (sv_handles_d(s)) {
+        sv_sag_d(s, x, y, z, g, h, bad);
+        return;
+    }
+    *z = *h = g[0] = g[1] = vd_set(0.0);
+    *bad = vm_set(0);
+    for (k = 0; k < SG_VL; k++) {
+        double zk, gk[2], hk;
+        if (!live[k])
+            continue;
+        if (!s->ops->sag_d(s, x[k], y[k], &zk, gk, &hk)) {
+            (*bad)[k] = -1;
+            continue;
+        }
+        (*z)[k] = zk;
+        g[0][k] = gk[0];
+        g[1][k] = gk[1];
+        (*h)[k] = hk;
+    }
+}
+
 #endif

@@ -27,32 +27,12 @@
 #include "slope_vec.h"
 #include "trace_internal.h"
 
-/* A shape's sag_d on every lane: shape_vd.h's vector twin of it for the
- * shapes it has (every lane the scalar bits), else the scalar one lane by
- * lane on the lanes of live.  *bad marks the lanes outside the shape. */
+/* A shape's sag_d on every lane (shape_vd.h): one copy of the shapes'
+ * code for the two callers. */
 __attribute__((noinline)) static void gen_sag_dv(const sg_shape *sh, vd x, vd y, vm live, vd *z,
                                                  vd g[2], vd *h, vm *bad)
 {
-    int k;
-    if (sv_handles_d(sh)) {
-        sv_sag_d(sh, x, y, z, g, h, bad);
-        return;
-    }
-    *z = *h = g[0] = g[1] = vd_set(0.0);
-    *bad = vm_set(0);
-    for (k = 0; k < SG_VL; k++) {
-        double zk, gk[2], hk;
-        if (!live[k])
-            continue;
-        if (!sh->ops->sag_d(sh, x[k], y[k], &zk, gk, &hk)) {
-            (*bad)[k] = -1;
-            continue;
-        }
-        (*z)[k] = zk;
-        g[0][k] = gk[0];
-        g[1][k] = gk[1];
-        (*h)[k] = hk;
-    }
+    sv_sag_d_live(sh, x, y, live, z, g, h, bad);
 }
 
 /* Newton in double on the lanes of run, from the step *svp along d from
