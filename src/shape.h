@@ -9,7 +9,9 @@
  * in the three arithmetics the methods use:
  *
  *   - double, with a bound on the second derivatives: classic's trace, the
- *     Newton seeds of precise, and the sizes that scale bounds;
+ *     Newton seeds of precise, and the sizes that scale bounds; both
+ *     vector traces evaluate it on all lanes at once through shape_vd.h's
+ *     vector twin of each, to the same bits;
  *   - double-double, with bounds on the rounding of f and of its
  *     gradient: the precise method, which evaluates it on all lanes at
  *     once through shape_vdd.h's vector twin of each, to the same bits;

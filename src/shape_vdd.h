@@ -18,6 +18,7 @@
 #define SG_SHAPE_VDD_H
 
 #include "shape.h"
+#include "shape_vd.h"
 #include "vdd.h"
 
 /* dd_div: three quotients, as there. */
@@ -157,17 +158,12 @@ static inline void svd_rot_p2(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2],
     if (s->px != 0.0 || s->py != 0.0) {
         /* A Zernike sag's decenter, with the scalar code's bounds on the
          * shift; the second-derivative bound comes from the double
-         * kernel, lane by lane. */
+         * kernel (shape_vd.h). */
         vdd xs = vdd_add_d(x, vd_set(-s->px)), ys = vdd_add_d(y, vd_set(-s->py));
         vd ex = 2.0 * DD_U * (vd_abs(x.hi) + fabs(s->px)),
-           ey = 2.0 * DD_U * (vd_abs(y.hi) + fabs(s->py)), hd;
-        int k;
+           ey = 2.0 * DD_U * (vd_abs(y.hi) + fabs(s->py)), hd, zd, gd[2];
         svd_p2(s, xs, ys, &zp, gp, &ezp, &egp);
-        for (k = 0; k < SG_VL; k++) {
-            double zd, gd[2], h;
-            sg_p2_d(s, xs.hi[k], ys.hi[k], &zd, gd, &h);
-            hd[k] = h;
-        }
+        sv_p2_d(s, xs.hi, ys.hi, &zd, gd, &hd);
         ezp += 2.0 * (vd_abs(gp[0].hi) * ex + vd_abs(gp[1].hi) * ey);
         egp += 2.0 * hd * vd_fmax(ex, ey);
     } else {

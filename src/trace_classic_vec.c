@@ -14,60 +14,53 @@
  * that differs between lanes is taken by all of them and the result
  * selected per lane.  A ray alone is a block with one live lane.
  *
- * Shapes of their own (SHAPE_GEN), with their residual, and the clip test
- * run lane by lane through the scalar functions, as before.
+ * Shapes of their own (SHAPE_GEN) take their double sag from shape_vd.h
+ * and their residual's double-double sag from shape_vdd.h, the vector
+ * twins of each shape's sag_d and sag_dd, on all lanes at once.  The clip
+ * test runs lane by lane through the scalar function, as before.
  */
 #include <math.h>
 #include <string.h>
 
+#include "shape_vd.h"
+#include "shape_vdd.h"
 #include "slope_vec.h"
 #include "trace_internal.h"
 
-/* Newton in double for a shape of its own, one ray: F(s) = z(s) -
- * f(x(s), y(s)), with f's bound on its second derivatives at the root
- * to *h.  1 on convergence, 0 for a miss, -1 when out of iterations. */
-static int gen_root_d(const sg_sprep *s, const double p[3], const double d[3], double s0,
-                      int max_iter, double *sout, double *h)
+/* A shape's sag_d on every lane (shape_vd.h): one copy of the shapes'
+ * code for the two callers. */
+__attribute__((noinline)) static void gen_sag_dv(const sg_shape *sh, vd x, vd y, vm live, vd *z,
+                                                 vd g[2], vd *h, vm *bad)
 {
-    double sv = s0;
-    int it;
-    for (it = 0; it < max_iter; it++) {
-        double x = p[0] + sv * d[0], y = p[1] + sv * d[1], z = p[2] + sv * d[2];
-        double sag = 0.0, F, Fp, step, g[2];
-        if (!s->shp->ops->sag_d(s->shp, x, y, &sag, g, h))
-            return 0;
-        F = z - sag;
-        Fp = d[2] - g[0] * d[0] - g[1] * d[1];
-        if (Fp == 0.0 || !isfinite(Fp))
-            return 0;
-        step = F / Fp;
-        sv -= step;
-        if (!isfinite(sv))
-            return 0;
-        if (fabs(step) <= 4.0 * U53 * (fabs(sv) + fabs(x) + fabs(y) + fabs(z)))
-            break;
-    }
-    if (it == max_iter)
-        return -1;
-    *sout = sv;
-    return 1;
+    sv_sag_d_live(sh, x, y, live, z, g, h, bad);
 }
 
-/* Newton in double for an even asphere on the lanes of run, from the
- * step *sv along d from p.  Lanes that leave the conic's domain or whose
- * step goes wrong get *bad, lanes out of iterations *slow; the others
- * have their root in *sv. */
-static void asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *svp, int max_iter,
-                        vm run, vm *bad, vm *slow)
+/* Newton in double on the lanes of run, from the step *svp along d from
+ * p: F(s) = z(s) - sag(x(s), y(s)) for an even asphere, or for a shape of
+ * its own with f's bound on its second derivatives at the last point to
+ * *h.  Lanes that leave the surface's domain or whose step goes wrong get
+ * *bad, lanes out of iterations *slow; the others have their root in
+ * *svp.  Each lane takes the steps the one-ray Newton of before took. */
+static void root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *svp, int max_iter,
+                   vm run, vd *h, vm *bad, vm *slow)
 {
-    vd sv = *svp;
+    vd sv = *svp, hh = vd_set(0.0);
     vm b = vm_set(0);
     int it;
     for (it = 0; it < max_iter && vm_any(run); it++) {
         vd x = p[0] + sv * d[0], y = p[1] + sv * d[1], z = p[2] + sv * d[2];
-        vd w, dw, F, Fp, step, nsv;
+        vd F, Fp, step, nsv;
         vm m;
-        asph_F_v(s, x, y, z, d, &F, &Fp, &w, &dw, &m);
+        if (s->shape == SHAPE_GEN) {
+            vd sag, g[2], hk;
+            gen_sag_dv(s->shp, x, y, run, &sag, g, &hk, &m);
+            F = z - sag;
+            Fp = d[2] - g[0] * d[0] - g[1] * d[1];
+            hh = vsel(run & ~m, hk, hh);
+        } else {
+            vd w, dw;
+            asph_F_v(s, x, y, z, d, &F, &Fp, &w, &dw, &m);
+        }
         m &= run;
         b |= m;
         run &= ~m;
@@ -83,13 +76,15 @@ static void asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *svp
         run &= ~(vm)(vd_abs(step) <= 4.0 * U53 * (vd_abs(sv) + vd_abs(x) + vd_abs(y) + vd_abs(z)));
     }
     *svp = sv;
+    *h = hh;
     *bad = b;
     *slow = run;
 }
 
 /* The surface's gradient direction at (x, y, z) in its frame: (x, y, k1 z
- * - R) for a conic, (-w x, -w y, 1) for an asphere or a shape of its own
- * (lane by lane, on the lanes of live), -z for a plane. */
+ * - R) for a conic, (-w x, -w y, 1) for an asphere, (-f_x, -f_y, 1) for a
+ * shape of its own on the lanes of live (NaN where it has no sag), -z for
+ * a plane. */
 static void grad_v(const sg_sprep *s, vd x, vd y, vd z, vm live, vd g[3])
 {
     if (s->shape == SHAPE_PLANE) {
@@ -101,19 +96,12 @@ static void grad_v(const sg_sprep *s, vd x, vd y, vd z, vm live, vd g[3])
         g[1] = y;
         g[2] = s->k1.hi * z - s->R;
     } else if (s->shape == SHAPE_GEN) {
-        int k;
-        g[0] = vd_set(0.0);
-        g[1] = vd_set(0.0);
+        vd f, gg[2], h;
+        vm bad;
+        gen_sag_dv(s->shp, x, y, live, &f, gg, &h, &bad);
+        g[0] = vsel(live, -vsel(bad, vd_set(NAN), gg[0]), vd_set(0.0));
+        g[1] = vsel(live, -vsel(bad, vd_set(NAN), gg[1]), vd_set(0.0));
         g[2] = vd_set(1.0);
-        for (k = 0; k < SG_VL; k++) {
-            double f, gg[2], h;
-            if (!live[k])
-                continue;
-            if (!s->shp->ops->sag_d(s->shp, x[k], y[k], &f, gg, &h))
-                gg[0] = gg[1] = NAN;
-            g[0][k] = -gg[0];
-            g[1][k] = -gg[1];
-        }
     } else {
         vd w, dw;
         slope_v(s, x * x + y * y, &w, &dw);
@@ -154,8 +142,8 @@ static vdd div_tw(vdd a, vdd b)
 
 /* |z - sag| at the lanes' points, as sg_sprep_sag_resid gives it: on a
  * plane, a conic or an even asphere here, in vdd.h's double-double (the
- * same roundings as dd.h's), on shapes of their own lane by lane on the
- * lanes of live. */
+ * same roundings as dd.h's), on shapes of their own through shape_vdd.h's
+ * twin of their sag_dd, on the lanes of live. */
 static vd resid_v(const sg_sprep *s, vd x, vd y, vd z, vm live)
 {
     vd r = vd_set(0.0);
@@ -191,6 +179,15 @@ static vd resid_v(const sg_sprep *s, vd x, vd y, vd z, vm live)
         }
         sag = vdd_sub(vdd_from(z), sag);
         return vsel(bad, vd_set(NAN), vd_abs(sag.hi + sag.lo));
+    }
+    if (svd_handles(s->shp)) {
+        /* sg_sprep_sag_resid's double-double sag, on every lane at once. */
+        vdd f, g[2], df;
+        vd ez, eg;
+        vm bad;
+        svd_sag(s->shp, vdd_from(x), vdd_from(y), &f, g, &ez, &eg, &bad);
+        df = vdd_sub(vdd_from(z), f);
+        return vsel(live, vsel(bad, vd_set(NAN), vd_abs(df.hi + df.lo)), r);
     }
     for (k = 0; k < SG_VL; k++)
         if (live[k])
@@ -288,27 +285,13 @@ void sg_classic_block(const sg_tracer *t, const double (*S)[3], const double (*D
                     fail_lane(t, out, k, i, SG_EMISS, rc, &act);
             tt = vsel(miss & ~lost, -zl / d[2], tt);
         }
-        if (s->shape == SHAPE_ASPH) {
+        if (newton) {
             vd pl[3] = {P[0], P[1], zl};
             vm bad, slow;
-            asph_root_v(s, pl, d, &tt, t->o.max_iter, act, &bad, &slow);
+            root_v(s, pl, d, &tt, t->o.max_iter, act, &hgen, &bad, &slow);
             for (k = 0; k < nl; k++)
                 if (act[k] && (bad[k] || slow[k]))
                     fail_lane(t, out, k, i, slow[k] ? SG_ENOCONV : SG_EMISS, rc, &act);
-        } else if (s->shape == SHAPE_GEN) {
-            for (k = 0; k < nl; k++) {
-                double pl[3] = {P[0][k], P[1][k], zl[k]}, dl[3] = {d[0][k], d[1][k], d[2][k]};
-                double ts, h = 0.0;
-                int r2;
-                if (!act[k])
-                    continue;
-                r2 = gen_root_d(s, pl, dl, tt[k], t->o.max_iter, &ts, &h);
-                hgen[k] = h;
-                if (r2 <= 0)
-                    fail_lane(t, out, k, i, r2 < 0 ? SG_ENOCONV : SG_EMISS, rc, &act);
-                else
-                    tt[k] = ts;
-            }
         }
         if (!vm_any(act))
             break;

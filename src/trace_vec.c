@@ -19,6 +19,7 @@
 #include <stddef.h>
 #include <string.h>
 
+#include "shape_vd.h"
 #include "shape_vdd.h"
 #include "slope_vec.h"
 #include "trace_internal.h"
@@ -87,6 +88,14 @@ __attribute__((noinline)) static void gen_sag_v(const sg_shape *s, vdd x, vdd y,
     svd_sag(s, x, y, z, g, ez, eg, bad);
 }
 
+/* A shape's double sag_d on every lane (shape_vd.h): the Newton seeds,
+ * slopes and second-derivative bounds, the scalar bits on each lane. */
+__attribute__((noinline)) static void gen_sag_dv(const sg_shape *s, vd x, vd y, vm live, vd *z,
+                                                 vd g[2], vd *h, vm *bad)
+{
+    sv_sag_d_live(s, x, y, live, z, g, h, bad);
+}
+
 /* F = z - f(x, y) in double-double and the bound on its rounding. */
 __attribute__((noinline)) static void gen_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
 {
@@ -123,73 +132,50 @@ __attribute__((noinline)) static void gen_F_v(const sg_sprep *s, vdd3 p, vdd *F,
  * F'' from the bound on f's second derivatives. */
 __attribute__((noinline)) static vd gen_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd *fpp)
 {
-    vd Fp;
-    int k;
-    for (k = 0; k < SG_VL; k++) {
-        double f, g[2], h;
-        if (!s->shp->ops->sag_d(s->shp, p[0][k], p[1][k], &f, g, &h)) {
-            Fp[k] = NAN;
-            (*mag)[k] = 0.0;
-            (*fpp)[k] = INFINITY;
-            continue;
-        }
-        Fp[k] = d[2][k] - g[0] * d[0][k] - g[1] * d[1][k];
-        (*mag)[k] = fabs(d[2][k]) + fabs(g[0] * d[0][k]) + fabs(g[1] * d[1][k]);
-        (*fpp)[k] = h * (d[0][k] * d[0][k] + d[1][k] * d[1][k]) + 1e-300;
-    }
-    return Fp;
+    vd f, g[2], h, Fp;
+    vm bad;
+    gen_sag_dv(s->shp, p[0], p[1], vm_set(-1), &f, g, &h, &bad);
+    Fp = d[2] - g[0] * d[0] - g[1] * d[1];
+    *mag = vsel(bad, vd_set(0.0), vd_abs(d[2]) + vd_abs(g[0] * d[0]) + vd_abs(g[1] * d[1]));
+    *fpp = vsel(bad, vd_set(INFINITY), h * (d[0] * d[0] + d[1] * d[1]) + 1e-300);
+    return vsel(bad, vd_set(NAN), Fp);
 }
 
 /* Newton in double from s0 for the active lanes, with the rules of
  * asph_root_v: a step long beside F' / F'' grows a difference in the
  * iterate, and past a growth of 4 (or near a double root) the root is
  * left to the rescue. */
-__attribute__((noinline)) static vd gen_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, int max_iter,
-                     vm active, vm *fail, vm *noconv, vm *wild)
+__attribute__((noinline)) static vd gen_root_v(const sg_sprep *s, const vd p[3], const vd d[3],
+                                                vd s0, int max_iter, vm active, vm *fail,
+                                                vm *noconv, vm *wild)
 {
-    vd sv = s0;
-    int k;
+    vd sv = s0, growth = vd_set(1.0), hprev = vd_set(0.0), dd2 = d[0] * d[0] + d[1] * d[1];
+    int it;
     *fail = vm_set(0);
-    *noconv = vm_set(0);
     *wild = vm_set(0);
-    for (k = 0; k < SG_VL; k++) {
-        double v = s0[k], growth = 1.0, hprev = 0.0;
-        int it, done = 0;
-        if (!active[k])
-            continue;
-        for (it = 0; it < max_iter && !done; it++) {
-            double x = p[0][k] + v * d[0][k], y = p[1][k] + v * d[1][k], z = p[2][k] + v * d[2][k];
-            double f, g[2], hh, F, Fp, step, snew, h;
-            int conv;
-            if (!s->shp->ops->sag_d(s->shp, x, y, &f, g, &hh)) {
-                (*fail)[k] = -1;
-                break;
-            }
-            F = z - f;
-            Fp = d[2][k] - g[0] * d[0][k] - g[1] * d[1][k];
-            if (Fp == 0.0 || !isfinite(Fp)) {
-                (*fail)[k] = -1;
-                break;
-            }
-            step = F / Fp;
-            snew = v - step;
-            if (!isfinite(snew)) {
-                (*fail)[k] = -1;
-                break;
-            }
-            h = hh * (d[0][k] * d[0][k] + d[1][k] * d[1][k]) * fabs(step) / fabs(Fp);
-            growth *= fmax(1.0, h);
-            conv = fabs(step) <= 4.0 * U53 * (fabs(snew) + fabs(x) + fabs(y) + fabs(z));
-            if (growth > 4.0 || (conv && fmax(h, hprev) > 0.25))
-                (*wild)[k] = -1;
-            hprev = h;
-            v = snew;
-            done = conv || (*wild)[k];
-        }
-        if (!done && !(*fail)[k])
-            (*noconv)[k] = -1;
-        sv[k] = v;
+    for (it = 0; it < max_iter && vm_any(active); it++) {
+        vd x = p[0] + sv * d[0], y = p[1] + sv * d[1], z = p[2] + sv * d[2];
+        vd f, g[2], hh, F, Fp, step, snew, h;
+        vm bad, conv;
+        gen_sag_dv(s->shp, x, y, active, &f, g, &hh, &bad);
+        F = z - f;
+        Fp = d[2] - g[0] * d[0] - g[1] * d[1];
+        bad |= (vm)(Fp == 0.0) | ~vd_isfinite(Fp);
+        step = F / Fp;
+        snew = sv - step;
+        bad |= ~vd_isfinite(snew);
+        bad &= active;
+        *fail |= bad;
+        active &= ~bad;
+        h = hh * dd2 * vd_abs(step) / vd_abs(Fp);
+        growth = vsel(active, growth * vd_fmax(vd_set(1.0), h), growth);
+        conv = (vm)(vd_abs(step) <= 4.0 * U53 * (vd_abs(snew) + vd_abs(x) + vd_abs(y) + vd_abs(z)));
+        *wild |= active & ((vm)(growth > 4.0) | (conv & (vm)(vd_fmax(h, hprev) > 0.25)));
+        hprev = vsel(active, h, hprev);
+        sv = vsel(active, snew, sv);
+        active &= ~conv & ~*wild;
     }
+    *noconv = active;
     return sv;
 }
 
@@ -210,11 +196,11 @@ __attribute__((noinline)) static vdd3 gen_grad_v(const sg_sprep *s, vdd3 p, vd *
         g.y.hi = vsel(bad, vd_set(NAN), vd_neg(gg[1].hi));
         g.y.lo = vsel(bad, vd_set(0.0), vd_neg(gg[1].lo));
         *gerr = vsel(bad, vd_set(INFINITY), eg);
-        for (k = 0; k < SG_VL; k++) {
-            double fd, gd[2], h = INFINITY;
-            if (!s->shp->ops->sag_d(s->shp, p.x.hi[k], p.y.hi[k], &fd, gd, &h))
-                h = INFINITY;
-            (*gsens)[k] = h;
+        {
+            vd fd, gd[2], h;
+            vm bd;
+            gen_sag_dv(s->shp, p.x.hi, p.y.hi, vm_set(-1), &fd, gd, &h, &bd);
+            *gsens = vsel(bd, vd_set(INFINITY), h);
         }
         g.z = vdd_from(vd_set(1.0));
         return g;
@@ -243,14 +229,11 @@ __attribute__((noinline)) static vdd3 gen_grad_v(const sg_sprep *s, vdd3 p, vd *
 __attribute__((noinline)) static void gen_normal_v(const sg_sprep *s, const vd p[3],
                                                          vd g[3])
 {
-    int k;
-    for (k = 0; k < SG_VL; k++) {
-        double f, gg[2], h;
-        if (!s->shp->ops->sag_d(s->shp, p[0][k], p[1][k], &f, gg, &h))
-            gg[0] = gg[1] = NAN;
-        g[0][k] = -gg[0];
-        g[1][k] = -gg[1];
-    }
+    vd f, gg[2], h;
+    vm bad;
+    gen_sag_dv(s->shp, p[0], p[1], vm_set(-1), &f, gg, &h, &bad);
+    g[0] = -vsel(bad, vd_set(NAN), gg[0]);
+    g[1] = -vsel(bad, vd_set(NAN), gg[1]);
     g[2] = vd_set(1.0);
 }
 

@@ -36,6 +36,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shape_vd.h"
 #include "shape_vdd.h"
 #include "testutil.h"
 #include "trace_internal.h"
@@ -1190,6 +1191,94 @@ static void vector_kernel(void **state)
     }
 }
 
+/* Every lane of sv_sag_d (shape_vd.h) gives what the shape's scalar sag_d
+ * gives that point alone: the same sag, slopes and second-derivative
+ * bound to the bit, and a lane marked bad exactly where the scalar kernel
+ * leaves the shape's domain.  The points are vector_kernel's (their high
+ * parts), with its rim and axis lanes on shapes of power-of-two radii, so
+ * the scalar code's exact-zero branches are met (the biconic's S = 0 with
+ * its infinite slopes, the toroid's u^2 - x^2 = 0, the odd asphere's r =
+ * 0 with an r^1 term); and a toroid flat in x, Zernike sags with and
+ * without a decenter, XY surfaces with and without even terms. */
+static void vector_kernel_d(void **state)
+{
+    static const double scales[] = {1e-3, 1.0, 1e4};
+    static const int types[] = {SG_SURF_ZERNIKE_FRINGE, SG_SURF_ZERNIKE_STANDARD, SG_SURF_XYPOLY,
+                                SG_SURF_ODDASPH,        SG_SURF_TOROIDAL,         SG_SURF_BICONIC};
+    enum { NT = sizeof types / sizeof types[0] };
+    int ti, si, it, blk, k, lanes[NT] = {0}, bad_lanes[NT] = {0}, inf_lanes = 0;
+    (void)state;
+    rng_state = 0x5a95a95a9ULL;
+    for (ti = 0; ti < NT; ti++)
+        for (si = 0; si < 3; si++)
+            for (it = 0; it < 30; it++) {
+                sg_surface f;
+                sg_shape sh;
+                double sc = scales[si], rim, lo;
+                memset(&f, 0, sizeof f);
+                random_shape(&f, types[ti], sc);
+                if (types[ti] == SG_SURF_XYPOLY && urand() < 0.5)
+                    for (k = 0; k < 4; k++)
+                        f.asph[k] = srand1(1e-6) / pow(sc, 2 * k + 1);
+                if (it == 0) {
+                    f.radius = ldexp(4.0, ilogb(sc));
+                    f.conic = 0.0;
+                    if (types[ti] == SG_SURF_TOROIDAL || types[ti] == SG_SURF_BICONIC) {
+                        f.radius_x = f.radius;
+                        f.conic_x = 0.0;
+                    }
+                }
+                rim = types[ti] == SG_SURF_TOROIDAL ? f.radius_x : f.radius;
+                assert_int_equal(sg_shape_prepare(&f, &sh, 1, NULL), SG_OK);
+                assert_true(sv_handles_d(&sh));
+                for (blk = 0; blk < 8; blk++) {
+                    vd x, y, z, g[2], h;
+                    vm bad;
+                    for (k = 0; k < SG_VL; k++) {
+                        point_dd(sc, &x[k], &lo);
+                        point_dd(sc, &y[k], &lo);
+                    }
+                    if (blk == 0) {
+                        x[1] = isfinite(rim) ? fabs(rim) : 0.0;
+                        y[1] = 0.0;
+                        x[2] = urand() < 0.5 ? 0.0 : -0.0;
+                        y[2] = urand() < 0.5 ? 0.0 : -0.0;
+                    }
+                    sv_sag_d(&sh, x, y, &z, g, &h, &bad);
+                    for (k = 0; k < SG_VL; k++) {
+                        double zs, gs[2], hs;
+                        int ok = sh.ops->sag_d(&sh, x[k], y[k], &zs, gs, &hs);
+                        lanes[ti]++;
+                        if (!ok) {
+                            bad_lanes[ti]++;
+                            if (!bad[k])
+                                fail_msg("%s lane %d at (%a, %a): scalar outside, vector not",
+                                         sh.ops->name, k, x[k], y[k]);
+                            continue;
+                        }
+                        if (bad[k])
+                            fail_msg("%s lane %d at (%a, %a): vector outside, scalar not",
+                                     sh.ops->name, k, x[k], y[k]);
+                        if (isinf(gs[0]) || isinf(hs))
+                            inf_lanes++;
+                        if (!same_bits(zs, z[k]) || !same_bits(gs[0], g[0][k]) ||
+                            !same_bits(gs[1], g[1][k]) || !same_bits(hs, h[k]))
+                            fail_msg("%s lane %d at (%a, %a): sag %a vs %a, slopes %a %a vs "
+                                     "%a %a, bound %a vs %a",
+                                     sh.ops->name, k, x[k], y[k], zs, z[k], gs[0], gs[1],
+                                     g[0][k], g[1][k], hs, h[k]);
+                    }
+                }
+            }
+    for (ti = 0; ti < NT; ti++) {
+        print_message("# vector double kernel, type %d: %d lanes, %d outside the shape\n",
+                      types[ti], lanes[ti], bad_lanes[ti]);
+        assert_true(bad_lanes[ti] > lanes[ti] / 20 && bad_lanes[ti] < lanes[ti] / 2);
+    }
+    /* The rim lanes reach the infinite slopes and bounds. */
+    assert_true(inf_lanes > 0);
+}
+
 /* On the axis, r = 0, of shapes whose curve has even polynomial terms
  * (a toroid's y^4 term, an odd asphere's r^4 term): the second-derivative
  * bound once took r^(2k) / r^2 = 0 / 0 there, so the precise and classic
@@ -1255,6 +1344,7 @@ int main(void)
         cmocka_unit_test(carried_error),
         cmocka_unit_test(reductions),
         cmocka_unit_test(vector_kernel),
+        cmocka_unit_test(vector_kernel_d),
         cmocka_unit_test(zernike_decenter_closed_form),
         cmocka_unit_test(axis_terms),
     };

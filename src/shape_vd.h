@@ -1,0 +1,228 @@
+/*
+ * shape_vd.h - the double sags of the shapes beyond the even asphere (odd
+ * asphere, toroid, biconic, Zernike, XY polynomial) on SG_VL lanes at
+ * once: each shape's sag_d, its value, gradient and second-derivative
+ * bound.
+ *
+ * Each function repeats its scalar twin (shape.c's sg_rot_d, sg_p2_d,
+ * sg_rot_p2_d; the sag_d of shape_odd.c, shape_toroid.c and
+ * shape_biconic.c) operation for operation and in the same order, its
+ * constants formed in scalar as there, branches becoming selections, so
+ * every lane gets the bits the scalar code gives it (the build uses
+ * -ffp-contract=off and only correctly rounded operations): the classic
+ * trace takes them from here instead of calling the shape's sag_d lane by
+ * lane.  A lane outside the shape's domain is marked in *bad and its
+ * numbers are not to be read, as the scalar code returns 0 there.
+ * tests/test_shapes.c compares the two bit for bit.  Included by the
+ * vector trace only, so each instruction set gets its own copy.
+ */
+#ifndef SG_SHAPE_VD_H
+#define SG_SHAPE_VD_H
+
+#include "shape.h"
+#include "vdd.h"
+
+/* sg_rot_d at r2: the sag, w = sag'(r) / r and the bound dw. */
+static inline void sv_rot_d(const sg_shape *s, vd r2, vd *z, vd *w, vd *dw, vm *bad)
+{
+    vd zz = vd_set(0.0), ww = vd_set(0.0), dd2 = vd_set(0.0), rk = vd_set(1.0),
+       rkm = vd_set(0.0);
+    int k;
+    *bad = vm_set(0);
+    if (isfinite(s->R)) {
+        vd q = s->R * s->R - s->k1 * r2, sq;
+        *bad = (vm)(q < 0.0);
+        sq = vd_sqrt(q);
+        zz = r2 / (s->R + vd_copysign(sq, vd_set(s->R)));
+        ww = copysign(1.0, s->R) / sq;
+        dd2 = fabs(s->k1) / (2.0 * q * sq);
+    }
+    for (k = 0; k < s->na; k++) {
+        zz += s->a[k] * rk * r2;
+        ww += (2.0 * k + 2.0) * s->a[k] * rk;
+        if (k > 0)
+            dd2 += fabs(k * (2.0 * k + 2.0) * s->a[k]) * rkm;
+        rkm = rk;
+        rk *= r2;
+    }
+    if (s->nodd) {
+        /* The scalar code's branch on r^2 > 0 is a selection per lane;
+         * both sides are formed everywhere. */
+        vd r = vd_sqrt(r2), rp = vd_set(1.0);
+        vm pos = (vm)(r2 > 0.0);
+        for (k = 0; k < s->nodd; k++) {
+            double i = k + 1.0, b = s->odd[k];
+            vd wz = ww, dz = dd2;
+            rp *= r;
+            zz += b * rp;
+            if (k == 1)
+                wz = ww + 2.0 * b;
+            else if (k == 0 && b != 0.0)
+                dz = vd_set(INFINITY);
+            ww = vsel(pos, ww + i * b * rp / r2, wz);
+            dd2 = vsel(pos, dd2 + fabs(i * (i - 2.0) * b) * rp / (2.0 * r2 * r2), dz);
+        }
+    }
+    *z = zz;
+    *w = ww;
+    *dw = dd2;
+}
+
+/* sg_p2_d: the polynomial in u = x / norm, v = y / norm. */
+static inline void sv_p2_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h)
+{
+    vd U[SG_P2_DEG + 1], V[SG_P2_DEG + 1], zz = vd_set(0.0), gx = vd_set(0.0),
+                                           gy = vd_set(0.0), hh = vd_set(0.0);
+    vd u = x / s->norm, v = y / s->norm;
+    int a, b, n = s->deg;
+    U[0] = V[0] = vd_set(1.0);
+    for (a = 1; a <= n; a++) {
+        U[a] = U[a - 1] * u;
+        V[a] = V[a - 1] * v;
+    }
+    for (a = 0; a <= n; a++)
+        for (b = 0; a + b <= n; b++) {
+            int at = SG_P2_AT(a, b);
+            double c = s->c[at].hi, m = s->cm[at];
+            if (m == 0.0)
+                continue;
+            zz += c * U[a] * V[b];
+            if (a)
+                gx += a * c * U[a - 1] * V[b];
+            if (b)
+                gy += b * c * U[a] * V[b - 1];
+            if (a > 1)
+                hh += a * (a - 1) * m * vd_abs(U[a - 2] * V[b]);
+            if (a && b)
+                hh += 2.0 * a * b * m * vd_abs(U[a - 1] * V[b - 1]);
+            if (b > 1)
+                hh += b * (b - 1) * m * vd_abs(U[a] * V[b - 2]);
+        }
+    *z = zz;
+    g[0] = gx / s->norm;
+    g[1] = gy / s->norm;
+    *h = hh / (s->norm * s->norm);
+}
+
+/* sg_rot_p2_d: the rotational part plus the polynomial about (px, py). */
+static inline void sv_rot_p2_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h, vm *bad)
+{
+    vd r2 = x * x + y * y, w, dw, zp, gp[2], hp;
+    sv_rot_d(s, r2, z, &w, &dw, bad);
+    sv_p2_d(s, x - s->px, y - s->py, &zp, gp, &hp);
+    *z += zp;
+    g[0] = w * x + gp[0];
+    g[1] = w * y + gp[1];
+    *h = 1.5 * (vd_abs(w) + 4.0 * dw * r2 + hp);
+}
+
+/* shape_odd.c's odd_d. */
+static inline void sv_odd_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h, vm *bad)
+{
+    vd r2 = x * x + y * y, w, dw;
+    sv_rot_d(s, r2, z, &w, &dw, bad);
+    g[0] = w * x;
+    g[1] = w * y;
+    *h = 1.5 * (vd_abs(w) + 4.0 * dw * r2);
+}
+
+/* shape_toroid.c's tor_d. */
+static inline void sv_tor_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h, vm *bad)
+{
+    vd zy, w, dw, zp, zpp, u, disc, q, zt, aq, hxx, hxy, hyy;
+    sv_rot_d(s, y * y, &zy, &w, &dw, bad);
+    zp = w * y;
+    zpp = vd_abs(w) + 2.0 * dw * y * y;
+    if (!isfinite(s->Rx)) {
+        *z = zy;
+        g[0] = vd_set(0.0);
+        g[1] = zp;
+        *h = 1.5 * vd_abs(zpp);
+        return;
+    }
+    u = s->Rx - zy;
+    disc = u * u - x * x;
+    *bad |= (vm)(disc < 0.0);
+    q = vd_copysign(vd_sqrt(disc), u);
+    zt = x * x / (u + q);
+    *z = zy + zt;
+    g[0] = x / q;
+    g[1] = u * zp / q;
+    aq = vd_abs(q);
+    hxx = u * u / (disc * aq);
+    hxy = vd_abs(x * u * zp) / (disc * aq);
+    hyy = (zp * zp + vd_abs(u * zpp)) / aq + u * u * zp * zp / (disc * aq);
+    *h = 1.5 * (hxx + 2.0 * hxy + hyy);
+}
+
+/* shape_biconic.c's bic_d.  A product that starts with constants
+ * (kx1 cx cx x x) rounds them first, in scalar, as there. */
+static inline void sv_bic_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h, vm *bad)
+{
+    double cx = isfinite(s->Rx) ? 1.0 / s->Rx : 0.0, cy = isfinite(s->R) ? 1.0 / s->R : 0.0;
+    double km = fmax(1.0, fmax(fabs(s->kx1), fabs(s->k1)));
+    vd N = cx * x * x + cy * y * y;
+    vd Q = 1.0 - s->kx1 * cx * cx * x * x - s->k1 * cy * cy * y * y, S, D;
+    vm pos;
+    *bad = (vm)(Q < 0.0);
+    S = vd_sqrt(Q);
+    D = 1.0 + S;
+    *z = N / D;
+    /* The scalar code's slopes where S > 0, infinite elsewhere. */
+    pos = (vm)(S > 0.0);
+    g[0] = vsel(pos, (2.0 * cx * x * D + N * s->kx1 * cx * cx * x / S) / (D * D),
+                vd_set(INFINITY));
+    g[1] = vsel(pos, (2.0 * cy * y * D + N * s->k1 * cy * cy * y / S) / (D * D),
+                vd_set(INFINITY));
+    *h = 3.0 * (fabs(cx) + fabs(cy)) * km / (Q * S);
+}
+
+/* Whether this file has the shape's double sag. */
+static inline int sv_handles_d(const sg_shape *s)
+{
+    return s->ops && (s->ops->sag_d == sg_rot_p2_d || s->ops == &sg_shape_odd_ops ||
+                      s->ops == &sg_shape_toroid_ops || s->ops == &sg_shape_biconic_ops);
+}
+
+/* The shape's sag_d on every lane, for a shape sv_handles_d. */
+static inline void sv_sag_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h, vm *bad)
+{
+    if (s->ops == &sg_shape_odd_ops)
+        sv_odd_d(s, x, y, z, g, h, bad);
+    else if (s->ops == &sg_shape_toroid_ops)
+        sv_tor_d(s, x, y, z, g, h, bad);
+    else if (s->ops == &sg_shape_biconic_ops)
+        sv_bic_d(s, x, y, z, g, h, bad);
+    else
+        sv_rot_p2_d(s, x, y, z, g, h, bad);
+}
+
+/* The shape's sag_d on every lane: sv_sag_d for a shape sv_handles_d,
+ * else the scalar sag_d lane by lane on the lanes of live (z, g and h 0
+ * elsewhere). */
+static inline void sv_sag_d_live(const sg_shape *s, vd x, vd y, vm live, vd *z, vd g[2], vd *h,
+                                 vm *bad)
+{
+    int k;
+    if (sv_handles_d(s)) {
+        sv_sag_d(s, x, y, z, g, h, bad);
+        return;
+    }
+    *z = *h = g[0] = g[1] = vd_set(0.0);
+    *bad = vm_set(0);
+    for (k = 0; k < SG_VL; k++) {
+        double zk, gk[2], hk;
+        if (!live[k])
+            continue;
+        if (!s->ops->sag_d(s, x[k], y[k], &zk, gk, &hk)) {
+            (*bad)[k] = -1;
+            continue;
+        }
+        (*z)[k] = zk;
+        g[0][k] = gk[0];
+        g[1][k] = gk[1];
+        (*h)[k] = hk;
+    }
+}
+
+#endif
