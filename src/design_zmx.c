@@ -894,6 +894,38 @@ static int zmx_shape(zctx *c, zsurf *z, sg_surface *s)
     return SG_OK;
 }
 
+/* A pickup line, "from scale offset [column]": PZUP of a thickness, PKUP
+ * of a conic (a Zemax 13 file writes "PKUP 2 1 0" for surface 2's conic
+ * at scale 1; tests/data/zmx/README.md).  Column 0 (the same parameter)
+ * from an earlier surface is kept; any other is frozen, with a warning. */
+static int read_pickup(zctx *c, const zline *l, sg_surface *s, sg_solve_target t,
+                       const char *what)
+{
+    double from, scale, off, col;
+    int rc;
+    if ((rc = opt_num(c, l, 1, "pickup surface", -1.0, &from)) != SG_OK ||
+        (rc = opt_num(c, l, 2, "pickup scale", 1.0, &scale)) != SG_OK ||
+        (rc = opt_num(c, l, 3, "pickup offset", 0.0, &off)) != SG_OK ||
+        (rc = opt_num(c, l, 4, "pickup column", 0.0, &col)) != SG_OK)
+        return rc;
+    if (from == floor(from) && from >= 0 && from < c->cur && col == 0.0) {
+        sg_solve *o = &s->solve[t];
+        memset(o, 0, sizeof *o);
+        o->kind = SG_SOLVE_PICKUP;
+        o->from = (int)from;
+        o->scale = scale;
+        o->offset = off;
+        c->nlive++;
+        zwarn(c, "%.4s: note: the %s pickup from surface %d is kept", l->t[0].p, what, o->from);
+        return SG_OK;
+    }
+    c->nfrozen++;
+    zwarn(c, "%.4s: the %s pickup from surface %g (column %g) is frozen at the value stored in "
+          "the file: sagitta keeps pickups of a %s from an earlier surface", l->t[0].p, what,
+          from, col, what);
+    return SG_OK;
+}
+
 /* The TYPE names sagitta reads (end_surface, zmx_shape). */
 static int known_type(const char *t)
 {
@@ -1384,31 +1416,8 @@ static int surface_line(zctx *c, const zline *l)
               "stored in the file", x);
         return SG_OK;
     }
-    if (tok_is(k, "PZUP")) {
-        /* PZUP from scale offset column: column 0 picks up a thickness. */
-        double from, scale, off, col;
-        if ((rc = opt_num(c, l, 1, "pickup surface", -1.0, &from)) != SG_OK ||
-            (rc = opt_num(c, l, 2, "pickup scale", 1.0, &scale)) != SG_OK ||
-            (rc = opt_num(c, l, 3, "pickup offset", 0.0, &off)) != SG_OK ||
-            (rc = opt_num(c, l, 4, "pickup column", 0.0, &col)) != SG_OK)
-            return rc;
-        if (from == floor(from) && from >= 0 && from < c->cur && col == 0.0) {
-            sg_solve *o = &s->solve[SG_SOLVE_THICKNESS];
-            memset(o, 0, sizeof *o);
-            o->kind = SG_SOLVE_PICKUP;
-            o->from = (int)from;
-            o->scale = scale;
-            o->offset = off;
-            c->nlive++;
-            zwarn(c, "PZUP: note: the thickness pickup from surface %d is kept", o->from);
-            return SG_OK;
-        }
-        c->nfrozen++;
-        zwarn(c, "PZUP: the thickness pickup from surface %g (column %g) is frozen at the value "
-              "stored in the file: sagitta keeps pickups of a thickness from an earlier surface",
-              from, col);
-        return SG_OK;
-    }
+    if (tok_is(k, "PZUP"))
+        return read_pickup(c, l, s, SG_SOLVE_THICKNESS, "thickness");
     if (tok_is(k, "TCED")) {
         /* TCED tce 0 0: the TCE column (1e-6/K), the mount's expansion
          * for the air after the surface (Zemax 8 and 13 files write
@@ -1429,33 +1438,8 @@ static int surface_line(zctx *c, const zline *l)
         }
         return SG_OK;
     }
-    if (tok_is(k, "PKUP")) {
-        /* PKUP from scale offset [column]: a conic pickup, laid out as
-         * PZUP (a Zemax 13 file writes "PKUP 2 1 0" for surface 2's conic
-         * at scale 1; tests/data/zmx/README.md). */
-        double from, scale, off, col;
-        if ((rc = opt_num(c, l, 1, "pickup surface", -1.0, &from)) != SG_OK ||
-            (rc = opt_num(c, l, 2, "pickup scale", 1.0, &scale)) != SG_OK ||
-            (rc = opt_num(c, l, 3, "pickup offset", 0.0, &off)) != SG_OK ||
-            (rc = opt_num(c, l, 4, "pickup column", 0.0, &col)) != SG_OK)
-            return rc;
-        if (from == floor(from) && from >= 0 && from < c->cur && col == 0.0) {
-            sg_solve *o = &s->solve[SG_SOLVE_CONIC];
-            memset(o, 0, sizeof *o);
-            o->kind = SG_SOLVE_PICKUP;
-            o->from = (int)from;
-            o->scale = scale;
-            o->offset = off;
-            c->nlive++;
-            zwarn(c, "PKUP: note: the conic pickup from surface %d is kept", o->from);
-            return SG_OK;
-        }
-        c->nfrozen++;
-        zwarn(c, "PKUP: the conic pickup from surface %g (column %g) is frozen at the value "
-              "stored in the file: sagitta keeps pickups of a conic from an earlier surface",
-              from, col);
-        return SG_OK;
-    }
+    if (tok_is(k, "PKUP"))
+        return read_pickup(c, l, s, SG_SOLVE_CONIC, "conic");
     if (tok_is(k, "PPAR") || tok_is(k, "EDGE")) {
         /* A parameter pickup, an edge thickness solve: the stored value
          * stays. */

@@ -44,6 +44,16 @@ static sg_system *must_load(const char *file)
     return sys;
 }
 
+/* Whether one of d's warnings contains a (and b, unless NULL). */
+static int has_warning(const sg_diag *d, const char *a, const char *b)
+{
+    int i;
+    for (i = 0; i < d->nwarn && i < SG_DIAG_MAXWARN; i++)
+        if (strstr(d->warn[i], a) && (!b || strstr(d->warn[i], b)))
+            return 1;
+    return 0;
+}
+
 /* The double nearest 1/c, c given as decimal text: MPFR at 2000 bits
  * holds every decimal used here within far less than a double's rounding,
  * and the one rounding to 53 bits is checked not to sit on a tie. */
@@ -764,7 +774,6 @@ static void test_zemax_conic_pickup(void **state)
     sg_system *s = sg_system_new();
     sg_diag d;
     char *z;
-    int i, warned = 0;
     (void)state;
     sg_diag_clear(&d);
     if (sg_zmx_parse(s, text, strlen(text), "pkup.zmx", cat, &d) != SG_OK)
@@ -779,10 +788,7 @@ static void test_zemax_conic_pickup(void **state)
     /* Another column than the conic's (column 1): frozen, with a warning. */
     assert_int_equal(s->surf[5].solve[SG_SOLVE_CONIC].kind, SG_SOLVE_NONE);
     assert_true(s->surf[5].conic == 3.0);
-    for (i = 0; i < d.nwarn && i < SG_DIAG_MAXWARN; i++)
-        warned |= strstr(d.warn[i], "PKUP: the conic pickup from surface 4 (column 1) is "
-                                    "frozen") != NULL;
-    assert_true(warned);
+    assert_true(has_warning(&d, "PKUP: the conic pickup from surface 4 (column 1) is frozen", NULL));
     /* Recomputed from the design: surface 3 mirrors surface 2. */
     s->surf[3].conic = s->surf[4].conic = 9.0;
     s->surf[3].radius = 9.0;
@@ -818,15 +824,12 @@ static void test_zemax_tce(void **state)
     sg_system *s = sg_system_new();
     sg_diag d;
     char *z;
-    int i, warned = 0;
     (void)state;
     sg_diag_clear(&d);
     if (sg_zmx_parse(s, text, strlen(text), "tce.zmx", cat, &d) != SG_OK)
         fail_msg("%s", d.msg);
     assert_true(s->surf[2].tce == 23.5 && s->surf[3].tce == -3.5 && s->surf[1].tce == 0.0);
-    for (i = 0; i < d.nwarn && i < SG_DIAG_MAXWARN; i++)
-        warned |= strstr(d.warn[i], "TCED: the TCE's solve (1 2) is frozen") != NULL;
-    assert_true(warned);
+    assert_true(has_warning(&d, "TCED: the TCE's solve (1 2) is frozen", NULL));
     sg_diag_clear(&d);
     z = sg_zmx_to_text(s, cat, &d);
     assert_non_null(z);
@@ -1382,15 +1385,6 @@ static sg_catalog *cooke_catalog(void)
     unlink(path);
     assert_non_null(sg_catalog_find(cat, "SK16"));
     return cat;
-}
-
-static int has_warning(const sg_diag *d, const char *a, const char *b)
-{
-    int i;
-    for (i = 0; i < d->nwarn && i < SG_DIAG_MAXWARN; i++)
-        if (strstr(d->warn[i], a) && (!b || strstr(d->warn[i], b)))
-            return 1;
-    return 0;
 }
 
 static void test_zemax_angle_solve(void **state)
