@@ -20,10 +20,12 @@ typedef struct yn {
 
 /* The paraxial memo: for each of a few precisions and designs (the
  * launch's 128 bits, the mpfr method's, other wavelengths), the inputs of
- * every surface's step and, for each trace in the order sg_paraxial_mpfr
- * makes them, its start and its state after every surface.  A step reads
- * the surface's radius and index and the thickness and index before it. */
-enum { PM_SETS = 4, PM_SLOTS = 8 };
+ * every surface's step, the tree of step products (ptree), and, for each
+ * trace to the stop in the order sg_paraxial_mpfr makes them (the two
+ * unit rays, and a telecentric system's marginal ray), its start and its
+ * state after every surface.  A step reads the surface's radius and index
+ * and the thickness and index before it. */
+enum { PM_SETS = 4, PM_SLOTS = 3 };
 
 typedef struct pm_slot {
     int used, good; /* states kept after surfaces 1..good */
