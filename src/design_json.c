@@ -844,7 +844,7 @@ static int get_solves(jctx *c, const cJSON *v, const char *where, sg_surface *s)
                            SG_SOLVE_NKINDS, &e)) != SG_OK)
             return rc;
         o->kind = (sg_solve_kind)e;
-        if (o->kind == SG_SOLVE_PICKUP) {
+        if (sg_solve_is_pickup(o->kind)) {
             o->scale = 1.0;
             if (!k[V_FROM])
                 return perr(c, SG_EPARSE, at, "a pickup needs \"from\", its source surface");
@@ -1566,7 +1566,7 @@ static void sb_solves(sbuf *b, const sg_surface *s)
         sb_puts(b, sg_solve_target_name((sg_solve_target)t));
         sb_puts(b, "\": {\"type\": \"");
         sb_puts(b, sg_solve_kind_name(v->kind));
-        if (v->kind == SG_SOLVE_PICKUP) {
+        if (sg_solve_is_pickup(v->kind)) {
             snprintf(buf, sizeof buf, "\", \"from\": %d", v->from);
             sb_puts(b, buf);
             sb_puts(b, ", \"scale\": ");
@@ -1665,6 +1665,10 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     /* So did the environment: a version-1 reader would trace at 20 C. */
     if (sys->temperature != 20.0 || sys->pressure != 1.0 || sys->adjust_index)
         version = version < 2 ? 2 : version;
+    /* The curvature pickup came with version 5. */
+    for (i = 0; i < sys->nsurf; i++)
+        if (sys->surf[i].solve[SG_SOLVE_RADIUS].kind == SG_SOLVE_CURV_PICKUP)
+            version = version < 5 ? 5 : version;
     /* A file says the oldest format that reads it, so designs without the
      * newer keys stay readable by older programs. */
     snprintf(t, sizeof t, "  \"version\": %d,\n", version);

@@ -457,12 +457,14 @@ static int opt_num(zctx *c, const zline *l, int k, const char *what, double dflt
     return tok_num(c, l, k, what, out);
 }
 
-/* Whether a curvature pickup's scale k maps to the radius pickup scale
- * 1 / k and back to k in doubles, so that the pickup round-trips. */
+/* Whether a radius pickup of scale k is the curvature pickup of scale
+ * 1 / k with the same bits: k a power of two whose reciprocal is a
+ * double, so that both scalings are exact. */
 static int curv_scale_ok(double k)
 {
+    int e;
     double r = 1.0 / k;
-    return k != 0.0 && isfinite(k) && isfinite(r) && r != 0.0 && 1.0 / r == k;
+    return k != 0.0 && isfinite(k) && fabs(frexp(k, &e)) == 0.5 && isfinite(r) && r != 0.0;
 }
 
 /* The radius nearest the exact decimal curvature in tok: 1/D rounded once,
@@ -1128,30 +1130,29 @@ static int surface_line(zctx *c, const zline *l)
             return rc;
         if (v == 4.0) {
             /* A pickup: CURV c 4 from scale offset, of the curvature (a
-             * Zemax file stores 2 c for scale 2).  Without an offset it is
-             * a radius pickup of scale 1 / scale; with one it is no
-             * radius pickup, so it stays frozen. */
+             * Zemax file stores 2 c for scale 2), kept as Zemax
+             * evaluates it. */
             double from, scale, off;
             if ((rc = opt_num(c, l, 3, "pickup surface", -1.0, &from)) != SG_OK ||
                 (rc = opt_num(c, l, 4, "pickup scale", 1.0, &scale)) != SG_OK ||
                 (rc = opt_num(c, l, 5, "pickup offset", 0.0, &off)) != SG_OK)
                 return rc;
-            if (from == floor(from) && from >= 0 && from < c->cur && off == 0.0 &&
-                curv_scale_ok(scale)) {
+            if (from == floor(from) && from >= 0 && from < c->cur && isfinite(scale) &&
+                isfinite(off)) {
                 sg_solve *o = &s->solve[SG_SOLVE_RADIUS];
                 memset(o, 0, sizeof *o);
-                o->kind = SG_SOLVE_PICKUP;
+                o->kind = SG_SOLVE_CURV_PICKUP;
                 o->from = (int)from;
-                o->scale = 1.0 / scale;
+                o->scale = scale;
+                o->offset = off;
                 c->nlive++;
                 zwarn(c, "CURV: note: the pickup from surface %d is kept", o->from);
                 return SG_OK;
             }
             c->nfrozen++;
             zwarn(c, "CURV: the curvature pickup from surface %g (scale %g, offset %g) is frozen "
-                  "at the stored value: sagitta keeps curvature pickups from an earlier surface "
-                  "with offset 0 and a scale whose reciprocal is exact both ways", from, scale,
-                  off);
+                  "at the stored value: sagitta keeps curvature pickups from an earlier surface",
+                  from, scale, off);
             return SG_OK;
         }
         if (v == 2.0 || v == 11.0) {
@@ -2120,17 +2121,21 @@ static void zb_list(zbuf *b, const char *kw, const sg_system *s, int what)
 }
 /* A shape's PARM and XDAT lines, as zmx_shape reads them. */
 /* The solve fields after a CURV value, as the .zmx reader keeps them: a
- * radius pickup of offset 0 (Zemax's scale is the curvature's, 1 / ours),
- * the marginal ray angle or the F number; else nothing, the value frozen. */
-static const char *zb_curv_solve(char out[80], const sg_surface *f)
+ * curvature pickup; a radius pickup of offset 0 and a power-of-two scale
+ * (Zemax's scale is the curvature's, 1 / ours, and gives the same bits);
+ * the marginal ray angle or the F number; else nothing, the value
+ * frozen. */
+static const char *zb_curv_solve(char out[128], const sg_surface *f)
 {
     const sg_solve *v = &f->solve[SG_SOLVE_RADIUS];
-    char n1[40];
+    char n1[40], n2[40];
     out[0] = '\0';
     if (v->kind == SG_SOLVE_PICKUP && v->offset == 0.0 && curv_scale_ok(v->scale))
-        snprintf(out, 80, " 4 %d %s 0 \"\"", v->from, num(n1, 1.0 / v->scale));
+        snprintf(out, 128, " 4 %d %s 0 \"\"", v->from, num(n1, 1.0 / v->scale));
+    else if (v->kind == SG_SOLVE_CURV_PICKUP)
+        snprintf(out, 128, " 4 %d %s %s \"\"", v->from, num(n1, v->scale), num(n2, v->offset));
     else if (v->kind == SG_SOLVE_MARGINAL_ANGLE || v->kind == SG_SOLVE_FNUM)
-        snprintf(out, 80, " %d %s 0 0 \"\"", v->kind == SG_SOLVE_FNUM ? 11 : 2,
+        snprintf(out, 128, " %d %s 0 0 \"\"", v->kind == SG_SOLVE_FNUM ? 11 : 2,
                  num(n1, v->value));
     return out;
 }
@@ -2142,7 +2147,8 @@ static int zmx_keeps(const sg_surface *f, int t)
     switch (t) {
     case SG_SOLVE_RADIUS:
         return (v->kind == SG_SOLVE_PICKUP && v->offset == 0.0 && curv_scale_ok(v->scale)) ||
-               v->kind == SG_SOLVE_MARGINAL_ANGLE || v->kind == SG_SOLVE_FNUM;
+               v->kind == SG_SOLVE_CURV_PICKUP || v->kind == SG_SOLVE_MARGINAL_ANGLE ||
+               v->kind == SG_SOLVE_FNUM;
     case SG_SOLVE_THICKNESS:
         return v->kind == SG_SOLVE_PICKUP || v->kind == SG_SOLVE_MARGINAL_HEIGHT ||
                v->kind == SG_SOLVE_CHIEF_HEIGHT;
@@ -2282,7 +2288,7 @@ static int gcat_order(const sg_system *s, const sg_catalog *cat,
 
 static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_diag *d)
 {
-    char n1[40], n2[40], cs[80], gcat[ZMX_MAX_GCAT][SG_GLASS_NAME];
+    char n1[40], n2[40], cs[128], gcat[ZMX_MAX_GCAT][SG_GLASS_NAME];
     int ngcat = 0, i, k, changed = 0;
     mpfr_t q;
 
@@ -2494,8 +2500,8 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
                 sg_diag_warn(d, "export: surface %d: the %s %s solve is written as its value; "
                              "sagitta writes .zmx solves for marginal_height and chief_height "
                              "thicknesses, "
-                             "marginal_angle and fnum radii, and pickups of a thickness or "
-                             "(offset 0) a radius", i,
+                             "marginal_angle and fnum radii, curvature pickups, and pickups of a "
+                             "thickness or (offset 0, a power-of-two scale) a radius", i,
                              sg_solve_target_name((sg_solve_target)k),
                              sg_solve_kind_name(s->surf[i].solve[k].kind));
     if (b->oom)

@@ -29,7 +29,7 @@ extern "C" {
 /* The JSON design format version this library reads and writes. */
 /* Version 2 adds coordinate breaks and surface tilts and decenters; a
  * design without them is still written as version 1. */
-#define SG_DESIGN_FORMAT_VERSION 4
+#define SG_DESIGN_FORMAT_VERSION 5
 
 /* ------------------------------------------------------------------------
  * Errors.  One table yields the enum, the names and the messages, so the
@@ -320,13 +320,17 @@ typedef enum sg_solve_kind {
     /* thickness: the paraxial chief ray of the largest field meets the next
      * surface at height `value`; Zemax's chief ray height */
     SG_SOLVE_CHIEF_HEIGHT = 5,
+    /* radius: the curvature is scale * (surface `from`'s curvature) +
+     * offset, offset in 1 / lens units; Zemax's curvature pickup, whose
+     * scale and offset act on the curvature (a flat source has 0) */
+    SG_SOLVE_CURV_PICKUP = 6,
     SG_SOLVE_NKINDS
 } sg_solve_kind;
 
 typedef struct sg_solve {
     sg_solve_kind kind;
-    int from;            /* pickup: the source surface */
-    double scale, offset; /* pickup */
+    int from;            /* pickups: the source surface */
+    double scale, offset; /* pickups */
     double value;        /* height, angle or F/# */
 } sg_solve;
 
@@ -573,9 +577,11 @@ double sg_surface_sag(const sg_surface *s, double x, double y);
 /* Whether a frame change moves or turns anything. */
 int sg_frame_change_is_zero(const sg_frame_change *c);
 /* Solves.  Names are the JSON and editor words ("pickup", "marginal_height",
- * "marginal_angle", "fnum", "chief_height"; "radius", "thickness",
- * "conic"); NULL when out of range. */
+ * "marginal_angle", "fnum", "chief_height", "curvature_pickup"; "radius",
+ * "thickness", "conic"); NULL when out of range. */
 const char *sg_solve_kind_name(sg_solve_kind k);
+/* Whether kind is a pickup, whose from, scale and offset are used. */
+int sg_solve_is_pickup(sg_solve_kind k);
 const char *sg_solve_target_name(sg_solve_target t);
 /* Whether kind may sit on target. */
 int sg_solve_allowed(sg_solve_target t, sg_solve_kind k);

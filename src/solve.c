@@ -13,13 +13,15 @@
 #include "trace_internal.h"
 
 static const char *const kind_names[SG_SOLVE_NKINDS] = {
-    "none", "pickup", "marginal_height", "marginal_angle", "fnum", "chief_height"};
+    "none", "pickup", "marginal_height", "marginal_angle", "fnum", "chief_height",
+    "curvature_pickup"};
 static const char *const target_names[SG_SOLVE_NTARGETS] = {"radius", "thickness", "conic"};
 
 /* Bit k: kind k may sit on the target. */
 static const unsigned allowed[SG_SOLVE_NTARGETS] = {
     [SG_SOLVE_RADIUS] = 1u << SG_SOLVE_NONE | 1u << SG_SOLVE_PICKUP |
-                        1u << SG_SOLVE_MARGINAL_ANGLE | 1u << SG_SOLVE_FNUM,
+                        1u << SG_SOLVE_MARGINAL_ANGLE | 1u << SG_SOLVE_FNUM |
+                        1u << SG_SOLVE_CURV_PICKUP,
     [SG_SOLVE_THICKNESS] = 1u << SG_SOLVE_NONE | 1u << SG_SOLVE_PICKUP |
                            1u << SG_SOLVE_MARGINAL_HEIGHT | 1u << SG_SOLVE_CHIEF_HEIGHT,
     [SG_SOLVE_CONIC] = 1u << SG_SOLVE_NONE | 1u << SG_SOLVE_PICKUP,
@@ -37,6 +39,11 @@ const char *sg_solve_kind_name(sg_solve_kind k)
 const char *sg_solve_target_name(sg_solve_target t)
 {
     return (int)t >= 0 && t < SG_SOLVE_NTARGETS ? target_names[t] : NULL;
+}
+
+int sg_solve_is_pickup(sg_solve_kind k)
+{
+    return k == SG_SOLVE_PICKUP || k == SG_SOLVE_CURV_PICKUP;
 }
 
 int sg_solve_allowed(sg_solve_target t, sg_solve_kind k)
@@ -66,7 +73,7 @@ int sg_solve_check(const sg_system *sys, int i, sg_solve_target t, sg_diag *d)
         return sg_diag_set(d, SG_ERANGE, "surface %d: %s: a %s solve cannot sit on the %s", i,
                            tn, sg_solve_kind_name(v->kind) ? sg_solve_kind_name(v->kind) : "?",
                            tn);
-    if (v->kind == SG_SOLVE_PICKUP) {
+    if (sg_solve_is_pickup(v->kind)) {
         if (v->from < 0 || v->from >= i)
             return sg_diag_set(d, SG_ERANGE, "surface %d: %s: the pickup's source surface %d is "
                                "not an earlier surface (0 to %d)", i, tn, v->from, i - 1);
@@ -155,6 +162,27 @@ static int pickup(sg_system *sys, int i, sg_solve_target t, mpfr_t a, int *chang
     return SG_OK;
 }
 
+/* Zemax's curvature pickup: c = scale * c_from + offset, so the radius is
+ * 1 / (scale / R_from + offset), rounded once; a flat source has c = 0,
+ * and c = 0 is flat. */
+static void curv_pickup(sg_system *sys, int i, mpfr_t a, int *changed)
+{
+    const sg_solve *v = &sys->surf[i].solve[SG_SOLVE_RADIUS];
+    double src = sys->surf[v->from].radius;
+    if (isinf(src) || src == 0.0) {
+        mpfr_set_zero(a, 1);
+    } else {
+        mpfr_set_d(a, src, MPFR_RNDN);
+        mpfr_d_div(a, v->scale, a, MPFR_RNDN);
+    }
+    mpfr_add_d(a, a, v->offset, MPFR_RNDN);
+    if (mpfr_zero_p(a))
+        mpfr_set_inf(a, 1);
+    else
+        mpfr_ui_div(a, 1, a, MPFR_RNDN);
+    *changed |= store(&sys->surf[i].radius, a, SG_SOLVE_RADIUS);
+}
+
 /* The paraxial marginal ray at surface 1, before it refracts: height y and
  * reduced slope w = n u, from the current system's entrance pupil; and the
  * chief ray of the largest field (cy, cw), as paraxial.c launches it per
@@ -232,6 +260,8 @@ static int pass(sg_system *sys, mpfr_t *idx, int need_ray, int *changed, sg_diag
                                      sg_solve_target_name((sg_solve_target)t), v->from);
                     goto out;
                 }
+            } else if (v->kind == SG_SOLVE_CURV_PICKUP) {
+                curv_pickup(sys, i, a, changed);
             } else if (v->kind == SG_SOLVE_MARGINAL_ANGLE || v->kind == SG_SOLVE_FNUM) {
                 /* n' u' = n u - y c (n' - n), so c = (w - n' u') / (y (n' - n)). */
                 mpfr_sub(b, idx[i], idx[i - 1], MPFR_RNDN);
@@ -324,7 +354,7 @@ int sg_system_apply_solves(sg_system *sys, const sg_catalog *cat, sg_diag *d)
             sg_solve_kind k = sys->surf[i].solve[t].kind;
             if ((rc = sg_solve_check(sys, i, (sg_solve_target)t, d)) != SG_OK)
                 return rc;
-            need_ray |= k != SG_SOLVE_NONE && k != SG_SOLVE_PICKUP;
+            need_ray |= k != SG_SOLVE_NONE && !sg_solve_is_pickup(k);
         }
     if (sys->nwave < 1 || sys->primary_wave < 0 || sys->primary_wave >= sys->nwave)
         return sg_diag_set(d, SG_ERANGE, "solves: the primary wavelength is not set");

@@ -131,7 +131,7 @@ static void renumber_pickups(sg_system *sys, int at, int dir)
     for (i = 0; i < sys->nsurf; i++)
         for (t = 0; t < SG_SOLVE_NTARGETS; t++) {
             sg_solve *v = &sys->surf[i].solve[t];
-            if (v->kind != SG_SOLVE_PICKUP)
+            if (!sg_solve_is_pickup(v->kind))
                 continue;
             if (dir < 0 && v->from == at)
                 memset(v, 0, sizeof *v);

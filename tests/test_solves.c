@@ -412,6 +412,14 @@ static void test_zmx_roundtrip(void **state)
     assert_non_null(strstr(z, "  MAZH 0 0\n"));
     sg_diag_clear(&d);
     assert_int_equal(sg_zmx_parse(b, z, strlen(z), "rt.zmx", NULL, &d), SG_OK);
+    /* The radius pickup of scale -1 comes back as Zemax's curvature pickup
+     * of scale 1/-1, which gives the same bits once applied. */
+    assert_int_equal(b->surf[2].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_CURV_PICKUP);
+    assert_true(b->surf[2].solve[SG_SOLVE_RADIUS].scale == -1.0 &&
+                b->surf[2].solve[SG_SOLVE_RADIUS].from == 1);
+    b->surf[2].radius = 7.0;
+    apply(b);
+    b->surf[2].solve[SG_SOLVE_RADIUS] = a->surf[2].solve[SG_SOLVE_RADIUS];
     assert_true(sg_system_equal(a, b));
     free(z);
     /* A thickness pickup comes back as a PZUP line. */
@@ -425,6 +433,14 @@ static void test_zmx_roundtrip(void **state)
     assert_non_null(strstr(z, "  PZUP 1 3 0.5 0\n"));
     sg_diag_clear(&d);
     assert_int_equal(sg_zmx_parse(b, z, strlen(z), "rt.zmx", NULL, &d), SG_OK);
+    /* The radius pickup of scale -1 comes back as Zemax's curvature pickup
+     * of scale 1/-1, which gives the same bits once applied. */
+    assert_int_equal(b->surf[2].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_CURV_PICKUP);
+    assert_true(b->surf[2].solve[SG_SOLVE_RADIUS].scale == -1.0 &&
+                b->surf[2].solve[SG_SOLVE_RADIUS].from == 1);
+    b->surf[2].radius = 7.0;
+    apply(b);
+    b->surf[2].solve[SG_SOLVE_RADIUS] = a->surf[2].solve[SG_SOLVE_RADIUS];
     assert_true(sg_system_equal(a, b));
     free(z);
     sg_system_free(a);
@@ -501,7 +517,7 @@ static void test_zemax_pickups(void **state)
         assert_int_equal(sys->surf[i].solve[SG_SOLVE_THICKNESS].from, 13 - i);
     }
     for (i = 8; i <= 12; i++) {
-        assert_int_equal(sys->surf[i].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_PICKUP);
+        assert_int_equal(sys->surf[i].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_CURV_PICKUP);
         assert_int_equal(sys->surf[i].solve[SG_SOLVE_RADIUS].from, 14 - i);
         assert_true(sys->surf[i].solve[SG_SOLVE_RADIUS].scale == -1.0);
     }

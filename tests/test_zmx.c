@@ -9,6 +9,7 @@
  * MPFR from the decimal text, and line numbers as grep -n shows them.
  */
 #define _USE_MATH_DEFINES
+#include <float.h>
 #include <math.h>
 #ifndef M_PI
 #define M_PI 3.14159265358979323846
@@ -782,7 +783,7 @@ static void test_zemax_conic_pickup(void **state)
     assert_int_equal(s->surf[3].solve[SG_SOLVE_CONIC].from, 2);
     assert_true(s->surf[3].solve[SG_SOLVE_CONIC].scale == 1.0 &&
                 s->surf[3].solve[SG_SOLVE_CONIC].offset == 0.0);
-    assert_int_equal(s->surf[3].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_PICKUP);
+    assert_int_equal(s->surf[3].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_CURV_PICKUP);
     assert_true(s->surf[4].solve[SG_SOLVE_CONIC].scale == 2.0 &&
                 s->surf[4].solve[SG_SOLVE_CONIC].offset == 0.25);
     /* Another column than the conic's (column 1): frozen, with a warning. */
@@ -1460,8 +1461,8 @@ static void test_zemax_unconfirmed_solves(void **state)
     } cases[] = {
         {"3 0.5 0 0 \"\"", "CURV: the curvature solve (type 3) is frozen"},
         {"8 3.33333333E-3 0 0 \"\"", "CURV: the curvature solve (type 8) is frozen"},
-        {"4 5 0 0 \"\"", "CURV: the curvature pickup from surface 5 (scale 0, offset 0) is frozen"},
-        {"4 5 -1 0.01 \"\"", "(scale -1, offset 0.01) is frozen"},
+        {"4 6 1 0 \"\"", "CURV: the curvature pickup from surface 6 (scale 1, offset 0) is frozen"},
+        {"4 2.5 -1 0.01 \"\"", "(scale -1, offset 0.01) is frozen"},
     };
     sg_catalog *cat = cooke_catalog();
     size_t i;
@@ -1589,8 +1590,8 @@ static void test_zemax_curvature_pickup_scale(void **state)
     sg_diag_clear(&d);
     if (sg_zmx_parse(s, text, strlen(text), "pk.zmx", cat, &d) != SG_OK)
         fail_msg("%s", d.msg);
-    assert_true(s->surf[2].solve[SG_SOLVE_RADIUS].scale == 0.5);
-    assert_true(s->surf[5].solve[SG_SOLVE_RADIUS].scale == -0.5);
+    assert_true(s->surf[2].solve[SG_SOLVE_RADIUS].scale == 2.0);
+    assert_true(s->surf[5].solve[SG_SOLVE_RADIUS].scale == -2.0);
     sg_diag_clear(&d);
     z = sg_zmx_to_text(s, cat, &d);
     assert_non_null(z);
@@ -1599,7 +1600,7 @@ static void test_zemax_curvature_pickup_scale(void **state)
     free(z);
     roundtrip(s, cat, "pk.zmx");
     for (i = 2; i <= 6; i++) {
-        assert_int_equal(s->surf[i].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_PICKUP);
+        assert_int_equal(s->surf[i].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_CURV_PICKUP);
         s->surf[i].radius = 99.0;
     }
     sg_diag_clear(&d);
@@ -1609,6 +1610,133 @@ static void test_zemax_curvature_pickup_scale(void **state)
             fail_msg("surface %d: radius %.17g, Zemax's curvature %s", i, s->surf[i].radius,
                      curv[i - 1][0]);
     sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
+/* The curvature of surface `from`, scaled and offset as Zemax's pickup
+ * takes it (P' = O + S V on the curvature), as the radius nearest the
+ * exact value: 1 / (S / R + O) in 2000-bit MPFR, rounded once. */
+static double curv_pickup_radius(double r_from, double scale, double offset)
+{
+    mpfr_t c;
+    double r;
+    mpfr_init2(c, 2000);
+    if (isinf(r_from))
+        mpfr_set_zero(c, 1);
+    else {
+        mpfr_set_d(c, r_from, MPFR_RNDN);
+        mpfr_d_div(c, scale, c, MPFR_RNDN);
+    }
+    mpfr_add_d(c, c, offset, MPFR_RNDN);
+    if (mpfr_zero_p(c))
+        r = INFINITY;
+    else {
+        mpfr_ui_div(c, 1, c, MPFR_RNDN);
+        r = mpfr_get_d(c, MPFR_RNDN);
+    }
+    mpfr_clear(c);
+    return r;
+}
+
+/* A curvature pickup with an offset, or with a scale whose reciprocal is
+ * not exact, is kept as a curvature_pickup: the curvature is scale times
+ * the source's plus the offset (Zemax's rule for every pickup; no file
+ * written by Zemax with an offset was found, so the stored curvatures here
+ * are that rule worked by hand: 0.02 + 0.01 = 0.03, -0.02 + 0.01 = -0.01,
+ * 0.5 * 0.02 - 0.002 = 0.008, 3 * 0.02 = 0.06, and a flat source's 0 +
+ * 0.025).  Export writes "4 from scale offset" back; applying the pickups
+ * gives the closed form; a flat source gives 1/offset. */
+static void test_zemax_curvature_pickup_offset(void **state)
+{
+    static const struct {
+        const char *curv, *fields;
+        int from;
+        double scale, offset;
+    } rows[] = {
+        {"0.02", "0 0 0 0", -1, 0, 0},
+        {"0.03", "4 1 1 0.01", 1, 1, 0.01},
+        {"-0.01", "4 1 -1 0.01", 1, -1, 0.01},
+        {"0.008", "4 1 0.5 -0.002", 1, 0.5, -0.002},
+        {"0.06", "4 1 3 0", 1, 3, 0},
+        {"0.0", "0 0 0 0", -1, 0, 0},
+        {"0.025", "4 6 2 0.025", 6, 2, 0.025},
+    };
+    enum { NR = sizeof rows / sizeof *rows };
+    char text[4096], *z, *j;
+    size_t n;
+    int i;
+    sg_system *s = sg_system_new(), *b = sg_system_new();
+    sg_catalog *cat = tu_catalog();
+    sg_diag d;
+    (void)state;
+    n = (size_t)snprintf(text, sizeof text,
+                         "MODE SEQ\nUNIT MM X W X CM MR CPMM\nENPD 10\nWAVM 1 0.55 1\nPWAV 1\n"
+                         "SURF 0\n  CURV 0.0\n  DISZ INFINITY\n");
+    for (i = 0; i < NR; i++)
+        n += (size_t)snprintf(text + n, sizeof text - n, "SURF %d\n%s  CURV %s %s \"\"\n"
+                              "  DISZ 10\n", i + 1, i == 0 ? "  STOP\n" : "", rows[i].curv,
+                              rows[i].fields);
+    snprintf(text + n, sizeof text - n, "SURF %d\n  CURV 0.0\n  DISZ 0\n", NR + 1);
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(s, text, strlen(text), "co.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(has_warning(&d, "co.zmx: note: 5 solve or pickup lines kept", NULL));
+    for (i = 0; i < NR; i++) {
+        const sg_solve *v = &s->surf[i + 1].solve[SG_SOLVE_RADIUS];
+        if (rows[i].from < 0) {
+            assert_int_equal(v->kind, SG_SOLVE_NONE);
+            continue;
+        }
+        assert_int_equal(v->kind, SG_SOLVE_CURV_PICKUP);
+        assert_int_equal(v->from, rows[i].from);
+        assert_true(v->scale == rows[i].scale && v->offset == rows[i].offset);
+        /* The closed form from the source as imported, and within an
+         * ulp of the curvature the file stores (two roundings apart). */
+        {
+            double want = curv_pickup_radius(s->surf[rows[i].from].radius, rows[i].scale,
+                                             rows[i].offset);
+            double file = recip_text(rows[i].curv);
+            if (s->surf[i + 1].radius != want)
+                fail_msg("surface %d: radius %.17g, closed form %.17g", i + 1,
+                         s->surf[i + 1].radius, want);
+            if (fabs(want - file) > 2 * DBL_EPSILON * fabs(file))
+                fail_msg("surface %d: closed form %.17g, the file's %.17g", i + 1, want, file);
+        }
+    }
+    /* Written back as Zemax's CURV pickup fields, read back the same. */
+    sg_diag_clear(&d);
+    z = sg_zmx_to_text(s, cat, &d);
+    assert_non_null(z);
+    assert_non_null(strstr(z, " 4 1 1 0.01 \"\"\n"));
+    assert_non_null(strstr(z, " 4 1 0.5 -0.002 \"\"\n"));
+    assert_non_null(strstr(z, " 4 6 2 0.025 \"\"\n"));
+    free(z);
+    roundtrip(s, cat, "co.zmx");
+    /* A design with one is format version 5, and reads back the same. */
+    j = sg_design_to_json(s);
+    assert_non_null(strstr(j, "\"version\": 5,"));
+    assert_non_null(strstr(j, "{\"type\": \"curvature_pickup\", \"from\": 1, \"scale\": 0.5, "
+                              "\"offset\": -0.002}"));
+    sg_diag_clear(&d);
+    if (sg_design_parse(b, j, strlen(j), "co.json", &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    for (i = 1; i <= NR; i++)
+        assert_memory_equal(&s->surf[i].solve[SG_SOLVE_RADIUS], &b->surf[i].solve[SG_SOLVE_RADIUS],
+                            sizeof(sg_solve));
+    free(j);
+    /* The pickups follow an edit of their source. */
+    s->surf[1].radius = 40.0;
+    s->surf[6].radius = -80.0;
+    s->surf[6].solve[SG_SOLVE_RADIUS].kind = SG_SOLVE_NONE;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_system_apply_solves(s, cat, &d), SG_OK);
+    for (i = 0; i < NR; i++)
+        if (rows[i].from > 0 && rows[i].from != 6 &&
+            s->surf[i + 1].radius != curv_pickup_radius(40.0, rows[i].scale, rows[i].offset))
+            fail_msg("surface %d after the edit: radius %.17g", i + 1, s->surf[i + 1].radius);
+    assert_true(s->surf[7].radius == curv_pickup_radius(-80.0, 2, 0.025));
+    sg_system_free(s);
+    sg_system_free(b);
     sg_catalog_free(cat);
 }
 
@@ -1736,6 +1864,7 @@ int main(void)
         cmocka_unit_test(test_zemax_unconfirmed_solves),
         cmocka_unit_test(test_zemax_fnum_solve),
         cmocka_unit_test(test_zemax_curvature_pickup_scale),
+        cmocka_unit_test(test_zemax_curvature_pickup_offset),
         cmocka_unit_test(test_zemax_chief_height_solve),
         cmocka_unit_test(test_gcat_order),
         cmocka_unit_test(test_zemax_conic_pickup),

@@ -574,6 +574,15 @@ static void test_solve_command(void **state)
     assert_true(e->doc.sys->surf[2].radius == -50.0);
     cell_text(e->doc.sys, 2, COL_RADIUS, buf, sizeof buf);
     assert_string_equal(buf, "-50 P");
+    /* Zemax's curvature pickup: 1/R = -1 / 50 + 0.01, so R = -100
+     * (the offset's double moves it by 2e-15, far below R's half ulp). */
+    ok(e, "solve 2 radius curvature_pickup 1 -1 0.01");
+    assert_true(e->doc.sys->surf[2].radius == -100.0);
+    cell_text(e->doc.sys, 2, COL_RADIUS, buf, sizeof buf);
+    assert_string_equal(buf, "-100 P");
+    assert_true(cmd_exec(e, "solve 2 thickness curvature_pickup 1") & ED_ERROR);
+    ok(e, "undo");
+    assert_true(e->doc.sys->surf[2].radius == -50.0);
     /* Refusals, naming the surface. */
     assert_true(cmd_exec(e, "solve 1 radius pickup 2") & ED_ERROR);
     assert_non_null(strstr(e->msg, "surface 1"));

@@ -381,7 +381,8 @@ static int c_stop(ed *e, args *a)
 static int c_solve(ed *e, args *a)
 {
     static const char usage[] = "solve SURFACE radius|thickness|conic none|pickup FROM [SCALE "
-                                "[OFFSET]]|marginal_height H|chief_height H|marginal_angle U|fnum F";
+                                "[OFFSET]]|curvature_pickup FROM [SCALE [OFFSET]]|"
+                                "marginal_height H|chief_height H|marginal_angle U|fnum F";
     sg_solve v;
     sg_diag d;
     int row, t, k, rc;
@@ -399,13 +400,13 @@ static int c_solve(ed *e, args *a)
         if (strcasecmp(a->v[3], sg_solve_kind_name((sg_solve_kind)k)) == 0)
             break;
     if (k == SG_SOLVE_NKINDS)
-        return fail(e, "solve: '%s' is not none, pickup, marginal_height, chief_height, "
-                    "marginal_angle or fnum", a->v[3]);
+        return fail(e, "solve: '%s' is not none, pickup, curvature_pickup, marginal_height, "
+                    "chief_height, marginal_angle or fnum", a->v[3]);
     if (!sg_solve_allowed((sg_solve_target)t, (sg_solve_kind)k))
         return fail(e, "solve: a %s solve cannot sit on the %s", a->v[3], a->v[2]);
     memset(&v, 0, sizeof v);
     v.kind = (sg_solve_kind)k;
-    if (k == SG_SOLVE_PICKUP) {
+    if (sg_solve_is_pickup((sg_solve_kind)k)) {
         v.scale = 1.0;
         if (a->n < 5 || !parse_row(e, a->v[4], 0, e->doc.sys->nsurf - 1, &v.from))
             return a->n < 5 ? fail(e, "usage: %s", usage) : (ED_HANDLED | ED_ERROR);
@@ -2303,7 +2304,7 @@ static const command commands[] = {
     {"solve", NULL, c_solve,
      "solve SURFACE radius|thickness|conic TYPE [ARGS]",
      "set a solve: none, pickup FROM [SCALE [OFFSET]], marginal_height H or chief_height H "
-     "(thickness), marginal_angle U or fnum F (radius)"},
+     "(thickness), curvature_pickup FROM [SCALE [OFFSET]], marginal_angle U or fnum F (radius)"},
     {"undo", "u", c_undo, "undo [N]", "undo the last change(s)"},
     {"redo", NULL, c_redo, "redo [N]", "redo undone change(s)"},
     {"open", "e", c_open0, "open FILE", "open a design (open! discards changes)"},
