@@ -808,8 +808,9 @@ static int get_change(jctx *c, const cJSON *v, const char *where, sg_frame_chang
 }
 
 /* A surface's solves: {"radius": {...}, "thickness": {...}, "conic": {...}},
- * each {"type": KIND, "from": N, "scale": S, "offset": O} for a pickup or
- * {"type": KIND, "value": V} for a solve (sagitta-design(5), SOLVES).
+ * each {"type": KIND, "from": N, "scale": S, "offset": O} for a pickup,
+ * {"type": "position", "from": N, "value": L}, or {"type": KIND, "value":
+ * V} for another solve (sagitta-design(5), SOLVES).
  * Their values are one nested object, not rows of the parameter table;
  * sg_solve_check checks them with the rest of the design. */
 enum { V_TYPE, V_FROM, V_SCALE, V_OFFSET, V_VALUE, V_N };
@@ -859,6 +860,14 @@ static int get_solves(jctx *c, const cJSON *v, const char *where, sg_surface *s)
                                                 &o->offset)) != SG_OK)
                 return rc;
         } else if (o->kind != SG_SOLVE_NONE) {
+            if (o->kind == SG_SOLVE_POSITION) {
+                if (!k[V_FROM])
+                    return perr(c, SG_EPARSE, at, "a position solve needs \"from\", its "
+                                "reference surface");
+                if ((rc = get_int(c, k[V_FROM], join(at2, sizeof at2, at, "from"), &o->from)) !=
+                    SG_OK)
+                    return rc;
+            }
             if (!k[V_VALUE])
                 return perr(c, SG_EPARSE, at, "a %s solve needs a \"value\"", kinds[e]);
             if ((rc = get_finite(c, k[V_VALUE], join(at2, sizeof at2, at, "value"),
@@ -1574,7 +1583,13 @@ static void sb_solves(sbuf *b, const sg_surface *s)
             sb_puts(b, ", \"offset\": ");
             sb_num(b, v->offset);
         } else {
-            sb_puts(b, "\", \"value\": ");
+            if (v->kind == SG_SOLVE_POSITION) {
+                snprintf(buf, sizeof buf, "\", \"from\": %d", v->from);
+                sb_puts(b, buf);
+                sb_puts(b, ", \"value\": ");
+            } else {
+                sb_puts(b, "\", \"value\": ");
+            }
             sb_num(b, v->value);
         }
         sb_puts(b, "}");
@@ -1665,9 +1680,10 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     /* So did the environment: a version-1 reader would trace at 20 C. */
     if (sys->temperature != 20.0 || sys->pressure != 1.0 || sys->adjust_index)
         version = version < 2 ? 2 : version;
-    /* The curvature pickup came with version 5. */
+    /* The curvature pickup and the position solve came with version 5. */
     for (i = 0; i < sys->nsurf; i++)
-        if (sys->surf[i].solve[SG_SOLVE_RADIUS].kind == SG_SOLVE_CURV_PICKUP)
+        if (sys->surf[i].solve[SG_SOLVE_RADIUS].kind == SG_SOLVE_CURV_PICKUP ||
+            sys->surf[i].solve[SG_SOLVE_THICKNESS].kind == SG_SOLVE_POSITION)
             version = version < 5 ? 5 : version;
     /* A file says the oldest format that reads it, so designs without the
      * newer keys stay readable by older programs. */

@@ -324,12 +324,16 @@ typedef enum sg_solve_kind {
      * offset, offset in 1 / lens units; Zemax's curvature pickup, whose
      * scale and offset act on the curvature (a flat source has 0) */
     SG_SOLVE_CURV_PICKUP = 6,
+    /* thickness: the distance along the axis from the vertex of surface
+     * `from` (this surface or an earlier one) to the next surface is
+     * `value`; Zemax's position solve */
+    SG_SOLVE_POSITION = 7,
     SG_SOLVE_NKINDS
 } sg_solve_kind;
 
 typedef struct sg_solve {
     sg_solve_kind kind;
-    int from;            /* pickups: the source surface */
+    int from;            /* pickups: the source surface; position: the reference */
     double scale, offset; /* pickups */
     double value;        /* height, angle or F/# */
 } sg_solve;
@@ -577,11 +581,14 @@ double sg_surface_sag(const sg_surface *s, double x, double y);
 /* Whether a frame change moves or turns anything. */
 int sg_frame_change_is_zero(const sg_frame_change *c);
 /* Solves.  Names are the JSON and editor words ("pickup", "marginal_height",
- * "marginal_angle", "fnum", "chief_height", "curvature_pickup"; "radius",
- * "thickness", "conic"); NULL when out of range. */
+ * "marginal_angle", "fnum", "chief_height", "curvature_pickup",
+ * "position"; "radius", "thickness", "conic"); NULL when out of range. */
 const char *sg_solve_kind_name(sg_solve_kind k);
 /* Whether kind is a pickup, whose from, scale and offset are used. */
 int sg_solve_is_pickup(sg_solve_kind k);
+/* Whether kind names another surface in from (pickups, position), so that
+ * inserting and deleting surfaces renumbers it. */
+int sg_solve_has_from(sg_solve_kind k);
 const char *sg_solve_target_name(sg_solve_target t);
 /* Whether kind may sit on target. */
 int sg_solve_allowed(sg_solve_target t, sg_solve_kind k);

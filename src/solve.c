@@ -14,7 +14,7 @@
 
 static const char *const kind_names[SG_SOLVE_NKINDS] = {
     "none", "pickup", "marginal_height", "marginal_angle", "fnum", "chief_height",
-    "curvature_pickup"};
+    "curvature_pickup", "position"};
 static const char *const target_names[SG_SOLVE_NTARGETS] = {"radius", "thickness", "conic"};
 
 /* Bit k: kind k may sit on the target. */
@@ -23,7 +23,8 @@ static const unsigned allowed[SG_SOLVE_NTARGETS] = {
                         1u << SG_SOLVE_MARGINAL_ANGLE | 1u << SG_SOLVE_FNUM |
                         1u << SG_SOLVE_CURV_PICKUP,
     [SG_SOLVE_THICKNESS] = 1u << SG_SOLVE_NONE | 1u << SG_SOLVE_PICKUP |
-                           1u << SG_SOLVE_MARGINAL_HEIGHT | 1u << SG_SOLVE_CHIEF_HEIGHT,
+                           1u << SG_SOLVE_MARGINAL_HEIGHT | 1u << SG_SOLVE_CHIEF_HEIGHT |
+                           1u << SG_SOLVE_POSITION,
     [SG_SOLVE_CONIC] = 1u << SG_SOLVE_NONE | 1u << SG_SOLVE_PICKUP,
 };
 
@@ -44,6 +45,11 @@ const char *sg_solve_target_name(sg_solve_target t)
 int sg_solve_is_pickup(sg_solve_kind k)
 {
     return k == SG_SOLVE_PICKUP || k == SG_SOLVE_CURV_PICKUP;
+}
+
+int sg_solve_has_from(sg_solve_kind k)
+{
+    return sg_solve_is_pickup(k) || k == SG_SOLVE_POSITION;
 }
 
 int sg_solve_allowed(sg_solve_target t, sg_solve_kind k)
@@ -80,6 +86,19 @@ int sg_solve_check(const sg_system *sys, int i, sg_solve_target t, sg_diag *d)
         if (!isfinite(v->scale) || !isfinite(v->offset))
             return sg_diag_set(d, SG_ERANGE, "surface %d: %s: the pickup's scale and offset "
                                "must be finite", i, tn);
+        return SG_OK;
+    }
+    if (v->kind == SG_SOLVE_POSITION) {
+        if (i < 1 || i > sys->nsurf - 2)
+            return sg_diag_set(d, SG_ERANGE, "surface %d: thickness: a position solve needs a "
+                               "surface after the object and before the image", i);
+        if (v->from < 0 || v->from > i)
+            return sg_diag_set(d, SG_ERANGE, "surface %d: thickness: the position solve's "
+                               "reference surface %d is not this or an earlier surface (0 to "
+                               "%d)", i, v->from, i);
+        if (!isfinite(v->value))
+            return sg_diag_set(d, SG_ERANGE, "surface %d: thickness: the position solve's "
+                               "length must be finite", i);
         return SG_OK;
     }
     /* The marginal-ray solves act on a surface between object and image. */
@@ -306,6 +325,22 @@ static int pass(sg_system *sys, mpfr_t *idx, int need_ray, int *changed, sg_diag
                                  s->solve[SG_SOLVE_THICKNESS].from);
                 goto out;
             }
+        } else if (s->solve[SG_SOLVE_THICKNESS].kind == SG_SOLVE_POSITION) {
+            /* t = L - (the thicknesses from the reference to here), in
+             * 128 bits and rounded once. */
+            const sg_solve *v = &s->solve[SG_SOLVE_THICKNESS];
+            int j;
+            mpfr_set_d(a, v->value, MPFR_RNDN);
+            for (j = v->from; j < i && mpfr_number_p(a); j++)
+                mpfr_sub_d(a, a, sys->surf[j].thickness, MPFR_RNDN);
+            if (!mpfr_number_p(a) || !(fabs(mpfr_get_d(a, MPFR_RNDN)) <= SG_MAX_LEN)) {
+                rc = sg_diag_set(d, SG_ENONPHYS, "surface %d: thickness: the position solve "
+                                 "from surface %d gives %g, not a finite length within %g "
+                                 "lens units", i, v->from, mpfr_get_d(a, MPFR_RNDN),
+                                 SG_MAX_LEN);
+                goto out;
+            }
+            *changed |= store(&s->thickness, a, SG_SOLVE_THICKNESS);
         } else if (s->solve[SG_SOLVE_THICKNESS].kind == SG_SOLVE_MARGINAL_HEIGHT ||
                    s->solve[SG_SOLVE_THICKNESS].kind == SG_SOLVE_CHIEF_HEIGHT) {
             /* y + t w / n' = h, so t = (h - y) n' / w. */
@@ -354,7 +389,7 @@ int sg_system_apply_solves(sg_system *sys, const sg_catalog *cat, sg_diag *d)
             sg_solve_kind k = sys->surf[i].solve[t].kind;
             if ((rc = sg_solve_check(sys, i, (sg_solve_target)t, d)) != SG_OK)
                 return rc;
-            need_ray |= k != SG_SOLVE_NONE && !sg_solve_is_pickup(k);
+            need_ray |= k != SG_SOLVE_NONE && !sg_solve_is_pickup(k) && k != SG_SOLVE_POSITION;
         }
     if (sys->nwave < 1 || sys->primary_wave < 0 || sys->primary_wave >= sys->nwave)
         return sg_diag_set(d, SG_ERANGE, "solves: the primary wavelength is not set");

@@ -122,16 +122,16 @@ sg_system *sg_system_clone(const sg_system *sys)
     return c;
 }
 
-/* After inserting (dir 1) or deleting (dir -1) surface at: pickups from
- * later surfaces follow them; a pickup from the deleted surface becomes a
- * plain value, as it holds. */
+/* After inserting (dir 1) or deleting (dir -1) surface at: pickups and
+ * position solves naming later surfaces follow them; one naming the
+ * deleted surface becomes a plain value, as it holds. */
 static void renumber_pickups(sg_system *sys, int at, int dir)
 {
     int i, t;
     for (i = 0; i < sys->nsurf; i++)
         for (t = 0; t < SG_SOLVE_NTARGETS; t++) {
             sg_solve *v = &sys->surf[i].solve[t];
-            if (!sg_solve_is_pickup(v->kind))
+            if (!sg_solve_has_from(v->kind))
                 continue;
             if (dir < 0 && v->from == at)
                 memset(v, 0, sizeof *v);

@@ -304,6 +304,117 @@ static void test_pickups(void **state)
 }
 
 
+/* L minus the thicknesses, in 2000-bit MPFR (exact for these doubles),
+ * rounded once: the closed form of a position solve. */
+static double position_closed(double L, const double *t, int n)
+{
+    mpfr_t x;
+    double r;
+    int k;
+    mpfr_init2(x, 2000);
+    mpfr_set_d(x, L, MPFR_RNDN);
+    for (k = 0; k < n; k++)
+        mpfr_sub_d(x, x, t[k], MPFR_RNDN);
+    r = mpfr_get_d(x, MPFR_RNDN);
+    mpfr_clear(x);
+    return r;
+}
+
+/* Zemax's position solve: the axial distance from the reference surface's
+ * vertex to the next surface is L, so the thickness is L minus the
+ * thicknesses from the reference on; it follows edits, surfaces inserted
+ * between, and is dropped with its reference. */
+static void test_position(void **state)
+{
+    sg_system *sys;
+    double t[3];
+    (void)state;
+    /* From the surface before: t2 = L - t1, with digits that do not
+     * cancel (30.125 - 5.3 is not a double sum). */
+    sys = singlet("100.7", 40, 100, 5.3, "",
+                  ", \"solves\": {\"thickness\": {\"type\": \"position\", \"from\": 1, "
+                  "\"value\": 30.125}}");
+    apply(sys);
+    t[0] = 5.3;
+    assert_true(sys->surf[2].thickness == position_closed(30.125, t, 1));
+    /* Follows an edit of the space before it. */
+    sys->surf[1].thickness = 7.77;
+    apply(sys);
+    t[0] = 7.77;
+    assert_true(sys->surf[2].thickness == position_closed(30.125, t, 1));
+    /* From the object: L - t0 - t1. */
+    sys->surf[2].solve[SG_SOLVE_THICKNESS].from = 0;
+    apply(sys);
+    t[0] = 100.7;
+    t[1] = 7.77;
+    assert_true(sys->surf[2].thickness == position_closed(30.125, t, 2));
+    /* From itself: the thickness is L. */
+    sys->surf[2].solve[SG_SOLVE_THICKNESS].from = 2;
+    apply(sys);
+    assert_true(sys->surf[2].thickness == 30.125);
+    /* A surface inserted between the reference and the solve counts, and
+     * the solve moves with its surface. */
+    sys->surf[2].solve[SG_SOLVE_THICKNESS].from = 1;
+    assert_int_equal(sg_system_insert(sys, 2), SG_OK);
+    sys->surf[2].thickness = 2.5;
+    assert_int_equal(sys->surf[3].solve[SG_SOLVE_THICKNESS].kind, SG_SOLVE_POSITION);
+    assert_int_equal(sys->surf[3].solve[SG_SOLVE_THICKNESS].from, 1);
+    apply(sys);
+    t[0] = 7.77;
+    t[1] = 2.5;
+    assert_true(sys->surf[3].thickness == position_closed(30.125, t, 2));
+    /* A surface inserted before the reference renumbers it. */
+    assert_int_equal(sg_system_insert(sys, 1), SG_OK);
+    assert_int_equal(sys->surf[4].solve[SG_SOLVE_THICKNESS].from, 2);
+    /* Written and read back (format version 5). */
+    {
+        char *j = sg_design_to_json(sys);
+        sg_system *b = sg_system_new();
+        sg_diag d;
+        assert_non_null(strstr(j, "\"version\": 5,"));
+        assert_non_null(strstr(j, "{\"type\": \"position\", \"from\": 2, \"value\": 30.125}"));
+        sg_diag_clear(&d);
+        if (sg_design_parse(b, j, strlen(j), "p.json", &d) != SG_OK)
+            fail_msg("%s", d.msg);
+        assert_true(sg_system_equal(sys, b));
+        free(j);
+        sg_system_free(b);
+    }
+    /* Deleting the reference leaves the value and drops the solve. */
+    t[0] = sys->surf[4].thickness;
+    assert_int_equal(sg_system_delete(sys, 2), SG_OK);
+    assert_int_equal(sys->surf[3].solve[SG_SOLVE_THICKNESS].kind, SG_SOLVE_NONE);
+    assert_true(sys->surf[3].thickness == t[0]);
+    sg_system_free(sys);
+    /* Refused: a later reference, the image, a missing length; not
+     * physical: the object at infinity among the thicknesses. */
+    sys = singlet("\"inf\"", 40, 100, 5, "",
+                  ", \"solves\": {\"thickness\": {\"type\": \"position\", \"from\": 3, "
+                  "\"value\": 20}}");
+    expect_error(sys, SG_ERANGE, "surface 2: thickness: the position solve's reference surface 3 "
+                 "is not this or an earlier surface");
+    sys->surf[2].solve[SG_SOLVE_THICKNESS].from = 0;
+    expect_error(sys, SG_ENONPHYS, "surface 2: thickness: the position solve from surface 0 gives");
+    sys->surf[2].solve[SG_SOLVE_THICKNESS].kind = SG_SOLVE_NONE;
+    sys->surf[3].solve[SG_SOLVE_THICKNESS].kind = SG_SOLVE_POSITION;
+    sys->surf[3].solve[SG_SOLVE_THICKNESS].from = 1;
+    expect_error(sys, SG_ERANGE, "surface 3: thickness: a position solve needs a surface after "
+                 "the object and before the image");
+    sg_system_free(sys);
+    {
+        static const char text[] =
+            "{\"surfaces\": [{}, {\"stop\": true, \"solves\": {\"thickness\": "
+            "{\"type\": \"position\", \"value\": 3}}}, {}]}";
+        sg_system *b = sg_system_new();
+        sg_diag d;
+        sg_diag_clear(&d);
+        assert_int_equal(sg_design_parse(b, text, strlen(text), "q.json", &d), SG_EPARSE);
+        if (!strstr(d.msg, "q.json: surface 1: solves: thickness: a position solve needs \"from\""))
+            fail_msg("%s", d.msg);
+        sg_system_free(b);
+    }
+}
+
 static void test_errors(void **state)
 {
     sg_system *sys;
@@ -548,6 +659,7 @@ int main(void)
         cmocka_unit_test(test_pupil_iteration),
         cmocka_unit_test(test_chief_height),
         cmocka_unit_test(test_pickups),
+        cmocka_unit_test(test_position),
         cmocka_unit_test(test_errors),
         cmocka_unit_test(test_json_kinds),
         cmocka_unit_test(test_json_roundtrip),

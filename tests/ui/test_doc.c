@@ -583,6 +583,16 @@ static void test_solve_command(void **state)
     assert_true(cmd_exec(e, "solve 2 thickness curvature_pickup 1") & ED_ERROR);
     ok(e, "undo");
     assert_true(e->doc.sys->surf[2].radius == -50.0);
+    /* A position solve: 30 from surface 1's vertex, whose thickness is 5. */
+    ok(e, "solve 2 thickness position 1 30");
+    assert_true(e->doc.sys->surf[2].thickness == 25.0);
+    cell_text(e->doc.sys, 2, COL_THICKNESS, buf, sizeof buf);
+    assert_string_equal(buf, "25 T");
+    ok(e, "set 1 thickness 6");
+    assert_true(e->doc.sys->surf[2].thickness == 24.0);
+    assert_true(cmd_exec(e, "solve 2 thickness position 3 30") & ED_ERROR);
+    ok(e, "undo");
+    ok(e, "undo");
     /* Refusals, naming the surface. */
     assert_true(cmd_exec(e, "solve 1 radius pickup 2") & ED_ERROR);
     assert_non_null(strstr(e->msg, "surface 1"));

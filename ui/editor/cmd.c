@@ -382,7 +382,8 @@ static int c_solve(ed *e, args *a)
 {
     static const char usage[] = "solve SURFACE radius|thickness|conic none|pickup FROM [SCALE "
                                 "[OFFSET]]|curvature_pickup FROM [SCALE [OFFSET]]|"
-                                "marginal_height H|chief_height H|marginal_angle U|fnum F";
+                                "marginal_height H|chief_height H|position FROM L|"
+                                "marginal_angle U|fnum F";
     sg_solve v;
     sg_diag d;
     int row, t, k, rc;
@@ -401,7 +402,7 @@ static int c_solve(ed *e, args *a)
             break;
     if (k == SG_SOLVE_NKINDS)
         return fail(e, "solve: '%s' is not none, pickup, curvature_pickup, marginal_height, "
-                    "chief_height, marginal_angle or fnum", a->v[3]);
+                    "chief_height, position, marginal_angle or fnum", a->v[3]);
     if (!sg_solve_allowed((sg_solve_target)t, (sg_solve_kind)k))
         return fail(e, "solve: a %s solve cannot sit on the %s", a->v[3], a->v[2]);
     memset(&v, 0, sizeof v);
@@ -413,6 +414,12 @@ static int c_solve(ed *e, args *a)
         if (a->n > 5 && !parse_num(e, a->v[5], "scale", &v.scale))
             return ED_HANDLED | ED_ERROR;
         if (a->n > 6 && !parse_num(e, a->v[6], "offset", &v.offset))
+            return ED_HANDLED | ED_ERROR;
+    } else if (k == SG_SOLVE_POSITION) {
+        if (a->n != 6)
+            return fail(e, "usage: %s", usage);
+        if (!parse_row(e, a->v[4], 0, e->doc.sys->nsurf - 1, &v.from) ||
+            !parse_num(e, a->v[5], "length", &v.value))
             return ED_HANDLED | ED_ERROR;
     } else if (k != SG_SOLVE_NONE) {
         if (a->n != 5)
@@ -2303,8 +2310,9 @@ static const command commands[] = {
     {"stop", NULL, c_stop, "stop [SURFACE]", "make a surface the aperture stop"},
     {"solve", NULL, c_solve,
      "solve SURFACE radius|thickness|conic TYPE [ARGS]",
-     "set a solve: none, pickup FROM [SCALE [OFFSET]], marginal_height H or chief_height H "
-     "(thickness), curvature_pickup FROM [SCALE [OFFSET]], marginal_angle U or fnum F (radius)"},
+     "set a solve: none, pickup FROM [SCALE [OFFSET]], marginal_height H, chief_height H "
+     "or position FROM L (thickness), curvature_pickup FROM [SCALE [OFFSET]], marginal_angle U "
+     "or fnum F (radius)"},
     {"undo", "u", c_undo, "undo [N]", "undo the last change(s)"},
     {"redo", NULL, c_redo, "redo [N]", "redo undone change(s)"},
     {"open", "e", c_open0, "open FILE", "open a design (open! discards changes)"},
