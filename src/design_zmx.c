@@ -878,6 +878,32 @@ static int zmx_shape(zctx *c, zsurf *z, sg_surface *s)
             }
         for (k = 0; k < n; k++)
             s->terms[k] = z->xd[k + 3];
+    } else if (strcmp(z->type, "TILTSURF") == 0) {
+        /* Zemax's tilted plane, z = x tan(theta_x) + y tan(theta_y) with
+         * the tangents in PARM 1 and 2: exactly the XY polynomial of the
+         * terms x and y at normalization radius 1. */
+        s->type = SG_SURF_XYPOLY;
+        if ((k = parm_only(c, z, 1, 2, "a tilted surface has the x and y tangents (PARM 1 "
+                                       "and 2)")) != SG_OK)
+            return k;
+        if (isfinite(s->radius) && s->radius != 0.0)
+            return zerr(c, SG_EUNSUPPORTED, "TYPE TILTSURF with a curvature: Zemax's tilted "
+                        "surface is a plane");
+        if (s->conic != 0.0)
+            return zerr(c, SG_EUNSUPPORTED, "TYPE TILTSURF with a conic: Zemax's tilted "
+                        "surface is a plane");
+        for (k = 1; k <= ZMX_MAX_XDAT; k++)
+            if (z->xd[k] != 0.0) {
+                c->line = z->xd_line[k];
+                return zerr(c, SG_EUNSUPPORTED, "XDAT %d is %.17g: a tilted surface has no "
+                            "extra data", k, z->xd[k]);
+            }
+        s->norm_radius = 1.0;
+        s->terms[0] = z->parm[1];
+        s->terms[1] = z->parm[2];
+        zwarn(c, "TYPE TILTSURF: note: the tilted plane is read as the XY polynomial z = %.17g x "
+              "+ %.17g y, the same surface, and is written back as XPOLYNOM", s->terms[0],
+              s->terms[1]);
     } else {
         const char *what = strcmp(z->type, "BICONIC") == 0      ? "an old biconic"
                            : strcmp(z->type, "PARAXIAL") == 0   ? "a paraxial surface"
@@ -933,7 +959,7 @@ static int known_type(const char *t)
 {
     static const char *const names[] = {"STANDARD", "EVENASPH", "COORDBRK", "ODDASPHE",
                                         "TOROIDAL", "BICONICX", "FZERNSAG", "SZERNSAG",
-                                        "XPOLYNOM"};
+                                        "XPOLYNOM", "TILTSURF"};
     size_t i;
     for (i = 0; i < sizeof names / sizeof *names; i++)
         if (strcmp(t, names[i]) == 0)

@@ -80,8 +80,9 @@ static void osp_from_values(const sg_tracer *t, dd vx, dd vy, int deg, osp *o)
         o->obj.x = vx;
         o->obj.y = vy;
         o->obj.z = dd_neg(t->ln.T0);
-        if (R != 0.0 && isfinite(R)) {
-            /* A curved object surface: the point lies on its sag. */
+        if ((R != 0.0 && isfinite(R)) || t->sp[0].shp) {
+            /* A curved or shaped object surface (a tilted plane is an XY
+             * polynomial): the point lies on its sag. */
             double sag = t->sp[0].shp ? sg_shape_sag(t->sp[0].shp, vx.hi, vy.hi)
                                       : sg_surface_sag(s0, vx.hi, vy.hi);
             if (isfinite(sag))

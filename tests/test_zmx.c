@@ -1740,6 +1740,50 @@ static void test_zemax_curvature_pickup_offset(void **state)
     sg_catalog_free(cat);
 }
 
+/* Zemax's tilted plane (TYPE TILTSURF, z = x tan(theta_x) + y tan(theta_y)
+ * with the tangents in PARM 1 and 2), in two of Zemax's samples as Zemax
+ * 13 wrote them (tests/data/zmx/README.md).  "Tilted object" tilts the
+ * object (tangent -1) and the image (1.27055561): the image's automatic
+ * semi-diameter, 6.63694305833, comes out only if the object points lie
+ * on the tilted object plane and the rays end on the tilted image.  In
+ * "Beamsplitter cube" the BK7 / SF1 hypotenuse is tilted 45 degrees
+ * (tangent 1); Zemax's semi-diameters after it, 6.692377000532 and
+ * 8.660584676767, follow the refraction there.  Each is read as the XY
+ * polynomial of the two tangents, the same surface. */
+static void test_zemax_tilted_plane(void **state)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *s;
+    double sd[8];
+    sg_diag d;
+    (void)state;
+    s = must_load("tilted_object.zmx");
+    assert_int_equal(s->nsurf, 4);
+    assert_int_equal(s->surf[0].type, SG_SURF_XYPOLY);
+    assert_int_equal(s->surf[3].type, SG_SURF_XYPOLY);
+    assert_true(s->surf[0].norm_radius == 1.0 && s->surf[0].terms[0] == 0.0 &&
+                s->surf[0].terms[1] == -1.0);
+    assert_true(s->surf[3].terms[1] == 1.27055561 && s->surf[3].terms[2] == 0.0);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_semi_diameters(s, cat, NULL, sd, &d), SG_OK);
+    print_message("# tilted object: image semi-diameter %.17g (Zemax 6.63694305833)\n", sd[3]);
+    assert_true(fabs(sd[3] - 6.63694305833) <= 0.5e-11);
+    roundtrip(s, cat, "tilted_object.zmx");
+    sg_system_free(s);
+    s = must_load("beamsplitter_cube.zmx");
+    assert_int_equal(s->surf[3].type, SG_SURF_XYPOLY);
+    assert_true(s->surf[3].terms[0] == 0.0 && s->surf[3].terms[1] == 1.0);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_semi_diameters(s, cat, NULL, sd, &d), SG_OK);
+    print_message("# beamsplitter cube: %.17g %.17g (Zemax 6.692377000532 8.660584676767)\n",
+                  sd[4], sd[5]);
+    assert_true(fabs(sd[4] - 6.692377000532) <= 0.5e-12);
+    assert_true(fabs(sd[5] - 8.660584676767) <= 0.5e-12);
+    roundtrip(s, cat, "beamsplitter_cube.zmx");
+    sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
 /* Zemax's chief ray height solve (CHZH height 0), restated from a
  * riflescope Zemax wrote (tests/data/zmx/README.md, Afocal Riflescope.ZMX,
  * line 251): surface 17's thickness puts the image (the eye) where the
@@ -1865,6 +1909,7 @@ int main(void)
         cmocka_unit_test(test_zemax_fnum_solve),
         cmocka_unit_test(test_zemax_curvature_pickup_scale),
         cmocka_unit_test(test_zemax_curvature_pickup_offset),
+        cmocka_unit_test(test_zemax_tilted_plane),
         cmocka_unit_test(test_zemax_chief_height_solve),
         cmocka_unit_test(test_gcat_order),
         cmocka_unit_test(test_zemax_conic_pickup),
