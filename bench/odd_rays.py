@@ -6,7 +6,8 @@
 NORM.csv: hx,hy,px,py rows, mostly in a few fields (runs, as sets are),
 with values drawn from odd texts: negative zero, subnormals, 1e-300,
 25-digit decimals, exponent forms, integers, values beyond the pupil and
-the field (up to 3), and plain ones written with repr.  SD.csv:
+the field (up to 3), blanks around a field, a leading + or point, and
+plain ones written with repr.  SD.csv:
 x,y,z,l,m,n rows (start points near the axis, directions mostly forward,
 some grazing or backward, unnormalized)."""
 import random
@@ -15,7 +16,8 @@ import sys
 ODD = ["-0", "0", "-0.0", "5e-324", "-4.9406564584124654e-324", "2.2250738585072009e-308",
        "1e-310", "1e-300", "0.1000000000000000055511151231257827", "0.3333333333333333333333333",
        "1E-5", "2.5e-1", "-7.5E-01", "1", "-1", "1.0000000000000002", "0.9999999999999999",
-       "1.5", "-2", "3", "0.70710678118654757", "123456789012345678901234e-24"]
+       "1.5", "-2", "3", "0.70710678118654757", "123456789012345678901234e-24",
+       " 0.25", "0.125 ", "+0.5", ".5", "5.", "1e+2", "1e-0", "-.75E+0"]
 
 
 def num(rng, scale):
