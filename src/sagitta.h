@@ -1227,6 +1227,11 @@ int sg_opd_reference(sg_tracer *t, double hx, double hy, sg_opd_ref *ref, sg_dia
  * NaNs; returns SG_EINVAL only for NULL arguments. */
 int sg_opd_of_ray(const sg_tracer *t, const sg_opd_ref *ref, const sg_ray_surface *image_row,
                   sg_opd *out);
+/* sg_opd_of_ray for n rays of ref's field at once, their image rows at
+ * rows[r * stride] and their results in out[r], each with the bits
+ * sg_opd_of_ray gives (on vector lanes where the build has them). */
+int sg_opd_of_rays(const sg_tracer *t, const sg_opd_ref *ref, const sg_ray_surface *rows,
+                   size_t stride, size_t n, sg_opd *out);
 /* Traces pupil point (px, py) of ref's field with t (out: nsurf rows) and
  * fills res; returns the trace's status. */
 int sg_trace_opd(sg_tracer *t, const sg_opd_ref *ref, double px, double py,

@@ -175,6 +175,36 @@ static int parse_header(span line, const char *name, long lineno,
     return SG_OK;
 }
 
+/* The usual row in one pass: ncol plain decimals (numfmt_parse's form)
+ * separated by single commas, nothing else.  Returns 0, with *ray
+ * untouched, for anything else, which parse_row then reads field by
+ * field: the same values where this one succeeds (each field here is
+ * what split and trim give there), and its messages where it fails. */
+static int parse_row_fast(span line, sg_ray_kind kind, const int *map, int ncol,
+                          sg_ray_in *ray)
+{
+    const char *p = line.p, *end = line.p + line.n;
+    sg_ray_in r;
+    int k;
+    memset(&r, 0, sizeof r);
+    for (k = 0; k < ncol; k++) {
+        p = numfmt_parse_to(p, end, &r.v[map[k]]);
+        if (!p)
+            return 0;
+        if (k + 1 < ncol) {
+            if (p == end || *p != ',')
+                return 0;
+            p++;
+        }
+    }
+    if (p != end)
+        return 0;
+    if (kind == SG_RAYS_START_DIR && r.v[3] == 0 && r.v[4] == 0 && r.v[5] == 0)
+        return 0;
+    *ray = r;
+    return 1;
+}
+
 static int parse_row(span line, const char *name, long lineno, sg_ray_kind kind,
                      const int *map, int ncol, sg_ray_in *ray, sg_diag *d)
 {
@@ -183,6 +213,8 @@ static int parse_row(span line, const char *name, long lineno, sg_ray_kind kind,
     const char *const *names = kind == SG_RAYS_NORMALIZED ? norm_names : sd_names;
     int count, k;
 
+    if (parse_row_fast(line, kind, map, ncol, ray))
+        return SG_OK;
     split(line, f, NCOLS_MAX, &count);
     if (count != ncol)
         return sg_diag_set(d, SG_EPARSE, "%s:%ld: expected %d fields, got %d",

@@ -4,6 +4,7 @@
 #include <errno.h>
 #include <hdf5.h>
 #include <math.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -24,7 +25,7 @@ struct h5rays {
     int opd; /* the OPD columns (normalized rays) */
     size_t rows, next_ray;
     char path[4096], tmp[4096 + 32];
-    void *buf; /* one column of a block */
+    void *buf; /* the columns of a block */
     size_t bufrows;
 };
 
@@ -282,63 +283,76 @@ int h5rays_write(h5rays *h, const sg_ray_surface *out, const int *status, size_t
                  const sg_ray_in *rays, const sg_opd *opd, char *err, size_t errlen)
 {
     size_t rows = n * (size_t)h->nsurf, r, i, j;
+    size_t nsurf = (size_t)h->nsurf;
+    double *col[C_MAX];
     int k;
     (void)status;
     if (rows == 0)
         return 0;
+    /* Every column of the block at once (a uint64_t or int column in a
+     * double's room), filled in one pass over the rows: a pass a column
+     * would read the block's rows once for every column. */
     if (rows > h->bufrows) {
-        void *b = realloc(h->buf, rows * sizeof(double));
+        void *b = rows > SIZE_MAX / (C_MAX * sizeof(double))
+                  ? NULL : realloc(h->buf, rows * C_MAX * sizeof(double));
         if (!b)
             return fail(err, errlen, "out of memory");
         h->buf = b;
         h->bufrows = rows;
     }
-    /* Column by column through one buffer: memory is one column of a
-     * block, whatever the column count.  The type is taken once a column:
-     * each H5T_NATIVE_* is a call into HDF5 (H5open) behind its lock. */
+    for (k = 0; k < C_MAX; k++)
+        col[k] = (double *)h->buf + (size_t)k * rows;
+    {
+        uint64_t *ray = (uint64_t *)col[C_RAY];
+        int *surface = (int *)col[C_SURFACE], *st = (int *)col[C_STATUS];
+        for (r = 0, j = 0; r < n; r++)
+            for (i = 0; i < nsurf; i++, j++) {
+                const sg_ray_surface *e = &out[j];
+                int c;
+                ray[j] = h->next_ray + r;
+                surface[j] = (int)i;
+                st[j] = e->status;
+                for (c = 0; c < h->nin; c++)
+                    col[C_IN0 + c][j] = rays ? rays[r].v[c] : NAN;
+                /* A failed surface's numbers mean nothing: NaN, as CSV
+                 * leaves the fields empty. */
+                if (e->status == SG_OK) {
+                    col[C_X][j] = e->x;
+                    col[C_Y][j] = e->y;
+                    col[C_Z][j] = e->z;
+                    col[C_L][j] = e->l;
+                    col[C_M][j] = e->m;
+                    col[C_N][j] = e->n;
+                    col[C_RESIDUAL][j] = e->residual;
+                    col[C_ERROR][j] = e->error_bound;
+                    col[C_PATH][j] = e->path;
+                    col[C_OPL][j] = e->opl;
+                    col[C_OPLB][j] = e->opl_error_bound;
+                } else {
+                    for (c = C_X; c <= C_OPLB; c++)
+                        col[c][j] = NAN;
+                }
+                if (h->opd) {
+                    /* As CSV: on the image row of a ray whose OPD is known. */
+                    int known = opd && i == nsurf - 1 && opd[r].status == SG_OK;
+                    col[C_OPD][j] = known ? opd[r].opd_waves : NAN;
+                    col[C_OPDB][j] = known ? opd[r].error_bound : NAN;
+                    col[C_EX][j] = known ? opd[r].ex : NAN;
+                    col[C_EY][j] = known ? opd[r].ey : NAN;
+                }
+            }
+    }
+    /* The type is taken once a column: each H5T_NATIVE_* is a call into
+     * HDF5 (H5open) behind its lock. */
     for (k = 0; k < C_MAX; k++) {
         hid_t mt;
         if ((k >= C_IN0 + h->nin && k < C_SURFACE) || (k > C_STATUS && !h->opd))
             continue;
-        if (k == C_RAY) {
-            uint64_t *b = h->buf;
-            mt = H5T_NATIVE_UINT64;
-            for (r = 0, j = 0; r < n; r++)
-                for (i = 0; i < (size_t)h->nsurf; i++, j++)
-                    b[j] = h->next_ray + r;
-        } else if (k == C_SURFACE || k == C_STATUS) {
-            int *b = h->buf;
-            mt = k == C_SURFACE ? H5T_NATIVE_INT : h->status_type;
-            for (r = 0, j = 0; r < n; r++)
-                for (i = 0; i < (size_t)h->nsurf; i++, j++)
-                    b[j] = k == C_SURFACE ? (int)i : out[j].status;
-        } else {
-            double *b = h->buf;
-            mt = H5T_NATIVE_DOUBLE;
-            for (r = 0, j = 0; r < n; r++)
-                for (i = 0; i < (size_t)h->nsurf; i++, j++) {
-                    const sg_ray_surface *e = &out[j];
-                    double v = NAN;
-                    if (k < C_SURFACE)
-                        v = rays ? rays[r].v[k - C_IN0] : NAN;
-                    else if (k > C_STATUS) {
-                        if (opd && i == (size_t)h->nsurf - 1 && opd[r].status == SG_OK) {
-                            const double all[4] = { opd[r].opd_waves, opd[r].error_bound,
-                                                    opd[r].ex, opd[r].ey };
-                            v = all[k - C_OPD];
-                        }
-                    } else if (e->status == SG_OK) {
-                        /* A failed surface's numbers mean nothing: NaN, as
-                         * CSV leaves the fields empty. */
-                        const double all[11] = { e->x, e->y, e->z, e->l, e->m, e->n,
-                                                 e->residual, e->error_bound, e->path,
-                                                 e->opl, e->opl_error_bound };
-                        v = all[k - C_X];
-                    }
-                    b[j] = v;
-                }
-        }
-        if (append(h, k, mt, h->buf, rows) < 0)
+        mt = k == C_RAY       ? H5T_NATIVE_UINT64
+             : k == C_SURFACE ? H5T_NATIVE_INT
+             : k == C_STATUS  ? h->status_type
+                              : H5T_NATIVE_DOUBLE;
+        if (append(h, k, mt, col[k], rows) < 0)
             return fail(err, errlen, "HDF5 write failed");
     }
     h->rows += rows;

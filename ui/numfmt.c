@@ -467,7 +467,15 @@ void numfmt_g17_n(const double *v, size_t n, char *out, unsigned char *len)
 
 int numfmt_parse(const char *s, size_t n, double *out)
 {
-    const char *end = s + n;
+    double v;
+    if (numfmt_parse_to(s, s + n, &v) != s + n)
+        return 0;
+    *out = v;
+    return 1;
+}
+
+const char *numfmt_parse_to(const char *s, const char *end, double *out)
+{
     uint64_t w = 0, bits, m;
     int neg = 0, nd = 0, any = 0, e2, lz, t, sh;
     long q = 0;
@@ -485,7 +493,7 @@ int numfmt_parse(const char *s, size_t n, double *out)
             w = w * 10 + (uint64_t)(*s - '0');
             nd++;
         } else if (*s != '0') {
-            return 0;
+            return NULL;
         } else {
             q++;
         }
@@ -502,12 +510,12 @@ int numfmt_parse(const char *s, size_t n, double *out)
                 nd++;
                 q--;
             } else if (*s != '0') {
-                return 0;
+                return NULL;
             }
         }
     }
     if (!any)
-        return 0;
+        return NULL;
     if (s < end && (*s == 'e' || *s == 'E')) {
         int eneg = 0, edig = 0;
         long x = 0;
@@ -518,24 +526,22 @@ int numfmt_parse(const char *s, size_t n, double *out)
             if (x < 100000)
                 x = x * 10 + (*s - '0');
         if (!edig)
-            return 0;
+            return NULL;
         q += eneg ? -x : x;
     }
-    if (s != end)
-        return 0;
     if (w == 0) {
         *out = neg ? -0.0 : 0.0;
-        return 1;
+        return s;
     }
     /* Clinger: w and 10^|q| are exact doubles, so one rounding. */
     if (w <= (UINT64_C(1) << 53) && q >= -22 && q <= 22) {
         double v = (double)w;
         v = q >= 0 ? v * exact_pow10[q] : v / exact_pow10[-q];
         *out = neg ? -v : v;
-        return 1;
+        return s;
     }
     if (q < -330 || q > 310)
-        return 0;
+        return NULL;
     lz = __builtin_clzll(w);
     h = mul_pow10(w << lz, (int)q, &t);
     /* w 10^q = h 2^(t - lz), to less than 2 units of h; keep 53 bits. */
@@ -548,7 +554,7 @@ int numfmt_parse(const char *s, size_t n, double *out)
     else if (rem > half)
         m++;
     else
-        return 0;
+        return NULL;
     e2 = t - lz + sh;
     if (m == (UINT64_C(1) << 53)) {
         m >>= 1;
@@ -556,10 +562,10 @@ int numfmt_parse(const char *s, size_t n, double *out)
     }
     /* value = m 2^e2 with 2^52 <= m < 2^53; normal range only. */
     if (e2 + 52 < -1022 || e2 + 52 > 1023)
-        return 0;
+        return NULL;
     bits = ((uint64_t)(e2 + 52 + 1023) << 52) | (m & ((UINT64_C(1) << 52) - 1));
     if (neg)
         bits |= UINT64_C(1) << 63;
     memcpy(out, &bits, sizeof bits);
-    return 1;
+    return s;
 }

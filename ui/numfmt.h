@@ -37,5 +37,9 @@ void numfmt_g17_n(const double *v, size_t n, char *out, unsigned char *len);
 void numfmt_digits8(uint32_t x, char out[8]);
 
 int numfmt_parse(const char *s, size_t n, double *out);
+/* The same for the longest such number from s (before end): where it
+ * stops, with *out its double; NULL where numfmt_parse would return 0
+ * for it.  Whatever follows is the caller's to judge (a comma, say). */
+const char *numfmt_parse_to(const char *s, const char *end, double *out);
 
 #endif

@@ -915,11 +915,13 @@ static void *opd_main(void *arg)
     /* The run holding the share's first ray. */
     while (k + 1 < j->nrun && j->runs[k + 1].from <= j->from)
         k++;
-    for (r = j->from; r < j->to; r++) {
-        while (k + 1 < j->nrun && j->runs[k + 1].from <= r)
-            k++;
-        sg_opd_of_ray(j->t, &j->runs[k].ref,
-                      &j->out[r * (size_t)j->nsurf + (size_t)j->nsurf - 1], &j->opd[r]);
+    /* Each run's part of the share at once, on vector lanes. */
+    for (r = j->from; r < j->to; k++) {
+        size_t end = k + 1 < j->nrun && j->runs[k + 1].from < j->to ? j->runs[k + 1].from : j->to;
+        sg_opd_of_rays(j->t, &j->runs[k].ref,
+                       &j->out[r * (size_t)j->nsurf + (size_t)j->nsurf - 1], (size_t)j->nsurf,
+                       end - r, &j->opd[r]);
+        r = end;
     }
     return NULL;
 }
@@ -991,13 +993,19 @@ void report_opd_block_mt(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, s
         free(runs);
         *ref = first;
     }
-    for (r = 0; r < n; r++) {
+    for (r = 0; r < n;) {
+        size_t end = r + 1;
         if (ref->status == SG_EINVAL || ref->hx != rays[r].v[0] || ref->hy != rays[r].v[1]) {
             sg_opd_reference(t, rays[r].v[0], rays[r].v[1], ref, NULL);
             if (ref->status == SG_EINVAL)
                 ref->status = SG_ERANGE;
         }
-        sg_opd_of_ray(t, ref, &out[r * (size_t)nsurf + (size_t)nsurf - 1], &opd[r]);
+        /* The run of rays in this field, at once. */
+        while (end < n && ref->hx == rays[end].v[0] && ref->hy == rays[end].v[1])
+            end++;
+        sg_opd_of_rays(t, ref, &out[r * (size_t)nsurf + (size_t)nsurf - 1], (size_t)nsurf,
+                       end - r, &opd[r]);
+        r = end;
     }
 }
 

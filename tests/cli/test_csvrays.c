@@ -102,6 +102,14 @@ static void test_errors(void **state)
     expect_error("hx,hy,px,py\n0,0,0,0\n0,0,abc,0\n", SG_EPARSE,
                  "rays.csv:3: column \"px\"", "\"abc\"");
     expect_error("hx,hy,px,py\n0,0,0,1.5.2\n", SG_EPARSE, "rays.csv:2: column \"py\"", NULL);
+    /* A number run into the next one without its comma: the one-pass
+     * reader must not take the stray byte for a separator. */
+    expect_error("hx,hy,px,py\n0,0.5x0.25,0\n", SG_EPARSE, "rays.csv:2:",
+                 "expected 4 fields, got 3");
+    expect_error("hx,hy,px,py\n0,0.5x0.25,0,0\n", SG_EPARSE, "rays.csv:2: column \"hy\"",
+                 "\"0.5x0.25\"");
+    expect_error("hx,hy,px,py\n0,0.5;0.25,0\n", SG_EPARSE, "rays.csv:2:",
+                 "expected 4 fields, got 3");
     expect_error("hx,hy,px,py\n0,nan,0,0\n", SG_EPARSE, "rays.csv:2: column \"hy\"", NULL);
     expect_error("hx,hy,px,py\n0,inf,0,0\n", SG_EPARSE, "rays.csv:2: column \"hy\"", NULL);
     expect_error("hx,hy,px,py\n0,0,,0\n", SG_EPARSE, "rays.csv:2: column \"px\"", "empty");

@@ -59,15 +59,34 @@ static void check_fmt(double v)
 
 static long parse_failures, parse_fast;
 
-/* The text must read as strtod reads it, or be handed back (0). */
+/* The text must read as strtod reads it, or be handed back (0); and
+ * followed by a comma and more (a CSV row), numfmt_parse_to must stop at
+ * the comma with the same value, or hand it back too. */
 static void check_parse(const char *s)
 {
-    double want = strtod(s, NULL), got;
-    if (numfmt_parse(s, strlen(s), &got)) {
+    double want = strtod(s, NULL), got, got2;
+    size_t n = strlen(s);
+    char row[128];
+    const char *stop;
+    int fast = numfmt_parse(s, n, &got);
+    if (fast) {
         parse_fast++;
         if (memcmp(&want, &got, sizeof got) != 0 && parse_failures++ < 10)
             print_error("\"%s\": strtod %a, numfmt_parse %a\n", s, want, got);
     }
+    if (n + 8 > sizeof row)
+        return;
+    memcpy(row, s, n);
+    memcpy(row + n, ",0.5,x", 7);
+    /* Where it stops elsewhere, the caller sees no comma there (or a
+     * comma inside the text, which a CSV field cannot hold). */
+    stop = numfmt_parse_to(row, row + n + 6, &got2);
+    if ((stop == row + n) != fast && parse_failures++ < 10)
+        print_error("\"%s\": numfmt_parse %d, numfmt_parse_to stops at %d of %zu\n", s, fast,
+                    stop ? (int)(stop - row) : -1, n);
+    if (fast && stop == row + n && memcmp(&want, &got2, sizeof got2) != 0 &&
+        parse_failures++ < 10)
+        print_error("\"%s,0.5,x\": numfmt_parse_to %a, strtod %a\n", s, got2, want);
 }
 
 static void edge_values(void (*fn)(double))
