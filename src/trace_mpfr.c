@@ -19,6 +19,8 @@ enum { NT = 48, NA = 16 };
 
 typedef struct msurf {
     int xf;           /* the transfer into it turns or moves the frame */
+    int k1one;        /* k1 is exactly 1 (a sphere): a product by it is skipped,
+                       * which gives the product's bits */
     double bmax;      /* its largest offset, which the point's bound must cover */
     mpfr_t A[3][3], b[3]; /* that transfer (frame.c), only where xf */
     mpfr_t R, k1, T, mu;
@@ -261,7 +263,8 @@ static int eval_F(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, mpfr_t F, 
         mpfr_sqr(t[0], m->P.y, MPFR_RNDN);
         mpfr_add(F, F, t[0], MPFR_RNDN);
         mpfr_sqr(t[0], m->P.z, MPFR_RNDN);
-        mpfr_mul(t[0], t[0], s->k1, MPFR_RNDN);
+        if (!s->k1one)
+            mpfr_mul(t[0], t[0], s->k1, MPFR_RNDN);
         mpfr_add(F, F, t[0], MPFR_RNDN);
         mpfr_mul(t[0], m->P.z, s->R, MPFR_RNDN);
         mpfr_mul_2ui(t[0], t[0], 1, MPFR_RNDN);
@@ -269,8 +272,12 @@ static int eval_F(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, mpfr_t F, 
         mpfr_mul(Fp, m->P.x, m->D.x, MPFR_RNDN);
         mpfr_mul(t[0], m->P.y, m->D.y, MPFR_RNDN);
         mpfr_add(Fp, Fp, t[0], MPFR_RNDN);
-        mpfr_mul(t[0], s->k1, m->P.z, MPFR_RNDN);
-        mpfr_sub(t[0], t[0], s->R, MPFR_RNDN);
+        if (s->k1one) {
+            mpfr_sub(t[0], m->P.z, s->R, MPFR_RNDN);
+        } else {
+            mpfr_mul(t[0], s->k1, m->P.z, MPFR_RNDN);
+            mpfr_sub(t[0], t[0], s->R, MPFR_RNDN);
+        }
         mpfr_mul(t[0], t[0], m->D.z, MPFR_RNDN);
         mpfr_add(Fp, Fp, t[0], MPFR_RNDN);
         mpfr_mul_2ui(Fp, Fp, 1, MPFR_RNDN);
@@ -301,13 +308,25 @@ static int eval_F(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, mpfr_t F, 
     return 1;
 }
 
+/* Whether k1 (P_z + sv D_z) / R, rounded as the vertex-sheet test rounds
+ * it, is certainly at most 1: the doubles' estimate of its size below one
+ * half (each double within 2^-52 of its number, far inside that margin).
+ * The test then skips the MPFR products, with the same outcome. */
+static int sheet_below(const sg_mpfr_ctx *m, const mpfr_t sv, const msurf *s, double R)
+{
+    double a = fabs(mpfr_get_d(sv, MPFR_RNDN) * mpfr_get_d(m->D.z, MPFR_RNDN)) +
+               fabs(mpfr_get_d(m->P.z, MPFR_RNDN));
+    double k = fabs(mpfr_get_d(s->k1, MPFR_RNDN));
+    return a * k * (1.0 + 0x1p-40) < 0.5 * fabs(R);
+}
+
 /* Moves P along D onto the surface sp (s in MPFR), from P on (or near)
  * its tangent plane.  The step is added to m->path. */
 static int intersect_s(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, int max_iter)
 {
     mpfr_t *t = m->t;
     mpfr_ptr sv = t[4], F = t[5], Fp = t[6], A = t[7], b = t[8], C = t[9];
-    int it, conv = 0;
+    int it, conv = 0, below;
     mpfr_exp_t es_prev = 0;
     double growth = 1.0, dstep = 0.0;
     mpfr_set_zero(sv, 1);
@@ -324,7 +343,8 @@ static int intersect_s(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, int m
         mpfr_sqr(t[0], m->D.y, MPFR_RNDN);
         mpfr_add(A, A, t[0], MPFR_RNDN);
         mpfr_sqr(t[0], m->D.z, MPFR_RNDN);
-        mpfr_mul(t[0], t[0], s->k1, MPFR_RNDN);
+        if (!s->k1one)
+            mpfr_mul(t[0], t[0], s->k1, MPFR_RNDN);
         mpfr_add(A, A, t[0], MPFR_RNDN);
         if (isfinite(sp->R)) {
             eval_F(m, &(sg_sprep){.shape = SHAPE_CONIC, .R = sp->R, .k1 = sp->k1}, s, C, b);
@@ -346,11 +366,14 @@ static int intersect_s(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, int m
                  * meets the other sheet; then q/A. */
                 if (!mpfr_zero_p(t[0]))
                     mpfr_div(sv, C, t[0], MPFR_RNDN);
-                mpfr_mul(t[1], sv, m->D.z, MPFR_RNDN);
-                mpfr_add(t[1], t[1], m->P.z, MPFR_RNDN);
-                mpfr_mul(t[1], t[1], s->k1, MPFR_RNDN);
-                mpfr_div(t[1], t[1], s->R, MPFR_RNDN);
-                if (mpfr_cmp_ui(t[1], 1) > 0 || mpfr_zero_p(t[0])) {
+                below = !mpfr_zero_p(t[0]) && sheet_below(m, sv, s, sp->R);
+                if (!below) {
+                    mpfr_mul(t[1], sv, m->D.z, MPFR_RNDN);
+                    mpfr_add(t[1], t[1], m->P.z, MPFR_RNDN);
+                    mpfr_mul(t[1], t[1], s->k1, MPFR_RNDN);
+                    mpfr_div(t[1], t[1], s->R, MPFR_RNDN);
+                }
+                if (!below && (mpfr_cmp_ui(t[1], 1) > 0 || mpfr_zero_p(t[0]))) {
                     if (mpfr_zero_p(A))
                         return SG_EMISS;
                     mpfr_div(sv, t[0], A, MPFR_RNDN);
@@ -478,6 +501,7 @@ int sg_mpfr_rescue_root(sg_mpfr_ctx *m, const sg_sprep *sp, dd3 P, dd3 D, int ma
     /* Every input is a double or a double-double: exact at 320 bits. */
     mpfr_set_d(s->R, sp->R, MPFR_RNDN);
     mpfr_set_dd(s->k1, sp->k1);
+    s->k1one = 0;
     for (k = 0; k < SG_NASPH; k++)
         mpfr_set_d(s->a[k], sp->a[k], MPFR_RNDN);
     /* A shape of its own brings its coefficients at this precision. */
@@ -516,8 +540,12 @@ static int bend(sg_tracer *tr, int i)
     } else if (sp->shape == SHAPE_CONIC) {
         mpfr_set(m->G.x, m->P.x, MPFR_RNDN);
         mpfr_set(m->G.y, m->P.y, MPFR_RNDN);
-        mpfr_mul(m->G.z, s->k1, m->P.z, MPFR_RNDN);
-        mpfr_sub(m->G.z, m->G.z, s->R, MPFR_RNDN);
+        if (s->k1one) {
+            mpfr_sub(m->G.z, m->P.z, s->R, MPFR_RNDN);
+        } else {
+            mpfr_mul(m->G.z, s->k1, m->P.z, MPFR_RNDN);
+            mpfr_sub(m->G.z, m->G.z, s->R, MPFR_RNDN);
+        }
     } else if (sp->shape == SHAPE_GEN) {
         if (!sp->shp->ops->sag_mp(sp->shp, s->mc, m->P.x, m->P.y, t[1], m->G.x, m->G.y,
                                   m->t + 28))
@@ -1459,8 +1487,14 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
     for (i = 0; i < tr->n; i++) {
         msurf *s = &m->s[i];
         mpfr_set_d(s->R, tr->sp[i].R, MPFR_RNDN);
-        mpfr_set_d(s->k1, sys->surf[i].conic, MPFR_RNDN);
-        mpfr_add_ui(s->k1, s->k1, 1, MPFR_RNDN);
+        /* 1 + conic; a zero conic (either sign) gives 1 exactly. */
+        if (sys->surf[i].conic == 0.0) {
+            mpfr_set_ui(s->k1, 1, MPFR_RNDN);
+        } else {
+            mpfr_set_d(s->k1, sys->surf[i].conic, MPFR_RNDN);
+            mpfr_add_ui(s->k1, s->k1, 1, MPFR_RNDN);
+        }
+        s->k1one = mpfr_cmp_ui(s->k1, 1) == 0;
         mpfr_set_d(s->T, tr->sp[i].T, MPFR_RNDN);
         if (tr->sp[i].xf) {
             int j, k2;
@@ -1474,8 +1508,14 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             for (j = 0; j < 3; j++)
                 s->bmax = fmax(s->bmax, fabs(mpfr_get_d(s->b[j], MPFR_RNDU)));
         }
-        for (k = 0; k < SG_NASPH; k++)
-            mpfr_set_d(s->a[k], tr->sp[i].a[k], MPFR_RNDN);
+        for (k = 0; k < SG_NASPH; k++) {
+            double a = tr->sp[i].a[k];
+            /* As mpfr_set_d gives a zero: with its sign. */
+            if (a == 0.0)
+                mpfr_set_zero(s->a[k], signbit(a) ? -1 : 1);
+            else
+                mpfr_set_d(s->a[k], a, MPFR_RNDN);
+        }
         if (tr->sp[i].shp) {
             s->mc = malloc(SG_SHAPE_MPC * sizeof *s->mc);
             if (!s->mc) {
@@ -1488,10 +1528,30 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
     mpfr_const_pi(m->pi, MPFR_RNDN);
     rc = sg_indices_mpfr_cached(sys, tr->cat, tr->wave, idx, tr->icache, d);
     if (rc == SG_OK) {
+        /* A design repeats a few pairs of media: the ratio of a pair met
+         * on an earlier surface is copied, the same bits as dividing. */
+        enum { PAIRS = 16 };
+        int pair[PAIRS], npair = 0, next = 0;
         for (i = 1; i < tr->n; i++) {
+            int j = -1;
             mpfr_abs(m->t[0], idx[i - 1], MPFR_RNDN);
             mpfr_abs(m->t[1], idx[i], MPFR_RNDN);
-            mpfr_div(m->s[i].mu, m->t[0], m->t[1], MPFR_RNDN);
+            if (mpfr_number_p(m->t[0]) && mpfr_number_p(m->t[1]))
+                for (k = 0; k < npair && j < 0; k++)
+                    if (mpfr_equal_p(m->s[pair[k]].nb, m->t[0]) &&
+                        mpfr_cmpabs(idx[pair[k]], m->t[1]) == 0)
+                        j = pair[k];
+            if (j >= 0) {
+                mpfr_set(m->s[i].mu, m->s[j].mu, MPFR_RNDN);
+            } else {
+                mpfr_div(m->s[i].mu, m->t[0], m->t[1], MPFR_RNDN);
+                if (mpfr_number_p(m->t[0]) && mpfr_number_p(m->t[1])) {
+                    pair[next] = i;
+                    next = (next + 1) % PAIRS;
+                    if (npair < PAIRS)
+                        npair++;
+                }
+            }
             mpfr_set(m->s[i].nb, m->t[0], MPFR_RNDN);
         }
         sg_parax_mp_init(&p, prec);
