@@ -24,6 +24,7 @@ typedef struct msurf {
     double bmax;      /* its largest offset, which the point's bound must cover */
     mpfr_t A[3][3], b[3]; /* that transfer (frame.c), only where xf */
     mpfr_t R, k1, T, mu;
+    mpfr_t mu2; /* mu squared, as the bend squares it */
     mpfr_t nb; /* |index| before the surface */
     mpfr_t a[SG_NASPH];
     mpfr_t *mc; /* SHAPE_GEN: its coefficients (SG_SHAPE_MPC), else NULL */
@@ -60,12 +61,12 @@ struct sg_mpfr_ctx {
     mpfr_t fv[2], tgt[2], qb[2], dq[2], qo[2];
     mpfr_t a[NA]; /* aiming's scratch: the landings reuse every t[] */
     int fdeg;
-    /* The limbs of every surface's R, k1, T, mu, nb and a[] (MSV a
+    /* The limbs of every surface's R, k1, T, mu, mu2, nb and a[] (MSV a
      * surface), one allocation (sg_mp_block_new). */
     void *arena;
 };
 
-enum { MSV = 5 + SG_NASPH };
+enum { MSV = 6 + SG_NASPH };
 
 static void mvec_init(mvec *v, mpfr_prec_t p)
 {
@@ -199,8 +200,9 @@ static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
         sg_mp_place(s[i].mu, b + 3 * sz, prec);
         sg_mp_place(s[i].nb, b + 4 * sz, prec);
         mpfr_set_ui(s[i].nb, 1, MPFR_RNDN);
+        sg_mp_place(s[i].mu2, b + 5 * sz, prec);
         for (k = 0; k < SG_NASPH; k++)
-            sg_mp_place(s[i].a[k], b + (size_t)(5 + k) * sz, prec);
+            sg_mp_place(s[i].a[k], b + (size_t)(6 + k) * sz, prec);
     }
     return m;
 }
@@ -465,7 +467,11 @@ static int onto_surface(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, int 
     if (!mpfr_zero_p(m->D.z) && !mpfr_zero_p(m->P.z)) {
         mpfr_div(t[11], m->P.z, m->D.z, MPFR_RNDN);
         mpfr_neg(t[11], t[11], MPFR_RNDN);
-        axpy(&m->P, t[11], &m->D, t[0]);
+        /* x and y move along; z is the plane's, zero. */
+        mpfr_mul(t[0], t[11], m->D.x, MPFR_RNDN);
+        mpfr_add(m->P.x, m->P.x, t[0], MPFR_RNDN);
+        mpfr_mul(t[0], t[11], m->D.y, MPFR_RNDN);
+        mpfr_add(m->P.y, m->P.y, t[0], MPFR_RNDN);
         mpfr_set_zero(m->P.z, 1);
         mpfr_add(m->path, m->path, t[11], MPFR_RNDN);
     }
@@ -578,8 +584,7 @@ static int bend(sg_tracer *tr, int i)
     mpfr_div(cosI, dg, gg, MPFR_RNDN);
     mpfr_sqr(k, cosI, MPFR_RNDN);
     mpfr_ui_sub(k, 1, k, MPFR_RNDN);
-    mpfr_sqr(t[1], s->mu, MPFR_RNDN);
-    mpfr_mul(k, k, t[1], MPFR_RNDN);
+    mpfr_mul(k, k, s->mu2, MPFR_RNDN);
     mpfr_ui_sub(k, 1, k, MPFR_RNDN);
     if (mpfr_sgn(k) < 0)
         return SG_ETIR;
@@ -1543,8 +1548,10 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
                         j = pair[k];
             if (j >= 0) {
                 mpfr_set(m->s[i].mu, m->s[j].mu, MPFR_RNDN);
+                mpfr_set(m->s[i].mu2, m->s[j].mu2, MPFR_RNDN);
             } else {
                 mpfr_div(m->s[i].mu, m->t[0], m->t[1], MPFR_RNDN);
+                mpfr_sqr(m->s[i].mu2, m->s[i].mu, MPFR_RNDN);
                 if (mpfr_number_p(m->t[0]) && mpfr_number_p(m->t[1])) {
                     pair[next] = i;
                     next = (next + 1) % PAIRS;
