@@ -68,6 +68,20 @@ struct sg_mpfr_ctx {
 
 enum { MSV = 6 + SG_NASPH };
 
+/* Whether |a| = |b| for two regular numbers of one precision, from their
+ * exponents and limbs (MPFR keeps the bits past the precision zero, so
+ * equal values have equal limbs): 1 or 0; -1 when either is zero, NaN or
+ * infinite or the precisions differ, for the caller to ask MPFR. */
+static int same_limbs(mpfr_srcptr a, mpfr_srcptr b)
+{
+    size_t nl;
+    if (!mpfr_regular_p(a) || !mpfr_regular_p(b) || mpfr_get_prec(a) != mpfr_get_prec(b))
+        return -1;
+    nl = ((size_t)mpfr_get_prec(a) + (size_t)mp_bits_per_limb - 1) / (size_t)mp_bits_per_limb;
+    return a->_mpfr_exp == b->_mpfr_exp &&
+           memcmp(a->_mpfr_d, b->_mpfr_d, nl * sizeof(mp_limb_t)) == 0;
+}
+
 static void mvec_init(mvec *v, mpfr_prec_t p)
 {
     mpfr_inits2(p, v->x, v->y, v->z, (mpfr_ptr)0);
@@ -160,7 +174,10 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
 static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
 {
     sg_mpfr_ctx *m = calloc(1, sizeof *m);
-    msurf *s = calloc((size_t)n, sizeof *s);
+    /* Not zeroed whole: a surface's transfer is set up only where it has
+     * one (xf), and zeroing some 800 bytes a surface for nothing costs a
+     * long design more than the rest of this function. */
+    msurf *s = malloc((size_t)(n > 0 ? n : 1) * sizeof *s);
     size_t sz = sg_mp_limb_bytes(prec);
     char *ar = malloc((size_t)n * MSV * sz + 1);
     int i, k;
@@ -194,6 +211,10 @@ static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
     mvec_init(&m->sv_D, prec);
     for (i = 0; i < n; i++) {
         char *b = ar + (size_t)i * MSV * sz;
+        s[i].xf = 0;
+        s[i].k1one = 0;
+        s[i].bmax = 0.0;
+        s[i].mc = NULL;
         sg_mp_place(s[i].R, b, prec);
         sg_mp_place(s[i].k1, b + sz, prec);
         sg_mp_place(s[i].T, b + 2 * sz, prec);
@@ -916,6 +937,9 @@ static int memo_fit(sg_mpfr_memo *mm, int n, mpfr_prec_t prec)
 /* The same number with the same sign, NaN never. */
 static int same_mp(mpfr_srcptr a, mpfr_srcptr b)
 {
+    int r = same_limbs(a, b);
+    if (r >= 0)
+        return r && a->_mpfr_sign == b->_mpfr_sign;
     return mpfr_equal_p(a, b) && mpfr_signbit(a) == mpfr_signbit(b);
 }
 
@@ -1541,10 +1565,11 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             int j = -1;
             mpfr_abs(m->t[0], idx[i - 1], MPFR_RNDN);
             mpfr_abs(m->t[1], idx[i], MPFR_RNDN);
-            if (mpfr_number_p(m->t[0]) && mpfr_number_p(m->t[1]))
+            /* Only regular numbers are kept, so same_limbs answers. */
+            if (mpfr_regular_p(m->t[0]) && mpfr_regular_p(m->t[1]))
                 for (k = 0; k < npair && j < 0; k++)
-                    if (mpfr_equal_p(m->s[pair[k]].nb, m->t[0]) &&
-                        mpfr_cmpabs(idx[pair[k]], m->t[1]) == 0)
+                    if (same_limbs(m->s[pair[k]].nb, m->t[0]) == 1 &&
+                        same_limbs(idx[pair[k]], m->t[1]) == 1)
                         j = pair[k];
             if (j >= 0) {
                 mpfr_set(m->s[i].mu, m->s[j].mu, MPFR_RNDN);
@@ -1552,7 +1577,7 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             } else {
                 mpfr_div(m->s[i].mu, m->t[0], m->t[1], MPFR_RNDN);
                 mpfr_sqr(m->s[i].mu2, m->s[i].mu, MPFR_RNDN);
-                if (mpfr_number_p(m->t[0]) && mpfr_number_p(m->t[1])) {
+                if (mpfr_regular_p(m->t[0]) && mpfr_regular_p(m->t[1])) {
                     pair[next] = i;
                     next = (next + 1) % PAIRS;
                     if (npair < PAIRS)
