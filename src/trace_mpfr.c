@@ -332,15 +332,38 @@ static int eval_F(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, mpfr_t F, 
 }
 
 /* Whether k1 (P_z + sv D_z) / R, rounded as the vertex-sheet test rounds
- * it, is certainly at most 1: the doubles' estimate of its size below one
- * half (each double within 2^-52 of its number, far inside that margin).
- * The test then skips the MPFR products, with the same outcome. */
+ * it, is certainly at most 1, from the exponents alone (x lies in
+ * [2^(e-1), 2^e)): the sum is at most 2^(max(e_sv + e_Dz, e_Pz) + 1), the
+ * product by k1 at most 2^e_k1 times that, and |R| at least 2^(e_R - 1),
+ * each bound holding after rounding too; one more factor of 2 to spare.
+ * The test then skips its MPFR products, with the same outcome. */
+/* An exponent e with |x| < 2^e for a finite x: its own, or for zero (and
+ * below 2^-2^40) -2^40, kept within +-2^40 so that sums cannot overflow
+ * whatever exponent range the caller set (a larger e is still a bound). */
+static long exp_up(mpfr_srcptr x)
+{
+    const long lim = 1L << 40;
+    long e;
+    if (!mpfr_regular_p(x))
+        return -lim;
+    e = (long)mpfr_get_exp(x);
+    return e < -lim ? -lim : e > lim ? lim : e;
+}
+
 static int sheet_below(const sg_mpfr_ctx *m, const mpfr_t sv, const msurf *s, double R)
 {
-    double a = fabs(mpfr_get_d(sv, MPFR_RNDN) * mpfr_get_d(m->D.z, MPFR_RNDN)) +
-               fabs(mpfr_get_d(m->P.z, MPFR_RNDN));
-    double k = fabs(mpfr_get_d(s->k1, MPFR_RNDN));
-    return a * k * (1.0 + 0x1p-40) < 0.5 * fabs(R);
+    long a, b, e, eR;
+    (void)R;
+    if (!mpfr_number_p(sv) || !mpfr_number_p(m->D.z) || !mpfr_number_p(m->P.z) ||
+        !mpfr_number_p(s->k1) || !mpfr_regular_p(s->R))
+        return 0;
+    if (mpfr_zero_p(s->k1))
+        return 1;
+    a = exp_up(sv) + exp_up(m->D.z);
+    b = exp_up(m->P.z);
+    e = (a > b ? a : b) + 1 + exp_up(s->k1);
+    eR = (long)mpfr_get_exp(s->R);
+    return eR > -(1L << 40) && e + 2 <= eR - 1;
 }
 
 /* Moves P along D onto the surface sp (s in MPFR), from P on (or near)
