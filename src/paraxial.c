@@ -50,6 +50,10 @@ typedef struct pm_set {
     pm_slot s[PM_SLOTS];
     ptree tree;
     int dlo, dhi; /* leaves to recompute (dlo > dhi: none) */
+    /* The track's running sums: trk[j] the thicknesses of surfaces 1..j
+     * added in order, kept for j <= tgood (they read only T[1..j]). */
+    mpfr_t *trk;
+    int tgood;
 } pm_set;
 
 struct sg_parax_memo {
@@ -68,6 +72,7 @@ typedef struct pctx {
     sg_parax_memo *memo;
     pm_set *pm; /* NULL: no memo */
     int kf;     /* steps 1..kf-1 read what the memo saw */
+    int kl;     /* the memo's keys differ from sys's on kf..kl at most */
     int slot;   /* the next trace's slot */
     ptree own;  /* the tree when there is no memo */
     ptree *tree; /* built: c->pm's or own; NULL until a trace needs it */
@@ -118,9 +123,10 @@ static void set_clear(pm_set *st)
             free(sl->w);
         }
         for (j = 0; j < st->n; j++)
-            mpfr_clear(st->ix[j]);
+            mpfr_clears(st->ix[j], st->trk[j], (mpfr_ptr)0);
     }
     tree_free(&st->tree);
+    free(st->trk);
     free(st->R);
     free(st->T);
     free(st->ix);
@@ -155,6 +161,7 @@ static int set_make(pm_set *st, int n, mpfr_prec_t prec)
     st->R = calloc((size_t)n, sizeof *st->R);
     st->T = calloc((size_t)n, sizeof *st->T);
     st->ix = calloc((size_t)n, sizeof *st->ix);
+    st->trk = calloc((size_t)n, sizeof *st->trk);
     for (k = 0; k < PM_SLOTS; k++) {
         st->s[k].y = calloc((size_t)n, sizeof(mpfr_t));
         st->s[k].w = calloc((size_t)n, sizeof(mpfr_t));
@@ -166,11 +173,12 @@ static int set_make(pm_set *st, int n, mpfr_prec_t prec)
             free(st->R);
             free(st->T);
             free(st->ix);
+            free(st->trk);
             memset(st, 0, sizeof *st);
             return 0;
         }
     }
-    if (!st->R || !st->T || !st->ix || !tree_make(&st->tree, n - 2, prec)) {
+    if (!st->R || !st->T || !st->ix || !st->trk || !tree_make(&st->tree, n - 2, prec)) {
         set_clear(st);
         return 0;
     }
@@ -178,8 +186,9 @@ static int set_make(pm_set *st, int n, mpfr_prec_t prec)
     st->n = n;
     st->dlo = 0;
     st->dhi = st->tree.size - 1;
+    st->tgood = 0;
     for (j = 0; j < n; j++) {
-        mpfr_init2(st->ix[j], prec);
+        mpfr_inits2(prec, st->ix[j], st->trk[j], (mpfr_ptr)0);
         /* A NaN key matches nothing until the surface is seen. */
         st->R[j] = st->T[j] = NAN;
     }
@@ -191,8 +200,17 @@ static int set_make(pm_set *st, int n, mpfr_prec_t prec)
     return 1;
 }
 
+/* The same value and sign.  Two regular numbers of one precision are
+ * equal exactly when their sign, exponent and limbs are (MPFR keeps the
+ * bits past the precision zero), which is cheaper to ask of 1,000 keys. */
 static int same_mp(mpfr_srcptr a, mpfr_srcptr b)
 {
+    if (mpfr_regular_p(a) && mpfr_regular_p(b) && mpfr_get_prec(a) == mpfr_get_prec(b)) {
+        size_t nl = ((size_t)mpfr_get_prec(a) + (size_t)mp_bits_per_limb - 1) /
+                    (size_t)mp_bits_per_limb;
+        return a->_mpfr_sign == b->_mpfr_sign && a->_mpfr_exp == b->_mpfr_exp &&
+               memcmp(a->_mpfr_d, b->_mpfr_d, nl * sizeof(mp_limb_t)) == 0;
+    }
     return mpfr_equal_p(a, b) && mpfr_signbit(a) == mpfr_signbit(b);
 }
 
@@ -225,7 +243,7 @@ static int set_last_change(const pm_set *st, const sg_system *sys, mpfr_t *idx)
 
 /* Picks the set that shares the most surfaces with sys, or makes one. */
 static pm_set *memo_pick(sg_parax_memo *pm, const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
-                         int *kf)
+                         int *kf, int *kl)
 {
     pm_set *best = NULL, *old = NULL;
     int k, bk = 0;
@@ -249,10 +267,11 @@ static pm_set *memo_pick(sg_parax_memo *pm, const sg_system *sys, mpfr_t *idx, m
     }
     best->stamp = ++pm->clock;
     *kf = bk;
+    *kl = bk < best->n ? set_last_change(best, sys, idx) : -1;
     if (bk < best->n) {
         /* Step j reads surface j and the gap before it: a change on
          * surfaces kf..kl reaches steps kf..kl + 1, leaves j - 2. */
-        int lo = bk - 2, hi = set_last_change(best, sys, idx) + 1 - 2;
+        int lo = bk - 2, hi = *kl + 1 - 2;
         if (lo < 0)
             lo = 0;
         if (hi > best->tree.size - 1)
@@ -282,7 +301,8 @@ static void memo_done(pctx *c)
             sl->good = c->kf - 1 > 0 ? c->kf - 1 : 0;
         sl->touched = 0;
     }
-    for (j = c->kf; j < st->n; j++) {
+    /* Past kl the keys hold sys's bits already. */
+    for (j = c->kf; j <= c->kl && j < st->n; j++) {
         st->R[j] = c->sys->surf[j].radius;
         st->T[j] = c->sys->surf[j].thickness;
         mpfr_set(st->ix[j], c->idx[j], MPFR_RNDN);
@@ -591,7 +611,16 @@ int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
     }
     c.memo = memo;
-    c.pm = memo ? memo_pick(memo, sys, idx, prec, &c.kf) : NULL;
+    c.pm = memo ? memo_pick(memo, sys, idx, prec, &c.kf, &c.kl) : NULL;
+    if (c.pm) {
+        /* The track's sums up to the first changed thickness stay. */
+        pm_set *st = c.pm;
+        for (j = c.kf > 1 ? c.kf : 1; j <= st->tgood; j++)
+            if (!same_d(st->T[j], sys->surf[j].thickness))
+                break;
+        if (j - 1 < st->tgood)
+            st->tgood = j - 1;
+    }
     c.slot = 0;
     c.tree = NULL;
     memset(&c.own, 0, sizeof c.own);
@@ -857,9 +886,28 @@ int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
         break;
     }
 
-    mpfr_set_zero(o->track, 1);
-    for (j = 1; j <= last; j++)
-        mpfr_add_d(o->track, o->track, sys->surf[j].thickness, MPFR_RNDN);
+    {
+        /* Each thickness added in order, rounded once at prec; a 53-bit
+         * copy of it makes mpfr_add the same correctly rounded sum as
+         * mpfr_add_d, without its temporary. */
+        pm_set *st = c.pm;
+        mpfr_t tj;
+        int j0 = st && st->tgood <= last ? st->tgood : st ? last : 0;
+        mpfr_init2(tj, 53);
+        if (j0 >= 1)
+            mpfr_set(o->track, st->trk[j0], MPFR_RNDN);
+        else
+            mpfr_set_zero(o->track, 1);
+        for (j = j0 + 1; j <= last; j++) {
+            mpfr_set_d(tj, sys->surf[j].thickness, MPFR_RNDN);
+            mpfr_add(o->track, o->track, tj, MPFR_RNDN);
+            if (st)
+                mpfr_set(st->trk[j], o->track, MPFR_RNDN);
+        }
+        if (st)
+            st->tgood = last;
+        mpfr_clear(tj);
+    }
 
 out:
     if (c.pm)

@@ -19,9 +19,12 @@ enum { NT = 48, NA = 16 };
 
 typedef struct msurf {
     int xf;           /* the transfer into it turns or moves the frame */
+    int k1one;        /* k1 is exactly 1 (a sphere): a product by it is skipped,
+                       * which gives the product's bits */
     double bmax;      /* its largest offset, which the point's bound must cover */
     mpfr_t A[3][3], b[3]; /* that transfer (frame.c), only where xf */
     mpfr_t R, k1, T, mu;
+    mpfr_t mu2; /* mu squared, as the bend squares it */
     mpfr_t nb; /* |index| before the surface */
     mpfr_t a[SG_NASPH];
     mpfr_t *mc; /* SHAPE_GEN: its coefficients (SG_SHAPE_MPC), else NULL */
@@ -58,12 +61,26 @@ struct sg_mpfr_ctx {
     mpfr_t fv[2], tgt[2], qb[2], dq[2], qo[2];
     mpfr_t a[NA]; /* aiming's scratch: the landings reuse every t[] */
     int fdeg;
-    /* The limbs of every surface's R, k1, T, mu, nb and a[] (MSV a
+    /* The limbs of every surface's R, k1, T, mu, mu2, nb and a[] (MSV a
      * surface), one allocation (sg_mp_block_new). */
     void *arena;
 };
 
-enum { MSV = 5 + SG_NASPH };
+enum { MSV = 6 + SG_NASPH };
+
+/* Whether |a| = |b| for two regular numbers of one precision, from their
+ * exponents and limbs (MPFR keeps the bits past the precision zero, so
+ * equal values have equal limbs): 1 or 0; -1 when either is zero, NaN or
+ * infinite or the precisions differ, for the caller to ask MPFR. */
+static int same_limbs(mpfr_srcptr a, mpfr_srcptr b)
+{
+    size_t nl;
+    if (!mpfr_regular_p(a) || !mpfr_regular_p(b) || mpfr_get_prec(a) != mpfr_get_prec(b))
+        return -1;
+    nl = ((size_t)mpfr_get_prec(a) + (size_t)mp_bits_per_limb - 1) / (size_t)mp_bits_per_limb;
+    return a->_mpfr_exp == b->_mpfr_exp &&
+           memcmp(a->_mpfr_d, b->_mpfr_d, nl * sizeof(mp_limb_t)) == 0;
+}
 
 static void mvec_init(mvec *v, mpfr_prec_t p)
 {
@@ -157,7 +174,10 @@ void sg_mpfr_free(sg_mpfr_ctx *m)
 static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
 {
     sg_mpfr_ctx *m = calloc(1, sizeof *m);
-    msurf *s = calloc((size_t)n, sizeof *s);
+    /* Not zeroed whole: a surface's transfer is set up only where it has
+     * one (xf), and zeroing some 800 bytes a surface for nothing costs a
+     * long design more than the rest of this function. */
+    msurf *s = malloc((size_t)(n > 0 ? n : 1) * sizeof *s);
     size_t sz = sg_mp_limb_bytes(prec);
     char *ar = malloc((size_t)n * MSV * sz + 1);
     int i, k;
@@ -191,14 +211,19 @@ static sg_mpfr_ctx *ctx_new(mpfr_prec_t prec, int n)
     mvec_init(&m->sv_D, prec);
     for (i = 0; i < n; i++) {
         char *b = ar + (size_t)i * MSV * sz;
+        s[i].xf = 0;
+        s[i].k1one = 0;
+        s[i].bmax = 0.0;
+        s[i].mc = NULL;
         sg_mp_place(s[i].R, b, prec);
         sg_mp_place(s[i].k1, b + sz, prec);
         sg_mp_place(s[i].T, b + 2 * sz, prec);
         sg_mp_place(s[i].mu, b + 3 * sz, prec);
         sg_mp_place(s[i].nb, b + 4 * sz, prec);
         mpfr_set_ui(s[i].nb, 1, MPFR_RNDN);
+        sg_mp_place(s[i].mu2, b + 5 * sz, prec);
         for (k = 0; k < SG_NASPH; k++)
-            sg_mp_place(s[i].a[k], b + (size_t)(5 + k) * sz, prec);
+            sg_mp_place(s[i].a[k], b + (size_t)(6 + k) * sz, prec);
     }
     return m;
 }
@@ -261,7 +286,8 @@ static int eval_F(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, mpfr_t F, 
         mpfr_sqr(t[0], m->P.y, MPFR_RNDN);
         mpfr_add(F, F, t[0], MPFR_RNDN);
         mpfr_sqr(t[0], m->P.z, MPFR_RNDN);
-        mpfr_mul(t[0], t[0], s->k1, MPFR_RNDN);
+        if (!s->k1one)
+            mpfr_mul(t[0], t[0], s->k1, MPFR_RNDN);
         mpfr_add(F, F, t[0], MPFR_RNDN);
         mpfr_mul(t[0], m->P.z, s->R, MPFR_RNDN);
         mpfr_mul_2ui(t[0], t[0], 1, MPFR_RNDN);
@@ -269,8 +295,12 @@ static int eval_F(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, mpfr_t F, 
         mpfr_mul(Fp, m->P.x, m->D.x, MPFR_RNDN);
         mpfr_mul(t[0], m->P.y, m->D.y, MPFR_RNDN);
         mpfr_add(Fp, Fp, t[0], MPFR_RNDN);
-        mpfr_mul(t[0], s->k1, m->P.z, MPFR_RNDN);
-        mpfr_sub(t[0], t[0], s->R, MPFR_RNDN);
+        if (s->k1one) {
+            mpfr_sub(t[0], m->P.z, s->R, MPFR_RNDN);
+        } else {
+            mpfr_mul(t[0], s->k1, m->P.z, MPFR_RNDN);
+            mpfr_sub(t[0], t[0], s->R, MPFR_RNDN);
+        }
         mpfr_mul(t[0], t[0], m->D.z, MPFR_RNDN);
         mpfr_add(Fp, Fp, t[0], MPFR_RNDN);
         mpfr_mul_2ui(Fp, Fp, 1, MPFR_RNDN);
@@ -301,13 +331,48 @@ static int eval_F(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, mpfr_t F, 
     return 1;
 }
 
+/* Whether k1 (P_z + sv D_z) / R, rounded as the vertex-sheet test rounds
+ * it, is certainly at most 1, from the exponents alone (x lies in
+ * [2^(e-1), 2^e)): the sum is at most 2^(max(e_sv + e_Dz, e_Pz) + 1), the
+ * product by k1 at most 2^e_k1 times that, and |R| at least 2^(e_R - 1),
+ * each bound holding after rounding too; one more factor of 2 to spare.
+ * The test then skips its MPFR products, with the same outcome. */
+/* An exponent e with |x| < 2^e for a finite x: its own, or for zero (and
+ * below 2^-2^40) -2^40, kept within +-2^40 so that sums cannot overflow
+ * whatever exponent range the caller set (a larger e is still a bound). */
+static long exp_up(mpfr_srcptr x)
+{
+    const long lim = 1L << 40;
+    long e;
+    if (!mpfr_regular_p(x))
+        return -lim;
+    e = (long)mpfr_get_exp(x);
+    return e < -lim ? -lim : e > lim ? lim : e;
+}
+
+static int sheet_below(const sg_mpfr_ctx *m, const mpfr_t sv, const msurf *s, double R)
+{
+    long a, b, e, eR;
+    (void)R;
+    if (!mpfr_number_p(sv) || !mpfr_number_p(m->D.z) || !mpfr_number_p(m->P.z) ||
+        !mpfr_number_p(s->k1) || !mpfr_regular_p(s->R))
+        return 0;
+    if (mpfr_zero_p(s->k1))
+        return 1;
+    a = exp_up(sv) + exp_up(m->D.z);
+    b = exp_up(m->P.z);
+    e = (a > b ? a : b) + 1 + exp_up(s->k1);
+    eR = (long)mpfr_get_exp(s->R);
+    return eR > -(1L << 40) && e + 2 <= eR - 1;
+}
+
 /* Moves P along D onto the surface sp (s in MPFR), from P on (or near)
  * its tangent plane.  The step is added to m->path. */
 static int intersect_s(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, int max_iter)
 {
     mpfr_t *t = m->t;
     mpfr_ptr sv = t[4], F = t[5], Fp = t[6], A = t[7], b = t[8], C = t[9];
-    int it, conv = 0;
+    int it, conv = 0, below;
     mpfr_exp_t es_prev = 0;
     double growth = 1.0, dstep = 0.0;
     mpfr_set_zero(sv, 1);
@@ -324,7 +389,8 @@ static int intersect_s(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, int m
         mpfr_sqr(t[0], m->D.y, MPFR_RNDN);
         mpfr_add(A, A, t[0], MPFR_RNDN);
         mpfr_sqr(t[0], m->D.z, MPFR_RNDN);
-        mpfr_mul(t[0], t[0], s->k1, MPFR_RNDN);
+        if (!s->k1one)
+            mpfr_mul(t[0], t[0], s->k1, MPFR_RNDN);
         mpfr_add(A, A, t[0], MPFR_RNDN);
         if (isfinite(sp->R)) {
             eval_F(m, &(sg_sprep){.shape = SHAPE_CONIC, .R = sp->R, .k1 = sp->k1}, s, C, b);
@@ -346,11 +412,14 @@ static int intersect_s(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, int m
                  * meets the other sheet; then q/A. */
                 if (!mpfr_zero_p(t[0]))
                     mpfr_div(sv, C, t[0], MPFR_RNDN);
-                mpfr_mul(t[1], sv, m->D.z, MPFR_RNDN);
-                mpfr_add(t[1], t[1], m->P.z, MPFR_RNDN);
-                mpfr_mul(t[1], t[1], s->k1, MPFR_RNDN);
-                mpfr_div(t[1], t[1], s->R, MPFR_RNDN);
-                if (mpfr_cmp_ui(t[1], 1) > 0 || mpfr_zero_p(t[0])) {
+                below = !mpfr_zero_p(t[0]) && sheet_below(m, sv, s, sp->R);
+                if (!below) {
+                    mpfr_mul(t[1], sv, m->D.z, MPFR_RNDN);
+                    mpfr_add(t[1], t[1], m->P.z, MPFR_RNDN);
+                    mpfr_mul(t[1], t[1], s->k1, MPFR_RNDN);
+                    mpfr_div(t[1], t[1], s->R, MPFR_RNDN);
+                }
+                if (!below && (mpfr_cmp_ui(t[1], 1) > 0 || mpfr_zero_p(t[0]))) {
                     if (mpfr_zero_p(A))
                         return SG_EMISS;
                     mpfr_div(sv, t[0], A, MPFR_RNDN);
@@ -442,7 +511,11 @@ static int onto_surface(sg_mpfr_ctx *m, const sg_sprep *sp, const msurf *s, int 
     if (!mpfr_zero_p(m->D.z) && !mpfr_zero_p(m->P.z)) {
         mpfr_div(t[11], m->P.z, m->D.z, MPFR_RNDN);
         mpfr_neg(t[11], t[11], MPFR_RNDN);
-        axpy(&m->P, t[11], &m->D, t[0]);
+        /* x and y move along; z is the plane's, zero. */
+        mpfr_mul(t[0], t[11], m->D.x, MPFR_RNDN);
+        mpfr_add(m->P.x, m->P.x, t[0], MPFR_RNDN);
+        mpfr_mul(t[0], t[11], m->D.y, MPFR_RNDN);
+        mpfr_add(m->P.y, m->P.y, t[0], MPFR_RNDN);
         mpfr_set_zero(m->P.z, 1);
         mpfr_add(m->path, m->path, t[11], MPFR_RNDN);
     }
@@ -478,6 +551,7 @@ int sg_mpfr_rescue_root(sg_mpfr_ctx *m, const sg_sprep *sp, dd3 P, dd3 D, int ma
     /* Every input is a double or a double-double: exact at 320 bits. */
     mpfr_set_d(s->R, sp->R, MPFR_RNDN);
     mpfr_set_dd(s->k1, sp->k1);
+    s->k1one = 0;
     for (k = 0; k < SG_NASPH; k++)
         mpfr_set_d(s->a[k], sp->a[k], MPFR_RNDN);
     /* A shape of its own brings its coefficients at this precision. */
@@ -516,8 +590,12 @@ static int bend(sg_tracer *tr, int i)
     } else if (sp->shape == SHAPE_CONIC) {
         mpfr_set(m->G.x, m->P.x, MPFR_RNDN);
         mpfr_set(m->G.y, m->P.y, MPFR_RNDN);
-        mpfr_mul(m->G.z, s->k1, m->P.z, MPFR_RNDN);
-        mpfr_sub(m->G.z, m->G.z, s->R, MPFR_RNDN);
+        if (s->k1one) {
+            mpfr_sub(m->G.z, m->P.z, s->R, MPFR_RNDN);
+        } else {
+            mpfr_mul(m->G.z, s->k1, m->P.z, MPFR_RNDN);
+            mpfr_sub(m->G.z, m->G.z, s->R, MPFR_RNDN);
+        }
     } else if (sp->shape == SHAPE_GEN) {
         if (!sp->shp->ops->sag_mp(sp->shp, s->mc, m->P.x, m->P.y, t[1], m->G.x, m->G.y,
                                   m->t + 28))
@@ -550,8 +628,7 @@ static int bend(sg_tracer *tr, int i)
     mpfr_div(cosI, dg, gg, MPFR_RNDN);
     mpfr_sqr(k, cosI, MPFR_RNDN);
     mpfr_ui_sub(k, 1, k, MPFR_RNDN);
-    mpfr_sqr(t[1], s->mu, MPFR_RNDN);
-    mpfr_mul(k, k, t[1], MPFR_RNDN);
+    mpfr_mul(k, k, s->mu2, MPFR_RNDN);
     mpfr_ui_sub(k, 1, k, MPFR_RNDN);
     if (mpfr_sgn(k) < 0)
         return SG_ETIR;
@@ -883,6 +960,9 @@ static int memo_fit(sg_mpfr_memo *mm, int n, mpfr_prec_t prec)
 /* The same number with the same sign, NaN never. */
 static int same_mp(mpfr_srcptr a, mpfr_srcptr b)
 {
+    int r = same_limbs(a, b);
+    if (r >= 0)
+        return r && a->_mpfr_sign == b->_mpfr_sign;
     return mpfr_equal_p(a, b) && mpfr_signbit(a) == mpfr_signbit(b);
 }
 
@@ -1459,8 +1539,14 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
     for (i = 0; i < tr->n; i++) {
         msurf *s = &m->s[i];
         mpfr_set_d(s->R, tr->sp[i].R, MPFR_RNDN);
-        mpfr_set_d(s->k1, sys->surf[i].conic, MPFR_RNDN);
-        mpfr_add_ui(s->k1, s->k1, 1, MPFR_RNDN);
+        /* 1 + conic; a zero conic (either sign) gives 1 exactly. */
+        if (sys->surf[i].conic == 0.0) {
+            mpfr_set_ui(s->k1, 1, MPFR_RNDN);
+        } else {
+            mpfr_set_d(s->k1, sys->surf[i].conic, MPFR_RNDN);
+            mpfr_add_ui(s->k1, s->k1, 1, MPFR_RNDN);
+        }
+        s->k1one = mpfr_cmp_ui(s->k1, 1) == 0;
         mpfr_set_d(s->T, tr->sp[i].T, MPFR_RNDN);
         if (tr->sp[i].xf) {
             int j, k2;
@@ -1474,8 +1560,14 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             for (j = 0; j < 3; j++)
                 s->bmax = fmax(s->bmax, fabs(mpfr_get_d(s->b[j], MPFR_RNDU)));
         }
-        for (k = 0; k < SG_NASPH; k++)
-            mpfr_set_d(s->a[k], tr->sp[i].a[k], MPFR_RNDN);
+        for (k = 0; k < SG_NASPH; k++) {
+            double a = tr->sp[i].a[k];
+            /* As mpfr_set_d gives a zero: with its sign. */
+            if (a == 0.0)
+                mpfr_set_zero(s->a[k], signbit(a) ? -1 : 1);
+            else
+                mpfr_set_d(s->a[k], a, MPFR_RNDN);
+        }
         if (tr->sp[i].shp) {
             s->mc = malloc(SG_SHAPE_MPC * sizeof *s->mc);
             if (!s->mc) {
@@ -1488,10 +1580,33 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
     mpfr_const_pi(m->pi, MPFR_RNDN);
     rc = sg_indices_mpfr_cached(sys, tr->cat, tr->wave, idx, tr->icache, d);
     if (rc == SG_OK) {
+        /* A design repeats a few pairs of media: the ratio of a pair met
+         * on an earlier surface is copied, the same bits as dividing. */
+        enum { PAIRS = 16 };
+        int pair[PAIRS], npair = 0, next = 0;
         for (i = 1; i < tr->n; i++) {
+            int j = -1;
             mpfr_abs(m->t[0], idx[i - 1], MPFR_RNDN);
             mpfr_abs(m->t[1], idx[i], MPFR_RNDN);
-            mpfr_div(m->s[i].mu, m->t[0], m->t[1], MPFR_RNDN);
+            /* Only regular numbers are kept, so same_limbs answers. */
+            if (mpfr_regular_p(m->t[0]) && mpfr_regular_p(m->t[1]))
+                for (k = 0; k < npair && j < 0; k++)
+                    if (same_limbs(m->s[pair[k]].nb, m->t[0]) == 1 &&
+                        same_limbs(idx[pair[k]], m->t[1]) == 1)
+                        j = pair[k];
+            if (j >= 0) {
+                mpfr_set(m->s[i].mu, m->s[j].mu, MPFR_RNDN);
+                mpfr_set(m->s[i].mu2, m->s[j].mu2, MPFR_RNDN);
+            } else {
+                mpfr_div(m->s[i].mu, m->t[0], m->t[1], MPFR_RNDN);
+                mpfr_sqr(m->s[i].mu2, m->s[i].mu, MPFR_RNDN);
+                if (mpfr_regular_p(m->t[0]) && mpfr_regular_p(m->t[1])) {
+                    pair[next] = i;
+                    next = (next + 1) % PAIRS;
+                    if (npair < PAIRS)
+                        npair++;
+                }
+            }
             mpfr_set(m->s[i].nb, m->t[0], MPFR_RNDN);
         }
         sg_parax_mp_init(&p, prec);
