@@ -323,7 +323,7 @@ static __attribute__((noinline, cold)) vd resid_rim(const sg_sprep *s, vd res, c
  * would).  *miss marks lanes it misses; *unsure those whose discriminant
  * lies within its own rounding of zero, which only double-double can
  * decide. */
-static vd conic_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd tgt, vd eseed,
+static inline __attribute__((always_inline)) vd conic_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd tgt, vd eseed,
                        vm *miss, vm *unsure)
 {
     double c = s->c, k1 = s->k1.hi, ac = fabs(c), ak = fabs(k1);
@@ -446,7 +446,7 @@ static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, in
     return sv;
 }
 
-static void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
+static inline __attribute__((always_inline)) void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
 {
     if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
         /* Through locals, so that the caller's F, err and bad never have
@@ -484,7 +484,7 @@ static void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
 
 /* F' along the ray at the double point p, the magnitude of its terms in
  * *mag, and in *fpp a bound on F''; an asphere's slope serves both. */
-static vd surf_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd *fpp)
+static inline __attribute__((always_inline)) vd surf_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd *fpp)
 {
     if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
         vd m, f, Fp = gen_Fp_v(s, p, d, &m, &f);
@@ -510,7 +510,7 @@ static vd surf_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd
 /* 1 / cos of the angle between the ray and the normal, which scales the
  * ray's error along the surface into the point's; 1e300 where the ray
  * grazes or the normal vanishes. */
-static vd surf_sec_v(const sg_sprep *s, const vd p[3], const vd d[3])
+static inline __attribute__((always_inline)) vd surf_sec_v(const sg_sprep *s, const vd p[3], const vd d[3])
 {
     vd g[3], gn, gd;
     if (s->shape == SHAPE_PLANE) {
@@ -917,7 +917,7 @@ static void xfer_v(const sg_xfer *x, sg_vray *r)
 
 /* One surface for every live lane; returns the lanes that stop here, with
  * their status in st[]. */
-static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
+static __attribute__((noinline)) vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
                     sg_ray_surface *const *out, vm live, int *st)
 {
     const sg_sprep *s = &t->sp[i];
