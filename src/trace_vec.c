@@ -323,8 +323,9 @@ static __attribute__((noinline, cold)) vd resid_rim(const sg_sprep *s, vd res, c
  * would).  *miss marks lanes it misses; *unsure those whose discriminant
  * lies within its own rounding of zero, which only double-double can
  * decide. */
-static vd conic_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd tgt, vd eseed,
-                       vm *miss, vm *unsure)
+static inline __attribute__((always_inline)) vd conic_root_v(const sg_sprep *s, const vd p[3],
+                                                             const vd d[3], vd tgt, vd eseed,
+                                                             vm *miss, vm *unsure)
 {
     double c = s->c, k1 = s->k1.hi, ac = fabs(c), ak = fabs(k1);
     vd A = c * (d[0] * d[0] + d[1] * d[1] + k1 * d[2] * d[2]);
@@ -446,7 +447,12 @@ static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, in
     return sv;
 }
 
-static void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
+/* Inlined, as are surf_Fp_v, surf_sec_v and conic_root_v, so that their
+ * results stay in registers: out of line, F and its bound went through
+ * memory on the Newton step's path, and the lenses' precise trace ran 5
+ * to 7% slower (README, issue 18). */
+static inline __attribute__((always_inline)) void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F,
+                                                           vd *err, vm *bad)
 {
     if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
         /* Through locals, so that the caller's F, err and bad never have
@@ -484,7 +490,8 @@ static void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F, vd *err, vm *bad)
 
 /* F' along the ray at the double point p, the magnitude of its terms in
  * *mag, and in *fpp a bound on F''; an asphere's slope serves both. */
-static vd surf_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd *fpp)
+static inline __attribute__((always_inline)) vd surf_Fp_v(const sg_sprep *s, const vd p[3],
+                                                          const vd d[3], vd *mag, vd *fpp)
 {
     if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
         vd m, f, Fp = gen_Fp_v(s, p, d, &m, &f);
@@ -510,7 +517,8 @@ static vd surf_Fp_v(const sg_sprep *s, const vd p[3], const vd d[3], vd *mag, vd
 /* 1 / cos of the angle between the ray and the normal, which scales the
  * ray's error along the surface into the point's; 1e300 where the ray
  * grazes or the normal vanishes. */
-static vd surf_sec_v(const sg_sprep *s, const vd p[3], const vd d[3])
+static inline __attribute__((always_inline)) vd surf_sec_v(const sg_sprep *s, const vd p[3],
+                                                           const vd d[3])
 {
     vd g[3], gn, gd;
     if (s->shape == SHAPE_PLANE) {
@@ -916,9 +924,11 @@ static void xfer_v(const sg_xfer *x, sg_vray *r)
 }
 
 /* One surface for every live lane; returns the lanes that stop here, with
- * their status in st[]. */
-static vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r, vd path0,
-                    sg_ray_surface *const *out, vm live, int *st)
+ * their status in st[].  Out of line, so that its own helpers inline into
+ * one copy of the surface's code whatever calls it. */
+static __attribute__((noinline)) vm surface_v(const sg_tracer *t, int i, int upto, sg_vray *r,
+                                              vd path0, sg_ray_surface *const *out, vm live,
+                                              int *st)
 {
     const sg_sprep *s = &t->sp[i];
     int flat = s->shape == SHAPE_PLANE;
@@ -1189,6 +1199,17 @@ void sg_precise_block(const sg_tracer *t, sg_vray *v, vd p0, sg_ray_surface *con
         wait = vm_any(pending);
         if (wait)
             snap = *v;
+        /* A batch writes its rows into fresh memory, whose cache lines a
+         * store must first fetch: asking for the next surface's rows now
+         * lets that fetch run while this surface is traced (no result
+         * depends on it). */
+        if (i < upto)
+            for (k = 0; k < nl; k++) {
+                const char *o = (const char *)&out[k][i + 1];
+                __builtin_prefetch(o, 1, 3);
+                __builtin_prefetch(o + 64, 1, 3);
+                __builtin_prefetch(o + sizeof(sg_ray_surface) - 1, 1, 3);
+            }
         bad = surface_v(t, i, upto, v, p0, out, live, st);
         /* Lanes that start further on keep their state. */
         if (wait)
