@@ -285,18 +285,6 @@ static inline vdd vdot3(vdd a0, vdd a1, vdd a2, vdd b0, vdd b1, vdd b2)
     return vdd_add(vdd_add(vdd_mul(a0, b0), vdd_mul(a1, b1)), vdd_mul(a2, b2));
 }
 
-/* dd_div on lanes. */
-static inline vdd vdd_div(vdd a, vdd b)
-{
-    vd q1 = a.hi / b.hi, q2, q3;
-    vdd r = vdd_sub(a, vdd_mul_d(b, q1)), q;
-    q2 = r.hi / b.hi;
-    r = vdd_sub(r, vdd_mul_d(b, q2));
-    q3 = r.hi / b.hi;
-    q = vdd_fast_two_sum(q1, q2);
-    return vdd_add_d(q, q3);
-}
-
 /* sg_ulp_of where |x| is zero, subnormal or from 2^-969 to below
  * DBL_MAX (the exponent shift); *odd marks the other lanes. */
 static inline vd vulp(vd x, vm *odd)

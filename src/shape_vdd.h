@@ -21,18 +21,6 @@
 #include "shape_vd.h"
 #include "vdd.h"
 
-/* dd_div: three quotients, as there. */
-static inline vdd svd_div(vdd a, vdd b)
-{
-    vd q1 = a.hi / b.hi, q2, q3;
-    vdd r = vdd_sub(a, vdd_mul_d(b, q1)), q;
-    q2 = r.hi / b.hi;
-    r = vdd_sub(r, vdd_mul_d(b, q2));
-    q3 = r.hi / b.hi;
-    q = vdd_fast_two_sum(q1, q2);
-    return vdd_add_d(q, q3);
-}
-
 /* dd_div_d. */
 static inline vdd svd_div_d(vdd a, double b)
 {
@@ -59,8 +47,8 @@ static inline void svd_rot(const sg_shape *s, vdd r2, vdd *z, vdd *w, vd *ez, vd
         sq = vdd_sqrt(q);
         if (s->R < 0)
             sq = vdd_neg(sq);
-        zz = svd_div(r2, vdd_add(R, sq));
-        ww = svd_div(vdd_from(vd_set(1.0)), sq);
+        zz = vdd_div(r2, vdd_add(R, sq));
+        ww = vdd_div(vdd_from(vd_set(1.0)), sq);
         cond = 1.0 + (s->R * s->R + fabs(s->k1) * r2d) / q.hi;
         *ez = 16.0 * DD_U * vd_abs(zz.hi) * cond;
         *ew = 16.0 * DD_U * vd_abs(ww.hi) * cond;
@@ -79,7 +67,7 @@ static inline void svd_rot(const sg_shape *s, vdd r2, vdd *z, vdd *w, vd *ez, vd
         vdd r = vdd_sqrt(r2), rp = vdd_from(vd_set(1.0)),
             rm = vdd_from(vd_set(0.0));
         vm pos = (vm)(r2d > 0.0);
-        rm = vdd_sel(pos, svd_div(vdd_from(vd_set(1.0)), r2), rm);
+        rm = vdd_sel(pos, vdd_div(vdd_from(vd_set(1.0)), r2), rm);
         for (k = 0; k < s->nodd; k++) {
             vdd t, tw, wz;
             vd mwz;
@@ -213,10 +201,10 @@ static inline void svd_tor(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd
     *bad |= (vm)(disc.hi <= 0.0);
     q = vdd_sqrt(disc);
     q = vdd_sel((vm)(u.hi < 0.0), vdd_neg(q), q);
-    zt = svd_div(vdd_sqr(x), vdd_add(u, q));
+    zt = vdd_div(vdd_sqr(x), vdd_add(u, q));
     *z = vdd_add(zy, zt);
-    g[0] = svd_div(x, q);
-    g[1] = svd_div(vdd_mul(u, zp), q);
+    g[0] = vdd_div(x, q);
+    g[1] = vdd_div(vdd_mul(u, zp), q);
     eu = ezy + 2.0 * DD_U * (fabs(s->Rx) + vd_abs(zy.hi));
     cond = (u.hi * u.hi + x.hi * x.hi) / disc.hi;
     aq = vd_abs(q.hi);
@@ -244,15 +232,15 @@ static inline void svd_bic(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd
     *bad = (vm)(Q.hi < 0.0);
     S = vdd_sqrt(Q);
     D = vdd_add(one, S);
-    *z = svd_div(N, D);
+    *z = vdd_div(N, D);
     *bad |= (vm)(S.hi <= 0.0);
     D2 = vdd_sqr(D);
     tx = vdd_add(vdd_mul(vdd_mul_d(vdd_mul(cx, x), vd_set(2.0)), D),
-                 svd_div(vdd_mul(N, vdd_mul_d(vdd_mul(vdd_mul(cx, cx), x), vd_set(s->kx1))), S));
+                 vdd_div(vdd_mul(N, vdd_mul_d(vdd_mul(vdd_mul(cx, cx), x), vd_set(s->kx1))), S));
     ty = vdd_add(vdd_mul(vdd_mul_d(vdd_mul(cy, y), vd_set(2.0)), D),
-                 svd_div(vdd_mul(N, vdd_mul_d(vdd_mul(vdd_mul(cy, cy), y), vd_set(s->k1))), S));
-    g[0] = svd_div(tx, D2);
-    g[1] = svd_div(ty, D2);
+                 vdd_div(vdd_mul(N, vdd_mul_d(vdd_mul(vdd_mul(cy, cy), y), vd_set(s->k1))), S));
+    g[0] = vdd_div(tx, D2);
+    g[1] = vdd_div(ty, D2);
     cond = (1.0 + vd_abs(px.hi) + vd_abs(py.hi)) / Q.hi;
     *ez = 24.0 * DD_U * vd_abs(z->hi) * (1.0 + cond) +
           8.0 * DD_U * (vd_abs(ax.hi) + vd_abs(ay.hi));

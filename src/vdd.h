@@ -333,4 +333,16 @@ static inline vdd3 vdd3_axpy(vdd3 a, vdd s, vdd3 b)
     return r;
 }
 
+/* dd_div on lanes: three quotients, as there, so each lane gets its bits. */
+static inline vdd vdd_div(vdd a, vdd b)
+{
+    vd q1 = a.hi / b.hi, q2, q3;
+    vdd r = vdd_sub(a, vdd_mul_d(b, q1)), q;
+    q2 = r.hi / b.hi;
+    r = vdd_sub(r, vdd_mul_d(b, q2));
+    q3 = r.hi / b.hi;
+    q = vdd_fast_two_sum(q1, q2);
+    return vdd_add_d(q, q3);
+}
+
 #endif

@@ -504,6 +504,20 @@ static void test_json_roundtrip(void **state)
     }
 }
 
+/* The radius pickup of scale -1 comes back from a .zmx as Zemax's
+ * curvature pickup of scale 1/-1, which gives the same bits once applied;
+ * otherwise b is a. */
+static void same_after_reimport(sg_system *a, sg_system *b)
+{
+    assert_int_equal(b->surf[2].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_CURV_PICKUP);
+    assert_true(b->surf[2].solve[SG_SOLVE_RADIUS].scale == -1.0 &&
+                b->surf[2].solve[SG_SOLVE_RADIUS].from == 1);
+    b->surf[2].radius = 7.0;
+    apply(b);
+    b->surf[2].solve[SG_SOLVE_RADIUS] = a->surf[2].solve[SG_SOLVE_RADIUS];
+    assert_true(sg_system_equal(a, b));
+}
+
 static void test_zmx_roundtrip(void **state)
 {
     sg_system *a = singlet("\"inf\"", 40, 100, 5, "",
@@ -523,15 +537,7 @@ static void test_zmx_roundtrip(void **state)
     assert_non_null(strstr(z, "  MAZH 0 0\n"));
     sg_diag_clear(&d);
     assert_int_equal(sg_zmx_parse(b, z, strlen(z), "rt.zmx", NULL, &d), SG_OK);
-    /* The radius pickup of scale -1 comes back as Zemax's curvature pickup
-     * of scale 1/-1, which gives the same bits once applied. */
-    assert_int_equal(b->surf[2].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_CURV_PICKUP);
-    assert_true(b->surf[2].solve[SG_SOLVE_RADIUS].scale == -1.0 &&
-                b->surf[2].solve[SG_SOLVE_RADIUS].from == 1);
-    b->surf[2].radius = 7.0;
-    apply(b);
-    b->surf[2].solve[SG_SOLVE_RADIUS] = a->surf[2].solve[SG_SOLVE_RADIUS];
-    assert_true(sg_system_equal(a, b));
+    same_after_reimport(a, b);
     free(z);
     /* A thickness pickup comes back as a PZUP line. */
     a->surf[2].solve[SG_SOLVE_THICKNESS].kind = SG_SOLVE_PICKUP;
@@ -544,15 +550,7 @@ static void test_zmx_roundtrip(void **state)
     assert_non_null(strstr(z, "  PZUP 1 3 0.5 0\n"));
     sg_diag_clear(&d);
     assert_int_equal(sg_zmx_parse(b, z, strlen(z), "rt.zmx", NULL, &d), SG_OK);
-    /* The radius pickup of scale -1 comes back as Zemax's curvature pickup
-     * of scale 1/-1, which gives the same bits once applied. */
-    assert_int_equal(b->surf[2].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_CURV_PICKUP);
-    assert_true(b->surf[2].solve[SG_SOLVE_RADIUS].scale == -1.0 &&
-                b->surf[2].solve[SG_SOLVE_RADIUS].from == 1);
-    b->surf[2].radius = 7.0;
-    apply(b);
-    b->surf[2].solve[SG_SOLVE_RADIUS] = a->surf[2].solve[SG_SOLVE_RADIUS];
-    assert_true(sg_system_equal(a, b));
+    same_after_reimport(a, b);
     free(z);
     sg_system_free(a);
     sg_system_free(b);
