@@ -577,6 +577,15 @@ static const bad_case cases[] = {
       "scbd.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  SCBD 3 0 0 0 0 1 0 0\n", NULL,
       NULL, ARGS("import", "@F", "-o", "-"), 3, "@F:9: surface 1: SCBD: flags 3 0 0", NULL, NULL,
       "sagitta-design", 0 },
+    { "zmx_tiltsurf_curved", "a tilted surface with a curvature is refused at its TYPE line",
+      "tilt.zmx", ZH "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  TYPE TILTSURF\n  CURV 0.1\n"
+      "SURF 2\n", NULL, NULL, ARGS("import", "@F", "-o", "-"), 3,
+      "@F:9: surface 1: TYPE TILTSURF with a curvature", NULL, NULL, "sagitta-design", 0 },
+    { "position_later", "a position solve from a later surface names both surfaces",
+      "pos.json", "{\"surfaces\": [{}, {\"stop\": true}, {\"solves\": {\"thickness\": "
+      "{\"type\": \"position\", \"from\": 3, \"value\": 5}}}, {}]}\n", NULL, NULL,
+      ARGS("paraxial", "@F"), 4, "@F: surface 2: thickness: the position solve's reference "
+      "surface 3 is not this or an earlier surface", NULL, NULL, NULL, 0 },
     { "zar_cut", "an archive whose first member's header is cut off (exit 3)",
       "cut.zar", NULL, gen_zar_cut, NULL, ARGS("import", "@F", "-o", "-"), 3,
       "@F: byte 0: an archive member's header of 648 bytes is cut off after 100", NULL, NULL,
