@@ -371,9 +371,11 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
     if (sys->primary_wave < 0 || sys->primary_wave >= sys->nwave)
         return sg_diag_set(d, SG_ERANGE, "wavelengths: primary %d is not one of 1 to %d",
                            sys->primary_wave + 1, sys->nwave);
+    /* sg_solve_check passes a cell without a solve at once; most have none. */
     for (i = 0; i < sys->nsurf; i++)
         for (k = 0; k < SG_SOLVE_NTARGETS; k++)
-            if ((src = sg_solve_check(sys, i, (sg_solve_target)k, d)) != SG_OK)
+            if (sys->surf[i].solve[k].kind != SG_SOLVE_NONE &&
+                (src = sg_solve_check(sys, i, (sg_solve_target)k, d)) != SG_OK)
                 return src;
     for (k = 0; k < sys->nwave; k++)
         if (!(sys->wave[k].um > 0.0) || !isfinite(sys->wave[k].um))
