@@ -39,6 +39,12 @@ struct sg_index_cache {
     sg_prep_memo *prep;
     /* What the last validation found of each surface (system.c). */
     sg_valid_memo *valid;
+    /* Every surface's bits as last seen and a number that changes with
+     * them (sg_index_cache_gens): the memos compare numbers, not bytes. */
+    sg_surface *seen;
+    uint64_t *gen;
+    int nseen;
+    uint64_t next_gen;
 };
 
 void sg_index_cache_reused(const sg_index_cache *cache, unsigned long *prep,
@@ -54,7 +60,7 @@ static void valid_free(sg_valid_memo *m)
 {
     if (!m)
         return;
-    free(m->surf);
+    free(m->gen);
     free(m->ok);
     free(m);
 }
@@ -71,9 +77,9 @@ sg_valid_memo *sg_index_cache_valid(sg_index_cache *cache, int n)
     if (!m)
         return NULL;
     m->n = n;
-    m->surf = calloc((size_t)n, sizeof *m->surf);
+    m->gen = calloc((size_t)n, sizeof *m->gen);
     m->ok = calloc((size_t)n, 1);
-    if (!m->surf || !m->ok) {
+    if (!m->gen || !m->ok) {
         valid_free(m);
         cache->valid = NULL;
     }
@@ -84,7 +90,7 @@ static void prep_free(sg_prep_memo *m)
 {
     if (!m)
         return;
-    free(m->surf);
+    free(m->gen);
     free(m->idx); /* sg_mp_block_new: one allocation, nothing to clear */
     free(m->sp);
     free(m->xf);
@@ -106,14 +112,14 @@ struct sg_prep_memo *sg_index_cache_prep(sg_index_cache *cache, int n)
     if (!m)
         return NULL;
     m->n = n;
-    m->surf = calloc((size_t)n, sizeof *m->surf);
+    m->gen = calloc((size_t)n, sizeof *m->gen);
     m->idx = sg_mp_block_new((size_t)n, 256);
     m->sp = calloc((size_t)n, sizeof *m->sp);
     m->xf = calloc((size_t)n, sizeof *m->xf);
     m->nsigned = calloc((size_t)n, sizeof *m->nsigned);
     m->ok = calloc((size_t)n, 1);
     m->has_xf = calloc((size_t)n, 1);
-    if (!m->surf || !m->idx || !m->sp || !m->xf || !m->nsigned || !m->ok || !m->has_xf) {
+    if (!m->gen || !m->idx || !m->sp || !m->xf || !m->nsigned || !m->ok || !m->has_xf) {
         prep_free(m);
         cache->prep = NULL;
         return NULL;
@@ -158,6 +164,68 @@ void sg_index_cache_clear(sg_index_cache *c)
     c->prep = NULL;
     valid_free(c->valid);
     c->valid = NULL;
+    free(c->seen);
+    free(c->gen);
+    c->seen = NULL;
+    c->gen = NULL;
+    c->nseen = 0;
+    /* next_gen keeps counting: a number is never given twice. */
+}
+
+const uint64_t *sg_index_cache_gens(sg_index_cache *c, const sg_system *sys,
+                                    sg_system **copy)
+{
+    int i, n = sys->nsurf, fresh;
+    sg_system *cl = NULL;
+    if (copy)
+        *copy = NULL;
+    if (!c || n < 1)
+        return NULL;
+    if (copy) {
+        /* sg_system_clone's copy, made in the same pass: each surface is
+         * read once for both. */
+        cl = malloc(sizeof *cl);
+        if (!cl)
+            return NULL;
+        *cl = *sys;
+        cl->capsurf = n;
+        cl->surf = malloc((size_t)n * sizeof *cl->surf);
+        if (!cl->surf) {
+            free(cl);
+            return NULL;
+        }
+    }
+    fresh = c->nseen != n;
+    if (fresh) {
+        sg_surface *s = malloc((size_t)n * sizeof *s);
+        uint64_t *g = malloc((size_t)n * sizeof *g);
+        if (!s || !g) {
+            free(s);
+            free(g);
+            sg_system_free(cl);
+            return NULL;
+        }
+        free(c->seen);
+        free(c->gen);
+        c->seen = s;
+        c->gen = g;
+        c->nseen = n;
+    }
+    /* One comparison of each surface with its last bits; a changed
+     * surface gets a number no surface had before, so a memo entry
+     * holding a surface's number was made from its present bits. */
+    for (i = 0; i < n; i++) {
+        const sg_surface *si = &sys->surf[i];
+        if (fresh || memcmp(&c->seen[i], si, sizeof *si) != 0) {
+            memcpy(&c->seen[i], si, sizeof *si);
+            c->gen[i] = ++c->next_gen;
+        }
+        if (cl)
+            memcpy(&cl->surf[i], si, sizeof *si);
+    }
+    if (copy)
+        *copy = cl;
+    return c->gen;
 }
 
 void sg_index_cache_free(sg_index_cache *c)
@@ -293,4 +361,25 @@ int sg_index_cache_glass(sg_index_cache *c, const sg_system *sys, const sg_glass
     e->used = 1;
     c->n++;
     return rc;
+}
+
+const sg_glass *sg_glass_seen_find(sg_glass_seen *gs, const sg_catalog *cat,
+                                   const sg_material *m)
+{
+    const sg_glass *g;
+    int k;
+    if (!m || m->kind != SG_MAT_GLASS)
+        return sg_material_glass(cat, m);
+    /* Whole arrays, a few instructions: equal arrays hold equal names
+     * (bytes after a name that differ only cost a look-up). */
+    for (k = 0; k < gs->n; k++)
+        if (memcmp(gs->mat[k]->name, m->name, sizeof m->name) == 0 &&
+            memcmp(gs->mat[k]->catalog, m->catalog, sizeof m->catalog) == 0)
+            return gs->g[k];
+    g = sg_material_glass(cat, m);
+    /* Full: the oldest entry goes. */
+    k = gs->n < SG_GLASS_SEEN ? gs->n++ : (gs->next++ % SG_GLASS_SEEN);
+    gs->mat[k] = m;
+    gs->g[k] = g;
+    return g;
 }

@@ -3,6 +3,7 @@
 #define SG_INDEX_CACHE_H
 
 #include <mpfr.h>
+#include <stdint.h>
 
 #include "internal.h"
 #include "sagitta.h"
@@ -22,6 +23,15 @@ struct sg_parax_memo *sg_index_cache_parax(sg_index_cache *cache);
  * made on first use and emptied when n changes; NULL without a cache or
  * memory. */
 struct sg_prep_memo *sg_index_cache_prep(sg_index_cache *cache, int n);
+
+/* Each surface's generation in sys: a number that changes whenever the
+ * surface's bits differ from those of the last call, and is never
+ * reused, so equal numbers mean equal bits.  n numbers, valid until the
+ * next call; NULL without a cache or memory.  With copy, *copy is
+ * sg_system_clone(sys), made in the same pass (NULL when NULL is
+ * returned). */
+const uint64_t *sg_index_cache_gens(sg_index_cache *cache, const sg_system *sys,
+                                    sg_system **copy);
 
 /* The cache's validation memo (internal.h) for n surfaces, as above. */
 sg_valid_memo *sg_index_cache_valid(sg_index_cache *cache, int n);

@@ -6,6 +6,7 @@
 #define SG_INTERNAL_H
 
 #include <mpfr.h>
+#include <stdint.h>
 
 #include "sagitta.h"
 
@@ -39,7 +40,8 @@ int sg_system_check(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
  * the stop, the track, the catalog, the warnings) run every time. */
 typedef struct sg_valid_memo {
     int n;
-    sg_surface *surf;
+    uint64_t *gen;    /* the generations the entries were made from */
+    const uint64_t *cur; /* the surfaces' generations now (sg_index_cache_gens) */
     unsigned char *ok;
     unsigned long reused; /* surfaces whose own checks were skipped, for tests */
 } sg_valid_memo;
@@ -55,6 +57,19 @@ int sg_xfer_moves(const sg_system *sys, int i);
 /* That transfer, p_i = A^T (p_{i-1} - b), at the precision of b (A's
  * entries take theirs), from MPFR 32 bits finer. */
 int sg_xfer_mpfr(const sg_system *sys, int i, mpfr_t A[3][3], mpfr_t b[3]);
+
+/* A catalog's glasses found in one pass over a system: a design names
+ * few glasses on many surfaces, and sg_material_glass's answer depends
+ * only on the catalog and the two names, so equal names are looked up
+ * once.  Zero it before the pass; the catalog must not change in it. */
+enum { SG_GLASS_SEEN = 8 };
+typedef struct sg_glass_seen {
+    int n, next;
+    const sg_material *mat[SG_GLASS_SEEN];
+    const sg_glass *g[SG_GLASS_SEEN];
+} sg_glass_seen;
+const sg_glass *sg_glass_seen_find(sg_glass_seen *gs, const sg_catalog *cat,
+                                   const sg_material *m);
 
 /* Copies at most n-1 bytes and always terminates. */
 void sg_strlcpy(char *dst, const char *src, size_t n);

@@ -354,6 +354,8 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
     double track;
     int i, k, p, src, np;
     unsigned char zero_ok[ZERO_MAX][2];
+    sg_glass_seen found;
+    memset(&found, 0, sizeof found);
     if (sys->nsurf < 3)
         return sg_diag_set(d, SG_ENOSYS,
                            "the system has %d surfaces; it needs an object, "
@@ -369,9 +371,11 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
     if (sys->primary_wave < 0 || sys->primary_wave >= sys->nwave)
         return sg_diag_set(d, SG_ERANGE, "wavelengths: primary %d is not one of 1 to %d",
                            sys->primary_wave + 1, sys->nwave);
+    /* sg_solve_check passes a cell without a solve at once; most have none. */
     for (i = 0; i < sys->nsurf; i++)
         for (k = 0; k < SG_SOLVE_NTARGETS; k++)
-            if ((src = sg_solve_check(sys, i, (sg_solve_target)k, d)) != SG_OK)
+            if (sys->surf[i].solve[k].kind != SG_SOLVE_NONE &&
+                (src = sg_solve_check(sys, i, (sg_solve_target)k, d)) != SG_OK)
                 return src;
     for (k = 0; k < sys->nwave; k++)
         if (!(sys->wave[k].um > 0.0) || !isfinite(sys->wave[k].um))
@@ -462,7 +466,7 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
                         sg_param_check(pp, 0, 0.0, 1, NULL, 0) == SG_OK;
     }
     track = 0.0;
-    if (m && m->n != sys->nsurf)
+    if (m && (m->n != sys->nsurf || !m->cur))
         m = NULL;
     for (i = 0; i < sys->nsurf; i++) {
         const sg_surface *s = &sys->surf[i];
@@ -470,7 +474,7 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
          * memo is for one number of surfaces, so i is the object, the
          * image or neither as it was): they pass again, and what else
          * can fail comes in the same order. */
-        int known = m && m->ok[i] && memcmp(&m->surf[i], s, sizeof *s) == 0;
+        int known = m && m->ok[i] && m->gen[i] == m->cur[i];
         if (known) {
             m->reused++;
             goto frames;
@@ -592,11 +596,11 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
                                i == 0 ? "object" : "image");
         if (m && !known) {
             /* Its own checks passed (the catalog's is the loop's last). */
-            memcpy(&m->surf[i], s, sizeof *s);
+            m->gen[i] = m->cur[i];
             m->ok[i] = 1;
         }
         if (s->mat.kind == SG_MAT_GLASS && cat) {
-            const sg_glass *g = sg_material_glass(cat, &s->mat);
+            const sg_glass *g = sg_glass_seen_find(&found, cat, &s->mat);
             if (!g) {
                 char where[96];
                 sg_material_where(cat, &s->mat, where, sizeof where);

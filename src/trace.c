@@ -186,6 +186,8 @@ int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave
     const sg_glass *seen_g[SEEN];
     int seen_at[SEEN], seen_sign[SEEN], nseen = 0, k;
     int i, sign = 1, rc = SG_OK;
+    sg_glass_seen found;
+    memset(&found, 0, sizeof found);
     mpfr_init2(um, mpfr_get_prec(idx[0]));
     mpfr_set_d(um, sys->wave[wave].um, MPFR_RNDN);
     for (i = 0; i < sys->nsurf; i++) {
@@ -220,7 +222,7 @@ int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave
             const sg_glass *g = s->mat.kind == SG_MAT_MODEL
                                     ? (sg_model_glass(s->mat.index, s->mat.vd, s->mat.dpgf,
                                                       &model) == SG_OK ? &model : NULL)
-                                : cat ? sg_material_glass(cat, &s->mat) : NULL;
+                                : cat ? sg_glass_seen_find(&found, cat, &s->mat) : NULL;
             if (!g && s->mat.kind == SG_MAT_MODEL) {
                 rc = sg_diag_set(d, SG_ERANGE, "surface %d: model glass nd %g, vd %g, dPgF %g "
                                  "is outside the model's limits", i, s->mat.index, s->mat.vd,
@@ -377,10 +379,9 @@ static int same_mp256(mpfr_srcptr a, mpfr_srcptr b)
     return mpfr_equal_p(a, b) && mpfr_signbit(a) == mpfr_signbit(b);
 }
 
-static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
+static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, const uint64_t *gen, sg_diag *d)
 {
-    const sg_system *sys = t->sys;
-    sg_prep_memo *m = sg_index_cache_prep(t->icache, t->n);
+    sg_prep_memo *m = gen ? sg_index_cache_prep(t->icache, t->n) : NULL;
     mpfr_t q, tmp;
     double zg = 0.0;
     int i, rc = SG_OK;
@@ -388,9 +389,7 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
     mpfr_init2(tmp, 256);
     for (i = 0; i < t->n; i++) {
         sg_sprep *p = &t->sp[i];
-        const sg_surface *s = &sys->surf[i];
-        int same = m && memcmp(&m->surf[i], s, sizeof *s) == 0 &&
-                   same_mp256(m->idx[i], idx[i]);
+        int same = m && m->gen[i] == gen[i] && same_mp256(m->idx[i], idx[i]);
         /* ok[i] is cleared whenever surface i - 1's bits change, so an
          * entry still marked was made from these surfaces i - 1 and i. */
         if (m && m->ok[i] && same) {
@@ -408,7 +407,7 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, sg_diag *d)
                 if (!same) {
                     /* Entry i + 1 was made from the old surface i (a
                      * surface that fails below leaves its own copy old). */
-                    memcpy(&m->surf[i], s, sizeof *s);
+                    m->gen[i] = gen[i];
                     mpfr_set(m->idx[i], idx[i], MPFR_RNDN);
                     if (i + 1 < t->n)
                         m->ok[i + 1] = 0;
@@ -471,6 +470,8 @@ static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_tra
 {
     sg_tracer *t;
     mpfr_t *idx = NULL;
+    const uint64_t *gen = NULL;
+    sg_system *copy = NULL;
     int i, rc, n;
     sg_diag own;
     if (!out)
@@ -486,13 +487,28 @@ static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_tra
         return sg_diag_set(d, SG_EINVAL, "tracer: no system");
     /* With a cache (the editor, which validates nowhere else) the
      * warnings go to the caller too; others validated before. */
-    rc = cache ? sg_system_validate_memo(sys, cat, d, sg_index_cache_valid(cache, sys->nsurf))
-               : sg_system_check(sys, cat, d);
-    if (rc != SG_OK)
+    if (cache && sys->nsurf >= 1) {
+        /* Both memos know an unchanged surface by its generation. */
+        sg_valid_memo *vmemo = sg_index_cache_valid(cache, sys->nsurf);
+        gen = sg_index_cache_gens(cache, sys, &copy);
+        if (vmemo)
+            vmemo->cur = gen;
+        rc = sg_system_validate_memo(sys, cat, d, gen ? vmemo : NULL);
+        if (vmemo)
+            vmemo->cur = NULL;
+    } else {
+        rc = cache ? sg_system_validate_memo(sys, cat, d, NULL) : sg_system_check(sys, cat, d);
+    }
+    if (rc != SG_OK) {
+        sg_system_free(copy);
         return rc;
+    }
     t = calloc(1, sizeof *t);
-    if (!t)
+    if (!t) {
+        sg_system_free(copy);
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    }
+    t->sys = copy; /* the tracer's from here, freed with it */
     if (opts)
         t->o = *opts;
     else
@@ -509,7 +525,8 @@ static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_tra
     }
     n = t->n = sys->nsurf;
     t->cat = cat;
-    t->sys = sg_system_clone(sys);
+    if (!t->sys)
+        t->sys = sg_system_clone(sys);
     t->sp = calloc((size_t)n, sizeof *t->sp);
     t->nsigned = calloc((size_t)n, sizeof *t->nsigned);
     idx = sg_mp_block_new((size_t)n, 256);
@@ -542,7 +559,7 @@ static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_tra
     t->icache = cache;
     rc = sg_indices_mpfr_cached(sys, cat, t->wave, idx, cache, d);
     if (rc == SG_OK)
-        rc = prepare_surfaces(t, idx, d);
+        rc = prepare_surfaces(t, idx, gen, d);
     free(idx);
     if (rc != SG_OK)
         goto fail;

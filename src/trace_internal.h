@@ -69,7 +69,7 @@ typedef struct sg_sprep {
  * a shape of their own (sg_shape_ops_of) are always prepared afresh. */
 typedef struct sg_prep_memo {
     int n;
-    sg_surface *surf; /* the surfaces the entries were made from */
+    uint64_t *gen;    /* the generations of the surfaces the entries were made from */
     mpfr_t *idx;      /* their indices, 256 bits, one block */
     sg_sprep *sp;     /* xf and shp not kept: has_xf says whether xf is set */
     sg_xfer *xf;

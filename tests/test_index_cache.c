@@ -497,6 +497,60 @@ static void test_repeated_glass_signs(void **state)
     sg_catalog_free(cat);
 }
 
+/* One glass name in three catalogs on three surfaces: each surface takes
+ * its own catalog's glass (the look-ups of one pass are kept by both
+ * names), with the cache and without, checked against each glass's own
+ * MPFR formula. */
+static void test_same_name_catalogs(void **state)
+{
+    static const char text[] =
+        "{ \"format\": \"sagitta-design\", \"surfaces\": [ { \"thickness\": \"inf\" },\n"
+        "  { \"radius\": 50, \"thickness\": 5, \"stop\": true,\n"
+        "    \"material\": { \"glass\": \"F7\", \"catalog\": \"CDGM\" } },\n"
+        "  { \"radius\": -50, \"thickness\": 2,\n"
+        "    \"material\": { \"glass\": \"F7\", \"catalog\": \"HOYA\" } },\n"
+        "  { \"radius\": -80, \"thickness\": 3, \"material\": \"F7\" },\n"
+        "  { \"thickness\": 30 }, {} ] }\n";
+    static const char *const cats[] = { "CDGM", "HOYA", "" };
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = sg_system_new();
+    sg_index_cache *ic = sg_index_cache_new();
+    mpfr_t idx[6], n, um;
+    sg_diag d;
+    int i, pass, differ = 0;
+    (void)state;
+    assert_int_equal(sg_design_parse(sys, text, strlen(text), "f7.json", &d), SG_OK);
+    assert_int_equal(sys->nsurf, 6);
+    mpfr_inits2(128, n, um, (mpfr_ptr)0);
+    for (i = 0; i < 6; i++)
+        mpfr_init2(idx[i], 128);
+    mpfr_set_d(um, sys->wave[sys->primary_wave].um, MPFR_RNDN);
+    for (pass = 0; pass < 3; pass++) {
+        sg_diag_clear(&d);
+        assert_int_equal(sg_indices_mpfr_cached(sys, cat, sys->primary_wave, idx,
+                                                pass ? ic : NULL, &d),
+                         SG_OK);
+        for (i = 0; i < 3; i++) {
+            const sg_glass *g = sg_catalog_find_in(cat, cats[i], "F7");
+            assert_non_null(g);
+            assert_int_equal(sg_glass_index_mpfr(g, n, um), 0);
+            if (!mpfr_equal_p(idx[1 + i], n))
+                fail_msg("pass %d: surface %d (F7 of \"%s\"): index %.20g, want %.20g", pass,
+                         1 + i, cats[i], mpfr_get_d(idx[1 + i], MPFR_RNDN),
+                         mpfr_get_d(n, MPFR_RNDN));
+        }
+        differ = !mpfr_equal_p(idx[1], idx[2]) && !mpfr_equal_p(idx[2], idx[3]);
+    }
+    /* Otherwise the test could not tell the catalogs apart. */
+    assert_true(differ);
+    for (i = 0; i < 6; i++)
+        mpfr_clear(idx[i]);
+    mpfr_clears(n, um, (mpfr_ptr)0);
+    sg_index_cache_free(ic);
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -507,6 +561,7 @@ int main(void)
         cmocka_unit_test(test_many_surfaces),
         cmocka_unit_test(test_track_edits),
         cmocka_unit_test(test_repeated_glass_signs),
+        cmocka_unit_test(test_same_name_catalogs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
