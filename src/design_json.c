@@ -782,7 +782,7 @@ static int get_change(jctx *c, const cJSON *v, const char *where, sg_frame_chang
     const cJSON *k[C_N];
     char at[96];
     double dec[2] = {0.0, 0.0}, tilt[3] = {0.0, 0.0, 0.0};
-    int rc, e;
+    int rc, e = 0;
     if ((rc = expect_object(c, v, where)) != SG_OK)
         return rc;
     pick_keys(c, v, where, change_keys, C_N, k);
@@ -822,7 +822,7 @@ static int get_solves(jctx *c, const cJSON *v, const char *where, sg_surface *s)
     const cJSON *t[SG_SOLVE_NTARGETS], *k[V_N];
     const char *targets[SG_SOLVE_NTARGETS];
     char at[96], at2[128];
-    int i, rc, e;
+    int i, rc, e = 0;
     for (i = 0; i < SG_SOLVE_NKINDS; i++)
         kinds[i] = sg_solve_kind_name((sg_solve_kind)i);
     for (i = 0; i < SG_SOLVE_NTARGETS; i++)
@@ -887,7 +887,7 @@ static const char *const surf_extra[X_N] = {"stop", "break", "before", "after", 
 
 static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, int *is_stop)
 {
-    const cJSON *x[X_N], *stop;
+    const cJSON *x[X_N] = {NULL}, *stop;
     char where[32], at[64];
     int rc;
     snprintf(where, sizeof where, "surface %d", i);
