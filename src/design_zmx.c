@@ -457,6 +457,19 @@ static int opt_num(zctx *c, const zline *l, int k, const char *what, double dflt
     return tok_num(c, l, k, what, out);
 }
 
+/* Keeps a pickup read from the file (from already checked to be an
+ * earlier surface) and counts it among the kept solves. */
+static void keep_pickup(zctx *c, sg_solve *o, sg_solve_kind kind, double from, double scale,
+                        double off)
+{
+    memset(o, 0, sizeof *o);
+    o->kind = kind;
+    o->from = (int)from;
+    o->scale = scale;
+    o->offset = off;
+    c->nlive++;
+}
+
 /* Whether a radius pickup of scale k is the curvature pickup of scale
  * 1 / k with the same bits: k a power of two whose reciprocal is a
  * double, so that both scalings are exact. */
@@ -937,14 +950,9 @@ static int read_pickup(zctx *c, const zline *l, sg_surface *s, sg_solve_target t
         (rc = opt_num(c, l, 4, "pickup column", 0.0, &col)) != SG_OK)
         return rc;
     if (from == floor(from) && from >= 0 && from < c->cur && col == 0.0) {
-        sg_solve *o = &s->solve[t];
-        memset(o, 0, sizeof *o);
-        o->kind = SG_SOLVE_PICKUP;
-        o->from = (int)from;
-        o->scale = scale;
-        o->offset = off;
-        c->nlive++;
-        zwarn(c, "%.4s: note: the %s pickup from surface %d is kept", l->t[0].p, what, o->from);
+        keep_pickup(c, &s->solve[t], SG_SOLVE_PICKUP, from, scale, off);
+        zwarn(c, "%.4s: note: the %s pickup from surface %d is kept", l->t[0].p, what,
+              (int)from);
         return SG_OK;
     }
     c->nfrozen++;
@@ -1165,14 +1173,9 @@ static int surface_line(zctx *c, const zline *l)
                 return rc;
             if (from == floor(from) && from >= 0 && from < c->cur && isfinite(scale) &&
                 isfinite(off)) {
-                sg_solve *o = &s->solve[SG_SOLVE_RADIUS];
-                memset(o, 0, sizeof *o);
-                o->kind = SG_SOLVE_CURV_PICKUP;
-                o->from = (int)from;
-                o->scale = scale;
-                o->offset = off;
-                c->nlive++;
-                zwarn(c, "CURV: note: the pickup from surface %d is kept", o->from);
+                keep_pickup(c, &s->solve[SG_SOLVE_RADIUS], SG_SOLVE_CURV_PICKUP, from, scale,
+                            off);
+                zwarn(c, "CURV: note: the pickup from surface %d is kept", (int)from);
                 return SG_OK;
             }
             c->nfrozen++;
