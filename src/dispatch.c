@@ -3,7 +3,8 @@
  * processor.
  *
  * Such a build (meson -Dnative=false on x86-64, as a distribution makes it)
- * compiles trace_vec.c, trace_classic_vec.c, launch.c and batch.c three times, see isa.h: for
+ * compiles trace_vec.c, trace_classic_vec.c, launch.c, batch.c and
+ * opd_vec.c three times, see isa.h: for
  * x86-64-v4 (AVX-512, eight lanes), x86-64-v3 (AVX2 and FMA, four lanes)
  * and the baseline (SSE2).  These functions, the only ways into those
  * files from the rest of the library, call the variant that the running
@@ -31,7 +32,10 @@
                                 sg_ray_surface *out, int upto);                              \
     int sg_batch_run_##isa(sg_tracer *const *t, int nt, sg_ray_kind kind,                    \
                            const sg_ray_in *rays, size_t nray, const int *sel, int nsel,     \
-                           sg_ray_surface *scratch, sg_ray_surface *out, int *status);
+                           sg_ray_surface *scratch, sg_ray_surface *out, int *status);   \
+    int sg_opd_of_rays_##isa(const sg_tracer *t, const sg_opd_ref *ref,                      \
+                             const sg_ray_surface *rows, size_t stride, size_t n,            \
+                             sg_opd *res);
 SG_VARIANT(v4)
 SG_VARIANT(v3)
 SG_VARIANT(base)
@@ -117,6 +121,12 @@ int sg_batch_run(sg_tracer *const *t, int nt, sg_ray_kind kind, const sg_ray_in 
                  sg_ray_surface *out, int *status)
 {
     SG_DISPATCH_CALL(sg_batch_run, t, nt, kind, rays, nray, sel, nsel, scratch, out, status)
+}
+
+int sg_opd_of_rays(const sg_tracer *t, const sg_opd_ref *ref, const sg_ray_surface *rows,
+                   size_t stride, size_t n, sg_opd *res)
+{
+    SG_DISPATCH_CALL(sg_opd_of_rays, t, ref, rows, stride, n, res)
 }
 
 #else

@@ -3,8 +3,8 @@
  * variant.
  *
  * A build without -march=native (a distribution's) compiles trace_vec.c,
- * trace_classic_vec.c, launch.c and batch.c once per instruction set, with SG_ISA naming the
- * set, and dispatch.c picks a variant at run time: the double-double
+ * trace_classic_vec.c, launch.c, batch.c and opd_vec.c once per
+ * instruction set, with SG_ISA naming the set, and dispatch.c picks a variant at run time: the double-double
  * kernels run several times faster with eight lanes and FMA than with
  * SSE2's two.  Every operation is correctly rounded in every variant, so
  * results do not depend on which one runs.  Without SG_ISA the names are
@@ -32,6 +32,7 @@
 #define sg_launch_precise_prep SG_ISA_CAT(sg_launch_precise_prep, SG_ISA)
 #define sg_launch_prepare SG_ISA_CAT(sg_launch_prepare, SG_ISA)
 #define sg_batch_run SG_ISA_CAT(sg_batch_run, SG_ISA)
+#define sg_opd_of_rays SG_ISA_CAT(sg_opd_of_rays, SG_ISA)
 #endif
 
 #endif

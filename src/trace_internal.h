@@ -350,6 +350,14 @@ int sg_batch_run(sg_tracer *const *t, int nt, sg_ray_kind kind, const sg_ray_in 
                  size_t nray, const int *sel, int nsel, sg_ray_surface *scratch,
                  sg_ray_surface *out, int *status);
 
+/* The OPD's helpers shared by opd.c and its vector form, opd_vec.c
+ * (built once per instruction set, as batch.c): one micrometre in the
+ * system's lens units, and each coordinate's error bound of a row's
+ * point whose error_bound is eb. */
+#define SG_SQRT3 1.7320508075688772
+double sg_um_in_units(const sg_system *sys);
+void sg_point_errors(const sg_tracer *t, double x, double y, double z, double eb, double e[3]);
+
 /* A tracer sharing t's prepared model, with a workspace of its own (its
  * own MPFR context for the mpfr method, and a fork of t's primary-
  * wavelength tracer): what a thread of the batch traces with.  t must

@@ -7,8 +7,10 @@
  * are compared with it on every bundled example, for the precise and the
  * classic method, on a grid of rays across field and pupil that includes
  * pupil corners which fail, and on the Cassegrain with its primary made
- * each shape of src/shape.h in turn; and the classic kernel alone on hard
- * start points and directions.  A variant this processor cannot run is
+ * each shape of src/shape.h in turn; the classic kernel alone on hard
+ * start points and directions; and the OPD of runs of rays (opd_vec.c)
+ * against sg_opd_of_ray, the scalar form, with image rows made hard.  A
+ * variant this processor cannot run is
  * reported and skipped.
  */
 #include <math.h>
@@ -295,12 +297,115 @@ static void classic_blocks(void **state)
     sg_catalog_free(cat);
 }
 
+/* The OPD on lanes (opd_vec.c, named by src/isa.h): every variant, the
+ * baseline too, against sg_opd_of_ray on each example's pupil grid
+ * through and beyond the rim, in runs of 1 to 9 rays, and on the same
+ * rows with a coordinate made huge, tiny, subnormal, zero or NaN. */
+typedef int opd_fn(const sg_tracer *t, const sg_opd_ref *ref, const sg_ray_surface *rows,
+                   size_t stride, size_t n, sg_opd *out);
+opd_fn sg_opd_of_rays_base, sg_opd_of_rays_v3, sg_opd_of_rays_v4;
+
+static int same_d(double a, double b)
+{
+    return (isnan(a) && isnan(b)) || memcmp(&a, &b, sizeof a) == 0;
+}
+
+static void opd_runs(void **state)
+{
+    static const char *const files[] = {"cassegrain.json", "cooke_triplet.json",
+                                        "double_gauss.json", "singlet.json", "tma.json"};
+    static const sg_method methods[] = {SG_METHOD_PRECISE, SG_METHOD_CLASSIC};
+    static const double odd[] = {1e200, -1e-300, 4.9406564584124654e-324, -0.0, NAN, 5e8};
+    static const struct {
+        const char *level;
+        opd_fn *fn;
+    } ov[] = {{NULL, sg_opd_of_rays_base},
+              {"x86-64-v3", sg_opd_of_rays_v3},
+              {"x86-64-v4", sg_opd_of_rays_v4}};
+    enum { NG = 11, NODD = sizeof odd / sizeof odd[0], CAP = NG * NG * (1 + 3 * NODD) };
+    sg_catalog *cat = tu_catalog();
+    sg_ray_surface *img = malloc(CAP * sizeof *img);
+    sg_opd *got = malloc(CAP * sizeof *got), want;
+    size_t f, compared = 0, okrays = 0;
+    (void)state;
+    assert_true(img && got);
+    for (f = 0; f < sizeof files / sizeof files[0]; f++) {
+        sg_system *sys = tu_example(files[f]);
+        size_t m;
+        for (m = 0; m < 2; m++) {
+            sg_tracer *t = tu_tracer(sys, cat, methods[m]);
+            int ns = sg_tracer_nsurf(t), i, j, k, c;
+            sg_ray_surface *rows = malloc((size_t)ns * sizeof *rows);
+            sg_opd_ref ref;
+            sg_diag d;
+            size_t n = 0, g, v, at, run, r;
+            assert_non_null(rows);
+            sg_diag_clear(&d);
+            assert_int_equal(sg_opd_reference(t, 0.0, 0.7, &ref, &d), SG_OK);
+            for (i = 0; i < NG; i++)
+                for (j = 0; j < NG; j++) {
+                    sg_trace_normalized(t, 0.0, 0.7, 1.3 * (2.0 * i / (NG - 1) - 1.0),
+                                        1.3 * (2.0 * j / (NG - 1) - 1.0), rows);
+                    img[n++] = rows[ns - 1];
+                }
+            g = n;
+            for (r = 0; r < g; r++)
+                for (k = 0; k < NODD; k++)
+                    for (c = 0; c < 3; c++) {
+                        img[n] = img[r];
+                        if (c == 0)
+                            img[n].x = odd[k];
+                        else if (c == 1)
+                            img[n].m = odd[k];
+                        else
+                            img[n].path = odd[k];
+                        n++;
+                    }
+            for (v = 0; v < 3; v++) {
+                if (ov[v].level && !runs(ov[v].level))
+                    continue;
+                for (run = 1; run <= 9; run++) {
+                    for (at = 0; at < n; at += run)
+                        assert_int_equal(ov[v].fn(t, &ref, img + at, 1,
+                                                  n - at < run ? n - at : run, got + at),
+                                         SG_OK);
+                    for (r = 0; r < n; r++) {
+                        sg_opd_of_ray(t, &ref, &img[r], &want);
+                        if (want.status != got[r].status ||
+                            !same_d(want.opd_waves, got[r].opd_waves) ||
+                            !same_d(want.error_bound, got[r].error_bound) ||
+                            !same_d(want.ex, got[r].ex) || !same_d(want.ey, got[r].ey) ||
+                            !same_d(want.opl, got[r].opl) || !same_d(want.opl_lo, got[r].opl_lo))
+                            fail_msg("%s %s, ray %zu in runs of %zu: %s differs from the "
+                                     "scalar OPD (%.17g against %.17g)",
+                                     files[f], m ? "classic" : "precise", r, run,
+                                     ov[v].level ? ov[v].level : "baseline",
+                                     got[r].opd_waves, want.opd_waves);
+                        compared++;
+                        okrays += want.status == SG_OK;
+                    }
+                }
+            }
+            free(rows);
+            sg_tracer_free(t);
+        }
+        sg_system_free(sys);
+    }
+    assert_true(okrays > compared / 4);
+    print_message("# opd on lanes: %zu results equal the scalar ones (%zu OK)\n", compared,
+                  okrays);
+    free(img);
+    free(got);
+    sg_catalog_free(cat);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(same_bits),
         cmocka_unit_test(shapes_same_bits),
         cmocka_unit_test(classic_blocks),
+        cmocka_unit_test(opd_runs),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
