@@ -12,6 +12,7 @@
 #include <stdio.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "cli.h"
 #ifdef SG_HAVE_EDITOR
@@ -138,8 +139,16 @@ int main(int argc, char **argv)
         return run_editor(argc - 1, argv + 1);
     }
     c = find_command(a);
-    if (c)
+    if (c) {
+        /* Into a pipe or file, a command's output (a ray table can be a
+         * gigabyte) goes out in large writes; stdio's 4 KiB default would
+         * make the kernel's part of the time larger than the trace's.  A
+         * terminal keeps its line buffering.  Nothing is written yet. */
+        static char out_buf[1 << 16];
+        if (!isatty(STDOUT_FILENO))
+            setvbuf(stdout, out_buf, _IOFBF, sizeof out_buf);
         return c->run(argc - 1, argv + 1);
+    }
     if (a[0] == '-' && a[1] != '\0')
         return cli_usage_error(NULL, "unknown option %s", a);
     if (looks_like_file(a))

@@ -10,12 +10,33 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+/* A larger buffer than stdio's, when memory allows; without it the
+ * stream keeps its own. */
+static void big_buffer(outfile *o)
+{
+    o->buf = malloc(OUTFILE_BUF);
+    if (o->buf && setvbuf(o->f, o->buf, _IOFBF, OUTFILE_BUF) != 0) {
+        free(o->buf);
+        o->buf = NULL;
+    }
+}
+
+static void close_file(outfile *o)
+{
+    fclose(o->f);
+    free(o->buf);
+    o->buf = NULL;
+}
+
 /* Writes in place, as fopen(path, "w") does. */
 static int in_place(outfile *o, const char *path)
 {
     o->tmp[0] = '\0';
     o->f = fopen(path, "w");
-    return o->f ? 0 : errno;
+    if (!o->f)
+        return errno;
+    big_buffer(o);
+    return 0;
 }
 
 int outfile_open(outfile *o, const char *path, FILE *std)
@@ -70,6 +91,7 @@ int outfile_open(outfile *o, const char *path, FILE *std)
         o->tmp[0] = '\0';
         return err;
     }
+    big_buffer(o);
     return 0;
 }
 
@@ -83,6 +105,8 @@ int outfile_commit(outfile *o)
     if (o->path) {
         if (fclose(o->f) != 0 && !err)
             err = errno ? errno : EIO;
+        free(o->buf);
+        o->buf = NULL;
     }
     o->f = NULL;
     if (o->tmp[0]) {
@@ -98,7 +122,7 @@ int outfile_commit(outfile *o)
 void outfile_abort(outfile *o)
 {
     if (o->f && o->path)
-        fclose(o->f);
+        close_file(o);
     else if (o->f)
         fflush(o->f);
     if (o->tmp[0])

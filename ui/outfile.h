@@ -13,8 +13,13 @@
 
 #include <stdio.h>
 
+/* The stream's buffer: stdio's default is the file system's block, 4 KiB,
+ * which makes a ray table of a gigabyte a quarter of a million writes. */
+#define OUTFILE_BUF (1 << 16)
+
 typedef struct outfile {
     FILE *f;
+    char *buf; /* OUTFILE_BUF bytes for a file we opened, or NULL */
     const char *path; /* NULL for standard output */
     char target[4096], tmp[4096 + 32];
 } outfile;
