@@ -70,7 +70,7 @@ static void test_points_to_cells(void **state)
     plot_panel *p;
     plot_grid g;
     double x[1] = {0.0}, y[1] = {10.0};
-    int cx, cy, k, last = -1;
+    int cx = -1, cy = -1, k, last = -1; /* set by find_braille; the release build cannot tell */
     unsigned bits;
     (void)state;
     plot_figure_init(&f, NULL);
