@@ -560,9 +560,10 @@ static int open_rays(const char *path, FILE *spool, csvrays_reader **rd, sg_diag
 
 /* trace --rays: read a block of rays, trace it on every thread, write it,
  * and go on, so memory stays the same however long the list.  The output
- * is byte for byte what tracing the whole list at once wrote.  The steps
- * are separate (reading, sg_batch_trace, report_rays) so that parsing and
- * formatting can later be split over the threads block by block too. */
+ * is byte for byte what tracing the whole list at once wrote.  Each step
+ * runs on every thread: the reader parses a block's rows in shares
+ * (csvrays.c), sg_batch_trace traces it, and report_rays formats it in
+ * rounds, writing each round while the next is formatted (report.c). */
 static int trace_rays(const char *design, const char *rays_path, const char *output, int fmt,
                       const sg_trace_opts *opts_in, int wave1, int threads, int global)
 {

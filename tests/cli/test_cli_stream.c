@@ -4,7 +4,10 @@
  * The bytes must not depend on where the blocks end: the same list is
  * traced in one block and in blocks of 1, 2 and 7 rays (SAGITTA_RAYS_BLOCK)
  * on 1 to 3 threads, by every method, as text, CSV and JSON, normalized
- * and start/direction; JSON must parse (cJSON) and hold every ray.  A bad
+ * and start/direction; JSON must parse (cJSON) and hold every ray.  A
+ * list long enough for several rounds of the threads' formatting (each
+ * round written while the next is formatted) must give the one thread's
+ * bytes, to standard output and to a file.  A bad
  * row far into the list must leave an existing output file untouched.
  * Memory must not grow with the list: a run under an address-space cap
  * that the whole-list reader exceeds (it needed nray * nsurf * 88 bytes of
@@ -382,6 +385,68 @@ static long bench_run(const char *design, const char *nray, double *mib)
  * 4 surfaces took 80 MB of rows and rays at once before.  Every ray of
  * the singlet's set reaches the image (its field and pupil are within the
  * lens), so both methods count 200,000. */
+/* Enough rays for several formatting rounds in one block (a round is
+ * about 8192 rows a thread, report.c), so each round is written while the
+ * next is formatted; the bytes must be the serial ones, on standard
+ * output and in a file (which has a buffer of its own), and in blocks
+ * that end inside a round. */
+static void test_many_rounds(void **state)
+{
+    static const char *const fmts[3] = { "csv", "json", "text" };
+    static const char *const threads[2] = { "2", "3" };
+    const char *design = example("cooke_triplet.json");
+    const char *rays = ray_file("rounds.csv", 1, 9000, 11);
+    char outpath[1100];
+    int f, t;
+    (void)state;
+    snprintf(outpath, sizeof outpath, "%s.out", rays);
+    for (f = 0; f < 3; f++) {
+        ct_result ref;
+        set_block(0);
+        ct_run(&ref, "trace", design, "--rays", rays, "--format", fmts[f], "--threads", "1",
+               NULL);
+        assert_int_equal(ref.code, 0);
+        assert_true(strlen(ref.out) > (size_t)9000 * 8 * 50);
+        for (t = 0; t < 2; t++) {
+            ct_result r;
+            FILE *fp;
+            char *text;
+            long len;
+            set_block(t ? 5003 : 0);
+            ct_run(&r, "trace", design, "--rays", rays, "--format", fmts[f], "--threads",
+                   threads[t], NULL);
+            assert_int_equal(r.code, 0);
+            if (strcmp(r.out, ref.out) != 0)
+                fail_msg("%s on %s threads: standard output differs from one thread's",
+                         fmts[f], threads[t]);
+            ct_free(&r);
+            ct_run(&r, "trace", design, "--rays", rays, "--format", fmts[f], "--threads",
+                   threads[t], "-o", outpath, NULL);
+            assert_int_equal(r.code, 0);
+            ct_free(&r);
+            fp = fopen(outpath, "rb");
+            assert_non_null(fp);
+            fseek(fp, 0, SEEK_END);
+            len = ftell(fp);
+            rewind(fp);
+            text = malloc((size_t)len + 1);
+            assert_non_null(text);
+            assert_int_equal(fread(text, 1, (size_t)len, fp), (size_t)len);
+            text[len] = '\0';
+            fclose(fp);
+            if ((size_t)len != strlen(ref.out) || memcmp(text, ref.out, (size_t)len) != 0)
+                fail_msg("%s on %s threads: the file differs from one thread's output",
+                         fmts[f], threads[t]);
+            free(text);
+        }
+        ct_free(&ref);
+    }
+    set_block(0);
+    remove(outpath);
+    print_message("# cooke_triplet: 9000 rays, csv/json/text on 2 and 3 threads, to standard "
+                  "output and a file, identical to one thread's\n");
+}
+
 static void test_bench_memory(void **state)
 {
     const char *design = example("singlet.json");
@@ -411,6 +476,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_bench_memory),
         cmocka_unit_test(test_grid_memory),
         cmocka_unit_test(test_grid_blocks),
+        cmocka_unit_test(test_many_rounds),
     };
     int rc;
     snprintf(examples, sizeof examples, "%s", e && *e ? e : "examples");
