@@ -563,7 +563,7 @@ static int open_rays(const char *path, FILE *spool, csvrays_reader **rd, sg_diag
  * is byte for byte what tracing the whole list at once wrote.  Each step
  * runs on every thread: the reader parses a block's rows in shares
  * (csvrays.c), sg_batch_trace traces it, and report_rays formats it in
- * rounds, writing each round while the next is formatted (report.c). */
+ * rounds of shares and writes each round in order (report.c). */
 static int trace_rays(const char *design, const char *rays_path, const char *output, int fmt,
                       const sg_trace_opts *opts_in, int wave1, int threads, int global)
 {

@@ -783,31 +783,17 @@ static void *fmt_main(void *arg)
  * rounds this long make the threads' start a small part of the time. */
 #define PAR_ROUND_ROWS 8192
 
-/* Writes a round's shares in order; 0, or -1 on a write error. */
-static int put_round(report_stream *s, const fmt_job *job, int nthreads)
-{
-    int k;
-    for (k = 0; k < nthreads; k++)
-        if (job[k].len > 0 && fwrite(job[k].text, 1, job[k].len, s->f) != job[k].len)
-            return -1;
-    return 0;
-}
-
 /* Formats the block in rounds; in each, nthreads contiguous shares go
  * each into its own memory and are written in order: the bytes of the
- * serial loop.  The rounds alternate between two sets of memory, so the
- * calling thread writes one round while the others format the next: a
- * write into a file or a pipe (the kernel copying the text, or the reader
- * at the other end) no longer leaves the cores idle.  Returns 0, 1 if the
- * first round could not be made (nothing is written then, and the caller
- * writes serially), or -1 on a write error or a later round's failure. */
+ * serial loop.  Returns 0, 1 if the first round could not be made (the
+ * caller writes serially), or -1 on a write error. */
 static int write_parallel(report_stream *s, const sg_ray_surface *out, const int *status,
                           size_t n, const sg_ray_in *rays, const sg_opd *opds, int nthreads)
 {
-    fmt_job job[2][PAR_MAX_THREADS];
+    fmt_job job[PAR_MAX_THREADS];
     pthread_t tid[PAR_MAX_THREADS];
     int started[PAR_MAX_THREADS];
-    int k, rc = 0, cur = 0, pending = 0, wrc;
+    int k, rc = 0;
     size_t per = PAR_ROUND_ROWS / (size_t)(s->nsurf > 0 ? s->nsurf : 1), at, round;
 
     if (per < 16)
@@ -816,41 +802,33 @@ static int write_parallel(report_stream *s, const sg_ray_surface *out, const int
     memset(job, 0, sizeof job);
     for (at = 0; at < n && rc == 0; at += round) {
         size_t m = n - at < round ? n - at : round;
-        fmt_job *j = job[cur];
         for (k = 0; k < nthreads; k++) {
-            j[k].s = s;
-            j[k].out = out;
-            j[k].status = status;
-            j[k].rays = rays;
-            j[k].opds = opds;
-            j[k].from = at + m * (size_t)k / (size_t)nthreads;
-            j[k].to = at + m * (size_t)(k + 1) / (size_t)nthreads;
-            /* With nothing to write yet, the calling thread formats share
-             * 0 itself. */
-            started[k] = (k > 0 || pending) &&
-                         pthread_create(&tid[k], NULL, fmt_main, &j[k]) == 0;
+            job[k].s = s;
+            job[k].out = out;
+            job[k].status = status;
+            job[k].rays = rays;
+            job[k].opds = opds;
+            job[k].from = at + m * (size_t)k / (size_t)nthreads;
+            job[k].to = at + m * (size_t)(k + 1) / (size_t)nthreads;
+            /* The calling thread formats share 0 itself. */
+            started[k] = k > 0 && pthread_create(&tid[k], NULL, fmt_main, &job[k]) == 0;
         }
-        /* The round before, written while this one is formatted. */
-        wrc = pending ? put_round(s, job[cur ^ 1], nthreads) : 0;
-        for (k = 0; k < nthreads; k++) {
+        fmt_main(&job[0]);
+        for (k = 1; k < nthreads; k++) {
             if (started[k])
                 pthread_join(tid[k], NULL);
             else
-                fmt_main(&j[k]);
+                fmt_main(&job[k]);
         }
         for (k = 0; k < nthreads; k++)
-            if (j[k].failed)
+            if (job[k].failed)
                 rc = at == 0 ? 1 : -1;
-        if (wrc != 0)
-            rc = -1;
-        pending = 1;
-        cur ^= 1;
+        for (k = 0; k < nthreads && rc == 0; k++)
+            if (job[k].len > 0 && fwrite(job[k].text, 1, job[k].len, s->f) != job[k].len)
+                rc = -1;
     }
-    if (rc == 0 && pending)
-        rc = put_round(s, job[cur ^ 1], nthreads);
-    for (cur = 0; cur < 2; cur++)
-        for (k = 0; k < nthreads; k++)
-            free(job[cur][k].text);
+    for (k = 0; k < nthreads; k++)
+        free(job[k].text);
     if (rc < 0 && errno == 0)
         errno = ENOMEM;
     return rc;

@@ -5,9 +5,8 @@
  * traced in one block and in blocks of 1, 2 and 7 rays (SAGITTA_RAYS_BLOCK)
  * on 1 to 3 threads, by every method, as text, CSV and JSON, normalized
  * and start/direction; JSON must parse (cJSON) and hold every ray.  A
- * list long enough for several rounds of the threads' formatting (each
- * round written while the next is formatted) must give the one thread's
- * bytes, to standard output and to a file.  A bad
+ * list long enough for several rounds of the threads' formatting must
+ * give the one thread's bytes, to standard output and to a file.  A bad
  * row far into the list must leave an existing output file untouched.
  * Memory must not grow with the list: a run under an address-space cap
  * that the whole-list reader exceeds (it needed nray * nsurf * 88 bytes of
@@ -386,10 +385,9 @@ static long bench_run(const char *design, const char *nray, double *mib)
  * the singlet's set reaches the image (its field and pupil are within the
  * lens), so both methods count 200,000. */
 /* Enough rays for several formatting rounds in one block (a round is
- * about 8192 rows a thread, report.c), so each round is written while the
- * next is formatted; the bytes must be the serial ones, on standard
- * output and in a file (which has a buffer of its own), and in blocks
- * that end inside a round. */
+ * about 8192 rows a thread, report.c); the bytes must be the serial ones,
+ * on standard output and in a file (which has a buffer of its own), and
+ * in blocks that end inside a round. */
 static void test_many_rounds(void **state)
 {
     static const char *const fmts[3] = { "csv", "json", "text" };
