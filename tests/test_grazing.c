@@ -184,7 +184,6 @@ static void judge(tally *t, int kind, long i, const sg_ray_surface *p,
     double scale, e, ed, dscale;
     t->n++;
     t->kind_n[kind]++;
-    if (getenv("DBG") && p->status != SG_OK && p->status != SG_EMISS && t->uncert < 8) {print_message("# %s %ld: %s (ref %s)\n", what, i, sg_err_name(p->status), sg_err_name(m->status)); print_case();}
     if (p->status == SG_EUNCERT || p->status == SG_ENOCONV || p->status == SG_ENONPHYS) {
         t->uncert++;
         t->kind_uncert[kind]++;
