@@ -1,6 +1,7 @@
 /* cli.c - the "trace" and "paraxial" subcommands and the helpers that every
  * subcommand shares. */
 #include "cli.h"
+#include "numfmt.h"
 
 #include <errno.h>
 #include <math.h>
@@ -1133,12 +1134,9 @@ done:
 
 const char *cli_shortest(double v, char *buf, size_t n)
 {
-    int prec;
-    for (prec = 1; prec <= 17; prec++) {
-        snprintf(buf, n, "%.*g", prec, v);
-        if (strtod(buf, NULL) == v)
-            break;
-    }
+    char g[NUMFMT_SHORTEST_MAX];
+    numfmt_shortest_g(v, g);
+    snprintf(buf, n, "%s", g);
     return buf;
 }
 

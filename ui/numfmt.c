@@ -465,6 +465,260 @@ void numfmt_g17_n(const double *v, size_t n, char *out, unsigned char *len)
 }
 
 
+/* ------------------------------------------------------------------------
+ * The shortest decimal that reads back as v: R. Giulietti, "The Schubfach
+ * way to render doubles" (2020), the algorithm of Java's Double.toString
+ * since JDK 19.  The rounding interval of v = c 2^q is scaled by 4 and by
+ * g ~ 10^-k 2^-r, a 126-bit upper approximation of a power of ten (here
+ * floor(P / 4) + 1 from gen_pow10.c's truncation P); rop() keeps the top
+ * 64 bits of each product with a sticky bit, which the paper proves
+ * enough to decide, without a fallback, which of the candidates s, s + 1
+ * (and their multiples of ten) lie in the interval.  Of those, the one
+ * with fewer digits wins, then the one closer to v, then an even last
+ * digit.  tests/cli/test_numfmt.c checks it against an exact search in GMP
+ * rationals on edge and random bit patterns.
+ * ------------------------------------------------------------------------ */
+
+#define SF_MASK63 ((UINT64_C(1) << 63) - 1)
+
+static inline uint64_t mulhi64(uint64_t a, uint64_t b)
+{
+    return (uint64_t)(((u128)a * b) >> 64);
+}
+
+/* floor(g cp / 2^127) with a sticky bit for what the floor dropped. */
+static uint64_t rop(uint64_t g1, uint64_t g0, uint64_t cp)
+{
+    uint64_t x1 = mulhi64(g0, cp);
+    uint64_t y0 = g1 * cp;
+    uint64_t y1 = mulhi64(g1, cp);
+    uint64_t z = (y0 >> 1) + x1;
+    uint64_t vbp = y1 + (z >> 63);
+    return vbp | (((z & SF_MASK63) + SF_MASK63) >> 63);
+}
+
+/* floor(q log10 2), floor(log10(3/4 2^q)) and floor(e log2 10), exact on
+ * the ranges used (the paper's constants; GCC shifts a negative value
+ * arithmetically). */
+static inline int flog10pow2(int q)
+{
+    return (int)(((int64_t)q * INT64_C(661971961083)) >> 41);
+}
+
+static inline int flog10three_quarters_pow2(int q)
+{
+    return (int)(((int64_t)q * INT64_C(661971961083) - INT64_C(274743187321)) >> 41);
+}
+
+static inline int flog2pow10(int e)
+{
+    return (int)(((int64_t)e * INT64_C(913124641741)) >> 38);
+}
+
+/* The decimal f 10^e for v = c 2^q (c >= 3). */
+static void sf_decimal(int q, uint64_t c, uint64_t *f, int *e)
+{
+    const uint64_t c_min = UINT64_C(1) << 52;
+    uint64_t out = c & 1, cb = c << 2, cbr = cb + 2, cbl, g1, g0, vb, vbl, vbr, s, t;
+    const numfmt_pow10 *p;
+    int k, h;
+    if (c != c_min || q == -1074) {
+        cbl = cb - 2;
+        k = flog10pow2(q);
+    } else {
+        cbl = cb - 1;
+        k = flog10three_quarters_pow2(q);
+    }
+    h = q + flog2pow10(-k) + 2;
+    p = &numfmt_pow10_tab[-k - NUMFMT_QMIN];
+    /* g = floor(10^-k / 2^r) + 1 in [2^125, 2^126): the table's 128-bit
+     * floor of 10^-k / 2^t, shifted by two more. */
+    {
+        u128 gg = ((((u128)p->hi << 64) | p->lo) >> 2) + 1;
+        g1 = (uint64_t)(gg >> 63);
+        g0 = (uint64_t)gg & SF_MASK63;
+    }
+    vb = rop(g1, g0, cb << h);
+    vbl = rop(g1, g0, cbl << h);
+    vbr = rop(g1, g0, cbr << h);
+    s = vb >> 2;
+    /* Java tries one digit fewer only from s >= 100, since its toString
+     * shows two digits at least; a small subnormal's s can be shorter. */
+    if (s >= 10) {
+        /* s rounded down to a multiple of ten, and the next one. */
+        uint64_t sp10 = 10 * mulhi64(s, UINT64_C(115292150460684698) << 4);
+        uint64_t tp10 = sp10 + 10;
+        int upin = vbl + out <= sp10 << 2;
+        int wpin = (tp10 << 2) + out <= vbr;
+        if (upin != wpin) {
+            *f = upin ? sp10 : tp10;
+            *e = k;
+            return;
+        }
+    }
+    t = s + 1;
+    {
+        int uin = vbl + out <= s << 2;
+        int win = (t << 2) + out <= vbr;
+        if (uin != win) {
+            *f = uin ? s : t;
+            *e = k;
+            return;
+        }
+    }
+    {
+        /* Both in: the closer, or the even one at a tie. */
+        int64_t cmp = (int64_t)(vb - ((s + t) << 1));
+        *f = cmp < 0 || (cmp == 0 && (s & 1) == 0) ? s : t;
+        *e = k;
+    }
+}
+
+int numfmt_shortest_decimal(double v, uint64_t *f, int *e)
+{
+    uint64_t bits, t, c;
+    int bq, mq;
+    memcpy(&bits, &v, sizeof bits);
+    t = bits & ((UINT64_C(1) << 52) - 1);
+    bq = (int)((bits >> 52) & 0x7ff);
+    if (bq == 0x7ff)
+        return 0;
+    if (bq != 0) {
+        mq = 1075 - bq;
+        c = (UINT64_C(1) << 52) | t;
+        /* An integer below 2^53 is its own shortest decimal. */
+        if (mq > 0 && mq < 53 && (c >> mq) << mq == c) {
+            *f = c >> mq;
+            *e = 0;
+        } else {
+            sf_decimal(-mq, c, f, e);
+        }
+    } else if (t >= 3) {
+        sf_decimal(-1074, t, f, e);
+    } else if (t != 0) {
+        /* The two smallest subnormals lie below the scaled powers' range;
+         * Java scales their c by ten and prints two digits (4.9E-324),
+         * but one reads back: 5e-324 and 1e-323, the closest of each's
+         * one-digit decimals. */
+        *f = t == 1 ? 5 : 1;
+        *e = t == 1 ? -324 : -323;
+        return 1;
+    } else {
+        *f = 0;
+        *e = 0;
+        return 1;
+    }
+    while (*f % 10 == 0) {
+        *f /= 10;
+        (*e)++;
+    }
+    return 1;
+}
+
+/* The digits of f (no trailing zeros, 1 to 17 of them) into d; returns
+ * their count. */
+static int sf_digits(uint64_t f, char d[20])
+{
+    char tmp[20];
+    int n = 0, i;
+    do {
+        tmp[n++] = (char)('0' + f % 10);
+        f /= 10;
+    } while (f);
+    for (i = 0; i < n; i++)
+        d[i] = tmp[n - 1 - i];
+    return n;
+}
+
+size_t numfmt_shortest_g(double v, char *buf)
+{
+    uint64_t f;
+    int e, n, x, i;
+    char d[20], *p = buf;
+    if (isnan(v) || isinf(v))
+        return (size_t)snprintf(buf, NUMFMT_SHORTEST_MAX, "%g", v);
+    if (signbit(v))
+        *p++ = '-';
+    numfmt_shortest_decimal(v, &f, &e);
+    if (f == 0) {
+        *p++ = '0';
+        *p = '\0';
+        return (size_t)(p - buf);
+    }
+    n = sf_digits(f, d);
+    x = e + n - 1; /* the exponent of the first digit */
+    if (x < -4 || x >= n) {
+        /* %.{n}g's exponent form: d[.ddd]e+XX, at least two digits. */
+        int ax = x < 0 ? -x : x;
+        *p++ = d[0];
+        if (n > 1) {
+            *p++ = '.';
+            for (i = 1; i < n; i++)
+                *p++ = d[i];
+        }
+        *p++ = 'e';
+        *p++ = x < 0 ? '-' : '+';
+        if (ax >= 100)
+            *p++ = (char)('0' + ax / 100);
+        *p++ = (char)('0' + ax / 10 % 10);
+        *p++ = (char)('0' + ax % 10);
+    } else if (x >= 0) {
+        for (i = 0; i < n; i++) {
+            *p++ = d[i];
+            if (i == x && i + 1 < n)
+                *p++ = '.';
+        }
+    } else {
+        *p++ = '0';
+        *p++ = '.';
+        for (i = 0; i < -x - 1; i++)
+            *p++ = '0';
+        for (i = 0; i < n; i++)
+            *p++ = d[i];
+    }
+    *p = '\0';
+    return (size_t)(p - buf);
+}
+
+size_t numfmt_shortest_f(double v, char *buf)
+{
+    uint64_t f;
+    int e, n, x, i;
+    char d[20], *p = buf;
+    if (isnan(v) || isinf(v) || !(fabs(v) < 1e300))
+        return numfmt_shortest_g(v, buf);
+    if (signbit(v))
+        *p++ = '-';
+    numfmt_shortest_decimal(v, &f, &e);
+    if (f == 0) {
+        *p++ = '0';
+        *p = '\0';
+        return (size_t)(p - buf);
+    }
+    n = sf_digits(f, d);
+    x = e + n - 1;
+    if (x >= 0) {
+        /* Integer digits (zeros past the last significant one), then any
+         * fraction. */
+        for (i = 0; i <= x; i++)
+            *p++ = i < n ? d[i] : '0';
+        if (n > x + 1) {
+            *p++ = '.';
+            for (i = x + 1; i < n; i++)
+                *p++ = d[i];
+        }
+    } else {
+        *p++ = '0';
+        *p++ = '.';
+        for (i = 0; i < -x - 1; i++)
+            *p++ = '0';
+        for (i = 0; i < n; i++)
+            *p++ = d[i];
+    }
+    *p = '\0';
+    return (size_t)(p - buf);
+}
+
 int numfmt_parse(const char *s, size_t n, double *out)
 {
     double v;

@@ -36,6 +36,22 @@ void numfmt_g17_n(const double *v, size_t n, char *out, unsigned char *len);
  * ASCII; no NUL (numfmt_g17's digit step, exposed for its test). */
 void numfmt_digits8(uint32_t x, char out[8]);
 
+/* The shortest decimal f 10^e that reads back as v (finite), the closest
+ * to v of those, an even last digit at a tie; f has no trailing zeros (0
+ * for a zero).  Schubfach (numfmt.c).  Returns 0 for an infinity or NaN. */
+int numfmt_shortest_decimal(double v, uint64_t *f, int *e);
+/* Room the two forms below need, with the NUL: a 17-digit fraction of a
+ * subnormal's size (0.000...) is the longest. */
+#define NUMFMT_SHORTEST_MAX 352
+/* That decimal as snprintf("%.*g", digits, v) writes it ("-0" for -0,
+ * "inf", "nan" as %g); the length.  The same text as the search for the
+ * fewest digits that read back, but for the rare doubles where a shorter
+ * decimal lies in the rounding interval away from the nearest one. */
+size_t numfmt_shortest_g(double v, char *buf);
+/* The same decimal in plain positional form, without an exponent
+ * ("1000", "0.00125"); an infinity, NaN or |v| >= 1e300 as the %g form. */
+size_t numfmt_shortest_f(double v, char *buf);
+
 int numfmt_parse(const char *s, size_t n, double *out);
 /* The same for the longest such number from s (before end): where it
  * stops, with *out its double; NULL where numfmt_parse would return 0

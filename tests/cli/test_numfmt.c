@@ -1,6 +1,9 @@
 /* test_numfmt.c - ui/numfmt.c against the C library it must equal:
  * numfmt_g17 against glibc's snprintf("%.17g") byte for byte, numfmt_parse
- * against glibc's strtod bit for bit (both exact, the independent source).
+ * against glibc's strtod bit for bit (both exact, the independent source);
+ * and numfmt_shortest_decimal (Schubfach) against an exact search in GMP
+ * rationals for the decimal with the fewest digits in the rounding
+ * interval, the closest to v of those, and its texts against strtod.
  * Random bit patterns, 2e6 a direction by default; NUMFMT_COUNT sets the
  * count for a long run. */
 #include <float.h>
@@ -14,6 +17,8 @@
 #include <stdarg.h>
 #include <setjmp.h>
 #include <cmocka.h>
+
+#include <gmp.h>
 
 #include "numfmt.h"
 
@@ -427,6 +432,207 @@ static void test_parse_random(void **state)
     assert_int_equal(parse_failures, 0);
 }
 
+/* The reference: the decimals m 10^E inside v's rounding interval (both
+ * ends in when v's significand is even, as round-half-even reads a tie
+ * back), found with exact rationals.  The largest E that has one gives
+ * the fewest digits; of its m, the closest to v, the even one at a tie.
+ * v is finite and positive. */
+static void exact_shortest(double v, uint64_t *fo, int *eo)
+{
+    mpq_t x, lo, hi, gap, p10, q;
+    mpz_t mmin, mmax, m, best, r;
+    uint64_t bits;
+    int even, E, X;
+    double below = nextafter(v, 0.0), above = nextafter(v, INFINITY);
+    memcpy(&bits, &v, sizeof bits);
+    even = (bits & 1) == 0;
+    mpq_inits(x, lo, hi, gap, p10, q, NULL);
+    mpz_inits(mmin, mmax, m, best, r, NULL);
+    mpq_set_d(x, v);
+    mpq_set_d(gap, below);
+    mpq_sub(gap, x, gap);
+    mpq_div_2exp(gap, gap, 1);
+    mpq_sub(lo, x, gap);
+    if (isinf(above)) {
+        mpq_set_d(gap, below);
+        mpq_sub(gap, x, gap); /* the gap above DBL_MAX is the one below */
+    } else {
+        mpq_set_d(gap, above);
+        mpq_sub(gap, gap, x);
+    }
+    mpq_div_2exp(gap, gap, 1);
+    mpq_add(hi, x, gap);
+    X = (int)floor(log10(v));
+    for (E = X + 2;; E--) {
+        /* 10^E as a rational. */
+        mpz_ui_pow_ui(r, 10, (unsigned long)(E < 0 ? -E : E));
+        if (E >= 0) {
+            mpq_set_z(p10, r);
+        } else {
+            mpq_set_ui(p10, 1, 1);
+            mpz_set(mpq_denref(p10), r);
+            mpq_canonicalize(p10);
+        }
+        /* mmin = ceil(lo / 10^E), one more where lo is out and exact. */
+        mpq_div(q, lo, p10);
+        mpz_cdiv_q(mmin, mpq_numref(q), mpq_denref(q));
+        if (!even && mpz_cmp_ui(mpq_denref(q), 1) == 0)
+            mpz_add_ui(mmin, mmin, 1);
+        mpq_div(q, hi, p10);
+        mpz_fdiv_q(mmax, mpq_numref(q), mpq_denref(q));
+        if (!even && mpz_cmp_ui(mpq_denref(q), 1) == 0)
+            mpz_sub_ui(mmax, mmax, 1);
+        if (mpz_cmp(mmin, mmax) <= 0)
+            break;
+    }
+    /* The closest m 10^E to v: |m 10^E - v| compared in rationals. */
+    {
+        mpq_t d, dbest;
+        int first = 1;
+        mpq_inits(d, dbest, NULL);
+        for (mpz_set(m, mmin); mpz_cmp(m, mmax) <= 0; mpz_add_ui(m, m, 1)) {
+            int c;
+            mpq_set_z(d, m);
+            mpq_mul(d, d, p10);
+            mpq_sub(d, d, x);
+            mpq_abs(d, d);
+            c = first ? -1 : mpq_cmp(d, dbest);
+            if (c < 0 || (c == 0 && mpz_even_p(m))) {
+                mpz_set(best, m);
+                mpq_set(dbest, d);
+            }
+            first = 0;
+        }
+        mpq_clears(d, dbest, NULL);
+    }
+    while (mpz_divisible_ui_p(best, 10)) {
+        mpz_divexact_ui(best, best, 10);
+        E++;
+    }
+    *fo = mpz_get_ui(best);
+    *eo = E;
+    mpq_clears(x, lo, hi, gap, p10, q, NULL);
+    mpz_clears(mmin, mmax, m, best, r, NULL);
+}
+
+static long shortest_checked, shorter_than_search, shortest_exact;
+/* Every how many values the exact search runs on (it is slow); the texts'
+ * checks run on all. */
+static int exact_every = 1;
+
+/* Schubfach's decimal is the reference's; both texts read back as v; the
+ * %g text has as many digits as the printf search for the fewest finds,
+ * or fewer, and is that search's text where they have as many. */
+static void check_shortest(double v)
+{
+    uint64_t f, rf;
+    int e, re, p;
+    char g[NUMFMT_SHORTEST_MAX], fx[NUMFMT_SHORTEST_MAX], search[64];
+    if (!isfinite(v))
+        return;
+    assert_int_equal(numfmt_shortest_decimal(v, &f, &e), 1);
+    if (v != 0.0 && shortest_checked % exact_every == 0) {
+        shortest_exact++;
+        exact_shortest(fabs(v), &rf, &re);
+        if (f != rf || e != re)
+            fail_msg("shortest of %a (%.17g): %llue%d, the exact search %llue%d", v, v,
+                     (unsigned long long)f, e, (unsigned long long)rf, re);
+    } else if (v == 0.0) {
+        assert_true(f == 0);
+    }
+    numfmt_shortest_g(v, g);
+    numfmt_shortest_f(v, fx);
+    if (strtod(g, NULL) != v || signbit(strtod(g, NULL)) != signbit(v))
+        fail_msg("%a: \"%s\" reads back as %a", v, g, strtod(g, NULL));
+    if (strtod(fx, NULL) != v || signbit(strtod(fx, NULL)) != signbit(v))
+        fail_msg("%a: \"%s\" reads back as %a", v, fx, strtod(fx, NULL));
+    for (p = 1; p <= 17; p++) {
+        snprintf(search, sizeof search, "%.*g", p, v);
+        if (strtod(search, NULL) == v)
+            break;
+    }
+    {
+        /* Digits of f, against p. */
+        int n = 0;
+        uint64_t t = f;
+        do {
+            n++;
+            t /= 10;
+        } while (t);
+        if (n > p)
+            fail_msg("%a: %d digits, the printf search found %d", v, n, p);
+        if (n == p && strcmp(g, search) != 0)
+            fail_msg("%a: \"%s\", the printf search wrote \"%s\"", v, g, search);
+        shorter_than_search += n < p;
+    }
+    shortest_checked++;
+}
+
+static void test_shortest_edges(void **state)
+{
+    int ex, k;
+    (void)state;
+    /* The shared edge set is large: the exact search takes every fifth. */
+    exact_every = 5;
+    edge_values(check_shortest);
+    exact_every = 1;
+    /* Every power of two, where the interval below is half the one above
+     * (the three-quarters exponent), and its neighbours. */
+    for (ex = -1074; ex <= 1023; ex++) {
+        double v = ldexp(1.0, ex);
+        check_shortest(v);
+        check_shortest(nextafter(v, 0.0));
+        check_shortest(nextafter(v, INFINITY));
+        check_shortest(-v);
+    }
+    /* The smallest subnormals (Schubfach scales c < 3 by ten), integers
+     * around 2^53, powers of ten and their neighbours. */
+    for (k = 1; k <= 20000; k++)
+        check_shortest(from_bits((uint64_t)k));
+    for (k = -40; k <= 40; k++) {
+        double v = ldexp(1.0, 53) + k;
+        check_shortest(v);
+        check_shortest((double)k);
+    }
+    {
+        char t[16];
+        for (k = -323; k <= 308; k++) {
+            double v;
+            snprintf(t, sizeof t, "1e%d", k);
+            v = strtod(t, NULL);
+            check_shortest(v);
+            check_shortest(nextafter(v, 0.0));
+            check_shortest(nextafter(v, INFINITY));
+            snprintf(t, sizeof t, "9.5e%d", k);
+            check_shortest(strtod(t, NULL));
+        }
+    }
+    print_message("# shortest: %ld edge values read back, %ld equal the exact search; %ld "
+                  "have fewer digits than the printf search finds\n",
+                  shortest_checked, shortest_exact, shorter_than_search);
+}
+
+static void test_shortest_random(void **state)
+{
+    long n = count() / 20, i;
+    (void)state;
+    shortest_checked = shorter_than_search = shortest_exact = 0;
+    for (i = 0; i < n; i++) {
+        uint64_t b = next();
+        double v = from_bits(b);
+        check_shortest(v);
+        /* Short decimals, the values people type. */
+        if (i % 4 == 0) {
+            char t[32];
+            snprintf(t, sizeof t, "%.*g", 1 + (int)(b % 8), v);
+            check_shortest(strtod(t, NULL));
+        }
+    }
+    print_message("# shortest: %ld random values equal the exact search; %ld have fewer "
+                  "digits than the printf search finds\n",
+                  shortest_exact, shorter_than_search);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -436,6 +642,8 @@ int main(void)
         cmocka_unit_test(test_g17_n),
         cmocka_unit_test(test_parse_edges),
         cmocka_unit_test(test_parse_random),
+        cmocka_unit_test(test_shortest_edges),
+        cmocka_unit_test(test_shortest_random),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -1,5 +1,6 @@
 /* numfmt.c - shortest round-trip text for doubles, cut to a column. */
 #include "numfmt.h"
+#include "../numfmt.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -8,7 +9,7 @@
 
 void numfmt_shortest(double v, char *buf, size_t n)
 {
-    int prec;
+    char g[NUMFMT_SHORTEST_MAX], fixed[NUMFMT_SHORTEST_MAX];
     if (isnan(v)) {
         snprintf(buf, n, "NaN");
         return;
@@ -17,25 +18,18 @@ void numfmt_shortest(double v, char *buf, size_t n)
         snprintf(buf, n, v > 0 ? "Infinity" : "-Infinity");
         return;
     }
-    for (prec = 1; prec <= 17; prec++) {
-        snprintf(buf, n, "%.*g", prec, v);
-        if (strtod(buf, NULL) == v)
-            break;
-    }
+    /* The fewest digits that read back (Schubfach, ../numfmt.c). */
+    numfmt_shortest_g(v, g);
     /* %g writes 4500 as 4.5e+03; plain digits read more easily, so they
      * win whenever they are short enough to fit a column anyway. */
-    if (strchr(buf, 'e') && fabs(v) >= 1e-7 && fabs(v) < 1e15) {
-        char fixed[NUMFMT_MAX + 8];
-        int d;
-        for (d = 0; d <= 24; d++) {
-            snprintf(fixed, sizeof fixed, "%.*f", d, v);
-            if (strtod(fixed, NULL) == v)
-                break;
-        }
-        if (d <= 24 && strlen(fixed) < n &&
-            (strlen(fixed) <= 12 || strlen(fixed) <= strlen(buf)))
+    if (strchr(g, 'e') && fabs(v) >= 1e-7 && fabs(v) < 1e15) {
+        numfmt_shortest_f(v, fixed);
+        if (strlen(fixed) < n && (strlen(fixed) <= 12 || strlen(fixed) <= strlen(g))) {
             snprintf(buf, n, "%s", fixed);
+            return;
+        }
     }
+    snprintf(buf, n, "%s", g);
 }
 
 int numfmt_width(const char *s)

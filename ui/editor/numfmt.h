@@ -14,8 +14,10 @@
 /* Longest text numfmt_shortest() writes, with its terminator. */
 #define NUMFMT_MAX 40
 
-/* Writes the shortest %.Ng text (N = 1..17) that strtod() reads back as v.
- * Infinities read "Infinity" / "-Infinity", NaN reads "NaN". */
+/* Writes v with the fewest significant digits that strtod() reads back as
+ * v (Schubfach, ui/numfmt.c), as %g lays them out, or in plain digits
+ * where those are short.  Infinities read "Infinity" / "-Infinity", NaN
+ * reads "NaN". */
 void numfmt_shortest(double v, char *buf, size_t n);
 
 /* Fits a number's text into width columns: unchanged when it fits, else
