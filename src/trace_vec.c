@@ -143,13 +143,14 @@ __attribute__((noinline)) static vd gen_Fp_v(const sg_sprep *s, const vd p[3], c
 
 /* Newton in double from s0 for the active lanes, with the rules of
  * asph_root_v: a step long beside F' / F'' grows a difference in the
- * iterate, and past a growth of 4 (or near a double root) the root is
- * left to the rescue. */
+ * iterate, and past a growth of 4 (or near a double root, or where F'
+ * turned sign on the way) the root is left to the rescue. */
 __attribute__((noinline)) static vd gen_root_v(const sg_sprep *s, const vd p[3], const vd d[3],
                                                 vd s0, int max_iter, vm active, vm *fail,
                                                 vm *noconv, vm *wild)
 {
     vd sv = s0, growth = vd_set(1.0), hprev = vd_set(0.0), dd2 = d[0] * d[0] + d[1] * d[1];
+    vd fp0 = vd_set(0.0);
     int it;
     *fail = vm_set(0);
     *wild = vm_set(0);
@@ -160,6 +161,8 @@ __attribute__((noinline)) static vd gen_root_v(const sg_sprep *s, const vd p[3],
         gen_sag_dv(s->shp, x, y, active, &f, g, &hh, &bad);
         F = z - f;
         Fp = d[2] - g[0] * d[0] - g[1] * d[1];
+        if (it == 0)
+            fp0 = Fp;
         bad |= (vm)(Fp == 0.0) | ~vd_isfinite(Fp);
         step = F / Fp;
         snew = sv - step;
@@ -170,7 +173,8 @@ __attribute__((noinline)) static vd gen_root_v(const sg_sprep *s, const vd p[3],
         h = hh * dd2 * vd_abs(step) / vd_abs(Fp);
         growth = vsel(active, growth * vd_fmax(vd_set(1.0), h), growth);
         conv = (vm)(vd_abs(step) <= 4.0 * U53 * (vd_abs(snew) + vd_abs(x) + vd_abs(y) + vd_abs(z)));
-        *wild |= active & ((vm)(growth > 4.0) | (conv & (vm)(vd_fmax(h, hprev) > 0.25)));
+        *wild |= active & ((vm)(growth > 4.0) | (conv & (vm)(vd_fmax(h, hprev) > 0.25)) |
+                           (vm)(Fp * fp0 < 0.0));
         hprev = vsel(active, h, hprev);
         sv = vsel(active, snew, sv);
         active &= ~conv & ~*wild;
@@ -412,7 +416,7 @@ static vdd conic_root_dd(const sg_sprep *s, vdd3 P, vdd3 D, vd eP, vd eD, vd tgt
 static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, int max_iter,
                       vm active, vm *fail, vm *noconv, vm *wild)
 {
-    vd sv = s0, growth = vd_set(1.0), hprev = vd_set(0.0);
+    vd sv = s0, growth = vd_set(1.0), hprev = vd_set(0.0), fp0 = vd_set(0.0);
     int it;
     *fail = vm_set(0);
     *wild = vm_set(0);
@@ -421,6 +425,8 @@ static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, in
         vd w, dw, F, Fp, step, snew, h;
         vm bad, conv;
         asph_F_v(s, x, y, z, d, &F, &Fp, &w, &dw, &bad);
+        if (it == 0)
+            fp0 = Fp;
         bad |= (vm)(Fp == 0.0) | ~vd_isfinite(Fp);
         step = F / Fp;
         snew = sv - step;
@@ -434,11 +440,15 @@ static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, in
          * end on another root.  And where two roots lie closer than double
          * resolves (a ray touching the surface), h stays near 1/2 down to
          * the rounding of F, and which of the two Newton ends on is
-         * rounding's choice.  Such roots are not certified here. */
+         * rounding's choice.  Such roots are not certified here.  Nor is
+         * one where F' has turned sign since the seed: the iterate has
+         * crossed an extremum of F between two roots (wandering there
+         * while F was rounding noise) and may end on the farther one. */
         h = (vd_abs(w) + 2.0 * dw) * vd_abs(step) / vd_abs(Fp);
         growth = vsel(active, growth * vd_fmax(vd_set(1.0), h), growth);
         conv = (vm)(vd_abs(step) <= 4.0 * U53 * (vd_abs(snew) + vd_abs(x) + vd_abs(y) + vd_abs(z)));
-        *wild |= active & ((vm)(growth > 4.0) | (conv & (vm)(vd_fmax(h, hprev) > 0.25)));
+        *wild |= active & ((vm)(growth > 4.0) | (conv & (vm)(vd_fmax(h, hprev) > 0.25)) |
+                           (vm)(Fp * fp0 < 0.0));
         hprev = vsel(active, h, hprev);
         sv = vsel(active, snew, sv);
         active &= ~conv & ~*wild;
@@ -1056,7 +1066,11 @@ static __attribute__((noinline)) vm surface_v(const sg_tracer *t, int i, int upt
             } else
                 sd = asph_root_v(s, ps, ds, vsel(miss, tgt, sd), t->o.max_iter,
                                  live & ~bad & ~resc, &nohit, &noconv, &wild);
-            resc |= (noconv | wild) & live & ~bad;
+            /* Newton from the tangent plane, where the base conic
+             * missed, that fails on the way says nothing of the asphere:
+             * its terms can raise the surface into a ray that passes the
+             * conic (near the conic's rim, say).  The rescue decides. */
+            resc |= (noconv | wild | (nohit & miss)) & live & ~bad;
             bad = fail_lanes(bad, nohit & ~resc, live, SG_EMISS, st);
         } else {
             bad = fail_lanes(bad, miss & ~resc, live, SG_EMISS, st);
