@@ -394,10 +394,9 @@ static void test_many_rounds(void **state)
     static const char *const threads[2] = { "2", "3" };
     const char *design = example("cooke_triplet.json");
     const char *rays = ray_file("rounds.csv", 1, 9000, 11);
-    char outpath[1100];
+    const char *outpath = ct_path("rounds.out");
     int f, t;
     (void)state;
-    snprintf(outpath, sizeof outpath, "%s.out", rays);
     for (f = 0; f < 3; f++) {
         ct_result ref;
         set_block(0);
@@ -407,9 +406,7 @@ static void test_many_rounds(void **state)
         assert_true(strlen(ref.out) > (size_t)9000 * 8 * 50);
         for (t = 0; t < 2; t++) {
             ct_result r;
-            FILE *fp;
             char *text;
-            long len;
             set_block(t ? 5003 : 0);
             ct_run(&r, "trace", design, "--rays", rays, "--format", fmts[f], "--threads",
                    threads[t], NULL);
@@ -422,17 +419,9 @@ static void test_many_rounds(void **state)
                    threads[t], "-o", outpath, NULL);
             assert_int_equal(r.code, 0);
             ct_free(&r);
-            fp = fopen(outpath, "rb");
-            assert_non_null(fp);
-            fseek(fp, 0, SEEK_END);
-            len = ftell(fp);
-            rewind(fp);
-            text = malloc((size_t)len + 1);
+            text = ct_read(outpath);
             assert_non_null(text);
-            assert_int_equal(fread(text, 1, (size_t)len, fp), (size_t)len);
-            text[len] = '\0';
-            fclose(fp);
-            if ((size_t)len != strlen(ref.out) || memcmp(text, ref.out, (size_t)len) != 0)
+            if (strcmp(text, ref.out) != 0)
                 fail_msg("%s on %s threads: the file differs from one thread's output",
                          fmts[f], threads[t]);
             free(text);
@@ -440,7 +429,6 @@ static void test_many_rounds(void **state)
         ct_free(&ref);
     }
     set_block(0);
-    remove(outpath);
     print_message("# cooke_triplet: 9000 rays, csv/json/text on 2 and 3 threads, to standard "
                   "output and a file, identical to one thread's\n");
 }
