@@ -4,9 +4,9 @@
  *
  * A build without -march=native (a distribution's) compiles trace_vec.c,
  * trace_classic_vec.c, launch.c, batch.c and opd_vec.c once per
- * instruction set, with SG_ISA naming the set, and dispatch.c picks a variant at run time: the double-double
- * kernels run several times faster with eight lanes and FMA than with
- * SSE2's two.  Every operation is correctly rounded in every variant, so
+ * instruction set, with SG_ISA naming the set, and dispatch.c picks a
+ * variant at run time: the double-double kernels run several times faster
+ * with eight lanes and FMA than with SSE2's two.  Every operation is correctly rounded in every variant, so
  * results do not depend on which one runs.  Without SG_ISA the names are
  * the plain ones.
  */

@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "outfile.h"
 #ifdef SG_HAVE_EDITOR
 #include "editor/editor.h"
 #endif
@@ -141,10 +142,11 @@ int main(int argc, char **argv)
     c = find_command(a);
     if (c) {
         /* Into a pipe or file, a command's output (a ray table can be a
-         * gigabyte) goes out in large writes; stdio's 4 KiB default would
-         * make the kernel's part of the time larger than the trace's.  A
-         * terminal keeps its line buffering.  Nothing is written yet. */
-        static char out_buf[1 << 16];
+         * gigabyte) goes out in writes as large as a file's (outfile.h);
+         * stdio's 4 KiB default would make the kernel's part of the time
+         * larger than the trace's.  A terminal keeps its line buffering.
+         * Nothing is written yet. */
+        static char out_buf[OUTFILE_BUF];
         if (!isatty(STDOUT_FILENO))
             setvbuf(stdout, out_buf, _IOFBF, sizeof out_buf);
         return c->run(argc - 1, argv + 1);

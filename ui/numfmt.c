@@ -630,7 +630,10 @@ static int sf_digits(uint64_t f, char d[20])
     return n;
 }
 
-size_t numfmt_shortest_g(double v, char *buf)
+/* The shortest decimal of v as text: in %g's layout (an exponent below
+ * 1e-4 or from as many digits as it has), or with plain set, positional
+ * at any size.  An infinity or NaN is %g's. */
+static size_t shortest_text(double v, char *buf, int plain)
 {
     uint64_t f;
     int e, n, x, i;
@@ -647,7 +650,7 @@ size_t numfmt_shortest_g(double v, char *buf)
     }
     n = sf_digits(f, d);
     x = e + n - 1; /* the exponent of the first digit */
-    if (x < -4 || x >= n) {
+    if (!plain && (x < -4 || x >= n)) {
         /* %.{n}g's exponent form: d[.ddd]e+XX, at least two digits. */
         int ax = x < 0 ? -x : x;
         *p++ = d[0];
@@ -663,41 +666,6 @@ size_t numfmt_shortest_g(double v, char *buf)
         *p++ = (char)('0' + ax / 10 % 10);
         *p++ = (char)('0' + ax % 10);
     } else if (x >= 0) {
-        for (i = 0; i < n; i++) {
-            *p++ = d[i];
-            if (i == x && i + 1 < n)
-                *p++ = '.';
-        }
-    } else {
-        *p++ = '0';
-        *p++ = '.';
-        for (i = 0; i < -x - 1; i++)
-            *p++ = '0';
-        for (i = 0; i < n; i++)
-            *p++ = d[i];
-    }
-    *p = '\0';
-    return (size_t)(p - buf);
-}
-
-size_t numfmt_shortest_f(double v, char *buf)
-{
-    uint64_t f;
-    int e, n, x, i;
-    char d[20], *p = buf;
-    if (isnan(v) || isinf(v) || !(fabs(v) < 1e300))
-        return numfmt_shortest_g(v, buf);
-    if (signbit(v))
-        *p++ = '-';
-    numfmt_shortest_decimal(v, &f, &e);
-    if (f == 0) {
-        *p++ = '0';
-        *p = '\0';
-        return (size_t)(p - buf);
-    }
-    n = sf_digits(f, d);
-    x = e + n - 1;
-    if (x >= 0) {
         /* Integer digits (zeros past the last significant one), then any
          * fraction. */
         for (i = 0; i <= x; i++)
@@ -717,6 +685,17 @@ size_t numfmt_shortest_f(double v, char *buf)
     }
     *p = '\0';
     return (size_t)(p - buf);
+}
+
+size_t numfmt_shortest_g(double v, char *buf)
+{
+    return shortest_text(v, buf, 0);
+}
+
+size_t numfmt_shortest_f(double v, char *buf)
+{
+    /* Past 1e300 the digits would outgrow NUMFMT_SHORTEST_MAX. */
+    return shortest_text(v, buf, fabs(v) < 1e300);
 }
 
 int numfmt_parse(const char *s, size_t n, double *out)

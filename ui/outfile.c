@@ -21,11 +21,13 @@ static void big_buffer(outfile *o)
     }
 }
 
-static void close_file(outfile *o)
+/* fclose's result; the buffer goes after the stream that used it. */
+static int close_file(outfile *o)
 {
-    fclose(o->f);
+    int rc = fclose(o->f);
     free(o->buf);
     o->buf = NULL;
+    return rc;
 }
 
 /* Writes in place, as fopen(path, "w") does. */
@@ -103,10 +105,8 @@ int outfile_commit(outfile *o)
     if (fflush(o->f) != 0 || ferror(o->f))
         err = errno ? errno : EIO;
     if (o->path) {
-        if (fclose(o->f) != 0 && !err)
+        if (close_file(o) != 0 && !err)
             err = errno ? errno : EIO;
-        free(o->buf);
-        o->buf = NULL;
     }
     o->f = NULL;
     if (o->tmp[0]) {
