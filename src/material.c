@@ -1284,7 +1284,7 @@ static int is_dir(const char *p)
 int sg_catalog_load_default(sg_catalog *cat, sg_diag *d)
 {
     const char *env, *use = NULL;
-    char *copy;
+    char *copy, found[4096];
 
     if (!cat)
         return sg_diag_set(d, SG_EINVAL,
@@ -1297,16 +1297,13 @@ int sg_catalog_load_default(sg_catalog *cat, sg_diag *d)
             sg_diag_warn(d, "SAGITTA_LENSDB=%s is not a directory; ignored",
                          env);
     }
-    if (!use && is_dir(SG_SOURCE_LENSDB))
-        use = SG_SOURCE_LENSDB;
-    if (!use && is_dir(SG_INSTALL_LENSDB))
-        use = SG_INSTALL_LENSDB;
+    if (!use)
+        use = sg_data_dir("lensdb", found, sizeof found);
     if (!use)
         return sg_diag_set(d, SG_EIO,
                            "no glass catalog directory found (tried "
-                           "$SAGITTA_LENSDB=%s, %s, %s)",
-                           env && *env ? env : "(unset)", SG_SOURCE_LENSDB,
-                           SG_INSTALL_LENSDB);
+                           "$SAGITTA_LENSDB=%s, the lensdb beside the program, %s)",
+                           env && *env ? env : "(unset)", SG_INSTALL_LENSDB);
     copy = dup_string(use);
     if (!copy)
         return sg_diag_set(d, SG_ENOMEM, "out of memory");

@@ -21,6 +21,14 @@
 extern "C" {
 #endif
 
+/* Every public function is marked SG_API: the library is built with hidden
+ * visibility, so what no installed header declares is not exported. */
+#if defined(__GNUC__) && __GNUC__ >= 4
+#define SG_API __attribute__((visibility("default")))
+#else
+#define SG_API
+#endif
+
 #define SG_VERSION_MAJOR 0
 #define SG_VERSION_MINOR 1
 #define SG_VERSION_PATCH 0
@@ -69,13 +77,13 @@ typedef enum sg_err {
 #define SG_OK SG_EOK
 
 /* Short message for a code; never NULL. */
-const char *sg_strerror(int err);
+SG_API const char *sg_strerror(int err);
 /* Symbolic name for a code, e.g. "SG_EMISS"; never NULL. */
-const char *sg_err_name(int err);
+SG_API const char *sg_err_name(int err);
 /* Nonzero when a trace's return code tells the ray's fate (reached the
  * image, missed, TIR, vignetted, not certified, not aimed ...) rather than
  * a failure of the program or its input. */
-int sg_err_is_ray_status(int err);
+SG_API int sg_err_is_ray_status(int err);
 
 #define SG_DIAG_MSG 512
 #define SG_DIAG_MAXWARN 16
@@ -89,15 +97,15 @@ typedef struct sg_diag {
     char warn[SG_DIAG_MAXWARN][SG_DIAG_MSG];
 } sg_diag;
 
-void sg_diag_clear(sg_diag *d);
+SG_API void sg_diag_clear(sg_diag *d);
 /* Records an error (the first one wins) and returns code.  d may be NULL. */
-int sg_diag_set(sg_diag *d, int code, const char *fmt, ...)
+SG_API int sg_diag_set(sg_diag *d, int code, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
 /* Records a warning.  d may be NULL. */
-void sg_diag_warn(sg_diag *d, const char *fmt, ...)
+SG_API void sg_diag_warn(sg_diag *d, const char *fmt, ...)
 #if defined(__GNUC__)
     __attribute__((format(printf, 2, 3)))
 #endif
@@ -150,44 +158,49 @@ typedef struct sg_glass {
 
 typedef struct sg_catalog sg_catalog;
 
-sg_catalog *sg_catalog_new(void);
-void sg_catalog_free(sg_catalog *cat);
+SG_API sg_catalog *sg_catalog_new(void);
+SG_API void sg_catalog_free(sg_catalog *cat);
 /* Appends the glasses of one AGF file; the file's stem (upper case) is
  * the glasses' catalog.  A later glass of the same name in the same
  * catalog replaces an earlier one; glasses of one name in different
  * catalogs are all kept. */
-int sg_catalog_load_agf(sg_catalog *cat, const char *path, sg_diag *d);
+SG_API int sg_catalog_load_agf(sg_catalog *cat, const char *path, sg_diag *d);
 /* Loads every *.agf in a directory. */
-int sg_catalog_load_dir(sg_catalog *cat, const char *dir, sg_diag *d);
+SG_API int sg_catalog_load_dir(sg_catalog *cat, const char *dir, sg_diag *d);
 /* Loads the bundled catalog: $SAGITTA_LENSDB, then the source tree's
  * lensdb/ (so the program runs unbuilt and uninstalled), then the installed
  * data directory.  The first directory that exists is used. */
-int sg_catalog_load_default(sg_catalog *cat, sg_diag *d);
+SG_API int sg_catalog_load_default(sg_catalog *cat, sg_diag *d);
+/* The directory of the data installed with sagitta, NAME "lensdb" or
+ * "examples", written into buf: the source tree's while the program runs
+ * from the build tree, else the one installed beside the program or the
+ * library, else the configured one.  NULL when none exists. */
+SG_API const char *sg_data_dir(const char *name, char *buf, size_t n);
 /* The directory sg_catalog_load_default() used, or NULL. */
-const char *sg_catalog_dir(const sg_catalog *cat);
+SG_API const char *sg_catalog_dir(const sg_catalog *cat);
 /* The glass an unqualified name means: of the catalogs holding it, the
  * first in the search order SCHOTT, OHARA, MISC, INFRARED, HOYA, SUMITA,
  * CDGM, HIKARI, then other catalogs in load order.  Case-insensitive. */
-const sg_glass *sg_catalog_find(const sg_catalog *cat, const char *name);
+SG_API const sg_glass *sg_catalog_find(const sg_catalog *cat, const char *name);
 /* The glass name of one catalog (NULL or "" means sg_catalog_find). */
-const sg_glass *sg_catalog_find_in(const sg_catalog *cat, const char *catalog,
+SG_API const sg_glass *sg_catalog_find_in(const sg_catalog *cat, const char *catalog,
                                    const char *name);
 /* The catalogs loaded, in load order. */
-size_t sg_catalog_ncatalogs(const sg_catalog *cat);
-const char *sg_catalog_catalog_at(const sg_catalog *cat, size_t i);
-size_t sg_catalog_count(const sg_catalog *cat);
-const sg_glass *sg_catalog_at(const sg_catalog *cat, size_t i);
+SG_API size_t sg_catalog_ncatalogs(const sg_catalog *cat);
+SG_API const char *sg_catalog_catalog_at(const sg_catalog *cat, size_t i);
+SG_API size_t sg_catalog_count(const sg_catalog *cat);
+SG_API const sg_glass *sg_catalog_at(const sg_catalog *cat, size_t i);
 
 /* Refractive index relative to air at wavelength um.  Returns NaN for an
  * unknown formula or a non-positive n^2. */
-double sg_glass_index(const sg_glass *g, double um);
-int sg_glass_in_range(const sg_glass *g, double um);
+SG_API double sg_glass_index(const sg_glass *g, double um);
+SG_API int sg_glass_in_range(const sg_glass *g, double um);
 
 /* Zemax's index of air at wavelength um, temperature temp (C) and relative
  * pressure pres (atm): n = 1 + (n_ref - 1) P / (1 + 3.4785e-3 (T - 15)),
  * n_ref = 1 + 1e-8 (6432.8 + 2949810 L^2 / (146 L^2 - 1)
  *                   + 25540 L^2 / (41 L^2 - 1)). */
-double sg_air_index(double um, double temp, double pres);
+SG_API double sg_air_index(double um, double temp, double pres);
 /* The glass's index relative to air at temp (C) and pres (atm), for a
  * wavelength um measured in that air, by Zemax's thermal model: the
  * wavelength is taken into the catalog's reference air (tref, 1 atm), the
@@ -196,7 +209,7 @@ double sg_air_index(double um, double temp, double pres);
  *            + (E0 dT + E1 dT^2) / (L^2 - Ltk^2)),  dT = temp - tref,
  * and divided by the index of the air at temp and pres.  At the reference
  * conditions (temp == tref, pres == 1) it is sg_glass_index() exactly. */
-double sg_glass_index_env(const sg_glass *g, double um, double temp, double pres);
+SG_API double sg_glass_index_env(const sg_glass *g, double um, double temp, double pres);
 
 /* A model glass from nd, vd and dPgF, as a catalog glass (named "MODEL") of
  * the Conrady formula (5), n = n0 + A / L + B / L^3.5, whose three
@@ -207,7 +220,7 @@ double sg_glass_index_env(const sg_glass *g, double um, double temp, double pres
  * from which catalogs' dPgF is measured.  Zemax's own model glass formula
  * is not published; in the visible this one follows real glasses to about
  * 1e-4.  Returns SG_ERANGE for values outside the SG_MODEL_* limits. */
-int sg_model_glass(double nd, double vd, double dpgf, sg_glass *out);
+SG_API int sg_model_glass(double nd, double vd, double dpgf, sg_glass *out);
 
 /* ------------------------------------------------------------------------
  * The optical system
@@ -268,7 +281,7 @@ typedef struct sg_material {
 
 /* The catalog glass of a glass material (its catalog's if it names one),
  * or NULL: not a glass, or not in cat. */
-const sg_glass *sg_material_glass(const sg_catalog *cat, const sg_material *m);
+SG_API const sg_glass *sg_material_glass(const sg_catalog *cat, const sg_material *m);
 
 /* A change of coordinate frame, as Zemax defines it (its coordinate break
  * and surface tilt/decenter).  Order 0: decenter the frame in x and y,
@@ -520,94 +533,94 @@ typedef struct sg_param {
 } sg_param;
 
 /* The scope's parameters in JSON order; NULL beyond the end. */
-int sg_param_count(sg_param_scope scope);
-const sg_param *sg_param_at(sg_param_scope scope, int i);
+SG_API int sg_param_count(sg_param_scope scope);
+SG_API const sg_param *sg_param_at(sg_param_scope scope, int i);
 /* By JSON key; NULL when none. */
-const sg_param *sg_param_find(sg_param_scope scope, const char *key);
+SG_API const sg_param *sg_param_find(sg_param_scope scope, const char *key);
 /* Element k of a REAL, or a BOOL or ENUM as a double, from the scope's
  * struct obj. */
-double sg_param_get(const sg_param *p, const void *obj, int k);
+SG_API double sg_param_get(const sg_param *p, const void *obj, int k);
 /* Sets element k of a REAL, BOOL or ENUM (no checks: see sg_param_check). */
-void sg_param_set(const sg_param *p, void *obj, int k, double v);
+SG_API void sg_param_set(const sg_param *p, void *obj, int k, double v);
 /* The address of the parameter in obj. */
-void *sg_param_ptr(const sg_param *p, void *obj);
-const void *sg_param_cptr(const sg_param *p, const void *obj);
+SG_API void *sg_param_ptr(const sg_param *p, void *obj);
+SG_API const void *sg_param_cptr(const sg_param *p, const void *obj);
 /* SG_OK when v may be element k's value (the object surface when object
  * is nonzero); else SG_ERANGE, with "LABEL: ..." in msg (may be NULL). */
-int sg_param_check(const sg_param *p, int k, double v, int object, char *msg, size_t n);
+SG_API int sg_param_check(const sg_param *p, int k, double v, int object, char *msg, size_t n);
 /* The label of element k ("asphere term r^4"), the heading ("r^4") and
  * the cell name ("a4"). */
-void sg_param_label(const sg_param *p, int k, char *buf, size_t n);
-void sg_param_heading(const sg_param *p, int k, char *buf, size_t n);
-void sg_param_cell(const sg_param *p, int k, char *buf, size_t n);
+SG_API void sg_param_label(const sg_param *p, int k, char *buf, size_t n);
+SG_API void sg_param_heading(const sg_param *p, int k, char *buf, size_t n);
+SG_API void sg_param_cell(const sg_param *p, int k, char *buf, size_t n);
 /* Whether a surface of type reads element k of surface parameter p (each
  * shape reads only its own; the editor shows the rest dim). */
-int sg_param_used(const sg_param *p, int k, int type);
+SG_API int sg_param_used(const sg_param *p, int k, int type);
 /* Every parameter of obj at its default. */
-void sg_param_defaults(sg_param_scope scope, void *obj);
+SG_API void sg_param_defaults(sg_param_scope scope, void *obj);
 /* Nonzero when every parameter of a and b is the same, bit for bit. */
-int sg_param_equal(sg_param_scope scope, const void *a, const void *b);
+SG_API int sg_param_equal(sg_param_scope scope, const void *a, const void *b);
 /* Nonzero when the whole systems are the same, bit for bit: every
  * parameter, wavelength, field and surface, and the stop. */
-int sg_system_equal(const sg_system *a, const sg_system *b);
+SG_API int sg_system_equal(const sg_system *a, const sg_system *b);
 
 /* A new system: object at infinity, stop on surface 1, image; one
  * wavelength (0.5875618 um), one on-axis field, EPD 10. */
-sg_system *sg_system_new(void);
-void sg_system_free(sg_system *sys);
+SG_API sg_system *sg_system_new(void);
+SG_API void sg_system_free(sg_system *sys);
 /* A deep copy, or NULL when out of memory. */
-sg_system *sg_system_clone(const sg_system *sys);
+SG_API sg_system *sg_system_clone(const sg_system *sys);
 /* Copies src into dst, reusing dst's storage where it can. */
-int sg_system_assign(sg_system *dst, const sg_system *src);
+SG_API int sg_system_assign(sg_system *dst, const sg_system *src);
 /* Sets every field to an empty system with n default surfaces (flat, air). */
-int sg_system_reset(sg_system *sys, int nsurf);
+SG_API int sg_system_reset(sg_system *sys, int nsurf);
 /* Inserts a flat air surface before index at (1 <= at <= nsurf-1). */
-int sg_system_insert(sg_system *sys, int at);
+SG_API int sg_system_insert(sg_system *sys, int at);
 /* Deletes surface at (1 <= at <= nsurf-2); the stop moves with its rows. */
-int sg_system_delete(sg_system *sys, int at);
-void sg_surface_init(sg_surface *s);
+SG_API int sg_system_delete(sg_system *sys, int at);
+SG_API void sg_surface_init(sg_surface *s);
 /* Checks what a trace needs: enough surfaces, one stop, finite values,
  * known glasses (when cat is not NULL), wavelengths and fields.  The
  * message names the surface and field at fault. */
-int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
+SG_API int sg_system_validate(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
 /* Whether normalized field coordinates (hx, hy) give a field a trace can
  * launch: Zemax's scaling of the largest field (of the angle itself for
  * angle fields), below 90 degrees.  The message names the field. */
-int sg_field_check(const sg_system *sys, double hx, double hy, sg_diag *d);
+SG_API int sg_field_check(const sg_system *sys, double hx, double hy, sg_diag *d);
 /* Curvature 1/R, 0 for a flat. */
-double sg_surface_curvature(const sg_surface *s);
+SG_API double sg_surface_curvature(const sg_surface *s);
 /* Sag z(x, y) in the surface's local frame; NaN outside the conic's domain. */
-double sg_surface_sag(const sg_surface *s, double x, double y);
+SG_API double sg_surface_sag(const sg_surface *s, double x, double y);
 /* Whether a frame change moves or turns anything. */
-int sg_frame_change_is_zero(const sg_frame_change *c);
+SG_API int sg_frame_change_is_zero(const sg_frame_change *c);
 /* Solves.  Names are the JSON and editor words ("pickup", "marginal_height",
  * "marginal_angle", "fnum", "chief_height", "curvature_pickup",
  * "position"; "radius", "thickness", "conic"); NULL when out of range. */
-const char *sg_solve_kind_name(sg_solve_kind k);
+SG_API const char *sg_solve_kind_name(sg_solve_kind k);
 /* Whether kind is a pickup, whose from, scale and offset are used. */
-int sg_solve_is_pickup(sg_solve_kind k);
+SG_API int sg_solve_is_pickup(sg_solve_kind k);
 /* Whether kind names another surface in from (pickups, position), so that
  * inserting and deleting surfaces renumbers it. */
-int sg_solve_has_from(sg_solve_kind k);
-const char *sg_solve_target_name(sg_solve_target t);
+SG_API int sg_solve_has_from(sg_solve_kind k);
+SG_API const char *sg_solve_target_name(sg_solve_target t);
 /* Whether kind may sit on target. */
-int sg_solve_allowed(sg_solve_target t, sg_solve_kind k);
+SG_API int sg_solve_allowed(sg_solve_target t, sg_solve_kind k);
 /* Checks the solve on target of surface i (kind, source surface, value):
  * SG_ERANGE with a message naming the surface. */
-int sg_solve_check(const sg_system *sys, int i, sg_solve_target t, sg_diag *d);
+SG_API int sg_solve_check(const sg_system *sys, int i, sg_solve_target t, sg_diag *d);
 /* Whether any surface holds a solve. */
-int sg_system_has_solves(const sg_system *sys);
+SG_API int sg_system_has_solves(const sg_system *sys);
 /* Evaluates every solve and pickup in surface order, at the primary
  * wavelength, in 128-bit MPFR, and stores the values (rounded once) in the
  * surfaces.  Solves that depend on the entrance pupil are repeated until
  * no value changes.  A solve without a solution (the marginal ray on the
  * axis, parallel to it, or a surface without power) is SG_ENONPHYS naming
  * the surface; the system is then left with the values of the last pass. */
-int sg_system_apply_solves(sg_system *sys, const sg_catalog *cat, sg_diag *d);
+SG_API int sg_system_apply_solves(sg_system *sys, const sg_catalog *cat, sg_diag *d);
 
 /* Whether a surface changes the frame: a coordinate break, or a tilt or
  * decenter before or after it. */
-int sg_surface_moves_frame(const sg_surface *s);
+SG_API int sg_surface_moves_frame(const sg_surface *s);
 
 /* ------------------------------------------------------------------------
  * JSON designs
@@ -615,15 +628,15 @@ int sg_surface_moves_frame(const sg_surface *s);
 
 /* Loads a design.  On failure the message reads "FILE:LINE:COL: ..." for
  * syntax errors and "FILE: surface N: field: ..." for content errors. */
-int sg_design_load(sg_system *sys, const char *path, sg_diag *d);
+SG_API int sg_design_load(sg_system *sys, const char *path, sg_diag *d);
 /* Parses a design held in memory; name is used in messages. */
-int sg_design_parse(sg_system *sys, const char *text, size_t len,
+SG_API int sg_design_parse(sg_system *sys, const char *text, size_t len,
                     const char *name, sg_diag *d);
 /* Writes a design atomically: a temporary file in the same directory,
  * fsync, then rename.  A failure leaves any existing file intact. */
-int sg_design_save(const sg_system *sys, const char *path, sg_diag *d);
+SG_API int sg_design_save(const sg_system *sys, const char *path, sg_diag *d);
 /* The design as a NUL-terminated JSON text; free() it. */
-char *sg_design_to_json(const sg_system *sys);
+SG_API char *sg_design_to_json(const sg_system *sys);
 
 /* sg_design_load reads a Zemax .zmx lens file too (by its name, or by a
  * byte-order mark or a first VERS or MODE line), and sg_design_save writes
@@ -637,16 +650,16 @@ char *sg_design_to_json(const sg_system *sys);
  * (MAZH at zone 0, CHZH, PZUP of a thickness, a CURV pickup of offset 0,
  * the CURV marginal ray angle and F number, types 2 and 11) are kept in the
  * surfaces' solve[] with a note, the others frozen with a warning.  See sagitta-design(5), ZEMAX FILES. */
-int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name,
+SG_API int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name,
                  const sg_catalog *cat, sg_diag *d);
-int sg_zmx_load(sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
+SG_API int sg_zmx_load(sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
 /* The design as .zmx text (UTF-8, Zemax keywords); NULL on failure. */
-char *sg_zmx_to_text(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
+SG_API char *sg_zmx_to_text(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
 /* Writes a .zmx file atomically, as sg_design_save does. */
-int sg_zmx_save(const sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
+SG_API int sg_zmx_save(const sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
 /* Nonzero when path ends in .zmx (any case) or the first n bytes of head
  * (may be NULL) look like a lens file rather than JSON. */
-int sg_zmx_detect(const char *path, const void *head, size_t n);
+SG_API int sg_zmx_detect(const char *path, const void *head, size_t n);
 
 /* Zemax archives (.zar): the one lens file inside is read by sg_zmx_parse,
  * its messages naming "ARCHIVE:LENS.ZMX:LINE".  Glasses still come from
@@ -654,16 +667,16 @@ int sg_zmx_detect(const char *path, const void *head, size_t n);
  * the archive's own catalogs named.  Damaged or hostile archives get
  * SG_EPARSE naming the member and byte; at most 64 MiB is unpacked.  See
  * sagitta-design(5), ZEMAX ARCHIVES. */
-int sg_zar_parse(sg_system *sys, const void *bytes, size_t len, const char *path,
+SG_API int sg_zar_parse(sg_system *sys, const void *bytes, size_t len, const char *path,
                  const sg_catalog *cat, sg_diag *d);
-int sg_zar_load(sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
+SG_API int sg_zar_load(sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
 /* One member unpacked into *out (malloc'd, NUL after its *outlen bytes):
  * the one named want (any case, without ".LZW"), or with want NULL the
  * lens file; name (may be NULL) gets its name. */
-int sg_zar_member(const void *bytes, size_t len, const char *path, const char *want,
+SG_API int sg_zar_member(const void *bytes, size_t len, const char *path, const char *want,
                   void **out, size_t *outlen, char name[256], sg_diag *d);
 /* Nonzero when path ends in .zar (any case) or head starts as an archive. */
-int sg_zar_detect(const char *path, const void *head, size_t n);
+SG_API int sg_zar_detect(const char *path, const void *head, size_t n);
 
 /* ------------------------------------------------------------------------
  * Paraxial data (y-nu trace)
@@ -688,7 +701,7 @@ typedef struct sg_paraxial {
 
 /* Paraxial data at wavelength index wave (0-based).  Mirrors follow the
  * sign convention n' = -n. */
-int sg_paraxial_compute(const sg_system *sys, const sg_catalog *cat, int wave,
+SG_API int sg_paraxial_compute(const sg_system *sys, const sg_catalog *cat, int wave,
                         sg_paraxial *out, sg_diag *d);
 
 /* ------------------------------------------------------------------------
@@ -701,9 +714,9 @@ typedef enum sg_method {
     SG_METHOD_MPFR = 2     /* every operation in MPFR; the reference */
 } sg_method;
 
-const char *sg_method_name(sg_method m);
+SG_API const char *sg_method_name(sg_method m);
 /* Parses "precise", "classic" or "mpfr"; returns -1 when unknown. */
-int sg_method_parse(const char *s);
+SG_API int sg_method_parse(const char *s);
 
 typedef struct sg_trace_opts {
     sg_method method;
@@ -716,7 +729,7 @@ typedef struct sg_trace_opts {
     double aim_rtol;    /* aiming tolerance relative to the stop radius; default 1e-13 */
 } sg_trace_opts;
 
-void sg_trace_opts_init(sg_trace_opts *o);
+SG_API void sg_trace_opts_init(sg_trace_opts *o);
 
 /* The result at one surface, in that surface's local frame. */
 typedef struct sg_ray_surface {
@@ -748,17 +761,17 @@ typedef struct sg_frame {
  * surface ref, Zemax's global coordinate reference surface (1 by
  * default; 0 is refused for an object at infinity, whose frame has no
  * place).  Computed in 256-bit MPFR and rounded. */
-int sg_global_frames(const sg_system *sys, int ref, sg_frame *out, sg_diag *d);
+SG_API int sg_global_frames(const sg_system *sys, int ref, sg_frame *out, sg_diag *d);
 /* A trace row in surface i's local frame to the global frame f: point,
  * direction and their bounds (a rotation can grow a coordinate's error by
  * the rows of R; the conversion's rounding is added). */
-void sg_row_to_global(const sg_frame *f, sg_ray_surface *row);
+SG_API void sg_row_to_global(const sg_frame *f, sg_ray_surface *row);
 /* The rows of nray rays (nsurf each, as the batch writes them) to the
  * frames gf of sg_global_frames.  Rows a ray did not reach keep their NaN,
  * and an object at infinity its infinities.  Row 0 of a ray given by start
  * and direction (start_dir nonzero) is in surface 1's frame, of a
  * normalized ray in the object's. */
-void sg_rows_to_global(const sg_frame *gf, sg_ray_surface *rows, size_t nray, int nsurf,
+SG_API void sg_rows_to_global(const sg_frame *gf, sg_ray_surface *rows, size_t nray, int nsurf,
                        int start_dir);
 
 /* Zemax's automatic semi-diameters. */
@@ -770,13 +783,13 @@ typedef struct sg_semidiam_opts {
     int refine;          /* golden-section steps refining each surface's
                             highest ray along the edge (40) */
 } sg_semidiam_opts;
-void sg_semidiam_opts_init(sg_semidiam_opts *o);
+SG_API void sg_semidiam_opts_init(sg_semidiam_opts *o);
 /* sd[i] for every surface i: the largest radial height, hypot(x, y) in the
  * surface's frame, of the real rays through the edge of the pupil over
  * every field and wavelength (0 where none reaches, and on the object).
  * The ring finds each surface's highest ray; a golden-section search along
  * the edge refines it.  o NULL takes the defaults. */
-int sg_semi_diameters(const sg_system *sys, const sg_catalog *cat, const sg_semidiam_opts *o,
+SG_API int sg_semi_diameters(const sg_system *sys, const sg_catalog *cat, const sg_semidiam_opts *o,
                       double *sd, sg_diag *d);
 
 /* Zemax's "Set Vignetting": each field's vignetting factors, found at the
@@ -799,12 +812,12 @@ typedef struct sg_vigfactors {
     double cx, cy; /* the centroid of the grid rays that pass */
     long pass;     /* how many grid rays pass */
 } sg_vigfactors;
-void sg_setvig_opts_init(sg_setvig_opts *o);
+SG_API void sg_setvig_opts_init(sg_setvig_opts *o);
 /* out[k] for every field k.  o NULL takes the defaults. */
-int sg_set_vignetting(const sg_system *sys, const sg_catalog *cat, const sg_setvig_opts *o,
+SG_API int sg_set_vignetting(const sg_system *sys, const sg_catalog *cat, const sg_setvig_opts *o,
                       sg_vigfactors *out, sg_diag *d);
 /* Sets every field's factors to vf[field]. */
-void sg_set_vignetting_apply(sg_system *sys, const sg_vigfactors *vf);
+SG_API void sg_set_vignetting_apply(sg_system *sys, const sg_vigfactors *vf);
 
 /* Thermal expansion, as Zemax's thermal analysis applies it (its Make
  * Thermal tool and thermal pickups; sagitta-design(5), THERMAL
@@ -834,7 +847,7 @@ typedef struct sg_thermal_tce {
 } sg_thermal_tce;
 /* out[i] for every surface i.  SG_ENOGLASS names a surface whose glass
  * is not in cat (NULL refuses every catalog glass). */
-int sg_thermal_tces(const sg_system *sys, const sg_catalog *cat, sg_thermal_tce *out,
+SG_API int sg_thermal_tces(const sg_system *sys, const sg_catalog *cat, sg_thermal_tce *out,
                     sg_diag *d);
 /* The design sys as built at temp (C) and pres (atm), into out (an
  * sg_system_new; may be sys): every surface scaled as above, temperature
@@ -843,7 +856,7 @@ int sg_thermal_tces(const sg_system *sys, const sg_catalog *cat, sg_thermal_tce 
  * SG_ERANGE names the temperature or pressure outside their limits, or
  * the surface whose expansion factor is not positive or whose sag at a
  * spacer's contact height does not exist; on any error out is unchanged. */
-int sg_thermal(const sg_system *sys, const sg_catalog *cat, double temp, double pres,
+SG_API int sg_thermal(const sg_system *sys, const sg_catalog *cat, double temp, double pres,
                sg_system *out, sg_diag *d);
 
 /* A prepared system: indices, paraxial data and work buffers, computed
@@ -856,10 +869,10 @@ typedef struct sg_tracer sg_tracer;
  * glass the catalog lacks, SG_ERANGE for options out of range, SG_EAIM
  * when aiming cannot land the marginal ray, SG_ENOMEM.  The tracer copies
  * sys and opts; cat must outlive it. */
-int sg_tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
+SG_API int sg_tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
                    sg_tracer **out, sg_diag *d);
 /* sg_tracer_open returning the tracer, or NULL (the code in d). */
-sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
+SG_API sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
                          const sg_trace_opts *opts, sg_diag *d);
 
 /* Glass indices kept between the tracers and paraxial data of one design
@@ -870,27 +883,27 @@ sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
  * gets the same bits as without it.  The caller owns the cache; it is used
  * only during the call, by one thread at a time. */
 typedef struct sg_index_cache sg_index_cache;
-sg_index_cache *sg_index_cache_new(void);
-void sg_index_cache_free(sg_index_cache *c);
-void sg_index_cache_clear(sg_index_cache *c);
+SG_API sg_index_cache *sg_index_cache_new(void);
+SG_API void sg_index_cache_free(sg_index_cache *c);
+SG_API void sg_index_cache_clear(sg_index_cache *c);
 /* Lookups answered from the cache and computed, since it was made. */
-void sg_index_cache_stats(const sg_index_cache *c, unsigned long *hits,
+SG_API void sg_index_cache_stats(const sg_index_cache *c, unsigned long *hits,
                           unsigned long *misses);
 /* The cache also keeps the paraxial y-nu traces' state after each surface
  * (the launch's, the mpfr method's, sg_paraxial_compute_cached's): a trace
  * whose start and surfaces up to the first changed one are as before
  * resumes there, with the same bits.  How many have resumed: */
-unsigned long sg_index_cache_resumes(const sg_index_cache *c);
+SG_API unsigned long sg_index_cache_resumes(const sg_index_cache *c);
 /* sg_tracer_new and sg_paraxial_compute with a cache (NULL: none).  With
  * a cache, sg_tracer_new_cached also leaves the validation's warnings (a
  * glass used beyond its range) in d, so its caller need not validate
  * the system a second time for them. */
-sg_tracer *sg_tracer_new_cached(const sg_system *sys, const sg_catalog *cat,
+SG_API sg_tracer *sg_tracer_new_cached(const sg_system *sys, const sg_catalog *cat,
                                 const sg_trace_opts *opts, sg_index_cache *cache,
                                 sg_diag *d);
-int sg_paraxial_compute_cached(const sg_system *sys, const sg_catalog *cat, int wave,
+SG_API int sg_paraxial_compute_cached(const sg_system *sys, const sg_catalog *cat, int wave,
                                sg_index_cache *cache, sg_paraxial *out, sg_diag *d);
-void sg_tracer_free(sg_tracer *t);
+SG_API void sg_tracer_free(sg_tracer *t);
 /* The mpfr method's ray kept between the tracers of one design (the
  * editor's digits check, after every edit): an mpfr tracer given a memo
  * keeps in it the state of its last normalized or started ray after each
@@ -909,33 +922,33 @@ void sg_tracer_free(sg_tracer *t);
  * prepares only what the new method adds (glass indices from cache when
  * given).  t must outlive it.  A classic tracer on either side makes a
  * new tracer from t's system instead.  NULL on failure, with d set. */
-sg_tracer *sg_tracer_new_method(const sg_tracer *t, sg_method method, int mpfr_bits,
+SG_API sg_tracer *sg_tracer_new_method(const sg_tracer *t, sg_method method, int mpfr_bits,
                                 sg_index_cache *cache, sg_diag *d);
 typedef struct sg_mpfr_memo sg_mpfr_memo;
-sg_mpfr_memo *sg_mpfr_memo_new(void);
-void sg_mpfr_memo_free(sg_mpfr_memo *memo);
-void sg_tracer_use_memo(sg_tracer *t, sg_mpfr_memo *memo);
+SG_API sg_mpfr_memo *sg_mpfr_memo_new(void);
+SG_API void sg_mpfr_memo_free(sg_mpfr_memo *memo);
+SG_API void sg_tracer_use_memo(sg_tracer *t, sg_mpfr_memo *memo);
 /* The surface the last ray resumed at (1 when it was traced in full), and
  * how many rays resumed later than surface 1, since the memo was made. */
-int sg_mpfr_memo_last_resume(const sg_mpfr_memo *memo);
-unsigned long sg_mpfr_memo_resumes(const sg_mpfr_memo *memo);
-int sg_tracer_nsurf(const sg_tracer *t);
-const sg_paraxial *sg_tracer_paraxial(const sg_tracer *t);
+SG_API int sg_mpfr_memo_last_resume(const sg_mpfr_memo *memo);
+SG_API unsigned long sg_mpfr_memo_resumes(const sg_mpfr_memo *memo);
+SG_API int sg_tracer_nsurf(const sg_tracer *t);
+SG_API const sg_paraxial *sg_tracer_paraxial(const sg_tracer *t);
 /* Index of the medium after surface i at the tracer's wavelength
  * (negative after an odd number of mirrors, as in the paraxial trace). */
-double sg_tracer_index(const sg_tracer *t, int i);
+SG_API double sg_tracer_index(const sg_tracer *t, int i);
 /* How many roots the precise method has had to find in MPFR since t was
  * made: rays it could not certify in double-double (grazing, tangent, or
  * an asphere's ill-conditioned root).  Ordinary rays need none; a count
  * that grows on them means a slow trace. */
-unsigned long sg_tracer_rescues(const sg_tracer *t);
+SG_API unsigned long sg_tracer_rescues(const sg_tracer *t);
 
 /* Traces a ray given in surface 1's local frame: start point and direction
  * (any nonzero length).  out has nsurf entries; out[0] holds the start.
  * Returns SG_OK when the ray reaches the image, else the failure, which is
  * also the status of the surface where it happened; later surfaces get
  * SG_ENOTREACHED. */
-int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
+SG_API int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
                    sg_ray_surface *out);
 
 /* Traces the ray with normalized field (hx, hy) and pupil (px, py)
@@ -946,7 +959,7 @@ int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
  * every method and entry point, a ray whose numbers leave the doubles
  * gets SG_ERANGE where they do: no surface marked SG_OK has a NaN or an
  * infinity (but the object row's point of an object at infinity). */
-int sg_trace_normalized(sg_tracer *t, double hx, double hy, double px,
+SG_API int sg_trace_normalized(sg_tracer *t, double hx, double hy, double px,
                         double py, sg_ray_surface *out);
 
 /* Rays of a batch: either normalized, or start and direction. */
@@ -962,7 +975,7 @@ typedef enum sg_ray_kind {
 /* Traces nray rays into out (nray * nsurf entries) and status (nray
  * entries), on nthreads threads (0 means every core).  Results equal the
  * single-ray calls bit for bit. */
-int sg_trace_batch(const sg_system *sys, const sg_catalog *cat,
+SG_API int sg_trace_batch(const sg_system *sys, const sg_catalog *cat,
                    const sg_trace_opts *opts, sg_ray_kind kind,
                    const sg_ray_in *rays, size_t nray, int nthreads,
                    sg_ray_surface *out, int *status, sg_diag *d);
@@ -973,16 +986,16 @@ int sg_trace_batch(const sg_system *sys, const sg_catalog *cat,
 typedef struct sg_batch sg_batch;
 
 /* nthreads as in sg_trace_batch.  NULL on failure, with d filled. */
-sg_batch *sg_batch_new(const sg_system *sys, const sg_catalog *cat,
+SG_API sg_batch *sg_batch_new(const sg_system *sys, const sg_catalog *cat,
                        const sg_trace_opts *opts, int nthreads, sg_diag *d);
-void sg_batch_free(sg_batch *b);
-int sg_batch_nsurf(const sg_batch *b);
+SG_API void sg_batch_free(sg_batch *b);
+SG_API int sg_batch_nsurf(const sg_batch *b);
 /* Traces nray rays and keeps, for each, only surfaces surf[0..nsel-1]
  * (each in 0..nsurf-1, in the order given, repeats allowed) at out[r *
  * nsel + k]; surf NULL keeps every surface (nsel is then ignored and
  * out has nray * nsurf entries).  Rows and status equal sg_trace_batch's
  * bit for bit, so an analysis of the image alone stores one row a ray. */
-int sg_batch_trace(sg_batch *b, sg_ray_kind kind, const sg_ray_in *rays,
+SG_API int sg_batch_trace(sg_batch *b, sg_ray_kind kind, const sg_ray_in *rays,
                    size_t nray, const int *surf, int nsel,
                    sg_ray_surface *out, int *status, sg_diag *d);
 
@@ -995,7 +1008,7 @@ int sg_batch_trace(sg_batch *b, sg_ray_kind kind, const sg_ray_in *rays,
 /* Normalized field coordinates (Hx, Hy) of field k (0-based): the field
  * divided by Zemax's field scale (the largest radius, or the largest |x|
  * and |y| for rectangular normalization). */
-int sg_field_normalized(const sg_system *sys, int k, double *hx, double *hy);
+SG_API int sg_field_normalized(const sg_system *sys, int k, double *hx, double *hy);
 
 /* The pupil point a normalized ray is traced at: (px, py) itself, unless
  * (hx, hy) is a field's own normalized point (sg_field_normalized, bit for
@@ -1004,7 +1017,7 @@ int sg_field_normalized(const sg_system *sys, int k, double *hx, double *hy);
  *   px' = vdx + a cos(van) - b sin(van), py' = vdy + a sin(van) + b cos(van),
  * the compressed pupil turned by van (degrees, counterclockwise) about its
  * centre, then decentred.  Every method traces (px', py'). */
-void sg_field_vignette(const sg_system *sys, double hx, double hy, double px, double py,
+SG_API void sg_field_vignette(const sg_system *sys, double hx, double hy, double px, double py,
                        double *vpx, double *vpy);
 
 /* Pupil sampling patterns, as Zemax defines them.  Hexapolar: density N
@@ -1021,18 +1034,18 @@ typedef enum sg_pupil_pattern {
 
 #define SG_PUPIL_MAX_DENSITY 100000000 /* N for square and Vogel; rings are fewer */
 
-const char *sg_pupil_pattern_name(int pattern);
+SG_API const char *sg_pupil_pattern_name(int pattern);
 /* Parses "hexapolar", "square" or "vogel"; -1 when unknown. */
-int sg_pupil_pattern_parse(const char *s);
+SG_API int sg_pupil_pattern_parse(const char *s);
 /* Checks density for a pattern (message names the limit). */
-int sg_pupil_check(int pattern, int density, sg_diag *d);
+SG_API int sg_pupil_check(int pattern, int density, sg_diag *d);
 /* Number of pupil points of a pattern; 0 for a bad pattern or density. */
-size_t sg_pupil_count(int pattern, int density);
+SG_API size_t sg_pupil_count(int pattern, int density);
 /* Fills up to cap points (px, py) of the pattern in its order, from
  * *cursor (0 at the start; an opaque position advanced by the call), so
  * a long pattern can be made block by block.  Returns the number filled;
  * 0 at the end. */
-size_t sg_pupil_fill(int pattern, int density, size_t *cursor, double (*p)[2], size_t cap);
+SG_API size_t sg_pupil_fill(int pattern, int density, size_t *cursor, double (*p)[2], size_t cap);
 
 typedef enum sg_spot_ref {
     SG_SPOT_REF_CHIEF = 0,   /* the real chief ray (Zemax's default) */
@@ -1052,7 +1065,7 @@ typedef struct sg_spot_opts {
                             pictures (every k-th ray); 0 keeps none */
 } sg_spot_opts;
 
-void sg_spot_opts_init(sg_spot_opts *o);
+SG_API void sg_spot_opts_init(sg_spot_opts *o);
 
 /* One field at one wavelength.  Points and radii are in lens units on the
  * image surface, relative to the reference point (ref_x, ref_y). */
@@ -1090,9 +1103,9 @@ typedef struct sg_spot {
 /* Spot diagrams of the chosen fields and wavelengths.  Fills *out (free it
  * with sg_spot_free).  Rays that fail (vignetting, TIR ...) are left out of
  * the figures and counted.  Returns SG_OK, or an error with d filled. */
-int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_opts *o,
+SG_API int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_opts *o,
                     sg_spot *out, sg_diag *d);
-void sg_spot_free(sg_spot *s);
+SG_API void sg_spot_free(sg_spot *s);
 
 typedef struct sg_fan_opts {
     sg_trace_opts trace;
@@ -1103,7 +1116,7 @@ typedef struct sg_fan_opts {
     int opd;     /* nonzero: OPD fans (waves) instead of transverse ray fans */
 } sg_fan_opts;
 
-void sg_fan_opts_init(sg_fan_opts *o);
+SG_API void sg_fan_opts_init(sg_fan_opts *o);
 
 /* One fan: the pupil coordinate of each sample and the aberration. */
 typedef struct sg_fan_curve {
@@ -1134,9 +1147,9 @@ typedef struct sg_fan {
  * wavelength's chief ray's OPD so every curve passes through zero at the
  * pupil's centre (the chromatic piston left out, as Zemax draws OPD fans);
  * a ray whose OPD is not defined gets that status. */
-int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opts *o,
+SG_API int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opts *o,
                    sg_fan *out, sg_diag *d);
-void sg_fan_free(sg_fan *f);
+SG_API void sg_fan_free(sg_fan *f);
 
 typedef struct sg_layout_opts {
     sg_trace_opts trace;  /* trace.wave: -1 primary */
@@ -1146,7 +1159,7 @@ typedef struct sg_layout_opts {
     int nthreads;
 } sg_layout_opts;
 
-void sg_layout_opts_init(sg_layout_opts *o);
+SG_API void sg_layout_opts_init(sg_layout_opts *o);
 
 typedef struct sg_layout_surface {
     double z0;           /* the vertex's global z (surface 1 at 0) */
@@ -1178,9 +1191,9 @@ typedef struct sg_layout {
 /* A y-z cross-section: each surface's profile over its semi-diameter at
  * its global position (surfaces 1 to the image; the object is left out,
  * as in Zemax's default layout), and a fan of rays in y per field. */
-int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layout_opts *o,
+SG_API int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layout_opts *o,
                       sg_layout *out, sg_diag *d);
-void sg_layout_free(sg_layout *l);
+SG_API void sg_layout_free(sg_layout *l);
 
 /* ------------------------------------------------------------------------
  * Optical path difference (Zemax's convention, sagitta(1)).
@@ -1220,24 +1233,24 @@ typedef struct sg_opd {
  * primary wavelength (by t's primary-wavelength tracer when t is at
  * another).  A chief ray that fails is a result: SG_OK is returned with
  * ref->status set.  SG_EUNSUPPORTED when the exit pupil is at infinity. */
-int sg_opd_reference(sg_tracer *t, double hx, double hy, sg_opd_ref *ref, sg_diag *d);
+SG_API int sg_opd_reference(sg_tracer *t, double hx, double hy, sg_opd_ref *ref, sg_diag *d);
 /* The OPD of a ray traced by t (in t's wavelength, for ref's field) from
  * its image row alone, so the rows of sg_batch_trace with only the image
  * surface selected serve.  A failed ray or reference sets out->status and
  * NaNs; returns SG_EINVAL only for NULL arguments. */
-int sg_opd_of_ray(const sg_tracer *t, const sg_opd_ref *ref, const sg_ray_surface *image_row,
+SG_API int sg_opd_of_ray(const sg_tracer *t, const sg_opd_ref *ref, const sg_ray_surface *image_row,
                   sg_opd *out);
 /* sg_opd_of_ray for n rays of ref's field at once, their image rows at
  * rows[r * stride] and their results in out[r], each with the bits
  * sg_opd_of_ray gives (on vector lanes where the build has them). */
-int sg_opd_of_rays(const sg_tracer *t, const sg_opd_ref *ref, const sg_ray_surface *rows,
+SG_API int sg_opd_of_rays(const sg_tracer *t, const sg_opd_ref *ref, const sg_ray_surface *rows,
                    size_t stride, size_t n, sg_opd *out);
 /* Traces pupil point (px, py) of ref's field with t (out: nsurf rows) and
  * fills res; returns the trace's status. */
-int sg_trace_opd(sg_tracer *t, const sg_opd_ref *ref, double px, double py,
+SG_API int sg_trace_opd(sg_tracer *t, const sg_opd_ref *ref, double px, double py,
                  sg_ray_surface *out, sg_opd *res);
 /* The tracer's wavelength in micrometres. */
-double sg_tracer_wavelength(const sg_tracer *t);
+SG_API double sg_tracer_wavelength(const sg_tracer *t);
 
 /* ------------------------------------------------------------------------
  * Seidel sums (third-order aberrations and first-order colour)
@@ -1271,9 +1284,9 @@ typedef struct sg_seidel {
  * largest field (scaled to the paraxial image height).  The conic and the
  * r^4 term of an even asphere contribute; the r^2 term is left out, as in
  * the paraxial data.  Free with sg_seidel_free. */
-int sg_seidel_compute(const sg_system *sys, const sg_catalog *cat, sg_seidel *out,
+SG_API int sg_seidel_compute(const sg_system *sys, const sg_catalog *cat, sg_seidel *out,
                       sg_diag *d);
-void sg_seidel_free(sg_seidel *s);
+SG_API void sg_seidel_free(sg_seidel *s);
 
 /* Zemax's wavefront coefficients, in waves of lambda (lens units):
  * W040 = SI/8, W131 = SII/2, W222 = SIII/2, W220P = SIV/4, W311 = SV/2,
@@ -1283,7 +1296,7 @@ enum {
     SG_W040 = 0, SG_W131, SG_W222, SG_W220P, SG_W311, SG_W020, SG_W111,
     SG_W220S, SG_W220M, SG_W220T, SG_NWCOEF
 };
-void sg_seidel_waves(const double *s, double lambda, double *w);
+SG_API void sg_seidel_waves(const double *s, double lambda, double *w);
 
 /* Zemax's transverse aberrations in lens units, with nu = n'u' of the
  * marginal ray: TSPH = SI/(2n'u'), TSCO = SII/(2n'u'), TTCO = 3 TSCO,
@@ -1294,10 +1307,10 @@ enum {
     SG_TSPH = 0, SG_TSCO, SG_TTCO, SG_TAST, SG_TPFC, SG_TSFC, SG_TTFC, SG_TDIS,
     SG_TAXC, SG_TLAC, SG_NTCOEF
 };
-void sg_seidel_transverse(const double *s, double nu, double *t);
+SG_API void sg_seidel_transverse(const double *s, double nu, double *t);
 
 /* Millimetres in one lens unit of the system (mm, cm, in or m). */
-double sg_lens_unit_mm(const sg_system *sys);
+SG_API double sg_lens_unit_mm(const sg_system *sys);
 
 /* ------------------------------------------------------------------------
  * Field curvature and distortion
@@ -1321,7 +1334,7 @@ typedef struct sg_fieldcurve_pt {
  * step to delta / 2.  A field whose rays fail gets that status; the call
  * fails only for bad arguments or a system that cannot be traced.  Fields
  * given as real image height are refused (SG_EUNSUPPORTED). */
-int sg_fieldcurve(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
+SG_API int sg_fieldcurve(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
                   int npts, double delta, sg_fieldcurve_pt *out, sg_diag *d);
 
 /* ------------------------------------------------------------------------
@@ -1338,21 +1351,21 @@ typedef enum sg_zernike_kind {
 
 /* Radial order n and azimuthal order m of term j (from 1); m < 0 is a
  * sine term, m > 0 a cosine term.  SG_ERANGE outside the set. */
-int sg_zernike_nm(sg_zernike_kind kind, int j, int *n, int *m);
+SG_API int sg_zernike_nm(sg_zernike_kind kind, int j, int *n, int *m);
 /* Term j at pupil point (x, y), |(x, y)| <= 1, angle from the x axis; NaN
  * for a j outside the set. */
-double sg_zernike_eval(sg_zernike_kind kind, int j, double x, double y);
+SG_API double sg_zernike_eval(sg_zernike_kind kind, int j, double x, double y);
 /* Least-squares coefficients of terms 1..nterms for the values w at the
  * npts points (x, y) of the unit pupil, into coef[0..nterms-1], and the
  * RMS of what the fit leaves (rms_resid may be NULL).  Memory does not
  * depend on npts. */
-int sg_zernike_fit(sg_zernike_kind kind, int nterms, size_t npts, const double *x,
+SG_API int sg_zernike_fit(sg_zernike_kind kind, int nterms, size_t npts, const double *x,
                    const double *y, const double *w, double *coef, double *rms_resid,
                    sg_diag *d);
 /* RMS and peak-to-valley of the values w at (x, y) after removing their
  * least-squares piston, and tilt too when remove_tilt (Zemax's figures
  * "to centroid"; piston alone gives its "to chief"). */
-int sg_wavefront_stats(size_t npts, const double *x, const double *y, const double *w,
+SG_API int sg_wavefront_stats(size_t npts, const double *x, const double *y, const double *w,
                        int remove_tilt, double *rms, double *pv, sg_diag *d);
 
 /* A source of optical path difference: OPD in waves at normalized pupil
@@ -1377,9 +1390,9 @@ typedef struct sg_wavefront {
 /* The wavefront map of opd on a grid x grid square of pupil points (those
  * inside the unit circle), its RMS and P-V, and nterms Zernike terms of
  * kind.  Free with sg_wavefront_free. */
-int sg_wavefront_compute(sg_opd_fn opd, void *ctx, int grid, sg_zernike_kind kind,
+SG_API int sg_wavefront_compute(sg_opd_fn opd, void *ctx, int grid, sg_zernike_kind kind,
                          int nterms, sg_wavefront *out, sg_diag *d);
-void sg_wavefront_free(sg_wavefront *w);
+SG_API void sg_wavefront_free(sg_wavefront *w);
 
 typedef struct sg_wavefront_opts {
     sg_trace_opts trace; /* trace.wave: the wavelength, -1 the primary */
@@ -1392,7 +1405,7 @@ typedef struct sg_wavefront_opts {
     size_t block;        /* rays per batch call; 0: 65536 */
 } sg_wavefront_opts;
 
-void sg_wavefront_opts_init(sg_wavefront_opts *o);
+SG_API void sg_wavefront_opts_init(sg_wavefront_opts *o);
 
 /* The traced wavefront of one field at one wavelength: the OPD of the
  * grid's pupil points against the field's reference sphere (sg_opd_ref,
@@ -1401,13 +1414,13 @@ void sg_wavefront_opts_init(sg_wavefront_opts *o);
  * less that wavelength's chief ray's OPD, so the map is zero at its chief
  * ray, as Zemax's.  Rays that fail are left out, as in Zemax.
  * A chief ray that fails is an error naming the field. */
-int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
+SG_API int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
                        const sg_wavefront_opts *o, sg_wavefront *out, sg_opd_ref *ref,
                        sg_diag *d);
 
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */
-double sg_digits(double a, double b);
+SG_API double sg_digits(double a, double b);
 
 #ifdef __cplusplus
 }

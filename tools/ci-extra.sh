@@ -87,7 +87,7 @@ setup() {
 # ---------------------------------------------------------------- sanitizers
 if [ "$do_asan" = 1 ]; then
     logs=$asan_dir/sanitizer-logs
-    if ! setup "$asan_dir" -Db_sanitize=address,undefined -Db_lundef=false; then
+    if ! setup "$asan_dir" -Dnative=true -Db_sanitize=address,undefined -Db_lundef=false; then
         note "ASan+UBSan: meson setup failed"
         failed=1
     elif ! ninja -C "$asan_dir" -j "$jobs" > "$asan_dir/ci-extra-build.log" 2>&1; then

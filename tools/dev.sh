@@ -8,6 +8,8 @@
 #
 # BUILD_DIR (default: build) selects the build directory and MESON_ARGS adds
 # options to its first setup, e.g. MESON_ARGS=-Db_sanitize=address,undefined.
+# The build is for this processor (-Dnative=true) unless MESON_ARGS sets
+# -Dnative.
 set -eu
 
 here=$(cd "$(dirname "$0")/.." && pwd)
@@ -49,8 +51,14 @@ deps() {
 build() {
     deps
     if [ ! -f "$build/build.ninja" ]; then
+        # A local build is for this processor unless MESON_ARGS says
+        # otherwise; meson's own default is the portable build.
+        case " ${MESON_ARGS:-} " in
+        *-Dnative=*) native="" ;;
+        *) native=-Dnative=true ;;
+        esac
         # shellcheck disable=SC2086
-        meson setup "$build" ${MESON_ARGS:-}
+        meson setup "$build" $native ${MESON_ARGS:-}
     fi
     ninja -C "$build"
 }

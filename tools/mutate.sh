@@ -153,7 +153,7 @@ suite() { # runs the suite in $build with timeout $1; returns its status
 
 echo "mutate: scratch tree $src (commit $commit$([ "$dirty" -gt 0 ] && echo ", $dirty files modified"))"
 # shellcheck disable=SC2086
-if ! { [ -f "$build/build.ninja" ] || meson setup "$build" "$src" ${MESON_ARGS:-} > "$log/setup.log" 2>&1; } ||
+if ! { [ -f "$build/build.ninja" ] || meson setup "$build" "$src" -Dnative=true ${MESON_ARGS:-} > "$log/setup.log" 2>&1; } ||
    ! ninja -C "$build" -j "$jobs" > "$log/build.log" 2>&1; then
     tail -n 20 "$log/setup.log" "$log/build.log" 2>/dev/null
     echo "mutate: the unmutated tree does not build (see $log)" >&2

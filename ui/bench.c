@@ -197,22 +197,23 @@ static int cmp_str(const void *a, const void *b)
     return strcmp(*(char *const *)a, *(char *const *)b);
 }
 
-static int is_dir(const char *p)
+/* A bundled example's path, for the runs that default to one. */
+static void example_path(const char *name, char *buf, size_t n)
 {
-    DIR *d = opendir(p);
-    if (!d)
-        return 0;
-    closedir(d);
-    return 1;
+    char found[4096];
+    const char *dir = sg_data_dir("examples", found, sizeof found);
+
+    snprintf(buf, n, "%s/%s", dir ? dir : SG_INSTALL_EXAMPLES, name);
 }
 
-/* Finds the bundled examples: $SAGITTA_EXAMPLES, the source tree, then the
- * installed copy.  Returns the exit status; *paths is a sorted list of
- * malloc'd strings. */
+/* Finds the bundled examples: $SAGITTA_EXAMPLES, else sg_data_dir's (the
+ * source tree's from the build tree, else the installed copy).  Returns the
+ * exit status; *paths is a sorted list of malloc'd strings. */
 static int find_examples(char ***paths, size_t *n)
 {
     const char *env = getenv("SAGITTA_EXAMPLES");
     const char *dir = NULL;
+    char found[4096];
     DIR *d;
     struct dirent *e;
     char **v = NULL;
@@ -222,9 +223,7 @@ static int find_examples(char ***paths, size_t *n)
     *n = 0;
     if (env && env[0])
         dir = env;
-    else if (is_dir(SG_SOURCE_EXAMPLES))
-        dir = SG_SOURCE_EXAMPLES;
-    else
+    else if (!(dir = sg_data_dir("examples", found, sizeof found)))
         dir = SG_INSTALL_EXAMPLES;
     d = opendir(dir);
     if (!d) {
@@ -1362,9 +1361,7 @@ int cmd_bench(int argc, char **argv)
         cJSON *varr = NULL;
         int kind;
         if (ndesign == 0) {
-            snprintf(dg, sizeof dg, "%s/double_gauss.json", SG_SOURCE_EXAMPLES);
-            if (!is_dir(SG_SOURCE_EXAMPLES))
-                snprintf(dg, sizeof dg, "%s/double_gauss.json", SG_INSTALL_EXAMPLES);
+            example_path("double_gauss.json", dg, sizeof dg);
             designs[ndesign++] = dg;
         }
         if (cfg.fmt == BENCH_JSON) {
@@ -1407,9 +1404,7 @@ int cmd_bench(int argc, char **argv)
         cfg.cores = count_cores();
         cfg.nthr_all = cfg.threads > 0 ? cfg.threads : cfg.cores;
         if (ndesign == 0) {
-            snprintf(cass, sizeof cass, "%s/cassegrain.json", SG_SOURCE_EXAMPLES);
-            if (!is_dir(SG_SOURCE_EXAMPLES))
-                snprintf(cass, sizeof cass, "%s/cassegrain.json", SG_INSTALL_EXAMPLES);
+            example_path("cassegrain.json", cass, sizeof cass);
             designs[ndesign++] = cass;
         }
         if (cfg.fmt == BENCH_JSON) {

@@ -167,14 +167,12 @@ static int is_dir(const char *p)
 
 const char *ed_examples_dir(void)
 {
+    static char found[4096];
     const char *env = getenv("SAGITTA_EXAMPLES");
+
     if (is_dir(env))
         return env;
-    if (is_dir(SG_SOURCE_EXAMPLES))
-        return SG_SOURCE_EXAMPLES;
-    if (is_dir(SG_INSTALL_EXAMPLES))
-        return SG_INSTALL_EXAMPLES;
-    return NULL;
+    return sg_data_dir("examples", found, sizeof found);
 }
 
 static int cmp_str(const void *a, const void *b)
