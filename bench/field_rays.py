@@ -7,7 +7,7 @@ Writes hx,hy,px,py rows: hx 0, hy k/(FIELDS-1) for FIELDS fields k
 (default 10), RAYS_PER_FIELD rays each (default 100000), px and py
 uniform in the unit disc (rejection sampling), every number written with
 Python's repr (the shortest text that reads back to the same double).
-The README's issue-18 figures use the defaults (F1E6.csv, 1e6 rays)."""
+bench/RESULTS.md's issue-18 figures use the defaults (F1E6.csv, 1e6 rays)."""
 import random
 import sys
 

@@ -460,7 +460,7 @@ static vd asph_root_v(const sg_sprep *s, const vd p[3], const vd d[3], vd s0, in
 /* Inlined, as are surf_Fp_v, surf_sec_v and conic_root_v, so that their
  * results stay in registers: out of line, F and its bound went through
  * memory on the Newton step's path, and the lenses' precise trace ran 5
- * to 7% slower (README, issue 18). */
+ * to 7% slower (docs/performance.md, issue 18). */
 static inline __attribute__((always_inline)) void surf_F_v(const sg_sprep *s, vdd3 p, vdd *F,
                                                            vd *err, vm *bad)
 {

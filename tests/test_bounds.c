@@ -856,7 +856,7 @@ static void carried_error(void **state)
                   n, nother, min_r[0], ngraze, min_r[1], nresc[0], nresc[1]);
     assert_true(n > PER_KIND * NK / 2);
     /* The counter counts: some grazing roots are beyond double-double, but
-     * few (README.md: about 5%); a kernel that gave up on more would still
+     * few (docs/precision.md: about 5%); a kernel that gave up on more would still
      * be right, and many times slower. */
     assert_true(nresc[0] > 0);
     assert_true(nresc[0] <= (unsigned long)ngraze / 10);
@@ -864,7 +864,7 @@ static void carried_error(void **state)
 }
 
 
-/* Classic's error figures are estimates, and README.md says how good they
+/* Classic's error figures are estimates, and docs/precision.md says how good they
  * are, measured here against the 1024-bit mpfr trace over field and pupil
  * (2,030 rows of the Cooke triplet): its point estimate is exceeded on one
  * row in eight of the Cooke triplet, by up to 42 times, and on no row of

@@ -192,7 +192,7 @@ static void grid(const char *file, int n)
                                         fmax(fabs(op[i].y - om[i].y), fabs(op[i].z - om[i].z)));
                         minp[i] = fmin(minp[i], point_digits(&op[i], &om[i]));
                         minc[i] = fmin(minc[i], point_digits(&oc[i], &om[i]));
-                        /* README: precise equals the 256-bit mpfr trace in
+                        /* docs/precision.md: precise equals the 256-bit mpfr trace in
                          * every digit at every surface: the same doubles,
                          * except a coordinate that is zero in one and the
                          * 256-bit aiming's residue (below 2^-200 of the

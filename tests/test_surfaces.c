@@ -403,7 +403,7 @@ static void random_surfaces(void **state)
         print_message("# classic: %d of %d cases failed (miss or no convergence); of the rest: "
                       "median %.3g ulp, p99 %.3g ulp, worst %.3g ulp\n",
                       nfail, N, errc[nok / 2], errc[(nok * 99) / 100], errc[nok - 1]);
-        /* README.md: classic's median error is about 150 ulp, and about one
+        /* docs/precision.md: classic's median error is about 150 ulp, and about one
          * case in a hundred fails outright. */
         assert_true(errc[nok / 2] >= 120.0 && errc[nok / 2] <= 190.0);
         assert_true(nfail >= N / 120 && nfail <= N / 90);
@@ -412,11 +412,11 @@ static void random_surfaces(void **state)
         print_message("# bound/error (precise, nonzero errors): min %.6f median %.3g\n",
                       ratio[0], ratio[nratio / 2]);
     print_message("# classic on aspheres: %d points, each within %.3g roundings of the distance "
-                  "travelled and the point, times the incidence secant, of a crossing (README: "
+                  "travelled and the point, times the incidence secant, of a crossing (docs/precision.md: "
                   "within 2)\n", nland, worst_land);
     assert_true(nland > PER_KIND * 9 / 10);
     assert_true((double)within1 >= 0.99 * N);
-    /* README: within 0.500 ulp (of the point's largest coordinate) of the
+    /* docs/precision.md: within 0.500 ulp (of the point's largest coordinate) of the
      * unrounded truth in every case; the 320-bit truth's own rounding is
      * far below the slack. */
     assert_true(worst_p <= 0.5 + 1e-9);

@@ -112,7 +112,7 @@ static void table1(void **state)
         classic_digits = sg_digits(oc[1].y, tr[1]);
         print_message("# O%d  %.17g  %6.3f      %.15g  %6.2f          %.15g\n", k, tr[1], up,
                       oc[1].y, classic_digits, paper_classic_y[k]);
-        /* README: within 0.5 ulp of the exact intersection at every scale;
+        /* docs/precision.md: within 0.5 ulp of the exact intersection at every scale;
          * the 400-bit truth's own rounding (2^-390 relative) is the slack. */
         for (c = 0; c < 3; c++)
             assert_true(e[c] <= 0.5 + 1e-9);
@@ -124,7 +124,7 @@ static void table1(void **state)
             assert_true(classic_digits < 12.0);
         if (k >= 4)
             assert_true(classic_digits < 5.0);
-        /* README: classic keeps 6.9 digits at 1e5 and none at 1e9. */
+        /* docs/precision.md: classic keeps 6.9 digits at 1e5 and none at 1e9. */
         if (k == 1)
             assert_true(fabs(classic_digits - 6.9) < 0.05);
         if (k == 5)

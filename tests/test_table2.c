@@ -102,7 +102,7 @@ static void table2(void **state)
             tl[k] = mpfr_get_d(w, MPFR_RNDN);
         }
         assert_int_equal(sg_trace_start(tp[h], S, D, op), SG_OK);
-        /* README: precise equals the truth (rounded once) on every ray. */
+        /* docs/precision.md: precise equals the truth (rounded once) on every ray. */
         if (op[1].x != tr[0] || op[1].y != tr[1] || op[1].z != tr[2])
             nexact_miss++;
         scale = fmax(fabs(tr[0]), fmax(fabs(tr[1]), fabs(tr[2])));
@@ -137,7 +137,7 @@ static void table2(void **state)
     assert_true(worst <= 0.5 + 1e-9);
     /* The paper reports its original method losing 8 digits here.  With
      * the start at the centre nothing cancels, so the textbook formulas in
-     * IEEE double traced every ray within README's 256 ulp (median about
+     * IEEE double traced every ray within docs/precision.md's 256 ulp (median about
      * half an ulp); a classic that lost digits would fail these. */
     assert_true(ec[N - 1] <= 256.0);
     assert_true(ec[N / 2] <= 1.0);

@@ -7,7 +7,7 @@
  *     reference rounds, at 11 significant digits, to the Zemax values of
  *     the paper's Tables 4 and 6 (docs/paper-notes.md; Zemax's surface-8 y
  *     is one unit off in its last digit, the exact value -162.777534965071);
- *   - the precise and reference points are the same doubles (README);
+ *   - the precise and reference points are the same doubles (docs/precision.md);
  *   - each surface's digits_min, dir_digits_min and max_error for both
  *     methods are recomputed here from the reported points and directions
  *     with the definition verify prints, and must be what verify says.
@@ -145,7 +145,7 @@ static void check(const char *file, const char *ray, const row *rows, int nrows,
         }
         if (w)
             nz += 4;
-        /* README: precise equals the reference in every digit. */
+        /* docs/precision.md: precise equals the reference in every digit. */
         assert_memory_equal(pp, pm, sizeof pp);
         assert_memory_equal(dp, dm, sizeof dp);
         /* verify's figures, from the points it printed. */
