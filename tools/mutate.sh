@@ -171,10 +171,39 @@ elif ! suite 1800 "$log/baseline.log"; then
 fi
 [ "$probe_only" = 1 ] || echo "mutate: unmutated suite passes in $(( $(date +%s) - t0 )) s"
 
+# inches SRC DEST: the design SRC (surfaces without aspheric terms, an EPD
+# aperture) written in inches, every length divided by 25.4, so that a
+# probe meets a unit other than the millimetre.
+inches() {
+    python3 - "$1" "$2" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+mm = 25.4
+d["units"] = "in"
+d["title"] = d.get("title", "") + " (in inches)"
+for s in d["surfaces"]:
+    for k in ("radius", "thickness", "semi_diameter"):
+        if isinstance(s.get(k), (int, float)):
+            s[k] = s[k] / mm
+if d["aperture"]["type"] == "epd":
+    d["aperture"]["value"] /= mm
+if d["fields"]["type"] != "angle":
+    for f in d["fields"]["list"]:
+        f["x"] /= mm
+        f["y"] /= mm
+json.dump(d, open(sys.argv[2], "w"), indent=1)
+PY
+}
+
 # probe DIR: the program's outputs on a fixed set of commands, for telling
 # a survivor that changes an output from one that (on this set) does not:
 # every example traced by every method and wavelength 1 and 2 on a grid of
-# asymmetric rays, with 1 and 3 threads, plus paraxial and verify.
+# asymmetric rays, with 1 and 3 threads, plus paraxial and verify; and
+# every analysis (spot, fans, OPD fans, wavefront, Seidel, field curves,
+# semi-diameters, vignetting, layout) at every field and wavelength, as
+# CSV or JSON, on each example and on the double Gauss in inches (an
+# off-axis, polychromatic design in another unit), and the editor's batch
+# mode exporting its ray table and views.
 probe() {
     pd=$1
     exe=$build/ui/sagitta
@@ -187,7 +216,31 @@ probe() {
         done
     done
     export SAGITTA_LENSDB="$src/lensdb"
-    for ex in "$src"/examples/*.json; do
+    inches "$src/examples/double_gauss.json" "$pd/dg_inch.json"
+    for ex in "$src"/examples/*.json "$pd/dg_inch.json"; do
+        b=$(basename "$ex" .json)
+        for a in "spot --format csv" "spot --reference centroid --format json" \
+                 "fan --format csv" "fan --opd --format csv" "wavefront --format json" \
+                 "seidel --format json" "fieldcurve --format csv" "semidiam --format json" \
+                 "vignetting --format json" "layout --format json"; do
+            # shellcheck disable=SC2086
+            "$exe" $a "$ex" > "$pd/$b-$(echo "$a" | tr ' ' '_').out" 2>&1
+            echo "exit $?" >> "$pd/$b-$(echo "$a" | tr ' ' '_').out"
+        done
+        nf=$(python3 -c 'import json, sys; print(len(json.load(open(sys.argv[1]))["fields"]["list"]))' "$ex")
+        for f in $(seq 1 "$nf"); do
+            "$exe" wavefront "$ex" --field $f --wave 1 --format json > "$pd/$b-wf-f$f.json" 2>&1
+            echo "exit $?" >> "$pd/$b-wf-f$f.json"
+        done
+        # The editor at the last field and wavelength 1, off axis in the
+        # pupil: the ray, a fan and a grid, as CSV and JSON.
+        printf 'field %s\nwave 1\nray 0.3 1 0.5 -0.7\nexport - csv ray\nexport - csv fan 7\nexport - json grid 5\nexport - text ray\n' "$nf" \
+            > "$pd/script"
+        "$exe" "$ex" --batch "$pd/script" > "$pd/$b-ed.log" 2>&1
+        echo "exit $?" >> "$pd/$b-ed.log"
+    done
+    rm -f "$pd/script"
+    for ex in "$src"/examples/*.json "$pd/dg_inch.json"; do
         b=$(basename "$ex" .json)
         for m in precise classic mpfr; do
             for w in 1 2; do
@@ -207,7 +260,7 @@ probe() {
     echo "exit $?" >> "$pd/table1.json"
     "$exe" verify --experiment table2 --count 2000 --format json > "$pd/table2.json" 2>&1
     echo "exit $?" >> "$pd/table2.json"
-    rm -f "$pd/rays.csv"
+    rm -f "$pd/rays.csv" "$pd/dg_inch.json"
 }
 probe "$dir/probe-base"
 
