@@ -67,6 +67,10 @@ cat > "$build/sg_config.h.new" <<EOF
 #define SG_INSTALL_LENSDB "/usr/local/share/sagitta/lensdb"
 #define SG_SOURCE_EXAMPLES "$root/examples"
 #define SG_INSTALL_EXAMPLES "/usr/local/share/sagitta/examples"
+#define SG_INSTALL_DATADIR "/usr/local/share/sagitta"
+#define SG_INSTALL_BINDIR "/usr/local/bin"
+#define SG_INSTALL_LIBDIR "/usr/local/lib"
+#define SG_BUILD_ROOT "$root"
 EOF
 if cmp -s "$build/sg_config.h.new" "$build/sg_config.h"; then
     rm -f "$build/sg_config.h.new"
