@@ -167,7 +167,7 @@ void status_draw(ui *u)
                             ? "Unsaved changes. Save before quitting? (y)es (n)o (c)ancel"
                         : e->confirm == CONFIRM_RECOVER && u->rec_delete
                             ? "Delete the recovery file and its unsaved changes for good? "
-                              "(y)es delete / (n)o go back"
+                              "D (capital) deletes / (b)ack"
                         : e->confirm == CONFIRM_RECOVER || e->confirm == CONFIRM_ASK
                             ? ((int)strlen(e->question) <= u->cols ? e->question
                                                                     : e->question_short)
@@ -208,14 +208,14 @@ void status_draw(ui *u)
     }
     if (u->focus == FOCUS_SHEET && sheet_text_col(e->col)) {
         term_text(y, 0, u->cols, T_DIM, 1,
-                  "Typing edits this text cell; Esc then a key runs a command (Esc : for the "
-                  "command line)  F1 help");
+                  "Typing edits this text cell; : command line; Esc then a key runs a "
+                  "command  F1 help");
         return;
     }
     term_text(y, 0, u->cols, T_DIM, 1,
               u->focus == FOCUS_RAY
                   ? "Ray: Left/Right choose  Up/Down step  Enter edit  c chief  F6-F9 marginal  f back"
-                  : "? help  : command  Enter edit  i/d insert/delete  s stop  u/r undo/redo  "
+                  : "? help  : command  Enter edit  Ins/d insert/delete  s stop  u/r undo/redo  "
                     "f ray  t settings  w save  q quit");
 }
 
@@ -334,28 +334,30 @@ static int confirm_key(ui *u, int key)
     ed *e = u->e;
     int kind = e->confirm, f;
     if (kind == CONFIRM_RECOVER) {
-        /* Only its own answers count; deleting takes a second, explicit
-         * yes, asked after the keys typed so far are dropped. */
+        /* Each answer has its own letter, so no key means one thing here
+         * and the opposite in the next question.  Deleting takes a second,
+         * deliberate capital D, asked after the keys typed so far are
+         * dropped; any other key is ignored. */
         if (u->rec_delete) {
-            if (key == 'y' || key == 'Y') {
+            if (key == 'D') {
                 u->rec_delete = 0;
                 e->confirm = CONFIRM_NONE;
                 u->mode = MODE_NORMAL;
                 return cmd_exec(e, e->pending2);
             }
-            if (key == 'n' || key == 'N' || key == K_ESC) {
+            if (key == 'b' || key == 'B' || key == K_ESC) {
                 u->rec_delete = 0;
                 term_flush_input();
                 return ED_HANDLED | ED_REDRAW;
             }
             return ED_HANDLED;
         }
-        if (key == 'n' || key == 'N') {
+        if (key == 'd' || key == 'D') {
             u->rec_delete = 1;
             term_flush_input();
             return ED_HANDLED | ED_REDRAW;
         }
-        if (key == 'y' || key == 'Y') {
+        if (key == 'r' || key == 'R') {
             e->confirm = CONFIRM_NONE;
             u->mode = MODE_NORMAL;
             return cmd_exec(e, e->pending);
@@ -679,10 +681,10 @@ static void offer_recovery(ed *e, const char *file, int batch)
             name = strrchr(name, '/') + 1;
         rec_time_text(v[0].time, when, sizeof when);
         snprintf(e->question, sizeof e->question,
-                 "Recover unsaved changes to %.300s from %s? [y]es / [n]o (discard) / [l]ater%s",
+                 "Recover unsaved changes to %.300s from %s? (r)ecover / (d)iscard / (l)ater%s",
                  name, when, n > 1 ? "  (more: :recover)" : "");
         snprintf(e->question_short, sizeof e->question_short,
-                 "Recover unsaved changes? [y]es / [n]o (discard) / [l]ater: %.300s, %s", name,
+                 "Recover unsaved changes? (r)ecover / (d)iscard / (l)ater: %.300s, %s", name,
                  when);
         cmd_quote(v[0].file, q, sizeof q);
         snprintf(e->pending, sizeof e->pending, "recover! %s", q);

@@ -157,8 +157,7 @@ int ray_key(ui *u, int key)
         u->ray_item = (u->ray_item + 1) % RAY_NITEMS;
         return ED_HANDLED | ED_REDRAW;
     case K_UP:
-    case 'k':
-    case '+': return step(u, 1);
+    case 'k': return step(u, 1);
     case K_DOWN:
     case 'j': return step(u, -1);
     case '[':
@@ -187,7 +186,9 @@ int ray_key(ui *u, int key)
         u->focus = FOCUS_SHEET;
         return ED_HANDLED | ED_REDRAW;
     default:
-        if ((key >= '0' && key <= '9') || key == '.' || key == '-') {
+        /* What a value may begin with types it; + too, so "+0.5" is never a
+         * step and then text. */
+        if ((key >= '0' && key <= '9') || key == '.' || key == '-' || key == '+') {
             buf[0] = (char)key;
             buf[1] = '\0';
             begin_edit(u, buf);

@@ -242,13 +242,12 @@ int sheet_text_col(int col)
 
 static int starts_edit(int col, int key)
 {
-    if (key >= K_BASE || key < 0x20 || key == 0x7f)
+    if (key >= K_BASE || key < 0x20 || key == 0x7f || key == ':')
         return 0;
-    /* In a text cell every printable key is text: a comment may hold any
-     * word, and none of its letters may run a command. */
-    if (sheet_text_col(col))
-        return 1;
-    if ((key >= '0' && key <= '9') || key == '.' || key == '-' || key == '+')
+    /* A key that can begin a value of the cell (any in a text cell, the i
+     * of inf in a number) types, so typing a value never runs a command;
+     * ':' alone opens the command line from any cell. */
+    if (cell_key_begins(col, key))
         return 1;
     /* Upper case never names a command, so it can start any text:
      * glass names, comments, INF. */
@@ -261,8 +260,9 @@ static int key_impl(ui *u, int key, int typing);
 
 int sheet_key(ui *u, int key)
 {
-    /* A printable key in a text cell types, before any command sees it. */
-    if (sheet_text_col(u->e->col) && starts_edit(u->e->col, key)) {
+    /* A key that can begin the cell's value types, before any command
+     * sees it. */
+    if (starts_edit(u->e->col, key)) {
         sheet_begin_edit(u, "");
         le_key(&u->le, key);
         return ED_HANDLED | ED_REDRAW;

@@ -1,0 +1,143 @@
+#!/bin/sh
+# e2e_surprise.sh - keys that never surprise and text never cut silently
+# (issue 30, items 13, 14, 16, 17, 19): the real editor runs in tmux, is
+# typed at, and its screen and files are read back.  Output is TAP.
+# Usage: e2e_surprise.sh PATH/TO/sagitta
+#
+# Independent references: the design files this script copies and what
+# grep finds in the files the editor saves; the .zmx importer's own
+# warnings from "sagitta import" (another program path) for what the
+# editor must show; widths counted by awk.
+
+SAGITTA=${1:-$SAGITTA}
+. "$(dirname "$0")/tmuxlib.sh"
+tmux_setup 4 surprise
+
+wait_gone() {
+    n=$(( ${2:-10} * 10 ))
+    while [ "$n" -gt 0 ]; do
+        screen | grep -qF -- "$1" || return 0
+        sleep 0.1
+        n=$((n - 1))
+    done
+    WHY="timed out waiting for this to go: $1"
+    return 1
+}
+
+# Starts the editor on $1 in a $2 x $3 window as session main; a session
+# "keep" holds the server up between editors.
+start() {
+    rm -f "$WORK/pid"
+    $T has-session -t =keep 2>/dev/null ||
+        $T new-session -d -s keep -x 40 -y 5 "sleep 600"
+    $T kill-session -t =main >/dev/null 2>&1
+    $T new-session -d -s main -x "${2:-110}" -y "${3:-30}" \
+        "cd '$WORK' && sh -c 'echo \$\$ >pid; exec \"\$0\" \$1' '$SAGITTA' '$1'; st=\$?; printf '\\r\\n'; echo \"EXITED \$st\"; sleep 60"
+    n=50
+    while [ ! -s "$WORK/pid" ] && [ "$n" -gt 0 ]; do sleep 0.1; n=$((n - 1)); done
+    started "$(cat "$WORK/pid" 2>/dev/null)"
+}
+
+# How many surfaces a saved design holds: one "stop" key each.
+nsurf() { grep -c '"stop"' "$WORK/$1"; }
+
+T0=$(date +%s)
+
+# 1. Item 13: ':' typed first on a Comment cell opens the command line, so
+# ":w" Enter right after committing a comment saves and leaves the comment.
+colon_comment() {
+    cp "$ROOT/examples/singlet.json" "$WORK/s.json"
+    start s.json 100 30
+    wait_for "s.json" 15 && wait_for "Surf" || return 1
+    command_line "goto 1 comment"
+    type_text "hello"
+    keys Enter
+    wait_for "s.json [+]" || return 1
+    type_text ":w"
+    keys Enter
+    wait_for "saved s.json" || { WHY="':w' on the comment cell did not save"; return 1; }
+    grep -q '"comment": "hello"' "$WORK/s.json" || { WHY="the comment is not hello"; return 1; }
+    ! grep -q '":w"' "$WORK/s.json" || { WHY="the comment became :w"; return 1; }
+    # On a Material cell ':' opens the line too: no glass "w" is looked up.
+    command_line "goto 1 material"
+    type_text ":set 1 thickness 4"
+    keys Enter
+    wait_for "s.json [+]" || return 1
+    grep -q '"material": "N-BK7"' "$WORK/s.json" || return 1
+    command_line "w"
+    wait_for "saved s.json" || return 1
+    grep -q '"thickness": 4,' "$WORK/s.json" && grep -q '"material": "N-BK7"' "$WORK/s.json"
+}
+check "':' first on a Comment or Material cell opens the command line" colon_comment
+
+# 2. Item 13: a text that begins with ':' goes into the cell after F2.
+colon_text() {
+    command_line "goto 1 comment"
+    keys F2 C-u
+    type_text ":wq"
+    keys Enter
+    wait_for "s.json [+]" || return 1
+    command_line "w"
+    wait_for "saved s.json" || return 1
+    grep -q '"comment": ":wq"' "$WORK/s.json" || { WHY="the comment is not :wq"; return 1; }
+    screen | grep -q "EXITED" && { WHY="the editor quit"; return 1; }
+    return 0
+}
+check "after F2 a comment may begin with ':'" colon_text
+
+# 3. Item 14: inf, infinity and -inf typed into number cells are values:
+# i inserts no surface and n asks nothing.
+inf_typed() {
+    before=$(nsurf s.json)
+    command_line "set 0 thickness 1000"
+    command_line "goto 1 radius"
+    type_text "inf"
+    keys Enter
+    wait_for "surface 1 radius = " || return 1
+    command_line "goto 0 thickness"
+    type_text "infinity"
+    keys Enter
+    wait_for "surface 0 thickness = " || return 1
+    screen | grep -q "Unsaved changes will be lost" && { WHY="n asked to discard"; return 1; }
+    command_line "goto 2 conic"
+    type_text "nan"
+    keys Enter
+    wait_for "not a finite number" || return 1
+    keys Escape
+    command_line "w"
+    wait_for "saved s.json" || return 1
+    after=$(nsurf s.json)
+    got=$(printf 'print cell 1 radius\nprint cell 0 thickness\n' |
+        "$SAGITTA" edit "$WORK/s.json" --batch - 2>&1 | tr '\n' ' ')
+    echo "# surfaces before $before, after $after; radius 1, thickness 0: $got"
+    [ "$before" -eq "$after" ] || { WHY="a surface was inserted"; return 1; }
+    [ "$got" = "Infinity Infinity " ] || { WHY="inf or infinity was not set"; return 1; }
+}
+check "inf, infinity and nan typed in number cells type, running no command" inf_typed
+
+# 4. Item 14: on the Type cell the first letter of a type types: e makes an
+# even asphere (not the examples list), s STANDARD (not the stop).
+type_letters() {
+    command_line "goto 2 type"
+    type_text "evenasph"
+    keys Enter
+    wait_for "surface 2 type" || return 1
+    command_line "w"
+    wait_for "saved s.json" || return 1
+    grep -q '"type": "even_asphere"' "$WORK/s.json" || { WHY="no even asphere"; return 1; }
+    command_line "goto 2 type"
+    type_text "s"
+    keys Enter
+    command_line "w"
+    wait_for "saved s.json" || return 1
+    ! grep -q '"type": "even_asphere"' "$WORK/s.json" || { WHY="s did not type STANDARD"; return 1; }
+    # The stop stayed on surface 1.
+    awk '/"stop": true/ { n++ } END { exit n == 1 ? 0 : 1 }' "$WORK/s.json" || return 1
+    command_line "quit!"
+    wait_for "EXITED 0" 5
+}
+check "on the Type cell e and s type a type name, running no command" type_letters
+
+echo "# $(( $(date +%s) - T0 )) s"
+[ "$N" -eq "$NTESTS" ] || echo "# ran $N of $NTESTS"
+[ "$FAILED" -eq 0 ]
