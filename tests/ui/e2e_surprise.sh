@@ -11,7 +11,7 @@
 
 SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
-tmux_setup 4 surprise
+tmux_setup 6 surprise
 
 wait_gone() {
     n=$(( ${2:-10} * 10 ))
@@ -137,6 +137,46 @@ type_letters() {
     wait_for "EXITED 0" 5
 }
 check "on the Type cell e and s type a type name, running no command" type_letters
+
+# 5. Item 16: a .zmx's import warnings show at open; at 80 columns the
+# status line is cut with an ellipsis and points to :messages, which shows
+# each warning whole.  The reference: "sagitta import"'s own warnings.
+zmx_warnings() {
+    cp "$ROOT/tests/data/zmx/US05331467-1.zmx" "$WORK/u.zmx"
+    (cd "$WORK" && "$SAGITTA" import u.zmx -o u.json 2>&1 >/dev/null) |
+        sed -n 's/^sagitta: warning: //p' >"$WORK/warn.txt"
+    nw=$(wc -l <"$WORK/warn.txt")
+    echo "# sagitta import gives $nw warnings"
+    [ "$nw" -ge 2 ] || { WHY="the reference has no warnings"; return 1; }
+    start u.zmx 80 24
+    wait_for "$nw warnings reading the file" 15 || return 1
+    last=$(screen | grep -v '^ *$' | tail -n 1)
+    echo "# status line: $last"
+    case $last in *"… :messages") ;; *) WHY="the cut has no ellipsis and :messages"; return 1 ;; esac
+    command_line "messages"
+    wait_for "Messages, the newest last" || return 1
+    joined=$(screen | tr '\n' ' ' | tr -s ' ')
+    while IFS= read -r w; do
+        w=$(printf '%s' "$w" | tr -s ' ')
+        case $joined in *"warning: $w"*) ;; *) WHY="not shown whole: $w"; return 1 ;; esac
+    done <"$WORK/warn.txt"
+    keys Escape
+    wait_gone "Messages, the newest last" || return 1
+    command_line "quit!"
+    wait_for "EXITED 0" 5
+}
+check ".zmx import warnings show at open; :messages shows each whole (80x24)" zmx_warnings
+
+# 6. Item 16: batch mode prints the warnings to stderr and :messages lists
+# them on stdout.
+batch_messages() {
+    out=$(cd "$WORK" && printf 'messages\n' | "$SAGITTA" edit u.zmx --batch - 2>"$WORK/err.txt")
+    while IFS= read -r w; do
+        printf '%s\n' "$out" | grep -qxF "warning: $w" || { WHY="stdout lacks: $w"; return 1; }
+        grep -qxF "sagitta edit: warning: $w" "$WORK/err.txt" || { WHY="stderr lacks: $w"; return 1; }
+    done <"$WORK/warn.txt"
+}
+check "batch: a .zmx's warnings on stderr, :messages lists them" batch_messages
 
 echo "# $(( $(date +%s) - T0 )) s"
 [ "$N" -eq "$NTESTS" ] || echo "# ran $N of $NTESTS"

@@ -148,6 +148,41 @@ void title_draw(ui *u)
     }
 }
 
+int ui_fit(const char *s, int w, const char *ell, char *out, size_t n)
+{
+    size_t i = 0;
+    int c = 0;
+    if (numfmt_width(s) <= w) {
+        snprintf(out, n, "%s", s);
+        return 0;
+    }
+    while (s[i] && c < w - 1) {
+        i++;
+        while (((unsigned char)s[i] & 0xC0) == 0x80)
+            i++;
+        c++;
+    }
+    snprintf(out, n, "%.*s%s", (int)i, s, w > 0 ? ell : "");
+    return 1;
+}
+
+/* A message on the status line from x on: whole when it fits, else cut
+ * with an ellipsis and the way to read it whole. */
+static void status_msg(ui *u, int x, int style, const char *s)
+{
+    static const char more[] = " :messages";
+    char buf[ED_MSG + SG_DIAG_MSG + 32];
+    int w = u->cols - x;
+    if (numfmt_width(s) <= w || w < 2 * (int)sizeof more) {
+        ui_fit(s, w, u->ell, buf, sizeof buf);
+        term_text(u->status_y, x, w, style, 1, buf);
+        return;
+    }
+    ui_fit(s, w - (int)strlen(more), u->ell, buf, sizeof buf);
+    x += term_text(u->status_y, x, w - (int)strlen(more), style, 0, buf);
+    term_text(u->status_y, x, u->cols - x, T_DIM, 1, more);
+}
+
 void status_draw(ui *u)
 {
     const ed *e = u->e;
@@ -183,13 +218,17 @@ void status_draw(ui *u)
             char m[ED_MSG + SG_DIAG_MSG + 16];
             int w;
             snprintf(m, sizeof m, "%s  ", e->msg);
+            if (numfmt_width(m) + 12 > u->cols) {
+                /* No room for both: the message, cut where it must be. */
+                status_msg(u, 0, T_NORMAL, e->msg);
+                return;
+            }
             w = term_text(y, 0, u->cols, T_NORMAL, 0, m);
             snprintf(m, sizeof m, "warning: %s", e->cmp.warn);
-            if (w < u->cols)
-                term_text(y, w, u->cols - w, T_ERROR, 1, m);
+            status_msg(u, w, T_ERROR, m);
             return;
         }
-        term_text(y, 0, u->cols, e->msg_err ? T_ERROR : T_NORMAL, 1, e->msg);
+        status_msg(u, 0, e->msg_err ? T_ERROR : T_NORMAL, e->msg);
         return;
     }
     if (u->mode == MODE_SETTINGS || u->mode == MODE_EXAMPLES || u->mode == MODE_SYSDATA ||
@@ -203,7 +242,7 @@ void status_draw(ui *u)
         /* A glass used beyond its range, say: the numbers are suspect. */
         char w[SG_DIAG_MSG + 16];
         snprintf(w, sizeof w, "warning: %s", e->cmp.warn);
-        term_text(y, 0, u->cols, T_ERROR, 1, w);
+        status_msg(u, 0, T_ERROR, w);
         return;
     }
     if (u->focus == FOCUS_SHEET && sheet_text_col(e->col)) {
@@ -265,6 +304,7 @@ static void draw(ui *u)
     case MODE_HELP: help_draw(u); break;
     case MODE_SYSDATA: sysdata_draw(u); break;
     case MODE_GLASSES: glasses_draw(u); break;
+    case MODE_MESSAGES: messages_draw(u); break;
     case MODE_SETTINGS: settings_draw(u); status_draw(u); break;
     case MODE_EXAMPLES: examples_draw(u); status_draw(u); break;
     case MODE_COMMAND:
@@ -528,6 +568,7 @@ static int dispatch(ui *u, int key)
     case MODE_EXAMPLES: return examples_key(u, key);
     case MODE_SYSDATA: return sysdata_key(u, key);
     case MODE_GLASSES: return glasses_key(u, key);
+    case MODE_MESSAGES: return messages_key(u, key);
     default: break;
     }
     /* A fresh key clears the last message; the key's own command may set a
@@ -585,6 +626,10 @@ static int act(ui *u, int f)
         u->sys_top = 0;
         u->mode = MODE_SYSDATA;
     }
+    if (f & ED_SHOW_MESSAGES) {
+        u->msg_top = -1;
+        u->mode = MODE_MESSAGES;
+    }
     if (f & ED_SHOW_GLASSES) {
         u->glass_top = 0;
         u->mode = MODE_GLASSES;
@@ -602,6 +647,16 @@ static int loop(ui *u)
         if (u->e->dirty) {
             ed_recompute(u->e);
             redraw = 1;
+        }
+        /* What the status line shows goes into the history whole. */
+        ed_msg_log(u->e);
+        if (strcmp(u->warn_seen, u->e->cmp.warn) != 0) {
+            snprintf(u->warn_seen, sizeof u->warn_seen, "%s", u->e->cmp.warn);
+            if (u->warn_seen[0]) {
+                char w[SG_DIAG_MSG + 16];
+                snprintf(w, sizeof w, "warning: %s", u->warn_seen);
+                ed_hist_add(u->e, 1, w);
+            }
         }
         if (redraw)
             draw(u);
@@ -749,6 +804,8 @@ int sg_editor_main(int argc, char **argv)
         fprintf(stderr, "sagitta edit: out of memory\n");
         return 1;
     }
+    /* A script's load warnings go to stderr, as its errors do. */
+    e.batch = script != NULL;
     if (file) {
         if (stat(file, &st) != 0 && errno == ENOENT) {
             /* Like vi: a new file under the name given. */
@@ -764,6 +821,7 @@ int sg_editor_main(int argc, char **argv)
                 return 1;
             }
             e.wave = e.doc.sys->primary_wave;
+            ed_load_warnings(&e, file, &d);
             /* Solved values follow the design as it is opened. */
             sg_diag_clear(&d);
             if (sg_system_apply_solves(e.doc.sys, e.cat, &d) != SG_OK)
