@@ -11,8 +11,18 @@
 
 SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
-tmux_setup 6 surprise
+tmux_setup 8 surprise
 
+wait_re() {
+    n=$(( ${2:-10} * 10 ))
+    while [ "$n" -gt 0 ]; do
+        screen | grep -qE -- "$1" && return 0
+        sleep 0.1
+        n=$((n - 1))
+    done
+    WHY="timed out waiting for a line like: $1"
+    return 1
+}
 wait_gone() {
     n=$(( ${2:-10} * 10 ))
     while [ "$n" -gt 0 ]; do
@@ -177,6 +187,54 @@ batch_messages() {
     done <"$WORK/warn.txt"
 }
 check "batch: a .zmx's warnings on stderr, :messages lists them" batch_messages
+
+# 7. Item 17, at 80x24: a solve's letter stays when its number is cut; the
+# ray's status shows; the paraxial line ends in an ellipsis and F3 where it
+# is cut, never mid-number; the detail panel keeps the direction's bound.
+narrow() {
+    cp "$ROOT/examples/cooke_triplet.json" "$WORK/ck.json"
+    start ck.json 80 24
+    wait_for "ck.json" 15 && wait_for "Surf" || return 1
+    command_line "solve 6 thickness marginal_height 0"
+    wait_for "ck.json [+]" || return 1
+    command_line "goto 6 thickness"
+    sleep 0.3
+    row=$(screen | grep -E '^ +6 STANDARD')
+    echo "# row 6: $row"
+    printf '%s\n' "$row" | grep -qE ' 41\.[0-9]*… M ' || { WHY="no '… M' in row 6"; return 1; }
+    ray=$(screen | grep '^Ray ')
+    echo "# ray line: $ray"
+    printf '%s\n' "$ray" | grep -qE ' OK *$' || { WHY="the ray's status is not shown"; return 1; }
+    par=$(screen | grep -E '^(at )?2: 0\.5875618um')
+    echo "# paraxial line: $par"
+    case $par in
+    *"track "[0-9]*) ;; # whole
+    *"… F3") ;;
+    *) WHY="the paraxial line is cut without an ellipsis"; return 1 ;;
+    esac
+    # No number on it is cut: each field's value is followed by a blank or
+    # the end, as "sagitta paraxial" writes them whole.
+    printf '%s\n' "$par" | grep -qE '(EFL|BFL|EPD|track) [0-9.]+…' && { WHY="a number was cut"; return 1; }
+    screen | grep -q 'dir bound=' || { WHY="the direction's bound is not shown"; return 1; }
+    return 0
+}
+check "80x24: solve letter, ray status, paraxial line and dir bound are never cut silently" narrow
+
+# 8. Item 17: the ray selector uses the width a terminal has: at 200
+# columns Hx shows every digit typed, at 80 it ends in an ellipsis.
+ray_width() {
+    command_line "hx 0.123456789"
+    wait_re '^Ray .*Hx 0\.123[0-9]*… ' || return 1
+    command_line "quit!"
+    wait_for "EXITED 0" 5 || return 1
+    start ck.json 200 30
+    wait_for "ck.json" 15 && wait_for "Surf" || return 1
+    command_line "hx 0.123456789"
+    wait_re '^Ray .*Hx 0\.123456789 ' || return 1
+    command_line "quit!"
+    wait_for "EXITED 0" 5
+}
+check "the ray selector shows all the digits at 200 columns, an ellipsis at 80" ray_width
 
 echo "# $(( $(date +%s) - T0 )) s"
 [ "$N" -eq "$NTESTS" ] || echo "# ran $N of $NTESTS"

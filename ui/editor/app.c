@@ -166,6 +166,29 @@ int ui_fit(const char *s, int w, const char *ell, char *out, size_t n)
     return 1;
 }
 
+int ui_fit_words(const char *s, int w, const char *ell, const char *more, char *out, size_t n)
+{
+    size_t i, cut = 0;
+    int cols = 0, room = w - 1 - numfmt_width(more);
+    if (numfmt_width(s) <= w) {
+        snprintf(out, n, "%s", s);
+        return 0;
+    }
+    for (i = 0; s[i]; i++) {
+        if (((unsigned char)s[i] & 0xC0) == 0x80)
+            continue;
+        if (s[i] == ' ' && cols <= room)
+            cut = i;
+        cols++;
+    }
+    while (cut > 0 && strchr(" ,:;", s[cut - 1]))
+        cut--;
+    if (room < 0)
+        return ui_fit(s, w, ell, out, n);
+    snprintf(out, n, "%.*s%s%s", (int)cut, s, ell, more);
+    return 1;
+}
+
 /* A message on the status line from x on: whole when it fits, else cut
  * with an ellipsis and the way to read it whole. */
 static void status_msg(ui *u, int x, int style, const char *s)
@@ -245,17 +268,21 @@ void status_draw(ui *u)
         status_msg(u, 0, T_ERROR, w);
         return;
     }
-    if (u->focus == FOCUS_SHEET && sheet_text_col(e->col)) {
-        term_text(y, 0, u->cols, T_DIM, 1,
-                  "Typing edits this text cell; : command line; Esc then a key runs a "
-                  "command  F1 help");
-        return;
+    {
+        /* A hint too long for the line ends at a word, in an ellipsis;
+         * F1 lists every key. */
+        char hint[256];
+        ui_fit_words(u->focus == FOCUS_SHEET && sheet_text_col(e->col)
+                         ? "Typing edits this text cell; : command line; Esc then a key runs a "
+                           "command  F1 help"
+                     : u->focus == FOCUS_RAY
+                         ? "Ray: Left/Right choose  Up/Down step  Enter edit  c chief  F6-F9 "
+                           "marginal  f back  F1 help"
+                         : "? help  : command  Enter edit  Ins/d insert/delete  s stop  u/r "
+                           "undo/redo  f ray  t settings  w save  q quit",
+                     u->cols, u->ell, "", hint, sizeof hint);
+        term_text(y, 0, u->cols, T_DIM, 1, hint);
     }
-    term_text(y, 0, u->cols, T_DIM, 1,
-              u->focus == FOCUS_RAY
-                  ? "Ray: Left/Right choose  Up/Down step  Enter edit  c chief  F6-F9 marginal  f back"
-                  : "? help  : command  Enter edit  Ins/d insert/delete  s stop  u/r undo/redo  "
-                    "f ray  t settings  w save  q quit");
 }
 
 /* Draws s from line y on, wrapped at blanks to cols columns; returns the
@@ -655,6 +682,14 @@ static int loop(ui *u)
             if (u->warn_seen[0]) {
                 char w[SG_DIAG_MSG + 16];
                 snprintf(w, sizeof w, "warning: %s", u->warn_seen);
+                ed_hist_add(u->e, 1, w);
+            }
+        }
+        if (strcmp(u->fail_seen, u->e->cmp.build_msg) != 0) {
+            snprintf(u->fail_seen, sizeof u->fail_seen, "%s", u->e->cmp.build_msg);
+            if (u->fail_seen[0]) {
+                char w[SG_DIAG_MSG + 16];
+                snprintf(w, sizeof w, "cannot trace: %s", u->fail_seen);
                 ed_hist_add(u->e, 1, w);
             }
         }

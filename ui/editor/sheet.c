@@ -67,10 +67,26 @@ static void cell_show(const ui *u, int row, int col, int w, char *out, size_t n)
         return;
     }
     cell_text(u->e->doc.sys, row, col, full, sizeof full);
-    if (cell_numeric(col) && !(col == COL_RADIUS && strcmp(full, "Infinity") == 0))
-        numfmt_fit(full, w, u->ell, out, n);
-    else
-        fit_text(full, w, u->ell, out, n);
+    if (cell_numeric(col)) {
+        /* A solve's letter (Zemax's M, P, F ...) stays when the number is
+         * cut: the number gives up the room. */
+        size_t len = strlen(full);
+        char mark = 0, num[NUMFMT_MAX * 2];
+        if (len > 2 && full[len - 2] == ' ' && full[len - 1] >= 'A' && full[len - 1] <= 'Z') {
+            mark = full[len - 1];
+            full[len - 2] = '\0';
+        }
+        if (col == COL_RADIUS && strcmp(full, "Infinity") == 0)
+            fit_text(full, mark ? w - 2 : w, u->ell, num, sizeof num);
+        else
+            numfmt_fit(full, mark ? w - 2 : w, u->ell, num, sizeof num);
+        if (mark)
+            snprintf(out, n, "%s %c", num, mark);
+        else
+            snprintf(out, n, "%s", num);
+        return;
+    }
+    fit_text(full, w, u->ell, out, n);
 }
 
 /* Places the visible columns from u->left on. */

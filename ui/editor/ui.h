@@ -67,6 +67,7 @@ typedef struct ui {
     int glass_top;
     int msg_top;         /* the message history's first row; -1: the newest */
     char warn_seen[SG_DIAG_MSG]; /* the design warning last put in the history */
+    char fail_seen[SG_DIAG_MSG]; /* the same for why the design cannot be traced */
     int set_sel, set_top;
     char **ex;
     int nex, ex_sel, ex_top;
@@ -132,6 +133,9 @@ int messages_key(ui *u, int key);
 /* Cuts UTF-8 s to at most w columns, the cut marked with ell; returns
  * nonzero when it cut. */
 int ui_fit(const char *s, int w, const char *ell, char *out, size_t n);
+/* The same, cut at a blank so no number or word is cut, then ell and more
+ * (where to see it whole, e.g. " F3"). */
+int ui_fit_words(const char *s, int w, const char *ell, const char *more, char *out, size_t n);
 
 void help_draw(ui *u);
 int help_key(ui *u, int key);
