@@ -71,7 +71,7 @@ void ray_draw(ui *u)
     int x = 0, i, y = u->ray_y, whole, need, room, sst;
     char buf[128], shown[128], st[96];
     term_fill(y, 0, u->cols, T_NORMAL);
-    /* The status is kept room first: the items give way to it. */
+    /* The status gets its room first: the items give way to it. */
     ray_status(u, st, sizeof st, &sst);
     room = u->cols - (int)strlen(st);
     for (need = 4, i = 0; i < RAY_NITEMS; i++)
