@@ -262,11 +262,12 @@ static void test_title_cut(void **state)
 {
     static const struct {
         int w;
-        const char *want;
+        const char *title, *want;
     } cases[] = {
-        {40, "RMS 12.3, GEO 1911 um"}, /* fits: whole */
-        {20, "RMS 12.3, GEO 1911…"},   /* "1911 u" would cut the unit */
-        {16, "RMS 12.3, GEO…"},        /* never "GEO 19" */
+        {40, "RMS 12.3, GEO 1911 um", "RMS 12.3, GEO 1911 um"}, /* fits: whole */
+        {20, "RMS 12.3, GEO 1911 um", "RMS 12.3, GEO 1911…"},   /* the unit goes */
+        {16, "RMS 12.3, GEO 1911 um", "RMS 12.3, GEO…"},        /* never "GEO 19" */
+        {20, "RMS 12.3, GEO 191100 um", "RMS 12.3, GEO…"},      /* never "GEO 1911" */
     };
     size_t i;
     (void)state;
@@ -279,7 +280,7 @@ static void test_title_cut(void **state)
         char buf[8192], *row, *end;
         size_t n;
         plot_figure_init(&f, "");
-        p = plot_add_panel(&f, "RMS 12.3, GEO 1911 um", "x", "y");
+        p = plot_add_panel(&f, cases[i].title, "x", "y");
         plot_add_series(p, PLOT_LINES, 0, x, y, 2);
         assert_int_equal(plot_grid_init(&g, cases[i].w, 12), 0);
         plot_draw_cells(&f, &g, 0, 0, cases[i].w, 12);
