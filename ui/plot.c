@@ -381,22 +381,40 @@ static void bars(dots *d, const plot_panel *p, const plot_series *s, int W, int 
     }
 }
 
-/* Centred in w columns, and cut to them. */
-static void center_text(plot_grid *g, int x, int w, int y, const char *s, int color)
-{
-    size_t len = 0;
-    const unsigned char *u = (const unsigned char *)s;
-    for (; *u; u++)
-        len += (*u & 0xC0) != 0x80;
-    plot_grid_text_n(g, x + (w > (int)len ? (w - (int)len) / 2 : 0), y, s, color, w);
-}
-
 static size_t text_len(const char *s)
 {
     size_t len = 0;
     for (; *s; s++)
         len += ((unsigned char)*s & 0xC0) != 0x80;
     return len;
+}
+
+/* Centred in w columns.  Text wider than that is cut at a blank and ends
+ * in an ellipsis, so a number is never cut short ("GEO 1911 um" becomes
+ * "GEO…", never "GEO 19"). */
+static void center_text(plot_grid *g, int x, int w, int y, const char *s, int color)
+{
+    size_t len = text_len(s);
+    char buf[256];
+    if (w <= 0)
+        return;
+    if ((int)len > w) {
+        size_t i, cut = 0, n = 0;
+        for (i = 0; s[i]; i++) {
+            if (((unsigned char)s[i] & 0xC0) == 0x80)
+                continue;
+            /* s[0..i) takes n columns; with the ellipsis n + 1. */
+            if (s[i] == ' ' && (int)n + 1 <= w)
+                cut = i;
+            n++;
+        }
+        while (cut > 0 && strchr(" ,:;", s[cut - 1]))
+            cut--;
+        snprintf(buf, sizeof buf, "%.*s\xe2\x80\xa6", (int)(cut < 200 ? cut : 200), s);
+        s = buf;
+        len = text_len(buf);
+    }
+    plot_grid_text_n(g, x + (w > (int)len ? (w - (int)len) / 2 : 0), y, s, color, w);
 }
 
 static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int w, int h)

@@ -255,6 +255,54 @@ static void test_cells_print(void **state)
     plot_figure_free(&f);
 }
 
+/* A panel title too wide for its panel is cut at a blank and ends in an
+ * ellipsis: the number after GEO is shown whole or not at all (issue 30,
+ * item 19: "GEO 19" where the value was 1911). */
+static void test_title_cut(void **state)
+{
+    static const struct {
+        int w;
+        const char *title, *want;
+    } cases[] = {
+        {40, "RMS 12.3, GEO 1911 um", "RMS 12.3, GEO 1911 um"}, /* fits: whole */
+        {20, "RMS 12.3, GEO 1911 um", "RMS 12.3, GEO 1911…"},   /* the unit goes */
+        {16, "RMS 12.3, GEO 1911 um", "RMS 12.3, GEO…"},        /* never "GEO 19" */
+        {20, "RMS 12.3, GEO 191100 um", "RMS 12.3, GEO…"},      /* never "GEO 1911" */
+    };
+    size_t i;
+    (void)state;
+    for (i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        plot_figure f;
+        plot_grid g;
+        plot_panel *p;
+        double x[2] = {0, 1}, y[2] = {0, 1};
+        FILE *t = tmpfile();
+        char buf[8192], *row, *end;
+        size_t n;
+        plot_figure_init(&f, "");
+        p = plot_add_panel(&f, cases[i].title, "x", "y");
+        plot_add_series(p, PLOT_LINES, 0, x, y, 2);
+        assert_int_equal(plot_grid_init(&g, cases[i].w, 12), 0);
+        plot_draw_cells(&f, &g, 0, 0, cases[i].w, 12);
+        assert_int_equal(plot_grid_print(&g, t, 0), 0);
+        rewind(t);
+        n = fread(buf, 1, sizeof buf - 1, t);
+        buf[n] = '\0';
+        /* The first row, without the centring's blanks. */
+        end = strchr(buf, '\n');
+        assert_non_null(end);
+        *end = '\0';
+        for (row = buf; *row == ' '; row++)
+            ;
+        while (end > row && end[-1] == ' ')
+            *--end = '\0';
+        assert_string_equal(row, cases[i].want);
+        fclose(t);
+        plot_grid_free(&g);
+        plot_figure_free(&f);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -263,6 +311,7 @@ int main(void)
         cmocka_unit_test(test_ticks),
         cmocka_unit_test(test_files),
         cmocka_unit_test(test_cells_print),
+        cmocka_unit_test(test_title_cut),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

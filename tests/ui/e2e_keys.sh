@@ -474,7 +474,7 @@ typeahead() {
     $T new-session -d -s main -x 110 -y 30 \
         "cd '$WORK' && sh -c 'sleep 0.5; echo \$\$ >pid.main; exec \"\$0\" r.json' '$SAGITTA'; echo \"EXITED \$?\"; sleep 60"
     type_text ":wn"
-    keys n y n y
+    keys d D r n y
     wait_for "Recover unsaved changes to r.json" 15 || return 1
     PID=$(cat "$WORK/pid.main")
     started "$PID"
@@ -484,28 +484,28 @@ typeahead() {
 }
 check "keys typed before the recovery question are dropped; the file stays" typeahead
 only_answers() {
-    type_text "xq:w"
+    type_text "xq:wyn"
     keys Enter
     sleep 0.5
     wait_for "Recover unsaved changes to r.json" || return 1
     [ "$(nrec)" -ge 1 ] || { WHY="the file went"; return 1; }
-    keys n
+    keys d
     wait_for "Delete the recovery file and its unsaved changes for good?" || return 1
     keys Escape
     wait_for "Recover unsaved changes to r.json" || return 1
     [ "$(nrec)" -ge 1 ] || { WHY="n then Esc deleted the file"; return 1; }
 }
-check "the question ignores other keys; n asks again and Esc goes back" only_answers
+check "the question ignores other keys, y and n too; d asks again and Esc goes back" only_answers
 confirmed_delete() {
-    keys n
+    keys d
     wait_for "for good?" || return 1
-    keys y
+    keys D
     wait_for "deleted " || return 1
     n=50; while [ "$(nrec)" -ne 0 ] && [ $n -gt 0 ]; do sleep 0.1; n=$((n - 1)); done
     [ "$(nrec)" -eq 0 ] || { WHY="the file is still there"; return 1; }
     stop
 }
-check "n, then y, deletes the recovery file" confirmed_delete
+check "d, then a capital D, deletes the recovery file" confirmed_delete
 
 # 25. Quitting with unsaved changes, y saves: a design without a name asks
 # for one, and a name that exists asks before it is replaced; then it quits.

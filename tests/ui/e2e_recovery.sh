@@ -162,8 +162,8 @@ died_well() { # expected "EXITED N" text or "", whether to check stty
 recovered() {
     start c.json
     wait_for "Recover unsaved changes to c.json from" 15 || return 1
-    wait_for "[y]es / [n]o (discard) / [l]ater" || return 1
-    keys y
+    wait_for "(r)ecover / (d)iscard / (l)ater" || return 1
+    keys r
     wait_for "recovered unsaved changes to" || return 1
     radius3_is -3900 || return 1
     wait_for "c.json [+]" || return 1
@@ -208,7 +208,7 @@ round() { # name, kill action, expected exit text, stty|-, start mode
         not_ok "$name: editing a radius writes a recovery file"
         OLDPID=$PID
     fi
-    check "$name: the next start offers recovery; y shows radius -3900, modified" recovered
+    check "$name: the next start offers recovery; r shows radius -3900, modified" recovered
     check "$name: save writes the recovered edit to the file; no recovery file remains" \
         saved_back
 }
@@ -253,21 +253,33 @@ batch_warns() {
 }
 check "--batch warns naming the recovery file, and runs the script" batch_warns
 
-# 21. "no", then a second "yes", deletes it.  In 80 columns the answers
-# come first, so they show.
+# 21. d (discard), then a capital D, deletes it; y and n answer nothing,
+# and a lower-case d a second time deletes nothing.  In 80 columns the
+# answers come first, so they show.
 discard() {
     start c.json 80 24
-    wait_for "Recover unsaved changes? [y]es / [n]o (discard) / [l]ater: c.json" 15 || return 1
-    keys n
+    wait_for "Recover unsaved changes? (r)ecover / (d)iscard / (l)ater: c.json" 15 || return 1
+    keys y n
+    sleep 0.5
+    wait_for "(r)ecover / (d)iscard / (l)ater" || { WHY="y or n answered the question"; return 1; }
+    radius3_is -3846 || return 1
+    keys d
     wait_for "Delete the recovery file" || return 1
-    [ "$(nrec)" -eq 1 ] || { WHY="n alone deleted the file"; return 1; }
-    keys y
+    keys d y n
+    sleep 0.5
+    [ "$(nrec)" -eq 1 ] || { WHY="d, y or n deleted the file"; return 1; }
+    wait_for "Delete the recovery file" || return 1
+    keys b
+    wait_for "(r)ecover / (d)iscard / (l)ater" || return 1
+    keys d
+    wait_for "D (capital) deletes" || return 1
+    keys D
     wait_for "deleted " || return 1
     wait_nrec 0 && radius3_is -3846 && wait_gone "c.json [+]" || return 1
     keys q
     wait_for "EXITED 0" 5
 }
-check "n (no) then y deletes the recovery file (80x24: the answers show)" discard
+check "d then a capital D deletes the recovery file; y, n and a second d do not (80x24)" discard
 
 # 22. A design never saved is recovered by a start without a file.
 untitled() {
@@ -282,7 +294,7 @@ untitled() {
     OLDPID=$PID
     start ""
     wait_for "Recover unsaved changes to an untitled design" 15 || return 1
-    keys y
+    keys r
     wait_for "recovered an untitled design" || return 1
     wait_re "^[A-Z]* +1 STANDARD .* 55\\.5 " 5 && wait_for "[new design] [+]" || return 1
     command_line "w new.json"

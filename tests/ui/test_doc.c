@@ -1136,10 +1136,61 @@ static void test_telecentric(void **state)
     free_ed(e);
 }
 
+/* Which keys type into a cell rather than run a command (issue 30, items
+ * 13 and 14).  The reference for a number cell is the C library's strtod:
+ * a key may begin a value when strtod reads some text that starts with it
+ * whole (leading blanks aside: a blank is the Space key's toggle, not a
+ * value's first character). */
+static void test_key_begins(void)
+{
+    static const char *const tails[] = {"", "1", "5", ".5", "nf", "nfinity", "an", "0"};
+    int k;
+    size_t t;
+    for (k = 0x21; k < 0x7f; k++) {
+        int reads = 0;
+        for (t = 0; t < sizeof tails / sizeof tails[0]; t++) {
+            char buf[16], *end;
+            snprintf(buf, sizeof buf, "%c%s", k, tails[t]);
+            errno = 0;
+            (void)strtod(buf, &end);
+            if (end != buf && *end == '\0')
+                reads = 1;
+        }
+        /* Hex (0x...) and exponents follow a digit; 'e' alone reads nothing. */
+        if (cell_key_begins(COL_RADIUS, k) != reads ||
+            cell_key_begins(COL_THICKNESS, k) != reads || cell_key_begins(COL_CONIC, k) != reads)
+            fail_msg("key '%c': strtod %s a value beginning with it, but the cell says %d", k,
+                     reads ? "reads" : "reads no", cell_key_begins(COL_RADIUS, k));
+        /* Text cells take every printable key but ':', the command line's. */
+        assert_int_equal(cell_key_begins(COL_COMMENT, k), k != ':');
+        assert_int_equal(cell_key_begins(COL_MATERIAL, k), k != ':');
+    }
+    /* A UTF-8 letter types in a comment; nothing below the blank does. */
+    assert_int_equal(cell_key_begins(COL_COMMENT, 0xE9), 1);
+    assert_int_equal(cell_key_begins(COL_COMMENT, '\t'), 0);
+    /* Type: the first letters of the names sagitta(1) lists (STANDARD,
+     * EVENASPH, COORDBRK or cb, ODDASPHE, TOROIDAL, BICONICX, FZERNSAG,
+     * SZERNSAG, XPOLYNOM, asph); d, i, n, q, u, w, ':' are none. */
+    {
+        const char *yes = "seEcCotbfzxa", *no = "dinquwhjkl:0";
+        for (; *yes; yes++)
+            assert_int_equal(cell_key_begins(COL_TYPE, *yes), 1);
+        for (; *no; no++)
+            assert_int_equal(cell_key_begins(COL_TYPE, *no), 0);
+    }
+}
+
+static void test_keys(void **state)
+{
+    (void)state;
+    test_key_begins();
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_numfmt),
+        cmocka_unit_test(test_keys),
         cmocka_unit_test(test_set_exact),
         cmocka_unit_test(test_set_shapes),
         cmocka_unit_test(test_frame_columns),

@@ -148,6 +148,64 @@ void title_draw(ui *u)
     }
 }
 
+int ui_fit(const char *s, int w, const char *ell, char *out, size_t n)
+{
+    size_t i = 0;
+    int c = 0;
+    if (numfmt_width(s) <= w) {
+        snprintf(out, n, "%s", s);
+        return 0;
+    }
+    while (s[i] && c < w - 1) {
+        i++;
+        while (((unsigned char)s[i] & 0xC0) == 0x80)
+            i++;
+        c++;
+    }
+    snprintf(out, n, "%.*s%s", (int)i, s, w > 0 ? ell : "");
+    return 1;
+}
+
+int ui_fit_words(const char *s, int w, const char *ell, const char *more, char *out, size_t n)
+{
+    size_t i, cut = 0;
+    int cols = 0, room = w - 1 - numfmt_width(more);
+    if (numfmt_width(s) <= w) {
+        snprintf(out, n, "%s", s);
+        return 0;
+    }
+    for (i = 0; s[i]; i++) {
+        if (((unsigned char)s[i] & 0xC0) == 0x80)
+            continue;
+        if (s[i] == ' ' && cols <= room)
+            cut = i;
+        cols++;
+    }
+    while (cut > 0 && strchr(" ,:;", s[cut - 1]))
+        cut--;
+    if (room < 0)
+        return ui_fit(s, w, ell, out, n);
+    snprintf(out, n, "%.*s%s%s", (int)cut, s, ell, more);
+    return 1;
+}
+
+/* A message on the status line from x on: whole when it fits, else cut
+ * with an ellipsis and the way to read it whole. */
+static void status_msg(ui *u, int x, int style, const char *s)
+{
+    static const char more[] = " :messages";
+    char buf[ED_MSG + SG_DIAG_MSG + 32];
+    int w = u->cols - x;
+    if (numfmt_width(s) <= w || w < 2 * (int)sizeof more) {
+        ui_fit(s, w, u->ell, buf, sizeof buf);
+        term_text(u->status_y, x, w, style, 1, buf);
+        return;
+    }
+    ui_fit(s, w - (int)strlen(more), u->ell, buf, sizeof buf);
+    x += term_text(u->status_y, x, w - (int)strlen(more), style, 0, buf);
+    term_text(u->status_y, x, u->cols - x, T_DIM, 1, more);
+}
+
 void status_draw(ui *u)
 {
     const ed *e = u->e;
@@ -167,7 +225,7 @@ void status_draw(ui *u)
                             ? "Unsaved changes. Save before quitting? (y)es (n)o (c)ancel"
                         : e->confirm == CONFIRM_RECOVER && u->rec_delete
                             ? "Delete the recovery file and its unsaved changes for good? "
-                              "(y)es delete / (n)o go back"
+                              "D (capital) deletes / (b)ack"
                         : e->confirm == CONFIRM_RECOVER || e->confirm == CONFIRM_ASK
                             ? ((int)strlen(e->question) <= u->cols ? e->question
                                                                     : e->question_short)
@@ -183,13 +241,17 @@ void status_draw(ui *u)
             char m[ED_MSG + SG_DIAG_MSG + 16];
             int w;
             snprintf(m, sizeof m, "%s  ", e->msg);
+            if (numfmt_width(m) + 12 > u->cols) {
+                /* No room for both: the message, cut where it must be. */
+                status_msg(u, 0, T_NORMAL, e->msg);
+                return;
+            }
             w = term_text(y, 0, u->cols, T_NORMAL, 0, m);
             snprintf(m, sizeof m, "warning: %s", e->cmp.warn);
-            if (w < u->cols)
-                term_text(y, w, u->cols - w, T_ERROR, 1, m);
+            status_msg(u, w, T_ERROR, m);
             return;
         }
-        term_text(y, 0, u->cols, e->msg_err ? T_ERROR : T_NORMAL, 1, e->msg);
+        status_msg(u, 0, e->msg_err ? T_ERROR : T_NORMAL, e->msg);
         return;
     }
     if (u->mode == MODE_SETTINGS || u->mode == MODE_EXAMPLES || u->mode == MODE_SYSDATA ||
@@ -203,20 +265,24 @@ void status_draw(ui *u)
         /* A glass used beyond its range, say: the numbers are suspect. */
         char w[SG_DIAG_MSG + 16];
         snprintf(w, sizeof w, "warning: %s", e->cmp.warn);
-        term_text(y, 0, u->cols, T_ERROR, 1, w);
+        status_msg(u, 0, T_ERROR, w);
         return;
     }
-    if (u->focus == FOCUS_SHEET && sheet_text_col(e->col)) {
-        term_text(y, 0, u->cols, T_DIM, 1,
-                  "Typing edits this text cell; Esc then a key runs a command (Esc : for the "
-                  "command line)  F1 help");
-        return;
+    {
+        /* A hint too long for the line ends at a word, in an ellipsis;
+         * F1 lists every key. */
+        char hint[256];
+        ui_fit_words(u->focus == FOCUS_SHEET && sheet_text_col(e->col)
+                         ? "Typing edits this text cell; : command line; Esc then a key runs a "
+                           "command  F1 help"
+                     : u->focus == FOCUS_RAY
+                         ? "Ray: Left/Right choose  Up/Down step  Enter edit  c chief  F6-F9 "
+                           "marginal  f back  F1 help"
+                         : "? help  : command  Enter edit  Ins/d insert/delete  s stop  u/r "
+                           "undo/redo  f ray  t settings  w save  q quit",
+                     u->cols, u->ell, "", hint, sizeof hint);
+        term_text(y, 0, u->cols, T_DIM, 1, hint);
     }
-    term_text(y, 0, u->cols, T_DIM, 1,
-              u->focus == FOCUS_RAY
-                  ? "Ray: Left/Right choose  Up/Down step  Enter edit  c chief  F6-F9 marginal  f back"
-                  : "? help  : command  Enter edit  i/d insert/delete  s stop  u/r undo/redo  "
-                    "f ray  t settings  w save  q quit");
 }
 
 /* Draws s from line y on, wrapped at blanks to cols columns; returns the
@@ -265,6 +331,7 @@ static void draw(ui *u)
     case MODE_HELP: help_draw(u); break;
     case MODE_SYSDATA: sysdata_draw(u); break;
     case MODE_GLASSES: glasses_draw(u); break;
+    case MODE_MESSAGES: messages_draw(u); break;
     case MODE_SETTINGS: settings_draw(u); status_draw(u); break;
     case MODE_EXAMPLES: examples_draw(u); status_draw(u); break;
     case MODE_COMMAND:
@@ -334,28 +401,30 @@ static int confirm_key(ui *u, int key)
     ed *e = u->e;
     int kind = e->confirm, f;
     if (kind == CONFIRM_RECOVER) {
-        /* Only its own answers count; deleting takes a second, explicit
-         * yes, asked after the keys typed so far are dropped. */
+        /* Each answer has its own letter, so no key means one thing here
+         * and the opposite in the next question.  Deleting takes a second,
+         * deliberate capital D, asked after the keys typed so far are
+         * dropped; any other key is ignored. */
         if (u->rec_delete) {
-            if (key == 'y' || key == 'Y') {
+            if (key == 'D') {
                 u->rec_delete = 0;
                 e->confirm = CONFIRM_NONE;
                 u->mode = MODE_NORMAL;
                 return cmd_exec(e, e->pending2);
             }
-            if (key == 'n' || key == 'N' || key == K_ESC) {
+            if (key == 'b' || key == 'B' || key == K_ESC) {
                 u->rec_delete = 0;
                 term_flush_input();
                 return ED_HANDLED | ED_REDRAW;
             }
             return ED_HANDLED;
         }
-        if (key == 'n' || key == 'N') {
+        if (key == 'd' || key == 'D') {
             u->rec_delete = 1;
             term_flush_input();
             return ED_HANDLED | ED_REDRAW;
         }
-        if (key == 'y' || key == 'Y') {
+        if (key == 'r' || key == 'R') {
             e->confirm = CONFIRM_NONE;
             u->mode = MODE_NORMAL;
             return cmd_exec(e, e->pending);
@@ -526,6 +595,7 @@ static int dispatch(ui *u, int key)
     case MODE_EXAMPLES: return examples_key(u, key);
     case MODE_SYSDATA: return sysdata_key(u, key);
     case MODE_GLASSES: return glasses_key(u, key);
+    case MODE_MESSAGES: return messages_key(u, key);
     default: break;
     }
     /* A fresh key clears the last message; the key's own command may set a
@@ -583,6 +653,10 @@ static int act(ui *u, int f)
         u->sys_top = 0;
         u->mode = MODE_SYSDATA;
     }
+    if (f & ED_SHOW_MESSAGES) {
+        u->msg_top = -1;
+        u->mode = MODE_MESSAGES;
+    }
     if (f & ED_SHOW_GLASSES) {
         u->glass_top = 0;
         u->mode = MODE_GLASSES;
@@ -600,6 +674,24 @@ static int loop(ui *u)
         if (u->e->dirty) {
             ed_recompute(u->e);
             redraw = 1;
+        }
+        /* What the status line shows goes into the history whole. */
+        ed_msg_log(u->e);
+        if (strcmp(u->warn_seen, u->e->cmp.warn) != 0) {
+            snprintf(u->warn_seen, sizeof u->warn_seen, "%s", u->e->cmp.warn);
+            if (u->warn_seen[0]) {
+                char w[SG_DIAG_MSG + 16];
+                snprintf(w, sizeof w, "warning: %s", u->warn_seen);
+                ed_hist_add(u->e, 1, w);
+            }
+        }
+        if (strcmp(u->fail_seen, u->e->cmp.build_msg) != 0) {
+            snprintf(u->fail_seen, sizeof u->fail_seen, "%s", u->e->cmp.build_msg);
+            if (u->fail_seen[0]) {
+                char w[SG_DIAG_MSG + 16];
+                snprintf(w, sizeof w, "cannot trace: %s", u->fail_seen);
+                ed_hist_add(u->e, 1, w);
+            }
         }
         if (redraw)
             draw(u);
@@ -679,10 +771,10 @@ static void offer_recovery(ed *e, const char *file, int batch)
             name = strrchr(name, '/') + 1;
         rec_time_text(v[0].time, when, sizeof when);
         snprintf(e->question, sizeof e->question,
-                 "Recover unsaved changes to %.300s from %s? [y]es / [n]o (discard) / [l]ater%s",
+                 "Recover unsaved changes to %.300s from %s? (r)ecover / (d)iscard / (l)ater%s",
                  name, when, n > 1 ? "  (more: :recover)" : "");
         snprintf(e->question_short, sizeof e->question_short,
-                 "Recover unsaved changes? [y]es / [n]o (discard) / [l]ater: %.300s, %s", name,
+                 "Recover unsaved changes? (r)ecover / (d)iscard / (l)ater: %.300s, %s", name,
                  when);
         cmd_quote(v[0].file, q, sizeof q);
         snprintf(e->pending, sizeof e->pending, "recover! %s", q);
@@ -747,6 +839,8 @@ int sg_editor_main(int argc, char **argv)
         fprintf(stderr, "sagitta edit: out of memory\n");
         return 1;
     }
+    /* A script's load warnings go to stderr, as its errors do. */
+    e.batch = script != NULL;
     if (file) {
         if (stat(file, &st) != 0 && errno == ENOENT) {
             /* Like vi: a new file under the name given. */
@@ -762,6 +856,7 @@ int sg_editor_main(int argc, char **argv)
                 return 1;
             }
             e.wave = e.doc.sys->primary_wave;
+            ed_load_warnings(&e, file, &d);
             /* Solved values follow the design as it is opened. */
             sg_diag_clear(&d);
             if (sg_system_apply_solves(e.doc.sys, e.cat, &d) != SG_OK)

@@ -99,6 +99,45 @@ int cell_parse_name(const char *s)
     return -1;
 }
 
+/* Whether some name in names[0..n) (or shown[]) begins with c, ignoring
+ * case. */
+static int names_begin(const char *const *names, int n, int c)
+{
+    int k;
+    for (k = 0; names && k < n; k++)
+        if (names[k] && tolower((unsigned char)names[k][0]) == c)
+            return 1;
+    return 0;
+}
+
+int cell_key_begins(int col, int key)
+{
+    /* The type's aliases cell_type_parse reads beyond the table's names. */
+    static const char *const type_alias[] = {"std", "asph", "even", "cb", "break"};
+    const sg_param *p = cell_param(col, NULL);
+    int c;
+    if (!p || key < 0x20 || key == 0x7f || key == ':')
+        return 0;
+    /* Text takes any character but the leading ':', which is the command
+     * line's. */
+    if (p->kind == SG_PARAM_TEXT || p->kind == SG_PARAM_MATERIAL)
+        return 1;
+    if (key >= 0x80)
+        return 0;
+    c = tolower(key);
+    if (p->kind == SG_PARAM_REAL)
+        /* What strtod reads first: a digit, sign or point, or the i of
+         * inf and infinity and the n of nan (refused, but a value's
+         * spelling, never a command). */
+        return (c >= '0' && c <= '9') || c == '+' || c == '-' || c == '.' || c == 'i' ||
+               c == 'n';
+    if (p->kind == SG_PARAM_ENUM)
+        return names_begin(p->names, p->nnames, c) || names_begin(p->shown, p->nnames, c) ||
+               (col == COL_TYPE &&
+                names_begin(type_alias, (int)(sizeof type_alias / sizeof type_alias[0]), c));
+    return 0;
+}
+
 int cell_numeric(int col)
 {
     const sg_param *p = cell_param(col, NULL);

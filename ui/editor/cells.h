@@ -43,6 +43,11 @@ int cell_parse_name(const char *s);
  * type's parameters, and a frame change's values where one may stand and
  * is typed. */
 int cell_used(const sg_system *sys, int row, int col);
+/* Whether key (a code point) can begin a value of the column: any
+ * character but ':' in text, what a number may begin with (0-9 + - . and
+ * the i and n of inf, infinity and nan), the first letter of a choice's
+ * name.  Such a key types into the cell; it never runs a command there. */
+int cell_key_begins(int col, int key);
 /* Nonzero for the columns that hold numbers. */
 int cell_numeric(int col);
 

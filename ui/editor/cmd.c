@@ -1192,6 +1192,7 @@ static int open_path(ed *e, const char *path)
     if (doc_load(&e->doc, path, &d) != SG_EOK)
         return fail(e, "%s", d.msg[0] ? d.msg : sg_strerror(d.code));
     f = opened(e, path);
+    ed_load_warnings(e, path, &d);
     /* Solved values follow the design as it is opened. */
     sg_diag_clear(&d);
     if (sg_system_apply_solves(e->doc.sys, e->cat, &d) != SG_OK)
@@ -2292,6 +2293,17 @@ static int c_quit1(ed *e, args *a) { return c_quit(e, a, 1); }
 static int c_help(ed *e, args *a);
 static int c_settings(ed *e, args *a) { return ED_HANDLED | ED_SHOW_SETTINGS; }
 static int c_redraw(ed *e, args *a) { return ED_HANDLED | ED_REDRAW; }
+/* The messages so far, whole: on the screen a page of them, in batch mode
+ * on standard output. */
+static int c_messages(ed *e, args *a)
+{
+    int i;
+    if (!e->batch)
+        return ED_HANDLED | ED_SHOW_MESSAGES;
+    for (i = 0; i < e->nhist; i++)
+        fprintf(e->out, "%s\n", e->hist[i] + 1);
+    return ED_HANDLED;
+}
 static int c_sysdata(ed *e, args *a)
 {
     args b = *a;
@@ -2391,6 +2403,8 @@ static const command commands[] = {
     {"bench", NULL, c_bench, "bench [N]", "time N live recomputes"},
     {"settings", NULL, c_settings, "settings", "open the system settings"},
     {"help", "h", c_help, "help", "list keys and commands"},
+    {"messages", "mes", c_messages, "messages",
+     "every message and warning shown so far, whole (as vim's :messages)"},
     {"redraw", NULL, c_redraw, "redraw", "repaint the screen"},
 };
 
@@ -2446,6 +2460,8 @@ static int exec_line(ed *e, const char *line)
 int cmd_exec(ed *e, const char *line)
 {
     int f = exec_line(e, line);
+    /* The history holds each command's message whole (:messages). */
+    ed_msg_log(e);
     /* Every change reaches the recovery file here, before the editor
      * waits for the next key. */
     rec_sync(e, 0);

@@ -42,6 +42,10 @@ int ed_init(ed *e)
 
 void ed_free(ed *e)
 {
+    int i;
+    for (i = 0; i < e->nhist; i++)
+        free(e->hist[i]);
+    e->nhist = 0;
     free(e->gframes);
     e->gframes = NULL;
     compute_free(&e->cmp);
@@ -157,6 +161,61 @@ void ed_msg(ed *e, int err, const char *fmt, ...)
     vsnprintf(e->msg, sizeof e->msg, fmt, ap);
     va_end(ap);
     e->msg_err = err;
+}
+
+void ed_hist_add(ed *e, int err, const char *text)
+{
+    size_t len = strlen(text);
+    char *s;
+    if (!text[0] || (e->nhist > 0 && strcmp(e->hist[e->nhist - 1] + 1, text) == 0))
+        return;
+    if (!(s = malloc(len + 2)))
+        return;
+    s[0] = err ? '!' : ' ';
+    memcpy(s + 1, text, len + 1);
+    if (e->nhist == ED_HIST_MAX) {
+        free(e->hist[0]);
+        memmove(e->hist, e->hist + 1, (ED_HIST_MAX - 1) * sizeof e->hist[0]);
+        e->nhist--;
+    }
+    e->hist[e->nhist++] = s;
+}
+
+void ed_msg_log(ed *e)
+{
+    ed_hist_add(e, e->msg_err, e->msg);
+}
+
+void ed_load_warnings(ed *e, const char *path, const sg_diag *d)
+{
+    int i, n = d->nwarn < SG_DIAG_MAXWARN ? d->nwarn : SG_DIAG_MAXWARN;
+    char line[ED_MSG + 64];
+    size_t len;
+    if (d->nwarn <= 0)
+        return;
+    for (i = 0; i < n; i++) {
+        /* Each warning names the file, line and surface already. */
+        snprintf(line, sizeof line, "warning: %s", d->warn[i]);
+        ed_hist_add(e, 1, line);
+        if (e->batch)
+            fprintf(stderr, "sagitta edit: %s\n", line);
+    }
+    if (d->nwarn > n) {
+        snprintf(line, sizeof line, "%s: %d more warnings (sagitta import lists them all)", path,
+                 d->nwarn - n);
+        ed_hist_add(e, 1, line);
+        if (e->batch)
+            fprintf(stderr, "sagitta edit: %s\n", line);
+    }
+    /* The count and the way to read them come first, so a narrow status
+     * line still shows them. */
+    len = strlen(e->msg);
+    snprintf(line, sizeof line, "%d warning%s reading the file (:messages shows %s): %s",
+             d->nwarn, d->nwarn == 1 ? "" : "s", d->nwarn == 1 ? "it" : "them all", d->warn[0]);
+    if (len > 0)
+        snprintf(line + strlen(line), sizeof line - strlen(line), "; %s", e->msg);
+    snprintf(e->msg, sizeof e->msg, "%s", line);
+    e->msg_err = 1;
 }
 
 static int is_dir(const char *p)

@@ -30,7 +30,8 @@ enum {
     ED_SHOW_EXAMPLES = 1 << 8,
     ED_PROMPT = 1 << 9,        /* open the ':' line with ed.prompt_init */
     ED_SHOW_SYSDATA = 1 << 10, /* the system data (paraxial) view */
-    ED_SHOW_GLASSES = 1 << 11  /* the glass picker (ed.glasses) */
+    ED_SHOW_GLASSES = 1 << 11, /* the glass picker (ed.glasses) */
+    ED_SHOW_MESSAGES = 1 << 12 /* the message history (ed.hist) */
 };
 
 /* What a confirmation asks. */
@@ -45,6 +46,8 @@ enum {
 
 #define ED_MSG 1024
 #define ED_LINE 4096
+/* Messages the history keeps, oldest dropped first. */
+#define ED_HIST_MAX 200
 
 typedef struct ed {
     doc doc;
@@ -73,6 +76,10 @@ typedef struct ed {
 
     char msg[ED_MSG];          /* the last message for the status line */
     int msg_err;
+    /* Every message shown, whole, oldest first (:messages), each led by
+     * '!' for an error or warning and ' ' else. */
+    char *hist[ED_HIST_MAX];
+    int nhist;
     int confirm;               /* CONFIRM_* pending */
     char pending[ED_LINE];     /* command to run when confirmed */
     char pending2[ED_LINE];    /* CONFIRM_RECOVER: the command for "no" */
@@ -114,6 +121,17 @@ void ed_msg(ed *e, int err, const char *fmt, ...)
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
+
+/* Adds the message on the status line to the history, unless it is the
+ * newest entry already. */
+void ed_msg_log(ed *e);
+/* Adds a line to the history (err: an error or a warning). */
+void ed_hist_add(ed *e, int err, const char *text);
+/* Puts a design file's load warnings (a .zmx import's frozen pickups and
+ * kept solves) into the history, each whole, and says on the status line
+ * how many there are and where to read them; batch mode prints them to
+ * stderr.  Nothing without warnings. */
+void ed_load_warnings(ed *e, const char *path, const sg_diag *d);
 
 /* Runs one command line.  Returns ED_* flags; on failure ED_ERROR is set,
  * e->msg says why and nothing changed. */

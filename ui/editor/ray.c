@@ -29,34 +29,69 @@ static void item_text(const ui *u, int i, char *buf, size_t n)
         numfmt_shortest(e->ray[i - RAY_HX], buf, n);
 }
 
-static int item_width(const ui *u, int i)
+/* Hx, Hy, Px and Py take 7 columns (a cut number ends in an ellipsis),
+ * or the whole shortest text where the line has room for all of them. */
+static int item_width(const ui *u, int i, int whole)
 {
     char buf[128];
     int w;
     if (i == RAY_FIELD)
         return u->e->doc.sys->nfield >= 10 ? 2 : 1;
-    if (i != RAY_WAVE)
-        return 7;
     item_text(u, i, buf, sizeof buf);
     w = (int)strlen(buf);
+    if (i != RAY_WAVE)
+        return whole && w > 7 ? w : 7;
     return w < 8 ? 8 : w > 16 ? 16 : w;
+}
+
+/* Where the ray ends, in words, so a failure shows at any width. */
+static void ray_status(const ui *u, char *buf, size_t n, int *style)
+{
+    const compute *c = &u->e->cmp;
+    int k;
+    *style = T_GOOD;
+    if (!c->have) {
+        snprintf(buf, n, " no trace");
+        *style = T_ERROR;
+    } else if (c->rc == SG_EOK) {
+        snprintf(buf, n, " OK");
+    } else {
+        for (k = 0; k < c->nsurf && c->res[k].status != c->rc; k++)
+            ;
+        if (k < c->nsurf)
+            snprintf(buf, n, " %s at %d", report_status_name(c->rc), k);
+        else
+            snprintf(buf, n, " %s", report_status_name(c->rc));
+        *style = T_ERROR;
+    }
 }
 
 void ray_draw(ui *u)
 {
-    int x = 0, i, y = u->ray_y;
-    char buf[128], shown[128];
+    int x = 0, i, y = u->ray_y, whole, need, room, sst;
+    char buf[128], shown[128], st[96];
     term_fill(y, 0, u->cols, T_NORMAL);
+    /* The status gets its room first: the items give way to it. */
+    ray_status(u, st, sizeof st, &sst);
+    room = u->cols - (int)strlen(st);
+    for (need = 4, i = 0; i < RAY_NITEMS; i++)
+        need += (int)strlen(item_name[i]) + 2 + item_width(u, i, 1);
+    whole = need <= room;
     x += term_text(y, x, u->cols - x, u->focus == FOCUS_RAY ? T_FRAME : T_HEADER, 0, "Ray ");
     for (i = 0; i < RAY_NITEMS; i++) {
-        int w = item_width(u, i), style = T_NORMAL;
-        if (x + 4 + w > u->cols)
+        int w = item_width(u, i, whole), style = T_NORMAL;
+        int lab = (int)strlen(item_name[i]) + 2;
+        if (i == RAY_WAVE && x + lab + w > room && x + lab + 8 <= room)
+            w = room - x - lab; /* the wavelength's text, cut with an ellipsis */
+        if (x + lab + w > room)
             break;
         snprintf(buf, sizeof buf, " %s ", item_name[i]);
         x += term_text(y, x, u->cols - x, T_DIM, 0, buf);
         item_text(u, i, buf, sizeof buf);
-        if (i == RAY_WAVE || i == RAY_FIELD)
+        if (i == RAY_FIELD)
             snprintf(shown, sizeof shown, "%s", buf);
+        else if (i == RAY_WAVE)
+            ui_fit(buf, w, u->ell, shown, sizeof shown);
         else
             numfmt_fit(buf, w, u->ell, shown, sizeof shown);
         if (u->focus == FOCUS_RAY && u->ray_item == i)
@@ -74,29 +109,12 @@ void ray_draw(ui *u)
         }
         x += w;
     }
+    if (i < RAY_NITEMS && x < room)
+        x += term_text(y, x, 1, T_DIM, 0, u->ell); /* items beyond the width */
     for (; i < RAY_NITEMS; i++)
         u->rayw[i] = 0;
-    {
-        /* Where the ray ends, in words, so a failure shows at any width. */
-        const compute *c = &u->e->cmp;
-        int k, style = T_GOOD;
-        if (!c->have) {
-            snprintf(buf, sizeof buf, " no trace");
-            style = T_ERROR;
-        } else if (c->rc == SG_EOK) {
-            snprintf(buf, sizeof buf, " OK");
-        } else {
-            for (k = 0; k < c->nsurf && c->res[k].status != c->rc; k++)
-                ;
-            if (k < c->nsurf)
-                snprintf(buf, sizeof buf, " %s at %d", report_status_name(c->rc), k);
-            else
-                snprintf(buf, sizeof buf, " %s", report_status_name(c->rc));
-            style = T_ERROR;
-        }
-        if (x + 6 < u->cols)
-            x += term_text(y, x, u->cols - x, style, 0, buf);
-    }
+    ui_fit(st, u->cols - x, u->ell, shown, sizeof shown);
+    x += term_text(y, x, u->cols - x, sst, 0, shown);
     if (u->focus == FOCUS_RAY && x + 14 < u->cols) {
         snprintf(buf, sizeof buf, "  step %.*f", u->step_exp, pow(10.0, -u->step_exp));
         term_text(y, x, u->cols - x, T_DIM, 0, buf);
@@ -157,8 +175,7 @@ int ray_key(ui *u, int key)
         u->ray_item = (u->ray_item + 1) % RAY_NITEMS;
         return ED_HANDLED | ED_REDRAW;
     case K_UP:
-    case 'k':
-    case '+': return step(u, 1);
+    case 'k': return step(u, 1);
     case K_DOWN:
     case 'j': return step(u, -1);
     case '[':
@@ -187,7 +204,9 @@ int ray_key(ui *u, int key)
         u->focus = FOCUS_SHEET;
         return ED_HANDLED | ED_REDRAW;
     default:
-        if ((key >= '0' && key <= '9') || key == '.' || key == '-') {
+        /* What a value may begin with types it; + too, so "+0.5" is never a
+         * step and then text. */
+        if ((key >= '0' && key <= '9') || key == '.' || key == '-' || key == '+') {
             buf[0] = (char)key;
             buf[1] = '\0';
             begin_edit(u, buf);

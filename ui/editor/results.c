@@ -183,12 +183,13 @@ static const char *nonfinite(double x)
 static void paraxial_line(ui *u)
 {
     const compute *c = &u->e->cmp;
-    char buf[SG_DIAG_MSG + 64];
+    char buf[SG_DIAG_MSG + 64], buf2[SG_DIAG_MSG + 64];
     int y = u->parax_y;
     term_fill(y, 0, u->cols, T_NORMAL);
     if (!c->par_ok) {
         snprintf(buf, sizeof buf, "cannot trace: %s", c->build_msg);
-        term_text(y, 0, u->cols, T_ERROR, 1, buf);
+        ui_fit_words(buf, u->cols, u->ell, "", buf2, sizeof buf2);
+        term_text(y, 0, u->cols, T_ERROR, 1, buf2);
         return;
     }
     /* Eight digits are plenty for a summary; exact numbers are one export
@@ -209,6 +210,14 @@ static void paraxial_line(ui *u)
          * number rather than what the numbers mean. */
         snprintf(buf, sizeof buf, "at %d: %.7gum, %s:  EFL %s  F/# %s  EPD %s  BFL %s  track %s",
                  w + 1, s->wave[w].um, s->units, v[0], v[1], v[2], v[3], v[4]);
+        if (numfmt_width(buf) > u->cols) {
+            /* Narrower: single blanks; still too wide, cut before a
+             * number, with F3 (the system data) to read it all. */
+            char narrow[sizeof buf];
+            snprintf(narrow, sizeof narrow, "%d: %.7gum, %s: EFL %s F/# %s EPD %s BFL %s track %s",
+                     w + 1, s->wave[w].um, s->units, v[0], v[1], v[2], v[3], v[4]);
+            ui_fit_words(narrow, u->cols, u->ell, " F3", buf, sizeof buf);
+        }
     }
     term_text(y, 0, u->cols, T_NORMAL, 1, buf);
     if (c->warn[0] && (int)strlen(buf) + 4 < u->cols)
@@ -232,10 +241,39 @@ static int panel_cells(const ui *u, int *cw)
     return 2;
 }
 
+/* The panel's bounds: "residual=R   bound=B   dir bound=D" on one line
+ * where it fits whole, else the direction's bound on a line of its own
+ * (a number too wide even there is cut with an ellipsis).  Returns the
+ * lines; line2 is empty for one. */
+static int bound_lines(const ui *u, char *line1, char *line2, size_t n)
+{
+    const compute *c = &u->e->cmp;
+    const sg_ray_surface *r;
+    char num[3][NUMFMT_MAX], dir[NUMFMT_MAX + 32];
+    const char *what = is_estimate(u) ? "estimate" : "bound";
+    line1[0] = line2[0] = '\0';
+    if (!c->have || u->e->row >= c->nsurf || c->res[u->e->row].status != SG_EOK)
+        return 1;
+    r = &c->res[u->e->row];
+    numfmt_shortest(residual(u, u->e->row, r), num[0], sizeof num[0]);
+    numfmt_shortest(r->error_bound, num[1], sizeof num[1]);
+    numfmt_shortest(r->dir_error_bound, num[2], sizeof num[2]);
+    snprintf(line1, n, "residual=%s   %s=%s", num[0], what, num[1]);
+    snprintf(dir, sizeof dir, "dir %s=%s", what, num[2]);
+    if ((int)(strlen(line1) + 3 + strlen(dir)) <= u->cols) {
+        size_t len = strlen(line1);
+        snprintf(line1 + len, n - len, "   %s", dir);
+        return 1;
+    }
+    snprintf(line2, n, "%s", dir);
+    return 2;
+}
+
 int results_panel_height(const ui *u)
 {
     int cw, n = panel_cells(u, &cw);
-    return 1 + (6 + n - 1) / n + 1 + (u->e->digits ? 1 : 0);
+    char a[256], b[256];
+    return 1 + (6 + n - 1) / n + bound_lines(u, a, b, sizeof a) + (u->e->digits ? 1 : 0);
 }
 
 /* Draws "label=value" in a cell; the value is cut (never rounded) to fit. */
@@ -250,6 +288,14 @@ static void panel_item(ui *u, int y, int x, int w, const char *label, double v, 
     numfmt_fit(num, w - lw, u->ell, cut, sizeof cut);
     snprintf(buf, sizeof buf, "%s=%s", label, cut);
     term_text(y, x, w, style, 1, buf);
+}
+
+/* A line of the panel, ending in an ellipsis where it is cut. */
+static void fit_line(ui *u, int y, int style, const char *s)
+{
+    char cut[600];
+    ui_fit(s, u->cols, u->ell, cut, sizeof cut);
+    term_text(y, 0, u->cols, style, 1, cut);
 }
 
 static void panel_draw(ui *u)
@@ -269,13 +315,13 @@ static void panel_draw(ui *u)
     if (r->status == SG_ENOTREACHED) {
         snprintf(buf, sizeof buf, "Surface %d: not reached (the ray stopped earlier: %s)",
                  e->row, report_status_name(c->rc));
-        term_text(y, 0, u->cols, T_DIM, 1, buf);
+        fit_line(u, y, T_DIM, buf);
         return;
     }
     if (r->status != SG_EOK) {
         snprintf(buf, sizeof buf, "Surface %d: %s (%s)", e->row,
                  report_status_name(r->status), sg_strerror(r->status));
-        term_text(y, 0, u->cols, T_ERROR, 1, buf);
+        fit_line(u, y, T_ERROR, buf);
         return;
     }
     numfmt_shortest(r->path, num[0], sizeof num[0]);
@@ -284,28 +330,24 @@ static void panel_draw(ui *u)
                  e->row, num[0], e->global);
     else
         snprintf(buf, sizeof buf, "Surface %d:  OK   path=%s", e->row, num[0]);
-    term_text(y, 0, u->cols, T_GOOD, 1, buf);
+    fit_line(u, y, T_GOOD, buf);
 
     for (i = 0; i < 6; i++)
         panel_item(u, y + 1 + i / n, (i % n) * (cw + 1), cw, name[i], coord(r, RC_X + i),
                    T_NORMAL);
     y += 1 + (6 + n - 1) / n;
 
-    numfmt_shortest(residual(u, e->row, r), num[0], sizeof num[0]);
-    numfmt_shortest(r->error_bound, num[1], sizeof num[1]);
-    numfmt_shortest(r->dir_error_bound, num[2], sizeof num[2]);
-    snprintf(buf, sizeof buf, "residual=%s   %s=%s", num[0],
-             is_estimate(u) ? "estimate" : "bound", num[1]);
     {
-        /* The direction's figure only where it fits whole. */
-        size_t len = strlen(buf);
-        char more[NUMFMT_MAX + 32];
-        snprintf(more, sizeof more, "   dir %s=%s", is_estimate(u) ? "estimate" : "bound",
-                 num[2]);
-        if ((int)(len + strlen(more)) <= u->cols)
-            snprintf(buf + len, sizeof buf - len, "%s", more);
+        char l1[256], l2[256], cut[256];
+        if (bound_lines(u, l1, l2, sizeof l1) == 2) {
+            ui_fit(l2, u->cols, u->ell, cut, sizeof cut);
+            term_text(y + 1, 0, u->cols, T_NORMAL, 1, cut);
+        }
+        ui_fit(l1, u->cols, u->ell, cut, sizeof cut);
+        term_text(y, 0, u->cols, T_NORMAL, 1, cut);
+        if (l2[0])
+            y++;
     }
-    term_text(y, 0, u->cols, T_NORMAL, 1, buf);
 
     if (!e->digits)
         return;

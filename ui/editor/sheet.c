@@ -67,10 +67,26 @@ static void cell_show(const ui *u, int row, int col, int w, char *out, size_t n)
         return;
     }
     cell_text(u->e->doc.sys, row, col, full, sizeof full);
-    if (cell_numeric(col) && !(col == COL_RADIUS && strcmp(full, "Infinity") == 0))
-        numfmt_fit(full, w, u->ell, out, n);
-    else
-        fit_text(full, w, u->ell, out, n);
+    if (cell_numeric(col)) {
+        /* A solve's letter (Zemax's M, P, F ...) stays when the number is
+         * cut: the number gives up the room. */
+        size_t len = strlen(full);
+        char mark = 0, num[NUMFMT_MAX * 2];
+        if (len > 2 && full[len - 2] == ' ' && full[len - 1] >= 'A' && full[len - 1] <= 'Z') {
+            mark = full[len - 1];
+            full[len - 2] = '\0';
+        }
+        if (col == COL_RADIUS && strcmp(full, "Infinity") == 0)
+            fit_text(full, mark ? w - 2 : w, u->ell, num, sizeof num);
+        else
+            numfmt_fit(full, mark ? w - 2 : w, u->ell, num, sizeof num);
+        if (mark)
+            snprintf(out, n, "%s %c", num, mark);
+        else
+            snprintf(out, n, "%s", num);
+        return;
+    }
+    fit_text(full, w, u->ell, out, n);
 }
 
 /* Places the visible columns from u->left on. */
@@ -242,13 +258,12 @@ int sheet_text_col(int col)
 
 static int starts_edit(int col, int key)
 {
-    if (key >= K_BASE || key < 0x20 || key == 0x7f)
+    if (key >= K_BASE || key < 0x20 || key == 0x7f || key == ':')
         return 0;
-    /* In a text cell every printable key is text: a comment may hold any
-     * word, and none of its letters may run a command. */
-    if (sheet_text_col(col))
-        return 1;
-    if ((key >= '0' && key <= '9') || key == '.' || key == '-' || key == '+')
+    /* A key that can begin a value of the cell (any in a text cell, the i
+     * of inf in a number) types, so typing a value never runs a command;
+     * ':' alone opens the command line from any cell. */
+    if (cell_key_begins(col, key))
         return 1;
     /* Upper case never names a command, so it can start any text:
      * glass names, comments, INF. */
@@ -261,8 +276,9 @@ static int key_impl(ui *u, int key, int typing);
 
 int sheet_key(ui *u, int key)
 {
-    /* A printable key in a text cell types, before any command sees it. */
-    if (sheet_text_col(u->e->col) && starts_edit(u->e->col, key)) {
+    /* A key that can begin the cell's value types, before any command
+     * sees it. */
+    if (starts_edit(u->e->col, key)) {
         sheet_begin_edit(u, "");
         le_key(&u->le, key);
         return ED_HANDLED | ED_REDRAW;

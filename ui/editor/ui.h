@@ -23,7 +23,8 @@ enum {
     MODE_SETTINGS,
     MODE_EXAMPLES,
     MODE_SYSDATA,    /* the system data view */
-    MODE_GLASSES     /* the glass picker */
+    MODE_GLASSES,    /* the glass picker */
+    MODE_MESSAGES    /* the message history (:messages) */
 };
 
 /* Items of the ray selector. */
@@ -64,6 +65,9 @@ typedef struct ui {
     int help_top;
     int sys_top;
     int glass_top;
+    int msg_top;         /* the message history's first row; -1: the newest */
+    char warn_seen[SG_DIAG_MSG]; /* the design warning last put in the history */
+    char fail_seen[SG_DIAG_MSG]; /* the same for why the design cannot be traced */
     int set_sel, set_top;
     char **ex;
     int nex, ex_sel, ex_top;
@@ -122,6 +126,16 @@ int sysdata_key(ui *u, int key);
 int sysdata_lines(const ed *e, char ***lines);
 /* Nonzero for the columns where any printable key types text. */
 int sheet_text_col(int col);
+
+void messages_draw(ui *u);
+int messages_key(ui *u, int key);
+
+/* Cuts UTF-8 s to at most w columns, the cut marked with ell; returns
+ * nonzero when it cut. */
+int ui_fit(const char *s, int w, const char *ell, char *out, size_t n);
+/* The same, cut at a blank so no number or word is cut, then ell and more
+ * (where to see it whole, e.g. " F3"). */
+int ui_fit_words(const char *s, int w, const char *ell, const char *more, char *out, size_t n);
 
 void help_draw(ui *u);
 int help_key(ui *u, int key);
