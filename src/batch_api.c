@@ -68,6 +68,13 @@ sg_batch *sg_batch_new(const sg_system *sys, const sg_catalog *cat,
     return b;
 }
 
+void sg_batch_set_reference(sg_batch *b, int on)
+{
+    int k;
+    for (k = 0; b && k < b->nt; k++)
+        sg_tracer_set_reference(b->t[k], on);
+}
+
 int sg_batch_nsurf(const sg_batch *b)
 {
     return b ? b->nsurf : 0;

@@ -34,8 +34,14 @@ const char *sg_err_name(int err)
 int sg_err_is_ray_status(int err)
 {
     return err == SG_OK || err == SG_EMISS || err == SG_ETIR || err == SG_EVIGNETTED ||
+           err == SG_EAPERTURE || err == SG_EOBSCURED ||
            err == SG_ENOCONV || err == SG_EAIM || err == SG_ENOTREACHED || err == SG_EUNCERT ||
            err == SG_ERANGE;
+}
+
+int sg_err_is_stopped(int err)
+{
+    return err == SG_EVIGNETTED || err == SG_EAPERTURE || err == SG_EOBSCURED;
 }
 
 void sg_diag_clear(sg_diag *d)

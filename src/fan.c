@@ -151,6 +151,19 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
         if ((rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, nray, &last, 1, rows, st, d)) !=
             SG_OK)
             goto done;
+        /* The chief rays again, past the apertures and obscurations: the
+         * curve is measured from them (Zemax's reference) even where an
+         * obscuration stops the pupil's centre.  A chief ray that passed
+         * gets the same bits. */
+        sg_batch_set_reference(b, 1);
+        for (f = 0; f < nf && rc == SG_OK; f++) {
+            r = (size_t)f * (size_t)(2 * np + 1);
+            if (st[r] != SG_OK)
+                rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, &rays[r], 1, &last, 1, &rows[r],
+                                    &st[r], d);
+        }
+        if (rc != SG_OK)
+            goto done;
         sg_batch_free(b);
         b = NULL;
         if (o->opd) {

@@ -29,6 +29,25 @@ static double crossing(const sg_ray_surface *p, const sg_ray_surface *q, int k)
     return (b - a + ta * p->z - tb * q->z) / (ta - tb);
 }
 
+/* Zemax's recipe: one ray at pupil step delta in direction k (0: Px,
+ * 1: Py) against the chief ray c, both lines taken from the chief ray's
+ * z (the ray's own z on a curved image is not used), so the focus is
+ * the chief ray's z plus (a - c) / (tc - ta) in that plane. */
+static int zemax_focus(sg_tracer *t, sg_ray_surface *buf, int n, double hy, int k,
+                       double delta, const sg_ray_surface *c, double *out)
+{
+    double ta, tc, a, cc;
+    int st = sg_trace_normalized(t, 0.0, hy, k ? 0.0 : delta, k ? delta : 0.0, buf);
+    if (st != SG_OK)
+        return st;
+    ta = (k ? buf[n - 1].m : buf[n - 1].l) / buf[n - 1].n;
+    tc = (k ? c->m : c->l) / c->n;
+    a = k ? buf[n - 1].y : buf[n - 1].x;
+    cc = k ? c->y : c->x;
+    *out = (a - cc) / (tc - ta);
+    return SG_OK;
+}
+
 /* The focus of the pair at pupil step delta in direction k (0: Px,
  * 1: Py), less the chief ray's z on the image surface. */
 static int pair_focus(sg_tracer *t, sg_ray_surface *buf, int n, double hy, int k,
@@ -51,6 +70,13 @@ static int pair_focus(sg_tracer *t, sg_ray_surface *buf, int n, double hy, int k
 int sg_fieldcurve(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
                   int npts, double delta, sg_fieldcurve_pt *out, sg_diag *d)
 {
+    return sg_fieldcurve_recipe(sys, cat, opts, npts, delta, SG_FIELDCURVE_EXACT, out, d);
+}
+
+int sg_fieldcurve_recipe(const sg_system *sys, const sg_catalog *cat,
+                         const sg_trace_opts *opts, int npts, double delta, int recipe,
+                         sg_fieldcurve_pt *out, sg_diag *d)
+{
     sg_tracer *t;
     sg_ray_surface *buf;
     sg_paraxial p;
@@ -63,6 +89,8 @@ int sg_fieldcurve(const sg_system *sys, const sg_catalog *cat, const sg_trace_op
     if (!(delta > 0.0 && delta <= 0.1))
         return sg_diag_set(d, SG_ERANGE, "fieldcurve: pupil step %g; it must be above 0 and "
                                          "at most 0.1", delta);
+    if (recipe != SG_FIELDCURVE_EXACT && recipe != SG_FIELDCURVE_ZEMAX)
+        return sg_diag_set(d, SG_EINVAL, "fieldcurve: unknown recipe %d", recipe);
     if (sys->field_type == SG_FIELD_REAL_IMAGE_HEIGHT)
         return sg_diag_set(d, SG_EUNSUPPORTED,
                            "fieldcurve: fields given as real image height have no paraxial "
@@ -77,6 +105,10 @@ int sg_fieldcurve(const sg_system *sys, const sg_catalog *cat, const sg_trace_op
         sg_tracer_free(t);
         return rc;
     }
+    /* Every ray here is a reference ray (the chief ray and its
+     * neighbours), traced past apertures and obscurations as Zemax does:
+     * a central obscuration does not hide the field's focus. */
+    sg_tracer_set_reference(t, 1);
     n = sg_tracer_nsurf(t);
     buf = malloc(sizeof *buf * (size_t)n);
     if (!buf) {
@@ -107,7 +139,15 @@ int sg_fieldcurve(const sg_system *sys, const sg_catalog *cat, const sg_trace_op
         zc = buf[n - 1].z;
         o->distortion = o->parax_y == 0.0 ? 0.0
                                           : 100.0 * (o->real_y - o->parax_y) / o->parax_y;
-        for (k = 0; k < 2; k++) {
+        for (k = 0; k < 2 && recipe == SG_FIELDCURVE_ZEMAX; k++) {
+            sg_ray_surface c = buf[n - 1];
+            o->status = zemax_focus(t, buf, n, hy, k, delta, &c, k ? &o->tan_focus
+                                                                   : &o->sag_focus);
+            buf[n - 1] = c;
+            if (o->status != SG_OK)
+                break;
+        }
+        for (k = 0; k < 2 && recipe == SG_FIELDCURVE_EXACT; k++) {
             o->status = pair_focus(t, buf, n, hy, k, delta, zc, &f1);
             if (o->status == SG_OK)
                 o->status = pair_focus(t, buf, n, hy, k, delta / 2, zc, &f2);

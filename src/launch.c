@@ -353,10 +353,10 @@ static int fd_jacobian(sg_tracer *t, land_fn land, const osp *o, const dd q[2],
         qp[k] = dd_add_d(qp[k], h);
         qm[k] = dd_add_d(qm[k], -h);
         rc = land(t, o, qp, ap, &noise, scratch);
-        if (rc != SG_OK && rc != SG_EVIGNETTED)
+        if (rc != SG_OK && !sg_err_is_stopped(rc))
             return SG_EAIM;
         rc = land(t, o, qm, am, &noise, scratch);
-        if (rc != SG_OK && rc != SG_EVIGNETTED)
+        if (rc != SG_OK && !sg_err_is_stopped(rc))
             return SG_EAIM;
         J[0][k] = (ap[0].hi - am[0].hi) / (2.0 * h);
         J[1][k] = (ap[1].hi - am[1].hi) / (2.0 * h);
@@ -536,7 +536,7 @@ static int aim_newton(sg_tracer *t, land_fn land, const osp *o, dd q[2],
         int failed, worse;
         q_lane(a.q, 0, q);
         rc = land(t, o, q, at, &noise, scratch);
-        failed = rc != SG_OK && rc != SG_EVIGNETTED;
+        failed = rc != SG_OK && !sg_err_is_stopped(rc);
         worse = 0;
         if (!failed) {
             aim_judge(&a, one, vdd_set(at[0]), vdd_set(at[1]), vd_set(noise), tg, tol, res,

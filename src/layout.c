@@ -154,7 +154,7 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
          * point on the surface that stops it is real and drawn. */
         for (i = 1; i < ns; i++) {
             int ok = row[i].status == SG_OK ||
-                     (row[i].status == SG_EVIGNETTED && isfinite(row[i].y) && isfinite(row[i].z));
+                     (sg_err_is_stopped(row[i].status) && isfinite(row[i].y) && isfinite(row[i].z));
             if (!ok)
                 break;
             to_yz(gf, z0, i, row[i].x, row[i].y, row[i].z, &lr->y[lr->npts], &lr->z[lr->npts]);

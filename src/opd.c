@@ -92,7 +92,14 @@ int sg_opd_reference(sg_tracer *t, double hx, double hy, sg_opd_ref *ref, sg_dia
         ref->status = SG_ENOMEM;
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
     }
-    rc = sg_trace_normalized(p, hx, hy, 0.0, 0.0, rows);
+    /* The chief ray is the reference whatever stops it: traced past the
+     * apertures and obscurations, as Zemax does. */
+    {
+        int unclipped = p->unclipped;
+        p->unclipped = 1;
+        rc = sg_trace_normalized(p, hx, hy, 0.0, 0.0, rows);
+        p->unclipped = unclipped;
+    }
     if (rc != SG_OK) {
         free(rows);
         /* A chief ray that does not reach the image leaves no sphere. */

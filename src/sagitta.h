@@ -64,7 +64,9 @@ extern "C" {
     X(NOTREACHED, "surface not reached")                                     \
     X(UNSUPPORTED, "unsupported feature")                                    \
     X(WAVERANGE, "wavelength outside material range")                       \
-    X(UNCERT, "intersection cannot be certified in double-double")
+    X(UNCERT, "intersection cannot be certified in double-double")            \
+    X(APERTURE, "ray outside the surface aperture")                           \
+    X(OBSCURED, "ray stopped by an obscuration")
 
 typedef enum sg_err {
 #define SG_ERR_ENUM_(name, msg) SG_E##name,
@@ -84,6 +86,9 @@ SG_API const char *sg_err_name(int err);
  * image, missed, TIR, vignetted, not certified, not aimed ...) rather than
  * a failure of the program or its input. */
 SG_API int sg_err_is_ray_status(int err);
+/* Nonzero for the codes of a ray something stopped: SG_EVIGNETTED (a fixed
+ * semi-diameter), SG_EAPERTURE and SG_EOBSCURED. */
+SG_API int sg_err_is_stopped(int err);
 
 #define SG_DIAG_MSG 512
 #define SG_DIAG_MAXWARN 16
@@ -249,8 +254,10 @@ typedef enum sg_surf_type {
 
 /* Surface apertures and obscurations, as Zemax defines them: one a surface
  * (a dummy surface of zero thickness adds another), each about its own
- * decenter.  A ray that meets the surface where its aperture stops it is
- * vignetted (SG_EVIGNETTED), as beyond a fixed semi-diameter. */
+ * decenter.  A ray that meets the surface where its aperture stops it
+ * fails there with SG_EAPERTURE, where its obscuration stops it with
+ * SG_EOBSCURED; beyond a fixed semi-diameter it is SG_EVIGNETTED.
+ * sg_ray_stop_text names the kind and the surface. */
 typedef enum sg_aperture_type {
     SG_APERTURE_NONE = 0,
     SG_APERTURE_CIRCULAR = 1,     /* passes min_radius <= r <= max_radius */
@@ -477,6 +484,13 @@ typedef struct sg_system {
     int capsurf; /* allocated */
     sg_surface *surf;
 } sg_system;
+
+/* What stopped a ray that failed at surface surf with status: for the
+ * stopped codes the kind and the surface ("ray stopped by the circular
+ * obscuration of surface 2", "ray outside the clear semi-diameter 5 of
+ * surface 1"), for others the code's message and the surface.  Writes
+ * at most len bytes (always terminated); returns buf. */
+SG_API char *sg_ray_stop_text(const sg_system *sys, int surf, int status, char *buf, size_t len);
 
 /* ------------------------------------------------------------------------
  * Parameters.  One table (src/param.c) describes every parameter of the
@@ -998,6 +1012,13 @@ SG_API int sg_batch_nsurf(const sg_batch *b);
 SG_API int sg_batch_trace(sg_batch *b, sg_ray_kind kind, const sg_ray_in *rays,
                    size_t nray, const int *surf, int nsel,
                    sg_ray_surface *out, int *status, sg_diag *d);
+/* Reference mode (on nonzero): the batch's later calls trace their rays
+ * past every semi-diameter, aperture and obscuration, as Zemax traces the
+ * chief ray an analysis measures from; the arithmetic is the same, so a
+ * ray that passes gets the same bits either way.  Off again with 0. */
+SG_API void sg_batch_set_reference(sg_batch *b, int on);
+/* The same for one tracer (sg_trace_normalized and sg_trace_start). */
+SG_API void sg_tracer_set_reference(sg_tracer *t, int on);
 
 /* ------------------------------------------------------------------------
  * Image analyses: spot diagrams, transverse ray fans and the layout.  Each
@@ -1277,6 +1298,12 @@ typedef struct sg_seidel {
     double wave_um;   /* the primary wavelength, at which the sums are taken */
     double wave_lens; /* the same in lens units */
     double short_um, long_um; /* colour: index differences between these two */
+    int decentred;    /* the first surface (0-based) whose frame is tilted or
+                         decentred (a coordinate break or a surface's own
+                         tilt or decenter), or -1: third-order theory assumes
+                         a centred system, so the sums of a system with one
+                         describe the centred system the tilts leave out;
+                         sg_seidel_compute also warns (sg_diag_warn) */
 } sg_seidel;
 
 /* Seidel sums of every surface at the primary wavelength, from the
@@ -1336,6 +1363,16 @@ typedef struct sg_fieldcurve_pt {
  * given as real image height are refused (SG_EUNSUPPORTED). */
 SG_API int sg_fieldcurve(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
                   int npts, double delta, sg_fieldcurve_pt *out, sg_diag *d);
+
+/* How sg_fieldcurve_recipe finds a fan's focus: the exact limit above
+ * (sg_fieldcurve's), or Zemax's recipe: the chief ray and one ray at
+ * pupil step delta (Zemax's is 0.001), both lines taken from the chief
+ * ray's z on the image surface, which on a curved image moves the
+ * tangential focus by the difference of the two rays' z. */
+enum { SG_FIELDCURVE_EXACT = 0, SG_FIELDCURVE_ZEMAX = 1 };
+SG_API int sg_fieldcurve_recipe(const sg_system *sys, const sg_catalog *cat,
+                         const sg_trace_opts *opts, int npts, double delta, int recipe,
+                         sg_fieldcurve_pt *out, sg_diag *d);
 
 /* ------------------------------------------------------------------------
  * Zernike polynomials and wavefront statistics

@@ -112,6 +112,24 @@ static double trace_rays(const sg_system *sys, const double *idx, const double *
     return yb;
 }
 
+static int frame_moves(const sg_frame_change *f)
+{
+    return f->dx != 0.0 || f->dy != 0.0 || f->tx != 0.0 || f->ty != 0.0 || f->tz != 0.0;
+}
+
+/* The first surface whose frame is tilted or decentred, or -1. */
+static int first_decentred(const sg_system *sys)
+{
+    int j;
+    for (j = 0; j < sys->nsurf; j++) {
+        const sg_surface *s = &sys->surf[j];
+        if (frame_moves(&s->before) ||
+            (s->after_mode == SG_AFTER_EXPLICIT && frame_moves(&s->after)))
+            return j;
+    }
+    return -1;
+}
+
 int sg_seidel_compute(const sg_system *sys, const sg_catalog *cat, sg_seidel *out,
                       sg_diag *d)
 {
@@ -126,6 +144,13 @@ int sg_seidel_compute(const sg_system *sys, const sg_catalog *cat, sg_seidel *ou
     rc = sg_paraxial_compute(sys, cat, -1, &p, d);
     if (rc != SG_OK)
         return rc;
+    /* Third-order theory is of a centred system: the sums are computed
+     * about the axis, the tilts and decenters left out, and say so. */
+    out->decentred = first_decentred(sys);
+    if (out->decentred >= 0)
+        sg_diag_warn(d, "seidel: surface %d is tilted or decentred; the Seidel sums assume a "
+                        "centred system and leave every tilt and decenter out, so they "
+                        "describe the centred system, not this one", out->decentred);
     n = sys->nsurf;
     buf = calloc((size_t)n * 8, sizeof *buf);
     out->surf = calloc((size_t)n * SG_SEIDEL_N, sizeof *out->surf);

@@ -258,14 +258,18 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
             rc = d && d->code ? d->code : SG_ENOMEM;
             goto done;
         }
-        /* Chief rays of every field at this wavelength. */
+        /* Chief rays of every field at this wavelength, traced past the
+         * apertures and obscurations as Zemax's reference is: a central
+         * obscuration stops the pupil's centre, not the measure. */
         for (f = 0; f < nf; f++) {
             rays[f].v[0] = out->field[f].hx;
             rays[f].v[1] = out->field[f].hy;
             rays[f].v[2] = rays[f].v[3] = 0.0;
         }
-        if ((rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, (size_t)nf, &last, 1, rows, st,
-                                 d)) != SG_OK)
+        sg_batch_set_reference(b, 1);
+        rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, (size_t)nf, &last, 1, rows, st, d);
+        sg_batch_set_reference(b, 0);
+        if (rc != SG_OK)
             goto done;
         for (f = 0; f < nf; f++) {
             sg_spot_cell *c = &out->cell[cell_index(out, f, w)];

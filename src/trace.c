@@ -148,7 +148,8 @@ double sg_sprep_sag_resid(const sg_sprep *s, double x, double y, double z)
 
 int sg_past_clip(const sg_tracer *t, const sg_sprep *s, double x, double y)
 {
-    return t->o.clip && !t->unclipped && sg_clip_point(s, x, y, t->o.clip_rtol);
+    /* 0 where the ray goes on, else the code of what stops it. */
+    return t->o.clip && !t->unclipped ? sg_clip_point(s, x, y, t->o.clip_rtol) : 0;
 }
 
 void sg_fail_rest(sg_ray_surface *out, int from, int n, int status)
@@ -713,6 +714,12 @@ void sg_tracer_free(sg_tracer *t)
     }
     free(t->scratch);
     free(t);
+}
+
+void sg_tracer_set_reference(sg_tracer *t, int on)
+{
+    if (t)
+        t->unclipped = on != 0;
 }
 
 int sg_tracer_nsurf(const sg_tracer *t)

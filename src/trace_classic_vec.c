@@ -209,7 +209,7 @@ void sg_classic_block(const sg_tracer *t, const double (*S)[3], const double (*D
 {
     vd P[3], d[3], eP = vd_set(0.0), eD = vd_set(0.0), opl = vd_set(0.0), eO = vd_set(0.0);
     vm act;
-    int i, j, k;
+    int i, j, k, clipped;
     /* Idle lanes repeat lane 0, so they compute on real numbers. */
     for (k = 0; k < SG_VL; k++) {
         int from = k < nl ? k : 0;
@@ -362,8 +362,8 @@ void sg_classic_block(const sg_tracer *t, const double (*S)[3], const double (*D
             o->residual = res[k];
             o->error_bound = sg_bound_up(eP[k]);
             o->status = SG_OK;
-            if (sg_past_clip(t, s, o->x, o->y))
-                fail_lane(t, out, k, i, SG_EVIGNETTED, rc, &act);
+            if ((clipped = sg_past_clip(t, s, o->x, o->y)) != 0)
+                fail_lane(t, out, k, i, clipped, rc, &act);
         }
         if (i < upto && vm_any(act)) {
             /* The bend: refraction or reflection of d at the point. */

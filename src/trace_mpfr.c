@@ -785,9 +785,10 @@ static int run_from(sg_tracer *tr, sg_ray_surface *out, int from, int upto, doub
         o->opl_error_bound =
             sg_bound_up(ldexp((double)i * (big + fabs(o->opl) + fabs(o->path)), 16 - (int)m->prec));
         o->status = SG_OK;
-        if (tr->o.clip && !tr->unclipped && sg_clip_point(sp, o->x, o->y, tr->o.clip_rtol)) {
-            sg_fail_rest(out, i, tr->n, SG_EVIGNETTED);
-            return SG_EVIGNETTED;
+        if (tr->o.clip && !tr->unclipped &&
+            (rc = sg_clip_point(sp, o->x, o->y, tr->o.clip_rtol)) != 0) {
+            sg_fail_rest(out, i, tr->n, rc);
+            return rc;
         }
         if (i < upto) {
             rc = bend(tr, i);

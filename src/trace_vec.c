@@ -837,12 +837,12 @@ static vm fail_lanes(vm bad, vm m, vm live, int code, int *st)
 /* The aperture of s for rays meeting it at (x, y). */
 static vm clip_v(const sg_tracer *t, const sg_sprep *s, vd x, vd y, vm live, vm bad, int *st)
 {
-    int k;
+    int k, c;
     if (t->o.clip && !t->unclipped && (s->sd > 0.0 || s->aper))
         for (k = 0; k < SG_VL; k++)
-            if (live[k] && !bad[k] && sg_past_clip(t, s, x[k], y[k])) {
+            if (live[k] && !bad[k] && (c = sg_past_clip(t, s, x[k], y[k])) != 0) {
                 bad[k] = -1;
-                st[k] = SG_EVIGNETTED;
+                st[k] = c;
             }
     return bad;
 }

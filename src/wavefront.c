@@ -183,7 +183,11 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
             rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
             goto done;
         }
+        /* This wavelength's chief ray, past the apertures and obscurations
+         * as the primary one is (sg_opd_reference). */
+        sg_tracer_set_reference(t, 1);
         rc = sg_trace_opd(t, &ref, 0.0, 0.0, cr, &c0);
+        sg_tracer_set_reference(t, 0);
         free(cr);
         if (rc == SG_OK && c0.status != SG_OK)
             rc = c0.status;

@@ -188,7 +188,7 @@ int classic_ref_run_to(const sg_tracer *t, const double S[3], const double D[3],
 {
     double P[3] = {S[0], S[1], S[2]}, d[3] = {D[0], D[1], D[2]};
     double eP = 0.0, eD = 0.0, opl = 0.0, eO = 0.0;
-    int i;
+    int i, rc;
     for (i = 1; i <= upto; i++) {
         const sg_sprep *s = &t->sp[i];
         sg_ray_surface *o = &out[i];
@@ -324,14 +324,13 @@ int classic_ref_run_to(const sg_tracer *t, const double S[3], const double D[3],
         o->residual = sg_sprep_sag_resid(s, o->x, o->y, o->z);
         o->error_bound = sg_bound_up(eP);
         o->status = SG_OK;
-        if (sg_past_clip(t, s, o->x, o->y)) {
-            sg_fail_rest(out, i, t->n, SG_EVIGNETTED);
-            return SG_EVIGNETTED;
+        if ((rc = sg_past_clip(t, s, o->x, o->y)) != 0) {
+            sg_fail_rest(out, i, t->n, rc);
+            return rc;
         }
         if (i < upto) {
             double pl[3] = {o->x, o->y, o->z};
             double gsens = s->shape == SHAPE_CONIC ? fmax(1.0, fabs(k1)) * fabs(c) : 0.0;
-            int rc;
             if (s->shape == SHAPE_ASPH) {
                 double w, dw;
                 slope_d(s, x * x + y * y, &w, &dw);

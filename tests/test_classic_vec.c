@@ -53,7 +53,7 @@ static void count(tally *c, int rc)
         c->miss++;
     else if (rc == SG_ETIR)
         c->tir++;
-    else if (rc == SG_EVIGNETTED)
+    else if (sg_err_is_stopped(rc))
         c->vig++;
     else if (rc == SG_ENOCONV)
         c->noconv++;

@@ -525,6 +525,38 @@ static void conversions(void **state)
     assert_true(fabs(t[SG_TAXC] - 11.0 / nu) < 1e-13 && fabs(t[SG_TLAC] - 13.0 / nu) < 1e-13);
 }
 
+/* Third-order theory is of a centred system: a tilt or decenter anywhere
+ * is named (the field and a warning), a centred system gets neither. */
+static void decentred(void **state)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = tu_example("cooke_triplet.json");
+    sg_seidel s;
+    sg_diag d;
+    (void)state;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_seidel_compute(sys, cat, &s, &d), SG_OK);
+    assert_int_equal(s.decentred, -1);
+    assert_int_equal(d.nwarn, 0);
+    sg_seidel_free(&s);
+    /* A tilt of surface 4 before it. */
+    sys->surf[4].before.tx = 0.5;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_seidel_compute(sys, cat, &s, &d), SG_OK);
+    assert_int_equal(s.decentred, 4);
+    assert_int_equal(d.nwarn, 1);
+    assert_non_null(strstr(d.warn[0], "surface 4 is tilted or decentred"));
+    sg_seidel_free(&s);
+    /* And a decenter after surface 2, given explicitly. */
+    sys->surf[2].after_mode = SG_AFTER_EXPLICIT;
+    sys->surf[2].after.dy = 0.1;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_seidel_compute(sys, cat, &s, &d), SG_OK);
+    assert_int_equal(s.decentred, 2);
+    sg_seidel_free(&s);
+    sg_system_free(sys);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -537,6 +569,7 @@ int main(void)
         cmocka_unit_test(real_rays),
         cmocka_unit_test(asphere_real_rays),
         cmocka_unit_test(conversions),
+        cmocka_unit_test(decentred),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -290,9 +290,13 @@ static void fieldcurve_help(FILE *f)
 "\n"
 "Options:\n"
 "  --points N         number of fields, 2 to 100000 (default 21)\n"
-"  --step D           normalized pupil step, (0, 0.1] (default 0.01)\n"
+"  --step D           normalized pupil step, (0, 0.1] (default 0.01;\n"
+"                     0.001 with --method zemax)\n"
 "  --wave N           wavelength number, from 1 (default: the primary)\n"
-"  --method M         precise (default), classic or mpfr\n"
+"  --method M         precise (default), classic or mpfr; or zemax:\n"
+"                     Zemax's recipe (one ray at the step against the\n"
+"                     chief ray, both from the chief ray's z), traced by\n"
+"                     precise\n"
 AN_COMMON_HELP
 "  -h, --help         show this help\n", f);
 }
@@ -405,7 +409,7 @@ int cmd_fieldcurve(int argc, char **argv)
 {
     cli_iter it;
     const char *val;
-    int id, rc, wave1 = 0, wave0 = 0, npts = 21, m;
+    int id, rc, wave1 = 0, wave0 = 0, npts = 21, m, recipe = SG_FIELDCURVE_EXACT, stepped = 0;
     double step = 0.01;
     sg_fieldcurve_pt *pts = NULL;
     sg_trace_opts opts;
@@ -427,10 +431,17 @@ int cmd_fieldcurve(int argc, char **argv)
                 return CLI_EXIT_USAGE;
             break;
         case A_METHOD:
+            /* zemax: Zemax's recipe for the foci, traced by precise. */
+            if (strcmp(val, "zemax") == 0) {
+                recipe = SG_FIELDCURVE_ZEMAX;
+                opts.method = SG_METHOD_PRECISE;
+                break;
+            }
             m = sg_method_parse(val);
             if (m < 0)
                 return cli_usage_error("fieldcurve", "--method: \"%s\" is not precise, "
-                                                     "classic or mpfr", val);
+                                                     "classic, mpfr or zemax", val);
+            recipe = SG_FIELDCURVE_EXACT;
             opts.method = (sg_method)m;
             break;
         case A_POINTS:
@@ -442,6 +453,7 @@ int cmd_fieldcurve(int argc, char **argv)
                 return CLI_EXIT_USAGE;
             if (!(step > 0.0 && step <= 0.1))
                 return cli_usage_error("fieldcurve", "--step: %g is not in (0, 0.1]", step);
+            stepped = 1;
             break;
         default:
             return CLI_EXIT_USAGE;
@@ -463,7 +475,10 @@ int cmd_fieldcurve(int argc, char **argv)
         goto done;
     }
     sg_diag_clear(&d);
-    rc = sg_fieldcurve(a.sys, a.cat, &opts, npts, step, pts, &d);
+    /* Zemax's parabasal ray is at pupil 0.001. */
+    if (recipe == SG_FIELDCURVE_ZEMAX && !stepped)
+        step = 0.001;
+    rc = sg_fieldcurve_recipe(a.sys, a.cat, &opts, npts, step, recipe, pts, &d);
     if (rc != SG_OK) {
         rc = an_cmd_engine_error(&a, &d, rc);
         goto done;

@@ -1000,6 +1000,7 @@ int cmd_trace(int argc, char **argv)
     meta.opd = kind == SG_RAYS_NORMALIZED;
     meta.global = gf != NULL;
     meta.global_ref = global;
+    meta.sys = sys;
 
     /* The output is opened only now, so a failed trace leaves an existing
      * file as it was. */

@@ -137,11 +137,16 @@ static void text_ray_line(FILE *f, sg_ray_kind kind, const sg_ray_in *ray)
     }
 }
 
-static void text_status_line(FILE *f, const sg_ray_surface *s, int nsurf, int st)
+static void text_status_line(FILE *f, const report_meta *m, const sg_ray_surface *s,
+                             int nsurf, int st)
 {
     int at = first_failure(s, nsurf);
+    char why[160];
     if (st == SG_OK)
         fputs("Status      : OK\n", f);
+    else if (at >= 0 && m->sys && sg_err_is_stopped(st))
+        fprintf(f, "Status      : %s (%s)\n", report_status_name(st),
+                sg_ray_stop_text(m->sys, at, st, why, sizeof why));
     else if (at >= 0)
         fprintf(f, "Status      : %s at surface %d (%s)\n", report_status_name(st),
                 at, sg_strerror(st));
@@ -235,7 +240,7 @@ static void text_ray(FILE *f, const report_meta *m, int multi, size_t index, int
         fprintf(f, "Ray %zu\n", index);
     if (ray)
         text_ray_line(f, kind, ray);
-    text_status_line(f, s, nsurf, st);
+    text_status_line(f, m, s, nsurf, st);
     if (opd)
         text_opd_line(f, m, opd);
     fputc('\n', f);

@@ -30,6 +30,8 @@ typedef struct report_meta {
     int global;         /* rows are in the global frame of surface
                            global_ref (trace --global), not local ones */
     int global_ref;
+    const sg_system *sys; /* when set, a stopped ray's status names what
+                             stopped it (sg_ray_stop_text) */
 } report_meta;
 
 /* The error column is error_bound (text: ErrBound) for precise and mpfr;
