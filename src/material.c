@@ -1322,17 +1322,18 @@ int sg_catalog_load_default(sg_catalog *cat, sg_diag *d)
         return sg_diag_set(d, SG_EINVAL,
                            "sg_catalog_load_default: NULL catalog");
     env = getenv("SAGITTA_LENSDB");
-    if (env && *env) {
-        if (is_dir(env))
-            use = env;
-        else
-            sg_diag_warn(d, "SAGITTA_LENSDB=%s is not a directory; ignored",
-                         env);
-    }
+    if (env && *env && is_dir(env))
+        use = env;
     if (!use && is_dir(SG_SOURCE_LENSDB))
         use = SG_SOURCE_LENSDB;
     if (!use && is_dir(SG_INSTALL_LENSDB))
         use = SG_INSTALL_LENSDB;
+    /* The user asked for other catalogs: say that these are not them. */
+    if (env && *env && use != env && use)
+        sg_diag_warn(d, "SAGITTA_LENSDB=%s is not a directory; using the bundled catalogs "
+                        "in %s instead", env, use);
+    else if (env && *env && use != env)
+        sg_diag_warn(d, "SAGITTA_LENSDB=%s is not a directory", env);
     if (!use)
         return sg_diag_set(d, SG_EIO,
                            "no glass catalog directory found (tried "

@@ -287,10 +287,11 @@ int cli_load_design(const char *path, sg_catalog **catp, sg_system **sysp)
         cli_error("out of memory loading the glass catalog");
         return CLI_EXIT_INTERNAL;
     }
-    if (rc != SG_OK) {
+    if (rc != SG_OK)
         cli_warn("glass catalog: %s", d.msg[0] ? d.msg : sg_strerror(rc));
-        cli_print_warnings(&d, NULL);
-    }
+    /* A SAGITTA_LENSDB that is not a directory is said, even though the
+     * bundled catalogs stand in for it. */
+    cli_print_warnings(&d, NULL);
 
     sg_diag_clear(&d);
     rc = sg_design_load(sys, path, &d);

@@ -257,6 +257,44 @@ static void test_output_full(void **state)
            "/dev/full", NULL);
 }
 
+/* Issue 30, item 23: a SAGITTA_LENSDB that is missing or not a directory
+ * is said on stderr, naming the variable and the path, while the bundled
+ * catalogs stand in (the trace still succeeds). */
+static void test_bad_lensdb(void **state)
+{
+    const char *saved = getenv("SAGITTA_LENSDB");
+    char *keep = saved ? strdup(saved) : NULL;
+    const char *d = ct_design("lensdb.json", SINGLET);
+    const char *notdir = ct_file("not-a-dir", "x\n");
+    const char *bad[2];
+    ct_result r;
+    int k;
+    (void)state;
+    bad[0] = ct_path("no-such-lensdb");
+    bad[1] = notdir;
+    for (k = 0; k < 2; k++) {
+        char want[1024];
+        setenv("SAGITTA_LENSDB", bad[k], 1);
+        ct_run(&r, "trace", d, "--ray", "0,0,0,1", NULL);
+        snprintf(want, sizeof want, "SAGITTA_LENSDB=%s is not a directory", bad[k]);
+        if (r.code != 0 || !strstr(r.err, want))
+            fail_msg("SAGITTA_LENSDB=%s: exit %d, stderr lacks \"%s\":\n%s", bad[k], r.code,
+                     want, r.err);
+        print_message("# %s\n", r.err);
+        ct_free(&r);
+    }
+    if (keep)
+        setenv("SAGITTA_LENSDB", keep, 1);
+    else
+        unsetenv("SAGITTA_LENSDB");
+    free(keep);
+    /* A good one says nothing. */
+    ct_run(&r, "trace", d, "--ray", "0,0,0,1", NULL);
+    assert_int_equal(r.code, 0);
+    assert_null(strstr(r.err, "SAGITTA_LENSDB"));
+    ct_free(&r);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -270,6 +308,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_output_errors),
         cmocka_unit_test(test_output_full),
         cmocka_unit_test(test_thermal),
+        cmocka_unit_test(test_bad_lensdb),
     };
     int rc;
     ct_init(argc, argv);

@@ -747,6 +747,12 @@ int sg_editor_main(int argc, char **argv)
         fprintf(stderr, "sagitta edit: out of memory\n");
         return 1;
     }
+    if (e.cat && e.cat_msg[0]) {
+        if (script)
+            fprintf(stderr, "sagitta edit: warning: %s\n", e.cat_msg);
+        else
+            ed_msg(&e, 1, "%s", e.cat_msg);
+    }
     if (file) {
         if (stat(file, &st) != 0 && errno == ENOENT) {
             /* Like vi: a new file under the name given. */
