@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "clitest.h"
 #include "sagitta.h"
@@ -295,6 +296,51 @@ static void test_bad_lensdb(void **state)
     ct_free(&r);
 }
 
+/* Issue 30, item 2 for the commands: -o (and vignetting --save) replaces
+ * an existing file, as the command line asks, whole or not at all; but a
+ * command never writes over a file it reads (its design or its ray list,
+ * by any name: device and inode are compared), which is refused with exit
+ * status 3 and the file left as it was. */
+static void test_output_is_input(void **state)
+{
+    const char *d = ct_design("own.json", SINGLET);
+    const char *rays = ct_file("own_rays.csv", "hx,hy,px,py\n0,0,0,1\n");
+    const char *lnk = ct_path("own_link.json");
+    const char *hard = ct_path("own_hard.json");
+    const char *other = ct_file("own_other.txt", "old\n");
+    char *before = ct_read(d), *rb = ct_read(rays), *after;
+    ct_result r;
+    (void)state;
+    assert_int_equal(symlink(d, lnk), 0);
+    assert_int_equal(link(d, hard), 0);
+    expect(3, ARGS("trace", d, "--ray", "0,0,0,1", "-o", d), "file this command reads", NULL);
+    expect(3, ARGS("trace", d, "--ray", "0,0,0,1", "-o", lnk), lnk, NULL);
+    expect(3, ARGS("trace", d, "--ray", "0,0,0,1", "-o", hard), hard, NULL);
+    expect(3, ARGS("trace", d, "--rays", rays, "-o", rays), rays, NULL);
+    expect(3, ARGS("trace", d, "--rays", rays, "--format", "csv", "-o", d), d, NULL);
+    expect(3, ARGS("spot", d, "-o", d), d, NULL);
+    expect(3, ARGS("paraxial", d, "-o", d), d, NULL);
+    expect(3, ARGS("import", d, "-o", d), d, NULL);
+    expect(3, ARGS("thermal", d, "--temperature", "40", "-o", d), d, NULL);
+    expect(3, ARGS("vignetting", d, "--save", hard), hard, NULL);
+    after = ct_read(d);
+    assert_string_equal(after, before);
+    free(after);
+    after = ct_read(rays);
+    assert_string_equal(after, rb);
+    free(after);
+    /* Another file named by -o is replaced. */
+    ct_run(&r, "trace", d, "--ray", "0,0,0,1", "--format", "csv", "-o", other, NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    after = ct_read(other);
+    assert_null(strstr(after, "old"));
+    assert_non_null(strstr(after, "surface"));
+    free(after);
+    free(before);
+    free(rb);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -309,6 +355,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_output_full),
         cmocka_unit_test(test_thermal),
         cmocka_unit_test(test_bad_lensdb),
+        cmocka_unit_test(test_output_is_input),
     };
     int rc;
     ct_init(argc, argv);
