@@ -1497,7 +1497,7 @@ static int c_recover(ed *e, args *a, int bang)
     /* The recovered design keeps its file name, so save writes the file it
      * came from; it differs from that file until then. */
     free(v);
-    doc_replace(&e->doc, sys, got.path[0] ? got.path : NULL, 1);
+    doc_replace(&e->doc, sys, got.path[0] ? got.path : NULL, 1, &got.disk);
     snprintf(e->rec.adopted, sizeof e->rec.adopted, "%s", got.file);
     opened(e, "recovered");
     rec_time_text(got.time, when, sizeof when);
