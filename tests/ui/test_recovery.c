@@ -679,6 +679,15 @@ static void test_recover_disk_changed(void **state)
     assert_int_equal(sg_design_load(want, path, &d), SG_OK);
     want->surf[3].radius = -3900.0;
     assert_int_equal(doc_stamp_file(path, &read), 0);
+    /* An editor's own recovery file records the file it read. */
+    e = new_ed();
+    ok(e, "open %s", path);
+    ok(e, "set 3 radius -3900");
+    assert_true(e->rec.file[0] != '\0');
+    assert_int_equal(rec_read_file(e->rec.file, &info, NULL, &d), SG_OK);
+    assert_true(info.disk.have && info.disk.hash == read.hash && info.disk.ino == read.ino);
+    ok(e, "quit!");
+    free_ed(e);
     child_writes(file, abs, want, &read, 1);
     /* The header holds the stamp as stat() and the bytes gave it. */
     assert_int_equal(rec_read_file(file, &info, NULL, &d), SG_OK);
