@@ -1837,6 +1837,13 @@ int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
     return rc;
 }
 
+static sg_temp_hook temp_hook;
+
+void sg_set_temp_hook(sg_temp_hook hook)
+{
+    temp_hook = hook;
+}
+
 int sg_save_text_atomic(const char *path, const char *text, size_t len, sg_diag *d)
 {
     char *tmp, *resolved = NULL;
@@ -1871,6 +1878,8 @@ int sg_save_text_atomic(const char *path, const char *text, size_t len, sg_diag 
         free(resolved);
         return sg_diag_set(d, SG_EIO, "%s: cannot create a temporary file: %s", path, strerror(e));
     }
+    if (temp_hook)
+        temp_hook(tmp, 1);
     /* mkstemp makes the file 0600; keep the old file's mode, or give a new
      * file the mode open() would have. */
     if (stat(target, &st) == 0 && S_ISREG(st.st_mode))
@@ -1897,6 +1906,8 @@ int sg_save_text_atomic(const char *path, const char *text, size_t len, sg_diag 
         e = errno;
         goto fail;
     }
+    if (temp_hook)
+        temp_hook(tmp, 0);
     sync_parent_dir(target);
     free(tmp);
     free(resolved);
@@ -1904,6 +1915,8 @@ int sg_save_text_atomic(const char *path, const char *text, size_t len, sg_diag 
 
 fail:
     unlink(tmp);
+    if (temp_hook)
+        temp_hook(tmp, 0);
     free(tmp);
     free(resolved);
     return sg_diag_set(d, SG_EIO, "%s: cannot write: %s", path, strerror(e));

@@ -624,6 +624,13 @@ int sg_design_parse(sg_system *sys, const char *text, size_t len,
 int sg_design_save(const sg_system *sys, const char *path, sg_diag *d);
 /* The design as a NUL-terminated JSON text; free() it. */
 char *sg_design_to_json(const sg_system *sys);
+/* A program may list the temporary files the atomic saves make beside
+ * their targets: hook(path, 1) once one exists, hook(path, 0) once it is
+ * renamed into place or removed, so that a signal ending the program
+ * meanwhile can remove it.  NULL (the default): none.  Set it once, before
+ * any save. */
+typedef void (*sg_temp_hook)(const char *path, int add);
+void sg_set_temp_hook(sg_temp_hook hook);
 
 /* sg_design_load reads a Zemax .zmx lens file too (by its name, or by a
  * byte-order mark or a first VERS or MODE line), and sg_design_save writes
