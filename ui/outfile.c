@@ -1,5 +1,5 @@
 /* outfile.c - a report file that appears whole or not at all. */
-/* realpath() and fchmod() are X/Open. */
+/* fchmod() and readlink() are X/Open. */
 #define _XOPEN_SOURCE 700
 #include "outfile.h"
 
@@ -140,6 +140,35 @@ static int close_file(outfile *o)
     return rc;
 }
 
+/* Follows a chain of symbolic links in buf (a path) to its end, whether
+ * that exists or not: a dangling link is written through and stays a
+ * link.  A loop is left as it is (the rename then fails). */
+static void link_target(char *buf, size_t n)
+{
+    char link[4096], next[4096 + 4096];
+    struct stat st;
+    int hops;
+    for (hops = 0; hops < 40; hops++) {
+        const char *slash;
+        ssize_t k;
+        if (lstat(buf, &st) != 0 || !S_ISLNK(st.st_mode))
+            return;
+        k = readlink(buf, link, sizeof link - 1);
+        if (k < 0)
+            return;
+        link[k] = '\0';
+        /* A relative link is relative to the link's own directory. */
+        slash = strrchr(buf, '/');
+        if (link[0] != '/' && slash)
+            snprintf(next, sizeof next, "%.*s%s", (int)(slash - buf + 1), buf, link);
+        else
+            snprintf(next, sizeof next, "%s", link);
+        if (strlen(next) >= n)
+            return;
+        strcpy(buf, next);
+    }
+}
+
 /* Removes the temporary and its listing. */
 static void drop_temp(outfile *o)
 {
@@ -177,13 +206,7 @@ int outfile_open(outfile *o, const char *path, FILE *std)
     }
     o->path = path;
     snprintf(o->target, sizeof o->target, "%s", path);
-    if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
-        char *real = realpath(path, NULL);
-        if (real) {
-            snprintf(o->target, sizeof o->target, "%s", real);
-            free(real);
-        }
-    }
+    link_target(o->target, sizeof o->target);
     if (stat(o->target, &st) == 0 && (!S_ISREG(st.st_mode) || st.st_nlink > 1))
         return in_place(o, path);
     slash = strrchr(o->target, '/');
@@ -201,8 +224,15 @@ int outfile_open(outfile *o, const char *path, FILE *std)
         /* A directory we may not create in: write in place after all. */
         return in_place(o, path);
     if (stat(o->target, &st) == 0) {
-        if (fchmod(fd, st.st_mode & 07777) != 0) {
-            /* Not ours to chmod: in place keeps owner and mode. */
+        struct stat now;
+        /* The new file keeps the old one's owner and group, then (chown
+         * clears set-id bits) its mode; where it cannot, the rename would
+         * change them. */
+        if (fstat(fd, &now) != 0 ||
+            ((now.st_uid != st.st_uid || now.st_gid != st.st_gid) &&
+             fchown(fd, st.st_uid, st.st_gid) != 0) ||
+            fchmod(fd, st.st_mode & 07777) != 0) {
+            /* Not ours to chown or chmod: in place keeps owner and mode. */
             close(fd);
             drop_temp(o);
             return in_place(o, path);

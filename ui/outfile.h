@@ -6,7 +6,9 @@
  * deep in a ray list, Esc during a long export) leaves an existing file as
  * it was.  Standard output ("-" or NULL), a device, a pipe, or a file with
  * other hard links (which a rename would break) are written in place.  A
- * symbolic link stays and the file it names is replaced, keeping its mode.
+ * symbolic link stays and the file it names is replaced (or made, for a
+ * dangling one), keeping its owner, group and mode; a file whose owner a
+ * new file could not keep is written in place.
  */
 #ifndef SG_UI_OUTFILE_H
 #define SG_UI_OUTFILE_H

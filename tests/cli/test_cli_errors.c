@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "clitest.h"
@@ -341,6 +342,50 @@ static void test_output_is_input(void **state)
     free(rb);
 }
 
+/* Issue 30, item 5 for -o: the file replaced keeps its owner, group and
+ * mode (as root, given to nobody first), and a dangling symbolic link
+ * stays a link, the file it names written.  References: stat(), lstat(). */
+static void test_output_keeps(void **state)
+{
+    const char *d = ct_design("keep.json", SINGLET);
+    const char *own = ct_file("keep_owned.csv", "old\n");
+    const char *lnk = ct_path("keep_link.csv");
+    const char *target = ct_path("keep_target.csv");
+    struct stat st;
+    ct_result r;
+    char *text;
+    (void)state;
+    assert_int_equal(chmod(own, 0640), 0);
+    if (geteuid() == 0)
+        assert_int_equal(chown(own, 65534, 65534), 0);
+    /* spot writes through a temporary file renamed into place (a single
+     * ray's trace writes in place). */
+    ct_run(&r, "spot", d, "--format", "csv", "-o", own, NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    assert_int_equal(stat(own, &st), 0);
+    assert_int_equal(st.st_mode & 07777, 0640);
+    if (geteuid() == 0) {
+        assert_int_equal((long)st.st_uid, 65534);
+        assert_int_equal((long)st.st_gid, 65534);
+    }
+    text = ct_read(own);
+    assert_null(strstr(text, "old"));
+    free(text);
+    assert_int_equal(symlink("keep_target.csv", lnk), 0);
+    ct_run(&r, "spot", d, "--format", "csv", "-o", lnk, NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    assert_int_equal(lstat(lnk, &st), 0);
+    assert_true(S_ISLNK(st.st_mode));
+    assert_int_equal(lstat(target, &st), 0);
+    assert_true(S_ISREG(st.st_mode));
+    print_message("# -o kept owner %ld, mode %04o; a dangling link stayed a link\n",
+                  (long)(geteuid() == 0 ? 65534 : geteuid()), 0640);
+    unlink(lnk);
+    unlink(target);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -356,6 +401,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_thermal),
         cmocka_unit_test(test_bad_lensdb),
         cmocka_unit_test(test_output_is_input),
+        cmocka_unit_test(test_output_keeps),
     };
     int rc;
     ct_init(argc, argv);
