@@ -837,6 +837,34 @@ static int parse_cd(agf_ctx *cx, const agf_line *ln, sg_glass *g, int first, int
     return SG_OK;
 }
 
+/* Zemax reads the coefficients a CD line leaves out as zeros (NIKON's
+ * catalog writes 8 numbers for its formula 13 glasses), so a short line is
+ * kept; but one that stops inside a term (a Sellmeier K without its L), or
+ * before the formula depends on the wavelength at all, is a line cut off:
+ * no glass has a constant index.  Per formula (index: sg_formula): the
+ * fewest coefficients a line may have, and where its pairs begin (-1:
+ * none). */
+static const struct {
+    signed char min, pairs;
+} cd_shape[14] = {
+    {0, -1}, {2, -1}, {2, 0}, {2, -1}, {3, 1}, {2, -1}, {2, 0}, {3, -1},
+    {3, -1}, {3, 1}, {2, -1}, {2, 0}, {2, -1}, {2, -1},
+};
+
+static int cd_complete(agf_ctx *cx, const sg_glass *g, int nc, long cd_line)
+{
+    int f = g->formula >= 1 && g->formula <= 13 ? g->formula : 0;
+    int min = cd_shape[f].min, pairs = cd_shape[f].pairs;
+    if (nc >= min && (pairs < 0 || nc <= pairs || (nc - pairs) % 2 == 0))
+        return SG_OK;
+    return sg_diag_set(cx->d, SG_EPARSE,
+                       "%s:%ld: glass %s: CD line has %d coefficient%s, which cuts a term of "
+                       "dispersion formula %d short (it needs at least %d%s; coefficients left "
+                       "out at the end count as zero, as in Zemax)",
+                       cx->path, cd_line, g->name, nc, nc == 1 ? "" : "s", f, min,
+                       pairs < 0 ? "" : pairs == 0 ? ", in pairs" : ", then pairs");
+}
+
 /* Nonzero when token k is a decimal number, as a continuation line's
  * first token is. */
 static int tok_is_number(const agf_line *ln, int k)
@@ -1057,6 +1085,7 @@ static int parse_text(agf_ctx *cx, const char *s, size_t n, glass_list *l,
 {
     size_t pos = 0;
     int has_cd = 0, rc, in_cd = 0, ncd = 0;
+    long cd_line = 0;
     agf_line ln;
 
     cx->line = 0;
@@ -1092,12 +1121,15 @@ static int parse_text(agf_ctx *cx, const char *s, size_t n, glass_list *l,
                                    "%s:%ld: glass %s has no CD line",
                                    cx->path, l->nm_line[l->n - 1],
                                    l->g[l->n - 1].name);
+            if (l->n > 0 && (rc = cd_complete(cx, &l->g[l->n - 1], ncd, cd_line)) != SG_OK)
+                return rc;
             rc = parse_nm(cx, &ln, l, catname, &has_cd);
         } else if (tok_is(&ln, 0, "CD")) {
             if (l->n == 0)
                 return agf_err(cx, "CD line before any NM line");
             rc = parse_cd(cx, &ln, &l->g[l->n - 1], 1, &ncd);
             has_cd = 1;
+            cd_line = cx->line;
         } else if (tok_is(&ln, 0, "LD")) {
             if (l->n == 0)
                 return agf_err(cx, "LD line before any NM line");
@@ -1125,7 +1157,7 @@ static int parse_text(agf_ctx *cx, const char *s, size_t n, glass_list *l,
     if (!has_cd)
         return sg_diag_set(cx->d, SG_EPARSE, "%s:%ld: glass %s has no CD line",
                            cx->path, l->nm_line[l->n - 1], l->g[l->n - 1].name);
-    return SG_OK;
+    return cd_complete(cx, &l->g[l->n - 1], ncd, cd_line);
 }
 
 int sg_catalog_load_agf(sg_catalog *cat, const char *path, sg_diag *d)
@@ -1290,15 +1322,16 @@ int sg_catalog_load_default(sg_catalog *cat, sg_diag *d)
         return sg_diag_set(d, SG_EINVAL,
                            "sg_catalog_load_default: NULL catalog");
     env = getenv("SAGITTA_LENSDB");
-    if (env && *env) {
-        if (is_dir(env))
-            use = env;
-        else
-            sg_diag_warn(d, "SAGITTA_LENSDB=%s is not a directory; ignored",
-                         env);
-    }
+    if (env && *env && is_dir(env))
+        use = env;
     if (!use)
         use = sg_data_dir("lensdb", found, sizeof found);
+    /* The user asked for other catalogs: say that these are not them. */
+    if (env && *env && use != env && use)
+        sg_diag_warn(d, "SAGITTA_LENSDB=%s is not a directory; using the bundled catalogs "
+                        "in %s instead", env, use);
+    else if (env && *env && use != env)
+        sg_diag_warn(d, "SAGITTA_LENSDB=%s is not a directory", env);
     if (!use)
         return sg_diag_set(d, SG_EIO,
                            "no glass catalog directory found (tried "

@@ -647,10 +647,22 @@ SG_API int sg_design_load(sg_system *sys, const char *path, sg_diag *d);
 SG_API int sg_design_parse(sg_system *sys, const char *text, size_t len,
                     const char *name, sg_diag *d);
 /* Writes a design atomically: a temporary file in the same directory,
- * fsync, then rename.  A failure leaves any existing file intact. */
+ * fsync, then rename.  A failure leaves any existing file intact.  The file
+ * keeps its owner, group and mode; a symbolic link, even a dangling one,
+ * is written through; a file whose owner a new file could not keep, or in
+ * a directory where no temporary can be made, is rewritten in place after
+ * a backup of its bytes (beside it, in $TMPDIR or /tmp), removed once the
+ * write is synced. */
 SG_API int sg_design_save(const sg_system *sys, const char *path, sg_diag *d);
 /* The design as a NUL-terminated JSON text; free() it. */
 SG_API char *sg_design_to_json(const sg_system *sys);
+/* A program may list the temporary files the atomic saves make beside
+ * their targets: hook(path, 1) once one exists, hook(path, 0) once it is
+ * renamed into place or removed, so that a signal ending the program
+ * meanwhile can remove it.  NULL (the default): none.  Set it once, before
+ * any save. */
+typedef void (*sg_temp_hook)(const char *path, int add);
+SG_API void sg_set_temp_hook(sg_temp_hook hook);
 
 /* sg_design_load reads a Zemax .zmx lens file too (by its name, or by a
  * byte-order mark or a first VERS or MODE line), and sg_design_save writes

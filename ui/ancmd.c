@@ -126,6 +126,8 @@ int an_cmd_write(const an_cmd *a, const an_writer *w)
     plot_figure fig;
     outfile of;
     int err, pic, have_fig = 0, rc = CLI_EXIT_OK;
+    if (cli_output_is_input(a->output))
+        return CLI_EXIT_FILE;
     if ((err = outfile_open(&of, a->output && strcmp(a->output, "-") ? a->output : NULL,
                             stdout)) != 0) {
         cli_error("%s: %s", a->output, strerror(err));

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "args.h"
@@ -287,12 +288,14 @@ int cli_load_design(const char *path, sg_catalog **catp, sg_system **sysp)
         cli_error("out of memory loading the glass catalog");
         return CLI_EXIT_INTERNAL;
     }
-    if (rc != SG_OK) {
+    if (rc != SG_OK)
         cli_warn("glass catalog: %s", d.msg[0] ? d.msg : sg_strerror(rc));
-        cli_print_warnings(&d, NULL);
-    }
+    /* A SAGITTA_LENSDB that is not a directory is said, even though the
+     * bundled catalogs stand in for it. */
+    cli_print_warnings(&d, NULL);
 
     sg_diag_clear(&d);
+    cli_note_input(path);
     rc = sg_design_load(sys, path, &d);
     if (rc != SG_OK) {
         cli_print_diag(path, &d, rc);
@@ -341,11 +344,45 @@ int cli_check_wave(const char *path, const sg_system *sys, int wave1, int *wave0
     return CLI_EXIT_OK;
 }
 
+/* The files this run reads; a command reads two at most (design, rays). */
+static struct {
+    dev_t dev;
+    ino_t ino;
+} inputs[8];
+static int ninputs;
+
+void cli_note_input(const char *path)
+{
+    struct stat st;
+    if (path && strcmp(path, "-") != 0 && ninputs < 8 && stat(path, &st) == 0) {
+        inputs[ninputs].dev = st.st_dev;
+        inputs[ninputs].ino = st.st_ino;
+        ninputs++;
+    }
+}
+
+int cli_output_is_input(const char *path)
+{
+    struct stat st;
+    int k;
+    if (!path || strcmp(path, "-") == 0 || stat(path, &st) != 0 || !S_ISREG(st.st_mode))
+        return 0;
+    for (k = 0; k < ninputs; k++)
+        if (inputs[k].dev == st.st_dev && inputs[k].ino == st.st_ino) {
+            cli_error("%s: the output is a file this command reads; not written (give "
+                      "another name)", path);
+            return 1;
+        }
+    return 0;
+}
+
 FILE *cli_open_output(const char *path)
 {
     FILE *f;
     if (!path || strcmp(path, "-") == 0)
         return stdout;
+    if (cli_output_is_input(path))
+        return NULL;
     f = fopen(path, "w");
     if (!f)
         cli_error("%s: %s", path, strerror(errno));
@@ -556,6 +593,7 @@ static int open_rays(const char *path, FILE *spool, csvrays_reader **rd, sg_diag
         rewind(spool);
         return csvrays_open_stream(spool, "<stdin>", rd, d);
     }
+    cli_note_input(path);
     return csvrays_open(path, rd, d);
 }
 
@@ -692,6 +730,10 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
         }
         /* The output is opened only after the first block traced, so a
          * design that cannot be traced leaves an existing file as it was. */
+        if (!opened && !h5 && output && cli_output_is_input(output)) {
+            rc = CLI_EXIT_FILE;
+            goto done;
+        }
         if (fmt == FMT_HDF5) {
             if (!h5) {
                 h5 = h5rays_open(output, &meta, sys->units, nsurf, csvrays_kind(rd),

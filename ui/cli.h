@@ -130,8 +130,16 @@ int cli_exit_for(int err);
  * returns the 0-based index in *wave0, or prints and returns CLI_EXIT_USAGE. */
 int cli_check_wave(const char *path, const sg_system *sys, int wave1, int *wave0);
 
+/* Remembers a file the command reads (its design, its ray list), so that
+ * no output replaces it. */
+void cli_note_input(const char *path);
+/* Nonzero, after a message naming it, when path is a file the command
+ * reads (the same device and inode, whatever the name): an output never
+ * replaces its own input.  "-" and NULL (standard output) are never one. */
+int cli_output_is_input(const char *path);
+
 /* Opens the output ("-" or NULL is standard output).  Returns NULL after
- * printing a message. */
+ * printing a message; refuses an input (cli_output_is_input). */
 FILE *cli_open_output(const char *path);
 /* Closes an output opened by cli_open_output; returns the exit status. */
 int cli_close_output(FILE *f, const char *path);

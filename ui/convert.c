@@ -84,6 +84,10 @@ static int convert(int argc, char **argv, int to_zmx)
         cli_design_free(cat, sys);
         return cli_close_output(stdout, NULL);
     }
+    if (cli_output_is_input(out)) {
+        cli_design_free(cat, sys);
+        return CLI_EXIT_FILE;
+    }
     rc = to_zmx ? sg_zmx_save(sys, out, cat, &d) : sg_design_save(sys, out, &d);
     cli_design_free(cat, sys);
     if (rc != SG_OK) {

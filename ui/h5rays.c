@@ -11,6 +11,8 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "outfile.h"
+
 /* Rows a chunk holds: 64 Ki doubles, 512 KiB, the size HDF5's guide
  * suggests for sequential reading and writing. */
 #define H5R_CHUNK 65536
@@ -25,6 +27,7 @@ struct h5rays {
     int opd; /* the OPD columns (normalized rays) */
     size_t rows, next_ray;
     char path[4096], tmp[4096 + 32];
+    int slot; /* the temporary's outfile_track slot, or -1 */
     void *buf; /* the columns of a block */
     size_t bufrows;
 };
@@ -123,8 +126,13 @@ void h5rays_abort(h5rays *h)
     if (!h)
         return;
     close_all(h);
-    if (h->tmp[0])
+    if (h->tmp[0]) {
+        sigset_t old;
+        outfile_block_signals(&old);
         unlink(h->tmp);
+        outfile_untrack(h->slot);
+        outfile_restore_signals(&old);
+    }
     free(h->buf);
     free(h);
 }
@@ -157,6 +165,7 @@ h5rays *h5rays_open(const char *path, const report_meta *m, const char *units,
         fail(err, errlen, "out of memory");
         return NULL;
     }
+    h->slot = -1;
     if (strlen(path) >= sizeof h->path) {
         free(h);
         fail(err, errlen, "file name too long");
@@ -168,7 +177,19 @@ h5rays *h5rays_open(const char *path, const report_meta *m, const char *units,
     h->nin = kind == SG_RAYS_NORMALIZED ? 4 : 6;
     /* The library's own messages would go to stderr unasked. */
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-    h->file = H5Fcreate(h->tmp, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    {
+        /* Listed from its creation on, so a signal that ends the program
+         * removes it (outfile.h). */
+        sigset_t old;
+        outfile_block_signals(&old);
+        h->slot = outfile_track(h->tmp);
+        h->file = H5Fcreate(h->tmp, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+        if (h->file < 0) {
+            outfile_untrack(h->slot);
+            h->slot = -1;
+        }
+        outfile_restore_signals(&old);
+    }
     if (h->file < 0) {
         snprintf(err, errlen, "cannot create %s: %s", h->tmp, strerror(errno ? errno : EIO));
         h->tmp[0] = '\0';
@@ -368,12 +389,18 @@ int h5rays_close(h5rays *h, char *err, size_t errlen)
         H5Fflush(h->file, H5F_SCOPE_GLOBAL) < 0)
         rc = fail(err, errlen, "HDF5 write failed");
     close_all(h);
-    if (rc == 0 && rename(h->tmp, h->path) != 0) {
-        snprintf(err, errlen, "%s: %s", h->path, strerror(errno));
-        rc = -1;
+    {
+        sigset_t old;
+        outfile_block_signals(&old);
+        if (rc == 0 && rename(h->tmp, h->path) != 0) {
+            snprintf(err, errlen, "%s: %s", h->path, strerror(errno));
+            rc = -1;
+        }
+        if (rc != 0)
+            unlink(h->tmp);
+        outfile_untrack(h->slot);
+        outfile_restore_signals(&old);
     }
-    if (rc != 0)
-        unlink(h->tmp);
     free(h->buf);
     free(h);
     return rc;

@@ -94,6 +94,9 @@ int main(int argc, char **argv)
     const cli_command *c;
     const char *a;
 
+    /* The engine's saves list their temporary files with ours, so a
+     * signal that ends the program removes them too. */
+    sg_set_temp_hook(outfile_temp_hook);
     if (argc < 2)
         return run_editor(argc, argv);
     a = argv[1];

@@ -114,6 +114,10 @@ int cmd_vignetting(int argc, char **argv)
          * that was not saved would mislead. */
         sg_set_vignetting_apply(sys, vf);
         sg_diag_clear(&d);
+        if (cli_output_is_input(save)) {
+            rc = CLI_EXIT_FILE;
+            goto done;
+        }
         if ((rc = sg_design_save(sys, save, &d)) != SG_OK) {
             cli_error("%s", d.msg[0] ? d.msg : sg_strerror(rc));
             rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_FILE;

@@ -110,6 +110,10 @@ int cmd_thermal(int argc, char **argv)
     }
     cli_print_warnings(&d, design);
     sg_diag_clear(&d);
+    if (cli_output_is_input(output)) {
+        rc = CLI_EXIT_FILE;
+        goto done;
+    }
     if ((rc = sg_design_save(hot, output, &d)) != SG_OK) {
         cli_error("%s", d.msg[0] ? d.msg : sg_strerror(rc));
         rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_FILE;

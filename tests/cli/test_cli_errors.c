@@ -6,6 +6,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "clitest.h"
 #include "sagitta.h"
@@ -257,6 +259,133 @@ static void test_output_full(void **state)
            "/dev/full", NULL);
 }
 
+/* Issue 30, item 23: a SAGITTA_LENSDB that is missing or not a directory
+ * is said on stderr, naming the variable and the path, while the bundled
+ * catalogs stand in (the trace still succeeds). */
+static void test_bad_lensdb(void **state)
+{
+    const char *saved = getenv("SAGITTA_LENSDB");
+    char *keep = saved ? strdup(saved) : NULL;
+    const char *d = ct_design("lensdb.json", SINGLET);
+    const char *notdir = ct_file("not-a-dir", "x\n");
+    const char *bad[2];
+    ct_result r;
+    int k;
+    (void)state;
+    bad[0] = ct_path("no-such-lensdb");
+    bad[1] = notdir;
+    for (k = 0; k < 2; k++) {
+        char want[1024];
+        setenv("SAGITTA_LENSDB", bad[k], 1);
+        ct_run(&r, "trace", d, "--ray", "0,0,0,1", NULL);
+        snprintf(want, sizeof want, "SAGITTA_LENSDB=%s is not a directory", bad[k]);
+        if (r.code != 0 || !strstr(r.err, want))
+            fail_msg("SAGITTA_LENSDB=%s: exit %d, stderr lacks \"%s\":\n%s", bad[k], r.code,
+                     want, r.err);
+        print_message("# %s\n", r.err);
+        ct_free(&r);
+    }
+    if (keep)
+        setenv("SAGITTA_LENSDB", keep, 1);
+    else
+        unsetenv("SAGITTA_LENSDB");
+    free(keep);
+    /* A good one says nothing. */
+    ct_run(&r, "trace", d, "--ray", "0,0,0,1", NULL);
+    assert_int_equal(r.code, 0);
+    assert_null(strstr(r.err, "SAGITTA_LENSDB"));
+    ct_free(&r);
+}
+
+/* Issue 30, item 2 for the commands: -o (and vignetting --save) replaces
+ * an existing file, as the command line asks, whole or not at all; but a
+ * command never writes over a file it reads (its design or its ray list,
+ * by any name: device and inode are compared), which is refused with exit
+ * status 3 and the file left as it was. */
+static void test_output_is_input(void **state)
+{
+    const char *d = ct_design("own.json", SINGLET);
+    const char *rays = ct_file("own_rays.csv", "hx,hy,px,py\n0,0,0,1\n");
+    const char *lnk = ct_path("own_link.json");
+    const char *hard = ct_path("own_hard.json");
+    const char *other = ct_file("own_other.txt", "old\n");
+    char *before = ct_read(d), *rb = ct_read(rays), *after;
+    ct_result r;
+    (void)state;
+    assert_int_equal(symlink(d, lnk), 0);
+    assert_int_equal(link(d, hard), 0);
+    expect(3, ARGS("trace", d, "--ray", "0,0,0,1", "-o", d), "file this command reads", NULL);
+    expect(3, ARGS("trace", d, "--ray", "0,0,0,1", "-o", lnk), lnk, NULL);
+    expect(3, ARGS("trace", d, "--ray", "0,0,0,1", "-o", hard), hard, NULL);
+    expect(3, ARGS("trace", d, "--rays", rays, "-o", rays), rays, NULL);
+    expect(3, ARGS("trace", d, "--rays", rays, "--format", "csv", "-o", d), d, NULL);
+    expect(3, ARGS("spot", d, "-o", d), d, NULL);
+    expect(3, ARGS("paraxial", d, "-o", d), d, NULL);
+    expect(3, ARGS("import", d, "-o", d), d, NULL);
+    expect(3, ARGS("thermal", d, "--temperature", "40", "-o", d), d, NULL);
+    expect(3, ARGS("vignetting", d, "--save", hard), hard, NULL);
+    after = ct_read(d);
+    assert_string_equal(after, before);
+    free(after);
+    after = ct_read(rays);
+    assert_string_equal(after, rb);
+    free(after);
+    /* Another file named by -o is replaced. */
+    ct_run(&r, "trace", d, "--ray", "0,0,0,1", "--format", "csv", "-o", other, NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    after = ct_read(other);
+    assert_null(strstr(after, "old"));
+    assert_non_null(strstr(after, "surface"));
+    free(after);
+    free(before);
+    free(rb);
+}
+
+/* Issue 30, item 5 for -o: the file replaced keeps its owner, group and
+ * mode (as root, given to nobody first), and a dangling symbolic link
+ * stays a link, the file it names written.  References: stat(), lstat(). */
+static void test_output_keeps(void **state)
+{
+    const char *d = ct_design("keep.json", SINGLET);
+    const char *own = ct_file("keep_owned.csv", "old\n");
+    const char *lnk = ct_path("keep_link.csv");
+    const char *target = ct_path("keep_target.csv");
+    struct stat st;
+    ct_result r;
+    char *text;
+    (void)state;
+    assert_int_equal(chmod(own, 0640), 0);
+    if (geteuid() == 0)
+        assert_int_equal(chown(own, 65534, 65534), 0);
+    /* spot writes through a temporary file renamed into place (a single
+     * ray's trace writes in place). */
+    ct_run(&r, "spot", d, "--format", "csv", "-o", own, NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    assert_int_equal(stat(own, &st), 0);
+    assert_int_equal(st.st_mode & 07777, 0640);
+    if (geteuid() == 0) {
+        assert_int_equal((long)st.st_uid, 65534);
+        assert_int_equal((long)st.st_gid, 65534);
+    }
+    text = ct_read(own);
+    assert_null(strstr(text, "old"));
+    free(text);
+    assert_int_equal(symlink("keep_target.csv", lnk), 0);
+    ct_run(&r, "spot", d, "--format", "csv", "-o", lnk, NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    assert_int_equal(lstat(lnk, &st), 0);
+    assert_true(S_ISLNK(st.st_mode));
+    assert_int_equal(lstat(target, &st), 0);
+    assert_true(S_ISREG(st.st_mode));
+    print_message("# -o kept owner %ld, mode %04o; a dangling link stayed a link\n",
+                  (long)(geteuid() == 0 ? 65534 : geteuid()), 0640);
+    unlink(lnk);
+    unlink(target);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -270,6 +399,9 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_output_errors),
         cmocka_unit_test(test_output_full),
         cmocka_unit_test(test_thermal),
+        cmocka_unit_test(test_bad_lensdb),
+        cmocka_unit_test(test_output_is_input),
+        cmocka_unit_test(test_output_keeps),
     };
     int rc;
     ct_init(argc, argv);

@@ -58,7 +58,7 @@ static int same_csv(const char *a, const char *b)
     return row + 1;
 }
 
-/* Runs the script (its export goes to OUT) in the editor on the
+/* Runs the script (its export! replaces OUT) in the editor on the
  * Cassegrain, and compares with trace --ray r under the given method. */
 static void check(const char *name, const char *script, const char *ray, const char *method)
 {
@@ -85,9 +85,9 @@ static void ray_command(void **state)
 {
     char s[1024];
     (void)state;
-    snprintf(s, sizeof s, "ray 0.3 0.7 -0.4 0.2\nexport %s csv\n", ct_path("out.csv"));
+    snprintf(s, sizeof s, "ray 0.3 0.7 -0.4 0.2\nexport! %s csv\n", ct_path("out.csv"));
     check("ray.cmd", s, "0.3,0.7,-0.4,0.2", "precise");
-    snprintf(s, sizeof s, "ray 0.3,-0.9,0.15,0.55\nexport %s csv\n", ct_path("out.csv"));
+    snprintf(s, sizeof s, "ray 0.3,-0.9,0.15,0.55\nexport! %s csv\n", ct_path("out.csv"));
     check("ray_commas.cmd", s, "0.3,-0.9,0.15,0.55", "precise");
 }
 
@@ -95,7 +95,7 @@ static void coordinate_commands(void **state)
 {
     char s[1024];
     (void)state;
-    snprintf(s, sizeof s, "hx -0.5\nhy 0.25\npx 0.6\npy -0.1\nexport %s csv\n",
+    snprintf(s, sizeof s, "hx -0.5\nhy 0.25\npx 0.6\npy -0.1\nexport! %s csv\n",
              ct_path("out.csv"));
     check("coords.cmd", s, "-0.5,0.25,0.6,-0.1", "precise");
 }
@@ -104,10 +104,10 @@ static void other_methods(void **state)
 {
     char s[1024];
     (void)state;
-    snprintf(s, sizeof s, "method classic\nray -0.2 0.8 0.45 -0.35\nexport %s csv\n",
+    snprintf(s, sizeof s, "method classic\nray -0.2 0.8 0.45 -0.35\nexport! %s csv\n",
              ct_path("out.csv"));
     check("classic.cmd", s, "-0.2,0.8,0.45,-0.35", "classic");
-    snprintf(s, sizeof s, "method mpfr\nray 0.6 -0.3 -0.1 0.7\nexport %s csv\n",
+    snprintf(s, sizeof s, "method mpfr\nray 0.6 -0.3 -0.1 0.7\nexport! %s csv\n",
              ct_path("out.csv"));
     check("mpfr.cmd", s, "0.6,-0.3,-0.1,0.7", "mpfr");
 }
@@ -166,7 +166,7 @@ static void global_toggle(void **state)
         char sc[512], g[32];
         ct_result r, t;
         char *got;
-        snprintf(sc, sizeof sc, "ray 0.3 0.7 -0.4 0.2\n%s\nprint ray\nexport %s csv\n",
+        snprintf(sc, sizeof sc, "ray 0.3 0.7 -0.4 0.2\n%s\nprint ray\nexport! %s csv\n",
                  refs[k][0], ct_path("out.csv"));
         ct_run(&r, "edit", fold, "--batch", ct_file("global.cmd", sc), (char *)NULL);
         assert_int_equal(r.code, 0);
@@ -224,7 +224,7 @@ static void batch_frames(void **state)
         "set 5 type cb\nset 5 tx 45\nset 5 thickness -57.25\n"
         "set 6 radius -80\nset 6 thickness -5\nset 6 tx 3\nset 6 after reverse\n"
         "set 7 tz 10\nundo\nundo\nredo\nredo\n"
-        "ray 0.3 0.7 -0.4 0.2\nprint ray\nexport %s csv\n";
+        "ray 0.3 0.7 -0.4 0.2\nprint ray\nexport! %s csv\n";
     const char *root = getenv("SAGITTA_SOURCE_ROOT");
     char fold[1024], sc[1024], start[1024];
     ct_result r, t;

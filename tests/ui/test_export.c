@@ -102,9 +102,11 @@ static void test_grid_counts(void **state)
     (void)state;
     for (k = 0; k < sizeof ns / sizeof ns[0]; k++) {
         ed *e = new_ed();
-        char n[16];
+        char n[16], name[32];
         snprintf(n, sizeof n, "grid %d", ns[k]);
-        assert_false(run(e, "export %s csv %s", tmp_path("g.csv", path, sizeof path), n) &
+        /* A file of its own each: export asks before replacing one. */
+        snprintf(name, sizeof name, "count%d.csv", ns[k]);
+        assert_false(run(e, "export %s csv %s", tmp_path(name, path, sizeof path), n) &
                      ED_ERROR);
         snprintf(want, sizeof want, "exported %zu ray%s", grid_count(ns[k]),
                  grid_count(ns[k]) == 1 ? "" : "s");
@@ -230,7 +232,7 @@ static void test_fan_json_text(void **state)
     cJSON *j, *rays;
     int k;
     (void)state;
-    assert_false(run(e, "export %s %s", tmp_path("f.json", path, sizeof path), "fan 5") &
+    assert_false(run(e, "export %s %s", tmp_path("fan.json", path, sizeof path), "fan 5") &
                  ED_ERROR);
     text = slurp(path);
     j = cJSON_Parse(text);
@@ -320,15 +322,117 @@ static void test_cancel_leaves_no_file(void **state)
     fputs("old\n", f);
     fclose(f);
     calls = 0;
-    assert_false(run(e, "export %s %s", path, "grid 151") & ED_ERROR);
+    /* export! replaces it, as the yes to export's question does. */
+    assert_false(run(e, "export! %s %s", path, "grid 151") & ED_ERROR);
     text = slurp(path);
     assert_string_equal(text, "old\n");
     free(text);
     print_message("# %s\n", e->msg);
     /* Not cancelled, the same export completes. */
     e->progress = NULL;
-    assert_false(run(e, "export %s %s", path, "grid 151") & ED_ERROR);
+    assert_false(run(e, "export! %s %s", path, "grid 151") & ED_ERROR);
     assert_non_null(strstr(e->msg, "exported"));
+    free_ed(e);
+}
+
+static void write_text(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(text, f);
+    assert_int_equal(fclose(f), 0);
+}
+
+static void same_text(const char *path, const char *want)
+{
+    char *text = slurp(path);
+    assert_string_equal(text, want);
+    free(text);
+}
+
+/* Issue 30, item 2: export never replaces the open design's file (by any
+ * name: its own, a symbolic or a hard link, found by device and inode),
+ * and replaces another existing file only when asked: the editor asks,
+ * and yes runs export!; batch mode refuses without export!.  A device
+ * (/dev/null) holds nothing to lose and is written. */
+static void test_export_replaces(void **state)
+{
+    char ex[1024], design[512], other[512], alias[512], hard[512], png[512], line[1200];
+    char *orig, *text;
+    ed *e = new_ed();
+    const char *names[3];
+    int k, f;
+    (void)state;
+    orig = slurp(tu_path("examples/singlet.json", ex, sizeof ex));
+    write_text(tmp_path("d.json", design, sizeof design), orig);
+    snprintf(line, sizeof line, "open %s", design);
+    assert_false(cmd_exec(e, line) & ED_ERROR);
+    assert_int_equal(symlink(design, tmp_path("alias.json", alias, sizeof alias)), 0);
+    assert_int_equal(link(design, tmp_path("hard.json", hard, sizeof hard)), 0);
+    names[0] = design;
+    names[1] = alias;
+    names[2] = hard;
+    for (k = 0; k < 3; k++) {
+        f = run(e, "export %s %s", names[k], "fan 5");
+        assert_true(f & ED_ERROR);
+        assert_non_null(strstr(e->msg, "open design's file"));
+        f = run(e, "export! %s %s", names[k], "csv");
+        assert_true(f & ED_ERROR);
+        same_text(design, orig);
+        print_message("# %s\n", e->msg);
+    }
+    /* Nor does the editor offer to. */
+    e->batch = 0;
+    f = run(e, "export %s %s", design, "ray");
+    assert_true(f & ED_ERROR);
+    assert_false(f & ED_CONFIRM);
+    e->batch = 1;
+    same_text(design, orig);
+
+    /* Another file: batch mode refuses and names export!. */
+    write_text(tmp_path("other.csv", other, sizeof other), "keep\n");
+    f = run(e, "export %s %s", other, "fan 5");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "export!"));
+    assert_non_null(strstr(e->msg, "already exists"));
+    same_text(other, "keep\n");
+    print_message("# %s\n", e->msg);
+    /* The editor asks; the answer's command replaces it. */
+    e->batch = 0;
+    f = run(e, "export %s %s", other, "fan 5");
+    assert_true(f & ED_CONFIRM);
+    assert_int_equal(e->confirm, CONFIRM_WRITE);
+    assert_non_null(strstr(e->question, "Replace it?"));
+    assert_int_equal(strncmp(e->pending, "export! ", 8), 0);
+    same_text(other, "keep\n");
+    print_message("# %s -> yes runs: %s\n", e->question, e->pending);
+    e->confirm = CONFIRM_NONE;
+    f = cmd_exec(e, e->pending);
+    assert_false(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "exported 5 rays"));
+    text = slurp(other);
+    assert_int_equal(strncmp(text, "ray,hx,hy,px,py,", 16), 0);
+    free(text);
+    e->batch = 1;
+    /* A device is written without a question. */
+    f = cmd_exec(e, "export /dev/null csv fan 5");
+    assert_false(f & ED_ERROR);
+    /* A picture: the same rules. */
+    assert_false(cmd_exec(e, "view layout") & ED_ERROR);
+    write_text(tmp_path("v.png", png, sizeof png), "keep\n");
+    f = run(e, "export %s %s", png, "png");
+    assert_true(f & ED_ERROR);
+    same_text(png, "keep\n");
+    f = run(e, "export! %s %s", design, "png");
+    assert_true(f & ED_ERROR);
+    assert_non_null(strstr(e->msg, "open design's file"));
+    same_text(design, orig);
+    f = run(e, "export! %s %s", png, "png");
+    assert_false(f & ED_ERROR);
+    text = slurp(png);
+    assert_int_equal(memcmp(text, "\x89PNG", 4), 0);
+    free(text);
+    free(orig);
     free_ed(e);
 }
 
@@ -341,6 +445,7 @@ int main(void)
         cmocka_unit_test(test_fan_json_text),
         cmocka_unit_test(test_large_asks),
         cmocka_unit_test(test_cancel_leaves_no_file),
+        cmocka_unit_test(test_export_replaces),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[400];

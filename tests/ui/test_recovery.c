@@ -410,7 +410,8 @@ static void test_cleanup(void **state)
 }
 
 /* A recovery file written by a child process that then exits. */
-static pid_t child_writes(const char *file, const char *abspath, const sg_system *sys, int reap)
+static pid_t child_writes(const char *file, const char *abspath, const sg_system *sys,
+                          const doc_stamp *disk, int reap)
 {
     pid_t pid;
     int st;
@@ -418,7 +419,7 @@ static pid_t child_writes(const char *file, const char *abspath, const sg_system
     pid = fork();
     assert_true(pid >= 0);
     if (pid == 0)
-        _exit(rec_write_file(file, abspath, sys, NULL) == SG_OK ? 0 : 1);
+        _exit(rec_write_file(file, abspath, sys, disk, NULL) == SG_OK ? 0 : 1);
     if (reap) {
         assert_int_equal(waitpid(pid, &st, 0), pid);
         assert_true(WIFEXITED(st) && WEXITSTATUS(st) == 0);
@@ -464,18 +465,18 @@ static void test_orphans(void **state)
 
     /* A writer that exited and was reaped: its pid no longer exists. */
     snprintf(dead, sizeof dead, "%s/dead%s", recdir, REC_SUFFIX);
-    dpid = child_writes(dead, abs, sys, 1);
+    dpid = child_writes(dead, abs, sys, NULL, 1);
     assert_int_equal(kill(dpid, 0), -1);
     assert_int_equal(errno, ESRCH);
     /* This process: alive. */
     snprintf(live, sizeof live, "%s/live%s", recdir, REC_SUFFIX);
-    assert_int_equal(rec_write_file(live, abs, sys, NULL), SG_OK);
+    assert_int_equal(rec_write_file(live, abs, sys, NULL, NULL), SG_OK);
     /* Our pid but another start time: a pid used again after a crash. */
     snprintf(reused, sizeof reused, "%s/reused%s", recdir, REC_SUFFIX);
-    assert_int_equal(rec_write_file(reused, abs, sys, NULL), SG_OK);
+    assert_int_equal(rec_write_file(reused, abs, sys, NULL, NULL), SG_OK);
     /* Another machine: its process cannot be checked, so it counts as alive. */
     snprintf(other, sizeof other, "%s/otherhost%s", recdir, REC_SUFFIX);
-    assert_int_equal(rec_write_file(other, abs, sys, NULL), SG_OK);
+    assert_int_equal(rec_write_file(other, abs, sys, NULL, NULL), SG_OK);
     patch(other, "\"host\":\"", "\"host\":\"another-host-");
     /* Not a recovery file at all. */
     snprintf(junk, sizeof junk, "%s/junk%s", recdir, REC_SUFFIX);
@@ -525,7 +526,7 @@ static void test_orphans(void **state)
 
     /* A writer that has exited but is not yet reaped (a zombie). */
     snprintf(zombie, sizeof zombie, "%s/zombie%s", recdir, REC_SUFFIX);
-    zpid = child_writes(zombie, abs, sys, 0);
+    zpid = child_writes(zombie, abs, sys, NULL, 0);
     memset(&si, 0, sizeof si);
     assert_int_equal(waitid(P_PID, (id_t)zpid, &si, WEXITED | WNOWAIT), 0);
     assert_int_equal(kill(zpid, 0), 0); /* the pid still exists */
@@ -542,7 +543,7 @@ static void test_orphans(void **state)
     unlink(zombie);
     unlink(reused);
     snprintf(older, sizeof older, "%s/older%s", recdir, REC_SUFFIX);
-    child_writes(older, abs, sys, 1);
+    child_writes(older, abs, sys, NULL, 1);
     patch(older, "\"time\":", "\"time\":-");
     n = rec_orphans(recdir, abs, NULL, &v);
     assert_int_equal(n, 2);
@@ -580,6 +581,7 @@ static void test_recover_command(void **state)
     char path[PATH_MAX], abs[PATH_MAX], file[PATH_MAX * 2], line[PATH_MAX * 3];
     ed *e = new_ed();
     sg_system *want, *disk = sg_system_new();
+    doc_stamp read;
     sg_diag d;
     pid_t pid;
     int k;
@@ -593,7 +595,9 @@ static void test_recover_command(void **state)
     sg_diag_clear(&d);
     assert_int_equal(sg_design_load(want, path, &d), SG_OK);
     want->surf[3].radius = strtod("-3900.0000000000005", NULL);
-    pid = child_writes(file, abs, want, 1);
+    /* It had read the file as it is on disk. */
+    assert_int_equal(doc_stamp_file(path, &read), 0);
+    pid = child_writes(file, abs, want, &read, 1);
 
     ok(e, "open %s", path);
     ok(e, "recover list");
@@ -626,18 +630,19 @@ static void test_recover_command(void **state)
     /* Without a recovery file of our own (batch), the orphan stays until
      * the design is saved; delete removes one; a live editor's file is
      * refused. */
-    pid = child_writes(file, abs, want, 1);
+    assert_int_equal(doc_stamp_file(path, &read), 0);
+    pid = child_writes(file, abs, want, &read, 1);
     e = new_ed();
     e->rec.enabled = 0;
     ok(e, "recover %s", file);
     assert_int_equal(access(file, F_OK), 0);
     ok(e, "save");
     assert_int_equal(access(file, F_OK), -1);
-    child_writes(file, abs, want, 1);
+    child_writes(file, abs, want, &read, 1);
     ok(e, "recover delete 1");
     assert_int_equal(access(file, F_OK), -1);
     /* A file this (live) process wrote is no orphan. */
-    assert_int_equal(rec_write_file(file, abs, want, NULL), SG_OK);
+    assert_int_equal(rec_write_file(file, abs, want, NULL, NULL), SG_OK);
     k = cmd_exec(e, "recover 1");
     assert_true(k & ED_ERROR);
     snprintf(line, sizeof line, "recover %s", file);
@@ -646,6 +651,101 @@ static void test_recover_command(void **state)
     free_ed(e);
     sg_system_free(want);
     sg_system_free(disk);
+}
+
+/* Issue 30, item 3: a recovered design carries the stamp of the file its
+ * crashed editor had read, so a change another program made on disk after
+ * the crash is not overwritten unasked: save in batch mode refuses naming
+ * save!, the editor asks.  A recovery file without a stamp (written before
+ * sagitta kept one) counts the file as unknown: save asks too. */
+static void test_recover_disk_changed(void **state)
+{
+    char path[PATH_MAX], abs[PATH_MAX], file[PATH_MAX * 2];
+    char *now, *after;
+    size_t n, na;
+    doc_stamp read;
+    rec_info info;
+    sg_system *want = sg_system_new(), *back = sg_system_new();
+    sg_diag d;
+    ed *e;
+    FILE *f;
+    int flags;
+
+    copy_example("cassegrain.json", tmp("c.json", path, sizeof path));
+    assert_int_equal(rec_abspath(path, abs, sizeof abs), 0);
+    make_recdir();
+    snprintf(file, sizeof file, "%s/c-crashed%s", recdir, REC_SUFFIX);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_load(want, path, &d), SG_OK);
+    want->surf[3].radius = -3900.0;
+    assert_int_equal(doc_stamp_file(path, &read), 0);
+    /* An editor's own recovery file records the file it read. */
+    e = new_ed();
+    ok(e, "open %s", path);
+    ok(e, "set 3 radius -3900");
+    assert_true(e->rec.file[0] != '\0');
+    assert_int_equal(rec_read_file(e->rec.file, &info, NULL, &d), SG_OK);
+    assert_true(info.disk.have && info.disk.hash == read.hash && info.disk.ino == read.ino);
+    ok(e, "quit!");
+    free_ed(e);
+    child_writes(file, abs, want, &read, 1);
+    /* The header holds the stamp as stat() and the bytes gave it. */
+    assert_int_equal(rec_read_file(file, &info, NULL, &d), SG_OK);
+    assert_true(info.disk.have);
+    assert_true(info.disk.dev == read.dev && info.disk.ino == read.ino &&
+                info.disk.size == read.size && info.disk.hash == read.hash &&
+                info.disk.mtime_s == read.mtime_s && info.disk.mtime_ns == read.mtime_ns);
+
+    /* After the crash another program changes the file. */
+    f = fopen(path, "a");
+    assert_non_null(f);
+    fputs("\n", f);
+    assert_int_equal(fclose(f), 0);
+    now = slurp(path, &n);
+
+    e = new_ed();
+    e->rec.enabled = 0;
+    ok(e, "recover %s", file);
+    assert_true(doc_system_equal(e->doc.sys, want));
+    flags = cmd_exec(e, "save");
+    assert_true(flags & ED_ERROR);
+    assert_non_null(strstr(e->msg, "changed on disk"));
+    assert_non_null(strstr(e->msg, "save!"));
+    print_message("# batch: %s\n", e->msg);
+    after = slurp(path, &na);
+    assert_true(na == n && memcmp(after, now, n) == 0);
+    free(after);
+    /* The editor asks; yes runs save!. */
+    e->batch = 0;
+    flags = cmd_exec(e, "save");
+    assert_true(flags & ED_CONFIRM);
+    assert_int_equal(strncmp(e->pending, "save! ", 6), 0);
+    print_message("# editor: %s\n", e->question);
+    e->confirm = CONFIRM_NONE;
+    e->batch = 1;
+    after = slurp(path, &na);
+    assert_true(na == n && memcmp(after, now, n) == 0);
+    free(after);
+    ok(e, "save!");
+    assert_int_equal(sg_design_load(back, path, &d), SG_OK);
+    assert_true(doc_system_equal(back, want));
+    free_ed(e);
+
+    /* No stamp in the header: the file's state is unknown. */
+    child_writes(file, abs, want, NULL, 1);
+    assert_int_equal(rec_read_file(file, &info, NULL, &d), SG_OK);
+    assert_false(info.disk.have);
+    e = new_ed();
+    e->rec.enabled = 0;
+    ok(e, "recover %s", file);
+    flags = cmd_exec(e, "save");
+    assert_true(flags & ED_ERROR);
+    assert_non_null(strstr(e->msg, "already exists"));
+    print_message("# no stamp: %s\n", e->msg);
+    free_ed(e);
+    free(now);
+    sg_system_free(want);
+    sg_system_free(back);
 }
 
 /* A save that fails leaves the old file whole and the document modified,
@@ -891,6 +991,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_cleanup, setup, teardown),
         cmocka_unit_test_setup_teardown(test_orphans, setup, teardown),
         cmocka_unit_test_setup_teardown(test_recover_command, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_recover_disk_changed, setup, teardown),
         cmocka_unit_test_setup_teardown(test_save_failure, setup, teardown),
         cmocka_unit_test_setup_teardown(test_write_failure, setup, teardown),
         cmocka_unit_test_setup_teardown(test_holders, setup, teardown),

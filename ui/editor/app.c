@@ -841,6 +841,13 @@ int sg_editor_main(int argc, char **argv)
     }
     /* A script's load warnings go to stderr, as its errors do. */
     e.batch = script != NULL;
+    if (e.cat && e.cat_msg[0]) {
+        if (script)
+            fprintf(stderr, "sagitta edit: warning: %s
+", e.cat_msg);
+        else
+            ed_msg(&e, 1, "%s", e.cat_msg);
+    }
     if (file) {
         if (stat(file, &st) != 0 && errno == ENOENT) {
             /* Like vi: a new file under the name given. */

@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "../args.h"
@@ -1497,7 +1498,7 @@ static int c_recover(ed *e, args *a, int bang)
     /* The recovered design keeps its file name, so save writes the file it
      * came from; it differs from that file until then. */
     free(v);
-    doc_replace(&e->doc, sys, got.path[0] ? got.path : NULL, 1);
+    doc_replace(&e->doc, sys, got.path[0] ? got.path : NULL, 1, &got.disk);
     snprintf(e->rec.adopted, sizeof e->rec.adopted, "%s", got.file);
     opened(e, "recovered");
     rec_time_text(got.time, when, sizeof when);
@@ -1644,7 +1645,55 @@ static double bytes_per_ray(const report_meta *m, report_fmt fmt, int nsurf,
     return b;
 }
 
-static int export_picture(ed *e, const char *path, int format);
+static int export_picture(ed *e, args *a, const char *path, int format, int bang);
+
+/* What an export would replace at path. */
+enum { EXPORT_NEW = 0, EXPORT_REPLACES, EXPORT_OWN };
+
+/* The open design's file, whatever the name (device and inode), is never
+ * an export's target; another regular file is replaced only when asked.  A
+ * device or pipe (/dev/null) holds nothing to lose. */
+static int export_target(ed *e, const char *path)
+{
+    struct stat t, own;
+    const char *dp = doc_path(&e->doc);
+    if (strcmp(path, "-") == 0 || stat(path, &t) != 0)
+        return EXPORT_NEW;
+    if (dp && stat(dp, &own) == 0 && own.st_dev == t.st_dev && own.st_ino == t.st_ino)
+        return EXPORT_OWN;
+    /* The file as the design was read, should its name now lead elsewhere. */
+    if (e->doc.disk.have && e->doc.disk.dev == (unsigned long long)t.st_dev &&
+        e->doc.disk.ino == (unsigned long long)t.st_ino)
+        return EXPORT_OWN;
+    return S_ISREG(t.st_mode) ? EXPORT_REPLACES : EXPORT_NEW;
+}
+
+static int export_own_file(ed *e, const char *path)
+{
+    return fail(e, "export: %s is the open design's file; not written (export to another "
+                   "name)", path);
+}
+
+/* Asks the question (yes runs the same export with "!"); in batch mode,
+ * where nobody can answer, fails naming export!. */
+static int export_ask(ed *e, args *a, const char *path, const char *what)
+{
+    char q[ED_LINE / 2];
+    size_t len;
+    int i;
+    if (e->batch)
+        return fail(e, "export: %s; not written (export! %s replaces it)", what, path);
+    snprintf(e->pending, sizeof e->pending, "export!");
+    for (i = 1; i < a->n; i++) {
+        cmd_quote(a->v[i], q, sizeof q);
+        len = strlen(e->pending);
+        snprintf(e->pending + len, sizeof e->pending - len, " %s", q);
+    }
+    snprintf(e->question, sizeof e->question, "export: %.900s. Replace it? (y)es (n)o", what);
+    e->confirm = CONFIRM_WRITE;
+    ed_msg(e, 0, "export: %s", what);
+    return ED_HANDLED | ED_CONFIRM | ED_REDRAW;
+}
 
 static int c_export_any(ed *e, args *a, int bang)
 {
@@ -1666,7 +1715,7 @@ static int c_export_any(ed *e, args *a, int bang)
     rayset rset;
     const sg_frame *gf = NULL; /* ed_global_frames', not freed here */
     outfile of;
-    int flags, hdf5 = 0;
+    int flags, hdf5 = 0, target;
     h5rays *h5 = NULL;
     char size[32], h5err[256];
 
@@ -1687,9 +1736,12 @@ static int c_export_any(ed *e, args *a, int bang)
             if (a->n > 3)
                 return fail(e, "export: a picture takes no ray set; usage: export FILE "
                                "[png|svg|pdf]");
-            return export_picture(e, path, pf);
+            return export_picture(e, a, path, pf, bang);
         }
     }
+    target = export_target(e, path);
+    if (target == EXPORT_OWN)
+        return export_own_file(e, path);
     for (i = 2; i < a->n; i++) {
         int f2 = report_parse_fmt(a->v[i]);
         if (f2 < 0 && strcasecmp(a->v[i], "txt") == 0)
@@ -1794,6 +1846,12 @@ static int c_export_any(ed *e, args *a, int bang)
         double est = bytes_per_ray(&m, (report_fmt)fmt, nsurf, out, status, rays, multi) *
                      (double)nray;
         human_size(est, size, sizeof size);
+        if (target == EXPORT_REPLACES && !bang && est <= EXPORT_ASK_BYTES) {
+            char what[ED_LINE];
+            snprintf(what, sizeof what, "%.900s already exists", path);
+            flags = export_ask(e, a, path, what);
+            goto done;
+        }
         if (est > EXPORT_ASK_BYTES && !bang && !tostd) {
             char q[ED_LINE / 2];
             size_t len;
@@ -1810,8 +1868,11 @@ static int c_export_any(ed *e, args *a, int bang)
                 snprintf(e->pending + len, sizeof e->pending - len, " %s", q);
             }
             snprintf(e->question, sizeof e->question,
-                     "export: %zu rays, about %s, to %s. Write it? (y)es (n)o", nray, size,
-                     path);
+                     target == EXPORT_REPLACES
+                         ? "export: %zu rays, about %s, to %s, which exists. Replace it? (y)es "
+                           "(n)o"
+                         : "export: %zu rays, about %s, to %s. Write it? (y)es (n)o",
+                     nray, size, path);
             e->confirm = CONFIRM_WRITE;
             flags = ED_HANDLED | ED_CONFIRM | ED_REDRAW;
             goto done;
@@ -2189,16 +2250,23 @@ static int c_view(ed *e, args *a)
 }
 
 /* Writes the view on show as a picture (format: plot.h's PLOT_*). */
-static int export_picture(ed *e, const char *path, int format)
+static int export_picture(ed *e, args *a, const char *path, int format, int bang)
 {
     outfile of;
     char msg[256];
-    int err, rc;
+    int err, rc, target;
     if (e->view.kind == VIEW_OFF)
         return fail(e, "export: no view on show to draw; choose one with g or "
                        ":view layout|spot|fan|opd|wave");
     if (strcmp(path, "-") == 0 && !e->batch)
         return fail(e, "export: \"-\" (standard output) works only in batch mode");
+    target = export_target(e, path);
+    if (target == EXPORT_OWN)
+        return export_own_file(e, path);
+    if (target == EXPORT_REPLACES && !bang) {
+        snprintf(msg, sizeof msg, "%.200s already exists", path);
+        return export_ask(e, a, path, msg);
+    }
     ed_opts(e);
     rc = edview_update(&e->view, e->doc.sys, e->doc.id, e->cat, &e->opts, ed_view_field(e));
     if (rc != SG_EOK || !e->view.have_fig)
@@ -2348,7 +2416,7 @@ static const command commands[] = {
     {"quit!", "q!", c_quit1, "quit!", "quit, discarding unsaved changes"},
     {"export", NULL, c_export, "export FILE [csv|json|text|hdf5] [ray|fan N|xfan N|grid N]",
      "write the ray table of the current ray or a ray set"},
-    {"export!", NULL, c_export1, "export! FILE ...", "export without asking about its size"},
+    {"export!", NULL, c_export1, "export! FILE ...", "export without asking about its size or a file it replaces"},
     {"print", NULL, c_print, "print [ray|paraxial|cell SURFACE COLUMN]",
      "show a result (batch: on standard output; paraxial: the system data view)"},
     {"sysdata", NULL, c_sysdata, "sysdata",

@@ -249,7 +249,8 @@ int doc_new(doc *d, const char *path)
     return SG_EOK;
 }
 
-void doc_replace(doc *d, sg_system *sys, const char *path, int modified)
+void doc_replace(doc *d, sg_system *sys, const char *path, int modified,
+                 const doc_stamp *read)
 {
     char *p = path ? dupstr(path) : NULL;
     replace(d, sys);
@@ -257,10 +258,13 @@ void doc_replace(doc *d, sg_system *sys, const char *path, int modified)
      * lost: save then asks for a name. */
     free(d->path);
     d->path = p;
-    /* A recovered design was never read from its file in this session:
-     * what is there now is what a save would replace. */
-    if (!p || doc_stamp_file(p, &d->disk) != 0)
-        d->disk.have = 0;
+    /* A recovered design keeps the stamp of the file its crashed editor
+     * read: a change made on disk since then is still a change, and saving
+     * asks before replacing it. */
+    if (p && read && read->have)
+        d->disk = *read;
+    else
+        memset(&d->disk, 0, sizeof d->disk);
     /* Ids start at 1, so 0 is a saved state no document ever reaches. */
     if (modified)
         d->saved_id = 0;

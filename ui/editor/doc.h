@@ -85,8 +85,11 @@ int doc_new(doc *d, const char *path);
 /* Replaces the document by sys, which it takes over, under the file name
  * path (NULL: none); the history is cleared.  With modified set the
  * document counts as differing from its file (a design recovered after a
- * crash), and no undo step leads back to an unmodified state. */
-void doc_replace(doc *d, sg_system *sys, const char *path, int modified);
+ * crash), and no undo step leads back to an unmodified state.  read is the
+ * file as the design's editor last read or wrote it (NULL or not have:
+ * unknown, and a save asks before replacing whatever is there). */
+void doc_replace(doc *d, sg_system *sys, const char *path, int modified,
+                 const doc_stamp *read);
 /* Saves to path (NULL: the current file name); on success the document
  * takes that name and is unmodified.  A file with one link is replaced
  * atomically (sg_design_save: a temporary file renamed over it).  A file

@@ -25,6 +25,9 @@ int ed_init(ed *e)
                  d.msg[0] ? d.msg : "out of memory");
         sg_catalog_free(e->cat);
         e->cat = NULL;
+    } else if (d.nwarn > 0) {
+        /* Loaded, but not what was asked for (a bad SAGITTA_LENSDB). */
+        snprintf(e->cat_msg, sizeof e->cat_msg, "glass catalog: %s", d.warn[0]);
     }
     sg_trace_opts_init(&e->opts);
     /* The on-axis upper marginal ray shows the most about a new design. */

@@ -197,7 +197,68 @@ static int write_all(int fd, const char *p, size_t n)
     return 0;
 }
 
-static char *header_json(const char *abspath)
+/* The stamp's numbers are 64-bit, beyond a JSON number's exact range, so
+ * they are written as decimal (and the hash as hex) strings. */
+static int add_stamp(cJSON *h, const doc_stamp *st)
+{
+    char v[6][32];
+    cJSON *o;
+    if (!st || !st->have)
+        return 1;
+    o = cJSON_AddObjectToObject(h, "disk");
+    snprintf(v[0], sizeof v[0], "%llu", st->dev);
+    snprintf(v[1], sizeof v[1], "%llu", st->ino);
+    snprintf(v[2], sizeof v[2], "%llu", st->size);
+    snprintf(v[3], sizeof v[3], "%lld", st->mtime_s);
+    snprintf(v[4], sizeof v[4], "%ld", st->mtime_ns);
+    snprintf(v[5], sizeof v[5], "%016llx", st->hash);
+    return o && cJSON_AddStringToObject(o, "dev", v[0]) && cJSON_AddStringToObject(o, "ino", v[1]) &&
+           cJSON_AddStringToObject(o, "size", v[2]) &&
+           cJSON_AddStringToObject(o, "mtime_s", v[3]) &&
+           cJSON_AddStringToObject(o, "mtime_ns", v[4]) && cJSON_AddStringToObject(o, "hash", v[5]);
+}
+
+/* Reads what add_stamp wrote; a missing or malformed one leaves st->have 0,
+ * so a save asks before replacing the file. */
+static void read_stamp(const cJSON *h, doc_stamp *st)
+{
+    const cJSON *o = cJSON_GetObjectItemCaseSensitive(h, "disk");
+    const char *k[6] = {"dev", "ino", "size", "mtime_s", "mtime_ns", "hash"};
+    const char *v[6];
+    char *end;
+    int i;
+    memset(st, 0, sizeof *st);
+    if (!cJSON_IsObject(o))
+        return;
+    for (i = 0; i < 6; i++) {
+        const cJSON *x = cJSON_GetObjectItemCaseSensitive(o, k[i]);
+        if (!cJSON_IsString(x) || !x->valuestring[0])
+            return;
+        v[i] = x->valuestring;
+    }
+    errno = 0;
+    st->dev = strtoull(v[0], &end, 10);
+    if (*end)
+        return;
+    st->ino = strtoull(v[1], &end, 10);
+    if (*end)
+        return;
+    st->size = strtoull(v[2], &end, 10);
+    if (*end)
+        return;
+    st->mtime_s = strtoll(v[3], &end, 10);
+    if (*end)
+        return;
+    st->mtime_ns = strtol(v[4], &end, 10);
+    if (*end)
+        return;
+    st->hash = strtoull(v[5], &end, 16);
+    if (*end || errno)
+        return;
+    st->have = 1;
+}
+
+static char *header_json(const char *abspath, const doc_stamp *disk)
 {
     char boot[40], host[256], start[32];
     cJSON *h = cJSON_CreateObject();
@@ -213,13 +274,14 @@ static char *header_json(const char *abspath)
         cJSON_AddNumberToObject(h, "pid", (double)getpid()) &&
         cJSON_AddStringToObject(h, "start", start) && cJSON_AddStringToObject(h, "boot", boot) &&
         cJSON_AddStringToObject(h, "host", host) &&
-        cJSON_AddNumberToObject(h, "time", (double)time(NULL)))
+        cJSON_AddNumberToObject(h, "time", (double)time(NULL)) && add_stamp(h, disk))
         s = cJSON_PrintUnformatted(h);
     cJSON_Delete(h);
     return s;
 }
 
-int rec_write_file(const char *file, const char *abspath, const sg_system *sys, sg_diag *d)
+int rec_write_file(const char *file, const char *abspath, const sg_system *sys,
+                   const doc_stamp *disk, sg_diag *d)
 {
     char tmp[REC_PATH + 16], dir[REC_PATH];
     char *text, *head;
@@ -227,7 +289,7 @@ int rec_write_file(const char *file, const char *abspath, const sg_system *sys, 
     int fd, err = 0;
 
     text = sg_design_to_json(sys);
-    head = header_json(abspath);
+    head = header_json(abspath, disk);
     if (!text || !head) {
         free(text);
         free(head);
@@ -309,6 +371,7 @@ static int parse_header(const char *file, const char *text, size_t len, rec_info
     info->start = s ? strtoull(s, NULL, 10) : 0;
     snprintf(info->boot, sizeof info->boot, "%s", (s = json_str(h, "boot")) ? s : "");
     snprintf(info->host, sizeof info->host, "%s", (s = json_str(h, "host")) ? s : "");
+    read_stamp(h, &info->disk);
     cJSON_Delete(h);
     info->orphan = rec_is_orphan(info);
     return SG_OK;
@@ -567,7 +630,7 @@ static void hold(ed *e)
         r->lock[0] = '\0';
         return;
     }
-    head = header_json(key);
+    head = header_json(key, NULL);
     fd = head ? open(r->lock, O_WRONLY | O_CREAT | O_EXCL, 0600) : -1;
     if (fd < 0 || write_all(fd, head, strlen(head)) != 0 || write_all(fd, "\n", 1) != 0) {
         if (fd >= 0)
@@ -660,7 +723,7 @@ int rec_sync(ed *e, int force)
         /* A failed write leaves the previous copy, older but better than
          * none, under the name we keep. */
         sg_diag_clear(&d);
-        if (rec_write_file(r->file, key, e->doc.sys, &d) != SG_OK)
+        if (rec_write_file(r->file, key, e->doc.sys, &e->doc.disk, &d) != SG_OK)
             snprintf(err, sizeof err, "%s", d.msg);
     }
     if (err[0]) {

@@ -8,8 +8,10 @@
  * named BASENAME-HASH-PID.sgrec (HASH: FNV-1a of the absolute path) or
  * untitled-PID.sgrec, mode 0600.  Its first line is a JSON header (the
  * design's absolute path, the writer's pid, process start time, boot id and
- * host, the time of writing); the rest is the design exactly as
- * sg_design_to_json() writes it, so "tail -n +2" gives a loadable design.
+ * host, the time of writing, and "disk": the design's file as the editor
+ * last read or wrote it, doc_stamp's fields as strings); the rest is the
+ * design exactly as sg_design_to_json() writes it, so "tail -n +2" gives a
+ * loadable design.
  *
  * Every write is atomic (temporary file in the same directory, fsync,
  * rename), so the signal handlers never need to touch the file: it is
@@ -20,6 +22,7 @@
 
 #include <stddef.h>
 
+#include "doc.h"
 #include "sagitta.h"
 
 #define REC_PATH 4096
@@ -44,6 +47,10 @@ typedef struct rec_info {
     char host[256];
     long long time;           /* when it was written, seconds since the epoch */
     int orphan;               /* the editor that wrote it is gone */
+    /* The design's file as that editor last read or wrote it (have = 0:
+     * unknown, or a file written before sagitta kept it), so a save after
+     * recovery still sees a change made on disk since. */
+    doc_stamp disk;
 } rec_info;
 
 /* The editor's side: which file it owns and what that file holds. */
@@ -72,10 +79,12 @@ int rec_dir(char *buf, size_t n);
 int rec_abspath(const char *path, char *buf, size_t n);
 
 /* Writes a recovery file for the design sys atomically: a header naming
- * abspath (NULL or "": an untitled design), this process and the time,
+ * abspath (NULL or "": an untitled design), this process, the time and
+ * disk (the design's file as the editor last read or wrote it; NULL: none),
  * then the design.  The directory must exist.  Returns SG_OK or an error
  * with d filled. */
-int rec_write_file(const char *file, const char *abspath, const sg_system *sys, sg_diag *d);
+int rec_write_file(const char *file, const char *abspath, const sg_system *sys,
+                   const doc_stamp *disk, sg_diag *d);
 
 /* Reads a recovery file's header into info and, when sys is not NULL, its
  * design into sys.  info->orphan is set.  Returns SG_OK or an error. */
