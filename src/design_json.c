@@ -1815,8 +1815,13 @@ static void sync_parent_dir(const char *path)
 
 int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
 {
+    return sg_design_save_flags(sys, path, 0, d);
+}
+
+int sg_design_save_flags(const sg_system *sys, const char *path, unsigned flags, sg_diag *d)
+{
     char *text;
-    int rc;
+    int rc, kept;
 
     if (!sys || !path || !path[0])
         return sg_diag_set(d, SG_EINVAL, "save: no system or no path");
@@ -1828,12 +1833,19 @@ int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
                            ".json or .zmx", path);
     /* A name ending in .zmx is written as a Zemax lens file. */
     if (sg_zmx_detect(path, NULL, 0))
-        return sg_zmx_save(sys, path, NULL, d);
+        return sg_zmx_save_flags(sys, path, NULL, flags, d);
     text = build_json(sys, d, &rc);
     if (!text)
         return rc;
     rc = sg_save_text_atomic(path, text, strlen(text), d);
     free(text);
+    /* A JSON design holds the model only (sagitta-design(5), ZEMAX FILES). */
+    kept = sg_zmx_kept_lines(sys);
+    if (rc == SG_OK && kept)
+        sg_diag_warn(d, "%s: %d line%s of the Zemax file the design was read from (tolerances, "
+                     "merit function, display settings ...) %s not kept in a JSON design; save "
+                     "as .zmx to keep them", path, kept, kept == 1 ? "" : "s",
+                     kept == 1 ? "is" : "are");
     return rc;
 }
 
