@@ -13,6 +13,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <locale.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -382,6 +383,12 @@ static int get_radius(jctx *c, const cJSON *v, const char *where, double *out)
         if (!isfinite(v->valuedouble))
             return perr(c, SG_EPARSE, where,
                         "the number is too large for a double; write \"inf\" for a flat surface");
+        /* A radius below 1/DBL_MAX (5e-324 ...) has no curvature in the
+         * doubles: .zmx files store the curvature, and traces use it. */
+        if (v->valuedouble != 0.0 && !isfinite(1.0 / v->valuedouble))
+            return perr(c, SG_ERANGE, where,
+                        "%g is so small that its curvature 1/R is beyond the doubles; "
+                        "|R| must be at least %g", v->valuedouble, 1.0 / DBL_MAX);
         /* Zemax writes 0 for a flat surface; it can only mean that. */
         *out = v->valuedouble == 0.0 ? INFINITY : v->valuedouble;
         return SG_OK;

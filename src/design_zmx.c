@@ -2770,6 +2770,10 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int la
                                "and a surface aperture; a .zmx surface holds one aperture (make "
                                "the semi-diameter free, or put the aperture on a dummy surface)",
                                i);
+        if (f->radius != 0.0 && !isfinite(1.0 / f->radius))
+            return sg_diag_set(d, SG_ERANGE, "export: surface %d: radius %g is so small that "
+                               "its curvature, which a .zmx file holds, is beyond the doubles",
+                               i, f->radius);
         if (isnan(f->radius) || isnan(f->thickness) || !isfinite(f->conic) ||
             (!isfinite(f->thickness) && !(i == 0 && f->thickness > 0)))
             return sg_diag_set(d, SG_ERANGE, "export: surface %d: a value a .zmx file cannot "

@@ -2239,6 +2239,53 @@ static void test_lossless_refusal(void **state)
     rmdir(dir);
 }
 
+/* Issue 30, item 24: a radius whose curvature overflows (5e-324) is
+ * refused on load and on export, naming it; a subnormal one whose
+ * curvature is a double (1e-308) goes through a .zmx file bit for bit. */
+static void test_subnormal_radius(void **state)
+{
+    char src[1024], *text, *z, *at, *t2;
+    size_t n;
+    sg_system *s = sg_system_new(), *b = sg_system_new();
+    sg_diag d;
+    (void)state;
+    /* examples/singlet.json with its first radius, 51.5, replaced. */
+    text = (char *)slurp(tu_path("examples/singlet.json", src, sizeof src), &n);
+    assert_non_null(text);
+    text[n] = '\0';
+    at = strstr(text, "\"radius\": 51.5,");
+    assert_non_null(at);
+    t2 = malloc(n + 16);
+    assert_non_null(t2);
+    snprintf(t2, n + 16, "%.*s%s%s", (int)(at + 10 - text), text, "5e-324", at + 14);
+    sg_diag_clear(&d);
+    assert_int_not_equal(sg_design_parse(s, t2, strlen(t2), "sub.json", &d), SG_OK);
+    assert_non_null(strstr(d.msg, "surface 1"));
+    assert_non_null(strstr(d.msg, "curvature 1/R is beyond the doubles"));
+    snprintf(t2, n + 16, "%.*s%s%s", (int)(at + 10 - text), text, "1e-308", at + 14);
+    sg_diag_clear(&d);
+    if (sg_design_parse(s, t2, strlen(t2), "sub.json", &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(s->surf[1].radius == strtod("1e-308", NULL));
+    z = sg_zmx_to_text(s, NULL, &d);
+    assert_non_null(z);
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(b, z, strlen(z), "sub.zmx", NULL, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(b->surf[1].radius == strtod("1e-308", NULL));
+    free(z);
+    /* Set directly, as a program could: the export refuses it. */
+    s->surf[1].radius = 4.9406564584124654e-324;
+    sg_diag_clear(&d);
+    assert_null(sg_zmx_to_text(s, NULL, &d));
+    assert_int_equal(d.code, SG_ERANGE);
+    assert_non_null(strstr(d.msg, "surface 1"));
+    free(text);
+    free(t2);
+    sg_system_free(s);
+    sg_system_free(b);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -2277,6 +2324,7 @@ int main(void)
         cmocka_unit_test(test_lossless_insert_delete),
         cmocka_unit_test(test_lossless_encodings),
         cmocka_unit_test(test_lossless_refusal),
+        cmocka_unit_test(test_subnormal_radius),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
