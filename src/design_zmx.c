@@ -24,6 +24,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include <gmp.h>
 #include <mpfr.h>
@@ -146,6 +147,7 @@ typedef struct zctx {
      * the surfaces, else the surface whose block holds it. */
     int *lsect;
     int nlsect;
+    const sg_zmx_subst *sub; /* glasses to substitute, or NULL */
 } zctx;
 
 /* ------------------------------------------------------------------------
@@ -664,6 +666,22 @@ static int grow_to(zctx *c, int n)
     return SG_OK;
 }
 
+static const sg_glass *nearest_of(const sg_catalog *cat, double nd, double vd)
+{
+    size_t i, m = cat ? sg_catalog_count(cat) : 0;
+    const sg_glass *best = NULL;
+    double bd = INFINITY;
+    for (i = 0; i < m; i++) {
+        const sg_glass *g = sg_catalog_at(cat, i);
+        double e = pow((g->nd - nd) / 0.01, 2) + pow(g->vd - vd, 2);
+        if (e < bd) {
+            bd = e;
+            best = g;
+        }
+    }
+    return best;
+}
+
 static const char *nearest_glass(const sg_catalog *cat, double nd, double vd, char *buf,
                                  size_t n)
 {
@@ -784,14 +802,44 @@ static int read_glas(zctx *c, const zline *l, sg_surface *s)
         }
         /* Zemax writes nd 1.5, vd 40 (or zeros) for a catalog glass whose
          * data it does not store. */
-        if (nd > 0.0 && !(nd == 1.5 && vd == 40.0))
+        int stored = nd > 0.0 && !(nd == 1.5 && vd == 40.0);
+        const char *to = NULL;
+        size_t nl = strlen(name);
+        /* A substitution asked for: NAME=GLASS, or the nearest. */
+        for (k = 0; c->sub && k < c->sub->n && !to; k++) {
+            const char *p = c->sub->pairs[k];
+            if (strlen(p) > nl && p[nl] == '=' && strncasecmp(p, name, nl) == 0)
+                to = p + nl + 1;
+        }
+        if (to) {
+            g = sg_catalog_find(c->cat, to);
+            if (!g)
+                return zerr(c, SG_ENOGLASS, "GLAS: glass %s is to be substituted by %s, which is "
+                            "not in sagitta's catalog either", name, to);
+        } else if (c->sub && c->sub->nearest && stored) {
+            g = nearest_of(c->cat, nd, vd);
+        }
+        if (g) {
+            zwarn(c, "GLAS: glass %s (nd %.6g, vd %.4g in the file) is substituted by %s (%s, "
+                  "nd %.6g, vd %.4g)%s", name, nd, vd, g->name, g->catalog, g->nd, g->vd,
+                  to ? "" : ", the nearest by nd and vd");
+            sg_strlcpy(s->mat.name, g->name, sizeof s->mat.name);
+            if (g != sg_catalog_find(c->cat, g->name))
+                sg_strlcpy(s->mat.catalog, g->catalog, sizeof s->mat.catalog);
+            return SG_OK;
+        }
+        if (stored)
             nearest_glass(c->cat, nd, vd, sug, sizeof sug);
         else
             snprintf(sug, sizeof sug, "the file stores no nd and vd to suggest one by");
         return zerr(c, SG_ENOGLASS,
                     "GLAS: glass %s (from the file's catalogs %s) is not in sagitta's catalog; "
-                    "%s, but no glass is substituted",
-                    name, cats[0] ? cats : "(no GCAT line)", sug);
+                    "%s, but no glass is substituted.  To read the file, add the catalog that "
+                    "has %s (its maker's AGF file, in a directory with sagitta's catalogs named "
+                    "by SAGITTA_LENSDB), or substitute a glass: sagitta import --substitute "
+                    "%s=GLASS%s",
+                    name, cats[0] ? cats : "(no GCAT line)", sug, name, name,
+                    stored ? ", or --substitute-nearest" : "");
     }
     if (c->ngcat && !gcat_has(c, g->catalog))
         zwarn(c, "GLAS: %s is taken from sagitta's %s catalog, which the file's GCAT line "
@@ -2062,6 +2110,9 @@ struct sg_zmx_origin {
     zoline *line;
     sg_system *base; /* the design as read, its surfaces' zmx_src 1, 2, ... */
     int nkept;       /* lines whose keyword sagitta does not interpret */
+    /* The glass substitutions it was read with, to read a save back. */
+    char **pairs;
+    sg_zmx_subst sub;
 };
 
 void sg_zmx_origin_retain(struct sg_zmx_origin *o)
@@ -2075,6 +2126,9 @@ void sg_zmx_origin_release(struct sg_zmx_origin *o)
     if (!o || __atomic_sub_fetch(&o->refs, 1, __ATOMIC_ACQ_REL) != 0)
         return;
     sg_system_free(o->base);
+    while (o->pairs && o->sub.n--)
+        free(o->pairs[o->sub.n]);
+    free(o->pairs);
     free(o->line);
     free(o->text);
     free(o);
@@ -2422,6 +2476,12 @@ static int count_kept(const struct sg_zmx_origin *o, const sg_catalog *cat)
 int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name,
                  const sg_catalog *cat, sg_diag *d)
 {
+    return sg_zmx_parse_subst(sys, bytes, len, name, cat, NULL, d);
+}
+
+int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char *name,
+                       const sg_catalog *cat, const sg_zmx_subst *sub, sg_diag *d)
+{
     zctx *c;
     struct sg_zmx_origin *org = NULL;
     char *text = NULL;
@@ -2492,6 +2552,7 @@ int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name
     c->name = name;
     c->d = d;
     c->cat = cat;
+    c->sub = sub;
     c->sys = tmp;
     c->cur = -1;
     cloc = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
@@ -2510,6 +2571,19 @@ int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name
         sg_diag_warn(d, "%s: %d solve%s and pickup%s frozen at the values the file stores; "
                      "sagitta does not evaluate them", name, c->nfrozen,
                      c->nfrozen == 1 ? "" : "s", c->nfrozen == 1 ? "" : "s");
+    if (rc == SG_OK && c->lsect && sub && sub->n > 0) {
+        int i;
+        org->pairs = calloc((size_t)sub->n, sizeof *org->pairs);
+        for (i = 0; org->pairs && i < sub->n; i++)
+            if (!(org->pairs[i] = strdup(sub->pairs[i])))
+                break;
+        org->sub.n = i;
+        org->sub.pairs = (const char *const *)org->pairs;
+        if (!org->pairs || i < sub->n)
+            rc = sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
+    }
+    if (sub)
+        org->sub.nearest = sub->nearest;
     if (rc == SG_OK && c->lsect) {
         /* Each surface knows its block in the file; the design as read is
          * what a save compares with to find the lines an edit changed. */
@@ -3246,7 +3320,8 @@ int sg_zmx_save_flags(const sg_system *sys, const char *path, const sg_catalog *
             sg_diag_clear(&scratch);
             if (!r) {
                 rc = SG_ENOMEM;
-            } else if (sg_zmx_parse(r, bytes.p, bytes.len, path, cat, &scratch) != SG_OK) {
+            } else if (sg_zmx_parse_subst(r, bytes.p, bytes.len, path, cat, &sys->zmx->sub,
+                                          &scratch) != SG_OK) {
                 snprintf(why, sizeof why, "the file would not read back: %.300s", scratch.msg);
                 back = 0;
             } else if (!sg_system_equal(r, sys)) {
@@ -3302,6 +3377,19 @@ int sg_zmx_save_flags(const sg_system *sys, const char *path, const sg_catalog *
         return d && d->code ? d->code : SG_ENOMEM;
     rc = sg_save_text_atomic(path, text, strlen(text), d);
     free(text);
+    return rc;
+}
+
+int sg_zmx_load_subst(sg_system *sys, const char *path, const sg_catalog *cat,
+                      const sg_zmx_subst *sub, sg_diag *d)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    int rc = sg_read_file(path, ZMX_MAX_BYTES, &buf, &len, d);
+    if (rc != SG_OK)
+        return rc;
+    rc = sg_zmx_parse_subst(sys, buf, len, path, cat, sub, d);
+    free(buf);
     return rc;
 }
 

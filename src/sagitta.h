@@ -648,6 +648,21 @@ char *sg_design_to_json(const sg_system *sys);
 int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name,
                  const sg_catalog *cat, sg_diag *d);
 int sg_zmx_load(sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
+/* Glasses substituted on reading a .zmx file, for a glass the catalog
+ * lacks: pairs[i] is "NAME=GLASS" (GLASS by the catalog's search order);
+ * with nearest set, any other missing glass whose nd and vd the file
+ * stores takes the catalog's nearest by nd and vd.  Each substitution is
+ * reported as a warning; the design keeps the substitute, and a lossless
+ * save writes the file's own glass back. */
+typedef struct sg_zmx_subst {
+    int n;
+    const char *const *pairs;
+    int nearest;
+} sg_zmx_subst;
+int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char *name,
+                       const sg_catalog *cat, const sg_zmx_subst *sub, sg_diag *d);
+int sg_zmx_load_subst(sg_system *sys, const char *path, const sg_catalog *cat,
+                      const sg_zmx_subst *sub, sg_diag *d);
 /* The design as .zmx text (UTF-8, Zemax keywords); NULL on failure. */
 char *sg_zmx_to_text(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
 /* Writes a .zmx file atomically, as sg_design_save does.  A design read
