@@ -51,6 +51,11 @@ static const char *const ignored_header[] = {
     /* semi-diameter margins, OPD reference, display settings */
     "TOL", "MOFF", "TCMM", /* tolerances; multi-configuration rows of MNUM 1 */
 };
+/* Surface keywords whose fields Zemax does not publish, met in public
+ * files: kept as they are, with a note, when every number is 0 (nothing
+ * set); refused otherwise, since sagitta cannot tell what a value does. */
+static const char *const zero_surface[] = {"TOLE", "SPID", "USAP", "FSVY"};
+#define ZMX_NZERO_KW 4
 static const char *const ignored_surface[] = {
     "FIMP", "HIDE", "MIRR", "SLAB", "SCOL", "POPS", "MEMA", "OEMA", "COAT", "SSID",
     "VPAR", "VCRV", "VDSZ", "VTHI", "VCON", "VGLS", "TCEX", "CONF",
@@ -148,6 +153,7 @@ typedef struct zctx {
     int *lsect;
     int nlsect;
     const sg_zmx_subst *sub; /* glasses to substitute, or NULL */
+    int nzero_kw[ZMX_NZERO_KW]; /* zero_surface lines kept */
 } zctx;
 
 /* ------------------------------------------------------------------------
@@ -1531,6 +1537,22 @@ static int surface_line(zctx *c, const zline *l)
     }
     if (in_list(k, ignored_surface, sizeof ignored_surface / sizeof *ignored_surface))
         return SG_OK;
+    {
+        int w;
+        for (w = 0; w < ZMX_NZERO_KW; w++)
+            if (tok_is(k, zero_surface[w])) {
+                nz = !all_zero(c, l, 1, &rc);
+                if (rc != SG_OK)
+                    return rc;
+                if (nz)
+                    return pend(c, SG_EUNSUPPORTED, "%s: a nonzero value; Zemax does not "
+                                "publish what this line's fields mean, so sagitta cannot "
+                                "tell whether it changes the trace (it keeps the line when "
+                                "every number on it is 0)", zero_surface[w]);
+                c->nzero_kw[w]++;
+                return SG_OK;
+            }
+    }
     /* A keyword of a surface type sagitta lacks (NSOH of a non-sequential
      * component, GDAT of a grating): the type is the reason. */
     if (z->type[0] && !known_type(z->type)) {
@@ -1959,6 +1981,7 @@ static int is_surface_kw(const ztok *k)
         "FLAP", "OBDC", "OBSC", "SQAP", "ELAP", "SQOB", "ELOB", "COMM", "SCBD", "SCAD",
         "PZUP", "PKUP", "PPAR", "MAZH", "CHZH", "EDGE", "TCED"};
     return in_list(k, kw, sizeof kw / sizeof *kw) ||
+           in_list(k, zero_surface, ZMX_NZERO_KW) ||
            in_list(k, ignored_surface, sizeof ignored_surface / sizeof *ignored_surface);
 }
 
@@ -2567,6 +2590,15 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
         sg_diag_warn(d, "%s: note: %d solve or pickup line%s kept; sagitta recomputes %s from "
                      "the design (sagitta-design(5), Solves and pickups)", name, c->nlive,
                      c->nlive == 1 ? "" : "s", c->nlive == 1 ? "it" : "them");
+    if (rc == SG_OK) {
+        int w;
+        for (w = 0; w < ZMX_NZERO_KW; w++)
+            if (c->nzero_kw[w])
+                sg_diag_warn(d, "%s: note: %d %s line%s, all zero, kept as they are (they are "
+                             "written back on a .zmx save; sagitta-design(5), ZEMAX FILES)",
+                             name, c->nzero_kw[w], zero_surface[w],
+                             c->nzero_kw[w] == 1 ? "" : "s");
+    }
     if (rc == SG_OK && c->nfrozen)
         sg_diag_warn(d, "%s: %d solve%s and pickup%s frozen at the values the file stores; "
                      "sagitta does not evaluate them", name, c->nfrozen,

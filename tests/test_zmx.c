@@ -2345,6 +2345,63 @@ static void test_glass_substitution(void **state)
     sg_catalog_free(cat);
 }
 
+/* Issue 37: TOLE, SPID, USAP and FSVY lines, whose fields Zemax does not
+ * publish, are kept when all zero (and written back), refused with their
+ * line otherwise. */
+static void test_zero_keywords(void **state)
+{
+    static const char *const kw[] = {"TOLE", "SPID", "USAP", "FSVY"};
+    char src[1024], *text, *buf, *at, dir[256] = "";
+    size_t n, i, nb;
+    sg_system *s = sg_system_new();
+    sg_catalog *cat = tu_catalog();
+    const char *out;
+    unsigned char *b;
+    sg_diag d;
+    (void)state;
+    text = (char *)slurp(tu_path("tests/data/zmx/lens1.zmx", src, sizeof src), &n);
+    assert_non_null(text);
+    text[n] = '\0';
+    /* After SURF 2's TYPE line (line 26 of lens1.zmx, so the new line is 27). */
+    at = strstr(text, "SURF 2\n  TYPE STANDARD\n");
+    assert_non_null(at);
+    at += strlen("SURF 2\n  TYPE STANDARD\n");
+    buf = malloc(n + 64);
+    assert_non_null(buf);
+    out = tmp_zmx(dir, sizeof dir, "kw.zmx");
+    for (i = 0; i < 4; i++) {
+        FILE *f;
+        snprintf(buf, n + 64, "%.*s  %s 0 0 0.0 0\n%s", (int)(at - text), text, kw[i], at);
+        sg_diag_clear(&d);
+        if (sg_zmx_parse(s, buf, strlen(buf), "kw.zmx", cat, &d) != SG_OK)
+            fail_msg("%s: %s", kw[i], d.msg);
+        assert_true(has_warning(&d, kw[i], "kept as they are"));
+        f = fopen(out, "wb");
+        assert_non_null(f);
+        fputs(buf, f);
+        fclose(f);
+        sg_diag_clear(&d);
+        assert_int_equal(sg_design_load(s, out, &d), SG_OK);
+        sg_diag_clear(&d);
+        assert_int_equal(sg_design_save(s, out, &d), SG_OK);
+        b = slurp(out, &nb);
+        assert_int_equal(nb, strlen(buf));
+        assert_memory_equal(b, buf, nb);
+        free(b);
+        snprintf(buf, n + 64, "%.*s  %s 0 1 0 0\n%s", (int)(at - text), text, kw[i], at);
+        sg_diag_clear(&d);
+        assert_int_equal(sg_zmx_parse(s, buf, strlen(buf), "kw.zmx", cat, &d), SG_EUNSUPPORTED);
+        assert_non_null(strstr(d.msg, "kw.zmx:27: surface 2"));
+        assert_non_null(strstr(d.msg, kw[i]));
+    }
+    unlink(out);
+    rmdir(dir);
+    free(buf);
+    free(text);
+    sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -2385,6 +2442,7 @@ int main(void)
         cmocka_unit_test(test_lossless_refusal),
         cmocka_unit_test(test_subnormal_radius),
         cmocka_unit_test(test_glass_substitution),
+        cmocka_unit_test(test_zero_keywords),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
