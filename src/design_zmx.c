@@ -840,12 +840,10 @@ static int read_glas(zctx *c, const zline *l, sg_surface *s)
             snprintf(sug, sizeof sug, "the file stores no nd and vd to suggest one by");
         return zerr(c, SG_ENOGLASS,
                     "GLAS: glass %s (from the file's catalogs %s) is not in sagitta's catalog; "
-                    "%s, but no glass is substituted.  To read the file, add the catalog that "
-                    "has %s (its maker's AGF file, in a directory with sagitta's catalogs named "
-                    "by SAGITTA_LENSDB), or substitute a glass: sagitta import --substitute "
-                    "%s=GLASS%s",
-                    name, cats[0] ? cats : "(no GCAT line)", sug, name, name,
-                    stored ? ", or --substitute-nearest" : "");
+                    "%s, but no glass is substituted.  Add its catalog (an AGF file, in "
+                    "SAGITTA_LENSDB) or substitute it (sagitta import --substitute %s=GLASS%s)",
+                    name, cats[0] ? cats : "(no GCAT line)", sug, name,
+                    stored ? " or --substitute-nearest" : "");
     }
     if (c->ngcat && !gcat_has(c, g->catalog))
         zwarn(c, "GLAS: %s is taken from sagitta's %s catalog, which the file's GCAT line "
