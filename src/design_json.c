@@ -13,6 +13,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <locale.h>
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -382,6 +383,12 @@ static int get_radius(jctx *c, const cJSON *v, const char *where, double *out)
         if (!isfinite(v->valuedouble))
             return perr(c, SG_EPARSE, where,
                         "the number is too large for a double; write \"inf\" for a flat surface");
+        /* A radius below 1/DBL_MAX (5e-324 ...) has no curvature in the
+         * doubles: .zmx files store the curvature, and traces use it. */
+        if (v->valuedouble != 0.0 && !isfinite(1.0 / v->valuedouble))
+            return perr(c, SG_ERANGE, where,
+                        "%g is so small that its curvature 1/R is beyond the doubles; "
+                        "|R| must be at least %g", v->valuedouble, 1.0 / DBL_MAX);
         /* Zemax writes 0 for a flat surface; it can only mean that. */
         *out = v->valuedouble == 0.0 ? INFINITY : v->valuedouble;
         return SG_OK;
@@ -1815,8 +1822,13 @@ static void sync_parent_dir(const char *path)
 
 int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
 {
+    return sg_design_save_flags(sys, path, 0, d);
+}
+
+int sg_design_save_flags(const sg_system *sys, const char *path, unsigned flags, sg_diag *d)
+{
     char *text;
-    int rc;
+    int rc, kept;
 
     if (!sys || !path || !path[0])
         return sg_diag_set(d, SG_EINVAL, "save: no system or no path");
@@ -1828,12 +1840,19 @@ int sg_design_save(const sg_system *sys, const char *path, sg_diag *d)
                            ".json or .zmx", path);
     /* A name ending in .zmx is written as a Zemax lens file. */
     if (sg_zmx_detect(path, NULL, 0))
-        return sg_zmx_save(sys, path, NULL, d);
+        return sg_zmx_save_flags(sys, path, NULL, flags, d);
     text = build_json(sys, d, &rc);
     if (!text)
         return rc;
     rc = sg_save_text_atomic(path, text, strlen(text), d);
     free(text);
+    /* A JSON design holds the model only (sagitta-design(5), ZEMAX FILES). */
+    kept = sg_zmx_kept_lines(sys);
+    if (rc == SG_OK && kept)
+        sg_diag_warn(d, "%s: %d line%s of the Zemax file the design was read from (tolerances, "
+                     "merit function, display settings ...) %s not kept in a JSON design; save "
+                     "as .zmx to keep them", path, kept, kept == 1 ? "" : "s",
+                     kept == 1 ? "is" : "are");
     return rc;
 }
 

@@ -24,6 +24,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include <gmp.h>
 #include <mpfr.h>
@@ -50,6 +51,11 @@ static const char *const ignored_header[] = {
     /* semi-diameter margins, OPD reference, display settings */
     "TOL", "MOFF", "TCMM", /* tolerances; multi-configuration rows of MNUM 1 */
 };
+/* Surface keywords whose fields Zemax does not publish, met in public
+ * files: kept as they are, with a note, when every number is 0 (nothing
+ * set); refused otherwise, since sagitta cannot tell what a value does. */
+static const char *const zero_surface[] = {"TOLE", "SPID", "USAP", "FSVY"};
+#define ZMX_NZERO_KW 4
 static const char *const ignored_surface[] = {
     "FIMP", "HIDE", "MIRR", "SLAB", "SCOL", "POPS", "MEMA", "OEMA", "COAT", "SSID",
     "VPAR", "VCRV", "VDSZ", "VTHI", "VCON", "VGLS", "TCEX", "CONF",
@@ -142,6 +148,12 @@ typedef struct zctx {
     int ngcat;
     int nfrozen;
     int nlive; /* solves and pickups kept (sagitta-design(5), SOLVES) */
+    /* Each line's place, for the lossless save: -1 the header, -2 after
+     * the surfaces, else the surface whose block holds it. */
+    int *lsect;
+    int nlsect;
+    const sg_zmx_subst *sub; /* glasses to substitute, or NULL */
+    int nzero_kw[ZMX_NZERO_KW]; /* zero_surface lines kept */
 } zctx;
 
 /* ------------------------------------------------------------------------
@@ -660,6 +672,22 @@ static int grow_to(zctx *c, int n)
     return SG_OK;
 }
 
+static const sg_glass *nearest_of(const sg_catalog *cat, double nd, double vd)
+{
+    size_t i, m = cat ? sg_catalog_count(cat) : 0;
+    const sg_glass *best = NULL;
+    double bd = INFINITY;
+    for (i = 0; i < m; i++) {
+        const sg_glass *g = sg_catalog_at(cat, i);
+        double e = pow((g->nd - nd) / 0.01, 2) + pow(g->vd - vd, 2);
+        if (e < bd) {
+            bd = e;
+            best = g;
+        }
+    }
+    return best;
+}
+
 static const char *nearest_glass(const sg_catalog *cat, double nd, double vd, char *buf,
                                  size_t n)
 {
@@ -780,14 +808,42 @@ static int read_glas(zctx *c, const zline *l, sg_surface *s)
         }
         /* Zemax writes nd 1.5, vd 40 (or zeros) for a catalog glass whose
          * data it does not store. */
-        if (nd > 0.0 && !(nd == 1.5 && vd == 40.0))
+        int stored = nd > 0.0 && !(nd == 1.5 && vd == 40.0);
+        const char *to = NULL;
+        size_t nl = strlen(name);
+        /* A substitution asked for: NAME=GLASS, or the nearest. */
+        for (k = 0; c->sub && k < c->sub->n && !to; k++) {
+            const char *p = c->sub->pairs[k];
+            if (strlen(p) > nl && p[nl] == '=' && strncasecmp(p, name, nl) == 0)
+                to = p + nl + 1;
+        }
+        if (to) {
+            g = sg_catalog_find(c->cat, to);
+            if (!g)
+                return zerr(c, SG_ENOGLASS, "GLAS: glass %s is to be substituted by %s, which is "
+                            "not in sagitta's catalog either", name, to);
+        } else if (c->sub && c->sub->nearest && stored) {
+            g = nearest_of(c->cat, nd, vd);
+        }
+        if (g) {
+            zwarn(c, "GLAS: glass %s (nd %.6g, vd %.4g in the file) is substituted by %s (%s, "
+                  "nd %.6g, vd %.4g)%s", name, nd, vd, g->name, g->catalog, g->nd, g->vd,
+                  to ? "" : ", the nearest by nd and vd");
+            sg_strlcpy(s->mat.name, g->name, sizeof s->mat.name);
+            if (g != sg_catalog_find(c->cat, g->name))
+                sg_strlcpy(s->mat.catalog, g->catalog, sizeof s->mat.catalog);
+            return SG_OK;
+        }
+        if (stored)
             nearest_glass(c->cat, nd, vd, sug, sizeof sug);
         else
             snprintf(sug, sizeof sug, "the file stores no nd and vd to suggest one by");
         return zerr(c, SG_ENOGLASS,
                     "GLAS: glass %s (from the file's catalogs %s) is not in sagitta's catalog; "
-                    "%s, but no glass is substituted",
-                    name, cats[0] ? cats : "(no GCAT line)", sug);
+                    "%s, but no glass is substituted.  Add its catalog (an AGF file, in "
+                    "SAGITTA_LENSDB) or substitute it (sagitta import --substitute %s=GLASS%s)",
+                    name, cats[0] ? cats : "(no GCAT line)", sug, name,
+                    stored ? " or --substitute-nearest" : "");
     }
     if (c->ngcat && !gcat_has(c, g->catalog))
         zwarn(c, "GLAS: %s is taken from sagitta's %s catalog, which the file's GCAT line "
@@ -1479,6 +1535,22 @@ static int surface_line(zctx *c, const zline *l)
     }
     if (in_list(k, ignored_surface, sizeof ignored_surface / sizeof *ignored_surface))
         return SG_OK;
+    {
+        int w;
+        for (w = 0; w < ZMX_NZERO_KW; w++)
+            if (tok_is(k, zero_surface[w])) {
+                nz = !all_zero(c, l, 1, &rc);
+                if (rc != SG_OK)
+                    return rc;
+                if (nz)
+                    return pend(c, SG_EUNSUPPORTED, "%s: a nonzero value; Zemax does not "
+                                "publish what this line's fields mean, so sagitta cannot "
+                                "tell whether it changes the trace (it keeps the line when "
+                                "every number on it is 0)", zero_surface[w]);
+                c->nzero_kw[w]++;
+                return SG_OK;
+            }
+    }
     /* A keyword of a surface type sagitta lacks (NSOH of a non-sequential
      * component, GDAT of a grating): the type is the reason. */
     if (z->type[0] && !known_type(z->type)) {
@@ -1907,7 +1979,14 @@ static int is_surface_kw(const ztok *k)
         "FLAP", "OBDC", "OBSC", "SQAP", "ELAP", "SQOB", "ELOB", "COMM", "SCBD", "SCAD",
         "PZUP", "PKUP", "PPAR", "MAZH", "CHZH", "EDGE", "TCED"};
     return in_list(k, kw, sizeof kw / sizeof *kw) ||
+           in_list(k, zero_surface, ZMX_NZERO_KW) ||
            in_list(k, ignored_surface, sizeof ignored_surface / sizeof *ignored_surface);
+}
+
+static void mark_line(zctx *c, int sect)
+{
+    if (c->lsect && c->line >= 1 && c->line <= c->nlsect)
+        c->lsect[c->line - 1] = sect;
 }
 
 static int parse_text(zctx *c, char *text)
@@ -1932,8 +2011,10 @@ static int parse_text(zctx *c, char *text)
         }
         split(p, l);
         p = nl ? nl + 1 : NULL;
-        if (l->n == 0)
+        if (l->n == 0) {
+            mark_line(c, c->after ? -2 : c->cur);
             continue;
+        }
         if (tok_is(&l->t[0], "SURF")) {
             int n;
             if (c->after) {
@@ -1954,6 +2035,7 @@ static int parse_text(zctx *c, char *text)
             if ((rc = grow_to(c, n + 1)) != SG_OK)
                 break;
             c->cur = n;
+            mark_line(c, n);
             memset(&c->zs, 0, sizeof c->zs);
             c->zs.line = c->line;
             sg_surface_init(&c->sys->surf[n]);
@@ -1961,6 +2043,7 @@ static int parse_text(zctx *c, char *text)
             continue;
         }
         if (c->cur >= 0 && (l->indented || is_surface_kw(&l->t[0]))) {
+            mark_line(c, c->cur);
             if ((rc = surface_line(c, l)) != SG_OK)
                 break;
             continue;
@@ -1971,6 +2054,7 @@ static int parse_text(zctx *c, char *text)
             c->cur = -1;
             c->after = 1;
         }
+        mark_line(c, c->after ? -2 : -1);
         if ((rc = header_line(c, l)) != SG_OK)
             break;
     }
@@ -1983,88 +2067,6 @@ static int parse_text(zctx *c, char *text)
         rc = finish(c);
     return rc;
 }
-
-int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name,
-                 const sg_catalog *cat, sg_diag *d)
-{
-    zctx *c;
-    char *text = NULL;
-    const char *enc = NULL;
-    sg_system *tmp;
-    sg_catalog *own = NULL;
-    locale_t cloc, old = (locale_t)0;
-    int rc;
-
-    name = name ? name : "(memory)";
-    if (!sys || (!bytes && len))
-        return sg_diag_set(d, SG_EINVAL, "%s: no system or no text to parse", name);
-    if (len > ZMX_MAX_BYTES)
-        return sg_diag_set(d, SG_ERANGE, "%s: the file is %zu bytes; the limit is %zu (64 MiB)",
-                           name, len, ZMX_MAX_BYTES);
-    rc = decode(name, bytes ? bytes : (const void *)"", len, &text, &enc, d);
-    if (rc != SG_OK)
-        return rc;
-    if (!cat) {
-        /* The default catalog checks the glasses and suggests neighbours;
-         * without one, the names are kept for sg_system_validate. */
-        sg_diag scratch;
-        own = sg_catalog_new();
-        sg_diag_clear(&scratch);
-        if (own && sg_catalog_load_default(own, &scratch) != SG_OK) {
-            sg_catalog_free(own);
-            own = NULL;
-        }
-        cat = own;
-    }
-    c = calloc(1, sizeof *c);
-    tmp = sg_system_new();
-    if (!c || !tmp) {
-        free(c);
-        sg_system_free(tmp);
-        sg_catalog_free(own);
-        free(text);
-        return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
-    }
-    /* The header keeps sg_system_new's values until the file sets them;
-     * the surfaces are appended as their SURF lines come. */
-    tmp->nsurf = 0;
-    c->name = name;
-    c->d = d;
-    c->cat = cat;
-    c->sys = tmp;
-    c->cur = -1;
-    cloc = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
-    if (cloc)
-        old = uselocale(cloc);
-    rc = parse_text(c, text);
-    if (cloc) {
-        uselocale(old);
-        freelocale(cloc);
-    }
-    if (rc == SG_OK && c->nlive)
-        sg_diag_warn(d, "%s: note: %d solve or pickup line%s kept; sagitta recomputes %s from "
-                     "the design (sagitta-design(5), Solves and pickups)", name, c->nlive,
-                     c->nlive == 1 ? "" : "s", c->nlive == 1 ? "it" : "them");
-    if (rc == SG_OK && c->nfrozen)
-        sg_diag_warn(d, "%s: %d solve%s and pickup%s frozen at the values the file stores; "
-                     "sagitta does not evaluate them", name, c->nfrozen,
-                     c->nfrozen == 1 ? "" : "s", c->nfrozen == 1 ? "" : "s");
-    if (rc == SG_OK) {
-        rc = sg_system_assign(sys, tmp);
-        if (rc != SG_OK)
-            sg_diag_set(d, rc, "%s: cannot store the design: %s", name, sg_strerror(rc));
-    }
-    (void)enc;
-    sg_system_free(tmp);
-    sg_catalog_free(own);
-    free(c);
-    free(text);
-    return rc;
-}
-
-/* ------------------------------------------------------------------------
- * Writing
- * ------------------------------------------------------------------------ */
 
 typedef struct zbuf {
     char *p;
@@ -2109,6 +2111,541 @@ static void zb_printf(zbuf *b, const char *fmt, ...)
         return;
     zb_add(b, tmp, (size_t)n < sizeof tmp ? (size_t)n : sizeof tmp - 1);
 }
+
+/* ------------------------------------------------------------------------
+ * The file a design was read from, for the lossless save
+ * ------------------------------------------------------------------------ */
+
+enum { ZENC_UTF8, ZENC_UTF8_BOM, ZENC_LATIN1, ZENC_UTF16LE };
+
+typedef struct zoline {
+    size_t off, len, tlen; /* the text, and its line ending's bytes */
+    int sect;              /* -1 header, -2 after the surfaces, else the surface */
+} zoline;
+
+struct sg_zmx_origin {
+    int refs;
+    char *text; /* the file decoded to UTF-8 */
+    int enc;
+    int nline;
+    zoline *line;
+    sg_system *base; /* the design as read, its surfaces' zmx_src 1, 2, ... */
+    int nkept;       /* lines whose keyword sagitta does not interpret */
+    /* The glass substitutions it was read with, to read a save back. */
+    char **pairs;
+    sg_zmx_subst sub;
+};
+
+void sg_zmx_origin_retain(struct sg_zmx_origin *o)
+{
+    if (o)
+        __atomic_add_fetch(&o->refs, 1, __ATOMIC_RELAXED);
+}
+
+void sg_zmx_origin_release(struct sg_zmx_origin *o)
+{
+    if (!o || __atomic_sub_fetch(&o->refs, 1, __ATOMIC_ACQ_REL) != 0)
+        return;
+    sg_system_free(o->base);
+    while (o->pairs && o->sub.n--)
+        free(o->pairs[o->sub.n]);
+    free(o->pairs);
+    free(o->line);
+    free(o->text);
+    free(o);
+}
+
+int sg_zmx_kept_lines(const sg_system *sys)
+{
+    return sys && sys->zmx ? sys->zmx->nkept : 0;
+}
+
+/* The lines as parse_text splits them: at '\n', a '\r' before it kept
+ * with the ending. */
+static zoline *split_lines(const char *t, int *n)
+{
+    const char *p = t;
+    zoline *v = NULL;
+    int k = 0, cap = 0;
+    while (*p) {
+        const char *nl = strchr(p, '\n');
+        size_t all = nl ? (size_t)(nl - p) + 1 : strlen(p);
+        size_t len = nl ? (size_t)(nl - p) : all;
+        if (len && p[len - 1] == '\r')
+            len--;
+        if (k == cap) {
+            zoline *q;
+            cap = cap ? cap * 2 : 256;
+            q = realloc(v, (size_t)cap * sizeof *v);
+            if (!q) {
+                free(v);
+                return NULL;
+            }
+            v = q;
+        }
+        v[k].off = (size_t)(p - t);
+        v[k].len = len;
+        v[k].tlen = all - len;
+        v[k].sect = -1;
+        k++;
+        p += all;
+    }
+    *n = k;
+    return v ? v : calloc(1, sizeof *v);
+}
+
+/* A line's key: its keyword, with the number for those that repeat with
+ * one (PARM 3, XDAT 5, WAVM 2, SCBD 1); "" for a blank line. */
+static void line_key(const char *p, size_t n, char key[48])
+{
+    static const char *const two[] = {"PARM", "XDAT", "WAVM", "SCBD"};
+    size_t i = 0, a, j = 0, k;
+    key[0] = '\0';
+    while (i < n && (p[i] == ' ' || p[i] == '\t'))
+        i++;
+    a = i;
+    while (i < n && p[i] != ' ' && p[i] != '\t' && j < 20)
+        key[j++] = p[i++];
+    key[j] = '\0';
+    for (k = 0; k < sizeof two / sizeof *two; k++)
+        if (i - a == 4 && strcmp(key, two[k]) == 0) {
+            while (i < n && (p[i] == ' ' || p[i] == '\t'))
+                i++;
+            key[j++] = ' ';
+            while (i < n && p[i] != ' ' && p[i] != '\t' && j < 40)
+                key[j++] = p[i++];
+            key[j] = '\0';
+        }
+}
+
+/* The older forms of the header's lists, read beside the newer ones:
+ * each stands for a group of sagitta's own lines. */
+static const char *alias_group(const char *key)
+{
+    if (!strcmp(key, "XFLD"))
+        return "XFLN";
+    if (!strcmp(key, "YFLD"))
+        return "YFLN";
+    if (!strcmp(key, "FWGT"))
+        return "FWGN";
+    if (!strcmp(key, "WAVL") || !strcmp(key, "WWGT") || !strcmp(key, "WAVN") ||
+        !strcmp(key, "WWGN"))
+        return "WAVM";
+    return NULL;
+}
+
+/* sagitta's own .zmx text, cut into sections: 0 the header, i + 1 the
+ * lines of surface i after its SURF line. */
+typedef struct cline {
+    const char *p; /* without its indentation */
+    size_t n;
+    char key[56]; /* line_key, then '#' and the occurrence */
+} cline;
+
+typedef struct csec {
+    cline *l;
+    int n, cap;
+} csec;
+
+static void key_occ(char key[56], int occ)
+{
+    size_t j = strlen(key);
+    snprintf(key + j, 56 - j, "#%d", occ);
+}
+
+static csec *canon_split(char *t, int *nsec)
+{
+    csec *sec = calloc((size_t)SG_MAX_SURFACES + 2, sizeof *sec);
+    int cur = 0, i;
+    char *p = t;
+    if (!sec)
+        return NULL;
+    while (p && *p) {
+        char *nl = strchr(p, '\n');
+        size_t n = nl ? (size_t)(nl - p) : strlen(p);
+        csec *c;
+        cline *l;
+        if (n > 5 && strncmp(p, "SURF ", 5) == 0) {
+            cur = atoi(p + 5) + 1;
+            if (cur > SG_MAX_SURFACES + 1)
+                cur = SG_MAX_SURFACES + 1;
+            if (cur > *nsec)
+                *nsec = cur;
+            p = nl ? nl + 1 : NULL;
+            continue;
+        }
+        c = &sec[cur];
+        if (c->n == c->cap) {
+            cline *q;
+            c->cap = c->cap ? c->cap * 2 : 16;
+            q = realloc(c->l, (size_t)c->cap * sizeof *q);
+            if (!q)
+                break;
+            c->l = q;
+        }
+        l = &c->l[c->n];
+        while (n && *p == ' ')
+            p++, n--;
+        l->p = p;
+        l->n = n;
+        line_key(p, n, l->key);
+        {
+            int occ = 0;
+            for (i = 0; i < c->n; i++) {
+                char k2[56];
+                line_key(c->l[i].p, c->l[i].n, k2);
+                occ += strcmp(k2, l->key) == 0;
+            }
+            key_occ(l->key, occ);
+        }
+        c->n++;
+        p = nl ? nl + 1 : NULL;
+    }
+    *nsec = *nsec + 1;
+    return sec;
+}
+
+static void canon_free(csec *sec)
+{
+    int i;
+    if (!sec)
+        return;
+    for (i = 0; i < SG_MAX_SURFACES + 2; i++)
+        free(sec[i].l);
+    free(sec);
+}
+
+static int canon_find(const csec *c, const char *key)
+{
+    int i;
+    for (i = 0; c && i < c->n; i++)
+        if (strcmp(c->l[i].key, key) == 0)
+            return i;
+    return -1;
+}
+
+static int cline_same(const cline *a, const cline *b)
+{
+    return a->n == b->n && memcmp(a->p, b->p, a->n) == 0;
+}
+
+/* Whether the lines of group g (keys starting with it) are the same. */
+static int group_same(const csec *b, const csec *c, const char *g)
+{
+    size_t gn = strlen(g);
+    int i = 0, j = 0;
+    for (;;) {
+        while (i < b->n && strncmp(b->l[i].key, g, gn) != 0)
+            i++;
+        while (j < c->n && strncmp(c->l[j].key, g, gn) != 0)
+            j++;
+        if (i == b->n || j == c->n)
+            return i == b->n && j == c->n;
+        if (!cline_same(&b->l[i], &c->l[j]))
+            return 0;
+        i++, j++;
+    }
+}
+
+typedef struct mline {
+    const char *pre, *p, *term;
+    size_t npre, n, nterm;
+    int cidx; /* the line of sagitta's text it stands for, or -1 */
+} mline;
+
+/* One section of the file: its lines (ol, on) as the design was read (B,
+ * sagitta's text of it) and now (C).  A line is kept as it is where B and
+ * C agree on its key; replaced by C's where they differ; dropped where C
+ * has no such line; C's lines the file lacks are added after the line
+ * before them in C.  The header's older lists go where their group
+ * changed. */
+static int merge_sec(zbuf *out, const struct sg_zmx_origin *o, const int *ol, int on,
+                     const csec *B, const csec *C, int header, const char *term, size_t nterm)
+{
+    static const csec none = {NULL, 0, 0};
+    mline *m;
+    int nm = 0, i, j, *used;
+    if (!B)
+        B = &none;
+    if (!C)
+        C = &none;
+    m = malloc((size_t)(on + C->n + 1) * sizeof *m);
+    used = calloc((size_t)C->n + 1, sizeof *used);
+    if (!m || !used) {
+        free(m);
+        free(used);
+        return SG_ENOMEM;
+    }
+    for (i = 0; i < on; i++) {
+        const zoline *z = &o->line[ol[i]];
+        const char *p = o->text + z->off;
+        char key[56];
+        int occ = 0, bi, ci;
+        mline e = {"", p, p + z->len, 0, z->len, z->tlen, -1};
+        line_key(p, z->len, key);
+        if (!key[0]) {
+            m[nm++] = e;
+            continue;
+        }
+        if (header && alias_group(key)) {
+            if (group_same(B, C, alias_group(key)))
+                m[nm++] = e;
+            continue;
+        }
+        for (j = 0; j < i; j++) {
+            char k2[56];
+            const zoline *y = &o->line[ol[j]];
+            line_key(o->text + y->off, y->len, k2);
+            occ += strcmp(k2, key) == 0;
+        }
+        key_occ(key, occ);
+        bi = canon_find(B, key);
+        ci = canon_find(C, key);
+        if (ci >= 0)
+            used[ci] = 1;
+        if (bi < 0 && ci < 0) {
+            m[nm++] = e;
+        } else if (ci >= 0 && bi >= 0 && cline_same(&B->l[bi], &C->l[ci])) {
+            e.cidx = ci;
+            m[nm++] = e;
+        } else if (ci >= 0) {
+            /* The edited line: the file's indentation and line ending. */
+            size_t ind = 0;
+            while (ind < z->len && (p[ind] == ' ' || p[ind] == '\t'))
+                ind++;
+            e.pre = p;
+            e.npre = ind;
+            e.p = C->l[ci].p;
+            e.n = C->l[ci].n;
+            e.cidx = ci;
+            m[nm++] = e;
+        }
+    }
+    for (j = 0; j < C->n; j++) {
+        int bi, at = 0, best = -1, k;
+        if (used[j])
+            continue;
+        bi = canon_find(B, C->l[j].key);
+        if (bi >= 0 && cline_same(&B->l[bi], &C->l[j]))
+            continue;
+        for (k = 0; k < nm; k++)
+            if (m[k].cidx >= 0 && m[k].cidx < j && m[k].cidx > best) {
+                best = m[k].cidx;
+                at = k + 1;
+            }
+        memmove(&m[at + 1], &m[at], (size_t)(nm - at) * sizeof *m);
+        m[at].pre = "  ";
+        m[at].npre = header ? 0 : 2;
+        m[at].p = C->l[j].p;
+        m[at].n = C->l[j].n;
+        m[at].term = term;
+        m[at].nterm = nterm;
+        m[at].cidx = j;
+        nm++;
+    }
+    for (i = 0; i < nm; i++) {
+        zb_add(out, m[i].pre, m[i].npre);
+        zb_add(out, m[i].p, m[i].n);
+        zb_add(out, m[i].term, m[i].nterm);
+    }
+    free(m);
+    free(used);
+    return SG_OK;
+}
+
+static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int lax, sg_diag *d);
+
+/* Lines whose keyword sagitta's own text of the design never writes
+ * (display, tolerances, the merit function ...), the older lists aside:
+ * what a JSON design does not keep. */
+static int count_kept(const struct sg_zmx_origin *o, const sg_catalog *cat)
+{
+    zbuf b = {0};
+    sg_diag scratch;
+    int i, n = 0;
+    sg_diag_clear(&scratch);
+    if (write_text(&b, o->base, cat, 1, &scratch) != SG_OK || b.oom) {
+        free(b.p);
+        return 0;
+    }
+    for (i = 0; i < o->nline; i++) {
+        const zoline *z = &o->line[i];
+        char key[48], k2[48];
+        const char *p, *q;
+        line_key(o->text + z->off, z->len, key);
+        if ((q = strchr(key, ' ')) != NULL)
+            key[q - key] = '\0';
+        if (!key[0] || alias_group(key) || !strcmp(key, "SURF"))
+            continue;
+        for (p = b.p; p && *p;) {
+            q = strchr(p, '\n');
+            line_key(p, q ? (size_t)(q - p) : strlen(p), k2);
+            if ((q = strchr(k2, ' ')) != NULL)
+                k2[q - k2] = '\0';
+            if (strcmp(k2, key) == 0)
+                break;
+            p = strchr(p, '\n');
+            p = p ? p + 1 : NULL;
+        }
+        if (!p || !*p)
+            n++;
+    }
+    free(b.p);
+    return n;
+}
+
+int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name,
+                 const sg_catalog *cat, sg_diag *d)
+{
+    return sg_zmx_parse_subst(sys, bytes, len, name, cat, NULL, d);
+}
+
+int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char *name,
+                       const sg_catalog *cat, const sg_zmx_subst *sub, sg_diag *d)
+{
+    zctx *c;
+    struct sg_zmx_origin *org = NULL;
+    char *text = NULL;
+    const char *enc = NULL;
+    sg_system *tmp;
+    sg_catalog *own = NULL;
+    locale_t cloc, old = (locale_t)0;
+    int rc;
+
+    name = name ? name : "(memory)";
+    if (!sys || (!bytes && len))
+        return sg_diag_set(d, SG_EINVAL, "%s: no system or no text to parse", name);
+    if (len > ZMX_MAX_BYTES)
+        return sg_diag_set(d, SG_ERANGE, "%s: the file is %zu bytes; the limit is %zu (64 MiB)",
+                           name, len, ZMX_MAX_BYTES);
+    rc = decode(name, bytes ? bytes : (const void *)"", len, &text, &enc, d);
+    if (rc != SG_OK)
+        return rc;
+    /* The text and its lines, kept for a lossless save. */
+    org = calloc(1, sizeof *org);
+    if (org) {
+        const unsigned char *ub = bytes;
+        org->refs = 1;
+        org->enc = strcmp(enc, "UTF-16LE") == 0     ? ZENC_UTF16LE
+                   : strcmp(enc, "ISO-8859-1") == 0 ? ZENC_LATIN1
+                   : len >= 3 && ub[0] == 0xEF && ub[1] == 0xBB && ub[2] == 0xBF
+                       ? ZENC_UTF8_BOM
+                       : ZENC_UTF8;
+        org->text = strdup(text);
+        org->line = org->text ? split_lines(org->text, &org->nline) : NULL;
+        if (!org->line) {
+            free(org->text);
+            free(org);
+            free(text);
+            return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
+        }
+    } else {
+        free(text);
+        return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
+    }
+    if (!cat) {
+        /* The default catalog checks the glasses and suggests neighbours;
+         * without one, the names are kept for sg_system_validate. */
+        sg_diag scratch;
+        own = sg_catalog_new();
+        sg_diag_clear(&scratch);
+        if (own && sg_catalog_load_default(own, &scratch) != SG_OK) {
+            sg_catalog_free(own);
+            own = NULL;
+        }
+        cat = own;
+    }
+    c = calloc(1, sizeof *c);
+    tmp = sg_system_new();
+    if (!c || !tmp) {
+        free(c);
+        sg_system_free(tmp);
+        sg_catalog_free(own);
+        sg_zmx_origin_release(org);
+        free(text);
+        return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
+    }
+    c->lsect = malloc(((size_t)org->nline + 1) * sizeof *c->lsect);
+    c->nlsect = c->lsect ? org->nline : 0;
+    /* The header keeps sg_system_new's values until the file sets them;
+     * the surfaces are appended as their SURF lines come. */
+    tmp->nsurf = 0;
+    c->name = name;
+    c->d = d;
+    c->cat = cat;
+    c->sub = sub;
+    c->sys = tmp;
+    c->cur = -1;
+    cloc = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
+    if (cloc)
+        old = uselocale(cloc);
+    rc = parse_text(c, text);
+    if (cloc) {
+        uselocale(old);
+        freelocale(cloc);
+    }
+    if (rc == SG_OK && c->nlive)
+        sg_diag_warn(d, "%s: note: %d solve or pickup line%s kept; sagitta recomputes %s from "
+                     "the design (sagitta-design(5), Solves and pickups)", name, c->nlive,
+                     c->nlive == 1 ? "" : "s", c->nlive == 1 ? "it" : "them");
+    if (rc == SG_OK) {
+        int w;
+        for (w = 0; w < ZMX_NZERO_KW; w++)
+            if (c->nzero_kw[w])
+                sg_diag_warn(d, "%s: note: %d %s line%s, all zero, kept as they are (they are "
+                             "written back on a .zmx save; sagitta-design(5), ZEMAX FILES)",
+                             name, c->nzero_kw[w], zero_surface[w],
+                             c->nzero_kw[w] == 1 ? "" : "s");
+    }
+    if (rc == SG_OK && c->nfrozen)
+        sg_diag_warn(d, "%s: %d solve%s and pickup%s frozen at the values the file stores; "
+                     "sagitta does not evaluate them", name, c->nfrozen,
+                     c->nfrozen == 1 ? "" : "s", c->nfrozen == 1 ? "" : "s");
+    if (rc == SG_OK && c->lsect && sub && sub->n > 0) {
+        int i;
+        org->pairs = calloc((size_t)sub->n, sizeof *org->pairs);
+        for (i = 0; org->pairs && i < sub->n; i++)
+            if (!(org->pairs[i] = strdup(sub->pairs[i])))
+                break;
+        org->sub.n = i;
+        org->sub.pairs = (const char *const *)org->pairs;
+        if (!org->pairs || i < sub->n)
+            rc = sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
+    }
+    if (sub)
+        org->sub.nearest = sub->nearest;
+    if (rc == SG_OK && c->lsect) {
+        /* Each surface knows its block in the file; the design as read is
+         * what a save compares with to find the lines an edit changed. */
+        int i;
+        for (i = 0; i < tmp->nsurf; i++)
+            tmp->surf[i].zmx_src = i + 1;
+        for (i = 0; i < org->nline; i++)
+            org->line[i].sect = c->lsect[i];
+        org->base = sg_system_clone(tmp);
+        if (org->base) {
+            org->nkept = count_kept(org, cat);
+            tmp->zmx = org;
+            org = NULL;
+        }
+    }
+    if (rc == SG_OK) {
+        rc = sg_system_assign(sys, tmp);
+        if (rc != SG_OK)
+            sg_diag_set(d, rc, "%s: cannot store the design: %s", name, sg_strerror(rc));
+    }
+    sg_zmx_origin_release(org);
+    free(c->lsect);
+    sg_system_free(tmp);
+    sg_catalog_free(own);
+    free(c);
+    free(text);
+    return rc;
+}
+
+/* ------------------------------------------------------------------------
+ * Writing
+ * ------------------------------------------------------------------------ */
 
 /* The shortest of %.15g to %.17g that strtod reads back to x. */
 static const char *num(char out[40], double x)
@@ -2315,7 +2852,9 @@ static int gcat_order(const sg_system *s, const sg_catalog *cat,
     return SG_OK;
 }
 
-static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_diag *d)
+/* lax: the text of any design, with no refusal, for the lossless save's
+ * comparisons only. */
+static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int lax, sg_diag *d)
 {
     char n1[40], n2[40], cs[128], gcat[ZMX_MAX_GCAT][SG_GLASS_NAME];
     int ngcat = 0, i, k, changed = 0;
@@ -2328,13 +2867,17 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
         s->primary_wave < 0 || s->primary_wave >= s->nwave)
         return sg_diag_set(d, SG_ERANGE, "export: wavelengths or fields out of range");
 
-    for (i = 0; i < s->nsurf; i++) {
+    for (i = 0; i < s->nsurf && !lax; i++) {
         const sg_surface *f = &s->surf[i];
         if (f->aperture != SG_APERTURE_NONE && f->sd_fixed)
             return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: a fixed semi-diameter "
                                "and a surface aperture; a .zmx surface holds one aperture (make "
                                "the semi-diameter free, or put the aperture on a dummy surface)",
                                i);
+        if (f->radius != 0.0 && !isfinite(1.0 / f->radius))
+            return sg_diag_set(d, SG_ERANGE, "export: surface %d: radius %g is so small that "
+                               "its curvature, which a .zmx file holds, is beyond the doubles",
+                               i, f->radius);
         if (isnan(f->radius) || isnan(f->thickness) || !isfinite(f->conic) ||
             (!isfinite(f->thickness) && !(i == 0 && f->thickness > 0)))
             return sg_diag_set(d, SG_ERANGE, "export: surface %d: a value a .zmx file cannot "
@@ -2356,7 +2899,7 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, sg_dia
                     return sg_diag_set(d, SG_ERANGE, "export: surface %d: asphere term r^%d is "
                                        "not finite", i, 2 * k + 2);
     }
-    if ((k = gcat_order(s, cat, gcat, &ngcat, d)) != SG_OK)
+    if ((k = gcat_order(s, cat, gcat, &ngcat, d)) != SG_OK && !lax)
         return k;
     /* No VERS line: Zemax reads a file without one, and a made-up version
      * number could select an old reading of the keywords. */
@@ -2550,7 +3093,7 @@ char *sg_zmx_to_text(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
     cloc = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
     if (cloc)
         old = uselocale(cloc);
-    rc = write_text(&b, sys, cat, d);
+    rc = write_text(&b, sys, cat, 0, d);
     if (cloc) {
         uselocale(old);
         freelocale(cloc);
@@ -2562,11 +3105,223 @@ char *sg_zmx_to_text(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
     return b.p;
 }
 
+/* UTF-8 text back into the file's encoding; a character ISO-8859-1 lacks
+ * is SG_ELOSSY naming its line. */
+static int encode(const char *t, size_t n, int enc, zbuf *out, char *why, size_t nwhy)
+{
+    size_t i = 0;
+    long ln = 1;
+    if (enc == ZENC_UTF8_BOM)
+        zb_add(out, "\xEF\xBB\xBF", 3);
+    if (enc == ZENC_UTF16LE)
+        zb_add(out, "\xFF\xFE", 2);
+    if (enc == ZENC_UTF8 || enc == ZENC_UTF8_BOM) {
+        zb_add(out, t, n);
+        return SG_OK;
+    }
+    while (i < n) {
+        const unsigned char *u = (const unsigned char *)t + i;
+        size_t k = utf8_len(u, n - i);
+        unsigned cp;
+        if (!k)
+            k = 1;
+        cp = k == 1 ? u[0] : k == 2 ? (u[0] & 0x1Fu) << 6 | (u[1] & 0x3Fu)
+             : k == 3 ? (u[0] & 0x0Fu) << 12 | (u[1] & 0x3Fu) << 6 | (u[2] & 0x3Fu)
+                      : (u[0] & 0x07u) << 18 | (u[1] & 0x3Fu) << 12 | (u[2] & 0x3Fu) << 6 |
+                            (u[3] & 0x3Fu);
+        if (cp == '\n')
+            ln++;
+        if (enc == ZENC_LATIN1) {
+            char ch = (char)cp;
+            if (cp > 0xFF) {
+                snprintf(why, nwhy, "line %ld holds the character U+%04X, which the file's "
+                         "encoding (ISO-8859-1) cannot hold", ln, cp);
+                return SG_ELOSSY;
+            }
+            zb_add(out, &ch, 1);
+        } else {
+            char w[4];
+            if (cp >= 0x10000) {
+                unsigned v = cp - 0x10000, hi = 0xD800 + (v >> 10), lo = 0xDC00 + (v & 0x3FF);
+                w[0] = (char)(hi & 0xFF), w[1] = (char)(hi >> 8);
+                w[2] = (char)(lo & 0xFF), w[3] = (char)(lo >> 8);
+                zb_add(out, w, 4);
+            } else {
+                w[0] = (char)(cp & 0xFF), w[1] = (char)(cp >> 8);
+                zb_add(out, w, 2);
+            }
+        }
+        i += k;
+    }
+    return SG_OK;
+}
+
+/* The file the design was read from with only the lines its edits concern
+ * changed, in the file's encoding (merge_sec).  *structural is set where
+ * surfaces were inserted, deleted or moved. */
+static int zmx_merged(const sg_system *sys, const sg_catalog *cat, zbuf *bytes,
+                      int *structural, char *why, size_t nwhy)
+{
+    const struct sg_zmx_origin *o = sys->zmx;
+    zbuf bt = {0}, ct = {0}, out = {0};
+    csec *B = NULL, *C = NULL;
+    sg_diag scratch;
+    int nb = 0, nc = 0, rc = SG_OK, i, j, *ol = NULL, on, *taken = NULL;
+    const char *term = "\n";
+    size_t nterm = 1;
+    char sl[40];
+
+    sg_diag_clear(&scratch);
+    *structural = sys->nsurf != o->base->nsurf;
+    if (write_text(&bt, o->base, cat, 1, &scratch) != SG_OK ||
+        write_text(&ct, sys, cat, 1, &scratch) != SG_OK || bt.oom || ct.oom) {
+        snprintf(why, nwhy, "%.300s", scratch.msg[0] ? scratch.msg : "out of memory");
+        rc = scratch.code ? scratch.code : SG_ENOMEM;
+        goto done;
+    }
+    B = canon_split(bt.p, &nb);
+    C = canon_split(ct.p, &nc);
+    ol = malloc(((size_t)o->nline + 1) * sizeof *ol);
+    taken = calloc((size_t)o->base->nsurf + 1, sizeof *taken);
+    if (!B || !C || !ol || !taken) {
+        rc = SG_ENOMEM;
+        snprintf(why, nwhy, "out of memory");
+        goto done;
+    }
+    if (o->nline && o->line[0].tlen) {
+        term = o->text + o->line[0].off + o->line[0].len;
+        nterm = o->line[0].tlen;
+    }
+    /* The header. */
+    for (on = 0, i = 0; i < o->nline; i++)
+        if (o->line[i].sect == -1)
+            ol[on++] = i;
+    if ((rc = merge_sec(&out, o, ol, on, &B[0], &C[0], 1, term, nterm)) != SG_OK)
+        goto done;
+    /* The surfaces: each with its block of the file, a new one (or a
+     * second copy of one) with sagitta's lines. */
+    for (j = 0; j < sys->nsurf; j++) {
+        int t = sys->surf[j].zmx_src;
+        if (t < 1 || t > o->base->nsurf || taken[t - 1]) {
+            *structural = 1;
+            snprintf(sl, sizeof sl, "SURF %d", j);
+            zb_add(&out, sl, strlen(sl));
+            zb_add(&out, term, nterm);
+            if ((rc = merge_sec(&out, o, ol, 0, NULL, &C[j + 1], 0, term, nterm)) != SG_OK)
+                goto done;
+            continue;
+        }
+        taken[t - 1] = 1;
+        if (t != j + 1)
+            *structural = 1;
+        for (on = 0, i = 0; i < o->nline; i++)
+            if (o->line[i].sect == t - 1)
+                ol[on++] = i;
+        /* The SURF line first, renumbered where the surface moved. */
+        if (on) {
+            const zoline *z = &o->line[ol[0]];
+            if (t == j + 1) {
+                zb_add(&out, o->text + z->off, z->len + z->tlen);
+            } else {
+                size_t ind = 0;
+                while (ind < z->len && (o->text[z->off + ind] == ' ' ||
+                                        o->text[z->off + ind] == '\t'))
+                    ind++;
+                snprintf(sl, sizeof sl, "SURF %d", j);
+                zb_add(&out, o->text + z->off, ind);
+                zb_add(&out, sl, strlen(sl));
+                zb_add(&out, o->text + z->off + z->len, z->tlen);
+            }
+        }
+        if ((rc = merge_sec(&out, o, ol + 1, on ? on - 1 : 0, &B[t], &C[j + 1], 0, term,
+                            nterm)) != SG_OK)
+            goto done;
+    }
+    /* After the surfaces: the merit function, tolerances and the rest, as
+     * they are. */
+    for (i = 0; i < o->nline; i++)
+        if (o->line[i].sect == -2)
+            zb_add(&out, o->text + o->line[i].off, o->line[i].len + o->line[i].tlen);
+    if (out.oom) {
+        rc = SG_ENOMEM;
+        snprintf(why, nwhy, "out of memory");
+        goto done;
+    }
+    rc = encode(out.p ? out.p : "", out.len, o->enc, bytes, why, nwhy);
+    if (rc == SG_OK && bytes->oom) {
+        rc = SG_ENOMEM;
+        snprintf(why, nwhy, "out of memory");
+    }
+done:
+    free(bt.p);
+    free(ct.p);
+    free(out.p);
+    free(ol);
+    free(taken);
+    canon_free(B);
+    canon_free(C);
+    return rc;
+}
+
+/* Whether a line after the surfaces may name a surface by number: any
+ * but the blank, BLNK, the configuration count (MNUM), the empty
+ * configuration operand (MOFF) and the tolerances' header (TOL TOFF). */
+static int may_name_surface(const char *p, size_t n)
+{
+    char key[48];
+    line_key(p, n, key);
+    if (!key[0] || !strcmp(key, "BLNK") || !strcmp(key, "MNUM") || !strcmp(key, "MOFF"))
+        return 0;
+    if (!strcmp(key, "TOL")) {
+        size_t i = 3;
+        while (i < n && (p[i] == ' ' || p[i] == '\t'))
+            i++;
+        return !(n - i >= 4 && strncmp(p + i, "TOFF", 4) == 0);
+    }
+    return 1;
+}
+
+/* The first line where two JSON texts differ, as "KEY: A, not B", for
+ * the message that says what a .zmx file would not keep. */
+static void first_diff(const char *want, const char *got, char *buf, size_t n)
+{
+    const char *a = want, *b = got;
+    while (*a && *b) {
+        const char *ea = strchr(a, '\n'), *eb = strchr(b, '\n');
+        size_t la = ea ? (size_t)(ea - a) : strlen(a), lb = eb ? (size_t)(eb - b) : strlen(b);
+        /* The format version follows the features a design uses. */
+        int ver = 0;
+        size_t t = 0;
+        while (t < la && a[t] == ' ')
+            t++;
+        ver = la - t > 9 && memcmp(a + t, "\"version\"", 9) == 0;
+        if ((la != lb || memcmp(a, b, la) != 0) && !ver) {
+            while (la && (*a == ' '))
+                a++, la--;
+            while (lb && (*b == ' '))
+                b++, lb--;
+            snprintf(buf, n, "the design has %.*s where the file would read back %.*s",
+                     (int)(la > 120 ? 120 : la), a, (int)(lb > 120 ? 120 : lb), b);
+            return;
+        }
+        a += la + (ea != NULL);
+        b += lb + (eb != NULL);
+    }
+    snprintf(buf, n, "the file would read back with %s surfaces", *a ? "fewer" : "more");
+}
+
 int sg_zmx_save(const sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d)
 {
+    return sg_zmx_save_flags(sys, path, cat, 0, d);
+}
+
+int sg_zmx_save_flags(const sg_system *sys, const char *path, const sg_catalog *cat,
+                      unsigned flags, sg_diag *d)
+{
     sg_catalog *own = NULL;
-    char *text;
-    int rc;
+    char *text = NULL, why[600] = "";
+    int rc, structural = 0, after = 0, back = 1, i;
+    zbuf bytes = {0};
     if (!sys || !path || !path[0])
         return sg_diag_set(d, SG_EINVAL, "save: no system or no path");
     if (!cat) {
@@ -2579,12 +3334,92 @@ int sg_zmx_save(const sg_system *sys, const char *path, const sg_catalog *cat, s
         }
         cat = own;
     }
+    if (sys->zmx) {
+        locale_t cloc = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0), old = (locale_t)0;
+        if (cloc)
+            old = uselocale(cloc);
+        rc = zmx_merged(sys, cat, &bytes, &structural, why, sizeof why);
+        if (cloc) {
+            uselocale(old);
+            freelocale(cloc);
+        }
+        if (rc == SG_OK) {
+            /* The file must read back as the design, bit for bit. */
+            sg_system *r = sg_system_new();
+            sg_diag scratch;
+            sg_diag_clear(&scratch);
+            if (!r) {
+                rc = SG_ENOMEM;
+            } else if (sg_zmx_parse_subst(r, bytes.p, bytes.len, path, cat, &sys->zmx->sub,
+                                          &scratch) != SG_OK) {
+                snprintf(why, sizeof why, "the file would not read back: %.300s", scratch.msg);
+                back = 0;
+            } else if (!sg_system_equal(r, sys)) {
+                char *a = sg_design_to_json(sys), *b = sg_design_to_json(r);
+                if (a && b)
+                    first_diff(a, b, why, sizeof why);
+                else
+                    snprintf(why, sizeof why, "the file would read back as another design");
+                free(a);
+                free(b);
+                back = 0;
+            }
+            sg_system_free(r);
+        } else if (rc == SG_ELOSSY) {
+            back = 0;
+        }
+        if (rc == SG_ENOMEM) {
+            sg_catalog_free(own);
+            free(bytes.p);
+            return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", path);
+        }
+        for (i = 0; i < sys->zmx->nline; i++)
+            after += sys->zmx->line[i].sect == -2 &&
+                     may_name_surface(sys->zmx->text + sys->zmx->line[i].off,
+                                      sys->zmx->line[i].len);
+        if (back && rc == SG_OK && structural && after)
+            snprintf(why, sizeof why, "surfaces were inserted, deleted or moved, and the %d "
+                     "lines after the surfaces (merit function, tolerances, configurations) "
+                     "may name surfaces by number, which sagitta does not renumber", after);
+        if (rc != SG_OK && back)
+            back = 0;
+        if (why[0] && !(flags & SG_ZMX_ALLOW_LOSS)) {
+            sg_catalog_free(own);
+            free(bytes.p);
+            return sg_diag_set(d, SG_ELOSSY, "%s: cannot be written faithfully: %s; nothing "
+                               "was written", path, why);
+        }
+        if (back) {
+            if (why[0])
+                sg_diag_warn(d, "%s: written all the same: %s", path, why);
+            rc = sg_save_text_atomic(path, bytes.p, bytes.len, d);
+            sg_catalog_free(own);
+            free(bytes.p);
+            return rc;
+        }
+        free(bytes.p);
+        sg_diag_warn(d, "%s: written as sagitta's own .zmx text, without the %d lines of the "
+                     "original file it does not interpret: %s", path, sys->zmx->nkept, why);
+    }
     text = sg_zmx_to_text(sys, cat, d);
     sg_catalog_free(own);
     if (!text)
         return d && d->code ? d->code : SG_ENOMEM;
     rc = sg_save_text_atomic(path, text, strlen(text), d);
     free(text);
+    return rc;
+}
+
+int sg_zmx_load_subst(sg_system *sys, const char *path, const sg_catalog *cat,
+                      const sg_zmx_subst *sub, sg_diag *d)
+{
+    char *buf = NULL;
+    size_t len = 0;
+    int rc = sg_read_file(path, ZMX_MAX_BYTES, &buf, &len, d);
+    if (rc != SG_OK)
+        return rc;
+    rc = sg_zmx_parse_subst(sys, buf, len, path, cat, sub, d);
+    free(buf);
     return rc;
 }
 

@@ -188,9 +188,11 @@ const uint64_t *sg_index_cache_gens(sg_index_cache *c, const sg_system *sys,
         if (!cl)
             return NULL;
         *cl = *sys;
+        sg_zmx_origin_retain(cl->zmx);
         cl->capsurf = n;
         cl->surf = malloc((size_t)n * sizeof *cl->surf);
         if (!cl->surf) {
+            sg_zmx_origin_release(cl->zmx);
             free(cl);
             return NULL;
         }

@@ -83,4 +83,10 @@ int sg_read_file(const char *path, size_t max, char **out, size_t *len, sg_diag 
 /* Writes text atomically: a temporary file beside path, fsync, rename. */
 int sg_save_text_atomic(const char *path, const char *text, size_t len, sg_diag *d);
 
+/* The .zmx file a design was read from (design_zmx.c): counted, since
+ * copies of a system share it; NULL is allowed. */
+struct sg_zmx_origin;
+void sg_zmx_origin_retain(struct sg_zmx_origin *o);
+void sg_zmx_origin_release(struct sg_zmx_origin *o);
+
 #endif

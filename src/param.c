@@ -331,6 +331,16 @@ int sg_param_check(const sg_param *p, int k, double v, int object, char *msg, si
         }
         return SG_ERANGE;
     }
+    /* A radius whose curvature 1/R overflows (|R| below 1/DBL_MAX, 5e-324
+     * say): no trace or .zmx file can hold it. */
+    if ((p->flags & SG_PARAM_INF) && v != 0.0 && !isfinite(1.0 / v)) {
+        if (msg) {
+            sg_param_label(p, k, lab, sizeof lab);
+            snprintf(msg, n, "%s %g is so small that its curvature 1/R is beyond the doubles",
+                     lab, v);
+        }
+        return SG_ERANGE;
+    }
     if (isfinite(v) && (v < p->min || v > p->max)) {
         if (msg) {
             sg_param_label(p, k, lab, sizeof lab);

@@ -66,7 +66,8 @@ extern "C" {
     X(WAVERANGE, "wavelength outside material range")                       \
     X(UNCERT, "intersection cannot be certified in double-double")            \
     X(APERTURE, "ray outside the surface aperture")                           \
-    X(OBSCURED, "ray stopped by an obscuration")
+    X(OBSCURED, "ray stopped by an obscuration")                              \
+    X(LOSSY, "the file cannot hold the design faithfully")
 
 typedef enum sg_err {
 #define SG_ERR_ENUM_(name, msg) SG_E##name,
@@ -394,6 +395,9 @@ typedef struct sg_surface {
      * dummy's or coordinate break's placement).  Only sg_thermal reads
      * it; traces do not.  Default 0. */
     double tce;
+    /* The surface of the .zmx file it was read from, from 1 (0: none),
+     * whose lines sagitta keeps for a lossless save; no trace reads it. */
+    int zmx_src;
 } sg_surface;
 
 typedef enum sg_field_type {
@@ -483,6 +487,10 @@ typedef struct sg_system {
     int nsurf;   /* surfaces 0..nsurf-1; object is 0, image is nsurf-1 */
     int capsurf; /* allocated */
     sg_surface *surf;
+    /* The .zmx file the design was read from (its lines, encoding and the
+     * design as read), shared between copies; NULL for any other design.
+     * sg_system_assign, _clone and _free keep its count. */
+    struct sg_zmx_origin *zmx;
 } sg_system;
 
 /* What stopped a ray that failed at surface surf with status: for the
@@ -679,10 +687,42 @@ SG_API void sg_set_temp_hook(sg_temp_hook hook);
 SG_API int sg_zmx_parse(sg_system *sys, const void *bytes, size_t len, const char *name,
                  const sg_catalog *cat, sg_diag *d);
 SG_API int sg_zmx_load(sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
+/* Glasses substituted on reading a .zmx file, for a glass the catalog
+ * lacks: pairs[i] is "NAME=GLASS" (GLASS by the catalog's search order);
+ * with nearest set, any other missing glass whose nd and vd the file
+ * stores takes the catalog's nearest by nd and vd.  Each substitution is
+ * reported as a warning; the design keeps the substitute, and a lossless
+ * save writes the file's own glass back. */
+typedef struct sg_zmx_subst {
+    int n;
+    const char *const *pairs;
+    int nearest;
+} sg_zmx_subst;
+SG_API int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char *name,
+                       const sg_catalog *cat, const sg_zmx_subst *sub, sg_diag *d);
+SG_API int sg_zmx_load_subst(sg_system *sys, const char *path, const sg_catalog *cat,
+                      const sg_zmx_subst *sub, sg_diag *d);
 /* The design as .zmx text (UTF-8, Zemax keywords); NULL on failure. */
 SG_API char *sg_zmx_to_text(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
-/* Writes a .zmx file atomically, as sg_design_save does. */
+/* Writes a .zmx file atomically, as sg_design_save does.  A design read
+ * from a .zmx file is written losslessly: every line of that file comes
+ * back unchanged, in its encoding, except the lines an edit concerns
+ * (sagitta-design(5), ZEMAX FILES).  Where that cannot be done faithfully
+ * (the file would read back as another design, surfaces were inserted or
+ * deleted while kept lines name surfaces by number, a character the
+ * encoding lacks) nothing is written and the result is SG_ELOSSY, its
+ * message saying what; with SG_ZMX_ALLOW_LOSS the file is written all the
+ * same (as sagitta's own .zmx text where the lossless one would read back
+ * wrong) with a warning. */
 SG_API int sg_zmx_save(const sg_system *sys, const char *path, const sg_catalog *cat, sg_diag *d);
+#define SG_ZMX_ALLOW_LOSS 1u
+SG_API int sg_zmx_save_flags(const sg_system *sys, const char *path, const sg_catalog *cat,
+                      unsigned flags, sg_diag *d);
+/* sg_design_save with flags for a .zmx name (SG_ZMX_ALLOW_LOSS). */
+SG_API int sg_design_save_flags(const sg_system *sys, const char *path, unsigned flags, sg_diag *d);
+/* How many lines of the .zmx file sys was read from hold what sagitta does
+ * not interpret (and a JSON design does not keep); 0 for other designs. */
+SG_API int sg_zmx_kept_lines(const sg_system *sys);
 /* Nonzero when path ends in .zmx (any case) or the first n bytes of head
  * (may be NULL) look like a lens file rather than JSON. */
 SG_API int sg_zmx_detect(const char *path, const void *head, size_t n);

@@ -40,6 +40,7 @@ int sg_system_reset(sg_system *sys, int nsurf)
     int rc, i;
     if (nsurf < 0 || nsurf > SG_MAX_SURFACES)
         return SG_ERANGE;
+    sg_zmx_origin_release(sys->zmx);
     memset(sys, 0, sizeof *sys);
     sys->surf = keep;
     sys->capsurf = keepcap;
@@ -86,6 +87,7 @@ void sg_system_free(sg_system *sys)
 {
     if (!sys)
         return;
+    sg_zmx_origin_release(sys->zmx);
     free(sys->surf);
     free(sys);
 }
@@ -101,6 +103,9 @@ int sg_system_assign(sg_system *dst, const sg_system *src)
         return rc;
     keep = dst->surf;
     keepcap = dst->capsurf;
+    /* The .zmx origin is shared: the copy holds a count of its own. */
+    sg_zmx_origin_retain(src->zmx);
+    sg_zmx_origin_release(dst->zmx);
     *dst = *src;
     dst->surf = keep;
     dst->capsurf = keepcap;

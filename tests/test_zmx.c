@@ -8,6 +8,7 @@
  * radius as the exact reciprocal of the written curvature computed here in
  * MPFR from the decimal text, and line numbers as grep -n shows them.
  */
+#define _GNU_SOURCE /* memmem, mkdtemp */
 #define _USE_MATH_DEFINES
 #include <float.h>
 #include <math.h>
@@ -1882,6 +1883,525 @@ static void test_zemax_chief_height_solve(void **state)
     sg_catalog_free(cat);
 }
 
+/* ------------------------------------------------------------------------
+ * Lossless saves (issue 30, item 1): the expected bytes are the files
+ * Zemax wrote, read here as bytes.
+ * ------------------------------------------------------------------------ */
+
+static unsigned char *slurp(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    unsigned char *b;
+    long m;
+    if (!f)
+        return NULL;
+    fseek(f, 0, SEEK_END);
+    m = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    b = malloc((size_t)m + 1);
+    assert_non_null(b);
+    *n = fread(b, 1, (size_t)m, f);
+    fclose(f);
+    return b;
+}
+
+/* The lines of a file as raw byte ranges, split after each '\n' (each
+ * "\n\0" in UTF-16LE text, unit 2). */
+typedef struct rawline {
+    const unsigned char *p;
+    size_t n;
+} rawline;
+
+static int raw_lines(const unsigned char *b, size_t n, rawline *out, int cap)
+{
+    size_t unit = n >= 2 && b[0] == 0xFF && b[1] == 0xFE ? 2 : 1, i, start = 0;
+    int k = 0;
+    for (i = 0; i + unit <= n; i += unit)
+        if (b[i] == '\n' && (unit == 1 || b[i + 1] == 0)) {
+            assert_true(k < cap);
+            out[k].p = b + start;
+            out[k++].n = i + unit - start;
+            start = i + unit;
+        }
+    if (start < n) {
+        assert_true(k < cap);
+        out[k].p = b + start;
+        out[k++].n = n - start;
+    }
+    return k;
+}
+
+/* Whether a raw line holds the ASCII text s (UTF-16LE: every other byte). */
+static int raw_has(const rawline *l, const char *s, int unit)
+{
+    size_t m = strlen(s), i, j;
+    for (i = 0; i + m * (size_t)unit <= l->n; i++) {
+        for (j = 0; j < m; j++)
+            if (l->p[i + j * (size_t)unit] != (unsigned char)s[j] ||
+                (unit == 2 && l->p[i + j * 2 + 1] != 0))
+                break;
+        if (j == m)
+            return 1;
+    }
+    return 0;
+}
+
+static char *tmp_zmx(char *dir, size_t n, const char *name)
+{
+    static char path[1200];
+    if (!dir[0]) {
+        snprintf(dir, n, "/tmp/sagitta_lossless_XXXXXX");
+        assert_non_null(mkdtemp(dir));
+    }
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    return path;
+}
+
+static const char *const zmx_files[] = {
+    "354710-C.zmx", "HoO-V2C18Ex03.zmx", "US00583336-2-scaled.zmx", "US05331467-1.zmx",
+    "US05831776-1.zmx", "US08011793-1.zmx", "beamsplitter_cube.zmx",
+    "fold_mirror_pre_post_tilts.zmx", "lens1.zmx", "lens2.zmx", "lens_thorlabs_iso_8859_1.zmx",
+    "thorlabs_lj1598l1.zmx", "tilted_object.zmx", "zmax_37992.zmx", "zmax_55278.zmx"};
+
+/* Every file that imports is written back byte for byte. */
+static void test_lossless_files(void **state)
+{
+    char dir[256] = "", rel[256], src[1024];
+    size_t i, na, nb;
+    int same = 0;
+    (void)state;
+    for (i = 0; i < sizeof zmx_files / sizeof *zmx_files; i++) {
+        sg_diag d;
+        int rc;
+        sg_system *s = load_zmx(zmx_files[i], &d, &rc);
+        unsigned char *a, *b;
+        const char *out = tmp_zmx(dir, sizeof dir, "out.zmx");
+        if (rc != SG_OK) {
+            /* D-ZK3M and MISC's N15 are in no catalog sagitta ships. */
+            assert_true(strcmp(zmx_files[i], "354710-C.zmx") == 0 ||
+                        strcmp(zmx_files[i], "fold_mirror_pre_post_tilts.zmx") == 0);
+            sg_system_free(s);
+            continue;
+        }
+        sg_diag_clear(&d);
+        if (sg_design_save(s, out, &d) != SG_OK)
+            fail_msg("%s: %s", zmx_files[i], d.msg);
+        snprintf(rel, sizeof rel, "tests/data/zmx/%s", zmx_files[i]);
+        a = slurp(tu_path(rel, src, sizeof src), &na);
+        b = slurp(out, &nb);
+        assert_non_null(a);
+        assert_non_null(b);
+        if (na != nb || memcmp(a, b, na) != 0)
+            fail_msg("%s: %zu bytes written back as %zu, not the same", zmx_files[i], na, nb);
+        same++;
+        free(a);
+        free(b);
+        unlink(out);
+        sg_system_free(s);
+    }
+    assert_int_equal(same, 13);
+    rmdir(dir);
+}
+
+/* One radius edited in a UTF-16LE, an ISO-8859-1, a CRLF and an LF file:
+ * only that surface's CURV line changes, and it reads back as the radius
+ * set. */
+static void test_lossless_edit_radius(void **state)
+{
+    static const struct {
+        const char *file;
+        int surf;
+    } cases[] = {{"tilted_object.zmx", 1}, {"lens_thorlabs_iso_8859_1.zmx", 1},
+                 {"US05331467-1.zmx", 3}, {"lens1.zmx", 6}};
+    char dir[256] = "", rel[256], src[1024];
+    size_t i;
+    static rawline la[4096], lb[4096];
+    (void)state;
+    for (i = 0; i < sizeof cases / sizeof *cases; i++) {
+        sg_system *s = must_load(cases[i].file), *r = sg_system_new();
+        const char *out = tmp_zmx(dir, sizeof dir, "edit.zmx");
+        unsigned char *a, *b;
+        size_t na, nb;
+        int ka, kb, k, diff = -1, ndiff = 0, unit, surf_line = -1, next_line = -1;
+        char want[16];
+        sg_diag d;
+        s->surf[cases[i].surf].radius = -1015.0;
+        sg_diag_clear(&d);
+        if (sg_design_save(s, out, &d) != SG_OK)
+            fail_msg("%s: %s", cases[i].file, d.msg);
+        snprintf(rel, sizeof rel, "tests/data/zmx/%s", cases[i].file);
+        a = slurp(tu_path(rel, src, sizeof src), &na);
+        b = slurp(out, &nb);
+        unit = na >= 2 && a[0] == 0xFF && a[1] == 0xFE ? 2 : 1;
+        /* The encoding stays: the byte-order mark, or its absence. */
+        assert_int_equal(unit == 2, nb >= 2 && b[0] == 0xFF && b[1] == 0xFE);
+        ka = raw_lines(a, na, la, 4096);
+        kb = raw_lines(b, nb, lb, 4096);
+        assert_int_equal(ka, kb);
+        snprintf(want, sizeof want, "SURF %d", cases[i].surf);
+        for (k = 0; k < ka; k++) {
+            if (raw_has(&la[k], want, unit) && la[k].n <= strlen(want) * unit + 2 * unit)
+                surf_line = k;
+            if (surf_line >= 0 && next_line < 0 && k > surf_line && raw_has(&la[k], "SURF ", unit))
+                next_line = k;
+            if (la[k].n != lb[k].n || memcmp(la[k].p, lb[k].p, la[k].n) != 0) {
+                diff = k;
+                ndiff++;
+            }
+        }
+        assert_int_equal(ndiff, 1);
+        assert_true(raw_has(&lb[diff], "CURV ", unit));
+        assert_true(raw_has(&la[diff], "CURV ", unit));
+        /* In the edited surface's block. */
+        assert_true(diff > surf_line && diff < next_line);
+        sg_diag_clear(&d);
+        if (sg_design_load(r, out, &d) != SG_OK)
+            fail_msg("%s: %s", cases[i].file, d.msg);
+        assert_true(r->surf[cases[i].surf].radius == -1015.0);
+        assert_true(sg_system_equal(r, s));
+        free(a);
+        free(b);
+        unlink(out);
+        sg_system_free(r);
+        sg_system_free(s);
+    }
+    rmdir(dir);
+}
+
+/* Whether the lines of a (SURF lines aside) appear in b in their order. */
+static int subsequence(const rawline *a, int ka, const rawline *b, int kb, int unit)
+{
+    int i, j = 0;
+    for (i = 0; i < ka; i++) {
+        if (raw_has(&a[i], "SURF ", unit))
+            continue;
+        while (j < kb && !(a[i].n == b[j].n && memcmp(a[i].p, b[j].p, a[i].n) == 0))
+            j++;
+        if (j == kb)
+            return 0;
+        j++;
+    }
+    return 1;
+}
+
+/* Inserted and deleted surfaces: the others keep their lines; a file whose
+ * merit function may name surfaces by number is not written unasked. */
+static void test_lossless_insert_delete(void **state)
+{
+    char dir[256] = "", src[1024];
+    static rawline la[4096], lb[4096];
+    unsigned char *a, *b;
+    size_t na, nb;
+    int ka, kb;
+    sg_diag d;
+    sg_system *s = must_load("lens1.zmx"), *r = sg_system_new();
+    const char *out = tmp_zmx(dir, sizeof dir, "ins.zmx");
+    (void)state;
+    a = slurp(tu_path("tests/data/zmx/lens1.zmx", src, sizeof src), &na);
+    ka = raw_lines(a, na, la, 4096);
+    assert_int_equal(sg_system_insert(s, 3), SG_OK);
+    s->surf[3].thickness = 0.25;
+    sg_diag_clear(&d);
+    if (sg_design_save(s, out, &d) != SG_OK)
+        fail_msg("insert: %s", d.msg);
+    b = slurp(out, &nb);
+    kb = raw_lines(b, nb, lb, 4096);
+    assert_true(subsequence(la, ka, lb, kb, 1));
+    assert_true(strstr((char *)b, "SURF 9\n") != NULL);
+    assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(r, s));
+    free(b);
+    /* Delete surface 3 again and surface 6 of the file (now 7): the file
+     * less surface 6's four lines, SURF 7 and 8 renumbered. */
+    assert_int_equal(sg_system_delete(s, 3), SG_OK);
+    assert_int_equal(sg_system_delete(s, 6), SG_OK);
+    sg_diag_clear(&d);
+    if (sg_design_save(s, out, &d) != SG_OK)
+        fail_msg("delete: %s", d.msg);
+    b = slurp(out, &nb);
+    kb = raw_lines(b, nb, lb, 4096);
+    assert_int_equal(kb, ka - 5);
+    assert_true(subsequence(lb, kb, la, ka, 1));
+    assert_null(strstr((char *)b, "N-LAK9"));
+    assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(r, s));
+    free(b);
+    sg_system_free(s);
+    free(a);
+    unlink(out);
+
+    /* tilted_object.zmx has merit function operands (TRAR) after its
+     * surfaces: an insert is refused, nothing written, unless allowed. */
+    s = must_load("tilted_object.zmx");
+    assert_int_equal(sg_system_insert(s, 1), SG_OK);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_save(s, out, &d), SG_ELOSSY);
+    assert_non_null(strstr(d.msg, "renumber"));
+    assert_int_equal(access(out, F_OK), -1);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_save_flags(s, out, SG_ZMX_ALLOW_LOSS, &d), SG_OK);
+    assert_true(has_warning(&d, "written all the same", NULL));
+    assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(r, s));
+    unlink(out);
+    sg_system_free(s);
+    sg_system_free(r);
+    rmdir(dir);
+}
+
+/* Encodings: UTF-8 with a byte-order mark comes back with it; a character
+ * ISO-8859-1 holds is written in it, one it lacks refuses the save. */
+static void test_lossless_encodings(void **state)
+{
+    char dir[256] = "", src[1024], in[1300];
+    unsigned char *a, *b, *bom;
+    size_t na, nb;
+    sg_diag d;
+    sg_system *s = sg_system_new();
+    FILE *f;
+    (void)state;
+    a = slurp(tu_path("tests/data/zmx/lens1.zmx", src, sizeof src), &na);
+    snprintf(in, sizeof in, "%s", tmp_zmx(dir, sizeof dir, "bom.zmx"));
+    bom = malloc(na + 3);
+    memcpy(bom, "\xEF\xBB\xBF", 3);
+    memcpy(bom + 3, a, na);
+    f = fopen(in, "wb");
+    assert_non_null(f);
+    assert_int_equal(fwrite(bom, 1, na + 3, f), na + 3);
+    fclose(f);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_load(s, in, &d), SG_OK);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_save(s, tmp_zmx(dir, sizeof dir, "bom2.zmx"), &d), SG_OK);
+    b = slurp(tmp_zmx(dir, sizeof dir, "bom2.zmx"), &nb);
+    assert_int_equal(nb, na + 3);
+    assert_memory_equal(b, bom, nb);
+    free(b);
+    free(bom);
+    free(a);
+    unlink(in);
+    unlink(tmp_zmx(dir, sizeof dir, "bom2.zmx"));
+    sg_system_free(s);
+
+    s = must_load("lens_thorlabs_iso_8859_1.zmx");
+    snprintf(s->surf[1].comment, sizeof s->surf[1].comment, "r\xC3\xA9" "f"); /* "réf" */
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_save(s, tmp_zmx(dir, sizeof dir, "l1.zmx"), &d), SG_OK);
+    b = slurp(tmp_zmx(dir, sizeof dir, "l1.zmx"), &nb);
+    assert_non_null(memmem(b, nb, "COMM r\xE9" "f", 8));
+    free(b);
+    unlink(tmp_zmx(dir, sizeof dir, "l1.zmx"));
+    snprintf(s->surf[1].comment, sizeof s->surf[1].comment, "10 \xE2\x82\xAC"); /* "10 €" */
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_save(s, tmp_zmx(dir, sizeof dir, "l2.zmx"), &d), SG_ELOSSY);
+    assert_non_null(strstr(d.msg, "U+20AC"));
+    assert_int_equal(access(tmp_zmx(dir, sizeof dir, "l2.zmx"), F_OK), -1);
+    sg_system_free(s);
+    rmdir(dir);
+}
+
+/* An edit a .zmx file cannot hold (a position solve) is refused with what
+ * it is; allowed, sagitta's own text is written, which holds the value. */
+static void test_lossless_refusal(void **state)
+{
+    char dir[256] = "";
+    const char *out;
+    sg_diag d;
+    sg_system *s = must_load("lens1.zmx"), *r = sg_system_new();
+    (void)state;
+    out = tmp_zmx(dir, sizeof dir, "pos.zmx");
+    s->surf[4].solve[SG_SOLVE_THICKNESS].kind = SG_SOLVE_POSITION;
+    s->surf[4].solve[SG_SOLVE_THICKNESS].from = 1;
+    s->surf[4].solve[SG_SOLVE_THICKNESS].value = 12.0;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_save(s, out, &d), SG_ELOSSY);
+    assert_non_null(strstr(d.msg, "position"));
+    assert_non_null(strstr(d.msg, "nothing was written"));
+    assert_int_equal(access(out, F_OK), -1);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_save_flags(s, out, SG_ZMX_ALLOW_LOSS, &d), SG_OK);
+    assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+    assert_true(r->surf[4].thickness == s->surf[4].thickness);
+    unlink(out);
+    /* JSON keeps none of the file's own lines, and says how many: lens1.zmx
+     * has four (ZVCY, ZVDY, ZVCX, ZVDX), every other keyword being one
+     * sagitta writes. */
+    sg_system_free(s);
+    s = must_load("lens1.zmx");
+    assert_int_equal(sg_zmx_kept_lines(s), 4);
+    out = tmp_zmx(dir, sizeof dir, "l.json");
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_save(s, out, &d), SG_OK);
+    assert_true(has_warning(&d, "4 lines of the Zemax file", "not kept in a JSON design"));
+    unlink(out);
+    sg_system_free(s);
+    sg_system_free(r);
+    rmdir(dir);
+}
+
+/* Issue 30, item 24: a radius whose curvature overflows (5e-324) is
+ * refused on load and on export, naming it; a subnormal one whose
+ * curvature is a double (1e-308) goes through a .zmx file bit for bit. */
+static void test_subnormal_radius(void **state)
+{
+    char src[1024], *text, *z, *at, *t2;
+    size_t n;
+    sg_system *s = sg_system_new(), *b = sg_system_new();
+    sg_diag d;
+    (void)state;
+    /* examples/singlet.json with its first radius, 51.5, replaced. */
+    text = (char *)slurp(tu_path("examples/singlet.json", src, sizeof src), &n);
+    assert_non_null(text);
+    text[n] = '\0';
+    at = strstr(text, "\"radius\": 51.5,");
+    assert_non_null(at);
+    t2 = malloc(n + 16);
+    assert_non_null(t2);
+    snprintf(t2, n + 16, "%.*s%s%s", (int)(at + 10 - text), text, "5e-324", at + 14);
+    sg_diag_clear(&d);
+    assert_int_not_equal(sg_design_parse(s, t2, strlen(t2), "sub.json", &d), SG_OK);
+    assert_non_null(strstr(d.msg, "surface 1"));
+    assert_non_null(strstr(d.msg, "curvature 1/R is beyond the doubles"));
+    snprintf(t2, n + 16, "%.*s%s%s", (int)(at + 10 - text), text, "1e-308", at + 14);
+    sg_diag_clear(&d);
+    if (sg_design_parse(s, t2, strlen(t2), "sub.json", &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(s->surf[1].radius == strtod("1e-308", NULL));
+    z = sg_zmx_to_text(s, NULL, &d);
+    assert_non_null(z);
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(b, z, strlen(z), "sub.zmx", NULL, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(b->surf[1].radius == strtod("1e-308", NULL));
+    free(z);
+    /* Set directly, as a program could: the export refuses it. */
+    s->surf[1].radius = 4.9406564584124654e-324;
+    sg_diag_clear(&d);
+    assert_null(sg_zmx_to_text(s, NULL, &d));
+    assert_int_equal(d.code, SG_ERANGE);
+    assert_non_null(strstr(d.msg, "surface 1"));
+    free(text);
+    free(t2);
+    sg_system_free(s);
+    sg_system_free(b);
+}
+
+/* Issue 30, item 30: 354710-C.zmx's D-ZK3M (CDGM, nd 1.601 vd 50.28 in
+ * the file) is in no shipped catalog.  The refusal says how to proceed;
+ * a named substitute or the nearest by nd and vd is taken only when
+ * asked, and reported; a save writes the file's own glass back. */
+static void test_glass_substitution(void **state)
+{
+    char src[1024], dir[256] = "";
+    const char *path = tu_path("tests/data/zmx/354710-C.zmx", src, sizeof src), *out;
+    const char *pairs[] = {"d-zk3m=N-SK5"};
+    sg_zmx_subst named = {1, pairs, 0}, nearest = {0, NULL, 1};
+    sg_catalog *cat = tu_catalog();
+    sg_system *s = sg_system_new();
+    const sg_glass *best = NULL;
+    double bd = INFINITY;
+    size_t i, na, nb;
+    unsigned char *a, *b;
+    sg_diag d;
+    (void)state;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_zmx_load(s, path, cat, &d), SG_ENOGLASS);
+    assert_non_null(strstr(d.msg, "SAGITTA_LENSDB"));
+    assert_non_null(strstr(d.msg, "--substitute D-ZK3M=GLASS"));
+    assert_non_null(strstr(d.msg, "--substitute-nearest"));
+    sg_diag_clear(&d);
+    if (sg_zmx_load_subst(s, path, cat, &named, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_string_equal(s->surf[1].mat.name, "N-SK5");
+    assert_true(has_warning(&d, "D-ZK3M", "substituted by N-SK5"));
+    /* Saved, the file is the file: its own glass, byte for byte. */
+    out = tmp_zmx(dir, sizeof dir, "sub.zmx");
+    sg_diag_clear(&d);
+    if (sg_zmx_save(s, out, cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    a = slurp(path, &na);
+    b = slurp(out, &nb);
+    assert_int_equal(na, nb);
+    assert_memory_equal(a, b, na);
+    free(a);
+    free(b);
+    unlink(out);
+    rmdir(dir);
+    /* The nearest: the least (dnd / 0.01)^2 + dvd^2 over the catalog,
+     * found here by brute force from the file's nd 1.601, vd 50.28. */
+    for (i = 0; i < sg_catalog_count(cat); i++) {
+        const sg_glass *g = sg_catalog_at(cat, i);
+        double e = (g->nd - 1.601) * (g->nd - 1.601) / 1e-4 + (g->vd - 50.28) * (g->vd - 50.28);
+        if (e < bd)
+            bd = e, best = g;
+    }
+    assert_non_null(best);
+    sg_diag_clear(&d);
+    if (sg_zmx_load_subst(s, path, cat, &nearest, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_string_equal(s->surf[1].mat.name, best->name);
+    assert_true(has_warning(&d, "substituted by", "the nearest by nd and vd"));
+    sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
+/* Issue 37: TOLE, SPID, USAP and FSVY lines, whose fields Zemax does not
+ * publish, are kept when all zero (and written back), refused with their
+ * line otherwise. */
+static void test_zero_keywords(void **state)
+{
+    static const char *const kw[] = {"TOLE", "SPID", "USAP", "FSVY"};
+    char src[1024], *text, *buf, *at, dir[256] = "";
+    size_t n, i, nb;
+    sg_system *s = sg_system_new();
+    sg_catalog *cat = tu_catalog();
+    const char *out;
+    unsigned char *b;
+    sg_diag d;
+    (void)state;
+    text = (char *)slurp(tu_path("tests/data/zmx/lens1.zmx", src, sizeof src), &n);
+    assert_non_null(text);
+    text[n] = '\0';
+    /* After SURF 2's TYPE line (line 26 of lens1.zmx, so the new line is 27). */
+    at = strstr(text, "SURF 2\n  TYPE STANDARD\n");
+    assert_non_null(at);
+    at += strlen("SURF 2\n  TYPE STANDARD\n");
+    buf = malloc(n + 64);
+    assert_non_null(buf);
+    out = tmp_zmx(dir, sizeof dir, "kw.zmx");
+    for (i = 0; i < 4; i++) {
+        FILE *f;
+        snprintf(buf, n + 64, "%.*s  %s 0 0 0.0 0\n%s", (int)(at - text), text, kw[i], at);
+        sg_diag_clear(&d);
+        if (sg_zmx_parse(s, buf, strlen(buf), "kw.zmx", cat, &d) != SG_OK)
+            fail_msg("%s: %s", kw[i], d.msg);
+        assert_true(has_warning(&d, kw[i], "kept as they are"));
+        f = fopen(out, "wb");
+        assert_non_null(f);
+        fputs(buf, f);
+        fclose(f);
+        sg_diag_clear(&d);
+        assert_int_equal(sg_design_load(s, out, &d), SG_OK);
+        sg_diag_clear(&d);
+        assert_int_equal(sg_design_save(s, out, &d), SG_OK);
+        b = slurp(out, &nb);
+        assert_int_equal(nb, strlen(buf));
+        assert_memory_equal(b, buf, nb);
+        free(b);
+        snprintf(buf, n + 64, "%.*s  %s 0 1 0 0\n%s", (int)(at - text), text, kw[i], at);
+        sg_diag_clear(&d);
+        assert_int_equal(sg_zmx_parse(s, buf, strlen(buf), "kw.zmx", cat, &d), SG_EUNSUPPORTED);
+        assert_non_null(strstr(d.msg, "kw.zmx:27: surface 2"));
+        assert_non_null(strstr(d.msg, kw[i]));
+    }
+    unlink(out);
+    rmdir(dir);
+    free(buf);
+    free(text);
+    sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1915,6 +2435,14 @@ int main(void)
         cmocka_unit_test(test_zemax_conic_pickup),
         cmocka_unit_test(test_zemax_tce),
         cmocka_unit_test(test_zemax_fold_mirror),
+        cmocka_unit_test(test_lossless_files),
+        cmocka_unit_test(test_lossless_edit_radius),
+        cmocka_unit_test(test_lossless_insert_delete),
+        cmocka_unit_test(test_lossless_encodings),
+        cmocka_unit_test(test_lossless_refusal),
+        cmocka_unit_test(test_subnormal_radius),
+        cmocka_unit_test(test_glass_substitution),
+        cmocka_unit_test(test_zero_keywords),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -265,6 +265,12 @@ void cli_design_free(sg_catalog *cat, sg_system *sys)
 
 int cli_load_design(const char *path, sg_catalog **catp, sg_system **sysp)
 {
+    return cli_load_design_subst(path, NULL, catp, sysp);
+}
+
+int cli_load_design_subst(const char *path, const sg_zmx_subst *sub, sg_catalog **catp,
+                          sg_system **sysp)
+{
     sg_catalog *cat;
     sg_system *sys;
     sg_diag d;
@@ -296,7 +302,7 @@ int cli_load_design(const char *path, sg_catalog **catp, sg_system **sysp)
 
     sg_diag_clear(&d);
     cli_note_input(path);
-    rc = sg_design_load(sys, path, &d);
+    rc = sub ? sg_zmx_load_subst(sys, path, cat, sub, &d) : sg_design_load(sys, path, &d);
     if (rc != SG_OK) {
         cli_print_diag(path, &d, rc);
         cli_design_free(cat, sys);

@@ -123,6 +123,10 @@ int cli_method_value(const char *s, int *method);
  * the exit status; on success *cat and *sys are set (free them with
  * cli_design_free), otherwise both are NULL and a message was printed. */
 int cli_load_design(const char *path, sg_catalog **cat, sg_system **sys);
+/* cli_load_design for a .zmx file read with glass substitutions
+ * (sagitta import --substitute); sub NULL: cli_load_design. */
+int cli_load_design_subst(const char *path, const sg_zmx_subst *sub, sg_catalog **catp,
+                          sg_system **sysp);
 void cli_design_free(sg_catalog *cat, sg_system *sys);
 /* Exit status for an engine error while preparing or running a trace. */
 int cli_exit_for(int err);

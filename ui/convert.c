@@ -12,13 +12,17 @@
 
 #include "cli.h"
 
-enum { OPT_HELP = 1, OPT_OUTPUT };
+enum { OPT_HELP = 1, OPT_OUTPUT, OPT_SUBST, OPT_NEAREST };
 
 static const cli_opt convert_opts[] = {
     { "--help", 'h', 0, OPT_HELP },
     { "--output", 'o', 1, OPT_OUTPUT },
+    { "--substitute", 0, 1, OPT_SUBST },
+    { "--substitute-nearest", 0, 0, OPT_NEAREST },
     { NULL, 0, 0, 0 }
 };
+
+#define MAX_SUBST 64
 
 static void convert_help(FILE *f, int to_zmx)
 {
@@ -27,12 +31,17 @@ static void convert_help(FILE *f, int to_zmx)
               "Write a design as a Zemax lens file (sagitta-design(5), ZEMAX FILES).\n"
               "-o - writes to standard output.\n", f);
     else
-        fputs("Usage: sagitta import FILE.zmx|FILE.zar -o DESIGN.json\n"
+        fputs("Usage: sagitta import [--substitute NAME=GLASS]... [--substitute-nearest]\n"
+              "                      FILE.zmx|FILE.zar -o DESIGN.json\n"
               "Read a Zemax lens file (or the one in a Zemax archive) and write it as a\n"
               "sagitta design.  What sagitta\n"
               "cannot represent is refused with the file, line, surface and keyword;\n"
               "solves are kept at their stored values, with a warning.  -o - writes to\n"
-              "standard output.  See sagitta-design(5), ZEMAX FILES.\n", f);
+              "standard output.  A glass the catalogs lack is refused unless\n"
+              "--substitute NAME=GLASS (repeatable) names its substitute, or\n"
+              "--substitute-nearest takes the nearest by the nd and vd the file stores\n"
+              "(.zmx files only); each substitution is reported.  See sagitta-design(5),\n"
+              "ZEMAX FILES.\n", f);
 }
 
 static int convert(int argc, char **argv, int to_zmx)
@@ -44,6 +53,8 @@ static int convert(int argc, char **argv, int to_zmx)
     cli_iter it;
     sg_diag d;
     int id, rc;
+    const char *pairs[MAX_SUBST];
+    sg_zmx_subst sub = {0, pairs, 0};
 
     cli_iter_init(&it, cmd, argc, argv);
     while ((id = cli_next_opt(&it, convert_opts, &val)) != -1) {
@@ -59,6 +70,20 @@ static int convert(int argc, char **argv, int to_zmx)
         case OPT_OUTPUT:
             out = val;
             break;
+        case OPT_SUBST:
+            if (to_zmx)
+                return cli_usage_error(cmd, "--substitute applies to import");
+            if (!strchr(val, '=') || val[0] == '=' || !strchr(val, '=')[1])
+                return cli_usage_error(cmd, "--substitute \"%s\": give NAME=GLASS", val);
+            if (sub.n == MAX_SUBST)
+                return cli_usage_error(cmd, "more than %d --substitute options", MAX_SUBST);
+            pairs[sub.n++] = val;
+            break;
+        case OPT_NEAREST:
+            if (to_zmx)
+                return cli_usage_error(cmd, "--substitute-nearest applies to import");
+            sub.nearest = 1;
+            break;
         default:
             return -id;
         }
@@ -67,7 +92,9 @@ static int convert(int argc, char **argv, int to_zmx)
         return cli_usage_error(cmd, "missing %s", to_zmx ? "DESIGN.json" : "FILE.zmx");
     if (!out)
         return cli_usage_error(cmd, "missing -o %s", to_zmx ? "FILE.zmx" : "DESIGN.json");
-    rc = cli_load_design(in, &cat, &sys);
+    if ((sub.n || sub.nearest) && (sg_zar_detect(in, NULL, 0) || !sg_zmx_detect(in, NULL, 0)))
+        return cli_usage_error(cmd, "--substitute and --substitute-nearest apply to .zmx files");
+    rc = cli_load_design_subst(in, sub.n || sub.nearest ? &sub : NULL, &cat, &sys);
     if (rc != CLI_EXIT_OK)
         return rc;
     sg_diag_clear(&d);

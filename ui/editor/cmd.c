@@ -1270,16 +1270,34 @@ static int c_example(ed *e, args *a, int bang)
     return flags;
 }
 
-static int save_as(ed *e, const char *path)
+static int save_as(ed *e, const char *path, int bang, const char *cmd)
 {
     sg_diag d;
+    int rc;
     sg_diag_clear(&d);
     /* A failure leaves the old file whole (see doc_save); the document
-     * stays as it was, modified. */
-    if (doc_save(&e->doc, path, &d) != SG_EOK)
+     * stays as it was, modified.  A .zmx file that cannot hold the edits
+     * faithfully is written only after a yes (or with "!"). */
+    rc = doc_save_flags(&e->doc, path, bang ? SG_ZMX_ALLOW_LOSS : 0, &d);
+    if (rc == SG_ELOSSY && !bang) {
+        if (e->batch)
+            return fail(e, "not saved: %s; %s writes it all the same", d.msg, cmd);
+        snprintf(e->pending, sizeof e->pending, "%s", cmd);
+        snprintf(e->question, sizeof e->question, "%.900s. Write it all the same? (y)es (n)o",
+                 d.msg);
+        snprintf(e->question_short, sizeof e->question_short,
+                 "Write all the same? (y)es (n)o: %.900s", d.msg);
+        e->confirm = CONFIRM_ASK;
+        ed_msg(e, 0, "%s", d.msg);
+        return ED_HANDLED | ED_CONFIRM | ED_REDRAW;
+    }
+    if (rc != SG_EOK)
         return fail(e, "not saved: %s", d.msg[0] ? d.msg : sg_strerror(d.code));
     rec_saved(e);
-    ed_msg(e, 0, "saved %s", doc_path(&e->doc));
+    if (d.nwarn)
+        ed_msg(e, 0, "saved %s: %s", doc_path(&e->doc), d.warn[0]);
+    else
+        ed_msg(e, 0, "saved %s", doc_path(&e->doc));
     return ED_HANDLED | ED_REDRAW;
 }
 
@@ -1315,6 +1333,7 @@ static int save_cmd(ed *e, args *a, int bang, int quit)
     char path[ED_LINE], q[ED_LINE], cmd[ED_LINE + 8];
     const char *target;
     int f;
+    cmd[0] = '\0';
     if (a->n > 1) {
         rest_of(a, 1, path, sizeof path);
         target = path;
@@ -1343,8 +1362,12 @@ static int save_cmd(ed *e, args *a, int bang, int quit)
             return ask(e, cmd, e->doc.disk.have ? "%s changed on disk since it was read"
                                                 : "%s already exists", target);
     }
-    f = save_as(e, a->n > 1 ? path : NULL);
-    if (!quit || (f & ED_ERROR))
+    if (!cmd[0]) {
+        cmd_quote(target, q, sizeof q);
+        snprintf(cmd, sizeof cmd, "%s! %s", quit ? "wq" : "save", q);
+    }
+    f = save_as(e, a->n > 1 ? path : NULL, bang, cmd);
+    if (!quit || (f & (ED_ERROR | ED_CONFIRM)))
         return f;
     rec_finish(e);
     e->quit = 1;

@@ -473,6 +473,11 @@ out:
 
 int doc_save(doc *d, const char *path, sg_diag *dg)
 {
+    return doc_save_flags(d, path, 0, dg);
+}
+
+int doc_save_flags(doc *d, const char *path, unsigned flags, sg_diag *dg)
+{
     unsigned long nlink = 0;
     int rc, t;
     if (!path)
@@ -491,7 +496,7 @@ int doc_save(doc *d, const char *path, sg_diag *dg)
     if (t == DOC_TARGET_FILE && nlink > 1)
         rc = save_in_place(d->sys, path, dg);
     else
-        rc = sg_design_save(d->sys, path, dg);
+        rc = sg_design_save_flags(d->sys, path, flags, dg);
     if (rc != SG_EOK)
         return rc;
     if (path != d->path && doc_set_path(d, path) != SG_EOK)

@@ -99,6 +99,8 @@ void doc_replace(doc *d, sg_system *sys, const char *path, int modified,
  * old bytes are put back and, failing that, the message names the backup.
  * On failure the document is as it was. */
 int doc_save(doc *d, const char *path, sg_diag *dg);
+/* doc_save with sg_design_save_flags's flags (SG_ZMX_ALLOW_LOSS). */
+int doc_save_flags(doc *d, const char *path, unsigned flags, sg_diag *dg);
 
 /* Stamps the file at path: returns 0, or -1 with errno set (ENOENT: no
  * such file). */
