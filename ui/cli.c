@@ -678,6 +678,9 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     meta.opd = t != NULL;
     meta.global = gf != NULL;
     meta.global_ref = global;
+    /* A CSV row of a normalized ray says which ray it is, as a fan's or
+     * grid's export and the JSON's "input" do. */
+    meta.csv_inputs = csvrays_kind(rd) == SG_RAYS_NORMALIZED;
     memset(&ref, 0, sizeof ref);
     ref.status = SG_EINVAL;
 

@@ -862,7 +862,7 @@ static const bad_case cases[] = {
       "aim.json", HEAD_AIM("paraxial", "10") AIM_LENS, NULL,
       "hx,hy,px,py\n0,0,0,1\n0,0,0,0\n", ARGS("trace", "@F", "--rays", "-", "--threads", "2",
                                            "--format", "csv"), 0,
-      NULL, "\n0,0,,,,,,,,,,AIM FAILED,,,,,,\n", NULL, NULL, 0 },
+      NULL, "\n0,0,0,0,1,0,,,,,,,,,,AIM FAILED,,,,,,\n", NULL, NULL, 0 }, /* ray, launch, surface */
     /* With real aiming and EPD 100 the on-axis marginal ray (height 50)
      * misses the R 20 sphere, so the tracer cannot size the stop: the
      * design cannot be traced as set up (exit 4), not an internal error. */
