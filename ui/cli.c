@@ -1035,6 +1035,8 @@ int cmd_trace(int argc, char **argv)
     meta.opd = kind == SG_RAYS_NORMALIZED;
     meta.global = gf != NULL;
     meta.global_ref = global;
+    /* Its CSV rows begin with the launch, as the editor's export of it. */
+    meta.csv_inputs = kind == SG_RAYS_NORMALIZED;
 
     /* The output is opened only now, so a failed trace leaves an existing
      * file as it was. */
