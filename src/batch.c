@@ -222,10 +222,9 @@ static void run_classic(job *j)
             inf[nl] = 0;
             if (j->kind == SG_RAYS_START_DIR) {
                 prc = sg_start_classic_prep(t, v, v + 3, out);
-                for (k = 0; k < 3; k++) {
+                for (k = 0; k < 3; k++)
                     S[nl][k] = v[k];
-                    D[nl][k] = v[3 + k];
-                }
+                sg_dir_scale(v + 3, D[nl]);
             } else if (!finite4(v)) {
                 /* The single-ray call reports a bad ray. */
                 prc = sg_trace_normalized(t, v[0], v[1], v[2], v[3], out);

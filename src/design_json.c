@@ -1081,6 +1081,125 @@ static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
     return SG_OK;
 }
 
+/* ------------------------------------------------------------------------
+ * String checks: RFC 8259 text is UTF-8, and a C string cannot hold NUL
+ * ------------------------------------------------------------------------ */
+
+/* The bytes an escaped NUL (\u0000) becomes before cJSON sees the text:
+ * cJSON would decode it to a NUL that silently ends the string, whereas
+ * 0xC0 0x80 (an overlong NUL, never valid UTF-8) survives the parse and is
+ * found, with its key's path, by check_strings. */
+#define NUL_MARK "\xC0\x80\xC0\x80\xC0\x80"
+
+/* Replaces every escaped NUL inside a string of buf with NUL_MARK, in place
+ * (both are six bytes). */
+static void mark_escaped_nuls(char *buf, size_t len)
+{
+    size_t k;
+    int in_str = 0;
+    for (k = 0; k < len; k++) {
+        if (!in_str) {
+            if (buf[k] == '"')
+                in_str = 1;
+        } else if (buf[k] == '"') {
+            in_str = 0;
+        } else if (buf[k] == '\\' && k + 1 < len) {
+            if (k + 6 <= len && memcmp(buf + k + 1, "u0000", 5) == 0) {
+                memcpy(buf + k, NUL_MARK, 6);
+                k += 5;
+            } else {
+                k++; /* the escaped character, a quote or backslash among them */
+            }
+        }
+    }
+}
+
+/* The length of the valid UTF-8 prefix of s (RFC 3629: no overlong forms,
+ * no surrogates, nothing above U+10FFFF). */
+static size_t utf8_valid_prefix(const unsigned char *s)
+{
+    const unsigned char *p = s;
+    while (*p) {
+        unsigned c = p[0];
+        int n, i;
+        unsigned cp;
+        if (c < 0x80) {
+            p++;
+            continue;
+        }
+        if (c >= 0xC2 && c <= 0xDF)
+            n = 1, cp = c & 0x1F;
+        else if (c >= 0xE0 && c <= 0xEF)
+            n = 2, cp = c & 0x0F;
+        else if (c >= 0xF0 && c <= 0xF4)
+            n = 3, cp = c & 0x07;
+        else
+            break;
+        for (i = 1; i <= n; i++) {
+            if ((p[i] & 0xC0) != 0x80)
+                break;
+            cp = cp << 6 | (p[i] & 0x3Fu);
+        }
+        if (i <= n || (n == 2 && (cp < 0x800 || (cp >= 0xD800 && cp <= 0xDFFF))) ||
+            (n == 3 && (cp < 0x10000 || cp > 0x10FFFF)))
+            break;
+        p += n + 1;
+    }
+    return (size_t)(p - s);
+}
+
+/* Refuses a key or string value that holds an escaped NUL or is not UTF-8,
+ * naming its path (surfaces[3].material).  raw_c0: the text itself held a
+ * 0xC0 byte, so a NUL_MARK cannot be told from invalid bytes. */
+static int check_strings(jctx *c, const cJSON *v, char *path, size_t cap, int raw_c0)
+{
+    size_t plen = strlen(path);
+    const cJSON *it;
+    int idx = 0;
+    if (cJSON_IsString(v) || v->string) {
+        const char *what[2];
+        int w;
+        what[0] = v->string;
+        what[1] = cJSON_IsString(v) ? v->valuestring : NULL;
+        for (w = 0; w < 2; w++) {
+            const unsigned char *s = (const unsigned char *)what[w];
+            size_t ok;
+            if (!s)
+                continue;
+            ok = utf8_valid_prefix(s);
+            if (!s[ok])
+                continue;
+            if (!raw_c0 && s[ok] == 0xC0 && s[ok + 1] == 0x80)
+                return sg_diag_set(c->d, SG_EPARSE,
+                                   "%s: %s: the %s holds \\u0000 (a NUL character), "
+                                   "which no name or comment may contain",
+                                   c->name, path[0] ? path : "(top level)",
+                                   w ? "text" : "key");
+            return sg_diag_set(c->d, SG_EPARSE,
+                               "%s: %s: the %s is not valid UTF-8 (byte 0x%02X after %zu valid "
+                               "bytes); JSON text must be UTF-8 (RFC 8259)",
+                               c->name, path[0] ? path : "(top level)", w ? "text" : "key",
+                               s[ok], ok);
+        }
+    }
+    cJSON_ArrayForEach(it, v) {
+        int rc;
+        if (cJSON_IsArray(v))
+            snprintf(path + plen, cap - plen, "[%d]", idx);
+        else if (it->string && utf8_valid_prefix((const unsigned char *)it->string) ==
+                                   strlen(it->string))
+            snprintf(path + plen, cap - plen, "%s%s", plen ? "." : "", it->string);
+        else
+            snprintf(path + plen, cap - plen, "%s(key %d)", plen ? "." : "", idx + 1);
+        rc = check_strings(c, it, path, cap, raw_c0);
+        if (rc != SG_OK)
+            return rc;
+        path[plen] = '\0';
+        idx++;
+    }
+    return SG_OK;
+}
+
 /* Line and column (both from 1, columns in bytes) of offset off. */
 static void line_col(const char *text, size_t off, long *line, long *col)
 {
@@ -1104,7 +1223,7 @@ int sg_design_parse(sg_system *sys, const char *text, size_t len, const char *na
     const char *end = NULL, *nul;
     cJSON *root;
     sg_system *tmp;
-    int rc;
+    int rc, raw_c0;
 
     c.name = name ? name : "(memory)";
     c.d = d;
@@ -1128,6 +1247,9 @@ int sg_design_parse(sg_system *sys, const char *text, size_t len, const char *na
     if (len)
         memcpy(buf, text, len);
     buf[len] = '\0';
+    raw_c0 = memchr(buf, 0xC0, len) != NULL;
+    mark_escaped_nuls(buf, len);
+    /* cJSON skips a UTF-8 byte order mark (RFC 8259, 8.1). */
     root = cJSON_ParseWithLengthOpts(buf, len + 1, &end, 1);
     if (!root) {
         long line, col;
@@ -1152,6 +1274,14 @@ int sg_design_parse(sg_system *sys, const char *text, size_t len, const char *na
         return rc;
     }
     free(buf);
+    {
+        char path[512] = "";
+        rc = check_strings(&c, root, path, sizeof path, raw_c0);
+        if (rc != SG_OK) {
+            cJSON_Delete(root);
+            return rc;
+        }
+    }
 
     tmp = sg_system_new();
     if (!tmp) {
@@ -1240,6 +1370,78 @@ int sg_read_file(const char *path, size_t max, char **out, size_t *outlen, sg_di
     return SG_OK;
 }
 
+/* A text that opens with a UTF-16 byte order mark, as UTF-8 (without the
+ * mark) in *out; SG_EPARSE naming the byte offset of an unpaired surrogate
+ * or a stray last byte.  A line break stays a line break, so a later error's
+ * line number is the file's. */
+static int utf16_to_utf8(const unsigned char *b, size_t n, const char *name, char **out,
+                         size_t *outlen, sg_diag *d)
+{
+    int be = b[0] == 0xFE;
+    size_t k, o = 0;
+    char *u;
+    if (n % 2)
+        return sg_diag_set(d, SG_EPARSE,
+                           "%s: UTF-16 text (byte order mark %02X %02X) of an odd number of "
+                           "bytes (%zu): the file is cut",
+                           name, b[0], b[1], n);
+    u = malloc(n / 2 * 3 + 1);
+    if (!u)
+        return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
+    for (k = 2; k < n; k += 2) {
+        unsigned cp = be ? (unsigned)b[k] << 8 | b[k + 1] : (unsigned)b[k + 1] << 8 | b[k];
+        if (cp >= 0xD800 && cp <= 0xDBFF && k + 3 < n) {
+            unsigned lo = be ? (unsigned)b[k + 2] << 8 | b[k + 3]
+                             : (unsigned)b[k + 3] << 8 | b[k + 2];
+            if (lo >= 0xDC00 && lo <= 0xDFFF) {
+                cp = 0x10000 + ((cp - 0xD800) << 10) + (lo - 0xDC00);
+                k += 2;
+            }
+        }
+        if (cp >= 0xD800 && cp <= 0xDFFF) {
+            free(u);
+            return sg_diag_set(d, SG_EPARSE,
+                               "%s: byte %zu: an unpaired UTF-16 surrogate (0x%04X); the text "
+                               "is not valid UTF-16",
+                               name, k, cp);
+        }
+        if (cp < 0x80) {
+            u[o++] = (char)cp;
+        } else if (cp < 0x800) {
+            u[o++] = (char)(0xC0 | cp >> 6);
+            u[o++] = (char)(0x80 | (cp & 0x3F));
+        } else if (cp < 0x10000) {
+            u[o++] = (char)(0xE0 | cp >> 12);
+            u[o++] = (char)(0x80 | (cp >> 6 & 0x3F));
+            u[o++] = (char)(0x80 | (cp & 0x3F));
+        } else {
+            u[o++] = (char)(0xF0 | cp >> 18);
+            u[o++] = (char)(0x80 | (cp >> 12 & 0x3F));
+            u[o++] = (char)(0x80 | (cp >> 6 & 0x3F));
+            u[o++] = (char)(0x80 | (cp & 0x3F));
+        }
+    }
+    u[o] = '\0';
+    *out = u;
+    *outlen = o;
+    return SG_OK;
+}
+
+/* Whether a UTF-16 text (after its mark) opens with '{', spaces aside: a
+ * JSON design, which a .zmx file in UTF-16 never is. */
+static int utf16_opens_object(const unsigned char *b, size_t n)
+{
+    int be = b[0] == 0xFE;
+    size_t k;
+    for (k = 2; k + 1 < n; k += 2) {
+        unsigned cp = be ? (unsigned)b[k] << 8 | b[k + 1] : (unsigned)b[k + 1] << 8 | b[k];
+        if (cp == ' ' || cp == '\t' || cp == '\r' || cp == '\n')
+            continue;
+        return cp == '{';
+    }
+    return 0;
+}
+
 int sg_design_load(sg_system *sys, const char *path, sg_diag *d)
 {
     char *buf;
@@ -1251,6 +1453,22 @@ int sg_design_load(sg_system *sys, const char *path, sg_diag *d)
     rc = sg_read_file(path, DESIGN_MAX_BYTES, &buf, &len, d);
     if (rc != SG_OK)
         return rc;
+    /* A JSON design in UTF-16 (RFC 8259 allows only UTF-8, but editors on
+     * Windows write it) is read as the same text in UTF-8, whatever its
+     * name; a lens file in UTF-16 is the .zmx reader's. */
+    if (len >= 2 &&
+        ((buf[0] == '\xFF' && buf[1] == '\xFE') || (buf[0] == '\xFE' && buf[1] == '\xFF')) &&
+        utf16_opens_object((const unsigned char *)buf, len)) {
+        char *u8 = NULL;
+        size_t n8 = 0;
+        rc = utf16_to_utf8((const unsigned char *)buf, len, path, &u8, &n8, d);
+        free(buf);
+        if (rc != SG_OK)
+            return rc;
+        rc = sg_design_parse(sys, u8, n8, path, d);
+        free(u8);
+        return rc;
+    }
     /* A Zemax archive or lens file, by its name or its first bytes. */
     if (sg_zar_detect(path, buf, len))
         rc = sg_zar_parse(sys, buf, len, path, NULL, d);

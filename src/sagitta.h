@@ -1150,6 +1150,9 @@ typedef struct sg_spot_cell {
     double rms, geo;       /* about the analysis's reference point */
     size_t npts;           /* points kept */
     double (*pts)[2];      /* kept points, relative to the reference */
+    double centroid_bound_x, centroid_bound_y; /* bounds on the centroid's errors: the
+                              mean of its rays' error bounds and the sums' rounding
+                              (classic: from its estimates) */
 } sg_spot_cell;
 
 typedef struct sg_spot_field {
@@ -1159,6 +1162,7 @@ typedef struct sg_spot_field {
                               chief ray, or the weighted centroid */
     double rms, geo;       /* over every wavelength, weighted by wavelength weight */
     double centroid_x, centroid_y;
+    double centroid_bound_x, centroid_bound_y; /* as sg_spot_cell's */
 } sg_spot_field;
 
 typedef struct sg_spot {

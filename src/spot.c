@@ -174,6 +174,7 @@ static int hull_add(hull *h, double (*pts)[2], size_t n, double (*work)[2])
 
 typedef struct acc {
     double sx, sy, s2; /* sums of dx, dy, dx^2 + dy^2 about the field's origin */
+    double sb, sax, say; /* sums of the rays' error bounds, |dx| and |dy| */
     double max2;       /* largest dx^2 + dy^2 */
     size_t n;
     hull h;
@@ -313,6 +314,9 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
                     r2 = dx * dx + dy * dy;
                     bx += dx;
                     by += dy;
+                    ac->sb += rows[i].error_bound;
+                    ac->sax += fabs(dx);
+                    ac->say += fabs(dy);
                     b2 += r2;
                     if (r2 > ac->max2)
                         ac->max2 = r2;
@@ -353,6 +357,7 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
     for (f = 0; f < nf; f++) {
         sg_spot_field *fd = &out->field[f];
         double wsum = 0.0, wsx = 0.0, wsy = 0.0, cx = 0.0, cy = 0.0, w2 = 0.0;
+        double wbx = 0.0, wby = 0.0;
         int equal = 1;
         if (fd->status != SG_OK)
             continue;
@@ -364,12 +369,22 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
             sg_spot_cell *c = &out->cell[cell_index(out, f, w)];
             double wt = equal ? 1.0 : sys->wave[waves[w]].weight;
             if (ac->n) {
-                c->centroid_x = origin[f][0] + ac->sx / (double)ac->n;
-                c->centroid_y = origin[f][1] + ac->sy / (double)ac->n;
+                /* The rays' mean error, and the rounding of each difference,
+                 * sum (at most n + 2 roundings of |dx| each, Higham's
+                 * gamma_n), division and the origin's addition. */
+                double n = (double)ac->n, g = (n + 4.0) * 0x1p-53 / (1.0 - (n + 4.0) * 0x1p-53);
+                c->centroid_x = origin[f][0] + ac->sx / n;
+                c->centroid_y = origin[f][1] + ac->sy / n;
+                c->centroid_bound_x = (ac->sb + g * ac->sax) / n * (1.0 + 0x1p-50) +
+                                      0x1p-52 * fabs(c->centroid_x);
+                c->centroid_bound_y = (ac->sb + g * ac->say) / n * (1.0 + 0x1p-50) +
+                                      0x1p-52 * fabs(c->centroid_y);
             }
             wsum += wt * (double)ac->n;
             wsx += wt * ac->sx;
             wsy += wt * ac->sy;
+            wbx += wt * (ac->sb + ac->sax * (double)(ac->n + 4) * 0x1p-53);
+            wby += wt * (ac->sb + ac->say * (double)(ac->n + 4) * 0x1p-53);
         }
         if (wsum > 0.0) {
             cx = wsx / wsum;
@@ -377,6 +392,13 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
         }
         fd->centroid_x = origin[f][0] + cx;
         fd->centroid_y = origin[f][1] + cy;
+        /* The weighted sums add nw more roundings of terms already counted. */
+        if (wsum > 0.0) {
+            fd->centroid_bound_x = (wbx * (1.0 + (nw + 4) * 0x1p-52)) / wsum * (1.0 + 0x1p-50) +
+                                   0x1p-52 * (fabs(fd->centroid_x) + fabs(cx));
+            fd->centroid_bound_y = (wby * (1.0 + (nw + 4) * 0x1p-52)) / wsum * (1.0 + 0x1p-50) +
+                                   0x1p-52 * (fabs(fd->centroid_y) + fabs(cy));
+        }
         if (o->reference == SG_SPOT_REF_CHIEF)
             cx = cy = 0.0;
         fd->ref_x = origin[f][0] + cx;

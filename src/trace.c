@@ -814,11 +814,30 @@ void sg_set_start_row(sg_ray_surface *o, const double S[3], const double u[3])
 }
 
 /* Rejects a start point or direction that no method can trace. */
-static int start_invalid(const sg_tracer *t, const double start[3], const double dir[3],
+void sg_dir_scale(const double in[3], double out[3])
+{
+    double m = fmax(fabs(in[0]), fmax(fabs(in[1]), fabs(in[2])));
+    int k, e;
+    if (!isfinite(m) || m == 0.0 || (m >= 0x1p-400 && m <= 0x1p400)) {
+        for (k = 0; k < 3; k++)
+            out[k] = in[k];
+        return;
+    }
+    e = ilogb(m);
+    /* A component more than 2^1074 below the largest becomes 0 (or keeps
+     * its last bits as a subnormal): its square is below the largest's
+     * rounding either way. */
+    for (k = 0; k < 3; k++)
+        out[k] = ldexp(in[k], -e);
+}
+
+static int start_invalid(const sg_tracer *t, const double start[3], const double dir_in[3],
                          sg_ray_surface *out)
 {
-    double len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
+    double dir[3], len2;
     int k;
+    sg_dir_scale(dir_in, dir);
+    len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
     for (k = 0; k < 3; k++)
         if (!isfinite(start[k]) || !isfinite(dir[k])) {
             sg_fail_rest(out, 0, t->n, SG_EINVAL);
@@ -831,14 +850,15 @@ static int start_invalid(const sg_tracer *t, const double start[3], const double
     return SG_OK;
 }
 
-int sg_start_precise_prep(const sg_tracer *t, const double start[3], const double dir[3],
+int sg_start_precise_prep(const sg_tracer *t, const double start[3], const double dir_in[3],
                           sg_ray_surface *out, sg_pray *r)
 {
     dd len;
-    double u[3];
-    int rc = start_invalid(t, start, dir, out);
+    double u[3], dir[3];
+    int rc = start_invalid(t, start, dir_in, out);
     if (rc != SG_OK)
         return rc;
+    sg_dir_scale(dir_in, dir);
     len = dd_sqrt(dd_add(dd_add(dd_sqr(dd_from(dir[0])), dd_sqr(dd_from(dir[1]))),
                          dd_sqr(dd_from(dir[2]))));
     r->p.x = dd_from(start[0]);
@@ -858,13 +878,15 @@ int sg_start_precise_prep(const sg_tracer *t, const double start[3], const doubl
     return SG_OK;
 }
 
-int sg_start_classic_prep(const sg_tracer *t, const double start[3], const double dir[3],
+int sg_start_classic_prep(const sg_tracer *t, const double start[3], const double dir_in[3],
                           sg_ray_surface *out)
 {
-    double len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2], len, u[3];
-    int rc = start_invalid(t, start, dir, out);
+    double len2, len, u[3], dir[3];
+    int rc = start_invalid(t, start, dir_in, out);
     if (rc != SG_OK)
         return rc;
+    sg_dir_scale(dir_in, dir);
+    len2 = dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2];
     len = sqrt(len2);
     u[0] = dir[0] / len;
     u[1] = dir[1] / len;
@@ -873,10 +895,12 @@ int sg_start_classic_prep(const sg_tracer *t, const double start[3], const doubl
     return SG_OK;
 }
 
-int sg_trace_start(sg_tracer *t, const double start[3], const double dir[3],
+int sg_trace_start(sg_tracer *t, const double start[3], const double dir_in[3],
                    sg_ray_surface *out)
 {
     int rc;
+    double dir[3];
+    sg_dir_scale(dir_in, dir);
     if (t->o.method == SG_METHOD_PRECISE) {
         /* The preparation checks the ray, as it does for the batch. */
         sg_pray r;

@@ -402,6 +402,12 @@ void sg_launch_classic_path(const sg_tracer *t, double off, sg_ray_surface *out)
  * and returns SG_EINVAL. */
 int sg_start_classic_prep(const sg_tracer *t, const double start[3], const double dir[3],
                           sg_ray_surface *out);
+/* A start direction whose squares would overflow or underflow (1e308 or
+ * 1e-200 a component) scaled by a power of two, which is exact and keeps
+ * its direction, so that its largest component lies in [1, 2); any other
+ * direction (and a non-finite or zero one) copied unchanged, so its trace
+ * keeps its bits. */
+void sg_dir_scale(const double in[3], double out[3]);
 
 /* The MPFR method, in trace_mpfr.c. */
 int sg_mpfr_prepare(sg_tracer *t, sg_diag *d);

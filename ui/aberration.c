@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "ancmd.h"
+#include "numfmt.h"
 #include "report.h"
 #include "safetext.h"
 #include "views.h"
@@ -41,11 +42,21 @@ static void json_str(FILE *f, const char *s)
     fputc('"', f);
 }
 
-/* %.17g, or null (JSON) / empty (CSV) for a value that is not finite. */
+/* v with a negative zero made +0: a sum that cancels exactly is 0, and
+ * "-0.000000e+00" in a table reads as a tiny negative value. */
+static double nz(double v)
+{
+    return v == 0.0 ? 0.0 : v;
+}
+
+/* The shortest decimal that reads back to the same double (so nothing is
+ * lost), -0 written 0; or null (JSON) / empty (CSV) for a value that is not
+ * finite. */
 static void num(FILE *f, double v, int json)
 {
+    char b[NUMFMT_SHORTEST_MAX];
     if (isfinite(v))
-        fprintf(f, "%.17g", v);
+        fwrite(b, 1, numfmt_shortest_g(nz(v), b), f);
     else if (json)
         fputs("null", f);
 }
@@ -117,7 +128,7 @@ static void seidel_text(FILE *f, const char *design, const sg_system *sys, const
             else
                 fprintf(f, "%-5s", "TOT");
             for (k = 0; k < ncol; k++)
-                fprintf(f, " %14.6e", v[k]);
+                fprintf(f, " %14.6e", nz(v[k]));
             fputc('\n', f);
         }
     }
@@ -378,8 +389,9 @@ static void fieldcurve_write(FILE *f, int fmt, const char *design, const sg_syst
     for (i = 0; i < n; i++) {
         fprintf(f, "%10.6f %12.6g ", p[i].hy, p[i].field);
         if (p[i].status == SG_OK)
-            fprintf(f, "%16.9e %16.9e %16.9e %16.9e %14.6e  OK\n", p[i].tan_focus,
-                    p[i].sag_focus, p[i].real_y, p[i].parax_y, p[i].distortion);
+            fprintf(f, "%16.9e %16.9e %16.9e %16.9e %14.6e  OK\n", nz(p[i].tan_focus),
+                    nz(p[i].sag_focus), nz(p[i].real_y), nz(p[i].parax_y),
+                    nz(p[i].distortion));
         else
             fprintf(f, "%16s %16s %16s %16.9e %14s  %s\n", "-", "-", "-", p[i].parax_y, "-",
                     report_status_name(p[i].status));

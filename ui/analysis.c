@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "ancmd.h"
+#include "numfmt.h"
 #include "plot.h"
 #include "safetext.h"
 #include "views.h"
@@ -85,13 +86,28 @@ static void an_help(int kind, FILE *f)
           "wavelength unless NO_COLOR is set).  See sagitta(1).\n", f);
 }
 
-/* A number with every digit a double holds, for CSV and JSON. */
+/* A number for CSV: the shortest decimal that reads back to the same
+ * double (0.4861327, not %.17g's 0.48613269999999997), so nothing is lost;
+ * -0 is written 0. */
 static void num(FILE *f, double v)
 {
-    fprintf(f, "%.17g", v);
+    char b[NUMFMT_SHORTEST_MAX];
+    if (!isfinite(v)) {
+        fprintf(f, "%.17g", v);
+        return;
+    }
+    fwrite(b, 1, numfmt_shortest_g(v == 0.0 ? 0.0 : v, b), f);
 }
 
 /* ---- spot ---- */
+
+/* A centroid smaller than its own error bound (the mean of its rays'
+ * bounds and the sums' rounding, sg_spot_cell) is noise, not an offset:
+ * it is printed as 0, never as -0 (sagitta(1), spot). */
+static double spot_denoise(double v, double bound)
+{
+    return fabs(v) <= bound ? 0.0 : v;
+}
 
 static void spot_text(FILE *f, const sg_system *sys, const sg_spot *s, const sg_spot_opts *o)
 {
@@ -124,11 +140,15 @@ static void spot_text(FILE *f, const sg_system *sys, const sg_spot *s, const sg_
             view_wave_label(s->wave_um[w], wl, sizeof wl);
             snprintf(rays, sizeof rays, "%zu", c->nok);
             fprintf(f, "%-26s %-12s %8s %11.6g %s %11.6g %s %14.8g %14.8g\n", w ? "" : fl, wl,
-                    rays, c->rms * sc, u, c->geo * sc, u, c->centroid_x, c->centroid_y);
+                    rays, c->rms * sc, u, c->geo * sc, u,
+                    spot_denoise(c->centroid_x, c->centroid_bound_x),
+                    spot_denoise(c->centroid_y, c->centroid_bound_y));
         }
         if (s->nwave > 1)
             fprintf(f, "%-26s %-12s %8s %11.6g %s %11.6g %s %14.8g %14.8g\n", "", "all", "",
-                    fd->rms * sc, u, fd->geo * sc, u, fd->centroid_x, fd->centroid_y);
+                    fd->rms * sc, u, fd->geo * sc, u,
+                    spot_denoise(fd->centroid_x, fd->centroid_bound_x),
+                    spot_denoise(fd->centroid_y, fd->centroid_bound_y));
     }
     fprintf(f, "(centroids in %s on the image surface)\n", sys->units);
 }
@@ -165,9 +185,11 @@ static void spot_csv(FILE *f, const sg_spot *s)
                 num(f, c->chief_y);
                 fputc(',', f);
             }
-            num(f, all ? fd->centroid_x : c->centroid_x);
+            num(f, all ? spot_denoise(fd->centroid_x, fd->centroid_bound_x)
+                       : spot_denoise(c->centroid_x, c->centroid_bound_x));
             fputc(',', f);
-            num(f, all ? fd->centroid_y : c->centroid_y);
+            num(f, all ? spot_denoise(fd->centroid_y, fd->centroid_bound_y)
+                       : spot_denoise(c->centroid_y, c->centroid_bound_y));
             fputc(',', f);
             num(f, fd->ref_x);
             fputc(',', f);
@@ -204,8 +226,10 @@ static cJSON *spot_json(const sg_system *sys, const sg_spot *s, const sg_spot_op
         cJSON_AddNumberToObject(jf, "ref_y", fd->ref_y);
         cJSON_AddNumberToObject(jf, "rms", fd->rms);
         cJSON_AddNumberToObject(jf, "geo", fd->geo);
-        cJSON_AddNumberToObject(jf, "centroid_x", fd->centroid_x);
-        cJSON_AddNumberToObject(jf, "centroid_y", fd->centroid_y);
+        cJSON_AddNumberToObject(jf, "centroid_x",
+                                spot_denoise(fd->centroid_x, fd->centroid_bound_x));
+        cJSON_AddNumberToObject(jf, "centroid_y",
+                                spot_denoise(fd->centroid_y, fd->centroid_bound_y));
         ws = cJSON_AddArrayToObject(jf, "waves");
         for (w = 0; w < s->nwave; w++) {
             const sg_spot_cell *c = &s->cell[fi * s->nwave + w];
@@ -216,8 +240,10 @@ static cJSON *spot_json(const sg_system *sys, const sg_spot *s, const sg_spot_op
             cJSON_AddNumberToObject(jw, "reached", (double)c->nok);
             cJSON_AddNumberToObject(jw, "chief_x", c->chief_x);
             cJSON_AddNumberToObject(jw, "chief_y", c->chief_y);
-            cJSON_AddNumberToObject(jw, "centroid_x", c->centroid_x);
-            cJSON_AddNumberToObject(jw, "centroid_y", c->centroid_y);
+            cJSON_AddNumberToObject(jw, "centroid_x",
+                                    spot_denoise(c->centroid_x, c->centroid_bound_x));
+            cJSON_AddNumberToObject(jw, "centroid_y",
+                                    spot_denoise(c->centroid_y, c->centroid_bound_y));
             cJSON_AddNumberToObject(jw, "rms", c->rms);
             cJSON_AddNumberToObject(jw, "geo", c->geo);
             cJSON_AddItemToArray(ws, jw);

@@ -492,16 +492,48 @@ static sg_frame *global_frames(const char *design, const sg_system *sys, int ref
     return gf;
 }
 
-/* Reports a trace that failed for a reason other than the ray's own fate,
- * and returns the exit status for it. */
-static int trace_failed(const char *design, const sg_diag *d, int rc)
+/* Why a single ray's trace stopped with a status that is not a ray's own
+ * fate (sagitta(1), STATUSES). */
+static const char *stop_reason(int rc)
 {
+    switch (rc) {
+    case SG_ENONPHYS:
+        return "the surface's normal at the ray's point vanishes in double-double (the "
+               "square of a radius below about 1e-162 underflows to 0), so the precise "
+               "method cannot bend the ray within its bound; the classic and mpfr methods "
+               "trace it";
+    case SG_EINVAL:
+        return "the ray's numbers are not finite or its direction is zero";
+    default:
+        return NULL;
+    }
+}
+
+/* Reports a trace that failed for a reason other than the ray's own fate,
+ * and returns the exit status for it; rows (nsurf of them, or NULL) name
+ * the surface where a single ray stopped. */
+static int trace_failed_at(const char *design, const sg_diag *d, int rc,
+                           const sg_ray_surface *rows, int nsurf)
+{
+    int i = 0;
+    if (rows)
+        for (i = 0; i < nsurf && rows[i].status != rc; i++)
+            ;
     if (d->msg[0])
         cli_print_diag(design, d, rc);
+    else if (rows && i < nsurf)
+        cli_error("%s: trace failed on surface %d: %s (status %s)%s%s", design, i,
+                  sg_strerror(rc), report_status_name(rc), stop_reason(rc) ? ": " : "",
+                  stop_reason(rc) ? stop_reason(rc) : "");
     else
         cli_error("%s: trace failed: %s", design, sg_strerror(rc));
     rc = cli_exit_for(rc);
     return rc == CLI_EXIT_OK ? CLI_EXIT_INTERNAL : rc;
+}
+
+static int trace_failed(const char *design, const sg_diag *d, int rc)
+{
+    return trace_failed_at(design, d, rc, NULL, 0);
 }
 
 /* Progress of a long run on standard error: only on a terminal, never in
@@ -722,6 +754,9 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     meta.opd = t != NULL;
     meta.global = gf != NULL;
     meta.global_ref = global;
+    /* A CSV row of a normalized ray says which ray it is, as a fan's or
+     * grid's export and the JSON's "input" do. */
+    meta.csv_inputs = csvrays_kind(rd) == SG_RAYS_NORMALIZED;
     memset(&ref, 0, sizeof ref);
     ref.status = SG_EINVAL;
 
@@ -1027,7 +1062,7 @@ int cmd_trace(int argc, char **argv)
         sg_diag_clear(&d);
     }
     if (!sg_err_is_ray_status(rc)) {
-        rc = trace_failed(design, &d, rc);
+        rc = trace_failed_at(design, &d, rc, out, nsurf);
         goto done;
     }
     cli_print_warnings(&d, design);
@@ -1049,6 +1084,8 @@ int cmd_trace(int argc, char **argv)
     meta.global = gf != NULL;
     meta.global_ref = global;
     meta.sys = sys;
+    /* Its CSV rows begin with the launch, as the editor's export of it. */
+    meta.csv_inputs = kind == SG_RAYS_NORMALIZED;
 
     /* The output is opened only now, so a failed trace leaves an existing
      * file as it was. */

@@ -319,8 +319,30 @@ static int fill(csvrays_reader *r)
     }
 }
 
+/* Whether the file opens with a UTF-16 byte order mark (its first line is
+ * at pos). */
+static int utf16_start(const csvrays_reader *r)
+{
+    const unsigned char *b = (const unsigned char *)r->buf + r->pos;
+    return r->lineno == 0 && r->len - r->pos >= 2 &&
+           ((b[0] == 0xFF && b[1] == 0xFE) || (b[0] == 0xFE && b[1] == 0xFF));
+}
+
+/* The NUL refusal, or on a first line in UTF-16 what the NULs mean. */
+static void nul_message(const csvrays_reader *r, long at, sg_diag *d)
+{
+    if (utf16_start(r))
+        sg_diag_set(d, SG_EPARSE,
+                    "%s: the file is UTF-16 text (byte order mark %s); ray lists are read "
+                    "as UTF-8 or ASCII: convert it, e.g. iconv -f UTF-16 -t UTF-8",
+                    r->name, (unsigned char)r->buf[r->pos] == 0xFF ? "FF FE" : "FE FF");
+    else
+        sg_diag_set(d, SG_EPARSE, "%s:%ld: NUL byte in line", r->name, at);
+}
+
 /* The next line (without its newline) in *line; returns 0 at the end, 1
- * for a line, or -1 with d filled. */
+ * for a line, or -1 with d filled.  A UTF-8 byte order mark before the
+ * first line is skipped (spreadsheets write one). */
 static int next_line(csvrays_reader *r, span *line, sg_diag *d)
 {
     const char *nl;
@@ -329,7 +351,7 @@ static int next_line(csvrays_reader *r, span *line, sg_diag *d)
         if (rc != SG_OK) {
             long at = r->lineno + 1;
             if (rc == SG_EPARSE)
-                sg_diag_set(d, SG_EPARSE, "%s:%ld: NUL byte in line", r->name, at);
+                nul_message(r, at, d);
             else if (rc == SG_ERANGE)
                 sg_diag_set(d, SG_EPARSE, "%s:%ld: line longer than %d MiB", r->name, at,
                             (int)(CSVRAYS_MAX_LINE >> 20));
@@ -342,6 +364,15 @@ static int next_line(csvrays_reader *r, span *line, sg_diag *d)
     }
     if (r->pos >= r->len)
         return 0;
+    if (r->lineno == 0 && r->len - r->pos >= 3 &&
+        memcmp(r->buf + r->pos, "\xEF\xBB\xBF", 3) == 0) {
+        r->pos += 3;
+        r->consumed += 3;
+    }
+    if (utf16_start(r)) {
+        nul_message(r, 1, d);
+        return -1;
+    }
     line->p = r->buf + r->pos;
     nl = memchr(line->p, '\n', r->len - r->pos);
     line->n = (size_t)((nl ? nl : r->buf + r->len) - line->p);

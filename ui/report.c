@@ -265,6 +265,20 @@ static void put_num(FILE *f, double v, int json)
     }
 }
 
+/* A number that comes from the design or the user (a wavelength, a ray's
+ * launch, a paraxial datum) as CSV and JSON carry it: the shortest decimal
+ * that reads back to the same double, so 0.5875618 stays 0.5875618, where
+ * %.17g writes 0.58756180000000002; -0 is written 0. */
+static void put_short(FILE *f, double v, int json)
+{
+    char b[NUMFMT_SHORTEST_MAX];
+    if (!isfinite(v)) {
+        put_num(f, v, json);
+        return;
+    }
+    fwrite(b, 1, numfmt_shortest_g(v == 0.0 ? 0.0 : v, b), f);
+}
+
 static void csv_head(FILE *f, const report_meta *m, int multi, int inputs, sg_ray_kind kind)
 {
     if (multi)
@@ -430,10 +444,23 @@ static char *csv_rows(char *p, int multi, size_t index, int i0, int i1, int nsur
         nix = (size_t)(mem_uint(ix, index) - ix);
         ix[nix++] = ',';
     }
-    for (i = i0; i < i1; i++)
+    int start[CSV_GROUP], k;
+    for (i = i0; i < i1; i++) {
+        start[i - i0] = n;
         n += csv_row_nums(v + n, i, nsurf, &s[i], nin, ray, opd);
+    }
     if (n > 0)
         numfmt_g17_n(v, (size_t)n, txt, len);
+    /* The launch is the user's: its shortest decimal, as JSON's "input". */
+    for (k = 0; k < nin; k++) {
+        char b[NUMFMT_SHORTEST_MAX];
+        size_t bl = isfinite(ray->v[k]) ? numfmt_shortest_g(ray->v[k] == 0.0 ? 0.0 : ray->v[k], b)
+                                        : numfmt_g17(ray->v[k], b);
+        for (i = i0; i < i1; i++) {
+            memcpy(txt + (size_t)(start[i - i0] + k) * NUMFMT_G17_MAX, b, bl + 1);
+            len[start[i - i0] + k] = (unsigned char)bl;
+        }
+    }
     c.v = v;
     c.txt = txt;
     c.len = len;
@@ -488,7 +515,7 @@ static int json_meta(FILE *f, const report_meta *m)
         fprintf(f, ",\n  \"bits\": %d", m->bits);
     if (m) {
         fputs(",\n  \"wavelength_um\": ", f);
-        put_num(f, m->wave_um, 1);
+        put_short(f, m->wave_um, 1);
         fprintf(f, ",\n  \"wave\": %d", m->wave_index);
         /* Only said when it is not the usual local frame. */
         if (m->global)
@@ -505,7 +532,7 @@ static void json_input(FILE *f, sg_ray_kind kind, const sg_ray_in *ray)
     fputc('{', f);
     for (k = 0; k < n; k++) {
         fprintf(f, "%s\"%s\": ", k ? ", " : "", names[k]);
-        put_num(f, ray->v[k], 1);
+        put_short(f, ray->v[k], 1);
     }
     fputc('}', f);
 }
@@ -1095,7 +1122,7 @@ int report_write_paraxial(FILE *f, report_fmt fmt, const report_meta *m,
             if (isinf(v) || isnan(v))
                 fputs(isnan(v) ? "undefined" : v > 0 ? "Infinity" : "-Infinity", f);
             else
-                fprintf(f, "%.17g", v);
+                put_short(f, v, 0);
             fputc('\n', f);
         }
         break;
@@ -1103,7 +1130,7 @@ int report_write_paraxial(FILE *f, report_fmt fmt, const report_meta *m,
         fputs("quantity,value\n", f);
         for (k = 0; k < NPFIELDS; k++) {
             fprintf(f, "%s,", pfields[k].key);
-            put_num(f, pget(p, k), 0);
+            put_short(f, pget(p, k), 0);
             fputc('\n', f);
         }
         break;
@@ -1113,7 +1140,7 @@ int report_write_paraxial(FILE *f, report_fmt fmt, const report_meta *m,
             return -1;
         for (k = 0; k < NPFIELDS; k++) {
             fprintf(f, ",\n  \"%s\": ", pfields[k].key);
-            put_num(f, pget(p, k), 1);
+            put_short(f, pget(p, k), 1);
         }
         fputs("\n}\n", f);
         break;

@@ -96,6 +96,31 @@ static void seidel_text_csv(void **state)
     }
 }
 
+/* lens1.zmx's surfaces 5 and 8 (flat, in air) contribute exactly nothing,
+ * some terms as a negative zero: the table prints 0, never -0.000000e+00,
+ * and the CSV 0, never -0 (sagitta(1)). */
+static void seidel_no_negative_zero(void **state)
+{
+    const char *root = getenv("SAGITTA_SOURCE_ROOT");
+    char z[1024];
+    const char *p;
+    ct_result r;
+    (void)state;
+    assert_non_null(root);
+    snprintf(z, sizeof z, "%s/tests/data/zmx/lens1.zmx", root);
+    ct_run(&r, "seidel", z, NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.out, "TOT"));
+    assert_null(strstr(r.out, "-0.000000e+00"));
+    ct_free(&r);
+    ct_run(&r, "seidel", z, "--format", "csv", NULL);
+    assert_int_equal(r.code, 0);
+    for (p = r.out; (p = strstr(p, "-0")) != NULL; p += 2)
+        if (p[2] == ',' || p[2] == '\n' || p[2] == '\0')
+            fail_msg("a -0 field in the CSV: \"%.40s\"", p > r.out + 20 ? p - 20 : r.out);
+    ct_free(&r);
+}
+
 static void fieldcurve_json(void **state)
 {
     ct_result r;
@@ -280,6 +305,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(seidel_json),
         cmocka_unit_test(seidel_text_csv),
+        cmocka_unit_test(seidel_no_negative_zero),
         cmocka_unit_test(fieldcurve_json),
         cmocka_unit_test(pictures),
         cmocka_unit_test(errors),

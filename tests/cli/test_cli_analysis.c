@@ -53,6 +53,31 @@ static void test_spot_csv_mirror(void **state)
     ct_free(&r);
 }
 
+/* The singlet's fields lie on the y axis of a rotationally symmetric
+ * system, so every centroid x is exactly 0 (symmetry): its rounding noise
+ * (1e-18 mm), below its error bound, is printed as 0; the wavelength is the
+ * design's number, 0.5875618, not 0.58756180000000002. */
+static void test_spot_csv_noise(void **state)
+{
+    char d[1024], buf[64];
+    const char *e = getenv("SAGITTA_EXAMPLES");
+    ct_result r;
+    int row;
+    (void)state;
+    assert_non_null(e);
+    snprintf(d, sizeof d, "%s/singlet.json", e);
+    ct_run(&r, "spot", d, "--format", "csv", NULL);
+    assert_int_equal(r.code, 0);
+    for (row = 0; row < 12; row++) {
+        assert_non_null(ct_csv(r.out, row, "centroid_x", buf, sizeof buf));
+        if (strcmp(buf, "0") != 0)
+            fail_msg("row %d: centroid_x \"%s\", expected 0", row, buf);
+    }
+    assert_non_null(ct_csv(r.out, 1, "um", buf, sizeof buf));
+    assert_string_equal(buf, "0.5875618");
+    ct_free(&r);
+}
+
 static void test_fan_json_mirror(void **state)
 {
     const char *d = ct_design("mirror.json", MIRROR);
@@ -465,6 +490,7 @@ int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_spot_csv_mirror),
+        cmocka_unit_test(test_spot_csv_noise),
         cmocka_unit_test(test_fan_json_mirror),
         cmocka_unit_test(test_pictures),
         cmocka_unit_test(test_bench_view),

@@ -80,9 +80,14 @@ static void trace_rows(const char *design, const char *rays, const char *method,
     assert_non_null(line);
     for (line++; *line; got++) {
         char *end;
-        long ray = strtol(line, &end, 10), s = strtol(end + 1, &end, 10);
+        long ray = strtol(line, &end, 10), s;
         const char *st;
         int k;
+        /* The launch columns hx, hy, px, py follow the ray's number. */
+        for (k = 0; k < 4; k++)
+            end = strchr(end + 1, ',');
+        assert_non_null(end);
+        s = strtol(end + 1, &end, 10);
         assert_true(ray >= 0 && (size_t)ray < nray && s >= 0 && s < NSURF);
         for (k = 0; k < 3; k++)
             out->p[ray][s][k] = strtod(end + 1, &end);

@@ -259,6 +259,31 @@ static void gen_csv_nul(const char *path)
     write_or_die(path, t, sizeof t - 1);
 }
 
+/* SINGLET in UTF-16 (little-endian, with its byte order mark) or, with
+ * csv set, a ray list so. */
+static void write_utf16(const char *path, const char *text)
+{
+    char buf[4096];
+    size_t n = 0, k;
+    buf[n++] = (char)0xFF;
+    buf[n++] = (char)0xFE;
+    for (k = 0; text[k] && n + 2 <= sizeof buf; k++) {
+        buf[n++] = text[k];
+        buf[n++] = 0;
+    }
+    write_or_die(path, buf, n);
+}
+
+static void gen_utf16_design(const char *path)
+{
+    write_utf16(path, SINGLET);
+}
+
+static void gen_utf16_csv(const char *path)
+{
+    write_utf16(path, "hx,hy,px,py\n0,0,0,0\n");
+}
+
 /* A Zemax archive of one stored member (the 0xEC layout, sagitta-design(5)
  * ZEMAX ARCHIVES) holding text; cut leaves the header's last bytes off. */
 static void write_zar(const char *path, const char *name, const char *text, int cut)
@@ -323,6 +348,48 @@ static const bad_case cases[] = {
     { "json_binary", "binary garbage is a syntax error at 1:1",
       "garbage.json", "\x7f" "ELF\x01\x02\x03 not json", NULL, NULL,
       ARGS("paraxial", "@F"), 3, "@F:1:1: JSON syntax error", NULL, NULL, NULL, 0 },
+    { "json_escaped_nul", "\\u0000 in a material would cut it: refused with the key's path",
+      "enul.json", HEAD OBJ "    {\"radius\": 50, \"thickness\": 5, \"material\": "
+      "\"N-BK7\\u0000garbage\", \"stop\": true},\n" S2 IMA TAIL, NULL, NULL,
+      ARGS("paraxial", "@F"), 3, "@F: surfaces[1].material: the text holds \\u0000", NULL, NULL,
+      NULL, 0 },
+    { "json_escaped_backslash_u0000", "an escaped backslash before u0000 is plain text",
+      "ebs.json", "{\n  \"title\": \"a\\\\u0000b\",\n" HEAD_KEYS OBJ S1 S2 IMA TAIL, NULL, NULL,
+      ARGS("paraxial", "@F"), 0, NULL, "Effective focal length", NULL, NULL, 0 },
+    { "json_invalid_utf8", "a Latin-1 byte in a comment is not UTF-8: refused with the path",
+      "latin1.json", HEAD OBJ "    {\"radius\": 50, \"thickness\": 5, \"material\": 1.5, "
+      "\"comment\": \"caf\xE9\", \"stop\": true},\n" S2 IMA TAIL, NULL, NULL,
+      ARGS("paraxial", "@F"), 3,
+      "@F: surfaces[1].comment: the text is not valid UTF-8 (byte 0xE9 after 3 valid bytes)",
+      NULL, NULL, NULL, 0 },
+    { "json_invalid_utf8_key", "an overlong encoding in a key is not UTF-8",
+      "key8.json", "{\n  \"ti\xC0\xAEtle\": \"x\",\n" HEAD_KEYS OBJ S1 S2 IMA TAIL, NULL, NULL,
+      ARGS("paraxial", "@F"), 3, "the key is not valid UTF-8 (byte 0xC0 after 2 valid bytes)",
+      NULL, NULL, NULL, 0 },
+    { "json_utf8_bom", "a UTF-8 byte order mark before the design is ignored (RFC 8259)",
+      "bom.json", "\xEF\xBB\xBF" SINGLET, NULL, NULL, ARGS("paraxial", "@F"), 0, NULL,
+      "Effective focal length", NULL, NULL, 0 },
+    { "json_utf16", "a design in UTF-16 with its byte order mark is read as JSON",
+      "u16.json", NULL, gen_utf16_design, NULL, ARGS("paraxial", "@F"), 0, NULL,
+      "Effective focal length", NULL, NULL, 0 },
+    { "trace_point_like_surface", "R = 1e-300: precise names the surface and the reason",
+      "tiny.json", HEAD OBJ "    {\"radius\": 1e-300, \"thickness\": 5, \"material\": 1.5, "
+      "\"stop\": true},\n" S2 IMA TAIL, NULL, NULL, ARGS("trace", "@F", "--ray", "0,0,0,0"), 4,
+      "@F: trace failed on surface 1: nonphysical surface or system (status NONPHYS): the "
+      "surface's normal", NULL, NULL, NULL, 0 },
+    { "trace_huge_direction", "a direction of 1e308 a component is (1, 1, 1) / sqrt 3",
+      NULL, NULL, NULL, NULL,
+      ARGS("trace", "@D", "--start", "0,0,-1", "--dir", "1e308,1e308,1e308", "--format", "csv"),
+      0, NULL, "0,0,-1,0.577350269189625", NULL, "INVAL", 0 },
+    { "trace_tiny_direction", "a direction of 1e-300 a component is (1, 0, 1) / sqrt 2",
+      NULL, NULL, NULL, NULL,
+      ARGS("trace", "@D", "--start", "0,0,-1", "--dir", "1e-300,0,1e-300", "--format", "csv",
+           "--method", "classic"),
+      0, NULL, "0,0,-1,0.70710678118654", NULL, "INVAL", 0 },
+    { "trace_huge_direction_list", "the same direction in a classic ray list (the batch)",
+      NULL, NULL, NULL, "x,y,z,l,m,n\n0,0,-1,1e308,1e308,1e308\n",
+      ARGS("trace", "@D", "--rays", "-", "--format", "csv", "--method", "classic"),
+      0, NULL, "\n0,0,0,-1,0.577350269189625", NULL, "MISS", 0 }, /* it meets the lens */
     { "json_nul_byte", "a NUL byte at line 2, column 5 is refused there",
       "nul.json", NULL, gen_nul_design, NULL, ARGS("paraxial", "@F"), 3,
       "@F:2:5: JSON syntax error: NUL byte", NULL, NULL, NULL, 0 },
@@ -674,6 +741,12 @@ static const bad_case cases[] = {
     { "csv_wide_line", "a line of a million fields",
       "wide.csv", NULL, gen_csv_wide, NULL, ARGS("trace", "@D", "--rays", "@F"), 3,
       "@F:2: expected 4 fields, got 1000001", NULL, NULL, NULL, 0 },
+    { "csv_utf8_bom", "a UTF-8 byte order mark before the header is skipped",
+      "bom.csv", "\xEF\xBB\xBFhx,hy,px,py\n0,0,0,0\n", NULL, NULL,
+      ARGS("trace", "@D", "--rays", "@F"), 0, NULL, NULL, NULL, "unknown column", 0 },
+    { "csv_utf16", "a ray list in UTF-16 is named so, with how to convert it",
+      "u16.csv", NULL, gen_utf16_csv, NULL, ARGS("trace", "@D", "--rays", "@F"), 3,
+      "@F: the file is UTF-16 text (byte order mark FF FE)", NULL, NULL, NULL, 0 },
     { "csv_nul", "a NUL byte in line 2",
       "nul.csv", NULL, gen_csv_nul, NULL, ARGS("trace", "@D", "--rays", "@F"), 3,
       "@F:2: NUL byte", NULL, NULL, NULL, 0 },
@@ -794,20 +867,20 @@ static const bad_case cases[] = {
     { "aim_impossible_precise", "paraxial aiming at an unreachable stop height: AIM FAILED",
       "aim.json", HEAD_AIM("paraxial", "10") AIM_LENS, NULL, NULL,
       ARGS("trace", "@F", "--ray", "0,0,0,1", "--format", "csv"), 0,
-      NULL, "\n0,,,,,,,,,,AIM FAILED,,,,,,\n1,,,,,,,,,,NOT REACHED,,,,,,\n", NULL, NULL, 0 },
+      NULL, "\n0,0,0,1,0,,,,,,,,,,AIM FAILED,,,,,,\n0,0,0,1,1,,,,,,,,,,NOT REACHED,,,,,,\n", NULL, NULL, 0 },
     { "aim_impossible_classic", "the same with --method classic",
       "aim.json", HEAD_AIM("paraxial", "10") AIM_LENS, NULL, NULL,
       ARGS("trace", "@F", "--ray", "0,0,0,1", "--format", "csv", "--method", "classic"), 0,
-      NULL, "\n0,,,,,,,,,,AIM FAILED,,,,,,\n1,,,,,,,,,,NOT REACHED,,,,,,\n", NULL, NULL, 0 },
+      NULL, "\n0,0,0,1,0,,,,,,,,,,AIM FAILED,,,,,,\n0,0,0,1,1,,,,,,,,,,NOT REACHED,,,,,,\n", NULL, NULL, 0 },
     { "aim_impossible_mpfr", "the same with --method mpfr",
       "aim.json", HEAD_AIM("paraxial", "10") AIM_LENS, NULL, NULL,
       ARGS("trace", "@F", "--ray", "0,0,0,1", "--format", "csv", "--method", "mpfr"), 0,
-      NULL, "\n0,,,,,,,,,,AIM FAILED,,,,,,\n1,,,,,,,,,,NOT REACHED,,,,,,\n", NULL, NULL, 0 },
+      NULL, "\n0,0,0,1,0,,,,,,,,,,AIM FAILED,,,,,,\n0,0,0,1,1,,,,,,,,,,NOT REACHED,,,,,,\n", NULL, NULL, 0 },
     { "aim_batch", "a batch mixing AIM FAILED and traced rays, 2 threads",
       "aim.json", HEAD_AIM("paraxial", "10") AIM_LENS, NULL,
       "hx,hy,px,py\n0,0,0,1\n0,0,0,0\n", ARGS("trace", "@F", "--rays", "-", "--threads", "2",
                                            "--format", "csv"), 0,
-      NULL, "\n0,0,,,,,,,,,,AIM FAILED,,,,,,\n", NULL, NULL, 0 },
+      NULL, "\n0,0,0,0,1,0,,,,,,,,,,AIM FAILED,,,,,,\n", NULL, NULL, 0 }, /* ray, launch, surface */
     /* With real aiming and EPD 100 the on-axis marginal ray (height 50)
      * misses the R 20 sphere, so the tracer cannot size the stop: the
      * design cannot be traced as set up (exit 4), not an internal error. */

@@ -83,7 +83,8 @@ detail_y() {
 
 # y of surface $2 from "sagitta trace" CSV output in file $1.
 csv_y() {
-    awk -F, -v s="$2" '$1 == s { print $3 }' "$1"
+    # A normalized ray's rows: hx,hy,px,py,surface,x,y,...
+    awk -F, -v s="$2" '$5 == s { print $7 }' "$1"
 }
 
 # Numeric equality of two decimal strings as doubles (awk reads them with

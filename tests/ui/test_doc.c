@@ -868,11 +868,13 @@ static void test_export_matches_trace(void **state)
     f = fopen(path, "r");
     assert_non_null(f);
     while (fgets(line, sizeof line, f)) {
-        double v[6];
+        double v[6], in[4];
         int s;
-        if (sscanf(line, "%d,%lf,%lf,%lf,%lf,%lf,%lf", &s, &v[0], &v[1], &v[2], &v[3], &v[4],
-                   &v[5]) != 7)
+        /* Each row begins with the ray's launch, hx,hy,px,py. */
+        if (sscanf(line, "%lf,%lf,%lf,%lf,%d,%lf,%lf,%lf,%lf,%lf,%lf", &in[0], &in[1], &in[2],
+                   &in[3], &s, &v[0], &v[1], &v[2], &v[3], &v[4], &v[5]) != 11)
             continue;
+        assert_true(in[0] == 0 && in[1] == 1 && in[2] == 0 && in[3] == 1);
         assert_int_equal(s, row);
         assert_true(same_bits(v[0], ref[s].x) && same_bits(v[1], ref[s].y) &&
                     same_bits(v[2], ref[s].z));

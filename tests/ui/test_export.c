@@ -258,6 +258,49 @@ static void test_fan_json_text(void **state)
     free_ed(e);
 }
 
+/* The single ray's CSV export names its ray as a fan's does (the launch in
+ * its shortest decimal, as typed), and the JSON's wavelength is the
+ * design's number as written, not its %.17g expansion: the shortest of
+ * %.1g ... %.17g that strtod reads back, found here by printf. */
+static void test_single_ray_inputs(void **state)
+{
+    char path[512], want[128], *text, *line, *save = NULL;
+    ed *e = new_ed();
+    int nsurf = e->doc.sys->nsurf, rows = 0, prec;
+    double um = e->doc.sys->wave[e->doc.sys->primary_wave].um;
+    (void)state;
+    assert_false(cmd_exec(e, "ray 0 0.7 0.3 -0.2") & ED_ERROR);
+    assert_false(run(e, "export %s%s", tmp_path("one.csv", path, sizeof path), "") & ED_ERROR);
+    text = slurp(path);
+    line = strtok_r(text, "\n", &save);
+    assert_string_equal(line, "hx,hy,px,py,surface,x,y,z,l,m,n,residual,error_bound,path,"
+                              "status,opl,opl_error_bound,opd_waves,opd_error_bound,ex,ey");
+    while ((line = strtok_r(NULL, "\n", &save))) {
+        snprintf(want, sizeof want, "0,0.7,0.3,-0.2,%d,", rows);
+        if (strncmp(line, want, strlen(want)) != 0)
+            fail_msg("row %d: \"%.60s\", expected it to begin \"%s\"", rows, line, want);
+        rows++;
+    }
+    assert_int_equal(rows, nsurf);
+    free(text);
+    assert_false(run(e, "export %s%s", tmp_path("one.json", path, sizeof path), "") & ED_ERROR);
+    text = slurp(path);
+    for (prec = 1; prec <= 17; prec++) {
+        char b[40];
+        snprintf(b, sizeof b, "%.*g", prec, um);
+        if (strtod(b, NULL) == um) {
+            snprintf(want, sizeof want, "\"wavelength_um\": %s,", b);
+            break;
+        }
+    }
+    if (!strstr(text, want))
+        fail_msg("the JSON export lacks %s", want);
+    print_message("# single ray CSV: %d rows beginning 0,0.7,0.3,-0.2; JSON has %s\n", rows,
+                  want);
+    free(text);
+    free_ed(e);
+}
+
 /* grid 1001 would write gigabytes: batch mode refuses with the size, the
  * screen asks (y runs export!), and no file appears until then. */
 static void test_large_asks(void **state)
@@ -446,6 +489,7 @@ int main(void)
         cmocka_unit_test(test_large_asks),
         cmocka_unit_test(test_cancel_leaves_no_file),
         cmocka_unit_test(test_export_replaces),
+        cmocka_unit_test(test_single_ray_inputs),
     };
     int rc = cmocka_run_group_tests(tests, NULL, NULL);
     char cmd[400];

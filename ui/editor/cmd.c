@@ -1845,8 +1845,8 @@ static int c_export_any(ed *e, args *a, int bang)
         goto done;
     }
     meta_of(e, &m);
-    /* Each row of a fan or grid says which ray it is. */
-    m.csv_inputs = rset.kind != SET_RAY;
+    /* Each row says which ray it is, the single ray's as a fan's. */
+    m.csv_inputs = 1;
     /* Every ray's OPD, as sagitta trace writes it, from a tracer of the
      * batch's options for the reference spheres. */
     opd = malloc(block * sizeof *opd);
