@@ -435,7 +435,13 @@ int sg_optimize(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *opts,
             break;
         }
     }
-    /* The best design, evaluated again, into sys. */
+    /* The best design, evaluated again, into sys; a start never bettered
+     * stays as it was, bit for bit (z and back may round). */
+    res->merit = bestmf;
+    if (!(bestmf < res->merit0)) {
+        rc = SG_OK;
+        goto done;
+    }
     if ((rc = set_vars(&o, o.work, best, d)) != SG_OK)
         goto done;
     if ((rc = sg_system_assign(sys, o.work)) != SG_OK) {

@@ -251,6 +251,40 @@ static void singlet_bending(void **state)
     sg_system_free(sys);
 }
 
+/* A stop before the first cycle keeps the start (the best so far), and
+ * the Jacobian's columns on two threads give the single thread's bits. */
+static void stop_and_threads(void **state)
+{
+    static const char *const s2 = "\"radius\": -100, \"solves\": {\"radius\": {\"type\": "
+                                  "\"variable\"}}";
+    const char *merit = "{\"operands\": [{\"type\": \"EFFL\", \"wave\": 1, \"target\": 80},"
+                        "{\"type\": \"ETGT\", \"surf\": 1, \"target\": 2}]}";
+    sg_system *a = singlet("\"radius\": 200, \"solves\": {\"radius\": {\"type\": "
+                           "\"variable\"}}", 5, s2, "70", merit, 10);
+    sg_system *b = sg_system_clone(a), *c = sg_system_clone(a);
+    sg_opt_opts o;
+    sg_opt_result res;
+    sg_diag d;
+    volatile int stop = 1;
+    (void)state;
+    sg_opt_opts_init(&o);
+    o.stop = &stop;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_optimize(c, NULL, &o, &res, &d), SG_OK);
+    assert_true(res.stopped);
+    assert_true(sg_system_equal(a, c));
+    stop = 0;
+    o.nthreads = 1;
+    assert_int_equal(sg_optimize(a, NULL, &o, &res, &d), SG_OK);
+    o.nthreads = 2;
+    assert_int_equal(sg_optimize(b, NULL, &o, &res, &d), SG_OK);
+    assert_true(sg_system_equal(a, b));
+    assert_true(a->surf[1].radius != 200);
+    sg_system_free(a);
+    sg_system_free(b);
+    sg_system_free(c);
+}
+
 static void errors(void **state)
 {
     sg_system *sys = singlet("\"radius\": 50", 5, "\"radius\": -50", "40",
@@ -285,6 +319,7 @@ int main(void)
         cmocka_unit_test(bounded_thickness),
         cmocka_unit_test(ritchey_chretien),
         cmocka_unit_test(singlet_bending),
+        cmocka_unit_test(stop_and_threads),
         cmocka_unit_test(errors),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
