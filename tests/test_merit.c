@@ -83,6 +83,43 @@ static void effl_thick_lens(void **state)
     sg_system_free(sys);
 }
 
+/* EFFL at another wavelength: N-BK7 by Schott's published Sellmeier
+ * coefficients (datasheet: B1 1.03961212, B2 0.231792344, B3 1.01046945,
+ * C1 0.00600069867, C2 0.0200179144, C3 103.560653), the thick-lens
+ * formula at the F line. */
+static void effl_wavelength(void **state)
+{
+    const double l2 = 0.4861327 * 0.4861327, R1 = 50, R2 = -80, T = 6;
+    double n = sqrt(1 + 1.03961212 * l2 / (l2 - 0.00600069867) +
+                    0.231792344 * l2 / (l2 - 0.0200179144) + 1.01046945 * l2 / (l2 - 103.560653));
+    double c1 = 1 / R1, c2 = 1 / R2, f = 1 / ((n - 1) * (c1 - c2 + (n - 1) * T * c1 * c2 / n));
+    const char *text =
+        "{\"format\": \"sagitta-design\", \"version\": 6, \"units\": \"mm\","
+        "\"wavelengths\": {\"primary\": 2, \"list\": [{\"um\": 0.4861327}, {\"um\": 0.5875618}]},"
+        "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}]},"
+        "\"aperture\": {\"type\": \"epd\", \"value\": 10},"
+        "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": 30},"
+        "{\"radius\": 50, \"thickness\": 6, \"material\": \"N-BK7\", \"stop\": true},"
+        "{\"radius\": -80, \"thickness\": 40}, {\"radius\": \"inf\", \"thickness\": 0}],"
+        "\"merit\": {\"operands\": [{\"type\": \"EFFL\", \"wave\": 1},"
+        "{\"type\": \"TOTR\"}]}}";
+    sg_system *sys = parse(text);
+    sg_catalog *cat = tu_catalog();
+    sg_merit_result r;
+    sg_diag d;
+    (void)state;
+    sg_diag_clear(&d);
+    if (sg_merit_eval(sys, cat, &r, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    /* The catalog's Sellmeier in double against the datasheet's: 1e-12. */
+    near(r.row[0].value, f, 1e-12, "EFFL at F");
+    /* TOTR leaves out the object distance. */
+    assert_true(r.row[1].value == 46.0);
+    sg_merit_result_free(&r);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
 /* TOTR, TTHI and CTVA against hand sums; MF against its definition. */
 static void lengths_and_mf(void **state)
 {
@@ -199,10 +236,16 @@ static void real_rays(void **state)
                              "{\"type\": \"REAY\", \"surf\": 1, \"wave\": 1, \"py\": 1},"
                              "{\"type\": \"REAZ\", \"surf\": 1, \"wave\": 1, \"py\": 1},"
                              "{\"type\": \"REAX\", \"surf\": 1, \"wave\": 1, \"px\": -1},"
-                             "{\"type\": \"REAX\", \"surf\": 1, \"wave\": 1, \"py\": 1}");
+                             "{\"type\": \"REAX\", \"surf\": 1, \"wave\": 1, \"py\": 1},"
+                             "{\"type\": \"TRAX\", \"wave\": 1, \"hx\": 1},"
+                             "{\"type\": \"REAX\", \"surf\": 3, \"wave\": 1, \"hx\": 1}");
     sg_merit_result r;
     (void)state;
     eval(sys, &r);
+    /* The chief ray's own transverse aberration is 0 by definition, off
+     * the axis too, where its image x is not. */
+    assert_true(r.row[4].value == 0.0);
+    assert_true(fabs(r.row[5].value) > 1.0);
     near(r.row[0].value, 5.0, 1e-15, "REAY");
     near(r.row[1].value, sphere_sag(50, 5), 1e-14, "REAZ");
     near(r.row[2].value, -5.0, 1e-15, "REAX");
@@ -297,6 +340,52 @@ static void rsce_against_spot(void **state)
     }
     sg_merit_result_free(&r);
     sg_system_free(sys);
+}
+
+/* The default part alone: MF = RSCE / sqrt 2 (x and y rows, one weight a
+ * ray) when it samples as RSCE does (3 rings, 2 * 3 + 4 arms), about the
+ * centroid and, as RSCH, the chief ray; and RSCE of a field along x equals
+ * it along y (the lens is round and the 28 arms turn into themselves). */
+static void default_part(void **state)
+{
+    static const char *const refs[] = {"centroid", "chief"};
+    int k;
+    (void)state;
+    for (k = 0; k < 2; k++) {
+        char text[4096];
+        sg_system *sys;
+        sg_merit_result r, q;
+        snprintf(text, sizeof text,
+                 "{\"format\": \"sagitta-design\", \"version\": 6, \"units\": \"mm\","
+                 "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.5875618}]},"
+                 "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 3}]},"
+                 "\"aperture\": {\"type\": \"epd\", \"value\": 10},"
+                 "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+                 "{\"radius\": 50, \"thickness\": 6, \"material\": 1.5, \"stop\": true},"
+                 "{\"radius\": -80, \"thickness\": 40}, {\"radius\": \"inf\", \"thickness\": 0}],"
+                 "\"merit\": {\"default\": {\"reference\": \"%s\", \"rings\": 3, \"arms\": 10}}}",
+                 refs[k]);
+        sys = parse(text);
+        eval(sys, &r);
+        sys->merit.has_default = 0;
+        sys->merit.nop = 2;
+        memset(sys->merit.op, 0, 2 * sizeof sys->merit.op[0]);
+        sys->merit.op[0].type = k ? SG_OP_RSCH : SG_OP_RSCE;
+        sys->merit.op[0].i1 = 3;
+        sys->merit.op[0].i2 = 1;
+        sys->merit.op[0].hy = 1;
+        sys->merit.op[0].weight = 1;
+        sys->merit.op[1] = sys->merit.op[0];
+        sys->merit.op[1].hy = 0;
+        sys->merit.op[1].hx = 1;
+        eval(sys, &q);
+        near(r.merit * sqrt(2.0), q.row[0].value, 1e-12, refs[k]);
+        near(q.row[1].value, q.row[0].value, 1e-12, "x field against y field");
+        assert_true(r.merit > 1e-3);
+        sg_merit_result_free(&r);
+        sg_merit_result_free(&q);
+        sg_system_free(sys);
+    }
 }
 
 /* The arithmetic operands on constants. */
@@ -487,12 +576,14 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(effl_thick_lens),
+        cmocka_unit_test(effl_wavelength),
         cmocka_unit_test(lengths_and_mf),
         cmocka_unit_test(boundaries),
         cmocka_unit_test(edge_thickness),
         cmocka_unit_test(real_rays),
         cmocka_unit_test(tray_spherical_mirror),
         cmocka_unit_test(rsce_against_spot),
+        cmocka_unit_test(default_part),
         cmocka_unit_test(arithmetic),
         cmocka_unit_test(quadrature_rings),
         cmocka_unit_test(failure_names_row),
