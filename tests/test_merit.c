@@ -86,22 +86,23 @@ static void effl_thick_lens(void **state)
 /* EFFL at another wavelength: N-BK7 by Schott's published Sellmeier
  * coefficients (datasheet: B1 1.03961212, B2 0.231792344, B3 1.01046945,
  * C1 0.00600069867, C2 0.0200179144, C3 103.560653), the thick-lens
- * formula at the F line. */
+ * formula at the d line, the second wavelength (the F line is the
+ * first and the primary). */
 static void effl_wavelength(void **state)
 {
-    const double l2 = 0.4861327 * 0.4861327, R1 = 50, R2 = -80, T = 6;
+    const double l2 = 0.5875618 * 0.5875618, R1 = 50, R2 = -80, T = 6;
     double n = sqrt(1 + 1.03961212 * l2 / (l2 - 0.00600069867) +
                     0.231792344 * l2 / (l2 - 0.0200179144) + 1.01046945 * l2 / (l2 - 103.560653));
     double c1 = 1 / R1, c2 = 1 / R2, f = 1 / ((n - 1) * (c1 - c2 + (n - 1) * T * c1 * c2 / n));
     const char *text =
         "{\"format\": \"sagitta-design\", \"version\": 6, \"units\": \"mm\","
-        "\"wavelengths\": {\"primary\": 2, \"list\": [{\"um\": 0.4861327}, {\"um\": 0.5875618}]},"
+        "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.4861327}, {\"um\": 0.5875618}]},"
         "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}]},"
         "\"aperture\": {\"type\": \"epd\", \"value\": 10},"
         "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": 30},"
         "{\"radius\": 50, \"thickness\": 6, \"material\": \"N-BK7\", \"stop\": true},"
         "{\"radius\": -80, \"thickness\": 40}, {\"radius\": \"inf\", \"thickness\": 0}],"
-        "\"merit\": {\"operands\": [{\"type\": \"EFFL\", \"wave\": 1},"
+        "\"merit\": {\"operands\": [{\"type\": \"EFFL\", \"wave\": 2},"
         "{\"type\": \"TOTR\"}]}}";
     sg_system *sys = parse(text);
     sg_catalog *cat = tu_catalog();
@@ -112,7 +113,7 @@ static void effl_wavelength(void **state)
     if (sg_merit_eval(sys, cat, &r, &d) != SG_OK)
         fail_msg("%s", d.msg);
     /* The catalog's Sellmeier in double against the datasheet's: 1e-12. */
-    near(r.row[0].value, f, 1e-12, "EFFL at F");
+    near(r.row[0].value, f, 1e-12, "EFFL at d");
     /* TOTR leaves out the object distance. */
     assert_true(r.row[1].value == 46.0);
     sg_merit_result_free(&r);
