@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include "cli.h"
 #include "report.h"
@@ -36,7 +37,7 @@ static void optimize_help(FILE *f)
 "Options:\n"
 "  -o, --output FILE        the optimized design (required; never the input)\n"
 "  --cycles N               at most N cycles (default: until converged, 500)\n"
-"  --threads N              threads for the derivatives (default 1)\n"
+"  --threads N              threads for the derivatives (default: every core)\n"
 "  --force                  overwrite OUT.json if it exists\n"
 "  -h, --help               show this help\n", f);
 }
@@ -255,6 +256,10 @@ int cmd_optimize(int argc, char **argv)
                                "another file", output);
     if (!force && stat(output, &st) == 0)
         return cli_usage_error("optimize", "%s exists; use --force to overwrite it", output);
+    if (o.nthreads == 0) {
+        long n = sysconf(_SC_NPROCESSORS_ONLN);
+        o.nthreads = n < 1 ? 1 : n > 16 ? 16 : (int)n;
+    }
     rc = cli_load_design(design, &cat, &sys);
     if (rc != CLI_EXIT_OK)
         return rc;
