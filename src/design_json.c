@@ -26,6 +26,7 @@
 #include <cjson/cJSON.h>
 
 #include "internal.h"
+#include "merit.h"
 
 /* Larger inputs are refused before parsing: a design this big is a mistake,
  * and cJSON's tree would need several times the text's size in memory. */
@@ -820,8 +821,9 @@ static int get_change(jctx *c, const cJSON *v, const char *where, sg_frame_chang
  * V} for another solve (sagitta-design(5), SOLVES).
  * Their values are one nested object, not rows of the parameter table;
  * sg_solve_check checks them with the rest of the design. */
-enum { V_TYPE, V_FROM, V_SCALE, V_OFFSET, V_VALUE, V_N };
-static const char *const solve_keys[V_N] = {"type", "from", "scale", "offset", "value"};
+enum { V_TYPE, V_FROM, V_SCALE, V_OFFSET, V_VALUE, V_MIN, V_MAX, V_N };
+static const char *const solve_keys[V_N] = {"type", "from", "scale", "offset", "value",
+                                            "min", "max"};
 
 static int get_solves(jctx *c, const cJSON *v, const char *where, sg_surface *s)
 {
@@ -866,6 +868,19 @@ static int get_solves(jctx *c, const cJSON *v, const char *where, sg_surface *s)
                                                 join(at2, sizeof at2, at, "offset"),
                                                 &o->offset)) != SG_OK)
                 return rc;
+        } else if (o->kind == SG_SOLVE_VARIABLE) {
+            /* {"type": "variable", "min": A, "max": B}, each optional. */
+            o->lo = -INFINITY;
+            o->hi = INFINITY;
+            if (k[V_MIN] && (rc = get_finite(c, k[V_MIN], join(at2, sizeof at2, at, "min"),
+                                             &o->lo)) != SG_OK)
+                return rc;
+            if (k[V_MAX] && (rc = get_finite(c, k[V_MAX], join(at2, sizeof at2, at, "max"),
+                                             &o->hi)) != SG_OK)
+                return rc;
+            if (o->lo > o->hi)
+                return perr(c, SG_EPARSE, at, "the variable's min %.17g is above its max %.17g",
+                            o->lo, o->hi);
         } else if (o->kind != SG_SOLVE_NONE) {
             if (o->kind == SG_SOLVE_POSITION) {
                 if (!k[V_FROM])
@@ -949,13 +964,134 @@ static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, in
     return SG_OK;
 }
 
+/* The merit function: {"default": {"criterion": "spot", "reference":
+ * "centroid" | "chief", "rings": N, "arms": M}, "operands": [{"type":
+ * "EFFL", "wave": 2, "target": T, "weight": W}, ...]} (sagitta-design(5),
+ * MERIT FUNCTION); an operand's other keys are its type's (merit.h). */
+static int get_merit(jctx *c, const cJSON *v, sg_merit *m)
+{
+    enum { M_DEFAULT, M_OPERANDS, M_N };
+    static const char *const mkeys[M_N] = {"default", "operands"};
+    enum { D_CRIT, D_REF, D_RINGS, D_ARMS, D_N };
+    static const char *const dkeys[D_N] = {"criterion", "reference", "rings", "arms"};
+    static const char *const crits[] = {"spot"};
+    static const char *const refs[] = {"centroid", "chief"};
+    const cJSON *k[M_N], *dk[D_N], *it;
+    char at[64], at2[96];
+    int rc, e = 0, n;
+    memset(m, 0, sizeof *m);
+    m->present = 1;
+    if ((rc = expect_object(c, v, "merit")) != SG_OK)
+        return rc;
+    pick_keys(c, v, "merit", mkeys, M_N, k);
+    if (k[M_DEFAULT]) {
+        if ((rc = expect_object(c, k[M_DEFAULT], "merit: default")) != SG_OK)
+            return rc;
+        pick_keys(c, k[M_DEFAULT], "merit: default", dkeys, D_N, dk);
+        m->has_default = 1;
+        m->rings = 3;
+        m->arms = 6;
+        if (dk[D_CRIT] && (rc = get_enum(c, dk[D_CRIT], "merit: default: criterion", crits, 1,
+                                         &e)) != SG_OK)
+            return rc;
+        if (dk[D_REF]) {
+            if ((rc = get_enum(c, dk[D_REF], "merit: default: reference", refs, 2, &e)) != SG_OK)
+                return rc;
+            m->reference = e;
+        }
+        if (dk[D_RINGS] && (rc = get_int(c, dk[D_RINGS], "merit: default: rings", &m->rings)) !=
+            SG_OK)
+            return rc;
+        if (dk[D_ARMS] && (rc = get_int(c, dk[D_ARMS], "merit: default: arms", &m->arms)) != SG_OK)
+            return rc;
+        if (m->rings < 1 || m->rings > 20)
+            return perr(c, SG_EPARSE, "merit: default: rings", "%d is not 1 to 20", m->rings);
+        if (m->arms < 1 || m->arms > 64)
+            return perr(c, SG_EPARSE, "merit: default: arms", "%d is not 1 to 64", m->arms);
+    }
+    if (!k[M_OPERANDS])
+        return SG_OK;
+    if (!cJSON_IsArray(k[M_OPERANDS]))
+        return perr(c, SG_EPARSE, "merit: operands", "expected an array of operand objects");
+    n = cJSON_GetArraySize(k[M_OPERANDS]);
+    if (n > SG_MAX_OPERANDS)
+        return perr(c, SG_ERANGE, "merit: operands", "%d given; the limit is %d", n,
+                    SG_MAX_OPERANDS);
+    cJSON_ArrayForEach(it, k[M_OPERANDS]) {
+        enum { O_TYPE, O_K1, O_K2, O_HX, O_HY, O_PX, O_PY, O_TARGET, O_WEIGHT, O_N };
+        const char *okeys[O_N];
+        const cJSON *ok[O_N];
+        const sg_op_info *inf;
+        sg_operand *o = &m->op[m->nop];
+        int t, nk = 0, idx[O_N];
+        snprintf(at, sizeof at, "merit: operand %d", m->nop + 1);
+        if ((rc = expect_object(c, it, at)) != SG_OK)
+            return rc;
+        ok[0] = last_item(it, "type");
+        if (!ok[0] || !cJSON_IsString(ok[0]) || !ok[0]->valuestring)
+            return perr(c, SG_EPARSE, at, "an operand needs a \"type\" (a Zemax operand name)");
+        t = sg_op_parse(ok[0]->valuestring);
+        if (t < 0) {
+            char shown[48];
+            show_text(shown, sizeof shown, ok[0]->valuestring);
+            return perr(c, SG_EPARSE, join(at2, sizeof at2, at, "type"),
+                        "\"%s\" is not an operand sagitta knows", shown);
+        }
+        inf = sg_op_info_of((sg_op_type)t);
+        /* The keys this type reads, so others are warned about. */
+        okeys[nk] = "type"; idx[O_TYPE] = nk++;
+        idx[O_K1] = idx[O_K2] = idx[O_HX] = idx[O_HY] = idx[O_PX] = idx[O_PY] = -1;
+        if (inf->k1) { okeys[nk] = inf->k1; idx[O_K1] = nk++; }
+        if (inf->k2) { okeys[nk] = inf->k2; idx[O_K2] = nk++; }
+        if (inf->field) {
+            okeys[nk] = "hx"; idx[O_HX] = nk++;
+            okeys[nk] = "hy"; idx[O_HY] = nk++;
+        }
+        if (inf->pupil) {
+            okeys[nk] = "px"; idx[O_PX] = nk++;
+            okeys[nk] = "py"; idx[O_PY] = nk++;
+        }
+        okeys[nk] = "target"; idx[O_TARGET] = nk++;
+        okeys[nk] = "weight"; idx[O_WEIGHT] = nk++;
+        {
+            const cJSON *got[O_N];
+            pick_keys(c, it, at, okeys, nk, got);
+            ok[O_TYPE] = got[idx[O_TYPE]];
+            ok[O_K1] = idx[O_K1] >= 0 ? got[idx[O_K1]] : NULL;
+            ok[O_K2] = idx[O_K2] >= 0 ? got[idx[O_K2]] : NULL;
+            ok[O_HX] = idx[O_HX] >= 0 ? got[idx[O_HX]] : NULL;
+            ok[O_HY] = idx[O_HY] >= 0 ? got[idx[O_HY]] : NULL;
+            ok[O_PX] = idx[O_PX] >= 0 ? got[idx[O_PX]] : NULL;
+            ok[O_PY] = idx[O_PY] >= 0 ? got[idx[O_PY]] : NULL;
+            ok[O_TARGET] = got[idx[O_TARGET]];
+            ok[O_WEIGHT] = got[idx[O_WEIGHT]];
+        }
+        memset(o, 0, sizeof *o);
+        o->type = (sg_op_type)t;
+        o->weight = 1.0;
+        if ((ok[O_K1] && (rc = get_int(c, ok[O_K1], join(at2, sizeof at2, at, inf->k1), &o->i1))) ||
+            (ok[O_K2] && (rc = get_int(c, ok[O_K2], join(at2, sizeof at2, at, inf->k2), &o->i2))) ||
+            (ok[O_HX] && (rc = get_finite(c, ok[O_HX], join(at2, sizeof at2, at, "hx"), &o->hx))) ||
+            (ok[O_HY] && (rc = get_finite(c, ok[O_HY], join(at2, sizeof at2, at, "hy"), &o->hy))) ||
+            (ok[O_PX] && (rc = get_finite(c, ok[O_PX], join(at2, sizeof at2, at, "px"), &o->px))) ||
+            (ok[O_PY] && (rc = get_finite(c, ok[O_PY], join(at2, sizeof at2, at, "py"), &o->py))) ||
+            (ok[O_TARGET] &&
+             (rc = get_finite(c, ok[O_TARGET], join(at2, sizeof at2, at, "target"), &o->target))) ||
+            (ok[O_WEIGHT] &&
+             (rc = get_nonneg(c, ok[O_WEIGHT], join(at2, sizeof at2, at, "weight"), &o->weight))))
+            return rc;
+        m->nop++;
+    }
+    return SG_OK;
+}
+
 enum {
     T_FORMAT, T_VERSION, T_TITLE, T_UNITS, T_WAVES, T_FIELDS, T_APER, T_AIM, T_SURFS,
-    T_TEMP, T_PRES, T_ADJUST, T_N
+    T_TEMP, T_PRES, T_ADJUST, T_MERIT, T_N
 };
 static const char *const top_keys[] = {
     "format", "version", "title", "units", "wavelengths", "fields", "aperture",
-    "ray_aiming", "surfaces", "temperature", "pressure", "adjust_index"};
+    "ray_aiming", "surfaces", "temperature", "pressure", "adjust_index", "merit"};
 
 /* Fills tmp from the document; the caller's system is not touched. */
 static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
@@ -1078,6 +1214,8 @@ static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
         return perr(c, SG_ENOSTOP, "surfaces",
                     "no surface has \"stop\": true; mark the aperture stop");
     tmp->stop = stop;
+    if (k[T_MERIT] && (rc = get_merit(c, k[T_MERIT], &tmp->merit)) != SG_OK)
+        return rc;
     return SG_OK;
 }
 
@@ -1800,7 +1938,17 @@ static void sb_solves(sbuf *b, const sg_surface *s)
         sb_puts(b, sg_solve_target_name((sg_solve_target)t));
         sb_puts(b, "\": {\"type\": \"");
         sb_puts(b, sg_solve_kind_name(v->kind));
-        if (sg_solve_is_pickup(v->kind)) {
+        if (v->kind == SG_SOLVE_VARIABLE) {
+            sb_puts(b, "\"");
+            if (isfinite(v->lo)) {
+                sb_puts(b, ", \"min\": ");
+                sb_num(b, v->lo);
+            }
+            if (isfinite(v->hi)) {
+                sb_puts(b, ", \"max\": ");
+                sb_num(b, v->hi);
+            }
+        } else if (sg_solve_is_pickup(v->kind)) {
             snprintf(buf, sizeof buf, "\", \"from\": %d", v->from);
             sb_puts(b, buf);
             sb_puts(b, ", \"scale\": ");
@@ -1821,6 +1969,55 @@ static void sb_solves(sbuf *b, const sg_surface *s)
     }
     if (n)
         sb_puts(b, " }");
+}
+
+/* The merit function as get_merit reads it. */
+static void sb_merit(sbuf *b, const sg_merit *m)
+{
+    static const char *const refs[] = {"centroid", "chief"};
+    char t[96];
+    int i;
+    sb_puts(b, ",\n  \"merit\": {");
+    if (m->has_default) {
+        snprintf(t, sizeof t, "\n    \"default\": {\"criterion\": \"spot\", \"reference\": "
+                 "\"%s\", \"rings\": %d, \"arms\": %d}", refs[m->reference == 1], m->rings,
+                 m->arms);
+        sb_puts(b, t);
+    }
+    sb_puts(b, m->has_default ? ",\n    \"operands\": [" : "\n    \"operands\": [");
+    for (i = 0; i < m->nop; i++) {
+        const sg_operand *o = &m->op[i];
+        const sg_op_info *inf = sg_op_info_of(o->type);
+        sb_puts(b, i ? ",\n      {\"type\": \"" : "\n      {\"type\": \"");
+        sb_puts(b, inf->name);
+        sb_puts(b, "\"");
+        if (inf->k1) {
+            snprintf(t, sizeof t, ", \"%s\": %d", inf->k1, o->i1);
+            sb_puts(b, t);
+        }
+        if (inf->k2) {
+            snprintf(t, sizeof t, ", \"%s\": %d", inf->k2, o->i2);
+            sb_puts(b, t);
+        }
+        if (inf->field) {
+            sb_puts(b, ", \"hx\": ");
+            sb_num(b, o->hx);
+            sb_puts(b, ", \"hy\": ");
+            sb_num(b, o->hy);
+        }
+        if (inf->pupil) {
+            sb_puts(b, ", \"px\": ");
+            sb_num(b, o->px);
+            sb_puts(b, ", \"py\": ");
+            sb_num(b, o->py);
+        }
+        sb_puts(b, ", \"target\": ");
+        sb_num(b, o->target);
+        sb_puts(b, ", \"weight\": ");
+        sb_num(b, o->weight);
+        sb_puts(b, "}");
+    }
+    sb_puts(b, m->nop ? "\n    ]\n  }" : "]\n  }");
 }
 
 /* Whether an optional parameter is at its default, so not written. */
@@ -1910,6 +2107,13 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
         if (sys->surf[i].solve[SG_SOLVE_RADIUS].kind == SG_SOLVE_CURV_PICKUP ||
             sys->surf[i].solve[SG_SOLVE_THICKNESS].kind == SG_SOLVE_POSITION)
             version = version < 5 ? 5 : version;
+    /* Variables and the merit function came with version 6. */
+    for (i = 0; i < sys->nsurf; i++)
+        for (k = 0; k < SG_SOLVE_NTARGETS; k++)
+            if (sys->surf[i].solve[k].kind == SG_SOLVE_VARIABLE)
+                version = version < 6 ? 6 : version;
+    if (sys->merit.present)
+        version = version < 6 ? 6 : version;
     /* A file says the oldest format that reads it, so designs without the
      * newer keys stay readable by older programs. */
     snprintf(t, sizeof t, "  \"version\": %d,\n", version);
@@ -1982,7 +2186,10 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
         sb_puts(&b, i == sys->stop ? ",\n      \"stop\": true\n" : ",\n      \"stop\": false\n");
         sb_puts(&b, i + 1 < sys->nsurf ? "    },\n" : "    }\n");
     }
-    sb_puts(&b, "  ]\n}\n");
+    sb_puts(&b, "  ]");
+    if (sys->merit.present)
+        sb_merit(&b, &sys->merit);
+    sb_puts(&b, "\n}\n");
     if (b.oom) {
         free(b.p);
         *rc = sg_diag_set(d, SG_ENOMEM, "out of memory while writing the design");

@@ -442,7 +442,8 @@ static int same_solves(const sg_solve *a, const sg_solve *b)
     for (t = 0; t < SG_SOLVE_NTARGETS; t++)
         if (a[t].kind != b[t].kind || a[t].from != b[t].from ||
             !same_bits(a[t].scale, b[t].scale) || !same_bits(a[t].offset, b[t].offset) ||
-            !same_bits(a[t].value, b[t].value))
+            !same_bits(a[t].value, b[t].value) || !same_bits(a[t].lo, b[t].lo) ||
+            !same_bits(a[t].hi, b[t].hi))
             return 0;
     return 1;
 }
@@ -453,6 +454,9 @@ int sg_system_equal(const sg_system *a, const sg_system *b)
     /* The environment is read and written beside the table (design_json.c). */
     if (!same_bits(a->temperature, b->temperature) || !same_bits(a->pressure, b->pressure) ||
         a->adjust_index != b->adjust_index)
+        return 0;
+    /* The merit function is its own object (merit.c). */
+    if (!sg_merit_equal(&a->merit, &b->merit))
         return 0;
     if (!sg_param_equal(SG_SCOPE_SYSTEM, a, b) || a->nwave != b->nwave ||
         a->primary_wave != b->primary_wave || a->nfield != b->nfield || a->stop != b->stop ||

@@ -37,7 +37,7 @@ extern "C" {
 /* The JSON design format version this library reads and writes. */
 /* Version 2 adds coordinate breaks and surface tilts and decenters; a
  * design without them is still written as version 1. */
-#define SG_DESIGN_FORMAT_VERSION 5
+#define SG_DESIGN_FORMAT_VERSION 6
 
 /* ------------------------------------------------------------------------
  * Errors.  One table yields the enum, the names and the messages, so the
@@ -349,6 +349,10 @@ typedef enum sg_solve_kind {
      * `from` (this surface or an earlier one) to the next surface is
      * `value`; Zemax's position solve */
     SG_SOLVE_POSITION = 7,
+    /* the optimizer varies the value, within [lo, hi] (each may be
+     * infinite); sg_system_apply_solves leaves it as it is.  Format
+     * version 6 */
+    SG_SOLVE_VARIABLE = 8,
     SG_SOLVE_NKINDS
 } sg_solve_kind;
 
@@ -357,6 +361,7 @@ typedef struct sg_solve {
     int from;            /* pickups: the source surface; position: the reference */
     double scale, offset; /* pickups */
     double value;        /* height, angle or F/# */
+    double lo, hi;       /* variable: the bounds, -inf and +inf when not given */
 } sg_solve;
 
 typedef struct sg_surface {
@@ -451,6 +456,40 @@ typedef struct sg_field {
 /* Limit of a surface's |tce|, in 1e-6/K. */
 #define SG_TCE_MAX 1000.0
 
+/* The merit function (sagitta-design(5), MERIT FUNCTION): Zemax's
+ * operands and its default merit function.  Values are Zemax's: MF^2 =
+ * sum w (v - t)^2 / sum w over the rows with nonzero weight. */
+#define SG_MAX_OPERANDS 200
+typedef enum sg_op_type {
+    SG_OP_BLNK = 0, SG_OP_EFFL, SG_OP_TOTR, SG_OP_TTHI, SG_OP_CTGT, SG_OP_CTLT, SG_OP_CTVA,
+    SG_OP_ETGT, SG_OP_ETLT, SG_OP_ETVA, SG_OP_MNCT, SG_OP_MXCT, SG_OP_MNET, SG_OP_MNCA,
+    SG_OP_MXCA, SG_OP_MNCG, SG_OP_MXCG, SG_OP_REAX, SG_OP_REAY, SG_OP_REAZ, SG_OP_TRAX,
+    SG_OP_TRAY, SG_OP_TRAR, SG_OP_RSCE, SG_OP_RSCH, SG_OP_SUMM, SG_OP_DIFF, SG_OP_PROD,
+    SG_OP_DIVI, SG_OP_CONS, SG_OP_OPGT, SG_OP_OPLT, SG_OP_ABSO,
+    SG_OP_NTYPES
+} sg_op_type;
+
+typedef struct sg_operand {
+    sg_op_type type;
+    int i1, i2;             /* Zemax's Int1 and Int2 (surface, wave, rings, operand) */
+    double hx, hy, px, py;  /* normalized field and pupil */
+    double target, weight;
+} sg_operand;
+
+typedef enum sg_merit_ref {
+    SG_MERIT_CENTROID = 0,
+    SG_MERIT_CHIEF = 1
+} sg_merit_ref;
+
+typedef struct sg_merit {
+    int present;            /* the design has a "merit" object */
+    int has_default;        /* the generated default part */
+    int reference;          /* sg_merit_ref */
+    int rings, arms;        /* pupil sampling of the default part */
+    int nop;
+    sg_operand op[SG_MAX_OPERANDS];
+} sg_merit;
+
 typedef struct sg_system {
     char title[128];
     char units[8]; /* "mm", "cm", "in" or "m" */
@@ -482,6 +521,9 @@ typedef struct sg_system {
      * used as they are. */
     double temperature, pressure;
     int adjust_index;
+
+    /* The merit function; merit.present 0 when the design has none. */
+    sg_merit merit;
 
     int stop; /* surface index of the aperture stop */
     int nsurf;   /* surfaces 0..nsurf-1; object is 0, image is nsurf-1 */
@@ -639,6 +681,101 @@ SG_API int sg_system_has_solves(const sg_system *sys);
  * axis, parallel to it, or a surface without power) is SG_ENONPHYS naming
  * the surface; the system is then left with the values of the last pass. */
 SG_API int sg_system_apply_solves(sg_system *sys, const sg_catalog *cat, sg_diag *d);
+
+/* ------------------------------------------------------------------------
+ * Parameter addresses: one numeric parameter of a design, named through
+ * the parameter table (scope, index of the wavelength, field or surface,
+ * the table's key, the element of an array), so optimization variables
+ * address every parameter without a list of their own.
+ * ------------------------------------------------------------------------ */
+typedef struct sg_paddr {
+    sg_param_scope scope;
+    int index;              /* wavelength, field or surface; 0 for the system */
+    const sg_param *param;  /* a REAL row of the scope's table */
+    int elem;               /* element of an array parameter; 0 for a scalar */
+} sg_paddr;
+/* Fills a from scope, index, key and element; SG_ERANGE with a message
+ * naming what is wrong (no such key, not a real number, element or index
+ * out of range). */
+int sg_paddr_make(const sg_system *sys, sg_param_scope scope, int index, const char *key,
+                  int elem, sg_paddr *a, sg_diag *d);
+/* The value at a, and setting it (no checks: see sg_paddr_check). */
+double sg_paddr_get(const sg_system *sys, const sg_paddr *a);
+void sg_paddr_set(sg_system *sys, const sg_paddr *a, double v);
+/* SG_OK when v may be the value at a; else SG_ERANGE with a message. */
+int sg_paddr_check(const sg_system *sys, const sg_paddr *a, double v, sg_diag *d);
+/* "surface 3 radius", "surface 5 asphere term r^4" ... */
+void sg_paddr_name(const sg_paddr *a, char *buf, size_t n);
+/* The solve target (radius, thickness, conic) a names, or -1. */
+int sg_paddr_solve_target(const sg_paddr *a);
+
+/* ------------------------------------------------------------------------
+ * The merit function and optimization (src/merit.c, src/optimize.c;
+ * sagitta(1), OPTIMIZATION)
+ * ------------------------------------------------------------------------ */
+/* Zemax's name of an operand type ("EFFL"), and the type of a name; -1
+ * when unknown. */
+const char *sg_op_name(sg_op_type t);
+int sg_op_parse(const char *name);
+/* Checks the merit function's rows against sys (surfaces, wavelengths,
+ * operand numbers in range): SG_ERANGE naming the row. */
+int sg_merit_check(const sg_system *sys, sg_diag *d);
+
+/* One row's result. */
+typedef struct sg_merit_row {
+    int row;                /* 1-based: the operands, then the default rows */
+    sg_op_type type;        /* the default's rows are TRAX and TRAY */
+    double value, target, weight;
+    double contribution;    /* percent of the sum */
+} sg_merit_row;
+
+typedef struct sg_merit_result {
+    double merit;           /* MF */
+    double wsum;            /* sum of the weights */
+    int nrow;               /* operands, then default rows */
+    sg_merit_row *row;      /* malloc'd; sg_merit_result_free */
+    double bound;           /* a bound on the rounding of the traced values */
+} sg_merit_result;
+/* Evaluates every row at sys.  A row that cannot be computed (a ray that
+ * misses, a surface out of range) is an error naming the row and why;
+ * the merit is never NaN. */
+int sg_merit_eval(const sg_system *sys, const sg_catalog *cat, sg_merit_result *out,
+                  sg_diag *d);
+void sg_merit_result_free(sg_merit_result *r);
+/* Nonzero when two merit functions are the same, bit for bit. */
+int sg_merit_equal(const sg_merit *a, const sg_merit *b);
+/* Gauss-Legendre nodes and weights of the default's rings: n points on
+ * [0, 1] in u = rho^2 (Forbes, JOSA A 5, 1943 (1988)); rho[k] = sqrt(u),
+ * w[k] sums to 1.  n at most 32. */
+int sg_merit_rings(int n, double *rho, double *w);
+
+/* The variables of a design: every solve of kind variable, in surface
+ * order (radius, thickness, conic).  Returns the count (at most cap). */
+int sg_variables(const sg_system *sys, sg_paddr *out, int cap);
+
+typedef struct sg_opt_opts {
+    int cycles;             /* at most this many; 0: until converged (500) */
+    int nthreads;           /* for the Jacobian's columns; 0: one */
+    /* Called after each cycle (may be NULL); a nonzero return stops. */
+    int (*progress)(void *ctx, int cycle, double merit, double step, double seconds);
+    void *ctx;
+    volatile int *stop;     /* when set nonzero (a signal), the run stops */
+} sg_opt_opts;
+void sg_opt_opts_init(sg_opt_opts *o);
+
+typedef struct sg_opt_result {
+    int cycles;
+    double merit0, merit;   /* before and after */
+    int converged;
+    int stopped;            /* stopped by *stop or progress */
+} sg_opt_result;
+/* Damped least squares (GSL's trust-region Levenberg-Marquardt with
+ * scaling) on the variables of sys against its merit function; sys gets
+ * the best design found (variables and what their solves derive), also
+ * when stopped.  SG_ENOSYS when the design has no variables or no merit
+ * function. */
+int sg_optimize(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *o,
+                sg_opt_result *res, sg_diag *d);
 
 /* Whether a surface changes the frame: a coordinate break, or a tilt or
  * decenter before or after it. */

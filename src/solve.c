@@ -14,18 +14,18 @@
 
 static const char *const kind_names[SG_SOLVE_NKINDS] = {
     "none", "pickup", "marginal_height", "marginal_angle", "fnum", "chief_height",
-    "curvature_pickup", "position"};
+    "curvature_pickup", "position", "variable"};
 static const char *const target_names[SG_SOLVE_NTARGETS] = {"radius", "thickness", "conic"};
 
 /* Bit k: kind k may sit on the target. */
 static const unsigned allowed[SG_SOLVE_NTARGETS] = {
     [SG_SOLVE_RADIUS] = 1u << SG_SOLVE_NONE | 1u << SG_SOLVE_PICKUP |
                         1u << SG_SOLVE_MARGINAL_ANGLE | 1u << SG_SOLVE_FNUM |
-                        1u << SG_SOLVE_CURV_PICKUP,
+                        1u << SG_SOLVE_CURV_PICKUP | 1u << SG_SOLVE_VARIABLE,
     [SG_SOLVE_THICKNESS] = 1u << SG_SOLVE_NONE | 1u << SG_SOLVE_PICKUP |
                            1u << SG_SOLVE_MARGINAL_HEIGHT | 1u << SG_SOLVE_CHIEF_HEIGHT |
-                           1u << SG_SOLVE_POSITION,
-    [SG_SOLVE_CONIC] = 1u << SG_SOLVE_NONE | 1u << SG_SOLVE_PICKUP,
+                           1u << SG_SOLVE_POSITION | 1u << SG_SOLVE_VARIABLE,
+    [SG_SOLVE_CONIC] = 1u << SG_SOLVE_NONE | 1u << SG_SOLVE_PICKUP | 1u << SG_SOLVE_VARIABLE,
 };
 
 /* Passes before the pupil-dependent solves are declared not to settle. */
@@ -62,9 +62,11 @@ int sg_solve_allowed(sg_solve_target t, sg_solve_kind k)
 int sg_system_has_solves(const sg_system *sys)
 {
     int i, t;
+    /* A variable holds its value: nothing to evaluate. */
     for (i = 0; i < sys->nsurf; i++)
         for (t = 0; t < SG_SOLVE_NTARGETS; t++)
-            if (sys->surf[i].solve[t].kind != SG_SOLVE_NONE)
+            if (sys->surf[i].solve[t].kind != SG_SOLVE_NONE &&
+                sys->surf[i].solve[t].kind != SG_SOLVE_VARIABLE)
                 return 1;
     return 0;
 }
@@ -75,6 +77,13 @@ int sg_solve_check(const sg_system *sys, int i, sg_solve_target t, sg_diag *d)
     const char *tn = sg_solve_target_name(t);
     if (v->kind == SG_SOLVE_NONE)
         return SG_OK;
+    if (v->kind == SG_SOLVE_VARIABLE) {
+        if (isnan(v->lo) || isnan(v->hi) || v->lo > v->hi || v->lo == INFINITY ||
+            v->hi == -INFINITY)
+            return sg_diag_set(d, SG_ERANGE, "surface %d: %s: the variable's min %g and max %g "
+                               "do not bound a range", i, tn, v->lo, v->hi);
+        return SG_OK;
+    }
     if (!sg_solve_allowed(t, v->kind))
         return sg_diag_set(d, SG_ERANGE, "surface %d: %s: a %s solve cannot sit on the %s", i,
                            tn, sg_solve_kind_name(v->kind) ? sg_solve_kind_name(v->kind) : "?",
@@ -389,7 +398,8 @@ int sg_system_apply_solves(sg_system *sys, const sg_catalog *cat, sg_diag *d)
             sg_solve_kind k = sys->surf[i].solve[t].kind;
             if ((rc = sg_solve_check(sys, i, (sg_solve_target)t, d)) != SG_OK)
                 return rc;
-            need_ray |= k != SG_SOLVE_NONE && !sg_solve_is_pickup(k) && k != SG_SOLVE_POSITION;
+            need_ray |= k != SG_SOLVE_NONE && !sg_solve_is_pickup(k) &&
+                        k != SG_SOLVE_POSITION && k != SG_SOLVE_VARIABLE;
         }
     if (sys->nwave < 1 || sys->primary_wave < 0 || sys->primary_wave >= sys->nwave)
         return sg_diag_set(d, SG_ERANGE, "solves: the primary wavelength is not set");

@@ -38,6 +38,8 @@ static const cli_command commands[] = {
     { "semidiam", cmd_semidiam, "automatic semi-diameters, as Zemax computes them" },
     { "vignetting", cmd_vignetting, "vignetting factors from the apertures (Zemax's Set Vignetting)" },
     { "thermal", cmd_thermal, "the design as built at another temperature (thermal expansion)" },
+    { "merit", cmd_merit, "print every row of the design's merit function and its value" },
+    { "optimize", cmd_optimize, "damped least squares on the design's variables" },
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
 

@@ -274,7 +274,7 @@ static void text(const sg_system *sys, int row, int col, int edit, char *buf, si
         int t = solve_target(p);
         if (t >= 0 && !edit && s->solve[t].kind != SG_SOLVE_NONE) {
             /* Zemax marks a solved cell with a letter after the value. */
-            static const char mark[SG_SOLVE_NKINDS] = {' ', 'P', 'M', 'A', 'F', 'C', 'P', 'T'};
+            static const char mark[SG_SOLVE_NKINDS] = {' ', 'P', 'M', 'A', 'F', 'C', 'P', 'T', 'V'};
             if ((p->flags & SG_PARAM_INF) && (x == 0.0 || isinf(x)))
                 snprintf(num, sizeof num, "Infinity");
             else

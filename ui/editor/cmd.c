@@ -377,6 +377,96 @@ static int c_stop(ed *e, args *a)
     return end(e, "surface %d is the stop", at);
 }
 
+/* A solve target by name: radius, thickness or conic. */
+static int parse_target(ed *e, const char *s, int *t)
+{
+    for (*t = 0; *t < SG_SOLVE_NTARGETS; (*t)++)
+        if (strcasecmp(s, sg_solve_target_name((sg_solve_target)*t)) == 0)
+            return 1;
+    fail(e, "'%s' is not radius, thickness or conic", s);
+    return 0;
+}
+
+/* var SURFACE radius|thickness|conic [MIN MAX]: the value becomes a
+ * variable of the optimizer, Zemax's V (sagitta-design(5), SOLVES). */
+static int c_var(ed *e, args *a)
+{
+    static const char usage[] = "var SURFACE radius|thickness|conic [MIN MAX]";
+    int row, t;
+    double lo = -INFINITY, hi = INFINITY;
+    sg_solve v;
+    if (!need(e, a, 2, 4, usage) || a->n == 4)
+        return a->n == 4 ? fail(e, "usage: %s", usage) : (ED_HANDLED | ED_ERROR);
+    if (!parse_row(e, a->v[1], 1, e->doc.sys->nsurf - 1, &row) || !parse_target(e, a->v[2], &t))
+        return ED_HANDLED | ED_ERROR;
+    if (a->n == 5 && (!parse_num(e, a->v[3], "min", &lo) || !parse_num(e, a->v[4], "max", &hi)))
+        return ED_HANDLED | ED_ERROR;
+    if (lo > hi)
+        return fail(e, "var: min %g is above max %g", lo, hi);
+    memset(&v, 0, sizeof v);
+    v.kind = SG_SOLVE_VARIABLE;
+    v.lo = lo;
+    v.hi = hi;
+    if (!begin(e, row))
+        return ED_HANDLED | ED_ERROR;
+    e->doc.sys->surf[row].solve[t] = v;
+    e->row = row;
+    return end(e, "surface %d: the %s is a variable", row, a->v[2]);
+}
+
+/* novar SURFACE radius|thickness|conic, or novar all: clears variables. */
+static int c_novar(ed *e, args *a)
+{
+    sg_system *sys = e->doc.sys;
+    int row, t, n = 0;
+    if (a->n == 2 && strcasecmp(a->v[1], "all") == 0) {
+        if (!begin(e, e->row))
+            return ED_HANDLED | ED_ERROR;
+        for (row = 0; row < sys->nsurf; row++)
+            for (t = 0; t < SG_SOLVE_NTARGETS; t++)
+                if (sys->surf[row].solve[t].kind == SG_SOLVE_VARIABLE) {
+                    memset(&sys->surf[row].solve[t], 0, sizeof sys->surf[row].solve[t]);
+                    n++;
+                }
+        return end(e, "%d variable%s cleared", n, n == 1 ? "" : "s");
+    }
+    if (!need(e, a, 2, 2, "novar SURFACE radius|thickness|conic | novar all"))
+        return ED_HANDLED | ED_ERROR;
+    if (!parse_row(e, a->v[1], 0, sys->nsurf - 1, &row) || !parse_target(e, a->v[2], &t))
+        return ED_HANDLED | ED_ERROR;
+    if (sys->surf[row].solve[t].kind != SG_SOLVE_VARIABLE)
+        return fail(e, "surface %d: the %s is not a variable", row, a->v[2]);
+    if (!begin(e, row))
+        return ED_HANDLED | ED_ERROR;
+    memset(&e->doc.sys->surf[row].solve[t], 0, sizeof e->doc.sys->surf[row].solve[t]);
+    e->row = row;
+    return end(e, "surface %d: the %s is no longer a variable", row, a->v[2]);
+}
+
+/* opt [CYCLES]: damped least squares on the variables against the merit
+ * function, as one undoable change. */
+static int c_opt(ed *e, args *a)
+{
+    sg_opt_opts o;
+    sg_opt_result res;
+    sg_diag d;
+    int cycles = 0, rc;
+    if (!need(e, a, 0, 1, "opt [CYCLES]"))
+        return ED_HANDLED | ED_ERROR;
+    if (a->n == 2 && !parse_int(e, a->v[1], "cycles", 1, 1000000, &cycles))
+        return ED_HANDLED | ED_ERROR;
+    sg_opt_opts_init(&o);
+    o.cycles = cycles;
+    if (!begin(e, e->row))
+        return ED_HANDLED | ED_ERROR;
+    sg_diag_clear(&d);
+    rc = sg_optimize(e->doc.sys, e->cat, &o, &res, &d);
+    if (rc != SG_OK)
+        return cancel(e, d.msg);
+    return end(e, "optimized: merit %.6g (from %.6g) after %d cycle%s%s", res.merit, res.merit0,
+               res.cycles, res.cycles == 1 ? "" : "s", res.converged ? ", converged" : "");
+}
+
 /* solve SURFACE radius|thickness|conic TYPE [ARGS]: sets or clears a solve
  * (sagitta-design(5), Solves and pickups). */
 static int c_solve(ed *e, args *a)
@@ -384,7 +474,7 @@ static int c_solve(ed *e, args *a)
     static const char usage[] = "solve SURFACE radius|thickness|conic none|pickup FROM [SCALE "
                                 "[OFFSET]]|curvature_pickup FROM [SCALE [OFFSET]]|"
                                 "marginal_height H|chief_height H|position FROM L|"
-                                "marginal_angle U|fnum F";
+                                "marginal_angle U|fnum F|variable [MIN MAX]";
     sg_solve v;
     sg_diag d;
     int row, t, k, rc;
@@ -415,6 +505,14 @@ static int c_solve(ed *e, args *a)
         if (a->n > 5 && !parse_num(e, a->v[5], "scale", &v.scale))
             return ED_HANDLED | ED_ERROR;
         if (a->n > 6 && !parse_num(e, a->v[6], "offset", &v.offset))
+            return ED_HANDLED | ED_ERROR;
+    } else if (k == SG_SOLVE_VARIABLE) {
+        v.lo = -INFINITY;
+        v.hi = INFINITY;
+        if (a->n != 4 && a->n != 6)
+            return fail(e, "usage: solve SURFACE radius|thickness|conic variable [MIN MAX]");
+        if (a->n == 6 && (!parse_num(e, a->v[4], "min", &v.lo) ||
+                          !parse_num(e, a->v[5], "max", &v.hi)))
             return ED_HANDLED | ED_ERROR;
     } else if (k == SG_SOLVE_POSITION) {
         if (a->n != 6)
@@ -2415,7 +2513,13 @@ static const command commands[] = {
      "solve SURFACE radius|thickness|conic TYPE [ARGS]",
      "set a solve: none, pickup FROM [SCALE [OFFSET]], marginal_height H, chief_height H "
      "or position FROM L (thickness), curvature_pickup FROM [SCALE [OFFSET]], marginal_angle U "
-     "or fnum F (radius)"},
+     "or fnum F (radius), variable [MIN MAX] (any)"},
+    {"var", NULL, c_var, "var SURFACE radius|thickness|conic [MIN MAX]",
+     "make a value a variable of the optimizer (V), optionally bounded"},
+    {"novar", NULL, c_novar, "novar SURFACE radius|thickness|conic | novar all",
+     "clear a variable, or every one"},
+    {"opt", NULL, c_opt, "opt [CYCLES]",
+     "damped least squares on the variables against the merit function (one undo step)"},
     {"undo", "u", c_undo, "undo [N]", "undo the last change(s)"},
     {"redo", NULL, c_redo, "redo [N]", "redo undone change(s)"},
     {"open", "e", c_open0, "open FILE", "open a design (open! discards changes)"},

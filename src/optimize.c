@@ -1,0 +1,462 @@
+/*
+ * optimize.c - damped least squares on a design's variables against its
+ * merit function (sagitta(1), OPTIMIZATION): GSL's trust-region
+ * Levenberg-Marquardt with More's scaling (gsl_multifit_nlinear).
+ *
+ * The residuals are sqrt(w / sum w) (v - t), so their sum of squares is
+ * MF^2.  A radius is varied as its curvature (a flat surface can bend);
+ * bounds are kept by a change of variable (MINUIT's): the solver moves z
+ * freely and the parameter is lo + (hi - lo) (1 + sin z) / 2, or lo - 1 +
+ * sqrt(z^2 + 1) with one bound.  After each change the solves and pickups
+ * are applied, so they stay live.  The Jacobian is central differences of
+ * the precise trace, each step from the traced values' error bounds.
+ */
+#include <float.h>
+#include <math.h>
+#include <pthread.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include <gsl/gsl_blas.h>
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_multifit_nlinear.h>
+#include <gsl/gsl_vector.h>
+
+#include "internal.h"
+
+#define OPT_MAX_VARS 256
+#define OPT_DEFAULT_CYCLES 500
+
+typedef struct ovar {
+    sg_paddr a;
+    int curv;          /* varied as the curvature 1 / R */
+    double lo, hi;     /* bounds on what is varied (the curvature for a radius) */
+} ovar;
+
+typedef struct octx {
+    const sg_system *base;
+    const sg_catalog *cat;
+    sg_system *work;
+    int nvar, nres;    /* nres: rows of nonzero weight, padded to nvar */
+    ovar v[OPT_MAX_VARS];
+    int *rowmap;       /* result row of each residual */
+    double bad;        /* residual given to a failed trial: its step is rejected */
+    double rel;        /* relative rounding of the residuals, from the bounds */
+    int nthreads;
+    sg_diag err;       /* the first failure the solver met */
+} octx;
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* The parameter from the solver's z, and back. */
+static double from_z(const ovar *v, double z)
+{
+    if (isfinite(v->lo) && isfinite(v->hi))
+        return v->lo + (v->hi - v->lo) * (1.0 + sin(z)) / 2.0;
+    if (isfinite(v->lo))
+        return v->lo - 1.0 + sqrt(z * z + 1.0);
+    if (isfinite(v->hi))
+        return v->hi + 1.0 - sqrt(z * z + 1.0);
+    return z;
+}
+
+static double to_z(const ovar *v, double p)
+{
+    if (isfinite(v->lo) && isfinite(v->hi)) {
+        double s = 2.0 * (p - v->lo) / (v->hi - v->lo) - 1.0;
+        return asin(s > 1.0 ? 1.0 : s < -1.0 ? -1.0 : s);
+    }
+    if (isfinite(v->lo))
+        return sqrt((p - v->lo + 1.0) * (p - v->lo + 1.0) - 1.0);
+    if (isfinite(v->hi))
+        return sqrt((v->hi - p + 1.0) * (v->hi - p + 1.0) - 1.0);
+    return p;
+}
+
+/* sys = base with the variables at z, solves applied. */
+static int set_vars(const octx *o, sg_system *sys, const double *z, sg_diag *d)
+{
+    int j, rc;
+    if ((rc = sg_system_assign(sys, o->base)) != SG_OK)
+        return sg_diag_set(d, rc, "out of memory");
+    for (j = 0; j < o->nvar; j++) {
+        double p = from_z(&o->v[j], z[j]);
+        if (o->v[j].curv)
+            p = p == 0.0 ? INFINITY : 1.0 / p;
+        sg_paddr_set(sys, &o->v[j].a, p);
+    }
+    return sg_system_apply_solves(sys, o->cat, d);
+}
+
+/* The residuals at z into f (nres); SG_OK, or the failure in d. */
+static int residuals(const octx *o, sg_system *sys, const double *z, double *f, double *bound,
+                     sg_diag *d)
+{
+    sg_merit_result r;
+    int k, rc;
+    if ((rc = set_vars(o, sys, z, d)) != SG_OK)
+        return rc;
+    if ((rc = sg_merit_eval(sys, o->cat, &r, d)) != SG_OK)
+        return rc;
+    for (k = 0; k < o->nres; k++) {
+        int i = o->rowmap[k];
+        f[k] = i < 0 ? 0.0
+                     : sqrt(r.row[i].weight / r.wsum) * (r.row[i].value - r.row[i].target);
+    }
+    if (bound)
+        *bound = r.bound;
+    sg_merit_result_free(&r);
+    return SG_OK;
+}
+
+static int gsl_f(const gsl_vector *x, void *params, gsl_vector *f)
+{
+    octx *o = params;
+    double z[OPT_MAX_VARS];
+    sg_diag d;
+    int j, k;
+    for (j = 0; j < o->nvar; j++)
+        z[j] = gsl_vector_get(x, j);
+    sg_diag_clear(&d);
+    if (residuals(o, o->work, z, f->data, NULL, &d) != SG_OK) {
+        /* A trial the design cannot take (a ray misses): a large residual,
+         * so the trust region shrinks and the step is rejected. */
+        for (k = 0; k < o->nres; k++)
+            gsl_vector_set(f, k, o->bad);
+        if (!o->err.code)
+            o->err = d;
+    }
+    return GSL_SUCCESS;
+}
+
+/* One Jacobian column: central differences at z, step h in z. */
+typedef struct colwork {
+    octx *o;
+    const double *z;
+    gsl_matrix *J;
+    const double *f0;
+    int j0, j1;       /* columns [j0, j1) */
+    int rc;
+    sg_diag d;
+} colwork;
+
+static void *columns(void *arg)
+{
+    colwork *w = arg;
+    octx *o = w->o;
+    sg_system *sys = sg_system_clone(o->base);
+    double *fp = malloc((size_t)o->nres * sizeof *fp), *fm = malloc((size_t)o->nres * sizeof *fm);
+    double z[OPT_MAX_VARS];
+    int j, k;
+    w->rc = SG_OK;
+    if (!sys || !fp || !fm) {
+        w->rc = sg_diag_set(&w->d, SG_ENOMEM, "out of memory");
+        goto out;
+    }
+    memcpy(z, w->z, (size_t)o->nvar * sizeof *z);
+    for (j = w->j0; j < w->j1; j++) {
+        /* Central differences: truncation h^2, rounding rel / h, so h =
+         * cbrt(rel) times the variable's scale (at least 1e-3 of a unit
+         * of z, which is the parameter itself when unbounded). */
+        double zj = z[j], h = cbrt(o->rel) * fmax(fabs(zj), 1e-3), hp, hm;
+        int okp, okm;
+        z[j] = zj + h;
+        hp = z[j] - zj;
+        okp = residuals(o, sys, z, fp, NULL, &w->d) == SG_OK;
+        z[j] = zj - h;
+        hm = zj - z[j];
+        okm = residuals(o, sys, z, fm, NULL, &w->d) == SG_OK;
+        z[j] = zj;
+        if (okp && okm) {
+            for (k = 0; k < o->nres; k++)
+                gsl_matrix_set(w->J, k, j, (fp[k] - fm[k]) / (hp + hm));
+        } else if (okp || okm) {
+            /* One side fails (a ray misses there): the one-sided difference. */
+            for (k = 0; k < o->nres; k++)
+                gsl_matrix_set(w->J, k, j, okp ? (fp[k] - w->f0[k]) / hp
+                                               : (w->f0[k] - fm[k]) / hm);
+        } else {
+            w->rc = SG_ENONPHYS;
+            goto out;
+        }
+    }
+    sg_diag_clear(&w->d);
+out:
+    free(fp);
+    free(fm);
+    sg_system_free(sys);
+    return NULL;
+}
+
+static int gsl_df(const gsl_vector *x, void *params, gsl_matrix *J)
+{
+    octx *o = params;
+    double z[OPT_MAX_VARS], *f0;
+    colwork w[16];
+    pthread_t th[16];
+    int j, t, nt = o->nthreads, started[16] = {0};
+    sg_diag d;
+    for (j = 0; j < o->nvar; j++)
+        z[j] = gsl_vector_get(x, j);
+    f0 = malloc((size_t)o->nres * sizeof *f0);
+    if (!f0)
+        return GSL_ENOMEM;
+    sg_diag_clear(&d);
+    if (residuals(o, o->work, z, f0, NULL, &d) != SG_OK) {
+        free(f0);
+        if (!o->err.code)
+            o->err = d;
+        return GSL_EBADFUNC;
+    }
+    if (nt < 1)
+        nt = 1;
+    if (nt > 16)
+        nt = 16;
+    if (nt > o->nvar)
+        nt = o->nvar;
+    for (t = 0; t < nt; t++) {
+        w[t].o = o;
+        w[t].z = z;
+        w[t].J = J;
+        w[t].f0 = f0;
+        w[t].j0 = o->nvar * t / nt;
+        w[t].j1 = o->nvar * (t + 1) / nt;
+        sg_diag_clear(&w[t].d);
+        if (t > 0 && pthread_create(&th[t], NULL, columns, &w[t]) == 0)
+            started[t] = 1;
+        else if (t > 0)
+            columns(&w[t]);
+    }
+    columns(&w[0]);
+    for (t = 1; t < nt; t++)
+        if (started[t])
+            pthread_join(th[t], NULL);
+    free(f0);
+    for (t = 0; t < nt; t++)
+        if (w[t].rc != SG_OK) {
+            if (!o->err.code)
+                o->err = w[t].d;
+            return GSL_EBADFUNC;
+        }
+    return GSL_SUCCESS;
+}
+
+void sg_opt_opts_init(sg_opt_opts *o)
+{
+    memset(o, 0, sizeof *o);
+}
+
+/* The variables and their bounds in what the solver varies. */
+static int collect(octx *o, const sg_system *sys, sg_diag *d)
+{
+    sg_paddr a[OPT_MAX_VARS];
+    int n = sg_variables(sys, a, OPT_MAX_VARS), j;
+    char name[96];
+    if (n > OPT_MAX_VARS)
+        return sg_diag_set(d, SG_ERANGE, "%d variables; the limit is %d", n, OPT_MAX_VARS);
+    for (j = 0; j < n; j++) {
+        ovar *v = &o->v[j];
+        int t = sg_paddr_solve_target(&a[j]);
+        const sg_solve *s = &sys->surf[a[j].index].solve[t];
+        double p = sg_paddr_get(sys, &a[j]);
+        v->a = a[j];
+        v->curv = t == SG_SOLVE_RADIUS;
+        v->lo = s->lo;
+        v->hi = s->hi;
+        sg_paddr_name(&a[j], name, sizeof name);
+        if (!(p >= s->lo && p <= s->hi) && !(v->curv && isinf(p)))
+            return sg_diag_set(d, SG_ERANGE, "%s: the value %.17g is outside the variable's "
+                               "min %g and max %g", name, p, s->lo, s->hi);
+        if (!isfinite(p) && !v->curv)
+            return sg_diag_set(d, SG_ERANGE, "%s: an infinite value cannot vary", name);
+        if (v->curv) {
+            /* Bounds on a radius of one sign bound the curvature. */
+            if (isfinite(s->lo) || isfinite(s->hi)) {
+                if (!(s->lo > 0.0 || s->hi < 0.0))
+                    return sg_diag_set(d, SG_ERANGE, "%s: a radius variable's min and max "
+                                       "must not enclose 0 (a flat surface's radius is "
+                                       "infinite); bound it on one side of 0", name);
+                /* R in [lo, hi] of one sign is c in [1 / hi, 1 / lo], an
+                 * infinite bound giving a curvature of 0 (flat). */
+                v->lo = 1.0 / s->hi;
+                v->hi = 1.0 / s->lo;
+            }
+        }
+    }
+    o->nvar = n;
+    return SG_OK;
+}
+
+int sg_optimize(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *opts,
+                sg_opt_result *res, sg_diag *d)
+{
+    octx o;
+    sg_opt_opts def;
+    sg_merit_result r0;
+    gsl_multifit_nlinear_fdf fdf;
+    gsl_multifit_nlinear_parameters par;
+    gsl_multifit_nlinear_workspace *w = NULL;
+    gsl_vector *x = NULL;
+    gsl_error_handler_t *old;
+    double z0[OPT_MAX_VARS], best[OPT_MAX_VARS], bestmf, t0 = now(), bound = 0.0;
+    int j, k, rc, cycle, maxc, nz = 0;
+
+    memset(res, 0, sizeof *res);
+    if (!opts) {
+        sg_opt_opts_init(&def);
+        opts = &def;
+    }
+    memset(&o, 0, sizeof o);
+    o.base = sys;
+    o.cat = cat;
+    o.nthreads = opts->nthreads;
+    if (!sys->merit.present || (sys->merit.nop == 0 && !sys->merit.has_default))
+        return sg_diag_set(d, SG_ENOSYS, "the design has no merit function (a \"merit\" object; "
+                           "sagitta-design(5), MERIT FUNCTION)");
+    if ((rc = collect(&o, sys, d)) != SG_OK)
+        return rc;
+    if (o.nvar == 0)
+        return sg_diag_set(d, SG_ENOSYS, "the design has no variables (a solve of type "
+                           "\"variable\"; sagitta-design(5), SOLVES)");
+    for (j = 0; j < o.nvar; j++) {
+        double p = sg_paddr_get(sys, &o.v[j].a);
+        if (o.v[j].curv)
+            p = isinf(p) || p == 0.0 ? 0.0 : 1.0 / p;
+        z0[j] = to_z(&o.v[j], p);
+    }
+    o.work = sg_system_clone(sys);
+    if (!o.work)
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    /* The start: which rows count, and the rounding of their values. */
+    if ((rc = set_vars(&o, o.work, z0, d)) != SG_OK ||
+        (rc = sg_merit_eval(o.work, cat, &r0, d)) != SG_OK) {
+        sg_system_free(o.work);
+        return rc;
+    }
+    for (k = 0; k < r0.nrow; k++)
+        nz += r0.row[k].weight != 0.0;
+    o.nres = nz > o.nvar ? nz : o.nvar;
+    o.rowmap = malloc((size_t)o.nres * sizeof *o.rowmap);
+    if (!o.rowmap) {
+        sg_merit_result_free(&r0);
+        sg_system_free(o.work);
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    }
+    for (k = 0, j = 0; k < r0.nrow; k++)
+        if (r0.row[k].weight != 0.0)
+            o.rowmap[j++] = k;
+    for (; j < o.nres; j++)
+        o.rowmap[j] = -1;
+    {
+        /* rel: the largest error bound over the largest traced value,
+         * never below a double's rounding (the values that are not traced:
+         * EFL, thicknesses, are rounded once). */
+        double vmax = 0.0;
+        for (k = 0; k < r0.nrow; k++)
+            vmax = fmax(vmax, fabs(r0.row[k].value));
+        bound = r0.bound;
+        o.rel = vmax > 0.0 ? bound / vmax : 0.0;
+        if (o.rel < DBL_EPSILON)
+            o.rel = DBL_EPSILON;
+    }
+    res->merit0 = r0.merit;
+    o.bad = 1e3 * (r0.merit + 1.0);
+    sg_merit_result_free(&r0);
+
+    old = gsl_set_error_handler_off();
+    fdf.f = gsl_f;
+    fdf.df = gsl_df;
+    fdf.fvv = NULL;
+    fdf.n = (size_t)o.nres;
+    fdf.p = (size_t)o.nvar;
+    fdf.params = &o;
+    par = gsl_multifit_nlinear_default_parameters();
+    par.trs = gsl_multifit_nlinear_trs_lm;
+    par.scale = gsl_multifit_nlinear_scale_more;
+    w = gsl_multifit_nlinear_alloc(gsl_multifit_nlinear_trust, &par, fdf.n, fdf.p);
+    x = gsl_vector_alloc(fdf.p);
+    if (!w || !x) {
+        rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
+        goto done;
+    }
+    for (j = 0; j < o.nvar; j++)
+        gsl_vector_set(x, j, z0[j]);
+    if (gsl_multifit_nlinear_init(x, &fdf, w) != GSL_SUCCESS) {
+        rc = sg_diag_set(d, o.err.code ? o.err.code : SG_ENONPHYS,
+                         "optimize: the start cannot be evaluated: %s",
+                         o.err.code ? o.err.msg : "the Jacobian failed");
+        goto done;
+    }
+    memcpy(best, z0, sizeof best);
+    bestmf = res->merit0;
+    maxc = opts->cycles > 0 ? opts->cycles : OPT_DEFAULT_CYCLES;
+    for (cycle = 1; cycle <= maxc; cycle++) {
+        double mf, step = 0.0, prev[OPT_MAX_VARS];
+        int info = 0, st;
+        for (j = 0; j < o.nvar; j++)
+            prev[j] = gsl_vector_get(gsl_multifit_nlinear_position(w), j);
+        if (opts->stop && *opts->stop) {
+            res->stopped = 1;
+            break;
+        }
+        st = gsl_multifit_nlinear_iterate(w);
+        {
+            gsl_vector *f = gsl_multifit_nlinear_residual(w), *xn = gsl_multifit_nlinear_position(w);
+            mf = gsl_blas_dnrm2(f);
+            for (j = 0; j < o.nvar; j++)
+                step = hypot(step, gsl_vector_get(xn, j) - prev[j]);
+            if (mf < bestmf) {
+                bestmf = mf;
+                for (j = 0; j < o.nvar; j++)
+                    best[j] = gsl_vector_get(xn, j);
+            }
+        }
+        res->cycles = cycle;
+        if (opts->progress && opts->progress(opts->ctx, cycle, bestmf, step, now() - t0)) {
+            res->stopped = 1;
+            break;
+        }
+        if (st == GSL_ENOPROG || st == GSL_EBADFUNC) {
+            /* No step lowers the merit (or the Jacobian cannot be formed
+             * there): a minimum as far as the trace can tell. */
+            res->converged = st == GSL_ENOPROG;
+            break;
+        }
+        if (st != GSL_SUCCESS)
+            break;
+        if (gsl_multifit_nlinear_test(1e-12, 1e-14, 0.0, &info, w) == GSL_SUCCESS) {
+            res->converged = 1;
+            break;
+        }
+    }
+    /* The best design, evaluated again, into sys; a start never bettered
+     * stays as it was, bit for bit (z and back may round). */
+    res->merit = bestmf;
+    if (!(bestmf < res->merit0)) {
+        rc = SG_OK;
+        goto done;
+    }
+    if ((rc = set_vars(&o, o.work, best, d)) != SG_OK)
+        goto done;
+    if ((rc = sg_system_assign(sys, o.work)) != SG_OK) {
+        rc = sg_diag_set(d, rc, "out of memory");
+        goto done;
+    }
+    res->merit = bestmf;
+    rc = SG_OK;
+done:
+    gsl_set_error_handler(old);
+    if (w)
+        gsl_multifit_nlinear_free(w);
+    if (x)
+        gsl_vector_free(x);
+    free(o.rowmap);
+    sg_system_free(o.work);
+    return rc;
+}

@@ -1,0 +1,94 @@
+/*
+ * test_opt_cmd.c - the editor's optimization commands without a screen:
+ * :var marks a value a variable (the cell shows V, as M and P are shown),
+ * :opt runs damped least squares as one undoable change and lands on the
+ * plano-convex lens's closed form (R = f (n - 1)), :undo returns the exact
+ * design, :novar clears variables, and :opt without them changes nothing.
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "testutil.h"
+
+#include "cells.h"
+#include "doc.h"
+#include "ed.h"
+
+static const char design[] =
+    "{\"format\": \"sagitta-design\", \"version\": 6, \"units\": \"mm\","
+    "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.5875618}]},"
+    "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}]},"
+    "\"aperture\": {\"type\": \"epd\", \"value\": 10},"
+    "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+    "{\"radius\": 60, \"thickness\": 4, \"material\": 1.5, \"stop\": true},"
+    "{\"radius\": \"inf\", \"thickness\": 95},"
+    "{\"radius\": \"inf\", \"thickness\": 0}],"
+    "\"merit\": {\"operands\": [{\"type\": \"EFFL\", \"wave\": 1, \"target\": 100}]}}";
+
+static void ok(ed *e, const char *line)
+{
+    int f = cmd_exec(e, line);
+    if (f & ED_ERROR)
+        fail_msg("\"%s\" failed: %s", line, e->msg);
+}
+
+static void var_opt_undo(void **state)
+{
+    char path[256], line[320], cell[64];
+    FILE *f;
+    ed *e = calloc(1, sizeof *e);
+    sg_system *before;
+    (void)state;
+    snprintf(path, sizeof path, "%s/sg-opt-test-%d.json",
+             getenv("TMPDIR") ? getenv("TMPDIR") : "/tmp", (int)getpid());
+    f = fopen(path, "w");
+    assert_non_null(f);
+    fputs(design, f);
+    fclose(f);
+    assert_non_null(e);
+    assert_int_equal(ed_init(e), SG_OK);
+    e->batch = 1;
+    e->out = tmpfile();
+    snprintf(line, sizeof line, "open %s", path);
+    ok(e, line);
+    ok(e, "var 1 radius");
+    assert_int_equal(e->doc.sys->surf[1].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_VARIABLE);
+    cell_text(e->doc.sys, 1, COL_RADIUS, cell, sizeof cell);
+    assert_non_null(strstr(cell, " V"));
+    before = sg_system_clone(e->doc.sys);
+    ok(e, "opt");
+    /* A plano-convex lens of index 1.5: f = R / (n - 1) whatever its
+     * thickness, so R = 50. */
+    assert_true(fabs(e->doc.sys->surf[1].radius - 50.0) <= 1e-12 * 50.0);
+    ok(e, "undo");
+    assert_true(sg_system_equal(e->doc.sys, before));
+    ok(e, "novar all");
+    assert_int_equal(e->doc.sys->surf[1].solve[SG_SOLVE_RADIUS].kind, SG_SOLVE_NONE);
+    sg_system_free(before);
+    before = sg_system_clone(e->doc.sys);
+    assert_true(cmd_exec(e, "opt") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "no variables"));
+    assert_true(sg_system_equal(e->doc.sys, before));
+    /* Bounds through :solve, and the errors. */
+    ok(e, "solve 2 thickness variable 2 20");
+    assert_true(e->doc.sys->surf[2].solve[SG_SOLVE_THICKNESS].hi == 20);
+    assert_true(cmd_exec(e, "var 1 radius 5") & ED_ERROR);
+    assert_true(cmd_exec(e, "var 1 material") & ED_ERROR);
+    assert_true(cmd_exec(e, "novar 1 radius") & ED_ERROR);
+    sg_system_free(before);
+    fclose(e->out);
+    ed_free(e);
+    free(e);
+    unlink(path);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(var_opt_undo),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,295 @@
+/* optimize.c - "sagitta merit" (every row of a design's merit function)
+ * and "sagitta optimize" (damped least squares on its variables). */
+#include <errno.h>
+#include <limits.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "report.h"
+
+static void merit_help(FILE *f)
+{
+    fputs(
+"Usage: sagitta merit DESIGN.json [--format text|json|csv]\n"
+"Print every row of the design's merit function (its \"merit\" object):\n"
+"number, type, parameters, target, weight, value and contribution (%), then\n"
+"the merit, MF^2 = sum w (v - t)^2 / sum w.  See sagitta(1), OPTIMIZATION.\n"
+"\n"
+"Options:\n"
+"  --format FMT             text (default), json or csv\n"
+"  -h, --help               show this help\n", f);
+}
+
+static void optimize_help(FILE *f)
+{
+    fputs(
+"Usage: sagitta optimize DESIGN.json -o OUT.json [--cycles N] [--threads N] [--force]\n"
+"Damped least squares (trust-region Levenberg-Marquardt) on the design's\n"
+"variables (solves of type \"variable\") against its merit function; writes\n"
+"the best design to OUT.json, also when stopped by Ctrl-C.  One line per\n"
+"cycle: merit, step, time.  See sagitta(1), OPTIMIZATION.\n"
+"\n"
+"Options:\n"
+"  -o, --output FILE        the optimized design (required; never the input)\n"
+"  --cycles N               at most N cycles (default: until converged, 500)\n"
+"  --threads N              threads for the derivatives (default: every core)\n"
+"  --force                  overwrite OUT.json if it exists\n"
+"  -h, --help               show this help\n", f);
+}
+
+/* The parameters an operand row shows: its type's keys and values. */
+static void row_params(const sg_system *sys, const sg_merit_row *r, char *buf, size_t n)
+{
+    const sg_operand *o;
+    static const char *const k1[SG_OP_NTYPES] = {
+        [SG_OP_TTHI] = "surf1", [SG_OP_CTGT] = "surf", [SG_OP_CTLT] = "surf",
+        [SG_OP_CTVA] = "surf", [SG_OP_ETGT] = "surf", [SG_OP_ETLT] = "surf",
+        [SG_OP_ETVA] = "surf", [SG_OP_MNCT] = "surf1", [SG_OP_MXCT] = "surf1",
+        [SG_OP_MNET] = "surf1", [SG_OP_MNCA] = "surf1", [SG_OP_MXCA] = "surf1",
+        [SG_OP_MNCG] = "surf1", [SG_OP_MXCG] = "surf1", [SG_OP_REAX] = "surf",
+        [SG_OP_REAY] = "surf", [SG_OP_REAZ] = "surf", [SG_OP_RSCE] = "rings",
+        [SG_OP_RSCH] = "rings", [SG_OP_SUMM] = "op1", [SG_OP_DIFF] = "op1",
+        [SG_OP_PROD] = "op1", [SG_OP_DIVI] = "op1", [SG_OP_OPGT] = "op1",
+        [SG_OP_OPLT] = "op1", [SG_OP_ABSO] = "op1"};
+    static const char *const k2[SG_OP_NTYPES] = {
+        [SG_OP_EFFL] = "wave", [SG_OP_TTHI] = "surf2", [SG_OP_MNCT] = "surf2",
+        [SG_OP_MXCT] = "surf2", [SG_OP_MNET] = "surf2", [SG_OP_MNCA] = "surf2",
+        [SG_OP_MXCA] = "surf2", [SG_OP_MNCG] = "surf2", [SG_OP_MXCG] = "surf2",
+        [SG_OP_REAX] = "wave", [SG_OP_REAY] = "wave", [SG_OP_REAZ] = "wave",
+        [SG_OP_TRAX] = "wave", [SG_OP_TRAY] = "wave", [SG_OP_TRAR] = "wave",
+        [SG_OP_RSCE] = "wave", [SG_OP_RSCH] = "wave", [SG_OP_SUMM] = "op2",
+        [SG_OP_DIFF] = "op2", [SG_OP_PROD] = "op2", [SG_OP_DIVI] = "op2"};
+    size_t m = 0;
+    buf[0] = '\0';
+    if (r->row > sys->merit.nop) {
+        snprintf(buf, n, "default");
+        return;
+    }
+    o = &sys->merit.op[r->row - 1];
+    if (k1[o->type])
+        m += (size_t)snprintf(buf + m, n - m, "%s=%d ", k1[o->type], o->i1);
+    if (m < n && k2[o->type])
+        m += (size_t)snprintf(buf + m, n - m, "%s=%d ", k2[o->type], o->i2);
+    if (m < n && o->type >= SG_OP_REAX && o->type <= SG_OP_RSCH)
+        m += (size_t)snprintf(buf + m, n - m, "hx=%g hy=%g ", o->hx, o->hy);
+    if (m < n && o->type >= SG_OP_REAX && o->type <= SG_OP_TRAR)
+        m += (size_t)snprintf(buf + m, n - m, "px=%g py=%g ", o->px, o->py);
+    if (m > 0 && m < n)
+        buf[m - 1] = '\0';
+}
+
+enum { ME_HELP = 1, ME_FORMAT };
+
+static const cli_opt merit_opts[] = {
+    { "--help", 'h', 0, ME_HELP },
+    { "--format", 0, 1, ME_FORMAT },
+    { NULL, 0, 0, 0 }
+};
+
+int cmd_merit(int argc, char **argv)
+{
+    cli_iter it;
+    const char *val, *design = NULL;
+    int id, rc, i, fmt = REPORT_TEXT;
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    sg_merit_result r;
+    sg_diag d;
+    char par[128];
+
+    cli_iter_init(&it, "merit", argc, argv);
+    while ((id = cli_next_opt(&it, merit_opts, &val)) != -1) {
+        switch (id) {
+        case 0:
+            if (design)
+                return cli_usage_error("merit", "unexpected argument \"%s\"", val);
+            design = val;
+            break;
+        case ME_HELP:
+            merit_help(stdout);
+            return CLI_EXIT_OK;
+        case ME_FORMAT:
+            if (cli_format_value(val, 1, &fmt))
+                return CLI_EXIT_USAGE;
+            break;
+        default:
+            return -id;
+        }
+    }
+    if (!design)
+        return cli_usage_error("merit", "missing DESIGN.json");
+    rc = cli_load_design(design, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    sg_diag_clear(&d);
+    rc = sg_merit_eval(sys, cat, &r, &d);
+    if (rc != SG_OK) {
+        cli_print_diag(design, &d, rc);
+        rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
+        goto done;
+    }
+    if (fmt == REPORT_JSON) {
+        printf("{\"merit\": %.17g, \"operands\": [", r.merit);
+        for (i = 0; i < r.nrow; i++) {
+            const sg_merit_row *w = &r.row[i];
+            printf("%s\n  {\"row\": %d, \"type\": \"%s\", \"target\": %.17g, \"weight\": %.17g, "
+                   "\"value\": %.17g, \"contribution\": %.17g}", i ? "," : "", w->row,
+                   sg_op_name(w->type), w->target, w->weight, w->value, w->contribution);
+        }
+        printf("\n]}\n");
+    } else if (fmt == REPORT_CSV) {
+        printf("row,type,parameters,target,weight,value,contribution\n");
+        for (i = 0; i < r.nrow; i++) {
+            const sg_merit_row *w = &r.row[i];
+            row_params(sys, w, par, sizeof par);
+            printf("%d,%s,%s,%.17g,%.17g,%.17g,%.17g\n", w->row, sg_op_name(w->type), par,
+                   w->target, w->weight, w->value, w->contribution);
+        }
+        printf("merit,,,,,%.17g,100\n", r.merit);
+    } else {
+        printf("%5s %-5s %-36s %14s %12s %22s %8s\n", "Row", "Type", "Parameters", "Target",
+               "Weight", "Value", "Contrib%");
+        for (i = 0; i < r.nrow; i++) {
+            const sg_merit_row *w = &r.row[i];
+            row_params(sys, w, par, sizeof par);
+            printf("%5d %-5s %-36s %14.8g %12.6g %22.15g %8.4f\n", w->row, sg_op_name(w->type),
+                   par, w->target, w->weight, w->value, w->contribution);
+        }
+        printf("Merit function: %.15g\n", r.merit);
+    }
+    sg_merit_result_free(&r);
+    rc = CLI_EXIT_OK;
+done:
+    cli_design_free(cat, sys);
+    return rc;
+}
+
+static volatile int stop_flag;
+
+static void on_sigint(int sig)
+{
+    (void)sig;
+    stop_flag = 1;
+}
+
+static int progress(void *ctx, int cycle, double merit, double step, double seconds)
+{
+    (void)ctx;
+    printf("cycle %4d  merit %-22.15g  step %-12.4g  time %.3f s\n", cycle, merit, step, seconds);
+    fflush(stdout);
+    return 0;
+}
+
+enum { OP_HELP = 1, OP_OUTPUT, OP_CYCLES, OP_THREADS, OP_FORCE };
+
+static const cli_opt optimize_opts[] = {
+    { "--help", 'h', 0, OP_HELP },
+    { "--output", 'o', 1, OP_OUTPUT },
+    { "--cycles", 0, 1, OP_CYCLES },
+    { "--threads", 0, 1, OP_THREADS },
+    { "--force", 0, 0, OP_FORCE },
+    { NULL, 0, 0, 0 }
+};
+
+/* Whether a and b name the same file (both exist). */
+static int same_file(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev &&
+           sa.st_ino == sb.st_ino;
+}
+
+int cmd_optimize(int argc, char **argv)
+{
+    cli_iter it;
+    const char *val, *design = NULL, *output = NULL;
+    int id, rc, force = 0;
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    sg_opt_opts o;
+    sg_opt_result res;
+    struct sigaction sa, old;
+    struct stat st;
+    sg_diag d;
+
+    sg_opt_opts_init(&o);
+    cli_iter_init(&it, "optimize", argc, argv);
+    while ((id = cli_next_opt(&it, optimize_opts, &val)) != -1) {
+        switch (id) {
+        case 0:
+            if (design)
+                return cli_usage_error("optimize", "unexpected argument \"%s\"", val);
+            design = val;
+            break;
+        case OP_HELP:
+            optimize_help(stdout);
+            return CLI_EXIT_OK;
+        case OP_OUTPUT:
+            output = val;
+            break;
+        case OP_CYCLES:
+            if (cli_int_value("--cycles", val, 1, 1000000, &o.cycles))
+                return CLI_EXIT_USAGE;
+            break;
+        case OP_THREADS:
+            if (cli_int_value("--threads", val, 1, 16, &o.nthreads))
+                return CLI_EXIT_USAGE;
+            break;
+        case OP_FORCE:
+            force = 1;
+            break;
+        default:
+            return -id;
+        }
+    }
+    if (!design)
+        return cli_usage_error("optimize", "missing DESIGN.json");
+    if (!output)
+        return cli_usage_error("optimize", "missing -o OUT.json (the optimized design)");
+    if (strcmp(output, design) == 0 || same_file(output, design))
+        return cli_usage_error("optimize", "-o %s is the input design; write the result to "
+                               "another file", output);
+    if (!force && stat(output, &st) == 0)
+        return cli_usage_error("optimize", "%s exists; use --force to overwrite it", output);
+    if (o.nthreads == 0) {
+        long n = sysconf(_SC_NPROCESSORS_ONLN);
+        o.nthreads = n < 1 ? 1 : n > 16 ? 16 : (int)n;
+    }
+    rc = cli_load_design(design, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_sigint;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old);
+    stop_flag = 0;
+    o.stop = &stop_flag;
+    o.progress = progress;
+    sg_diag_clear(&d);
+    rc = sg_optimize(sys, cat, &o, &res, &d);
+    sigaction(SIGINT, &old, NULL);
+    if (rc != SG_OK) {
+        cli_print_diag(design, &d, rc);
+        rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
+        goto done;
+    }
+    sg_diag_clear(&d);
+    if ((rc = sg_design_save(sys, output, &d)) != SG_OK) {
+        cli_error("%s", d.msg[0] ? d.msg : sg_strerror(rc));
+        rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_FILE;
+        goto done;
+    }
+    printf("%s after %d cycles: merit %.15g (from %.15g)\n",
+           res.stopped ? "Stopped" : res.converged ? "Converged" : "Stopped at the cycle limit",
+           res.cycles, res.merit, res.merit0);
+    printf("Saved: %s\n", output);
+    rc = CLI_EXIT_OK;
+done:
+    cli_design_free(cat, sys);
+    return rc;
+}
