@@ -697,17 +697,17 @@ typedef struct sg_paddr {
 /* Fills a from scope, index, key and element; SG_ERANGE with a message
  * naming what is wrong (no such key, not a real number, element or index
  * out of range). */
-int sg_paddr_make(const sg_system *sys, sg_param_scope scope, int index, const char *key,
+SG_API int sg_paddr_make(const sg_system *sys, sg_param_scope scope, int index, const char *key,
                   int elem, sg_paddr *a, sg_diag *d);
 /* The value at a, and setting it (no checks: see sg_paddr_check). */
-double sg_paddr_get(const sg_system *sys, const sg_paddr *a);
-void sg_paddr_set(sg_system *sys, const sg_paddr *a, double v);
+SG_API double sg_paddr_get(const sg_system *sys, const sg_paddr *a);
+SG_API void sg_paddr_set(sg_system *sys, const sg_paddr *a, double v);
 /* SG_OK when v may be the value at a; else SG_ERANGE with a message. */
-int sg_paddr_check(const sg_system *sys, const sg_paddr *a, double v, sg_diag *d);
+SG_API int sg_paddr_check(const sg_system *sys, const sg_paddr *a, double v, sg_diag *d);
 /* "surface 3 radius", "surface 5 asphere term r^4" ... */
-void sg_paddr_name(const sg_paddr *a, char *buf, size_t n);
+SG_API void sg_paddr_name(const sg_paddr *a, char *buf, size_t n);
 /* The solve target (radius, thickness, conic) a names, or -1. */
-int sg_paddr_solve_target(const sg_paddr *a);
+SG_API int sg_paddr_solve_target(const sg_paddr *a);
 
 /* ------------------------------------------------------------------------
  * The merit function and optimization (src/merit.c, src/optimize.c;
@@ -715,11 +715,11 @@ int sg_paddr_solve_target(const sg_paddr *a);
  * ------------------------------------------------------------------------ */
 /* Zemax's name of an operand type ("EFFL"), and the type of a name; -1
  * when unknown. */
-const char *sg_op_name(sg_op_type t);
-int sg_op_parse(const char *name);
+SG_API const char *sg_op_name(sg_op_type t);
+SG_API int sg_op_parse(const char *name);
 /* Checks the merit function's rows against sys (surfaces, wavelengths,
  * operand numbers in range): SG_ERANGE naming the row. */
-int sg_merit_check(const sg_system *sys, sg_diag *d);
+SG_API int sg_merit_check(const sg_system *sys, sg_diag *d);
 
 /* One row's result. */
 typedef struct sg_merit_row {
@@ -739,19 +739,19 @@ typedef struct sg_merit_result {
 /* Evaluates every row at sys.  A row that cannot be computed (a ray that
  * misses, a surface out of range) is an error naming the row and why;
  * the merit is never NaN. */
-int sg_merit_eval(const sg_system *sys, const sg_catalog *cat, sg_merit_result *out,
+SG_API int sg_merit_eval(const sg_system *sys, const sg_catalog *cat, sg_merit_result *out,
                   sg_diag *d);
-void sg_merit_result_free(sg_merit_result *r);
+SG_API void sg_merit_result_free(sg_merit_result *r);
 /* Nonzero when two merit functions are the same, bit for bit. */
-int sg_merit_equal(const sg_merit *a, const sg_merit *b);
+SG_API int sg_merit_equal(const sg_merit *a, const sg_merit *b);
 /* Gauss-Legendre nodes and weights of the default's rings: n points on
  * [0, 1] in u = rho^2 (Forbes, JOSA A 5, 1943 (1988)); rho[k] = sqrt(u),
  * w[k] sums to 1.  n at most 32. */
-int sg_merit_rings(int n, double *rho, double *w);
+SG_API int sg_merit_rings(int n, double *rho, double *w);
 
 /* The variables of a design: every solve of kind variable, in surface
  * order (radius, thickness, conic).  Returns the count (at most cap). */
-int sg_variables(const sg_system *sys, sg_paddr *out, int cap);
+SG_API int sg_variables(const sg_system *sys, sg_paddr *out, int cap);
 
 typedef struct sg_opt_opts {
     int cycles;             /* at most this many; 0: until converged (500) */
@@ -761,7 +761,7 @@ typedef struct sg_opt_opts {
     void *ctx;
     volatile int *stop;     /* when set nonzero (a signal), the run stops */
 } sg_opt_opts;
-void sg_opt_opts_init(sg_opt_opts *o);
+SG_API void sg_opt_opts_init(sg_opt_opts *o);
 
 typedef struct sg_opt_result {
     int cycles;
@@ -774,7 +774,7 @@ typedef struct sg_opt_result {
  * the best design found (variables and what their solves derive), also
  * when stopped.  SG_ENOSYS when the design has no variables or no merit
  * function. */
-int sg_optimize(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *o,
+SG_API int sg_optimize(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *o,
                 sg_opt_result *res, sg_diag *d);
 
 /* Whether a surface changes the frame: a coordinate break, or a tilt or
