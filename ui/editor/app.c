@@ -843,8 +843,7 @@ int sg_editor_main(int argc, char **argv)
     e.batch = script != NULL;
     if (e.cat && e.cat_msg[0]) {
         if (script)
-            fprintf(stderr, "sagitta edit: warning: %s
-", e.cat_msg);
+            fprintf(stderr, "sagitta edit: warning: %s\n", e.cat_msg);
         else
             ed_msg(&e, 1, "%s", e.cat_msg);
     }
