@@ -339,17 +339,20 @@ static void dot(dots *d, long px, long py, int color)
 static void line(dots *d, long x0, long y0, long x1, long y1, int color)
 {
     long dx = labs(x1 - x0), dy = -labs(y1 - y0), sx = x0 < x1 ? 1 : -1,
-         sy = y0 < y1 ? 1 : -1, err = dx + dy, n = 0;
-    /* Bresenham; long lines far outside are cut by the step limit. */
+         sy = y0 < y1 ? 1 : -1, err = dx + dy, n = 0, e2;
+    /* Bresenham; long lines far outside are cut by the step limit.  Both
+     * tests read the error before either step, or the walk can pass its end
+     * and streak on to the step limit. */
     while (n++ < 100000) {
         dot(d, x0, y0, color);
         if (x0 == x1 && y0 == y1)
             break;
-        if (2 * err >= dy) {
+        e2 = 2 * err;
+        if (e2 >= dy) {
             err += dy;
             x0 += sx;
         }
-        if (2 * err <= dx) {
+        if (e2 <= dx) {
             err += dx;
             y0 += sy;
         }

@@ -255,6 +255,81 @@ static void test_cells_print(void **state)
     plot_figure_free(&f);
 }
 
+/* Every dot of a figure's first panel in dot coordinates (2 across and 4
+ * down per cell, from the grid's corner); how many, at most max. */
+static int grid_dots(const plot_grid *g, int (*xy)[2], int max)
+{
+    int k, n = 0, r, c;
+    for (k = 0; k < g->w * g->h; k++) {
+        const unsigned char *s = (const unsigned char *)g->c[k].ch;
+        unsigned bits;
+        if (!(s[0] == 0xE2 && (s[1] & 0xFC) == 0xA0))
+            continue;
+        bits = (((unsigned)(s[1] & 0x3F) << 6) | (s[2] & 0x3F)) - 0x800;
+        for (r = 0; r < 4; r++)
+            for (c = 0; c < 2; c++)
+                if ((bits & plot_braille_bit(c, r)) && n < max) {
+                    xy[n][0] = 2 * (k % g->w) + c;
+                    xy[n][1] = 4 * (k / g->w) + r;
+                    n++;
+                }
+    }
+    return n;
+}
+
+/* A closed circle drawn as a line (the spot's Airy circle) stays on the
+ * circle: its vertices drawn as points give the circle's centre and radius
+ * in dots (braille dots are square on an equal panel), and every dot of the
+ * line lies within two dots of that radius.  The line walk once passed its
+ * end and streaked across the panel. */
+static void test_circle_line(void **state)
+{
+    static int pts[20000][2], lin[20000][2];
+    double x[73], y[73], cx, cy, r;
+    int kind, np = 0, nl = 0, k, x0 = 1 << 30, x1 = -1, y0 = 1 << 30, y1 = -1;
+    (void)state;
+    for (k = 0; k < 73; k++) {
+        x[k] = 4.0 * cos(2 * 3.14159265358979323846 * k / 72);
+        y[k] = 4.0 * sin(2 * 3.14159265358979323846 * k / 72);
+    }
+    for (kind = 0; kind < 2; kind++) {
+        plot_figure f;
+        plot_panel *p;
+        plot_grid g;
+        plot_figure_init(&f, NULL);
+        p = plot_add_panel(&f, "", "x", "y");
+        assert_non_null(p);
+        p->equal = 1;
+        p->xmin = p->ymin = -5;
+        p->xmax = p->ymax = 5;
+        assert_int_equal(plot_add_series(p, kind ? PLOT_LINES : PLOT_POINTS, 0, x, y, 73), 0);
+        assert_int_equal(plot_grid_init(&g, 60, 24), 0);
+        plot_draw_cells(&f, &g, 0, 0, 60, 24);
+        if (kind)
+            nl = grid_dots(&g, lin, 20000);
+        else
+            np = grid_dots(&g, pts, 20000);
+        plot_grid_free(&g);
+        plot_figure_free(&f);
+    }
+    assert_true(np > 20 && nl > np);
+    for (k = 0; k < np; k++) {
+        x0 = pts[k][0] < x0 ? pts[k][0] : x0;
+        x1 = pts[k][0] > x1 ? pts[k][0] : x1;
+        y0 = pts[k][1] < y0 ? pts[k][1] : y0;
+        y1 = pts[k][1] > y1 ? pts[k][1] : y1;
+    }
+    cx = 0.5 * (x0 + x1);
+    cy = 0.5 * (y0 + y1);
+    r = 0.25 * ((x1 - x0) + (y1 - y0));
+    for (k = 0; k < nl; k++) {
+        double d = hypot(lin[k][0] - cx, lin[k][1] - cy);
+        if (fabs(d - r) > 2.0)
+            fail_msg("dot (%d, %d) is %.1f dots from the centre; the circle's radius is %.1f",
+                     lin[k][0], lin[k][1], d, r);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -263,6 +338,7 @@ int main(void)
         cmocka_unit_test(test_ticks),
         cmocka_unit_test(test_files),
         cmocka_unit_test(test_cells_print),
+        cmocka_unit_test(test_circle_line),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
