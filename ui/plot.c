@@ -148,6 +148,81 @@ void plot_add_legend(plot_figure *f, int color, const char *label)
     f->nlegend++;
 }
 
+void plot_colour_rgb(int c, double rgb[3])
+{
+    /* Twelve that a reader tells apart (the first six are the terminal's
+     * blue, green, red, yellow, magenta and cyan), then hues a golden angle
+     * apart, alternating in saturation and brightness. */
+    static const double base[12][3] = {
+        {0.00, 0.35, 0.85}, {0.00, 0.60, 0.20}, {0.85, 0.10, 0.10}, {0.90, 0.55, 0.00},
+        {0.65, 0.20, 0.70}, {0.00, 0.60, 0.70}, {0.55, 0.34, 0.16}, {0.95, 0.40, 0.70},
+        {0.45, 0.45, 0.45}, {0.60, 0.60, 0.10}, {0.10, 0.10, 0.45}, {0.40, 0.75, 1.00}};
+    double h, sat, val, f, q, t, pp;
+    int i;
+    if (c < 0) {
+        rgb[0] = rgb[1] = rgb[2] = 0.0;
+        return;
+    }
+    c %= PLOT_NCOLOURS;
+    if (c < 12) {
+        memcpy(rgb, base[c], sizeof base[c]);
+        return;
+    }
+    h = fmod(0.07 + (c - 12) * 0.6180339887498949, 1.0) * 6.0;
+    sat = (c & 1) ? 0.55 : 0.95;
+    val = (c & 2) ? 0.60 : 0.85;
+    i = (int)h;
+    f = h - i;
+    pp = val * (1 - sat);
+    q = val * (1 - sat * f);
+    t = val * (1 - sat * (1 - f));
+    switch (i % 6) {
+    case 0: rgb[0] = val, rgb[1] = t, rgb[2] = pp; break;
+    case 1: rgb[0] = q, rgb[1] = val, rgb[2] = pp; break;
+    case 2: rgb[0] = pp, rgb[1] = val, rgb[2] = t; break;
+    case 3: rgb[0] = pp, rgb[1] = q, rgb[2] = val; break;
+    case 4: rgb[0] = t, rgb[1] = pp, rgb[2] = val; break;
+    default: rgb[0] = val, rgb[1] = pp, rgb[2] = q; break;
+    }
+}
+
+void plot_fit_text(const char *s, int maxw, char *out, size_t n)
+{
+    size_t len = 0, cut = 0, space = 0, k;
+    const unsigned char *u = (const unsigned char *)s;
+    int chars = 0;
+    if (n == 0)
+        return;
+    for (k = 0; u[k]; k++)
+        chars += (u[k] & 0xC0) != 0x80;
+    if (chars <= maxw || maxw < 2) {
+        snprintf(out, n, "%s", chars <= maxw ? s : "");
+        return;
+    }
+    /* The bytes of the first maxw - 1 characters, and the last space in them. */
+    chars = 0;
+    for (k = 0; u[k]; k++) {
+        if ((u[k] & 0xC0) != 0x80) {
+            if (chars == maxw - 1)
+                break;
+            chars++;
+            if (u[k] == ' ')
+                space = k;
+        }
+    }
+    cut = k;
+    /* A whole word when one ends past the middle; else cut the word. */
+    if (space > 0 && 2 * space >= cut)
+        cut = space;
+    while (cut > 0 && (u[cut - 1] == ' ' || u[cut - 1] == ',' || u[cut - 1] == ':'))
+        cut--;
+    len = cut < n - 4 ? cut : n - 4;
+    while (len > 0 && (u[len] & 0xC0) == 0x80)
+        len--; /* never half a character */
+    memcpy(out, s, len);
+    memcpy(out + len, "\xe2\x80\xa6", 4); /* U+2026, the ellipsis, and the NUL */
+}
+
 void plot_panel_limits(plot_panel *p, double aspect)
 {
     double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY, dx, dy;
@@ -384,14 +459,16 @@ static void bars(dots *d, const plot_panel *p, const plot_series *s, int W, int 
     }
 }
 
-/* Centred in w columns, and cut to them. */
+/* Centred in w columns; a longer text ends in an ellipsis. */
 static void center_text(plot_grid *g, int x, int w, int y, const char *s, int color)
 {
     size_t len = 0;
-    const unsigned char *u = (const unsigned char *)s;
-    for (; *u; u++)
+    char fit[256];
+    const unsigned char *u;
+    plot_fit_text(s, w, fit, sizeof fit);
+    for (u = (const unsigned char *)fit; *u; u++)
         len += (*u & 0xC0) != 0x80;
-    plot_grid_text_n(g, x + (w > (int)len ? (w - (int)len) / 2 : 0), y, s, color, w);
+    plot_grid_text_n(g, x + (w > (int)len ? (w - (int)len) / 2 : 0), y, fit, color, w);
 }
 
 static size_t text_len(const char *s)
@@ -406,7 +483,7 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
 {
     plot_panel p = *src;
     double yt[16], xt[16], ystep, xstep;
-    int nyt, nxt, lw = 0, k, W, H, ax, ay;
+    int nyt, nxt, lw = 0, k, W = 0, H, ax, ay, pass;
     char lab[32];
     dots d;
     size_t i;
@@ -414,23 +491,28 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
         plot_grid_text(g, x0, y0, "(too small)", PLOT_FG);
         return;
     }
-    H = h - 4;
-    nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 3, yt, 16);
-    ystep = nyt > 1 ? yt[1] - yt[0] : p.ymax - p.ymin;
-    for (k = 0; k < nyt; k++) {
-        plot_tick_label(yt[k], ystep, lab, sizeof lab);
-        if ((int)strlen(lab) > lw)
-            lw = (int)strlen(lab);
+    /* A map keeps a row for its shade scale. */
+    H = h - 4 - (p.map != NULL);
+    /* The labels' width sets the plot's, which sets an equal panel's
+     * limits and so the labels: twice round is enough, as the widest
+     * label only widens. */
+    for (pass = 0; pass < 2; pass++) {
+        W = w - lw - 1;
+        if (W < 4) {
+            plot_grid_text(g, x0, y0, "(too small)", PLOT_FG);
+            return;
+        }
+        p = *src;
+        /* Braille dots are about square: 2 per cell across, 4 down. */
+        plot_panel_limits(&p, (2.0 * W) / (4.0 * H));
+        nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 3, yt, 16);
+        ystep = nyt > 1 ? yt[1] - yt[0] : p.ymax - p.ymin;
+        for (k = 0; k < nyt; k++) {
+            plot_tick_label(yt[k], ystep, lab, sizeof lab);
+            if ((int)strlen(lab) > lw)
+                lw = (int)strlen(lab);
+        }
     }
-    W = w - lw - 1;
-    if (W < 4) {
-        plot_grid_text(g, x0, y0, "(too small)", PLOT_FG);
-        return;
-    }
-    /* Braille dots are about square: 2 per cell across, 4 down. */
-    plot_panel_limits(&p, (2.0 * W) / (4.0 * H));
-    nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 3, yt, 16);
-    ystep = nyt > 1 ? yt[1] - yt[0] : p.ymax - p.ymin;
     nxt = plot_xticks(&p, W >= 40 ? 5 : 3, xt, 16);
     xstep = nxt > 1 ? xt[1] - xt[0] : p.xmax - p.xmin;
     center_text(g, x0, w, y0, p.title, PLOT_FG);
@@ -488,17 +570,40 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
         /* A map in shades: each cell takes the value under its centre; the
          * lowest is a dot, so a blank is a point with no data. */
         static const char *const shade[] = {"·", "░", "▒", "▓", "█"};
+        double mx0 = p.map_x0, mx1 = p.map_x1, my0 = p.map_y0, my1 = p.map_y1;
+        char sl[160], a[32], b[32];
         int r, c;
+        if (!(mx0 < mx1 && my0 < my1)) {
+            mx0 = p.xmin;
+            mx1 = p.xmax;
+            my0 = p.ymin;
+            my1 = p.ymax;
+        }
         for (r = 0; r < H; r++)
             for (c = 0; c < W; c++) {
-                int mx = c * p.mw / W, my = r * p.mh / H;
-                double v = p.map[my * p.mw + mx], t;
+                /* The cell's centre in the data, then in the raster. */
+                double xv = p.xmin + (c + 0.5) / W * (p.xmax - p.xmin);
+                double yv = p.ymax - (r + 0.5) / H * (p.ymax - p.ymin);
+                double fx = (xv - mx0) / (mx1 - mx0) * p.mw, fy = (my1 - yv) / (my1 - my0) * p.mh;
+                int mx, my;
+                double v, t;
+                if (!(fx >= 0 && fx < p.mw && fy >= 0 && fy < p.mh))
+                    continue;
+                mx = (int)fx;
+                my = (int)fy;
+                v = p.map[my * p.mw + mx];
                 if (!isfinite(v) || !(p.map_hi > p.map_lo))
                     continue;
                 t = (v - p.map_lo) / (p.map_hi - p.map_lo);
                 plot_grid_text(g, ax + 1 + c, y0 + 1 + r, shade[(int)fmin(4, fmax(0, t * 4.999))],
                                PLOT_FG);
             }
+        /* The shade scale, on the terminal only (files have a colour bar). */
+        snprintf(a, sizeof a, "%.3g", p.map_lo);
+        snprintf(b, sizeof b, "%.3g", p.map_hi);
+        snprintf(sl, sizeof sl, "%s from · %s to █ %s", p.map_unit[0] ? p.map_unit : "value", a,
+                 b);
+        plot_grid_text_n(g, x0, ay + 3, sl, PLOT_FG, w);
     }
     for (k = 0; k < p.nseries; k++) {
         const plot_series *s = &p.s[k];
@@ -551,16 +656,35 @@ void plot_draw_cells(const plot_figure *f, plot_grid *g, int x0, int y0, int w, 
         center_text(g, x0, w, top++, t, PLOT_FG);
     }
     if (f->nlegend) {
-        int x = x0;
-        bottom--;
+        /* As many rows as the entries need (at most a third of the
+         * height), each entry whole or ending in an ellipsis. */
+        int rows = 1, x = x0, row;
         for (k = 0; k < f->nlegend; k++) {
-            size_t len = text_len(f->legend[k].label) + 3;
-            if (x + (int)len > x0 + w)
-                break;
-            plot_grid_text(g, x, bottom, "■", f->legend[k].color);
-            plot_grid_text(g, x + 1, bottom, " ", PLOT_FG);
-            plot_grid_text(g, x + 2, bottom, f->legend[k].label, PLOT_FG);
-            x += (int)len;
+            int len = (int)text_len(f->legend[k].label) + 3;
+            if (x > x0 && x + len > x0 + w) {
+                rows++;
+                x = x0;
+            }
+            x += len;
+        }
+        if (rows > h / 3)
+            rows = h / 3 > 0 ? h / 3 : 1;
+        bottom -= rows;
+        x = x0;
+        row = 0;
+        for (k = 0; k < f->nlegend; k++) {
+            char fit[64];
+            int len = (int)text_len(f->legend[k].label) + 3;
+            if (x > x0 && x + len > x0 + w) {
+                if (++row == rows)
+                    break;
+                x = x0;
+            }
+            plot_fit_text(f->legend[k].label, w - 3, fit, sizeof fit);
+            plot_grid_text(g, x, bottom + row, "■", f->legend[k].color);
+            plot_grid_text(g, x + 1, bottom + row, " ", PLOT_FG);
+            plot_grid_text_n(g, x + 2, bottom + row, fit, PLOT_FG, w - 2);
+            x += len;
         }
     }
     if (f->npanel == 0)
@@ -571,6 +695,8 @@ void plot_draw_cells(const plot_figure *f, plot_grid *g, int x0, int y0, int w, 
         int nr = (f->npanel + nc - 1) / nc;
         double pw = (double)w / nc, ph = (double)(bottom - top) / nr;
         double sc = fmin(pw / 2.0, ph);
+        if (f->ncol > 0 && nc != f->ncol && f->ncol <= f->npanel && w / f->ncol >= 14)
+            continue; /* the figure's own columns, where they fit */
         if (pw >= 14 && ph >= 6 && sc > score) {
             score = sc;
             best = nc;
@@ -580,6 +706,8 @@ void plot_draw_cells(const plot_figure *f, plot_grid *g, int x0, int y0, int w, 
         /* Not all fit: as many rows of the widest panels as room allows,
          * and a note of the rest (a file has room for every one). */
         nc = w / 14 > 0 ? w / 14 : 1;
+        if (f->ncol > 0 && w / f->ncol >= 14)
+            nc = f->ncol;
         if (nc > f->npanel)
             nc = f->npanel;
         best = nc;
@@ -607,6 +735,7 @@ void plot_draw_cells(const plot_figure *f, plot_grid *g, int x0, int y0, int w, 
 int plot_grid_print(const plot_grid *g, FILE *out, int colour)
 {
     static const int ansi[PLOT_NPALETTE] = {34, 32, 31, 33, 35, 36};
+    double rgb[3];
     int x, y;
     for (y = 0; y < g->h; y++) {
         int cur = PLOT_FG, end = g->w;
@@ -618,8 +747,15 @@ int plot_grid_print(const plot_grid *g, FILE *out, int colour)
             if (colour && c->color != cur && strcmp(c->ch, " ") != 0) {
                 if (c->color == PLOT_FG)
                     fputs("\033[0m", out);
-                else
-                    fprintf(out, "\033[%dm", ansi[c->color % PLOT_NPALETTE]);
+                else if (c->color < PLOT_NPALETTE)
+                    fprintf(out, "\033[%dm", ansi[c->color]);
+                else {
+                    /* Beyond the six: the nearest of the 256-colour cube. */
+                    plot_colour_rgb(c->color, rgb);
+                    fprintf(out, "\033[38;5;%dm",
+                            16 + 36 * (int)lround(rgb[0] * 5) + 6 * (int)lround(rgb[1] * 5) +
+                                (int)lround(rgb[2] * 5));
+                }
                 cur = c->color;
             }
             fputs(c->ch, out);

@@ -49,15 +49,38 @@ static void legend_waves(plot_figure *f, int nwave, const int *index, const doub
     }
 }
 
+/* A scale bar's length: 1, 2 or 5 times a power of ten, about a quarter
+ * of span and never more than 0.4 of it. */
+static double scalebar_length(double span)
+{
+    double raw = 0.25 * span, mag = pow(10.0, floor(log10(raw))), m = raw / mag;
+    double len = (m < 1.5 ? 1.0 : m < 3.5 ? 2.0 : m < 7.5 ? 5.0 : 10.0) * mag;
+    while (len > 0.4 * span)
+        len = len == 2.0 * mag || len == 10.0 * mag ? len / 2.0 : len * 0.4;
+    return len;
+}
+
 int view_spot_figure(const sg_system *sys, const sg_spot *s, plot_figure *f)
 {
-    double ext = s->airy_radius, scale;
+    double ext = s->airy_radius, scale, half = s->airy_radius;
     const char *u;
     char title[200], lab[64], xl[32], yl[32];
     int fi, w, k;
     for (fi = 0; fi < s->nfield; fi++)
         ext = fmax(ext, s->field[fi].geo);
     u = view_length_unit(sys, ext, &scale);
+    /* One scale for every field, as Zemax draws them: the farthest point
+     * from the reference over all fields and wavelengths. */
+    for (k = 0; k < s->nfield * s->nwave; k++) {
+        const sg_spot_cell *c = &s->cell[k];
+        size_t i;
+        for (i = 0; i < c->npts; i++)
+            if (isfinite(c->pts[i][0]) && isfinite(c->pts[i][1]))
+                half = fmax(half, fmax(fabs(c->pts[i][0]), fabs(c->pts[i][1])));
+    }
+    half *= scale;
+    if (!(half > 0.0))
+        half = 1.0;
     snprintf(title, sizeof title, "Spot diagram: %s", safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
     snprintf(xl, sizeof xl, "x (%s)", u);
@@ -108,7 +131,10 @@ int view_spot_figure(const sg_system *sys, const sg_spot *s, plot_figure *f)
             if (plot_add_series(p, PLOT_LINES, PLOT_FG, x, y, 73))
                 return -1;
         }
-        plot_panel_limits(p, 0.0);
+        p->xmin = p->ymin = -1.1 * half;
+        p->xmax = p->ymax = 1.1 * half;
+        p->scalebar = scalebar_length(2.2 * half);
+        snprintf(p->scalebar_label, sizeof p->scalebar_label, "%g %s", p->scalebar, u);
     }
     legend_waves(f, s->nwave, s->wave_index, s->wave_um);
     return 0;
@@ -143,6 +169,8 @@ int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f)
     snprintf(title, sizeof title, "%s: %s", fan->opd ? "OPD fans" : "Transverse ray fans",
              safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
+    /* One row per field: its tangential and sagittal fans side by side. */
+    f->ncol = 2;
     snprintf(yt, sizeof yt, "%s (%s)", fan->opd ? "W" : "ey", u);
     snprintf(ys, sizeof ys, "%s (%s)", fan->opd ? "W" : "ex", u);
     for (fi = 0; fi < fan->nfield; fi++)
@@ -223,7 +251,7 @@ int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f)
 int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_opd_ref *ref,
                           int field, double um, plot_figure *f)
 {
-    char title[200], lab[64], fl[64], pt[256], wl[32], sc[48];
+    char title[200], lab[64], fl[64], pt[256], wl[32];
     double lo = INFINITY, hi = -INFINITY;
     plot_panel *p;
     int g = w->grid, i, j;
@@ -239,6 +267,11 @@ int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_
     p = plot_add_panel(f, pt, "Px", "Py");
     if (!p)
         return -1;
+    /* A circular pupil is a circle: equal units, the raster on -1..1. */
+    p->equal = 1;
+    p->map_x0 = p->map_y0 = -1.0;
+    p->map_x1 = p->map_y1 = 1.0;
+    snprintf(p->map_unit, sizeof p->map_unit, "OPD (waves)");
     p->map = malloc((size_t)g * (size_t)g * sizeof *p->map);
     if (!p->map)
         return -1;
@@ -265,18 +298,16 @@ int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_
     p->map_hi = hi;
     p->xmin = p->ymin = -1.0;
     p->xmax = p->ymax = 1.0;
-    snprintf(sc, sizeof sc, "OPD ·%.3g to █%.3g waves", lo, hi);
-    plot_add_legend(f, PLOT_FG, sc);
     return 0;
 }
 
 const char *const view_seidel_names[SG_SEIDEL_N] = {"SI", "SII", "SIII", "SIV",
                                                    "SV", "CI", "CII"};
 
-/* One colour per sum: the six palette colours, then the foreground. */
+/* One colour per sum. */
 static int seidel_colour(int k)
 {
-    return k < PLOT_NPALETTE ? k : PLOT_FG;
+    return k;
 }
 
 int view_seidel_figure(const sg_system *sys, const sg_seidel *s, int grouped, plot_figure *f)
