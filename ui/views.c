@@ -146,7 +146,12 @@ int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f)
     const char *u;
     char title[200], lab[64], yt[32], ys[32];
     int fi, w, j, side, n = fan->npts;
-    double *x = malloc((size_t)n * sizeof *x), *y = malloc((size_t)n * sizeof *y);
+    double *x, *y;
+    /* The longest curve (a refined fan has more samples than npts). */
+    for (j = 0; j < fan->nfield * fan->nwave; j++)
+        n = fan->tan[j].n > n ? fan->tan[j].n : fan->sag[j].n > n ? fan->sag[j].n : n;
+    x = malloc((size_t)n * sizeof *x);
+    y = malloc((size_t)n * sizeof *y);
     if (!x || !y) {
         free(x);
         free(y);
@@ -156,7 +161,7 @@ int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f)
         for (side = 0; side < 2; side++) {
             const sg_fan_curve *c = side ? &fan->sag[j] : &fan->tan[j];
             int i;
-            for (i = 0; i < n; i++)
+            for (i = 0; i < c->n; i++)
                 if (c->status[i] == SG_OK)
                     ext = fmax(ext, fabs(c->e[i]));
         }
@@ -185,11 +190,11 @@ int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f)
             for (w = 0; w < fan->nwave; w++) {
                 const sg_fan_curve *c = side ? &fan->sag[fi * fan->nwave + w]
                                              : &fan->tan[fi * fan->nwave + w];
-                for (j = 0; j < n; j++) {
+                for (j = 0; j < c->n; j++) {
                     x[j] = c->p[j];
                     y[j] = c->status[j] == SG_OK ? c->e[j] * scale : NAN;
                 }
-                if (plot_add_series(p, PLOT_LINES, fan->wave_index[w], x, y, (size_t)n))
+                if (plot_add_series(p, PLOT_LINES, fan->wave_index[w], x, y, (size_t)c->n))
                     goto oom;
             }
             p->xmin = -1.0;
