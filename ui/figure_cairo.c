@@ -255,10 +255,11 @@ static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, d
         cairo_set_line_width(cr, 2.0);
         cairo_move_to(cr, sx, sy);
         cairo_line_to(cr, sx + len, sy);
-        cairo_move_to(cr, sx, sy - 4);
-        cairo_line_to(cr, sx, sy + 4);
-        cairo_move_to(cr, sx + len, sy - 4);
-        cairo_line_to(cr, sx + len, sy + 4);
+        /* The end marks inside the bar, so it is len long overall. */
+        cairo_move_to(cr, sx + 1, sy - 4);
+        cairo_line_to(cr, sx + 1, sy + 4);
+        cairo_move_to(cr, sx + len - 1, sy - 4);
+        cairo_line_to(cr, sx + len - 1, sy + 4);
         cairo_stroke(cr);
         text_at(cr, sx, sy - 6, p.scalebar_label, 0.0, 1.0);
     }

@@ -151,39 +151,45 @@ void plot_add_legend(plot_figure *f, int color, const char *label)
 void plot_colour_rgb(int c, double rgb[3])
 {
     /* Twelve that a reader tells apart (the first six are the terminal's
-     * blue, green, red, yellow, magenta and cyan), then hues a golden angle
-     * apart, alternating in saturation and brightness. */
+     * blue, green, red, yellow, magenta and cyan), then, one at a time,
+     * the point of a 6 x 6 x 6 grid of colours farthest from all chosen
+     * and from black (none too light to see on white).  Made once; every caller computes
+     * the same table, so a race only writes the same numbers. */
     static const double base[12][3] = {
         {0.00, 0.35, 0.85}, {0.00, 0.60, 0.20}, {0.85, 0.10, 0.10}, {0.90, 0.55, 0.00},
         {0.65, 0.20, 0.70}, {0.00, 0.60, 0.70}, {0.55, 0.34, 0.16}, {0.95, 0.40, 0.70},
         {0.45, 0.45, 0.45}, {0.60, 0.60, 0.10}, {0.10, 0.10, 0.45}, {0.40, 0.75, 1.00}};
-    double h, sat, val, f, q, t, pp;
-    int i;
+    static double table[PLOT_NCOLOURS][3];
+    static volatile int made;
     if (c < 0) {
         rgb[0] = rgb[1] = rgb[2] = 0.0;
         return;
     }
-    c %= PLOT_NCOLOURS;
-    if (c < 12) {
-        memcpy(rgb, base[c], sizeof base[c]);
-        return;
+    if (!made) {
+        int k, j, g;
+        memcpy(table, base, sizeof base);
+        for (k = 12; k < PLOT_NCOLOURS; k++) {
+            double best = -1.0, cand[3];
+            for (g = 0; g < 216; g++) {
+                double q[3] = {g / 36 * 0.2, g / 6 % 6 * 0.2, g % 6 * 0.2};
+                double dmin = q[0] * q[0] + q[1] * q[1] + q[2] * q[2]; /* from black, the axes' */
+                if (0.299 * q[0] + 0.587 * q[1] + 0.114 * q[2] > 0.75)
+                    continue;
+                for (j = 0; j < k; j++) {
+                    double dr = q[0] - table[j][0], dg = q[1] - table[j][1],
+                           db = q[2] - table[j][2];
+                    dmin = fmin(dmin, dr * dr + dg * dg + db * db);
+                }
+                if (dmin > best) {
+                    best = dmin;
+                    memcpy(cand, q, sizeof q);
+                }
+            }
+            memcpy(table[k], cand, sizeof cand);
+        }
+        made = 1;
     }
-    h = fmod(0.07 + (c - 12) * 0.6180339887498949, 1.0) * 6.0;
-    sat = (c & 1) ? 0.55 : 0.95;
-    val = (c & 2) ? 0.60 : 0.85;
-    i = (int)h;
-    f = h - i;
-    pp = val * (1 - sat);
-    q = val * (1 - sat * f);
-    t = val * (1 - sat * (1 - f));
-    switch (i % 6) {
-    case 0: rgb[0] = val, rgb[1] = t, rgb[2] = pp; break;
-    case 1: rgb[0] = q, rgb[1] = val, rgb[2] = pp; break;
-    case 2: rgb[0] = pp, rgb[1] = val, rgb[2] = t; break;
-    case 3: rgb[0] = pp, rgb[1] = q, rgb[2] = val; break;
-    case 4: rgb[0] = t, rgb[1] = pp, rgb[2] = val; break;
-    default: rgb[0] = val, rgb[1] = pp, rgb[2] = q; break;
-    }
+    memcpy(rgb, table[c % PLOT_NCOLOURS], 3 * sizeof *rgb);
 }
 
 void plot_fit_text(const char *s, int maxw, char *out, size_t n)
@@ -211,8 +217,9 @@ void plot_fit_text(const char *s, int maxw, char *out, size_t n)
         }
     }
     cut = k;
-    /* A whole word when one ends past the middle; else cut the word. */
-    if (space > 0 && 2 * space >= cut)
+    /* A whole word when one ends past the middle (the cut may fall just
+     * after one); else cut the word. */
+    if (u[cut] != ' ' && space > 0 && 2 * space >= cut)
         cut = space;
     while (cut > 0 && (u[cut - 1] == ' ' || u[cut - 1] == ',' || u[cut - 1] == ':'))
         cut--;

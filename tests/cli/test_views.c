@@ -280,6 +280,84 @@ static void test_bar_limits(void **state)
     plot_figure_free(&f);
 }
 
+/* Spot panels share one scale: the same limits in every field, holding
+ * every point of every field; each has a scale bar of 1, 2 or 5 times a
+ * power of ten, a tenth to four tenths of the span, labelled with its
+ * length in the axes' unit.  A fan figure puts a field's tangential and
+ * sagittal fans side by side: two columns, panel 2k tangential and 2k + 1
+ * sagittal of field k + 1. */
+static void test_spot_fan_layout(void **state)
+{
+    sg_spot sp;
+    sg_spot_opts so;
+    sg_fan fan;
+    sg_fan_opts fo;
+    plot_figure f;
+    int k, j;
+    sg_system *off = sg_system_new();
+    double w0 = 0.0, w1 = 0.0;
+    (void)state;
+    /* The stop 150 before the mirror, not at its centre: field 2 gains
+     * coma, so its spot is larger than field 1's. */
+    assert_non_null(off);
+    assert_int_equal(sg_system_assign(off, sys), SG_OK);
+    off->surf[1].thickness = 150;
+    sg_spot_opts_init(&so);
+    so.max_points = 100000;
+    assert_int_equal(sg_spot_compute(off, cat, &so, &sp, NULL), SG_OK);
+    assert_true(sp.field[1].geo > 1.5 * sp.field[0].geo);
+    assert_int_equal(view_spot_figure(off, &sp, &f), 0);
+    assert_int_equal(f.npanel, 2);
+    for (k = 0; k < f.npanel; k++) {
+        const plot_panel *p = &f.panel[k];
+        double span = p->xmax - p->xmin, m, mant;
+        char want[32];
+        assert_true(p->xmin == f.panel[0].xmin && p->xmax == f.panel[0].xmax &&
+                    p->ymin == f.panel[0].ymin && p->ymax == f.panel[0].ymax);
+        for (j = 0; j < p->nseries; j++) {
+            size_t i;
+            for (i = 0; i < p->s[j].n; i++) {
+                assert_true(p->s[j].x[i] >= p->xmin && p->s[j].x[i] <= p->xmax &&
+                            p->s[j].y[i] >= p->ymin && p->s[j].y[i] <= p->ymax);
+                double r = fmax(fabs(p->s[j].x[i]), fabs(p->s[j].y[i]));
+                if (p->s[j].kind != PLOT_POINTS)
+                    continue; /* the Airy circle, the same in both */
+                if (k == 0)
+                    w0 = fmax(w0, r);
+                else
+                    w1 = fmax(w1, r);
+            }
+        }
+        m = pow(10.0, floor(log10(p->scalebar)));
+        mant = p->scalebar / m;
+        assert_true(fabs(mant - 1) < 1e-9 || fabs(mant - 2) < 1e-9 || fabs(mant - 5) < 1e-9);
+        assert_true(p->scalebar >= 0.1 * span && p->scalebar <= 0.4 * span);
+        snprintf(want, sizeof want, "%g %s", p->scalebar, strchr(p->xlabel, '(') + 1);
+        want[strlen(want) - 1] = '\0'; /* the label's closing parenthesis */
+        assert_string_equal(p->scalebar_label, want);
+    }
+    print_message("# spot: field 1 reaches %g, field 2 %g\n", w0, w1);
+    assert_true(w1 > w0); /* the fields differ, their scale does not */
+    plot_figure_free(&f);
+    sg_spot_free(&sp);
+    sg_system_free(off);
+    sg_fan_opts_init(&fo);
+    assert_int_equal(sg_fan_compute(sys, cat, &fo, &fan, NULL), SG_OK);
+    assert_int_equal(view_fan_figure(sys, &fan, &f), 0);
+    assert_int_equal(f.ncol, 2);
+    assert_int_equal(f.npanel, 4);
+    for (k = 0; k < 2; k++) {
+        char field[16];
+        snprintf(field, sizeof field, "field %d ", k + 1);
+        assert_non_null(strstr(f.panel[2 * k].title, "tangential"));
+        assert_non_null(strstr(f.panel[2 * k + 1].title, "sagittal"));
+        assert_true(strncmp(f.panel[2 * k].title, field, strlen(field)) == 0);
+        assert_true(strncmp(f.panel[2 * k + 1].title, field, strlen(field)) == 0);
+    }
+    plot_figure_free(&f);
+    sg_fan_free(&fan);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -287,6 +365,7 @@ int main(void)
         cmocka_unit_test(test_fieldcurve_figure),
         cmocka_unit_test(test_bars_in_cells),
         cmocka_unit_test(test_bar_limits),
+        cmocka_unit_test(test_spot_fan_layout),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
