@@ -145,12 +145,13 @@ static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, d
             text_at(cr, bx + bw + 25, by + bh - (t[k] - p.map_lo) / (p.map_hi - p.map_lo) * bh,
                     lab, 0.0, 0.5);
         }
-        if (p.map_unit[0]) {
+        if (p.map_label[0] || p.map_unit[0]) {
+            snprintf(fit, sizeof fit, p.map_unit[0] ? "%s (%s)" : "%s", p.map_label, p.map_unit);
             cairo_save(cr);
             cairo_translate(cr, x + w - 10, by + bh / 2);
             cairo_rotate(cr, -M_PI_ / 2);
             cairo_set_font_size(cr, 11);
-            text_at(cr, 0, 0, p.map_unit, 0.5, 0.5);
+            text_at(cr, 0, 0, fit, 0.5, 0.5);
             cairo_restore(cr);
         }
     }

@@ -608,8 +608,8 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
         /* The shade scale, on the terminal only (files have a colour bar). */
         snprintf(a, sizeof a, "%.3g", p.map_lo);
         snprintf(b, sizeof b, "%.3g", p.map_hi);
-        snprintf(sl, sizeof sl, "%s from · %s to █ %s", p.map_unit[0] ? p.map_unit : "value", a,
-                 b);
+        snprintf(sl, sizeof sl, "%s from · %s to █ %s %s", p.map_label[0] ? p.map_label : "value",
+                 a, b, p.map_unit);
         plot_grid_text_n(g, x0, ay + 3, sl, PLOT_FG, w);
     }
     for (k = 0; k < p.nseries; k++) {
@@ -658,7 +658,7 @@ void plot_draw_cells(const plot_figure *f, plot_grid *g, int x0, int y0, int w, 
         return;
     }
     if (f->title[0]) {
-        char t[200];
+        char t[256];
         snprintf(t, sizeof t, "%s", f->title);
         center_text(g, x0, w, top++, t, PLOT_FG);
     }

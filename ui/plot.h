@@ -47,7 +47,7 @@ typedef struct plot_panel {
     int mw, mh;
     double *map, map_lo, map_hi;
     double map_x0, map_x1, map_y0, map_y1; /* the raster's extent (unset: the limits) */
-    char map_unit[16];                      /* the colour bar's unit */
+    char map_label[24], map_unit[16];       /* what the colour bar shows, in what unit */
     /* Categories on x (bar charts): ticks at x = 1 .. ncat, labelled cat[k-1]
      * instead of by number. */
     int ncat;
@@ -55,7 +55,7 @@ typedef struct plot_panel {
 } plot_panel;
 
 typedef struct plot_figure {
-    char title[160];
+    char title[256];
     int ncol; /* panels per row (fans: a field's pair); 0 for the roomiest */
     int npanel, cap;
     plot_panel *panel;

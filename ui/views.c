@@ -64,7 +64,7 @@ int view_spot_figure(const sg_system *sys, const sg_spot *s, plot_figure *f)
 {
     double ext = s->airy_radius, scale, half = s->airy_radius;
     const char *u;
-    char title[200], lab[64], xl[32], yl[32];
+    char title[256], lab[160], xl[32], yl[32];
     int fi, w, k;
     for (fi = 0; fi < s->nfield; fi++)
         ext = fmax(ext, s->field[fi].geo);
@@ -144,7 +144,7 @@ int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f)
 {
     double ext = 0.0, scale;
     const char *u;
-    char title[200], lab[64], yt[32], ys[32];
+    char title[256], lab[160], yt[32], ys[32];
     int fi, w, j, side, n = fan->npts;
     double *x, *y;
     /* The longest curve (a refined fan has more samples than npts). */
@@ -215,7 +215,7 @@ oom:
 
 int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f)
 {
-    char title[200], lab[64], xl[32], yl[32];
+    char title[256], lab[160], xl[32], yl[32];
     const char *u = sys->units[0] ? sys->units : "mm";
     plot_panel *p;
     int i, fi;
@@ -256,7 +256,7 @@ int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f)
 int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_opd_ref *ref,
                           int field, double um, plot_figure *f)
 {
-    char title[200], lab[64], fl[64], pt[256], wl[32];
+    char title[256], lab[160], fl[64], pt[256], wl[32];
     double lo = INFINITY, hi = -INFINITY;
     plot_panel *p;
     int g = w->grid, i, j;
@@ -276,7 +276,8 @@ int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_
     p->equal = 1;
     p->map_x0 = p->map_y0 = -1.0;
     p->map_x1 = p->map_y1 = 1.0;
-    snprintf(p->map_unit, sizeof p->map_unit, "OPD (waves)");
+    snprintf(p->map_label, sizeof p->map_label, "OPD");
+    snprintf(p->map_unit, sizeof p->map_unit, "waves");
     p->map = malloc((size_t)g * (size_t)g * sizeof *p->map);
     if (!p->map)
         return -1;
@@ -320,7 +321,7 @@ int view_seidel_figure(const sg_system *sys, const sg_seidel *s, int grouped, pl
     static const char *const what[SG_SEIDEL_N] = {
         "SI spherical", "SII coma", "SIII astigmatism", "SIV Petzval",
         "SV distortion", "CI axial colour", "CII lateral colour"};
-    char title[200], lab[64], yl[32], (*cats)[12];
+    char title[256], lab[160], yl[32], (*cats)[12];
     const char **cp;
     const char *u = sys->units[0] ? sys->units : "mm";
     int ng = s->nsurf, j, k, rc = -1; /* surfaces 1 .. nsurf-1 and the total */
@@ -390,7 +391,7 @@ out:
 int view_fieldcurve_figure(const sg_system *sys, const sg_fieldcurve_pt *pt, int n, double um,
                            plot_figure *f)
 {
-    char title[200], lab[64], wl[32], fl[32], xl[32];
+    char title[256], lab[160], wl[32], fl[32], xl[32];
     const char *u = sys->units[0] ? sys->units : "mm";
     double *yv = malloc((size_t)(n > 0 ? n : 1) * sizeof *yv),
            *xv = malloc((size_t)(n > 0 ? n : 1) * sizeof *xv);
