@@ -1157,8 +1157,9 @@ void sg_layout_opts_init(sg_layout_opts *o);
 
 typedef struct sg_layout_surface {
     double z0;           /* the vertex's global z (surface 1 at 0) */
-    double sd;           /* the semi-diameter drawn: the design's, or the
-                            largest ray height there when it has none */
+    double sd;           /* the semi-diameter drawn: a fixed one as stored,
+                            else the automatic one (sg_semi_diameters), else
+                            the stored one or the rays drawn's highest */
     int mirror, glass_after; /* a mirror; glass (index != 1) after it */
     int npts;
     double *y, *z;       /* the profile, global y and z */

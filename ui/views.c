@@ -218,7 +218,7 @@ int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f)
     char title[256], lab[160], xl[32], yl[32];
     const char *u = sys->units[0] ? sys->units : "mm";
     plot_panel *p;
-    int i, fi;
+    int i, fi, coaxial = 1;
     snprintf(title, sizeof title, "Layout: %s", safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
     snprintf(xl, sizeof xl, "z (%s)", u);
@@ -227,15 +227,44 @@ int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f)
     if (!p)
         return -1;
     p->equal = 1;
+    for (i = 1; i < sys->nsurf && coaxial; i++)
+        coaxial = !sg_surface_moves_frame(&sys->surf[i]);
     for (i = 0; i < l->nsurf - 1; i++) {
         const sg_layout_surface *s = &l->surf[i];
         if (plot_add_series(p, PLOT_LINES, PLOT_FG, s->z, s->y, (size_t)s->npts))
             return -1;
-        /* A lens's edges: its two surfaces' rims joined. */
+        /* A lens's edges: its two surfaces' rims joined.  On the axis, as
+         * Zemax draws them, the smaller surface goes on flat to the larger
+         * one's height and a cylinder joins them; in a tilted system the
+         * rims are joined straight. */
         if (s->glass_after && i + 1 < l->nsurf - 1 && s->npts && l->surf[i + 1].npts) {
             const sg_layout_surface *t = &l->surf[i + 1];
             double z[5] = {s->z[0], t->z[0], NAN, s->z[s->npts - 1], t->z[t->npts - 1]};
             double y[5] = {s->y[0], t->y[0], NAN, s->y[s->npts - 1], t->y[t->npts - 1]};
+            if (coaxial) {
+                double ez[8], ey[8];
+                int side;
+                for (side = 0; side < 2; side++) {
+                    /* Rim points: s's (zs, ys) and t's (zt, yt). */
+                    double zs = z[3 * side], ys = y[3 * side], zt = z[3 * side + 1],
+                           yt = y[3 * side + 1], *oz = ez + 4 * side, *oy = ey + 4 * side;
+                    oz[0] = zs;
+                    oy[0] = ys;
+                    if (fabs(ys) < fabs(yt)) {
+                        oz[1] = zs;
+                        oy[1] = yt;
+                    } else {
+                        oz[1] = zt;
+                        oy[1] = ys;
+                    }
+                    oz[2] = zt;
+                    oy[2] = yt;
+                    oz[3] = oy[3] = NAN; /* a break between the two edges */
+                }
+                if (plot_add_series(p, PLOT_LINES, PLOT_FG, ez, ey, 7))
+                    return -1;
+                continue;
+            }
             if (plot_add_series(p, PLOT_LINES, PLOT_FG, z, y, 5))
                 return -1;
         }

@@ -358,6 +358,63 @@ static void test_spot_fan_layout(void **state)
     sg_fan_free(&fan);
 }
 
+static const char LENS[] =
+    "{\"format\": \"sagitta-design\", \"version\": 1, \"title\": \"lens\",\n"
+    " \"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.55, \"weight\": 1}]},\n"
+    " \"fields\": {\"type\": \"angle\", \"normalization\": \"radial\",\n"
+    "   \"list\": [{\"x\": 0, \"y\": 0, \"weight\": 1}, {\"x\": 0, \"y\": 10, \"weight\": 1}]},\n"
+    " \"aperture\": {\"type\": \"epd\", \"value\": 10},\n"
+    " \"ray_aiming\": \"off\",\n"
+    " \"surfaces\": [\n"
+    "    {\"radius\": \"inf\", \"thickness\": \"inf\"},\n"
+    "    {\"radius\": \"inf\", \"thickness\": 10, \"stop\": true},\n"
+    "    {\"radius\": 50, \"thickness\": 5, \"material\": \"N-BK7\"},\n"
+    "    {\"radius\": -50, \"thickness\": 45},\n"
+    "    {\"radius\": \"inf\", \"thickness\": 0}]}\n";
+
+/* A lens's edge as Zemax draws it on the axis: the smaller surface goes
+ * on flat (at its rim's z) to the larger one's height, and a cylinder
+ * parallel to the axis (one height) joins the larger rim.  The stop 10
+ * before the lens and a 10 degree field make the rear surface's automatic
+ * semi-diameter larger than the front's. */
+static void test_layout_edges(void **state)
+{
+    sg_system *lens = sg_system_new();
+    sg_layout l;
+    sg_layout_opts lo;
+    plot_figure f;
+    sg_diag d;
+    int j, found = 0;
+    (void)state;
+    sg_diag_clear(&d);
+    assert_non_null(lens);
+    assert_int_equal(sg_design_parse(lens, LENS, strlen(LENS), "lens.json", &d), SG_OK);
+    sg_layout_opts_init(&lo);
+    assert_int_equal(sg_layout_compute(lens, cat, &lo, &l, &d), SG_OK);
+    assert_true(l.surf[2].sd > l.surf[1].sd + 0.1); /* surface 3 (rear) larger than 2 */
+    assert_int_equal(view_layout_figure(lens, &l, &f), 0);
+    for (j = 0; j < f.panel[0].nseries; j++) {
+        const plot_series *e = &f.panel[0].s[j];
+        int side;
+        if (e->n != 7)
+            continue;
+        found++;
+        for (side = 0; side < 2; side++) {
+            const double *y = e->y;
+            /* From the front rim, out flat at its z to the rear's height,
+             * then along the axis at that height to the rear rim. */
+            assert_true(e->x[4 * side] == e->x[4 * side + 1]);
+            assert_true(fabs(y[4 * side + 1]) > fabs(y[4 * side]));
+            assert_true(y[4 * side + 1] == y[4 * side + 2]);
+        }
+        assert_true(isnan(e->y[3]));
+    }
+    assert_int_equal(found, 1);
+    plot_figure_free(&f);
+    sg_layout_free(&l);
+    sg_system_free(lens);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -366,6 +423,7 @@ int main(void)
         cmocka_unit_test(test_bars_in_cells),
         cmocka_unit_test(test_bar_limits),
         cmocka_unit_test(test_spot_fan_layout),
+        cmocka_unit_test(test_layout_edges),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }
