@@ -5,6 +5,7 @@
  * wavelength goes through the batch in one call, keeping only the image
  * surface.
  */
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -43,6 +44,7 @@ void sg_fan_free(sg_fan *f)
 
 static int curve_alloc(sg_fan_curve *c, int n)
 {
+    c->n = n;
     c->p = calloc((size_t)n, sizeof *c->p);
     c->e = calloc((size_t)n, sizeof *c->e);
     c->status = calloc((size_t)n, sizeof *c->status);
@@ -67,6 +69,145 @@ static void opd_value(const sg_tracer *t, const sg_opd_ref *ref, const sg_ray_su
         *e = r.opd_waves;
 }
 
+/* One sample's value from its image row: the transverse aberration from
+ * the reference chief ray, or the OPD less this wavelength's chief ray's. */
+static void sample_value(const sg_fan *out, int f, int sag, const sg_tracer *tw,
+                         const sg_opd_ref *ref, double c0, int c0st, const sg_ray_surface *row,
+                         int st, int *status, double *e)
+{
+    *status = out->status[f] != SG_OK ? out->status[f] : st;
+    if (out->opd) {
+        if (c0st != SG_OK)
+            *status = c0st;
+        opd_value(tw, ref, row, status, e);
+        if (*status == SG_OK)
+            *e -= c0;
+        return;
+    }
+    *e = *status == SG_OK ? (sag ? row->x - out->ref_x[f] : row->y - out->ref_y[f]) : 0.0;
+}
+
+/* A curve's interval j..j+1 needs its midpoint: both ends traced and the
+ * bend beyond tol, or one end failed (the edge of what passes lies there). */
+static int wants_mid(const sg_fan_curve *c, int j, const double *mid_e, const int *mid_st,
+                     double tol)
+{
+    if (c->status[j] != SG_OK || c->status[j + 1] != SG_OK)
+        return c->status[j] != c->status[j + 1];
+    if (*mid_st != SG_OK)
+        return 1;
+    return fabs(*mid_e - 0.5 * (c->e[j] + c->e[j + 1])) > tol;
+}
+
+/* Inserts sample (p, e, st) after index j. */
+static int curve_insert(sg_fan_curve *c, int j, double p, double e, int st)
+{
+    double *np = realloc(c->p, (size_t)(c->n + 1) * sizeof *np), *ne;
+    int *ns;
+    if (!np)
+        return SG_ENOMEM;
+    c->p = np;
+    if (!(ne = realloc(c->e, (size_t)(c->n + 1) * sizeof *ne)))
+        return SG_ENOMEM;
+    c->e = ne;
+    if (!(ns = realloc(c->status, (size_t)(c->n + 1) * sizeof *ns)))
+        return SG_ENOMEM;
+    c->status = ns;
+    memmove(c->p + j + 2, c->p + j + 1, (size_t)(c->n - j - 1) * sizeof *c->p);
+    memmove(c->e + j + 2, c->e + j + 1, (size_t)(c->n - j - 1) * sizeof *c->e);
+    memmove(c->status + j + 2, c->status + j + 1, (size_t)(c->n - j - 1) * sizeof *c->status);
+    c->p[j + 1] = p;
+    c->e[j + 1] = e;
+    c->status[j + 1] = st;
+    c->n++;
+    return SG_OK;
+}
+
+/* The refinement of one wavelength's curves (index w of each field): rounds
+ * of every interval's midpoint, traced together in b, kept where
+ * wants_mid says; an interval whose midpoint is kept is split and its
+ * halves looked at next round. */
+static int refine_curves(const sg_system *sys, const sg_fan_opts *o, sg_fan *out, int w,
+                         sg_batch *b, const sg_tracer *tw, const sg_opd_ref *ref,
+                         const double *c0, const int *c0st, double *ext, sg_diag *d)
+{
+    int nf = out->nfield, nw = out->nwave, round, f, side, j, last = sys->nsurf - 1, rc;
+    double minstep = 2.0 / (double)(out->npts - 1) / 128.0 * 1.0000001;
+    double tol = o->refine_tol > 0.0 ? o->refine_tol : 1e-3;
+    for (round = 0; round < 7; round++) {
+        size_t nray = 0, cap = 0, r;
+        sg_ray_in *rays = NULL;
+        sg_ray_surface *rows = NULL;
+        int *st = NULL, added = 0;
+        /* Every interval wider than the smallest step. */
+        for (f = 0; f < nf; f++)
+            for (side = 0; side < 2; side++) {
+                const sg_fan_curve *c = side ? &out->sag[f * nw + w] : &out->tan[f * nw + w];
+                for (j = 0; j + 1 < c->n; j++)
+                    if (c->p[j + 1] - c->p[j] > minstep)
+                        cap++;
+            }
+        if (cap == 0)
+            return SG_OK;
+        rays = malloc(cap * sizeof *rays);
+        rows = malloc(cap * sizeof *rows);
+        st = malloc(cap * sizeof *st);
+        if (!rays || !rows || !st) {
+            free(rays);
+            free(rows);
+            free(st);
+            return sg_diag_set(d, SG_ENOMEM, "out of memory");
+        }
+        for (f = 0; f < nf; f++)
+            for (side = 0; side < 2; side++) {
+                const sg_fan_curve *c = side ? &out->sag[f * nw + w] : &out->tan[f * nw + w];
+                for (j = 0; j + 1 < c->n; j++)
+                    if (c->p[j + 1] - c->p[j] > minstep) {
+                        double p = 0.5 * (c->p[j] + c->p[j + 1]);
+                        sg_ray_in *t = &rays[nray++];
+                        t->v[0] = out->hx[f];
+                        t->v[1] = out->hy[f];
+                        t->v[2] = side ? p : 0.0;
+                        t->v[3] = side ? 0.0 : p;
+                    }
+            }
+        rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, nray, &last, 1, rows, st, d);
+        if (rc == SG_OK) {
+            double tolabs = tol * *ext;
+            r = 0;
+            for (f = 0; f < nf; f++)
+                for (side = 0; side < 2 && rc == SG_OK; side++) {
+                    sg_fan_curve *c = side ? &out->sag[f * nw + w] : &out->tan[f * nw + w];
+                    /* Walk the old intervals, inserting as we go. */
+                    for (j = 0; j + 1 < c->n && rc == SG_OK; j++) {
+                        double e;
+                        int s2;
+                        if (!(c->p[j + 1] - c->p[j] > minstep))
+                            continue;
+                        sample_value(out, f, side, tw, &ref[f], c0[f], c0st[f], &rows[r], st[r],
+                                     &s2, &e);
+                        r++;
+                        if (wants_mid(c, j, &e, &s2, tolabs)) {
+                            rc = curve_insert(c, j, 0.5 * (c->p[j] + c->p[j + 1]), e, s2);
+                            if (s2 == SG_OK)
+                                *ext = fmax(*ext, fabs(e));
+                            j++; /* past the new sample: its halves wait for the next round */
+                            added++;
+                        }
+                    }
+                }
+        }
+        free(rays);
+        free(rows);
+        free(st);
+        if (rc != SG_OK)
+            return rc == SG_ENOMEM ? sg_diag_set(d, SG_ENOMEM, "out of memory") : rc;
+        if (!added)
+            return SG_OK;
+    }
+    return SG_OK;
+}
+
 int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opts *o,
                    sg_fan *out, sg_diag *d)
 {
@@ -79,8 +220,8 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
     sg_batch *b = NULL;
     sg_tracer *tw = NULL;
     sg_opd_ref *ref = NULL;
-    double c0 = 0.0;
-    int c0st = SG_OK;
+    double c0 = 0.0, c0v[SG_MAX_FIELDS], ext = 0.0;
+    int c0st = SG_OK, c0stv[SG_MAX_FIELDS];
 
     if (!sys || !o || !out)
         return sg_diag_set(d, SG_EINVAL, "fan: no system, options or result");
@@ -162,10 +303,10 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
                 rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, &rays[r], 1, &last, 1, &rows[r],
                                     &st[r], d);
         }
+        /* The refinement's rays are the pupil's, stopped as usual. */
+        sg_batch_set_reference(b, 0);
         if (rc != SG_OK)
             goto done;
-        sg_batch_free(b);
-        b = NULL;
         if (o->opd) {
             /* A tracer at this wavelength, for the OPD in its waves; the
              * spheres are the primary wavelength's whichever traces them. */
@@ -193,6 +334,8 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
                 c0st = out->status[f] != SG_OK ? out->status[f] : st[r];
                 opd_value(tw, &ref[f], &rows[r], &c0st, &c0);
             }
+            c0v[f] = c0;
+            c0stv[f] = c0st;
             for (j = 0; j < np; j++) {
                 size_t it = r + 1 + (size_t)j, is = r + 1 + (size_t)(np + j);
                 t->p[j] = rays[it].v[3];
@@ -214,7 +357,18 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
                 t->e[j] = t->status[j] == SG_OK ? rows[it].y - out->ref_y[f] : 0.0;
                 s->e[j] = s->status[j] == SG_OK ? rows[is].x - out->ref_x[f] : 0.0;
             }
+            for (j = 0; j < np; j++) {
+                if (t->status[j] == SG_OK)
+                    ext = fmax(ext, fabs(t->e[j]));
+                if (s->status[j] == SG_OK)
+                    ext = fmax(ext, fabs(s->e[j]));
+            }
         }
+        if (o->refine && (rc = refine_curves(sys, o, out, w, b, tw, ref, c0v, c0stv, &ext, d)) !=
+                             SG_OK)
+            goto done;
+        sg_batch_free(b);
+        b = NULL;
     }
     rc = SG_OK;
 done:

@@ -79,6 +79,7 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
     sg_ray_in *rays = NULL;
     sg_ray_surface *rows = NULL;
     int *st = NULL;
+    double *autosd = NULL;
 
     if (!sys || !o || !out)
         return sg_diag_set(d, SG_EINVAL, "layout: no system, options or result");
@@ -164,12 +165,28 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
                 break;
         }
     }
+    /* Zemax draws a semi-diameter that is not fixed as the automatic one,
+     * so no ray passes outside a lens.  Where that cannot be found (a ray
+     * of the edge fails), the stored values and the rays drawn serve. */
+    for (i = 1; i < ns && sys->surf[i].sd_fixed; i++)
+        ;
+    if (i < ns && (autosd = calloc((size_t)ns, sizeof *autosd)) != NULL) {
+        sg_semidiam_opts so;
+        sg_semidiam_opts_init(&so);
+        so.trace.method = o->trace.method;
+        if (sg_semi_diameters(sys, cat, &so, autosd, NULL) != SG_OK) {
+            free(autosd);
+            autosd = NULL;
+        }
+    }
     for (i = 1; i < ns; i++) {
         sg_layout_surface *s = &out->surf[i - 1];
         const sg_surface *su = &sys->surf[i];
         sg_shape sh;
         int gen;
         double sd = su->semi_diameter;
+        if (!su->sd_fixed && autosd && autosd[i] > 0.0)
+            sd = autosd[i];
         int np = o->profile_pts;
         s->z0 = z0[i];
         s->mirror = su->type != SG_SURF_COORDBRK && su->mat.kind == SG_MAT_MIRROR;
@@ -215,6 +232,7 @@ int sg_layout_compute(const sg_system *sys, const sg_catalog *cat, const sg_layo
     }
     rc = SG_OK;
 done:
+    free(autosd);
     free(z0);
     free(gf);
     free(rays);

@@ -1328,13 +1328,20 @@ typedef struct sg_fan_opts {
     int field;   /* 0-based, or -1 for every field */
     int nthreads;
     int opd;     /* nonzero: OPD fans (waves) instead of transverse ray fans */
+    /* Nonzero: samples added where a curve bends, for pictures: an
+     * interval's midpoint is traced, and kept (its halves tested in turn,
+     * down to a 128th of the first step) while it lies farther than
+     * refine_tol times the largest |e| so far from the chord. */
+    int refine;
+    double refine_tol; /* 0: 1e-3 */
 } sg_fan_opts;
 
 SG_API void sg_fan_opts_init(sg_fan_opts *o);
 
 /* One fan: the pupil coordinate of each sample and the aberration. */
 typedef struct sg_fan_curve {
-    double *p;      /* npts pupil coordinates (Py tangential, Px sagittal) */
+    int n;          /* samples: npts, or more with refine */
+    double *p;      /* n pupil coordinates, increasing (Py tangential, Px sagittal) */
     double *e;      /* ey (tangential) or ex (sagittal), lens units; or, in an
                        OPD fan, the OPD in waves of the curve's wavelength */
     int *status;    /* each ray's status; e is 0 where it is not SG_OK */
@@ -1377,8 +1384,9 @@ SG_API void sg_layout_opts_init(sg_layout_opts *o);
 
 typedef struct sg_layout_surface {
     double z0;           /* the vertex's global z (surface 1 at 0) */
-    double sd;           /* the semi-diameter drawn: the design's, or the
-                            largest ray height there when it has none */
+    double sd;           /* the semi-diameter drawn: a fixed one as stored,
+                            else the automatic one (sg_semi_diameters), else
+                            the stored one or the rays drawn's highest */
     int mirror, glass_after; /* a mirror; glass (index != 1) after it */
     int npts;
     double *y, *z;       /* the profile, global y and z */

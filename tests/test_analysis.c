@@ -380,6 +380,55 @@ static void test_sphere_mirror_exact(void **state)
     sg_catalog_free(cat);
 }
 
+
+/* A refined fan's polyline follows the true curve: the spherical mirror's
+ * ey(Py) in closed form (sphere_landing, MPFR), evaluated at 2001 points,
+ * departs from the piecewise-linear curve through the samples by at most
+ * twice the tolerance asked (1e-3 of the largest |ey|), where the 5 even
+ * samples alone miss it by far more; every sample is on the curve, in
+ * increasing Py. */
+static void test_fan_refine(void **state)
+{
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = mirror(0.0);
+    sg_fan fan;
+    sg_fan_opts fo;
+    int pass, j, k;
+    double g = fabs(sphere_landing(-100.0, 10.0)), dev[2];
+    (void)state;
+    for (pass = 0; pass < 2; pass++) {
+        const sg_fan_curve *c;
+        sg_fan_opts_init(&fo);
+        fo.npts = 5;
+        fo.refine = pass;
+        assert_int_equal(sg_fan_compute(sys, cat, &fo, &fan, NULL), SG_OK);
+        c = &fan.tan[0];
+        assert_true(pass ? c->n > 20 : c->n == 5);
+        for (j = 0; j < c->n; j++) {
+            assert_int_equal(c->status[j], SG_OK);
+            assert_true(fabs(c->e[j] - sphere_landing(-100.0, 10.0 * c->p[j])) <= 1e-12 * g);
+            if (j)
+                assert_true(c->p[j] > c->p[j - 1]);
+        }
+        dev[pass] = 0.0;
+        for (k = 0, j = 0; k <= 2000; k++) {
+            double py = -1.0 + k / 1000.0, t, lin;
+            while (j + 2 < c->n && c->p[j + 1] < py)
+                j++;
+            t = (py - c->p[j]) / (c->p[j + 1] - c->p[j]);
+            lin = c->e[j] + t * (c->e[j + 1] - c->e[j]);
+            dev[pass] = fmax(dev[pass], fabs(lin - sphere_landing(-100.0, 10.0 * py)));
+        }
+        sg_fan_free(&fan);
+    }
+    print_message("# fan refine: max deviation %.3g of the range unrefined, %.3g refined\n",
+                  dev[0] / g, dev[1] / g);
+    assert_true(dev[0] > 1e-2 * g);
+    assert_true(dev[1] <= 2e-3 * g);
+    sg_system_free(sys);
+    sg_catalog_free(cat);
+}
+
 /* Fans of every wavelength measure from the primary wavelength's chief ray. */
 static void test_fan_polychromatic_reference(void **state)
 {
@@ -497,6 +546,7 @@ int main(void)
         cmocka_unit_test(test_paraboloid_zero_spot),
         cmocka_unit_test(test_spot_centroid_bound),
         cmocka_unit_test(test_sphere_mirror_exact),
+        cmocka_unit_test(test_fan_refine),
         cmocka_unit_test(test_fan_polychromatic_reference),
         cmocka_unit_test(test_layout_positions),
         cmocka_unit_test(test_bad_input),

@@ -740,6 +740,9 @@ static int run(int kind, int argc, char **argv)
         fo.field = field1 - 1;
         fo.nthreads = threads;
         fo.opd = opdfan;
+        /* A picture file's curves get samples where they bend; the
+         * tables keep the --points steps. */
+        fo.refine = a.fmt >= AN_FMT_PNG;
         rc = sg_fan_compute(a.sys, a.cat, &fo, &r.fan, &d);
     } else if (kind == AN_WAVEFRONT) {
         if (field1 == 0)

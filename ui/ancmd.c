@@ -69,6 +69,7 @@ int an_cmd_next(an_cmd *a, cli_iter *it, const cli_opt *opts, const char **val)
         case AN_OPT_SIZE:
             if (parse_size(a, *val, &a->width, &a->height))
                 return -CLI_EXIT_USAGE;
+            a->size_given = 1;
             break;
         default:
             return id;
@@ -147,7 +148,14 @@ int an_cmd_write(const an_cmd *a, const an_writer *w)
     }
     if (a->fmt >= AN_FMT_PNG) {
         char msg[256];
-        if (plot_write(&fig, a->fmt - AN_FMT_PNG, a->width, a->height, of.f, msg, sizeof msg)) {
+        int wd = a->width, ht = a->height, mw, mh;
+        if (!a->size_given) {
+            /* The default size grows to hold every panel (nine fields' fans). */
+            plot_min_size(&fig, wd, &mw, &mh);
+            wd = mw > wd ? mw : wd;
+            ht = mh > ht ? mh : ht;
+        }
+        if (plot_write(&fig, a->fmt - AN_FMT_PNG, wd, ht, of.f, msg, sizeof msg)) {
             cli_error("%s: %s", where, msg);
             outfile_abort(&of);
             rc = CLI_EXIT_FILE;

@@ -36,6 +36,7 @@ typedef struct an_cmd {
     const char *output; /* -o, or NULL */
     int fmt;            /* AN_FMT_* */
     int width, height;  /* --size */
+    int size_given;     /* --size was given (else a picture grows to hold its panels) */
     /* Text carries its picture even when it does not go to a terminal. */
     int text_picture;
     sg_catalog *cat;

@@ -14,9 +14,9 @@
 
 #define M_PI_  3.14159265358979323846
 
-static const double palette[PLOT_NPALETTE][3] = {
-    {0.00, 0.35, 0.85}, {0.00, 0.60, 0.20}, {0.85, 0.10, 0.10},
-    {0.90, 0.55, 0.00}, {0.65, 0.20, 0.70}, {0.00, 0.60, 0.70}};
+/* The smallest panel whose labels stay apart (points). */
+#define MIN_PANEL_W 160
+#define MIN_PANEL_H 120
 
 int plot_file_format(const char *s)
 {
@@ -33,11 +33,30 @@ int plot_file_format(const char *s)
 
 static void set_colour(cairo_t *cr, int c)
 {
-    if (c < 0)
-        cairo_set_source_rgb(cr, 0, 0, 0);
-    else
-        cairo_set_source_rgb(cr, palette[c % PLOT_NPALETTE][0], palette[c % PLOT_NPALETTE][1],
-                             palette[c % PLOT_NPALETTE][2]);
+    double rgb[3];
+    plot_colour_rgb(c, rgb);
+    cairo_set_source_rgb(cr, rgb[0], rgb[1], rgb[2]);
+}
+
+/* s cut with an ellipsis to at most maxpx wide in the current font. */
+static void fit_px(cairo_t *cr, const char *s, double maxpx, char *out, size_t n)
+{
+    cairo_text_extents_t e;
+    int m = 0;
+    const unsigned char *u;
+    snprintf(out, n, "%s", s);
+    cairo_text_extents(cr, out, &e);
+    if (e.x_advance <= maxpx)
+        return;
+    for (u = (const unsigned char *)s; *u; u++)
+        m += (*u & 0xC0) != 0x80;
+    for (m--; m > 1; m--) {
+        plot_fit_text(s, m, out, n);
+        cairo_text_extents(cr, out, &e);
+        if (e.x_advance <= maxpx)
+            return;
+    }
+    out[0] = '\0';
 }
 
 /* A perceptually even map from dark blue through green to yellow (five
@@ -65,10 +84,10 @@ static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, d
                        double h)
 {
     plot_panel p = *src;
-    double L = 62, R = p.map ? 60 : 12, T = 22, B = 42, bx, by, bw, bh, t[16], step;
+    double L = 62, R = p.map ? 90 : 12, T = 22, B = 42, bx, by, bw, bh, t[16], step;
     int n, k;
     size_t i;
-    char lab[32];
+    char lab[32], fit[256];
     bx = x + L;
     by = y + T;
     bw = w - L - R;
@@ -79,13 +98,27 @@ static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, d
     cairo_set_font_size(cr, 12);
     cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
     set_colour(cr, PLOT_FG);
-    text_at(cr, bx + bw / 2, y + 4, p.title, 0.5, 0.0);
+    fit_px(cr, p.title, w - 8, fit, sizeof fit);
+    text_at(cr, x + w / 2, y + 4, fit, 0.5, 0.0);
     cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL,
                            CAIRO_FONT_WEIGHT_NORMAL);
     cairo_set_font_size(cr, 10);
     if (p.map && p.mw > 0 && p.mh > 0 && p.map_hi > p.map_lo) {
-        double cw = bw / p.mw, ch = bh / p.mh, rgb[3];
+        double mx0 = p.map_x0, mx1 = p.map_x1, my0 = p.map_y0, my1 = p.map_y1, rgb[3];
+        double ox, oy, cw, ch;
         int r, c;
+        if (!(mx0 < mx1 && my0 < my1)) {
+            mx0 = p.xmin;
+            mx1 = p.xmax;
+            my0 = p.ymin;
+            my1 = p.ymax;
+        }
+        /* The raster over its own extent: on an equal panel a square
+         * pupil stays square. */
+        ox = bx + (mx0 - p.xmin) / (p.xmax - p.xmin) * bw;
+        oy = by + (p.ymax - my1) / (p.ymax - p.ymin) * bh;
+        cw = (mx1 - mx0) / (p.xmax - p.xmin) * bw / p.mw;
+        ch = (my1 - my0) / (p.ymax - p.ymin) * bh / p.mh;
         for (r = 0; r < p.mh; r++)
             for (c = 0; c < p.mw; c++) {
                 double v = p.map[r * p.mw + c];
@@ -93,7 +126,8 @@ static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, d
                     continue;
                 map_colour((v - p.map_lo) / (p.map_hi - p.map_lo), rgb);
                 cairo_set_source_rgb(cr, rgb[0], rgb[1], rgb[2]);
-                cairo_rectangle(cr, bx + c * cw, by + r * ch, cw + 0.5, ch + 0.5);
+                /* Overlapping by a fraction of a pixel, so no seams show. */
+                cairo_rectangle(cr, ox + c * cw, oy + r * ch, cw + 0.5, ch + 0.5);
                 cairo_fill(cr);
             }
         /* The colour bar, with its scale. */
@@ -111,10 +145,20 @@ static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, d
             text_at(cr, bx + bw + 25, by + bh - (t[k] - p.map_lo) / (p.map_hi - p.map_lo) * bh,
                     lab, 0.0, 0.5);
         }
+        if (p.map_label[0] || p.map_unit[0]) {
+            snprintf(fit, sizeof fit, p.map_unit[0] ? "%s (%s)" : "%s", p.map_label, p.map_unit);
+            cairo_save(cr);
+            cairo_translate(cr, x + w - 10, by + bh / 2);
+            cairo_rotate(cr, -M_PI_ / 2);
+            cairo_set_font_size(cr, 11);
+            text_at(cr, 0, 0, fit, 0.5, 0.5);
+            cairo_restore(cr);
+        }
     }
     /* Grid lines and ticks. */
     cairo_set_line_width(cr, 0.5);
-    n = plot_xticks(&p, p.ncat ? (int)(bw / 60) : bw > 300 ? 6 : 4, t, 16);
+    /* About one tick label per 70 points, so they never touch. */
+    n = plot_xticks(&p, p.ncat ? (int)(bw / 60) : (int)fmax(2, fmin(6, bw / 70)), t, 16);
     step = n > 1 ? t[1] - t[0] : 1.0;
     for (k = 0; k < n; k++) {
         double px = bx + (t[k] - p.xmin) / (p.xmax - p.xmin) * bw;
@@ -126,7 +170,7 @@ static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, d
         plot_xtick_label(&p, t[k], step, lab, sizeof lab);
         text_at(cr, px, by + bh + 4, lab, 0.5, 0.0);
     }
-    n = plot_ticks(p.ymin, p.ymax, bh > 300 ? 6 : 4, t, 16);
+    n = plot_ticks(p.ymin, p.ymax, (int)fmax(2, fmin(6, bh / 50)), t, 16);
     step = n > 1 ? t[1] - t[0] : 1.0;
     for (k = 0; k < n; k++) {
         double py = by + (p.ymax - t[k]) / (p.ymax - p.ymin) * bh;
@@ -143,11 +187,13 @@ static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, d
     cairo_rectangle(cr, bx, by, bw, bh);
     cairo_stroke(cr);
     cairo_set_font_size(cr, 11);
-    text_at(cr, bx + bw / 2, by + bh + 20, p.xlabel, 0.5, 0.0);
+    fit_px(cr, p.xlabel, bw, fit, sizeof fit);
+    text_at(cr, bx + bw / 2, by + bh + 20, fit, 0.5, 0.0);
     cairo_save(cr);
     cairo_translate(cr, x + 12, by + bh / 2);
     cairo_rotate(cr, -M_PI_ / 2);
-    text_at(cr, 0, 0, p.ylabel, 0.5, 0.5);
+    fit_px(cr, p.ylabel, bh, fit, sizeof fit);
+    text_at(cr, 0, 0, fit, 0.5, 0.5);
     cairo_restore(cr);
     /* The data, clipped to the frame. */
     cairo_save(cr);
@@ -196,57 +242,167 @@ static void draw_panel(cairo_t *cr, const plot_panel *src, double x, double y, d
         if (have && s->kind == PLOT_LINES)
             cairo_stroke(cr);
     }
+    if (p.scalebar > 0.0) {
+        /* The scale bar, bottom left, on white so the data cannot hide it. */
+        double len = p.scalebar / (p.xmax - p.xmin) * bw, sx = bx + 10, sy = by + bh - 10;
+        cairo_text_extents_t e;
+        cairo_set_font_size(cr, 10);
+        cairo_text_extents(cr, p.scalebar_label, &e);
+        cairo_set_source_rgb(cr, 1, 1, 1);
+        cairo_rectangle(cr, bx + 1, sy - e.height - 14, fmax(len, e.x_advance) + 18,
+                        e.height + 23);
+        cairo_fill(cr);
+        set_colour(cr, PLOT_FG);
+        cairo_set_line_width(cr, 2.0);
+        cairo_move_to(cr, sx, sy);
+        cairo_line_to(cr, sx + len, sy);
+        /* The end marks inside the bar, so it is len long overall. */
+        cairo_move_to(cr, sx + 1, sy - 4);
+        cairo_line_to(cr, sx + 1, sy + 4);
+        cairo_move_to(cr, sx + len - 1, sy - 4);
+        cairo_line_to(cr, sx + len - 1, sy + 4);
+        cairo_stroke(cr);
+        text_at(cr, sx, sy - 6, p.scalebar_label, 0.0, 1.0);
+    }
     cairo_restore(cr);
 }
 
-static void draw(cairo_t *cr, const plot_figure *f, double W, double H)
+/* Where draw puts things: the panels' grid and the bands above and below. */
+typedef struct fig_layout {
+    double top, bottom; /* the panels between */
+    int nc, nr, legend_rows;
+} fig_layout;
+
+/* The legend's rows at width W, entries left to right. */
+static int legend_rows(cairo_t *cr, const plot_figure *f, double W)
 {
-    double top = 8, bottom = H, x;
-    int nc, best = 1, k;
+    double x = 20;
+    int k, rows = 1;
+    cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL,
+                           CAIRO_FONT_WEIGHT_NORMAL);
+    cairo_set_font_size(cr, 11);
+    for (k = 0; k < f->nlegend; k++) {
+        cairo_text_extents_t e;
+        double adv;
+        cairo_text_extents(cr, f->legend[k].label, &e);
+        adv = fmin(e.x_advance, W - 60) + 34;
+        if (x > 20 && x + adv - 20 > W - 10) {
+            rows++;
+            x = 20;
+        }
+        x += adv;
+    }
+    return f->nlegend ? rows : 0;
+}
+
+static void layout(cairo_t *cr, const plot_figure *f, double W, double H, fig_layout *l)
+{
+    int nc;
     double score = -1;
+    l->top = 8 + (f->title[0] ? 24 : 0);
+    l->legend_rows = legend_rows(cr, f, W);
+    l->bottom = H - (l->legend_rows ? 18.0 * l->legend_rows + 8 : 0);
+    l->nc = 1;
+    if (f->npanel == 0) {
+        l->nr = 0;
+        return;
+    }
+    if (f->ncol > 0)
+        l->nc = f->ncol < f->npanel ? f->ncol : f->npanel;
+    else
+        for (nc = 1; nc <= f->npanel; nc++) {
+            int nr = (f->npanel + nc - 1) / nc;
+            double pw = W / nc, ph = (l->bottom - l->top) / nr;
+            /* The roomiest panels, among those big enough if any are. */
+            double sc = fmin(pw, ph) + (pw >= MIN_PANEL_W && ph >= MIN_PANEL_H ? 1e9 : 0.0);
+            if (sc > score) {
+                score = sc;
+                l->nc = nc;
+            }
+        }
+    l->nr = (f->npanel + l->nc - 1) / l->nc;
+}
+
+void plot_min_size(const plot_figure *fig, int w, int *minw, int *minh)
+{
+    cairo_surface_t *s = cairo_image_surface_create(CAIRO_FORMAT_RGB24, 1, 1);
+    cairo_t *cr = cairo_create(s);
+    fig_layout l;
+    int nc = fig->ncol > 0 ? fig->ncol : 1;
+    double W;
+    if (fig->ncol <= 0)
+        /* As many columns as the width holds. */
+        while (nc < fig->npanel && (nc + 1) * MIN_PANEL_W <= w)
+            nc++;
+    if (nc > fig->npanel && fig->npanel > 0)
+        nc = fig->npanel;
+    W = fmax(w, nc * MIN_PANEL_W);
+    layout(cr, fig, W, 1e6, &l);
+    *minw = (int)ceil(W);
+    *minh = (int)ceil(l.top + (fig->npanel + nc - 1) / nc * MIN_PANEL_H + (1e6 - l.bottom));
+    cairo_destroy(cr);
+    cairo_surface_destroy(s);
+}
+
+/* The figure, or -1 with a message when the size cannot hold its panels. */
+static int draw(cairo_t *cr, const plot_figure *f, double W, double H, char *err, size_t nerr)
+{
+    fig_layout l;
+    double x, y;
+    int k;
+    char fit[256];
+    layout(cr, f, W, H, &l);
+    if (f->npanel && (W / l.nc < MIN_PANEL_W || (l.bottom - l.top) / l.nr < MIN_PANEL_H)) {
+        int mw, mh;
+        plot_min_size(f, (int)W, &mw, &mh);
+        snprintf(err, nerr,
+                 "picture size %.0fx%.0f is too small for %d panel%s with their labels: "
+                 "--size %dx%d or larger",
+                 W, H, f->npanel, f->npanel > 1 ? "s" : "", mw, mh);
+        return -1;
+    }
     cairo_set_source_rgb(cr, 1, 1, 1);
     cairo_paint(cr);
     cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL, CAIRO_FONT_WEIGHT_BOLD);
     if (f->title[0]) {
         cairo_set_font_size(cr, 14);
         set_colour(cr, PLOT_FG);
-        text_at(cr, W / 2, top, f->title, 0.5, 0.0);
-        top += 24;
+        fit_px(cr, f->title, W - 16, fit, sizeof fit);
+        text_at(cr, W / 2, 8, fit, 0.5, 0.0);
     }
     cairo_select_font_face(cr, "sans-serif", CAIRO_FONT_SLANT_NORMAL,
                            CAIRO_FONT_WEIGHT_NORMAL);
     if (f->nlegend) {
-        bottom -= 24;
+        /* Rows of entries, wrapped as legend_rows counted them. */
         x = 20;
+        y = l.bottom + 4;
         cairo_set_font_size(cr, 11);
         for (k = 0; k < f->nlegend; k++) {
             cairo_text_extents_t e;
+            double adv;
+            fit_px(cr, f->legend[k].label, W - 60, fit, sizeof fit);
+            cairo_text_extents(cr, fit, &e);
+            adv = e.x_advance + 34;
+            if (x > 20 && x + adv - 20 > W - 10) {
+                x = 20;
+                y += 18;
+            }
             set_colour(cr, f->legend[k].color);
-            cairo_rectangle(cr, x, bottom + 8, 10, 10);
+            cairo_rectangle(cr, x, y + 3, 10, 10);
             cairo_fill(cr);
             set_colour(cr, PLOT_FG);
-            text_at(cr, x + 14, bottom + 13, f->legend[k].label, 0.0, 0.5);
-            cairo_text_extents(cr, f->legend[k].label, &e);
-            x += e.x_advance + 34;
+            text_at(cr, x + 14, y + 8, fit, 0.0, 0.5);
+            x += adv;
         }
     }
     if (f->npanel == 0)
-        return;
-    for (nc = 1; nc <= f->npanel; nc++) {
-        int nr = (f->npanel + nc - 1) / nc;
-        double sc = fmin(W / nc, (bottom - top) / nr);
-        if (sc > score) {
-            score = sc;
-            best = nc;
-        }
-    }
-    nc = best;
+        return 0;
     {
-        int nr = (f->npanel + nc - 1) / nc;
-        double pw = W / nc, ph = (bottom - top) / nr;
+        double pw = W / l.nc, ph = (l.bottom - l.top) / l.nr;
         for (k = 0; k < f->npanel; k++)
-            draw_panel(cr, &f->panel[k], (k % nc) * pw, top + (k / nc) * ph, pw, ph);
+            draw_panel(cr, &f->panel[k], (k % l.nc) * pw, l.top + (k / l.nc) * ph, pw, ph);
     }
+    return 0;
 }
 
 static cairo_status_t to_file(void *closure, const unsigned char *data, unsigned int len)
@@ -277,7 +433,11 @@ int plot_write(const plot_figure *fig, int format, int width, int height, FILE *
         return -1;
     }
     cr = cairo_create(s);
-    draw(cr, fig, width, height);
+    if (draw(cr, fig, width, height, err, nerr)) {
+        cairo_destroy(cr);
+        cairo_surface_destroy(s);
+        return -1;
+    }
     cairo_show_page(cr);
     st = cairo_status(cr);
     cairo_destroy(cr);

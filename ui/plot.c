@@ -2,6 +2,7 @@
  * plot.c - figures and their terminal rendering: braille dots (2 x 4 per
  * cell) in a frame with ticks and labels, one colour per series.
  */
+#include <ctype.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -146,6 +147,97 @@ void plot_add_legend(plot_figure *f, int color, const char *label)
     f->legend[f->nlegend].color = color;
     snprintf(f->legend[f->nlegend].label, sizeof f->legend[0].label, "%s", label);
     f->nlegend++;
+}
+
+void plot_colour_rgb(int c, double rgb[3])
+{
+    /* Twelve that a reader tells apart (the first six are the terminal's
+     * blue, green, red, yellow, magenta and cyan), then, one at a time,
+     * the point of a 6 x 6 x 6 grid of colours farthest from all chosen
+     * and from black (none too light to see on white).  Made once; every caller computes
+     * the same table, so a race only writes the same numbers. */
+    static const double base[12][3] = {
+        {0.00, 0.35, 0.85}, {0.00, 0.60, 0.20}, {0.85, 0.10, 0.10}, {0.90, 0.55, 0.00},
+        {0.65, 0.20, 0.70}, {0.00, 0.60, 0.70}, {0.55, 0.34, 0.16}, {0.95, 0.40, 0.70},
+        {0.45, 0.45, 0.45}, {0.60, 0.60, 0.10}, {0.10, 0.10, 0.45}, {0.40, 0.75, 1.00}};
+    static double table[PLOT_NCOLOURS][3];
+    static volatile int made;
+    if (c < 0) {
+        rgb[0] = rgb[1] = rgb[2] = 0.0;
+        return;
+    }
+    if (!made) {
+        int k, j, g;
+        memcpy(table, base, sizeof base);
+        for (k = 12; k < PLOT_NCOLOURS; k++) {
+            double best = -1.0, cand[3];
+            for (g = 0; g < 216; g++) {
+                double q[3] = {g / 36 * 0.2, g / 6 % 6 * 0.2, g % 6 * 0.2};
+                double dmin = q[0] * q[0] + q[1] * q[1] + q[2] * q[2]; /* from black, the axes' */
+                if (0.299 * q[0] + 0.587 * q[1] + 0.114 * q[2] > 0.75)
+                    continue;
+                for (j = 0; j < k; j++) {
+                    double dr = q[0] - table[j][0], dg = q[1] - table[j][1],
+                           db = q[2] - table[j][2];
+                    dmin = fmin(dmin, dr * dr + dg * dg + db * db);
+                }
+                if (dmin > best) {
+                    best = dmin;
+                    memcpy(cand, q, sizeof q);
+                }
+            }
+            memcpy(table[k], cand, sizeof cand);
+        }
+        made = 1;
+    }
+    memcpy(rgb, table[c % PLOT_NCOLOURS], 3 * sizeof *rgb);
+}
+
+void plot_fit_text(const char *s, int maxw, char *out, size_t n)
+{
+    size_t len = 0, cut = 0, space = 0, k;
+    const unsigned char *u = (const unsigned char *)s;
+    int chars = 0;
+    if (n == 0)
+        return;
+    for (k = 0; u[k]; k++)
+        chars += (u[k] & 0xC0) != 0x80;
+    if (chars <= maxw || maxw < 2) {
+        snprintf(out, n, "%s", chars <= maxw ? s : "");
+        return;
+    }
+    /* The bytes of the first maxw - 1 characters, and the last space in them. */
+    chars = 0;
+    for (k = 0; u[k]; k++) {
+        if ((u[k] & 0xC0) != 0x80) {
+            if (chars == maxw - 1)
+                break;
+            chars++;
+            if (u[k] == ' ')
+                space = k;
+        }
+    }
+    cut = k;
+    /* A whole word when one ends past the middle (the cut may fall just
+     * after one); else cut the word, unless it holds a digit: a number is
+     * never cut short ("GEO 1911 um" may become "GEO…", never "GEO 19…"). */
+    if (u[cut] != ' ' && space > 0 && 2 * space >= cut)
+        cut = space;
+    else if (u[cut] != ' ') {
+        size_t w0 = space > 0 ? space + 1 : 0, i;
+        for (i = w0; i < cut; i++)
+            if (isdigit(u[i])) {
+                cut = space;
+                break;
+            }
+    }
+    while (cut > 0 && (u[cut - 1] == ' ' || u[cut - 1] == ',' || u[cut - 1] == ':'))
+        cut--;
+    len = cut < n - 4 ? cut : n - 4;
+    while (len > 0 && (u[len] & 0xC0) == 0x80)
+        len--; /* never half a character */
+    memcpy(out, s, len);
+    memcpy(out + len, "\xe2\x80\xa6", 4); /* U+2026, the ellipsis, and the NUL */
 }
 
 void plot_panel_limits(plot_panel *p, double aspect)
@@ -339,17 +431,20 @@ static void dot(dots *d, long px, long py, int color)
 static void line(dots *d, long x0, long y0, long x1, long y1, int color)
 {
     long dx = labs(x1 - x0), dy = -labs(y1 - y0), sx = x0 < x1 ? 1 : -1,
-         sy = y0 < y1 ? 1 : -1, err = dx + dy, n = 0;
-    /* Bresenham; long lines far outside are cut by the step limit. */
+         sy = y0 < y1 ? 1 : -1, err = dx + dy, n = 0, e2;
+    /* Bresenham; long lines far outside are cut by the step limit.  Both
+     * tests read the error before either step, or the walk can pass its end
+     * and streak on to the step limit. */
     while (n++ < 100000) {
         dot(d, x0, y0, color);
         if (x0 == x1 && y0 == y1)
             break;
-        if (2 * err >= dy) {
+        e2 = 2 * err;
+        if (e2 >= dy) {
             err += dy;
             x0 += sx;
         }
-        if (2 * err <= dx) {
+        if (e2 <= dx) {
             err += dx;
             y0 += sy;
         }
@@ -381,6 +476,18 @@ static void bars(dots *d, const plot_panel *p, const plot_series *s, int W, int 
     }
 }
 
+/* Centred in w columns; a longer text ends in an ellipsis. */
+static void center_text(plot_grid *g, int x, int w, int y, const char *s, int color)
+{
+    size_t len = 0;
+    char fit[256];
+    const unsigned char *u;
+    plot_fit_text(s, w, fit, sizeof fit);
+    for (u = (const unsigned char *)fit; *u; u++)
+        len += (*u & 0xC0) != 0x80;
+    plot_grid_text_n(g, x + (w > (int)len ? (w - (int)len) / 2 : 0), y, fit, color, w);
+}
+
 static size_t text_len(const char *s)
 {
     size_t len = 0;
@@ -389,39 +496,11 @@ static size_t text_len(const char *s)
     return len;
 }
 
-/* Centred in w columns.  Text wider than that is cut at a blank and ends
- * in an ellipsis, so a number is never cut short ("GEO 1911 um" becomes
- * "GEO…", never "GEO 19"). */
-static void center_text(plot_grid *g, int x, int w, int y, const char *s, int color)
-{
-    size_t len = text_len(s);
-    char buf[256];
-    if (w <= 0)
-        return;
-    if ((int)len > w) {
-        size_t i, cut = 0, n = 0;
-        for (i = 0; s[i]; i++) {
-            if (((unsigned char)s[i] & 0xC0) == 0x80)
-                continue;
-            /* s[0..i) takes n columns; with the ellipsis n + 1. */
-            if (s[i] == ' ' && (int)n + 1 <= w)
-                cut = i;
-            n++;
-        }
-        while (cut > 0 && strchr(" ,:;", s[cut - 1]))
-            cut--;
-        snprintf(buf, sizeof buf, "%.*s\xe2\x80\xa6", (int)(cut < 200 ? cut : 200), s);
-        s = buf;
-        len = text_len(buf);
-    }
-    plot_grid_text_n(g, x + (w > (int)len ? (w - (int)len) / 2 : 0), y, s, color, w);
-}
-
 static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int w, int h)
 {
     plot_panel p = *src;
     double yt[16], xt[16], ystep, xstep;
-    int nyt, nxt, lw = 0, k, W, H, ax, ay;
+    int nyt, nxt, lw = 0, k, W = 0, H, ax, ay, pass;
     char lab[32];
     dots d;
     size_t i;
@@ -429,23 +508,28 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
         plot_grid_text(g, x0, y0, "(too small)", PLOT_FG);
         return;
     }
-    H = h - 4;
-    nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 3, yt, 16);
-    ystep = nyt > 1 ? yt[1] - yt[0] : p.ymax - p.ymin;
-    for (k = 0; k < nyt; k++) {
-        plot_tick_label(yt[k], ystep, lab, sizeof lab);
-        if ((int)strlen(lab) > lw)
-            lw = (int)strlen(lab);
+    /* A map keeps a row for its shade scale. */
+    H = h - 4 - (p.map != NULL);
+    /* The labels' width sets the plot's, which sets an equal panel's
+     * limits and so the labels: twice round is enough, as the widest
+     * label only widens. */
+    for (pass = 0; pass < 2; pass++) {
+        W = w - lw - 1;
+        if (W < 4) {
+            plot_grid_text(g, x0, y0, "(too small)", PLOT_FG);
+            return;
+        }
+        p = *src;
+        /* Braille dots are about square: 2 per cell across, 4 down. */
+        plot_panel_limits(&p, (2.0 * W) / (4.0 * H));
+        nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 3, yt, 16);
+        ystep = nyt > 1 ? yt[1] - yt[0] : p.ymax - p.ymin;
+        for (k = 0; k < nyt; k++) {
+            plot_tick_label(yt[k], ystep, lab, sizeof lab);
+            if ((int)strlen(lab) > lw)
+                lw = (int)strlen(lab);
+        }
     }
-    W = w - lw - 1;
-    if (W < 4) {
-        plot_grid_text(g, x0, y0, "(too small)", PLOT_FG);
-        return;
-    }
-    /* Braille dots are about square: 2 per cell across, 4 down. */
-    plot_panel_limits(&p, (2.0 * W) / (4.0 * H));
-    nyt = plot_ticks(p.ymin, p.ymax, H >= 8 ? 4 : 3, yt, 16);
-    ystep = nyt > 1 ? yt[1] - yt[0] : p.ymax - p.ymin;
     nxt = plot_xticks(&p, W >= 40 ? 5 : 3, xt, 16);
     xstep = nxt > 1 ? xt[1] - xt[0] : p.xmax - p.xmin;
     center_text(g, x0, w, y0, p.title, PLOT_FG);
@@ -503,17 +587,40 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
         /* A map in shades: each cell takes the value under its centre; the
          * lowest is a dot, so a blank is a point with no data. */
         static const char *const shade[] = {"·", "░", "▒", "▓", "█"};
+        double mx0 = p.map_x0, mx1 = p.map_x1, my0 = p.map_y0, my1 = p.map_y1;
+        char sl[160], a[32], b[32];
         int r, c;
+        if (!(mx0 < mx1 && my0 < my1)) {
+            mx0 = p.xmin;
+            mx1 = p.xmax;
+            my0 = p.ymin;
+            my1 = p.ymax;
+        }
         for (r = 0; r < H; r++)
             for (c = 0; c < W; c++) {
-                int mx = c * p.mw / W, my = r * p.mh / H;
-                double v = p.map[my * p.mw + mx], t;
+                /* The cell's centre in the data, then in the raster. */
+                double xv = p.xmin + (c + 0.5) / W * (p.xmax - p.xmin);
+                double yv = p.ymax - (r + 0.5) / H * (p.ymax - p.ymin);
+                double fx = (xv - mx0) / (mx1 - mx0) * p.mw, fy = (my1 - yv) / (my1 - my0) * p.mh;
+                int mx, my;
+                double v, t;
+                if (!(fx >= 0 && fx < p.mw && fy >= 0 && fy < p.mh))
+                    continue;
+                mx = (int)fx;
+                my = (int)fy;
+                v = p.map[my * p.mw + mx];
                 if (!isfinite(v) || !(p.map_hi > p.map_lo))
                     continue;
                 t = (v - p.map_lo) / (p.map_hi - p.map_lo);
                 plot_grid_text(g, ax + 1 + c, y0 + 1 + r, shade[(int)fmin(4, fmax(0, t * 4.999))],
                                PLOT_FG);
             }
+        /* The shade scale, on the terminal only (files have a colour bar). */
+        snprintf(a, sizeof a, "%.3g", p.map_lo);
+        snprintf(b, sizeof b, "%.3g", p.map_hi);
+        snprintf(sl, sizeof sl, "%s from · %s to █ %s %s", p.map_label[0] ? p.map_label : "value",
+                 a, b, p.map_unit);
+        plot_grid_text_n(g, x0, ay + 3, sl, PLOT_FG, w);
     }
     for (k = 0; k < p.nseries; k++) {
         const plot_series *s = &p.s[k];
@@ -561,21 +668,40 @@ void plot_draw_cells(const plot_figure *f, plot_grid *g, int x0, int y0, int w, 
         return;
     }
     if (f->title[0]) {
-        char t[200];
+        char t[256];
         snprintf(t, sizeof t, "%s", f->title);
         center_text(g, x0, w, top++, t, PLOT_FG);
     }
     if (f->nlegend) {
-        int x = x0;
-        bottom--;
+        /* As many rows as the entries need (at most a third of the
+         * height), each entry whole or ending in an ellipsis. */
+        int rows = 1, x = x0, row;
         for (k = 0; k < f->nlegend; k++) {
-            size_t len = text_len(f->legend[k].label) + 3;
-            if (x + (int)len > x0 + w)
-                break;
-            plot_grid_text(g, x, bottom, "■", f->legend[k].color);
-            plot_grid_text(g, x + 1, bottom, " ", PLOT_FG);
-            plot_grid_text(g, x + 2, bottom, f->legend[k].label, PLOT_FG);
-            x += (int)len;
+            int len = (int)text_len(f->legend[k].label) + 3;
+            if (x > x0 && x + len > x0 + w) {
+                rows++;
+                x = x0;
+            }
+            x += len;
+        }
+        if (rows > h / 3)
+            rows = h / 3 > 0 ? h / 3 : 1;
+        bottom -= rows;
+        x = x0;
+        row = 0;
+        for (k = 0; k < f->nlegend; k++) {
+            char fit[64];
+            int len = (int)text_len(f->legend[k].label) + 3;
+            if (x > x0 && x + len > x0 + w) {
+                if (++row == rows)
+                    break;
+                x = x0;
+            }
+            plot_fit_text(f->legend[k].label, w - 3, fit, sizeof fit);
+            plot_grid_text(g, x, bottom + row, "■", f->legend[k].color);
+            plot_grid_text(g, x + 1, bottom + row, " ", PLOT_FG);
+            plot_grid_text_n(g, x + 2, bottom + row, fit, PLOT_FG, w - 2);
+            x += len;
         }
     }
     if (f->npanel == 0)
@@ -586,6 +712,8 @@ void plot_draw_cells(const plot_figure *f, plot_grid *g, int x0, int y0, int w, 
         int nr = (f->npanel + nc - 1) / nc;
         double pw = (double)w / nc, ph = (double)(bottom - top) / nr;
         double sc = fmin(pw / 2.0, ph);
+        if (f->ncol > 0 && nc != f->ncol && f->ncol <= f->npanel && w / f->ncol >= 14)
+            continue; /* the figure's own columns, where they fit */
         if (pw >= 14 && ph >= 6 && sc > score) {
             score = sc;
             best = nc;
@@ -595,6 +723,8 @@ void plot_draw_cells(const plot_figure *f, plot_grid *g, int x0, int y0, int w, 
         /* Not all fit: as many rows of the widest panels as room allows,
          * and a note of the rest (a file has room for every one). */
         nc = w / 14 > 0 ? w / 14 : 1;
+        if (f->ncol > 0 && w / f->ncol >= 14)
+            nc = f->ncol;
         if (nc > f->npanel)
             nc = f->npanel;
         best = nc;
@@ -622,6 +752,7 @@ void plot_draw_cells(const plot_figure *f, plot_grid *g, int x0, int y0, int w, 
 int plot_grid_print(const plot_grid *g, FILE *out, int colour)
 {
     static const int ansi[PLOT_NPALETTE] = {34, 32, 31, 33, 35, 36};
+    double rgb[3];
     int x, y;
     for (y = 0; y < g->h; y++) {
         int cur = PLOT_FG, end = g->w;
@@ -633,8 +764,15 @@ int plot_grid_print(const plot_grid *g, FILE *out, int colour)
             if (colour && c->color != cur && strcmp(c->ch, " ") != 0) {
                 if (c->color == PLOT_FG)
                     fputs("\033[0m", out);
-                else
-                    fprintf(out, "\033[%dm", ansi[c->color % PLOT_NPALETTE]);
+                else if (c->color < PLOT_NPALETTE)
+                    fprintf(out, "\033[%dm", ansi[c->color]);
+                else {
+                    /* Beyond the six: the nearest of the 256-colour cube. */
+                    plot_colour_rgb(c->color, rgb);
+                    fprintf(out, "\033[38;5;%dm",
+                            16 + 36 * (int)lround(rgb[0] * 5) + 6 * (int)lround(rgb[1] * 5) +
+                                (int)lround(rgb[2] * 5));
+                }
                 cur = c->color;
             }
             fputs(c->ch, out);

@@ -19,7 +19,8 @@
 /* PLOT_BARS: a bar from y = 0 to each y, width wide about each x. */
 enum { PLOT_POINTS = 0, PLOT_LINES = 1, PLOT_BARS = 2 };
 #define PLOT_FG (-1)     /* the foreground colour */
-#define PLOT_NPALETTE 6  /* colours before they repeat */
+#define PLOT_NPALETTE 6  /* a terminal's basic colours (ANSI 31 to 36) */
+#define PLOT_NCOLOURS 64 /* distinct series colours (as many as fields) */
 #define PLOT_MAXLEGEND 32
 
 typedef struct plot_series {
@@ -34,13 +35,19 @@ typedef struct plot_panel {
     char title[96];
     char xlabel[64], ylabel[64];
     double xmin, xmax, ymin, ymax; /* set by plot_panel_limits */
-    int equal;     /* one unit is as long on both axes (spots, layouts) */
+    int equal;     /* one unit is as long on both axes (spots, layouts, maps) */
+    /* A scale bar this long in x's units (0: none), labelled with its length
+     * and unit (spots, as Zemax draws them). */
+    double scalebar;
+    char scalebar_label[32];
     int nseries, cap;
     plot_series *s;
     /* A raster over the limits, for maps (wavefront): mw x mh values, row 0
      * at ymax; NaN is no data.  Drawn with a colour map and a scale. */
     int mw, mh;
     double *map, map_lo, map_hi;
+    double map_x0, map_x1, map_y0, map_y1; /* the raster's extent (unset: the limits) */
+    char map_label[24], map_unit[16];       /* what the colour bar shows, in what unit */
     /* Categories on x (bar charts): ticks at x = 1 .. ncat, labelled cat[k-1]
      * instead of by number. */
     int ncat;
@@ -48,7 +55,8 @@ typedef struct plot_panel {
 } plot_panel;
 
 typedef struct plot_figure {
-    char title[160];
+    char title[256];
+    int ncol; /* panels per row (fans: a field's pair); 0 for the roomiest */
     int npanel, cap;
     plot_panel *panel;
     int nlegend;
@@ -76,6 +84,12 @@ int plot_xticks(const plot_panel *p, int n, double *t, int max);
 /* A tick's label on the x axis: a category's name, or plot_tick_label. */
 void plot_xtick_label(const plot_panel *p, double v, double step, char *buf, size_t n);
 void plot_add_legend(plot_figure *f, int color, const char *label);
+/* Series colour c (0 .. PLOT_NCOLOURS - 1 all differ; PLOT_FG black) as
+ * red, green and blue from 0 to 1. */
+void plot_colour_rgb(int c, double rgb[3]);
+/* s cut to at most maxw characters: whole words and an ellipsis when it
+ * does not fit (UTF-8, into out of n bytes). */
+void plot_fit_text(const char *s, int maxw, char *out, size_t n);
 /* Sets the panel's limits from its data with a margin (or to lo..hi when
  * lo < hi), widening the shorter axis of an equal panel. */
 void plot_panel_limits(plot_panel *p, double aspect);
@@ -122,8 +136,12 @@ int plot_use_colour(FILE *f);
 enum { PLOT_PNG = 0, PLOT_SVG = 1, PLOT_PDF = 2 };
 /* Parses "png", "svg" or "pdf"; -1 otherwise. */
 int plot_file_format(const char *s);
+/* The smallest size (pixels or points) at which a file of the figure
+ * shows every panel with its labels apart, for a width of at least w. */
+void plot_min_size(const plot_figure *fig, int w, int *minw, int *minh);
 /* Renders the figure at width x height (pixels for PNG, points for SVG and
- * PDF) and writes it to f.  0, or -1 with a message in err. */
+ * PDF) and writes it to f.  0, or -1 with a message in err (a size below
+ * plot_min_size's is refused, naming the size it needs). */
 int plot_write(const plot_figure *fig, int format, int width, int height, FILE *f, char *err,
                size_t nerr);
 

@@ -49,15 +49,38 @@ static void legend_waves(plot_figure *f, int nwave, const int *index, const doub
     }
 }
 
+/* A scale bar's length: 1, 2 or 5 times a power of ten, about a quarter
+ * of span and never more than 0.4 of it. */
+static double scalebar_length(double span)
+{
+    double raw = 0.25 * span, mag = pow(10.0, floor(log10(raw))), m = raw / mag;
+    double len = (m < 1.5 ? 1.0 : m < 3.5 ? 2.0 : m < 7.5 ? 5.0 : 10.0) * mag;
+    while (len > 0.4 * span)
+        len = len == 2.0 * mag || len == 10.0 * mag ? len / 2.0 : len * 0.4;
+    return len;
+}
+
 int view_spot_figure(const sg_system *sys, const sg_spot *s, plot_figure *f)
 {
-    double ext = s->airy_radius, scale;
+    double ext = s->airy_radius, scale, half = s->airy_radius;
     const char *u;
-    char title[200], lab[64], xl[32], yl[32];
+    char title[256], lab[160], xl[32], yl[32];
     int fi, w, k;
     for (fi = 0; fi < s->nfield; fi++)
         ext = fmax(ext, s->field[fi].geo);
     u = view_length_unit(sys, ext, &scale);
+    /* One scale for every field, as Zemax draws them: the farthest point
+     * from the reference over all fields and wavelengths. */
+    for (k = 0; k < s->nfield * s->nwave; k++) {
+        const sg_spot_cell *c = &s->cell[k];
+        size_t i;
+        for (i = 0; i < c->npts; i++)
+            if (isfinite(c->pts[i][0]) && isfinite(c->pts[i][1]))
+                half = fmax(half, fmax(fabs(c->pts[i][0]), fabs(c->pts[i][1])));
+    }
+    half *= scale;
+    if (!(half > 0.0))
+        half = 1.0;
     snprintf(title, sizeof title, "Spot diagram: %s", safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
     snprintf(xl, sizeof xl, "x (%s)", u);
@@ -108,7 +131,10 @@ int view_spot_figure(const sg_system *sys, const sg_spot *s, plot_figure *f)
             if (plot_add_series(p, PLOT_LINES, PLOT_FG, x, y, 73))
                 return -1;
         }
-        plot_panel_limits(p, 0.0);
+        p->xmin = p->ymin = -1.1 * half;
+        p->xmax = p->ymax = 1.1 * half;
+        p->scalebar = scalebar_length(2.2 * half);
+        snprintf(p->scalebar_label, sizeof p->scalebar_label, "%g %s", p->scalebar, u);
     }
     legend_waves(f, s->nwave, s->wave_index, s->wave_um);
     return 0;
@@ -118,9 +144,14 @@ int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f)
 {
     double ext = 0.0, scale;
     const char *u;
-    char title[200], lab[64], yt[32], ys[32];
+    char title[256], lab[160], yt[32], ys[32];
     int fi, w, j, side, n = fan->npts;
-    double *x = malloc((size_t)n * sizeof *x), *y = malloc((size_t)n * sizeof *y);
+    double *x, *y;
+    /* The longest curve (a refined fan has more samples than npts). */
+    for (j = 0; j < fan->nfield * fan->nwave; j++)
+        n = fan->tan[j].n > n ? fan->tan[j].n : fan->sag[j].n > n ? fan->sag[j].n : n;
+    x = malloc((size_t)n * sizeof *x);
+    y = malloc((size_t)n * sizeof *y);
     if (!x || !y) {
         free(x);
         free(y);
@@ -130,7 +161,7 @@ int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f)
         for (side = 0; side < 2; side++) {
             const sg_fan_curve *c = side ? &fan->sag[j] : &fan->tan[j];
             int i;
-            for (i = 0; i < n; i++)
+            for (i = 0; i < c->n; i++)
                 if (c->status[i] == SG_OK)
                     ext = fmax(ext, fabs(c->e[i]));
         }
@@ -143,6 +174,8 @@ int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f)
     snprintf(title, sizeof title, "%s: %s", fan->opd ? "OPD fans" : "Transverse ray fans",
              safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
+    /* One row per field: its tangential and sagittal fans side by side. */
+    f->ncol = 2;
     snprintf(yt, sizeof yt, "%s (%s)", fan->opd ? "W" : "ey", u);
     snprintf(ys, sizeof ys, "%s (%s)", fan->opd ? "W" : "ex", u);
     for (fi = 0; fi < fan->nfield; fi++)
@@ -157,11 +190,11 @@ int view_fan_figure(const sg_system *sys, const sg_fan *fan, plot_figure *f)
             for (w = 0; w < fan->nwave; w++) {
                 const sg_fan_curve *c = side ? &fan->sag[fi * fan->nwave + w]
                                              : &fan->tan[fi * fan->nwave + w];
-                for (j = 0; j < n; j++) {
+                for (j = 0; j < c->n; j++) {
                     x[j] = c->p[j];
                     y[j] = c->status[j] == SG_OK ? c->e[j] * scale : NAN;
                 }
-                if (plot_add_series(p, PLOT_LINES, fan->wave_index[w], x, y, (size_t)n))
+                if (plot_add_series(p, PLOT_LINES, fan->wave_index[w], x, y, (size_t)c->n))
                     goto oom;
             }
             p->xmin = -1.0;
@@ -182,10 +215,10 @@ oom:
 
 int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f)
 {
-    char title[200], lab[64], xl[32], yl[32];
+    char title[256], lab[160], xl[32], yl[32];
     const char *u = sys->units[0] ? sys->units : "mm";
     plot_panel *p;
-    int i, fi;
+    int i, fi, coaxial = 1;
     snprintf(title, sizeof title, "Layout: %s", safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
     snprintf(xl, sizeof xl, "z (%s)", u);
@@ -194,15 +227,44 @@ int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f)
     if (!p)
         return -1;
     p->equal = 1;
+    for (i = 1; i < sys->nsurf && coaxial; i++)
+        coaxial = !sg_surface_moves_frame(&sys->surf[i]);
     for (i = 0; i < l->nsurf - 1; i++) {
         const sg_layout_surface *s = &l->surf[i];
         if (plot_add_series(p, PLOT_LINES, PLOT_FG, s->z, s->y, (size_t)s->npts))
             return -1;
-        /* A lens's edges: its two surfaces' rims joined. */
+        /* A lens's edges: its two surfaces' rims joined.  On the axis, as
+         * Zemax draws them, the smaller surface goes on flat to the larger
+         * one's height and a cylinder joins them; in a tilted system the
+         * rims are joined straight. */
         if (s->glass_after && i + 1 < l->nsurf - 1 && s->npts && l->surf[i + 1].npts) {
             const sg_layout_surface *t = &l->surf[i + 1];
             double z[5] = {s->z[0], t->z[0], NAN, s->z[s->npts - 1], t->z[t->npts - 1]};
             double y[5] = {s->y[0], t->y[0], NAN, s->y[s->npts - 1], t->y[t->npts - 1]};
+            if (coaxial) {
+                double ez[8], ey[8];
+                int side;
+                for (side = 0; side < 2; side++) {
+                    /* Rim points: s's (zs, ys) and t's (zt, yt). */
+                    double zs = z[3 * side], ys = y[3 * side], zt = z[3 * side + 1],
+                           yt = y[3 * side + 1], *oz = ez + 4 * side, *oy = ey + 4 * side;
+                    oz[0] = zs;
+                    oy[0] = ys;
+                    if (fabs(ys) < fabs(yt)) {
+                        oz[1] = zs;
+                        oy[1] = yt;
+                    } else {
+                        oz[1] = zt;
+                        oy[1] = ys;
+                    }
+                    oz[2] = zt;
+                    oy[2] = yt;
+                    oz[3] = oy[3] = NAN; /* a break between the two edges */
+                }
+                if (plot_add_series(p, PLOT_LINES, PLOT_FG, ez, ey, 7))
+                    return -1;
+                continue;
+            }
             if (plot_add_series(p, PLOT_LINES, PLOT_FG, z, y, 5))
                 return -1;
         }
@@ -223,7 +285,7 @@ int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f)
 int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_opd_ref *ref,
                           int field, double um, plot_figure *f)
 {
-    char title[200], lab[64], fl[64], pt[256], wl[32], sc[48];
+    char title[256], lab[160], fl[64], pt[256], wl[32];
     double lo = INFINITY, hi = -INFINITY;
     plot_panel *p;
     int g = w->grid, i, j;
@@ -239,6 +301,12 @@ int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_
     p = plot_add_panel(f, pt, "Px", "Py");
     if (!p)
         return -1;
+    /* A circular pupil is a circle: equal units, the raster on -1..1. */
+    p->equal = 1;
+    p->map_x0 = p->map_y0 = -1.0;
+    p->map_x1 = p->map_y1 = 1.0;
+    snprintf(p->map_label, sizeof p->map_label, "OPD");
+    snprintf(p->map_unit, sizeof p->map_unit, "waves");
     p->map = malloc((size_t)g * (size_t)g * sizeof *p->map);
     if (!p->map)
         return -1;
@@ -265,18 +333,16 @@ int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_
     p->map_hi = hi;
     p->xmin = p->ymin = -1.0;
     p->xmax = p->ymax = 1.0;
-    snprintf(sc, sizeof sc, "OPD ·%.3g to █%.3g waves", lo, hi);
-    plot_add_legend(f, PLOT_FG, sc);
     return 0;
 }
 
 const char *const view_seidel_names[SG_SEIDEL_N] = {"SI", "SII", "SIII", "SIV",
                                                    "SV", "CI", "CII"};
 
-/* One colour per sum: the six palette colours, then the foreground. */
+/* One colour per sum. */
 static int seidel_colour(int k)
 {
-    return k < PLOT_NPALETTE ? k : PLOT_FG;
+    return k;
 }
 
 int view_seidel_figure(const sg_system *sys, const sg_seidel *s, int grouped, plot_figure *f)
@@ -284,7 +350,7 @@ int view_seidel_figure(const sg_system *sys, const sg_seidel *s, int grouped, pl
     static const char *const what[SG_SEIDEL_N] = {
         "SI spherical", "SII coma", "SIII astigmatism", "SIV Petzval",
         "SV distortion", "CI axial colour", "CII lateral colour"};
-    char title[200], lab[64], yl[32], (*cats)[12];
+    char title[256], lab[160], yl[32], (*cats)[12];
     const char **cp;
     const char *u = sys->units[0] ? sys->units : "mm";
     int ng = s->nsurf, j, k, rc = -1; /* surfaces 1 .. nsurf-1 and the total */
@@ -354,7 +420,7 @@ out:
 int view_fieldcurve_figure(const sg_system *sys, const sg_fieldcurve_pt *pt, int n, double um,
                            plot_figure *f)
 {
-    char title[200], lab[64], wl[32], fl[32], xl[32];
+    char title[256], lab[160], wl[32], fl[32], xl[32];
     const char *u = sys->units[0] ? sys->units : "mm";
     double *yv = malloc((size_t)(n > 0 ? n : 1) * sizeof *yv),
            *xv = malloc((size_t)(n > 0 ? n : 1) * sizeof *xv);

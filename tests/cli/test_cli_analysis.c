@@ -159,14 +159,21 @@ static void test_layout_csv(void **state)
     const char *d = ct_design("mirror.json", MIRROR);
     ct_result r;
     char buf[64];
+    double y = -5.0, t5 = tan(5.0 * 3.14159265358979323846 / 180.0);
+    int k;
     (void)state;
     ct_run(&r, "layout", d, "--rays", "3", "--field", "1", "--format", "csv", NULL);
     assert_int_equal(r.code, 0);
     /* The mirror's profile starts at its rim: the sag of a radius-100
-     * sphere at the marginal ray's height 5 (its automatic semi-diameter). */
+     * sphere at its automatic semi-diameter, which counts every field (as
+     * Zemax's does, whichever field is drawn): the 5 degree ray through the
+     * pupil's lower edge (y = -5 + z tan 5 from the vertex plane, the stop)
+     * meets the sphere z = -100 + sqrt(10000 - y^2) at the greatest height. */
+    for (k = 0; k < 60; k++)
+        y = -5.0 + t5 * (-100.0 + sqrt(10000.0 - y * y));
     assert_string_equal(ct_csv(r.out, 0, "kind", buf, sizeof buf), "surface");
-    ct_close(ct_csv_num(r.out, 0, "y"), -5.0, 1e-12, 0, "rim y");
-    ct_close(ct_csv_num(r.out, 0, "z"), -100.0 + sqrt(10000.0 - 25.0), 1e-12, 0, "rim z");
+    ct_close(ct_csv_num(r.out, 0, "y"), y, 1e-9, 0, "rim y");
+    ct_close(ct_csv_num(r.out, 0, "z"), -100.0 + sqrt(10000.0 - y * y), 1e-9, 0, "rim z");
     assert_non_null(strstr(r.out, "\nray,"));
     ct_free(&r);
 }
@@ -486,6 +493,72 @@ static void test_vignetting_command(void **state)
     ct_free(&r);
 }
 
+/* Automatic semi-diameters on flat surfaces behind the stop (EPD 10,
+ * fields 0 and 5 degrees, no aiming): the highest edge ray at z behind the
+ * stop is 5 + z tan 5 degrees (closed form).  The layout draws a surface
+ * whose semi-diameter is not fixed at that height (its stored 1 is too
+ * small for the rays) and keeps a fixed one; the editor's "semidiam" sets
+ * the same values as one edit, and undo takes it back. */
+static void test_semidiam_auto(void **state)
+{
+    const char *d = ct_design("sdauto.json",
+        "    {\"radius\": \"inf\", \"thickness\": \"inf\"},\n"
+        "    {\"radius\": \"inf\", \"thickness\": 20, \"stop\": true, \"semi_diameter\": 1},\n"
+        "    {\"radius\": \"inf\", \"thickness\": 10, \"semi_diameter\": 1},\n"
+        "    {\"radius\": \"inf\", \"thickness\": 5, \"semi_diameter\": 9, "
+        "\"sd_fixed\": true},\n"
+        "    {\"radius\": \"inf\", \"thickness\": 0}");
+    const double t5 = tan(5.0 * 3.14159265358979323846 / 180.0);
+    const double want[4] = {5.0, 5.0 + 20.0 * t5, 9.0, 5.0 + 35.0 * t5};
+    char script_text[3 * 1024], plain_text[1024];
+    ct_result r;
+    cJSON *js, *ss;
+    int i;
+    char *a, *b;
+    (void)state;
+    ct_run(&r, "layout", d, "--format", "json", NULL);
+    if (r.code != 0)
+        fail_msg("layout: exit %d: %s", r.code, r.err);
+    js = cJSON_Parse(r.out);
+    assert_non_null(js);
+    ss = cJSON_GetObjectItem(js, "surfaces");
+    for (i = 0; i < 4; i++) {
+        double got = cJSON_GetObjectItem(cJSON_GetArrayItem(ss, i), "semi_diameter")->valuedouble;
+        if (fabs(got - want[i]) > 1e-9)
+            fail_msg("layout surface %d: semi-diameter %.12g, closed form %.12g", i + 1, got,
+                     want[i]);
+    }
+    cJSON_Delete(js);
+    ct_free(&r);
+    snprintf(script_text, sizeof script_text, "semidiam\nsave %s\nundo\nsave %s\n",
+             ct_path("sd_set.json"), ct_path("sd_undo.json"));
+    snprintf(plain_text, sizeof plain_text, "save %s\n", ct_path("sd_plain.json"));
+    ct_run(&r, "edit", d, "--batch", ct_file("sd.txt", script_text), NULL);
+    if (r.code != 0)
+        fail_msg("edit --batch: exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    ct_run(&r, "edit", d, "--batch", ct_file("sdp.txt", plain_text), NULL);
+    if (r.code != 0)
+        fail_msg("edit --batch (plain save): exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    a = ct_read(ct_path("sd_set.json"));
+    js = cJSON_Parse(a);
+    assert_non_null(js);
+    ss = cJSON_GetObjectItem(js, "surfaces");
+    for (i = 0; i < 4; i++) {
+        cJSON *v = cJSON_GetObjectItem(cJSON_GetArrayItem(ss, i + 1), "semi_diameter");
+        if (!v || fabs(v->valuedouble - want[i]) > 1e-9)
+            fail_msg("semidiam surface %d: %s, closed form %.12g", i + 1, a, want[i]);
+    }
+    cJSON_Delete(js);
+    free(a);
+    a = ct_read(ct_path("sd_undo.json"));
+    b = ct_read(ct_path("sd_plain.json"));
+    assert_string_equal(a, b);
+    free(a);
+    free(b);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -500,6 +573,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_fan_opd),
         cmocka_unit_test(test_bad_options),
         cmocka_unit_test(test_vignetting_command),
+        cmocka_unit_test(test_semidiam_auto),
     };
     int rc;
     ct_init(argc, argv);

@@ -6,12 +6,15 @@
  */
 #include <math.h>
 #include <stdio.h>
+#include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include <stdarg.h>
 #include <setjmp.h>
 #include <cmocka.h>
+
+#include <cairo.h>
 
 #include "plot.h"
 
@@ -303,6 +306,351 @@ static void test_title_cut(void **state)
     }
 }
 
+/* Every dot of a figure's first panel in dot coordinates (2 across and 4
+ * down per cell, from the grid's corner); how many, at most max. */
+static int grid_dots(const plot_grid *g, int (*xy)[2], int max)
+{
+    int k, n = 0, r, c;
+    for (k = 0; k < g->w * g->h; k++) {
+        const unsigned char *s = (const unsigned char *)g->c[k].ch;
+        unsigned bits;
+        if (!(s[0] == 0xE2 && (s[1] & 0xFC) == 0xA0))
+            continue;
+        bits = (((unsigned)(s[1] & 0x3F) << 6) | (s[2] & 0x3F)) - 0x800;
+        for (r = 0; r < 4; r++)
+            for (c = 0; c < 2; c++)
+                if ((bits & plot_braille_bit(c, r)) && n < max) {
+                    xy[n][0] = 2 * (k % g->w) + c;
+                    xy[n][1] = 4 * (k / g->w) + r;
+                    n++;
+                }
+    }
+    return n;
+}
+
+/* A closed circle drawn as a line (the spot's Airy circle) stays on the
+ * circle: its vertices drawn as points give the circle's centre and radius
+ * in dots (braille dots are square on an equal panel), and every dot of the
+ * line lies within two dots of that radius.  The line walk once passed its
+ * end and streaked across the panel. */
+static void test_circle_line(void **state)
+{
+    static int pts[20000][2], lin[20000][2];
+    double x[73], y[73], cx, cy, r;
+    int kind, np = 0, nl = 0, k, x0 = 1 << 30, x1 = -1, y0 = 1 << 30, y1 = -1;
+    (void)state;
+    for (k = 0; k < 73; k++) {
+        x[k] = 4.0 * cos(2 * 3.14159265358979323846 * k / 72);
+        y[k] = 4.0 * sin(2 * 3.14159265358979323846 * k / 72);
+    }
+    for (kind = 0; kind < 2; kind++) {
+        plot_figure f;
+        plot_panel *p;
+        plot_grid g;
+        plot_figure_init(&f, NULL);
+        p = plot_add_panel(&f, "", "x", "y");
+        assert_non_null(p);
+        p->equal = 1;
+        p->xmin = p->ymin = -5;
+        p->xmax = p->ymax = 5;
+        assert_int_equal(plot_add_series(p, kind ? PLOT_LINES : PLOT_POINTS, 0, x, y, 73), 0);
+        assert_int_equal(plot_grid_init(&g, 60, 24), 0);
+        plot_draw_cells(&f, &g, 0, 0, 60, 24);
+        if (kind)
+            nl = grid_dots(&g, lin, 20000);
+        else
+            np = grid_dots(&g, pts, 20000);
+        plot_grid_free(&g);
+        plot_figure_free(&f);
+    }
+    assert_true(np > 20 && nl > np);
+    for (k = 0; k < np; k++) {
+        x0 = pts[k][0] < x0 ? pts[k][0] : x0;
+        x1 = pts[k][0] > x1 ? pts[k][0] : x1;
+        y0 = pts[k][1] < y0 ? pts[k][1] : y0;
+        y1 = pts[k][1] > y1 ? pts[k][1] : y1;
+    }
+    cx = 0.5 * (x0 + x1);
+    cy = 0.5 * (y0 + y1);
+    r = 0.25 * ((x1 - x0) + (y1 - y0));
+    for (k = 0; k < nl; k++) {
+        double d = hypot(lin[k][0] - cx, lin[k][1] - cy);
+        if (fabs(d - r) > 2.0)
+            fail_msg("dot (%d, %d) is %.1f dots from the centre; the circle's radius is %.1f",
+                     lin[k][0], lin[k][1], d, r);
+    }
+}
+
+/* ---- pictures read back: the PNG's pixels through cairo ---------------- */
+
+static cairo_status_t read_file(void *closure, unsigned char *data, unsigned int len)
+{
+    return fread(data, 1, len, (FILE *)closure) == len ? CAIRO_STATUS_SUCCESS
+                                                       : CAIRO_STATUS_READ_ERROR;
+}
+
+/* The figure as a PNG of w x h, read back as an image. */
+static cairo_surface_t *render(const plot_figure *f, int w, int h)
+{
+    char err[256];
+    FILE *t = tmpfile();
+    cairo_surface_t *img;
+    assert_non_null(t);
+    if (plot_write(f, PLOT_PNG, w, h, t, err, sizeof err))
+        fail_msg("plot_write: %s", err);
+    rewind(t);
+    img = cairo_image_surface_create_from_png_stream(read_file, t);
+    fclose(t);
+    assert_int_equal(cairo_surface_status(img), CAIRO_STATUS_SUCCESS);
+    assert_int_equal(cairo_image_surface_get_width(img), w);
+    return img;
+}
+
+static void pixel(cairo_surface_t *img, int x, int y, int rgb[3])
+{
+    const unsigned char *d = cairo_image_surface_get_data(img);
+    uint32_t v;
+    memcpy(&v, d + (size_t)y * (size_t)cairo_image_surface_get_stride(img) + 4 * (size_t)x, 4);
+    rgb[0] = (int)(v >> 16 & 255);
+    rgb[1] = (int)(v >> 8 & 255);
+    rgb[2] = (int)(v & 255);
+}
+
+static int dark(cairo_surface_t *img, int x, int y, int level)
+{
+    int c[3];
+    pixel(img, x, y, c);
+    /* Grey or black, not a dark colour (a colour bar's end). */
+    return c[0] < level && c[1] < level && c[2] < level && abs(c[0] - c[1]) < 30 &&
+           abs(c[1] - c[2]) < 30;
+}
+
+/* The plot frame: the columns and rows with dark runs over half the
+ * picture's height or width (left, right, top, bottom). */
+static void frame_of(cairo_surface_t *img, double fr[4])
+{
+    int w = cairo_image_surface_get_width(img), h = cairo_image_surface_get_height(img);
+    int x, y, n;
+    double sx = 0, sy = 0;
+    int nx = 0, ny = 0;
+    fr[0] = fr[2] = 1e9;
+    fr[1] = fr[3] = -1;
+    for (x = 0; x < w; x++) {
+        for (n = 0, y = 0; y < h; y++)
+            n += dark(img, x, y, 200);
+        if (n > h / 2) {
+            fr[0] = fmin(fr[0], x);
+            fr[1] = fmax(fr[1], x);
+            sx += x;
+            nx++;
+        }
+    }
+    for (y = 0; y < h; y++) {
+        for (n = 0, x = 0; x < w; x++)
+            n += dark(img, x, y, 200);
+        if (n > w / 2) {
+            fr[2] = fmin(fr[2], y);
+            fr[3] = fmax(fr[3], y);
+            sy += y;
+            ny++;
+        }
+    }
+    assert_true(nx >= 2 && ny >= 2);
+    (void)sx;
+    (void)sy;
+}
+
+/* A scale bar is as long in pixels as its labelled length times the
+ * plot's pixels per unit, which the frame's width in pixels over the
+ * axis range (0 to 100, not equal) gives. */
+static void test_scalebar_pixels(void **state)
+{
+    plot_figure f;
+    plot_panel *p;
+    cairo_surface_t *img;
+    double x[1] = {90}, y[1] = {70}, fr[4], want, best = 0;
+    int row, col;
+    (void)state;
+    plot_figure_init(&f, "scale");
+    p = plot_add_panel(&f, "a spot", "x (µm)", "y (µm)");
+    assert_non_null(p);
+    p->xmin = 0;
+    p->xmax = 100;
+    p->ymin = 0;
+    p->ymax = 75;
+    p->scalebar = 20;
+    snprintf(p->scalebar_label, sizeof p->scalebar_label, "20 µm");
+    assert_int_equal(plot_add_series(p, PLOT_POINTS, 0, x, y, 1), 0);
+    img = render(&f, 500, 400);
+    frame_of(img, fr);
+    want = 20.0 * (fr[1] - fr[0]) / 100.0;
+    /* The longest dark run in the frame's bottom 30 rows. */
+    for (row = (int)fr[3] - 30; row < (int)fr[3] - 2; row++) {
+        int run = 0;
+        for (col = (int)fr[0] + 3; col < (int)fr[1] - 3; col++) {
+            run = dark(img, col, row, 128) ? run + 1 : 0;
+            best = fmax(best, run);
+        }
+    }
+    print_message("# scale bar: %.0f px, 20 units x %.3f px per unit = %.1f px\n", best,
+                  (fr[1] - fr[0]) / 100.0, want);
+    assert_true(fabs(best - want) <= 1.5);
+    cairo_surface_destroy(img);
+    plot_figure_free(&f);
+}
+
+/* A circular pupil's map on an equal panel in a wide picture is as wide as
+ * it is tall in pixels. */
+static void test_map_circle(void **state)
+{
+    plot_figure f;
+    plot_panel *p;
+    cairo_surface_t *img;
+    double fr[4];
+    int k, x, y, x0 = 1 << 30, x1 = -1, y0 = 1 << 30, y1 = -1, g = 32;
+    (void)state;
+    plot_figure_init(&f, "map");
+    p = plot_add_panel(&f, "pupil", "Px", "Py");
+    assert_non_null(p);
+    p->equal = 1;
+    /* Limits past the raster, so the frame does not cut it. */
+    p->xmin = p->ymin = -1.25;
+    p->xmax = p->ymax = 1.25;
+    p->map_x0 = p->map_y0 = -1;
+    p->map_x1 = p->map_y1 = 1;
+    p->mw = p->mh = g;
+    p->map = malloc((size_t)(g * g) * sizeof *p->map);
+    assert_non_null(p->map);
+    for (k = 0; k < g * g; k++) {
+        double px = -1 + (k % g + 0.5) * 2.0 / g, py = 1 - (k / g + 0.5) * 2.0 / g;
+        p->map[k] = px * px + py * py <= 1.0 ? px * px + py * py : NAN;
+    }
+    p->map_lo = 0;
+    p->map_hi = 1;
+    img = render(&f, 900, 400);
+    frame_of(img, fr);
+    /* Coloured pixels (not white, grey or black) inside the frame. */
+    for (y = (int)fr[2] + 2; y < (int)fr[3] - 1; y++)
+        for (x = (int)fr[0] + 2; x < (int)fr[1] - 1; x++) {
+            int c[3];
+            pixel(img, x, y, c);
+            if (abs(c[0] - c[1]) + abs(c[1] - c[2]) + abs(c[0] - c[2]) > 60) {
+                x0 = x < x0 ? x : x0;
+                x1 = x > x1 ? x : x1;
+                y0 = y < y0 ? y : y0;
+                y1 = y > y1 ? y : y1;
+            }
+        }
+    print_message("# pupil map: %d x %d px in a 900 x 400 picture\n", x1 - x0 + 1, y1 - y0 + 1);
+    assert_true(y1 - y0 > 100);
+    assert_true(abs((x1 - x0) - (y1 - y0)) <= 2);
+    cairo_surface_destroy(img);
+    plot_figure_free(&f);
+}
+
+/* Sixty-four series colours, every two far apart (a fifth of the RGB
+ * cube's edge) and none black (the axes' colour); nine series in cells
+ * print nine different escapes. */
+static void test_palette_distinct(void **state)
+{
+    double a[PLOT_NCOLOURS][3];
+    plot_figure f;
+    plot_panel *p;
+    plot_grid g;
+    FILE *t;
+    char buf[65536], seen[16][24];
+    int i, j, nseen = 0;
+    size_t n;
+    (void)state;
+    for (i = 0; i < PLOT_NCOLOURS; i++) {
+        plot_colour_rgb(i, a[i]);
+        assert_true(a[i][0] + a[i][1] + a[i][2] > 0.2);
+        for (j = 0; j < i; j++)
+            assert_true(hypot(hypot(a[i][0] - a[j][0], a[i][1] - a[j][1]), a[i][2] - a[j][2]) >
+                        0.2);
+    }
+    plot_figure_init(&f, NULL);
+    p = plot_add_panel(&f, "", "x", "y");
+    p->xmin = p->ymin = 0;
+    p->xmax = p->ymax = 10;
+    for (i = 0; i < 9; i++) {
+        double x = 1 + i, y = 1 + i;
+        plot_add_series(p, PLOT_POINTS, i, &x, &y, 1);
+    }
+    assert_int_equal(plot_grid_init(&g, 60, 24), 0);
+    plot_draw_cells(&f, &g, 0, 0, 60, 24);
+    t = tmpfile();
+    assert_int_equal(plot_grid_print(&g, t, 1), 0);
+    rewind(t);
+    n = fread(buf, 1, sizeof buf - 1, t);
+    buf[n] = '\0';
+    fclose(t);
+    for (i = 0; buf[i]; i++)
+        if (buf[i] == '\033') {
+            int len = (int)strcspn(buf + i, "m") + 1, k, have = 0;
+            if (len > 23 || strncmp(buf + i, "\033[0m", 4) == 0)
+                continue;
+            for (k = 0; k < nseen; k++)
+                have |= strncmp(seen[k], buf + i, (size_t)len) == 0 && seen[k][len] == '\0';
+            if (!have && nseen < 16) {
+                memcpy(seen[nseen], buf + i, (size_t)len);
+                seen[nseen++][len] = '\0';
+            }
+        }
+    assert_int_equal(nseen, 9);
+    plot_grid_free(&g);
+    plot_figure_free(&f);
+}
+
+/* A size too small for the panels is refused, naming a size that works. */
+static void test_size_refused(void **state)
+{
+    plot_figure f;
+    plot_panel *p;
+    char err[256];
+    double x[2] = {0, 1}, y[2] = {0, 1};
+    int k, w, h, mw, mh;
+    FILE *t;
+    (void)state;
+    plot_figure_init(&f, "six panels");
+    f.ncol = 2;
+    for (k = 0; k < 6; k++) {
+        p = plot_add_panel(&f, "a fan", "Py", "ey (µm)");
+        plot_add_series(p, PLOT_LINES, 0, x, y, 2);
+    }
+    plot_add_legend(&f, 0, "0.5876 µm");
+    t = tmpfile();
+    assert_int_equal(plot_write(&f, PLOT_PNG, 300, 200, t, err, sizeof err), -1);
+    fclose(t);
+    assert_non_null(strstr(err, "300x200"));
+    assert_non_null(strstr(err, "--size "));
+    assert_int_equal(sscanf(strstr(err, "--size ") + 7, "%dx%d", &w, &h), 2);
+    plot_min_size(&f, 300, &mw, &mh);
+    assert_int_equal(w, mw);
+    assert_int_equal(h, mh);
+    assert_true(h > 200);
+    t = tmpfile();
+    if (plot_write(&f, PLOT_PNG, w, h, t, err, sizeof err))
+        fail_msg("the size named (%dx%d) is refused: %s", w, h, err);
+    fclose(t);
+    plot_figure_free(&f);
+}
+
+/* Text that does not fit ends in an ellipsis after a whole word. */
+static void test_fit_text(void **state)
+{
+    char out[64];
+    (void)state;
+    plot_fit_text("field 1: RMS 7.558, GEO 8.883 µm", 20, out, sizeof out);
+    assert_string_equal(out, "field 1: RMS 7.558\xe2\x80\xa6");
+    plot_fit_text("short", 20, out, sizeof out);
+    assert_string_equal(out, "short");
+    plot_fit_text("Spot diagram: Off-axis", 10, out, sizeof out);
+    assert_string_equal(out, "Spot diag\xe2\x80\xa6"); /* no word ends past the middle */
+    plot_fit_text("abcdefghijklmnop", 6, out, sizeof out);
+    assert_string_equal(out, "abcde\xe2\x80\xa6");
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -312,6 +660,12 @@ int main(void)
         cmocka_unit_test(test_files),
         cmocka_unit_test(test_cells_print),
         cmocka_unit_test(test_title_cut),
+        cmocka_unit_test(test_circle_line),
+        cmocka_unit_test(test_scalebar_pixels),
+        cmocka_unit_test(test_map_circle),
+        cmocka_unit_test(test_palette_distinct),
+        cmocka_unit_test(test_size_refused),
+        cmocka_unit_test(test_fit_text),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

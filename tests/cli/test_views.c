@@ -280,6 +280,141 @@ static void test_bar_limits(void **state)
     plot_figure_free(&f);
 }
 
+/* Spot panels share one scale: the same limits in every field, holding
+ * every point of every field; each has a scale bar of 1, 2 or 5 times a
+ * power of ten, a tenth to four tenths of the span, labelled with its
+ * length in the axes' unit.  A fan figure puts a field's tangential and
+ * sagittal fans side by side: two columns, panel 2k tangential and 2k + 1
+ * sagittal of field k + 1. */
+static void test_spot_fan_layout(void **state)
+{
+    sg_spot sp;
+    sg_spot_opts so;
+    sg_fan fan;
+    sg_fan_opts fo;
+    plot_figure f;
+    int k, j;
+    sg_system *off = sg_system_new();
+    double w0 = 0.0, w1 = 0.0;
+    (void)state;
+    /* The stop 150 before the mirror, not at its centre: field 2 gains
+     * coma, so its spot is larger than field 1's. */
+    assert_non_null(off);
+    assert_int_equal(sg_system_assign(off, sys), SG_OK);
+    off->surf[1].thickness = 150;
+    sg_spot_opts_init(&so);
+    so.max_points = 100000;
+    assert_int_equal(sg_spot_compute(off, cat, &so, &sp, NULL), SG_OK);
+    assert_true(sp.field[1].geo > 1.5 * sp.field[0].geo);
+    assert_int_equal(view_spot_figure(off, &sp, &f), 0);
+    assert_int_equal(f.npanel, 2);
+    for (k = 0; k < f.npanel; k++) {
+        const plot_panel *p = &f.panel[k];
+        double span = p->xmax - p->xmin, m, mant;
+        char want[32];
+        assert_true(p->xmin == f.panel[0].xmin && p->xmax == f.panel[0].xmax &&
+                    p->ymin == f.panel[0].ymin && p->ymax == f.panel[0].ymax);
+        for (j = 0; j < p->nseries; j++) {
+            size_t i;
+            for (i = 0; i < p->s[j].n; i++) {
+                assert_true(p->s[j].x[i] >= p->xmin && p->s[j].x[i] <= p->xmax &&
+                            p->s[j].y[i] >= p->ymin && p->s[j].y[i] <= p->ymax);
+                double r = fmax(fabs(p->s[j].x[i]), fabs(p->s[j].y[i]));
+                if (p->s[j].kind != PLOT_POINTS)
+                    continue; /* the Airy circle, the same in both */
+                if (k == 0)
+                    w0 = fmax(w0, r);
+                else
+                    w1 = fmax(w1, r);
+            }
+        }
+        m = pow(10.0, floor(log10(p->scalebar)));
+        mant = p->scalebar / m;
+        assert_true(fabs(mant - 1) < 1e-9 || fabs(mant - 2) < 1e-9 || fabs(mant - 5) < 1e-9);
+        assert_true(p->scalebar >= 0.1 * span && p->scalebar <= 0.4 * span);
+        snprintf(want, sizeof want, "%g %s", p->scalebar, strchr(p->xlabel, '(') + 1);
+        want[strlen(want) - 1] = '\0'; /* the label's closing parenthesis */
+        assert_string_equal(p->scalebar_label, want);
+    }
+    print_message("# spot: field 1 reaches %g, field 2 %g\n", w0, w1);
+    assert_true(w1 > w0); /* the fields differ, their scale does not */
+    plot_figure_free(&f);
+    sg_spot_free(&sp);
+    sg_system_free(off);
+    sg_fan_opts_init(&fo);
+    assert_int_equal(sg_fan_compute(sys, cat, &fo, &fan, NULL), SG_OK);
+    assert_int_equal(view_fan_figure(sys, &fan, &f), 0);
+    assert_int_equal(f.ncol, 2);
+    assert_int_equal(f.npanel, 4);
+    for (k = 0; k < 2; k++) {
+        char field[16];
+        snprintf(field, sizeof field, "field %d ", k + 1);
+        assert_non_null(strstr(f.panel[2 * k].title, "tangential"));
+        assert_non_null(strstr(f.panel[2 * k + 1].title, "sagittal"));
+        assert_true(strncmp(f.panel[2 * k].title, field, strlen(field)) == 0);
+        assert_true(strncmp(f.panel[2 * k + 1].title, field, strlen(field)) == 0);
+    }
+    plot_figure_free(&f);
+    sg_fan_free(&fan);
+}
+
+static const char LENS[] =
+    "{\"format\": \"sagitta-design\", \"version\": 1, \"title\": \"lens\",\n"
+    " \"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.55, \"weight\": 1}]},\n"
+    " \"fields\": {\"type\": \"angle\", \"normalization\": \"radial\",\n"
+    "   \"list\": [{\"x\": 0, \"y\": 0, \"weight\": 1}, {\"x\": 0, \"y\": 10, \"weight\": 1}]},\n"
+    " \"aperture\": {\"type\": \"epd\", \"value\": 10},\n"
+    " \"ray_aiming\": \"off\",\n"
+    " \"surfaces\": [\n"
+    "    {\"radius\": \"inf\", \"thickness\": \"inf\"},\n"
+    "    {\"radius\": \"inf\", \"thickness\": 10, \"stop\": true},\n"
+    "    {\"radius\": 50, \"thickness\": 5, \"material\": \"N-BK7\"},\n"
+    "    {\"radius\": -50, \"thickness\": 45},\n"
+    "    {\"radius\": \"inf\", \"thickness\": 0}]}\n";
+
+/* A lens's edge as Zemax draws it on the axis: the smaller surface goes
+ * on flat (at its rim's z) to the larger one's height, and a cylinder
+ * parallel to the axis (one height) joins the larger rim.  The stop 10
+ * before the lens and a 10 degree field make the rear surface's automatic
+ * semi-diameter larger than the front's. */
+static void test_layout_edges(void **state)
+{
+    sg_system *lens = sg_system_new();
+    sg_layout l;
+    sg_layout_opts lo;
+    plot_figure f;
+    sg_diag d;
+    int j, found = 0;
+    (void)state;
+    sg_diag_clear(&d);
+    assert_non_null(lens);
+    assert_int_equal(sg_design_parse(lens, LENS, strlen(LENS), "lens.json", &d), SG_OK);
+    sg_layout_opts_init(&lo);
+    assert_int_equal(sg_layout_compute(lens, cat, &lo, &l, &d), SG_OK);
+    assert_true(l.surf[2].sd > l.surf[1].sd + 0.1); /* surface 3 (rear) larger than 2 */
+    assert_int_equal(view_layout_figure(lens, &l, &f), 0);
+    for (j = 0; j < f.panel[0].nseries; j++) {
+        const plot_series *e = &f.panel[0].s[j];
+        int side;
+        if (e->n != 7)
+            continue;
+        found++;
+        for (side = 0; side < 2; side++) {
+            const double *y = e->y;
+            /* From the front rim, out flat at its z to the rear's height,
+             * then along the axis at that height to the rear rim. */
+            assert_true(e->x[4 * side] == e->x[4 * side + 1]);
+            assert_true(fabs(y[4 * side + 1]) > fabs(y[4 * side]));
+            assert_true(y[4 * side + 1] == y[4 * side + 2]);
+        }
+        assert_true(isnan(e->y[3]));
+    }
+    assert_int_equal(found, 1);
+    plot_figure_free(&f);
+    sg_layout_free(&l);
+    sg_system_free(lens);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -287,6 +422,8 @@ int main(void)
         cmocka_unit_test(test_fieldcurve_figure),
         cmocka_unit_test(test_bars_in_cells),
         cmocka_unit_test(test_bar_limits),
+        cmocka_unit_test(test_spot_fan_layout),
+        cmocka_unit_test(test_layout_edges),
     };
     return cmocka_run_group_tests(tests, setup, teardown);
 }

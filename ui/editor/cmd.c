@@ -1127,6 +1127,46 @@ static int c_thermal(ed *e, args *a)
                d.nwarn ? "; " : "", d.nwarn ? d.warn[0] : "");
 }
 
+/* Zemax's automatic semi-diameters: every surface whose semi-diameter is
+ * not fixed gets the highest edge ray's height there, as one edit (one
+ * undo).  A surface no ray reaches keeps its value. */
+static int c_semidiam(ed *e, args *a)
+{
+    double *sd;
+    sg_diag d;
+    sg_system *s;
+    int i, set = 0, kept = 0;
+    if (!need(e, a, 0, 0, "semidiam"))
+        return ED_HANDLED | ED_ERROR;
+    if (!e->cat)
+        return fail(e, "no glass catalog: %s", e->cat_msg);
+    if (!(sd = calloc((size_t)e->doc.sys->nsurf, sizeof *sd)))
+        return fail(e, "out of memory: the change was not made");
+    sg_diag_clear(&d);
+    if (sg_semi_diameters(e->doc.sys, e->cat, NULL, sd, &d) != SG_OK) {
+        free(sd);
+        return fail(e, "semidiam: %s", d.msg[0] ? d.msg : sg_strerror(d.code));
+    }
+    if (!begin(e, e->row)) {
+        free(sd);
+        return ED_HANDLED | ED_ERROR;
+    }
+    s = e->doc.sys;
+    for (i = 1; i < s->nsurf; i++) {
+        if (s->surf[i].sd_fixed)
+            continue;
+        if (sd[i] > 0.0) {
+            s->surf[i].semi_diameter = sd[i];
+            set++;
+        } else
+            kept++;
+    }
+    free(sd);
+    return end(e, "semidiam: %d automatic semi-diameter%s set from the edge rays%s", set,
+               set == 1 ? "" : "s",
+               kept ? " (surfaces no ray reaches kept theirs)" : "");
+}
+
 static int c_pressure(ed *e, args *a)
 {
     double p;
@@ -2587,6 +2627,9 @@ static const command commands[] = {
      "the design as built at CELSIUS: radii, thicknesses, semi-diameters and shape terms "
      "expand by the glasses' and mounts' TCE (Zemax's thermal analysis; column tce), "
      "solves frozen"},
+    {"semidiam", NULL, c_semidiam, "semidiam",
+     "set every semi-diameter that is not fixed to Zemax's automatic one (the highest ray of "
+     "the pupil's edge over fields and wavelengths), as one undoable edit"},
     {"adjust", NULL, c_adjust, "adjust on|off|toggle",
      "make glass indices follow temperature and pressure (Zemax's thermal model)"},
     {"glasses", NULL, c_glasses, "glasses [NAME | ND VD]",
