@@ -271,6 +271,7 @@ static void test_title_cut(void **state)
         {20, "RMS 12.3, GEO 1911 um", "RMS 12.3, GEO 1911…"},   /* the unit goes */
         {16, "RMS 12.3, GEO 1911 um", "RMS 12.3, GEO…"},        /* never "GEO 19" */
         {20, "RMS 12.3, GEO 191100 um", "RMS 12.3, GEO…"},      /* never "GEO 1911" */
+        {14, "GEO 1911000000 um", "GEO…"},      /* no blank past the middle */
     };
     size_t i;
     (void)state;
