@@ -560,6 +560,24 @@ static int tok_curv(zctx *c, const zline *l, int k, double *radius)
     mpq_clear(r);
     mpz_clear(num);
     mpz_clear(den);
+    /* Zemax writes a curvature in 16 to 19 digits, 1/R of the radius the
+     * user typed; where a shorter decimal radius has exactly that
+     * curvature, it is the radius (-1015, not -1015.0000000000001).  A
+     * longer text, such as sagitta's own 25 digits, keeps its exact
+     * reciprocal, so an exported design reads back bit for bit. */
+    if (nd <= 20 && isfinite(*radius)) {
+        int p;
+        for (p = 1; p < 17; p++) {
+            char t[40];
+            double r2;
+            snprintf(t, sizeof t, "%.*g", p, *radius);
+            r2 = strtod(t, NULL);
+            if (isfinite(r2) && r2 != 0.0 && 1.0 / r2 == cv) {
+                *radius = r2;
+                break;
+            }
+        }
+    }
     return SG_OK;
 }
 

@@ -2286,6 +2286,72 @@ static void test_subnormal_radius(void **state)
     sg_system_free(b);
 }
 
+/* Issue 30, item 12: a curvature Zemax wrote (16 to 19 digits of 1/R in
+ * double) for a radius typed as a short decimal reads back as that decimal
+ * (-1015, as Zemax shows it, not -1015.0000000000001), while sagitta's own
+ * 25-digit curvature keeps any radius bit for bit. */
+static void test_short_radius(void **state)
+{
+    static const char *const radii[] = {"-1015", "206.961", "-58.971", "3852.629",
+                                        "25.4625317208055", "51.5", "-0.5"};
+    static const char *const fmts[] = {"%.15E", "%.16E", "%.18E"};
+    char src[1024], *text, *z, *at, *t2, *line, *zt;
+    size_t n, i, k;
+    sg_system *s = sg_system_new(), *b = sg_system_new();
+    sg_diag d;
+    (void)state;
+    text = (char *)slurp(tu_path("examples/singlet.json", src, sizeof src), &n);
+    assert_non_null(text);
+    text[n] = '\0';
+    at = strstr(text, "\"radius\": 51.5,");
+    assert_non_null(at);
+    t2 = malloc(n + 64);
+    assert_non_null(t2);
+    for (i = 0; i < sizeof radii / sizeof radii[0]; i++)
+        for (k = 0; k < sizeof fmts / sizeof fmts[0]; k++) {
+            char cv[64];
+            double want = strtod(radii[i], NULL);
+            snprintf(t2, n + 64, "%.*s%s%s", (int)(at + 10 - text), text, radii[i], at + 14);
+            sg_diag_clear(&d);
+            if (sg_design_parse(s, t2, strlen(t2), "r.json", &d) != SG_OK)
+                fail_msg("%s", d.msg);
+            z = sg_zmx_to_text(s, NULL, &d);
+            assert_non_null(z);
+            /* Surface 1's CURV value written as Zemax writes it. */
+            line = strstr(strstr(z, "SURF 1"), "CURV ");
+            assert_non_null(line);
+            snprintf(cv, sizeof cv, fmts[k], 1.0 / want);
+            zt = malloc(strlen(z) + 64);
+            assert_non_null(zt);
+            sprintf(zt, "%.*sCURV %s%s", (int)(line - z), z, cv, strpbrk(line + 5, " \r\n"));
+            sg_diag_clear(&d);
+            if (sg_zmx_parse(b, zt, strlen(zt), "r.zmx", NULL, &d) != SG_OK)
+                fail_msg("%s", d.msg);
+            if (b->surf[1].radius != want)
+                fail_msg("CURV %s read as radius %.17g, want %s", cv, b->surf[1].radius,
+                         radii[i]);
+            free(zt);
+            free(z);
+        }
+    /* sagitta's own export of a radius one ulp off keeps it. */
+    snprintf(t2, n + 64, "%.*s%s%s", (int)(at + 10 - text), text, "-1015.0000000000001", at + 14);
+    sg_diag_clear(&d);
+    if (sg_design_parse(s, t2, strlen(t2), "r.json", &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    z = sg_zmx_to_text(s, NULL, &d);
+    assert_non_null(z);
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(b, z, strlen(z), "r.zmx", NULL, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(b->surf[1].radius == strtod("-1015.0000000000001", NULL));
+    assert_true(b->surf[1].radius != -1015.0);
+    free(z);
+    free(text);
+    free(t2);
+    sg_system_free(s);
+    sg_system_free(b);
+}
+
 /* Issue 30, item 30: 354710-C.zmx's D-ZK3M (CDGM, nd 1.601 vd 50.28 in
  * the file) is in no shipped catalog.  The refusal says how to proceed;
  * a named substitute or the nearest by nd and vd is taken only when
@@ -2441,6 +2507,7 @@ int main(void)
         cmocka_unit_test(test_lossless_encodings),
         cmocka_unit_test(test_lossless_refusal),
         cmocka_unit_test(test_subnormal_radius),
+        cmocka_unit_test(test_short_radius),
         cmocka_unit_test(test_glass_substitution),
         cmocka_unit_test(test_zero_keywords),
     };
