@@ -55,7 +55,7 @@ static int pupil_cuts(const sg_pupil *p, int aberrated, double complex *sag, dou
     fftw_complex *c;
     fftw_plan plan;
 
-    if ((rc = sg_pupil_intensity(p, aberrated, &inten, d)) != SG_OK)
+    if ((rc = sg_pupil_intensity(p, aberrated, m, &inten, d)) != SG_OK)
         return rc;
     lsf = fftw_alloc_real((size_t)m);
     c = fftw_alloc_complex((size_t)m / 2 + 1);

@@ -9,6 +9,8 @@
  * chief ray's reference sphere.  It is zero-padded to M = 2N points, so
  * the PSF grid spacing is lambda F# (N - 1) / M, about lambda F# / 2, and
  * the pupil's autocorrelation (extent 2N - 1 samples) does not alias.
+ * Several wavelengths share the shortest one's grid: a longer wavelength
+ * is padded further, in proportion to its wavelength.
  */
 #include <complex.h>
 #include <math.h>
@@ -104,9 +106,9 @@ int sg_pupil_trace(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
     return SG_OK;
 }
 
-int sg_pupil_intensity(const sg_pupil *p, int aberrated, double **intensity, sg_diag *d)
+int sg_pupil_intensity(const sg_pupil *p, int aberrated, int m, double **intensity, sg_diag *d)
 {
-    int n = p->n, m = 2 * p->n, i, j;
+    int n = p->n, i, j;
     size_t mm = (size_t)m * (size_t)m;
     fftw_complex *a = fftw_alloc_complex(mm);
     fftw_plan plan;
@@ -165,23 +167,6 @@ double sg_pupil_strehl_exact(const sg_pupil *p)
     return re * re + im * im;
 }
 
-/* The value of a centred m x m grid of spacing (sx, sy) at (x, y),
- * bilinear; 0 outside. */
-static double bilinear(const double *g, int m, double sx, double sy, double x, double y)
-{
-    double u = x / sx + m / 2, v = y / sy + m / 2, fu, fv;
-    long i = (long)floor(u), j = (long)floor(v);
-    if (i < 0 || j < 0 || i + 1 >= m || j + 1 >= m) {
-        if (i >= 0 && j >= 0 && i < m && j < m && u == i && v == j)
-            return g[(size_t)j * (size_t)m + (size_t)i];
-        return 0.0;
-    }
-    fu = u - (double)i;
-    fv = v - (double)j;
-    return (1 - fv) * ((1 - fu) * g[(size_t)j * m + i] + fu * g[(size_t)j * m + i + 1]) +
-           fv * ((1 - fu) * g[(size_t)(j + 1) * m + i] + fu * g[(size_t)(j + 1) * m + i + 1]);
-}
-
 int sg_psf_working_fnum(const sg_system *sys, const sg_catalog *cat, double *fnum, sg_diag *d)
 {
     sg_paraxial px;
@@ -198,8 +183,8 @@ int sg_psf_working_fnum(const sg_system *sys, const sg_catalog *cat, double *fnu
 int sg_psf_compute(const sg_system *sys, const sg_catalog *cat, const sg_psf_opts *o,
                    sg_psf *out, sg_diag *d)
 {
-    int waves[SG_MAX_WAVES], nw, w, rc, m, i, j, refw;
-    double fnum, wsum = 0.0, sx0, sy0, strehl_num = 0.0, strehl_den = 0.0, dl_peak = 0.0;
+    int waves[SG_MAX_WAVES], nw, w, rc, m, i, j;
+    double fnum, wsum = 0.0, sx0, sy0, strehl_num = 0.0, dl_peak = 0.0, lmin;
     double *acc = NULL;
     size_t mm;
 
@@ -219,21 +204,30 @@ int sg_psf_compute(const sg_system *sys, const sg_catalog *cat, const sg_psf_opt
         return rc;
     m = 2 * o->sampling;
     mm = (size_t)m * (size_t)m;
-    /* The output grid is that of the primary wavelength, or of the one
-     * wavelength chosen; every other wavelength is resampled onto it. */
-    refw = o->wave >= 0 ? o->wave : sys->primary_wave;
+    /* The output grid is the shortest wavelength's, padded to 2N; a longer
+     * wavelength is padded to 2N lambda / lambda_min points (rounded), so
+     * its grid is the same to 1 part in 4N and its centre M x M is taken
+     * as it is, with no interpolation, and nothing aliases. */
+    lmin = 0.0;
+    for (w = 0; w < nw; w++) {
+        double um = sys->wave[waves[w]].um;
+        if ((nw == 1 || sys->wave[waves[w]].weight > 0.0) && (lmin == 0.0 || um < lmin))
+            lmin = um;
+    }
+    if (lmin == 0.0)
+        return sg_diag_set(d, SG_ERANGE, "psf: every chosen wavelength has weight 0");
     {
         const sg_field *f = &sys->field[o->field];
-        double base = sys->wave[refw].um * fnum * (o->sampling - 1) / m;
+        double base = lmin * fnum * (o->sampling - 1) / m;
         sx0 = base / (1.0 - f->vcx);
         sy0 = base / (1.0 - f->vcy);
-        out->wave_um = sys->wave[refw].um;
+        out->wave_um = lmin;
     }
     acc = calloc(mm, sizeof *acc);
     if (!acc)
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
     for (w = 0; w < nw; w++) {
-        int wi = waves[w];
+        int wi = waves[w], mi, off;
         double wt = nw > 1 ? sys->wave[wi].weight : 1.0, sx, sy, energy, s, scale, *inten;
         sg_pupil p;
         if (nw > 1 && wt <= 0.0)
@@ -242,31 +236,28 @@ int sg_psf_compute(const sg_system *sys, const sg_catalog *cat, const sg_psf_opt
                             &p, d);
         if (rc != SG_OK)
             goto fail;
-        rc = sg_pupil_intensity(&p, 1, &inten, d);
+        mi = (int)lround(m * p.um / lmin);
+        if (mi < m)
+            mi = m;
+        rc = sg_pupil_intensity(&p, 1, mi, &inten, d);
         if (rc != SG_OK) {
             sg_pupil_free(&p);
             goto fail;
         }
-        sx = p.um * fnum * (o->sampling - 1) / m / p.scale_x;
-        sy = p.um * fnum * (o->sampling - 1) / m / p.scale_y;
-        /* Each wavelength carries unit energy (Parseval: the grid sums to
-         * m^2 nvalid) over its own cells sx * sy, times its weight. */
-        energy = (double)mm * (double)p.nvalid * sx * sy;
+        sx = p.um * fnum * (o->sampling - 1) / mi / p.scale_x;
+        sy = p.um * fnum * (o->sampling - 1) / mi / p.scale_y;
+        /* Each wavelength carries unit energy (Parseval: its grid sums to
+         * mi^2 nvalid) over its own cells sx * sy, times its weight. */
+        energy = (double)mi * (double)mi * (double)p.nvalid * sx * sy;
         scale = wt / energy;
         s = sg_pupil_strehl_exact(&p);
         /* The unaberrated peak of this wavelength is nvalid^2 at the centre. */
         dl_peak += scale * (double)p.nvalid * (double)p.nvalid;
         strehl_num += scale * (double)p.nvalid * (double)p.nvalid * s;
-        strehl_den += scale * (double)p.nvalid * (double)p.nvalid;
-        if (wi == refw) {
-            for (size_t k = 0; k < mm; k++)
-                acc[k] += scale * inten[k];
-        } else {
-            for (j = 0; j < m; j++)
-                for (i = 0; i < m; i++)
-                    acc[(size_t)j * m + i] +=
-                        scale * bilinear(inten, m, sx, sy, (i - m / 2) * sx0, (j - m / 2) * sy0);
-        }
+        off = mi / 2 - m / 2;
+        for (j = 0; j < m; j++)
+            for (i = 0; i < m; i++)
+                acc[(size_t)j * m + i] += scale * inten[(size_t)(j + off) * mi + (i + off)];
         wsum += wt;
         free(inten);
         sg_pupil_free(&p);
@@ -288,7 +279,7 @@ int sg_psf_compute(const sg_system *sys, const sg_catalog *cat, const sg_psf_opt
     out->spacing_y_um = sy0;
     out->fnum = fnum;
     out->strehl = acc[(size_t)(m / 2) * m + m / 2];
-    out->strehl_exact = strehl_num / strehl_den;
+    out->strehl_exact = strehl_num / dl_peak;
     out->psf = acc;
     return SG_OK;
 fail:

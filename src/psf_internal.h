@@ -24,9 +24,10 @@ int sg_pupil_trace(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
                    int field, int wave, int sampling, double fnum, int nthreads,
                    sg_pupil *out, sg_diag *d);
 void sg_pupil_free(sg_pupil *p);
-/* |FFT|^2 of the pupil zero-padded to 2n x 2n, centred at (n, n); with
- * aberrated 0 the phase is left out (the same pupil, unaberrated). */
-int sg_pupil_intensity(const sg_pupil *p, int aberrated, double **intensity, sg_diag *d);
+/* |FFT|^2 of the pupil zero-padded to m x m (m >= 2n), centred at
+ * (m/2, m/2); with aberrated 0 the phase is left out (the same pupil,
+ * unaberrated). */
+int sg_pupil_intensity(const sg_pupil *p, int aberrated, int m, double **intensity, sg_diag *d);
 /* |mean over the pupil of exp(i 2 pi W)|^2. */
 double sg_pupil_strehl_exact(const sg_pupil *p);
 

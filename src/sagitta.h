@@ -1437,7 +1437,8 @@ typedef struct sg_psf {
     int field;            /* 0-based */
     int sampling;         /* N */
     int size;             /* M = 2N, PSF grid points across */
-    double wave_um;       /* the wavelength whose grid the PSF is on */
+    double wave_um;       /* the wavelength whose grid the PSF is on: the
+                           * shortest of those summed */
     double spacing_x_um, spacing_y_um; /* grid spacing: lambda F# (N-1) / M
                                         * / (1 - vc) on each axis */
     double fnum;          /* the primary wavelength's paraxial working F/# */
@@ -1453,7 +1454,8 @@ SG_API void sg_psf_opts_init(sg_psf_opts *o);
 /* The FFT PSF of one field: the traced pupil (amplitude 1 where the ray
  * reaches the image, phase 2 pi OPD) on an N x N grid, zero-padded to
  * 2N x 2N.  Several wavelengths are summed, each with unit energy times
- * its weight, resampled (bilinear) onto the grid of the primary one. */
+ * its weight, on the shortest one's grid: a longer one is padded to
+ * 2N lambda / lambda_min points, rounded, and its centre taken. */
 SG_API int sg_psf_compute(const sg_system *sys, const sg_catalog *cat, const sg_psf_opts *o,
                           sg_psf *out, sg_diag *d);
 SG_API void sg_psf_free(sg_psf *p);

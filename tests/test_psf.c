@@ -179,6 +179,53 @@ static void polychromatic_mtf(void **state)
     sg_system_free(sys);
 }
 
+/* The perfect system's PSF in three wavelengths: each wavelength's Airy
+ * pattern carries unit energy times its weight, so its peak is
+ * proportional to w / lambda^2; the sum is normalized to peak 1. */
+static void polychromatic_psf(void **state)
+{
+    const double f = 200.0, epd = 20.0;
+    const double um[3] = { 0.4861327, 0.5875618, 0.6562725 }, wt[3] = { 1.0, 2.0, 0.5 };
+    sg_system *sys = paraboloid(f, epd, 0.0);
+    sg_catalog *cat = tu_catalog();
+    sg_psf_opts o;
+    sg_psf p;
+    sg_diag d;
+    double worst = 0.0, norm = 0.0;
+    int i, w, c;
+    (void)state;
+    sys->nwave = 3;
+    for (w = 0; w < 3; w++) {
+        sys->wave[w].um = um[w];
+        sys->wave[w].weight = wt[w];
+        norm += wt[w] / (um[w] * um[w]);
+    }
+    sys->primary_wave = 1;
+    sg_psf_opts_init(&o);
+    o.sampling = 128;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_psf_compute(sys, cat, &o, &p, &d), SG_OK);
+    assert_true(fabs(p.spacing_x_um / (um[0] * f / epd * 127.0 / 256.0) - 1.0) < 1e-9);
+    c = p.size / 2;
+    for (i = 0; i <= 12; i++) {
+        double r = i * p.spacing_x_um, want = 0.0;
+        for (w = 0; w < 3; w++) {
+            double v = PI * r / (um[w] * f / epd);
+            want += wt[w] / (um[w] * um[w]) * (v == 0.0 ? 1.0 : pow(2.0 * j1(v) / v, 2));
+        }
+        want /= norm;
+        worst = fmax(worst, fabs(p.psf[(size_t)c * p.size + c + i] - want));
+        worst = fmax(worst, fabs(p.psf[(size_t)(c - i) * p.size + c] - want));
+    }
+    print_message("# three wavelengths: PSF against the weighted Airy patterns: largest "
+                  "difference %.3g\n", worst);
+    assert_true(worst < 0.003);
+    assert_true(fabs(p.strehl - 1.0) < 1e-9);
+    sg_psf_free(&p);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
 /* The defocused paraboloid's OPD in waves at pupil radius rho (0 to 1). */
 static double defocus_w(double f, double epd, double dz, double lambda_mm, double rho)
 {
@@ -235,6 +282,23 @@ static void defocus_strehl(void **state)
         assert_true(fabs(p.strehl - want) < 1.5e-3);
         assert_true(fabs(want - sinc) < 1e-3);
         sg_psf_free(&p);
+        if (t == 1) {
+            /* The diffraction limit is the same pupil unaberrated. */
+            sg_mtf_opts mo;
+            sg_mtf m;
+            double nuc = 1.0 / (lambda_mm * F), worst = 0.0;
+            int j;
+            sg_mtf_opts_init(&mo);
+            mo.sampling = 128;
+            assert_int_equal(sg_mtf_compute(sys, cat, &mo, &m, &d), SG_OK);
+            for (j = 0; j < m.npts; j++)
+                worst = fmax(worst, fabs(m.dl[j] - mtf_circle(m.freq[j] / nuc)));
+            assert_true(worst < 0.002);
+            /* Half a wave of defocus: at half the cutoff the MTF is well below it. */
+            assert_true(m.tan[m.npts / 2] < m.dl[m.npts / 2] - 0.1);
+            assert_true(fabs(m.tan[m.npts / 2] - m.sag[m.npts / 2]) < 1e-6);
+            sg_mtf_free(&m);
+        }
         sg_system_free(sys);
     }
     sg_catalog_free(cat);
@@ -281,6 +345,7 @@ int main(void)
         cmocka_unit_test(perfect_mtf),
         cmocka_unit_test(perfect_psf),
         cmocka_unit_test(polychromatic_mtf),
+        cmocka_unit_test(polychromatic_psf),
         cmocka_unit_test(defocus_strehl),
         cmocka_unit_test(bad_input),
     };
