@@ -97,6 +97,30 @@ int sg_pupil_trace(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
                                         "the image", field + 1, wave + 1);
     }
     out->um = sys->wave[wave].um;
+    /* The sampling rule: the PSF grid spans N lambda F#, so a pupil whose
+     * OPD changes by more than half a wave between neighbouring samples
+     * spreads light beyond it, and the FFT wraps that light around. */
+    {
+        int n = sampling, i, j;
+        double step = 0.0;
+        for (j = 0; j < n; j++)
+            for (i = 0; i < n; i++) {
+                size_t k = (size_t)j * (size_t)n + (size_t)i;
+                if (!out->ok[k])
+                    continue;
+                if (i + 1 < n && out->ok[k + 1])
+                    step = fmax(step, fabs(out->opd[k + 1] - out->opd[k]));
+                if (j + 1 < n && out->ok[k + (size_t)n])
+                    step = fmax(step, fabs(out->opd[k + (size_t)n] - out->opd[k]));
+            }
+        out->max_step = step;
+        if (step > 0.5)
+            sg_diag_warn(d, "field %d, wavelength %d: the OPD changes by up to %.3g waves "
+                            "between neighbouring pupil samples, more than 0.5: the PSF is "
+                            "wider than its grid and aliases; a sampling of about %.0f or "
+                            "more is needed", field + 1, wave + 1, step,
+                         ceil(sampling * step / 0.5));
+    }
     /* The vignetting factors compress the traced pupil: its samples lie
      * closer in the physical pupil by (1 - vc), so the PSF grid is wider
      * by 1 / (1 - vc) along that axis. */

@@ -15,6 +15,7 @@ typedef struct sg_pupil {
     double um;              /* the wavelength */
     double fnum;            /* the working F/# the grid is scaled by */
     double scale_x, scale_y; /* 1 - vcx, 1 - vcy */
+    double max_step;        /* largest OPD change between neighbours, waves */
 } sg_pupil;
 
 int sg_psf_check_common(const sg_system *sys, int sampling, const char *what, sg_diag *d);

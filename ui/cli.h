@@ -36,6 +36,8 @@ const char *cli_shortest(double v, char *buf, size_t n);
 int cmd_semidiam(int argc, char **argv);
 int cmd_vignetting(int argc, char **argv);
 int cmd_thermal(int argc, char **argv); /* thermal.c */
+int cmd_psf(int argc, char **argv);     /* diffraction.c */
+int cmd_mtf(int argc, char **argv);     /* diffraction.c */
 /* Further subcommands live in their own files. */
 int cmd_verify(int argc, char **argv);
 int cmd_bench(int argc, char **argv);

@@ -38,6 +38,8 @@ static const cli_command commands[] = {
     { "semidiam", cmd_semidiam, "automatic semi-diameters, as Zemax computes them" },
     { "vignetting", cmd_vignetting, "vignetting factors from the apertures (Zemax's Set Vignetting)" },
     { "thermal", cmd_thermal, "the design as built at another temperature (thermal expansion)" },
+    { "psf", cmd_psf, "FFT point spread function and Strehl ratio" },
+    { "mtf", cmd_mtf, "FFT MTF, tangential and sagittal, with the diffraction limit" },
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
 
