@@ -143,6 +143,40 @@ static void compressed_pupil(void **state)
     sg_system_free(sys);
 }
 
+/* A slit |x| <= half the pupil's radius on the stop: the sagittal MTF
+ * (along x) ends at half the cutoff, the pupil's width there, while the
+ * tangential one does not.  (A central obscuration's annulus is not
+ * tested: its chief ray is stopped, which the reference sphere refuses.) */
+static void slit_pupil(void **state)
+{
+    const double f = 200.0, epd = 20.0;
+    sg_system *sys = paraboloid(f, epd, 0.0);
+    sg_catalog *cat = tu_catalog();
+    sg_mtf_opts o;
+    sg_mtf m;
+    sg_diag d;
+    double nuc = 1.0 / (sys->wave[0].um * 1e-3 * f / epd);
+    int j;
+    (void)state;
+    sg_mtf_opts_init(&o);
+    sg_diag_clear(&d);
+    sys->surf[1].aperture = SG_APERTURE_RECTANGULAR;
+    sys->surf[1].ap_xhalf = epd / 4;
+    sys->surf[1].ap_yhalf = epd;
+    o.sampling = 128;
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_OK);
+    for (j = 0; j < m.npts; j++) {
+        double x = m.freq[j] / nuc;
+        if (x > 0.51)
+            assert_true(m.sag[j] < 1e-9);
+        if (x > 0.51 && x < 0.9)
+            assert_true(m.tan[j] > 0.01);
+    }
+    sg_mtf_free(&m);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
 static void perfect_psf(void **state)
 {
     const double f = 200.0, epd = 20.0;
@@ -384,6 +418,7 @@ int main(void)
         cmocka_unit_test(perfect_mtf),
         cmocka_unit_test(perfect_psf),
         cmocka_unit_test(compressed_pupil),
+        cmocka_unit_test(slit_pupil),
         cmocka_unit_test(polychromatic_mtf),
         cmocka_unit_test(polychromatic_psf),
         cmocka_unit_test(defocus_strehl),
