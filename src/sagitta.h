@@ -1656,6 +1656,75 @@ SG_API int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
                        const sg_wavefront_opts *o, sg_wavefront *out, sg_opd_ref *ref,
                        sg_diag *d);
 
+/* ------------------------------------------------------------------------
+ * Diffraction: FFT PSF, Strehl ratio and FFT MTF (sagitta(1), psf, mtf)
+ * ------------------------------------------------------------------------ */
+
+#define SG_PSF_SAMPLING_MIN 32
+#define SG_PSF_SAMPLING_MAX 2048
+
+typedef struct sg_psf_opts {
+    sg_trace_opts trace; /* trace.wave is ignored: see wave */
+    int field;           /* 0-based design field */
+    int wave;            /* 0-based wavelength, or -1: every one, by weight */
+    int sampling;        /* N, pupil grid points across, 32 to 2048 */
+    int nthreads;        /* 0: every core */
+} sg_psf_opts;
+
+typedef struct sg_psf {
+    int field;            /* 0-based */
+    int sampling;         /* N */
+    int size;             /* M = 2N, PSF grid points across */
+    double wave_um;       /* the wavelength whose grid the PSF is on: the
+                           * shortest of those summed */
+    double spacing_x_um, spacing_y_um; /* grid spacing: lambda F# (N-1) / M
+                                        * / (1 - vc) on each axis */
+    double fnum;          /* the primary wavelength's paraxial working F/# */
+    double strehl;        /* the PSF at the chief ray's point */
+    double strehl_exact;  /* |mean of exp(i 2 pi W)|^2, weighted alike */
+    double peak;          /* the PSF's largest value */
+    double *psf;          /* M * M, row y, column x; (M/2, M/2) is the
+                           * chief ray's point; the unaberrated pupil of
+                           * the same shape has peak 1 */
+} sg_psf;
+
+SG_API void sg_psf_opts_init(sg_psf_opts *o);
+/* The FFT PSF of one field: the traced pupil (amplitude 1 where the ray
+ * reaches the image, phase 2 pi OPD) on an N x N grid, zero-padded to
+ * 2N x 2N.  Several wavelengths are summed, each with unit energy times
+ * its weight, on the shortest one's grid: a longer one is padded to
+ * 2N lambda / lambda_min points, rounded, and its centre taken. */
+SG_API int sg_psf_compute(const sg_system *sys, const sg_catalog *cat, const sg_psf_opts *o,
+                          sg_psf *out, sg_diag *d);
+SG_API void sg_psf_free(sg_psf *p);
+
+typedef struct sg_mtf_opts {
+    sg_trace_opts trace;  /* trace.wave is ignored: see wave */
+    int field;            /* 0-based design field, or -1: every one */
+    int wave;             /* 0-based wavelength, or -1: every one, by weight */
+    int sampling;         /* N, 32 to 2048 */
+    double max_frequency; /* cycles/mm; 0: the cutoff 1 / (lambda F#) */
+    int nthreads;
+} sg_mtf_opts;
+
+typedef struct sg_mtf {
+    int nfield, npts;
+    int sampling;
+    int *field;           /* nfield 0-based design fields */
+    double fnum;          /* the working F/# the frequencies are scaled by */
+    double cutoff;        /* 1 / (lambda F#) of the shortest wavelength, cycles/mm */
+    double *freq;         /* npts, cycles/mm, from 0 to the maximum */
+    double *tan, *sag;    /* nfield * npts: along y and along x */
+    double *dl;           /* npts: the first field's pupil, unaberrated */
+} sg_mtf;
+
+SG_API void sg_mtf_opts_init(sg_mtf_opts *o);
+/* The FFT MTF: |FFT of the FFT PSF|, cut along y (tangential) and x
+ * (sagittal), at N frequencies from 0 to the maximum. */
+SG_API int sg_mtf_compute(const sg_system *sys, const sg_catalog *cat, const sg_mtf_opts *o,
+                          sg_mtf *out, sg_diag *d);
+SG_API void sg_mtf_free(sg_mtf *m);
+
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */
 SG_API double sg_digits(double a, double b);

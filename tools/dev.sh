@@ -16,7 +16,7 @@ here=$(cd "$(dirname "$0")/.." && pwd)
 cd "$here"
 build=${BUILD_DIR:-build}
 
-packages="gcc meson ninja-build pkg-config libmpfr-dev libgmp-dev libcjson-dev libcairo2-dev \
+packages="gcc meson ninja-build pkg-config libmpfr-dev libgmp-dev libcjson-dev libfftw3-dev libcairo2-dev \
 libcmocka-dev libncurses-dev tmux python3 clang libclang-rt-14-dev valgrind \
 libhdf5-dev hdf5-tools libgsl-dev \
 locales"

@@ -466,3 +466,77 @@ out:
     free(yv);
     return rc;
 }
+
+int view_mtf_figure(const sg_system *sys, const sg_mtf *m, plot_figure *f)
+{
+    char title[200], lab[64], leg[48];
+    plot_panel *p;
+    int k;
+    snprintf(title, sizeof title, "FFT MTF: %s", safe_text(sys->title, lab, sizeof lab));
+    plot_figure_init(f, title);
+    p = plot_add_panel(f, NULL, "spatial frequency (cycles/mm)", "modulus of the OTF");
+    if (!p)
+        return -1;
+    if (plot_add_series(p, PLOT_LINES, PLOT_FG, m->freq, m->dl, (size_t)m->npts))
+        return -1;
+    plot_add_legend(f, PLOT_FG, "diffraction limit");
+    for (k = 0; k < m->nfield; k++) {
+        if (plot_add_series(p, PLOT_LINES, 2 * k, m->freq, m->tan + (size_t)k * m->npts,
+                            (size_t)m->npts) ||
+            plot_add_series(p, PLOT_LINES, 2 * k + 1, m->freq, m->sag + (size_t)k * m->npts,
+                            (size_t)m->npts))
+            return -1;
+        snprintf(leg, sizeof leg, "field %d T", m->field[k] + 1);
+        plot_add_legend(f, 2 * k, leg);
+        snprintf(leg, sizeof leg, "field %d S", m->field[k] + 1);
+        plot_add_legend(f, 2 * k + 1, leg);
+    }
+    plot_panel_limits(p, 0.0);
+    return 0;
+}
+
+int view_psf_figure(const sg_system *sys, const sg_psf *ps, int n, plot_figure *f)
+{
+    char title[200], lab[64], pt[64];
+    int k, rc = -1;
+    snprintf(title, sizeof title, "FFT PSF cross-sections: %s",
+             safe_text(sys->title, lab, sizeof lab));
+    plot_figure_init(f, title);
+    for (k = 0; k < n; k++) {
+        const sg_psf *q = &ps[k];
+        double lf = q->wave_um * q->fnum;
+        int r = (int)ceil(16.0 * lf / fmin(q->spacing_x_um, q->spacing_y_um)), i, c = q->size / 2;
+        double *x, *vx, *vy;
+        plot_panel *p;
+        if (r >= c)
+            r = c - 1;
+        x = malloc((size_t)(2 * r + 1) * sizeof *x);
+        vx = malloc((size_t)(2 * r + 1) * sizeof *vx);
+        vy = malloc((size_t)(2 * r + 1) * sizeof *vy);
+        snprintf(pt, sizeof pt, "field %d: Strehl %.4f", q->field + 1, q->strehl);
+        p = x && vx && vy ? plot_add_panel(f, pt, "offset (um)", "PSF") : NULL;
+        if (p) {
+            for (i = -r; i <= r; i++) {
+                x[i + r] = i * q->spacing_x_um;
+                vx[i + r] = q->psf[(size_t)c * q->size + (size_t)(c + i)];
+                vy[i + r] = q->psf[(size_t)(c + i) * q->size + (size_t)c];
+            }
+            if (!plot_add_series(p, PLOT_LINES, 0, x, vx, (size_t)(2 * r + 1))) {
+                for (i = -r; i <= r; i++)
+                    x[i + r] = i * q->spacing_y_um;
+                if (!plot_add_series(p, PLOT_LINES, 1, x, vy, (size_t)(2 * r + 1))) {
+                    plot_panel_limits(p, 0.0);
+                    p = (plot_panel *)1;
+                }
+            }
+        }
+        free(x);
+        free(vx);
+        free(vy);
+        if (p != (plot_panel *)1)
+            return rc;
+    }
+    plot_add_legend(f, 0, "along x");
+    plot_add_legend(f, 1, "along y");
+    return 0;
+}

@@ -39,5 +39,11 @@ int view_seidel_figure(const sg_system *sys, const sg_seidel *s, int grouped, pl
  * fields break the curves. */
 int view_fieldcurve_figure(const sg_system *sys, const sg_fieldcurve_pt *p, int n, double um,
                            plot_figure *f);
+/* The FFT MTF against frequency: each field's tangential and sagittal
+ * curves and the diffraction limit. */
+int view_mtf_figure(const sg_system *sys, const sg_mtf *m, plot_figure *f);
+/* The FFT PSF's cross-sections along x and y through the chief ray's
+ * point, one panel per field, out to 16 lambda F#. */
+int view_psf_figure(const sg_system *sys, const sg_psf *p, int n, plot_figure *f);
 
 #endif

@@ -3,6 +3,7 @@
  * line, 3 for a file that cannot be read or parsed, 4 for a design that
  * cannot be traced, and never a crash. */
 #include <ctype.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -103,6 +104,68 @@ static void test_unknown_glass(void **state)
     expect(4, ARGS("paraxial", path), "surface 1", NULL);
     expect(4, ARGS("thermal", path, "--temperature", "40", "-o", ct_path("hot.json")),
            "surface 1", "NO-SUCH-GLASS-42");
+}
+
+/* sagitta psf and mtf: bad options named, and a perfect paraboloid's MTF
+ * JSON against the circular pupil's 2/pi (phi - cos phi sin phi). */
+static void test_diffraction(void **state)
+{
+    const char *path = ct_design("psf.json", SINGLET);
+    const char *mirror = ct_file("parab.json",
+        "{\"format\": \"sagitta-design\", \"version\": 1, \"units\": \"mm\",\n"
+        " \"aperture\": {\"type\": \"epd\", \"value\": 20},\n"
+        " \"fields\": {\"type\": \"angle\", \"list\": [{\"x\": 0, \"y\": 0}]},\n"
+        " \"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.55}]},\n"
+        " \"surfaces\": [\n"
+        "  {\"radius\": \"inf\", \"thickness\": \"inf\"},\n"
+        "  {\"radius\": \"inf\", \"thickness\": 0, \"stop\": true},\n"
+        "  {\"radius\": -400, \"conic\": -1, \"thickness\": -200, \"material\": \"MIRROR\"},\n"
+        "  {\"radius\": \"inf\", \"thickness\": 0}]}\n");
+    ct_result r;
+    const char *p;
+    double nuc = 1.0 / (0.55e-3 * 10.0), worst = 0.0;
+    int j;
+    (void)state;
+    expect(2, ARGS("psf", path, "--sampling", "16"), "--sampling", NULL);
+    expect(2, ARGS("mtf", path, "--max-frequency", "-1"), "--max-frequency", NULL);
+    expect(2, ARGS("psf", path, "--max-frequency", "10"), "--max-frequency", NULL);
+    expect(2, ARGS("mtf", path, "--field", "9"), "--field 9", NULL);
+    ct_run(&r, "mtf", mirror, "--sampling", "64", "--format", "json", (const char *)NULL);
+    if (r.code != 0)
+        fail_msg("sagitta mtf: exit %d: %s", r.code, r.err);
+    /* "frequency" then "tangential": read the pairs in order. */
+    p = strstr(r.out, "\"frequency\": [");
+    assert_non_null(p);
+    {
+        double fr[64], t[64];
+        const char *q = strstr(p, "\"tangential\": [");
+        assert_non_null(q);
+        p += strlen("\"frequency\": [");
+        q += strlen("\"tangential\": [");
+        for (j = 0; j < 64; j++) {
+            char *e;
+            fr[j] = strtod(p, &e);
+            p = e + 1;
+            t[j] = strtod(q, &e);
+            q = e + 1;
+        }
+        for (j = 0; j < 64; j++) {
+            double x = fr[j] / nuc, phi = acos(x < 1 ? x : 1);
+            worst = fmax(worst, fabs(t[j] - 2.0 / 3.14159265358979 * (phi - cos(phi) * sin(phi))));
+        }
+        assert_true(fabs(fr[63] / nuc - 1.0) < 1e-9);
+    }
+    print_message("# mtf --format json of a perfect F/10: largest difference %.3g\n", worst);
+    assert_true(worst < 0.004);
+    assert_non_null(strstr(r.out, "\"diffraction_limit\": {\"frequency\": ["));
+    ct_free(&r);
+    ct_run(&r, "psf", mirror, "--format", "json", (const char *)NULL);
+    assert_int_equal(r.code, 0);
+    p = strstr(r.out, "\"strehl\": ");
+    assert_non_null(p);
+    assert_true(fabs(strtod(p + 10, NULL) - 1.0) < 1e-9);
+    assert_non_null(strstr(r.out, "\"spacing_um\": "));
+    ct_free(&r);
 }
 
 /* sagitta thermal: the N-BK7 singlet at 60 C from 20 C has its first radius
@@ -402,6 +465,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_bad_lensdb),
         cmocka_unit_test(test_output_is_input),
         cmocka_unit_test(test_output_keeps),
+        cmocka_unit_test(test_diffraction),
     };
     int rc;
     ct_init(argc, argv);

@@ -82,7 +82,7 @@ cflags="-std=c11 -D_POSIX_C_SOURCE=200809L -O1 -g -fno-omit-frame-pointer
  -ffp-contract=off -fno-math-errno -fno-sanitize-recover=all
  -I$build -I$root/src -I$root/ui $(pkg-config --cflags hdf5) $(pkg-config --cflags gsl)"
 cflags_lib="$cflags -fsanitize=fuzzer-no-link,address,undefined"
-libs="-lcjson -lmpfr -lgmp -lm -lpthread $(pkg-config --libs hdf5) $(pkg-config --libs gsl)"
+libs="-lcjson -lfftw3 -lmpfr -lgmp -lm -lpthread $(pkg-config --libs hdf5) $(pkg-config --libs gsl)"
 
 # ui/numfmt.c's power-of-ten table, made as meson makes it.
 if [ ! -f "$build/numfmt_pow10.h" ] || [ "$root/ui/gen_pow10.c" -nt "$build/numfmt_pow10.h" ]; then

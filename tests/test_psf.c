@@ -1,0 +1,428 @@
+/*
+ * test_psf.c - the FFT PSF, Strehl ratio and FFT MTF against closed forms.
+ *
+ * 1. A paraboloid mirror on axis with the object at infinity is perfect:
+ *    its MTF is the circular pupil's, 2/pi (phi - cos phi sin phi) with
+ *    cos phi = nu / nu_c, nu_c = 1 / (lambda F#), tangential, sagittal and
+ *    the diffraction limit; its Strehl ratio is 1; its PSF is Airy's,
+ *    (2 J1(v) / v)^2 with v = pi r / (lambda F#), at the grid's points.
+ * 2. Three wavelengths: the perfect system's polychromatic MTF is the
+ *    weighted sum of the circular pupil's MTF at each wavelength's cutoff.
+ * 3. The same paraboloid with its image plane dz beyond the focus: the
+ *    Strehl ratio against |int_0^1 exp(i 2 pi W(rho)) 2 rho d rho|^2, W
+ *    from the exact geometry of the defocused sphere (written out in
+ *    test_wavefront.c, opd_fan_defocus), integrated here by Gauss-Legendre,
+ *    and against (sin(pi W020) / (pi W020))^2 for W020 the edge OPD.
+ */
+#define _XOPEN_SOURCE 700 /* j1 */
+#include <complex.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "testutil.h"
+
+static const double PI = 3.14159265358979323846;
+
+/* Object at infinity; surface 1 the stop, flat, at the vertex of a
+ * paraboloid of focal length f; the image dz beyond its focus. */
+static sg_system *paraboloid(double f, double epd, double dz)
+{
+    sg_system *sys = sg_system_new();
+    assert_non_null(sys);
+    assert_int_equal(sg_system_reset(sys, 4), SG_OK);
+    sys->surf[0].thickness = INFINITY;
+    sys->surf[1].radius = INFINITY;
+    sys->surf[1].thickness = 0.0;
+    sys->surf[2].radius = -2.0 * f;
+    sys->surf[2].conic = -1.0;
+    sys->surf[2].mat.kind = SG_MAT_MIRROR;
+    sys->surf[2].thickness = -(f + dz);
+    sys->stop = 1;
+    sys->aper_type = SG_APER_EPD;
+    sys->aper_value = epd;
+    sys->field_type = SG_FIELD_ANGLE;
+    sys->nfield = 1;
+    sys->field[0].x = sys->field[0].y = 0.0;
+    sys->field[0].weight = 1.0;
+    return sys;
+}
+
+/* The circular pupil's MTF at nu / nu_c = x. */
+static double mtf_circle(double x)
+{
+    double phi;
+    if (x >= 1.0)
+        return 0.0;
+    phi = acos(x);
+    return 2.0 / PI * (phi - cos(phi) * sin(phi));
+}
+
+static void perfect_mtf(void **state)
+{
+    const double f = 200.0, epd = 20.0;
+    sg_system *sys = paraboloid(f, epd, 0.0);
+    sg_catalog *cat = tu_catalog();
+    sg_mtf_opts o;
+    sg_mtf m;
+    sg_diag d;
+    double lambda_mm = sys->wave[0].um * 1e-3, nuc = 1.0 / (lambda_mm * f / epd);
+    double worst = 0.0;
+    int j;
+    (void)state;
+    sg_mtf_opts_init(&o);
+    o.sampling = 128;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_OK);
+    assert_int_equal(m.nfield, 1);
+    assert_true(fabs(m.cutoff / nuc - 1.0) < 1e-9);
+    assert_true(fabs(m.freq[m.npts - 1] / nuc - 1.0) < 1e-9);
+    for (j = 0; j < m.npts; j++) {
+        double want = mtf_circle(m.freq[j] / nuc);
+        worst = fmax(worst, fabs(m.tan[j] - want));
+        worst = fmax(worst, fabs(m.sag[j] - want));
+        worst = fmax(worst, fabs(m.dl[j] - want));
+    }
+    print_message("# perfect F/%g, sampling %d: MTF against 2/pi (phi - cos phi sin phi): "
+                  "largest difference %.3g\n", f / epd, o.sampling, worst);
+    /* The grid's disk is the circle to about one sample in 128. */
+    assert_true(worst < 0.002);
+    sg_mtf_free(&m);
+
+    /* --max-frequency: half the cutoff, the same curve. */
+    o.max_frequency = nuc / 2;
+    o.sampling = 64;
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_OK);
+    worst = 0.0;
+    for (j = 0; j < m.npts; j++)
+        worst = fmax(worst, fabs(m.tan[j] - mtf_circle(m.freq[j] / nuc)));
+    assert_true(fabs(m.freq[m.npts - 1] - nuc / 2) < 1e-9 * nuc);
+    print_message("# sampling 64 to half the cutoff: largest difference %.3g\n", worst);
+    assert_true(worst < 0.004);
+    sg_mtf_free(&m);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
+/* Vignetting factor VCY = 0.5 on the perfect paraboloid: the pupil is an
+ * ellipse half as tall, so the tangential MTF (along y) is the circle's
+ * with half the cutoff and the sagittal one the circle's. */
+static void compressed_pupil(void **state)
+{
+    const double f = 200.0, epd = 20.0;
+    sg_system *sys = paraboloid(f, epd, 0.0);
+    sg_catalog *cat = tu_catalog();
+    sg_mtf_opts o;
+    sg_mtf m;
+    sg_psf_opts po;
+    sg_psf p;
+    sg_diag d;
+    double nuc = 1.0 / (sys->wave[0].um * 1e-3 * f / epd), worst = 0.0;
+    int j;
+    (void)state;
+    sys->field[0].vcy = 0.5;
+    sg_mtf_opts_init(&o);
+    o.sampling = 128;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_OK);
+    for (j = 0; j < m.npts; j++) {
+        worst = fmax(worst, fabs(m.tan[j] - mtf_circle(m.freq[j] / (0.5 * nuc))));
+        worst = fmax(worst, fabs(m.sag[j] - mtf_circle(m.freq[j] / nuc)));
+    }
+    print_message("# VCY 0.5: MTF against the circle's at half and full cutoff: largest "
+                  "difference %.3g\n", worst);
+    assert_true(worst < 0.003);
+    sg_mtf_free(&m);
+    /* The PSF grid is twice as coarse along y. */
+    sg_psf_opts_init(&po);
+    po.sampling = 32;
+    assert_int_equal(sg_psf_compute(sys, cat, &po, &p, &d), SG_OK);
+    assert_true(fabs(p.spacing_y_um / p.spacing_x_um - 2.0) < 1e-12);
+    sg_psf_free(&p);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
+/* A slit |x| <= half the pupil's radius on the stop: the sagittal MTF
+ * (along x) ends at half the cutoff, the pupil's width there, while the
+ * tangential one does not.  (A central obscuration's annulus is not
+ * tested: its chief ray is stopped, which the reference sphere refuses.) */
+static void slit_pupil(void **state)
+{
+    const double f = 200.0, epd = 20.0;
+    sg_system *sys = paraboloid(f, epd, 0.0);
+    sg_catalog *cat = tu_catalog();
+    sg_mtf_opts o;
+    sg_mtf m;
+    sg_diag d;
+    double nuc = 1.0 / (sys->wave[0].um * 1e-3 * f / epd);
+    int j;
+    (void)state;
+    sg_mtf_opts_init(&o);
+    sg_diag_clear(&d);
+    sys->surf[1].aperture = SG_APERTURE_RECTANGULAR;
+    sys->surf[1].ap_xhalf = epd / 4;
+    sys->surf[1].ap_yhalf = epd;
+    o.sampling = 128;
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_OK);
+    for (j = 0; j < m.npts; j++) {
+        double x = m.freq[j] / nuc;
+        if (x > 0.51)
+            assert_true(m.sag[j] < 1e-9);
+        if (x > 0.51 && x < 0.9)
+            assert_true(m.tan[j] > 0.01);
+    }
+    sg_mtf_free(&m);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
+static void perfect_psf(void **state)
+{
+    const double f = 200.0, epd = 20.0;
+    sg_system *sys = paraboloid(f, epd, 0.0);
+    sg_catalog *cat = tu_catalog();
+    sg_psf_opts o;
+    sg_psf p;
+    sg_diag d;
+    double lf = sys->wave[0].um * f / epd, worst = 0.0; /* lambda F#, um */
+    int i, j, c;
+    (void)state;
+    sg_psf_opts_init(&o);
+    o.sampling = 128;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_psf_compute(sys, cat, &o, &p, &d), SG_OK);
+    assert_int_equal(p.size, 256);
+    /* The grid: lambda F# (N - 1) / (2N). */
+    assert_true(fabs(p.spacing_x_um / (lf * 127.0 / 256.0) - 1.0) < 1e-9);
+    assert_true(fabs(p.strehl - 1.0) < 1e-9 && fabs(p.strehl_exact - 1.0) < 1e-9);
+    assert_true(fabs(p.peak - 1.0) < 1e-9);
+    c = p.size / 2;
+    /* Airy's pattern out to the third dark ring. */
+    for (j = -12; j <= 12; j++)
+        for (i = -12; i <= 12; i++) {
+            double r = hypot(i * p.spacing_x_um, j * p.spacing_y_um), v = PI * r / lf;
+            double want = v == 0.0 ? 1.0 : pow(2.0 * j1(v) / v, 2);
+            worst = fmax(worst, fabs(p.psf[(size_t)(c + j) * p.size + c + i] - want));
+        }
+    print_message("# perfect PSF against Airy: largest difference %.3g\n", worst);
+    assert_true(worst < 0.002);
+    sg_psf_free(&p);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
+static void polychromatic_mtf(void **state)
+{
+    const double f = 200.0, epd = 20.0;
+    const double um[3] = { 0.4861327, 0.5875618, 0.6562725 }, wt[3] = { 1.0, 2.0, 0.5 };
+    sg_system *sys = paraboloid(f, epd, 0.0);
+    sg_catalog *cat = tu_catalog();
+    sg_mtf_opts o;
+    sg_mtf m;
+    sg_diag d;
+    double worst = 0.0;
+    int j, w;
+    (void)state;
+    sys->nwave = 3;
+    for (w = 0; w < 3; w++) {
+        sys->wave[w].um = um[w];
+        sys->wave[w].weight = wt[w];
+    }
+    sys->primary_wave = 1;
+    sg_mtf_opts_init(&o);
+    o.sampling = 128;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_OK);
+    /* The shortest wavelength's cutoff. */
+    assert_true(fabs(m.cutoff * um[0] * 1e-3 * f / epd - 1.0) < 1e-9);
+    for (j = 0; j < m.npts; j++) {
+        double want = 0.0;
+        for (w = 0; w < 3; w++)
+            want += wt[w] * mtf_circle(m.freq[j] * um[w] * 1e-3 * f / epd);
+        want /= wt[0] + wt[1] + wt[2];
+        worst = fmax(worst, fabs(m.tan[j] - want));
+        worst = fmax(worst, fabs(m.sag[j] - want));
+    }
+    print_message("# three wavelengths: MTF against the weighted sum of the circle's: largest "
+                  "difference %.3g\n", worst);
+    assert_true(worst < 0.002);
+    sg_mtf_free(&m);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
+/* The perfect system's PSF in three wavelengths: each wavelength's Airy
+ * pattern carries unit energy times its weight, so its peak is
+ * proportional to w / lambda^2; the sum is normalized to peak 1. */
+static void polychromatic_psf(void **state)
+{
+    const double f = 200.0, epd = 20.0;
+    const double um[3] = { 0.4861327, 0.5875618, 0.6562725 }, wt[3] = { 1.0, 2.0, 0.5 };
+    sg_system *sys = paraboloid(f, epd, 0.0);
+    sg_catalog *cat = tu_catalog();
+    sg_psf_opts o;
+    sg_psf p;
+    sg_diag d;
+    double worst = 0.0, norm = 0.0;
+    int i, w, c;
+    (void)state;
+    sys->nwave = 3;
+    for (w = 0; w < 3; w++) {
+        sys->wave[w].um = um[w];
+        sys->wave[w].weight = wt[w];
+        norm += wt[w] / (um[w] * um[w]);
+    }
+    sys->primary_wave = 1;
+    sg_psf_opts_init(&o);
+    o.sampling = 128;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_psf_compute(sys, cat, &o, &p, &d), SG_OK);
+    assert_true(fabs(p.spacing_x_um / (um[0] * f / epd * 127.0 / 256.0) - 1.0) < 1e-9);
+    c = p.size / 2;
+    for (i = 0; i <= 12; i++) {
+        double r = i * p.spacing_x_um, want = 0.0;
+        for (w = 0; w < 3; w++) {
+            double v = PI * r / (um[w] * f / epd);
+            want += wt[w] / (um[w] * um[w]) * (v == 0.0 ? 1.0 : pow(2.0 * j1(v) / v, 2));
+        }
+        want /= norm;
+        worst = fmax(worst, fabs(p.psf[(size_t)c * p.size + c + i] - want));
+        worst = fmax(worst, fabs(p.psf[(size_t)(c - i) * p.size + c] - want));
+    }
+    print_message("# three wavelengths: PSF against the weighted Airy patterns: largest "
+                  "difference %.3g\n", worst);
+    assert_true(worst < 0.003);
+    assert_true(fabs(p.strehl - 1.0) < 1e-9);
+    sg_psf_free(&p);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
+/* The defocused paraboloid's OPD in waves at pupil radius rho (0 to 1). */
+static double defocus_w(double f, double epd, double dz, double lambda_mm, double rho)
+{
+    double h = rho * epd / 2, th = 2.0 * atan(h / (2.0 * f)), s;
+    s = -dz * cos(th) + sqrt((f + dz) * (f + dz) - dz * dz * sin(th) * sin(th));
+    return (s - f) / lambda_mm;
+}
+
+static void defocus_strehl(void **state)
+{
+    /* 20-point Gauss-Legendre on [-1, 1], composite over 50 panels of [0, 1]. */
+    static const double gx[10] = { 0.0765265211334973, 0.2277858511416451, 0.3737060887154195,
+                                   0.5108670019508271, 0.6360536807265150, 0.7463319064601508,
+                                   0.8391169718222188, 0.9122344282513259, 0.9639719272779138,
+                                   0.9931285991850949 };
+    static const double gw[10] = { 0.1527533871307258, 0.1491729864726037, 0.1420961093183820,
+                                   0.1316886384491766, 0.1181945319615184, 0.1019301198172404,
+                                   0.0832767415767048, 0.0626720483341091, 0.0406014298003869,
+                                   0.0176140071391521 };
+    const double f = 200.0, epd = 20.0, w020s[3] = { 0.1, 0.5, 0.8 };
+    sg_catalog *cat = tu_catalog();
+    int t;
+    (void)state;
+    for (t = 0; t < 3; t++) {
+        double lambda_mm = 0.5875618e-3, F = f / epd, dz = 8.0 * w020s[t] * lambda_mm * F * F;
+        sg_system *sys = paraboloid(f, epd, dz);
+        double complex sum = 0.0;
+        double want, w020, sinc, strehl_int;
+        sg_psf_opts o;
+        sg_psf p;
+        sg_diag d;
+        int k, q;
+        assert_true(fabs(sys->wave[0].um * 1e-3 - lambda_mm) < 1e-15);
+        for (k = 0; k < 50; k++)
+            for (q = 0; q < 20; q++) {
+                double x = q < 10 ? -gx[q] : gx[q - 10], wq = gw[q < 10 ? q : q - 10];
+                double rho = (k + 0.5 + 0.5 * x) / 50.0;
+                double W = defocus_w(f, epd, dz, lambda_mm, rho);
+                sum += wq * 0.5 / 50.0 * 2.0 * rho * cexp(I * 2.0 * PI * W);
+            }
+        strehl_int = creal(sum) * creal(sum) + cimag(sum) * cimag(sum);
+        w020 = fabs(defocus_w(f, epd, dz, lambda_mm, 1.0));
+        sinc = pow(sin(PI * w020) / (PI * w020), 2);
+        sg_psf_opts_init(&o);
+        o.sampling = 256;
+        sg_diag_clear(&d);
+        assert_int_equal(sg_psf_compute(sys, cat, &o, &p, &d), SG_OK);
+        want = strehl_int;
+        print_message("# defocus W020 %.4f waves: Strehl %.6f (exact mean %.6f), integral "
+                      "%.6f, (sin(pi W020)/(pi W020))^2 %.6f\n", w020, p.strehl, p.strehl_exact,
+                      strehl_int, sinc);
+        /* The two definitions are one number at the chief ray's point. */
+        assert_true(fabs(p.strehl - p.strehl_exact) < 1e-9);
+        assert_true(fabs(p.strehl - want) < 1.5e-3);
+        assert_true(fabs(want - sinc) < 1e-3);
+        sg_psf_free(&p);
+        if (t == 1) {
+            /* The diffraction limit is the same pupil unaberrated. */
+            sg_mtf_opts mo;
+            sg_mtf m;
+            double nuc = 1.0 / (lambda_mm * F), worst = 0.0;
+            int j;
+            sg_mtf_opts_init(&mo);
+            mo.sampling = 128;
+            assert_int_equal(sg_mtf_compute(sys, cat, &mo, &m, &d), SG_OK);
+            for (j = 0; j < m.npts; j++)
+                worst = fmax(worst, fabs(m.dl[j] - mtf_circle(m.freq[j] / nuc)));
+            assert_true(worst < 0.002);
+            /* Half a wave of defocus: at half the cutoff the MTF is well below it. */
+            assert_true(m.tan[m.npts / 2] < m.dl[m.npts / 2] - 0.1);
+            assert_true(fabs(m.tan[m.npts / 2] - m.sag[m.npts / 2]) < 1e-6);
+            sg_mtf_free(&m);
+        }
+        sg_system_free(sys);
+    }
+    sg_catalog_free(cat);
+}
+
+static void bad_input(void **state)
+{
+    sg_system *sys = paraboloid(200.0, 20.0, 0.0);
+    sg_catalog *cat = tu_catalog();
+    sg_mtf_opts o;
+    sg_psf_opts po;
+    sg_mtf m;
+    sg_psf p;
+    sg_diag d;
+    (void)state;
+    sg_mtf_opts_init(&o);
+    o.sampling = 16;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_ERANGE);
+    assert_non_null(strstr(d.msg, "sampling 16"));
+    o.sampling = 32;
+    o.max_frequency = NAN;
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_ERANGE);
+    o.max_frequency = 0.0;
+    o.field = 3;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_ERANGE);
+    assert_non_null(strstr(d.msg, "field 4"));
+    sg_psf_opts_init(&po);
+    po.sampling = 4096;
+    assert_int_equal(sg_psf_compute(sys, cat, &po, &p, &d), SG_ERANGE);
+    po.sampling = 32;
+    po.wave = 2;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_psf_compute(sys, cat, &po, &p, &d), SG_ERANGE);
+    assert_non_null(strstr(d.msg, "wavelength 3"));
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(perfect_mtf),
+        cmocka_unit_test(perfect_psf),
+        cmocka_unit_test(compressed_pupil),
+        cmocka_unit_test(slit_pupil),
+        cmocka_unit_test(polychromatic_mtf),
+        cmocka_unit_test(polychromatic_psf),
+        cmocka_unit_test(defocus_strehl),
+        cmocka_unit_test(bad_input),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}

@@ -1,0 +1,425 @@
+/*
+ * diffraction.c - the "psf" and "mtf" subcommands: the engine's FFT PSF
+ * with its Strehl ratio (sg_psf_compute) and FFT MTF (sg_mtf_compute)
+ * as text, CSV, JSON or a picture (views.c), with the options and output
+ * every analysis command shares (ancmd.c).
+ */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ancmd.h"
+#include "safetext.h"
+#include "views.h"
+
+enum { D_FIELD = 1, D_WAVE, D_SAMPLING, D_MAXFREQ, D_METHOD };
+enum { K_PSF, K_MTF };
+
+/* Cross-sections reach 16 lambda F# either side (8 dark rings), or the
+ * grid's edge. */
+#define PSF_CROSS_REACH 16.0
+
+static const cli_opt diff_opts[] = {
+    AN_COMMON_OPTS,
+    { "--field", 0, 1, D_FIELD },
+    { "--wave", 0, 1, D_WAVE },
+    { "--sampling", 0, 1, D_SAMPLING },
+    { "--max-frequency", 0, 1, D_MAXFREQ },
+    { "--method", 0, 1, D_METHOD },
+    { NULL, 0, 0, 0 }
+};
+
+static void diff_help(int kind, FILE *f)
+{
+    if (kind == K_MTF)
+        fputs(
+"Usage: sagitta mtf DESIGN.json [OPTIONS]\n"
+"Print the FFT MTF of each field, tangential (along y) and sagittal (along\n"
+"x), in cycles/mm from 0 to the maximum frequency, with the diffraction\n"
+"limit of the first field's pupil unaberrated.  The MTF is the modulus of\n"
+"the Fourier transform of the FFT PSF (see sagitta psf): the pupil's\n"
+"autocorrelation.  Every wavelength by its weight unless --wave is given.\n"
+"See sagitta(1), MTF AND PSF.\n"
+"\n"
+"Options:\n"
+"  --field N          one field (default: every field)\n"
+"  --wave N           one wavelength (default: every one, by weight)\n"
+"  --sampling N       pupil grid points across, 32 to 2048 (default 64)\n"
+"  --max-frequency F  cycles/mm (default: the cutoff 1 / (lambda F#) of\n"
+"                     the shortest wavelength)\n"
+"  --method M         precise (default), classic or mpfr\n"
+AN_COMMON_HELP
+"  -h, --help         show this help\n", f);
+    else
+        fputs(
+"Usage: sagitta psf DESIGN.json [OPTIONS]\n"
+"Print the FFT PSF of each field: its Strehl ratio (the PSF at the chief\n"
+"ray's point, the unaberrated pupil of the same shape having peak 1), its\n"
+"peak, the grid (2N x 2N points, spacing lambda F# (N - 1) / 2N) and the\n"
+"cross-sections along x and y through the chief ray's point.  Every\n"
+"wavelength by its weight unless --wave is given.  See sagitta(1), MTF AND\n"
+"PSF.\n"
+"\n"
+"Options:\n"
+"  --field N          one field (default: every field)\n"
+"  --wave N           one wavelength (default: every one, by weight)\n"
+"  --sampling N       pupil grid points across, 32 to 2048 (default 64)\n"
+"  --method M         precise (default), classic or mpfr\n"
+AN_COMMON_HELP
+"  -h, --help         show this help\n", f);
+}
+
+/* %.17g, or null (JSON) / empty (CSV) for a value that is not finite. */
+static void num(FILE *f, double v, int json)
+{
+    if (isfinite(v))
+        fprintf(f, "%.17g", v);
+    else if (json)
+        fputs("null", f);
+}
+
+typedef struct diff_ctx {
+    const an_cmd *a;
+    int kind;
+    int wave0;         /* -1: every wavelength */
+    const sg_mtf *m;
+    const sg_psf *p;   /* one per field */
+    int np;
+} diff_ctx;
+
+/* The half-width of the cross-sections, in grid points. */
+static int psf_reach(const sg_psf *p)
+{
+    double lf = p->wave_um * p->fnum;
+    int r = (int)ceil(PSF_CROSS_REACH * lf / fmin(p->spacing_x_um, p->spacing_y_um));
+    return r < p->size / 2 ? r : p->size / 2 - 1;
+}
+
+static double psf_at(const sg_psf *p, int i, int j)
+{
+    int c = p->size / 2;
+    return p->psf[(size_t)(c + j) * (size_t)p->size + (size_t)(c + i)];
+}
+
+static void wave_text(FILE *f, const sg_system *sys, int wave0)
+{
+    if (wave0 >= 0 || sys->nwave == 1)
+        fprintf(f, "wavelength %d (%.6g um)", wave0 + 1 + (wave0 < 0),
+                sys->wave[wave0 >= 0 ? wave0 : 0].um);
+    else
+        fprintf(f, "%d wavelengths by weight", sys->nwave);
+}
+
+static void mtf_write(FILE *f, int fmt, const diff_ctx *c)
+{
+    const sg_mtf *m = c->m;
+    const sg_system *sys = c->a->sys;
+    int j, k;
+    if (fmt == AN_FMT_JSON) {
+        fputs("{\n  \"sampling\": ", f);
+        fprintf(f, "%d,\n  \"working_fnum\": ", m->sampling);
+        num(f, m->fnum, 1);
+        fputs(",\n  \"cutoff\": ", f);
+        num(f, m->cutoff, 1);
+        fputs(",\n  \"fields\": [", f);
+        for (k = 0; k < m->nfield; k++) {
+            fprintf(f, "%s\n    {\"field\": %d, \"frequency\": [", k ? "," : "", m->field[k] + 1);
+            for (j = 0; j < m->npts; j++) {
+                fputs(j ? ", " : "", f);
+                num(f, m->freq[j], 1);
+            }
+            fputs("],\n     \"tangential\": [", f);
+            for (j = 0; j < m->npts; j++) {
+                fputs(j ? ", " : "", f);
+                num(f, m->tan[(size_t)k * m->npts + j], 1);
+            }
+            fputs("],\n     \"sagittal\": [", f);
+            for (j = 0; j < m->npts; j++) {
+                fputs(j ? ", " : "", f);
+                num(f, m->sag[(size_t)k * m->npts + j], 1);
+            }
+            fputs("]}", f);
+        }
+        fputs("\n  ],\n  \"diffraction_limit\": {\"frequency\": [", f);
+        for (j = 0; j < m->npts; j++) {
+            fputs(j ? ", " : "", f);
+            num(f, m->freq[j], 1);
+        }
+        fputs("], \"mtf\": [", f);
+        for (j = 0; j < m->npts; j++) {
+            fputs(j ? ", " : "", f);
+            num(f, m->dl[j], 1);
+        }
+        fputs("]}\n}\n", f);
+        return;
+    }
+    if (fmt == AN_FMT_TEXT) {
+        char t[160];
+        fprintf(f, "FFT MTF: %s\n", safe_text(sys->title, t, sizeof t));
+        fputs("  ", f);
+        wave_text(f, sys, c->wave0);
+        fprintf(f, "; sampling %d x %d, padded to %d x %d; working F/# %.6g; cutoff %.6g "
+                   "cycles/mm\n\n", m->sampling, m->sampling, 2 * m->sampling,
+                2 * m->sampling, m->fnum, m->cutoff);
+        fprintf(f, "%12s", "cycles/mm");
+        for (k = 0; k < m->nfield; k++)
+            fprintf(f, "  %5s %-3d T  %5s %-3d S", "field", m->field[k] + 1, "field",
+                    m->field[k] + 1);
+        fprintf(f, "  %12s\n", "diff. limit");
+        for (j = 0; j < m->npts; j++) {
+            fprintf(f, "%12.6g", m->freq[j]);
+            for (k = 0; k < m->nfield; k++)
+                fprintf(f, "  %13.6f  %13.6f", m->tan[(size_t)k * m->npts + j],
+                        m->sag[(size_t)k * m->npts + j]);
+            fprintf(f, "  %12.6f\n", m->dl[j]);
+        }
+        return;
+    }
+    fputs("frequency", f);
+    for (k = 0; k < m->nfield; k++)
+        fprintf(f, ",field%d_tangential,field%d_sagittal", m->field[k] + 1, m->field[k] + 1);
+    fputs(",diffraction_limit\n", f);
+    for (j = 0; j < m->npts; j++) {
+        num(f, m->freq[j], 0);
+        for (k = 0; k < m->nfield; k++) {
+            fputc(',', f);
+            num(f, m->tan[(size_t)k * m->npts + j], 0);
+            fputc(',', f);
+            num(f, m->sag[(size_t)k * m->npts + j], 0);
+        }
+        fputc(',', f);
+        num(f, m->dl[j], 0);
+        fputc('\n', f);
+    }
+}
+
+static void psf_write(FILE *f, int fmt, const diff_ctx *c)
+{
+    const sg_system *sys = c->a->sys;
+    int k, i;
+    if (fmt == AN_FMT_JSON) {
+        fputs("{\n  \"fields\": [", f);
+        for (k = 0; k < c->np; k++) {
+            const sg_psf *p = &c->p[k];
+            int r = psf_reach(p);
+            fprintf(f, "%s\n    {\"field\": %d, \"strehl\": ", k ? "," : "", p->field + 1);
+            num(f, p->strehl, 1);
+            fputs(", \"strehl_exact\": ", f);
+            num(f, p->strehl_exact, 1);
+            fputs(", \"peak\": ", f);
+            num(f, p->peak, 1);
+            fputs(", \"spacing_um\": ", f);
+            num(f, p->spacing_x_um, 1);
+            fputs(", \"spacing_y_um\": ", f);
+            num(f, p->spacing_y_um, 1);
+            fprintf(f, ", \"size\": %d, \"sampling\": %d, \"wavelength_um\": ", p->size,
+                    p->sampling);
+            num(f, p->wave_um, 1);
+            fputs(", \"working_fnum\": ", f);
+            num(f, p->fnum, 1);
+            fputs(",\n     \"offset\": [", f);
+            for (i = -r; i <= r; i++)
+                fprintf(f, "%s%d", i > -r ? ", " : "", i);
+            fputs("],\n     \"x_section\": [", f);
+            for (i = -r; i <= r; i++) {
+                fputs(i > -r ? ", " : "", f);
+                num(f, psf_at(p, i, 0), 1);
+            }
+            fputs("],\n     \"y_section\": [", f);
+            for (i = -r; i <= r; i++) {
+                fputs(i > -r ? ", " : "", f);
+                num(f, psf_at(p, 0, i), 1);
+            }
+            fputs("]}", f);
+        }
+        fputs("\n  ]\n}\n", f);
+        return;
+    }
+    if (fmt == AN_FMT_TEXT) {
+        char t[160];
+        fprintf(f, "FFT PSF: %s\n  ", safe_text(sys->title, t, sizeof t));
+        wave_text(f, sys, c->wave0);
+        fputs("\n", f);
+        for (k = 0; k < c->np; k++) {
+            const sg_psf *p = &c->p[k];
+            fprintf(f, "\nfield %d: Strehl ratio %.6f (|mean exp(i 2 pi W)|^2 %.6f), peak "
+                       "%.6f\n  pupil %d x %d padded to %d x %d; image delta %.6g x %.6g um "
+                       "(at %.6g um, working F/# %.6g)\n",
+                    p->field + 1, p->strehl, p->strehl_exact, p->peak, p->sampling,
+                    p->sampling, p->size, p->size, p->spacing_x_um, p->spacing_y_um,
+                    p->wave_um, p->fnum);
+        }
+        fputs("\n", f);
+    }
+    fputs(fmt == AN_FMT_TEXT ? "  field       x (um)   along x       y (um)   along y\n"
+                             : "field,x_um,psf_x,y_um,psf_y\n", f);
+    for (k = 0; k < c->np; k++) {
+        const sg_psf *p = &c->p[k];
+        int r = psf_reach(p);
+        for (i = -r; i <= r; i++) {
+            if (fmt == AN_FMT_TEXT)
+                fprintf(f, "%7d %12.6g %9.6f %12.6g %9.6f\n", p->field + 1, i * p->spacing_x_um,
+                        psf_at(p, i, 0), i * p->spacing_y_um, psf_at(p, 0, i));
+            else {
+                fprintf(f, "%d,", p->field + 1);
+                num(f, i * p->spacing_x_um, 0);
+                fputc(',', f);
+                num(f, psf_at(p, i, 0), 0);
+                fputc(',', f);
+                num(f, i * p->spacing_y_um, 0);
+                fputc(',', f);
+                num(f, psf_at(p, 0, i), 0);
+                fputc('\n', f);
+            }
+        }
+    }
+}
+
+static int diff_text(void *ctx, FILE *f, int fmt)
+{
+    const diff_ctx *c = ctx;
+    if (c->kind == K_MTF)
+        mtf_write(f, fmt, c);
+    else
+        psf_write(f, fmt, c);
+    return 0;
+}
+
+static int diff_fig(void *ctx, plot_figure *f)
+{
+    const diff_ctx *c = ctx;
+    if (c->kind == K_MTF)
+        return view_mtf_figure(c->a->sys, c->m, f);
+    return view_psf_figure(c->a->sys, c->p, c->np, f);
+}
+
+static int run(int kind, int argc, char **argv)
+{
+    const char *cmd = kind == K_MTF ? "mtf" : "psf", *val;
+    int id, rc, field1 = 0, wave1 = 0, sampling = 64, method = SG_METHOD_PRECISE, k, nf;
+    double maxf = 0.0;
+    cli_iter it;
+    an_cmd a;
+    sg_diag d;
+    sg_trace_opts to;
+    sg_mtf m;
+    sg_psf *psf = NULL;
+    diff_ctx c;
+    an_writer w = {diff_fig, diff_text, &c};
+
+    memset(&m, 0, sizeof m);
+    memset(&c, 0, sizeof c);
+    an_cmd_init(&a, cmd);
+    cli_iter_init(&it, cmd, argc, argv);
+    while ((id = an_cmd_next(&a, &it, diff_opts, &val)) >= 0) {
+        switch (id) {
+        case AN_OPT_HELP:
+            diff_help(kind, stdout);
+            return CLI_EXIT_OK;
+        case D_FIELD:
+            if (cli_int_value("--field", val, 1, SG_MAX_FIELDS, &field1))
+                return CLI_EXIT_USAGE;
+            break;
+        case D_WAVE:
+            if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))
+                return CLI_EXIT_USAGE;
+            break;
+        case D_SAMPLING:
+            if (cli_int_value("--sampling", val, SG_PSF_SAMPLING_MIN, SG_PSF_SAMPLING_MAX,
+                              &sampling))
+                return CLI_EXIT_USAGE;
+            break;
+        case D_MAXFREQ:
+            if (kind != K_MTF)
+                return cli_usage_error(cmd, "--max-frequency is an option of mtf only");
+            if (cli_doubles_value("--max-frequency", val, 1, "frequency", &maxf))
+                return CLI_EXIT_USAGE;
+            if (!(maxf > 0.0))
+                return cli_usage_error(cmd, "--max-frequency: %g is not a positive number "
+                                            "of cycles/mm", maxf);
+            break;
+        case D_METHOD:
+            if ((method = sg_method_parse(val)) < 0)
+                return cli_usage_error(cmd, "--method: \"%s\" is not precise, classic or mpfr",
+                                       val);
+            break;
+        default:
+            return CLI_EXIT_USAGE;
+        }
+    }
+    if (id < -1)
+        return -id;
+    rc = an_cmd_load(&a);
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    if (wave1 > a.sys->nwave || field1 > a.sys->nfield) {
+        rc = cli_usage_error(cmd, "%s: %s %d is not one of 1 to %d", a.design,
+                             wave1 > a.sys->nwave ? "--wave" : "--field",
+                             wave1 > a.sys->nwave ? wave1 : field1,
+                             wave1 > a.sys->nwave ? a.sys->nwave : a.sys->nfield);
+        goto done;
+    }
+    sg_trace_opts_init(&to);
+    to.method = (sg_method)method;
+    c.a = &a;
+    c.kind = kind;
+    c.wave0 = wave1 - 1;
+    sg_diag_clear(&d);
+    if (kind == K_MTF) {
+        sg_mtf_opts o;
+        sg_mtf_opts_init(&o);
+        o.trace = to;
+        o.field = field1 - 1;
+        o.wave = wave1 - 1;
+        o.sampling = sampling;
+        o.max_frequency = maxf;
+        rc = sg_mtf_compute(a.sys, a.cat, &o, &m, &d);
+        c.m = &m;
+    } else {
+        sg_psf_opts o;
+        nf = field1 ? 1 : a.sys->nfield;
+        psf = calloc((size_t)nf, sizeof *psf);
+        if (!psf) {
+            cli_error("out of memory");
+            rc = CLI_EXIT_INTERNAL;
+            goto done;
+        }
+        sg_psf_opts_init(&o);
+        o.trace = to;
+        o.wave = wave1 - 1;
+        o.sampling = sampling;
+        rc = SG_OK;
+        for (k = 0; k < nf && rc == SG_OK; k++) {
+            o.field = field1 ? field1 - 1 : k;
+            rc = sg_psf_compute(a.sys, a.cat, &o, &psf[k], &d);
+            if (rc == SG_OK)
+                c.np++;
+        }
+        c.p = psf;
+    }
+    if (rc != SG_OK) {
+        rc = an_cmd_engine_error(&a, &d, rc);
+        goto done;
+    }
+    cli_print_warnings(&d, a.design);
+    rc = an_cmd_write(&a, &w);
+done:
+    if (psf)
+        for (k = 0; k < c.np; k++)
+            sg_psf_free(&psf[k]);
+    free(psf);
+    sg_mtf_free(&m);
+    an_cmd_free(&a);
+    return rc;
+}
+
+int cmd_mtf(int argc, char **argv)
+{
+    return run(K_MTF, argc, argv);
+}
+
+int cmd_psf(int argc, char **argv)
+{
+    return run(K_PSF, argc, argv);
+}
