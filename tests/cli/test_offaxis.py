@@ -23,21 +23,10 @@ import math
 import subprocess
 import sys
 import tempfile
+
+import tap
 import os
 
-n_test = 0
-n_fail = 0
-
-
-def tap(ok, what, detail=""):
-    global n_test, n_fail
-    n_test += 1
-    if not ok:
-        n_fail += 1
-    print(("ok %d - " if ok else "not ok %d - ") % n_test + what)
-    if not ok:
-        for line in detail.splitlines()[:8]:
-            print("# " + line)
 
 
 def run(exe, args):
@@ -117,7 +106,7 @@ def main():
                 got = float(row["opd_waves"])
                 if abs(got - want) > 2e-7:
                     bad.append("pupil %r: %r, from the paths %r" % (p, got, want))
-            tap(not bad, "trace's OPD at field hy=%g, wavelength %d, from the rays' paths" % (hy, wave),
+            tap.check(not bad, "trace's OPD at field hy=%g, wavelength %d, from the rays' paths" % (hy, wave),
                 "\n".join(bad))
             # One ray alone takes the scalar OPD (the editor's), not the batch's.
             out = run(exe, ["trace", design, "--ray", "0,%r,0.3,0.5" % hy, "--wave", str(wave),
@@ -125,7 +114,7 @@ def main():
             row = [r for r in csv.DictReader(io.StringIO(out))][-1]
             want = (ref - opl_to_sphere(row)) / lam
             got = float(row["opd_waves"])
-            tap(abs(got - want) <= 2e-7, "one ray's OPD at field hy=%g, wavelength %d" % (hy, wave),
+            tap.check(abs(got - want) <= 2e-7, "one ray's OPD at field hy=%g, wavelength %d" % (hy, wave),
                 "%r, from the paths %r" % (got, want))
 
     # --- Field curve points up to full field, against the chief ray alone.
@@ -145,7 +134,7 @@ def main():
            abs(p["distortion_pct"] - dist) > 1e-9:
             bad.append("hy %r: real %r (%r) parax %r (%r) distortion %r (%r)" %
                        (p["hy"], p["real_y"], real, p["parax_y"], parax, p["distortion_pct"], dist))
-    tap(len(pts) > 2 and pts[-1]["hy"] == 1 and not bad,
+    tap.check(len(pts) > 2 and pts[-1]["hy"] == 1 and not bad,
         "fieldcurve's heights and distortion at %d fields up to full field" % len(pts), "\n".join(bad))
 
     # --- The spot CSV of the full field, every wavelength.
@@ -182,7 +171,7 @@ def main():
             got = float(row[k])
             if abs(got - v) > 1e-12 * scale:
                 bad.append("%s: %r, from the rays %r" % (k, got, v))
-        tap(not bad, "spot CSV of the full field at wavelength %d against its traced rays" % wave,
+        tap.check(not bad, "spot CSV of the full field at wavelength %d against its traced rays" % wave,
             "\n".join(bad))
 
     # The polychromatic row: every wavelength's rays weighted by its weight.
@@ -194,10 +183,9 @@ def main():
         got = float(allrow[0][k]) if allrow else float("nan")
         if not abs(got - v) <= 1e-12 * abs(ref[1]):
             bad.append("%s: %r, from the rays %r" % (k, got, v))
-    tap(len(allrow) == 1 and not bad, "spot CSV of the full field, all wavelengths weighted", "\n".join(bad))
+    tap.check(len(allrow) == 1 and not bad, "spot CSV of the full field, all wavelengths weighted", "\n".join(bad))
 
-    print("1..%d" % n_test)
-    return 1 if n_fail else 0
+    return tap.finish()
 
 
 if __name__ == "__main__":

@@ -23,6 +23,8 @@ import subprocess
 import sys
 import tempfile
 
+import tap
+
 UNITS = {"cm": 10.0, "in": 25.4, "m": 1000.0}
 
 # Lengths in lens units, by JSON key.
@@ -68,18 +70,6 @@ COMMANDS = [
     ["seidel"], ["fieldcurve"], ["semidiam"], ["vignetting"], ["layout"],
 ]
 
-n_test = 0
-n_fail = 0
-
-
-def tap(ok, what, detail=""):
-    global n_test, n_fail
-    n_test += 1
-    if not ok:
-        n_fail += 1
-    print(("ok %d - " if ok else "not ok %d - ") % n_test + what)
-    for line in detail.splitlines():
-        print("# " + line)
 
 
 def scaled(design, unit, k):
@@ -177,7 +167,7 @@ def main():
                 rc, out, err = run(exe, cmd, path)
                 what = "%s of %s in %s" % (c, name, unit)
                 if rc0 != 0 or rc != 0:
-                    tap(rc == rc0, what + " (exit %d, mm %d)" % (rc, rc0), err or err0)
+                    tap.check(rc == rc0, what + " (exit %d, mm %d)" % (rc, rc0), err or err0)
                     continue
                 lengths = set(LENGTH)
                 # fieldcurve's "field" is the field coordinate itself, a
@@ -185,9 +175,8 @@ def main():
                 if cmd[0] == "fieldcurve" and design["fields"]["type"] != "angle":
                     lengths.add("field")
                 msg = compare(j0, json.loads(out), k, lengths)
-                tap(not msg, what, msg)
-    print("1..%d" % n_test)
-    return 1 if n_fail else 0
+                tap.check(not msg, what, msg)
+    return tap.finish()
 
 
 if __name__ == "__main__":
