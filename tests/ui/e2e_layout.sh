@@ -24,8 +24,9 @@ panel() {
 
 # Column $2 of surface $3 in the CSV file $1.
 csv() {
-    awk -F, -v c="$2" -v s="$3" 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == c) k = i }
-        $1 == s { print $k }' "$1"
+    awk -F, -v c="$2" -v s="$3" 'NR == 1 { for (i = 1; i <= NF; i++) { if ($i == c) k = i
+                                                                 if ($i == "surface") sc = i } }
+        NR > 1 && $sc == s { print $k }' "$1"
 }
 
 same_number() {
