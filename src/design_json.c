@@ -2469,6 +2469,13 @@ int sg_save_text_atomic(const char *path, const char *text, size_t len, sg_diag 
         return sg_diag_set(d, e == ENOMEM ? SG_ENOMEM : SG_EIO, "%s: %s", path, strerror(e));
     }
     have = stat(target, &st) == 0 && S_ISREG(st.st_mode);
+    /* A file with other hard links: a rename would give the new text a new
+     * inode and leave every other link on the old bytes. */
+    if (have && st.st_nlink > 1) {
+        int rc = save_in_place(path, target, text, len, d);
+        free(target);
+        return rc;
+    }
     /* The temporary file is a short hidden name in the target's directory,
      * so even a name at the file system's length limit can be saved. */
     slash = strrchr(target, '/');

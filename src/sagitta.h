@@ -795,9 +795,10 @@ SG_API int sg_design_parse(sg_system *sys, const char *text, size_t len,
  * fsync, then rename.  A failure leaves any existing file intact.  The file
  * keeps its owner, group and mode; a symbolic link, even a dangling one,
  * is written through; a file whose owner a new file could not keep, or in
- * a directory where no temporary can be made, is rewritten in place after
- * a backup of its bytes (beside it, in $TMPDIR or /tmp), removed once the
- * write is synced. */
+ * a directory where no temporary can be made, or one with other hard
+ * links (which a rename would leave on the old bytes), is rewritten in
+ * place after a backup of its bytes (beside it, in $TMPDIR or /tmp),
+ * removed once the write is synced. */
 SG_API int sg_design_save(const sg_system *sys, const char *path, sg_diag *d);
 /* The design as a NUL-terminated JSON text; free() it. */
 SG_API char *sg_design_to_json(const sg_system *sys);

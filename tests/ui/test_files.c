@@ -297,6 +297,61 @@ static void test_hard_link(void **state)
     free_ed(e);
 }
 
+/* A .zmx file with two hard links is saved in place as a lens file, not
+ * as JSON: both names see the edit, and every other line of the file is
+ * as Zemax wrote it (issue 30, item 1: the editor's hard-link path wrote
+ * JSON under the .zmx name). */
+static void test_hard_link_zmx(void **state)
+{
+    char src[1024], a[512], b[512];
+    ed *e = new_ed();
+    struct stat sa0, sa;
+    char *orig, *ta, *tb;
+    size_t i, la, lo, diff = 0;
+    (void)state;
+    tu_path("tests/data/zmx/lens1.zmx", src, sizeof src);
+    tmp_path("linked.zmx", a, sizeof a);
+    tmp_path("link2.zmx", b, sizeof b);
+    unlink(a);
+    unlink(b);
+    orig = get_file(src);
+    {
+        FILE *f = fopen(a, "wb");
+        assert_non_null(f);
+        lo = strlen(orig);
+        assert_int_equal(fwrite(orig, 1, lo, f), lo);
+        fclose(f);
+    }
+    assert_int_equal(link(a, b), 0);
+    assert_int_equal(stat(a, &sa0), 0);
+    ok(e, "open %s", a);
+    ok(e, "set 1 thickness 7.25");
+    ok(e, "save");
+    assert_int_equal(stat(a, &sa), 0);
+    assert_true(sa.st_ino == sa0.st_ino);
+    assert_int_equal((int)sa.st_nlink, 2);
+    ta = get_file(a);
+    tb = get_file(b);
+    assert_string_equal(ta, tb);
+    assert_true(ta[0] != '{');
+    /* Every line but the edited thickness's is the file's own. */
+    la = strlen(ta);
+    for (i = 0; i < la && i < lo; i++)
+        if (ta[i] != orig[i]) {
+            diff = i;
+            break;
+        }
+    assert_true(diff > 0);
+    assert_non_null(strstr(ta + (diff > 40 ? diff - 40 : 0), "DISZ 7.25"));
+    assert_string_equal(strchr(ta + diff, '\n'), strchr(orig + diff, '\n'));
+    free(orig);
+    free(ta);
+    free(tb);
+    unlink(a);
+    unlink(b);
+    free_ed(e);
+}
+
 /* Runs ed_batch on script with stderr captured into err. */
 static int batch_capture(const char *script, char *err, size_t n)
 {
@@ -495,6 +550,7 @@ int main(void)
         cmocka_unit_test(test_open_zmx),
         cmocka_unit_test(test_readonly),
         cmocka_unit_test(test_hard_link),
+        cmocka_unit_test(test_hard_link_zmx),
         cmocka_unit_test(test_batch_bounds),
         cmocka_unit_test(test_wavelength_lines),
         cmocka_unit_test(test_wavelength_move),

@@ -363,114 +363,6 @@ int doc_is_own_file(const doc *d, const char *path)
            a.st_ino == b.st_ino;
 }
 
-static int write_all(int fd, const char *p, size_t n)
-{
-    while (n > 0) {
-        ssize_t w = write(fd, p, n);
-        if (w < 0) {
-            if (errno == EINTR)
-                continue;
-            return -1;
-        }
-        p += w;
-        n -= (size_t)w;
-    }
-    return 0;
-}
-
-/* Reads a whole file into a malloc'ed buffer. */
-static char *slurp(const char *path, size_t *len)
-{
-    FILE *f = fopen(path, "rb");
-    char *buf = NULL, *nb;
-    size_t n = 0, cap = 0, got;
-    if (!f)
-        return NULL;
-    for (;;) {
-        if (cap - n < 65536) {
-            cap = cap ? cap * 2 : 65536;
-            nb = realloc(buf, cap);
-            if (!nb) {
-                free(buf);
-                fclose(f);
-                errno = ENOMEM;
-                return NULL;
-            }
-            buf = nb;
-        }
-        got = fread(buf + n, 1, cap - n, f);
-        n += got;
-        if (got == 0)
-            break;
-    }
-    if (ferror(f)) {
-        free(buf);
-        fclose(f);
-        errno = EIO;
-        return NULL;
-    }
-    fclose(f);
-    *len = n;
-    return buf;
-}
-
-/* Rewrites path in place with text, keeping its inode and so every hard
- * link to it.  The old bytes go to a backup beside it first. */
-static int save_in_place(const sg_system *sys, const char *path, sg_diag *dg)
-{
-    char *text = NULL, *old = NULL, *bak = NULL;
-    const char *slash = strrchr(path, '/');
-    size_t oldlen = 0, dirlen = slash ? (size_t)(slash - path) + 1 : 0;
-    int fd = -1, bfd = -1, e, rc;
-    text = sg_design_to_json(sys);
-    if (!text)
-        return sg_diag_set(dg, SG_ENOMEM, "%s: out of memory", path);
-    old = slurp(path, &oldlen);
-    bak = malloc(dirlen + sizeof ".sagitta-bak-XXXXXX");
-    if (!old || !bak) {
-        e = errno;
-        rc = sg_diag_set(dg, SG_EIO, "%s: cannot read it to back it up: %s", path, strerror(e));
-        goto out;
-    }
-    memcpy(bak, path, dirlen);
-    strcpy(bak + dirlen, ".sagitta-bak-XXXXXX");
-    bfd = mkstemp(bak);
-    if (bfd < 0 || write_all(bfd, old, oldlen) != 0 || fsync(bfd) != 0) {
-        e = errno;
-        if (bfd >= 0)
-            unlink(bak);
-        rc = sg_diag_set(dg, SG_EIO, "%s: cannot write a backup beside it: %s", path,
-                         strerror(e));
-        goto out;
-    }
-    fd = open(path, O_WRONLY | O_TRUNC);
-    if (fd < 0 || write_all(fd, text, strlen(text)) != 0 || fsync(fd) != 0) {
-        e = errno;
-        /* Put the old bytes back; the backup stays if even that fails. */
-        if (fd >= 0 && ftruncate(fd, 0) == 0 && lseek(fd, 0, SEEK_SET) == 0 &&
-            write_all(fd, old, oldlen) == 0 && fsync(fd) == 0) {
-            unlink(bak);
-            rc = sg_diag_set(dg, SG_EIO, "%s: cannot write: %s (the file is as it was)", path,
-                             strerror(e));
-        } else {
-            rc = sg_diag_set(dg, SG_EIO, "%s: cannot write: %s; its old content is in %s",
-                             path, strerror(e), bak);
-        }
-        goto out;
-    }
-    unlink(bak);
-    rc = SG_EOK;
-out:
-    if (fd >= 0)
-        close(fd);
-    if (bfd >= 0)
-        close(bfd);
-    free(bak);
-    free(old);
-    free(text);
-    return rc;
-}
-
 int doc_save(doc *d, const char *path, sg_diag *dg)
 {
     return doc_save_flags(d, path, 0, dg);
@@ -478,7 +370,6 @@ int doc_save(doc *d, const char *path, sg_diag *dg)
 
 int doc_save_flags(doc *d, const char *path, unsigned flags, sg_diag *dg)
 {
-    unsigned long nlink = 0;
     int rc, t;
     if (!path)
         path = d->path;
@@ -487,16 +378,13 @@ int doc_save_flags(doc *d, const char *path, unsigned flags, sg_diag *dg)
     if (sg_zar_detect(path, NULL, 0))
         return sg_diag_set(dg, SG_EUNSUPPORTED, "%s: sagitta reads Zemax archives but does not "
                                                 "write them: save as .json or .zmx", path);
-    t = doc_target(path, &nlink);
+    t = doc_target(path, NULL);
     if (t == DOC_TARGET_READONLY)
         return sg_diag_set(dg, SG_EIO, "%s is read-only: not saved (save under another name, "
                                        "or make it writable)", path);
-    /* rename() would give the new text a new inode and leave every other
-     * hard link on the old one. */
-    if (t == DOC_TARGET_FILE && nlink > 1)
-        rc = save_in_place(d->sys, path, dg);
-    else
-        rc = sg_design_save_flags(d->sys, path, flags, dg);
+    /* The engine's save keeps a file's hard links (it rewrites such a file
+     * in place after a backup) in every format. */
+    rc = sg_design_save_flags(d->sys, path, flags, dg);
     if (rc != SG_EOK)
         return rc;
     if (path != d->path && doc_set_path(d, path) != SG_EOK)
