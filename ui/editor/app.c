@@ -231,6 +231,17 @@ void status_draw(ui *u)
                                                                     : e->question_short)
                         : e->confirm == CONFIRM_WRITE ? e->question
                             : "Unsaved changes will be lost. Continue? (y)es (n)o";
+        /* A question wider than the line keeps its end, where the
+         * answers are, and shows that its start is cut. */
+        if (numfmt_width(q) > u->cols && u->cols > 1) {
+            int x = term_text(y, 0, 1, T_EDIT, 0, term_utf8() ? "\xe2\x80\xa6" : ".");
+            while (*q && numfmt_width(q) > u->cols - x)
+                do
+                    q++;
+                while (((unsigned char)*q & 0xC0) == 0x80);
+            term_text(y, x, u->cols - x, T_EDIT, 1, q);
+            return;
+        }
         term_text(y, 0, u->cols, T_EDIT, 1, q);
         return;
     }
