@@ -1296,6 +1296,7 @@ typedef struct sg_spot_cell {
 typedef struct sg_spot_field {
     double hx, hy;         /* normalized field */
     int status;            /* SG_OK, or the reference chief ray's failure */
+    int fail_surface;      /* the surface where that chief ray failed, or -1 */
     double ref_x, ref_y;   /* reference point: the primary (or only) wavelength's
                               chief ray, or the weighted centroid */
     double rms, geo;       /* over every wavelength, weighted by wavelength weight */

@@ -279,10 +279,28 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
             c->status = st[f];
             if (k == 0) {
                 out->field[f].status = st[f];
+                out->field[f].fail_surface = -1;
                 origin[f][0] = c->chief_x;
                 origin[f][1] = c->chief_y;
             }
         }
+        /* A reference chief ray that fails is traced again to every
+         * surface, so that the report can name where it failed. */
+        for (f = 0; k == 0 && f < nf; f++)
+            if (st[f] != SG_OK && (size_t)sys->nsurf <= block) {
+                sg_diag d1;
+                int s1, st1;
+                sg_diag_clear(&d1);
+                sg_batch_set_reference(b, 1);
+                if (sg_batch_trace(b, SG_RAYS_NORMALIZED, &rays[f], 1, NULL, 0, rows, &st1,
+                                   &d1) == SG_OK)
+                    for (s1 = 0; s1 < sys->nsurf; s1++)
+                        if (rows[s1].status != SG_OK) {
+                            out->field[f].fail_surface = s1;
+                            break;
+                        }
+                sg_batch_set_reference(b, 0);
+            }
         for (f = 0; f < nf; f++) {
             sg_spot_cell *c = &out->cell[cell_index(out, f, w)];
             acc *ac = &a[cell_index(out, f, w)];

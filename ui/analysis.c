@@ -131,7 +131,11 @@ static void spot_text(FILE *f, const sg_system *sys, const sg_spot *s, const sg_
         const sg_spot_field *fd = &s->field[fi];
         view_field_label(sys, s->field_index[fi], fl, sizeof fl);
         if (fd->status != SG_OK) {
-            fprintf(f, "%-26s chief ray: %s\n", fl, sg_strerror(fd->status));
+            char why[200];
+            fprintf(f, "%-26s chief ray: %s\n", fl,
+                    fd->fail_surface >= 0
+                        ? sg_ray_stop_text(sys, fd->fail_surface, fd->status, why, sizeof why)
+                        : sg_strerror(fd->status));
             continue;
         }
         for (w = 0; w < s->nwave; w++) {

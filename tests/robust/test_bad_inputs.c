@@ -377,6 +377,10 @@ static const bad_case cases[] = {
       "\"stop\": true},\n" S2 IMA TAIL, NULL, NULL, ARGS("trace", "@F", "--ray", "0,0,0,0"), 4,
       "@F: trace failed on surface 1: nonphysical surface or system (status NONPHYS): the "
       "surface's normal", NULL, NULL, NULL, 0 },
+    { "spot_point_like_surface", "R = 1e-300: spot's chief-ray line names the surface",
+      "tiny2.json", HEAD OBJ "    {\"radius\": 1e-300, \"thickness\": 5, \"material\": 1.5, "
+      "\"stop\": true},\n" S2 IMA TAIL, NULL, NULL, ARGS("spot", "@F"), 0, NULL,
+      "chief ray: nonphysical surface or system at surface 1\n", NULL, NULL, 0 },
     { "trace_huge_direction", "a direction of 1e308 a component is (1, 1, 1) / sqrt 3",
       NULL, NULL, NULL, NULL,
       ARGS("trace", "@D", "--start", "0,0,-1", "--dir", "1e308,1e308,1e308", "--format", "csv"),
