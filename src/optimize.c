@@ -194,6 +194,15 @@ out:
     return NULL;
 }
 
+/* A worker thread's columns; MPFR caches constants such as pi per thread,
+ * and a worker frees its own before it ends (as the batch's do). */
+static void *column_thread(void *arg)
+{
+    columns(arg);
+    mpfr_free_cache2(MPFR_FREE_LOCAL_CACHE);
+    return NULL;
+}
+
 static int gsl_df(const gsl_vector *x, void *params, gsl_matrix *J)
 {
     octx *o = params;
@@ -228,7 +237,7 @@ static int gsl_df(const gsl_vector *x, void *params, gsl_matrix *J)
         w[t].j0 = o->nvar * t / nt;
         w[t].j1 = o->nvar * (t + 1) / nt;
         sg_diag_clear(&w[t].d);
-        if (t > 0 && pthread_create(&th[t], NULL, columns, &w[t]) == 0)
+        if (t > 0 && pthread_create(&th[t], NULL, column_thread, &w[t]) == 0)
             started[t] = 1;
         else if (t > 0)
             columns(&w[t]);

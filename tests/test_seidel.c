@@ -555,6 +555,7 @@ static void decentred(void **state)
     assert_int_equal(s.decentred, 2);
     sg_seidel_free(&s);
     sg_system_free(sys);
+    sg_catalog_free(cat);
 }
 
 int main(void)

@@ -1901,6 +1901,7 @@ static unsigned char *slurp(const char *path, size_t *n)
     b = malloc((size_t)m + 1);
     assert_non_null(b);
     *n = fread(b, 1, (size_t)m, f);
+    b[*n] = '\0'; /* the tests search it as text */
     fclose(f);
     return b;
 }
