@@ -238,9 +238,9 @@ ray_width() {
 }
 check "the ray selector shows all the digits at 200 columns, an ellipsis at 80" ray_width
 
-# 9. Item 17: a question wider than the status line keeps its end, where
-# the answers are, and begins with an ellipsis (an export onto an existing
-# file with a long name asks to replace it).
+# 9. Item 17: a question wider than the status line keeps its start and
+# its end, where the answers are, with an ellipsis between (an export onto
+# an existing file with a long name asks to replace it).
 long_question() {
     long=replace_me_$(printf '%080d' 0).csv
     : >"$WORK/$long"
@@ -250,14 +250,14 @@ long_question() {
     wait_re 'Replace it\? \(y\)es \(n\)o *$' || return 1
     last=$(screen | grep -v '^ *$' | tail -n 1)
     echo "# question line: $last"
-    case $last in "…"*"(y)es (n)o") ;; *) WHY="no ellipsis before the answers: $last"; return 1 ;; esac
+    case $last in "export: "*"…"*"(y)es (n)o") ;; *) WHY="not its start, an ellipsis and its answers: $last"; return 1 ;; esac
     keys n
     wait_gone "Replace it?" || return 1
     [ ! -s "$WORK/$long" ] || { WHY="the file was replaced"; return 1; }
     command_line "quit!"
     wait_for "EXITED 0" 5
 }
-check "a question wider than the line shows its answers after an ellipsis (80x24)" long_question
+check "a question wider than the line keeps its start and answers, an ellipsis between (80x24)" long_question
 
 echo "# $(( $(date +%s) - T0 )) s"
 [ "$N" -eq "$NTESTS" ] || echo "# ran $N of $NTESTS"

@@ -231,15 +231,42 @@ void status_draw(ui *u)
                                                                     : e->question_short)
                         : e->confirm == CONFIRM_WRITE ? e->question
                             : "Unsaved changes will be lost. Continue? (y)es (n)o";
-        /* A question wider than the line keeps its end, where the
-         * answers are, and shows that its start is cut. */
-        if (numfmt_width(q) > u->cols && u->cols > 1) {
-            int x = term_text(y, 0, 1, T_EDIT, 0, term_utf8() ? "\xe2\x80\xa6" : ".");
-            while (*q && numfmt_width(q) > u->cols - x)
+        /* A question wider than the line is never cut silently: where
+         * its answers come first (the recovery question), its start and an
+         * ellipsis; where they end it, its start, an ellipsis and the
+         * answers after its last question mark. */
+        if (numfmt_width(q) > u->cols && u->cols > 2) {
+            const char *ell = term_utf8() ? "\xe2\x80\xa6" : ".", *close = strrchr(q, ')');
+            const char *t;
+            char head[ED_MSG];
+            int x;
+            size_t hn = close ? (size_t)(close - q) + 1 : 0;
+            if (close && close[1] && hn < sizeof head) {
+                memcpy(head, q, hn);
+                head[hn] = '\0';
+                if (numfmt_width(head) <= u->cols - 1) {
+                    x = term_text(y, 0, u->cols - 1, T_EDIT, 0, q);
+                    term_text(y, x, u->cols - x, T_EDIT, 1, ell);
+                    return;
+                }
+            }
+            /* The last sentence, the question itself, if it is short. */
+            t = strrchr(q, '?');
+            if (t) {
+                const char *p = q, *dot = NULL;
+                while ((p = strstr(p, ". ")) && p < t)
+                    dot = p++;
+                t = dot ? dot + 2 : t + 1;
+            } else {
+                t = q;
+            }
+            while (*t && numfmt_width(t) > u->cols / 2)
                 do
-                    q++;
-                while (((unsigned char)*q & 0xC0) == 0x80);
-            term_text(y, x, u->cols - x, T_EDIT, 1, q);
+                    t++;
+                while (((unsigned char)*t & 0xC0) == 0x80);
+            x = term_text(y, 0, u->cols - 1 - numfmt_width(t), T_EDIT, 0, q);
+            x += term_text(y, x, 1, T_EDIT, 0, ell);
+            term_text(y, x, u->cols - x, T_EDIT, 1, t);
             return;
         }
         term_text(y, 0, u->cols, T_EDIT, 1, q);
