@@ -28,26 +28,6 @@ wait_for() {
     WHY="timed out waiting for: $1"
     return 1
 }
-wait_re() {
-    n=$(( ${2:-10} * 10 ))
-    while [ "$n" -gt 0 ]; do
-        screen | grep -qE -- "$1" && return 0
-        sleep 0.1
-        n=$((n - 1))
-    done
-    WHY="timed out waiting for a line like: $1"
-    return 1
-}
-wait_gone() {
-    n=$(( ${2:-10} * 10 ))
-    while [ "$n" -gt 0 ]; do
-        screen | grep -qF -- "$1" || return 0
-        sleep 0.1
-        n=$((n - 1))
-    done
-    WHY="timed out waiting for this to go: $1"
-    return 1
-}
 wait_dead() {
     n=200
     while [ "$n" -gt 0 ]; do

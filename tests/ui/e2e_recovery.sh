@@ -36,29 +36,6 @@ wait_for() {
     return 1
 }
 
-# Waits for a line of the screen that matches the extended regex $1.
-wait_re() {
-    n=$(( ${2:-10} * 10 ))
-    while [ "$n" -gt 0 ]; do
-        screen | grep -qE -- "$1" && return 0
-        sleep 0.1
-        n=$((n - 1))
-    done
-    WHY="timed out waiting for a line like: $1"
-    return 1
-}
-
-wait_gone() {
-    n=$(( ${2:-10} * 10 ))
-    while [ "$n" -gt 0 ]; do
-        screen | grep -qF -- "$1" || return 0
-        sleep 0.1
-        n=$((n - 1))
-    done
-    WHY="timed out waiting for this to go: $1"
-    return 1
-}
-
 # Waits up to 5 s for process $1 to be gone (a zombie counts as gone).
 wait_dead() {
     # Up to 20 s: under AddressSanitizer the leak check at exit alone can

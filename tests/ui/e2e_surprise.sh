@@ -13,27 +13,6 @@ SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
 tmux_setup 9 surprise
 
-wait_re() {
-    n=$(( ${2:-10} * 10 ))
-    while [ "$n" -gt 0 ]; do
-        screen | grep -qE -- "$1" && return 0
-        sleep 0.1
-        n=$((n - 1))
-    done
-    WHY="timed out waiting for a line like: $1"
-    return 1
-}
-wait_gone() {
-    n=$(( ${2:-10} * 10 ))
-    while [ "$n" -gt 0 ]; do
-        screen | grep -qF -- "$1" || return 0
-        sleep 0.1
-        n=$((n - 1))
-    done
-    WHY="timed out waiting for this to go: $1"
-    return 1
-}
-
 # Starts the editor on $1 in a $2 x $3 window as session main; a session
 # "keep" holds the server up between editors.
 start() {

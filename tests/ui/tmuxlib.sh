@@ -64,6 +64,31 @@ tmux_cleanup() {
 # Records an editor's pid so tmux_cleanup can make sure it is gone.
 started() { [ -n "$1" ] && echo "$1" >>"$WORK/started"; }
 
+# Waits up to $2 seconds (default 10) for a line of the screen that
+# matches the extended regex $1; WHY says what it waited for.
+wait_re() {
+    n=$(( ${2:-10} * 10 ))
+    while [ "$n" -gt 0 ]; do
+        screen | grep -qE -- "$1" && return 0
+        sleep 0.1
+        n=$((n - 1))
+    done
+    WHY="timed out waiting for a line like: $1"
+    return 1
+}
+
+# Waits up to $2 seconds (default 10) for text $1 to leave the screen.
+wait_gone() {
+    n=$(( ${2:-10} * 10 ))
+    while [ "$n" -gt 0 ]; do
+        screen | grep -qF -- "$1" || return 0
+        sleep 0.1
+        n=$((n - 1))
+    done
+    WHY="timed out waiting for this to go: $1"
+    return 1
+}
+
 # Waits up to $2 seconds (default 10) for text $1 on the screen.
 wait_for() {
     n=$(( ${2:-10} * 10 ))
