@@ -245,27 +245,34 @@ void help_draw(ui *u)
     term_text(u->rows - 1, 0, u->cols, T_DIM, 1, buf);
 }
 
-int help_key(ui *u, int key)
+int ui_page_key(int *top, int h, int key, int end)
 {
-    int h = u->rows - 2;
     switch (key) {
     case K_UP:
-    case 'k': u->help_top--; break;
+    case 'k': (*top)--; return 1;
     case K_DOWN:
-    case 'j': u->help_top++; break;
-    case K_PGUP: u->help_top -= h - 1; break;
+    case 'j': (*top)++; return 1;
+    case K_PGUP: *top -= h - 1; return 1;
     case K_PGDN:
-    case ' ': u->help_top += h - 1; break;
+    case ' ': *top += h - 1; return 1;
     case K_HOME:
-    case '<': u->help_top = 0; break;
+    case '<': *top = 0; return 1;
     case K_END:
-    case '>': u->help_top = total_rows(u->cols); break;
+    case '>': *top = end; return 1;
+    default: return 0;
+    }
+}
+
+int help_key(ui *u, int key)
+{
+    if (ui_page_key(&u->help_top, u->rows - 2, key, total_rows(u->cols)))
+        return ED_HANDLED | ED_REDRAW;
+    switch (key) {
     case K_ESC:
     case 'q':
     case '?':
     case K_F(1):
-    case K_ENTER: u->mode = MODE_NORMAL; break;
+    case K_ENTER: u->mode = MODE_NORMAL; return ED_HANDLED | ED_REDRAW;
     default: return ED_HANDLED;
     }
-    return ED_HANDLED | ED_REDRAW;
 }

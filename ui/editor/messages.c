@@ -82,25 +82,16 @@ void messages_draw(ui *u)
 
 int messages_key(ui *u, int key)
 {
-    int h = u->rows - 2;
+    /* End is -1: the drawing puts the newest message last. */
+    if (ui_page_key(&u->msg_top, u->rows - 2, key, -1)) {
+        if (u->msg_top < -1)
+            u->msg_top = 0;
+        return ED_HANDLED | ED_REDRAW;
+    }
     switch (key) {
-    case K_UP:
-    case 'k': u->msg_top--; break;
-    case K_DOWN:
-    case 'j': u->msg_top++; break;
-    case K_PGUP: u->msg_top -= h - 1; break;
-    case K_PGDN:
-    case ' ': u->msg_top += h - 1; break;
-    case K_HOME:
-    case '<': u->msg_top = 0; break;
-    case K_END:
-    case '>': u->msg_top = -1; break;
     case K_ESC:
     case 'q':
-    case K_ENTER: u->mode = MODE_NORMAL; break;
+    case K_ENTER: u->mode = MODE_NORMAL; return ED_HANDLED | ED_REDRAW;
     default: return ED_HANDLED;
     }
-    if (u->msg_top < -1)
-        u->msg_top = 0;
-    return ED_HANDLED | ED_REDRAW;
 }

@@ -139,6 +139,9 @@ int ui_fit_words(const char *s, int w, const char *ell, const char *more, char *
 
 void help_draw(ui *u);
 int help_key(ui *u, int key);
+/* The scrolling keys of a page (help, messages): moves *top, h rows a
+ * screen, to end on End; 1 when key was one of them. */
+int ui_page_key(int *top, int h, int key, int end);
 
 void settings_draw(ui *u);
 int settings_key(ui *u, int key);
