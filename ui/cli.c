@@ -17,6 +17,7 @@
 #include "h5rays.h"
 #include "report.h"
 #include "outfile.h"
+#include "progress.h"
 #include "safetext.h"
 
 /* ---------------------------------------------------------------- messages */
@@ -536,55 +537,6 @@ static int trace_failed(const char *design, const sg_diag *d, int rc)
     return trace_failed_at(design, d, rc, NULL, 0);
 }
 
-/* Progress of a long run on standard error: only on a terminal, never in
- * CI (CI set) or a pipe, first after a second and then four times a
- * second, erased at the end. */
-typedef struct progress {
-    int on, shown;
-    double t0, last;
-} progress;
-
-static double now_s(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static void progress_init(progress *p)
-{
-    const char *ci = getenv("CI");
-    memset(p, 0, sizeof *p);
-    p->on = isatty(STDERR_FILENO) && !(ci && ci[0]);
-    p->t0 = p->last = now_s();
-}
-
-static void progress_show(progress *p, size_t nray, unsigned long long done,
-                          unsigned long long total)
-{
-    double t;
-    if (!p->on)
-        return;
-    t = now_s();
-    if (t - p->t0 < 1.0 || t - p->last < 0.25)
-        return;
-    p->last = t;
-    p->shown = 1;
-    if (total > 0)
-        fprintf(stderr, "\rsagitta: trace: %5.1f%%, %zu rays, %.0f s", 100.0 * (double)done /
-                (double)total, nray, t - p->t0);
-    else
-        fprintf(stderr, "\rsagitta: trace: %zu rays, %.0f s", nray, t - p->t0);
-    fflush(stderr);
-}
-
-static void progress_end(progress *p)
-{
-    if (p->shown)
-        fputs("\r\033[K", stderr);
-    p->shown = 0;
-}
-
 /* Rays a block holds: about 16 MiB of result rows, from 16 to 65536
  * rays.  SAGITTA_RAYS_BLOCK sets it (from 1), for tests of the seams. */
 static size_t rays_block(int nsurf)
@@ -661,7 +613,7 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     report_meta meta;
     report_stream rs;
     outfile ro;
-    progress pg;
+    ui_progress pg;
     sg_diag d;
     h5rays *h5 = NULL;
     char h5err[512];
@@ -760,12 +712,12 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     memset(&ref, 0, sizeof ref);
     ref.status = SG_EINVAL;
 
-    progress_init(&pg);
+    ui_progress_init(&pg, "trace", "rays");
     while (n > 0) {
         sg_diag_clear(&d);
         rc = sg_batch_trace(b, csvrays_kind(rd), rays, n, NULL, 0, out, status, &d);
         if (rc != SG_OK) {
-            progress_end(&pg);
+            ui_progress_end(&pg);
             rc = trace_failed(design, &d, rc);
             goto done;
         }
@@ -810,15 +762,15 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
             goto write_error;
         done += n;
         csvrays_progress(rd, &pos, &size);
-        progress_show(&pg, done, pos, size);
+        ui_progress_show(&pg, done, pos, size);
         sg_diag_clear(&d);
         rc = csvrays_next(rd, rays, block, &n, &d);
         if (rc != SG_OK) {
-            progress_end(&pg);
+            ui_progress_end(&pg);
             goto bad_rays;
         }
     }
-    progress_end(&pg);
+    ui_progress_end(&pg);
     if (fmt == FMT_HDF5) {
         rc = h5rays_close(h5, h5err, sizeof h5err);
         h5 = NULL;
@@ -844,12 +796,12 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     goto done;
 
 h5_error:
-    progress_end(&pg);
+    ui_progress_end(&pg);
     cli_error("%s: %s", output, h5err);
     rc = CLI_EXIT_FILE;
     goto done;
 write_error:
-    progress_end(&pg);
+    ui_progress_end(&pg);
     cli_error("%s: %s", output && strcmp(output, "-") ? output : "standard output",
               strerror(errno));
     rc = CLI_EXIT_FILE;
