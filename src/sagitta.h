@@ -67,7 +67,8 @@ extern "C" {
     X(UNCERT, "intersection cannot be certified in double-double")            \
     X(APERTURE, "ray outside the surface aperture")                           \
     X(OBSCURED, "ray stopped by an obscuration")                              \
-    X(LOSSY, "the file cannot hold the design faithfully")
+    X(LOSSY, "the file cannot hold the design faithfully")                   \
+    X(STOPPED, "stopped before the end")
 
 typedef enum sg_err {
 #define SG_ERR_ENUM_(name, msg) SG_E##name,
@@ -1274,6 +1275,10 @@ typedef struct sg_spot_opts {
     size_t block;        /* rays per batch call; 0: 65536 */
     size_t max_points;   /* image points kept per field and wavelength, for
                             pictures (every k-th ray); 0 keeps none */
+    /* Called after each block with rays traced and in all (may be NULL);
+     * a nonzero return stops the run with SG_ESTOPPED. */
+    int (*progress)(void *ctx, size_t done, size_t total);
+    void *progress_ctx;
 } sg_spot_opts;
 
 SG_API void sg_spot_opts_init(sg_spot_opts *o);
@@ -1625,6 +1630,10 @@ typedef struct sg_wavefront {
     int nterms;
     double coef[SG_WAVEFRONT_MAXTERMS]; /* Zernike coefficients, waves */
     double fit_rms;                     /* RMS of what the fit leaves */
+    /* Bounds on each coefficient's error, waves: from the OPDs' error
+     * bounds (sg_wavefront_trace) and the fit's rounding.  A coefficient
+     * within its bound is indistinguishable from zero. */
+    double coef_bound[SG_WAVEFRONT_MAXTERMS];
 } sg_wavefront;
 
 /* The wavefront map of opd on a grid x grid square of pupil points (those
@@ -1643,6 +1652,10 @@ typedef struct sg_wavefront_opts {
     int nterms;          /* Zernike terms fitted, 1 to 37 */
     int nthreads;        /* 0: every core */
     size_t block;        /* rays per batch call; 0: 65536 */
+    /* Called after each block with grid points done and in all (may be
+     * NULL); a nonzero return stops the run with SG_ESTOPPED. */
+    int (*progress)(void *ctx, size_t done, size_t total);
+    void *progress_ctx;
 } sg_wavefront_opts;
 
 SG_API void sg_wavefront_opts_init(sg_wavefront_opts *o);

@@ -190,7 +190,7 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
 {
     int waves[SG_MAX_WAVES], fields[SG_MAX_FIELDS], order[SG_MAX_WAVES];
     int nw, nf, refw, w, f, k, rc = SG_OK, last;
-    size_t count, block, stride, i;
+    size_t count, block, stride, i, traced = 0;
     sg_paraxial px;
     sg_ray_in *rays = NULL;
     sg_ray_surface *rows = NULL;
@@ -352,6 +352,13 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
                 ac->sy += by;
                 ac->s2 += b2;
                 ac->n += m;
+                traced += got;
+                if (o->progress &&
+                    o->progress(o->progress_ctx, traced, count * (size_t)nf * (size_t)nw)) {
+                    rc = sg_diag_set(d, SG_ESTOPPED, "spot: stopped after %zu of %zu rays",
+                                     traced, count * (size_t)nf * (size_t)nw);
+                    goto done;
+                }
                 if (o->reference == SG_SPOT_REF_CENTROID) {
                     double (*nw2)[2] = realloc(work, 2 * (m + ac->h.n + 1) * sizeof *work);
                     if (!nw2) {

@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "sagitta.h"
+#include "analysis_internal.h"
 
 void sg_wavefront_free(sg_wavefront *w)
 {
@@ -24,16 +24,10 @@ void sg_wavefront_free(sg_wavefront *w)
     w->valid = NULL;
 }
 
-int sg_wavefront_compute(sg_opd_fn opd, void *ctx, int grid, sg_zernike_kind kind,
-                         int nterms, sg_wavefront *out, sg_diag *d)
+/* Checks a grid and a Zernike set before any work. */
+static int check_grid(int grid, sg_zernike_kind kind, int nterms, sg_diag *d)
 {
-    size_t n, k, m = 0;
-    double *x = NULL, *y = NULL, *v = NULL;
-    int i, j, rc, maxj;
-
-    if (!out || !opd)
-        return sg_diag_set(d, SG_EINVAL, "wavefront: no OPD function or no output");
-    memset(out, 0, sizeof *out);
+    int maxj;
     if (grid < 3 || grid > 4096)
         return sg_diag_set(d, SG_ERANGE, "wavefront: grid %d; from 3 to 4096 points across "
                                          "are allowed", grid);
@@ -42,17 +36,63 @@ int sg_wavefront_compute(sg_opd_fn opd, void *ctx, int grid, sg_zernike_kind kin
         return sg_diag_set(d, SG_ERANGE, "wavefront: %d Zernike terms; from 1 to %d are "
                                          "allowed", nterms,
                            maxj < SG_WAVEFRONT_MAXTERMS ? maxj : SG_WAVEFRONT_MAXTERMS);
-    n = (size_t)grid * (size_t)grid;
+    return SG_OK;
+}
+
+/* The map and its validity, the only memory that grows with the grid
+ * (9 bytes a point: 151 MB at 4096). */
+static int map_alloc(int grid, sg_wavefront *out, sg_diag *d)
+{
+    size_t n = (size_t)grid * (size_t)grid;
     out->grid = grid;
     out->map = calloc(n, sizeof *out->map);
     out->valid = calloc(n, 1);
-    x = malloc(n * sizeof *x);
-    y = malloc(n * sizeof *y);
-    v = malloc(n * sizeof *v);
-    if (!out->map || !out->valid || !x || !y || !v) {
-        rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
-        goto fail;
+    if (!out->map || !out->valid) {
+        sg_wavefront_free(out);
+        return sg_diag_set(d, SG_ENOMEM, "out of memory: a wavefront map of %d x %d points "
+                                         "needs %zu MB", grid, grid, n * 9 >> 20);
     }
+    return SG_OK;
+}
+
+/* Statistics and the Zernike fit, read from the map itself. */
+static int map_finish(sg_zernike_kind kind, int nterms, double data_err, sg_wavefront *out,
+                      sg_diag *d)
+{
+    size_t k, n = (size_t)out->grid * (size_t)out->grid, m = 0;
+    int rc;
+    for (k = 0; k < n; k++)
+        m += out->valid[k];
+    out->nvalid = m;
+    rc = sg_wavefront_stats_map(out->grid, out->map, out->valid, m, 0, &out->rms_chief,
+                                &out->pv_chief, d);
+    if (rc == SG_OK)
+        rc = sg_wavefront_stats_map(out->grid, out->map, out->valid, m, 1, &out->rms_centroid,
+                                    &out->pv_centroid, d);
+    if (rc == SG_OK)
+        rc = sg_zernike_fit_map(kind, nterms, out->grid, out->map, out->valid, m, data_err,
+                                out->coef, out->coef_bound, &out->fit_rms, d);
+    if (rc != SG_OK) {
+        sg_wavefront_free(out);
+        return rc;
+    }
+    out->kind = kind;
+    out->nterms = nterms;
+    return SG_OK;
+}
+
+int sg_wavefront_compute(sg_opd_fn opd, void *ctx, int grid, sg_zernike_kind kind,
+                         int nterms, sg_wavefront *out, sg_diag *d)
+{
+    size_t k;
+    int i, j, rc;
+
+    if (!out || !opd)
+        return sg_diag_set(d, SG_EINVAL, "wavefront: no OPD function or no output");
+    memset(out, 0, sizeof *out);
+    if ((rc = check_grid(grid, kind, nterms, d)) != SG_OK ||
+        (rc = map_alloc(grid, out, d)) != SG_OK)
+        return rc;
     for (j = 0; j < grid; j++)
         for (i = 0; i < grid; i++) {
             double px = -1.0 + 2.0 * i / (grid - 1), py = -1.0 + 2.0 * j / (grid - 1), w;
@@ -64,31 +104,9 @@ int sg_wavefront_compute(sg_opd_fn opd, void *ctx, int grid, sg_zernike_kind kin
                 continue;
             out->map[k] = w;
             out->valid[k] = 1;
-            x[m] = px;
-            y[m] = py;
-            v[m] = w;
-            m++;
         }
-    out->nvalid = m;
-    rc = sg_wavefront_stats(m, x, y, v, 0, &out->rms_chief, &out->pv_chief, d);
-    if (rc == SG_OK)
-        rc = sg_wavefront_stats(m, x, y, v, 1, &out->rms_centroid, &out->pv_centroid, d);
-    if (rc == SG_OK)
-        rc = sg_zernike_fit(kind, nterms, m, x, y, v, out->coef, &out->fit_rms, d);
-    if (rc != SG_OK)
-        goto fail;
-    out->kind = kind;
-    out->nterms = nterms;
-    free(x);
-    free(y);
-    free(v);
-    return SG_OK;
-fail:
-    free(x);
-    free(y);
-    free(v);
-    sg_wavefront_free(out);
-    return rc;
+    /* A callback's values carry no bound: only the fit's rounding counts. */
+    return map_finish(kind, nterms, 0.0, out, d);
 }
 
 void sg_wavefront_opts_init(sg_wavefront_opts *o)
@@ -99,27 +117,6 @@ void sg_wavefront_opts_init(sg_wavefront_opts *o)
     o->grid = 64;
     o->kind = SG_ZERNIKE_FRINGE;
     o->nterms = 37;
-}
-
-/* The traced OPD of every grid point, looked up by the callback. */
-typedef struct grid_opd {
-    int grid;
-    const double *opd;
-    const unsigned char *ok;
-} grid_opd;
-
-static int grid_lookup(void *ctx, double px, double py, double *w)
-{
-    const grid_opd *g = ctx;
-    long i = lround((px + 1.0) * 0.5 * (g->grid - 1)), j = lround((py + 1.0) * 0.5 * (g->grid - 1));
-    size_t k;
-    if (i < 0 || j < 0 || i >= g->grid || j >= g->grid)
-        return SG_ERANGE;
-    k = (size_t)j * (size_t)g->grid + (size_t)i;
-    if (!g->ok[k])
-        return SG_EMISS;
-    *w = g->opd[k];
-    return SG_OK;
 }
 
 int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
@@ -133,17 +130,14 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
     sg_ray_in *rays = NULL;
     sg_ray_surface *rows = NULL;
     int *st = NULL, last, rc;
-    double hx, hy, *opd = NULL, piston = 0.0;
-    unsigned char *ok = NULL;
-    size_t n, blk, k, start;
-    grid_opd g;
+    double hx, hy, piston = 0.0, piston_err = 0.0, emax = 0.0;
+    size_t n, blk, k, q, *cell = NULL;
 
     if (!sys || !o || !out)
         return sg_diag_set(d, SG_EINVAL, "wavefront: no system, options or result");
     memset(out, 0, sizeof *out);
-    if (o->grid < 3 || o->grid > 4096)
-        return sg_diag_set(d, SG_ERANGE, "wavefront: grid %d; from 3 to 4096 points across "
-                                         "are allowed", o->grid);
+    if ((rc = check_grid(o->grid, (sg_zernike_kind)o->kind, o->nterms, d)) != SG_OK)
+        return rc;
     if ((rc = sg_system_validate(sys, cat, d)) != SG_OK)
         return rc;
     if (o->field >= sys->nfield)
@@ -198,17 +192,20 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
             goto done;
         }
         piston = c0.opd_waves;
+        piston_err = c0.error_bound;
     }
+    if ((rc = check_grid(o->grid, (sg_zernike_kind)o->kind, o->nterms, d)) != SG_OK ||
+        (rc = map_alloc(o->grid, out, d)) != SG_OK)
+        goto done;
     n = (size_t)o->grid * (size_t)o->grid;
     blk = o->block ? o->block : 65536;
     if (blk > n)
         blk = n;
-    opd = malloc(n * sizeof *opd);
-    ok = calloc(n, 1);
     rays = malloc(blk * sizeof *rays);
     rows = malloc(blk * sizeof *rows);
     st = malloc(blk * sizeof *st);
-    if (!opd || !ok || !rays || !rows || !st) {
+    cell = malloc(blk * sizeof *cell);
+    if (!rays || !rows || !st || !cell) {
         rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
         goto done;
     }
@@ -217,40 +214,50 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
         goto done;
     }
     last = sys->nsurf - 1;
-    /* Grid points in blocks; the same pupil coordinates as sg_wavefront_compute. */
-    for (start = 0; start < n; start += blk) {
-        size_t m = n - start < blk ? n - start : blk;
-        for (k = 0; k < m; k++) {
-            size_t q = start + k;
+    /* The grid's points inside the pupil, in blocks, straight into the
+     * map; the same pupil coordinates as sg_wavefront_compute. */
+    for (q = 0; q < n;) {
+        size_t m = 0;
+        for (; q < n && m < blk; q++) {
             int i = (int)(q % (size_t)o->grid), j = (int)(q / (size_t)o->grid);
-            rays[k].v[0] = hx;
-            rays[k].v[1] = hy;
-            rays[k].v[2] = -1.0 + 2.0 * i / (o->grid - 1);
-            rays[k].v[3] = -1.0 + 2.0 * j / (o->grid - 1);
-            rays[k].v[4] = rays[k].v[5] = 0.0;
+            double px = -1.0 + 2.0 * i / (o->grid - 1), py = -1.0 + 2.0 * j / (o->grid - 1);
+            if (px * px + py * py > 1.0)
+                continue;
+            rays[m].v[0] = hx;
+            rays[m].v[1] = hy;
+            rays[m].v[2] = px;
+            rays[m].v[3] = py;
+            rays[m].v[4] = rays[m].v[5] = 0.0;
+            cell[m++] = q;
         }
-        if ((rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, m, &last, 1, rows, st, d)) !=
-            SG_OK)
+        if (m && (rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, m, &last, 1, rows, st, d)) !=
+                     SG_OK)
             goto done;
         for (k = 0; k < m; k++) {
             sg_opd r;
             if (st[k] != SG_OK || sg_opd_of_ray(t, &ref, &rows[k], &r) != SG_OK ||
                 r.status != SG_OK || !isfinite(r.opd_waves))
                 continue;
-            opd[start + k] = r.opd_waves - piston;
-            ok[start + k] = 1;
+            double e;
+            out->map[cell[k]] = r.opd_waves - piston;
+            out->valid[cell[k]] = 1;
+            /* The ray's bound, the piston's and the difference's rounding. */
+            e = r.error_bound + piston_err + 0x1p-53 * fabs(out->map[cell[k]]);
+            emax = e > emax ? e : emax;
+        }
+        if (o->progress && o->progress(o->progress_ctx, q, n)) {
+            rc = sg_diag_set(d, SG_ESTOPPED, "wavefront: stopped after %zu of %zu grid points",
+                             q, n);
+            goto done;
         }
     }
-    g.grid = o->grid;
-    g.opd = opd;
-    g.ok = ok;
-    rc = sg_wavefront_compute(grid_lookup, &g, o->grid, (sg_zernike_kind)o->kind, o->nterms,
-                              out, d);
+    rc = map_finish((sg_zernike_kind)o->kind, o->nterms, emax, out, d);
 done:
+    if (rc != SG_OK)
+        sg_wavefront_free(out);
     sg_batch_free(b);
     sg_tracer_free(t);
-    free(opd);
-    free(ok);
+    free(cell);
     free(rays);
     free(rows);
     free(st);

@@ -12,7 +12,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "sagitta.h"
+#include "analysis_internal.h"
+#include "dd.h"
 
 int sg_zernike_nm(sg_zernike_kind kind, int j, int *n, int *m)
 {
@@ -63,41 +64,119 @@ int sg_zernike_nm(sg_zernike_kind kind, int j, int *n, int *m)
         }
 }
 
-/* R_n^|m|(rho) by its explicit sum (n is at most 12 for Fringe and small
- * for Standard's range, where the factorials are exact in double). */
-static double radial(int n, int m, double rho)
+/* One term as a polynomial: Z = norm * Q(rho^2) * Re or Im of (x + iy)^|m|,
+ * where R_n^|m|(rho) = rho^|m| Q(rho^2).  No angle, power or factorial is
+ * evaluated per point, so a fit over millions of points stays cheap. */
+typedef struct zterm {
+    int am, sine, deg;      /* |m|; 1 for m < 0; degree of Q */
+    double norm;
+    double q[11];           /* Q's coefficients, highest power first */
+    double eps;             /* bound on the rounding of one evaluation */
+} zterm;
+
+static int zterm_init(sg_zernike_kind kind, int j, zterm *t)
 {
-    int s, am = m < 0 ? -m : m;
-    double sum = 0.0;
-    for (s = 0; s <= (n - am) / 2; s++) {
-        double c = tgamma(n - s + 1.0) /
-                   (tgamma(s + 1.0) * tgamma((n + am) / 2 - s + 1.0) *
-                    tgamma((n - am) / 2 - s + 1.0));
-        sum += ((s & 1) ? -c : c) * pow(rho, n - 2 * s);
+    int n, m, s;
+    if (sg_zernike_nm(kind, j, &n, &m) != SG_OK)
+        return SG_ERANGE;
+    t->am = m < 0 ? -m : m;
+    t->sine = m < 0;
+    t->deg = (n - t->am) / 2;
+    /* The explicit sum's integer coefficients; n <= 20 keeps the
+     * factorials' ratio within a rounding of an integer below 2^53. */
+    for (s = 0; s <= t->deg; s++) {
+        double c = round(tgamma(n - s + 1.0) /
+                         (tgamma(s + 1.0) * tgamma((n + t->am) / 2 - s + 1.0) *
+                          tgamma((n - t->am) / 2 - s + 1.0)));
+        t->q[s] = (s & 1) ? -c : c;
     }
-    return sum;
+    t->norm = kind == SG_ZERNIKE_STANDARD ? (m == 0 ? sqrt(n + 1.0) : sqrt(2.0 * (n + 1.0)))
+                                          : 1.0;
+    /* Horner on rho^2 <= 1 errs by at most gamma_2deg sum |q|; the
+     * complex power by gamma_(4|m|) of |x + iy|^|m| <= 1; the products
+     * by two more roundings (Higham, Accuracy and Stability, 5.1, 3.5). */
+    {
+        double qa = 0.0, k = 2.0 * t->deg + 4.0 * t->am + 4.0;
+        for (s = 0; s <= t->deg; s++)
+            qa += fabs(t->q[s]);
+        t->eps = t->norm * qa * (k * 0x1p-53 / (1.0 - k * 0x1p-53)) * (1.0 + 0x1p-50);
+    }
+    return SG_OK;
 }
+
+/* (x + iy)^k for k = 0..kmax into re[], im[]. */
+static void cpowers(double x, double y, int kmax, double *re, double *im)
+{
+    int k;
+    re[0] = 1.0;
+    im[0] = 0.0;
+    for (k = 1; k <= kmax; k++) {
+        re[k] = re[k - 1] * x - im[k - 1] * y;
+        im[k] = re[k - 1] * y + im[k - 1] * x;
+    }
+}
+
+static double zterm_eval(const zterm *t, double rho2, const double *re, const double *im)
+{
+    double v = t->q[0];
+    int s;
+    for (s = 1; s <= t->deg; s++)
+        v = v * rho2 + t->q[s];
+    return t->norm * v * (t->sine ? im[t->am] : re[t->am]);
+}
+
+#define ZMAX_M 20
 
 double sg_zernike_eval(sg_zernike_kind kind, int j, double x, double y)
 {
-    int n, m;
-    double rho, th, v;
-    if (sg_zernike_nm(kind, j, &n, &m) != SG_OK)
+    zterm t;
+    double re[ZMAX_M + 1], im[ZMAX_M + 1];
+    if (zterm_init(kind, j, &t) != SG_OK)
         return NAN;
-    rho = hypot(x, y);
-    th = atan2(y, x);
-    v = radial(n, m, rho);
-    if (m > 0)
-        v *= cos(m * th);
-    else if (m < 0)
-        v *= sin(-m * th);
-    if (kind == SG_ZERNIKE_STANDARD)
-        v *= m == 0 ? sqrt(n + 1.0) : sqrt(2.0 * (n + 1.0));
-    return v;
+    cpowers(x, y, t.am, re, im);
+    return zterm_eval(&t, x * x + y * y, re, im);
+}
+
+/* The first nterms terms' records, and the largest |m| among them. */
+static int zterms_init(sg_zernike_kind kind, int nterms, zterm *t)
+{
+    int i, mmax = 0;
+    for (i = 0; i < nterms; i++) {
+        zterm_init(kind, i + 1, &t[i]);
+        mmax = t[i].am > mmax ? t[i].am : mmax;
+    }
+    return mmax;
+}
+
+static void zterms_eval(const zterm *t, int nterms, int mmax, double x, double y, double *z)
+{
+    double re[ZMAX_M + 1], im[ZMAX_M + 1], rho2 = x * x + y * y;
+    int i;
+    cpowers(x, y, mmax, re, im);
+    for (i = 0; i < nterms; i++)
+        z[i] = zterm_eval(&t[i], rho2, re, im);
 }
 
 /* Solves the symmetric positive definite k x k system a c = b by
  * Cholesky, in place; SG_ENONPHYS when a is singular to working precision. */
+/* Solves with the factor that cholesky_solve left in a's lower triangle. */
+static void cholesky_resolve(const double *a, double *b, int k)
+{
+    int i, l;
+    for (i = 0; i < k; i++) {
+        double s = b[i];
+        for (l = 0; l < i; l++)
+            s -= a[i * k + l] * b[l];
+        b[i] = s / a[i * k + i];
+    }
+    for (i = k - 1; i >= 0; i--) {
+        double s = b[i];
+        for (l = i + 1; l < k; l++)
+            s -= a[l * k + i] * b[l];
+        b[i] = s / a[i * k + i];
+    }
+}
+
 static int cholesky_solve(double *a, double *b, int k)
 {
     int i, j, l;
@@ -116,18 +195,199 @@ static int cholesky_solve(double *a, double *b, int k)
             a[i * k + j] = s / d;
         }
     }
+    cholesky_resolve(a, b, k);
+    return SG_OK;
+}
+
+/* Points for a fit: arrays of x, y and w, or a wavefront map (its valid
+ * cells at the grid's pupil coordinates), so a map is fitted without
+ * copies of its points. */
+typedef struct zpts {
+    size_t n;
+    const double *x, *y, *w;
+    int grid;
+    const double *map;
+    const unsigned char *valid;
+} zpts;
+
+/* The next point from *cur; 0 at the end. */
+static int zpts_next(const zpts *P, size_t *cur, double *x, double *y, double *w)
+{
+    if (!P->map) {
+        if (*cur >= P->n)
+            return 0;
+        *x = P->x[*cur];
+        *y = P->y[*cur];
+        *w = P->w[*cur];
+        ++*cur;
+        return 1;
+    }
+    for (; *cur < (size_t)P->grid * (size_t)P->grid; ++*cur)
+        if (P->valid[*cur]) {
+            size_t k = (*cur)++;
+            int i = (int)(k % (size_t)P->grid), j = (int)(k / (size_t)P->grid);
+            /* The same coordinates as the map's rays (sg_wavefront_trace). */
+            *x = -1.0 + 2.0 * i / (P->grid - 1);
+            *y = -1.0 + 2.0 * j / (P->grid - 1);
+            *w = P->map[k];
+            return 1;
+        }
+    return 0;
+}
+
+/* Points a block of the normal equations' sums takes. */
+#define ZB 64
+
+/* Bounds on the coefficients' errors, to first order in the roundings.
+ * Data wrong by at most e at each of the N points move c_j by at most
+ * e sqrt(N G_jj), G = (A^T A)^-1, by Cauchy-Schwarz on the row of G A^T.
+ * The normal equations A c = b are off by dA and db: each block sum
+ * carries gamma_(ZB/4+3) of its terms' magnitudes and the double-double
+ * accumulation of the blocks almost nothing, and each basis value z_i
+ * errs by at most eps_i; sums of |z_i z_k|, |z_i| and |z_i w| are bounded
+ * by Cauchy-Schwarz from A's diagonal, N and sum w^2.  Then
+ * |dc| <= |G| (|dA| |c| + |db|).  The factor 2 covers the Cholesky
+ * solve's own roundings on the small, well-conditioned system. */
+static void fit_bounds(const double *chol, const double *diag, const zterm *t,
+                       const double *c, int k, size_t n, double e, double sw2, double *g,
+                       double *out)
+{
+    double kb = ZB / 4 + 3.0, gam = kb * 0x1p-53 / (1.0 - kb * 0x1p-53) +
+                                     ((double)n / ZB + 2.0) * 4.0 * 0x1p-106;
+    double r[SG_ZERNIKE_STANDARD_MAX], sc = 0.0, sn = sqrt((double)n), sw = sqrt(sw2);
+    double se = 0.0;
+    int i, j;
     for (i = 0; i < k; i++) {
-        double s = b[i];
-        for (l = 0; l < i; l++)
-            s -= a[i * k + l] * b[l];
-        b[i] = s / a[i * k + i];
+        sc += sqrt(diag[i]) * fabs(c[i]);
+        se += t[i].eps * fabs(c[i]);
     }
-    for (i = k - 1; i >= 0; i--) {
-        double s = b[i];
-        for (l = i + 1; l < k; l++)
-            s -= a[l * k + i] * b[l];
-        b[i] = s / a[i * k + i];
+    for (i = 0; i < k; i++) {
+        double ai = sqrt(diag[i]);
+        r[i] = gam * ai * (sc + sw) + sn * ai * se + sn * t[i].eps * (sc + sw);
     }
+    for (j = 0; j < k; j++) {
+        double s = 0.0;
+        /* Row j of G, by a solve against the unit vector. */
+        memset(g, 0, (size_t)k * sizeof *g);
+        g[j] = 1.0;
+        cholesky_resolve(chol, g, k);
+        for (i = 0; i < k; i++)
+            s += fabs(g[i]) * r[i];
+        out[j] = 2.0 * (e * sqrt((double)n * fabs(g[j])) + s);
+    }
+}
+
+static int zernike_fit(sg_zernike_kind kind, int nterms, const zpts *P, double data_err,
+                       double *coef, double *coef_bound, double *rms_resid, sg_diag *d)
+{
+    double *a, *z, *b, ss = 0.0, sw2 = 0.0, x, y, w;
+    double diag[SG_ZERNIKE_STANDARD_MAX], wb[ZB];
+    double (*zt)[ZB];
+    dd *A, *B;
+    zterm t[SG_ZERNIKE_STANDARD_MAX];
+    size_t cur = 0, p = 0;
+    int i, j, rc, maxj, mmax;
+    maxj = kind == SG_ZERNIKE_FRINGE ? SG_ZERNIKE_FRINGE_MAX : SG_ZERNIKE_STANDARD_MAX;
+    if (nterms < 1 || nterms > maxj)
+        return sg_diag_set(d, SG_ERANGE, "zernike: %d terms; from 1 to %d are allowed", nterms,
+                           maxj);
+    if (P->n < (size_t)nterms)
+        return sg_diag_set(d, SG_ERANGE, "zernike: %zu points cannot fit %d terms", P->n,
+                           nterms);
+    mmax = zterms_init(kind, nterms, t);
+    a = calloc((size_t)nterms * (size_t)nterms + 2 * (size_t)nterms, sizeof *a);
+    if (!a)
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    z = a + (size_t)nterms * nterms;
+    b = z + nterms;
+    zt = malloc((size_t)nterms * sizeof *zt);
+    A = calloc((size_t)nterms * (size_t)nterms + (size_t)nterms, sizeof *A);
+    if (!zt || !A) {
+        free(a);
+        free(zt);
+        free(A);
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    }
+    B = A + (size_t)nterms * nterms;
+    /* The normal equations, ZB points at a time: memory does not grow
+     * with the number of points, and each block's sums are dot products
+     * of contiguous rows, which the compiler vectorizes. */
+    for (;;) {
+        int nb = 0;
+        while (nb < ZB && zpts_next(P, &cur, &x, &y, &w)) {
+            p++;
+            if (!isfinite(x) || !isfinite(y) || !isfinite(w) || x * x + y * y > 1.0 + 1e-12) {
+                free(a);
+                free(zt);
+                free(A);
+                return sg_diag_set(d, SG_ERANGE,
+                                   "zernike: point %zu (%g, %g, %g) is not a finite value "
+                                   "inside the unit pupil", p, x, y, w);
+            }
+            zterms_eval(t, nterms, mmax, x, y, z);
+            for (i = 0; i < nterms; i++)
+                zt[i][nb] = z[i];
+            wb[nb++] = w;
+            sw2 += w * w;
+        }
+        if (!nb)
+            break;
+        for (i = 0; i < nterms; i++) {
+            double sb = 0.0;
+            int q;
+            for (q = 0; q < nb; q++)
+                sb += zt[i][q] * wb[q];
+            B[i] = dd_add(B[i], dd_from(sb));
+            for (j = 0; j <= i; j++) {
+                /* Four chains, so the sums overlap in the pipeline. */
+                double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+                for (q = 0; q + 4 <= nb; q += 4) {
+                    s0 += zt[i][q] * zt[j][q];
+                    s1 += zt[i][q + 1] * zt[j][q + 1];
+                    s2 += zt[i][q + 2] * zt[j][q + 2];
+                    s3 += zt[i][q + 3] * zt[j][q + 3];
+                }
+                for (; q < nb; q++)
+                    s0 += zt[i][q] * zt[j][q];
+                A[(size_t)i * nterms + j] =
+                    dd_add(A[(size_t)i * nterms + j], dd_from((s0 + s1) + (s2 + s3)));
+            }
+        }
+    }
+    for (i = 0; i < nterms; i++) {
+        b[i] = B[i].hi + B[i].lo;
+        for (j = 0; j <= i; j++)
+            a[i * nterms + j] = A[(size_t)i * nterms + j].hi + A[(size_t)i * nterms + j].lo;
+    }
+    free(A);
+    for (i = 0; i < nterms; i++)
+        for (j = i + 1; j < nterms; j++)
+            a[i * nterms + j] = a[j * nterms + i];
+    for (i = 0; i < nterms; i++)
+        diag[i] = a[i * nterms + i];
+    rc = cholesky_solve(a, b, nterms);
+    if (rc != SG_OK) {
+        free(a);
+        free(zt);
+        return sg_diag_set(d, rc, "zernike: the %zu points do not determine %d terms "
+                                  "(too few, or all on a few rings or lines)", P->n, nterms);
+    }
+    memcpy(coef, b, (size_t)nterms * sizeof *coef);
+    if (coef_bound)
+        fit_bounds(a, diag, t, coef, nterms, P->n, data_err, sw2, z, coef_bound);
+    /* The residual from a second pass: subtracting sums would lose it. */
+    cur = 0;
+    while (zpts_next(P, &cur, &x, &y, &w)) {
+        double r = w;
+        zterms_eval(t, nterms, mmax, x, y, z);
+        for (i = 0; i < nterms; i++)
+            r -= coef[i] * z[i];
+        ss += r * r;
+    }
+    if (rms_resid)
+        *rms_resid = sqrt(ss / (double)P->n);
+    free(a);
+    free(zt);
     return SG_OK;
 }
 
@@ -135,76 +395,32 @@ int sg_zernike_fit(sg_zernike_kind kind, int nterms, size_t npts, const double *
                    const double *y, const double *w, double *coef, double *rms_resid,
                    sg_diag *d)
 {
-    double *a, *z, *b, ss = 0.0;
-    size_t p;
-    int i, j, rc, maxj;
-    maxj = kind == SG_ZERNIKE_FRINGE ? SG_ZERNIKE_FRINGE_MAX : SG_ZERNIKE_STANDARD_MAX;
-    if (nterms < 1 || nterms > maxj)
-        return sg_diag_set(d, SG_ERANGE, "zernike: %d terms; from 1 to %d are allowed", nterms,
-                           maxj);
-    if (npts < (size_t)nterms)
-        return sg_diag_set(d, SG_ERANGE, "zernike: %zu points cannot fit %d terms", npts,
-                           nterms);
-    a = calloc((size_t)nterms * (size_t)nterms + 2 * (size_t)nterms, sizeof *a);
-    if (!a)
-        return sg_diag_set(d, SG_ENOMEM, "out of memory");
-    z = a + (size_t)nterms * nterms;
-    b = z + nterms;
-    /* The normal equations, one point at a time: memory does not grow
-     * with the number of points. */
-    for (p = 0; p < npts; p++) {
-        if (!isfinite(x[p]) || !isfinite(y[p]) || !isfinite(w[p]) ||
-            x[p] * x[p] + y[p] * y[p] > 1.0 + 1e-12) {
-            free(a);
-            return sg_diag_set(d, SG_ERANGE,
-                               "zernike: point %zu (%g, %g, %g) is not a finite value "
-                               "inside the unit pupil", p + 1, x[p], y[p], w[p]);
-        }
-        for (i = 0; i < nterms; i++)
-            z[i] = sg_zernike_eval(kind, i + 1, x[p], y[p]);
-        for (i = 0; i < nterms; i++) {
-            b[i] += z[i] * w[p];
-            for (j = 0; j <= i; j++)
-                a[i * nterms + j] += z[i] * z[j];
-        }
-    }
-    for (i = 0; i < nterms; i++)
-        for (j = i + 1; j < nterms; j++)
-            a[i * nterms + j] = a[j * nterms + i];
-    rc = cholesky_solve(a, b, nterms);
-    if (rc != SG_OK) {
-        free(a);
-        return sg_diag_set(d, rc, "zernike: the %zu points do not determine %d terms "
-                                  "(too few, or all on a few rings or lines)", npts, nterms);
-    }
-    memcpy(coef, b, (size_t)nterms * sizeof *coef);
-    /* The residual from a second pass: subtracting sums would lose it. */
-    for (p = 0; p < npts; p++) {
-        double r = w[p];
-        for (i = 0; i < nterms; i++)
-            r -= coef[i] * sg_zernike_eval(kind, i + 1, x[p], y[p]);
-        ss += r * r;
-    }
-    if (rms_resid)
-        *rms_resid = sqrt(ss / (double)npts);
-    free(a);
-    return SG_OK;
+    zpts P = { npts, x, y, w, 0, NULL, NULL };
+    return zernike_fit(kind, nterms, &P, 0.0, coef, NULL, rms_resid, d);
 }
 
-int sg_wavefront_stats(size_t npts, const double *x, const double *y, const double *w,
-                       int remove_tilt, double *rms, double *pv, sg_diag *d)
+int sg_zernike_fit_map(sg_zernike_kind kind, int nterms, int grid, const double *map,
+                       const unsigned char *valid, size_t nvalid, double data_err,
+                       double *coef, double *coef_bound, double *rms_resid, sg_diag *d)
 {
-    double a[9] = { 0 }, b[3] = { 0 }, ss = 0.0, lo = INFINITY, hi = -INFINITY;
-    size_t p;
+    zpts P = { nvalid, NULL, NULL, NULL, grid, map, valid };
+    return zernike_fit(kind, nterms, &P, data_err, coef, coef_bound, rms_resid, d);
+}
+
+static int wavefront_stats(const zpts *P, int remove_tilt, double *rms, double *pv, sg_diag *d)
+{
+    double a[9] = { 0 }, b[3] = { 0 }, ss = 0.0, lo = INFINITY, hi = -INFINITY, x, y, w;
+    size_t cur = 0, p = 0;
     int k = remove_tilt ? 3 : 1, i, j;
-    if (npts < (size_t)k)
-        return sg_diag_set(d, SG_ERANGE, "wavefront: %zu points are too few", npts);
-    for (p = 0; p < npts; p++) {
-        double f[3] = { 1.0, x[p], y[p] };
-        if (!isfinite(x[p]) || !isfinite(y[p]) || !isfinite(w[p]))
-            return sg_diag_set(d, SG_ERANGE, "wavefront: point %zu is not finite", p + 1);
+    if (P->n < (size_t)k)
+        return sg_diag_set(d, SG_ERANGE, "wavefront: %zu points are too few", P->n);
+    while (zpts_next(P, &cur, &x, &y, &w)) {
+        double f[3] = { 1.0, x, y };
+        p++;
+        if (!isfinite(x) || !isfinite(y) || !isfinite(w))
+            return sg_diag_set(d, SG_ERANGE, "wavefront: point %zu is not finite", p);
         for (i = 0; i < k; i++) {
-            b[i] += f[i] * w[p];
+            b[i] += f[i] * w;
             for (j = 0; j < k; j++)
                 a[i * k + j] += f[i] * f[j];
         }
@@ -212,15 +428,30 @@ int sg_wavefront_stats(size_t npts, const double *x, const double *y, const doub
     if (cholesky_solve(a, b, k) != SG_OK)
         return sg_diag_set(d, SG_ENONPHYS, "wavefront: the points lie on one line; tilt "
                                            "cannot be removed");
-    for (p = 0; p < npts; p++) {
-        double r = w[p] - b[0];
+    cur = 0;
+    while (zpts_next(P, &cur, &x, &y, &w)) {
+        double r = w - b[0];
         if (remove_tilt)
-            r -= b[1] * x[p] + b[2] * y[p];
+            r -= b[1] * x + b[2] * y;
         ss += r * r;
         lo = r < lo ? r : lo;
         hi = r > hi ? r : hi;
     }
-    *rms = sqrt(ss / (double)npts);
+    *rms = sqrt(ss / (double)P->n);
     *pv = hi - lo;
     return SG_OK;
+}
+
+int sg_wavefront_stats(size_t npts, const double *x, const double *y, const double *w,
+                       int remove_tilt, double *rms, double *pv, sg_diag *d)
+{
+    zpts P = { npts, x, y, w, 0, NULL, NULL };
+    return wavefront_stats(&P, remove_tilt, rms, pv, d);
+}
+
+int sg_wavefront_stats_map(int grid, const double *map, const unsigned char *valid,
+                           size_t nvalid, int remove_tilt, double *rms, double *pv, sg_diag *d)
+{
+    zpts P = { nvalid, NULL, NULL, NULL, grid, map, valid };
+    return wavefront_stats(&P, remove_tilt, rms, pv, d);
 }

@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "analysis_internal.h"
 #include "testutil.h"
 
 #ifndef M_PI
@@ -410,13 +411,70 @@ static void wavefront_map(void **state)
                      SG_ERANGE);
 }
 
+/* The coefficients' error bounds on a map built from known coefficients
+ * plus data errors of at most e (a deterministic sequence in [-e, e]):
+ * every fitted coefficient lies within its bound of the true one, and the
+ * bound is a few e, not a vacuous one.  Exact data (e = 0) get the fit's
+ * rounding and the basis values' alone, below 1e-9 waves
+ * (worst-case bounds: the errors themselves are near 1e-16). */
+static void coef_bounds(void **state)
+{
+    static const double truth[8] = { 0.3, 0.0, 0.0, -0.02, 0.0, 0.0, 0.0, 0.0 };
+    const int g = 257, nt = 37;
+    double *map = malloc((size_t)g * g * sizeof *map), coef[37], bound[37], rms;
+    unsigned char *valid = calloc((size_t)g * g, 1);
+    double es[2] = { 0.0, 1e-9 };
+    unsigned long long seed = 12345;
+    size_t n = 0;
+    int i, j, t, k;
+    sg_diag d;
+    (void)state;
+    assert_non_null(map);
+    assert_non_null(valid);
+    for (k = 0; k < 2; k++) {
+        double e = es[k];
+        n = 0;
+        for (j = 0; j < g; j++)
+            for (i = 0; i < g; i++) {
+                double px = -1.0 + 2.0 * i / (g - 1), py = -1.0 + 2.0 * j / (g - 1), r2, v, u;
+                size_t q = (size_t)j * g + i;
+                r2 = px * px + py * py;
+                if (r2 > 1.0)
+                    continue;
+                /* Z1 = 1, Z4 = 2 r^2 - 1 (Fringe), and Z9 = 6 r^4 - 6 r^2 + 1,
+                 * written out here, not through the library. */
+                v = truth[0] + truth[3] * (2.0 * r2 - 1.0) +
+                    0.05 * (6.0 * r2 * r2 - 6.0 * r2 + 1.0);
+                seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+                u = (double)(seed >> 11) * 0x1p-53 * 2.0 - 1.0;
+                map[q] = v + e * u;
+                valid[q] = 1;
+                n++;
+            }
+        sg_diag_clear(&d);
+        assert_int_equal(sg_zernike_fit_map(SG_ZERNIKE_FRINGE, nt, g, map, valid, n, e, coef,
+                                            bound, &rms, &d),
+                         SG_OK);
+        for (t = 0; t < nt; t++) {
+            double want = t == 8 ? 0.05 : t < 8 ? truth[t] : 0.0;
+            if (!(fabs(coef[t] - want) <= bound[t]))
+                fail_msg("e %g: Z%d = %.17g, want %.17g within %g", e, t + 1, coef[t], want,
+                         bound[t]);
+            if (e > 0.0 ? !(bound[t] < 20.0 * e) : !(bound[t] < 1e-9))
+                fail_msg("e %g: Z%d's bound %g is vacuous", e, t + 1, bound[t]);
+        }
+    }
+    free(map);
+    free(valid);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(fringe_table), cmocka_unit_test(noll_table),
         cmocka_unit_test(orthogonal),   cmocka_unit_test(fit),
         cmocka_unit_test(fit_residual), cmocka_unit_test(bad_input),
-        cmocka_unit_test(wavefront_map),
+        cmocka_unit_test(wavefront_map), cmocka_unit_test(coef_bounds),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

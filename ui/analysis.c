@@ -12,6 +12,7 @@
 #include "ancmd.h"
 #include "numfmt.h"
 #include "plot.h"
+#include "progress.h"
 #include "safetext.h"
 #include "views.h"
 
@@ -102,7 +103,8 @@ static void num(FILE *f, double v)
 /* ---- spot ---- */
 
 /* A centroid smaller than its own error bound (the mean of its rays'
- * bounds and the sums' rounding, sg_spot_cell) is noise, not an offset:
+ * bounds and the sums' rounding, sg_spot_cell), or a Zernike coefficient
+ * within its bound (sg_wavefront), is noise, not an offset:
  * it is printed as 0, never as -0 (sagitta(1), spot). */
 static double spot_denoise(double v, double bound)
 {
@@ -450,7 +452,8 @@ static void wavefront_text(FILE *f, const sg_system *sys, const sg_wavefront *w,
     for (j = 1; j <= w->nterms; j++) {
         int n = 0, m = 0;
         sg_zernike_nm(w->kind, j, &n, &m);
-        fprintf(f, "  Z%-3d n %2d m %3d %16.8g\n", j, n, m, w->coef[j - 1]);
+        fprintf(f, "  Z%-3d n %2d m %3d %16.8g\n", j, n, m,
+                spot_denoise(w->coef[j - 1], w->coef_bound[j - 1]));
     }
     fprintf(f, "Fit residual RMS: %.8g waves\n", w->fit_rms);
 }
@@ -494,7 +497,13 @@ static cJSON *wavefront_json(const sg_system *sys, const sg_wavefront *w,
     cJSON_AddNumberToObject(root, "pv_centroid", w->pv_centroid);
     z = cJSON_AddObjectToObject(root, "zernike");
     cJSON_AddStringToObject(z, "kind", w->kind == SG_ZERNIKE_FRINGE ? "fringe" : "standard");
-    cJSON_AddItemToObject(z, "coef", cJSON_CreateDoubleArray(w->coef, w->nterms));
+    {
+        double c[SG_WAVEFRONT_MAXTERMS];
+        for (i = 0; i < w->nterms; i++)
+            c[i] = spot_denoise(w->coef[i], w->coef_bound[i]);
+        cJSON_AddItemToObject(z, "coef", cJSON_CreateDoubleArray(c, w->nterms));
+        cJSON_AddItemToObject(z, "coef_bound", cJSON_CreateDoubleArray(w->coef_bound, w->nterms));
+    }
     cJSON_AddNumberToObject(z, "fit_rms", w->fit_rms);
     /* map[j][i]: py = -1 + 2 j / (grid - 1), px likewise; null outside the
      * pupil or where the ray failed. */
@@ -592,6 +601,7 @@ static int run(int kind, int argc, char **argv)
     int pattern = SG_PUPIL_HEXAPOLAR, density = 6, ref = SG_SPOT_REF_CHIEF, points = 21;
     int nrays = 7, threads = 0, noclip = 0;
     int grid = 64, zkind = SG_ZERNIKE_FRINGE, terms = 37, opdfan = 0;
+    ui_progress pg;
     sg_wavefront_opts wo;
     sg_fan_opts fo;
     sg_layout_opts lo;
@@ -735,7 +745,11 @@ static int run(int kind, int argc, char **argv)
         r.so.field = field1 - 1;
         r.so.nthreads = threads;
         r.so.max_points = 20000;
+        ui_progress_init(&pg, "spot", "rays");
+        r.so.progress = ui_progress_cb;
+        r.so.progress_ctx = &pg;
         rc = sg_spot_compute(a.sys, a.cat, &r.so, &r.spot, &d);
+        ui_progress_end(&pg);
     } else if (kind == AN_FAN) {
         sg_fan_opts_init(&fo);
         fo.trace = to;
@@ -759,7 +773,11 @@ static int run(int kind, int argc, char **argv)
         wo.kind = zkind;
         wo.nterms = terms;
         wo.nthreads = threads;
+        ui_progress_init(&pg, "wavefront", "grid points");
+        wo.progress = ui_progress_cb;
+        wo.progress_ctx = &pg;
         rc = sg_wavefront_trace(a.sys, a.cat, &wo, &r.wf, &r.wref, &d);
+        ui_progress_end(&pg);
     } else {
         sg_layout_opts_init(&lo);
         lo.trace = to;

@@ -282,13 +282,15 @@ int view_layout_figure(const sg_system *sys, const sg_layout *l, plot_figure *f)
     return 0;
 }
 
+#define VIEW_MAP_MAX 1024
+
 int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_opd_ref *ref,
                           int field, double um, plot_figure *f)
 {
     char title[256], lab[160], fl[64], pt[256], wl[32];
     double lo = INFINITY, hi = -INFINITY;
     plot_panel *p;
-    int g = w->grid, i, j;
+    int g = w->grid, i, j, fac, r;
     snprintf(title, sizeof title, "Wavefront map: %s", safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
     if (field >= 0)
@@ -307,20 +309,32 @@ int view_wavefront_figure(const sg_system *sys, const sg_wavefront *w, const sg_
     p->map_x1 = p->map_y1 = 1.0;
     snprintf(p->map_label, sizeof p->map_label, "OPD");
     snprintf(p->map_unit, sizeof p->map_unit, "waves");
-    p->map = malloc((size_t)g * (size_t)g * sizeof *p->map);
+    /* A picture shows at most VIEW_MAP_MAX cells across: a finer grid is
+     * averaged in blocks (its valid cells), so the raster stays small
+     * (8 MB) where the grid goes to 4096 (134 MB). */
+    fac = (g + VIEW_MAP_MAX - 1) / VIEW_MAP_MAX;
+    r = (g + fac - 1) / fac;
+    p->map = malloc((size_t)r * (size_t)r * sizeof *p->map);
     if (!p->map)
         return -1;
-    p->mw = p->mh = g;
+    p->mw = p->mh = r;
     /* Row 0 of the picture is Py = +1, the top. */
-    for (j = 0; j < g; j++)
-        for (i = 0; i < g; i++) {
-            size_t k = (size_t)j * (size_t)g + (size_t)i;
-            double v = w->valid[k] ? w->map[k] : NAN;
-            p->map[(size_t)(g - 1 - j) * (size_t)g + (size_t)i] = v;
-            if (w->valid[k]) {
-                lo = fmin(lo, v);
-                hi = fmax(hi, v);
-            }
+    for (j = 0; j < r; j++)
+        for (i = 0; i < r; i++) {
+            double sum = 0.0;
+            int cnt = 0, a, b;
+            for (b = j * fac; b < (j + 1) * fac && b < g; b++)
+                for (a = i * fac; a < (i + 1) * fac && a < g; a++) {
+                    size_t k = (size_t)b * (size_t)g + (size_t)a;
+                    if (w->valid[k]) {
+                        sum += w->map[k];
+                        cnt++;
+                        lo = fmin(lo, w->map[k]);
+                        hi = fmax(hi, w->map[k]);
+                    }
+                }
+            p->map[(size_t)(r - 1 - j) * (size_t)r + (size_t)i] =
+                cnt ? sum / cnt : NAN;
         }
     if (!(lo <= hi))
         lo = hi = 0.0;
