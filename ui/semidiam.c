@@ -9,6 +9,7 @@
 #include <math.h>
 
 #include "cli.h"
+#include "numfmt.h"
 #include "report.h"
 
 
@@ -36,6 +37,17 @@ static const cli_opt semidiam_opts[] = {
     { "--output", 'o', 1, SD_OUTPUT },
     { NULL, 0, 0, 0 }
 };
+
+/* An automatic semi-diameter in the table: the marginal rays are aimed to
+ * 1e-13 of the stop radius, so 12 significant digits are all it has
+ * ("1500", not "1500.0000000000002"); positional, as Zemax's editor. */
+static const char *sd_text(double v, char *buf)
+{
+    char t[40];
+    snprintf(t, sizeof t, "%.12g", v);
+    numfmt_shortest_f(strtod(t, NULL), buf);
+    return buf;
+}
 
 int cmd_semidiam(int argc, char **argv)
 {
@@ -124,7 +136,7 @@ int cmd_semidiam(int argc, char **argv)
         fprintf(f, "%-8s %24s %24s  %s\n", "Surface", "Automatic", "Set", "");
         for (i = 1; i < sys->nsurf; i++) {
             const sg_surface *s = &sys->surf[i];
-            char a[40], b[40];
+            char a[NUMFMT_SHORTEST_MAX], b[NUMFMT_SHORTEST_MAX];
             const char *note = "";
             if (s->type == SG_SURF_COORDBRK)
                 note = "coordinate break";
@@ -132,8 +144,8 @@ int cmd_semidiam(int argc, char **argv)
                 note = "fixed below the rays: vignettes";
             else if (s->sd_fixed)
                 note = "fixed";
-            fprintf(f, "%-8d %24s %24s  %s\n", i, cli_shortest(sd[i], a, sizeof a),
-                    s->semi_diameter > 0.0 ? cli_shortest(s->semi_diameter, b, sizeof b) : "-",
+            fprintf(f, "%-8d %24s %24s  %s\n", i, sd_text(sd[i], a),
+                    s->semi_diameter > 0.0 ? (numfmt_shortest_f(s->semi_diameter, b), b) : "-",
                     note);
         }
     }
