@@ -1501,6 +1501,10 @@ typedef struct sg_seidel {
     int nsurf;        /* surfaces 0..nsurf-1; row 0 (the object) is zero */
     double *surf;     /* nsurf * SG_SEIDEL_N: surface j's sums at surf[j * SG_SEIDEL_N] */
     double total[SG_SEIDEL_N];
+    /* Bounds on the errors of surf and total, to first order in the
+     * roundings: a sum within its bound is indistinguishable from 0. */
+    double *surf_bound;
+    double total_bound[SG_SEIDEL_N];
     double lagrange;  /* Welford's H = n (u ybar - ubar y), full field and aperture */
     double nu_image;  /* n'u' of the paraxial marginal ray in image space */
     double wave_um;   /* the primary wavelength, at which the sums are taken */

@@ -88,11 +88,27 @@ static const cli_opt seidel_opts[] = {
     { NULL, 0, 0, 0 }
 };
 
-/* The three sets of one row (a surface or the total). */
-static void seidel_row(const sg_seidel *s, const double *in, double *w, double *t)
+/* The three sets of row j (surface j, or the total at j == nsurf), each
+ * value within its error bound printed as 0: rounding noise, such as the
+ * distortion of a mirror at the stop, is not an aberration. */
+static void seidel_row(const sg_seidel *s, int j, double *sums, double *w, double *t)
 {
+    const double *in = j < s->nsurf ? s->surf + (size_t)j * SG_SEIDEL_N : s->total;
+    const double *eb = j < s->nsurf ? s->surf_bound + (size_t)j * SG_SEIDEL_N : s->total_bound;
+    double wb[SG_NWCOEF], tb[SG_NTCOEF];
+    int k;
     sg_seidel_waves(in, s->wave_lens, w);
     sg_seidel_transverse(in, s->nu_image, t);
+    /* The sets are the sums times positive constants (the transverse
+     * ones by 1 / (2 n'u'), taken in magnitude), so are their bounds. */
+    sg_seidel_waves(eb, s->wave_lens, wb);
+    sg_seidel_transverse(eb, fabs(s->nu_image), tb);
+    for (k = 0; k < SG_SEIDEL_N; k++)
+        sums[k] = fabs(in[k]) <= eb[k] ? 0.0 : in[k];
+    for (k = 0; k < SG_NWCOEF; k++)
+        w[k] = fabs(w[k]) <= wb[k] ? 0.0 : w[k];
+    for (k = 0; k < SG_NTCOEF; k++)
+        t[k] = fabs(t[k]) <= tb[k] ? 0.0 : t[k];
 }
 
 static void seidel_text(FILE *f, const char *design, const sg_system *sys, const sg_seidel *s)
@@ -116,9 +132,9 @@ static void seidel_text(FILE *f, const char *design, const sg_system *sys, const
             fprintf(f, " %14s", names[k]);
         fputc('\n', f);
         for (j = 1; j <= s->nsurf; j++) {
-            const double *row = j < s->nsurf ? s->surf + (size_t)j * SG_SEIDEL_N : s->total;
+            double row[SG_SEIDEL_N];
             const double *v = row;
-            seidel_row(s, row, w, t);
+            seidel_row(s, j, row, w, t);
             if (set == 1)
                 v = w;
             else if (set == 2)
@@ -147,8 +163,8 @@ static void seidel_csv(FILE *f, const sg_seidel *s)
         fprintf(f, ",%s", trans_names[k]);
     fputc('\n', f);
     for (j = 1; j <= s->nsurf; j++) {
-        const double *row = j < s->nsurf ? s->surf + (size_t)j * SG_SEIDEL_N : s->total;
-        seidel_row(s, row, w, t);
+        double row[SG_SEIDEL_N];
+        seidel_row(s, j, row, w, t);
         if (j < s->nsurf)
             fprintf(f, "%d", j);
         else
@@ -180,10 +196,10 @@ static void json_set(FILE *f, const char *const *names, const double *v, int n)
     fputc('}', f);
 }
 
-static void seidel_json_row(FILE *f, const sg_seidel *s, const double *row)
+static void seidel_json_row(FILE *f, const sg_seidel *s, int j)
 {
-    double w[SG_NWCOEF], t[SG_NTCOEF];
-    seidel_row(s, row, w, t);
+    double row[SG_SEIDEL_N], w[SG_NWCOEF], t[SG_NTCOEF];
+    seidel_row(s, j, row, w, t);
     fputs("\"sums\": ", f);
     json_set(f, seidel_names, row, SG_SEIDEL_N);
     fputs(", \"waves\": ", f);
@@ -214,11 +230,11 @@ static void seidel_json(FILE *f, const char *design, const sg_system *sys, const
     fputs(",\n  \"surfaces\": [", f);
     for (j = 1; j < s->nsurf; j++) {
         fprintf(f, "%s\n    {\"surface\": %d, ", j > 1 ? "," : "", j);
-        seidel_json_row(f, s, s->surf + (size_t)j * SG_SEIDEL_N);
+        seidel_json_row(f, s, j);
         fputc('}', f);
     }
     fputs("\n  ],\n  \"total\": {", f);
-    seidel_json_row(f, s, s->total);
+    seidel_json_row(f, s, s->nsurf);
     fputs("}\n}\n", f);
 }
 
