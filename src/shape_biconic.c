@@ -127,3 +127,12 @@ static int bic_mp(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, m
 }
 
 const sg_shape_ops sg_shape_biconic_ops = {"biconic", NULL, NULL, bic_d, bic_dd, bic_mp};
+
+static const sg_shape_key bic_keys[] = {{"radius_x", 0, 1, 0}, {"conic_x", 0, 0, 0}, {NULL, 0, 0, 0}};
+static const sg_zmx_map bic_zmx[] = {{0, 1, "radius_x", 0, 1, SG_ZMX_ZERO_INF},
+                                     {0, 2, "conic_x", 0, 1, 0},
+                                     {0, 0, NULL, 0, 0, 0}};
+const sg_shape_type sg_shape_biconic_type = {
+    .type = SG_SURF_BICONIC, .name = "biconic", .ops = &sg_shape_biconic_ops, .keys = bic_keys,
+    .parm_lo = 1, .parm_hi = 2,
+    .parm_what = "a biconic has the x radius and x conic (PARM 1 and 2)", .zmx = bic_zmx};

@@ -49,3 +49,11 @@ static int odd_mp(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, m
 }
 
 const sg_shape_ops sg_shape_odd_ops = {"odd asphere", NULL, NULL, odd_d, odd_dd, odd_mp};
+
+/* b_k on r^(k+1) is in lens units^-k. */
+static const sg_shape_key odd_keys[] = {{"odd", 0, 0, -1}, {NULL, 0, 0, 0}};
+static const sg_zmx_map odd_zmx[] = {{0, 1, "odd", 0, SG_NODD, 0}, {0, 0, NULL, 0, 0, 0}};
+const sg_shape_type sg_shape_odd_type = {
+    .type = SG_SURF_ODDASPH, .name = "odd asphere", .ops = &sg_shape_odd_ops, .keys = odd_keys,
+    .parm_lo = 1, .parm_hi = SG_NODD,
+    .parm_what = "the odd asphere has terms r^1 to r^8 (PARM 1 to 8)", .zmx = odd_zmx};

@@ -129,3 +129,16 @@ static int tor_mp(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, m
 }
 
 const sg_shape_ops sg_shape_toroid_ops = {"toroidal", tor_prepare, NULL, tor_d, tor_dd, tor_mp};
+
+/* The y curve's y^2 ... y^14 terms and the radius of rotation; in .zmx
+ * PARM 0 is the extrapolate flag of its Zernike terms (which sagitta does
+ * not read), 1 the radius of rotation (0: a cylinder), 2 to 8 the terms. */
+static const sg_shape_key tor_keys[] = {
+    {"asphere", 7, -1, -2}, {"radius_x", 0, 1, 0}, {NULL, 0, 0, 0}};
+static const sg_zmx_map tor_zmx[] = {{0, 1, "radius_x", 0, 1, SG_ZMX_ZERO_INF},
+                                     {0, 2, "asphere", 0, 7, 0},
+                                     {0, 0, NULL, 0, 0, 0}};
+const sg_shape_type sg_shape_toroid_type = {
+    .type = SG_SURF_TOROIDAL, .name = "toroidal", .ops = &sg_shape_toroid_ops, .keys = tor_keys,
+    .parm_lo = 0, .parm_hi = 8, .parm_what = "a toroid has parameters 0 to 8", .zmx = tor_zmx,
+    .xdat_what = "a toroid's Zernike terms are not supported"};
