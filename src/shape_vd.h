@@ -155,27 +155,11 @@ static inline void sv_tor_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h
     *h = 1.5 * (hxx + 2.0 * hxy + hyy);
 }
 
-/* shape_biconic.c's bic_d.  A product that starts with constants
- * (kx1 cx cx x x) rounds them first, in scalar, as there. */
-static inline void sv_bic_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h, vm *bad)
-{
-    double cx = isfinite(s->Rx) ? 1.0 / s->Rx : 0.0, cy = isfinite(s->R) ? 1.0 / s->R : 0.0;
-    double km = fmax(1.0, fmax(fabs(s->kx1), fabs(s->k1)));
-    vd N = cx * x * x + cy * y * y;
-    vd Q = 1.0 - s->kx1 * cx * cx * x * x - s->k1 * cy * cy * y * y, S, D;
-    vm pos;
-    *bad = (vm)(Q < 0.0);
-    S = vd_sqrt(Q);
-    D = 1.0 + S;
-    *z = N / D;
-    /* The scalar code's slopes where S > 0, infinite elsewhere. */
-    pos = (vm)(S > 0.0);
-    g[0] = vsel(pos, (2.0 * cx * x * D + N * s->kx1 * cx * cx * x / S) / (D * D),
-                vd_set(INFINITY));
-    g[1] = vsel(pos, (2.0 * cy * y * D + N * s->k1 * cy * cy * y / S) / (D * D),
-                vd_set(INFINITY));
-    *h = 3.0 * (fabs(cx) + fabs(cy)) * km / (Q * S);
-}
+/* shape_biconic.c's bic_d: the one text of shape_biconic_k.h on lanes. */
+#define SG_TMPL 2 /* SG_TMPL_VD */
+#include "shape_tmpl_on.h"
+#include "shape_biconic_k.h"
+#include "shape_tmpl_off.h"
 
 /* Whether this file has the shape's double sag. */
 static inline int sv_handles_d(const sg_shape *s)

@@ -215,42 +215,11 @@ static inline void svd_tor(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd
           ezp * vd_abs(u.hi) / aq;
 }
 
-/* shape_biconic.c's bic_dd.  The curvatures are the same on every lane:
- * they are formed once in scalar double-double, as there. */
-static inline void svd_bic(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd *ez, vd *eg,
-                           vm *bad)
-{
-    dd cxs = isfinite(s->Rx) ? dd_div(dd_from(1.0), dd_from(s->Rx)) : dd_from(0.0);
-    dd cys = isfinite(s->R) ? dd_div(dd_from(1.0), dd_from(s->R)) : dd_from(0.0);
-    vdd one = vdd_from(vd_set(1.0)), cx = vdd_set(cxs), cy = vdd_set(cys);
-    vdd ax = vdd_mul(cx, vdd_sqr(x)), ay = vdd_mul(cy, vdd_sqr(y));
-    vdd N = vdd_add(ax, ay);
-    vdd px = vdd_mul_d(vdd_mul(ax, cx), vd_set(s->kx1)),
-        py = vdd_mul_d(vdd_mul(ay, cy), vd_set(s->k1));
-    vdd Q = vdd_sub(vdd_sub(one, px), py), S, D, D2, tx, ty;
-    vd cond, gm;
-    *bad = (vm)(Q.hi < 0.0);
-    S = vdd_sqrt(Q);
-    D = vdd_add(one, S);
-    *z = vdd_div(N, D);
-    *bad |= (vm)(S.hi <= 0.0);
-    D2 = vdd_sqr(D);
-    tx = vdd_add(vdd_mul(vdd_mul_d(vdd_mul(cx, x), vd_set(2.0)), D),
-                 vdd_div(vdd_mul(N, vdd_mul_d(vdd_mul(vdd_mul(cx, cx), x), vd_set(s->kx1))), S));
-    ty = vdd_add(vdd_mul(vdd_mul_d(vdd_mul(cy, y), vd_set(2.0)), D),
-                 vdd_div(vdd_mul(N, vdd_mul_d(vdd_mul(vdd_mul(cy, cy), y), vd_set(s->k1))), S));
-    g[0] = vdd_div(tx, D2);
-    g[1] = vdd_div(ty, D2);
-    cond = (1.0 + vd_abs(px.hi) + vd_abs(py.hi)) / Q.hi;
-    *ez = 24.0 * DD_U * vd_abs(z->hi) * (1.0 + cond) +
-          8.0 * DD_U * (vd_abs(ax.hi) + vd_abs(ay.hi));
-    gm = (vd_abs(tx.hi) + vd_abs(ty.hi) +
-          2.0 * vd_abs(N.hi) *
-              (vd_abs(s->kx1 * cxs.hi * cxs.hi * x.hi) + vd_abs(s->k1 * cys.hi * cys.hi * y.hi)) /
-              (S.hi * Q.hi)) /
-         (D.hi * D.hi);
-    *eg = 48.0 * DD_U * gm * (1.0 + cond);
-}
+/* shape_biconic.c's bic_dd: the one text of shape_biconic_k.h on lanes. */
+#define SG_TMPL 4 /* SG_TMPL_VDD */
+#include "shape_tmpl_on.h"
+#include "shape_biconic_k.h"
+#include "shape_tmpl_off.h"
 
 /* Whether this file has the shape's double-double sag. */
 static inline int svd_handles(const sg_shape *s)
