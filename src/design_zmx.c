@@ -2908,6 +2908,12 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int la
                                "before surface 1 or around the object, which sagitta's .zmx "
                                "reader does not take (its rays start in surface 1's frame); "
                                "use coordinate breaks", i);
+        /* A shape whose record has no .zmx map (sagitta does not know
+         * Zemax's layout of it) cannot be written. */
+        if (sg_shape_ops_of(f->type) && !sg_shape_type_of(f->type)->zmx)
+            return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: sagitta does not know "
+                               "how a .zmx file holds a %s surface; keep the design as JSON",
+                               i, sg_shape_type_of(f->type)->name);
         if (f->type == SG_SURF_EVENASPH)
             for (k = 0; k < SG_NASPH; k++)
                 if (!isfinite(f->asph[k]))

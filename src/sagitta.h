@@ -255,7 +255,8 @@ SG_API int sg_model_glass(double nd, double vd, double dpgf, sg_glass *out);
     X(BICONIC, "biconic", "BICONICX", biconic)          /* conics in x and y */    \
     X(ZERNIKE_FRINGE, "zernike_fringe", "FZERNSAG", zernike_fringe)                \
     X(ZERNIKE_STANDARD, "zernike_standard", "SZERNSAG", zernike_standard)          \
-    X(XYPOLY, "xy_polynomial", "XPOLYNOM", xypoly)      /* conic + x^i y^j */
+    X(XYPOLY, "xy_polynomial", "XPOLYNOM", xypoly)      /* conic + x^i y^j */ \
+    X(QCON, "q_type_asphere", "QTYPEASP", qcon)         /* conic + Forbes Qcon */
 
 /* The values are those of earlier versions: 0 standard ... 8 XY. */
 #define SG_SURF_ENUM_(name, json, zmx, rec) SG_SURF_##name,

@@ -374,6 +374,66 @@ static void xy_random(sg_surface *f, double s)
             f->terms[k] = srand1(0.02) * s / (1.0 + k);
 }
 
+/* The Q-type asphere (Forbes' Qcon): the conic plus u^4 sum a_m
+ * P_m^(0,4)(2 u^2 - 1), u = r / rn, each Jacobi polynomial from its
+ * explicit sum (Abramowitz and Stegun 22.3.2: P_m^(0,4)(t) = sum_s C(m,
+ * m - s) C(m + 4, s) ((t - 1) / 2)^s ((t + 1) / 2)^(m - s)), not the
+ * engine's recurrence. */
+/* C(n, k), exact in double for the n used here. */
+static double choose(int n, int k)
+{
+    double r = 1.0;
+    int i;
+    for (i = 1; i <= k; i++)
+        r = r * (n - k + i) / i;
+    return r;
+}
+
+static int qcon_ref(const sg_surface *f, const mpfr_t x, const mpfr_t y, const mpfr_t r2,
+                    mpfr_t z)
+{
+    mpfr_t u2, u2m, P, t, q;
+    int ok, m, k;
+    (void)x;
+    (void)y;
+    mpfr_inits2(PREC, u2, u2m, P, t, q, (mpfr_ptr)0);
+    ok = conic_ref(z, f->radius, f->conic, r2);
+    mpfr_div_d(u2, r2, f->norm_radius, MPFR_RNDN);
+    mpfr_div_d(u2, u2, f->norm_radius, MPFR_RNDN);
+    mpfr_sub_ui(u2m, u2, 1, MPFR_RNDN);
+    for (m = 0; m < SG_NTERMS; m++) {
+        if (f->terms[m] == 0.0)
+            continue;
+        mpfr_set_zero(P, 1);
+        for (k = 0; k <= m; k++) {
+            /* C(m, m - k) C(m + 4, k) (u^2 - 1)^k u^(2(m - k)) */
+            mpfr_set_d(t, choose(m, m - k) * choose(m + 4, k), MPFR_RNDN);
+            mpfr_pow_ui(q, u2m, (unsigned long)k, MPFR_RNDN);
+            mpfr_mul(t, t, q, MPFR_RNDN);
+            mpfr_pow_ui(q, u2, (unsigned long)(m - k), MPFR_RNDN);
+            mpfr_mul(t, t, q, MPFR_RNDN);
+            mpfr_add(P, P, t, MPFR_RNDN);
+        }
+        mpfr_sqr(q, u2, MPFR_RNDN);
+        mpfr_mul(P, P, q, MPFR_RNDN);
+        mpfr_mul_d(P, P, f->terms[m], MPFR_RNDN);
+        mpfr_add(z, z, P, MPFR_RNDN);
+    }
+    mpfr_clears(u2, u2m, P, t, q, (mpfr_ptr)0);
+    return ok;
+}
+
+static void qcon_random(sg_surface *f, double s)
+{
+    int k;
+    f->norm_radius = (8.0 + 4.0 * urand()) * s;
+    /* Up to a_7: beyond the normalization radius (the points reach 1.6
+     * of it) P_m grows as 7.9^m. */
+    for (k = 0; k < 8; k++)
+        if (urand() < 0.6)
+            f->terms[k] = srand1(0.02) * s / ((1.0 + k) * (1.0 + k));
+}
+
 /* Every type with a shape of its own (sg_shape_ops_of) has its row here:
  * the reference and the random surfaces; rx: it has an x radius (made
  * equal to the radius for the vector tests' rim lanes), rim_x: its domain
@@ -394,6 +454,7 @@ static const shape_case shape_cases[] = {
     {SG_SURF_ZERNIKE_FRINGE, zern_sag_ref, zern_random, 0, 0, 1},
     {SG_SURF_ZERNIKE_STANDARD, zern_sag_ref, zern_random, 0, 0, 1},
     {SG_SURF_XYPOLY, xy_ref, xy_random, 0, 0, 1},
+    {SG_SURF_QCON, qcon_ref, qcon_random, 0, 0, 0},
 };
 
 /* The row of a registered shape's type (find_shapes has checked that
@@ -1424,6 +1485,91 @@ static void axis_terms(void **state)
     sg_catalog_free(cat);
 }
 
+/* The Q-type asphere against values from another program: its sag and
+ * slopes from mpmath's Jacobi polynomials at 50 digits
+ * (tests/data/qcon_ref.py), at points inside and beyond the normalization
+ * radius. */
+static void qcon_forbes_values(void **state)
+{
+    static const double a[] = {2e-3, -5e-4, 1e-4, -3e-5, 1e-5, 4e-6};
+    static const struct {
+        double x, y;
+        const char *z, *gx, *gy;
+    } pt[] = {
+        {3.0, 4.0, "0.3131561411031732675226880287391475775896",
+         "0.07528383130332571843302405081689009787925",
+         "0.1003784417377676245773654010891867971723"},
+        {0.0, 9.5, "1.134395241294212756851286858729953547665", "0.0",
+         "0.2397834173728828904334280918752569645722"},
+        {7.125, -6.25, "1.129071194950235952807322795619092820032",
+         "0.1798313589410181212253998800349735511489",
+         "-0.1577468060886123870398244561710294308324"},
+    };
+    mpfr_t x, y, z, gx, gy, ref, e, tmp[SG_SHAPE_MPTMP], mc[SG_SHAPE_MPC];
+    sg_surface f;
+    sg_shape sh;
+    size_t i;
+    int k;
+    (void)state;
+    memset(&f, 0, sizeof f);
+    f.type = SG_SURF_QCON;
+    f.radius = 40.0;
+    f.conic = -0.7;
+    f.norm_radius = 10.0;
+    for (k = 0; k < 6; k++)
+        f.terms[k] = a[k];
+    assert_int_equal(sg_shape_prepare(&f, &sh, 1, NULL), SG_OK);
+    mpfr_inits2(PREC, x, y, z, gx, gy, ref, e, (mpfr_ptr)0);
+    for (k = 0; k < SG_SHAPE_MPTMP; k++)
+        mpfr_init2(tmp[k], PREC);
+    sg_shape_mp_coefs(&sh, mc, PREC);
+    for (i = 0; i < sizeof pt / sizeof pt[0]; i++) {
+        dd zz, gg[2];
+        double ez, eg, zd, gd[2], h, ref_d[3];
+        const char *want[3] = {pt[i].z, pt[i].gx, pt[i].gy};
+        for (k = 0; k < 3; k++) {
+            mpfr_set_str(ref, want[k], 10, MPFR_RNDN);
+            ref_d[k] = mpfr_get_d(ref, MPFR_RNDN);
+        }
+        /* MPFR: to the reference's 40 digits. */
+        mpfr_set_d(x, pt[i].x, MPFR_RNDN);
+        mpfr_set_d(y, pt[i].y, MPFR_RNDN);
+        assert_true(sh.ops->sag_mp(&sh, mc, x, y, z, gx, gy, tmp));
+        mpfr_set_str(ref, pt[i].z, 10, MPFR_RNDN);
+        mpfr_sub(e, z, ref, MPFR_RNDN);
+        assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= 1e-38);
+        mpfr_set_str(ref, pt[i].gx, 10, MPFR_RNDN);
+        mpfr_sub(e, gx, ref, MPFR_RNDN);
+        assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= 1e-38);
+        mpfr_set_str(ref, pt[i].gy, 10, MPFR_RNDN);
+        mpfr_sub(e, gy, ref, MPFR_RNDN);
+        assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= 1e-38);
+        /* Double-double: within its bounds, which are near its precision. */
+        assert_true(sh.ops->sag_dd(&sh, dd_from(pt[i].x), dd_from(pt[i].y), &zz, gg, &ez, &eg));
+        mpfr_set_str(ref, pt[i].z, 10, MPFR_RNDN);
+        mpfr_set_d(e, zz.hi, MPFR_RNDN);
+        mpfr_add_d(e, e, zz.lo, MPFR_RNDN);
+        mpfr_sub(e, e, ref, MPFR_RNDN);
+        assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= ez);
+        assert_true(ez < 1e-28);
+        mpfr_set_str(ref, pt[i].gy, 10, MPFR_RNDN);
+        mpfr_set_d(e, gg[1].hi, MPFR_RNDN);
+        mpfr_add_d(e, e, gg[1].lo, MPFR_RNDN);
+        mpfr_sub(e, e, ref, MPFR_RNDN);
+        assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= eg);
+        assert_true(eg < 1e-28);
+        /* Double: to a few ulps. */
+        assert_true(sh.ops->sag_d(&sh, pt[i].x, pt[i].y, &zd, gd, &h));
+        assert_true(fabs(zd - ref_d[0]) <= 1e-15 * fabs(ref_d[0]));
+        assert_true(fabs(gd[0] - ref_d[1]) <= 1e-15 * (fabs(ref_d[1]) + fabs(ref_d[2])));
+        assert_true(fabs(gd[1] - ref_d[2]) <= 1e-15 * (fabs(ref_d[1]) + fabs(ref_d[2])));
+    }
+    sg_shape_mp_clear(mc);
+    mpfr_clears(x, y, z, gx, gy, ref, e, (mpfr_ptr)0);
+    for (k = 0; k < SG_SHAPE_MPTMP; k++)
+        mpfr_clear(tmp[k]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1435,6 +1581,7 @@ int main(void)
         cmocka_unit_test(vector_kernel_d),
         cmocka_unit_test(zernike_decenter_closed_form),
         cmocka_unit_test(axis_terms),
+        cmocka_unit_test(qcon_forbes_values),
     };
     if (!find_shapes())
         return 1;
