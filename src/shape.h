@@ -5,8 +5,10 @@
  * methods trace with kernels of their own, written for speed) is a sag
  * z = f(x, y) in its vertex frame.  Each such shape is one file
  * (shape_odd.c, shape_toroid.c, shape_biconic.c, shape_zernike.c,
- * shape_xypoly.c) that fills an sg_shape and supplies f and its gradient
- * in the three arithmetics the methods use:
+ * shape_xypoly.c, shape_qcon.c) with its record (sg_shape_type, below,
+ * named by its row of SG_SURF_TYPES in sagitta.h) that fills an sg_shape
+ * and supplies f and its gradient in the three arithmetics the methods
+ * use:
  *
  *   - double, with a bound on the second derivatives: classic's trace, the
  *     Newton seeds of precise, and the sizes that scale bounds; both

@@ -5,8 +5,9 @@
  * bound.
  *
  * Each function repeats its scalar twin (shape.c's sg_rot_d, sg_p2_d,
- * sg_rot_p2_d; the sag_d of shape_odd.c, shape_toroid.c and
- * shape_biconic.c) operation for operation and in the same order, its
+ * sg_rot_p2_d; the sag_d of shape_odd.c and shape_toroid.c; the
+ * biconic's is compiled here from the one text both share,
+ * shape_biconic_k.h) operation for operation and in the same order, its
  * constants formed in scalar as there, branches becoming selections, so
  * every lane gets the bits the scalar code gives it (the build uses
  * -ffp-contract=off and only correctly rounded operations): the classic

@@ -4,8 +4,8 @@
  * SG_VL lanes at once.
  *
  * Each function repeats its scalar twin (shape.c's sg_rot_dd, sg_p2_dd,
- * sg_rot_p2_dd; the sag_dd of shape_odd.c, shape_toroid.c and
- * shape_biconic.c) operation for operation in the vector twins of dd.h's
+ * sg_rot_p2_dd; the sag_dd of shape_odd.c and shape_toroid.c; the
+ * biconic's is compiled here from shape_biconic_k.h) operation for operation in the vector twins of dd.h's
  * operations, branches becoming selections, so every lane gets the bits
  * the scalar code gives it: the precise trace takes them from here
  * instead of calling the shape's ops lane by lane.  A lane outside the
