@@ -19,6 +19,10 @@
 #undef T_C
 #undef T_ABS
 #undef T_SQRT
+#undef T_COPYSIGN
+#undef T_DDSEL
+#undef T_ROT_D
+#undef T_ROT_DD
 #undef T_D
 #undef T_DD
 #undef T_DDC

@@ -40,6 +40,11 @@
 #define T_C(c) (c)
 #define T_ABS fabs
 #define T_SQRT sqrt
+#define T_COPYSIGN copysign
+#define T_DDSEL(m, a, b) ((m) ? (a) : (b))
+/* shape.c's rotational part, leaving the kernel outside its domain. */
+#define T_ROT_D(s, r2, z, w, dw) T_OUT(!sg_rot_d(s, r2, z, w, dw))
+#define T_ROT_DD(s, r2, z, w, ez, ew) T_OUT(!sg_rot_dd(s, r2, z, w, ez, ew))
 #else
 /* SG_VL lanes: the kernel marks the lanes outside the shape in *bad. */
 #define T_VEC 1
@@ -54,6 +59,12 @@
 #define T_C(c) vd_set(c)
 #define T_ABS vd_abs
 #define T_SQRT vd_sqrt
+#define T_COPYSIGN vd_copysign
+#define T_DDSEL(m, a, b) vdd_sel(m, a, b)
+/* The lane twins of shape.c's rotational part (shape_vd.h, shape_vdd.h);
+ * they set *bad afresh, so a kernel calls them before any T_OUT. */
+#define T_ROT_D(s, r2, z, w, dw) sv_rot_d(s, r2, z, w, dw, bad)
+#define T_ROT_DD(s, r2, z, w, ez, ew) svd_rot(s, r2, z, w, ez, ew, bad)
 #endif
 
 #if SG_TMPL == SG_TMPL_D

@@ -5,8 +5,8 @@
  * bound.
  *
  * Each function repeats its scalar twin (shape.c's sg_rot_d, sg_p2_d,
- * sg_rot_p2_d; the sag_d of shape_odd.c and shape_toroid.c; the
- * biconic's is compiled here from the one text both share,
+ * sg_rot_p2_d; the odd asphere's sag_d; the toroid's and biconic's are
+ * compiled here from the one text both share, shape_toroid_k.h and
  * shape_biconic_k.h) operation for operation and in the same order, its
  * constants formed in scalar as there, branches becoming selections, so
  * every lane gets the bits the scalar code gives it (the build uses
@@ -127,34 +127,11 @@ static inline void sv_odd_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h
     *h = 1.5 * (vd_abs(w) + 4.0 * dw * r2);
 }
 
-/* shape_toroid.c's tor_d. */
-static inline void sv_tor_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h, vm *bad)
-{
-    vd zy, w, dw, zp, zpp, u, disc, q, zt, aq, hxx, hxy, hyy;
-    sv_rot_d(s, y * y, &zy, &w, &dw, bad);
-    zp = w * y;
-    zpp = vd_abs(w) + 2.0 * dw * y * y;
-    if (!isfinite(s->Rx)) {
-        *z = zy;
-        g[0] = vd_set(0.0);
-        g[1] = zp;
-        *h = 1.5 * vd_abs(zpp);
-        return;
-    }
-    u = s->Rx - zy;
-    disc = u * u - x * x;
-    *bad |= (vm)(disc < 0.0);
-    q = vd_copysign(vd_sqrt(disc), u);
-    zt = x * x / (u + q);
-    *z = zy + zt;
-    g[0] = x / q;
-    g[1] = u * zp / q;
-    aq = vd_abs(q);
-    hxx = u * u / (disc * aq);
-    hxy = vd_abs(x * u * zp) / (disc * aq);
-    hyy = (zp * zp + vd_abs(u * zpp)) / aq + u * u * zp * zp / (disc * aq);
-    *h = 1.5 * (hxx + 2.0 * hxy + hyy);
-}
+/* shape_toroid.c's tor_d: the one text of shape_toroid_k.h on lanes. */
+#define SG_TMPL 2 /* SG_TMPL_VD */
+#include "shape_tmpl_on.h"
+#include "shape_toroid_k.h"
+#include "shape_tmpl_off.h"
 
 /* shape_biconic.c's bic_d: the one text of shape_biconic_k.h on lanes. */
 #define SG_TMPL 2 /* SG_TMPL_VD */

@@ -4,8 +4,8 @@
  * SG_VL lanes at once.
  *
  * Each function repeats its scalar twin (shape.c's sg_rot_dd, sg_p2_dd,
- * sg_rot_p2_dd; the sag_dd of shape_odd.c and shape_toroid.c; the
- * biconic's is compiled here from shape_biconic_k.h) operation for operation in the vector twins of dd.h's
+ * sg_rot_p2_dd; the odd asphere's sag_dd; the toroid's and biconic's are
+ * compiled here from shape_toroid_k.h and shape_biconic_k.h) operation for operation in the vector twins of dd.h's
  * operations, branches becoming selections, so every lane gets the bits
  * the scalar code gives it: the precise trace takes them from here
  * instead of calling the shape's ops lane by lane.  A lane outside the
@@ -178,42 +178,11 @@ static inline void svd_odd(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd
     *eg = (ew + 8.0 * DD_U * vd_abs(w.hi)) * m;
 }
 
-/* shape_toroid.c's tor_dd. */
-static inline void svd_tor(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd *ez, vd *eg,
-                           vm *bad)
-{
-    vdd y2 = vdd_sqr(y), zy, w, zp, u, disc, q, zt;
-    vd ezy, ew, ezp, eu, cond, aq;
-    svd_rot(s, y2, &zy, &w, &ezy, &ew, bad);
-    ezy += 4.0 * DD_U * vd_abs(w.hi) * y2.hi;
-    zp = vdd_mul(w, y);
-    ezp = (ew + 4.0 * DD_U * vd_abs(w.hi)) * vd_abs(y.hi);
-    if (!isfinite(s->Rx)) {
-        *z = zy;
-        g[0] = vdd_from(vd_set(0.0));
-        g[1] = zp;
-        *ez = ezy;
-        *eg = ezp;
-        return;
-    }
-    u = vdd_sub(vdd_from(vd_set(s->Rx)), zy);
-    disc = vdd_sub(vdd_sqr(u), vdd_sqr(x));
-    *bad |= (vm)(disc.hi <= 0.0);
-    q = vdd_sqrt(disc);
-    q = vdd_sel((vm)(u.hi < 0.0), vdd_neg(q), q);
-    zt = vdd_div(vdd_sqr(x), vdd_add(u, q));
-    *z = vdd_add(zy, zt);
-    g[0] = vdd_div(x, q);
-    g[1] = vdd_div(vdd_mul(u, zp), q);
-    eu = ezy + 2.0 * DD_U * (fabs(s->Rx) + vd_abs(zy.hi));
-    cond = (u.hi * u.hi + x.hi * x.hi) / disc.hi;
-    aq = vd_abs(q.hi);
-    *ez = ezy + eu * vd_abs(u.hi) / aq +
-          16.0 * DD_U * (vd_abs(zy.hi) + vd_abs(zt.hi) * (1.0 + cond));
-    *eg = 16.0 * DD_U * (vd_abs(g[0].hi) + vd_abs(g[1].hi)) * (1.0 + cond) +
-          eu * (vd_abs(x.hi * u.hi) + vd_abs(zp.hi) * (u.hi * u.hi + disc.hi)) / (disc.hi * aq) +
-          ezp * vd_abs(u.hi) / aq;
-}
+/* shape_toroid.c's tor_dd: the one text of shape_toroid_k.h on lanes. */
+#define SG_TMPL 4 /* SG_TMPL_VDD */
+#include "shape_tmpl_on.h"
+#include "shape_toroid_k.h"
+#include "shape_tmpl_off.h"
 
 /* shape_biconic.c's bic_dd: the one text of shape_biconic_k.h on lanes. */
 #define SG_TMPL 4 /* SG_TMPL_VDD */
