@@ -104,52 +104,11 @@ int sg_shape_prepare(const sg_surface *f, sg_shape *s, int isurf, sg_diag *d)
  * The rotational part: conic, even terms on r^2 ..., odd terms on r^1 ...
  * ------------------------------------------------------------------------ */
 
-int sg_rot_d(const sg_shape *s, double r2, double *z, double *w, double *dw)
-{
-    /* rk = r^(2k) and rkm = r^(2k-2), each a product of r2: a quotient
-     * rk / r2 would be 0 / 0 on the axis. */
-    double zz = 0.0, ww = 0.0, dd2 = 0.0, rk = 1.0, rkm = 0.0;
-    int k;
-    if (isfinite(s->R)) {
-        double q = s->R * s->R - s->k1 * r2, sq;
-        if (q < 0.0)
-            return 0;
-        sq = sqrt(q);
-        zz = r2 / (s->R + copysign(sq, s->R));
-        ww = copysign(1.0, s->R) / sq;
-        dd2 = fabs(s->k1) / (2.0 * q * sq);
-    }
-    for (k = 0; k < s->na; k++) {
-        /* a_k r^(2k+2): w gains (2k+2) a_k r^(2k), w' k (2k+2) a_k r^(2k-2). */
-        zz += s->a[k] * rk * r2;
-        ww += (2.0 * k + 2.0) * s->a[k] * rk;
-        if (k > 0)
-            dd2 += fabs(k * (2.0 * k + 2.0) * s->a[k]) * rkm;
-        rkm = rk;
-        rk *= r2;
-    }
-    if (s->nodd) {
-        double r = sqrt(r2), rp = 1.0;
-        for (k = 0; k < s->nodd; k++) {
-            /* b r^i, i = k + 1: w gains i b r^(i-2), w' i (i-2) b r^(i-4) / 2. */
-            double i = k + 1.0, b = s->odd[k];
-            rp *= r; /* r^i */
-            zz += b * rp;
-            if (r2 > 0.0) {
-                ww += i * b * rp / r2;
-                dd2 += fabs(i * (i - 2.0) * b) * rp / (2.0 * r2 * r2);
-            } else if (k == 1) {
-                ww += 2.0 * b;
-            } else if (k == 0 && b != 0.0) {
-                dd2 = INFINITY;
-            }
-        }
-    }
-    *z = zz;
-    *w = ww;
-    *dw = dd2;
-    return 1;
-}
+/* sg_rot_d, written once with its lane form (shape_vd.h's sv_rot_d). */
+#define SG_TMPL 1 /* SG_TMPL_D */
+#include "shape_tmpl_on.h"
+#include "shape_rot_k.h"
+#include "shape_tmpl_off.h"
 
 int sg_rot_dd(const sg_shape *s, dd r2, dd *z, dd *w, double *ez, double *ew)
 {

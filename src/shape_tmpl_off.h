@@ -9,6 +9,7 @@
 #undef SG_TMPL_VDD
 #undef T_VEC
 #undef T_FN
+#undef T_FNX
 #undef T_BADARG
 #undef T_START
 #undef T_OUT
@@ -20,6 +21,7 @@
 #undef T_ABS
 #undef T_SQRT
 #undef T_COPYSIGN
+#undef T_FMAX
 #undef T_DDSEL
 #undef T_ROT_D
 #undef T_ROT_DD

@@ -26,6 +26,7 @@
 /* One point: the kernel returns 1, or 0 outside the shape. */
 #define T_VEC 0
 #define T_FN(scalar, vector) static int scalar
+#define T_FNX(scalar, vector) int scalar /* the scalar form is shape.h's */
 #define T_BADARG
 #define T_START
 #define T_OUT(cond)                                                                              \
@@ -41,6 +42,7 @@
 #define T_ABS fabs
 #define T_SQRT sqrt
 #define T_COPYSIGN copysign
+#define T_FMAX fmax
 #define T_DDSEL(m, a, b) ((m) ? (a) : (b))
 /* shape.c's rotational part, leaving the kernel outside its domain. */
 #define T_ROT_D(s, r2, z, w, dw) T_OUT(!sg_rot_d(s, r2, z, w, dw))
@@ -49,6 +51,7 @@
 /* SG_VL lanes: the kernel marks the lanes outside the shape in *bad. */
 #define T_VEC 1
 #define T_FN(scalar, vector) static inline void vector
+#define T_FNX(scalar, vector) static inline void vector
 #define T_BADARG , vm *bad
 #define T_START (*bad = vm_set(0))
 #define T_OUT(cond) (*bad |= (vm)(cond))
@@ -60,6 +63,7 @@
 #define T_ABS vd_abs
 #define T_SQRT vd_sqrt
 #define T_COPYSIGN vd_copysign
+#define T_FMAX vd_fmax
 #define T_DDSEL(m, a, b) vdd_sel(m, a, b)
 /* The lane twins of shape.c's rotational part (shape_vd.h, shape_vdd.h);
  * they set *bad afresh, so a kernel calls them before any T_OUT. */

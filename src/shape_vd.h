@@ -23,51 +23,11 @@
 #include "shape.h"
 #include "vdd.h"
 
-/* sg_rot_d at r2: the sag, w = sag'(r) / r and the bound dw. */
-static inline void sv_rot_d(const sg_shape *s, vd r2, vd *z, vd *w, vd *dw, vm *bad)
-{
-    vd zz = vd_set(0.0), ww = vd_set(0.0), dd2 = vd_set(0.0), rk = vd_set(1.0),
-       rkm = vd_set(0.0);
-    int k;
-    *bad = vm_set(0);
-    if (isfinite(s->R)) {
-        vd q = s->R * s->R - s->k1 * r2, sq;
-        *bad = (vm)(q < 0.0);
-        sq = vd_sqrt(q);
-        zz = r2 / (s->R + vd_copysign(sq, vd_set(s->R)));
-        ww = copysign(1.0, s->R) / sq;
-        dd2 = fabs(s->k1) / (2.0 * q * sq);
-    }
-    for (k = 0; k < s->na; k++) {
-        zz += s->a[k] * rk * r2;
-        ww += (2.0 * k + 2.0) * s->a[k] * rk;
-        if (k > 0)
-            dd2 += fabs(k * (2.0 * k + 2.0) * s->a[k]) * rkm;
-        rkm = rk;
-        rk *= r2;
-    }
-    if (s->nodd) {
-        /* The scalar code's branch on r^2 > 0 is a selection per lane;
-         * both sides are formed everywhere. */
-        vd r = vd_sqrt(r2), rp = vd_set(1.0);
-        vm pos = (vm)(r2 > 0.0);
-        for (k = 0; k < s->nodd; k++) {
-            double i = k + 1.0, b = s->odd[k];
-            vd wz = ww, dz = dd2;
-            rp *= r;
-            zz += b * rp;
-            if (k == 1)
-                wz = ww + 2.0 * b;
-            else if (k == 0 && b != 0.0)
-                dz = vd_set(INFINITY);
-            ww = vsel(pos, ww + i * b * rp / r2, wz);
-            dd2 = vsel(pos, dd2 + fabs(i * (i - 2.0) * b) * rp / (2.0 * r2 * r2), dz);
-        }
-    }
-    *z = zz;
-    *w = ww;
-    *dw = dd2;
-}
+/* shape.c's sg_rot_d: the one text of shape_rot_k.h on lanes. */
+#define SG_TMPL 2 /* SG_TMPL_VD */
+#include "shape_tmpl_on.h"
+#include "shape_rot_k.h"
+#include "shape_tmpl_off.h"
 
 /* sg_p2_d: the polynomial in u = x / norm, v = y / norm. */
 static inline void sv_p2_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h)
@@ -117,15 +77,13 @@ static inline void sv_rot_p2_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd
     *h = 1.5 * (vd_abs(w) + 4.0 * dw * r2 + hp);
 }
 
-/* shape_odd.c's odd_d. */
-static inline void sv_odd_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h, vm *bad)
-{
-    vd r2 = x * x + y * y, w, dw;
-    sv_rot_d(s, r2, z, &w, &dw, bad);
-    g[0] = w * x;
-    g[1] = w * y;
-    *h = 1.5 * (vd_abs(w) + 4.0 * dw * r2);
-}
+/* shape_odd.c's odd_d: the one text of shape_rot_k.h on lanes. */
+#define SG_TMPL 2 /* SG_TMPL_VD */
+#define SG_ROT_K_ODD
+#include "shape_tmpl_on.h"
+#include "shape_rot_k.h"
+#include "shape_tmpl_off.h"
+#undef SG_ROT_K_ODD
 
 /* shape_toroid.c's tor_d: the one text of shape_toroid_k.h on lanes. */
 #define SG_TMPL 2 /* SG_TMPL_VD */
