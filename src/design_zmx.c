@@ -30,6 +30,7 @@
 #include <mpfr.h>
 
 #include "internal.h"
+#include "shape.h"
 
 #define ZMX_MAX_BYTES ((size_t)64 * 1024 * 1024)
 #define ZMX_MAX_TOK 64       /* tokens read from one line */
@@ -885,67 +886,48 @@ static int parm_only(zctx *c, zsurf *z, int lo, int hi, const char *what)
     return SG_OK;
 }
 
-/* The shapes of sagitta-design(5), SURFACE TYPES, from their Zemax
- * parameters (PARM) and extra data (XDAT); SG_EUNSUPPORTED with the
- * message otherwise. */
-static int zmx_shape(zctx *c, zsurf *z, sg_surface *s)
+/* The type whose record maps its .zmx block (the types end_surface
+ * reads itself have none), by its TYPE keyword; NULL when none. */
+#define ZMX_NAME_(name, json, zmx, rec) zmx,
+static const char *const zmx_type_names[] = {SG_SURF_TYPES(ZMX_NAME_)};
+#undef ZMX_NAME_
+static const sg_shape_type *zmx_type_of(const char *name)
 {
+    int i;
+    for (i = 0; i < SG_SURF_NTYPES; i++)
+        if (strcmp(name, zmx_type_names[i]) == 0 && sg_shape_type_of(i)->zmx)
+            return sg_shape_type_of(i);
+    return NULL;
+}
+
+/* Element e of the surface parameter key. */
+static double *zmx_value(sg_surface *s, const char *key, int e)
+{
+    return (double *)sg_param_ptr(sg_param_find(SG_SCOPE_SURFACE, key), s) + e;
+}
+
+/* A type's block by its record (src/shape.h): the PARM numbers it may
+ * hold, its runs of PARM and XDAT values, its terms in XDAT. */
+static int zmx_read_shape(zctx *c, zsurf *z, sg_surface *s, const sg_shape_type *t)
+{
+    const sg_zmx_map *m;
     int k;
-    if (strcmp(z->type, "ODDASPHE") == 0) {
-        s->type = SG_SURF_ODDASPH;
-        if ((k = parm_only(c, z, 1, SG_NODD, "the odd asphere has terms r^1 to r^8 "
-                                             "(PARM 1 to 8)")) != SG_OK)
-            return k;
-        for (k = 0; k < SG_NODD; k++)
-            s->odd[k] = z->parm[k + 1];
-    } else if (strcmp(z->type, "TOROIDAL") == 0) {
-        /* PARM 0 the extrapolate flag of its Zernike terms, 1 the radius
-         * of rotation (0: a cylinder), 2 to 8 the y^2 ... y^14 terms. */
-        s->type = SG_SURF_TOROIDAL;
-        if ((k = parm_only(c, z, 0, 8, "a toroid has parameters 0 to 8")) != SG_OK)
-            return k;
-        s->radius_x = z->parm[1] == 0.0 ? INFINITY : z->parm[1];
-        for (k = 0; k < 7; k++)
-            s->asph[k] = z->parm[k + 2];
-        for (k = 3; k <= ZMX_MAX_XDAT; k++)
-            if (z->xd[k] != 0.0) {
-                c->line = z->xd_line[k];
-                return zerr(c, SG_EUNSUPPORTED, "XDAT %d is %.17g: a toroid's Zernike terms "
-                            "are not supported", k, z->xd[k]);
-            }
-    } else if (strcmp(z->type, "BICONICX") == 0) {
-        s->type = SG_SURF_BICONIC;
-        if ((k = parm_only(c, z, 1, 2, "a biconic has the x radius and x conic (PARM 1 and "
-                                       "2)")) != SG_OK)
-            return k;
-        s->radius_x = z->parm[1] == 0.0 ? INFINITY : z->parm[1];
-        s->conic_x = z->parm[2];
-    } else if (strcmp(z->type, "FZERNSAG") == 0 || strcmp(z->type, "SZERNSAG") == 0 ||
-               strcmp(z->type, "XPOLYNOM") == 0) {
-        /* XDAT 1 the number of terms, 2 the normalization radius, 3 on the
-         * coefficients; Zernike: PARM 1 to 8 the even terms r^2 ... r^16. */
-        int xy = z->type[0] == 'X', n = (int)z->xd[1], max;
-        s->type = xy ? SG_SURF_XYPOLY
-                     : z->type[0] == 'F' ? SG_SURF_ZERNIKE_FRINGE : SG_SURF_ZERNIKE_STANDARD;
-        max = s->type == SG_SURF_ZERNIKE_FRINGE ? SG_ZERNIKE_FRINGE_MAX
-              : xy                              ? SG_NTERMS - 1
-                                                : SG_NTERMS;
-        k = xy ? parm_only(c, z, 1, 0, "an XY polynomial has no parameters")
-               : parm_only(c, z, 0, SG_NASPH + 2,
-                           "the Zernike sag has terms r^2 to r^16 (PARM 1 to 8) and the "
-                           "Zernike decenters x and y (PARM 9 and 10)");
-        if (k != SG_OK)
-            return k;
-        if (!xy && z->parm_line[0] && z->parm[0] == 0.0)
-            zwarn(c, "PARM 0: extrapolate is 0, so Zemax drops the Zernike terms beyond the "
-                  "normalization radius; sagitta applies them at every radius");
-        for (k = 0; k < SG_NASPH && !xy; k++)
-            s->asph[k] = z->parm[k + 1];
-        /* PARM 9 and 10: where the Zernike terms are centred (Decenter X, Y). */
-        if (!xy) {
-            s->zern_dx = z->parm[SG_NASPH + 1];
-            s->zern_dy = z->parm[SG_NASPH + 2];
+    s->type = (sg_surf_type)t->type;
+    if ((k = parm_only(c, z, t->parm_lo, t->parm_hi, t->parm_what)) != SG_OK)
+        return k;
+    if (t->extrapolate && z->parm_line[0] && z->parm[0] == 0.0)
+        zwarn(c, "PARM 0: extrapolate is 0, so Zemax drops the Zernike terms beyond the "
+              "normalization radius; sagitta applies them at every radius");
+    for (m = t->zmx; m->key; m++)
+        for (k = 0; k < m->n; k++) {
+            double v = m->xdat ? z->xd[m->index + k] : z->parm[m->index + k];
+            *zmx_value(s, m->key, m->elem + k) =
+                (m->flags & SG_ZMX_ZERO_INF) && v == 0.0 ? INFINITY : v;
         }
+    if (t->zmx_terms) {
+        /* XDAT 1 the number of terms, 2 the normalization radius, 3 on
+         * the coefficients. */
+        int n = (int)z->xd[1], max = t->zmx_terms;
         if (z->xd[1] != (double)n || n < 0 || n > max) {
             c->line = z->xd_line[1];
             return zerr(c, SG_EUNSUPPORTED, "XDAT 1: %.17g terms; sagitta reads 0 to %d here",
@@ -965,6 +947,27 @@ static int zmx_shape(zctx *c, zsurf *z, sg_surface *s)
             }
         for (k = 0; k < n; k++)
             s->terms[k] = z->xd[k + 3];
+    }
+    if (t->xdat_what)
+        for (k = 3; k <= ZMX_MAX_XDAT; k++)
+            if (z->xd[k] != 0.0) {
+                c->line = z->xd_line[k];
+                return zerr(c, SG_EUNSUPPORTED, "XDAT %d is %.17g: %s", k, z->xd[k],
+                            t->xdat_what);
+            }
+    return SG_OK;
+}
+
+/* The shapes of sagitta-design(5), SURFACE TYPES, from their Zemax
+ * parameters (PARM) and extra data (XDAT); SG_EUNSUPPORTED with the
+ * message otherwise. */
+static int zmx_shape(zctx *c, zsurf *z, sg_surface *s)
+{
+    const sg_shape_type *t = zmx_type_of(z->type);
+    int k;
+    if (t) {
+        if ((k = zmx_read_shape(c, z, s, t)) != SG_OK)
+            return k;
     } else if (strcmp(z->type, "TILTSURF") == 0) {
         /* Zemax's tilted plane, z = x tan(theta_x) + y tan(theta_y) with
          * the tangents in PARM 1 and 2: exactly the XY polynomial of the
@@ -1039,14 +1042,11 @@ static int read_pickup(zctx *c, const zline *l, sg_surface *s, sg_solve_target t
 /* The TYPE names sagitta reads (end_surface, zmx_shape). */
 static int known_type(const char *t)
 {
-    static const char *const names[] = {"STANDARD", "EVENASPH", "COORDBRK", "ODDASPHE",
-                                        "TOROIDAL", "BICONICX", "FZERNSAG", "SZERNSAG",
-                                        "XPOLYNOM", "TILTSURF"};
-    size_t i;
-    for (i = 0; i < sizeof names / sizeof *names; i++)
-        if (strcmp(t, names[i]) == 0)
+    int i;
+    for (i = 0; i < SG_SURF_NTYPES; i++)
+        if (strcmp(t, zmx_type_names[i]) == 0)
             return 1;
-    return 0;
+    return strcmp(t, "TILTSURF") == 0;
 }
 
 /* Ends the current surface block: its type, parameters and aperture. */
@@ -2760,36 +2760,36 @@ static void zb_disz_solve(zbuf *b, const sg_surface *f)
 
 static void zb_shape(zbuf *b, const sg_surface *f)
 {
+    const sg_shape_type *t = sg_shape_type_of(f->type);
+    const sg_zmx_map *m, *g;
     char n1[40];
     int k, n = 0;
-    switch (f->type) {
-    case SG_SURF_ODDASPH:
-        for (k = 0; k < SG_NODD; k++)
-            zb_printf(b, "  PARM %d %s\n", k + 1, num(n1, f->odd[k]));
+    if (!t || !t->zmx)
         return;
-    case SG_SURF_TOROIDAL:
-        zb_printf(b, "  PARM 1 %s\n", num(n1, isinf(f->radius_x) ? 0.0 : f->radius_x));
-        for (k = 0; k < 7; k++)
-            zb_printf(b, "  PARM %d %s\n", k + 2, num(n1, f->asph[k]));
-        return;
-    case SG_SURF_BICONIC:
-        zb_printf(b, "  PARM 1 %s\n", num(n1, isinf(f->radius_x) ? 0.0 : f->radius_x));
-        zb_printf(b, "  PARM 2 %s\n", num(n1, f->conic_x));
-        return;
-    case SG_SURF_ZERNIKE_FRINGE:
-    case SG_SURF_ZERNIKE_STANDARD:
+    if (t->extrapolate)
         /* Extrapolate set: the terms apply at every radius, as sagitta's. */
         zb_add(b, "  PARM 0 1\n", 11);
-        for (k = 0; k < SG_NASPH; k++)
-            zb_printf(b, "  PARM %d %s\n", k + 1, num(n1, f->asph[k]));
-        /* Decenter X and Y, only when set, so centred surfaces write as
-         * before. */
-        if (f->zern_dx != 0.0 || f->zern_dy != 0.0) {
-            zb_printf(b, "  PARM %d %s\n", SG_NASPH + 1, num(n1, f->zern_dx));
-            zb_printf(b, "  PARM %d %s\n", SG_NASPH + 2, num(n1, f->zern_dy));
+    for (m = t->zmx; m->key; m++) {
+        if ((m->flags & SG_ZMX_IF_SET) && (m == t->zmx || !(m[-1].flags & SG_ZMX_IF_SET))) {
+            /* A group of such runs is written when one of them is set. */
+            int set = 0;
+            for (g = m; g->key && (g->flags & SG_ZMX_IF_SET) && !set; g++)
+                for (k = 0; k < g->n; k++)
+                    set |= *zmx_value((sg_surface *)f, g->key, g->elem + k) != 0.0;
+            if (!set) {
+                while (m[1].key && (m[1].flags & SG_ZMX_IF_SET))
+                    m++;
+                continue;
+            }
         }
-        /* fall through */
-    case SG_SURF_XYPOLY:
+        for (k = 0; k < m->n; k++) {
+            double v = *zmx_value((sg_surface *)f, m->key, m->elem + k);
+            if ((m->flags & SG_ZMX_ZERO_INF) && isinf(v))
+                v = 0.0;
+            zb_printf(b, "  %s %d %s\n", m->xdat ? "XDAT" : "PARM", m->index + k, num(n1, v));
+        }
+    }
+    if (t->zmx_terms) {
         for (k = 0; k < SG_NTERMS; k++)
             if (f->terms[k] != 0.0)
                 n = k + 1;
@@ -2797,9 +2797,6 @@ static void zb_shape(zbuf *b, const sg_surface *f)
         zb_printf(b, "  XDAT 2 %s 0 0 0 0 0 0\n", num(n1, f->norm_radius));
         for (k = 0; k < n; k++)
             zb_printf(b, "  XDAT %d %s 0 0 0 0 0 0\n", k + 3, num(n1, f->terms[k]));
-        return;
-    default:
-        return;
     }
 }
 
@@ -2911,6 +2908,12 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int la
                                "before surface 1 or around the object, which sagitta's .zmx "
                                "reader does not take (its rays start in surface 1's frame); "
                                "use coordinate breaks", i);
+        /* A shape whose record has no .zmx map (sagitta does not know
+         * Zemax's layout of it) cannot be written. */
+        if (sg_shape_ops_of(f->type) && !sg_shape_type_of(f->type)->zmx)
+            return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: sagitta does not know "
+                               "how a .zmx file holds a %s surface; keep the design as JSON",
+                               i, sg_shape_type_of(f->type)->name);
         if (f->type == SG_SURF_EVENASPH)
             for (k = 0; k < SG_NASPH; k++)
                 if (!isfinite(f->asph[k]))

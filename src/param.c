@@ -12,15 +12,17 @@
 #include <string.h>
 
 #include "internal.h"
+#include "shape.h"
 
 static const char *const units_names[] = {"mm", "cm", "in", "m"};
-static const char *const surf_type_names[] = {
-    "standard", "even_asphere", "coordinate_break", "odd_asphere", "toroidal", "biconic",
-    "zernike_fringe", "zernike_standard", "xy_polynomial"};
-/* The editor shows the .zmx keyword of each. */
-static const char *const surf_type_shown[] = {"STANDARD", "EVENASPH", "COORDBRK",
-                                              "ODDASPHE", "TOROIDAL", "BICONICX",
-                                              "FZERNSAG", "SZERNSAG", "XPOLYNOM"};
+/* The surface types' JSON names, and their .zmx keywords, which the editor
+ * shows: from the one list of types, SG_SURF_TYPES. */
+#define JSON_NAME_(name, json, zmx, rec) json,
+#define ZMX_NAME_(name, json, zmx, rec) zmx,
+static const char *const surf_type_names[] = {SG_SURF_TYPES(JSON_NAME_)};
+static const char *const surf_type_shown[] = {SG_SURF_TYPES(ZMX_NAME_)};
+#undef JSON_NAME_
+#undef ZMX_NAME_
 static const char *const aperture_names[] = {
     "none", "circular_aperture", "circular_obscuration", "rectangular_aperture",
     "rectangular_obscuration", "elliptical_aperture", "elliptical_obscuration"};
@@ -123,29 +125,31 @@ static const sg_param surface_params[] = {
      offsetof(sg_surface, sd_fixed), 0, 1, 0, 0, 0, 0, 0, NONAMES, 1},
     REAL1(sg_surface, "conic", "conic", "Conic", "conic", "CONI", 0, conic, -INFINITY, INFINITY,
           0.0),
-    {"asphere", "asphere term r^%d", "r^%d", "a%d", "PARM", SG_PARAM_REAL, 0,
+    {"asphere", "asphere term r^%d", "r^%d", "a%d", "PARM", SG_PARAM_REAL, SG_PARAM_SHAPE,
      offsetof(sg_surface, asph), 0, SG_NASPH, 2, 2, -INFINITY, INFINITY, 0.0, NONAMES, 1},
     /* Format version 3: the shapes beyond the even asphere; each type
      * reads only its own (sagitta-design(5), SURFACE TYPES). */
-    {"odd", "odd asphere term r^%d", "b%d", "b%d", "PARM", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+    {"odd", "odd asphere term r^%d", "b%d", "b%d", "PARM", SG_PARAM_REAL,
+     SG_PARAM_SHAPE | SG_PARAM_OPTIONAL,
      offsetof(sg_surface, odd), 0, SG_NODD, 1, 1, -INFINITY, INFINITY, 0.0, NONAMES, 3},
     {"radius_x", "x radius", "Radius X", "rx", "PARM", SG_PARAM_REAL,
-     SG_PARAM_INF | SG_PARAM_OPTIONAL, offsetof(sg_surface, radius_x), 0, 1, 0, 0, -SG_MAX_LEN,
+     SG_PARAM_SHAPE | SG_PARAM_INF | SG_PARAM_OPTIONAL, offsetof(sg_surface, radius_x), 0, 1, 0, 0, -SG_MAX_LEN,
      SG_MAX_LEN, INFINITY, NONAMES, 3},
-    {"conic_x", "x conic", "Conic X", "kx", "PARM", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+    {"conic_x", "x conic", "Conic X", "kx", "PARM", SG_PARAM_REAL,
+     SG_PARAM_SHAPE | SG_PARAM_OPTIONAL,
      offsetof(sg_surface, conic_x), 0, 1, 0, 0, -INFINITY, INFINITY, 0.0, NONAMES, 3},
     {"norm_radius", "normalization radius", "Norm R", "norm", "XDAT", SG_PARAM_REAL,
-     SG_PARAM_POSITIVE | SG_PARAM_OPTIONAL, offsetof(sg_surface, norm_radius), 0, 1, 0, 0, 0.0,
+     SG_PARAM_SHAPE | SG_PARAM_POSITIVE | SG_PARAM_OPTIONAL, offsetof(sg_surface, norm_radius), 0, 1, 0, 0, 0.0,
      SG_MAX_LEN, 1.0, NONAMES, 3},
     /* Zemax's Decenter X and Y of a Zernike sag: where its terms are
      * centred (the conic and r^n terms stay on the vertex). */
     {"zernike_decenter_x", "Zernike decenter x", "Zern dX", "zdx", "PARM", SG_PARAM_REAL,
-     SG_PARAM_OPTIONAL, offsetof(sg_surface, zern_dx), 0, 1, 0, 0, -SG_MAX_LEN, SG_MAX_LEN, 0.0,
+     SG_PARAM_SHAPE | SG_PARAM_OPTIONAL, offsetof(sg_surface, zern_dx), 0, 1, 0, 0, -SG_MAX_LEN, SG_MAX_LEN, 0.0,
      NONAMES, 3},
     {"zernike_decenter_y", "Zernike decenter y", "Zern dY", "zdy", "PARM", SG_PARAM_REAL,
-     SG_PARAM_OPTIONAL, offsetof(sg_surface, zern_dy), 0, 1, 0, 0, -SG_MAX_LEN, SG_MAX_LEN, 0.0,
+     SG_PARAM_SHAPE | SG_PARAM_OPTIONAL, offsetof(sg_surface, zern_dy), 0, 1, 0, 0, -SG_MAX_LEN, SG_MAX_LEN, 0.0,
      NONAMES, 3},
-    {"terms", "term %d", "T%d", "t%d", "XDAT", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
+    {"terms", "term %d", "T%d", "t%d", "XDAT", SG_PARAM_REAL, SG_PARAM_SHAPE | SG_PARAM_OPTIONAL,
      offsetof(sg_surface, terms), 0, SG_NTERMS, 1, 1, -INFINITY, INFINITY, 0.0, NONAMES, 3},
     /* Format version 2: surface apertures and obscurations. */
     {"aperture", "aperture", "Aperture", "aperture", "CLAP|OBSC|SQAP|SQOB|ELAP|ELOB",
@@ -478,30 +482,17 @@ int sg_system_equal(const sg_system *a, const sg_system *b)
     return 1;
 }
 
+/* The record of the type (src/shape.h) lists the parameters it reads. */
 int sg_param_used(const sg_param *p, int k, int type)
 {
-    const char *key = p->key;
-    int zern = type == SG_SURF_ZERNIKE_FRINGE || type == SG_SURF_ZERNIKE_STANDARD;
-    /* A coordinate break is its before change (Zemax's Decenter X ...
-     * Order) and a thickness; no optics, no after change. */
-    if (type == SG_SURF_COORDBRK)
-        return strcmp(key, "type") == 0 || strcmp(key, "comment") == 0 ||
-               strcmp(key, "thickness") == 0 || strncmp(key, "before.", 7) == 0 ||
-               strcmp(key, "tce") == 0;
-    if (strcmp(key, "asphere") == 0)
-        return type == SG_SURF_EVENASPH || zern || (type == SG_SURF_TOROIDAL && k < 7);
-    if (strcmp(key, "odd") == 0)
-        return type == SG_SURF_ODDASPH;
-    if (strcmp(key, "radius_x") == 0)
-        return type == SG_SURF_TOROIDAL || type == SG_SURF_BICONIC;
-    if (strcmp(key, "conic_x") == 0)
-        return type == SG_SURF_BICONIC;
-    if (strcmp(key, "norm_radius") == 0)
-        return zern || type == SG_SURF_XYPOLY;
-    if (strcmp(key, "zernike_decenter_x") == 0 || strcmp(key, "zernike_decenter_y") == 0)
-        return zern;
-    if (strcmp(key, "terms") == 0)
-        return type == SG_SURF_XYPOLY || type == SG_SURF_ZERNIKE_STANDARD ||
-               (type == SG_SURF_ZERNIKE_FRINGE && k < SG_ZERNIKE_FRINGE_MAX);
-    return 1;
+    const sg_shape_type *t = sg_shape_type_of(type);
+    const sg_shape_key *e;
+    if (!t)
+        return !(p->flags & SG_PARAM_SHAPE);
+    for (e = t->keys; e->key; e++) {
+        size_t n = strlen(e->key);
+        if (e->key[n - 1] == '.' ? strncmp(p->key, e->key, n) == 0 : strcmp(p->key, e->key) == 0)
+            return e->n == 0 || k < e->n;
+    }
+    return !t->only && !(p->flags & SG_PARAM_SHAPE);
 }

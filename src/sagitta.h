@@ -241,18 +241,28 @@ SG_API int sg_model_glass(double nd, double vd, double dpgf, sg_glass *out);
 #define SG_COMMENT 64
 #define SG_MAX_SURFACES 100000
 
-typedef enum sg_surf_type {
-    SG_SURF_STANDARD = 0, /* sphere, plane or conic */
-    SG_SURF_EVENASPH = 1, /* conic plus even polynomial in r */
-    SG_SURF_COORDBRK = 2, /* Zemax's coordinate break: a new frame, no optics */
-    SG_SURF_ODDASPH = 3,  /* conic plus a polynomial in r^1 ... r^8 */
-    SG_SURF_TOROIDAL = 4, /* a y-z conic asphere curve turned about an axis parallel to y */
-    SG_SURF_BICONIC = 5,  /* conic sections of their own in x and in y */
-    SG_SURF_ZERNIKE_FRINGE = 6,   /* even asphere plus Fringe Zernike terms */
-    SG_SURF_ZERNIKE_STANDARD = 7, /* even asphere plus Standard (Noll) Zernike terms */
-    SG_SURF_XYPOLY = 8    /* conic plus a polynomial in x and y */
-} sg_surf_type;
-#define SG_SURF_NTYPES 9
+/* The surface types, one row each: the enum's name (SG_SURF_...), the JSON
+ * name (sagitta-design(5)), Zemax's .zmx TYPE keyword and the shape's
+ * record (sg_shape_<record>_type in src/shape*.c, which holds its
+ * parameters, .zmx map, thermal rule and kernels).  The enum, the names
+ * and the engine's registry are made from this list, in this order; a new
+ * type is a row at the end. */
+#define SG_SURF_TYPES(X)                                                         \
+    X(STANDARD, "standard", "STANDARD", standard)       /* sphere, plane, conic */ \
+    X(EVENASPH, "even_asphere", "EVENASPH", even)       /* conic + r^2 ... r^16 */ \
+    X(COORDBRK, "coordinate_break", "COORDBRK", coordbrk) /* a frame, no optics */ \
+    X(ODDASPH, "odd_asphere", "ODDASPHE", odd)          /* conic + r^1 ... r^8 */  \
+    X(TOROIDAL, "toroidal", "TOROIDAL", toroid)         /* y-z curve, turned */    \
+    X(BICONIC, "biconic", "BICONICX", biconic)          /* conics in x and y */    \
+    X(ZERNIKE_FRINGE, "zernike_fringe", "FZERNSAG", zernike_fringe)                \
+    X(ZERNIKE_STANDARD, "zernike_standard", "SZERNSAG", zernike_standard)          \
+    X(XYPOLY, "xy_polynomial", "XPOLYNOM", xypoly)      /* conic + x^i y^j */ \
+    X(QCON, "q_type_asphere", "QTYPEASP", qcon)         /* conic + Forbes Qcon */
+
+/* The values are those of earlier versions: 0 standard ... 8 XY. */
+#define SG_SURF_ENUM_(name, json, zmx, rec) SG_SURF_##name,
+typedef enum sg_surf_type { SG_SURF_TYPES(SG_SURF_ENUM_) SG_SURF_NTYPES } sg_surf_type;
+#undef SG_SURF_ENUM_
 
 /* Surface apertures and obscurations, as Zemax defines them: one a surface
  * (a dummy surface of zero thickness adds another), each about its own
@@ -575,6 +585,8 @@ typedef enum sg_param_kind {
 #define SG_PARAM_REQUIRED 0x20u  /* a JSON object must give it */
 #define SG_PARAM_NESTED 0x40u    /* not a JSON key of its own: design_json.c reads and
                                   * writes it inside a nested object (a frame change) */
+#define SG_PARAM_SHAPE 0x80u     /* a shape's own: read only by the types whose record
+                                  * lists it (src/shape.h, sg_param_used) */
 
 typedef struct sg_param {
     const char *key;       /* JSON key, e.g. "semi_diameter" */

@@ -8,18 +8,59 @@
 
 #include "shape.h"
 
+/* The registry: each type's record, in the order of SG_SURF_TYPES. */
+#define SG_SHAPE_REC_(name, json, zmx, rec) [SG_SURF_##name] = &sg_shape_##rec##_type,
+static const sg_shape_type *const registry[SG_SURF_NTYPES] = {SG_SURF_TYPES(SG_SHAPE_REC_)};
+#undef SG_SHAPE_REC_
+
+/* The values files and users of the library have always seen. */
+typedef char surf_values_kept[SG_SURF_STANDARD == 0 && SG_SURF_EVENASPH == 1 &&
+                                      SG_SURF_COORDBRK == 2 && SG_SURF_ODDASPH == 3 &&
+                                      SG_SURF_TOROIDAL == 4 && SG_SURF_BICONIC == 5 &&
+                                      SG_SURF_ZERNIKE_FRINGE == 6 &&
+                                      SG_SURF_ZERNIKE_STANDARD == 7 && SG_SURF_XYPOLY == 8
+                                  ? 1
+                                  : -1];
+
+const sg_shape_type *sg_shape_type_of(int type)
+{
+    return type >= 0 && type < SG_SURF_NTYPES ? registry[type] : NULL;
+}
+
+int sg_shape_reads(int type, const char *key)
+{
+    const sg_shape_type *t = sg_shape_type_of(type);
+    const sg_shape_key *e;
+    for (e = t ? t->keys : NULL; e && e->key; e++)
+        if (strcmp(e->key, key) == 0)
+            return 1;
+    return 0;
+}
+
 const sg_shape_ops *sg_shape_ops_of(int type)
 {
-    switch (type) {
-    case SG_SURF_ODDASPH: return &sg_shape_odd_ops;
-    case SG_SURF_TOROIDAL: return &sg_shape_toroid_ops;
-    case SG_SURF_BICONIC: return &sg_shape_biconic_ops;
-    case SG_SURF_ZERNIKE_FRINGE:
-    case SG_SURF_ZERNIKE_STANDARD: return &sg_shape_zernike_ops;
-    case SG_SURF_XYPOLY: return &sg_shape_xypoly_ops;
-    default: return NULL;
-    }
+    const sg_shape_type *t = sg_shape_type_of(type);
+    return t ? t->ops : NULL;
 }
+
+/* The types the methods trace with kernels of their own: they have no
+ * ops, and design_zmx.c reads their blocks itself. */
+static const sg_shape_key no_keys[] = {{NULL, 0, 0, 0}};
+const sg_shape_type sg_shape_standard_type = {
+    .type = SG_SURF_STANDARD, .name = "standard", .keys = no_keys};
+
+/* a_k on r^(2k+2) is in lens units^-(2k+1). */
+static const sg_shape_key even_keys[] = {{"asphere", 0, -1, -2}, {NULL, 0, 0, 0}};
+const sg_shape_type sg_shape_even_type = {
+    .type = SG_SURF_EVENASPH, .name = "even asphere", .keys = even_keys};
+
+/* A coordinate break is its before change (Zemax's Decenter X ... Order)
+ * and a thickness; no optics, no after change. */
+static const sg_shape_key coordbrk_keys[] = {{"type", 0, 0, 0},      {"comment", 0, 0, 0},
+                                             {"thickness", 0, 0, 0}, {"before.", 0, 0, 0},
+                                             {"tce", 0, 0, 0},       {NULL, 0, 0, 0}};
+const sg_shape_type sg_shape_coordbrk_type = {
+    .type = SG_SURF_COORDBRK, .name = "coordinate break", .keys = coordbrk_keys, .only = 1};
 
 double sg_shape_sag(const sg_shape *s, double x, double y)
 {
@@ -44,14 +85,13 @@ int sg_shape_prepare(const sg_surface *f, sg_shape *s, int isurf, sg_diag *d)
     s->Rx = flat_inf(f->radius_x);
     s->kx1 = 1.0 + f->conic_x;
     s->norm = f->norm_radius;
-    if (f->type == SG_SURF_TOROIDAL || f->type == SG_SURF_ZERNIKE_FRINGE ||
-        f->type == SG_SURF_ZERNIKE_STANDARD)
+    if (sg_shape_reads(f->type, "asphere"))
         for (k = 0; k < SG_NASPH; k++) {
             s->a[k] = f->asph[k];
             if (f->asph[k] != 0.0)
                 s->na = k + 1;
         }
-    if (f->type == SG_SURF_ODDASPH)
+    if (sg_shape_reads(f->type, "odd"))
         for (k = 0; k < SG_NODD; k++) {
             s->odd[k] = f->odd[k];
             if (f->odd[k] != 0.0)
@@ -64,52 +104,11 @@ int sg_shape_prepare(const sg_surface *f, sg_shape *s, int isurf, sg_diag *d)
  * The rotational part: conic, even terms on r^2 ..., odd terms on r^1 ...
  * ------------------------------------------------------------------------ */
 
-int sg_rot_d(const sg_shape *s, double r2, double *z, double *w, double *dw)
-{
-    /* rk = r^(2k) and rkm = r^(2k-2), each a product of r2: a quotient
-     * rk / r2 would be 0 / 0 on the axis. */
-    double zz = 0.0, ww = 0.0, dd2 = 0.0, rk = 1.0, rkm = 0.0;
-    int k;
-    if (isfinite(s->R)) {
-        double q = s->R * s->R - s->k1 * r2, sq;
-        if (q < 0.0)
-            return 0;
-        sq = sqrt(q);
-        zz = r2 / (s->R + copysign(sq, s->R));
-        ww = copysign(1.0, s->R) / sq;
-        dd2 = fabs(s->k1) / (2.0 * q * sq);
-    }
-    for (k = 0; k < s->na; k++) {
-        /* a_k r^(2k+2): w gains (2k+2) a_k r^(2k), w' k (2k+2) a_k r^(2k-2). */
-        zz += s->a[k] * rk * r2;
-        ww += (2.0 * k + 2.0) * s->a[k] * rk;
-        if (k > 0)
-            dd2 += fabs(k * (2.0 * k + 2.0) * s->a[k]) * rkm;
-        rkm = rk;
-        rk *= r2;
-    }
-    if (s->nodd) {
-        double r = sqrt(r2), rp = 1.0;
-        for (k = 0; k < s->nodd; k++) {
-            /* b r^i, i = k + 1: w gains i b r^(i-2), w' i (i-2) b r^(i-4) / 2. */
-            double i = k + 1.0, b = s->odd[k];
-            rp *= r; /* r^i */
-            zz += b * rp;
-            if (r2 > 0.0) {
-                ww += i * b * rp / r2;
-                dd2 += fabs(i * (i - 2.0) * b) * rp / (2.0 * r2 * r2);
-            } else if (k == 1) {
-                ww += 2.0 * b;
-            } else if (k == 0 && b != 0.0) {
-                dd2 = INFINITY;
-            }
-        }
-    }
-    *z = zz;
-    *w = ww;
-    *dw = dd2;
-    return 1;
-}
+/* sg_rot_d, written once with its lane form (shape_vd.h's sv_rot_d). */
+#define SG_TMPL 1 /* SG_TMPL_D */
+#include "shape_tmpl_on.h"
+#include "shape_rot_k.h"
+#include "shape_tmpl_off.h"
 
 int sg_rot_dd(const sg_shape *s, dd r2, dd *z, dd *w, double *ez, double *ew)
 {

@@ -5,8 +5,10 @@
  * methods trace with kernels of their own, written for speed) is a sag
  * z = f(x, y) in its vertex frame.  Each such shape is one file
  * (shape_odd.c, shape_toroid.c, shape_biconic.c, shape_zernike.c,
- * shape_xypoly.c) that fills an sg_shape and supplies f and its gradient
- * in the three arithmetics the methods use:
+ * shape_xypoly.c, shape_qcon.c) with its record (sg_shape_type, below,
+ * named by its row of SG_SURF_TYPES in sagitta.h) that fills an sg_shape
+ * and supplies f and its gradient in the three arithmetics the methods
+ * use:
  *
  *   - double, with a bound on the second derivatives: classic's trace, the
  *     Newton seeds of precise, and the sizes that scale bounds; both
@@ -69,6 +71,69 @@ typedef struct sg_shape_ops {
                   mpfr_ptr gx, mpfr_ptr gy, mpfr_t *tmp);
 } sg_shape_ops;
 
+/* A parameter a surface type reads beyond those every surface has (the
+ * surface table's rows marked SG_PARAM_SHAPE, src/param.c): its key, how
+ * many of its elements the type reads (0: all), and its thermal rule,
+ * the power of lens units its element k is in, p0 + pk k (sg_thermal
+ * scales it by s^(p0 + pk k): 1 multiplies by s, 0 keeps it, a negative
+ * power divides by s to the opposite power).  A key that ends in '.' is
+ * every key it begins (a frame change's "before."). */
+typedef struct sg_shape_key {
+    const char *key;
+    int n;
+    int p0, pk;
+} sg_shape_key;
+
+/* A run of a type's values in a .zmx surface block: PARM (or XDAT) index
+ * + j holds element elem + j of key, j < n; written in this order. */
+typedef struct sg_zmx_map {
+    int xdat;      /* 0: PARM, 1: XDAT */
+    int index;
+    const char *key;
+    int elem, n;
+    unsigned flags; /* SG_ZMX_* */
+} sg_zmx_map;
+
+#define SG_ZMX_ZERO_INF 0x1u /* 0 in the file is an infinite radius, and back */
+#define SG_ZMX_IF_SET 0x2u   /* written only when some element of the run is not 0 */
+
+/* A surface type: one record, one row of SG_SURF_TYPES (sagitta.h) that
+ * names it sg_shape_<record>_type.  Everything the engine knows of the
+ * type outside its kernels is here. */
+typedef struct sg_shape_type {
+    int type;             /* its sg_surf_type */
+    const char *name;     /* in messages and tests */
+    const sg_shape_ops *ops; /* NULL: the methods' own kernels (standard,
+                              * even asphere, coordinate break) */
+    /* The parameters it reads, ended by a NULL key; only: it reads no
+     * other (a coordinate break), else also every row without
+     * SG_PARAM_SHAPE. */
+    const sg_shape_key *keys;
+    int only;
+    /* The .zmx surface block (design_zmx.c): the PARM numbers lo to hi
+     * it may hold (others must be 0; why, in parm_what), its runs ended
+     * by a NULL key; zmx_terms: XDAT 1 the number of terms, at most this,
+     * XDAT 2 the normalization radius, XDAT 3 on the terms (0: none);
+     * xdat_what: XDAT 3 on must be 0, and why; extrapolate: PARM 0 is
+     * Zemax's extrapolate flag, written 1. */
+    int parm_lo, parm_hi;
+    const char *parm_what;
+    const sg_zmx_map *zmx;
+    int zmx_terms;
+    const char *xdat_what;
+    int extrapolate;
+} sg_shape_type;
+
+/* The record of each type, as SG_SURF_TYPES names it. */
+#define SG_SHAPE_DECL_(name, json, zmx, rec) extern const sg_shape_type sg_shape_##rec##_type;
+SG_SURF_TYPES(SG_SHAPE_DECL_)
+#undef SG_SHAPE_DECL_
+
+/* The record of a surface type, or NULL for a value that is none. */
+const sg_shape_type *sg_shape_type_of(int type);
+/* Whether the type's record lists the parameter key. */
+int sg_shape_reads(int type, const char *key);
+
 /* A prepared shape: what its ops read. */
 struct sg_shape {
     const sg_shape_ops *ops;
@@ -90,8 +155,9 @@ struct sg_shape {
     const sg_surface *src; /* the surface, for MPFR coefficients */
 };
 
-/* The ops of a surface type, or NULL for the types the methods trace with
- * their own kernels (standard, even asphere, coordinate break). */
+/* The ops of a surface type (its record's), or NULL for the types the
+ * methods trace with their own kernels (standard, even asphere,
+ * coordinate break). */
 const sg_shape_ops *sg_shape_ops_of(int type);
 /* Fills s from surface f; returns SG_OK or SG_ERANGE with a message. */
 int sg_shape_prepare(const sg_surface *f, sg_shape *s, int isurf, sg_diag *d);

@@ -2,70 +2,23 @@
  * shape_biconic.c - Zemax's biconic: z = (cx x^2 + cy y^2) / (1 + sqrt(1
  * - (1 + kx) cx^2 x^2 - (1 + ky) cy^2 y^2)), with cy and ky the surface's
  * radius and conic and cx, kx its x radius and conic (an x radius of 0
- * or inf is flat in x) (sagitta-design(5), SURFACE TYPES).
+ * or inf is flat in x) (sagitta-design(5), SURFACE TYPES).  Its double
+ * and double-double kernels are shape_biconic_k.h, which shape_vd.h and
+ * shape_vdd.h also compile on lanes.
  */
 #include <math.h>
 
 #include "shape.h"
 
-static int bic_d(const sg_shape *s, double x, double y, double *z, double g[2], double *h)
-{
-    double cx = isfinite(s->Rx) ? 1.0 / s->Rx : 0.0, cy = isfinite(s->R) ? 1.0 / s->R : 0.0;
-    double N = cx * x * x + cy * y * y;
-    double Q = 1.0 - s->kx1 * cx * cx * x * x - s->k1 * cy * cy * y * y, S, D, km;
-    if (Q < 0.0)
-        return 0;
-    S = sqrt(Q);
-    D = 1.0 + S;
-    *z = N / D;
-    if (S > 0.0) {
-        g[0] = (2.0 * cx * x * D + N * s->kx1 * cx * cx * x / S) / (D * D);
-        g[1] = (2.0 * cy * y * D + N * s->k1 * cy * cy * y / S) / (D * D);
-    } else {
-        g[0] = g[1] = INFINITY;
-    }
-    /* A conic section's second derivative is c / S^3; the cross terms of
-     * two sections are of the same order. */
-    km = fmax(1.0, fmax(fabs(s->kx1), fabs(s->k1)));
-    *h = 3.0 * (fabs(cx) + fabs(cy)) * km / (Q * S);
-    return 1;
-}
-
-static int bic_dd(const sg_shape *s, dd x, dd y, dd *z, dd g[2], double *ez, double *eg)
-{
-    dd one = dd_from(1.0);
-    dd cx = isfinite(s->Rx) ? dd_div(one, dd_from(s->Rx)) : dd_from(0.0);
-    dd cy = isfinite(s->R) ? dd_div(one, dd_from(s->R)) : dd_from(0.0);
-    dd ax = dd_mul(cx, dd_sqr(x)), ay = dd_mul(cy, dd_sqr(y)); /* cx x^2, cy y^2 */
-    dd N = dd_add(ax, ay);
-    dd px = dd_mul_d(dd_mul(ax, cx), s->kx1), py = dd_mul_d(dd_mul(ay, cy), s->k1);
-    dd Q = dd_sub(dd_sub(one, px), py), S, D, D2, tx, ty;
-    double cond, gm;
-    if (Q.hi < 0.0)
-        return 0;
-    S = dd_sqrt(Q);
-    D = dd_add(one, S);
-    *z = dd_div(N, D);
-    if (S.hi <= 0.0)
-        return 0;
-    D2 = dd_sqr(D);
-    /* dz/dx = (2 cx x D + N kx1 cx^2 x / S) / D^2. */
-    tx = dd_add(dd_mul(dd_mul_d(dd_mul(cx, x), 2.0), D),
-                dd_div(dd_mul(N, dd_mul_d(dd_mul(dd_mul(cx, cx), x), s->kx1)), S));
-    ty = dd_add(dd_mul(dd_mul_d(dd_mul(cy, y), 2.0), D),
-                dd_div(dd_mul(N, dd_mul_d(dd_mul(dd_mul(cy, cy), y), s->k1)), S));
-    g[0] = dd_div(tx, D2);
-    g[1] = dd_div(ty, D2);
-    /* Q = 1 - kx1 cx^2 x^2 - ky1 cy^2 y^2 may cancel near the rim. */
-    cond = (1.0 + fabs(px.hi) + fabs(py.hi)) / Q.hi;
-    *ez = 24.0 * DD_U * fabs(z->hi) * (1.0 + cond) + 8.0 * DD_U * (fabs(ax.hi) + fabs(ay.hi));
-    gm = (fabs(tx.hi) + fabs(ty.hi) + 2.0 * fabs(N.hi) * (fabs(s->kx1 * cx.hi * cx.hi * x.hi) +
-                                                           fabs(s->k1 * cy.hi * cy.hi * y.hi)) /
-                                            (S.hi * Q.hi)) /
-         (D.hi * D.hi);
-    *eg = 48.0 * DD_U * gm * (1.0 + cond);
-    return 1;
-}
+/* bic_d and bic_dd, written once with their lane forms. */
+#define SG_TMPL 1 /* SG_TMPL_D */
+#include "shape_tmpl_on.h"
+#include "shape_biconic_k.h"
+#include "shape_tmpl_off.h"
+#define SG_TMPL 3 /* SG_TMPL_DD */
+#include "shape_tmpl_on.h"
+#include "shape_biconic_k.h"
+#include "shape_tmpl_off.h"
 
 /* One section's slope, (2 c u D + N k1 c (c u) / S) / D^2, with cu = c u
  * and k1 = 1 + its conic; t[8] and t[11] are scratch. */
@@ -127,3 +80,12 @@ static int bic_mp(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, m
 }
 
 const sg_shape_ops sg_shape_biconic_ops = {"biconic", NULL, NULL, bic_d, bic_dd, bic_mp};
+
+static const sg_shape_key bic_keys[] = {{"radius_x", 0, 1, 0}, {"conic_x", 0, 0, 0}, {NULL, 0, 0, 0}};
+static const sg_zmx_map bic_zmx[] = {{0, 1, "radius_x", 0, 1, SG_ZMX_ZERO_INF},
+                                     {0, 2, "conic_x", 0, 1, 0},
+                                     {0, 0, NULL, 0, 0, 0}};
+const sg_shape_type sg_shape_biconic_type = {
+    .type = SG_SURF_BICONIC, .name = "biconic", .ops = &sg_shape_biconic_ops, .keys = bic_keys,
+    .parm_lo = 1, .parm_hi = 2,
+    .parm_what = "a biconic has the x radius and x conic (PARM 1 and 2)", .zmx = bic_zmx};

@@ -7,18 +7,13 @@
 
 #include "shape.h"
 
-/* The gradient of a rotational sag is w (x, y); its Hessian w I + 2 w'
- * (x, y)(x, y)^T has row sums at most |w| + 4 |w'| r^2. */
-static int odd_d(const sg_shape *s, double x, double y, double *z, double g[2], double *h)
-{
-    double r2 = x * x + y * y, w, dw;
-    if (!sg_rot_d(s, r2, z, &w, &dw))
-        return 0;
-    g[0] = w * x;
-    g[1] = w * y;
-    *h = 1.5 * (fabs(w) + 4.0 * dw * r2);
-    return 1;
-}
+/* odd_d, written once with its lane form (shape_vd.h's sv_odd_d). */
+#define SG_TMPL 1 /* SG_TMPL_D */
+#define SG_ROT_K_ODD
+#include "shape_tmpl_on.h"
+#include "shape_rot_k.h"
+#include "shape_tmpl_off.h"
+#undef SG_ROT_K_ODD
 
 static int odd_dd(const sg_shape *s, dd x, dd y, dd *z, dd g[2], double *ez, double *eg)
 {
@@ -49,3 +44,11 @@ static int odd_mp(const sg_shape *s, mpfr_t *mc, mpfr_srcptr x, mpfr_srcptr y, m
 }
 
 const sg_shape_ops sg_shape_odd_ops = {"odd asphere", NULL, NULL, odd_d, odd_dd, odd_mp};
+
+/* b_k on r^(k+1) is in lens units^-k. */
+static const sg_shape_key odd_keys[] = {{"odd", 0, 0, -1}, {NULL, 0, 0, 0}};
+static const sg_zmx_map odd_zmx[] = {{0, 1, "odd", 0, SG_NODD, 0}, {0, 0, NULL, 0, 0, 0}};
+const sg_shape_type sg_shape_odd_type = {
+    .type = SG_SURF_ODDASPH, .name = "odd asphere", .ops = &sg_shape_odd_ops, .keys = odd_keys,
+    .parm_lo = 1, .parm_hi = SG_NODD,
+    .parm_what = "the odd asphere has terms r^1 to r^8 (PARM 1 to 8)", .zmx = odd_zmx};

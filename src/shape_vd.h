@@ -5,8 +5,9 @@
  * bound.
  *
  * Each function repeats its scalar twin (shape.c's sg_rot_d, sg_p2_d,
- * sg_rot_p2_d; the sag_d of shape_odd.c, shape_toroid.c and
- * shape_biconic.c) operation for operation and in the same order, its
+ * sg_rot_p2_d; the odd asphere's sag_d; the toroid's and biconic's are
+ * compiled here from the one text both share, shape_toroid_k.h and
+ * shape_biconic_k.h) operation for operation and in the same order, its
  * constants formed in scalar as there, branches becoming selections, so
  * every lane gets the bits the scalar code gives it (the build uses
  * -ffp-contract=off and only correctly rounded operations): the classic
@@ -22,51 +23,11 @@
 #include "shape.h"
 #include "vdd.h"
 
-/* sg_rot_d at r2: the sag, w = sag'(r) / r and the bound dw. */
-static inline void sv_rot_d(const sg_shape *s, vd r2, vd *z, vd *w, vd *dw, vm *bad)
-{
-    vd zz = vd_set(0.0), ww = vd_set(0.0), dd2 = vd_set(0.0), rk = vd_set(1.0),
-       rkm = vd_set(0.0);
-    int k;
-    *bad = vm_set(0);
-    if (isfinite(s->R)) {
-        vd q = s->R * s->R - s->k1 * r2, sq;
-        *bad = (vm)(q < 0.0);
-        sq = vd_sqrt(q);
-        zz = r2 / (s->R + vd_copysign(sq, vd_set(s->R)));
-        ww = copysign(1.0, s->R) / sq;
-        dd2 = fabs(s->k1) / (2.0 * q * sq);
-    }
-    for (k = 0; k < s->na; k++) {
-        zz += s->a[k] * rk * r2;
-        ww += (2.0 * k + 2.0) * s->a[k] * rk;
-        if (k > 0)
-            dd2 += fabs(k * (2.0 * k + 2.0) * s->a[k]) * rkm;
-        rkm = rk;
-        rk *= r2;
-    }
-    if (s->nodd) {
-        /* The scalar code's branch on r^2 > 0 is a selection per lane;
-         * both sides are formed everywhere. */
-        vd r = vd_sqrt(r2), rp = vd_set(1.0);
-        vm pos = (vm)(r2 > 0.0);
-        for (k = 0; k < s->nodd; k++) {
-            double i = k + 1.0, b = s->odd[k];
-            vd wz = ww, dz = dd2;
-            rp *= r;
-            zz += b * rp;
-            if (k == 1)
-                wz = ww + 2.0 * b;
-            else if (k == 0 && b != 0.0)
-                dz = vd_set(INFINITY);
-            ww = vsel(pos, ww + i * b * rp / r2, wz);
-            dd2 = vsel(pos, dd2 + fabs(i * (i - 2.0) * b) * rp / (2.0 * r2 * r2), dz);
-        }
-    }
-    *z = zz;
-    *w = ww;
-    *dw = dd2;
-}
+/* shape.c's sg_rot_d: the one text of shape_rot_k.h on lanes. */
+#define SG_TMPL 2 /* SG_TMPL_VD */
+#include "shape_tmpl_on.h"
+#include "shape_rot_k.h"
+#include "shape_tmpl_off.h"
 
 /* sg_p2_d: the polynomial in u = x / norm, v = y / norm. */
 static inline void sv_p2_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h)
@@ -116,66 +77,25 @@ static inline void sv_rot_p2_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd
     *h = 1.5 * (vd_abs(w) + 4.0 * dw * r2 + hp);
 }
 
-/* shape_odd.c's odd_d. */
-static inline void sv_odd_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h, vm *bad)
-{
-    vd r2 = x * x + y * y, w, dw;
-    sv_rot_d(s, r2, z, &w, &dw, bad);
-    g[0] = w * x;
-    g[1] = w * y;
-    *h = 1.5 * (vd_abs(w) + 4.0 * dw * r2);
-}
+/* shape_odd.c's odd_d: the one text of shape_rot_k.h on lanes. */
+#define SG_TMPL 2 /* SG_TMPL_VD */
+#define SG_ROT_K_ODD
+#include "shape_tmpl_on.h"
+#include "shape_rot_k.h"
+#include "shape_tmpl_off.h"
+#undef SG_ROT_K_ODD
 
-/* shape_toroid.c's tor_d. */
-static inline void sv_tor_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h, vm *bad)
-{
-    vd zy, w, dw, zp, zpp, u, disc, q, zt, aq, hxx, hxy, hyy;
-    sv_rot_d(s, y * y, &zy, &w, &dw, bad);
-    zp = w * y;
-    zpp = vd_abs(w) + 2.0 * dw * y * y;
-    if (!isfinite(s->Rx)) {
-        *z = zy;
-        g[0] = vd_set(0.0);
-        g[1] = zp;
-        *h = 1.5 * vd_abs(zpp);
-        return;
-    }
-    u = s->Rx - zy;
-    disc = u * u - x * x;
-    *bad |= (vm)(disc < 0.0);
-    q = vd_copysign(vd_sqrt(disc), u);
-    zt = x * x / (u + q);
-    *z = zy + zt;
-    g[0] = x / q;
-    g[1] = u * zp / q;
-    aq = vd_abs(q);
-    hxx = u * u / (disc * aq);
-    hxy = vd_abs(x * u * zp) / (disc * aq);
-    hyy = (zp * zp + vd_abs(u * zpp)) / aq + u * u * zp * zp / (disc * aq);
-    *h = 1.5 * (hxx + 2.0 * hxy + hyy);
-}
+/* shape_toroid.c's tor_d: the one text of shape_toroid_k.h on lanes. */
+#define SG_TMPL 2 /* SG_TMPL_VD */
+#include "shape_tmpl_on.h"
+#include "shape_toroid_k.h"
+#include "shape_tmpl_off.h"
 
-/* shape_biconic.c's bic_d.  A product that starts with constants
- * (kx1 cx cx x x) rounds them first, in scalar, as there. */
-static inline void sv_bic_d(const sg_shape *s, vd x, vd y, vd *z, vd g[2], vd *h, vm *bad)
-{
-    double cx = isfinite(s->Rx) ? 1.0 / s->Rx : 0.0, cy = isfinite(s->R) ? 1.0 / s->R : 0.0;
-    double km = fmax(1.0, fmax(fabs(s->kx1), fabs(s->k1)));
-    vd N = cx * x * x + cy * y * y;
-    vd Q = 1.0 - s->kx1 * cx * cx * x * x - s->k1 * cy * cy * y * y, S, D;
-    vm pos;
-    *bad = (vm)(Q < 0.0);
-    S = vd_sqrt(Q);
-    D = 1.0 + S;
-    *z = N / D;
-    /* The scalar code's slopes where S > 0, infinite elsewhere. */
-    pos = (vm)(S > 0.0);
-    g[0] = vsel(pos, (2.0 * cx * x * D + N * s->kx1 * cx * cx * x / S) / (D * D),
-                vd_set(INFINITY));
-    g[1] = vsel(pos, (2.0 * cy * y * D + N * s->k1 * cy * cy * y / S) / (D * D),
-                vd_set(INFINITY));
-    *h = 3.0 * (fabs(cx) + fabs(cy)) * km / (Q * S);
-}
+/* shape_biconic.c's bic_d: the one text of shape_biconic_k.h on lanes. */
+#define SG_TMPL 2 /* SG_TMPL_VD */
+#include "shape_tmpl_on.h"
+#include "shape_biconic_k.h"
+#include "shape_tmpl_off.h"
 
 /* Whether this file has the shape's double sag. */
 static inline int sv_handles_d(const sg_shape *s)

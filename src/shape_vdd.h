@@ -4,8 +4,8 @@
  * SG_VL lanes at once.
  *
  * Each function repeats its scalar twin (shape.c's sg_rot_dd, sg_p2_dd,
- * sg_rot_p2_dd; the sag_dd of shape_odd.c, shape_toroid.c and
- * shape_biconic.c) operation for operation in the vector twins of dd.h's
+ * sg_rot_p2_dd; the odd asphere's sag_dd; the toroid's and biconic's are
+ * compiled here from shape_toroid_k.h and shape_biconic_k.h) operation for operation in the vector twins of dd.h's
  * operations, branches becoming selections, so every lane gets the bits
  * the scalar code gives it: the precise trace takes them from here
  * instead of calling the shape's ops lane by lane.  A lane outside the
@@ -178,79 +178,17 @@ static inline void svd_odd(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd
     *eg = (ew + 8.0 * DD_U * vd_abs(w.hi)) * m;
 }
 
-/* shape_toroid.c's tor_dd. */
-static inline void svd_tor(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd *ez, vd *eg,
-                           vm *bad)
-{
-    vdd y2 = vdd_sqr(y), zy, w, zp, u, disc, q, zt;
-    vd ezy, ew, ezp, eu, cond, aq;
-    svd_rot(s, y2, &zy, &w, &ezy, &ew, bad);
-    ezy += 4.0 * DD_U * vd_abs(w.hi) * y2.hi;
-    zp = vdd_mul(w, y);
-    ezp = (ew + 4.0 * DD_U * vd_abs(w.hi)) * vd_abs(y.hi);
-    if (!isfinite(s->Rx)) {
-        *z = zy;
-        g[0] = vdd_from(vd_set(0.0));
-        g[1] = zp;
-        *ez = ezy;
-        *eg = ezp;
-        return;
-    }
-    u = vdd_sub(vdd_from(vd_set(s->Rx)), zy);
-    disc = vdd_sub(vdd_sqr(u), vdd_sqr(x));
-    *bad |= (vm)(disc.hi <= 0.0);
-    q = vdd_sqrt(disc);
-    q = vdd_sel((vm)(u.hi < 0.0), vdd_neg(q), q);
-    zt = vdd_div(vdd_sqr(x), vdd_add(u, q));
-    *z = vdd_add(zy, zt);
-    g[0] = vdd_div(x, q);
-    g[1] = vdd_div(vdd_mul(u, zp), q);
-    eu = ezy + 2.0 * DD_U * (fabs(s->Rx) + vd_abs(zy.hi));
-    cond = (u.hi * u.hi + x.hi * x.hi) / disc.hi;
-    aq = vd_abs(q.hi);
-    *ez = ezy + eu * vd_abs(u.hi) / aq +
-          16.0 * DD_U * (vd_abs(zy.hi) + vd_abs(zt.hi) * (1.0 + cond));
-    *eg = 16.0 * DD_U * (vd_abs(g[0].hi) + vd_abs(g[1].hi)) * (1.0 + cond) +
-          eu * (vd_abs(x.hi * u.hi) + vd_abs(zp.hi) * (u.hi * u.hi + disc.hi)) / (disc.hi * aq) +
-          ezp * vd_abs(u.hi) / aq;
-}
+/* shape_toroid.c's tor_dd: the one text of shape_toroid_k.h on lanes. */
+#define SG_TMPL 4 /* SG_TMPL_VDD */
+#include "shape_tmpl_on.h"
+#include "shape_toroid_k.h"
+#include "shape_tmpl_off.h"
 
-/* shape_biconic.c's bic_dd.  The curvatures are the same on every lane:
- * they are formed once in scalar double-double, as there. */
-static inline void svd_bic(const sg_shape *s, vdd x, vdd y, vdd *z, vdd g[2], vd *ez, vd *eg,
-                           vm *bad)
-{
-    dd cxs = isfinite(s->Rx) ? dd_div(dd_from(1.0), dd_from(s->Rx)) : dd_from(0.0);
-    dd cys = isfinite(s->R) ? dd_div(dd_from(1.0), dd_from(s->R)) : dd_from(0.0);
-    vdd one = vdd_from(vd_set(1.0)), cx = vdd_set(cxs), cy = vdd_set(cys);
-    vdd ax = vdd_mul(cx, vdd_sqr(x)), ay = vdd_mul(cy, vdd_sqr(y));
-    vdd N = vdd_add(ax, ay);
-    vdd px = vdd_mul_d(vdd_mul(ax, cx), vd_set(s->kx1)),
-        py = vdd_mul_d(vdd_mul(ay, cy), vd_set(s->k1));
-    vdd Q = vdd_sub(vdd_sub(one, px), py), S, D, D2, tx, ty;
-    vd cond, gm;
-    *bad = (vm)(Q.hi < 0.0);
-    S = vdd_sqrt(Q);
-    D = vdd_add(one, S);
-    *z = vdd_div(N, D);
-    *bad |= (vm)(S.hi <= 0.0);
-    D2 = vdd_sqr(D);
-    tx = vdd_add(vdd_mul(vdd_mul_d(vdd_mul(cx, x), vd_set(2.0)), D),
-                 vdd_div(vdd_mul(N, vdd_mul_d(vdd_mul(vdd_mul(cx, cx), x), vd_set(s->kx1))), S));
-    ty = vdd_add(vdd_mul(vdd_mul_d(vdd_mul(cy, y), vd_set(2.0)), D),
-                 vdd_div(vdd_mul(N, vdd_mul_d(vdd_mul(vdd_mul(cy, cy), y), vd_set(s->k1))), S));
-    g[0] = vdd_div(tx, D2);
-    g[1] = vdd_div(ty, D2);
-    cond = (1.0 + vd_abs(px.hi) + vd_abs(py.hi)) / Q.hi;
-    *ez = 24.0 * DD_U * vd_abs(z->hi) * (1.0 + cond) +
-          8.0 * DD_U * (vd_abs(ax.hi) + vd_abs(ay.hi));
-    gm = (vd_abs(tx.hi) + vd_abs(ty.hi) +
-          2.0 * vd_abs(N.hi) *
-              (vd_abs(s->kx1 * cxs.hi * cxs.hi * x.hi) + vd_abs(s->k1 * cys.hi * cys.hi * y.hi)) /
-              (S.hi * Q.hi)) /
-         (D.hi * D.hi);
-    *eg = 48.0 * DD_U * gm * (1.0 + cond);
-}
+/* shape_biconic.c's bic_dd: the one text of shape_biconic_k.h on lanes. */
+#define SG_TMPL 4 /* SG_TMPL_VDD */
+#include "shape_tmpl_on.h"
+#include "shape_biconic_k.h"
+#include "shape_tmpl_off.h"
 
 /* Whether this file has the shape's double-double sag. */
 static inline int svd_handles(const sg_shape *s)

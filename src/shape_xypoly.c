@@ -30,3 +30,14 @@ static void xy_mp_coefs(const sg_shape *s, mpfr_t *mc)
 
 const sg_shape_ops sg_shape_xypoly_ops = {"XY polynomial", xy_prepare, xy_mp_coefs, sg_rot_p2_d,
                                           sg_rot_p2_dd, sg_rot_p2_mp};
+
+/* The terms are in lens units over coordinates divided by the
+ * normalization radius, which grows with the part.  In .zmx: no PARM;
+ * XDAT 1 the number of terms (x, y, x^2, ... : at most 65), 2 the
+ * normalization radius, 3 on the terms. */
+static const sg_shape_key xy_keys[] = {{"norm_radius", 0, 1, 0}, {"terms", 0, 1, 0}, {NULL, 0, 0, 0}};
+static const sg_zmx_map xy_zmx[] = {{0, 0, NULL, 0, 0, 0}};
+const sg_shape_type sg_shape_xypoly_type = {
+    .type = SG_SURF_XYPOLY, .name = "XY polynomial", .ops = &sg_shape_xypoly_ops, .keys = xy_keys,
+    .parm_lo = 1, .parm_hi = 0, .parm_what = "an XY polynomial has no parameters", .zmx = xy_zmx,
+    .zmx_terms = SG_NTERMS - 1};

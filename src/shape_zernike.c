@@ -127,3 +127,31 @@ static void zern_mp_coefs(const sg_shape *s, mpfr_t *mc)
 
 const sg_shape_ops sg_shape_zernike_ops = {"Zernike sag", zern_prepare, zern_mp_coefs,
                                            sg_rot_p2_d, sg_rot_p2_dd, sg_rot_p2_mp};
+
+/* The even terms, the normalization radius, the decenter and the terms
+ * (lens units over coordinates divided by the normalization radius).  In
+ * .zmx: PARM 0 the extrapolate flag (written 1: sagitta applies the terms
+ * at every radius), 1 to 8 the even terms, 9 and 10 the decenter
+ * (written only when set, so a centred surface writes as before); XDAT 1
+ * the number of terms, 2 the normalization radius, 3 on the terms. */
+#define ZERN_KEYS(nterms)                                                                 \
+    {{"asphere", 0, -1, -2},           {"norm_radius", 0, 1, 0},                           \
+     {"zernike_decenter_x", 0, 1, 0}, {"zernike_decenter_y", 0, 1, 0},                    \
+     {"terms", nterms, 1, 0},          {NULL, 0, 0, 0}}
+static const sg_shape_key fringe_keys[] = ZERN_KEYS(SG_ZERNIKE_FRINGE_MAX);
+static const sg_shape_key standard_keys[] = ZERN_KEYS(0);
+static const sg_zmx_map zern_zmx[] = {{0, 1, "asphere", 0, SG_NASPH, 0},
+                                      {0, SG_NASPH + 1, "zernike_decenter_x", 0, 1, SG_ZMX_IF_SET},
+                                      {0, SG_NASPH + 2, "zernike_decenter_y", 0, 1, SG_ZMX_IF_SET},
+                                      {0, 0, NULL, 0, 0, 0}};
+#define ZERN_PARM_WHAT                                                                    \
+    "the Zernike sag has terms r^2 to r^16 (PARM 1 to 8) and the Zernike decenters x and y " \
+    "(PARM 9 and 10)"
+const sg_shape_type sg_shape_zernike_fringe_type = {
+    .type = SG_SURF_ZERNIKE_FRINGE, .name = "Zernike Fringe sag", .ops = &sg_shape_zernike_ops,
+    .keys = fringe_keys, .parm_lo = 0, .parm_hi = SG_NASPH + 2, .parm_what = ZERN_PARM_WHAT,
+    .zmx = zern_zmx, .zmx_terms = SG_ZERNIKE_FRINGE_MAX, .extrapolate = 1};
+const sg_shape_type sg_shape_zernike_standard_type = {
+    .type = SG_SURF_ZERNIKE_STANDARD, .name = "Zernike Standard sag", .ops = &sg_shape_zernike_ops,
+    .keys = standard_keys, .parm_lo = 0, .parm_hi = SG_NASPH + 2, .parm_what = ZERN_PARM_WHAT,
+    .zmx = zern_zmx, .zmx_terms = SG_NTERMS, .extrapolate = 1};

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "internal.h"
+#include "shape.h"
 
 /* A glass, a model glass or a fixed index: a solid body that expands as
  * a whole.  Air and mirrors do not. */
@@ -107,33 +108,31 @@ static int factor(double tce, double dt, int i, double *s, sg_diag *d)
  * the others keep their defaults (and stay out of the file). */
 static void scale_shape(sg_surface *f, double s)
 {
-    int k;
-    int zern = f->type == SG_SURF_ZERNIKE_FRINGE || f->type == SG_SURF_ZERNIKE_STANDARD;
-    if (f->type == SG_SURF_COORDBRK)
+    const sg_shape_type *t = sg_shape_type_of(f->type);
+    const sg_shape_key *e;
+    if (f->type == SG_SURF_COORDBRK || !t)
         return;
     if (isfinite(f->radius))
         f->radius *= s;
-    /* The conic is a ratio and stays. */
-    if (f->type == SG_SURF_EVENASPH || f->type == SG_SURF_TOROIDAL || zern)
-        for (k = 0; k < SG_NASPH; k++)
-            /* r^(2k+2) in lens units^(-2k-1). */
-            f->asph[k] /= pow(s, 2 * k + 1);
-    if (f->type == SG_SURF_ODDASPH)
-        for (k = 0; k < SG_NODD; k++)
-            /* r^(k+1) in lens units^(-k). */
-            f->odd[k] /= pow(s, k);
-    if ((f->type == SG_SURF_TOROIDAL || f->type == SG_SURF_BICONIC) && isfinite(f->radius_x))
-        f->radius_x *= s;
-    if (zern || f->type == SG_SURF_XYPOLY) {
-        /* The terms are in lens units over coordinates divided by the
-         * normalization radius, which grows with the part. */
-        f->norm_radius *= s;
-        for (k = 0; k < SG_NTERMS; k++)
-            f->terms[k] *= s;
-    }
-    if (zern) {
-        f->zern_dx *= s;
-        f->zern_dy *= s;
+    /* The conic is a ratio and stays; the type's own values follow its
+     * record's rule, every element of each (those past what the type
+     * reads are 0). */
+    for (e = t->keys; e->key; e++) {
+        const sg_param *p = sg_param_find(SG_SCOPE_SURFACE, e->key);
+        double *v;
+        int k;
+        if (!p || p->kind != SG_PARAM_REAL)
+            continue;
+        v = sg_param_ptr(p, f);
+        for (k = 0; k < p->count; k++) {
+            int pw = e->p0 + e->pk * k;
+            if (pw == 1)
+                v[k] *= s;
+            else if (pw > 1)
+                v[k] *= pow(s, pw);
+            else if (pw < 0)
+                v[k] /= pow(s, -pw);
+        }
     }
     f->semi_diameter *= s;
     f->ap_rmin *= s;

@@ -11,6 +11,10 @@
  * gradients are central differences at 2^-150; its intersections Newton
  * in 512 bits; its refraction the vector law.
  *
+ * The shapes come from the registry (sg_shape_ops_of over SG_SURF_TYPES);
+ * each gives its reference and its random surfaces in one row of
+ * shape_cases, and a registered shape without a row fails the test.
+ *
  * Checked for every registered shape:
  *   - the kernel: at random points, the double-double sag and gradient
  *     within the bounds the shape reports, its second-derivative bound
@@ -164,147 +168,337 @@ static void even_ref(mpfr_t z, const double *a, int n, const mpfr_t r2)
     mpfr_clears(p, t, (mpfr_ptr)0);
 }
 
+/* ------------------------------------------------------------------------
+ * Each shape's reference sag, from its definition, at (x, y) with r2 =
+ * x^2 + y^2 (0 outside the shape), and its random surfaces, scaled by s
+ * (lengths times s; the sag scales with them).  random_shape has set a
+ * base radius and conic and zeroed the rest.
+ * ------------------------------------------------------------------------ */
+
+static int odd_ref(const sg_surface *f, const mpfr_t x, const mpfr_t y, const mpfr_t r2, mpfr_t z)
+{
+    mpfr_t t, u;
+    int ok, k;
+    (void)x;
+    (void)y;
+    mpfr_inits2(PREC, t, u, (mpfr_ptr)0);
+    ok = conic_ref(z, f->radius, f->conic, r2);
+    mpfr_sqrt(u, r2, MPFR_RNDN);
+    for (k = 0; k < SG_NODD; k++) {
+        mpfr_pow_ui(t, u, (unsigned long)(k + 1), MPFR_RNDN);
+        mpfr_mul_d(t, t, f->odd[k], MPFR_RNDN);
+        mpfr_add(z, z, t, MPFR_RNDN);
+    }
+    mpfr_clears(t, u, (mpfr_ptr)0);
+    return ok;
+}
+
+static void odd_random(sg_surface *f, double s)
+{
+    int k;
+    /* b_i r^i at r = 10 s stays below about 0.05 s. */
+    for (k = 0; k < SG_NODD; k++)
+        f->odd[k] = srand1(0.05) * s / pow(10.0 * s, k + 1);
+}
+
+static int tor_ref(const sg_surface *f, const mpfr_t x, const mpfr_t y, const mpfr_t r2, mpfr_t z)
+{
+    mpfr_t y2, zy, t, u, x2;
+    int ok;
+    (void)r2;
+    mpfr_inits2(PREC, y2, zy, t, u, x2, (mpfr_ptr)0);
+    mpfr_sqr(y2, y, MPFR_RNDN);
+    ok = conic_ref(zy, f->radius, f->conic, y2);
+    even_ref(zy, f->asph, 7, y2);
+    if (!isfinite(f->radius_x) || f->radius_x == 0.0) {
+        mpfr_set(z, zy, MPFR_RNDN);
+    } else {
+        /* Turned about the axis at Rr: z = Rr - sgn(Rr - zy) sqrt((Rr - zy)^2 - x^2). */
+        mpfr_d_sub(u, f->radius_x, zy, MPFR_RNDN);
+        mpfr_sqr(t, u, MPFR_RNDN);
+        mpfr_sqr(x2, x, MPFR_RNDN);
+        mpfr_sub(t, t, x2, MPFR_RNDN);
+        if (mpfr_sgn(t) < 0)
+            ok = 0;
+        else {
+            mpfr_sqrt(t, t, MPFR_RNDN);
+            if (mpfr_sgn(u) < 0)
+                mpfr_neg(t, t, MPFR_RNDN);
+            mpfr_d_sub(z, f->radius_x, t, MPFR_RNDN);
+        }
+    }
+    mpfr_clears(y2, zy, t, u, x2, (mpfr_ptr)0);
+    return ok;
+}
+
+static void tor_random(sg_surface *f, double s)
+{
+    int k;
+    f->radius_x = urand() < 0.2 ? INFINITY
+                                : (urand() < 0.5 ? -1.0 : 1.0) * (15.0 + 100.0 * urand()) * s;
+    for (k = 0; k < 3; k++)
+        f->asph[k] = srand1(0.05) * s / pow(10.0 * s, 2 * k + 2);
+}
+
+static int bic_ref(const sg_surface *f, const mpfr_t x, const mpfr_t y, const mpfr_t r2, mpfr_t z)
+{
+    mpfr_t cx, cy, N, Q, t;
+    int ok = 1;
+    (void)r2;
+    mpfr_inits2(PREC, cx, cy, N, Q, t, (mpfr_ptr)0);
+    mpfr_set_ui(cx, 1, MPFR_RNDN);
+    mpfr_set_ui(cy, 1, MPFR_RNDN);
+    if (isfinite(f->radius_x) && f->radius_x != 0.0)
+        mpfr_div_d(cx, cx, f->radius_x, MPFR_RNDN);
+    else
+        mpfr_set_zero(cx, 1);
+    if (isfinite(f->radius) && f->radius != 0.0)
+        mpfr_div_d(cy, cy, f->radius, MPFR_RNDN);
+    else
+        mpfr_set_zero(cy, 1);
+    mpfr_sqr(t, x, MPFR_RNDN);
+    mpfr_mul(N, cx, t, MPFR_RNDN);
+    mpfr_mul(Q, N, cx, MPFR_RNDN);
+    mpfr_mul_d(Q, Q, 1.0 + f->conic_x, MPFR_RNDN);
+    mpfr_sqr(t, y, MPFR_RNDN);
+    mpfr_mul(t, t, cy, MPFR_RNDN);
+    mpfr_add(N, N, t, MPFR_RNDN);
+    mpfr_mul(t, t, cy, MPFR_RNDN);
+    mpfr_mul_d(t, t, 1.0 + f->conic, MPFR_RNDN);
+    mpfr_add(Q, Q, t, MPFR_RNDN);
+    mpfr_ui_sub(Q, 1, Q, MPFR_RNDN);
+    if (mpfr_sgn(Q) < 0)
+        ok = 0;
+    else {
+        mpfr_sqrt(Q, Q, MPFR_RNDN);
+        mpfr_add_ui(Q, Q, 1, MPFR_RNDN);
+        mpfr_div(z, N, Q, MPFR_RNDN);
+    }
+    mpfr_clears(cx, cy, N, Q, t, (mpfr_ptr)0);
+    return ok;
+}
+
+static void bic_random(sg_surface *f, double s)
+{
+    f->radius_x = urand() < 0.2 ? INFINITY
+                                : (urand() < 0.5 ? -1.0 : 1.0) * (20.0 + 80.0 * urand()) * s;
+    f->conic_x = srand1(2.0);
+}
+
+static int zern_sag_ref(const sg_surface *f, const mpfr_t x, const mpfr_t y, const mpfr_t r2,
+                        mpfr_t z)
+{
+    mpfr_t rho, th, zt, t, u;
+    int ok, k;
+    mpfr_inits2(PREC, rho, th, zt, t, u, (mpfr_ptr)0);
+    ok = conic_ref(z, f->radius, f->conic, r2);
+    even_ref(z, f->asph, SG_NASPH, r2);
+    /* The terms about the decenter (Zemax's Decenter X, Y), the conic and
+     * r^n terms about the vertex. */
+    mpfr_sub_d(u, x, f->zern_dx, MPFR_RNDN);
+    mpfr_sub_d(t, y, f->zern_dy, MPFR_RNDN);
+    mpfr_hypot(rho, u, t, MPFR_RNDN);
+    mpfr_div_d(rho, rho, f->norm_radius, MPFR_RNDN);
+    mpfr_atan2(th, t, u, MPFR_RNDN);
+    for (k = 0; k < SG_NTERMS; k++) {
+        int n, m;
+        if (f->terms[k] == 0.0)
+            continue;
+        if (f->type == SG_SURF_ZERNIKE_FRINGE) {
+            n = fringe_nm[k][0];
+            m = fringe_nm[k][1];
+        } else {
+            noll_nm(k + 1, &n, &m);
+        }
+        zern_ref(zt, n, m, rho, th);
+        if (f->type == SG_SURF_ZERNIKE_STANDARD) {
+            mpfr_set_ui(t, (unsigned long)(m == 0 ? n + 1 : 2 * (n + 1)), MPFR_RNDN);
+            mpfr_sqrt(t, t, MPFR_RNDN);
+            mpfr_mul(zt, zt, t, MPFR_RNDN);
+        }
+        mpfr_mul_d(zt, zt, f->terms[k], MPFR_RNDN);
+        mpfr_add(z, z, zt, MPFR_RNDN);
+    }
+    mpfr_clears(rho, th, zt, t, u, (mpfr_ptr)0);
+    return ok;
+}
+
+static void zern_random(sg_surface *f, double s)
+{
+    int k;
+    f->norm_radius = (8.0 + 4.0 * urand()) * s;
+    for (k = 0; k < (f->type == SG_SURF_ZERNIKE_FRINGE ? 37 : SG_NTERMS); k++)
+        if (urand() < 0.5)
+            f->terms[k] = srand1(0.02) * s / (1.0 + k);
+    f->asph[1] = srand1(1e-6) / (s * s * s);
+    /* Half of them decentred: the terms about (dx, dy), the conic and r^n
+     * terms about the vertex. */
+    if (urand() < 0.5) {
+        f->zern_dx = srand1(2.0) * s;
+        f->zern_dy = srand1(2.0) * s;
+    }
+}
+
+static int xy_ref(const sg_surface *f, const mpfr_t x, const mpfr_t y, const mpfr_t r2, mpfr_t z)
+{
+    mpfr_t uu, vv, pa, pb;
+    int n = 1, ok, k;
+    mpfr_inits2(PREC, uu, vv, pa, pb, (mpfr_ptr)0);
+    ok = conic_ref(z, f->radius, f->conic, r2);
+    mpfr_div_d(uu, x, f->norm_radius, MPFR_RNDN);
+    mpfr_div_d(vv, y, f->norm_radius, MPFR_RNDN);
+    for (k = 0; k < SG_NTERMS; k++) {
+        /* Term k + 1: order n holds terms n(n+1)/2 ... n(n+1)/2 + n. */
+        int j = k + 1, i;
+        while ((n + 1) * (n + 2) / 2 <= j)
+            n++;
+        i = j - n * (n + 1) / 2;
+        if (f->terms[k] == 0.0)
+            continue;
+        mpfr_pow_ui(pa, uu, (unsigned long)(n - i), MPFR_RNDN);
+        mpfr_pow_ui(pb, vv, (unsigned long)i, MPFR_RNDN);
+        mpfr_mul(pa, pa, pb, MPFR_RNDN);
+        mpfr_mul_d(pa, pa, f->terms[k], MPFR_RNDN);
+        mpfr_add(z, z, pa, MPFR_RNDN);
+    }
+    mpfr_clears(uu, vv, pa, pb, (mpfr_ptr)0);
+    return ok;
+}
+
+static void xy_random(sg_surface *f, double s)
+{
+    int k;
+    f->norm_radius = (8.0 + 4.0 * urand()) * s;
+    for (k = 0; k < 65; k++)
+        if (urand() < 0.5)
+            f->terms[k] = srand1(0.02) * s / (1.0 + k);
+}
+
+/* The Q-type asphere (Forbes' Qcon): the conic plus u^4 sum a_m
+ * P_m^(0,4)(2 u^2 - 1), u = r / rn, each Jacobi polynomial from its
+ * explicit sum (Abramowitz and Stegun 22.3.2: P_m^(0,4)(t) = sum_s C(m,
+ * m - s) C(m + 4, s) ((t - 1) / 2)^s ((t + 1) / 2)^(m - s)), not the
+ * engine's recurrence. */
+/* C(n, k), exact in double for the n used here. */
+static double choose(int n, int k)
+{
+    double r = 1.0;
+    int i;
+    for (i = 1; i <= k; i++)
+        r = r * (n - k + i) / i;
+    return r;
+}
+
+static int qcon_ref(const sg_surface *f, const mpfr_t x, const mpfr_t y, const mpfr_t r2,
+                    mpfr_t z)
+{
+    mpfr_t u2, u2m, P, t, q;
+    int ok, m, k;
+    (void)x;
+    (void)y;
+    mpfr_inits2(PREC, u2, u2m, P, t, q, (mpfr_ptr)0);
+    ok = conic_ref(z, f->radius, f->conic, r2);
+    mpfr_div_d(u2, r2, f->norm_radius, MPFR_RNDN);
+    mpfr_div_d(u2, u2, f->norm_radius, MPFR_RNDN);
+    mpfr_sub_ui(u2m, u2, 1, MPFR_RNDN);
+    for (m = 0; m < SG_NTERMS; m++) {
+        if (f->terms[m] == 0.0)
+            continue;
+        mpfr_set_zero(P, 1);
+        for (k = 0; k <= m; k++) {
+            /* C(m, m - k) C(m + 4, k) (u^2 - 1)^k u^(2(m - k)) */
+            mpfr_set_d(t, choose(m, m - k) * choose(m + 4, k), MPFR_RNDN);
+            mpfr_pow_ui(q, u2m, (unsigned long)k, MPFR_RNDN);
+            mpfr_mul(t, t, q, MPFR_RNDN);
+            mpfr_pow_ui(q, u2, (unsigned long)(m - k), MPFR_RNDN);
+            mpfr_mul(t, t, q, MPFR_RNDN);
+            mpfr_add(P, P, t, MPFR_RNDN);
+        }
+        mpfr_sqr(q, u2, MPFR_RNDN);
+        mpfr_mul(P, P, q, MPFR_RNDN);
+        mpfr_mul_d(P, P, f->terms[m], MPFR_RNDN);
+        mpfr_add(z, z, P, MPFR_RNDN);
+    }
+    mpfr_clears(u2, u2m, P, t, q, (mpfr_ptr)0);
+    return ok;
+}
+
+static void qcon_random(sg_surface *f, double s)
+{
+    int k;
+    f->norm_radius = (8.0 + 4.0 * urand()) * s;
+    /* Up to a_7: beyond the normalization radius (the points reach 1.6
+     * of it) P_m grows as 7.9^m. */
+    for (k = 0; k < 8; k++)
+        if (urand() < 0.6)
+            f->terms[k] = srand1(0.02) * s / ((1.0 + k) * (1.0 + k));
+}
+
+/* Every type with a shape of its own (sg_shape_ops_of) has its row here:
+ * the reference and the random surfaces; rx: it has an x radius (made
+ * equal to the radius for the vector tests' rim lanes), rim_x: its domain
+ * ends at the x radius rather than the radius; vec: shape_vd.h and
+ * shape_vdd.h have its kernels on lanes (else the traces call its scalar
+ * ones lane by lane, and the vector tests skip it). */
+typedef struct shape_case {
+    int type;
+    int (*ref)(const sg_surface *f, const mpfr_t x, const mpfr_t y, const mpfr_t r2, mpfr_t z);
+    void (*random)(sg_surface *f, double s);
+    int rx, rim_x, vec;
+} shape_case;
+
+static const shape_case shape_cases[] = {
+    {SG_SURF_ODDASPH, odd_ref, odd_random, 0, 0, 1},
+    {SG_SURF_TOROIDAL, tor_ref, tor_random, 1, 1, 1},
+    {SG_SURF_BICONIC, bic_ref, bic_random, 1, 0, 1},
+    {SG_SURF_ZERNIKE_FRINGE, zern_sag_ref, zern_random, 0, 0, 1},
+    {SG_SURF_ZERNIKE_STANDARD, zern_sag_ref, zern_random, 0, 0, 1},
+    {SG_SURF_XYPOLY, xy_ref, xy_random, 0, 0, 1},
+    {SG_SURF_QCON, qcon_ref, qcon_random, 0, 0, 0},
+};
+
+/* The row of a registered shape's type (find_shapes has checked that
+ * every one has a row). */
+static const shape_case *case_of(int type)
+{
+    size_t i;
+    for (i = 0; i < sizeof shape_cases / sizeof shape_cases[0]; i++)
+        if (shape_cases[i].type == type)
+            return &shape_cases[i];
+    return NULL;
+}
+
+/* The registered shapes, in the order of SG_SURF_TYPES: the types with
+ * ops: n_shapes of them (find_shapes). */
+static int shape_types[SG_SURF_NTYPES];
+static int n_shapes;
+
+static int find_shapes(void)
+{
+    int t;
+    n_shapes = 0;
+    for (t = 0; t < SG_SURF_NTYPES; t++)
+        if (sg_shape_ops_of(t)) {
+            if (!case_of(t)) {
+                fprintf(stderr, "type %d has a shape (sg_shape_ops_of) and no row in "
+                        "shape_cases\n", t);
+                return 0;
+            }
+            shape_types[n_shapes++] = t;
+        }
+    return 1;
+}
+
 static int sag_ref(const sg_surface *f, const mpfr_t x, const mpfr_t y, mpfr_t z)
 {
-    mpfr_t r2, t, u;
-    int ok = 1, k;
-    mpfr_inits2(PREC, r2, t, u, (mpfr_ptr)0);
+    mpfr_t r2, t;
+    int ok;
+    mpfr_inits2(PREC, r2, t, (mpfr_ptr)0);
     mpfr_sqr(r2, x, MPFR_RNDN);
     mpfr_sqr(t, y, MPFR_RNDN);
     mpfr_add(r2, r2, t, MPFR_RNDN);
-    switch (f->type) {
-    case SG_SURF_ODDASPH:
-        ok = conic_ref(z, f->radius, f->conic, r2);
-        mpfr_sqrt(u, r2, MPFR_RNDN);
-        for (k = 0; k < SG_NODD; k++) {
-            mpfr_pow_ui(t, u, (unsigned long)(k + 1), MPFR_RNDN);
-            mpfr_mul_d(t, t, f->odd[k], MPFR_RNDN);
-            mpfr_add(z, z, t, MPFR_RNDN);
-        }
-        break;
-    case SG_SURF_TOROIDAL: {
-        mpfr_t y2, zy;
-        mpfr_inits2(PREC, y2, zy, (mpfr_ptr)0);
-        mpfr_sqr(y2, y, MPFR_RNDN);
-        ok = conic_ref(zy, f->radius, f->conic, y2);
-        even_ref(zy, f->asph, 7, y2);
-        if (!isfinite(f->radius_x) || f->radius_x == 0.0) {
-            mpfr_set(z, zy, MPFR_RNDN);
-        } else {
-            /* Turned about the axis at Rr: z = Rr - sgn(Rr - zy) sqrt((Rr - zy)^2 - x^2). */
-            mpfr_d_sub(u, f->radius_x, zy, MPFR_RNDN);
-            mpfr_sqr(t, u, MPFR_RNDN);
-            mpfr_sqr(r2, x, MPFR_RNDN);
-            mpfr_sub(t, t, r2, MPFR_RNDN);
-            if (mpfr_sgn(t) < 0)
-                ok = 0;
-            else {
-                mpfr_sqrt(t, t, MPFR_RNDN);
-                if (mpfr_sgn(u) < 0)
-                    mpfr_neg(t, t, MPFR_RNDN);
-                mpfr_d_sub(z, f->radius_x, t, MPFR_RNDN);
-            }
-        }
-        mpfr_clears(y2, zy, (mpfr_ptr)0);
-        break;
-    }
-    case SG_SURF_BICONIC: {
-        mpfr_t cx, cy, N, Q;
-        mpfr_inits2(PREC, cx, cy, N, Q, (mpfr_ptr)0);
-        mpfr_set_ui(cx, 1, MPFR_RNDN);
-        mpfr_set_ui(cy, 1, MPFR_RNDN);
-        if (isfinite(f->radius_x) && f->radius_x != 0.0)
-            mpfr_div_d(cx, cx, f->radius_x, MPFR_RNDN);
-        else
-            mpfr_set_zero(cx, 1);
-        if (isfinite(f->radius) && f->radius != 0.0)
-            mpfr_div_d(cy, cy, f->radius, MPFR_RNDN);
-        else
-            mpfr_set_zero(cy, 1);
-        mpfr_sqr(t, x, MPFR_RNDN);
-        mpfr_mul(N, cx, t, MPFR_RNDN);
-        mpfr_mul(Q, N, cx, MPFR_RNDN);
-        mpfr_mul_d(Q, Q, 1.0 + f->conic_x, MPFR_RNDN);
-        mpfr_sqr(t, y, MPFR_RNDN);
-        mpfr_mul(t, t, cy, MPFR_RNDN);
-        mpfr_add(N, N, t, MPFR_RNDN);
-        mpfr_mul(t, t, cy, MPFR_RNDN);
-        mpfr_mul_d(t, t, 1.0 + f->conic, MPFR_RNDN);
-        mpfr_add(Q, Q, t, MPFR_RNDN);
-        mpfr_ui_sub(Q, 1, Q, MPFR_RNDN);
-        if (mpfr_sgn(Q) < 0)
-            ok = 0;
-        else {
-            mpfr_sqrt(Q, Q, MPFR_RNDN);
-            mpfr_add_ui(Q, Q, 1, MPFR_RNDN);
-            mpfr_div(z, N, Q, MPFR_RNDN);
-        }
-        mpfr_clears(cx, cy, N, Q, (mpfr_ptr)0);
-        break;
-    }
-    case SG_SURF_ZERNIKE_FRINGE:
-    case SG_SURF_ZERNIKE_STANDARD: {
-        mpfr_t rho, th, zt;
-        mpfr_inits2(PREC, rho, th, zt, (mpfr_ptr)0);
-        ok = conic_ref(z, f->radius, f->conic, r2);
-        even_ref(z, f->asph, SG_NASPH, r2);
-        /* The terms about the decenter (Zemax's Decenter X, Y), the
-         * conic and r^n terms about the vertex. */
-        mpfr_sub_d(u, x, f->zern_dx, MPFR_RNDN);
-        mpfr_sub_d(t, y, f->zern_dy, MPFR_RNDN);
-        mpfr_hypot(rho, u, t, MPFR_RNDN);
-        mpfr_div_d(rho, rho, f->norm_radius, MPFR_RNDN);
-        mpfr_atan2(th, t, u, MPFR_RNDN);
-        for (k = 0; k < SG_NTERMS; k++) {
-            int n, m;
-            if (f->terms[k] == 0.0)
-                continue;
-            if (f->type == SG_SURF_ZERNIKE_FRINGE) {
-                n = fringe_nm[k][0];
-                m = fringe_nm[k][1];
-            } else {
-                noll_nm(k + 1, &n, &m);
-            }
-            zern_ref(zt, n, m, rho, th);
-            if (f->type == SG_SURF_ZERNIKE_STANDARD) {
-                mpfr_set_ui(t, (unsigned long)(m == 0 ? n + 1 : 2 * (n + 1)), MPFR_RNDN);
-                mpfr_sqrt(t, t, MPFR_RNDN);
-                mpfr_mul(zt, zt, t, MPFR_RNDN);
-            }
-            mpfr_mul_d(zt, zt, f->terms[k], MPFR_RNDN);
-            mpfr_add(z, z, zt, MPFR_RNDN);
-        }
-        mpfr_clears(rho, th, zt, (mpfr_ptr)0);
-        break;
-    }
-    case SG_SURF_XYPOLY: {
-        mpfr_t uu, vv, pa, pb;
-        int n = 1;
-        mpfr_inits2(PREC, uu, vv, pa, pb, (mpfr_ptr)0);
-        ok = conic_ref(z, f->radius, f->conic, r2);
-        mpfr_div_d(uu, x, f->norm_radius, MPFR_RNDN);
-        mpfr_div_d(vv, y, f->norm_radius, MPFR_RNDN);
-        for (k = 0; k < SG_NTERMS; k++) {
-            /* Term k + 1: order n holds terms n(n+1)/2 ... n(n+1)/2 + n. */
-            int j = k + 1, i;
-            while ((n + 1) * (n + 2) / 2 <= j)
-                n++;
-            i = j - n * (n + 1) / 2;
-            if (f->terms[k] == 0.0)
-                continue;
-            mpfr_pow_ui(pa, uu, (unsigned long)(n - i), MPFR_RNDN);
-            mpfr_pow_ui(pb, vv, (unsigned long)i, MPFR_RNDN);
-            mpfr_mul(pa, pa, pb, MPFR_RNDN);
-            mpfr_mul_d(pa, pa, f->terms[k], MPFR_RNDN);
-            mpfr_add(z, z, pa, MPFR_RNDN);
-        }
-        mpfr_clears(uu, vv, pa, pb, (mpfr_ptr)0);
-        break;
-    }
-    default:
-        ok = 0;
-    }
-    mpfr_clears(r2, t, u, (mpfr_ptr)0);
+    ok = case_of(f->type)->ref(f, x, y, r2, z);
+    mpfr_clears(r2, t, (mpfr_ptr)0);
     return ok;
 }
 
@@ -335,13 +529,8 @@ static int sag_grad_ref(const sg_surface *f, const mpfr_t x, const mpfr_t y, dou
     return ok;
 }
 
-/* ------------------------------------------------------------------------
- * Random shapes, scaled by s (lengths times s; the sag scales with them).
- * ------------------------------------------------------------------------ */
-
 static void random_shape(sg_surface *f, int type, double s)
 {
-    int k;
     f->type = type;
     f->radius = (urand() < 0.5 ? -1.0 : 1.0) * (20.0 + 80.0 * urand()) * s;
     /* A flat base now and then: the terms alone make the sag. */
@@ -354,50 +543,8 @@ static void random_shape(sg_surface *f, int type, double s)
     f->radius_x = INFINITY;
     f->conic_x = 0.0;
     f->norm_radius = 1.0;
-    switch (type) {
-    case SG_SURF_ODDASPH:
-        /* b_i r^i at r = 10 s stays below about 0.05 s. */
-        for (k = 0; k < SG_NODD; k++)
-            f->odd[k] = srand1(0.05) * s / pow(10.0 * s, k + 1);
-        break;
-    case SG_SURF_TOROIDAL:
-        f->radius_x = urand() < 0.2 ? INFINITY
-                                    : (urand() < 0.5 ? -1.0 : 1.0) * (15.0 + 100.0 * urand()) * s;
-        for (k = 0; k < 3; k++)
-            f->asph[k] = srand1(0.05) * s / pow(10.0 * s, 2 * k + 2);
-        break;
-    case SG_SURF_BICONIC:
-        f->radius_x = urand() < 0.2 ? INFINITY
-                                    : (urand() < 0.5 ? -1.0 : 1.0) * (20.0 + 80.0 * urand()) * s;
-        f->conic_x = srand1(2.0);
-        break;
-    case SG_SURF_ZERNIKE_FRINGE:
-    case SG_SURF_ZERNIKE_STANDARD:
-        f->norm_radius = (8.0 + 4.0 * urand()) * s;
-        for (k = 0; k < (type == SG_SURF_ZERNIKE_FRINGE ? 37 : SG_NTERMS); k++)
-            if (urand() < 0.5)
-                f->terms[k] = srand1(0.02) * s / (1.0 + k);
-        f->asph[1] = srand1(1e-6) / (s * s * s);
-        /* Half of them decentred: the terms about (dx, dy), the conic and
-         * r^n terms about the vertex. */
-        if (urand() < 0.5) {
-            f->zern_dx = srand1(2.0) * s;
-            f->zern_dy = srand1(2.0) * s;
-        }
-        break;
-    case SG_SURF_XYPOLY:
-        f->norm_radius = (8.0 + 4.0 * urand()) * s;
-        for (k = 0; k < 65; k++)
-            if (urand() < 0.5)
-                f->terms[k] = srand1(0.02) * s / (1.0 + k);
-        break;
-    }
+    case_of(type)->random(f, s);
 }
-
-static const int shape_types[] = {SG_SURF_ODDASPH, SG_SURF_TOROIDAL, SG_SURF_BICONIC,
-                                  SG_SURF_ZERNIKE_FRINGE, SG_SURF_ZERNIKE_STANDARD,
-                                  SG_SURF_XYPOLY};
-#define NTYPES ((int)(sizeof shape_types / sizeof shape_types[0]))
 
 /* ------------------------------------------------------------------------
  * The kernel itself.
@@ -413,7 +560,7 @@ static void kernel_bounds(void **state)
     mpfr_inits2(PREC, x, y, z, gx, gy, e, mz, mgx, mgy, (mpfr_ptr)0);
     for (k = 0; k < SG_SHAPE_MPTMP; k++)
         mpfr_init2(tmp[k], PREC);
-    for (ti = 0; ti < NTYPES; ti++)
+    for (ti = 0; ti < n_shapes; ti++)
         for (si = 0; si < 3; si++)
             for (it = 0; it < 40; it++) {
                 sg_surface f;
@@ -483,7 +630,7 @@ static void kernel_bounds(void **state)
                 }
             }
     print_message("# kernel points checked: %d\n", checked);
-    assert_true(checked > NTYPES * 3 * 40 * 5);
+    assert_true(checked > n_shapes * 3 * 40 * 5);
     mpfr_clears(x, y, z, gx, gy, e, mz, mgx, mgy, (mpfr_ptr)0);
     for (k = 0; k < SG_SHAPE_MPTMP; k++)
         mpfr_clear(tmp[k]);
@@ -723,7 +870,7 @@ static void trace_sets(void **state)
     tally all = {0};
     (void)state;
     rng_state = 0xface0ff5eedULL;
-    for (ti = 0; ti < NTYPES; ti++)
+    for (ti = 0; ti < n_shapes; ti++)
         for (si = 0; si < 3; si++)
             for (it = 0; it < 6; it++) {
                 double s = scales[si];
@@ -1111,14 +1258,13 @@ static void point_dd(double s, double *hi, double *lo)
 static void vector_kernel(void **state)
 {
     static const double scales[] = {1e-3, 1.0, 1e4};
-    static const int types[] = {SG_SURF_ZERNIKE_FRINGE, SG_SURF_ZERNIKE_STANDARD, SG_SURF_XYPOLY,
-                                SG_SURF_ODDASPH,        SG_SURF_TOROIDAL,         SG_SURF_BICONIC};
-    enum { NT = sizeof types / sizeof types[0] };
+    const int *types = shape_types;
+    enum { NT = SG_SURF_NTYPES };
     int ti, si, it, blk, k, lanes[NT] = {0}, bad_lanes[NT] = {0};
     (void)state;
     rng_state = 0x7ec7ec7ec7ULL;
-    for (ti = 0; ti < NT; ti++)
-        for (si = 0; si < 3; si++)
+    for (ti = 0; ti < n_shapes; ti++)
+        for (si = 0; si < 3 && case_of(types[ti])->vec; si++)
             for (it = 0; it < 30; it++) {
                 sg_surface f;
                 sg_shape sh;
@@ -1131,14 +1277,14 @@ static void vector_kernel(void **state)
                 if (it == 0) {
                     f.radius = ldexp(4.0, ilogb(sc));
                     f.conic = 0.0;
-                    if (types[ti] == SG_SURF_TOROIDAL || types[ti] == SG_SURF_BICONIC) {
+                    if (case_of(types[ti])->rx) {
                         f.radius_x = f.radius;
                         f.conic_x = 0.0;
                     }
                 }
-                rim = types[ti] == SG_SURF_TOROIDAL ? f.radius_x : f.radius;
+                rim = case_of(types[ti])->rim_x ? f.radius_x : f.radius;
                 assert_int_equal(sg_shape_prepare(&f, &sh, 1, NULL), SG_OK);
-                assert_true(svd_handles(&sh));
+                assert_int_equal(svd_handles(&sh), case_of(types[ti])->vec);
                 for (blk = 0; blk < 8; blk++) {
                     vdd x, y, z, g[2];
                     vd ez, eg;
@@ -1184,7 +1330,9 @@ static void vector_kernel(void **state)
                     }
                 }
             }
-    for (ti = 0; ti < NT; ti++) {
+    for (ti = 0; ti < n_shapes; ti++) {
+        if (!case_of(types[ti])->vec)
+            continue;
         print_message("# vector kernel, type %d: %d lanes, %d outside the shape\n", types[ti],
                       lanes[ti], bad_lanes[ti]);
         assert_true(bad_lanes[ti] > lanes[ti] / 20 && bad_lanes[ti] < lanes[ti] / 2);
@@ -1203,14 +1351,13 @@ static void vector_kernel(void **state)
 static void vector_kernel_d(void **state)
 {
     static const double scales[] = {1e-3, 1.0, 1e4};
-    static const int types[] = {SG_SURF_ZERNIKE_FRINGE, SG_SURF_ZERNIKE_STANDARD, SG_SURF_XYPOLY,
-                                SG_SURF_ODDASPH,        SG_SURF_TOROIDAL,         SG_SURF_BICONIC};
-    enum { NT = sizeof types / sizeof types[0] };
+    const int *types = shape_types;
+    enum { NT = SG_SURF_NTYPES };
     int ti, si, it, blk, k, lanes[NT] = {0}, bad_lanes[NT] = {0}, inf_lanes = 0;
     (void)state;
     rng_state = 0x5a95a95a9ULL;
-    for (ti = 0; ti < NT; ti++)
-        for (si = 0; si < 3; si++)
+    for (ti = 0; ti < n_shapes; ti++)
+        for (si = 0; si < 3 && case_of(types[ti])->vec; si++)
             for (it = 0; it < 30; it++) {
                 sg_surface f;
                 sg_shape sh;
@@ -1223,14 +1370,14 @@ static void vector_kernel_d(void **state)
                 if (it == 0) {
                     f.radius = ldexp(4.0, ilogb(sc));
                     f.conic = 0.0;
-                    if (types[ti] == SG_SURF_TOROIDAL || types[ti] == SG_SURF_BICONIC) {
+                    if (case_of(types[ti])->rx) {
                         f.radius_x = f.radius;
                         f.conic_x = 0.0;
                     }
                 }
-                rim = types[ti] == SG_SURF_TOROIDAL ? f.radius_x : f.radius;
+                rim = case_of(types[ti])->rim_x ? f.radius_x : f.radius;
                 assert_int_equal(sg_shape_prepare(&f, &sh, 1, NULL), SG_OK);
-                assert_true(sv_handles_d(&sh));
+                assert_int_equal(sv_handles_d(&sh), case_of(types[ti])->vec);
                 for (blk = 0; blk < 8; blk++) {
                     vd x, y, z, g[2], h;
                     vm bad;
@@ -1270,7 +1417,9 @@ static void vector_kernel_d(void **state)
                     }
                 }
             }
-    for (ti = 0; ti < NT; ti++) {
+    for (ti = 0; ti < n_shapes; ti++) {
+        if (!case_of(types[ti])->vec)
+            continue;
         print_message("# vector double kernel, type %d: %d lanes, %d outside the shape\n",
                       types[ti], lanes[ti], bad_lanes[ti]);
         assert_true(bad_lanes[ti] > lanes[ti] / 20 && bad_lanes[ti] < lanes[ti] / 2);
@@ -1336,6 +1485,91 @@ static void axis_terms(void **state)
     sg_catalog_free(cat);
 }
 
+/* The Q-type asphere against values from another program: its sag and
+ * slopes from mpmath's Jacobi polynomials at 50 digits
+ * (tests/data/qcon_ref.py), at points inside and beyond the normalization
+ * radius. */
+static void qcon_forbes_values(void **state)
+{
+    static const double a[] = {2e-3, -5e-4, 1e-4, -3e-5, 1e-5, 4e-6};
+    static const struct {
+        double x, y;
+        const char *z, *gx, *gy;
+    } pt[] = {
+        {3.0, 4.0, "0.3131561411031732675226880287391475775896",
+         "0.07528383130332571843302405081689009787925",
+         "0.1003784417377676245773654010891867971723"},
+        {0.0, 9.5, "1.134395241294212756851286858729953547665", "0.0",
+         "0.2397834173728828904334280918752569645722"},
+        {7.125, -6.25, "1.129071194950235952807322795619092820032",
+         "0.1798313589410181212253998800349735511489",
+         "-0.1577468060886123870398244561710294308324"},
+    };
+    mpfr_t x, y, z, gx, gy, ref, e, tmp[SG_SHAPE_MPTMP], mc[SG_SHAPE_MPC];
+    sg_surface f;
+    sg_shape sh;
+    size_t i;
+    int k;
+    (void)state;
+    memset(&f, 0, sizeof f);
+    f.type = SG_SURF_QCON;
+    f.radius = 40.0;
+    f.conic = -0.7;
+    f.norm_radius = 10.0;
+    for (k = 0; k < 6; k++)
+        f.terms[k] = a[k];
+    assert_int_equal(sg_shape_prepare(&f, &sh, 1, NULL), SG_OK);
+    mpfr_inits2(PREC, x, y, z, gx, gy, ref, e, (mpfr_ptr)0);
+    for (k = 0; k < SG_SHAPE_MPTMP; k++)
+        mpfr_init2(tmp[k], PREC);
+    sg_shape_mp_coefs(&sh, mc, PREC);
+    for (i = 0; i < sizeof pt / sizeof pt[0]; i++) {
+        dd zz, gg[2];
+        double ez, eg, zd, gd[2], h, ref_d[3];
+        const char *want[3] = {pt[i].z, pt[i].gx, pt[i].gy};
+        for (k = 0; k < 3; k++) {
+            mpfr_set_str(ref, want[k], 10, MPFR_RNDN);
+            ref_d[k] = mpfr_get_d(ref, MPFR_RNDN);
+        }
+        /* MPFR: to the reference's 40 digits. */
+        mpfr_set_d(x, pt[i].x, MPFR_RNDN);
+        mpfr_set_d(y, pt[i].y, MPFR_RNDN);
+        assert_true(sh.ops->sag_mp(&sh, mc, x, y, z, gx, gy, tmp));
+        mpfr_set_str(ref, pt[i].z, 10, MPFR_RNDN);
+        mpfr_sub(e, z, ref, MPFR_RNDN);
+        assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= 1e-38);
+        mpfr_set_str(ref, pt[i].gx, 10, MPFR_RNDN);
+        mpfr_sub(e, gx, ref, MPFR_RNDN);
+        assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= 1e-38);
+        mpfr_set_str(ref, pt[i].gy, 10, MPFR_RNDN);
+        mpfr_sub(e, gy, ref, MPFR_RNDN);
+        assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= 1e-38);
+        /* Double-double: within its bounds, which are near its precision. */
+        assert_true(sh.ops->sag_dd(&sh, dd_from(pt[i].x), dd_from(pt[i].y), &zz, gg, &ez, &eg));
+        mpfr_set_str(ref, pt[i].z, 10, MPFR_RNDN);
+        mpfr_set_d(e, zz.hi, MPFR_RNDN);
+        mpfr_add_d(e, e, zz.lo, MPFR_RNDN);
+        mpfr_sub(e, e, ref, MPFR_RNDN);
+        assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= ez);
+        assert_true(ez < 1e-28);
+        mpfr_set_str(ref, pt[i].gy, 10, MPFR_RNDN);
+        mpfr_set_d(e, gg[1].hi, MPFR_RNDN);
+        mpfr_add_d(e, e, gg[1].lo, MPFR_RNDN);
+        mpfr_sub(e, e, ref, MPFR_RNDN);
+        assert_true(fabs(mpfr_get_d(e, MPFR_RNDN)) <= eg);
+        assert_true(eg < 1e-28);
+        /* Double: to a few ulps. */
+        assert_true(sh.ops->sag_d(&sh, pt[i].x, pt[i].y, &zd, gd, &h));
+        assert_true(fabs(zd - ref_d[0]) <= 1e-15 * fabs(ref_d[0]));
+        assert_true(fabs(gd[0] - ref_d[1]) <= 1e-15 * (fabs(ref_d[1]) + fabs(ref_d[2])));
+        assert_true(fabs(gd[1] - ref_d[2]) <= 1e-15 * (fabs(ref_d[1]) + fabs(ref_d[2])));
+    }
+    sg_shape_mp_clear(mc);
+    mpfr_clears(x, y, z, gx, gy, ref, e, (mpfr_ptr)0);
+    for (k = 0; k < SG_SHAPE_MPTMP; k++)
+        mpfr_clear(tmp[k]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -1347,6 +1581,9 @@ int main(void)
         cmocka_unit_test(vector_kernel_d),
         cmocka_unit_test(zernike_decenter_closed_form),
         cmocka_unit_test(axis_terms),
+        cmocka_unit_test(qcon_forbes_values),
     };
+    if (!find_shapes())
+        return 1;
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -424,6 +424,34 @@ static void test_roundtrip_shapes(void **state)
     sg_catalog_free(cat);
 }
 
+/* A shape with no .zmx map in its record (the Q-type asphere): export
+ * refuses the design naming the surface and the type, and import refuses
+ * its TYPE naming the line. */
+static void test_shape_without_zmx(void **state)
+{
+    static const char text[] =
+        "{ \"surfaces\": [ { \"thickness\": \"inf\" },\n"
+        "    { \"type\": \"q_type_asphere\", \"radius\": 50, \"thickness\": 5,\n"
+        "      \"stop\": true, \"norm_radius\": 10, \"terms\": [1e-3, -2e-4] }, {} ] }\n";
+    static const char zmx[] = "MODE SEQ\nSURF 0\n  DISZ INFINITY\nSURF 1\n  TYPE QTYPEASP\n"
+                              "  CURV 0.02\n  DISZ 5\nSURF 2\n";
+    sg_system *a = sg_system_new(), *b = sg_system_new();
+    sg_diag d;
+    (void)state;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_parse(a, text, strlen(text), "q.json", &d), SG_OK);
+    assert_null(sg_zmx_to_text(a, NULL, &d));
+    assert_int_equal(d.code, SG_EUNSUPPORTED);
+    assert_non_null(strstr(d.msg, "surface 1"));
+    assert_non_null(strstr(d.msg, "Q-type asphere"));
+    sg_diag_clear(&d);
+    assert_int_equal(sg_zmx_parse(b, zmx, strlen(zmx), "q.zmx", NULL, &d), SG_EUNSUPPORTED);
+    assert_non_null(strstr(d.msg, "q.zmx:5"));
+    assert_non_null(strstr(d.msg, "TYPE QTYPEASP"));
+    sg_system_free(a);
+    sg_system_free(b);
+}
+
 /* HoO-V2C18Ex03 (a Cassegrain of two conic mirrors, so no glass and no
  * temperature correction) stores Zemax's automatic semi-diameters with 13
  * digits.  Zemax takes the largest ray height over the fields and the pupil
@@ -2482,6 +2510,7 @@ int main(void)
         cmocka_unit_test(test_roundtrip_examples),
         cmocka_unit_test(test_zemax_cylinder),
         cmocka_unit_test(test_roundtrip_shapes),
+        cmocka_unit_test(test_shape_without_zmx),
         cmocka_unit_test(test_zemax_semi_diameters),
         cmocka_unit_test(test_zemax_asphere_temperature),
         cmocka_unit_test(test_bad_inputs),

@@ -516,9 +516,16 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
         }
         rc = cell_type_parse(text);
         if (rc < 0) {
-            snprintf(err, errn,
-                     "surface %d type: \"%s\" is not STANDARD, EVENASPH, COORDBRK, ODDASPHE, "
-                     "TOROIDAL, BICONICX, FZERNSAG, SZERNSAG or XPOLYNOM", row, text);
+            /* The names from the one list of types (SG_SURF_TYPES). */
+            char names[256] = "";
+            size_t len = 0;
+            for (k = 0; k < p->nnames && len < sizeof names; k++)
+                len += (size_t)snprintf(names + len, sizeof names - len, "%s%s",
+                                        k == 0                ? ""
+                                        : k == p->nnames - 1 ? " or "
+                                                              : ", ",
+                                        p->shown[k]);
+            snprintf(err, errn, "surface %d type: \"%s\" is not %s", row, text, names);
             return SG_EPARSE;
         }
         if (rc == SG_SURF_COORDBRK && s->type != SG_SURF_COORDBRK)
