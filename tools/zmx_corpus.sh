@@ -24,6 +24,9 @@ shift $((OPTIND - 1))
 [ $# -ge 1 ] || { echo "usage: $0 [-s SAGITTA] [-l LIST.tsv] DIR..." >&2; exit 2; }
 [ -x "$sag" ] || { echo "$0: no sagitta program at $sag (build first, or give -s)" >&2; exit 2; }
 
+# The catalogs of this tree, for a program copied elsewhere.
+SAGITTA_LENSDB=${SAGITTA_LENSDB:-$(cd "$(dirname "$0")/.." && pwd)/lensdb}
+export SAGITTA_LENSDB
 tmp=$(mktemp -d) || exit 2
 trap 'rm -rf "$tmp"' EXIT INT TERM
 : > "$tmp/rows"
@@ -36,11 +39,12 @@ while IFS= read -r f; do
     rc=$?
     # The first message line that names this file: strip "sagitta: FILE:LINE: "
     # and "surface N: ", then keep what names the reason.
-    msg=$(grep -F -m1 "$f" "$tmp/err" | cut -c"$((${#f} + 11))"-)
-    [ -n "$msg" ] || msg=$(head -n1 "$tmp/err")
-    reason=$(printf '%s\n' "$msg" | sed -e 's/^[0-9]*: //' -e 's/^surface [0-9]*: //' | awk '
+    line=$(grep -F -m1 "sagitta: $f:" "$tmp/err")
+    msg=${line#"sagitta: $f:"}
+    [ -n "$line" ] || msg=$(head -n1 "$tmp/err")
+    reason=$(printf '%s\n' "$msg" | sed -e 's/^ *//' -e 's/^[0-9]*: //' -e 's/^surface [0-9]*: //' | awk '
         /^TYPE / { print "TYPE " $2; exit }
-        /^GLAS:/ { print "GLAS (missing glass)"; exit }
+        /^GLAS:/ || /^material .* is not in the catalog/ { print "GLAS (missing glass)"; exit }
         /^MODE:/ { print "MODE NSC"; exit }
         /^MNUM: operand/ { sub(/^MNUM: operand /, ""); print "MNUM/" $1; exit }
         { sub(/:.*/, ""); print; exit }')
