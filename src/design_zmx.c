@@ -154,6 +154,14 @@ typedef struct zctx {
     int nlsect;
     const sg_zmx_subst *sub; /* glasses to substitute, or NULL */
     int nzero_kw[ZMX_NZERO_KW]; /* zero_surface lines kept */
+    /* The configurations (MNUM n, n > 1) and, per operand, its row in
+     * Zemax's editor, its first line and which configurations gave it a
+     * value. */
+    int mnum;
+    long mnum_line;
+    int mrow[SG_MAX_CONFIG_OPS];
+    long mline[SG_MAX_CONFIG_OPS];
+    unsigned char *mfill[SG_MAX_CONFIG_OPS];
 } zctx;
 
 /* ------------------------------------------------------------------------
@@ -1633,6 +1641,89 @@ static int vignetting(zctx *c, const zline *l, int which, const char *what)
     return SG_OK;
 }
 
+/* One row of Zemax's Multi-Configuration Editor for one configuration:
+ * "OPER num config value solve num2 ... row scale offset ...".  MOFF is
+ * an empty row and CWGT a configuration's weight in the merit function:
+ * neither changes a trace. */
+static int config_line(zctx *c, const zline *l)
+{
+    const ztok *k = &l->t[0];
+    sg_configs *cf = c->sys->configs;
+    char type[8], q[48];
+    int num, cfg, num2 = 0, row = 0, i, rc;
+    sg_diag e;
+    if (tok_is(k, "MOFF") || tok_is(k, "CWGT"))
+        return SG_OK;
+    tok_show(k, q, sizeof q);
+    memcpy(type, k->p, 4);
+    type[4] = '\0';
+    if ((rc = tok_int(c, l, 1, "operand number", 0, SG_MAX_SURFACES, &num)) != SG_OK ||
+        (rc = tok_int(c, l, 2, "configuration", 1, c->mnum, &cfg)) != SG_OK)
+        return rc;
+    if (l->n < 4)
+        return zerr(c, SG_EPARSE, "MNUM: operand %s: missing its value", q);
+    if (l->n > 5 && (rc = tok_int(c, l, 5, "operand's second number", 0, 1 << 20, &num2)) != SG_OK)
+        return rc;
+    if (l->n > 8 && (rc = tok_int(c, l, 8, "operand's row", 0, 1 << 20, &row)) != SG_OK)
+        return rc;
+    if (strcmp(type, "PRAM") != 0)
+        num2 = 0;
+    for (i = 0; i < cf->nop; i++)
+        if (!strcmp(cf->op[i].type, type) && cf->op[i].num == num && cf->op[i].num2 == num2 &&
+            c->mrow[i] == row)
+            break;
+    if (i == cf->nop) {
+        sg_diag_clear(&e);
+        if ((rc = sg_configs_add(cf, type, num, num2, &e)) != SG_OK)
+            return zerr(c, rc == SG_ENOMEM ? SG_ENOMEM : SG_EUNSUPPORTED,
+                        "MNUM: operand %s of %d configurations: %s", q, c->mnum, e.msg);
+        c->mrow[i] = row;
+        c->mline[i] = c->line;
+        if (!(c->mfill[i] = calloc((size_t)c->mnum, 1)))
+            return zerr(c, SG_ENOMEM, "MNUM: out of memory");
+    }
+    if (c->mfill[i][cfg - 1])
+        return zerr(c, SG_EPARSE, "MNUM: operand %s %d: configuration %d given twice (line %ld "
+                    "gave the row)", q, num, cfg, c->mline[i]);
+    c->mfill[i][cfg - 1] = 1;
+    if (cf->op[i].mat) {
+        /* A glass as the GLAS line gives it: the name, quoted. */
+        char gl[SG_GLASS_NAME + 8];
+        zline g;
+        sg_surface tmp;
+        const char *p = l->t[3].p;
+        size_t n = l->t[3].n;
+        if (n >= 2 && p[0] == '"' && p[n - 1] == '"')
+            p++, n -= 2;
+        if (n >= SG_GLASS_NAME)
+            return zerr(c, SG_ERANGE, "MNUM: GLSS: glass name '%s' is longer than %d characters",
+                        q, SG_GLASS_NAME - 1);
+        snprintf(gl, sizeof gl, "GLAS %.*s", (int)n, p);
+        split(gl, &g);
+        sg_surface_init(&tmp);
+        if ((rc = read_glas(c, &g, &tmp)) != SG_OK)
+            return rc;
+        cf->op[i].mat[cfg - 1] = tmp.mat;
+        return SG_OK;
+    }
+    return tok_num(c, l, 3, "operand value", &cf->op[i].value[cfg - 1]);
+}
+
+/* Every operand must give every configuration a value. */
+static int config_finish(zctx *c)
+{
+    const sg_configs *cf = c->sys->configs;
+    int i, k;
+    for (i = 0; cf && i < cf->nop; i++)
+        for (k = 0; k < cf->n; k++)
+            if (!c->mfill[i][k]) {
+                c->line = c->mline[i];
+                return zerr(c, SG_EPARSE, "MNUM: operand %s %d has no value for configuration "
+                            "%d of %d", cf->op[i].type, cf->op[i].num, k + 1, cf->n);
+            }
+    return SG_OK;
+}
+
 static int header_line(zctx *c, const zline *l)
 {
     const ztok *k = &l->t[0];
@@ -1819,10 +1910,22 @@ static int header_line(zctx *c, const zline *l)
     if (tok_is(k, "MNUM")) {
         if ((rc = tok_int(c, l, 1, "number of configurations", 0, 1 << 20, &n)) != SG_OK)
             return rc;
-        if (n > 1)
-            return zerr(c, SG_EUNSUPPORTED, "MNUM: %d configurations; sagitta has one", n);
+        if (n > SG_MAX_CONFIGS)
+            return zerr(c, SG_ERANGE, "MNUM: %d configurations; sagitta holds %d", n,
+                        SG_MAX_CONFIGS);
+        if (c->mnum)
+            return zerr(c, SG_EPARSE, "MNUM: a second MNUM line (the first is line %ld)",
+                        c->mnum_line);
+        c->mnum = n < 1 ? 1 : n;
+        c->mnum_line = c->line;
+        /* With one configuration the rows that follow hold the design's
+         * own values; with more, each row is read (config_line). */
+        if (n > 1 && !(c->sys->configs = sg_configs_new(n)))
+            return zerr(c, SG_ENOMEM, "MNUM: out of memory");
         return SG_OK;
     }
+    if (c->mnum > 1 && c->after && k->n == 4 && !tok_is(k, "CSUM"))
+        return config_line(c, l);
     if (in_list(k, ignored_header, sizeof ignored_header / sizeof *ignored_header))
         return SG_OK;
     /* After the surfaces come the merit function's operands (EFFL, REAY,
@@ -1844,6 +1947,8 @@ static int finish(zctx *c)
     int nf, nw, i;
 
     c->cur = -1;
+    if ((i = config_finish(c)) != SG_OK)
+        return i;
     /* Messages about the file as a whole name no line. */
     c->line = 0;
     /* Fields: FTYP's count, else the values given. */
@@ -2482,7 +2587,8 @@ static int count_kept(const struct sg_zmx_origin *o, const sg_catalog *cat)
     sg_diag scratch;
     int i, n = 0;
     sg_diag_clear(&scratch);
-    if (write_text(&b, o->base, cat, 1, &scratch) != SG_OK || b.oom) {
+    /* Lax, with the configurations' lines, which are read. */
+    if (write_text(&b, o->base, cat, 2, &scratch) != SG_OK || b.oom) {
         free(b.p);
         return 0;
     }
@@ -2528,7 +2634,7 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
     sg_system *tmp;
     sg_catalog *own = NULL;
     locale_t cloc, old = (locale_t)0;
-    int rc;
+    int rc, rc2;
 
     name = name ? name : "(memory)";
     if (!sys || (!bytes && len))
@@ -2615,6 +2721,15 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
                              name, c->nzero_kw[w], zero_surface[w],
                              c->nzero_kw[w] == 1 ? "" : "s");
     }
+    if (rc == SG_OK && tmp->configs && cat) {
+        /* Each configuration must be a design sagitta can trace; the base
+         * design's own faults are reported where it is loaded. */
+        sg_diag e;
+        sg_diag_clear(&e);
+        if (sg_system_validate(tmp, cat, &e) == SG_OK &&
+            (rc = sg_configs_check(tmp, cat, &e)) != SG_OK)
+            sg_diag_set(d, rc, "%s: %s", name, e.msg);
+    }
     if (rc == SG_OK && c->nfrozen)
         sg_diag_warn(d, "%s: %d solve%s and pickup%s frozen at the values the file stores; "
                      "sagitta does not evaluate them", name, c->nfrozen,
@@ -2653,6 +2768,8 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
             sg_diag_set(d, rc, "%s: cannot store the design: %s", name, sg_strerror(rc));
     }
     sg_zmx_origin_release(org);
+    for (rc2 = 0; rc2 < SG_MAX_CONFIG_OPS; rc2++)
+        free(c->mfill[rc2]);
     free(c->lsect);
     sg_system_free(tmp);
     sg_catalog_free(own);
@@ -3082,6 +3199,33 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int la
         }
     }
     mpfr_clear(q);
+    /* The configurations, as Zemax's editor rows: not in the merged save
+     * (lax 1), which keeps the file's own lines. */
+    if (s->configs && lax != 1) {
+        const sg_configs *cf = s->configs;
+        zb_printf(b, "MNUM %d 1\n", cf->n);
+        for (i = 0; i < cf->nop; i++) {
+            const sg_config_op *o = &cf->op[i];
+            for (k = 0; k < cf->n; k++) {
+                if (o->mat) {
+                    const sg_material *m = &o->mat[k];
+                    const char *g = m->kind == SG_MAT_GLASS    ? m->name
+                                    : m->kind == SG_MAT_MIRROR ? "MIRROR"
+                                    : m->kind == SG_MAT_AIR    ? ""
+                                                               : NULL;
+                    if (!g)
+                        return sg_diag_set(d, SG_EUNSUPPORTED, "export: configuration %d: GLSS "
+                                           "of surface %d is a fixed index or model glass, "
+                                           "which a .zmx GLSS row cannot hold", k + 1, o->num);
+                    zb_printf(b, "GLSS %d %d \"%s\" 0 0 0 %d %d 0 0.0 \"\"\n", o->num, k + 1, g,
+                              k + 1, i + 1);
+                } else {
+                    zb_printf(b, "%s %d %d %s 0 %d 0 %d %d 1 0 0\n", o->type, o->num, k + 1,
+                              num(n1, o->value[k]), o->num2, k + 1, i + 1);
+                }
+            }
+        }
+    }
     if (changed)
         sg_diag_warn(d, "export: control characters in the title or a comment became spaces");
     for (i = 0; i < s->nsurf; i++)

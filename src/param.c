@@ -458,6 +458,9 @@ int sg_system_equal(const sg_system *a, const sg_system *b)
     /* The merit function is its own object (merit.c). */
     if (!sg_merit_equal(&a->merit, &b->merit))
         return 0;
+    /* So are the configurations (config.c). */
+    if (!sg_configs_equal(a->configs, b->configs))
+        return 0;
     if (!sg_param_equal(SG_SCOPE_SYSTEM, a, b) || a->nwave != b->nwave ||
         a->primary_wave != b->primary_wave || a->nfield != b->nfield || a->stop != b->stop ||
         a->nsurf != b->nsurf)
