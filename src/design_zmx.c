@@ -154,12 +154,10 @@ typedef struct zctx {
     int nlsect;
     const sg_zmx_subst *sub; /* glasses to substitute, or NULL */
     int nzero_kw[ZMX_NZERO_KW]; /* zero_surface lines kept */
-    /* The configurations (MNUM n, n > 1) and, per operand, its row in
-     * Zemax's editor, its first line and which configurations gave it a
-     * value. */
+    /* The configurations (MNUM n, n > 1) and, per operand, its first
+     * line and which configurations gave it a value. */
     int mnum;
     long mnum_line;
-    int mrow[SG_MAX_CONFIG_OPS];
     long mline[SG_MAX_CONFIG_OPS];
     unsigned char *mfill[SG_MAX_CONFIG_OPS];
 } zctx;
@@ -1642,7 +1640,7 @@ static int vignetting(zctx *c, const zline *l, int which, const char *what)
 }
 
 /* One row of Zemax's Multi-Configuration Editor for one configuration:
- * "OPER num config value solve num2 ... row scale offset ...".  MOFF is
+ * "OPER num config value solve num2 ...".  MOFF is
  * an empty row and CWGT a configuration's weight in the merit function:
  * neither changes a trace. */
 static int config_line(zctx *c, const zline *l)
@@ -1650,7 +1648,7 @@ static int config_line(zctx *c, const zline *l)
     const ztok *k = &l->t[0];
     sg_configs *cf = c->sys->configs;
     char type[8], q[48];
-    int num, cfg, num2 = 0, row = 0, i, rc;
+    int num, cfg, num2 = 0, solve = 0, i, rc;
     sg_diag e;
     if (tok_is(k, "MOFF") || tok_is(k, "CWGT"))
         return SG_OK;
@@ -1664,20 +1662,21 @@ static int config_line(zctx *c, const zline *l)
         return zerr(c, SG_EPARSE, "MNUM: operand %s: missing its value", q);
     if (l->n > 5 && (rc = tok_int(c, l, 5, "operand's second number", 0, 1 << 20, &num2)) != SG_OK)
         return rc;
-    if (l->n > 8 && (rc = tok_int(c, l, 8, "operand's row", 0, 1 << 20, &row)) != SG_OK)
+    if (l->n > 4 && (rc = tok_int(c, l, 4, "operand's solve", 0, 1 << 20, &solve)) != SG_OK)
         return rc;
     if (strcmp(type, "PRAM") != 0)
         num2 = 0;
-    for (i = 0; i < cf->nop; i++)
-        if (!strcmp(cf->op[i].type, type) && cf->op[i].num == num && cf->op[i].num2 == num2 &&
-            c->mrow[i] == row)
+    /* A row's values come one configuration after another, from 1; a
+     * configuration 1 starts a row (two rows may address the same). */
+    for (i = cf->nop - 1; i >= 0 && cfg > 1; i--)
+        if (!strcmp(cf->op[i].type, type) && cf->op[i].num == num && cf->op[i].num2 == num2)
             break;
-    if (i == cf->nop) {
+    if (i < 0 || cfg == 1) {
+        i = cf->nop;
         sg_diag_clear(&e);
         if ((rc = sg_configs_add(cf, type, num, num2, &e)) != SG_OK)
             return zerr(c, rc == SG_ENOMEM ? SG_ENOMEM : SG_EUNSUPPORTED,
                         "MNUM: operand %s of %d configurations: %s", q, c->mnum, e.msg);
-        c->mrow[i] = row;
         c->mline[i] = c->line;
         if (!(c->mfill[i] = calloc((size_t)c->mnum, 1)))
             return zerr(c, SG_ENOMEM, "MNUM: out of memory");
@@ -1686,6 +1685,10 @@ static int config_line(zctx *c, const zline *l)
         return zerr(c, SG_EPARSE, "MNUM: operand %s %d: configuration %d given twice (line %ld "
                     "gave the row)", q, num, cfg, c->mline[i]);
     c->mfill[i][cfg - 1] = 1;
+    /* Pickups and thermal pickups (solve 2 and up) are read as the values
+     * Zemax stored; 0 is fixed and 1 variable. */
+    if (solve > 1)
+        c->nfrozen++;
     if (cf->op[i].mat) {
         /* A glass as the GLAS line gives it: the name, quoted. */
         char gl[SG_GLASS_NAME + 8];

@@ -335,8 +335,9 @@ static void test_config_refusals(void **state)
             SG_EUNSUPPORTED, "zoom.zmx:114: MNUM: operand EDVA", "THIC, CRVT");
     refused(cat, "MNUM 2 1\nTHIC 8 1 9.48 0 0 0 1 1 1 0 0\n", SG_EPARSE,
             "zoom.zmx:114: MNUM: operand THIC 8 has no value for configuration 2 of 2", NULL);
-    refused(cat, "MNUM 2 1\nTHIC 8 1 9.48 0 0 0 1 1 1 0 0\nTHIC 8 1 9 0 0 0 1 1 1 0 0\n",
-            SG_EPARSE, "zoom.zmx:115: MNUM: operand THIC 8: configuration 1 given twice", NULL);
+    refused(cat, "MNUM 2 1\nTHIC 8 1 9.48 0 0 0 1 1 1 0 0\nTHIC 8 2 9 0 0 0 2 1 1 0 0\n"
+                 "THIC 8 2 9 0 0 0 2 1 1 0 0\n",
+            SG_EPARSE, "zoom.zmx:116: MNUM: operand THIC 8: configuration 2 given twice", NULL);
     refused(cat, "MNUM 2 1\nTHIC 8 1 9.48 0 0 0 1 1 1 0 0\nTHIC 8 3 9 0 0 0 3 1 1 0 0\n",
             SG_ERANGE, "zoom.zmx:115: configuration", "from 1 to 2");
     refused(cat, "MNUM 2 1\nTHIC 40 1 1 0 0 0 1 1 1 0 0\nTHIC 40 2 1 0 0 0 2 1 1 0 0\n",
