@@ -1075,6 +1075,26 @@ static int end_surface(zctx *c)
                             "PARM %d is %.17g on a standard surface, which has no parameter %d",
                             k, z->parm[k], k);
             }
+    } else if (strcmp(z->type, "JONESMAT") == 0) {
+        /* Zemax's Jones matrix surface is always a plane (it does not use
+         * the radius column), and its matrix (PARM 1 to 8: A, B, C, D,
+         * real and imaginary) acts on the polarization alone, which a
+         * sequential trace does not carry: a plane, with its lines kept. */
+        s->type = SG_SURF_STANDARD;
+        for (k = 0; k <= ZMX_MAX_PARM; k++)
+            if (z->parm[k] != 0.0 && (k < 1 || k > 8)) {
+                c->line = z->parm_line[k];
+                return zerr(c, SG_EUNSUPPORTED, "PARM %d is %.17g; a Jones matrix surface has "
+                            "parameters 1 to 8", k, z->parm[k]);
+            }
+        if ((isfinite(s->radius) && s->radius != 0.0) || s->conic != 0.0)
+            zwarn(c, "TYPE JONESMAT: note: Zemax's Jones matrix surface is a plane; its "
+                  "radius %.17g and conic %.17g are not used", s->radius, s->conic);
+        s->radius = INFINITY;
+        s->conic = 0.0;
+        zwarn(c, "TYPE JONESMAT: note: a Jones matrix surface, read as a plane: its matrix "
+              "changes only the polarization, which sagitta does not trace, and its lines are "
+              "kept for a .zmx save (sagitta-design(5), ZEMAX FILES)");
     } else if (strcmp(z->type, "EVENASPH") == 0) {
         s->type = SG_SURF_EVENASPH;
         for (k = 0; k <= ZMX_MAX_PARM; k++) {
