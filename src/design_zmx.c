@@ -156,6 +156,7 @@ typedef struct zctx {
     int nzero_kw[ZMX_NZERO_KW]; /* zero_surface lines kept */
     /* The configurations (MNUM n, n > 1) and, per operand, its first
      * line and which configurations gave it a value. */
+    long push_line; /* a PUSH line with a shift */
     int mnum;
     long mnum_line;
     long mline[SG_MAX_CONFIG_OPS];
@@ -1849,8 +1850,12 @@ static int header_line(zctx *c, const zline *l)
         int nz = !all_zero(c, l, 1, &rc);
         if (rc != SG_OK)
             return rc;
+        /* Zemax's pupil shift is ray aiming's first guess at where a ray
+         * meets the stop; once a ray is aimed it plays no part, so with
+         * ray aiming on it changes no trace (checked in finish, since
+         * RAIM may come later). */
         if (nz)
-            return zerr(c, SG_EUNSUPPORTED, "PUSH: pupil shifts; sagitta's ray aiming has none");
+            c->push_line = c->line;
         return SG_OK;
     }
     if (tok_is(k, "FTYP")) {
@@ -1972,6 +1977,14 @@ static int finish(zctx *c)
     c->cur = -1;
     if ((i = config_finish(c)) != SG_OK)
         return i;
+    if (c->push_line) {
+        c->line = c->push_line;
+        if (s->aim == SG_AIM_OFF)
+            return zerr(c, SG_EUNSUPPORTED, "PUSH: pupil shifts without ray aiming; sagitta "
+                        "cannot tell how Zemax would use them");
+        zwarn(c, "PUSH: note: the pupil shift is ray aiming's first guess and changes no "
+              "aimed ray; it is kept for a .zmx save");
+    }
     /* Messages about the file as a whole name no line. */
     c->line = 0;
     /* Fields: FTYP's count, else the values given. */

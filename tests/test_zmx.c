@@ -637,7 +637,7 @@ static void test_bad_inputs(void **state)
         {"temperature", "ENVD -300 1 0\n", 0, SG_ERANGE, "t.zmx:1: ENVD: temperature -300 C"},
         {"pressure", "ENVD 20 -1 0\n", 0, SG_ERANGE, "t.zmx:1: ENVD: pressure -1 atm"},
         {"configs", "MNUM 300 1\n", 0, SG_ERANGE, "t.zmx:1: MNUM: 300 configurations; sagitta holds 256"},
-        {"pupil shift", "PUSH 1 0 0 0 0 0\n", 0, SG_EUNSUPPORTED, "PUSH"},
+        {"pupil shift", "PUSH 1 0 0 0 0 0\n" H S0 S1 S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:1: PUSH: pupil shifts without ray aiming"},
         {"two apertures", "ENPD 10\nFNUM 4 0\n", 0, SG_EPARSE, "t.zmx:2: a second aperture line"},
         {"few waves", "FTYP 0 0 1 3 0 0 0\n" "ENPD 10\nWAVM 1 0.55 1\n" S0 S1 S2 S3, 0, SG_EPARSE, "WAVM 2 is missing"},
         {"pwav", "ENPD 10\nWAVM 1 0.55 1\nPWAV 3\n" S0 S1 S2 S3, 0, SG_ERANGE, "t.zmx:3: PWAV"},

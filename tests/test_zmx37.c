@@ -1,6 +1,7 @@
 /*
  * test_zmx37.c - Zemax files that issue 37 opens: the Jones matrix surface
- * (JONESMAT), read as the plane Zemax makes it.
+ * (JONESMAT), read as the plane Zemax makes it; the pupil shift (PUSH)
+ * under ray aiming.
  *
  * tests/data/zmx/zospy_jonesmat.zmx is a file OpticStudio 25.1.1 saved for
  * ZOSPy's polarization tests (README there): ZOSPy's simple system with
@@ -83,7 +84,7 @@ static void test_jonesmat_plane(void **state)
     sg_paraxial p;
     sg_trace_opts o;
     sg_tracer *ta, *tb;
-    sg_ray_surface ra[8], rb[8];
+    sg_ray_surface ra[8] = {{0}}, rb[8] = {{0}};
     sg_diag d;
     int i;
     (void)state;
@@ -138,10 +139,85 @@ static void test_jonesmat_plane(void **state)
     sg_catalog_free(cat);
 }
 
+
+/* Zemax's Knowledge Base ("How to Specify the Pupil Shift Factor when
+ * Using Ray-Aiming", 2005): the shift is ray aiming's first guess and
+ * "once ZEMAX has successfully traced a ray it needs no further help".
+ * With real ray aiming a file with a shift traces as the file without
+ * one; without aiming it is refused. */
+static void test_push_aimed(void **state)
+{
+    char src[1024], *text, *buf;
+    size_t n, nb;
+    FILE *f;
+    sg_catalog *cat = tu_catalog();
+    sg_system *a = sg_system_new(), *b = sg_system_new();
+    sg_trace_opts o;
+    sg_tracer *ta, *tb;
+    sg_ray_surface ra[16] = {{0}}, rb[16] = {{0}};
+    const char *at;
+    sg_diag d;
+    int i;
+    (void)state;
+    f = fopen(tu_path("tests/data/zmx/lens1.zmx", src, sizeof src), "rb");
+    assert_non_null(f);
+    fseek(f, 0, SEEK_END);
+    n = (size_t)ftell(f);
+    fseek(f, 0, SEEK_SET);
+    text = calloc(1, n + 1);
+    assert_non_null(text);
+    assert_int_equal(fread(text, 1, n, f), n);
+    fclose(f);
+    at = strstr(text, "PWAV 2\n");
+    assert_non_null(at);
+    nb = n + 128;
+    buf = malloc(nb);
+    assert_non_null(buf);
+    /* Lines 12 and 13: real ray aiming, and a shift of the first guess. */
+    snprintf(buf, nb, "%.*sRAIM 0 2 1 1 0 0 0 0 0\nPUSH 0.5 -0.25 1 0 0 0\n%s", (int)(at - text),
+             text, at);
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(a, buf, strlen(buf), "push.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    {
+        int seen = 0;
+        for (i = 0; i < d.nwarn && i < SG_DIAG_MAXWARN; i++)
+            seen |= strstr(d.warn[i], "push.zmx:13: PUSH: note") != NULL;
+        assert_true(seen);
+    }
+    snprintf(buf, nb, "%.*sRAIM 0 2 1 1 0 0 0 0 0\nPUSH 0 0 0 0 0 0\n%s", (int)(at - text), text,
+             at);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_zmx_parse(b, buf, strlen(buf), "nopush.zmx", cat, &d), SG_OK);
+    assert_true(a->aim == SG_AIM_REAL);
+    assert_true(sg_system_equal(a, b));
+    sg_trace_opts_init(&o);
+    ta = sg_tracer_new(a, cat, &o, &d);
+    tb = sg_tracer_new(b, cat, &o, &d);
+    assert_non_null(ta);
+    assert_non_null(tb);
+    assert_int_equal(sg_trace_normalized(ta, 0, 1, 0, 1, ra), SG_OK);
+    assert_int_equal(sg_trace_normalized(tb, 0, 1, 0, 1, rb), SG_OK);
+    assert_memory_equal(ra, rb, (size_t)a->nsurf * sizeof ra[0]);
+    sg_tracer_free(ta);
+    sg_tracer_free(tb);
+    /* Without ray aiming sagitta cannot tell what Zemax does with it. */
+    snprintf(buf, nb, "%.*sPUSH 0.5 -0.25 1 0 0 0\n%s", (int)(at - text), text, at);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_zmx_parse(b, buf, strlen(buf), "off.zmx", cat, &d), SG_EUNSUPPORTED);
+    assert_non_null(strstr(d.msg, "off.zmx:12: PUSH: pupil shifts without ray aiming"));
+    free(buf);
+    free(text);
+    sg_system_free(a);
+    sg_system_free(b);
+    sg_catalog_free(cat);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_jonesmat_plane),
+        cmocka_unit_test(test_push_aimed),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
