@@ -121,6 +121,23 @@ static void test_jonesmat_plane(void **state)
     assert_memory_equal(ra, rb, (size_t)a->nsurf * sizeof ra[0]);
     sg_tracer_free(ta);
     sg_tracer_free(tb);
+    /* A curvature on the line is not used: Zemax's surface is a plane. */
+    {
+        char *cv = malloc(n + 32), *at = strstr(text, "  TYPE JONESMAT\r\n");
+        const char *c0 = "  CURV 0.0 0 0.0 0.0 0\r\n";
+        char *cl;
+        assert_non_null(at);
+        cl = strstr(at, c0);
+        assert_non_null(cl);
+        snprintf(cv, n + 32, "%.*s  CURV 0.05 0 0.0 0.0 0\r\n%s", (int)(cl - text), text,
+                 cl + strlen(c0));
+        sg_diag_clear(&d);
+        assert_int_equal(sg_zmx_parse(b, cv, strlen(cv), "curved.zmx", cat, &d), SG_OK);
+        assert_true(isinf(b->surf[2].radius));
+        assert_int_equal(sg_paraxial_compute(b, cat, -1, &p, &d), SG_OK);
+        assert_true(fabs(p.efl - 40.0) <= 1e-12);
+        free(cv);
+    }
     /* A parameter beyond the matrix is refused with its line. */
     {
         char *bad = malloc(n + 32), *at = strstr(text, "  PARM 8 0\r\n");
