@@ -1180,12 +1180,12 @@ static int get_configs(jctx *c, const cJSON *v, sg_system *sys)
 
 enum {
     T_FORMAT, T_VERSION, T_TITLE, T_UNITS, T_WAVES, T_FIELDS, T_APER, T_AIM, T_SURFS,
-    T_TEMP, T_PRES, T_ADJUST, T_MERIT, T_CONFIGS, T_N
+    T_TEMP, T_PRES, T_ADJUST, T_MERIT, T_CONFIGS, T_AFOCAL, T_N
 };
 static const char *const top_keys[] = {
     "format", "version", "title", "units", "wavelengths", "fields", "aperture",
     "ray_aiming", "surfaces", "temperature", "pressure", "adjust_index", "merit",
-    "configurations"};
+    "configurations", "afocal"};
 
 /* Fills tmp from the document; the caller's system is not touched. */
 static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
@@ -1311,6 +1311,8 @@ static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
     if (k[T_MERIT] && (rc = get_merit(c, k[T_MERIT], &tmp->merit)) != SG_OK)
         return rc;
     if (k[T_CONFIGS] && (rc = get_configs(c, k[T_CONFIGS], tmp)) != SG_OK)
+        return rc;
+    if (k[T_AFOCAL] && (rc = get_bool(c, k[T_AFOCAL], "afocal", &tmp->afocal)) != SG_OK)
         return rc;
     return SG_OK;
 }
@@ -2296,6 +2298,8 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
         sb_puts(&b, ", \"telecentric\": true");
     sb_puts(&b, " },\n  \"ray_aiming\": ");
     sb_str(&b, aim_names[sys->aim]);
+    if (sys->afocal)
+        sb_puts(&b, ",\n  \"afocal\": true");
     /* Written only away from the defaults, so older files save unchanged. */
     if (sys->temperature != 20.0 || sys->pressure != 1.0 || sys->adjust_index) {
         sb_puts(&b, ",\n  \"temperature\": ");

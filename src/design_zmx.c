@@ -1875,9 +1875,7 @@ static int header_line(zctx *c, const zline *l)
         /* Telecentric object space: checked with the aperture and the
          * object distance when the design is validated. */
         s->telecentric = tel;
-        if (afocal)
-            return zerr(c, SG_EUNSUPPORTED, "FTYP: afocal image space; sagitta traces to an "
-                        "image surface");
+        s->afocal = afocal;
         s->field_type = (sg_field_type)t;
         s->field_norm = norm ? SG_NORM_RECT : SG_NORM_RADIAL;
         c->have_ftyp = 1;
@@ -3108,9 +3106,9 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int la
         zb_add(b, "\n", 1);
     }
     zb_printf(b, "RAIM 0 %d 1 1 0 0 0 0 0\n", s->aim == SG_AIM_REAL ? 2 : s->aim == SG_AIM_PARAXIAL ? 1 : 0);
-    zb_printf(b, "FTYP %d %d %d %d %d 0 0\n", (int)s->field_type, s->telecentric ? 1 : 0,
+    zb_printf(b, "FTYP %d %d %d %d %d 0 %d\n", (int)s->field_type, s->telecentric ? 1 : 0,
               s->nfield, s->nwave,
-              s->field_norm == SG_NORM_RECT ? 1 : 0);
+              s->field_norm == SG_NORM_RECT ? 1 : 0, s->afocal ? 1 : 0);
     zb_list(b, "XFLN", s, 0);
     zb_list(b, "YFLN", s, 1);
     zb_list(b, "FWGN", s, 2);

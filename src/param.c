@@ -79,6 +79,9 @@ static const sg_param system_params[] = {
     /* Format version 3: object-space telecentric (in "aperture"). */
     {"aperture.telecentric", "object-space telecentric", NULL, NULL, "FTYP", SG_PARAM_BOOL,
      SG_PARAM_OPTIONAL, offsetof(sg_system, telecentric), 0, 1, 0, 0, 0, 0, 0, NONAMES, 3},
+    /* Format version 7: afocal image space. */
+    {"afocal", "afocal image space", NULL, NULL, "FTYP", SG_PARAM_BOOL, SG_PARAM_OPTIONAL,
+     offsetof(sg_system, afocal), 0, 1, 0, 0, 0, 0, 0, NONAMES, 7},
 };
 
 static const sg_param wave_params[] = {

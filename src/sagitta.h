@@ -533,6 +533,11 @@ typedef struct sg_system {
      * NA, the object is at a finite distance, fields are heights, and ray
      * aiming does not apply (the rays are fixed in object space). */
     int telecentric;
+    /* Afocal image space (Zemax's "Afocal Image Space"): image-space
+     * aberrations are angles, the differences of the rays' direction
+     * cosines l and m from the chief ray's on the image surface (Zemax's
+     * ANAX and ANAY), so the spot diagram and ray fans are angular. */
+    int afocal;
 
     /* The environment (Zemax's ENVD): temperature in C (20) and pressure
      * in atm (1) of the air the wavelengths are measured in.  With
