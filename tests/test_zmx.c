@@ -1790,7 +1790,7 @@ static void test_zemax_tilted_plane(void **state)
  * line 251): surface 17's thickness puts the image (the eye) where the
  * paraxial chief ray crosses the axis; Zemax stored 9.095135769303E+1.
  * The file's afocal image space flag (FTYP, 7th field) is left out here:
- * sagitta refuses it, and the paraxial chief ray does not depend on it.
+ * the paraxial chief ray does not depend on it.
  * Its old SCHOTT glasses beyond the bundled catalog are given SCHOTT's
  * Sellmeier coefficients (README). */
 static const char *const rifle_zmx =
