@@ -312,6 +312,56 @@ static void test_zoom_save(void **state)
     sg_catalog_free(cat);
 }
 
+/* The other operands, on the zoom's design: a curvature (CRVT's value is
+ * c, the radius 1 / c), a glass, a field and a wavelength, and two rows
+ * of one thickness (the later row wins, as rows apply in order).  The
+ * values expected are the rows' own numbers. */
+static void test_config_operands(void **state)
+{
+    static const char rows[] =
+        "MNUM 2 1\n"
+        "CRVT 2 1 -0.06172 0 0 0 1 1 1 0 0\n"
+        "CRVT 2 2 0.0125 0 0 0 2 1 1 0 0\n"
+        "GLSS 2 1 \"LAH66\" 0 0 0 1 2 0 0.0 \"\"\n"
+        "GLSS 2 2 \"\" 0 0 0 2 2 0 0.0 \"\"\n"
+        "YFIE 3 1 5.8 0 0 0 1 3 1 0 0\n"
+        "YFIE 3 2 2.5 0 0 0 2 3 1 0 0\n"
+        "WAVE 2 1 0.48613 0 0 0 1 4 1 0 0\n"
+        "WAVE 2 2 0.55 0 0 0 2 4 1 0 0\n"
+        "THIC 8 1 9.48 0 0 0 1 5 1 0 0\n"
+        "THIC 8 2 4.48 0 0 0 2 5 1 0 0\n"
+        "THIC 8 1 7 0 0 0 1 6 1 0 0\n"
+        "THIC 8 2 3 0 0 0 2 6 1 0 0\n";
+    sg_catalog *cat = tu_catalog();
+    char *text = zoom_text(fnum[0], t8[0], t15[0], rows);
+    sg_system *s = parse(text, cat, SG_OK), *c = sg_system_clone(s), *plain;
+    sg_diag d;
+    (void)state;
+    assert_int_equal(s->configs->nop, 6);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_config_apply(c, 2, &d), SG_OK);
+    assert_true(c->surf[2].radius == 1.0 / 0.0125);
+    assert_int_equal(c->surf[2].mat.kind, SG_MAT_AIR);
+    assert_true(c->field[2].y == 2.5);
+    assert_true(c->wave[1].um == 0.55);
+    assert_true(c->surf[8].thickness == 3.0);
+    assert_int_equal(sg_config_apply(c, 1, &d), SG_OK);
+    assert_true(c->surf[2].radius == 1.0 / -0.06172);
+    assert_int_equal(c->surf[2].mat.kind, SG_MAT_GLASS);
+    assert_string_equal(c->surf[2].mat.name, "LAH66");
+    assert_true(c->surf[8].thickness == 7.0);
+    /* Configurations are part of the design: without them it is another. */
+    plain = sg_system_clone(s);
+    sg_configs_release(plain->configs);
+    plain->configs = NULL;
+    assert_false(sg_system_equal(plain, s));
+    sg_system_free(plain);
+    sg_system_free(c);
+    sg_system_free(s);
+    free(text);
+    sg_catalog_free(cat);
+}
+
 static void refused(const sg_catalog *cat, const char *mce, int code, const char *a, const char *b)
 {
     char *text = zoom_text(fnum[0], t8[0], t15[0], mce);
@@ -355,6 +405,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_zoom_configurations),
         cmocka_unit_test(test_zoom_save),
+        cmocka_unit_test(test_config_operands),
         cmocka_unit_test(test_config_refusals),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
