@@ -332,6 +332,14 @@ int cli_load_design_subst(const char *path, const sg_zmx_subst *sub, sg_catalog 
     }
     cli_print_warnings(&d, path);
 
+    /* Every configuration must be a design (a JSON design's operands are
+     * checked here; a .zmx file's when it is read). */
+    sg_diag_clear(&d);
+    if (sys->configs && (rc = sg_configs_check(sys, cat, &d)) != SG_OK) {
+        cli_print_diag(path, &d, rc);
+        cli_design_free(cat, sys);
+        return rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
+    }
     /* --config N: configuration N's design (sagitta-design(5), CONFIGURATIONS). */
     sg_diag_clear(&d);
     if (cli_config_n && (rc = sg_config_apply(sys, cli_config_n, &d)) != SG_OK) {

@@ -263,6 +263,24 @@ static void test_config_option(void **state)
     ct_runv(&r, ARGS("paraxial", d, "--config", "1"));
     assert_int_equal(r.code, 0);
     ct_free(&r);
+    /* An operand of a surface the design lacks is a design error (4),
+     * whatever configuration is asked for. */
+    {
+        const char *bad = ct_file(
+            "badcfg.json",
+            "{ \"wavelengths\": { \"primary\": 1, \"list\": [ { \"um\": 0.55 } ] },\n"
+            "  \"fields\": { \"type\": \"angle\", \"list\": [ { \"y\": 0 } ] },\n"
+            "  \"aperture\": { \"type\": \"epd\", \"value\": 10 },\n"
+            "  \"surfaces\": [\n    {\"radius\": \"inf\", \"thickness\": \"inf\"},\n"
+            "    {\"radius\": 50, \"thickness\": 5, \"material\": 1.5, \"stop\": true},\n"
+            "    {\"radius\": -50, \"thickness\": 45},\n"
+            "    {\"radius\": \"inf\", \"thickness\": 0} ],\n"
+            "  \"configurations\": { \"count\": 2, \"operands\": [\n"
+            "    { \"type\": \"THIC\", \"surface\": 9, \"values\": [45, 40] } ] } }\n");
+        expect(4, ARGS("paraxial", bad), "configuration 1: configuration operand THIC 9",
+               "surfaces 0 to 3");
+        expect(4, ARGS("paraxial", bad, "--config", "2"), "THIC 9", NULL);
+    }
 }
 
 static void test_help_version(void **state)
