@@ -17,6 +17,16 @@ void sg_an_wave_order(const sg_system *sys, const int *waves, int nw, int refw,
                       int *wave_index, double *wave_um, int *order);
 /* One micrometre in the design's lens units. */
 double sg_an_um_to_units(const sg_system *sys);
+/* Where a ray lands in the image's measure: its point, or in afocal image
+ * space its direction cosines (sg_system.afocal). */
+static inline double sg_an_img_x(const sg_system *sys, const sg_ray_surface *r)
+{
+    return sys->afocal ? r->l : r->x;
+}
+static inline double sg_an_img_y(const sg_system *sys, const sg_ray_surface *r)
+{
+    return sys->afocal ? r->m : r->y;
+}
 
 /* sg_zernike_fit and sg_wavefront_stats over a wavefront map's nvalid
  * valid cells (at the map's pupil coordinates), without copies of its

@@ -1085,13 +1085,107 @@ static int get_merit(jctx *c, const cJSON *v, sg_merit *m)
     return SG_OK;
 }
 
+/* The configurations: {"count": N, "operands": [{"type": "THIC",
+ * "surface": 8, "values": [N numbers]}, ...]}; the number key is the
+ * type's ("surface", "field", "wavelength" or none) and PRAM adds
+ * "parameter"; GLSS's values are materials (sagitta-design(5),
+ * CONFIGURATIONS). */
+static int get_configs(jctx *c, const cJSON *v, sg_system *sys)
+{
+    static const char *const keys[] = {"count", "operands"};
+    const cJSON *k[2], *it;
+    sg_configs *cf;
+    char at[64], at2[96];
+    int rc, n, i = 0;
+    if ((rc = expect_object(c, v, "configurations")) != SG_OK)
+        return rc;
+    pick_keys(c, v, "configurations", keys, 2, k);
+    if (!k[0])
+        return perr(c, SG_EPARSE, "configurations: count", "required key is missing");
+    if ((rc = get_int(c, k[0], "configurations: count", &n)) != SG_OK)
+        return rc;
+    if (n < 2 || n > SG_MAX_CONFIGS)
+        return perr(c, SG_ERANGE, "configurations: count", "%d is not 2 to %d", n,
+                    SG_MAX_CONFIGS);
+    if (!k[1] || !cJSON_IsArray(k[1]))
+        return perr(c, SG_EPARSE, "configurations: operands", "expected an array of operand "
+                    "objects");
+    if (!(cf = sg_configs_new(n)))
+        return perr(c, SG_ENOMEM, "configurations", "out of memory");
+    sg_configs_release(sys->configs);
+    sys->configs = cf;
+    cJSON_ArrayForEach(it, k[1]) {
+        static const char *const okeys[] = {"type", "surface", "field", "wavelength",
+                                            "parameter", "values"};
+        const cJSON *ok[6], *e;
+        const char *numkey;
+        sg_diag dd;
+        int num = 0, num2 = 0, j = 0;
+        sg_config_op *o;
+        snprintf(at, sizeof at, "configurations: operand %d", ++i);
+        if ((rc = expect_object(c, it, at)) != SG_OK)
+            return rc;
+        pick_keys(c, it, at, okeys, 6, ok);
+        if (!ok[0] || !cJSON_IsString(ok[0]) || !ok[0]->valuestring)
+            return perr(c, SG_EPARSE, at, "an operand needs a \"type\" (a Zemax "
+                        "multi-configuration operand name)");
+        sg_diag_clear(&dd);
+        {
+            const char *t = ok[0]->valuestring;
+            numkey = !strcmp(t, "XFIE") || !strcmp(t, "YFIE") || !strcmp(t, "FLWT") ? "field"
+                     : !strcmp(t, "WAVE") || !strcmp(t, "WLWT")                     ? "wavelength"
+                     : !strcmp(t, "APER") || !strcmp(t, "STPS") || !strcmp(t, "TEMP") ||
+                             !strcmp(t, "PRES")
+                         ? NULL
+                         : "surface";
+            if (strlen(t) > 4 || sg_configs_add(cf, t, 0, 0, &dd) != SG_OK)
+                return perr(c, SG_EPARSE, join(at2, sizeof at2, at, "type"), "%s", dd.msg[0] ?
+                            dd.msg : "not an operand sagitta applies");
+        }
+        o = &cf->op[cf->nop - 1];
+        if (numkey) {
+            const cJSON *nv = ok[!strcmp(numkey, "surface") ? 1 : !strcmp(numkey, "field") ? 2 : 3];
+            if (!nv)
+                return perr(c, SG_EPARSE, join(at2, sizeof at2, at, numkey), "required key is "
+                            "missing");
+            if ((rc = get_int(c, nv, join(at2, sizeof at2, at, numkey), &num)) != SG_OK)
+                return rc;
+        }
+        if (!strcmp(o->type, "PRAM")) {
+            if (!ok[4])
+                return perr(c, SG_EPARSE, join(at2, sizeof at2, at, "parameter"), "required key "
+                            "is missing");
+            if ((rc = get_int(c, ok[4], join(at2, sizeof at2, at, "parameter"), &num2)) != SG_OK)
+                return rc;
+        }
+        o->num = num;
+        o->num2 = num2;
+        if (!ok[5] || !cJSON_IsArray(ok[5]) || cJSON_GetArraySize(ok[5]) != n)
+            return perr(c, SG_EPARSE, join(at2, sizeof at2, at, "values"), "expected an array of "
+                        "%d values, one per configuration", n);
+        cJSON_ArrayForEach(e, ok[5]) {
+            char at3[128];
+            snprintf(at3, sizeof at3, "%s: values: %d", at, j + 1);
+            if (o->mat)
+                rc = get_material(c, e, at3, &o->mat[j]);
+            else
+                rc = get_finite(c, e, at3, &o->value[j]);
+            if (rc != SG_OK)
+                return rc;
+            j++;
+        }
+    }
+    return SG_OK;
+}
+
 enum {
     T_FORMAT, T_VERSION, T_TITLE, T_UNITS, T_WAVES, T_FIELDS, T_APER, T_AIM, T_SURFS,
-    T_TEMP, T_PRES, T_ADJUST, T_MERIT, T_N
+    T_TEMP, T_PRES, T_ADJUST, T_MERIT, T_CONFIGS, T_AFOCAL, T_N
 };
 static const char *const top_keys[] = {
     "format", "version", "title", "units", "wavelengths", "fields", "aperture",
-    "ray_aiming", "surfaces", "temperature", "pressure", "adjust_index", "merit"};
+    "ray_aiming", "surfaces", "temperature", "pressure", "adjust_index", "merit",
+    "configurations", "afocal"};
 
 /* Fills tmp from the document; the caller's system is not touched. */
 static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
@@ -1215,6 +1309,10 @@ static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
                     "no surface has \"stop\": true; mark the aperture stop");
     tmp->stop = stop;
     if (k[T_MERIT] && (rc = get_merit(c, k[T_MERIT], &tmp->merit)) != SG_OK)
+        return rc;
+    if (k[T_CONFIGS] && (rc = get_configs(c, k[T_CONFIGS], tmp)) != SG_OK)
+        return rc;
+    if (k[T_AFOCAL] && (rc = get_bool(c, k[T_AFOCAL], "afocal", &tmp->afocal)) != SG_OK)
         return rc;
     return SG_OK;
 }
@@ -1972,6 +2070,52 @@ static void sb_solves(sbuf *b, const sg_surface *s)
 }
 
 /* The merit function as get_merit reads it. */
+/* The configurations as get_configs reads them. */
+static void sb_configs(sbuf *b, const sg_configs *cf)
+{
+    const sg_param *mp = sg_param_find(SG_SCOPE_SURFACE, "material");
+    char t[96];
+    int i, k;
+    snprintf(t, sizeof t, ",\n  \"configurations\": {\n    \"count\": %d,\n    \"operands\": [\n",
+             cf->n);
+    sb_puts(b, t);
+    for (i = 0; i < cf->nop; i++) {
+        const sg_config_op *o = &cf->op[i];
+        const char *ty = o->type;
+        const char *nk = !strcmp(ty, "XFIE") || !strcmp(ty, "YFIE") || !strcmp(ty, "FLWT") ? "field"
+                         : !strcmp(ty, "WAVE") || !strcmp(ty, "WLWT") ? "wavelength"
+                         : !strcmp(ty, "APER") || !strcmp(ty, "STPS") || !strcmp(ty, "TEMP") ||
+                                 !strcmp(ty, "PRES")
+                             ? NULL
+                             : "surface";
+        sb_puts(b, "      { \"type\": ");
+        sb_str(b, ty);
+        if (nk) {
+            snprintf(t, sizeof t, ", \"%s\": %d", nk, o->num);
+            sb_puts(b, t);
+        }
+        if (!strcmp(ty, "PRAM")) {
+            snprintf(t, sizeof t, ", \"parameter\": %d", o->num2);
+            sb_puts(b, t);
+        }
+        sb_puts(b, ", \"values\": [");
+        for (k = 0; k < cf->n; k++) {
+            if (k)
+                sb_puts(b, ", ");
+            if (o->mat) {
+                sg_surface s;
+                memset(&s, 0, sizeof s);
+                s.mat = o->mat[k];
+                sb_param(b, mp, &s);
+            } else {
+                sb_num(b, o->value[k]);
+            }
+        }
+        sb_puts(b, i + 1 < cf->nop ? "] },\n" : "] }\n");
+    }
+    sb_puts(b, "    ]\n  }");
+}
+
 static void sb_merit(sbuf *b, const sg_merit *m)
 {
     static const char *const refs[] = {"centroid", "chief"};
@@ -2114,6 +2258,9 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
                 version = version < 6 ? 6 : version;
     if (sys->merit.present)
         version = version < 6 ? 6 : version;
+    /* Configurations came with version 7. */
+    if (sys->configs)
+        version = 7;
     /* A file says the oldest format that reads it, so designs without the
      * newer keys stay readable by older programs. */
     snprintf(t, sizeof t, "  \"version\": %d,\n", version);
@@ -2151,6 +2298,8 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
         sb_puts(&b, ", \"telecentric\": true");
     sb_puts(&b, " },\n  \"ray_aiming\": ");
     sb_str(&b, aim_names[sys->aim]);
+    if (sys->afocal)
+        sb_puts(&b, ",\n  \"afocal\": true");
     /* Written only away from the defaults, so older files save unchanged. */
     if (sys->temperature != 20.0 || sys->pressure != 1.0 || sys->adjust_index) {
         sb_puts(&b, ",\n  \"temperature\": ");
@@ -2189,6 +2338,8 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     sb_puts(&b, "  ]");
     if (sys->merit.present)
         sb_merit(&b, &sys->merit);
+    if (sys->configs)
+        sb_configs(&b, sys->configs);
     sb_puts(&b, "\n}\n");
     if (b.oom) {
         free(b.p);

@@ -155,6 +155,13 @@ typedef struct zctx {
     int nlsect;
     const sg_zmx_subst *sub; /* glasses to substitute, or NULL */
     int nzero_kw[ZMX_NZERO_KW]; /* zero_surface lines kept */
+    /* The configurations (MNUM n, n > 1) and, per operand, its first
+     * line and which configurations gave it a value. */
+    long push_line; /* a PUSH line with a shift */
+    int mnum;
+    long mnum_line;
+    long mline[SG_MAX_CONFIG_OPS];
+    unsigned char *mfill[SG_MAX_CONFIG_OPS];
 } zctx;
 
 /* ------------------------------------------------------------------------
@@ -1069,6 +1076,26 @@ static int end_surface(zctx *c)
                             "PARM %d is %.17g on a standard surface, which has no parameter %d",
                             k, z->parm[k], k);
             }
+    } else if (strcmp(z->type, "JONESMAT") == 0) {
+        /* Zemax's Jones matrix surface is always a plane (it does not use
+         * the radius column), and its matrix (PARM 1 to 8: A, B, C, D,
+         * real and imaginary) acts on the polarization alone, which a
+         * sequential trace does not carry: a plane, with its lines kept. */
+        s->type = SG_SURF_STANDARD;
+        for (k = 0; k <= ZMX_MAX_PARM; k++)
+            if (z->parm[k] != 0.0 && (k < 1 || k > 8)) {
+                c->line = z->parm_line[k];
+                return zerr(c, SG_EUNSUPPORTED, "PARM %d is %.17g; a Jones matrix surface has "
+                            "parameters 1 to 8", k, z->parm[k]);
+            }
+        if ((isfinite(s->radius) && s->radius != 0.0) || s->conic != 0.0)
+            zwarn(c, "TYPE JONESMAT: note: Zemax's Jones matrix surface is a plane; its "
+                  "radius %.17g and conic %.17g are not used", s->radius, s->conic);
+        s->radius = INFINITY;
+        s->conic = 0.0;
+        zwarn(c, "TYPE JONESMAT: note: a Jones matrix surface, read as a plane: its matrix "
+              "changes only the polarization, which sagitta does not trace, and its lines are "
+              "kept for a .zmx save (sagitta-design(5), ZEMAX FILES)");
     } else if (strcmp(z->type, "EVENASPH") == 0) {
         s->type = SG_SURF_EVENASPH;
         for (k = 0; k <= ZMX_MAX_PARM; k++) {
@@ -1633,6 +1660,94 @@ static int vignetting(zctx *c, const zline *l, int which, const char *what)
     return SG_OK;
 }
 
+/* One row of Zemax's Multi-Configuration Editor for one configuration:
+ * "OPER num config value solve num2 ...".  MOFF is
+ * an empty row and CWGT a configuration's weight in the merit function:
+ * neither changes a trace. */
+static int config_line(zctx *c, const zline *l)
+{
+    const ztok *k = &l->t[0];
+    sg_configs *cf = c->sys->configs;
+    char type[8], q[48];
+    int num, cfg, num2 = 0, solve = 0, i, rc;
+    sg_diag e;
+    if (tok_is(k, "MOFF") || tok_is(k, "CWGT"))
+        return SG_OK;
+    tok_show(k, q, sizeof q);
+    memcpy(type, k->p, 4);
+    type[4] = '\0';
+    if ((rc = tok_int(c, l, 1, "operand number", 0, SG_MAX_SURFACES, &num)) != SG_OK ||
+        (rc = tok_int(c, l, 2, "configuration", 1, c->mnum, &cfg)) != SG_OK)
+        return rc;
+    if (l->n < 4)
+        return zerr(c, SG_EPARSE, "MNUM: operand %s: missing its value", q);
+    if (l->n > 5 && (rc = tok_int(c, l, 5, "operand's second number", 0, 1 << 20, &num2)) != SG_OK)
+        return rc;
+    if (l->n > 4 && (rc = tok_int(c, l, 4, "operand's solve", 0, 1 << 20, &solve)) != SG_OK)
+        return rc;
+    if (strcmp(type, "PRAM") != 0)
+        num2 = 0;
+    /* A row's values come one configuration after another, from 1; a
+     * configuration 1 starts a row (two rows may address the same). */
+    for (i = cf->nop - 1; i >= 0 && cfg > 1; i--)
+        if (!strcmp(cf->op[i].type, type) && cf->op[i].num == num && cf->op[i].num2 == num2)
+            break;
+    if (i < 0 || cfg == 1) {
+        i = cf->nop;
+        sg_diag_clear(&e);
+        if ((rc = sg_configs_add(cf, type, num, num2, &e)) != SG_OK)
+            return zerr(c, rc == SG_ENOMEM ? SG_ENOMEM : SG_EUNSUPPORTED,
+                        "MNUM: operand %s of %d configurations: %s", q, c->mnum, e.msg);
+        c->mline[i] = c->line;
+        if (!(c->mfill[i] = calloc((size_t)c->mnum, 1)))
+            return zerr(c, SG_ENOMEM, "MNUM: out of memory");
+    }
+    if (c->mfill[i][cfg - 1])
+        return zerr(c, SG_EPARSE, "MNUM: operand %s %d: configuration %d given twice (line %ld "
+                    "gave the row)", q, num, cfg, c->mline[i]);
+    c->mfill[i][cfg - 1] = 1;
+    /* Pickups and thermal pickups (solve 2 and up) are read as the values
+     * Zemax stored; 0 is fixed and 1 variable. */
+    if (solve > 1)
+        c->nfrozen++;
+    if (cf->op[i].mat) {
+        /* A glass as the GLAS line gives it: the name, quoted. */
+        char gl[SG_GLASS_NAME + 8];
+        zline g;
+        sg_surface tmp;
+        const char *p = l->t[3].p;
+        size_t n = l->t[3].n;
+        if (n >= 2 && p[0] == '"' && p[n - 1] == '"')
+            p++, n -= 2;
+        if (n >= SG_GLASS_NAME)
+            return zerr(c, SG_ERANGE, "MNUM: GLSS: glass name '%s' is longer than %d characters",
+                        q, SG_GLASS_NAME - 1);
+        snprintf(gl, sizeof gl, "GLAS %.*s", (int)n, p);
+        split(gl, &g);
+        sg_surface_init(&tmp);
+        if ((rc = read_glas(c, &g, &tmp)) != SG_OK)
+            return rc;
+        cf->op[i].mat[cfg - 1] = tmp.mat;
+        return SG_OK;
+    }
+    return tok_num(c, l, 3, "operand value", &cf->op[i].value[cfg - 1]);
+}
+
+/* Every operand must give every configuration a value. */
+static int config_finish(zctx *c)
+{
+    const sg_configs *cf = c->sys->configs;
+    int i, k;
+    for (i = 0; cf && i < cf->nop; i++)
+        for (k = 0; k < cf->n; k++)
+            if (!c->mfill[i][k]) {
+                c->line = c->mline[i];
+                return zerr(c, SG_EPARSE, "MNUM: operand %s %d has no value for configuration "
+                            "%d of %d", cf->op[i].type, cf->op[i].num, k + 1, cf->n);
+            }
+    return SG_OK;
+}
+
 static int header_line(zctx *c, const zline *l)
 {
     const ztok *k = &l->t[0];
@@ -1735,8 +1850,12 @@ static int header_line(zctx *c, const zline *l)
         int nz = !all_zero(c, l, 1, &rc);
         if (rc != SG_OK)
             return rc;
+        /* Zemax's pupil shift is ray aiming's first guess at where a ray
+         * meets the stop; once a ray is aimed it plays no part, so with
+         * ray aiming on it changes no trace (checked in finish, since
+         * RAIM may come later). */
         if (nz)
-            return zerr(c, SG_EUNSUPPORTED, "PUSH: pupil shifts; sagitta's ray aiming has none");
+            c->push_line = c->line;
         return SG_OK;
     }
     if (tok_is(k, "FTYP")) {
@@ -1756,9 +1875,7 @@ static int header_line(zctx *c, const zline *l)
         /* Telecentric object space: checked with the aperture and the
          * object distance when the design is validated. */
         s->telecentric = tel;
-        if (afocal)
-            return zerr(c, SG_EUNSUPPORTED, "FTYP: afocal image space; sagitta traces to an "
-                        "image surface");
+        s->afocal = afocal;
         s->field_type = (sg_field_type)t;
         s->field_norm = norm ? SG_NORM_RECT : SG_NORM_RADIAL;
         c->have_ftyp = 1;
@@ -1819,10 +1936,22 @@ static int header_line(zctx *c, const zline *l)
     if (tok_is(k, "MNUM")) {
         if ((rc = tok_int(c, l, 1, "number of configurations", 0, 1 << 20, &n)) != SG_OK)
             return rc;
-        if (n > 1)
-            return zerr(c, SG_EUNSUPPORTED, "MNUM: %d configurations; sagitta has one", n);
+        if (n > SG_MAX_CONFIGS)
+            return zerr(c, SG_ERANGE, "MNUM: %d configurations; sagitta holds %d", n,
+                        SG_MAX_CONFIGS);
+        if (c->mnum)
+            return zerr(c, SG_EPARSE, "MNUM: a second MNUM line (the first is line %ld)",
+                        c->mnum_line);
+        c->mnum = n < 1 ? 1 : n;
+        c->mnum_line = c->line;
+        /* With one configuration the rows that follow hold the design's
+         * own values; with more, each row is read (config_line). */
+        if (n > 1 && !(c->sys->configs = sg_configs_new(n)))
+            return zerr(c, SG_ENOMEM, "MNUM: out of memory");
         return SG_OK;
     }
+    if (c->mnum > 1 && c->after && k->n == 4 && !tok_is(k, "CSUM"))
+        return config_line(c, l);
     if (in_list(k, ignored_header, sizeof ignored_header / sizeof *ignored_header))
         return SG_OK;
     /* After the surfaces come the merit function's operands (EFFL, REAY,
@@ -1844,6 +1973,16 @@ static int finish(zctx *c)
     int nf, nw, i;
 
     c->cur = -1;
+    if ((i = config_finish(c)) != SG_OK)
+        return i;
+    if (c->push_line) {
+        c->line = c->push_line;
+        if (s->aim == SG_AIM_OFF)
+            return zerr(c, SG_EUNSUPPORTED, "PUSH: pupil shifts without ray aiming; sagitta "
+                        "cannot tell how Zemax would use them");
+        zwarn(c, "PUSH: note: the pupil shift is ray aiming's first guess and changes no "
+              "aimed ray; it is kept for a .zmx save");
+    }
     /* Messages about the file as a whole name no line. */
     c->line = 0;
     /* Fields: FTYP's count, else the values given. */
@@ -2482,7 +2621,8 @@ static int count_kept(const struct sg_zmx_origin *o, const sg_catalog *cat)
     sg_diag scratch;
     int i, n = 0;
     sg_diag_clear(&scratch);
-    if (write_text(&b, o->base, cat, 1, &scratch) != SG_OK || b.oom) {
+    /* Lax, with the configurations' lines, which are read. */
+    if (write_text(&b, o->base, cat, 2, &scratch) != SG_OK || b.oom) {
         free(b.p);
         return 0;
     }
@@ -2528,7 +2668,7 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
     sg_system *tmp;
     sg_catalog *own = NULL;
     locale_t cloc, old = (locale_t)0;
-    int rc;
+    int rc, rc2;
 
     name = name ? name : "(memory)";
     if (!sys || (!bytes && len))
@@ -2615,6 +2755,15 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
                              name, c->nzero_kw[w], zero_surface[w],
                              c->nzero_kw[w] == 1 ? "" : "s");
     }
+    if (rc == SG_OK && tmp->configs && cat) {
+        /* Each configuration must be a design sagitta can trace; the base
+         * design's own faults are reported where it is loaded. */
+        sg_diag e;
+        sg_diag_clear(&e);
+        if (sg_system_validate(tmp, cat, &e) == SG_OK &&
+            (rc = sg_configs_check(tmp, cat, &e)) != SG_OK)
+            sg_diag_set(d, rc, "%s: %s", name, e.msg);
+    }
     if (rc == SG_OK && c->nfrozen)
         sg_diag_warn(d, "%s: %d solve%s and pickup%s frozen at the values the file stores; "
                      "sagitta does not evaluate them", name, c->nfrozen,
@@ -2653,6 +2802,8 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
             sg_diag_set(d, rc, "%s: cannot store the design: %s", name, sg_strerror(rc));
     }
     sg_zmx_origin_release(org);
+    for (rc2 = 0; rc2 < SG_MAX_CONFIG_OPS; rc2++)
+        free(c->mfill[rc2]);
     free(c->lsect);
     sg_system_free(tmp);
     sg_catalog_free(own);
@@ -2958,9 +3109,9 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int la
         zb_add(b, "\n", 1);
     }
     zb_printf(b, "RAIM 0 %d 1 1 0 0 0 0 0\n", s->aim == SG_AIM_REAL ? 2 : s->aim == SG_AIM_PARAXIAL ? 1 : 0);
-    zb_printf(b, "FTYP %d %d %d %d %d 0 0\n", (int)s->field_type, s->telecentric ? 1 : 0,
+    zb_printf(b, "FTYP %d %d %d %d %d 0 %d\n", (int)s->field_type, s->telecentric ? 1 : 0,
               s->nfield, s->nwave,
-              s->field_norm == SG_NORM_RECT ? 1 : 0);
+              s->field_norm == SG_NORM_RECT ? 1 : 0, s->afocal ? 1 : 0);
     zb_list(b, "XFLN", s, 0);
     zb_list(b, "YFLN", s, 1);
     zb_list(b, "FWGN", s, 2);
@@ -3085,6 +3236,33 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int la
         }
     }
     mpfr_clear(q);
+    /* The configurations, as Zemax's editor rows: not in the merged save
+     * (lax 1), which keeps the file's own lines. */
+    if (s->configs && lax != 1) {
+        const sg_configs *cf = s->configs;
+        zb_printf(b, "MNUM %d 1\n", cf->n);
+        for (i = 0; i < cf->nop; i++) {
+            const sg_config_op *o = &cf->op[i];
+            for (k = 0; k < cf->n; k++) {
+                if (o->mat) {
+                    const sg_material *m = &o->mat[k];
+                    const char *g = m->kind == SG_MAT_GLASS    ? m->name
+                                    : m->kind == SG_MAT_MIRROR ? "MIRROR"
+                                    : m->kind == SG_MAT_AIR    ? ""
+                                                               : NULL;
+                    if (!g)
+                        return sg_diag_set(d, SG_EUNSUPPORTED, "export: configuration %d: GLSS "
+                                           "of surface %d is a fixed index or model glass, "
+                                           "which a .zmx GLSS row cannot hold", k + 1, o->num);
+                    zb_printf(b, "GLSS %d %d \"%s\" 0 0 0 %d %d 0 0.0 \"\"\n", o->num, k + 1, g,
+                              k + 1, i + 1);
+                } else {
+                    zb_printf(b, "%s %d %d %s 0 %d 0 %d %d 1 0 0\n", o->type, o->num, k + 1,
+                              num(n1, o->value[k]), o->num2, k + 1, i + 1);
+                }
+            }
+        }
+    }
     if (changed)
         sg_diag_warn(d, "export: control characters in the title or a comment became spaces");
     for (i = 0; i < s->nsurf; i++)

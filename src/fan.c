@@ -71,7 +71,8 @@ static void opd_value(const sg_tracer *t, const sg_opd_ref *ref, const sg_ray_su
 
 /* One sample's value from its image row: the transverse aberration from
  * the reference chief ray, or the OPD less this wavelength's chief ray's. */
-static void sample_value(const sg_fan *out, int f, int sag, const sg_tracer *tw,
+static void sample_value(const sg_system *sys, const sg_fan *out, int f, int sag,
+                         const sg_tracer *tw,
                          const sg_opd_ref *ref, double c0, int c0st, const sg_ray_surface *row,
                          int st, int *status, double *e)
 {
@@ -84,7 +85,9 @@ static void sample_value(const sg_fan *out, int f, int sag, const sg_tracer *tw,
             *e -= c0;
         return;
     }
-    *e = *status == SG_OK ? (sag ? row->x - out->ref_x[f] : row->y - out->ref_y[f]) : 0.0;
+    *e = *status == SG_OK ? (sag ? sg_an_img_x(sys, row) - out->ref_x[f]
+                                 : sg_an_img_y(sys, row) - out->ref_y[f])
+                          : 0.0;
 }
 
 /* A curve's interval j..j+1 needs its midpoint: both ends traced and the
@@ -184,7 +187,7 @@ static int refine_curves(const sg_system *sys, const sg_fan_opts *o, sg_fan *out
                         int s2;
                         if (!(c->p[j + 1] - c->p[j] > minstep))
                             continue;
-                        sample_value(out, f, side, tw, &ref[f], c0[f], c0st[f], &rows[r], st[r],
+                        sample_value(sys, out, f, side, tw, &ref[f], c0[f], c0st[f], &rows[r], st[r],
                                      &s2, &e);
                         r++;
                         if (wants_mid(c, j, &e, &s2, tolabs)) {
@@ -326,8 +329,8 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
             r = (size_t)f * (size_t)(2 * np + 1);
             if (k == 0) {
                 out->status[f] = st[r];
-                out->ref_x[f] = st[r] == SG_OK ? rows[r].x : 0.0;
-                out->ref_y[f] = st[r] == SG_OK ? rows[r].y : 0.0;
+                out->ref_x[f] = st[r] == SG_OK ? sg_an_img_x(sys, &rows[r]) : 0.0;
+                out->ref_y[f] = st[r] == SG_OK ? sg_an_img_y(sys, &rows[r]) : 0.0;
             }
             if (o->opd) {
                 /* This wavelength's chief ray: its OPD is the curve's zero. */
@@ -354,8 +357,8 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
                         s->e[j] -= c0;
                     continue;
                 }
-                t->e[j] = t->status[j] == SG_OK ? rows[it].y - out->ref_y[f] : 0.0;
-                s->e[j] = s->status[j] == SG_OK ? rows[is].x - out->ref_x[f] : 0.0;
+                t->e[j] = t->status[j] == SG_OK ? sg_an_img_y(sys, &rows[it]) - out->ref_y[f] : 0.0;
+                s->e[j] = s->status[j] == SG_OK ? sg_an_img_x(sys, &rows[is]) - out->ref_x[f] : 0.0;
             }
             for (j = 0; j < np; j++) {
                 if (t->status[j] == SG_OK)

@@ -189,10 +189,12 @@ const uint64_t *sg_index_cache_gens(sg_index_cache *c, const sg_system *sys,
             return NULL;
         *cl = *sys;
         sg_zmx_origin_retain(cl->zmx);
+        sg_configs_retain(cl->configs);
         cl->capsurf = n;
         cl->surf = malloc((size_t)n * sizeof *cl->surf);
         if (!cl->surf) {
             sg_zmx_origin_release(cl->zmx);
+            sg_configs_release(cl->configs);
             free(cl);
             return NULL;
         }

@@ -81,6 +81,9 @@ static const sg_param system_params[] = {
     /* Format version 3: object-space telecentric (in "aperture"). */
     {"aperture.telecentric", "object-space telecentric", NULL, NULL, "FTYP", SG_PARAM_BOOL,
      SG_PARAM_OPTIONAL, offsetof(sg_system, telecentric), 0, 1, 0, 0, 0, 0, 0, NONAMES, 3},
+    /* Format version 7: afocal image space. */
+    {"afocal", "afocal image space", NULL, NULL, "FTYP", SG_PARAM_BOOL, SG_PARAM_OPTIONAL,
+     offsetof(sg_system, afocal), 0, 1, 0, 0, 0, 0, 0, NONAMES, 7},
 };
 
 static const sg_param wave_params[] = {
@@ -461,6 +464,9 @@ int sg_system_equal(const sg_system *a, const sg_system *b)
         return 0;
     /* The merit function is its own object (merit.c). */
     if (!sg_merit_equal(&a->merit, &b->merit))
+        return 0;
+    /* So are the configurations (config.c). */
+    if (!sg_configs_equal(a->configs, b->configs))
         return 0;
     if (!sg_param_equal(SG_SCOPE_SYSTEM, a, b) || a->nwave != b->nwave ||
         a->primary_wave != b->primary_wave || a->nfield != b->nfield || a->stop != b->stop ||

@@ -37,7 +37,7 @@ extern "C" {
 /* The JSON design format version this library reads and writes. */
 /* Version 2 adds coordinate breaks and surface tilts and decenters; a
  * design without them is still written as version 1. */
-#define SG_DESIGN_FORMAT_VERSION 6
+#define SG_DESIGN_FORMAT_VERSION 7
 
 /* ------------------------------------------------------------------------
  * Errors.  One table yields the enum, the names and the messages, so the
@@ -501,6 +501,27 @@ typedef struct sg_merit {
     sg_operand op[SG_MAX_OPERANDS];
 } sg_merit;
 
+/* Configurations (Zemax's Multi-Configuration Editor; sagitta-design(5),
+ * CONFIGURATIONS): operands, each a parameter of the design with one value
+ * per configuration.  type is Zemax's name: THIC, CRVT, CONI, SDIA, GLSS
+ * (surface num), PRAM (surface num, parameter num2), APER, STPS, TEMP,
+ * PRES (num 0), XFIE, YFIE, FLWT (field num), WAVE, WLWT (wavelength num).
+ * Shared between copies of a design and not changed once made. */
+#define SG_MAX_CONFIGS 256
+#define SG_MAX_CONFIG_OPS 512
+typedef struct sg_config_op {
+    char type[8];
+    int num, num2;
+    double *value;     /* n values; CRVT a curvature, STPS a surface */
+    sg_material *mat;  /* GLSS: n materials; NULL for the others */
+} sg_config_op;
+typedef struct sg_configs {
+    int refs;
+    int n;             /* configurations, 2 or more */
+    int nop;
+    sg_config_op op[SG_MAX_CONFIG_OPS];
+} sg_configs;
+
 typedef struct sg_system {
     char title[128];
     char units[8]; /* "mm", "cm", "in" or "m" */
@@ -523,6 +544,11 @@ typedef struct sg_system {
      * NA, the object is at a finite distance, fields are heights, and ray
      * aiming does not apply (the rays are fixed in object space). */
     int telecentric;
+    /* Afocal image space (Zemax's "Afocal Image Space"): image-space
+     * aberrations are angles, the differences of the rays' direction
+     * cosines l and m from the chief ray's on the image surface (Zemax's
+     * ANAX and ANAY), so the spot diagram and ray fans are angular. */
+    int afocal;
 
     /* The environment (Zemax's ENVD): temperature in C (20) and pressure
      * in atm (1) of the air the wavelengths are measured in.  With
@@ -544,7 +570,28 @@ typedef struct sg_system {
      * design as read), shared between copies; NULL for any other design.
      * sg_system_assign, _clone and _free keep its count. */
     struct sg_zmx_origin *zmx;
+    /* Its configurations, shared between copies like zmx; NULL: one. */
+    sg_configs *configs;
 } sg_system;
+
+/* Configurations.  sg_configs_new makes n configurations without
+ * operands (refs 1); sg_configs_add appends one operand, its values 0
+ * (SG_ERANGE naming the type when it is not one of the list above or
+ * the table is full); retain and release keep the count.  sg_config_count
+ * is 1 for a design without configurations.  sg_config_apply sets every
+ * operand of configuration k (1 to the count) in sys, so that every
+ * analysis of the result is configuration k's; the message names the
+ * operand whose target (surface, field, wavelength) is not in the design.
+ * sg_configs_check applies each configuration to a copy and validates
+ * it. */
+SG_API sg_configs *sg_configs_new(int n);
+SG_API int sg_configs_add(sg_configs *c, const char *type, int num, int num2, sg_diag *d);
+SG_API void sg_configs_retain(sg_configs *c);
+SG_API void sg_configs_release(sg_configs *c);
+SG_API int sg_configs_equal(const sg_configs *a, const sg_configs *b);
+SG_API int sg_config_count(const sg_system *sys);
+SG_API int sg_config_apply(sg_system *sys, int k, sg_diag *d);
+SG_API int sg_configs_check(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
 
 /* What stopped a ray that failed at surface surf with status: for the
  * stopped codes the kind and the surface ("ray stopped by the circular

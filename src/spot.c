@@ -223,7 +223,10 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
     out->nfield = nf;
     out->nwave = nw;
     out->nray_per_cell = count;
-    out->airy_radius = 1.22 * sys->wave[refw].um * sg_an_um_to_units(sys) * px.working_fnum;
+    /* An afocal image has no Airy disc on the image surface. */
+    out->airy_radius = sys->afocal ? 0.0
+                                   : 1.22 * sys->wave[refw].um * sg_an_um_to_units(sys) *
+                                         px.working_fnum;
     /* The reference wavelength first: its chief rays are every cell's origin. */
     sg_an_wave_order(sys, waves, nw, refw, out->wave_index, out->wave_um, order);
     out->cell = calloc((size_t)nf * (size_t)nw, sizeof *out->cell);
@@ -274,8 +277,8 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
             goto done;
         for (f = 0; f < nf; f++) {
             sg_spot_cell *c = &out->cell[cell_index(out, f, w)];
-            c->chief_x = st[f] == SG_OK ? rows[f].x : 0.0;
-            c->chief_y = st[f] == SG_OK ? rows[f].y : 0.0;
+            c->chief_x = st[f] == SG_OK ? sg_an_img_x(sys, &rows[f]) : 0.0;
+            c->chief_y = st[f] == SG_OK ? sg_an_img_y(sys, &rows[f]) : 0.0;
             c->status = st[f];
             if (k == 0) {
                 out->field[f].status = st[f];
@@ -327,12 +330,12 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
                     c->nray++;
                     if (st[i] != SG_OK)
                         continue;
-                    dx = rows[i].x - origin[f][0];
-                    dy = rows[i].y - origin[f][1];
+                    dx = sg_an_img_x(sys, &rows[i]) - origin[f][0];
+                    dy = sg_an_img_y(sys, &rows[i]) - origin[f][1];
                     r2 = dx * dx + dy * dy;
                     bx += dx;
                     by += dy;
-                    ac->sb += rows[i].error_bound;
+                    ac->sb += sys->afocal ? rows[i].dir_error_bound : rows[i].error_bound;
                     ac->sax += fabs(dx);
                     ac->say += fabs(dy);
                     b2 += r2;

@@ -41,6 +41,7 @@ int sg_system_reset(sg_system *sys, int nsurf)
     if (nsurf < 0 || nsurf > SG_MAX_SURFACES)
         return SG_ERANGE;
     sg_zmx_origin_release(sys->zmx);
+    sg_configs_release(sys->configs);
     memset(sys, 0, sizeof *sys);
     sys->surf = keep;
     sys->capsurf = keepcap;
@@ -88,6 +89,7 @@ void sg_system_free(sg_system *sys)
     if (!sys)
         return;
     sg_zmx_origin_release(sys->zmx);
+    sg_configs_release(sys->configs);
     free(sys->surf);
     free(sys);
 }
@@ -106,6 +108,8 @@ int sg_system_assign(sg_system *dst, const sg_system *src)
     /* The .zmx origin is shared: the copy holds a count of its own. */
     sg_zmx_origin_retain(src->zmx);
     sg_zmx_origin_release(dst->zmx);
+    sg_configs_retain(src->configs);
+    sg_configs_release(dst->configs);
     *dst = *src;
     dst->surf = keep;
     dst->capsurf = keepcap;

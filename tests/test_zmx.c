@@ -664,8 +664,8 @@ static void test_bad_inputs(void **state)
         {"cone angle", "OBNA 90 1\n" S0, 0, SG_EUNSUPPORTED, "t.zmx:1: OBNA: an object cone angle of 90 degrees; sagitta takes angles below 90"},
         {"temperature", "ENVD -300 1 0\n", 0, SG_ERANGE, "t.zmx:1: ENVD: temperature -300 C"},
         {"pressure", "ENVD 20 -1 0\n", 0, SG_ERANGE, "t.zmx:1: ENVD: pressure -1 atm"},
-        {"configs", "MNUM 3 1\n", 0, SG_EUNSUPPORTED, "t.zmx:1: MNUM: 3 configurations"},
-        {"pupil shift", "PUSH 1 0 0 0 0 0\n", 0, SG_EUNSUPPORTED, "PUSH"},
+        {"configs", "MNUM 300 1\n", 0, SG_ERANGE, "t.zmx:1: MNUM: 300 configurations; sagitta holds 256"},
+        {"pupil shift", "PUSH 1 0 0 0 0 0\n" H S0 S1 S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:1: PUSH: pupil shifts without ray aiming"},
         {"two apertures", "ENPD 10\nFNUM 4 0\n", 0, SG_EPARSE, "t.zmx:2: a second aperture line"},
         {"few waves", "FTYP 0 0 1 3 0 0 0\n" "ENPD 10\nWAVM 1 0.55 1\n" S0 S1 S2 S3, 0, SG_EPARSE, "WAVM 2 is missing"},
         {"pwav", "ENPD 10\nWAVM 1 0.55 1\nPWAV 3\n" S0 S1 S2 S3, 0, SG_ERANGE, "t.zmx:3: PWAV"},
@@ -1818,7 +1818,7 @@ static void test_zemax_tilted_plane(void **state)
  * line 251): surface 17's thickness puts the image (the eye) where the
  * paraxial chief ray crosses the axis; Zemax stored 9.095135769303E+1.
  * The file's afocal image space flag (FTYP, 7th field) is left out here:
- * sagitta refuses it, and the paraxial chief ray does not depend on it.
+ * the paraxial chief ray does not depend on it.
  * Its old SCHOTT glasses beyond the bundled catalog are given SCHOTT's
  * Sellmeier coefficients (README). */
 static const char *const rifle_zmx =

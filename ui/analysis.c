@@ -124,8 +124,11 @@ static void spot_text(FILE *f, const sg_system *sys, const sg_spot *s, const sg_
     fprintf(f, "Pattern %s, density %d, %zu rays per field and wavelength; reference: %s\n",
             sg_pupil_pattern_name(o->pattern), o->density, s->nray_per_cell,
             o->reference == SG_SPOT_REF_CHIEF ? "chief ray" : "centroid");
-    fprintf(f, "Airy radius %.6g %s (1.22 x %.6g µm x working F/#)\n\n", s->airy_radius * sc, u,
-            sys->wave[o->wave >= 0 ? o->wave : sys->primary_wave].um);
+    if (sys->afocal)
+        fputs("Afocal image space: no Airy radius\n\n", f);
+    else
+        fprintf(f, "Airy radius %.6g %s (1.22 x %.6g µm x working F/#)\n\n",
+                s->airy_radius * sc, u, sys->wave[o->wave >= 0 ? o->wave : sys->primary_wave].um);
     fprintf(f, "%-26s %-12s %8s %14s %14s %14s %14s\n", "Field", "Wavelength", "Rays",
             "RMS", "GEO", "Centroid x", "Centroid y");
     for (fi = 0; fi < s->nfield; fi++) {
@@ -156,7 +159,11 @@ static void spot_text(FILE *f, const sg_system *sys, const sg_spot *s, const sg_
                     spot_denoise(fd->centroid_x, fd->centroid_bound_x),
                     spot_denoise(fd->centroid_y, fd->centroid_bound_y));
     }
-    fprintf(f, "(centroids in %s on the image surface)\n", sys->units);
+    if (sys->afocal)
+        fputs("(afocal image space: angles are differences of direction cosines from the "
+              "chief ray's; centroids as direction cosines)\n", f);
+    else
+        fprintf(f, "(centroids in %s on the image surface)\n", sys->units);
 }
 
 static void spot_csv(FILE *f, const sg_spot *s)

@@ -109,16 +109,34 @@ void cli_iter_init(cli_iter *it, const char *cmd, int argc, char **argv)
     it->cmd = cmd;
 }
 
+/* --config N, which every command that reads a design takes: the design
+ * is configuration N of its configurations (0: as stored). */
+static int cli_config_n;
+
 int cli_next_opt(cli_iter *it, const cli_opt *opts, const char **val)
 {
     const char *a, *eq;
     const cli_opt *o;
     size_t nlen;
 
+again:
     *val = NULL;
     if (it->i >= it->argc)
         return -1;
     a = it->argv[it->i++];
+    if (!it->only_positional && strncmp(a, "--config", 8) == 0 && (!a[8] || a[8] == '=')) {
+        const char *v = a[8] ? a + 9 : it->i < it->argc ? it->argv[it->i++] : NULL;
+        long n;
+        char *end;
+        if (!v || !v[0])
+            return -cli_usage_error(it->cmd, "--config needs a configuration number");
+        n = strtol(v, &end, 10);
+        if (*end || n < 1 || n > SG_MAX_CONFIGS)
+            return -cli_usage_error(it->cmd, "--config \"%s\": give a configuration number "
+                                    "from 1 to %d", v, SG_MAX_CONFIGS);
+        cli_config_n = (int)n;
+        goto again;
+    }
     if (!it->only_positional && strcmp(a, "--") == 0) {
         it->only_positional = 1;
         if (it->i >= it->argc)
@@ -314,6 +332,22 @@ int cli_load_design_subst(const char *path, const sg_zmx_subst *sub, sg_catalog 
         return rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_FILE;
     }
     cli_print_warnings(&d, path);
+
+    /* Every configuration must be a design (a JSON design's operands are
+     * checked here; a .zmx file's when it is read). */
+    sg_diag_clear(&d);
+    if (sys->configs && (rc = sg_configs_check(sys, cat, &d)) != SG_OK) {
+        cli_print_diag(path, &d, rc);
+        cli_design_free(cat, sys);
+        return rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
+    }
+    /* --config N: configuration N's design (sagitta-design(5), CONFIGURATIONS). */
+    sg_diag_clear(&d);
+    if (cli_config_n && (rc = sg_config_apply(sys, cli_config_n, &d)) != SG_OK) {
+        cli_print_diag(path, &d, rc);
+        cli_design_free(cat, sys);
+        return CLI_EXIT_USAGE;
+    }
 
     sg_diag_clear(&d);
     rc = sg_system_validate(sys, cat, &d);

@@ -14,6 +14,12 @@
 const char *view_length_unit(const sg_system *sys, double extent, double *scale)
 {
     double um = 1e3; /* micrometres per lens unit */
+    /* Afocal image space: the spot and fans are angles (sg_system.afocal). */
+    if (sys->afocal) {
+        (void)extent;
+        *scale = 1e3;
+        return "mrad";
+    }
     if (strcmp(sys->units, "cm") == 0)
         um = 1e4;
     else if (strcmp(sys->units, "in") == 0)

@@ -248,6 +248,41 @@ static void test_wave_beyond_design(void **state)
     expect(2, ARGS("paraxial", d, "--wave", "2"), "--wave", NULL);
 }
 
+/* --config N (sagitta-design(5), CONFIGURATIONS): a design without
+ * configurations has configuration 1 alone. */
+static void test_config_option(void **state)
+{
+    const char *d = ct_design("good.json", SINGLET);
+    ct_result r;
+    (void)state;
+    expect(2, ARGS("paraxial", d, "--config", "2"), "configuration 2",
+           "the design has one configuration");
+    expect(2, ARGS("trace", d, "--ray", "0,0,0,0", "--config", "x"), "--config", NULL);
+    expect(2, ARGS("paraxial", d, "--config=0"), "--config", NULL);
+    expect(2, ARGS("paraxial", d, "--config"), "--config", NULL);
+    ct_runv(&r, ARGS("paraxial", d, "--config", "1"));
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    /* An operand of a surface the design lacks is a design error (4),
+     * whatever configuration is asked for. */
+    {
+        const char *bad = ct_file(
+            "badcfg.json",
+            "{ \"wavelengths\": { \"primary\": 1, \"list\": [ { \"um\": 0.55 } ] },\n"
+            "  \"fields\": { \"type\": \"angle\", \"list\": [ { \"y\": 0 } ] },\n"
+            "  \"aperture\": { \"type\": \"epd\", \"value\": 10 },\n"
+            "  \"surfaces\": [\n    {\"radius\": \"inf\", \"thickness\": \"inf\"},\n"
+            "    {\"radius\": 50, \"thickness\": 5, \"material\": 1.5, \"stop\": true},\n"
+            "    {\"radius\": -50, \"thickness\": 45},\n"
+            "    {\"radius\": \"inf\", \"thickness\": 0} ],\n"
+            "  \"configurations\": { \"count\": 2, \"operands\": [\n"
+            "    { \"type\": \"THIC\", \"surface\": 9, \"values\": [45, 40] } ] } }\n");
+        expect(4, ARGS("paraxial", bad), "configuration 1: configuration operand THIC 9",
+               "surfaces 0 to 3");
+        expect(4, ARGS("paraxial", bad, "--config", "2"), "THIC 9", NULL);
+    }
+}
+
 static void test_help_version(void **state)
 {
     ct_result r;
@@ -457,6 +492,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_unknown_glass),
         cmocka_unit_test(test_bad_values),
         cmocka_unit_test(test_wave_beyond_design),
+        cmocka_unit_test(test_config_option),
         cmocka_unit_test(test_help_version),
         cmocka_unit_test(test_csv_errors),
         cmocka_unit_test(test_output_errors),
