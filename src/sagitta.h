@@ -38,7 +38,7 @@ extern "C" {
 /* The JSON design format version this library reads and writes. */
 /* Version 2 adds coordinate breaks and surface tilts and decenters; a
  * design without them is still written as version 1. */
-#define SG_DESIGN_FORMAT_VERSION 6
+#define SG_DESIGN_FORMAT_VERSION 7
 
 /* ------------------------------------------------------------------------
  * Errors.  One table yields the enum, the names and the messages, so the
@@ -1130,8 +1130,8 @@ SG_API int sg_tol_nominal(const sg_system *sys, const sg_catalog *cat, sg_system
  * the first vertex's frame.  map (nominal->nsurf entries, may be NULL)
  * gets each nominal surface's index in out.  The nominal is not
  * touched. */
-SG_API int sg_tol_apply(const sg_system *nominal, const double *delta, sg_system *out, int *map,
-                        sg_diag *d);
+SG_API int sg_tol_apply(const sg_system *nominal, const sg_catalog *cat, const double *delta,
+                        sg_system *out, int *map, sg_diag *d);
 
 typedef struct sg_tol_opts {
     int method;             /* sg_method of the criterion's traces (precise) */
