@@ -392,6 +392,29 @@ int sg_optimize(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *opts,
     return rc;
 }
 
+/* GSL's error handler is one for the process: it is off while any run
+ * is under way (compensators run on several threads at once), and back
+ * when the last one ends. */
+static pthread_mutex_t gsl_handler_lock = PTHREAD_MUTEX_INITIALIZER;
+static int gsl_handler_users;
+static gsl_error_handler_t *gsl_handler_old;
+
+static void gsl_handler_enter(void)
+{
+    pthread_mutex_lock(&gsl_handler_lock);
+    if (gsl_handler_users++ == 0)
+        gsl_handler_old = gsl_set_error_handler_off();
+    pthread_mutex_unlock(&gsl_handler_lock);
+}
+
+static void gsl_handler_leave(void)
+{
+    pthread_mutex_lock(&gsl_handler_lock);
+    if (--gsl_handler_users == 0)
+        gsl_set_error_handler(gsl_handler_old);
+    pthread_mutex_unlock(&gsl_handler_lock);
+}
+
 /* The damped least squares from z0; sys gets the best point found. */
 static int run_lsq(octx *op, sg_system *sys, const double *z0, const sg_opt_opts *opts,
                    sg_opt_result *res, sg_diag *d)
@@ -400,11 +423,10 @@ static int run_lsq(octx *op, sg_system *sys, const double *z0, const sg_opt_opts
     gsl_multifit_nlinear_parameters par;
     gsl_multifit_nlinear_workspace *w = NULL;
     gsl_vector *x = NULL;
-    gsl_error_handler_t *old;
     double best[OPT_MAX_VARS], bestmf, t0 = now();
     int j, rc, cycle, maxc;
 
-    old = gsl_set_error_handler_off();
+    gsl_handler_enter();
     fdf.f = gsl_f;
     fdf.df = gsl_df;
     fdf.fvv = NULL;
@@ -486,7 +508,7 @@ static int run_lsq(octx *op, sg_system *sys, const double *z0, const sg_opt_opts
     res->merit = bestmf;
     rc = SG_OK;
 done:
-    gsl_set_error_handler(old);
+    gsl_handler_leave();
     if (w)
         gsl_multifit_nlinear_free(w);
     if (x)

@@ -208,13 +208,6 @@ int sg_tol_check(const sg_system *sys, sg_diag *d)
             !(v + c->max < 0.0))
             return sg_diag_set(d, SG_ERANGE, "tolerances: compensator %d: the radius's range "
                                "%g to %g encloses 0", k + 1, v + c->min, v + c->max);
-        if (strcmp(c->param, "thickness") == 0)
-            for (j = 0; j < t->nop; j++)
-                if (is_element(t->op[j].type) && t->op[j].last == c->surface)
-                    return sg_diag_set(d, SG_ERANGE, "tolerances: compensator %d: the "
-                                       "thickness after surface %d, the last of operand %d's "
-                                       "element, is the element's return and cannot "
-                                       "compensate", k + 1, c->surface, j + 1);
     }
     if (t->criterion == SG_TOLC_MERIT) {
         if (!sys->merit.present)
@@ -368,28 +361,41 @@ int sg_tol_apply(const sg_system *nom, const sg_catalog *cat, const double *delt
         for (i = first; i < last; i++)
             T += out->surf[i].thickness;
         Tl = out->surf[last].thickness;
+        /* Rays start in surface 1's frame, which no break may precede:
+         * an element there gets a dummy plane of the object's medium in
+         * front, at its vertex, and the break after that. */
+        if (first == 1) {
+            if ((rc = sg_system_insert(out, 1)) != SG_OK)
+                return sg_diag_set(d, rc, "out of memory");
+            out->surf[1].mat = out->surf[0].mat;
+            out->surf[1].thickness = 0.0;
+            if (map)
+                for (i = 0; i < nom->nsurf; i++)
+                    if (map[i] >= 1)
+                        map[i]++;
+            first++;
+            last++;
+        }
         /* A break before the element: decenter, then tilt about its first
          * vertex. */
         if ((rc = sg_system_insert(out, first)) != SG_OK)
             return sg_diag_set(d, rc, "out of memory");
         out->surf[first].type = SG_SURF_COORDBRK;
-        out->surf[first].mat = first > 0 ? out->surf[first - 1].mat : out->surf[first].mat;
         out->surf[first].before = c;
         out->surf[first].thickness = 0.0;
+        at = last + 2;
         /* Back along the element's axis to that vertex, the break undone
          * there (order toggled, values negated), then on to where the next
          * surface was. */
-        at = last + 2;
-        out->surf[last + 1].thickness = -T;
+        out->surf[at - 1].thickness = 0.0 - T; /* +0 for a single surface */
         if ((rc = sg_system_insert(out, at)) != SG_OK)
             return sg_diag_set(d, rc, "out of memory");
         out->surf[at].type = SG_SURF_COORDBRK;
-        out->surf[at].mat = out->surf[at - 1].mat;
-        out->surf[at].before.dx = -c.dx;
-        out->surf[at].before.dy = -c.dy;
-        out->surf[at].before.tx = -c.tx;
-        out->surf[at].before.ty = -c.ty;
-        out->surf[at].before.tz = -c.tz;
+        out->surf[at].before.dx = 0.0 - c.dx;
+        out->surf[at].before.dy = 0.0 - c.dy;
+        out->surf[at].before.tx = 0.0 - c.tx;
+        out->surf[at].before.ty = 0.0 - c.ty;
+        out->surf[at].before.tz = 0.0 - c.tz;
         out->surf[at].before.order = 1;
         out->surf[at].thickness = T + Tl;
         if (map)
@@ -523,7 +529,16 @@ int sg_tol_compensate(sg_system *sys, const sg_system *nominal, const int *map,
     for (k = 0; k < t->ncomp; k++) {
         const sg_tol_comp *c = &t->comp[k];
         int s = map ? map[c->surface] : c->surface;
-        double nv;
+        double nv, off = 0.0;
+        /* The thickness after an element's last surface is, in the
+         * perturbed design, the return break's, T longer (its last surface
+         * goes back T to the first vertex). */
+        if (map && strcmp(c->param, "thickness") == 0 && c->surface + 1 < nominal->nsurf &&
+            map[c->surface + 1] > s + 1 && sys->surf[s + 1].type == SG_SURF_COORDBRK &&
+            sys->surf[s + 1].before.order == 1) {
+            off = -sys->surf[s].thickness;
+            s++;
+        }
         if ((rc = sg_paddr_make(sys, SG_SCOPE_SURFACE, s, c->param, c->elem, &a[k], d)) != SG_OK)
             return rc;
         /* The range is about the nominal's value. */
@@ -535,8 +550,8 @@ int sg_tol_compensate(sg_system *sys, const sg_system *nominal, const int *map,
             nv = sg_paddr_get(nominal, &an);
         }
         v0[k] = sg_paddr_get(sys, &a[k]);
-        lo[k] = nv + c->min;
-        hi[k] = nv + c->max;
+        lo[k] = nv + off + c->min;
+        hi[k] = nv + off + c->max;
         /* A perturbation may move the compensator's own value out. */
         if (v0[k] < lo[k] || v0[k] > hi[k])
             sg_paddr_set(sys, &a[k], v0[k] < lo[k] ? lo[k] : hi[k]);
