@@ -725,8 +725,12 @@ static void *worker(void *arg)
             break;
         run_job(c, job, work, map);
         pthread_mutex_lock(&c->lock);
-        c->finished[job] = 1;
-        c->ndone++;
+        /* A stop may have cut this system's compensation short: a system
+         * that ends after it is not counted. */
+        if (!((c->o->stop && *c->o->stop) || c->r->stopped)) {
+            c->finished[job] = 1;
+            c->ndone++;
+        }
         if (c->o->progress && c->o->progress(c->o->ctx, c->ndone, c->njob))
             c->r->stopped = 1;
         pthread_mutex_unlock(&c->lock);

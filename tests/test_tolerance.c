@@ -404,6 +404,89 @@ static void compensated_focus(void **state)
         sg_system_free(sys);
         sg_system_free(nom);
     }
+    /* A run compensates the nominal too: 1 mm out of focus, it comes back
+     * to R / 2, and so do the rows. */
+    {
+        sg_system *nom = parse(
+            "{\"format\": \"sagitta-design\", \"units\": \"mm\","
+            "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.55}]},"
+            "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}]},"
+            "\"aperture\": {\"type\": \"epd\", \"value\": 20},"
+            "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+            "{\"radius\": -200, \"conic\": -1, \"thickness\": -99, \"material\": \"MIRROR\","
+            " \"stop\": true}, {\"radius\": \"inf\", \"thickness\": 0}],"
+            "\"tolerances\": {\"operands\": [{\"type\": \"TRAD\", \"surface\": 1, "
+            "\"min\": -0.3, \"max\": 0.3}], \"compensators\": [{\"surface\": 1, "
+            "\"parameter\": \"thickness\", \"min\": -2, \"max\": 2}]}}", 1, NULL, 0);
+        sg_tol_result r;
+        sg_tol_opts o;
+        sg_diag d;
+        sg_tol_opts_init(&o);
+        o.nthreads = 1;
+        sg_diag_clear(&d);
+        if (sg_tolerance_run(nom, NULL, &o, 1, 0, 1, &r, &d) != SG_OK)
+            fail_msg("%s", d.msg);
+        if (!(r.nominal.criterion < 1e-8))
+            fail_msg("the nominal was not compensated: %.17g", r.nominal.criterion);
+        assert_true(r.sens[0].at_min.criterion < 1e-8 && r.sens[0].at_max.criterion < 1e-8);
+        /* The design itself is untouched. */
+        assert_true(nom->surf[1].thickness == -99.0);
+        sg_tol_result_free(&r);
+        sg_system_free(nom);
+    }
+}
+
+/* Turning a round element about its axis changes nothing on axis: with
+ * the back focus after it compensating (the return break's thickness in
+ * the perturbed design), the result is the nominal's. */
+static void round_element_turned(void **state)
+{
+    const char *tol =
+        "{\"operands\": [{\"type\": \"TETZ\", \"first\": 1, \"last\": 2, \"min\": -30,"
+        "  \"max\": 30}],"
+        " \"compensators\": [{\"surface\": 2, \"parameter\": \"thickness\", \"min\": -3,"
+        "  \"max\": 3}]}";
+    char text[8192];
+    sg_system *nom, *sys = sg_system_new(), *ref;
+    double dv[SG_MAX_TOL_OPERANDS] = {0};
+    sg_tol_value v0, v1;
+    sg_tol_opts o;
+    sg_diag d;
+    int map[4];
+    (void)state;
+    snprintf(text, sizeof text,
+             "{\"format\": \"sagitta-design\", \"units\": \"mm\","
+             "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.5875618}]},"
+             "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}]},"
+             "\"aperture\": {\"type\": \"epd\", \"value\": 10},"
+             "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+             "{\"radius\": 50, \"thickness\": 4, \"material\": 1.5, \"stop\": true},"
+             "{\"radius\": -50, \"thickness\": 49},"
+             "{\"radius\": \"inf\", \"thickness\": 0}], \"tolerances\": %s}", tol);
+    nom = parse(text, 1, NULL, 0);
+    ref = sg_system_clone(nom);
+    sg_tol_opts_init(&o);
+    o.nthreads = 1;
+    sg_diag_clear(&d);
+    if (sg_tol_compensate(nom, ref, NULL, NULL, &o, &v0, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    dv[0] = 30;
+    if (sg_tol_apply(nom, NULL, dv, sys, map, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    /* The break after the element carries the thickness to the image. */
+    assert_int_equal(sys->surf[map[2] + 1].type, SG_SURF_COORDBRK);
+    if (sg_tol_compensate(sys, ref, map, NULL, &o, &v1, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    if (fabs(v1.comp[0]) > 1e-9)
+        fail_msg("the compensator moved by %.17g", v1.comp[0]);
+    if (fabs(v1.criterion - v0.criterion) > 1e-12 * v0.criterion)
+        fail_msg("criterion %.17g, nominal %.17g", v1.criterion, v0.criterion);
+    if (fabs(sys->surf[map[2] + 1].thickness - (4.0 + nom->surf[2].thickness)) > 1e-12)
+        fail_msg("the return's thickness %.17g, expected %.17g",
+                 sys->surf[map[2] + 1].thickness, 4.0 + nom->surf[2].thickness);
+    sg_system_free(ref);
+    sg_system_free(sys);
+    sg_system_free(nom);
 }
 
 /* Mean and variance of the sum of a uniform, a normal (limits at +-2
@@ -468,6 +551,9 @@ static void sampler_statistics(void **state)
     assert_true(st.pct[0] == 90 && st.pct[1] == 80 && st.pct[2] == 50 && st.pct[3] == 20 &&
                 st.pct[4] == 10);
     assert_true(st.best == 1 && st.worst == 100 && st.mean == 50.5);
+    /* The sample deviation of 1..100: sqrt(100 * 101 / 12). */
+    if (fabs(st.std - sqrt(100.0 * 101.0 / 12.0)) > 1e-13)
+        fail_msg("std of 1..100: %.17g", st.std);
     v[0] = NAN;
     sg_tol_statistics(v, 100, &st);
     assert_int_equal(st.n, 99);
@@ -513,6 +599,17 @@ static void threads_identical(void **state)
         assert_memory_equal(&r1.mc[k], &r2.mc[k], sizeof r1.mc[k]);
     }
     assert_memory_equal(&r1.stats, &r2.stats, sizeof r1.stats);
+    /* The RSS estimate: each row's larger |change|, root sum of squares. */
+    {
+        double acc = 0.0;
+        for (k = 0; k < 3; k++) {
+            double a = fabs(r1.sens[k].at_min.criterion - r1.nominal.criterion);
+            double b = fabs(r1.sens[k].at_max.criterion - r1.nominal.criterion);
+            acc += (a > b ? a : b) * (a > b ? a : b);
+        }
+        if (fabs(r1.rss - sqrt(acc)) > 1e-15 * sqrt(acc))
+            fail_msg("rss %.17g, expected %.17g", r1.rss, sqrt(acc));
+    }
     /* A change of the criterion: the compensated TRAD rows move it. */
     assert_true(r1.sens[0].at_max.criterion != r1.nominal.criterion);
     sg_tol_result_free(&r1);
@@ -589,6 +686,7 @@ int main(void)
         cmocka_unit_test(operands_by_hand),
         cmocka_unit_test(element_by_hand),
         cmocka_unit_test(compensated_focus),
+        cmocka_unit_test(round_element_turned),
         cmocka_unit_test(sampler_statistics),
         cmocka_unit_test(threads_identical),
         cmocka_unit_test(cassegrain_mpfr),

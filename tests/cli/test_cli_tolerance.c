@@ -4,16 +4,24 @@
  * field weights, sqrt(sum w c^2 / sum w); a paraboloid's TRAD rows
  * compensated to a perfect focus again; the JSON's shape; reports that are
  * the same bytes on one and two threads; -o refused over an existing file
- * without --force; a design without tolerances refused.
+ * without --force; a design without tolerances refused; Ctrl-C mid-run
+ * writing the trials done, in order, marked stopped.
  */
+#include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
+#include <unistd.h>
+#include <sys/wait.h>
 
 #include <cjson/cJSON.h>
 
 #include "clitest.h"
+
+static const char *exe;
 
 /* Two lenses of index 1.5 and 1.6; fields 0, 2 and 3 degrees weighted 1,
  * 2 and 3. */
@@ -208,6 +216,46 @@ static void refusals(void **state)
     ct_free(&r);
 }
 
+/* SIGINT during a long Monte Carlo run: the report holds the trials
+ * done from the first, says stopped, and the program ends with 0. */
+static void interrupted(void **state)
+{
+    const char *d = doublet("i.json", TOL), *out = ct_path("i_out.json");
+    struct timespec ts = {1, 500000000L};
+    cJSON *root, *mc;
+    char *text;
+    int st, done;
+    pid_t pid;
+    (void)state;
+    fflush(NULL);
+    pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        unsetenv("CI");
+        execl(exe, exe, "tolerance", d, "--monte-carlo", "1000000", "--threads", "2",
+              "--format", "json", "-o", out, (char *)NULL);
+        _exit(127);
+    }
+    while (nanosleep(&ts, &ts) != 0 && errno == EINTR)
+        ;
+    assert_int_equal(kill(pid, SIGINT), 0);
+    assert_int_equal(waitpid(pid, &st, 0), pid);
+    if (!WIFEXITED(st) || WEXITSTATUS(st) != 0)
+        fail_msg("the run ended with status 0x%x", st);
+    text = ct_read(out);
+    root = cJSON_Parse(text);
+    assert_non_null(root);
+    assert_true(cJSON_IsTrue(cJSON_GetObjectItem(root, "stopped")));
+    mc = cJSON_GetObjectItem(root, "monte_carlo");
+    assert_non_null(mc);
+    done = (int)num(mc, "done");
+    assert_true(done < 1000000);
+    assert_int_equal(cJSON_GetArraySize(cJSON_GetObjectItem(mc, "criteria")), done);
+    print_message("# stopped after %d trials\n", done);
+    cJSON_Delete(root);
+    free(text);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -215,9 +263,11 @@ int main(int argc, char **argv)
         cmocka_unit_test(paraboloid_refocus),
         cmocka_unit_test(threads_same_bytes),
         cmocka_unit_test(refusals),
+        cmocka_unit_test(interrupted),
     };
     int rc;
     ct_init(argc, argv);
+    exe = argv[1];
     rc = cmocka_run_group_tests(tests, NULL, NULL);
     ct_cleanup();
     return rc;
