@@ -286,6 +286,10 @@ typedef struct sg_material {
     char catalog[SG_GLASS_NAME];
     double index;             /* for SG_MAT_INDEX; nd for SG_MAT_MODEL */
     double vd, dpgf;          /* for SG_MAT_MODEL */
+    /* A catalog glass as tolerancing changes it (TIND, TABB; sg_tol_apply;
+     * no file holds them): dn is added to the index at every wavelength,
+     * and n - n(d) is scaled by disp (0: not scaled). */
+    double dn, disp;
 } sg_material;
 
 /* The catalog glass of a glass material (its catalog's if it names one),

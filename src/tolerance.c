@@ -178,12 +178,12 @@ int sg_tol_check(const sg_system *sys, sg_diag *d)
             break;
         case SG_TOL_TIND:
         case SG_TOL_TABB:
-            if (s->mat.kind == SG_MAT_MODEL)
+            if (s->mat.kind == SG_MAT_MODEL || s->mat.kind == SG_MAT_GLASS)
                 break;
             if (s->mat.kind == SG_MAT_INDEX && op->type == SG_TOL_TIND)
                 break;
-            return op_err(d, k, op, "surface %d: only a model glass (or, for TIND, a fixed "
-                          "index) takes this operand; make the glass a model glass", op->surface);
+            return op_err(d, k, op, "surface %d: only a glass (or, for TIND, a fixed index) "
+                          "takes this operand", op->surface);
         default:
             break;
         }
@@ -321,10 +321,29 @@ int sg_tol_apply(const sg_system *nom, const sg_catalog *cat, const double *delt
             s->after_mode = SG_AFTER_REVERSE;
             break;
         case SG_TOL_TIND:
-            /* A fixed index, or a model glass's nd. */
-            s->mat.index += v;
+            /* A catalog glass's curve moves by v at every wavelength; a
+             * fixed index, or a model glass's nd, by v. */
+            if (s->mat.kind == SG_MAT_GLASS)
+                s->mat.dn += v;
+            else
+                s->mat.index += v;
             break;
-        case SG_TOL_TABB: s->mat.vd += v; break;
+        case SG_TOL_TABB:
+            if (s->mat.kind == SG_MAT_GLASS) {
+                /* nd held, n(F) - n(C) = (nd - 1) / vd: the dispersion
+                 * about the d line scales by vd / (vd + v). */
+                const sg_glass *g = cat ? sg_material_glass(cat, &s->mat) : NULL;
+                double f = s->mat.disp != 0.0 ? s->mat.disp : 1.0;
+                if (!g || !(g->vd + v > 0.0))
+                    return sg_diag_set(d, SG_ENOGLASS, "tolerances: operand %d (TABB): "
+                                       "surface %d: %s", k + 1, op->surface,
+                                       g ? "the Abbe number would not be positive"
+                                         : "the glass is not in the catalog");
+                s->mat.disp = f * g->vd / (g->vd + v);
+            } else {
+                s->mat.vd += v;
+            }
+            break;
         default: break;
         }
     }

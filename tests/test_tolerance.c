@@ -133,7 +133,7 @@ static void json_roundtrip(void **state)
              " \"max\": 1}, {\"type\": \"TEDY\", \"first\": 2, \"last\": 3, \"min\": 0,"
              " \"max\": 1}]}", "tolerances: operand 2 (TEDY): the element overlaps operand 1");
     must_say("{\"operands\": [{\"type\": \"TABB\", \"surface\": 1, \"min\": 0, \"max\": 1}]}",
-             "tolerances: operand 1 (TABB): surface 1: only a model glass");
+             "tolerances: operand 1 (TABB): surface 1: only a glass");
     must_say("{\"operands\": [], \"compensators\": [{\"surface\": 4, \"parameter\": "
              "\"thickness\", \"min\": 0}]}", "tolerances: compensator 1: a compensator needs");
     must_say("{\"monte_carlo\": {\"seed\": -1}}", "tolerances: monte_carlo: seed");
@@ -168,13 +168,14 @@ static void same_traces(const sg_system *a, const sg_system *b, const sg_catalog
 }
 
 /* Applies one operand row k by delta to nom into out. */
-static void apply_one(const sg_system *nom, int k, double delta, sg_system *out, int *map)
+static void apply_one(const sg_system *nom, const sg_catalog *cat, int k, double delta,
+                      sg_system *out, int *map)
 {
     double dv[SG_MAX_TOL_OPERANDS] = {0};
     sg_diag d;
     dv[k] = delta;
     sg_diag_clear(&d);
-    if (sg_tol_apply(nom, NULL, dv, out, map, &d) != SG_OK)
+    if (sg_tol_apply(nom, cat, dv, out, map, &d) != SG_OK)
         fail_msg("%s", d.msg);
 }
 
@@ -203,7 +204,7 @@ static void operands_by_hand(void **state)
     for (k = 0; k < nom->tol.nop; k++) {
         double v = nom->tol.op[k].max;
         sg_surface *s;
-        apply_one(nom, k, v, out, NULL);
+        apply_one(nom, NULL, k, v, out, NULL);
         hand = sg_system_clone(nom);
         switch (k) {
         case 0: hand->surf[1].radius = 50.5; break;
@@ -240,6 +241,65 @@ static void operands_by_hand(void **state)
     sg_system_free(hand);
     sg_system_free(out);
     sg_system_free(nom);
+}
+
+/* TIND and TABB on a catalog glass: the traces of a fixed index equal to
+ * the catalog's formula changed by hand, n + dn, and n(d) + (n - n(d)) vd
+ * / (vd + dv), at the F line. */
+static void glass_changes(void **state)
+{
+    const char *tol =
+        "{\"operands\": [{\"type\": \"TIND\", \"surface\": 3, \"min\": -2e-3, \"max\": 2e-3},"
+        " {\"type\": \"TABB\", \"surface\": 3, \"min\": -3, \"max\": 3}]}";
+    sg_catalog *cat = tu_catalog();
+    const sg_glass *g = sg_catalog_find(cat, "N-BK7");
+    sg_system *nom, *out = sg_system_new(), *hand;
+    const double uf = 0.4861327;
+    char text[8192], fmt[4096], *at;
+    int k, j;
+    (void)state;
+    assert_non_null(g);
+    /* The singlet with N-BK7 for its second lens. */
+    snprintf(fmt, sizeof fmt, "%s", singlet_fmt);
+    at = strstr(fmt, "\"material\": 1.6}");
+    assert_non_null(at);
+    memcpy(at, "\"material\": \"N-BK7\"}", strlen("\"material\": \"N-BK7\"}"));
+    snprintf(fmt + (at - fmt) + strlen("\"material\": \"N-BK7\"}"),
+             sizeof fmt - (size_t)(at - fmt) - strlen("\"material\": \"N-BK7\"}"), "%s",
+             strstr(singlet_fmt, "\"material\": 1.6}") + strlen("\"material\": 1.6}"));
+    snprintf(text, sizeof text, fmt, tol);
+    nom = parse(text, 1, NULL, 0);
+    nom->wave[0].um = uf;
+    for (k = 0; k < 2; k++) {
+        double n = sg_glass_index(g, uf), nd = sg_glass_index(g, 0.5875618);
+        static const double pts[][4] = {{0, 0, 0, 1}, {0, 1, 0.5, -0.5}};
+        sg_tracer *ta, *tb;
+        sg_ray_surface ra[6], rb[6];
+        apply_one(nom, cat, k, nom->tol.op[k].max, out, NULL);
+        hand = sg_system_clone(nom);
+        hand->surf[3].mat.kind = SG_MAT_INDEX;
+        hand->surf[3].mat.index = k == 0 ? n + 2e-3 : nd + (n - nd) * g->vd / (g->vd + 3.0);
+        ta = tu_tracer(out, cat, SG_METHOD_PRECISE);
+        tb = tu_tracer(hand, cat, SG_METHOD_PRECISE);
+        for (j = 0; j < 2; j++) {
+            assert_int_equal(sg_trace_normalized(ta, pts[j][0], pts[j][1], pts[j][2], pts[j][3],
+                                                 ra), SG_OK);
+            assert_int_equal(sg_trace_normalized(tb, pts[j][0], pts[j][1], pts[j][2], pts[j][3],
+                                                 rb), SG_OK);
+            /* The hand's index is the double nearest; the change's is
+             * rounded once from MPFR: a few ulps of the index apart. */
+            if (fabs(ra[5].y - rb[5].y) > 1e-12 || fabs(ra[5].x - rb[5].x) > 1e-12)
+                fail_msg("%s ray %d: image %.17g %.17g against %.17g %.17g",
+                         sg_tol_name(nom->tol.op[k].type), j, ra[5].x, ra[5].y, rb[5].x,
+                         rb[5].y);
+        }
+        sg_tracer_free(ta);
+        sg_tracer_free(tb);
+        sg_system_free(hand);
+    }
+    sg_system_free(out);
+    sg_system_free(nom);
+    sg_catalog_free(cat);
 }
 
 /* An element's decenter and tilt: coordinate breaks around it, as they
@@ -684,6 +744,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(json_roundtrip),
         cmocka_unit_test(operands_by_hand),
+        cmocka_unit_test(glass_changes),
         cmocka_unit_test(element_by_hand),
         cmocka_unit_test(compensated_focus),
         cmocka_unit_test(round_element_turned),
