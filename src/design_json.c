@@ -1097,7 +1097,7 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
 {
     enum { K_OPS, K_COMPS, K_CRIT, K_MC, K_N };
     static const char *const keys[K_N] = {"operands", "compensators", "criterion", "monte_carlo"};
-    static const char *const crits[] = {"rms_spot", "merit"};
+    static const char *const crits[] = {"rms_spot", "merit", "rms_wavefront"};
     static const char *const refs[] = {"chief", "centroid"};
     static const char *const dists[] = {"normal", "uniform", "parabolic"};
     const cJSON *k[K_N], *it;
@@ -1107,6 +1107,7 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
     t->present = 1;
     t->pattern = SG_PUPIL_HEXAPOLAR;
     t->density = 6;
+    t->grid = 64;
     t->seed = 1.0;
     if ((rc = expect_object(c, v, "tolerances")) != SG_OK)
         return rc;
@@ -1231,7 +1232,7 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
             return rc;
         pick_keys(c, k[K_CRIT], "tolerances: criterion", rkeys, R_N, rk);
         if (rk[R_TYPE]) {
-            if ((rc = get_enum(c, rk[R_TYPE], "tolerances: criterion: type", crits, 2, &e)))
+            if ((rc = get_enum(c, rk[R_TYPE], "tolerances: criterion: type", crits, 3, &e)))
                 return rc;
             t->criterion = e;
         }
@@ -1241,8 +1242,8 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
             t->reference = e;
         }
         if (rk[R_SAMP]) {
-            enum { S_PAT, S_DENS, S_N };
-            static const char *const skeys[S_N] = {"pattern", "density"};
+            enum { S_PAT, S_DENS, S_GRID, S_N };
+            static const char *const skeys[S_N] = {"pattern", "density", "grid"};
             static const char *const pats[] = {"hexapolar", "square", "vogel"};
             const cJSON *sk[S_N];
             const char *w = "tolerances: criterion: sampling";
@@ -1259,6 +1260,14 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
             if (sk[S_DENS] && (rc = get_int(c, sk[S_DENS], "tolerances: criterion: sampling: "
                                             "density", &t->density)))
                 return rc;
+            if (sk[S_GRID]) {
+                if ((rc = get_int(c, sk[S_GRID], "tolerances: criterion: sampling: grid",
+                                  &t->grid)))
+                    return rc;
+                if (t->grid < 3 || t->grid > 4096)
+                    return perr(c, SG_ERANGE, "tolerances: criterion: sampling: grid",
+                                "%d is not 3 to 4096", t->grid);
+            }
             sg_diag_clear(&d2);
             if (sg_pupil_check(t->pattern, t->density, &d2) != SG_OK)
                 return perr(c, SG_ERANGE, "tolerances: criterion: sampling: density", "%s",
@@ -2195,10 +2204,10 @@ static void sb_solves(sbuf *b, const sg_surface *s)
 /* The tolerances as get_tolerances reads them. */
 static void sb_tolerances(sbuf *b, const sg_tolerances *t)
 {
-    static const char *const crits[] = {"rms_spot", "merit"};
+    static const char *const crits[] = {"rms_spot", "merit", "rms_wavefront"};
     static const char *const refs[] = {"chief", "centroid"};
     static const char *const dists[] = {"normal", "uniform", "parabolic"};
-    char x[160];
+    char x[200];
     int i;
     sb_puts(b, ",\n  \"tolerances\": {\n    \"operands\": [");
     for (i = 0; i < t->nop; i++) {
@@ -2244,9 +2253,10 @@ static void sb_tolerances(sbuf *b, const sg_tolerances *t)
         sb_puts(b, "}");
     }
     snprintf(x, sizeof x, "%s],\n    \"criterion\": {\"type\": \"%s\", \"reference\": \"%s\", "
-             "\"sampling\": {\"pattern\": \"%s\", \"density\": %d}},\n", t->ncomp ? "\n    " : "",
-             crits[t->criterion == SG_TOLC_MERIT], refs[t->reference == 1],
-             sg_pupil_pattern_name(t->pattern), t->density);
+             "\"sampling\": {\"pattern\": \"%s\", \"density\": %d, \"grid\": %d}},\n",
+             t->ncomp ? "\n    " : "",
+             crits[t->criterion >= 0 && t->criterion < 3 ? t->criterion : 0],
+             refs[t->reference == 1], sg_pupil_pattern_name(t->pattern), t->density, t->grid);
     sb_puts(b, x);
     snprintf(x, sizeof x, "    \"monte_carlo\": {\"trials\": %d, \"seed\": %.0f, "
              "\"distribution\": \"%s\"}\n  }", t->trials, t->seed,

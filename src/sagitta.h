@@ -523,7 +523,7 @@ typedef struct sg_tol_comp {
     double min, max;        /* changes from the nominal */
 } sg_tol_comp;
 typedef enum sg_tol_crit {
-    SG_TOLC_RMS_SPOT = 0, SG_TOLC_MERIT = 1
+    SG_TOLC_RMS_SPOT = 0, SG_TOLC_MERIT = 1, SG_TOLC_RMS_WAVEFRONT = 2
 } sg_tol_crit;
 typedef enum sg_tol_dist {
     SG_TOLD_NORMAL = 0, SG_TOLD_UNIFORM = 1, SG_TOLD_PARABOLIC = 2
@@ -536,6 +536,7 @@ typedef struct sg_tolerances {
     int criterion;          /* sg_tol_crit */
     int reference;          /* sg_spot_ref: 0 chief, 1 centroid */
     int pattern, density;   /* the criterion's pupil sampling (sg_pupil_pattern) */
+    int grid;               /* the wavefront criterion's grid (64) */
     int trials;             /* Monte Carlo trials (0: none given) */
     double seed;            /* an integer from 0 to 2^53 */
     int distribution;       /* sg_tol_dist */

@@ -450,6 +450,57 @@ static int field_values(const sg_system *sys, const sg_catalog *cat, const sg_to
             share[0] = 1.0;
         sg_merit_result_free(&r);
         return SG_OK;
+    } else if (t->criterion == SG_TOLC_RMS_WAVEFRONT) {
+        /* Each field's RMS wavefront error in waves, as sagitta wavefront
+         * gives it at each wavelength (about the centroid: piston and tilt
+         * removed; about the chief ray: piston), combined over the
+         * wavelengths as sqrt(sum w r^2 / sum w). */
+        double wsum = 0.0, acc = 0.0;
+        int w;
+        for (f = 0; f < sys->nfield; f++) {
+            double s2 = 0.0, ww = 0.0;
+            for (w = 0; w < sys->nwave; w++) {
+                sg_wavefront_opts wo;
+                sg_wavefront wf;
+                sg_opd_ref ref;
+                sg_wavefront_opts_init(&wo);
+                wo.trace.method = (sg_method)o->method;
+                if (o->mpfr_bits > 0)
+                    wo.trace.mpfr_bits = o->mpfr_bits;
+                wo.trace.wave = w;
+                wo.field = f;
+                wo.grid = t->grid > 0 ? t->grid : 64;
+                wo.nterms = 1;
+                wo.nthreads = nthreads;
+                if ((rc = sg_wavefront_trace(sys, cat, &wo, &wf, &ref, d)) != SG_OK)
+                    return rc;
+                if (wf.nvalid == 0) {
+                    sg_wavefront_free(&wf);
+                    return sg_diag_set(d, SG_EMISS, "field %d: no ray reaches the image",
+                                       f + 1);
+                }
+                {
+                    double r = t->reference == SG_SPOT_REF_CENTROID ? wf.rms_centroid
+                                                                    : wf.rms_chief;
+                    s2 += sys->wave[w].weight * r * r;
+                    ww += sys->wave[w].weight;
+                }
+                sg_wavefront_free(&wf);
+            }
+            out->field[f] = ww > 0.0 ? sqrt(s2 / ww) : 0.0;
+            wsum += sys->field[f].weight;
+        }
+        out->nfield = sys->nfield;
+        if (!(wsum > 0.0))
+            wsum = 1.0;
+        for (f = 0; f < sys->nfield; f++) {
+            double s = sqrt(sys->field[f].weight / wsum);
+            if (share)
+                share[f] = s;
+            acc = hypot(acc, s * out->field[f]);
+        }
+        out->criterion = acc;
+        return SG_OK;
     } else {
         sg_spot_opts so;
         sg_spot sp;

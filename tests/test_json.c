@@ -600,7 +600,7 @@ static const err_case err_cases[] = {
     {"{\"title\": 7, " S3 "}", SG_EPARSE, "t.json: title: expected a string, got number 7"},
     {"{\"format\": \"zemax\", " S3 "}", SG_EPARSE,
      "t.json: format: expected \"sagitta-design\", got string \"zemax\""},
-    {"{\"version\": 7, " S3 "}", SG_EUNSUPPORTED, "t.json: version: this is format version 7; this program reads version 6 and older"},
+    {"{\"version\": 8, " S3 "}", SG_EUNSUPPORTED, "t.json: version: this is format version 8; this program reads version 7 and older"},
     {"{\"version\": \"1\", " S3 "}", SG_EPARSE, "t.json: version: expected an integer"},
     {"{\"title\": \"no surfaces\"}", SG_EPARSE, "t.json: surfaces: required key is missing"},
     {"{\"surfaces\": {}}", SG_EPARSE, "t.json: surfaces: expected an array"},

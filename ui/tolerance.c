@@ -156,7 +156,9 @@ static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, in
     static const char *const pk[5] = {"90", "80", "50", "20", "10"};
     int k, j;
     fprintf(f, "{\"criterion\": \"%s\", \"nominal\": ",
-            sys->tol.criterion == SG_TOLC_MERIT ? "merit" : "rms_spot");
+            sys->tol.criterion == SG_TOLC_MERIT            ? "merit"
+            : sys->tol.criterion == SG_TOLC_RMS_WAVEFRONT ? "rms_wavefront"
+                                                           : "rms_spot");
     print_num(f, r->nominal.criterion);
     fprintf(f, ", \"nominal_fields\": [");
     for (j = 0; j < r->nominal.nfield; j++) {
@@ -258,8 +260,9 @@ static void write_csv(FILE *f, const sg_system *sys, const sg_tol_result *r, int
 static void write_text(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc)
 {
     static const char *const pk[5] = {"90", "80", "50", "20", "10"};
-    const char *crit = sys->tol.criterion == SG_TOLC_MERIT ? "merit function"
-                                                           : "RMS spot radius";
+    const char *crit = sys->tol.criterion == SG_TOLC_MERIT            ? "merit function"
+                       : sys->tol.criterion == SG_TOLC_RMS_WAVEFRONT ? "RMS wavefront (waves)"
+                                                                      : "RMS spot radius";
     char place[64];
     int k, j;
     fprintf(f, "Criterion: %s; nominal %.10g\n", crit, r->nominal.criterion);

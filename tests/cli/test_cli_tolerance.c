@@ -102,6 +102,50 @@ static void nominal_is_spot(void **state)
     ct_free(&r);
 }
 
+/* The wavefront criterion: each field's RMS over the wavelengths, as
+ * sagitta wavefront gives them (same grid, about the centroid), combined
+ * by the wavelength weights and then the field weights. */
+static void wavefront_criterion(void **state)
+{
+    const char *d = doublet("w.json",
+        ", \"tolerances\": {\"operands\": [{\"type\": \"TCON\", \"surface\": 1, \"min\": -0.1,"
+        " \"max\": 0.1}], \"criterion\": {\"type\": \"rms_wavefront\", \"reference\":"
+        " \"centroid\", \"sampling\": {\"grid\": 16}}}");
+    static const char *const fn[3] = {"1", "2", "3"}, *const wn[2] = {"1", "2"};
+    const double fw[3] = {1, 2, 3}, ww[2] = {1, 0.5};
+    double acc = 0.0, wsum = 0.0;
+    ct_result r;
+    cJSON *root;
+    int f, w;
+    (void)state;
+    for (f = 0; f < 3; f++) {
+        double s2 = 0.0;
+        for (w = 0; w < 2; w++) {
+            double c;
+            ct_run(&r, "wavefront", d, "--field", fn[f], "--wave", wn[w], "--grid", "16",
+                   "--format", "json", NULL);
+            assert_int_equal(r.code, 0);
+            root = cJSON_Parse(r.out);
+            assert_non_null(root);
+            c = num(root, "rms_centroid");
+            s2 += ww[w] * c * c;
+            cJSON_Delete(root);
+            ct_free(&r);
+        }
+        acc += fw[f] * s2 / 1.5;
+        wsum += fw[f];
+    }
+    ct_run(&r, "tolerance", d, "--sensitivity", "--format", "json", NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    root = cJSON_Parse(r.out);
+    assert_non_null(root);
+    assert_string_equal(cJSON_GetObjectItem(root, "criterion")->valuestring, "rms_wavefront");
+    ct_close(num(root, "nominal"), sqrt(acc / wsum), 1e-14, 0, "nominal wavefront");
+    cJSON_Delete(root);
+    ct_free(&r);
+}
+
 /* A paraboloid images the axial point at infinity perfectly at R / 2 for
  * any R: with the back focus compensating, both TRAD rows are perfect
  * again, and the compensator moved by dR / 2. */
@@ -260,6 +304,7 @@ int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(nominal_is_spot),
+        cmocka_unit_test(wavefront_criterion),
         cmocka_unit_test(paraboloid_refocus),
         cmocka_unit_test(threads_same_bytes),
         cmocka_unit_test(refusals),
