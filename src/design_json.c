@@ -1178,14 +1178,236 @@ static int get_configs(jctx *c, const cJSON *v, sg_system *sys)
     return SG_OK;
 }
 
+/* The tolerances (sagitta-design(5), TOLERANCES): {"operands": [{"type":
+ * "TRAD", "surface": 2, "min": -0.05, "max": 0.05}, {"type": "TEDX",
+ * "first": 3, "last": 4, ...}], "compensators": [{"surface": 7,
+ * "parameter": "thickness", "min": -1, "max": 1}], "criterion": {"type":
+ * "rms_spot", "reference": "centroid", "sampling": {"pattern":
+ * "hexapolar", "density": 6}}, "monte_carlo": {"trials": 1000, "seed": 1,
+ * "distribution": "normal"}}; sg_tol_check checks them against the
+ * surfaces. */
+static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
+{
+    enum { K_OPS, K_COMPS, K_CRIT, K_MC, K_N };
+    static const char *const keys[K_N] = {"operands", "compensators", "criterion", "monte_carlo"};
+    static const char *const crits[] = {"rms_spot", "merit", "rms_wavefront"};
+    static const char *const refs[] = {"chief", "centroid"};
+    static const char *const dists[] = {"normal", "uniform", "parabolic"};
+    const cJSON *k[K_N], *it;
+    char at[64], at2[96];
+    int rc, n;
+    memset(t, 0, sizeof *t);
+    t->present = 1;
+    t->pattern = SG_PUPIL_HEXAPOLAR;
+    t->density = 6;
+    t->grid = 64;
+    t->seed = 1.0;
+    if ((rc = expect_object(c, v, "tolerances")) != SG_OK)
+        return rc;
+    pick_keys(c, v, "tolerances", keys, K_N, k);
+    if (k[K_OPS]) {
+        if (!cJSON_IsArray(k[K_OPS]))
+            return perr(c, SG_EPARSE, "tolerances: operands", "expected an array of operand "
+                        "objects");
+        n = cJSON_GetArraySize(k[K_OPS]);
+        if (n > SG_MAX_TOL_OPERANDS)
+            return perr(c, SG_ERANGE, "tolerances: operands", "%d given; the limit is %d", n,
+                        SG_MAX_TOL_OPERANDS);
+        cJSON_ArrayForEach(it, k[K_OPS]) {
+            enum { O_TYPE, O_SURF, O_FIRST, O_LAST, O_ADJ, O_PAR, O_ELEM, O_MIN, O_MAX, O_N };
+            static const char *const okeys[O_N] = {"type", "surface", "first", "last",
+                                                   "adjust", "parameter", "element", "min",
+                                                   "max"};
+            const cJSON *ok[O_N];
+            sg_tol_operand *o = &t->op[t->nop];
+            int ty, elem;
+            snprintf(at, sizeof at, "tolerances: operand %d", t->nop + 1);
+            if ((rc = expect_object(c, it, at)) != SG_OK)
+                return rc;
+            pick_keys(c, it, at, okeys, O_N, ok);
+            if (!ok[O_TYPE] || !cJSON_IsString(ok[O_TYPE]) || !ok[O_TYPE]->valuestring)
+                return perr(c, SG_EPARSE, at, "an operand needs a \"type\" (a Zemax tolerance "
+                            "operand name)");
+            ty = sg_tol_parse(ok[O_TYPE]->valuestring);
+            if (ty < 0) {
+                char shown[48];
+                show_text(shown, sizeof shown, ok[O_TYPE]->valuestring);
+                return perr(c, SG_EPARSE, join(at2, sizeof at2, at, "type"),
+                            "\"%s\" is not a tolerance operand sagitta knows", shown);
+            }
+            memset(o, 0, sizeof *o);
+            o->type = (sg_tol_type)ty;
+            o->adjust = -1;
+            elem = ty >= SG_TOL_TEDX && ty <= SG_TOL_TETZ;
+            /* An element is first and last; every other row one surface. */
+            if (elem ? !ok[O_FIRST] || !ok[O_LAST] : !ok[O_SURF])
+                return perr(c, SG_EPARSE, at, elem ? "an element operand needs \"first\" and "
+                            "\"last\"" : "the operand needs a \"surface\"");
+            if (elem && ok[O_SURF])
+                return perr(c, SG_EPARSE, at, "an element operand takes \"first\" and \"last\", "
+                            "not \"surface\"");
+            if (!elem && (ok[O_FIRST] || ok[O_LAST]))
+                return perr(c, SG_EPARSE, at, "only element operands (TEDX ... TETZ) take "
+                            "\"first\" and \"last\"");
+            if (ty != SG_TOL_TTHI && ok[O_ADJ])
+                return perr(c, SG_EPARSE, join(at2, sizeof at2, at, "adjust"),
+                            "only TTHI takes it");
+            if (ty != SG_TOL_TPAR && (ok[O_PAR] || ok[O_ELEM]))
+                return perr(c, SG_EPARSE, at, "only TPAR takes \"parameter\" and \"element\"");
+            if (ty == SG_TOL_TPAR && !ok[O_PAR])
+                return perr(c, SG_EPARSE, at, "TPAR needs a \"parameter\" (a surface key)");
+            if (!ok[O_MIN] || !ok[O_MAX])
+                return perr(c, SG_EPARSE, at, "the operand needs \"min\" and \"max\"");
+            if ((ok[O_SURF] && (rc = get_int(c, ok[O_SURF], join(at2, sizeof at2, at, "surface"),
+                                             &o->surface))) ||
+                (ok[O_FIRST] && (rc = get_int(c, ok[O_FIRST], join(at2, sizeof at2, at, "first"),
+                                              &o->surface))) ||
+                (ok[O_LAST] && (rc = get_int(c, ok[O_LAST], join(at2, sizeof at2, at, "last"),
+                                             &o->last))) ||
+                (ok[O_ADJ] && (rc = get_int(c, ok[O_ADJ], join(at2, sizeof at2, at, "adjust"),
+                                            &o->adjust))) ||
+                (ok[O_PAR] && (rc = get_string(c, ok[O_PAR], join(at2, sizeof at2, at,
+                                                                  "parameter"),
+                                               o->param, sizeof o->param))) ||
+                (ok[O_ELEM] && (rc = get_int(c, ok[O_ELEM], join(at2, sizeof at2, at, "element"),
+                                             &o->elem))) ||
+                (rc = get_finite(c, ok[O_MIN], join(at2, sizeof at2, at, "min"), &o->min)) ||
+                (rc = get_finite(c, ok[O_MAX], join(at2, sizeof at2, at, "max"), &o->max)))
+                return rc;
+            if (o->min > o->max)
+                return perr(c, SG_ERANGE, join(at2, sizeof at2, at, "min"),
+                            "%.17g is above max %.17g", o->min, o->max);
+            t->nop++;
+        }
+    }
+    if (k[K_COMPS]) {
+        if (!cJSON_IsArray(k[K_COMPS]))
+            return perr(c, SG_EPARSE, "tolerances: compensators", "expected an array of "
+                        "compensator objects");
+        n = cJSON_GetArraySize(k[K_COMPS]);
+        if (n > SG_MAX_COMPENSATORS)
+            return perr(c, SG_ERANGE, "tolerances: compensators", "%d given; the limit is %d",
+                        n, SG_MAX_COMPENSATORS);
+        cJSON_ArrayForEach(it, k[K_COMPS]) {
+            enum { C_SURF, C_PAR, C_ELEM, C_MIN, C_MAX, CK_N };
+            static const char *const ckeys[CK_N] = {"surface", "parameter", "element", "min",
+                                                    "max"};
+            const cJSON *ck[CK_N];
+            sg_tol_comp *o = &t->comp[t->ncomp];
+            snprintf(at, sizeof at, "tolerances: compensator %d", t->ncomp + 1);
+            if ((rc = expect_object(c, it, at)) != SG_OK)
+                return rc;
+            pick_keys(c, it, at, ckeys, CK_N, ck);
+            memset(o, 0, sizeof *o);
+            if (!ck[C_SURF] || !ck[C_PAR] || !ck[C_MIN] || !ck[C_MAX])
+                return perr(c, SG_EPARSE, at, "a compensator needs \"surface\", \"parameter\", "
+                            "\"min\" and \"max\"");
+            if ((rc = get_int(c, ck[C_SURF], join(at2, sizeof at2, at, "surface"), &o->surface)) ||
+                (rc = get_string(c, ck[C_PAR], join(at2, sizeof at2, at, "parameter"), o->param,
+                                 sizeof o->param)) ||
+                (ck[C_ELEM] && (rc = get_int(c, ck[C_ELEM], join(at2, sizeof at2, at, "element"),
+                                             &o->elem))) ||
+                (rc = get_finite(c, ck[C_MIN], join(at2, sizeof at2, at, "min"), &o->min)) ||
+                (rc = get_finite(c, ck[C_MAX], join(at2, sizeof at2, at, "max"), &o->max)))
+                return rc;
+            if (o->min > o->max)
+                return perr(c, SG_ERANGE, join(at2, sizeof at2, at, "min"),
+                            "%.17g is above max %.17g", o->min, o->max);
+            t->ncomp++;
+        }
+    }
+    if (k[K_CRIT]) {
+        enum { R_TYPE, R_REF, R_SAMP, R_N };
+        static const char *const rkeys[R_N] = {"type", "reference", "sampling"};
+        const cJSON *rk[R_N];
+        int e = 0;
+        if ((rc = expect_object(c, k[K_CRIT], "tolerances: criterion")) != SG_OK)
+            return rc;
+        pick_keys(c, k[K_CRIT], "tolerances: criterion", rkeys, R_N, rk);
+        if (rk[R_TYPE]) {
+            if ((rc = get_enum(c, rk[R_TYPE], "tolerances: criterion: type", crits, 3, &e)))
+                return rc;
+            t->criterion = e;
+        }
+        if (rk[R_REF]) {
+            if ((rc = get_enum(c, rk[R_REF], "tolerances: criterion: reference", refs, 2, &e)))
+                return rc;
+            t->reference = e;
+        }
+        if (rk[R_SAMP]) {
+            enum { S_PAT, S_DENS, S_GRID, S_N };
+            static const char *const skeys[S_N] = {"pattern", "density", "grid"};
+            static const char *const pats[] = {"hexapolar", "square", "vogel"};
+            const cJSON *sk[S_N];
+            const char *w = "tolerances: criterion: sampling";
+            sg_diag d2;
+            if ((rc = expect_object(c, rk[R_SAMP], w)) != SG_OK)
+                return rc;
+            pick_keys(c, rk[R_SAMP], w, skeys, S_N, sk);
+            if (sk[S_PAT]) {
+                if ((rc = get_enum(c, sk[S_PAT], "tolerances: criterion: sampling: pattern",
+                                   pats, 3, &e)))
+                    return rc;
+                t->pattern = e;
+            }
+            if (sk[S_DENS] && (rc = get_int(c, sk[S_DENS], "tolerances: criterion: sampling: "
+                                            "density", &t->density)))
+                return rc;
+            if (sk[S_GRID]) {
+                if ((rc = get_int(c, sk[S_GRID], "tolerances: criterion: sampling: grid",
+                                  &t->grid)))
+                    return rc;
+                if (t->grid < 3 || t->grid > 4096)
+                    return perr(c, SG_ERANGE, "tolerances: criterion: sampling: grid",
+                                "%d is not 3 to 4096", t->grid);
+            }
+            sg_diag_clear(&d2);
+            if (sg_pupil_check(t->pattern, t->density, &d2) != SG_OK)
+                return perr(c, SG_ERANGE, "tolerances: criterion: sampling: density", "%s",
+                            d2.msg);
+        }
+    }
+    if (k[K_MC]) {
+        enum { M_TRIALS, M_SEED, M_DIST, M_N };
+        static const char *const mkeys[M_N] = {"trials", "seed", "distribution"};
+        const cJSON *mk[M_N];
+        int e = 0;
+        const char *w = "tolerances: monte_carlo";
+        if ((rc = expect_object(c, k[K_MC], w)) != SG_OK)
+            return rc;
+        pick_keys(c, k[K_MC], w, mkeys, M_N, mk);
+        if (mk[M_TRIALS]) {
+            if ((rc = get_int(c, mk[M_TRIALS], "tolerances: monte_carlo: trials", &t->trials)))
+                return rc;
+            if (t->trials < 0 || t->trials > 100000000)
+                return perr(c, SG_ERANGE, "tolerances: monte_carlo: trials",
+                            "%d is not 0 to 100000000", t->trials);
+        }
+        if (mk[M_SEED]) {
+            if ((rc = get_finite(c, mk[M_SEED], "tolerances: monte_carlo: seed", &t->seed)))
+                return rc;
+            if (!(t->seed >= 0.0 && t->seed <= 0x1p53 && floor(t->seed) == t->seed))
+                return perr(c, SG_ERANGE, "tolerances: monte_carlo: seed",
+                            "%.17g is not an integer from 0 to 2^53", t->seed);
+        }
+        if (mk[M_DIST]) {
+            if ((rc = get_enum(c, mk[M_DIST], "tolerances: monte_carlo: distribution", dists, 3,
+                               &e)))
+                return rc;
+            t->distribution = e;
+        }
+    }
+    return SG_OK;
+}
+
 enum {
     T_FORMAT, T_VERSION, T_TITLE, T_UNITS, T_WAVES, T_FIELDS, T_APER, T_AIM, T_SURFS,
-    T_TEMP, T_PRES, T_ADJUST, T_MERIT, T_CONFIGS, T_AFOCAL, T_N
+    T_TEMP, T_PRES, T_ADJUST, T_MERIT, T_CONFIGS, T_AFOCAL, T_TOL, T_N
 };
 static const char *const top_keys[] = {
     "format", "version", "title", "units", "wavelengths", "fields", "aperture",
     "ray_aiming", "surfaces", "temperature", "pressure", "adjust_index", "merit",
-    "configurations", "afocal"};
+    "configurations", "afocal", "tolerances"};
 
 /* Fills tmp from the document; the caller's system is not touched. */
 static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
@@ -1314,6 +1536,14 @@ static int read_design(jctx *c, const cJSON *root, sg_system *tmp)
         return rc;
     if (k[T_AFOCAL] && (rc = get_bool(c, k[T_AFOCAL], "afocal", &tmp->afocal)) != SG_OK)
         return rc;
+    if (k[T_TOL]) {
+        if ((rc = get_tolerances(c, k[T_TOL], &tmp->tol)) != SG_OK)
+            return rc;
+        sg_diag d2;
+        sg_diag_clear(&d2);
+        if ((rc = sg_tol_check(tmp, &d2)) != SG_OK)
+            return sg_diag_set(c->d, rc, "%s: %s", c->name, d2.msg);
+    }
     return SG_OK;
 }
 
@@ -2069,6 +2299,69 @@ static void sb_solves(sbuf *b, const sg_surface *s)
         sb_puts(b, " }");
 }
 
+/* The tolerances as get_tolerances reads them. */
+static void sb_tolerances(sbuf *b, const sg_tolerances *t)
+{
+    static const char *const crits[] = {"rms_spot", "merit", "rms_wavefront"};
+    static const char *const refs[] = {"chief", "centroid"};
+    static const char *const dists[] = {"normal", "uniform", "parabolic"};
+    char x[200];
+    int i;
+    sb_puts(b, ",\n  \"tolerances\": {\n    \"operands\": [");
+    for (i = 0; i < t->nop; i++) {
+        const sg_tol_operand *o = &t->op[i];
+        sb_puts(b, i ? ",\n      {\"type\": \"" : "\n      {\"type\": \"");
+        sb_puts(b, sg_tol_name(o->type));
+        if (o->type >= SG_TOL_TEDX && o->type <= SG_TOL_TETZ)
+            snprintf(x, sizeof x, "\", \"first\": %d, \"last\": %d", o->surface, o->last);
+        else
+            snprintf(x, sizeof x, "\", \"surface\": %d", o->surface);
+        sb_puts(b, x);
+        if (o->type == SG_TOL_TTHI && o->adjust >= 0) {
+            snprintf(x, sizeof x, ", \"adjust\": %d", o->adjust);
+            sb_puts(b, x);
+        }
+        if (o->type == SG_TOL_TPAR) {
+            sb_puts(b, ", \"parameter\": ");
+            sb_str(b, o->param);
+            snprintf(x, sizeof x, ", \"element\": %d", o->elem);
+            sb_puts(b, x);
+        }
+        sb_puts(b, ", \"min\": ");
+        sb_num(b, o->min);
+        sb_puts(b, ", \"max\": ");
+        sb_num(b, o->max);
+        sb_puts(b, "}");
+    }
+    sb_puts(b, t->nop ? "\n    ],\n    \"compensators\": [" : "],\n    \"compensators\": [");
+    for (i = 0; i < t->ncomp; i++) {
+        const sg_tol_comp *o = &t->comp[i];
+        snprintf(x, sizeof x, "%s{\"surface\": %d, \"parameter\": ", i ? ",\n      " : "\n      ",
+                 o->surface);
+        sb_puts(b, x);
+        sb_str(b, o->param);
+        if (o->elem) {
+            snprintf(x, sizeof x, ", \"element\": %d", o->elem);
+            sb_puts(b, x);
+        }
+        sb_puts(b, ", \"min\": ");
+        sb_num(b, o->min);
+        sb_puts(b, ", \"max\": ");
+        sb_num(b, o->max);
+        sb_puts(b, "}");
+    }
+    snprintf(x, sizeof x, "%s],\n    \"criterion\": {\"type\": \"%s\", \"reference\": \"%s\", "
+             "\"sampling\": {\"pattern\": \"%s\", \"density\": %d, \"grid\": %d}},\n",
+             t->ncomp ? "\n    " : "",
+             crits[t->criterion >= 0 && t->criterion < 3 ? t->criterion : 0],
+             refs[t->reference == 1], sg_pupil_pattern_name(t->pattern), t->density, t->grid);
+    sb_puts(b, x);
+    snprintf(x, sizeof x, "    \"monte_carlo\": {\"trials\": %d, \"seed\": %.0f, "
+             "\"distribution\": \"%s\"}\n  }", t->trials, t->seed,
+             dists[t->distribution >= 0 && t->distribution < 3 ? t->distribution : 0]);
+    sb_puts(b, x);
+}
+
 /* The merit function as get_merit reads it. */
 /* The configurations as get_configs reads them. */
 static void sb_configs(sbuf *b, const sg_configs *cf)
@@ -2258,9 +2551,9 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
                 version = version < 6 ? 6 : version;
     if (sys->merit.present)
         version = version < 6 ? 6 : version;
-    /* Configurations came with version 7. */
-    if (sys->configs)
-        version = 7;
+    /* Configurations and tolerances came with version 7. */
+    if (sys->configs || sys->tol.present)
+        version = version < 7 ? 7 : version;
     /* A file says the oldest format that reads it, so designs without the
      * newer keys stay readable by older programs. */
     snprintf(t, sizeof t, "  \"version\": %d,\n", version);
@@ -2340,6 +2633,8 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
         sb_merit(&b, &sys->merit);
     if (sys->configs)
         sb_configs(&b, sys->configs);
+    if (sys->tol.present)
+        sb_tolerances(&b, &sys->tol);
     sb_puts(&b, "\n}\n");
     if (b.oom) {
         free(b.p);

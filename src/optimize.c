@@ -24,6 +24,7 @@
 #include <gsl/gsl_vector.h>
 
 #include "internal.h"
+#include "lsq.h"
 
 #define OPT_MAX_VARS 256
 #define OPT_DEFAULT_CYCLES 500
@@ -45,6 +46,9 @@ typedef struct octx {
     double rel;        /* relative rounding of the residuals, from the bounds */
     int nthreads;
     sg_diag err;       /* the first failure the solver met */
+    sg_lsq_fn fn;      /* residuals of another objective (sg_lsq_optimize), or NULL */
+    void *fnctx;
+    int nfn;           /* fn's residuals; the rest of nres are 0 */
 } octx;
 
 static double now(void)
@@ -102,6 +106,13 @@ static int residuals(const octx *o, sg_system *sys, const double *z, double *f, 
     int k, rc;
     if ((rc = set_vars(o, sys, z, d)) != SG_OK)
         return rc;
+    if (o->fn) {
+        if (bound)
+            *bound = 0.0;
+        for (k = o->nfn; k < o->nres; k++)
+            f[k] = 0.0;
+        return o->fn(o->fnctx, sys, f, o->nfn, d);
+    }
     if ((rc = sg_merit_eval(sys, o->cat, &r, d)) != SG_OK)
         return rc;
     for (k = 0; k < o->nres; k++) {
@@ -261,6 +272,9 @@ void sg_opt_opts_init(sg_opt_opts *o)
     memset(o, 0, sizeof *o);
 }
 
+static int run_lsq(octx *op, sg_system *sys, const double *z0, const sg_opt_opts *opts,
+                   sg_opt_result *res, sg_diag *d);
+
 /* The variables and their bounds in what the solver varies. */
 static int collect(octx *o, const sg_system *sys, sg_diag *d)
 {
@@ -308,13 +322,8 @@ int sg_optimize(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *opts,
     octx o;
     sg_opt_opts def;
     sg_merit_result r0;
-    gsl_multifit_nlinear_fdf fdf;
-    gsl_multifit_nlinear_parameters par;
-    gsl_multifit_nlinear_workspace *w = NULL;
-    gsl_vector *x = NULL;
-    gsl_error_handler_t *old;
-    double z0[OPT_MAX_VARS], best[OPT_MAX_VARS], bestmf, t0 = now(), bound = 0.0;
-    int j, k, rc, cycle, maxc, nz = 0;
+    double z0[OPT_MAX_VARS], bound = 0.0;
+    int j, k, rc, nz = 0;
 
     memset(res, 0, sizeof *res);
     if (!opts) {
@@ -377,14 +386,53 @@ int sg_optimize(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *opts,
     res->merit0 = r0.merit;
     o.bad = 1e3 * (r0.merit + 1.0);
     sg_merit_result_free(&r0);
+    rc = run_lsq(&o, sys, z0, opts, res, d);
+    free(o.rowmap);
+    sg_system_free(o.work);
+    return rc;
+}
 
-    old = gsl_set_error_handler_off();
+/* GSL's error handler is one for the process: it is off while any run
+ * is under way (compensators run on several threads at once), and back
+ * when the last one ends. */
+static pthread_mutex_t gsl_handler_lock = PTHREAD_MUTEX_INITIALIZER;
+static int gsl_handler_users;
+static gsl_error_handler_t *gsl_handler_old;
+
+static void gsl_handler_enter(void)
+{
+    pthread_mutex_lock(&gsl_handler_lock);
+    if (gsl_handler_users++ == 0)
+        gsl_handler_old = gsl_set_error_handler_off();
+    pthread_mutex_unlock(&gsl_handler_lock);
+}
+
+static void gsl_handler_leave(void)
+{
+    pthread_mutex_lock(&gsl_handler_lock);
+    if (--gsl_handler_users == 0)
+        gsl_set_error_handler(gsl_handler_old);
+    pthread_mutex_unlock(&gsl_handler_lock);
+}
+
+/* The damped least squares from z0; sys gets the best point found. */
+static int run_lsq(octx *op, sg_system *sys, const double *z0, const sg_opt_opts *opts,
+                   sg_opt_result *res, sg_diag *d)
+{
+    gsl_multifit_nlinear_fdf fdf;
+    gsl_multifit_nlinear_parameters par;
+    gsl_multifit_nlinear_workspace *w = NULL;
+    gsl_vector *x = NULL;
+    double best[OPT_MAX_VARS], bestmf, t0 = now();
+    int j, rc, cycle, maxc;
+
+    gsl_handler_enter();
     fdf.f = gsl_f;
     fdf.df = gsl_df;
     fdf.fvv = NULL;
-    fdf.n = (size_t)o.nres;
-    fdf.p = (size_t)o.nvar;
-    fdf.params = &o;
+    fdf.n = (size_t)op->nres;
+    fdf.p = (size_t)op->nvar;
+    fdf.params = op;
     par = gsl_multifit_nlinear_default_parameters();
     par.trs = gsl_multifit_nlinear_trs_lm;
     par.scale = gsl_multifit_nlinear_scale_more;
@@ -394,21 +442,21 @@ int sg_optimize(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *opts,
         rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
         goto done;
     }
-    for (j = 0; j < o.nvar; j++)
+    for (j = 0; j < op->nvar; j++)
         gsl_vector_set(x, j, z0[j]);
     if (gsl_multifit_nlinear_init(x, &fdf, w) != GSL_SUCCESS) {
-        rc = sg_diag_set(d, o.err.code ? o.err.code : SG_ENONPHYS,
+        rc = sg_diag_set(d, op->err.code ? op->err.code : SG_ENONPHYS,
                          "optimize: the start cannot be evaluated: %s",
-                         o.err.code ? o.err.msg : "the Jacobian failed");
+                         op->err.code ? op->err.msg : "the Jacobian failed");
         goto done;
     }
-    memcpy(best, z0, sizeof best);
+    memcpy(best, z0, (size_t)op->nvar * sizeof *best);
     bestmf = res->merit0;
     maxc = opts->cycles > 0 ? opts->cycles : OPT_DEFAULT_CYCLES;
     for (cycle = 1; cycle <= maxc; cycle++) {
         double mf, step = 0.0, prev[OPT_MAX_VARS];
         int info = 0, st;
-        for (j = 0; j < o.nvar; j++)
+        for (j = 0; j < op->nvar; j++)
             prev[j] = gsl_vector_get(gsl_multifit_nlinear_position(w), j);
         if (opts->stop && *opts->stop) {
             res->stopped = 1;
@@ -418,11 +466,11 @@ int sg_optimize(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *opts,
         {
             gsl_vector *f = gsl_multifit_nlinear_residual(w), *xn = gsl_multifit_nlinear_position(w);
             mf = gsl_blas_dnrm2(f);
-            for (j = 0; j < o.nvar; j++)
+            for (j = 0; j < op->nvar; j++)
                 step = hypot(step, gsl_vector_get(xn, j) - prev[j]);
             if (mf < bestmf) {
                 bestmf = mf;
-                for (j = 0; j < o.nvar; j++)
+                for (j = 0; j < op->nvar; j++)
                     best[j] = gsl_vector_get(xn, j);
             }
         }
@@ -451,21 +499,89 @@ int sg_optimize(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *opts,
         rc = SG_OK;
         goto done;
     }
-    if ((rc = set_vars(&o, o.work, best, d)) != SG_OK)
+    if ((rc = set_vars(op, op->work, best, d)) != SG_OK)
         goto done;
-    if ((rc = sg_system_assign(sys, o.work)) != SG_OK) {
+    if ((rc = sg_system_assign(sys, op->work)) != SG_OK) {
         rc = sg_diag_set(d, rc, "out of memory");
         goto done;
     }
     res->merit = bestmf;
     rc = SG_OK;
 done:
-    gsl_set_error_handler(old);
+    gsl_handler_leave();
     if (w)
         gsl_multifit_nlinear_free(w);
     if (x)
         gsl_vector_free(x);
-    free(o.rowmap);
+    return rc;
+}
+
+int sg_lsq_optimize(sg_system *sys, const sg_catalog *cat, const sg_paddr *vars,
+                    const double *lo, const double *hi, int nvar, int nres, double rel,
+                    sg_lsq_fn fn, void *ctx, const sg_opt_opts *opts, sg_opt_result *res,
+                    sg_diag *d)
+{
+    octx o;
+    sg_opt_opts def;
+    double z0[OPT_MAX_VARS], *f;
+    int j, k, rc;
+    char name[96];
+
+    memset(res, 0, sizeof *res);
+    if (!opts) {
+        sg_opt_opts_init(&def);
+        opts = &def;
+    }
+    if (nvar < 1 || nvar > OPT_MAX_VARS || nres < 1)
+        return sg_diag_set(d, SG_ERANGE, "%d variables and %d residuals", nvar, nres);
+    memset(&o, 0, sizeof o);
+    o.base = sys;
+    o.cat = cat;
+    o.nthreads = opts->nthreads;
+    o.fn = fn;
+    o.fnctx = ctx;
+    o.nvar = nvar;
+    o.nres = nres > nvar ? nres : nvar;
+    o.nfn = nres;
+    o.rel = rel > DBL_EPSILON ? rel : DBL_EPSILON;
+    for (j = 0; j < nvar; j++) {
+        ovar *v = &o.v[j];
+        double p = sg_paddr_get(sys, &vars[j]);
+        v->a = vars[j];
+        v->curv = sg_paddr_solve_target(&vars[j]) == SG_SOLVE_RADIUS;
+        v->lo = lo[j];
+        v->hi = hi[j];
+        sg_paddr_name(&vars[j], name, sizeof name);
+        if (v->curv) {
+            if (!(lo[j] > 0.0 || hi[j] < 0.0))
+                return sg_diag_set(d, SG_ERANGE, "%s: a radius's min and max must not "
+                                   "enclose 0", name);
+            v->lo = 1.0 / hi[j];
+            v->hi = 1.0 / lo[j];
+            p = isinf(p) || p == 0.0 ? 0.0 : 1.0 / p;
+        }
+        if (!(p >= v->lo && p <= v->hi))
+            return sg_diag_set(d, SG_ERANGE, "%s: the value %.17g is outside its range", name,
+                               sg_paddr_get(sys, &vars[j]));
+        z0[j] = to_z(v, p);
+    }
+    o.work = sg_system_clone(sys);
+    f = malloc((size_t)o.nres * sizeof *f);
+    if (!o.work || !f) {
+        free(f);
+        sg_system_free(o.work);
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    }
+    if ((rc = residuals(&o, o.work, z0, f, NULL, d)) != SG_OK) {
+        free(f);
+        sg_system_free(o.work);
+        return rc;
+    }
+    for (k = 0; k < o.nres; k++)
+        res->merit0 = hypot(res->merit0, k < nres ? f[k] : 0.0);
+    o.bad = 1e3 * (res->merit0 + 1.0);
+    free(f);
+    rc = run_lsq(&o, sys, z0, opts, res, d);
     sg_system_free(o.work);
     return rc;
 }

@@ -422,7 +422,8 @@ int sg_param_equal(sg_param_scope scope, const void *a, const void *b)
             if (ma->kind != mb->kind || strncmp(ma->name, mb->name, sizeof ma->name) != 0 ||
                 strncmp(ma->catalog, mb->catalog, sizeof ma->catalog) != 0 ||
                 !same_bits(ma->index, mb->index) || !same_bits(ma->vd, mb->vd) ||
-                !same_bits(ma->dpgf, mb->dpgf))
+                !same_bits(ma->dpgf, mb->dpgf) || !same_bits(ma->dn, mb->dn) ||
+                !same_bits(ma->disp, mb->disp))
                 return 0;
             break;
         }

@@ -16,6 +16,7 @@
 #define SAGITTA_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -296,6 +297,10 @@ typedef struct sg_material {
     char catalog[SG_GLASS_NAME];
     double index;             /* for SG_MAT_INDEX; nd for SG_MAT_MODEL */
     double vd, dpgf;          /* for SG_MAT_MODEL */
+    /* A catalog glass as tolerancing changes it (TIND, TABB; sg_tol_apply;
+     * no file holds them): dn is added to the index at every wavelength,
+     * and n - n(d) is scaled by disp (0: not scaled). */
+    double dn, disp;
 } sg_material;
 
 /* The catalog glass of a glass material (its catalog's if it names one),
@@ -521,6 +526,52 @@ typedef struct sg_configs {
     int nop;
     sg_config_op op[SG_MAX_CONFIG_OPS];
 } sg_configs;
+/* Tolerances (sagitta-design(5), TOLERANCES; sagitta(1), TOLERANCING):
+ * Zemax's tolerance operands, compensators, a criterion and Monte Carlo
+ * settings.  Min and max are changes from the nominal value. */
+#define SG_MAX_TOL_OPERANDS 200
+#define SG_MAX_COMPENSATORS 16
+typedef enum sg_tol_type {
+    SG_TOL_TRAD = 0, SG_TOL_TCUR, SG_TOL_TFRN, SG_TOL_TTHI, SG_TOL_TCON, SG_TOL_TPAR,
+    SG_TOL_TSDX, SG_TOL_TSDY, SG_TOL_TSTX, SG_TOL_TSTY,
+    SG_TOL_TEDX, SG_TOL_TEDY, SG_TOL_TETX, SG_TOL_TETY, SG_TOL_TETZ,
+    SG_TOL_TIND, SG_TOL_TABB,
+    SG_TOL_NTYPES
+} sg_tol_type;
+typedef struct sg_tol_operand {
+    sg_tol_type type;
+    int surface;            /* the surface; an element's first */
+    int last;               /* an element's last surface */
+    int adjust;             /* TTHI: the surface whose thickness takes the opposite change, or -1 */
+    char param[32];         /* TPAR: the parameter table's key */
+    int elem;               /* TPAR: its element */
+    double min, max;
+} sg_tol_operand;
+typedef struct sg_tol_comp {
+    int surface;
+    char param[32];         /* the parameter table's key ("thickness") */
+    int elem;
+    double min, max;        /* changes from the nominal */
+} sg_tol_comp;
+typedef enum sg_tol_crit {
+    SG_TOLC_RMS_SPOT = 0, SG_TOLC_MERIT = 1, SG_TOLC_RMS_WAVEFRONT = 2
+} sg_tol_crit;
+typedef enum sg_tol_dist {
+    SG_TOLD_NORMAL = 0, SG_TOLD_UNIFORM = 1, SG_TOLD_PARABOLIC = 2
+} sg_tol_dist;
+typedef struct sg_tolerances {
+    int present;            /* the design has a "tolerances" object */
+    int nop, ncomp;
+    sg_tol_operand op[SG_MAX_TOL_OPERANDS];
+    sg_tol_comp comp[SG_MAX_COMPENSATORS];
+    int criterion;          /* sg_tol_crit */
+    int reference;          /* sg_spot_ref: 0 chief, 1 centroid */
+    int pattern, density;   /* the criterion's pupil sampling (sg_pupil_pattern) */
+    int grid;               /* the wavefront criterion's grid (64) */
+    int trials;             /* Monte Carlo trials (0: none given) */
+    double seed;            /* an integer from 0 to 2^53 */
+    int distribution;       /* sg_tol_dist */
+} sg_tolerances;
 
 typedef struct sg_system {
     char title[128];
@@ -561,6 +612,8 @@ typedef struct sg_system {
 
     /* The merit function; merit.present 0 when the design has none. */
     sg_merit merit;
+    /* Tolerances; tol.present 0 when the design has none. */
+    sg_tolerances tol;
 
     int stop; /* surface index of the aperture stop */
     int nsurf;   /* surfaces 0..nsurf-1; object is 0, image is nsurf-1 */
@@ -1122,6 +1175,101 @@ SG_API int sg_thermal_tces(const sg_system *sys, const sg_catalog *cat, sg_therm
  * spacer's contact height does not exist; on any error out is unchanged. */
 SG_API int sg_thermal(const sg_system *sys, const sg_catalog *cat, double temp, double pres,
                sg_system *out, sg_diag *d);
+
+/* Tolerancing (src/tolerance.c; sagitta(1), TOLERANCING).  Zemax's names
+ * of the operand types ("TRAD"), and the type of a name (-1: unknown). */
+SG_API const char *sg_tol_name(sg_tol_type t);
+SG_API int sg_tol_parse(const char *name);
+/* Checks sys->tol against sys: surfaces, elements, parameters, limits;
+ * SG_ERANGE naming the row ("tolerances: operand 3 (TEDX): ..."). */
+SG_API int sg_tol_check(const sg_system *sys, sg_diag *d);
+/* The nominal prepared for tolerancing: solves applied, then every solve
+ * but the pickups frozen at its value (the built lens does not refocus
+ * itself; compensators do). */
+SG_API int sg_tol_nominal(const sg_system *sys, const sg_catalog *cat, sg_system *out,
+                          sg_diag *d);
+/* out = nominal with operand k changed by delta[k] (nop values; 0 leaves
+ * a row alone), as Zemax applies each operand: element operands insert a
+ * coordinate break before the element and one after it that returns to
+ * the first vertex's frame.  map (nominal->nsurf entries, may be NULL)
+ * gets each nominal surface's index in out.  The nominal is not
+ * touched. */
+SG_API int sg_tol_apply(const sg_system *nominal, const sg_catalog *cat, const double *delta,
+                        sg_system *out, int *map, sg_diag *d);
+
+typedef struct sg_tol_opts {
+    int method;             /* sg_method of the criterion's traces (precise) */
+    int mpfr_bits;          /* for the mpfr method; 0: 256 */
+    int nthreads;           /* systems evaluated at once; 0: every core */
+    int compensate;         /* nonzero (default): re-optimize the compensators */
+    int cycles;             /* compensator cycles at most; 0: 50 */
+    /* Called after each system (may be NULL); nonzero stops the run. */
+    int (*progress)(void *ctx, int done, int total);
+    void *ctx;
+    volatile int *stop;     /* set nonzero (a signal) to stop; what is done is kept */
+} sg_tol_opts;
+SG_API void sg_tol_opts_init(sg_tol_opts *o);
+
+/* One evaluated system: the criterion over the fields and each field's. */
+typedef struct sg_tol_value {
+    int status;             /* SG_OK, or why the system could not be evaluated */
+    double criterion;
+    int nfield;
+    double field[SG_MAX_FIELDS];
+    double comp[SG_MAX_COMPENSATORS]; /* the compensators' changes */
+} sg_tol_value;
+/* The criterion of sys (compensators not moved): sqrt(sum w c^2 / sum w)
+ * over the fields, c a field's polychromatic RMS spot radius as
+ * sg_spot_compute gives it with the tolerances' sampling (or the merit
+ * function's value). */
+SG_API int sg_tol_criterion(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *o,
+                            sg_tol_value *out, sg_diag *d);
+/* sys's compensators (addressed through map, as sg_tol_apply fills it)
+ * re-optimized by damped least squares on the criterion; sys gets them,
+ * out the criterion there. */
+SG_API int sg_tol_compensate(sg_system *sys, const sg_system *nominal, const int *map,
+                             const sg_catalog *cat, const sg_tol_opts *o, sg_tol_value *out,
+                             sg_diag *d);
+
+/* Trial t's draw for operand k: a counter-based SplitMix64 keyed by
+ * (seed, t, k), so it depends on nothing else.  Normal: within +-2 sigma
+ * at min and max; uniform; parabolic (density growing as the square of
+ * the distance from the centre, Zemax's). */
+SG_API double sg_tol_draw(uint64_t seed, uint64_t trial, int k, int dist, double min,
+                          double max);
+
+typedef struct sg_tol_stats {
+    int n;                  /* values counted (failed systems left out) */
+    double best, worst, mean, std;
+    double pct[5];          /* at 90, 80, 50, 20 and 10 % cumulative probability */
+} sg_tol_stats;
+/* Statistics of v[0..n-1], NaNs left out: std with n - 1; the p % value
+ * is the smallest value that at least p % of the values do not exceed
+ * (Zemax's "90% <= X"). */
+SG_API void sg_tol_statistics(const double *v, int n, sg_tol_stats *out);
+
+typedef struct sg_tol_sens {
+    int row;                /* 1-based operand row */
+    sg_tol_value at_min, at_max;
+} sg_tol_sens;
+typedef struct sg_tol_result {
+    sg_tol_value nominal;
+    int nsens;              /* rows done (all, unless stopped) */
+    sg_tol_sens *sens;      /* malloc'd, nop rows */
+    double rss;             /* sqrt of the sum over rows of the larger |change| squared */
+    int trials, done;       /* Monte Carlo: asked, and done in order from 0 */
+    uint64_t seed;
+    sg_tol_value *mc;       /* malloc'd, trials rows */
+    sg_tol_stats stats;
+    int stopped;
+} sg_tol_result;
+/* Sensitivity (when sens) and Monte Carlo (trials > 0) of sys's
+ * tolerances.  Every system is a copy; sys is not touched.  The systems
+ * run on threads and the results do not depend on their number. */
+SG_API int sg_tolerance_run(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *o,
+                            int sens, int trials, uint64_t seed, sg_tol_result *out,
+                            sg_diag *d);
+SG_API void sg_tol_result_free(sg_tol_result *r);
 
 /* A prepared system: indices, paraxial data and work buffers, computed
  * once so the per-ray path allocates nothing.  A tracer is used by one

@@ -176,6 +176,40 @@ int sg_indices_mpfr(const sg_system *sys, const sg_catalog *cat, int wave,
     return sg_indices_mpfr_cached(sys, cat, wave, idx, NULL, d);
 }
 
+/* Whether two materials carry the same tolerancing change. */
+static int glass_change_same(const sg_material *a, const sg_material *b)
+{
+    return memcmp(&a->dn, &b->dn, sizeof a->dn) == 0 &&
+           memcmp(&a->disp, &b->disp, sizeof a->disp) == 0;
+}
+
+/* A catalog glass's index n changed as tolerancing asks (TABB, TIND):
+ * n(d) + disp (n - n(d)) + dn, n(d) at the d line by the same formula. */
+static int glass_change(sg_index_cache *cache, const sg_system *sys, const sg_glass *g,
+                        const sg_material *m, mpfr_t n, int i, sg_diag *d)
+{
+    if (m->disp != 0.0) {
+        mpfr_t nd, ud;
+        int rc;
+        mpfr_init2(nd, mpfr_get_prec(n));
+        mpfr_init2(ud, mpfr_get_prec(n));
+        mpfr_set_d(ud, 0.5875618, MPFR_RNDN);
+        rc = sg_index_cache_glass(cache, sys, g, nd, ud);
+        if (rc == SG_OK) {
+            mpfr_sub(n, n, nd, MPFR_RNDN);
+            mpfr_mul_d(n, n, m->disp, MPFR_RNDN);
+            mpfr_add(n, n, nd, MPFR_RNDN);
+        }
+        mpfr_clear(nd);
+        mpfr_clear(ud);
+        if (rc != SG_OK)
+            return sg_diag_set(d, SG_ERANGE, "surface %d: glass %s has no real index at the "
+                               "d line", i, g->name);
+    }
+    mpfr_add_d(n, n, m->dn, MPFR_RNDN);
+    return SG_OK;
+}
+
 int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave,
                            mpfr_t *idx, sg_index_cache *cache, sg_diag *d)
 {
@@ -238,7 +272,10 @@ int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave
                                  s->mat.name, where);
                 goto out;
             }
-            for (k = 0; s->mat.kind == SG_MAT_GLASS && k < nseen && seen_g[k] != g; k++)
+            for (k = 0; s->mat.kind == SG_MAT_GLASS && k < nseen &&
+                        (seen_g[k] != g || !glass_change_same(&sys->surf[seen_at[k]].mat,
+                                                              &s->mat));
+                 k++)
                 ;
             if (s->mat.kind == SG_MAT_GLASS && k < nseen) {
                 /* The same bits the cache or the formula gave there. */
@@ -254,6 +291,9 @@ int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave
                                  g->name, sys->wave[wave].um);
                 goto out;
             }
+            if (s->mat.kind == SG_MAT_GLASS && (s->mat.dn != 0.0 || s->mat.disp != 0.0) &&
+                (rc = glass_change(cache, sys, g, &s->mat, idx[i], i, d)) != SG_OK)
+                goto out;
             if (sign < 0)
                 mpfr_neg(idx[i], idx[i], MPFR_RNDN);
             if (s->mat.kind == SG_MAT_GLASS && nseen < SEEN) {

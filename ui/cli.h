@@ -38,6 +38,7 @@ int cmd_vignetting(int argc, char **argv);
 int cmd_thermal(int argc, char **argv); /* thermal.c */
 int cmd_merit(int argc, char **argv);    /* optimize.c */
 int cmd_optimize(int argc, char **argv); /* optimize.c */
+int cmd_tolerance(int argc, char **argv); /* tolerance.c */
 int cmd_psf(int argc, char **argv);     /* diffraction.c */
 int cmd_mtf(int argc, char **argv);     /* diffraction.c */
 /* Further subcommands live in their own files. */

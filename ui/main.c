@@ -40,6 +40,7 @@ static const cli_command commands[] = {
     { "thermal", cmd_thermal, "the design as built at another temperature (thermal expansion)" },
     { "merit", cmd_merit, "print every row of the design's merit function and its value" },
     { "optimize", cmd_optimize, "damped least squares on the design's variables" },
+    { "tolerance", cmd_tolerance, "sensitivity and Monte Carlo of the design's tolerances, compensated" },
     { "psf", cmd_psf, "FFT point spread function and Strehl ratio" },
     { "mtf", cmd_mtf, "FFT MTF, tangential and sagittal, with the diffraction limit" },
 };

@@ -1,0 +1,319 @@
+/*
+ * test_cli_tolerance.c - "sagitta tolerance" as a user runs it: the
+ * nominal criterion against "sagitta spot"'s per-field RMS combined by the
+ * field weights, sqrt(sum w c^2 / sum w); a paraboloid's TRAD rows
+ * compensated to a perfect focus again; the JSON's shape; reports that are
+ * the same bytes on one and two threads; -o refused over an existing file
+ * without --force; a design without tolerances refused; Ctrl-C mid-run
+ * writing the trials done, in order, marked stopped.
+ */
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+#include <sys/wait.h>
+
+#include <cjson/cJSON.h>
+
+#include "clitest.h"
+
+static const char *exe;
+
+/* Two lenses of index 1.5 and 1.6; fields 0, 2 and 3 degrees weighted 1,
+ * 2 and 3. */
+static const char *doublet(const char *name, const char *tol)
+{
+    char text[8192];
+    snprintf(text, sizeof text,
+             "{\"format\": \"sagitta-design\", \"units\": \"mm\","
+             "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.5875618, \"weight\": 1},"
+             " {\"um\": 0.48, \"weight\": 0.5}]},"
+             "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0, \"weight\": 1},"
+             " {\"y\": 2, \"weight\": 2}, {\"y\": 3, \"weight\": 3}]},"
+             "\"aperture\": {\"type\": \"epd\", \"value\": 10},"
+             "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+             "{\"radius\": 50, \"thickness\": 4, \"material\": 1.5, \"stop\": true},"
+             "{\"radius\": -50, \"thickness\": 2},"
+             "{\"radius\": 80, \"thickness\": 3, \"material\": 1.6},"
+             "{\"radius\": \"inf\", \"thickness\": 30},"
+             "{\"radius\": \"inf\", \"thickness\": 0}]%s}",
+             tol);
+    return ct_file(name, text);
+}
+
+#define TOL                                                                                    \
+    ", \"tolerances\": {\"operands\": ["                                                        \
+    "{\"type\": \"TRAD\", \"surface\": 1, \"min\": -0.5, \"max\": 0.5},"                       \
+    "{\"type\": \"TEDX\", \"first\": 3, \"last\": 3, \"min\": -0.05, \"max\": 0.05},"          \
+    "{\"type\": \"TSTY\", \"surface\": 2, \"min\": -0.1, \"max\": 0.1}],"                      \
+    "\"compensators\": [{\"surface\": 4, \"parameter\": \"thickness\", \"min\": -3,"           \
+    " \"max\": 3}],"                                                                           \
+    "\"criterion\": {\"type\": \"rms_spot\", \"reference\": \"centroid\","                     \
+    " \"sampling\": {\"pattern\": \"hexapolar\", \"density\": 4}},"                            \
+    "\"monte_carlo\": {\"trials\": 6, \"seed\": 5, \"distribution\": \"uniform\"}}"
+
+static double num(const cJSON *o, const char *k)
+{
+    const cJSON *v = cJSON_GetObjectItem(o, k);
+    if (!cJSON_IsNumber(v))
+        fail_msg("no number \"%s\"", k);
+    return v->valuedouble;
+}
+
+/* Without compensators the nominal is the design as given: its criterion
+ * is spot's per-field RMS (same sampling and reference) combined by the
+ * field weights. */
+static void nominal_is_spot(void **state)
+{
+    const char *d = doublet("n.json", TOL);
+    ct_result r;
+    cJSON *root, *fields;
+    double acc = 0.0, wsum = 0.0;
+    const double w[3] = {1, 2, 3};
+    int k;
+    (void)state;
+    ct_run(&r, "spot", d, "--reference", "centroid", "--density", "4", "--format", "json",
+           NULL);
+    assert_int_equal(r.code, 0);
+    root = cJSON_Parse(r.out);
+    assert_non_null(root);
+    fields = cJSON_GetObjectItem(root, "fields");
+    assert_int_equal(cJSON_GetArraySize(fields), 3);
+    for (k = 0; k < 3; k++) {
+        double c = num(cJSON_GetArrayItem(fields, k), "rms");
+        acc += w[k] * c * c;
+        wsum += w[k];
+    }
+    cJSON_Delete(root);
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--sensitivity", "--no-compensators", "--format", "json", NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    root = cJSON_Parse(r.out);
+    assert_non_null(root);
+    ct_close(num(root, "nominal"), sqrt(acc / wsum), 1e-15, 0, "nominal");
+    assert_int_equal(cJSON_GetArraySize(cJSON_GetObjectItem(root, "sensitivity")), 3);
+    assert_null(cJSON_GetObjectItem(root, "monte_carlo"));
+    cJSON_Delete(root);
+    ct_free(&r);
+}
+
+/* The wavefront criterion: each field's RMS over the wavelengths, as
+ * sagitta wavefront gives them (same grid, about the centroid), combined
+ * by the wavelength weights and then the field weights. */
+static void wavefront_criterion(void **state)
+{
+    const char *d = doublet("w.json",
+        ", \"tolerances\": {\"operands\": [{\"type\": \"TCON\", \"surface\": 1, \"min\": -0.1,"
+        " \"max\": 0.1}], \"criterion\": {\"type\": \"rms_wavefront\", \"reference\":"
+        " \"centroid\", \"sampling\": {\"grid\": 16}}}");
+    static const char *const fn[3] = {"1", "2", "3"}, *const wn[2] = {"1", "2"};
+    const double fw[3] = {1, 2, 3}, ww[2] = {1, 0.5};
+    double acc = 0.0, wsum = 0.0;
+    ct_result r;
+    cJSON *root;
+    int f, w;
+    (void)state;
+    for (f = 0; f < 3; f++) {
+        double s2 = 0.0;
+        for (w = 0; w < 2; w++) {
+            double c;
+            ct_run(&r, "wavefront", d, "--field", fn[f], "--wave", wn[w], "--grid", "16",
+                   "--format", "json", NULL);
+            assert_int_equal(r.code, 0);
+            root = cJSON_Parse(r.out);
+            assert_non_null(root);
+            c = num(root, "rms_centroid");
+            s2 += ww[w] * c * c;
+            cJSON_Delete(root);
+            ct_free(&r);
+        }
+        acc += fw[f] * s2 / 1.5;
+        wsum += fw[f];
+    }
+    ct_run(&r, "tolerance", d, "--sensitivity", "--format", "json", NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    root = cJSON_Parse(r.out);
+    assert_non_null(root);
+    assert_string_equal(cJSON_GetObjectItem(root, "criterion")->valuestring, "rms_wavefront");
+    ct_close(num(root, "nominal"), sqrt(acc / wsum), 1e-14, 0, "nominal wavefront");
+    cJSON_Delete(root);
+    ct_free(&r);
+}
+
+/* A paraboloid images the axial point at infinity perfectly at R / 2 for
+ * any R: with the back focus compensating, both TRAD rows are perfect
+ * again, and the compensator moved by dR / 2. */
+static void paraboloid_refocus(void **state)
+{
+    const char *d = ct_file("p.json",
+        "{\"format\": \"sagitta-design\", \"units\": \"mm\","
+        "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.55}]},"
+        "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}]},"
+        "\"aperture\": {\"type\": \"epd\", \"value\": 20},"
+        "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+        "{\"radius\": -200, \"conic\": -1, \"thickness\": -100, \"material\": \"MIRROR\","
+        " \"stop\": true}, {\"radius\": \"inf\", \"thickness\": 0}],"
+        "\"tolerances\": {\"operands\": [{\"type\": \"TRAD\", \"surface\": 1, \"min\": -0.4,"
+        " \"max\": 0.6}], \"compensators\": [{\"surface\": 1, \"parameter\": \"thickness\","
+        " \"min\": -1, \"max\": 1}]}}");
+    ct_result r;
+    cJSON *root, *row;
+    (void)state;
+    ct_run(&r, "tolerance", d, "--format", "json", NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    root = cJSON_Parse(r.out);
+    assert_non_null(root);
+    row = cJSON_GetArrayItem(cJSON_GetObjectItem(root, "sensitivity"), 0);
+    assert_non_null(row);
+    assert_string_equal(cJSON_GetObjectItem(row, "type")->valuestring, "TRAD");
+    assert_int_equal((int)num(row, "row"), 1);
+    assert_int_equal((int)num(row, "surface"), 1);
+    assert_true(num(row, "criterion_min") < 1e-8 && num(row, "criterion_max") < 1e-8);
+    ct_close(cJSON_GetArrayItem(cJSON_GetObjectItem(row, "compensators_min"), 0)->valuedouble,
+             -0.2, 1e-7, 1, "compensator at min");
+    ct_close(cJSON_GetArrayItem(cJSON_GetObjectItem(row, "compensators_max"), 0)->valuedouble,
+             0.3, 1e-7, 1, "compensator at max");
+    cJSON_Delete(root);
+    ct_free(&r);
+}
+
+/* Monte Carlo's report: the issue's JSON shape, and the same bytes on one
+ * and two threads in every format. */
+static void threads_same_bytes(void **state)
+{
+    const char *d = doublet("t.json", TOL);
+    static const char *const fmts[3] = {"json", "text", "csv"};
+    ct_result r1, r2;
+    cJSON *root, *mc, *pct;
+    int k;
+    (void)state;
+    for (k = 0; k < 3; k++) {
+        ct_run(&r1, "tolerance", d, "--threads", "1", "--format", fmts[k], NULL);
+        ct_run(&r2, "tolerance", d, "--threads", "2", "--format", fmts[k], NULL);
+        if (r1.code != 0)
+            fail_msg("exit %d: %s", r1.code, r1.err);
+        assert_int_equal(r2.code, 0);
+        assert_string_equal(r1.out, r2.out);
+        if (k == 0) {
+            root = cJSON_Parse(r1.out);
+            assert_non_null(root);
+            mc = cJSON_GetObjectItem(root, "monte_carlo");
+            assert_non_null(mc);
+            assert_int_equal((int)num(mc, "trials"), 6);
+            assert_int_equal((int)num(mc, "seed"), 5);
+            assert_int_equal(cJSON_GetArraySize(cJSON_GetObjectItem(mc, "criteria")), 6);
+            pct = cJSON_GetObjectItem(mc, "percentiles");
+            assert_true(num(pct, "90") >= num(pct, "50") && num(pct, "50") >= num(pct, "10"));
+            assert_true(num(mc, "worst") >= num(mc, "mean") && num(mc, "mean") >= num(mc, "best"));
+            assert_true(num(mc, "std") > 0);
+            assert_int_equal(cJSON_GetArraySize(cJSON_GetObjectItem(root, "sensitivity")), 3);
+            assert_true(num(root, "rss_change") > 0);
+            cJSON_Delete(root);
+        }
+        ct_free(&r1);
+        ct_free(&r2);
+    }
+    /* Another seed, other trials. */
+    ct_run(&r1, "tolerance", d, "--monte-carlo", "3", "--seed", "5", "--format", "csv", NULL);
+    ct_run(&r2, "tolerance", d, "--monte-carlo", "3", "--seed", "6", "--format", "csv", NULL);
+    assert_int_equal(r1.code, 0);
+    assert_true(strcmp(r1.out, r2.out) != 0);
+    ct_free(&r1);
+    ct_free(&r2);
+}
+
+static void refusals(void **state)
+{
+    const char *d = doublet("f.json", TOL), *none = doublet("none.json", "");
+    const char *out = ct_file("exists.txt", "keep me\n");
+    ct_result r;
+    char *kept;
+    (void)state;
+    ct_run(&r, "tolerance", d, "--monte-carlo", "0", "-o", out, NULL);
+    assert_int_not_equal(r.code, 0);
+    assert_non_null(strstr(r.err, "exists; use --force"));
+    ct_free(&r);
+    kept = ct_read(out);
+    assert_string_equal(kept, "keep me\n");
+    free(kept);
+    ct_run(&r, "tolerance", d, "--sensitivity", "--no-compensators", "-o", out, "--force",
+           NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    kept = ct_read(out);
+    assert_non_null(strstr(kept, "Sensitivity"));
+    free(kept);
+    ct_run(&r, "tolerance", none, NULL);
+    assert_int_not_equal(r.code, 0);
+    assert_non_null(strstr(r.err, "no tolerance operands"));
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--seed", "-3", NULL);
+    assert_int_not_equal(r.code, 0);
+    assert_non_null(strstr(r.err, "--seed"));
+    ct_free(&r);
+}
+
+/* SIGINT during a long Monte Carlo run: the report holds the trials
+ * done from the first, says stopped, and the program ends with 0. */
+static void interrupted(void **state)
+{
+    const char *d = doublet("i.json", TOL), *out = ct_path("i_out.json");
+    struct timespec ts = {1, 500000000L};
+    cJSON *root, *mc;
+    char *text;
+    int st, done;
+    pid_t pid;
+    (void)state;
+    fflush(NULL);
+    pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        unsetenv("CI");
+        execl(exe, exe, "tolerance", d, "--monte-carlo", "1000000", "--threads", "2",
+              "--format", "json", "-o", out, (char *)NULL);
+        _exit(127);
+    }
+    while (nanosleep(&ts, &ts) != 0 && errno == EINTR)
+        ;
+    assert_int_equal(kill(pid, SIGINT), 0);
+    assert_int_equal(waitpid(pid, &st, 0), pid);
+    if (!WIFEXITED(st) || WEXITSTATUS(st) != 0)
+        fail_msg("the run ended with status 0x%x", st);
+    text = ct_read(out);
+    root = cJSON_Parse(text);
+    assert_non_null(root);
+    assert_true(cJSON_IsTrue(cJSON_GetObjectItem(root, "stopped")));
+    mc = cJSON_GetObjectItem(root, "monte_carlo");
+    assert_non_null(mc);
+    done = (int)num(mc, "done");
+    assert_true(done < 1000000);
+    assert_int_equal(cJSON_GetArraySize(cJSON_GetObjectItem(mc, "criteria")), done);
+    print_message("# stopped after %d trials\n", done);
+    cJSON_Delete(root);
+    free(text);
+}
+
+int main(int argc, char **argv)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(nominal_is_spot),
+        cmocka_unit_test(wavefront_criterion),
+        cmocka_unit_test(paraboloid_refocus),
+        cmocka_unit_test(threads_same_bytes),
+        cmocka_unit_test(refusals),
+        cmocka_unit_test(interrupted),
+    };
+    int rc;
+    ct_init(argc, argv);
+    exe = argv[1];
+    rc = cmocka_run_group_tests(tests, NULL, NULL);
+    ct_cleanup();
+    return rc;
+}

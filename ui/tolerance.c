@@ -1,0 +1,470 @@
+/* tolerance.c - "sagitta tolerance": sensitivity and Monte Carlo of a
+ * design's tolerances (sagitta(1), TOLERANCING), as text, JSON or CSV. */
+#include <errno.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "outfile.h"
+#include "report.h"
+
+static void tolerance_help(FILE *f)
+{
+    fputs(
+"Usage: sagitta tolerance DESIGN.json [--sensitivity] [--monte-carlo N] [--seed S]\n"
+"                         [--threads N] [--method M] [--format text|json|csv]\n"
+"                         [-o FILE] [--force]\n"
+"Tolerance the design (its \"tolerances\" object): each operand at its min\n"
+"and max with the compensators re-optimized (sensitivity), and N systems\n"
+"with every operand drawn (Monte Carlo), on every core.  Without\n"
+"--sensitivity or --monte-carlo, sensitivity runs, and Monte Carlo too when\n"
+"the design asks for trials.  Ctrl-C stops and reports what is done.  See\n"
+"sagitta(1), TOLERANCING.\n"
+"\n"
+"Options:\n"
+"  --sensitivity            each operand at its min and max\n"
+"  --monte-carlo N          N trials (0: none)\n"
+"  --seed S                 the trials' seed (default: the design's, else 1)\n"
+"  --threads N              systems at once (default: every core)\n"
+"  --method M               the criterion's traces: precise (default), classic, mpfr\n"
+"  --no-compensators        leave the compensators at their nominal values\n"
+"  --format FMT             text (default), json or csv\n"
+"  -o, --output FILE        write the report to FILE (not over an existing file\n"
+"                           without --force)\n"
+"  --force                  overwrite FILE\n"
+"  -h, --help               show this help\n", f);
+}
+
+enum { TO_HELP = 1, TO_SENS, TO_MC, TO_SEED, TO_THREADS, TO_METHOD, TO_NOCOMP, TO_FORMAT,
+       TO_OUTPUT, TO_FORCE };
+static const cli_opt tolerance_opts[] = {
+    { "--help", 'h', 0, TO_HELP },
+    { "--sensitivity", 0, 0, TO_SENS },
+    { "--monte-carlo", 0, 1, TO_MC },
+    { "--seed", 0, 1, TO_SEED },
+    { "--threads", 0, 1, TO_THREADS },
+    { "--method", 0, 1, TO_METHOD },
+    { "--no-compensators", 0, 0, TO_NOCOMP },
+    { "--format", 0, 1, TO_FORMAT },
+    { "--output", 'o', 1, TO_OUTPUT },
+    { "--force", 0, 0, TO_FORCE },
+    { NULL, 0, 0, 0 }
+};
+
+static volatile sig_atomic_t stop_flag;
+static volatile int stop_int;
+
+static void on_sigint(int sig)
+{
+    (void)sig;
+    stop_flag = 1;
+    stop_int = 1;
+}
+
+typedef struct prog {
+    int on, shown;
+    double t0, last;
+} prog;
+
+static double now_s(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* On a terminal (not under CI), a line on standard error that counts the
+ * systems done, four times a second. */
+static int progress(void *ctx, int done, int total)
+{
+    prog *p = ctx;
+    double t;
+    if (!p->on)
+        return 0;
+    t = now_s();
+    if (t - p->last < 0.25 && done < total)
+        return 0;
+    p->last = t;
+    p->shown = 1;
+    fprintf(stderr, "\rsagitta: tolerance: %d of %d systems, %.0f s", done, total, t - p->t0);
+    fflush(stderr);
+    return 0;
+}
+
+static const char *status_text(int st)
+{
+    return st == SG_OK ? "ok" : sg_err_name(st);
+}
+
+/* The operand's place: "surface 3" or "surfaces 3-4". */
+static void op_place(const sg_tol_operand *op, char *buf, size_t n)
+{
+    if (op->type >= SG_TOL_TEDX && op->type <= SG_TOL_TETZ)
+        snprintf(buf, n, "%d-%d", op->surface, op->last);
+    else if (op->type == SG_TOL_TPAR)
+        snprintf(buf, n, "%d %s[%d]", op->surface, op->param, op->elem);
+    else
+        snprintf(buf, n, "%d", op->surface);
+}
+
+static double change(const sg_tol_value *v, double c0)
+{
+    return v->status == SG_OK ? v->criterion - c0 : NAN;
+}
+
+static double worst_change(const sg_tol_sens *s, double c0)
+{
+    double a = change(&s->at_min, c0), b = change(&s->at_max, c0);
+    if (isnan(a))
+        return isnan(b) ? INFINITY : b;
+    if (isnan(b))
+        return a;
+    return a > b ? a : b;
+}
+
+static const sg_tol_result *sort_r;
+static const sg_system *sort_sys;
+
+/* Worst first: the larger change of the two, descending; then by row. */
+static int cmp_worst(const void *x, const void *y)
+{
+    int i = *(const int *)x, j = *(const int *)y;
+    double a = worst_change(&sort_r->sens[i], sort_r->nominal.criterion);
+    double b = worst_change(&sort_r->sens[j], sort_r->nominal.criterion);
+    (void)sort_sys;
+    if (a != b)
+        return a > b ? -1 : 1;
+    return i - j;
+}
+
+static void print_num(FILE *f, double v)
+{
+    if (isnan(v))
+        fputs("null", f);
+    else
+        fprintf(f, "%.17g", v);
+}
+
+static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc)
+{
+    static const char *const pk[5] = {"90", "80", "50", "20", "10"};
+    int k, j;
+    fprintf(f, "{\"criterion\": \"%s\", \"nominal\": ",
+            sys->tol.criterion == SG_TOLC_MERIT            ? "merit"
+            : sys->tol.criterion == SG_TOLC_RMS_WAVEFRONT ? "rms_wavefront"
+                                                           : "rms_spot");
+    print_num(f, r->nominal.criterion);
+    fprintf(f, ", \"nominal_fields\": [");
+    for (j = 0; j < r->nominal.nfield; j++) {
+        fputs(j ? ", " : "", f);
+        print_num(f, r->nominal.field[j]);
+    }
+    fprintf(f, "]");
+    if (sens) {
+        fprintf(f, ",\n\"sensitivity\": [");
+        for (k = 0; k < r->nsens; k++) {
+            const sg_tol_operand *op = &sys->tol.op[k];
+            const sg_tol_sens *s = &r->sens[k];
+            fprintf(f, "%s\n  {\"row\": %d, \"type\": \"%s\", ", k ? "," : "", k + 1,
+                    sg_tol_name(op->type));
+            if (op->type >= SG_TOL_TEDX && op->type <= SG_TOL_TETZ)
+                fprintf(f, "\"first\": %d, \"last\": %d", op->surface, op->last);
+            else
+                fprintf(f, "\"surface\": %d", op->surface);
+            fprintf(f, ", \"min\": %.17g, \"max\": %.17g, \"criterion_min\": ", op->min, op->max);
+            print_num(f, s->at_min.status == SG_OK ? s->at_min.criterion : NAN);
+            fputs(", \"criterion_max\": ", f);
+            print_num(f, s->at_max.status == SG_OK ? s->at_max.criterion : NAN);
+            fputs(", \"change_min\": ", f);
+            print_num(f, change(&s->at_min, r->nominal.criterion));
+            fputs(", \"change_max\": ", f);
+            print_num(f, change(&s->at_max, r->nominal.criterion));
+            fprintf(f, ", \"status_min\": \"%s\", \"status_max\": \"%s\"",
+                    status_text(s->at_min.status), status_text(s->at_max.status));
+            if (sys->tol.ncomp) {
+                fputs(", \"compensators_min\": [", f);
+                for (j = 0; j < sys->tol.ncomp; j++) {
+                    fputs(j ? ", " : "", f);
+                    print_num(f, s->at_min.comp[j]);
+                }
+                fputs("], \"compensators_max\": [", f);
+                for (j = 0; j < sys->tol.ncomp; j++) {
+                    fputs(j ? ", " : "", f);
+                    print_num(f, s->at_max.comp[j]);
+                }
+                fputs("]", f);
+            }
+            fputs("}", f);
+        }
+        fprintf(f, "%s],\n\"rss_change\": %.17g", r->nsens ? "\n" : "", r->rss);
+    }
+    if (mc) {
+        fprintf(f, ",\n\"monte_carlo\": {\"trials\": %d, \"done\": %d, \"seed\": %llu, "
+                "\"distribution\": \"%s\", \"criteria\": [", r->trials, r->done,
+                (unsigned long long)r->seed,
+                sys->tol.distribution == SG_TOLD_UNIFORM ? "uniform"
+                : sys->tol.distribution == SG_TOLD_PARABOLIC ? "parabolic" : "normal");
+        for (k = 0; k < r->done; k++) {
+            fputs(k ? (k % 8 ? ", " : ",\n  ") : "\n  ", f);
+            print_num(f, r->mc[k].status == SG_OK ? r->mc[k].criterion : NAN);
+        }
+        fprintf(f, "],\n  \"failed\": %d, \"best\": ", r->done - r->stats.n);
+        print_num(f, r->stats.best);
+        fputs(", \"worst\": ", f);
+        print_num(f, r->stats.worst);
+        fputs(", \"mean\": ", f);
+        print_num(f, r->stats.mean);
+        fputs(", \"std\": ", f);
+        print_num(f, r->stats.std);
+        fputs(", \"percentiles\": {", f);
+        for (j = 0; j < 5; j++) {
+            fprintf(f, "%s\"%s\": ", j ? ", " : "", pk[j]);
+            print_num(f, r->stats.pct[j]);
+        }
+        fputs("}}", f);
+    }
+    fprintf(f, ",\n\"stopped\": %s}\n", r->stopped ? "true" : "false");
+}
+
+static void write_csv(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc)
+{
+    int k;
+    char place[64];
+    fprintf(f, "kind,row,type,place,min,max,criterion_min,criterion_max,status_min,"
+            "status_max\n");
+    fprintf(f, "nominal,,,,,,%.17g,%.17g,%s,%s\n", r->nominal.criterion, r->nominal.criterion,
+            "ok", "ok");
+    if (sens)
+        for (k = 0; k < r->nsens; k++) {
+            const sg_tol_operand *op = &sys->tol.op[k];
+            const sg_tol_sens *s = &r->sens[k];
+            op_place(op, place, sizeof place);
+            fprintf(f, "sensitivity,%d,%s,%s,%.17g,%.17g,%.17g,%.17g,%s,%s\n", k + 1,
+                    sg_tol_name(op->type), place, op->min, op->max, s->at_min.criterion,
+                    s->at_max.criterion, status_text(s->at_min.status),
+                    status_text(s->at_max.status));
+        }
+    if (mc)
+        for (k = 0; k < r->done; k++)
+            fprintf(f, "trial,%d,,,,,%.17g,%.17g,%s,%s\n", k + 1, r->mc[k].criterion,
+                    r->mc[k].criterion, status_text(r->mc[k].status),
+                    status_text(r->mc[k].status));
+}
+
+static void write_text(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc)
+{
+    static const char *const pk[5] = {"90", "80", "50", "20", "10"};
+    const char *crit = sys->tol.criterion == SG_TOLC_MERIT            ? "merit function"
+                       : sys->tol.criterion == SG_TOLC_RMS_WAVEFRONT ? "RMS wavefront (waves)"
+                                                                      : "RMS spot radius";
+    char place[64];
+    int k, j;
+    fprintf(f, "Criterion: %s; nominal %.10g\n", crit, r->nominal.criterion);
+    for (j = 0; j < r->nominal.nfield; j++)
+        fprintf(f, "  field %d: %.10g\n", j + 1, r->nominal.field[j]);
+    if (sens) {
+        int *ord = malloc((size_t)(r->nsens > 0 ? r->nsens : 1) * sizeof *ord);
+        fprintf(f, "\nSensitivity (each operand at its min and max%s):\n",
+                sys->tol.ncomp ? ", compensated" : "");
+        fprintf(f, "%4s %-5s %-14s %12s %12s %16s %16s %14s %14s\n", "Row", "Type", "Surface",
+                "Min", "Max", "Criterion(min)", "Criterion(max)", "Change(min)",
+                "Change(max)");
+        for (k = 0; k < r->nsens; k++) {
+            const sg_tol_operand *op = &sys->tol.op[k];
+            const sg_tol_sens *s = &r->sens[k];
+            op_place(op, place, sizeof place);
+            fprintf(f, "%4d %-5s %-14s %12.6g %12.6g ", k + 1, sg_tol_name(op->type), place,
+                    op->min, op->max);
+            if (s->at_min.status == SG_OK)
+                fprintf(f, "%16.10g ", s->at_min.criterion);
+            else
+                fprintf(f, "%16s ", sg_err_name(s->at_min.status));
+            if (s->at_max.status == SG_OK)
+                fprintf(f, "%16.10g ", s->at_max.criterion);
+            else
+                fprintf(f, "%16s ", sg_err_name(s->at_max.status));
+            fprintf(f, "%14.6g %14.6g\n", change(&s->at_min, r->nominal.criterion),
+                    change(&s->at_max, r->nominal.criterion));
+        }
+        if (ord) {
+            for (k = 0; k < r->nsens; k++)
+                ord[k] = k;
+            sort_r = r;
+            sort_sys = sys;
+            qsort(ord, (size_t)r->nsens, sizeof *ord, cmp_worst);
+            fprintf(f, "\nWorst offenders:\n");
+            for (k = 0; k < r->nsens && k < 10; k++) {
+                const sg_tol_operand *op = &sys->tol.op[ord[k]];
+                op_place(op, place, sizeof place);
+                fprintf(f, "%4d %-5s %-14s change %.6g\n", ord[k] + 1, sg_tol_name(op->type),
+                        place, worst_change(&r->sens[ord[k]], r->nominal.criterion));
+            }
+            free(ord);
+        }
+        fprintf(f, "\nEstimated change (RSS): %.6g; estimated criterion %.10g\n", r->rss,
+                r->nominal.criterion + r->rss);
+    }
+    if (mc) {
+        fprintf(f, "\nMonte Carlo: %d of %d trials, seed %llu, %s distribution\n", r->done,
+                r->trials, (unsigned long long)r->seed,
+                sys->tol.distribution == SG_TOLD_UNIFORM ? "uniform"
+                : sys->tol.distribution == SG_TOLD_PARABOLIC ? "parabolic" : "normal");
+        if (r->done > r->stats.n)
+            fprintf(f, "  failed:  %d (left out)\n", r->done - r->stats.n);
+        fprintf(f, "  nominal: %.10g\n  best:    %.10g\n  worst:   %.10g\n  mean:    %.10g\n"
+                "  std:     %.10g\n", r->nominal.criterion, r->stats.best, r->stats.worst,
+                r->stats.mean, r->stats.std);
+        for (j = 0; j < 5; j++)
+            fprintf(f, "  %s%% <= %.10g\n", pk[j], r->stats.pct[j]);
+    }
+    if (r->stopped)
+        fprintf(f, "\nStopped: the report holds what was done.\n");
+}
+
+int cmd_tolerance(int argc, char **argv)
+{
+    cli_iter it;
+    const char *val, *design = NULL, *output = NULL;
+    int id, rc, force = 0, sens = 0, mc = -1, fmt = REPORT_TEXT, seed_given = 0, m;
+    long long seed = 1;
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    sg_tol_opts o;
+    sg_tol_result r;
+    struct sigaction sa, old;
+    struct stat st;
+    sg_diag d;
+    prog p;
+    outfile of;
+    sg_tol_opts_init(&o);
+    cli_iter_init(&it, "tolerance", argc, argv);
+    while ((id = cli_next_opt(&it, tolerance_opts, &val)) != -1) {
+        switch (id) {
+        case 0:
+            if (design)
+                return cli_usage_error("tolerance", "unexpected argument \"%s\"", val);
+            design = val;
+            break;
+        case TO_HELP:
+            tolerance_help(stdout);
+            return CLI_EXIT_OK;
+        case TO_SENS:
+            sens = 1;
+            break;
+        case TO_MC:
+            if (cli_int_value("--monte-carlo", val, 0, 100000000, &mc))
+                return CLI_EXIT_USAGE;
+            break;
+        case TO_SEED: {
+            char *end;
+            errno = 0;
+            seed = strtoll(val, &end, 10);
+            if (errno || end == val || *end || seed < 0 || seed > (1LL << 53))
+                return cli_usage_error("tolerance", "--seed: \"%s\" is not an integer from 0 "
+                                       "to 2^53", val);
+            seed_given = 1;
+            break;
+        }
+        case TO_THREADS:
+            if (cli_int_value("--threads", val, 1, 256, &o.nthreads))
+                return CLI_EXIT_USAGE;
+            break;
+        case TO_METHOD:
+            m = sg_method_parse(val);
+            if (m < 0)
+                return cli_usage_error("tolerance", "--method: \"%s\" is not precise, classic "
+                                       "or mpfr", val);
+            o.method = m;
+            break;
+        case TO_NOCOMP:
+            o.compensate = 0;
+            break;
+        case TO_FORMAT:
+            if (cli_format_value(val, 1, &fmt))
+                return CLI_EXIT_USAGE;
+            break;
+        case TO_OUTPUT:
+            output = val;
+            break;
+        case TO_FORCE:
+            force = 1;
+            break;
+        default:
+            return -id;
+        }
+    }
+    if (!design)
+        return cli_usage_error("tolerance", "missing DESIGN.json");
+    if (output && strcmp(output, "-") != 0 && !force && stat(output, &st) == 0)
+        return cli_usage_error("tolerance", "%s exists; use --force to overwrite it", output);
+    rc = cli_load_design(design, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    if (!sys->tol.present || sys->tol.nop == 0) {
+        cli_error("%s: the design has no tolerance operands (a \"tolerances\" object; "
+                  "sagitta-design(5), TOLERANCES)", design);
+        rc = CLI_EXIT_DESIGN;
+        goto done;
+    }
+    if (mc < 0 && !sens) {
+        sens = 1;
+        mc = sys->tol.trials;
+    } else if (mc < 0) {
+        mc = 0;
+    }
+    if (!seed_given)
+        seed = (long long)sys->tol.seed;
+    memset(&p, 0, sizeof p);
+    {
+        const char *ci = getenv("CI");
+        p.on = isatty(STDERR_FILENO) && !(ci && ci[0]);
+    }
+    p.t0 = p.last = now_s();
+    o.progress = progress;
+    o.ctx = &p;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_sigint;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old);
+    stop_flag = 0;
+    stop_int = 0;
+    o.stop = &stop_int;
+    sg_diag_clear(&d);
+    rc = sg_tolerance_run(sys, cat, &o, sens, mc, (uint64_t)seed, &r, &d);
+    sigaction(SIGINT, &old, NULL);
+    if (p.shown)
+        fputs("\r\033[K", stderr);
+    if (rc != SG_OK) {
+        cli_print_diag(design, &d, rc);
+        rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
+        goto done;
+    }
+    if ((rc = outfile_open(&of, output && strcmp(output, "-") != 0 ? output : NULL, stdout))) {
+        cli_error("%s: %s", output, strerror(rc));
+        sg_tol_result_free(&r);
+        rc = CLI_EXIT_FILE;
+        goto done;
+    }
+    if (fmt == REPORT_JSON)
+        write_json(of.f, sys, &r, sens, mc > 0);
+    else if (fmt == REPORT_CSV)
+        write_csv(of.f, sys, &r, sens, mc > 0);
+    else
+        write_text(of.f, sys, &r, sens, mc > 0);
+    sg_tol_result_free(&r);
+    if ((rc = outfile_commit(&of))) {
+        cli_error("%s: %s", output ? output : "standard output", strerror(rc));
+        rc = CLI_EXIT_FILE;
+        goto done;
+    }
+    rc = CLI_EXIT_OK;
+done:
+    cli_design_free(cat, sys);
+    return rc;
+}
