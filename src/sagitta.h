@@ -1727,6 +1727,46 @@ SG_API int sg_mtf_compute(const sg_system *sys, const sg_catalog *cat, const sg_
                           sg_mtf *out, sg_diag *d);
 SG_API void sg_mtf_free(sg_mtf *m);
 
+/* Encircled and ensquared energy (sagitta(1), encircled). */
+typedef enum sg_ee_kind {
+    SG_EE_ENCIRCLED = 0, /* within a circle of radius r about the chief ray */
+    SG_EE_ENSQUARED = 1  /* within a square of half-width r */
+} sg_ee_kind;
+
+#define SG_EE_MAX_NPTS 10000
+
+typedef struct sg_ee_opts {
+    sg_trace_opts trace;  /* trace.wave is ignored: see wave */
+    int field;            /* 0-based design field, or -1: every one */
+    int wave;             /* 0-based wavelength, or -1: every one, by weight */
+    int sampling;         /* N, the FFT PSF's pupil grid, 32 to 2048 */
+    int rays;             /* geometric: a square grid of rays across; 0: 2N */
+    int kind;             /* sg_ee_kind */
+    double max_radius_um; /* 0: the farthest ray or 5 lambda F#, whichever is wider */
+    int npts;             /* radii from 0 to the maximum; 0: 101 */
+    int nthreads;
+} sg_ee_opts;
+
+typedef struct sg_ee {
+    int nfield, npts, sampling, rays, kind;
+    int *field;           /* nfield 0-based design fields */
+    double fnum;          /* the working F/# */
+    double wave_um;       /* the shortest wavelength summed */
+    double *radius_um;    /* npts: radius or half-width, from 0 */
+    double *diffraction;  /* nfield * npts: the FFT PSF's fraction */
+    double *geometric;    /* nfield * npts: the rays' fraction */
+    double *limit;        /* nfield * npts: each field's pupil, unaberrated */
+} sg_ee;
+
+SG_API void sg_ee_opts_init(sg_ee_opts *o);
+/* Energy within r of each field's chief ray point: the FFT PSF (psf.c)
+ * integrated exactly over the circle or square through its OTF, the same
+ * for the pupil unaberrated, and the fraction of a square grid of rays
+ * (each wavelength's rays that reach the image sharing its weight). */
+SG_API int sg_ee_compute(const sg_system *sys, const sg_catalog *cat, const sg_ee_opts *o,
+                         sg_ee *out, sg_diag *d);
+SG_API void sg_ee_free(sg_ee *e);
+
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */
 SG_API double sg_digits(double a, double b);

@@ -377,6 +377,238 @@ static void defocus_strehl(void **state)
     sg_catalog_free(cat);
 }
 
+/* 20-point Gauss-Legendre on [-1, 1]: the positive nodes and weights. */
+static const double GX[10] = { 0.0765265211334973, 0.2277858511416451, 0.3737060887154195,
+                               0.5108670019508271, 0.6360536807265150, 0.7463319064601508,
+                               0.8391169718222188, 0.9122344282513259, 0.9639719272779138,
+                               0.9931285991850949 };
+static const double GW[10] = { 0.1527533871307258, 0.1491729864726037, 0.1420961093183820,
+                               0.1316886384491766, 0.1181945319615184, 0.1019301198172404,
+                               0.0832767415767048, 0.0626720483341091, 0.0406014298003869,
+                               0.0176140071391521 };
+
+/* int_a^b g by 20-point Gauss-Legendre over np panels. */
+static double gl_int(double (*g)(double, const double *), const double *par, double a,
+                     double b, int np)
+{
+    double s = 0.0, h = (b - a) / np;
+    int k, q;
+    for (k = 0; k < np; k++)
+        for (q = 0; q < 20; q++) {
+            double x = q < 10 ? -GX[q] : GX[q - 10], w = GW[q < 10 ? q : q - 10];
+            s += w * 0.5 * h * g(a + h * (k + 0.5 + 0.5 * x), par);
+        }
+    return s;
+}
+
+static double j1j1_over_t(double t, const double *eps)
+{
+    return t == 0.0 ? 0.0 : j1(t) * j1(*eps * t) / t;
+}
+
+/* The encircled energy of an annular pupil, outer radius 1 and inner eps,
+ * within v = pi r / (lambda F#) (Mahajan, JOSA 1986, 3, 470, eq. 16):
+ *   [1 - J0^2(v) - J1^2(v) + eps^2 (1 - J0^2(eps v) - J1^2(eps v))
+ *    - 4 eps int_0^v J1(t) J1(eps t) / t dt] / (1 - eps^2);
+ * eps 0 is Rayleigh's 1 - J0^2 - J1^2. */
+static double ee_annulus(double v, double eps)
+{
+    double e = 1.0 - j0(v) * j0(v) - j1(v) * j1(v);
+    if (eps == 0.0)
+        return e;
+    e += eps * eps * (1.0 - j0(eps * v) * j0(eps * v) - j1(eps * v) * j1(eps * v));
+    e -= 4.0 * eps * gl_int(j1j1_over_t, &eps, 0.0, v, 40);
+    return e / (1.0 - eps * eps);
+}
+
+/* The perfect paraboloid and the same with a central obscuration of eps
+ * (an annular stop): the diffraction and limit curves against Mahajan's
+ * closed form; the circle's at its first two dark rings, 0.838 and 0.910. */
+static void encircled_airy(void **state)
+{
+    const double f = 200.0, epd = 20.0, epss[2] = { 0.0, 0.4 };
+    sg_catalog *cat = tu_catalog();
+    int t, j;
+    (void)state;
+    for (t = 0; t < 2; t++) {
+        sg_system *sys = paraboloid(f, epd, 0.0);
+        double lf = sys->wave[0].um * f / epd, worst = 0.0, v;
+        sg_ee_opts o;
+        sg_ee e;
+        sg_diag d;
+        if (epss[t] > 0.0) {
+            sys->surf[1].aperture = SG_APERTURE_CIRCULAR;
+            sys->surf[1].ap_rmin = epss[t] * epd / 2;
+            sys->surf[1].ap_rmax = epd;
+        }
+        sg_ee_opts_init(&o);
+        o.sampling = 128;
+        o.max_radius_um = 8.0 * lf;
+        o.npts = 81;
+        sg_diag_clear(&d);
+        assert_int_equal(sg_ee_compute(sys, cat, &o, &e, &d), SG_OK);
+        assert_int_equal(e.nfield, 1);
+        assert_int_equal(e.npts, 81);
+        assert_true(fabs(e.radius_um[80] - 8.0 * lf) < 1e-9 * lf);
+        for (j = 0; j < e.npts; j++) {
+            double want = ee_annulus(PI * e.radius_um[j] / lf, epss[t]);
+            worst = fmax(worst, fabs(e.diffraction[j] - want));
+            worst = fmax(worst, fabs(e.limit[j] - want));
+        }
+        print_message("# encircled energy, obscuration %g, sampling 128: largest difference "
+                      "from Mahajan's closed form %.3g\n", epss[t], worst);
+        assert_true(worst < 0.003);
+        sg_ee_free(&e);
+        if (t == 0) {
+            /* The first and second dark rings exactly: 0.838 and 0.910. */
+            const double vz[2] = { 3.8317059702075123, 7.0155866698156188 };
+            const double ez[2] = { 0.838, 0.910 };
+            for (j = 0; j < 2; j++) {
+                v = vz[j];
+                o.max_radius_um = v * lf / PI;
+                o.npts = 2;
+                assert_int_equal(sg_ee_compute(sys, cat, &o, &e, &d), SG_OK);
+                print_message("# ring %d: %.5f\n", j + 1, e.diffraction[1]);
+                assert_true(fabs(e.diffraction[1] - ez[j]) < 0.002);
+                assert_true(fabs(e.diffraction[0]) < 1e-12);
+                sg_ee_free(&e);
+            }
+        }
+        sg_system_free(sys);
+    }
+    sg_catalog_free(cat);
+}
+
+/* The Airy pattern's energy in a square of half-width a, by quadrature of
+ * (2 J1(v) / v)^2 over [0, a]^2 (four quadrants), over its total
+ * 4 (lambda F#)^2 / pi. */
+static double airy_sq_row(double x, const double *par)
+{
+    double y = par[1], v = PI * hypot(x, y) / par[0];
+    return v == 0.0 ? 1.0 : pow(2.0 * j1(v) / v, 2);
+}
+
+static double airy_sq_col(double y, const double *par)
+{
+    double p2[2] = { par[0], y };
+    return gl_int(airy_sq_row, p2, 0.0, par[1], 12);
+}
+
+static void ensquared_airy(void **state)
+{
+    const double f = 200.0, epd = 20.0;
+    sg_system *sys = paraboloid(f, epd, 0.0);
+    sg_catalog *cat = tu_catalog();
+    double lf = sys->wave[0].um * f / epd, worst = 0.0;
+    sg_ee_opts o;
+    sg_ee e;
+    sg_diag d;
+    int j;
+    (void)state;
+    sg_ee_opts_init(&o);
+    o.sampling = 128;
+    o.kind = SG_EE_ENSQUARED;
+    o.max_radius_um = 4.0 * lf;
+    o.npts = 9;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_ee_compute(sys, cat, &o, &e, &d), SG_OK);
+    for (j = 0; j < e.npts; j++) {
+        double par[2] = { lf, e.radius_um[j] };
+        double want = 4.0 * gl_int(airy_sq_col, par, 0.0, e.radius_um[j], 12) /
+                      (4.0 * lf * lf / PI);
+        worst = fmax(worst, fabs(e.diffraction[j] - want));
+    }
+    print_message("# ensquared energy against the Airy pattern's quadrature: largest "
+                  "difference %.3g\n", worst);
+    assert_true(worst < 0.003);
+    sg_ee_free(&e);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
+/* Three wavelengths: the perfect system's curve is the weighted sum of
+ * each wavelength's Airy energy. */
+static void encircled_polychromatic(void **state)
+{
+    const double f = 200.0, epd = 20.0;
+    const double um[3] = { 0.4861327, 0.5875618, 0.6562725 }, wt[3] = { 1.0, 2.0, 0.5 };
+    sg_system *sys = paraboloid(f, epd, 0.0);
+    sg_catalog *cat = tu_catalog();
+    double worst = 0.0;
+    sg_ee_opts o;
+    sg_ee e;
+    sg_diag d;
+    int j, w;
+    (void)state;
+    sys->nwave = 3;
+    for (w = 0; w < 3; w++) {
+        sys->wave[w].um = um[w];
+        sys->wave[w].weight = wt[w];
+    }
+    sys->primary_wave = 1;
+    sg_ee_opts_init(&o);
+    o.sampling = 128;
+    o.npts = 41;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_ee_compute(sys, cat, &o, &e, &d), SG_OK);
+    /* Automatic: five rings of the longest wavelength (the rays meet at a point). */
+    assert_true(fabs(e.radius_um[40] - 5.0 * um[2] * f / epd) < 1e-9);
+    for (j = 0; j < e.npts; j++) {
+        double want = 0.0;
+        for (w = 0; w < 3; w++)
+            want += wt[w] * ee_annulus(PI * e.radius_um[j] / (um[w] * f / epd), 0.0);
+        want /= wt[0] + wt[1] + wt[2];
+        worst = fmax(worst, fabs(e.diffraction[j] - want));
+    }
+    print_message("# three wavelengths: encircled energy against the weighted Airy sum: "
+                  "largest difference %.3g\n", worst);
+    assert_true(worst < 0.003);
+    sg_ee_free(&e);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
+/* The paraboloid's image dz beyond its focus: the ray at pupil height h
+ * crosses it at r = h dz / (f - h^2 / 4f) (the mirror's point lies
+ * h^2 / 4f nearer the focus), so the rays within r are those within
+ *   h(r) = 2 f (sqrt(dz^2 + r^2) - dz) / r
+ * and a uniform grid of rays puts (h(r) / H)^2 of them there. */
+static void encircled_geometric_disc(void **state)
+{
+    const double f = 200.0, epd = 20.0, dz = 2.0;
+    sg_system *sys = paraboloid(f, epd, dz);
+    sg_catalog *cat = tu_catalog();
+    double worst = 0.0, rdisc = (epd / 2) * dz / (f - (epd / 2) * (epd / 2) / (4.0 * f)) * 1e3;
+    sg_ee_opts o;
+    sg_ee e;
+    sg_diag d;
+    int j;
+    (void)state;
+    sg_ee_opts_init(&o);
+    o.sampling = 64;
+    o.rays = 400;
+    o.max_radius_um = 1.2 * rdisc;
+    o.npts = 61;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_ee_compute(sys, cat, &o, &e, &d), SG_OK);
+    for (j = 1; j < e.npts; j++) {
+        double r = e.radius_um[j] * 1e-3, h = 2.0 * f * (sqrt(dz * dz + r * r) - dz) / r;
+        double want = fmin(1.0, pow(h / (epd / 2), 2));
+        worst = fmax(worst, fabs(e.geometric[j] - want));
+    }
+    print_message("# defocused paraboloid, %d x %d rays: geometric encircled energy against "
+                  "the disc's: largest difference %.3g\n", o.rays, o.rays, worst);
+    assert_true(worst < 0.002);
+    assert_true(e.geometric[0] < 1e-3);
+    assert_true(fabs(e.geometric[e.npts - 1] - 1.0) < 1e-12);
+    /* About 8.5 waves of defocus: diffraction's curve is near the rays'. */
+    for (j = 0; j < e.npts; j++)
+        assert_true(fabs(e.diffraction[j] - e.geometric[j]) < 0.1);
+    sg_ee_free(&e);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
 static void bad_input(void **state)
 {
     sg_system *sys = paraboloid(200.0, 20.0, 0.0);
@@ -422,6 +654,10 @@ int main(void)
         cmocka_unit_test(polychromatic_mtf),
         cmocka_unit_test(polychromatic_psf),
         cmocka_unit_test(defocus_strehl),
+        cmocka_unit_test(encircled_airy),
+        cmocka_unit_test(ensquared_airy),
+        cmocka_unit_test(encircled_polychromatic),
+        cmocka_unit_test(encircled_geometric_disc),
         cmocka_unit_test(bad_input),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
