@@ -309,10 +309,18 @@ int sg_ee_compute(const sg_system *sys, const sg_catalog *cat, const sg_ee_opts 
     }
     if (o->max_radius_um > 0.0) {
         if (o->max_radius_um > rlim) {
-            rc = sg_diag_set(d, SG_ERANGE, "encircled: maximum radius %g um is beyond half the "
-                                           "PSF grid, %.6g um at sampling %d: a sampling of "
-                                           "%.0f or more reaches it", o->max_radius_um, rlim, n,
-                             ceil(2.0 * o->max_radius_um / (lmin * fnum)) + 1.0);
+            double need = ceil(2.0 * o->max_radius_um / (lmin * fnum)) + 1.0;
+            if (need <= SG_PSF_SAMPLING_MAX)
+                rc = sg_diag_set(d, SG_ERANGE, "encircled: maximum radius %g um is beyond half "
+                                               "the PSF grid, %.6g um at sampling %d: a "
+                                               "sampling of %.0f or more reaches it",
+                                 o->max_radius_um, rlim, n, need);
+            else
+                rc = sg_diag_set(d, SG_ERANGE, "encircled: maximum radius %g um is beyond half "
+                                               "the PSF grid, %.6g um at sampling %d, and %.6g "
+                                               "um at the largest, %d", o->max_radius_um, rlim,
+                                 n, 0.5 * lmin * fnum * (SG_PSF_SAMPLING_MAX - 1),
+                                 SG_PSF_SAMPLING_MAX);
             goto fail;
         }
         rmax = o->max_radius_um;

@@ -1,6 +1,7 @@
 /*
- * diffraction.c - the "psf" and "mtf" subcommands: the engine's FFT PSF
- * with its Strehl ratio (sg_psf_compute) and FFT MTF (sg_mtf_compute)
+ * diffraction.c - the "psf", "mtf" and "encircled" subcommands: the
+ * engine's FFT PSF with its Strehl ratio (sg_psf_compute), FFT MTF
+ * (sg_mtf_compute) and encircled energy (sg_ee_compute)
  * as text, CSV, JSON or a picture (views.c), with the options and output
  * every analysis command shares (ancmd.c).
  */
@@ -13,8 +14,8 @@
 #include "safetext.h"
 #include "views.h"
 
-enum { D_FIELD = 1, D_WAVE, D_SAMPLING, D_MAXFREQ, D_METHOD };
-enum { K_PSF, K_MTF };
+enum { D_FIELD = 1, D_WAVE, D_SAMPLING, D_MAXFREQ, D_METHOD, D_TYPE, D_RAYS, D_MAXRAD };
+enum { K_PSF, K_MTF, K_EE };
 
 /* Cross-sections reach 16 lambda F# either side (8 dark rings), or the
  * grid's edge. */
@@ -27,12 +28,37 @@ static const cli_opt diff_opts[] = {
     { "--sampling", 0, 1, D_SAMPLING },
     { "--max-frequency", 0, 1, D_MAXFREQ },
     { "--method", 0, 1, D_METHOD },
+    { "--type", 0, 1, D_TYPE },
+    { "--rays", 0, 1, D_RAYS },
+    { "--max-radius", 0, 1, D_MAXRAD },
     { NULL, 0, 0, 0 }
 };
 
 static void diff_help(int kind, FILE *f)
 {
-    if (kind == K_MTF)
+    if (kind == K_EE)
+        fputs(
+"Usage: sagitta encircled DESIGN.json [OPTIONS]\n"
+"Print the fraction of each field's energy within a radius of the chief\n"
+"ray's point (or, with --type ensquared, within a square of that\n"
+"half-width): diffraction (the FFT PSF, see sagitta psf, integrated over\n"
+"the circle or square), geometric (a square grid of rays) and the\n"
+"diffraction limit (the same pupil unaberrated), radii in micrometres.\n"
+"Every wavelength by its weight unless --wave is given.  See sagitta(1),\n"
+"MTF AND PSF.\n"
+"\n"
+"Options:\n"
+"  --field N          one field (default: every field)\n"
+"  --wave N           one wavelength (default: every one, by weight)\n"
+"  --type T           encircled (default) or ensquared\n"
+"  --sampling N       pupil grid points across, 32 to 2048 (default 64)\n"
+"  --rays N           geometric: rays across a square pupil grid (default 2N)\n"
+"  --max-radius R     micrometres (default: the farthest ray or 5 lambda F#,\n"
+"                     whichever is wider, within half the PSF grid)\n"
+"  --method M         precise (default), classic or mpfr\n"
+AN_COMMON_HELP
+"  -h, --help         show this help\n", f);
+    else if (kind == K_MTF)
         fputs(
 "Usage: sagitta mtf DESIGN.json [OPTIONS]\n"
 "Print the FFT MTF of each field, tangential (along y) and sagittal (along\n"
@@ -86,6 +112,7 @@ typedef struct diff_ctx {
     const sg_mtf *m;
     const sg_psf *p;   /* one per field */
     int np;
+    const sg_ee *e;
 } diff_ctx;
 
 /* The half-width of the cross-sections, in grid points. */
@@ -276,10 +303,93 @@ static void psf_write(FILE *f, int fmt, const diff_ctx *c)
     }
 }
 
+static void ee_series(FILE *f, const char *key, const double *v, int n)
+{
+    int j;
+    fprintf(f, "\"%s\": [", key);
+    for (j = 0; j < n; j++) {
+        fputs(j ? ", " : "", f);
+        num(f, v[j], 1);
+    }
+    fputc(']', f);
+}
+
+static void ee_write(FILE *f, int fmt, const diff_ctx *c)
+{
+    const sg_ee *e = c->e;
+    const sg_system *sys = c->a->sys;
+    const char *kind = e->kind == SG_EE_ENSQUARED ? "ensquared" : "encircled";
+    int j, k;
+    if (fmt == AN_FMT_JSON) {
+        fprintf(f, "{\n  \"type\": \"%s\",\n  \"sampling\": %d,\n  \"rays\": %d,\n"
+                   "  \"working_fnum\": ", kind, e->sampling, e->rays);
+        num(f, e->fnum, 1);
+        fputs(",\n  \"fields\": [", f);
+        for (k = 0; k < e->nfield; k++) {
+            size_t o = (size_t)k * e->npts;
+            fprintf(f, "%s\n    {\"field\": %d, ", k ? "," : "", e->field[k] + 1);
+            ee_series(f, "radius_um", e->radius_um, e->npts);
+            fputs(",\n     ", f);
+            ee_series(f, "fraction", e->diffraction + o, e->npts);
+            fputs(",\n     ", f);
+            ee_series(f, "geometric", e->geometric + o, e->npts);
+            fputs(",\n     ", f);
+            ee_series(f, "diffraction_limit", e->limit + o, e->npts);
+            fputc('}', f);
+        }
+        fputs("\n  ]\n}\n", f);
+        return;
+    }
+    if (fmt == AN_FMT_TEXT) {
+        char t[160];
+        fprintf(f, "%s energy: %s\n  ", e->kind == SG_EE_ENSQUARED ? "Ensquared" : "Encircled",
+                safe_text(sys->title, t, sizeof t));
+        wave_text(f, sys, c->wave0);
+        fprintf(f, "; FFT PSF from a %d x %d pupil; %d x %d rays; working F/# %.6g\n"
+                   "  D: diffraction, G: geometric, L: diffraction limit\n\n", e->sampling,
+                e->sampling, e->rays, e->rays, e->fnum);
+        fprintf(f, "%15s", e->kind == SG_EE_ENSQUARED ? "half-width (um)" : "radius (um)");
+        for (k = 0; k < e->nfield; k++)
+            fprintf(f, "  field %-3d D  field %-3d G  field %-3d L", e->field[k] + 1,
+                    e->field[k] + 1, e->field[k] + 1);
+        fputc('\n', f);
+        for (j = 0; j < e->npts; j++) {
+            fprintf(f, "%15.6g", e->radius_um[j]);
+            for (k = 0; k < e->nfield; k++) {
+                size_t o = (size_t)k * e->npts + j;
+                fprintf(f, "  %11.6f  %11.6f  %11.6f", e->diffraction[o], e->geometric[o],
+                        e->limit[o]);
+            }
+            fputc('\n', f);
+        }
+        return;
+    }
+    fputs(e->kind == SG_EE_ENSQUARED ? "half_width_um" : "radius_um", f);
+    for (k = 0; k < e->nfield; k++)
+        fprintf(f, ",field%d_diffraction,field%d_geometric,field%d_limit", e->field[k] + 1,
+                e->field[k] + 1, e->field[k] + 1);
+    fputc('\n', f);
+    for (j = 0; j < e->npts; j++) {
+        num(f, e->radius_um[j], 0);
+        for (k = 0; k < e->nfield; k++) {
+            size_t o = (size_t)k * e->npts + j;
+            fputc(',', f);
+            num(f, e->diffraction[o], 0);
+            fputc(',', f);
+            num(f, e->geometric[o], 0);
+            fputc(',', f);
+            num(f, e->limit[o], 0);
+        }
+        fputc('\n', f);
+    }
+}
+
 static int diff_text(void *ctx, FILE *f, int fmt)
 {
     const diff_ctx *c = ctx;
-    if (c->kind == K_MTF)
+    if (c->kind == K_EE)
+        ee_write(f, fmt, c);
+    else if (c->kind == K_MTF)
         mtf_write(f, fmt, c);
     else
         psf_write(f, fmt, c);
@@ -289,6 +399,8 @@ static int diff_text(void *ctx, FILE *f, int fmt)
 static int diff_fig(void *ctx, plot_figure *f)
 {
     const diff_ctx *c = ctx;
+    if (c->kind == K_EE)
+        return view_ee_figure(c->a->sys, c->e, f);
     if (c->kind == K_MTF)
         return view_mtf_figure(c->a->sys, c->m, f);
     return view_psf_figure(c->a->sys, c->p, c->np, f);
@@ -296,19 +408,22 @@ static int diff_fig(void *ctx, plot_figure *f)
 
 static int run(int kind, int argc, char **argv)
 {
-    const char *cmd = kind == K_MTF ? "mtf" : "psf", *val;
+    const char *cmd = kind == K_EE ? "encircled" : kind == K_MTF ? "mtf" : "psf", *val;
     int id, rc, field1 = 0, wave1 = 0, sampling = 64, method = SG_METHOD_PRECISE, k, nf;
-    double maxf = 0.0;
+    int eekind = SG_EE_ENCIRCLED, rays = 0;
+    double maxf = 0.0, maxr = 0.0;
     cli_iter it;
     an_cmd a;
     sg_diag d;
     sg_trace_opts to;
     sg_mtf m;
+    sg_ee ee;
     sg_psf *psf = NULL;
     diff_ctx c;
     an_writer w = {diff_fig, diff_text, &c};
 
     memset(&m, 0, sizeof m);
+    memset(&ee, 0, sizeof ee);
     memset(&c, 0, sizeof c);
     an_cmd_init(&a, cmd);
     cli_iter_init(&it, cmd, argc, argv);
@@ -339,6 +454,32 @@ static int run(int kind, int argc, char **argv)
                 return cli_usage_error(cmd, "--max-frequency: %g is not a positive number "
                                             "of cycles/mm", maxf);
             break;
+        case D_TYPE:
+            if (kind != K_EE)
+                return cli_usage_error(cmd, "--type is an option of encircled only");
+            if (strcmp(val, "encircled") == 0)
+                eekind = SG_EE_ENCIRCLED;
+            else if (strcmp(val, "ensquared") == 0)
+                eekind = SG_EE_ENSQUARED;
+            else
+                return cli_usage_error(cmd, "--type: \"%s\" is not encircled or ensquared",
+                                       val);
+            break;
+        case D_RAYS:
+            if (kind != K_EE)
+                return cli_usage_error(cmd, "--rays is an option of encircled only");
+            if (cli_int_value("--rays", val, 1, 20000, &rays))
+                return CLI_EXIT_USAGE;
+            break;
+        case D_MAXRAD:
+            if (kind != K_EE)
+                return cli_usage_error(cmd, "--max-radius is an option of encircled only");
+            if (cli_doubles_value("--max-radius", val, 1, "radius", &maxr))
+                return CLI_EXIT_USAGE;
+            if (!(maxr > 0.0) || !isfinite(maxr))
+                return cli_usage_error(cmd, "--max-radius: %g is not a positive number of "
+                                            "micrometres", maxr);
+            break;
         case D_METHOD:
             if ((method = sg_method_parse(val)) < 0)
                 return cli_usage_error(cmd, "--method: \"%s\" is not precise, classic or mpfr",
@@ -366,7 +507,19 @@ static int run(int kind, int argc, char **argv)
     c.kind = kind;
     c.wave0 = wave1 - 1;
     sg_diag_clear(&d);
-    if (kind == K_MTF) {
+    if (kind == K_EE) {
+        sg_ee_opts o;
+        sg_ee_opts_init(&o);
+        o.trace = to;
+        o.field = field1 - 1;
+        o.wave = wave1 - 1;
+        o.sampling = sampling;
+        o.rays = rays;
+        o.kind = eekind;
+        o.max_radius_um = maxr;
+        rc = sg_ee_compute(a.sys, a.cat, &o, &ee, &d);
+        c.e = &ee;
+    } else if (kind == K_MTF) {
         sg_mtf_opts o;
         sg_mtf_opts_init(&o);
         o.trace = to;
@@ -410,6 +563,7 @@ done:
             sg_psf_free(&psf[k]);
     free(psf);
     sg_mtf_free(&m);
+    sg_ee_free(&ee);
     an_cmd_free(&a);
     return rc;
 }
@@ -422,4 +576,9 @@ int cmd_mtf(int argc, char **argv)
 int cmd_psf(int argc, char **argv)
 {
     return run(K_PSF, argc, argv);
+}
+
+int cmd_encircled(int argc, char **argv)
+{
+    return run(K_EE, argc, argv);
 }

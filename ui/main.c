@@ -42,6 +42,7 @@ static const cli_command commands[] = {
     { "optimize", cmd_optimize, "damped least squares on the design's variables" },
     { "psf", cmd_psf, "FFT point spread function and Strehl ratio" },
     { "mtf", cmd_mtf, "FFT MTF, tangential and sagittal, with the diffraction limit" },
+    { "encircled", cmd_encircled, "encircled and ensquared energy: diffraction and geometric" },
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])
 

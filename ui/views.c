@@ -540,3 +540,30 @@ int view_psf_figure(const sg_system *sys, const sg_psf *ps, int n, plot_figure *
     plot_add_legend(f, 1, "along y");
     return 0;
 }
+
+int view_ee_figure(const sg_system *sys, const sg_ee *e, plot_figure *f)
+{
+    char title[200], lab[64], pt[32];
+    int k, sq = e->kind == SG_EE_ENSQUARED;
+    snprintf(title, sizeof title, "%s energy: %s", sq ? "Ensquared" : "Encircled",
+             safe_text(sys->title, lab, sizeof lab));
+    plot_figure_init(f, title);
+    for (k = 0; k < e->nfield; k++) {
+        size_t o = (size_t)k * e->npts;
+        plot_panel *p;
+        snprintf(pt, sizeof pt, "field %d", e->field[k] + 1);
+        p = plot_add_panel(f, pt, sq ? "half-width (um)" : "radius (um)", "fraction of energy");
+        if (!p ||
+            plot_add_series(p, PLOT_LINES, PLOT_FG, e->radius_um, e->limit + o,
+                            (size_t)e->npts) ||
+            plot_add_series(p, PLOT_LINES, 0, e->radius_um, e->diffraction + o,
+                            (size_t)e->npts) ||
+            plot_add_series(p, PLOT_LINES, 1, e->radius_um, e->geometric + o, (size_t)e->npts))
+            return -1;
+        plot_panel_limits(p, 0.0);
+    }
+    plot_add_legend(f, PLOT_FG, "diffraction limit");
+    plot_add_legend(f, 0, "diffraction");
+    plot_add_legend(f, 1, "geometric");
+    return 0;
+}
