@@ -145,8 +145,7 @@ static void compressed_pupil(void **state)
 
 /* A slit |x| <= half the pupil's radius on the stop: the sagittal MTF
  * (along x) ends at half the cutoff, the pupil's width there, while the
- * tangential one does not.  (A central obscuration's annulus is not
- * tested: its chief ray is stopped, which the reference sphere refuses.) */
+ * tangential one does not.  (A central obscuration: annular_pupil.) */
 static void slit_pupil(void **state)
 {
     const double f = 200.0, epd = 20.0;
@@ -615,6 +614,107 @@ static void encircled_geometric_disc(void **state)
     sg_system_free(sys);
 }
 
+/* The area common to two circles of radii a and b, centres s apart. */
+static double lens_area(double a, double b, double s)
+{
+    double ca, cb;
+    if (s >= a + b)
+        return 0.0;
+    if (s <= fabs(a - b))
+        return PI * fmin(a, b) * fmin(a, b);
+    ca = acos((s * s + a * a - b * b) / (2.0 * s * a));
+    cb = acos((s * s + b * b - a * a) / (2.0 * s * b));
+    return a * a * (ca - cos(ca) * sin(ca)) + b * b * (cb - cos(cb) * sin(cb));
+}
+
+/* The MTF of an annulus of radii eps and 1 at nu / nu_c = x: the area
+ * common to it and its copy shifted by 2x, over its area (the overlap of
+ * annuli from those of the circles: outer-outer, less twice outer-inner,
+ * plus inner-inner). */
+static double mtf_annulus(double x, double eps)
+{
+    double s = 2.0 * x;
+    return (lens_area(1.0, 1.0, s) - 2.0 * lens_area(1.0, eps, s) + lens_area(eps, eps, s)) /
+           (PI * (1.0 - eps * eps));
+}
+
+/* The paraboloid with a central obscuration of eps on its stop: the MTF,
+ * tangential, sagittal and the diffraction limit, is the annulus's; the
+ * PSF is the annular Airy pattern
+ *   ((2 J1(v) / v - eps^2 2 J1(eps v) / (eps v)) / (1 - eps^2))^2,
+ * peak and Strehl ratio 1; defocused by W020 waves (edge), the Strehl
+ * ratio is (sin(pi W020 (1 - eps^2)) / (pi W020 (1 - eps^2)))^2, the
+ * mean of exp(i 2 pi W020 u) over u = rho^2 from eps^2 to 1. */
+static void annular_pupil(void **state)
+{
+    const double f = 200.0, epd = 20.0, eps = 0.4;
+    sg_catalog *cat = tu_catalog();
+    sg_mtf_opts mo;
+    sg_mtf m;
+    sg_psf_opts po;
+    sg_psf p;
+    sg_diag d;
+    double nuc, lf, worst = 0.0;
+    int i, j, t, c;
+    (void)state;
+    for (t = 0; t < 2; t++) {
+        double lambda_mm = 0.5875618e-3, F = f / epd, w020 = 0.3;
+        double dz = t ? 8.0 * w020 * lambda_mm * F * F : 0.0;
+        sg_system *sys = paraboloid(f, epd, dz);
+        sys->surf[1].aperture = SG_APERTURE_CIRCULAR;
+        sys->surf[1].ap_rmin = eps * epd / 2;
+        sys->surf[1].ap_rmax = epd;
+        nuc = 1.0 / (lambda_mm * F);
+        lf = sys->wave[0].um * F;
+        sg_diag_clear(&d);
+        sg_psf_opts_init(&po);
+        po.sampling = 128;
+        assert_int_equal(sg_psf_compute(sys, cat, &po, &p, &d), SG_OK);
+        if (t == 0) {
+            sg_mtf_opts_init(&mo);
+            mo.sampling = 128;
+            assert_int_equal(sg_mtf_compute(sys, cat, &mo, &m, &d), SG_OK);
+            for (j = 0; j < m.npts; j++) {
+                double want = mtf_annulus(m.freq[j] / nuc, eps);
+                worst = fmax(worst, fabs(m.tan[j] - want));
+                worst = fmax(worst, fabs(m.sag[j] - want));
+                worst = fmax(worst, fabs(m.dl[j] - want));
+            }
+            print_message("# annulus eps %g: MTF against the overlap of annuli: largest "
+                          "difference %.3g\n", eps, worst);
+            assert_true(worst < 0.003);
+            /* Not the full circle's: the annulus lifts high frequencies. */
+            assert_true(m.tan[3 * m.npts / 4] > mtf_circle(0.75) + 0.02);
+            sg_mtf_free(&m);
+            assert_true(fabs(p.strehl - 1.0) < 1e-9 && fabs(p.peak - 1.0) < 1e-9);
+            worst = 0.0;
+            c = p.size / 2;
+            for (j = -12; j <= 12; j++)
+                for (i = -12; i <= 12; i++) {
+                    double r = hypot(i * p.spacing_x_um, j * p.spacing_y_um), v = PI * r / lf;
+                    double a = v == 0.0 ? 1.0 - eps * eps
+                                        : 2.0 * j1(v) / v - 2.0 * eps * j1(eps * v) / v;
+                    double want = pow(a / (1.0 - eps * eps), 2);
+                    worst = fmax(worst, fabs(p.psf[(size_t)(c + j) * p.size + c + i] - want));
+                }
+            print_message("# annulus eps %g: PSF against the annular Airy pattern: largest "
+                          "difference %.3g\n", eps, worst);
+            assert_true(worst < 0.003);
+        } else {
+            double w = fabs(defocus_w(f, epd, dz, lambda_mm, 1.0)) -
+                       fabs(defocus_w(f, epd, dz, lambda_mm, 0.0));
+            double x = PI * w * (1.0 - eps * eps), want = pow(sin(x) / x, 2);
+            print_message("# annulus eps %g, defocus %.4f waves: Strehl %.6f, closed form "
+                          "%.6f\n", eps, w, p.strehl, want);
+            assert_true(fabs(p.strehl - p.strehl_exact) < 1e-9);
+            assert_true(fabs(p.strehl - want) < 2e-3);
+        }
+        sg_psf_free(&p);
+        sg_system_free(sys);
+    }
+    sg_catalog_free(cat);
+}
+
 static void bad_input(void **state)
 {
     sg_system *sys = paraboloid(200.0, 20.0, 0.0);
@@ -660,6 +760,7 @@ int main(void)
         cmocka_unit_test(polychromatic_mtf),
         cmocka_unit_test(polychromatic_psf),
         cmocka_unit_test(defocus_strehl),
+        cmocka_unit_test(annular_pupil),
         cmocka_unit_test(encircled_airy),
         cmocka_unit_test(ensquared_airy),
         cmocka_unit_test(encircled_polychromatic),
