@@ -1665,12 +1665,23 @@ SG_API int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
 #define SG_PSF_SAMPLING_MIN 32
 #define SG_PSF_SAMPLING_MAX 2048
 
+typedef enum sg_psf_method {
+    SG_PSF_FFT = 0,     /* the pupil's Fourier transform */
+    SG_PSF_HUYGENS = 1  /* wavelets from the reference sphere, summed */
+} sg_psf_method;
+
+#define SG_PSF_IMAGE_MAX 1024
+
 typedef struct sg_psf_opts {
     sg_trace_opts trace; /* trace.wave is ignored: see wave */
     int field;           /* 0-based design field */
     int wave;            /* 0-based wavelength, or -1: every one, by weight */
     int sampling;        /* N, pupil grid points across, 32 to 2048 */
     int nthreads;        /* 0: every core */
+    int method;          /* sg_psf_method */
+    int image_size;      /* Huygens: image points across, 0: N; at most
+                          * SG_PSF_IMAGE_MAX */
+    double image_delta_um; /* Huygens: their spacing; 0: the FFT's */
 } sg_psf_opts;
 
 typedef struct sg_psf {
@@ -1695,7 +1706,9 @@ SG_API void sg_psf_opts_init(sg_psf_opts *o);
  * reaches the image, phase 2 pi OPD) on an N x N grid, zero-padded to
  * 2N x 2N.  Several wavelengths are summed, each with unit energy times
  * its weight, on the shortest one's grid: a longer one is padded to
- * 2N lambda / lambda_min points, rounded, and its centre taken. */
+ * 2N lambda / lambda_min points, rounded, and its centre taken.  With
+ * method SG_PSF_HUYGENS, the Huygens PSF of the same rays on an
+ * image_size square grid (huygens.c), normalized alike. */
 SG_API int sg_psf_compute(const sg_system *sys, const sg_catalog *cat, const sg_psf_opts *o,
                           sg_psf *out, sg_diag *d);
 SG_API void sg_psf_free(sg_psf *p);
