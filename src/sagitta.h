@@ -1713,18 +1713,26 @@ SG_API int sg_psf_compute(const sg_system *sys, const sg_catalog *cat, const sg_
                           sg_psf *out, sg_diag *d);
 SG_API void sg_psf_free(sg_psf *p);
 
+typedef enum sg_mtf_method {
+    SG_MTF_FFT = 0,      /* the FFT PSF's transform */
+    SG_MTF_GEOMETRIC = 1 /* the transform of the rays' line spread */
+} sg_mtf_method;
+
 typedef struct sg_mtf_opts {
     sg_trace_opts trace;  /* trace.wave is ignored: see wave */
     int field;            /* 0-based design field, or -1: every one */
     int wave;             /* 0-based wavelength, or -1: every one, by weight */
-    int sampling;         /* N, 32 to 2048 */
+    int sampling;         /* N, 32 to 2048: the pupil grid (geometric: N x N
+                           * rays, a square grid) */
     double max_frequency; /* cycles/mm; 0: the cutoff 1 / (lambda F#) */
     int nthreads;
+    int method;           /* sg_mtf_method */
 } sg_mtf_opts;
 
 typedef struct sg_mtf {
     int nfield, npts;
     int sampling;
+    int method;           /* sg_mtf_method */
     int *field;           /* nfield 0-based design fields */
     double fnum;          /* the working F/# the frequencies are scaled by */
     double cutoff;        /* 1 / (lambda F#) of the shortest wavelength, cycles/mm */
@@ -1735,7 +1743,10 @@ typedef struct sg_mtf {
 
 SG_API void sg_mtf_opts_init(sg_mtf_opts *o);
 /* The FFT MTF: |FFT of the FFT PSF|, cut along y (tangential) and x
- * (sagittal), at N frequencies from 0 to the maximum. */
+ * (sagittal), at N frequencies from 0 to the maximum.  With method
+ * SG_MTF_GEOMETRIC, |mean of exp(i 2 pi nu y)| over the rays of an N x N
+ * square pupil grid (x for sagittal), each wavelength's rays sharing its
+ * weight, about the spot's reference; the diffraction limit is the FFT's. */
 SG_API int sg_mtf_compute(const sg_system *sys, const sg_catalog *cat, const sg_mtf_opts *o,
                           sg_mtf *out, sg_diag *d);
 SG_API void sg_mtf_free(sg_mtf *m);
