@@ -1687,7 +1687,9 @@ typedef struct sg_psf_opts {
 typedef struct sg_psf {
     int field;            /* 0-based */
     int sampling;         /* N */
-    int size;             /* M = 2N, PSF grid points across */
+    int method;           /* sg_psf_method */
+    int size;             /* M = 2N, PSF grid points across (Huygens: the
+                           * image points) */
     double wave_um;       /* the wavelength whose grid the PSF is on: the
                            * shortest of those summed */
     double spacing_x_um, spacing_y_um; /* grid spacing: lambda F# (N-1) / M

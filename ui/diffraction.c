@@ -14,7 +14,8 @@
 #include "safetext.h"
 #include "views.h"
 
-enum { D_FIELD = 1, D_WAVE, D_SAMPLING, D_MAXFREQ, D_METHOD, D_TYPE, D_RAYS, D_MAXRAD };
+enum { D_FIELD = 1, D_WAVE, D_SAMPLING, D_MAXFREQ, D_METHOD, D_TYPE, D_RAYS, D_MAXRAD,
+       D_ISIZE, D_IDELTA };
 enum { K_PSF, K_MTF, K_EE };
 
 /* Cross-sections reach 16 lambda F# either side (8 dark rings), or the
@@ -31,6 +32,8 @@ static const cli_opt diff_opts[] = {
     { "--type", 0, 1, D_TYPE },
     { "--rays", 0, 1, D_RAYS },
     { "--max-radius", 0, 1, D_MAXRAD },
+    { "--image-size", 0, 1, D_ISIZE },
+    { "--image-delta", 0, 1, D_IDELTA },
     { NULL, 0, 0, 0 }
 };
 
@@ -61,7 +64,7 @@ AN_COMMON_HELP
     else if (kind == K_MTF)
         fputs(
 "Usage: sagitta mtf DESIGN.json [OPTIONS]\n"
-"Print the FFT MTF of each field, tangential (along y) and sagittal (along\n"
+"Print the FFT (or geometric) MTF of each field, tangential (along y) and sagittal (along\n"
 "x), in cycles/mm from 0 to the maximum frequency, with the diffraction\n"
 "limit of the first field's pupil unaberrated.  The MTF is the modulus of\n"
 "the Fourier transform of the FFT PSF (see sagitta psf): the pupil's\n"
@@ -74,13 +77,15 @@ AN_COMMON_HELP
 "  --sampling N       pupil grid points across, 32 to 2048 (default 64)\n"
 "  --max-frequency F  cycles/mm (default: the cutoff 1 / (lambda F#) of\n"
 "                     the shortest wavelength)\n"
-"  --method M         precise (default), classic or mpfr\n"
+"  --method M         fft (default) or geometric (the rays' MTF, from an\n"
+"                     N x N grid of rays); and the trace: precise (default),\n"
+"                     classic or mpfr (the option may be given twice)\n"
 AN_COMMON_HELP
 "  -h, --help         show this help\n", f);
     else
         fputs(
 "Usage: sagitta psf DESIGN.json [OPTIONS]\n"
-"Print the FFT PSF of each field: its Strehl ratio (the PSF at the chief\n"
+"Print the FFT (or Huygens) PSF of each field: its Strehl ratio (the PSF at the chief\n"
 "ray's point, the unaberrated pupil of the same shape having peak 1), its\n"
 "peak, the grid (2N x 2N points, spacing lambda F# (N - 1) / 2N) and the\n"
 "cross-sections along x and y through the chief ray's point.  Every\n"
@@ -91,7 +96,12 @@ AN_COMMON_HELP
 "  --field N          one field (default: every field)\n"
 "  --wave N           one wavelength (default: every one, by weight)\n"
 "  --sampling N       pupil grid points across, 32 to 2048 (default 64)\n"
-"  --method M         precise (default), classic or mpfr\n"
+"  --method M         fft (default) or huygens (wavelets from the reference\n"
+"                     sphere summed at each image point); and the trace:\n"
+"                     precise (default), classic or mpfr (the option may be\n"
+"                     given twice)\n"
+"  --image-size K     huygens: image points across, 3 to 1024 (default N)\n"
+"  --image-delta D    huygens: their spacing in um (default: the FFT's)\n"
 AN_COMMON_HELP
 "  -h, --help         show this help\n", f);
 }
@@ -144,7 +154,8 @@ static void mtf_write(FILE *f, int fmt, const diff_ctx *c)
     const sg_system *sys = c->a->sys;
     int j, k;
     if (fmt == AN_FMT_JSON) {
-        fputs("{\n  \"sampling\": ", f);
+        fprintf(f, "{\n  \"method\": \"%s\",\n  \"sampling\": ",
+                m->method == SG_MTF_GEOMETRIC ? "geometric" : "fft");
         fprintf(f, "%d,\n  \"working_fnum\": ", m->sampling);
         num(f, m->fnum, 1);
         fputs(",\n  \"cutoff\": ", f);
@@ -183,12 +194,18 @@ static void mtf_write(FILE *f, int fmt, const diff_ctx *c)
     }
     if (fmt == AN_FMT_TEXT) {
         char t[160];
-        fprintf(f, "FFT MTF: %s\n", safe_text(sys->title, t, sizeof t));
+        fprintf(f, "%s MTF: %s\n", m->method == SG_MTF_GEOMETRIC ? "Geometric" : "FFT",
+                safe_text(sys->title, t, sizeof t));
         fputs("  ", f);
         wave_text(f, sys, c->wave0);
-        fprintf(f, "; sampling %d x %d, padded to %d x %d; working F/# %.6g; cutoff %.6g "
-                   "cycles/mm\n\n", m->sampling, m->sampling, 2 * m->sampling,
-                2 * m->sampling, m->fnum, m->cutoff);
+        if (m->method == SG_MTF_GEOMETRIC)
+            fprintf(f, "; %d x %d rays; working F/# %.6g; cutoff %.6g cycles/mm; the "
+                       "diffraction limit by FFT\n\n", m->sampling, m->sampling, m->fnum,
+                    m->cutoff);
+        else
+            fprintf(f, "; sampling %d x %d, padded to %d x %d; working F/# %.6g; cutoff %.6g "
+                       "cycles/mm\n\n", m->sampling, m->sampling, 2 * m->sampling,
+                    2 * m->sampling, m->fnum, m->cutoff);
         fprintf(f, "%12s", "cycles/mm");
         for (k = 0; k < m->nfield; k++)
             fprintf(f, "  %5s %-3d T  %5s %-3d S", "field", m->field[k] + 1, "field",
@@ -230,7 +247,8 @@ static void psf_write(FILE *f, int fmt, const diff_ctx *c)
         for (k = 0; k < c->np; k++) {
             const sg_psf *p = &c->p[k];
             int r = psf_reach(p);
-            fprintf(f, "%s\n    {\"field\": %d, \"strehl\": ", k ? "," : "", p->field + 1);
+            fprintf(f, "%s\n    {\"field\": %d, \"method\": \"%s\", \"strehl\": ", k ? "," : "",
+                    p->field + 1, p->method == SG_PSF_HUYGENS ? "huygens" : "fft");
             num(f, p->strehl, 1);
             fputs(", \"strehl_exact\": ", f);
             num(f, p->strehl_exact, 1);
@@ -265,17 +283,19 @@ static void psf_write(FILE *f, int fmt, const diff_ctx *c)
     }
     if (fmt == AN_FMT_TEXT) {
         char t[160];
-        fprintf(f, "FFT PSF: %s\n  ", safe_text(sys->title, t, sizeof t));
+        fprintf(f, "%s PSF: %s\n  ",
+                c->np && c->p[0].method == SG_PSF_HUYGENS ? "Huygens" : "FFT",
+                safe_text(sys->title, t, sizeof t));
         wave_text(f, sys, c->wave0);
         fputs("\n", f);
         for (k = 0; k < c->np; k++) {
             const sg_psf *p = &c->p[k];
             fprintf(f, "\nfield %d: Strehl ratio %.6f (|mean exp(i 2 pi W)|^2 %.6f), peak "
-                       "%.6f\n  pupil %d x %d padded to %d x %d; image delta %.6g x %.6g um "
+                       "%.6f\n  pupil %d x %d %s %d x %d; image delta %.6g x %.6g um "
                        "(at %.6g um, working F/# %.6g)\n",
                     p->field + 1, p->strehl, p->strehl_exact, p->peak, p->sampling,
-                    p->sampling, p->size, p->size, p->spacing_x_um, p->spacing_y_um,
-                    p->wave_um, p->fnum);
+                    p->sampling, p->method == SG_PSF_HUYGENS ? "onto an image of" : "padded to",
+                    p->size, p->size, p->spacing_x_um, p->spacing_y_um, p->wave_um, p->fnum);
         }
         fputs("\n", f);
     }
@@ -410,8 +430,8 @@ static int run(int kind, int argc, char **argv)
 {
     const char *cmd = kind == K_EE ? "encircled" : kind == K_MTF ? "mtf" : "psf", *val;
     int id, rc, field1 = 0, wave1 = 0, sampling = 64, method = SG_METHOD_PRECISE, k, nf;
-    int eekind = SG_EE_ENCIRCLED, rays = 0;
-    double maxf = 0.0, maxr = 0.0;
+    int eekind = SG_EE_ENCIRCLED, rays = 0, dmethod = 0, isize = 0;
+    double maxf = 0.0, maxr = 0.0, idelta = 0.0;
     cli_iter it;
     an_cmd a;
     sg_diag d;
@@ -481,9 +501,37 @@ static int run(int kind, int argc, char **argv)
                                             "micrometres", maxr);
             break;
         case D_METHOD:
-            if ((method = sg_method_parse(val)) < 0)
-                return cli_usage_error(cmd, "--method: \"%s\" is not precise, classic or mpfr",
-                                       val);
+            /* The diffraction method's names and the trace's are apart. */
+            if (strcmp(val, "fft") == 0)
+                dmethod = 0;
+            else if (strcmp(val, "huygens") == 0 && kind == K_PSF)
+                dmethod = SG_PSF_HUYGENS;
+            else if (strcmp(val, "geometric") == 0 && kind == K_MTF)
+                dmethod = SG_MTF_GEOMETRIC;
+            else if ((k = sg_method_parse(val)) >= 0)
+                method = k;
+            else
+                return cli_usage_error(cmd, "--method: \"%s\" is not %s, or the trace's "
+                                            "precise, classic or mpfr", val,
+                                       kind == K_PSF   ? "fft or huygens"
+                                       : kind == K_MTF ? "fft or geometric"
+                                                       : "one of");
+            break;
+        case D_ISIZE:
+        case D_IDELTA:
+            if (kind != K_PSF)
+                return cli_usage_error(cmd, "%s is an option of psf only",
+                                       id == D_ISIZE ? "--image-size" : "--image-delta");
+            if (id == D_ISIZE) {
+                if (cli_int_value("--image-size", val, 3, SG_PSF_IMAGE_MAX, &isize))
+                    return CLI_EXIT_USAGE;
+            } else {
+                if (cli_doubles_value("--image-delta", val, 1, "spacing", &idelta))
+                    return CLI_EXIT_USAGE;
+                if (!(idelta > 0.0) || !isfinite(idelta))
+                    return cli_usage_error(cmd, "--image-delta: %g is not a positive number "
+                                                "of micrometres", idelta);
+            }
             break;
         default:
             return CLI_EXIT_USAGE;
@@ -491,6 +539,9 @@ static int run(int kind, int argc, char **argv)
     }
     if (id < -1)
         return -id;
+    if (kind == K_PSF && dmethod != SG_PSF_HUYGENS && (isize || idelta > 0.0))
+        return cli_usage_error(cmd, "--image-size and --image-delta are options of "
+                                    "--method huygens");
     rc = an_cmd_load(&a);
     if (rc != CLI_EXIT_OK)
         return rc;
@@ -527,6 +578,7 @@ static int run(int kind, int argc, char **argv)
         o.wave = wave1 - 1;
         o.sampling = sampling;
         o.max_frequency = maxf;
+        o.method = dmethod;
         rc = sg_mtf_compute(a.sys, a.cat, &o, &m, &d);
         c.m = &m;
     } else {
@@ -542,6 +594,9 @@ static int run(int kind, int argc, char **argv)
         o.trace = to;
         o.wave = wave1 - 1;
         o.sampling = sampling;
+        o.method = dmethod;
+        o.image_size = isize;
+        o.image_delta_um = idelta;
         rc = SG_OK;
         for (k = 0; k < nf && rc == SG_OK; k++) {
             o.field = field1 ? field1 - 1 : k;

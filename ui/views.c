@@ -472,7 +472,8 @@ int view_mtf_figure(const sg_system *sys, const sg_mtf *m, plot_figure *f)
     char title[200], lab[64], leg[48];
     plot_panel *p;
     int k;
-    snprintf(title, sizeof title, "FFT MTF: %s", safe_text(sys->title, lab, sizeof lab));
+    snprintf(title, sizeof title, "%s MTF: %s", m->method == SG_MTF_GEOMETRIC ? "Geometric" : "FFT",
+             safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
     p = plot_add_panel(f, NULL, "spatial frequency (cycles/mm)", "modulus of the OTF");
     if (!p)
@@ -499,7 +500,8 @@ int view_psf_figure(const sg_system *sys, const sg_psf *ps, int n, plot_figure *
 {
     char title[200], lab[64], pt[64];
     int k, rc = -1;
-    snprintf(title, sizeof title, "FFT PSF cross-sections: %s",
+    snprintf(title, sizeof title, "%s PSF cross-sections: %s",
+             n > 0 && ps[0].method == SG_PSF_HUYGENS ? "Huygens" : "FFT",
              safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
     for (k = 0; k < n; k++) {

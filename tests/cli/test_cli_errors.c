@@ -166,6 +166,19 @@ static void test_diffraction(void **state)
     assert_true(fabs(strtod(p + 10, NULL) - 1.0) < 1e-9);
     assert_non_null(strstr(r.out, "\"spacing_um\": "));
     ct_free(&r);
+    /* psf --method huygens: the perfect mirror's Strehl ratio is 1; the
+     * diffraction methods belong to their commands. */
+    expect(2, ARGS("mtf", path, "--method", "huygens"), "huygens", NULL);
+    expect(2, ARGS("psf", path, "--method", "geometric"), "geometric", NULL);
+    expect(2, ARGS("psf", path, "--image-size", "16"), "--method huygens", NULL);
+    ct_run(&r, "psf", mirror, "--method", "huygens", "--method", "classic", "--sampling", "32",
+           "--format", "json", (const char *)NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.out, "\"method\": \"huygens\""));
+    p = strstr(r.out, "\"strehl\": ");
+    assert_non_null(p);
+    assert_true(fabs(strtod(p + 10, NULL) - 1.0) < 1e-9);
+    ct_free(&r);
     /* encircled: bad options named; the perfect F/10's energy within its
      * first dark ring, v = 3.8317 (1.2197 lambda F#), is Rayleigh's 0.838. */
     expect(2, ARGS("encircled", path, "--type", "round"), "--type", NULL);
