@@ -132,6 +132,7 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
     sg_opd_ref ref;
     sg_ray_in *rays = NULL;
     sg_ray_surface *rows = NULL;
+    sg_opd *res = NULL;
     int *st = NULL, last, rc;
     double hx, hy, *opd = NULL, piston = 0.0;
     unsigned char *ok = NULL;
@@ -208,7 +209,8 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
     rays = malloc(blk * sizeof *rays);
     rows = malloc(blk * sizeof *rows);
     st = malloc(blk * sizeof *st);
-    if (!opd || !ok || !rays || !rows || !st) {
+    res = malloc(blk * sizeof *res);
+    if (!opd || !ok || !rays || !rows || !st || !res) {
         rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
         goto done;
     }
@@ -232,12 +234,15 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
         if ((rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, m, &last, 1, rows, st, d)) !=
             SG_OK)
             goto done;
+        /* The block's OPDs on vector lanes, each the bits sg_opd_of_ray
+         * gives (tests/test_opd_vec.c); a failed ray's row only sets its
+         * status. */
+        sg_opd_of_rays(t, &ref, rows, 1, m, res);
         for (k = 0; k < m; k++) {
-            sg_opd r;
-            if (st[k] != SG_OK || sg_opd_of_ray(t, &ref, &rows[k], &r) != SG_OK ||
-                r.status != SG_OK || !isfinite(r.opd_waves))
+            const sg_opd *r = &res[k];
+            if (st[k] != SG_OK || r->status != SG_OK || !isfinite(r->opd_waves))
                 continue;
-            opd[start + k] = r.opd_waves - piston;
+            opd[start + k] = r->opd_waves - piston;
             ok[start + k] = 1;
         }
     }
@@ -254,5 +259,6 @@ done:
     free(rays);
     free(rows);
     free(st);
+    free(res);
     return rc;
 }
