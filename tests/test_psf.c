@@ -939,6 +939,47 @@ static void bad_input(void **state)
     sg_diag_clear(&d);
     assert_int_equal(sg_psf_compute(sys, cat, &po, &p, &d), SG_ERANGE);
     assert_non_null(strstr(d.msg, "wavelength 3"));
+    /* Huygens: the image grid's size and spacing are checked. */
+    po.wave = -1;
+    po.method = SG_PSF_HUYGENS;
+    po.image_size = SG_PSF_IMAGE_MAX + 1;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_psf_compute(sys, cat, &po, &p, &d), SG_ERANGE);
+    assert_non_null(strstr(d.msg, "image points"));
+    po.image_size = 0;
+    po.image_delta_um = NAN;
+    assert_int_equal(sg_psf_compute(sys, cat, &po, &p, &d), SG_ERANGE);
+    po.method = 7;
+    po.image_delta_um = 0.0;
+    assert_int_equal(sg_psf_compute(sys, cat, &po, &p, &d), SG_EINVAL);
+    o.method = 5;
+    o.field = -1;
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_EINVAL);
+    /* Encircled energy: radius, radii, rays and kind. */
+    {
+        sg_ee_opts eo;
+        sg_ee e;
+        sg_ee_opts_init(&eo);
+        eo.max_radius_um = -1.0;
+        sg_diag_clear(&d);
+        assert_int_equal(sg_ee_compute(sys, cat, &eo, &e, &d), SG_ERANGE);
+        eo.max_radius_um = 0.0;
+        eo.npts = 1;
+        assert_int_equal(sg_ee_compute(sys, cat, &eo, &e, &d), SG_ERANGE);
+        eo.npts = 0;
+        eo.kind = 9;
+        assert_int_equal(sg_ee_compute(sys, cat, &eo, &e, &d), SG_EINVAL);
+        eo.kind = SG_EE_ENCIRCLED;
+        eo.max_radius_um = 1e5;
+        sg_diag_clear(&d);
+        assert_int_equal(sg_ee_compute(sys, cat, &eo, &e, &d), SG_ERANGE);
+        assert_non_null(strstr(d.msg, "beyond half the PSF grid"));
+        eo.max_radius_um = 0.0;
+        eo.field = 2;
+        sg_diag_clear(&d);
+        assert_int_equal(sg_ee_compute(sys, cat, &eo, &e, &d), SG_ERANGE);
+        assert_non_null(strstr(d.msg, "field 3"));
+    }
     sg_catalog_free(cat);
     sg_system_free(sys);
 }
