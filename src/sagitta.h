@@ -1793,6 +1793,34 @@ SG_API int sg_ee_compute(const sg_system *sys, const sg_catalog *cat, const sg_e
                          sg_ee *out, sg_diag *d);
 SG_API void sg_ee_free(sg_ee *e);
 
+/* Through-focus MTF and Strehl ratio (sagitta(1), mtf --through-focus). */
+#define SG_TF_MAX_STEPS 1001
+
+typedef struct sg_tf_opts {
+    sg_mtf_opts mtf;   /* field, wave, sampling, method, trace; its
+                        * max_frequency is set to frequency */
+    double frequency;  /* cycles/mm */
+    double range;      /* lens units: the image plane from -range to +range */
+    int steps;         /* shifts, 2 to SG_TF_MAX_STEPS; default 11 */
+} sg_tf_opts;
+
+typedef struct sg_tf {
+    int nfield, nsteps;
+    int *field;          /* nfield 0-based design fields */
+    double frequency;    /* cycles/mm */
+    double *shift;       /* nsteps, lens units, from -range to +range */
+    double *tan, *sag;   /* nfield * nsteps: the MTF at the frequency */
+    double *strehl;      /* nfield * nsteps: the FFT PSF's Strehl ratio */
+} sg_tf;
+
+SG_API void sg_tf_opts_init(sg_tf_opts *o);
+/* The MTF at one frequency and the Strehl ratio of each field with the
+ * image plane shifted along the axis (the gap before it lengthened),
+ * at steps shifts from -range to +range. */
+SG_API int sg_tf_compute(const sg_system *sys, const sg_catalog *cat, const sg_tf_opts *o,
+                         sg_tf *out, sg_diag *d);
+SG_API void sg_tf_free(sg_tf *t);
+
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */
 SG_API double sg_digits(double a, double b);

@@ -15,7 +15,7 @@
 #include "views.h"
 
 enum { D_FIELD = 1, D_WAVE, D_SAMPLING, D_MAXFREQ, D_METHOD, D_TYPE, D_RAYS, D_MAXRAD,
-       D_ISIZE, D_IDELTA };
+       D_ISIZE, D_IDELTA, D_TF, D_FREQ, D_STEPS };
 enum { K_PSF, K_MTF, K_EE };
 
 /* Cross-sections reach 16 lambda F# either side (8 dark rings), or the
@@ -34,6 +34,9 @@ static const cli_opt diff_opts[] = {
     { "--max-radius", 0, 1, D_MAXRAD },
     { "--image-size", 0, 1, D_ISIZE },
     { "--image-delta", 0, 1, D_IDELTA },
+    { "--through-focus", 0, 1, D_TF },
+    { "--frequency", 0, 1, D_FREQ },
+    { "--steps", 0, 1, D_STEPS },
     { NULL, 0, 0, 0 }
 };
 
@@ -80,6 +83,10 @@ AN_COMMON_HELP
 "  --method M         fft (default) or geometric (the rays' MTF, from an\n"
 "                     N x N grid of rays); and the trace: precise (default),\n"
 "                     classic or mpfr (the option may be given twice)\n"
+"  --through-focus R  the MTF at --frequency and the Strehl ratio against\n"
+"                     the image plane shifted from -R to +R (lens units)\n"
+"  --frequency F      cycles/mm, with --through-focus\n"
+"  --steps K          shifts, 2 to 1001 (default 11), with --through-focus\n"
 AN_COMMON_HELP
 "  -h, --help         show this help\n", f);
     else
@@ -123,6 +130,7 @@ typedef struct diff_ctx {
     const sg_psf *p;   /* one per field */
     int np;
     const sg_ee *e;
+    const sg_tf *tf;
 } diff_ctx;
 
 /* The half-width of the cross-sections, in grid points. */
@@ -404,10 +412,77 @@ static void ee_write(FILE *f, int fmt, const diff_ctx *c)
     }
 }
 
+static void tf_write(FILE *f, int fmt, const diff_ctx *c)
+{
+    const sg_tf *t = c->tf;
+    const sg_system *sys = c->a->sys;
+    int j, k;
+    if (fmt == AN_FMT_JSON) {
+        fputs("{\n  \"frequency\": ", f);
+        num(f, t->frequency, 1);
+        fprintf(f, ",\n  \"units\": \"%s\",\n  \"fields\": [", sys->units);
+        for (k = 0; k < t->nfield; k++) {
+            size_t o = (size_t)k * t->nsteps;
+            fprintf(f, "%s\n    {\"field\": %d, ", k ? "," : "", t->field[k] + 1);
+            ee_series(f, "shift", t->shift, t->nsteps);
+            fputs(",\n     ", f);
+            ee_series(f, "tangential", t->tan + o, t->nsteps);
+            fputs(",\n     ", f);
+            ee_series(f, "sagittal", t->sag + o, t->nsteps);
+            fputs(",\n     ", f);
+            ee_series(f, "strehl", t->strehl + o, t->nsteps);
+            fputc('}', f);
+        }
+        fputs("\n  ]\n}\n", f);
+        return;
+    }
+    if (fmt == AN_FMT_TEXT) {
+        char tt[160];
+        fprintf(f, "Through-focus MTF at %.6g cycles/mm and Strehl ratio: %s\n  ", t->frequency,
+                safe_text(sys->title, tt, sizeof tt));
+        wave_text(f, sys, c->wave0);
+        fprintf(f, "; focus shift of the image plane in %s\n\n", sys->units);
+        fprintf(f, "%14s", "shift");
+        for (k = 0; k < t->nfield; k++)
+            fprintf(f, "  field %-3d T  field %-3d S  field %-3d Strehl", t->field[k] + 1,
+                    t->field[k] + 1, t->field[k] + 1);
+        fputc('\n', f);
+        for (j = 0; j < t->nsteps; j++) {
+            fprintf(f, "%14.6g", t->shift[j]);
+            for (k = 0; k < t->nfield; k++) {
+                size_t o = (size_t)k * t->nsteps + j;
+                fprintf(f, "  %11.6f  %11.6f  %16.6f", t->tan[o], t->sag[o], t->strehl[o]);
+            }
+            fputc('\n', f);
+        }
+        return;
+    }
+    fputs("shift", f);
+    for (k = 0; k < t->nfield; k++)
+        fprintf(f, ",field%d_tangential,field%d_sagittal,field%d_strehl", t->field[k] + 1,
+                t->field[k] + 1, t->field[k] + 1);
+    fputc('\n', f);
+    for (j = 0; j < t->nsteps; j++) {
+        num(f, t->shift[j], 0);
+        for (k = 0; k < t->nfield; k++) {
+            size_t o = (size_t)k * t->nsteps + j;
+            fputc(',', f);
+            num(f, t->tan[o], 0);
+            fputc(',', f);
+            num(f, t->sag[o], 0);
+            fputc(',', f);
+            num(f, t->strehl[o], 0);
+        }
+        fputc('\n', f);
+    }
+}
+
 static int diff_text(void *ctx, FILE *f, int fmt)
 {
     const diff_ctx *c = ctx;
-    if (c->kind == K_EE)
+    if (c->tf)
+        tf_write(f, fmt, c);
+    else if (c->kind == K_EE)
         ee_write(f, fmt, c);
     else if (c->kind == K_MTF)
         mtf_write(f, fmt, c);
@@ -419,6 +494,8 @@ static int diff_text(void *ctx, FILE *f, int fmt)
 static int diff_fig(void *ctx, plot_figure *f)
 {
     const diff_ctx *c = ctx;
+    if (c->tf)
+        return view_tf_figure(c->a->sys, c->tf, f);
     if (c->kind == K_EE)
         return view_ee_figure(c->a->sys, c->e, f);
     if (c->kind == K_MTF)
@@ -430,20 +507,22 @@ static int run(int kind, int argc, char **argv)
 {
     const char *cmd = kind == K_EE ? "encircled" : kind == K_MTF ? "mtf" : "psf", *val;
     int id, rc, field1 = 0, wave1 = 0, sampling = 64, method = SG_METHOD_PRECISE, k, nf;
-    int eekind = SG_EE_ENCIRCLED, rays = 0, dmethod = 0, isize = 0;
-    double maxf = 0.0, maxr = 0.0, idelta = 0.0;
+    int eekind = SG_EE_ENCIRCLED, rays = 0, dmethod = 0, isize = 0, steps = 11;
+    double maxf = 0.0, maxr = 0.0, idelta = 0.0, tfrange = 0.0, tffreq = 0.0;
     cli_iter it;
     an_cmd a;
     sg_diag d;
     sg_trace_opts to;
     sg_mtf m;
     sg_ee ee;
+    sg_tf tf;
     sg_psf *psf = NULL;
     diff_ctx c;
     an_writer w = {diff_fig, diff_text, &c};
 
     memset(&m, 0, sizeof m);
     memset(&ee, 0, sizeof ee);
+    memset(&tf, 0, sizeof tf);
     memset(&c, 0, sizeof c);
     an_cmd_init(&a, cmd);
     cli_iter_init(&it, cmd, argc, argv);
@@ -517,6 +596,29 @@ static int run(int kind, int argc, char **argv)
                                        : kind == K_MTF ? "fft or geometric"
                                                        : "one of");
             break;
+        case D_TF:
+        case D_FREQ:
+        case D_STEPS:
+            if (kind != K_MTF)
+                return cli_usage_error(cmd, "%s is an option of mtf only",
+                                       id == D_TF ? "--through-focus"
+                                       : id == D_FREQ ? "--frequency" : "--steps");
+            if (id == D_STEPS) {
+                if (cli_int_value("--steps", val, 2, SG_TF_MAX_STEPS, &steps))
+                    return CLI_EXIT_USAGE;
+            } else {
+                double v;
+                const char *on = id == D_TF ? "--through-focus" : "--frequency";
+                if (cli_doubles_value(on, val, 1, id == D_TF ? "range" : "frequency", &v))
+                    return CLI_EXIT_USAGE;
+                if (!(v > 0.0) || !isfinite(v))
+                    return cli_usage_error(cmd, "%s: %g is not a positive number", on, v);
+                if (id == D_TF)
+                    tfrange = v;
+                else
+                    tffreq = v;
+            }
+            break;
         case D_ISIZE:
         case D_IDELTA:
             if (kind != K_PSF)
@@ -539,6 +641,13 @@ static int run(int kind, int argc, char **argv)
     }
     if (id < -1)
         return -id;
+    if (kind == K_MTF && (tfrange > 0.0) != (tffreq > 0.0))
+        return cli_usage_error(cmd, "--through-focus and --frequency go together");
+    if (kind == K_MTF && tfrange == 0.0 && steps != 11)
+        return cli_usage_error(cmd, "--steps is an option of --through-focus");
+    if (kind == K_MTF && tfrange > 0.0 && maxf > 0.0)
+        return cli_usage_error(cmd, "--max-frequency does not go with --through-focus "
+                                    "(--frequency gives its frequency)");
     if (kind == K_PSF && dmethod != SG_PSF_HUYGENS && (isize || idelta > 0.0))
         return cli_usage_error(cmd, "--image-size and --image-delta are options of "
                                     "--method huygens");
@@ -579,8 +688,19 @@ static int run(int kind, int argc, char **argv)
         o.sampling = sampling;
         o.max_frequency = maxf;
         o.method = dmethod;
-        rc = sg_mtf_compute(a.sys, a.cat, &o, &m, &d);
-        c.m = &m;
+        if (tfrange > 0.0) {
+            sg_tf_opts to2;
+            sg_tf_opts_init(&to2);
+            to2.mtf = o;
+            to2.frequency = tffreq;
+            to2.range = tfrange;
+            to2.steps = steps;
+            rc = sg_tf_compute(a.sys, a.cat, &to2, &tf, &d);
+            c.tf = &tf;
+        } else {
+            rc = sg_mtf_compute(a.sys, a.cat, &o, &m, &d);
+            c.m = &m;
+        }
     } else {
         sg_psf_opts o;
         nf = field1 ? 1 : a.sys->nfield;
@@ -619,6 +739,7 @@ done:
     free(psf);
     sg_mtf_free(&m);
     sg_ee_free(&ee);
+    sg_tf_free(&tf);
     an_cmd_free(&a);
     return rc;
 }

@@ -569,3 +569,29 @@ int view_ee_figure(const sg_system *sys, const sg_ee *e, plot_figure *f)
     plot_add_legend(f, 1, "geometric");
     return 0;
 }
+
+int view_tf_figure(const sg_system *sys, const sg_tf *t, plot_figure *f)
+{
+    char title[200], lab[64], pt[32], ax[48];
+    int k;
+    snprintf(title, sizeof title, "Through-focus MTF at %.4g cycles/mm: %s", t->frequency,
+             safe_text(sys->title, lab, sizeof lab));
+    plot_figure_init(f, title);
+    snprintf(ax, sizeof ax, "focus shift (%s)", sys->units);
+    for (k = 0; k < t->nfield; k++) {
+        size_t o = (size_t)k * t->nsteps;
+        plot_panel *p;
+        snprintf(pt, sizeof pt, "field %d", t->field[k] + 1);
+        p = plot_add_panel(f, pt, ax, "MTF, Strehl ratio");
+        if (!p ||
+            plot_add_series(p, PLOT_LINES, 0, t->shift, t->tan + o, (size_t)t->nsteps) ||
+            plot_add_series(p, PLOT_LINES, 1, t->shift, t->sag + o, (size_t)t->nsteps) ||
+            plot_add_series(p, PLOT_LINES, PLOT_FG, t->shift, t->strehl + o, (size_t)t->nsteps))
+            return -1;
+        plot_panel_limits(p, 0.0);
+    }
+    plot_add_legend(f, 0, "tangential");
+    plot_add_legend(f, 1, "sagittal");
+    plot_add_legend(f, PLOT_FG, "Strehl ratio");
+    return 0;
+}

@@ -48,5 +48,7 @@ int view_psf_figure(const sg_system *sys, const sg_psf *p, int n, plot_figure *f
 /* Encircled or ensquared energy: a panel per field, diffraction, geometric
  * and the diffraction limit. */
 int view_ee_figure(const sg_system *sys, const sg_ee *e, plot_figure *f);
+/* Through-focus MTF and Strehl ratio: a panel per field. */
+int view_tf_figure(const sg_system *sys, const sg_tf *t, plot_figure *f);
 
 #endif

@@ -179,6 +179,27 @@ static void test_diffraction(void **state)
     assert_non_null(p);
     assert_true(fabs(strtod(p + 10, NULL) - 1.0) < 1e-9);
     ct_free(&r);
+    /* mtf --through-focus: the options go together; in focus the mirror's
+     * MTF at half the cutoff is the circle's, 2/pi (pi/3 - sqrt(3)/4). */
+    expect(2, ARGS("mtf", path, "--through-focus", "0.1"), "--frequency", NULL);
+    expect(2, ARGS("mtf", path, "--steps", "3"), "--through-focus", NULL);
+    expect(2, ARGS("mtf", path, "--through-focus", "0.1", "--frequency", "20", "--steps", "1"),
+           "--steps", NULL);
+    {
+        char fr[32];
+        snprintf(fr, sizeof fr, "%.17g", nuc / 2);
+        ct_run(&r, "mtf", mirror, "--through-focus", "0.01", "--frequency", fr, "--steps", "3",
+               "--format", "json", (const char *)NULL);
+    }
+    if (r.code != 0)
+        fail_msg("sagitta mtf --through-focus: exit %d: %s", r.code, r.err);
+    p = strstr(r.out, "\"tangential\": [");
+    assert_non_null(p);
+    p = strchr(p, ',');
+    assert_true(fabs(strtod(p + 1, NULL) -
+                     2.0 / 3.14159265358979 * (3.14159265358979 / 3 - sqrt(3.0) / 4)) < 0.004);
+    assert_non_null(strstr(r.out, "\"strehl\": ["));
+    ct_free(&r);
     /* encircled: bad options named; the perfect F/10's energy within its
      * first dark ring, v = 3.8317 (1.2197 lambda F#), is Rayleigh's 0.838. */
     expect(2, ARGS("encircled", path, "--type", "round"), "--type", NULL);
