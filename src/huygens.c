@@ -29,6 +29,10 @@
 
 #define HY_TWO_PI 6.283185307179586476925286766559
 
+/* Minutes: a core sums some 2.4e7 wavelets a second (the double Gauss's
+ * default Huygens PSF, 1.2e8 of them, takes 4.9 s). */
+#define SG_HUYGENS_MAX_TERMS 1e10
+
 /* One wavelength's wavelets: per ray, its place on the sphere relative to
  * C (lens units), |S - C|^2 - R^2, and its OPD (waves). */
 typedef struct hy_rays {
@@ -220,8 +224,17 @@ int sg_psf_huygens(const sg_system *sys, const sg_catalog *cat, const sg_psf_opt
     double delta = o->image_delta_um > 0.0 ? o->image_delta_um
                                            : lmin * fnum * (o->sampling - 1) / (2.0 * o->sampling);
     double units = sg_an_um_to_units(sys), norm = 0.0, snum = 0.0, *acc;
+    double cost = (double)g * g * 0.785 * o->sampling * o->sampling * nw;
     size_t gg = (size_t)g * (size_t)g;
 
+    /* Each image point sums every ray: a grid that would take hours is
+     * refused rather than left running. */
+    if (cost > SG_HUYGENS_MAX_TERMS)
+        return sg_diag_set(d, SG_ERANGE, "psf: a Huygens PSF of %d x %d image points from a "
+                                         "%d x %d pupil at %d wavelength(s) sums %.3g wavelets, "
+                                         "more than %.3g: use fewer image points or a smaller "
+                                         "sampling", g, g, o->sampling, o->sampling, nw, cost,
+                           SG_HUYGENS_MAX_TERMS);
     acc = calloc(gg, sizeof *acc);
     if (!acc)
         return sg_diag_set(d, SG_ENOMEM, "out of memory");

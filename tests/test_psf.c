@@ -1029,8 +1029,16 @@ static void bad_input(void **state)
     po.image_size = 0;
     po.image_delta_um = NAN;
     assert_int_equal(sg_psf_compute(sys, cat, &po, &p, &d), SG_ERANGE);
-    po.method = 7;
+    /* A grid that would run for hours is refused. */
     po.image_delta_um = 0.0;
+    po.image_size = SG_PSF_IMAGE_MAX;
+    po.sampling = 2048;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_psf_compute(sys, cat, &po, &p, &d), SG_ERANGE);
+    assert_non_null(strstr(d.msg, "wavelets"));
+    po.image_size = 0;
+    po.sampling = 32;
+    po.method = 7;
     assert_int_equal(sg_psf_compute(sys, cat, &po, &p, &d), SG_EINVAL);
     o.method = 5;
     o.field = -1;
