@@ -253,7 +253,8 @@ static void polychromatic_mtf(void **state)
 
 /* The perfect system's PSF in three wavelengths: each wavelength's Airy
  * pattern carries unit energy times its weight, so its peak is
- * proportional to w / lambda^2; the sum is normalized to peak 1. */
+ * proportional to w / lambda^2; the sum is normalized to peak 1.  The FFT
+ * PSF at N = 128, the Huygens PSF at N = 64. */
 static void polychromatic_psf(void **state)
 {
     const double f = 200.0, epd = 20.0;
@@ -293,6 +294,24 @@ static void polychromatic_psf(void **state)
                   "difference %.3g\n", worst);
     assert_true(worst < 0.003);
     assert_true(fabs(p.strehl - 1.0) < 1e-9);
+    sg_psf_free(&p);
+    o.sampling = 64;
+    o.method = SG_PSF_HUYGENS;
+    assert_int_equal(sg_psf_compute(sys, cat, &o, &p, &d), SG_OK);
+    c = p.size / 2;
+    worst = 0.0;
+    for (i = 0; i < c; i++) {
+        double r = i * p.spacing_x_um, want = 0.0;
+        for (w = 0; w < 3; w++) {
+            double v = PI * r / (um[w] * f / epd);
+            want += wt[w] / (um[w] * um[w]) * (v == 0.0 ? 1.0 : pow(2.0 * j1(v) / v, 2));
+        }
+        want /= norm;
+        worst = fmax(worst, fabs(p.psf[(size_t)c * p.size + c + i] - want));
+    }
+    print_message("# three wavelengths: Huygens PSF against the weighted Airy patterns: "
+                  "largest difference %.3g\n", worst);
+    assert_true(worst < 0.005);
     sg_psf_free(&p);
     sg_catalog_free(cat);
     sg_system_free(sys);
@@ -867,6 +886,22 @@ static void geometric_mtf_defocus(void **state)
     assert_true(worst < 0.005);
     /* The diffraction limit is still the circle's. */
     assert_true(fabs(g.dl[1] - mtf_circle(g.freq[1] / g.cutoff)) < 0.002);
+    sg_mtf_free(&g);
+    /* Three weighted wavelengths: a mirror's rays are the same in each, so
+     * the weighted sum is the same disc's MTF. */
+    sys->nwave = 3;
+    sys->wave[1].um = 0.4861327;
+    sys->wave[2].um = 0.6562725;
+    sys->wave[0].weight = 1.0;
+    sys->wave[1].weight = 2.0;
+    sys->wave[2].weight = 0.5;
+    o.sampling = 64;
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &g, &d), SG_OK);
+    for (j = 0; j < g.npts; j += 8) {
+        double x = PI * D * g.freq[j], want = x == 0.0 ? 1.0 : fabs(2.0 * j1(x) / x);
+        assert_true(fabs(g.tan[j] - want) < 0.01);
+    }
+    sys->nwave = 1;
     o.method = SG_MTF_FFT;
     o.sampling = 128;
     assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_OK);
