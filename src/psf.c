@@ -160,7 +160,11 @@ int sg_pupil_intensity(const sg_pupil *p, int aberrated, int m, double **intensi
             double ph;
             if (!p->ok[k])
                 continue;
-            ph = aberrated ? SG_TWO_PI * p->opd[k] : 0.0;
+            /* The wave reaching an image point x carries the phase of its
+             * path, -2 pi W less 2 pi (pupil point . x) / (lambda R): the
+             * forward transform of exp(-i 2 pi W), or the PSF comes out
+             * turned through the chief ray's point. */
+            ph = aberrated ? -SG_TWO_PI * p->opd[k] : 0.0;
             a[(size_t)j * (size_t)m + (size_t)i] = cos(ph) + I * sin(ph);
         }
     fftw_execute(plan);
@@ -219,6 +223,14 @@ int sg_psf_compute(const sg_system *sys, const sg_catalog *cat, const sg_psf_opt
         return rc;
     if ((rc = sg_system_validate(sys, cat, d)) != SG_OK)
         return rc;
+    if (o->method != SG_PSF_FFT && o->method != SG_PSF_HUYGENS)
+        return sg_diag_set(d, SG_EINVAL, "psf: unknown method %d", o->method);
+    if (o->image_size != 0 && (o->image_size < 3 || o->image_size > SG_PSF_IMAGE_MAX))
+        return sg_diag_set(d, SG_ERANGE, "psf: %d image points across; from 3 to %d are "
+                                         "allowed", o->image_size, SG_PSF_IMAGE_MAX);
+    if (!(o->image_delta_um >= 0.0) || !isfinite(o->image_delta_um))
+        return sg_diag_set(d, SG_ERANGE, "psf: image spacing %g um; it must be positive, or 0 "
+                                         "for the FFT's", o->image_delta_um);
     if (o->field < 0 || o->field >= sys->nfield)
         return sg_diag_set(d, SG_ERANGE, "psf: field %d is not one of 1 to %d", o->field + 1,
                            sys->nfield);
@@ -240,6 +252,8 @@ int sg_psf_compute(const sg_system *sys, const sg_catalog *cat, const sg_psf_opt
     }
     if (lmin == 0.0)
         return sg_diag_set(d, SG_ERANGE, "psf: every chosen wavelength has weight 0");
+    if (o->method == SG_PSF_HUYGENS)
+        return sg_psf_huygens(sys, cat, o, waves, nw, fnum, lmin, out, d);
     {
         const sg_field *f = &sys->field[o->field];
         double base = lmin * fnum * (o->sampling - 1) / m;

@@ -29,6 +29,10 @@ void sg_pupil_free(sg_pupil *p);
  * (m/2, m/2); with aberrated 0 the phase is left out (the same pupil,
  * unaberrated). */
 int sg_pupil_intensity(const sg_pupil *p, int aberrated, int m, double **intensity, sg_diag *d);
+/* The Huygens PSF (huygens.c) of the chosen wavelengths, lmin the
+ * shortest. */
+int sg_psf_huygens(const sg_system *sys, const sg_catalog *cat, const sg_psf_opts *o,
+                   const int *waves, int nw, double fnum, double lmin, sg_psf *out, sg_diag *d);
 /* |mean over the pupil of exp(i 2 pi W)|^2. */
 double sg_pupil_strehl_exact(const sg_pupil *p);
 

@@ -1889,18 +1889,31 @@ SG_API int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
 #define SG_PSF_SAMPLING_MIN 32
 #define SG_PSF_SAMPLING_MAX 2048
 
+typedef enum sg_psf_method {
+    SG_PSF_FFT = 0,     /* the pupil's Fourier transform */
+    SG_PSF_HUYGENS = 1  /* wavelets from the reference sphere, summed */
+} sg_psf_method;
+
+#define SG_PSF_IMAGE_MAX 1024
+
 typedef struct sg_psf_opts {
     sg_trace_opts trace; /* trace.wave is ignored: see wave */
     int field;           /* 0-based design field */
     int wave;            /* 0-based wavelength, or -1: every one, by weight */
     int sampling;        /* N, pupil grid points across, 32 to 2048 */
     int nthreads;        /* 0: every core */
+    int method;          /* sg_psf_method */
+    int image_size;      /* Huygens: image points across, 0: N; at most
+                          * SG_PSF_IMAGE_MAX */
+    double image_delta_um; /* Huygens: their spacing; 0: the FFT's */
 } sg_psf_opts;
 
 typedef struct sg_psf {
     int field;            /* 0-based */
     int sampling;         /* N */
-    int size;             /* M = 2N, PSF grid points across */
+    int method;           /* sg_psf_method */
+    int size;             /* M = 2N, PSF grid points across (Huygens: the
+                           * image points) */
     double wave_um;       /* the wavelength whose grid the PSF is on: the
                            * shortest of those summed */
     double spacing_x_um, spacing_y_um; /* grid spacing: lambda F# (N-1) / M
@@ -1919,23 +1932,33 @@ SG_API void sg_psf_opts_init(sg_psf_opts *o);
  * reaches the image, phase 2 pi OPD) on an N x N grid, zero-padded to
  * 2N x 2N.  Several wavelengths are summed, each with unit energy times
  * its weight, on the shortest one's grid: a longer one is padded to
- * 2N lambda / lambda_min points, rounded, and its centre taken. */
+ * 2N lambda / lambda_min points, rounded, and its centre taken.  With
+ * method SG_PSF_HUYGENS, the Huygens PSF of the same rays on an
+ * image_size square grid (huygens.c), normalized alike. */
 SG_API int sg_psf_compute(const sg_system *sys, const sg_catalog *cat, const sg_psf_opts *o,
                           sg_psf *out, sg_diag *d);
 SG_API void sg_psf_free(sg_psf *p);
+
+typedef enum sg_mtf_method {
+    SG_MTF_FFT = 0,      /* the FFT PSF's transform */
+    SG_MTF_GEOMETRIC = 1 /* the transform of the rays' line spread */
+} sg_mtf_method;
 
 typedef struct sg_mtf_opts {
     sg_trace_opts trace;  /* trace.wave is ignored: see wave */
     int field;            /* 0-based design field, or -1: every one */
     int wave;             /* 0-based wavelength, or -1: every one, by weight */
-    int sampling;         /* N, 32 to 2048 */
+    int sampling;         /* N, 32 to 2048: the pupil grid (geometric: N x N
+                           * rays, a square grid) */
     double max_frequency; /* cycles/mm; 0: the cutoff 1 / (lambda F#) */
     int nthreads;
+    int method;           /* sg_mtf_method */
 } sg_mtf_opts;
 
 typedef struct sg_mtf {
     int nfield, npts;
     int sampling;
+    int method;           /* sg_mtf_method */
     int *field;           /* nfield 0-based design fields */
     double fnum;          /* the working F/# the frequencies are scaled by */
     double cutoff;        /* 1 / (lambda F#) of the shortest wavelength, cycles/mm */
@@ -1946,10 +1969,81 @@ typedef struct sg_mtf {
 
 SG_API void sg_mtf_opts_init(sg_mtf_opts *o);
 /* The FFT MTF: |FFT of the FFT PSF|, cut along y (tangential) and x
- * (sagittal), at N frequencies from 0 to the maximum. */
+ * (sagittal), at N frequencies from 0 to the maximum.  With method
+ * SG_MTF_GEOMETRIC, |mean of exp(i 2 pi nu y)| over the rays of an N x N
+ * square pupil grid (x for sagittal), each wavelength's rays sharing its
+ * weight, about the spot's reference; the diffraction limit is the FFT's. */
 SG_API int sg_mtf_compute(const sg_system *sys, const sg_catalog *cat, const sg_mtf_opts *o,
                           sg_mtf *out, sg_diag *d);
 SG_API void sg_mtf_free(sg_mtf *m);
+
+/* Encircled and ensquared energy (sagitta(1), encircled). */
+typedef enum sg_ee_kind {
+    SG_EE_ENCIRCLED = 0, /* within a circle of radius r about the chief ray */
+    SG_EE_ENSQUARED = 1  /* within a square of half-width r */
+} sg_ee_kind;
+
+#define SG_EE_MAX_NPTS 10000
+
+typedef struct sg_ee_opts {
+    sg_trace_opts trace;  /* trace.wave is ignored: see wave */
+    int field;            /* 0-based design field, or -1: every one */
+    int wave;             /* 0-based wavelength, or -1: every one, by weight */
+    int sampling;         /* N, the FFT PSF's pupil grid, 32 to 2048 */
+    int rays;             /* geometric: a square grid of rays across; 0: 2N */
+    int kind;             /* sg_ee_kind */
+    double max_radius_um; /* 0: the farthest ray or 5 lambda F#, whichever is wider */
+    int npts;             /* radii from 0 to the maximum; 0: 101 */
+    int nthreads;
+} sg_ee_opts;
+
+typedef struct sg_ee {
+    int nfield, npts, sampling, rays, kind;
+    int *field;           /* nfield 0-based design fields */
+    double fnum;          /* the working F/# */
+    double wave_um;       /* the shortest wavelength summed */
+    double *radius_um;    /* npts: radius or half-width, from 0 */
+    double *diffraction;  /* nfield * npts: the FFT PSF's fraction */
+    double *geometric;    /* nfield * npts: the rays' fraction */
+    double *limit;        /* nfield * npts: each field's pupil, unaberrated */
+} sg_ee;
+
+SG_API void sg_ee_opts_init(sg_ee_opts *o);
+/* Energy within r of each field's chief ray point: the FFT PSF (psf.c)
+ * integrated exactly over the circle or square through its OTF, the same
+ * for the pupil unaberrated, and the fraction of a square grid of rays
+ * (each wavelength's rays that reach the image sharing its weight). */
+SG_API int sg_ee_compute(const sg_system *sys, const sg_catalog *cat, const sg_ee_opts *o,
+                         sg_ee *out, sg_diag *d);
+SG_API void sg_ee_free(sg_ee *e);
+
+/* Through-focus MTF and Strehl ratio (sagitta(1), mtf --through-focus). */
+#define SG_TF_MAX_STEPS 1001
+
+typedef struct sg_tf_opts {
+    sg_mtf_opts mtf;   /* field, wave, sampling, method, trace; its
+                        * max_frequency is set to frequency */
+    double frequency;  /* cycles/mm */
+    double range;      /* lens units: the image plane from -range to +range */
+    int steps;         /* shifts, 2 to SG_TF_MAX_STEPS; default 11 */
+} sg_tf_opts;
+
+typedef struct sg_tf {
+    int nfield, nsteps;
+    int *field;          /* nfield 0-based design fields */
+    double frequency;    /* cycles/mm */
+    double *shift;       /* nsteps, lens units, from -range to +range */
+    double *tan, *sag;   /* nfield * nsteps: the MTF at the frequency */
+    double *strehl;      /* nfield * nsteps: the FFT PSF's Strehl ratio */
+} sg_tf;
+
+SG_API void sg_tf_opts_init(sg_tf_opts *o);
+/* The MTF at one frequency and the Strehl ratio of each field with the
+ * image plane shifted along the axis (the gap before it lengthened),
+ * at steps shifts from -range to +range. */
+SG_API int sg_tf_compute(const sg_system *sys, const sg_catalog *cat, const sg_tf_opts *o,
+                         sg_tf *out, sg_diag *d);
+SG_API void sg_tf_free(sg_tf *t);
 
 /* Significant decimal digits by which a agrees with the reference b:
  * -log10(|a - b| / |b|), capped at 17 (equal) and floored at 0. */

@@ -129,6 +129,7 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
     sg_opd_ref ref;
     sg_ray_in *rays = NULL;
     sg_ray_surface *rows = NULL;
+    sg_opd *res = NULL;
     int *st = NULL, last, rc;
     double hx, hy, piston = 0.0, piston_err = 0.0, emax = 0.0;
     size_t n, blk, k, q, *cell = NULL;
@@ -205,7 +206,8 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
     rows = malloc(blk * sizeof *rows);
     st = malloc(blk * sizeof *st);
     cell = malloc(blk * sizeof *cell);
-    if (!rays || !rows || !st || !cell) {
+    res = malloc(blk * sizeof *res);
+    if (!rays || !rows || !st || !cell || !res) {
         rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
         goto done;
     }
@@ -233,16 +235,20 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
         if (m && (rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, m, &last, 1, rows, st, d)) !=
                      SG_OK)
             goto done;
+        /* The block's OPDs on vector lanes, each the bits sg_opd_of_ray
+         * gives (tests/test_opd_vec.c); a failed ray's row only sets its
+         * status. */
+        if (m)
+            sg_opd_of_rays(t, &ref, rows, 1, m, res);
         for (k = 0; k < m; k++) {
-            sg_opd r;
-            if (st[k] != SG_OK || sg_opd_of_ray(t, &ref, &rows[k], &r) != SG_OK ||
-                r.status != SG_OK || !isfinite(r.opd_waves))
+            const sg_opd *r = &res[k];
+            if (st[k] != SG_OK || r->status != SG_OK || !isfinite(r->opd_waves))
                 continue;
             double e;
-            out->map[cell[k]] = r.opd_waves - piston;
+            out->map[cell[k]] = r->opd_waves - piston;
             out->valid[cell[k]] = 1;
             /* The ray's bound, the piston's and the difference's rounding. */
-            e = r.error_bound + piston_err + 0x1p-53 * fabs(out->map[cell[k]]);
+            e = r->error_bound + piston_err + 0x1p-53 * fabs(out->map[cell[k]]);
             emax = e > emax ? e : emax;
         }
         if (o->progress && o->progress(o->progress_ctx, q, n)) {
@@ -261,5 +267,6 @@ done:
     free(rays);
     free(rows);
     free(st);
+    free(res);
     return rc;
 }

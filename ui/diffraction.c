@@ -1,6 +1,7 @@
 /*
- * diffraction.c - the "psf" and "mtf" subcommands: the engine's FFT PSF
- * with its Strehl ratio (sg_psf_compute) and FFT MTF (sg_mtf_compute)
+ * diffraction.c - the "psf", "mtf" and "encircled" subcommands: the
+ * engine's FFT PSF with its Strehl ratio (sg_psf_compute), FFT MTF
+ * (sg_mtf_compute) and encircled energy (sg_ee_compute)
  * as text, CSV, JSON or a picture (views.c), with the options and output
  * every analysis command shares (ancmd.c).
  */
@@ -13,8 +14,9 @@
 #include "safetext.h"
 #include "views.h"
 
-enum { D_FIELD = 1, D_WAVE, D_SAMPLING, D_MAXFREQ, D_METHOD };
-enum { K_PSF, K_MTF };
+enum { D_FIELD = 1, D_WAVE, D_SAMPLING, D_MAXFREQ, D_METHOD, D_TYPE, D_RAYS, D_MAXRAD,
+       D_ISIZE, D_IDELTA, D_TF, D_FREQ, D_STEPS };
+enum { K_PSF, K_MTF, K_EE };
 
 /* Cross-sections reach 16 lambda F# either side (8 dark rings), or the
  * grid's edge. */
@@ -27,15 +29,45 @@ static const cli_opt diff_opts[] = {
     { "--sampling", 0, 1, D_SAMPLING },
     { "--max-frequency", 0, 1, D_MAXFREQ },
     { "--method", 0, 1, D_METHOD },
+    { "--type", 0, 1, D_TYPE },
+    { "--rays", 0, 1, D_RAYS },
+    { "--max-radius", 0, 1, D_MAXRAD },
+    { "--image-size", 0, 1, D_ISIZE },
+    { "--image-delta", 0, 1, D_IDELTA },
+    { "--through-focus", 0, 1, D_TF },
+    { "--frequency", 0, 1, D_FREQ },
+    { "--steps", 0, 1, D_STEPS },
     { NULL, 0, 0, 0 }
 };
 
 static void diff_help(int kind, FILE *f)
 {
-    if (kind == K_MTF)
+    if (kind == K_EE)
+        fputs(
+"Usage: sagitta encircled DESIGN.json [OPTIONS]\n"
+"Print the fraction of each field's energy within a radius of the chief\n"
+"ray's point (or, with --type ensquared, within a square of that\n"
+"half-width): diffraction (the FFT PSF, see sagitta psf, integrated over\n"
+"the circle or square), geometric (a square grid of rays) and the\n"
+"diffraction limit (the same pupil unaberrated), radii in micrometres.\n"
+"Every wavelength by its weight unless --wave is given.  See sagitta(1),\n"
+"MTF AND PSF.\n"
+"\n"
+"Options:\n"
+"  --field N          one field (default: every field)\n"
+"  --wave N           one wavelength (default: every one, by weight)\n"
+"  --type T           encircled (default) or ensquared\n"
+"  --sampling N       pupil grid points across, 32 to 2048 (default 64)\n"
+"  --rays N           geometric: rays across a square pupil grid (default 2N)\n"
+"  --max-radius R     micrometres (default: the farthest ray or 5 lambda F#,\n"
+"                     whichever is wider, within half the PSF grid)\n"
+"  --method M         precise (default), classic or mpfr\n"
+AN_COMMON_HELP
+"  -h, --help         show this help\n", f);
+    else if (kind == K_MTF)
         fputs(
 "Usage: sagitta mtf DESIGN.json [OPTIONS]\n"
-"Print the FFT MTF of each field, tangential (along y) and sagittal (along\n"
+"Print the FFT (or geometric) MTF of each field, tangential (along y) and sagittal (along\n"
 "x), in cycles/mm from 0 to the maximum frequency, with the diffraction\n"
 "limit of the first field's pupil unaberrated.  The MTF is the modulus of\n"
 "the Fourier transform of the FFT PSF (see sagitta psf): the pupil's\n"
@@ -48,13 +80,19 @@ static void diff_help(int kind, FILE *f)
 "  --sampling N       pupil grid points across, 32 to 2048 (default 64)\n"
 "  --max-frequency F  cycles/mm (default: the cutoff 1 / (lambda F#) of\n"
 "                     the shortest wavelength)\n"
-"  --method M         precise (default), classic or mpfr\n"
+"  --method M         fft (default) or geometric (the rays' MTF, from an\n"
+"                     N x N grid of rays); and the trace: precise (default),\n"
+"                     classic or mpfr (the option may be given twice)\n"
+"  --through-focus R  the MTF at --frequency and the Strehl ratio against\n"
+"                     the image plane shifted from -R to +R (lens units)\n"
+"  --frequency F      cycles/mm, with --through-focus\n"
+"  --steps K          shifts, 2 to 1001 (default 11), with --through-focus\n"
 AN_COMMON_HELP
 "  -h, --help         show this help\n", f);
     else
         fputs(
 "Usage: sagitta psf DESIGN.json [OPTIONS]\n"
-"Print the FFT PSF of each field: its Strehl ratio (the PSF at the chief\n"
+"Print the FFT (or Huygens) PSF of each field: its Strehl ratio (the PSF at the chief\n"
 "ray's point, the unaberrated pupil of the same shape having peak 1), its\n"
 "peak, the grid (2N x 2N points, spacing lambda F# (N - 1) / 2N) and the\n"
 "cross-sections along x and y through the chief ray's point.  Every\n"
@@ -65,7 +103,12 @@ AN_COMMON_HELP
 "  --field N          one field (default: every field)\n"
 "  --wave N           one wavelength (default: every one, by weight)\n"
 "  --sampling N       pupil grid points across, 32 to 2048 (default 64)\n"
-"  --method M         precise (default), classic or mpfr\n"
+"  --method M         fft (default) or huygens (wavelets from the reference\n"
+"                     sphere summed at each image point); and the trace:\n"
+"                     precise (default), classic or mpfr (the option may be\n"
+"                     given twice)\n"
+"  --image-size K     huygens: image points across, 3 to 1024 (default N)\n"
+"  --image-delta D    huygens: their spacing in um (default: the FFT's)\n"
 AN_COMMON_HELP
 "  -h, --help         show this help\n", f);
 }
@@ -86,6 +129,8 @@ typedef struct diff_ctx {
     const sg_mtf *m;
     const sg_psf *p;   /* one per field */
     int np;
+    const sg_ee *e;
+    const sg_tf *tf;
 } diff_ctx;
 
 /* The half-width of the cross-sections, in grid points. */
@@ -117,7 +162,8 @@ static void mtf_write(FILE *f, int fmt, const diff_ctx *c)
     const sg_system *sys = c->a->sys;
     int j, k;
     if (fmt == AN_FMT_JSON) {
-        fputs("{\n  \"sampling\": ", f);
+        fprintf(f, "{\n  \"method\": \"%s\",\n  \"sampling\": ",
+                m->method == SG_MTF_GEOMETRIC ? "geometric" : "fft");
         fprintf(f, "%d,\n  \"working_fnum\": ", m->sampling);
         num(f, m->fnum, 1);
         fputs(",\n  \"cutoff\": ", f);
@@ -156,12 +202,18 @@ static void mtf_write(FILE *f, int fmt, const diff_ctx *c)
     }
     if (fmt == AN_FMT_TEXT) {
         char t[160];
-        fprintf(f, "FFT MTF: %s\n", safe_text(sys->title, t, sizeof t));
+        fprintf(f, "%s MTF: %s\n", m->method == SG_MTF_GEOMETRIC ? "Geometric" : "FFT",
+                safe_text(sys->title, t, sizeof t));
         fputs("  ", f);
         wave_text(f, sys, c->wave0);
-        fprintf(f, "; sampling %d x %d, padded to %d x %d; working F/# %.6g; cutoff %.6g "
-                   "cycles/mm\n\n", m->sampling, m->sampling, 2 * m->sampling,
-                2 * m->sampling, m->fnum, m->cutoff);
+        if (m->method == SG_MTF_GEOMETRIC)
+            fprintf(f, "; %d x %d rays; working F/# %.6g; cutoff %.6g cycles/mm; the "
+                       "diffraction limit by FFT\n\n", m->sampling, m->sampling, m->fnum,
+                    m->cutoff);
+        else
+            fprintf(f, "; sampling %d x %d, padded to %d x %d; working F/# %.6g; cutoff %.6g "
+                       "cycles/mm\n\n", m->sampling, m->sampling, 2 * m->sampling,
+                    2 * m->sampling, m->fnum, m->cutoff);
         fprintf(f, "%12s", "cycles/mm");
         for (k = 0; k < m->nfield; k++)
             fprintf(f, "  %5s %-3d T  %5s %-3d S", "field", m->field[k] + 1, "field",
@@ -203,7 +255,8 @@ static void psf_write(FILE *f, int fmt, const diff_ctx *c)
         for (k = 0; k < c->np; k++) {
             const sg_psf *p = &c->p[k];
             int r = psf_reach(p);
-            fprintf(f, "%s\n    {\"field\": %d, \"strehl\": ", k ? "," : "", p->field + 1);
+            fprintf(f, "%s\n    {\"field\": %d, \"method\": \"%s\", \"strehl\": ", k ? "," : "",
+                    p->field + 1, p->method == SG_PSF_HUYGENS ? "huygens" : "fft");
             num(f, p->strehl, 1);
             fputs(", \"strehl_exact\": ", f);
             num(f, p->strehl_exact, 1);
@@ -238,17 +291,19 @@ static void psf_write(FILE *f, int fmt, const diff_ctx *c)
     }
     if (fmt == AN_FMT_TEXT) {
         char t[160];
-        fprintf(f, "FFT PSF: %s\n  ", safe_text(sys->title, t, sizeof t));
+        fprintf(f, "%s PSF: %s\n  ",
+                c->np && c->p[0].method == SG_PSF_HUYGENS ? "Huygens" : "FFT",
+                safe_text(sys->title, t, sizeof t));
         wave_text(f, sys, c->wave0);
         fputs("\n", f);
         for (k = 0; k < c->np; k++) {
             const sg_psf *p = &c->p[k];
             fprintf(f, "\nfield %d: Strehl ratio %.6f (|mean exp(i 2 pi W)|^2 %.6f), peak "
-                       "%.6f\n  pupil %d x %d padded to %d x %d; image delta %.6g x %.6g um "
+                       "%.6f\n  pupil %d x %d %s %d x %d; image delta %.6g x %.6g um "
                        "(at %.6g um, working F/# %.6g)\n",
                     p->field + 1, p->strehl, p->strehl_exact, p->peak, p->sampling,
-                    p->sampling, p->size, p->size, p->spacing_x_um, p->spacing_y_um,
-                    p->wave_um, p->fnum);
+                    p->sampling, p->method == SG_PSF_HUYGENS ? "onto an image of" : "padded to",
+                    p->size, p->size, p->spacing_x_um, p->spacing_y_um, p->wave_um, p->fnum);
         }
         fputs("\n", f);
     }
@@ -276,10 +331,160 @@ static void psf_write(FILE *f, int fmt, const diff_ctx *c)
     }
 }
 
+static void ee_series(FILE *f, const char *key, const double *v, int n)
+{
+    int j;
+    fprintf(f, "\"%s\": [", key);
+    for (j = 0; j < n; j++) {
+        fputs(j ? ", " : "", f);
+        num(f, v[j], 1);
+    }
+    fputc(']', f);
+}
+
+static void ee_write(FILE *f, int fmt, const diff_ctx *c)
+{
+    const sg_ee *e = c->e;
+    const sg_system *sys = c->a->sys;
+    const char *kind = e->kind == SG_EE_ENSQUARED ? "ensquared" : "encircled";
+    int j, k;
+    if (fmt == AN_FMT_JSON) {
+        fprintf(f, "{\n  \"type\": \"%s\",\n  \"sampling\": %d,\n  \"rays\": %d,\n"
+                   "  \"working_fnum\": ", kind, e->sampling, e->rays);
+        num(f, e->fnum, 1);
+        fputs(",\n  \"fields\": [", f);
+        for (k = 0; k < e->nfield; k++) {
+            size_t o = (size_t)k * e->npts;
+            fprintf(f, "%s\n    {\"field\": %d, ", k ? "," : "", e->field[k] + 1);
+            ee_series(f, "radius_um", e->radius_um, e->npts);
+            fputs(",\n     ", f);
+            ee_series(f, "fraction", e->diffraction + o, e->npts);
+            fputs(",\n     ", f);
+            ee_series(f, "geometric", e->geometric + o, e->npts);
+            fputs(",\n     ", f);
+            ee_series(f, "diffraction_limit", e->limit + o, e->npts);
+            fputc('}', f);
+        }
+        fputs("\n  ]\n}\n", f);
+        return;
+    }
+    if (fmt == AN_FMT_TEXT) {
+        char t[160];
+        fprintf(f, "%s energy: %s\n  ", e->kind == SG_EE_ENSQUARED ? "Ensquared" : "Encircled",
+                safe_text(sys->title, t, sizeof t));
+        wave_text(f, sys, c->wave0);
+        fprintf(f, "; FFT PSF from a %d x %d pupil; %d x %d rays; working F/# %.6g\n"
+                   "  D: diffraction, G: geometric, L: diffraction limit\n\n", e->sampling,
+                e->sampling, e->rays, e->rays, e->fnum);
+        fprintf(f, "%15s", e->kind == SG_EE_ENSQUARED ? "half-width (um)" : "radius (um)");
+        for (k = 0; k < e->nfield; k++)
+            fprintf(f, "  field %-3d D  field %-3d G  field %-3d L", e->field[k] + 1,
+                    e->field[k] + 1, e->field[k] + 1);
+        fputc('\n', f);
+        for (j = 0; j < e->npts; j++) {
+            fprintf(f, "%15.6g", e->radius_um[j]);
+            for (k = 0; k < e->nfield; k++) {
+                size_t o = (size_t)k * e->npts + j;
+                fprintf(f, "  %11.6f  %11.6f  %11.6f", e->diffraction[o], e->geometric[o],
+                        e->limit[o]);
+            }
+            fputc('\n', f);
+        }
+        return;
+    }
+    fputs(e->kind == SG_EE_ENSQUARED ? "half_width_um" : "radius_um", f);
+    for (k = 0; k < e->nfield; k++)
+        fprintf(f, ",field%d_diffraction,field%d_geometric,field%d_limit", e->field[k] + 1,
+                e->field[k] + 1, e->field[k] + 1);
+    fputc('\n', f);
+    for (j = 0; j < e->npts; j++) {
+        num(f, e->radius_um[j], 0);
+        for (k = 0; k < e->nfield; k++) {
+            size_t o = (size_t)k * e->npts + j;
+            fputc(',', f);
+            num(f, e->diffraction[o], 0);
+            fputc(',', f);
+            num(f, e->geometric[o], 0);
+            fputc(',', f);
+            num(f, e->limit[o], 0);
+        }
+        fputc('\n', f);
+    }
+}
+
+static void tf_write(FILE *f, int fmt, const diff_ctx *c)
+{
+    const sg_tf *t = c->tf;
+    const sg_system *sys = c->a->sys;
+    int j, k;
+    if (fmt == AN_FMT_JSON) {
+        fputs("{\n  \"frequency\": ", f);
+        num(f, t->frequency, 1);
+        fprintf(f, ",\n  \"units\": \"%s\",\n  \"fields\": [", sys->units);
+        for (k = 0; k < t->nfield; k++) {
+            size_t o = (size_t)k * t->nsteps;
+            fprintf(f, "%s\n    {\"field\": %d, ", k ? "," : "", t->field[k] + 1);
+            ee_series(f, "shift", t->shift, t->nsteps);
+            fputs(",\n     ", f);
+            ee_series(f, "tangential", t->tan + o, t->nsteps);
+            fputs(",\n     ", f);
+            ee_series(f, "sagittal", t->sag + o, t->nsteps);
+            fputs(",\n     ", f);
+            ee_series(f, "strehl", t->strehl + o, t->nsteps);
+            fputc('}', f);
+        }
+        fputs("\n  ]\n}\n", f);
+        return;
+    }
+    if (fmt == AN_FMT_TEXT) {
+        char tt[160];
+        fprintf(f, "Through-focus MTF at %.6g cycles/mm and Strehl ratio: %s\n  ", t->frequency,
+                safe_text(sys->title, tt, sizeof tt));
+        wave_text(f, sys, c->wave0);
+        fprintf(f, "; focus shift of the image plane in %s\n\n", sys->units);
+        fprintf(f, "%14s", "shift");
+        for (k = 0; k < t->nfield; k++)
+            fprintf(f, "  field %-3d T  field %-3d S  field %-3d Strehl", t->field[k] + 1,
+                    t->field[k] + 1, t->field[k] + 1);
+        fputc('\n', f);
+        for (j = 0; j < t->nsteps; j++) {
+            fprintf(f, "%14.6g", t->shift[j]);
+            for (k = 0; k < t->nfield; k++) {
+                size_t o = (size_t)k * t->nsteps + j;
+                fprintf(f, "  %11.6f  %11.6f  %16.6f", t->tan[o], t->sag[o], t->strehl[o]);
+            }
+            fputc('\n', f);
+        }
+        return;
+    }
+    fputs("shift", f);
+    for (k = 0; k < t->nfield; k++)
+        fprintf(f, ",field%d_tangential,field%d_sagittal,field%d_strehl", t->field[k] + 1,
+                t->field[k] + 1, t->field[k] + 1);
+    fputc('\n', f);
+    for (j = 0; j < t->nsteps; j++) {
+        num(f, t->shift[j], 0);
+        for (k = 0; k < t->nfield; k++) {
+            size_t o = (size_t)k * t->nsteps + j;
+            fputc(',', f);
+            num(f, t->tan[o], 0);
+            fputc(',', f);
+            num(f, t->sag[o], 0);
+            fputc(',', f);
+            num(f, t->strehl[o], 0);
+        }
+        fputc('\n', f);
+    }
+}
+
 static int diff_text(void *ctx, FILE *f, int fmt)
 {
     const diff_ctx *c = ctx;
-    if (c->kind == K_MTF)
+    if (c->tf)
+        tf_write(f, fmt, c);
+    else if (c->kind == K_EE)
+        ee_write(f, fmt, c);
+    else if (c->kind == K_MTF)
         mtf_write(f, fmt, c);
     else
         psf_write(f, fmt, c);
@@ -289,6 +494,10 @@ static int diff_text(void *ctx, FILE *f, int fmt)
 static int diff_fig(void *ctx, plot_figure *f)
 {
     const diff_ctx *c = ctx;
+    if (c->tf)
+        return view_tf_figure(c->a->sys, c->tf, f);
+    if (c->kind == K_EE)
+        return view_ee_figure(c->a->sys, c->e, f);
     if (c->kind == K_MTF)
         return view_mtf_figure(c->a->sys, c->m, f);
     return view_psf_figure(c->a->sys, c->p, c->np, f);
@@ -296,19 +505,24 @@ static int diff_fig(void *ctx, plot_figure *f)
 
 static int run(int kind, int argc, char **argv)
 {
-    const char *cmd = kind == K_MTF ? "mtf" : "psf", *val;
+    const char *cmd = kind == K_EE ? "encircled" : kind == K_MTF ? "mtf" : "psf", *val;
     int id, rc, field1 = 0, wave1 = 0, sampling = 64, method = SG_METHOD_PRECISE, k, nf;
-    double maxf = 0.0;
+    int eekind = SG_EE_ENCIRCLED, rays = 0, dmethod = 0, isize = 0, steps = 11;
+    double maxf = 0.0, maxr = 0.0, idelta = 0.0, tfrange = 0.0, tffreq = 0.0;
     cli_iter it;
     an_cmd a;
     sg_diag d;
     sg_trace_opts to;
     sg_mtf m;
+    sg_ee ee;
+    sg_tf tf;
     sg_psf *psf = NULL;
     diff_ctx c;
     an_writer w = {diff_fig, diff_text, &c};
 
     memset(&m, 0, sizeof m);
+    memset(&ee, 0, sizeof ee);
+    memset(&tf, 0, sizeof tf);
     memset(&c, 0, sizeof c);
     an_cmd_init(&a, cmd);
     cli_iter_init(&it, cmd, argc, argv);
@@ -339,10 +553,87 @@ static int run(int kind, int argc, char **argv)
                 return cli_usage_error(cmd, "--max-frequency: %g is not a positive number "
                                             "of cycles/mm", maxf);
             break;
-        case D_METHOD:
-            if ((method = sg_method_parse(val)) < 0)
-                return cli_usage_error(cmd, "--method: \"%s\" is not precise, classic or mpfr",
+        case D_TYPE:
+            if (kind != K_EE)
+                return cli_usage_error(cmd, "--type is an option of encircled only");
+            if (strcmp(val, "encircled") == 0)
+                eekind = SG_EE_ENCIRCLED;
+            else if (strcmp(val, "ensquared") == 0)
+                eekind = SG_EE_ENSQUARED;
+            else
+                return cli_usage_error(cmd, "--type: \"%s\" is not encircled or ensquared",
                                        val);
+            break;
+        case D_RAYS:
+            if (kind != K_EE)
+                return cli_usage_error(cmd, "--rays is an option of encircled only");
+            if (cli_int_value("--rays", val, 1, 20000, &rays))
+                return CLI_EXIT_USAGE;
+            break;
+        case D_MAXRAD:
+            if (kind != K_EE)
+                return cli_usage_error(cmd, "--max-radius is an option of encircled only");
+            if (cli_doubles_value("--max-radius", val, 1, "radius", &maxr))
+                return CLI_EXIT_USAGE;
+            if (!(maxr > 0.0) || !isfinite(maxr))
+                return cli_usage_error(cmd, "--max-radius: %g is not a positive number of "
+                                            "micrometres", maxr);
+            break;
+        case D_METHOD:
+            /* The diffraction method's names and the trace's are apart. */
+            if (strcmp(val, "fft") == 0)
+                dmethod = 0;
+            else if (strcmp(val, "huygens") == 0 && kind == K_PSF)
+                dmethod = SG_PSF_HUYGENS;
+            else if (strcmp(val, "geometric") == 0 && kind == K_MTF)
+                dmethod = SG_MTF_GEOMETRIC;
+            else if ((k = sg_method_parse(val)) >= 0)
+                method = k;
+            else
+                return cli_usage_error(cmd, "--method: \"%s\" is not %s, or the trace's "
+                                            "precise, classic or mpfr", val,
+                                       kind == K_PSF   ? "fft or huygens"
+                                       : kind == K_MTF ? "fft or geometric"
+                                                       : "one of");
+            break;
+        case D_TF:
+        case D_FREQ:
+        case D_STEPS:
+            if (kind != K_MTF)
+                return cli_usage_error(cmd, "%s is an option of mtf only",
+                                       id == D_TF ? "--through-focus"
+                                       : id == D_FREQ ? "--frequency" : "--steps");
+            if (id == D_STEPS) {
+                if (cli_int_value("--steps", val, 2, SG_TF_MAX_STEPS, &steps))
+                    return CLI_EXIT_USAGE;
+            } else {
+                double v;
+                const char *on = id == D_TF ? "--through-focus" : "--frequency";
+                if (cli_doubles_value(on, val, 1, id == D_TF ? "range" : "frequency", &v))
+                    return CLI_EXIT_USAGE;
+                if (!(v > 0.0) || !isfinite(v))
+                    return cli_usage_error(cmd, "%s: %g is not a positive number", on, v);
+                if (id == D_TF)
+                    tfrange = v;
+                else
+                    tffreq = v;
+            }
+            break;
+        case D_ISIZE:
+        case D_IDELTA:
+            if (kind != K_PSF)
+                return cli_usage_error(cmd, "%s is an option of psf only",
+                                       id == D_ISIZE ? "--image-size" : "--image-delta");
+            if (id == D_ISIZE) {
+                if (cli_int_value("--image-size", val, 3, SG_PSF_IMAGE_MAX, &isize))
+                    return CLI_EXIT_USAGE;
+            } else {
+                if (cli_doubles_value("--image-delta", val, 1, "spacing", &idelta))
+                    return CLI_EXIT_USAGE;
+                if (!(idelta > 0.0) || !isfinite(idelta))
+                    return cli_usage_error(cmd, "--image-delta: %g is not a positive number "
+                                                "of micrometres", idelta);
+            }
             break;
         default:
             return CLI_EXIT_USAGE;
@@ -350,6 +641,16 @@ static int run(int kind, int argc, char **argv)
     }
     if (id < -1)
         return -id;
+    if (kind == K_MTF && (tfrange > 0.0) != (tffreq > 0.0))
+        return cli_usage_error(cmd, "--through-focus and --frequency go together");
+    if (kind == K_MTF && tfrange == 0.0 && steps != 11)
+        return cli_usage_error(cmd, "--steps is an option of --through-focus");
+    if (kind == K_MTF && tfrange > 0.0 && maxf > 0.0)
+        return cli_usage_error(cmd, "--max-frequency does not go with --through-focus "
+                                    "(--frequency gives its frequency)");
+    if (kind == K_PSF && dmethod != SG_PSF_HUYGENS && (isize || idelta > 0.0))
+        return cli_usage_error(cmd, "--image-size and --image-delta are options of "
+                                    "--method huygens");
     rc = an_cmd_load(&a);
     if (rc != CLI_EXIT_OK)
         return rc;
@@ -366,7 +667,19 @@ static int run(int kind, int argc, char **argv)
     c.kind = kind;
     c.wave0 = wave1 - 1;
     sg_diag_clear(&d);
-    if (kind == K_MTF) {
+    if (kind == K_EE) {
+        sg_ee_opts o;
+        sg_ee_opts_init(&o);
+        o.trace = to;
+        o.field = field1 - 1;
+        o.wave = wave1 - 1;
+        o.sampling = sampling;
+        o.rays = rays;
+        o.kind = eekind;
+        o.max_radius_um = maxr;
+        rc = sg_ee_compute(a.sys, a.cat, &o, &ee, &d);
+        c.e = &ee;
+    } else if (kind == K_MTF) {
         sg_mtf_opts o;
         sg_mtf_opts_init(&o);
         o.trace = to;
@@ -374,8 +687,20 @@ static int run(int kind, int argc, char **argv)
         o.wave = wave1 - 1;
         o.sampling = sampling;
         o.max_frequency = maxf;
-        rc = sg_mtf_compute(a.sys, a.cat, &o, &m, &d);
-        c.m = &m;
+        o.method = dmethod;
+        if (tfrange > 0.0) {
+            sg_tf_opts to2;
+            sg_tf_opts_init(&to2);
+            to2.mtf = o;
+            to2.frequency = tffreq;
+            to2.range = tfrange;
+            to2.steps = steps;
+            rc = sg_tf_compute(a.sys, a.cat, &to2, &tf, &d);
+            c.tf = &tf;
+        } else {
+            rc = sg_mtf_compute(a.sys, a.cat, &o, &m, &d);
+            c.m = &m;
+        }
     } else {
         sg_psf_opts o;
         nf = field1 ? 1 : a.sys->nfield;
@@ -389,6 +714,9 @@ static int run(int kind, int argc, char **argv)
         o.trace = to;
         o.wave = wave1 - 1;
         o.sampling = sampling;
+        o.method = dmethod;
+        o.image_size = isize;
+        o.image_delta_um = idelta;
         rc = SG_OK;
         for (k = 0; k < nf && rc == SG_OK; k++) {
             o.field = field1 ? field1 - 1 : k;
@@ -410,6 +738,8 @@ done:
             sg_psf_free(&psf[k]);
     free(psf);
     sg_mtf_free(&m);
+    sg_ee_free(&ee);
+    sg_tf_free(&tf);
     an_cmd_free(&a);
     return rc;
 }
@@ -422,4 +752,9 @@ int cmd_mtf(int argc, char **argv)
 int cmd_psf(int argc, char **argv)
 {
     return run(K_PSF, argc, argv);
+}
+
+int cmd_encircled(int argc, char **argv)
+{
+    return run(K_EE, argc, argv);
 }

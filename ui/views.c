@@ -492,7 +492,8 @@ int view_mtf_figure(const sg_system *sys, const sg_mtf *m, plot_figure *f)
     char title[200], lab[64], leg[48];
     plot_panel *p;
     int k;
-    snprintf(title, sizeof title, "FFT MTF: %s", safe_text(sys->title, lab, sizeof lab));
+    snprintf(title, sizeof title, "%s MTF: %s", m->method == SG_MTF_GEOMETRIC ? "Geometric" : "FFT",
+             safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
     p = plot_add_panel(f, NULL, "spatial frequency (cycles/mm)", "modulus of the OTF");
     if (!p)
@@ -519,7 +520,8 @@ int view_psf_figure(const sg_system *sys, const sg_psf *ps, int n, plot_figure *
 {
     char title[200], lab[64], pt[64];
     int k, rc = -1;
-    snprintf(title, sizeof title, "FFT PSF cross-sections: %s",
+    snprintf(title, sizeof title, "%s PSF cross-sections: %s",
+             n > 0 && ps[0].method == SG_PSF_HUYGENS ? "Huygens" : "FFT",
              safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
     for (k = 0; k < n; k++) {
@@ -558,5 +560,58 @@ int view_psf_figure(const sg_system *sys, const sg_psf *ps, int n, plot_figure *
     }
     plot_add_legend(f, 0, "along x");
     plot_add_legend(f, 1, "along y");
+    return 0;
+}
+
+int view_ee_figure(const sg_system *sys, const sg_ee *e, plot_figure *f)
+{
+    char title[200], lab[64], pt[32];
+    int k, sq = e->kind == SG_EE_ENSQUARED;
+    snprintf(title, sizeof title, "%s energy: %s", sq ? "Ensquared" : "Encircled",
+             safe_text(sys->title, lab, sizeof lab));
+    plot_figure_init(f, title);
+    for (k = 0; k < e->nfield; k++) {
+        size_t o = (size_t)k * e->npts;
+        plot_panel *p;
+        snprintf(pt, sizeof pt, "field %d", e->field[k] + 1);
+        p = plot_add_panel(f, pt, sq ? "half-width (um)" : "radius (um)", "fraction of energy");
+        if (!p ||
+            plot_add_series(p, PLOT_LINES, PLOT_FG, e->radius_um, e->limit + o,
+                            (size_t)e->npts) ||
+            plot_add_series(p, PLOT_LINES, 0, e->radius_um, e->diffraction + o,
+                            (size_t)e->npts) ||
+            plot_add_series(p, PLOT_LINES, 1, e->radius_um, e->geometric + o, (size_t)e->npts))
+            return -1;
+        plot_panel_limits(p, 0.0);
+    }
+    plot_add_legend(f, PLOT_FG, "diffraction limit");
+    plot_add_legend(f, 0, "diffraction");
+    plot_add_legend(f, 1, "geometric");
+    return 0;
+}
+
+int view_tf_figure(const sg_system *sys, const sg_tf *t, plot_figure *f)
+{
+    char title[200], lab[64], pt[32], ax[48];
+    int k;
+    snprintf(title, sizeof title, "Through-focus MTF at %.4g cycles/mm: %s", t->frequency,
+             safe_text(sys->title, lab, sizeof lab));
+    plot_figure_init(f, title);
+    snprintf(ax, sizeof ax, "focus shift (%s)", sys->units);
+    for (k = 0; k < t->nfield; k++) {
+        size_t o = (size_t)k * t->nsteps;
+        plot_panel *p;
+        snprintf(pt, sizeof pt, "field %d", t->field[k] + 1);
+        p = plot_add_panel(f, pt, ax, "MTF, Strehl ratio");
+        if (!p ||
+            plot_add_series(p, PLOT_LINES, 0, t->shift, t->tan + o, (size_t)t->nsteps) ||
+            plot_add_series(p, PLOT_LINES, 1, t->shift, t->sag + o, (size_t)t->nsteps) ||
+            plot_add_series(p, PLOT_LINES, PLOT_FG, t->shift, t->strehl + o, (size_t)t->nsteps))
+            return -1;
+        plot_panel_limits(p, 0.0);
+    }
+    plot_add_legend(f, 0, "tangential");
+    plot_add_legend(f, 1, "sagittal");
+    plot_add_legend(f, PLOT_FG, "Strehl ratio");
     return 0;
 }

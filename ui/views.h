@@ -45,5 +45,10 @@ int view_mtf_figure(const sg_system *sys, const sg_mtf *m, plot_figure *f);
 /* The FFT PSF's cross-sections along x and y through the chief ray's
  * point, one panel per field, out to 16 lambda F#. */
 int view_psf_figure(const sg_system *sys, const sg_psf *p, int n, plot_figure *f);
+/* Encircled or ensquared energy: a panel per field, diffraction, geometric
+ * and the diffraction limit. */
+int view_ee_figure(const sg_system *sys, const sg_ee *e, plot_figure *f);
+/* Through-focus MTF and Strehl ratio: a panel per field. */
+int view_tf_figure(const sg_system *sys, const sg_tf *t, plot_figure *f);
 
 #endif

@@ -166,6 +166,65 @@ static void test_diffraction(void **state)
     assert_true(fabs(strtod(p + 10, NULL) - 1.0) < 1e-9);
     assert_non_null(strstr(r.out, "\"spacing_um\": "));
     ct_free(&r);
+    /* psf --method huygens: the perfect mirror's Strehl ratio is 1; the
+     * diffraction methods belong to their commands. */
+    expect(2, ARGS("mtf", path, "--method", "huygens"), "huygens", NULL);
+    expect(2, ARGS("psf", path, "--method", "geometric"), "geometric", NULL);
+    expect(2, ARGS("psf", path, "--image-size", "16"), "--method huygens", NULL);
+    ct_run(&r, "psf", mirror, "--method", "huygens", "--method", "classic", "--sampling", "32",
+           "--format", "json", (const char *)NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.out, "\"method\": \"huygens\""));
+    p = strstr(r.out, "\"strehl\": ");
+    assert_non_null(p);
+    assert_true(fabs(strtod(p + 10, NULL) - 1.0) < 1e-9);
+    ct_free(&r);
+    /* mtf --through-focus: the options go together; in focus the mirror's
+     * MTF at half the cutoff is the circle's, 2/pi (pi/3 - sqrt(3)/4). */
+    expect(2, ARGS("mtf", path, "--through-focus", "0.1"), "--frequency", NULL);
+    expect(2, ARGS("mtf", path, "--steps", "3"), "--through-focus", NULL);
+    expect(2, ARGS("mtf", path, "--through-focus", "0.1", "--frequency", "20", "--steps", "1"),
+           "--steps", NULL);
+    {
+        char fr[32];
+        snprintf(fr, sizeof fr, "%.17g", nuc / 2);
+        ct_run(&r, "mtf", mirror, "--through-focus", "0.01", "--frequency", fr, "--steps", "3",
+               "--format", "json", (const char *)NULL);
+    }
+    if (r.code != 0)
+        fail_msg("sagitta mtf --through-focus: exit %d: %s", r.code, r.err);
+    p = strstr(r.out, "\"tangential\": [");
+    assert_non_null(p);
+    p = strchr(p, ',');
+    assert_true(fabs(strtod(p + 1, NULL) -
+                     2.0 / 3.14159265358979 * (3.14159265358979 / 3 - sqrt(3.0) / 4)) < 0.004);
+    assert_non_null(strstr(r.out, "\"strehl\": ["));
+    ct_free(&r);
+    /* encircled: bad options named; the perfect F/10's energy within its
+     * first dark ring, v = 3.8317 (1.2197 lambda F#), is Rayleigh's 0.838. */
+    expect(2, ARGS("encircled", path, "--type", "round"), "--type", NULL);
+    expect(2, ARGS("encircled", path, "--max-radius", "0"), "--max-radius", NULL);
+    expect(2, ARGS("mtf", path, "--rays", "10"), "--rays", NULL);
+    expect(4, ARGS("encircled", path, "--max-radius", "1e6"), "maximum radius", NULL);
+    {
+        char rad[32];
+        snprintf(rad, sizeof rad, "%.17g", 3.8317059702075123 * 0.55 * 10.0 / 3.14159265358979);
+        ct_run(&r, "encircled", mirror, "--max-radius", rad, "--format", "json",
+               (const char *)NULL);
+    }
+    if (r.code != 0)
+        fail_msg("sagitta encircled: exit %d: %s", r.code, r.err);
+    p = strstr(r.out, "\"fraction\": [");
+    assert_non_null(p);
+    p = strchr(p, ']');
+    while (p[-1] != ' ')
+        p--;
+    print_message("# encircled --format json, F/10 at the first dark ring: %g\n", strtod(p, NULL));
+    assert_true(fabs(strtod(p, NULL) - 0.838) < 0.003);
+    assert_non_null(strstr(r.out, "\"radius_um\": [0, "));
+    assert_non_null(strstr(r.out, "\"geometric\": ["));
+    assert_non_null(strstr(r.out, "\"diffraction_limit\": ["));
+    ct_free(&r);
 }
 
 /* sagitta thermal: the N-BK7 singlet at 60 C from 20 C has its first radius
