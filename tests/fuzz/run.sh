@@ -101,7 +101,7 @@ pids=""
 n=0
 status=0
 for src in "$root"/src/*.c "$root"/ui/args.c "$root"/ui/csvrays.c "$root"/ui/report.c \
-           "$root"/ui/outfile.c "$root"/ui/safetext.c \
+           "$root"/ui/outfile.c "$root"/ui/safetext.c "$root"/ui/progress.c \
            "$root"/ui/numfmt.c "$root"/ui/h5rays.c \
            "$root"/ui/cli.c; do
     dir=$(basename "$(dirname "$src")")
