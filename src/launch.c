@@ -808,7 +808,8 @@ static int field_osp_at(sg_tracer *t, land_fn land, double hx, double hy, osp *o
         osp_from_values(t, vx, vy, 0, o);
         return SG_OK;
     case SG_FIELD_PARAX_IMAGE_HEIGHT:
-        osp_from_values(t, dd_div(vx, t->ln.pimg_slope), dd_div(vy, t->ln.pimg_slope), 0, o);
+        osp_from_values(t, dd_div(vx, t->ln.pimg_slope_f), dd_div(vy, t->ln.pimg_slope_f), 0,
+                        o);
         return SG_OK;
     case SG_FIELD_REAL_IMAGE_HEIGHT: {
         /* Newton on the object-space value until the chief ray lands on
@@ -1244,9 +1245,11 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
         }
         t->ln.stop_r = dd_from_mpfr(p.stop_r, tmp);
         t->ln.pimg_slope = dd_from_mpfr(p.pimg_slope, tmp);
+        t->ln.pimg_slope_f = dd_from_mpfr(p.pimg_slope_f, tmp);
         if ((sys->field_type == SG_FIELD_PARAX_IMAGE_HEIGHT ||
              sys->field_type == SG_FIELD_REAL_IMAGE_HEIGHT) &&
-            !(t->ln.pimg_slope.hi != 0.0 && isfinite(t->ln.pimg_slope.hi)))
+            !(t->ln.pimg_slope.hi != 0.0 && isfinite(t->ln.pimg_slope.hi) &&
+              t->ln.pimg_slope_f.hi != 0.0 && isfinite(t->ln.pimg_slope_f.hi)))
             rc = sg_diag_set(d, SG_ENONPHYS,
                              "fields: image heights cannot define fields in this system: the "
                              "paraxial chief ray meets the image at height %g whatever the "
@@ -1303,6 +1306,7 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
         t->ln.tslope = t->prim->ln.tslope;
         t->ln.stop_r = t->prim->ln.stop_r;
         t->ln.pimg_slope = t->prim->ln.pimg_slope;
+        t->ln.pimg_slope_f = t->prim->ln.pimg_slope_f;
         return SG_OK;
     }
 

@@ -269,6 +269,14 @@ int sg_seidel_compute(const sg_system *sys, const sg_catalog *cat, sg_seidel *ou
 
     launch(sys, &p, idx[0], &y0, &w0, &yb0, &wb0);
     hfull = trace_rays(sys, idx, phi, &r, y0, w0, yb0, wb0);
+    /* A paraxial-image-height field is defined at the paraxial image
+     * plane (sg_parax_mp): the chief ray's height there, image_dist after
+     * the last surface rather than its thickness, sets its scale. */
+    if (sys->field_type == SG_FIELD_PARAX_IMAGE_HEIGHT && isfinite(p.image_dist) && n >= 3)
+        hfull = ve_add(hfull, ve_mul(ve_div(ve_sub(ve_rounded(p.image_dist),
+                                                   ve_exact(sys->surf[n - 2].thickness)),
+                                            idx[n - 2]),
+                                     r.wb[n - 1]));
     /* The chief ray of the largest field: scaled to the paraxial image
      * height, which every field type defines. */
     if (!(fabs(hfull.v) > 0.0) || !isfinite(p.parax_image_height)) {

@@ -240,11 +240,17 @@ static int marginal_launch(const sg_system *sys, mpfr_t *idx, mpfr_t y, mpfr_t w
             mpfr_mul(cw, t, idx[0], MPFR_RNDN);
         }
         /* The field scale: image height over image height per unit. */
-        if (mpfr_zero_p(p.pimg_slope)) {
+        if (mpfr_zero_p(p.pimg_slope) || mpfr_zero_p(p.pimg_slope_f)) {
             mpfr_set_zero(cy, 1);
             mpfr_set_zero(cw, 1);
         } else {
-            mpfr_div(t, p.pimg_h, p.pimg_slope, MPFR_RNDN);
+            /* A paraxial-image-height field is defined at the paraxial
+             * image plane (sg_parax_mp); the others' pimg_h is on the
+             * image surface. */
+            mpfr_div(t, p.pimg_h,
+                     sys->field_type == SG_FIELD_PARAX_IMAGE_HEIGHT ? p.pimg_slope_f
+                                                                   : p.pimg_slope,
+                     MPFR_RNDN);
             mpfr_mul(cy, cy, t, MPFR_RNDN);
             mpfr_mul(cw, cw, t, MPFR_RNDN);
         }

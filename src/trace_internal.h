@@ -102,6 +102,7 @@ typedef struct sg_launch {
     dd stop_r;       /* stop radius that aiming lands Py = 1 on */
     dd fx, fy;       /* field scale for Hx and Hy */
     dd pimg_slope;   /* paraxial image height per unit object-space tan or height */
+    dd pimg_slope_f; /* the same at the paraxial image plane (sg_parax_mp) */
     int straight;    /* every surface between 1 and the stop leaves a ray straight */
     dd zstop;        /* the stop's vertex in surface 1's frame */
     /* Object-space telecentric: pupil point (px, py) is the direction of
@@ -433,6 +434,10 @@ typedef struct sg_parax_mp {
     mpfr_t efl, bfl, image_dist, epd, enp, exp_diam, exp_pos, image_fnum,
         working_fnum, object_na, pimg_h, mag, track, stop_r;
     mpfr_t pimg_slope; /* paraxial image height per unit tan(field) or object height */
+    /* The same at the paraxial image plane (the image surface's when the
+     * image is afocal): Zemax's paraxial-image-height fields are defined
+     * there, while its distortion is referred to the image surface. */
+    mpfr_t pimg_slope_f;
 } sg_parax_mp;
 
 void sg_parax_mp_init(sg_parax_mp *p, mpfr_prec_t prec);

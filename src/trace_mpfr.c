@@ -1618,7 +1618,9 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             mpfr_set(m->enp, p.enp, MPFR_RNDN);
             mpfr_div_2ui(m->epr, p.epd, 1, MPFR_RNDN);
             mpfr_set(m->stop_r, p.stop_r, MPFR_RNDN);
-            mpfr_set(m->pimg_slope, p.pimg_slope, MPFR_RNDN);
+            /* Only paraxial-image-height fields use it: at the paraxial
+             * image plane, as the precise launch (sg_parax_mp). */
+            mpfr_set(m->pimg_slope, p.pimg_slope_f, MPFR_RNDN);
             m->tele = sys->telecentric && isfinite(sys->surf[0].thickness);
             if (m->tele)
                 rc = sg_object_slope_mpfr(sys, idx[0], m->tslope, d);
