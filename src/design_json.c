@@ -1178,6 +1178,21 @@ static int get_configs(jctx *c, const cJSON *v, sg_system *sys)
     return SG_OK;
 }
 
+/* A tolerance row's "min" and "max" under at: both finite, min <= max. */
+static int get_limits(jctx *c, const cJSON *kmin, const cJSON *kmax, const char *at,
+                      double *min, double *max)
+{
+    char at2[160];
+    int rc;
+    if ((rc = get_finite(c, kmin, join(at2, sizeof at2, at, "min"), min)) ||
+        (rc = get_finite(c, kmax, join(at2, sizeof at2, at, "max"), max)))
+        return rc;
+    if (*min > *max)
+        return perr(c, SG_ERANGE, join(at2, sizeof at2, at, "min"), "%.17g is above max %.17g",
+                    *min, *max);
+    return SG_OK;
+}
+
 /* The tolerances (sagitta-design(5), TOLERANCES): {"operands": [{"type":
  * "TRAD", "surface": 2, "min": -0.05, "max": 0.05}, {"type": "TEDX",
  * "first": 3, "last": 4, ...}], "compensators": [{"surface": 7,
@@ -1271,12 +1286,8 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
                                                o->param, sizeof o->param))) ||
                 (ok[O_ELEM] && (rc = get_int(c, ok[O_ELEM], join(at2, sizeof at2, at, "element"),
                                              &o->elem))) ||
-                (rc = get_finite(c, ok[O_MIN], join(at2, sizeof at2, at, "min"), &o->min)) ||
-                (rc = get_finite(c, ok[O_MAX], join(at2, sizeof at2, at, "max"), &o->max)))
+                (rc = get_limits(c, ok[O_MIN], ok[O_MAX], at, &o->min, &o->max)))
                 return rc;
-            if (o->min > o->max)
-                return perr(c, SG_ERANGE, join(at2, sizeof at2, at, "min"),
-                            "%.17g is above max %.17g", o->min, o->max);
             t->nop++;
         }
     }
@@ -1307,12 +1318,8 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
                                  sizeof o->param)) ||
                 (ck[C_ELEM] && (rc = get_int(c, ck[C_ELEM], join(at2, sizeof at2, at, "element"),
                                              &o->elem))) ||
-                (rc = get_finite(c, ck[C_MIN], join(at2, sizeof at2, at, "min"), &o->min)) ||
-                (rc = get_finite(c, ck[C_MAX], join(at2, sizeof at2, at, "max"), &o->max)))
+                (rc = get_limits(c, ck[C_MIN], ck[C_MAX], at, &o->min, &o->max)))
                 return rc;
-            if (o->min > o->max)
-                return perr(c, SG_ERANGE, join(at2, sizeof at2, at, "min"),
-                            "%.17g is above max %.17g", o->min, o->max);
             t->ncomp++;
         }
     }

@@ -106,7 +106,7 @@ static void num(FILE *f, double v)
  * bounds and the sums' rounding, sg_spot_cell), or a Zernike coefficient
  * within its bound (sg_wavefront), is noise, not an offset:
  * it is printed as 0, never as -0 (sagitta(1), spot). */
-static double spot_denoise(double v, double bound)
+static double denoise(double v, double bound)
 {
     return fabs(v) <= bound ? 0.0 : v;
 }
@@ -150,14 +150,14 @@ static void spot_text(FILE *f, const sg_system *sys, const sg_spot *s, const sg_
             snprintf(rays, sizeof rays, "%zu", c->nok);
             fprintf(f, "%-26s %-12s %8s %11.6g %s %11.6g %s %14.8g %14.8g\n", w ? "" : fl, wl,
                     rays, c->rms * sc, u, c->geo * sc, u,
-                    spot_denoise(c->centroid_x, c->centroid_bound_x),
-                    spot_denoise(c->centroid_y, c->centroid_bound_y));
+                    denoise(c->centroid_x, c->centroid_bound_x),
+                    denoise(c->centroid_y, c->centroid_bound_y));
         }
         if (s->nwave > 1)
             fprintf(f, "%-26s %-12s %8s %11.6g %s %11.6g %s %14.8g %14.8g\n", "", "all", "",
                     fd->rms * sc, u, fd->geo * sc, u,
-                    spot_denoise(fd->centroid_x, fd->centroid_bound_x),
-                    spot_denoise(fd->centroid_y, fd->centroid_bound_y));
+                    denoise(fd->centroid_x, fd->centroid_bound_x),
+                    denoise(fd->centroid_y, fd->centroid_bound_y));
     }
     if (sys->afocal)
         fputs("(afocal image space: angles are differences of direction cosines from the "
@@ -198,11 +198,11 @@ static void spot_csv(FILE *f, const sg_spot *s)
                 num(f, c->chief_y);
                 fputc(',', f);
             }
-            num(f, all ? spot_denoise(fd->centroid_x, fd->centroid_bound_x)
-                       : spot_denoise(c->centroid_x, c->centroid_bound_x));
+            num(f, all ? denoise(fd->centroid_x, fd->centroid_bound_x)
+                       : denoise(c->centroid_x, c->centroid_bound_x));
             fputc(',', f);
-            num(f, all ? spot_denoise(fd->centroid_y, fd->centroid_bound_y)
-                       : spot_denoise(c->centroid_y, c->centroid_bound_y));
+            num(f, all ? denoise(fd->centroid_y, fd->centroid_bound_y)
+                       : denoise(c->centroid_y, c->centroid_bound_y));
             fputc(',', f);
             num(f, fd->ref_x);
             fputc(',', f);
@@ -240,9 +240,9 @@ static cJSON *spot_json(const sg_system *sys, const sg_spot *s, const sg_spot_op
         cJSON_AddNumberToObject(jf, "rms", fd->rms);
         cJSON_AddNumberToObject(jf, "geo", fd->geo);
         cJSON_AddNumberToObject(jf, "centroid_x",
-                                spot_denoise(fd->centroid_x, fd->centroid_bound_x));
+                                denoise(fd->centroid_x, fd->centroid_bound_x));
         cJSON_AddNumberToObject(jf, "centroid_y",
-                                spot_denoise(fd->centroid_y, fd->centroid_bound_y));
+                                denoise(fd->centroid_y, fd->centroid_bound_y));
         ws = cJSON_AddArrayToObject(jf, "waves");
         for (w = 0; w < s->nwave; w++) {
             const sg_spot_cell *c = &s->cell[fi * s->nwave + w];
@@ -254,9 +254,9 @@ static cJSON *spot_json(const sg_system *sys, const sg_spot *s, const sg_spot_op
             cJSON_AddNumberToObject(jw, "chief_x", c->chief_x);
             cJSON_AddNumberToObject(jw, "chief_y", c->chief_y);
             cJSON_AddNumberToObject(jw, "centroid_x",
-                                    spot_denoise(c->centroid_x, c->centroid_bound_x));
+                                    denoise(c->centroid_x, c->centroid_bound_x));
             cJSON_AddNumberToObject(jw, "centroid_y",
-                                    spot_denoise(c->centroid_y, c->centroid_bound_y));
+                                    denoise(c->centroid_y, c->centroid_bound_y));
             cJSON_AddNumberToObject(jw, "rms", c->rms);
             cJSON_AddNumberToObject(jw, "geo", c->geo);
             cJSON_AddItemToArray(ws, jw);
@@ -460,7 +460,7 @@ static void wavefront_text(FILE *f, const sg_system *sys, const sg_wavefront *w,
         int n = 0, m = 0;
         sg_zernike_nm(w->kind, j, &n, &m);
         fprintf(f, "  Z%-3d n %2d m %3d %16.8g\n", j, n, m,
-                spot_denoise(w->coef[j - 1], w->coef_bound[j - 1]));
+                denoise(w->coef[j - 1], w->coef_bound[j - 1]));
     }
     fprintf(f, "Fit residual RMS: %.8g waves\n", w->fit_rms);
 }
@@ -507,7 +507,7 @@ static cJSON *wavefront_json(const sg_system *sys, const sg_wavefront *w,
     {
         double c[SG_WAVEFRONT_MAXTERMS];
         for (i = 0; i < w->nterms; i++)
-            c[i] = spot_denoise(w->coef[i], w->coef_bound[i]);
+            c[i] = denoise(w->coef[i], w->coef_bound[i]);
         cJSON_AddItemToObject(z, "coef", cJSON_CreateDoubleArray(c, w->nterms));
         cJSON_AddItemToObject(z, "coef_bound", cJSON_CreateDoubleArray(w->coef_bound, w->nterms));
     }
