@@ -195,8 +195,7 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
         piston = c0.opd_waves;
         piston_err = c0.error_bound;
     }
-    if ((rc = check_grid(o->grid, (sg_zernike_kind)o->kind, o->nterms, d)) != SG_OK ||
-        (rc = map_alloc(o->grid, out, d)) != SG_OK)
+    if ((rc = map_alloc(o->grid, out, d)) != SG_OK)
         goto done;
     n = (size_t)o->grid * (size_t)o->grid;
     blk = o->block ? o->block : 65536;
