@@ -18,7 +18,6 @@
 #include "safetext.h"
 #include "views.h"
 
-enum { A_WAVE = 1, A_METHOD, A_POINTS, A_STEP };
 
 #define seidel_names view_seidel_names
 static const char *const wave_names[SG_NWCOEF] = { "W040", "W131", "W222",  "W220P", "W311",
@@ -85,7 +84,7 @@ AN_COMMON_HELP
 
 static const cli_opt seidel_opts[] = {
     AN_COMMON_OPTS,
-    { NULL, 0, 0, 0 }
+    CLI_END
 };
 
 /* The three sets of row j (surface j, or the total at j == nsurf), each
@@ -328,15 +327,6 @@ AN_COMMON_HELP
 "  -h, --help         show this help\n", f);
 }
 
-static const cli_opt fieldcurve_opts[] = {
-    AN_COMMON_OPTS,
-    { "--wave", 0, 1, A_WAVE },
-    { "--method", 0, 1, A_METHOD },
-    { "--points", 0, 1, A_POINTS },
-    { "--step", 0, 1, A_STEP },
-    { NULL, 0, 0, 0 }
-};
-
 static void fieldcurve_write(FILE *f, int fmt, const char *design, const sg_system *sys,
                              int wave0, const sg_fieldcurve_pt *p, int n)
 {
@@ -437,58 +427,44 @@ int cmd_fieldcurve(int argc, char **argv)
 {
     cli_iter it;
     const char *val;
-    int id, rc, wave1 = 0, wave0 = 0, npts = 21, m, recipe = SG_FIELDCURVE_EXACT, stepped = 0;
-    double step = 0.01;
+    int id, rc, wave1 = 0, wave0 = 0, npts = 21, m = SG_METHOD_PRECISE, stepped;
+    int recipe = SG_FIELDCURVE_EXACT;
+    double step = NAN; /* NaN: not given */
     sg_fieldcurve_pt *pts = NULL;
     sg_trace_opts opts;
     sg_diag d;
     an_cmd a;
     fc_ctx c;
     an_writer w = {fc_fig, fc_write, &c};
+    /* zemax: Zemax's recipe for the foci, traced by precise. */
+    const cli_opt fieldcurve_opts[] = {
+        AN_COMMON_OPTS,
+        CLI_OPT_INT("--wave", 0, wave1, 1, SG_MAX_WAVES),
+        CLI_OPT_WORD("--method", m, "precise|classic|mpfr|zemax", NULL),
+        CLI_OPT_INT("--points", 0, npts, 2, 100000),
+        CLI_OPT_NUMS("--step", &step, 1, "step"),
+        CLI_END
+    };
 
     sg_trace_opts_init(&opts);
     an_cmd_init(&a, "fieldcurve");
     cli_iter_init(&it, "fieldcurve", argc, argv);
     while ((id = an_cmd_next(&a, &it, fieldcurve_opts, &val)) >= 0) {
-        switch (id) {
-        case AN_OPT_HELP:
-            fieldcurve_help(stdout);
-            return CLI_EXIT_OK;
-        case A_WAVE:
-            if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))
-                return CLI_EXIT_USAGE;
-            break;
-        case A_METHOD:
-            /* zemax: Zemax's recipe for the foci, traced by precise. */
-            if (strcmp(val, "zemax") == 0) {
-                recipe = SG_FIELDCURVE_ZEMAX;
-                opts.method = SG_METHOD_PRECISE;
-                break;
-            }
-            m = sg_method_parse(val);
-            if (m < 0)
-                return cli_usage_error("fieldcurve", "--method: \"%s\" is not precise, "
-                                                     "classic, mpfr or zemax", val);
-            recipe = SG_FIELDCURVE_EXACT;
-            opts.method = (sg_method)m;
-            break;
-        case A_POINTS:
-            if (cli_int_value("--points", val, 2, 100000, &npts))
-                return CLI_EXIT_USAGE;
-            break;
-        case A_STEP:
-            if (cli_doubles_value("--step", val, 1, "step", &step))
-                return CLI_EXIT_USAGE;
-            if (!(step > 0.0 && step <= 0.1))
-                return cli_usage_error("fieldcurve", "--step: %g is not in (0, 0.1]", step);
-            stepped = 1;
-            break;
-        default:
+        if (id != AN_OPT_HELP)
             return CLI_EXIT_USAGE;
-        }
+        fieldcurve_help(stdout);
+        return CLI_EXIT_OK;
     }
     if (id < -1)
         return -id;
+    stepped = !isnan(step);
+    if (stepped && !(step > 0.0 && step <= 0.1))
+        return cli_usage_error("fieldcurve", "--step: %g is not in (0, 0.1]", step);
+    if (!stepped)
+        step = 0.01;
+    /* The engine's methods are 0 to 2 in the words' order. */
+    recipe = m == 3 ? SG_FIELDCURVE_ZEMAX : SG_FIELDCURVE_EXACT;
+    opts.method = m == 3 ? SG_METHOD_PRECISE : (sg_method)m;
     rc = an_cmd_load(&a);
     if (rc != CLI_EXIT_OK)
         return rc;

@@ -18,29 +18,10 @@
 
 enum { AN_SPOT, AN_FAN, AN_LAYOUT, AN_WAVEFRONT };
 
-enum {
-    O_WAVE = 1, O_FIELD, O_METHOD, O_PATTERN, O_DENSITY, O_REFERENCE, O_POINTS, O_RAYS,
-    O_THREADS, O_NOCLIP, O_GRID, O_ZERNIKE, O_TERMS, O_OPD
-};
+enum { O_PATTERN = 1 };
 
-static const cli_opt an_opts[] = {
-    AN_COMMON_OPTS,
-    { "--wave", 0, 1, O_WAVE },
-    { "--field", 0, 1, O_FIELD },
-    { "--method", 0, 1, O_METHOD },
-    { "--pattern", 0, 1, O_PATTERN },
-    { "--density", 0, 1, O_DENSITY },
-    { "--reference", 0, 1, O_REFERENCE },
-    { "--points", 0, 1, O_POINTS },
-    { "--rays", 0, 1, O_RAYS },
-    { "--threads", 0, 1, O_THREADS },
-    { "--no-clip", 0, 0, O_NOCLIP },
-    { "--grid", 0, 1, O_GRID },
-    { "--zernike", 0, 1, O_ZERNIKE },
-    { "--terms", 0, 1, O_TERMS },
-    { "--opd", 0, 0, O_OPD },
-    { NULL, 0, 0, 0 }
-};
+static const int zernike_kinds[] = {SG_ZERNIKE_FRINGE, SG_ZERNIKE_STANDARD};
+static const int spot_refs[] = {SG_SPOT_REF_CHIEF, SG_SPOT_REF_CENTROID};
 
 static const char *const an_name[] = {"spot", "fan", "layout", "wavefront"};
 
@@ -618,6 +599,26 @@ static int run(int kind, int argc, char **argv)
     an_res r;
     an_writer w = {res_fig, res_text, &r};
 
+    const cli_opt an_opts[] = {
+        AN_COMMON_OPTS,
+        CLI_OPT_INT("--wave", 0, wave1, 1, SG_MAX_WAVES),
+        CLI_OPT_INT("--field", 0, field1, 1, SG_MAX_FIELDS),
+        CLI_OPT_METHOD(method),
+        /* The engine owns the pattern names. */
+        CLI_ID("--pattern", 0, 1, O_PATTERN),
+        CLI_OPT_INT_FOR("--density", density, 1, SG_PUPIL_MAX_DENSITY, "spot"),
+        CLI_OPT_WORD_FOR("--reference", ref, "chief|centroid", spot_refs, "spot"),
+        CLI_OPT_INT_FOR("--points", points, 2, 1000000, "fan"),
+        CLI_OPT_INT_FOR("--rays", nrays, 1, 10000, "layout"),
+        CLI_OPT_INT("--threads", 0, threads, 0, 256),
+        CLI_OPT_FLAG("--no-clip", 0, noclip),
+        CLI_OPT_INT_FOR("--grid", grid, 3, 4096, "wavefront"),
+        CLI_OPT_WORD_FOR("--zernike", zkind, "fringe|standard", zernike_kinds, "wavefront"),
+        CLI_OPT_INT_FOR("--terms", terms, 1, SG_WAVEFRONT_MAXTERMS, "wavefront"),
+        CLI_OPT_FLAG_FOR("--opd", opdfan, "fan"),
+        CLI_END
+    };
+
     memset(&r, 0, sizeof r);
     an_cmd_init(&a, cmd);
     cli_iter_init(&it, cmd, argc, argv);
@@ -626,90 +627,12 @@ static int run(int kind, int argc, char **argv)
         case AN_OPT_HELP:
             an_help(kind, stdout);
             return CLI_EXIT_OK;
-        case O_WAVE:
-            if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))
-                return CLI_EXIT_USAGE;
-            break;
-        case O_FIELD:
-            if (cli_int_value("--field", val, 1, SG_MAX_FIELDS, &field1))
-                return CLI_EXIT_USAGE;
-            break;
-        case O_METHOD:
-            method = sg_method_parse(val);
-            if (method < 0)
-                return cli_usage_error(cmd, "--method: expected precise, classic or mpfr, "
-                                            "got \"%s\"", val);
-            break;
         case O_PATTERN:
             pattern = sg_pupil_pattern_parse(val);
             if (pattern < 0 || kind != AN_SPOT)
-                return cli_usage_error(cmd, kind != AN_SPOT ? "--pattern is for spot"
+                return cli_usage_error(cmd, kind != AN_SPOT ? "--pattern is an option of spot only"
                                                             : "--pattern: expected hexapolar, "
                                                               "square or vogel");
-            break;
-        case O_DENSITY:
-            if (kind != AN_SPOT)
-                return cli_usage_error(cmd, "--density is for spot");
-            if (cli_int_value("--density", val, 1, SG_PUPIL_MAX_DENSITY, &density))
-                return CLI_EXIT_USAGE;
-            break;
-        case O_REFERENCE:
-            if (kind != AN_SPOT)
-                return cli_usage_error(cmd, "--reference is for spot");
-            if (strcmp(val, "chief") == 0)
-                ref = SG_SPOT_REF_CHIEF;
-            else if (strcmp(val, "centroid") == 0)
-                ref = SG_SPOT_REF_CENTROID;
-            else
-                return cli_usage_error(cmd, "--reference: expected chief or centroid, got "
-                                            "\"%s\"", val);
-            break;
-        case O_POINTS:
-            if (kind != AN_FAN)
-                return cli_usage_error(cmd, "--points is for fan");
-            if (cli_int_value("--points", val, 2, 1000000, &points))
-                return CLI_EXIT_USAGE;
-            break;
-        case O_RAYS:
-            if (kind != AN_LAYOUT)
-                return cli_usage_error(cmd, "--rays is for layout");
-            if (cli_int_value("--rays", val, 1, 10000, &nrays))
-                return CLI_EXIT_USAGE;
-            break;
-        case O_THREADS:
-            if (cli_int_value("--threads", val, 0, 256, &threads))
-                return CLI_EXIT_USAGE;
-            break;
-        case O_NOCLIP:
-            noclip = 1;
-            break;
-        case O_OPD:
-            if (kind != AN_FAN)
-                return cli_usage_error(cmd, "--opd is for fan");
-            opdfan = 1;
-            break;
-        case O_GRID:
-            if (kind != AN_WAVEFRONT)
-                return cli_usage_error(cmd, "--grid is for wavefront");
-            if (cli_int_value("--grid", val, 3, 4096, &grid))
-                return CLI_EXIT_USAGE;
-            break;
-        case O_ZERNIKE:
-            if (kind != AN_WAVEFRONT)
-                return cli_usage_error(cmd, "--zernike is for wavefront");
-            if (strcmp(val, "fringe") == 0)
-                zkind = SG_ZERNIKE_FRINGE;
-            else if (strcmp(val, "standard") == 0)
-                zkind = SG_ZERNIKE_STANDARD;
-            else
-                return cli_usage_error(cmd, "--zernike: expected fringe or standard, got "
-                                            "\"%s\"", val);
-            break;
-        case O_TERMS:
-            if (kind != AN_WAVEFRONT)
-                return cli_usage_error(cmd, "--terms is for wavefront");
-            if (cli_int_value("--terms", val, 1, SG_WAVEFRONT_MAXTERMS, &terms))
-                return CLI_EXIT_USAGE;
             break;
         default:
             return CLI_EXIT_USAGE;

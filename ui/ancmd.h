@@ -20,8 +20,8 @@ enum { AN_OPT_HELP = 1000, AN_OPT_FORMAT, AN_OPT_OUTPUT, AN_OPT_SIZE };
 
 /* The shared rows of a command's option table. */
 #define AN_COMMON_OPTS                                                                      \
-    { "--help", 'h', 0, AN_OPT_HELP }, { "--format", 0, 1, AN_OPT_FORMAT },                 \
-        { "--output", 'o', 1, AN_OPT_OUTPUT }, { "--size", 0, 1, AN_OPT_SIZE }
+    CLI_ID("--help", 'h', 0, AN_OPT_HELP), CLI_ID("--format", 0, 1, AN_OPT_FORMAT),                 \
+        CLI_ID("--output", 'o', 1, AN_OPT_OUTPUT), CLI_ID("--size", 0, 1, AN_OPT_SIZE)
 
 /* The shared lines of a command's help. */
 #define AN_COMMON_HELP                                                                      \

@@ -974,17 +974,17 @@ enum { OPT_HELP = 1, OPT_FORMAT, OPT_REPEAT, OPT_QUICK, OPT_THREADS, OPT_RAYS, O
        OPT_VIEW, OPT_CLOCK, OPT_EDIT_SURF };
 
 static const cli_opt bench_opts[] = {
-    { "--help", 'h', 0, OPT_HELP },
-    { "--format", 0, 1, OPT_FORMAT },
-    { "--repeat", 0, 1, OPT_REPEAT },
-    { "--quick", 0, 0, OPT_QUICK },
-    { "--threads", 0, 1, OPT_THREADS },
-    { "--rays", 0, 1, OPT_RAYS },
-    { "--spot", 0, 0, OPT_SPOT },
-    { "--view", 0, 1, OPT_VIEW },
-    { "--clock", 0, 1, OPT_CLOCK },
-    { "--edit-surface", 0, 1, OPT_EDIT_SURF },
-    { NULL, 0, 0, 0 }
+    CLI_ID("--help", 'h', 0, OPT_HELP),
+    CLI_ID("--format", 0, 1, OPT_FORMAT),
+    CLI_ID("--repeat", 0, 1, OPT_REPEAT),
+    CLI_ID("--quick", 0, 0, OPT_QUICK),
+    CLI_ID("--threads", 0, 1, OPT_THREADS),
+    CLI_ID("--rays", 0, 1, OPT_RAYS),
+    CLI_ID("--spot", 0, 0, OPT_SPOT),
+    CLI_ID("--view", 0, 1, OPT_VIEW),
+    CLI_ID("--clock", 0, 1, OPT_CLOCK),
+    CLI_ID("--edit-surface", 0, 1, OPT_EDIT_SURF),
+    CLI_END
 };
 
 /* ------------------------------------------------------------ spot mode */

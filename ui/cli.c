@@ -113,7 +113,7 @@ void cli_iter_init(cli_iter *it, const char *cmd, int argc, char **argv)
  * is configuration N of its configurations (0: as stored). */
 static int cli_config_n;
 
-int cli_next_opt(cli_iter *it, const cli_opt *opts, const char **val)
+static int next_raw(cli_iter *it, const cli_opt *opts, const char **val, const cli_opt **row)
 {
     const char *a, *eq;
     const cli_opt *o;
@@ -160,17 +160,17 @@ again:
         if (!o->has_arg) {
             if (eq)
                 return -cli_usage_error(it->cmd, "%s takes no value", o->name);
-            return o->id;
+            return *row = o, o->id;
         }
         if (eq) {
             *val = eq + 1;
-            return o->id;
+            return *row = o, o->id;
         }
         if (o->has_arg == CLI_OPT_NUM) {
             const char *n = it->i < it->argc ? it->argv[it->i] : NULL;
             if (n && n[0] && strspn(n, "0123456789") == strlen(n))
                 *val = it->argv[it->i++];
-            return o->id;
+            return *row = o, o->id;
         }
     } else {
         snprintf(it->opt, sizeof it->opt, "-%c", a[1]);
@@ -182,17 +182,106 @@ again:
         if (!o->has_arg) {
             if (a[2])
                 return -cli_usage_error(it->cmd, "%s takes no value", it->opt);
-            return o->id;
+            return *row = o, o->id;
         }
         if (a[2]) {
             *val = a + 2;
-            return o->id;
+            return *row = o, o->id;
         }
     }
     if (it->i >= it->argc)
         return -cli_usage_error(it->cmd, "%s needs a value", it->opt);
     *val = it->argv[it->i++];
-    return o->id;
+    return *row = o, o->id;
+}
+
+
+/* words "a|b|c" as "a, b or c", for messages. */
+static void word_list(const char *words, char *buf, size_t n)
+{
+    size_t len = 0;
+    const char *p = words;
+    buf[0] = '\0';
+    while (*p && len + 1 < n) {
+        size_t w = strcspn(p, "|");
+        const char *sep = p[w] ? (strchr(p + w + 1, '|') ? ", " : " or ") : "";
+        len += (size_t)snprintf(buf + len, n - len, "%.*s%s", (int)w, p, sep);
+        p += w + (p[w] != '\0');
+    }
+}
+
+/* Whether the command cmd is one of only's space-separated names. */
+static int row_is_for(const char *only, const char *cmd)
+{
+    size_t n = cmd ? strlen(cmd) : 0;
+    const char *p = only;
+    while ((p = strstr(p, cmd)) != NULL) {
+        if ((p == only || p[-1] == ' ') && (p[n] == '\0' || p[n] == ' '))
+            return 1;
+        p += n;
+    }
+    return 0;
+}
+
+/* Stores a declarative row's value; CLI_EXIT_OK or, after a message,
+ * CLI_EXIT_USAGE. */
+static int store_row(const cli_iter *it, const cli_opt *o, const char *val)
+{
+    if (o->only && !row_is_for(o->only, it->cmd))
+        return cli_usage_error(it->cmd, "%s is an option of %s only", o->name, o->only);
+    switch (o->kind) {
+    case CLI_INT:
+        return cli_int_value(o->name, val, o->lo, o->hi, (int *)o->dest);
+    case CLI_FLAG:
+        *(int *)o->dest = 1;
+        return CLI_EXIT_OK;
+    case CLI_TEXT:
+        *(const char **)o->dest = val;
+        return CLI_EXIT_OK;
+    case CLI_NUMS:
+        return cli_doubles_value(o->name, val, o->lo, o->words, (double *)o->dest);
+    case CLI_POS: {
+        double v;
+        if (cli_doubles_value(o->name, val, 1, o->words, &v))
+            return CLI_EXIT_USAGE;
+        if (!(v > 0.0) || !isfinite(v))
+            return cli_usage_error(it->cmd, "%s: %g is not a positive number%s", o->name, v,
+                                   o->unit ? o->unit : "");
+        *(double *)o->dest = v;
+        return CLI_EXIT_OK;
+    }
+    case CLI_WORD: {
+        const char *p = o->words;
+        size_t n = strlen(val);
+        int k = 0;
+        char list[256];
+        while (*p) {
+            size_t w = strcspn(p, "|");
+            if (w == n && strncmp(p, val, n) == 0) {
+                *(int *)o->dest = o->values ? o->values[k] : k;
+                return CLI_EXIT_OK;
+            }
+            p += w + (p[w] != '\0');
+            k++;
+        }
+        word_list(o->words, list, sizeof list);
+        return cli_usage_error(it->cmd, "%s: expected %s, got \"%s\"", o->name, list, val);
+    }
+    default:
+        return cli_usage_error(it->cmd, "%s: no way to read it", o->name);
+    }
+}
+
+int cli_next_opt(cli_iter *it, const cli_opt *opts, const char **val)
+{
+    for (;;) {
+        const cli_opt *row = NULL;
+        int id = next_raw(it, opts, val, &row);
+        if (id <= 0 || !row || !row->dest)
+            return id;
+        if (store_row(it, row, *val) != CLI_EXIT_OK)
+            return -CLI_EXIT_USAGE;
+    }
 }
 
 int cli_format_value(const char *s, int allow_csv, int *fmt)
@@ -487,20 +576,20 @@ enum {
 };
 
 static const cli_opt trace_opts[] = {
-    { "--help", 'h', 0, OPT_HELP },
-    { "--method", 0, 1, OPT_METHOD },
-    { "--bits", 0, 1, OPT_BITS },
-    { "--wave", 0, 1, OPT_WAVE },
-    { "--format", 0, 1, OPT_FORMAT },
-    { "--output", 'o', 1, OPT_OUTPUT },
-    { "--start", 0, 1, OPT_START },
-    { "--dir", 0, 1, OPT_DIR },
-    { "--ray", 0, 1, OPT_RAY },
-    { "--rays", 0, 1, OPT_RAYS },
-    { "--no-clip", 0, 0, OPT_NOCLIP },
-    { "--threads", 0, 1, OPT_THREADS },
-    { "--global", 0, CLI_OPT_NUM, OPT_GLOBAL },
-    { NULL, 0, 0, 0 }
+    CLI_ID("--help", 'h', 0, OPT_HELP),
+    CLI_ID("--method", 0, 1, OPT_METHOD),
+    CLI_ID("--bits", 0, 1, OPT_BITS),
+    CLI_ID("--wave", 0, 1, OPT_WAVE),
+    CLI_ID("--format", 0, 1, OPT_FORMAT),
+    CLI_ID("--output", 'o', 1, OPT_OUTPUT),
+    CLI_ID("--start", 0, 1, OPT_START),
+    CLI_ID("--dir", 0, 1, OPT_DIR),
+    CLI_ID("--ray", 0, 1, OPT_RAY),
+    CLI_ID("--rays", 0, 1, OPT_RAYS),
+    CLI_ID("--no-clip", 0, 0, OPT_NOCLIP),
+    CLI_ID("--threads", 0, 1, OPT_THREADS),
+    CLI_ID("--global", 0, CLI_OPT_NUM, OPT_GLOBAL),
+    CLI_END
 };
 
 /* ---- a ray list, streamed ---- */
@@ -1114,55 +1203,24 @@ static void paraxial_help(FILE *f)
 "  -h, --help               show this help\n", f);
 }
 
-static const cli_opt paraxial_opts[] = {
-    { "--help", 'h', 0, OPT_HELP },
-    { "--wave", 0, 1, OPT_WAVE },
-    { "--format", 0, 1, OPT_FORMAT },
-    { "--output", 'o', 1, OPT_OUTPUT },
-    { NULL, 0, 0, 0 }
-};
-
 int cmd_paraxial(int argc, char **argv)
 {
     cli_iter it;
-    const char *val, *design = NULL, *output = NULL;
-    int id, rc, wave1 = 0, wave0 = 0, fmt = REPORT_TEXT;
+    const char *design = NULL, *output = NULL;
+    int rc, wave1 = 0, wave0 = 0, fmt = REPORT_TEXT;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
     sg_paraxial p;
     report_meta meta;
     sg_diag d;
     FILE *f;
+    const cli_opt opts[] = {CLI_OPT_HELP, CLI_OPT_INT("--wave", 0, wave1, 1, SG_MAX_WAVES),
+                            CLI_OPT_FORMAT(fmt), CLI_OPT_OUTPUT(output), CLI_END};
 
     cli_iter_init(&it, "paraxial", argc, argv);
-    while ((id = cli_next_opt(&it, paraxial_opts, &val)) != -1) {
-        switch (id) {
-        case 0:
-            if (design)
-                return cli_usage_error("paraxial", "unexpected argument \"%s\"", val);
-            design = val;
-            break;
-        case OPT_HELP:
-            paraxial_help(stdout);
-            return CLI_EXIT_OK;
-        case OPT_WAVE:
-            if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))
-                return CLI_EXIT_USAGE;
-            break;
-        case OPT_FORMAT:
-            if (cli_format_value(val, 0, &fmt))
-                return CLI_EXIT_USAGE;
-            break;
-        case OPT_OUTPUT:
-            output = val;
-            break;
-        default:
-            return -id;
-        }
-    }
-    if (!design)
-        return cli_usage_error("paraxial", "missing DESIGN.json");
-
+    rc = cli_parse(&it, opts, &design, paraxial_help);
+    if (rc != CLI_EXIT_OK)
+        return rc == CLI_DONE ? CLI_EXIT_OK : rc;
     rc = cli_load_design(design, &cat, &sys);
     if (rc != CLI_EXIT_OK)
         return rc;
@@ -1211,6 +1269,32 @@ const char *cli_shortest(double v, char *buf, size_t n)
     snprintf(buf, n, "%s", g);
     return buf;
 }
+
+const int cli_format_values[2] = {REPORT_TEXT, REPORT_JSON};
+const int cli_format_csv_values[3] = {REPORT_TEXT, REPORT_CSV, REPORT_JSON};
+
+int cli_parse(cli_iter *it, const cli_opt *opts, const char **design, void (*help)(FILE *))
+{
+    const char *val;
+    int id;
+    while ((id = cli_next_opt(it, opts, &val)) != -1) {
+        if (id == 0) {
+            if (*design)
+                return cli_usage_error(it->cmd, "unexpected argument \"%s\"", val);
+            *design = val;
+        } else if (id == CLI_HELP) {
+            help(stdout);
+            return CLI_DONE;
+        } else {
+            return id < 0 ? -id : cli_usage_error(it->cmd, "%s: not handled", it->opt);
+        }
+    }
+    if (!*design)
+        return cli_usage_error(it->cmd, "missing DESIGN.json");
+    return CLI_EXIT_OK;
+}
+
+const int cli_method_values[3] = {SG_METHOD_PRECISE, SG_METHOD_CLASSIC, SG_METHOD_MPFR};
 
 int cli_method_value(const char *s, int *method)
 {

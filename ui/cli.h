@@ -86,12 +86,60 @@ int cli_usage_error(const char *cmd, const char *fmt, ...)
  * both read as meant); *val is NULL when it is left out. */
 #define CLI_OPT_NUM 2
 
+/* What cli_next_opt stores for a row that has a dest. */
+enum {
+    CLI_INT = 1, /* int *dest, from lo to hi */
+    CLI_FLAG,    /* int *dest set to 1; the row takes no value */
+    CLI_TEXT,    /* const char **dest: the value as given */
+    CLI_WORD,    /* int *dest: values[k] (or k) for the k-th of words "a|b|c" */
+    CLI_NUMS,    /* double *dest: lo comma-separated numbers named by words */
+    CLI_POS      /* double *dest: one positive finite number named by words, in unit */
+};
+
 typedef struct cli_opt {
     const char *name; /* "--ray", or NULL to end the table */
     char shortc;      /* 'o' for -o, or 0 */
     int has_arg;      /* 0 none, 1 one, CLI_OPT_NUM an optional number */
     int id;           /* positive; returned by cli_next_opt */
+    /* A row with a dest is stored by cli_next_opt itself, which goes on to
+     * the next argument: a command's switch keeps only what needs logic of
+     * its own, and every command reads a value with the same message. */
+    int kind;          /* CLI_INT ... CLI_NUMS */
+    void *dest;
+    int lo, hi;        /* CLI_INT: the range; CLI_NUMS: lo numbers */
+    const char *words; /* CLI_WORD: "chief|centroid"; CLI_NUMS: their names */
+    const int *values; /* CLI_WORD: each word's value (NULL: its index) */
+    const char *only;  /* the commands the row is for ("spot"), NULL: all */
+    const char *unit;  /* CLI_POS: " of micrometres", for messages */
 } cli_opt;
+
+/* A row the command's switch handles, and the table's end. */
+#define CLI_ID(name, sc, has_arg, id) {name, sc, has_arg, id, 0, NULL, 0, 0, NULL, NULL, NULL, NULL}
+#define CLI_END {NULL, 0, 0, 0, 0, NULL, 0, 0, NULL, NULL, NULL, NULL}
+/* Table rows: an option stored in a local, with the value's checks. */
+#define CLI_OPT_INT(name, sc, var, lo, hi) {name, sc, 1, 1, CLI_INT, &(var), lo, hi, NULL, NULL, NULL, NULL}
+#define CLI_OPT_FLAG(name, sc, var) {name, sc, 0, 1, CLI_FLAG, &(var), 0, 0, NULL, NULL, NULL, NULL}
+#define CLI_OPT_TEXT(name, sc, var) {name, sc, 1, 1, CLI_TEXT, &(var), 0, 0, NULL, NULL, NULL, NULL}
+#define CLI_OPT_WORD(name, var, words, values) {name, 0, 1, 1, CLI_WORD, &(var), 0, 0, words, values, NULL, NULL}
+#define CLI_OPT_NUMS(name, var, n, what) {name, 0, 1, 1, CLI_NUMS, var, n, 0, what, NULL, NULL, NULL}
+#define CLI_OPT_POS(name, var, what, unit) {name, 0, 1, 1, CLI_POS, &(var), 1, 0, what, NULL, NULL, unit}
+#define CLI_OPT_POS_FOR(name, var, what, unit, only) {name, 0, 1, 1, CLI_POS, &(var), 1, 0, what, NULL, only, unit}
+/* Rows for some of the commands that share a table: "--grid is for wavefront". */
+#define CLI_OPT_INT_FOR(name, var, lo, hi, only) {name, 0, 1, 1, CLI_INT, &(var), lo, hi, NULL, NULL, only, NULL}
+#define CLI_OPT_FLAG_FOR(name, var, only) {name, 0, 0, 1, CLI_FLAG, &(var), 0, 0, NULL, NULL, only, NULL}
+#define CLI_OPT_WORD_FOR(name, var, words, values, only) {name, 0, 1, 1, CLI_WORD, &(var), 0, 0, words, values, only, NULL}
+/* --method precise|classic|mpfr, into an int holding an sg_method. */
+#define CLI_OPT_METHOD(var) CLI_OPT_WORD("--method", var, "precise|classic|mpfr", cli_method_values)
+extern const int cli_method_values[3];
+/* --format text|json, or text|csv|json, into an int holding a report_fmt. */
+#define CLI_OPT_FORMAT(var) CLI_OPT_WORD("--format", var, "text|json", cli_format_values)
+#define CLI_OPT_FORMAT_CSV(var) CLI_OPT_WORD("--format", var, "text|csv|json", cli_format_csv_values)
+extern const int cli_format_values[2], cli_format_csv_values[3];
+/* -h, --help, which cli_parse answers with the command's help. */
+enum { CLI_HELP = 999 };
+#define CLI_OPT_HELP CLI_ID("--help", 'h', 0, CLI_HELP)
+/* -o, --output FILE. */
+#define CLI_OPT_OUTPUT(var) CLI_OPT_TEXT("--output", 'o', var)
 
 typedef struct cli_iter {
     int argc;
@@ -108,6 +156,13 @@ void cli_iter_init(cli_iter *it, const char *cmd, int argc, char **argv);
  * -CLI_EXIT_USAGE after printing the error.  Accepts "--name value",
  * "--name=value", "-x value", "-xvalue" and "--" before positionals. */
 int cli_next_opt(cli_iter *it, const cli_opt *opts, const char **val);
+
+/* Reads the whole command line of a command whose table is declarative
+ * but for CLI_OPT_HELP: one positional DESIGN argument goes to *design
+ * (missing or a second one is an error).  Returns CLI_EXIT_OK to go on,
+ * CLI_EXIT_USAGE after a message, or CLI_DONE after printing help. */
+enum { CLI_DONE = -1 };
+int cli_parse(cli_iter *it, const cli_opt *opts, const char **design, void (*help)(FILE *));
 
 /* Option values.  Each prints a message naming the option and returns
  * CLI_EXIT_USAGE on a bad value, CLI_EXIT_OK otherwise. */

@@ -15,11 +15,11 @@
 enum { OPT_HELP = 1, OPT_OUTPUT, OPT_SUBST, OPT_NEAREST };
 
 static const cli_opt convert_opts[] = {
-    { "--help", 'h', 0, OPT_HELP },
-    { "--output", 'o', 1, OPT_OUTPUT },
-    { "--substitute", 0, 1, OPT_SUBST },
-    { "--substitute-nearest", 0, 0, OPT_NEAREST },
-    { NULL, 0, 0, 0 }
+    CLI_ID("--help", 'h', 0, OPT_HELP),
+    CLI_ID("--output", 'o', 1, OPT_OUTPUT),
+    CLI_ID("--substitute", 0, 1, OPT_SUBST),
+    CLI_ID("--substitute-nearest", 0, 0, OPT_NEAREST),
+    CLI_END
 };
 
 #define MAX_SUBST 64

@@ -14,31 +14,14 @@
 #include "safetext.h"
 #include "views.h"
 
-enum { D_FIELD = 1, D_WAVE, D_SAMPLING, D_MAXFREQ, D_METHOD, D_TYPE, D_RAYS, D_MAXRAD,
-       D_ISIZE, D_IDELTA, D_TF, D_FREQ, D_STEPS };
+enum { D_METHOD = 1 };
 enum { K_PSF, K_MTF, K_EE };
+
+static const int ee_kinds[] = {SG_EE_ENCIRCLED, SG_EE_ENSQUARED};
 
 /* Cross-sections reach 16 lambda F# either side (8 dark rings), or the
  * grid's edge. */
 #define PSF_CROSS_REACH 16.0
-
-static const cli_opt diff_opts[] = {
-    AN_COMMON_OPTS,
-    { "--field", 0, 1, D_FIELD },
-    { "--wave", 0, 1, D_WAVE },
-    { "--sampling", 0, 1, D_SAMPLING },
-    { "--max-frequency", 0, 1, D_MAXFREQ },
-    { "--method", 0, 1, D_METHOD },
-    { "--type", 0, 1, D_TYPE },
-    { "--rays", 0, 1, D_RAYS },
-    { "--max-radius", 0, 1, D_MAXRAD },
-    { "--image-size", 0, 1, D_ISIZE },
-    { "--image-delta", 0, 1, D_IDELTA },
-    { "--through-focus", 0, 1, D_TF },
-    { "--frequency", 0, 1, D_FREQ },
-    { "--steps", 0, 1, D_STEPS },
-    { NULL, 0, 0, 0 }
-};
 
 static void diff_help(int kind, FILE *f)
 {
@@ -519,6 +502,23 @@ static int run(int kind, int argc, char **argv)
     sg_psf *psf = NULL;
     diff_ctx c;
     an_writer w = {diff_fig, diff_text, &c};
+    const cli_opt diff_opts[] = {
+        AN_COMMON_OPTS,
+        CLI_OPT_INT("--field", 0, field1, 1, SG_MAX_FIELDS),
+        CLI_OPT_INT("--wave", 0, wave1, 1, SG_MAX_WAVES),
+        CLI_OPT_INT("--sampling", 0, sampling, SG_PSF_SAMPLING_MIN, SG_PSF_SAMPLING_MAX),
+        CLI_OPT_POS_FOR("--max-frequency", maxf, "frequency", " of cycles/mm", "mtf"),
+        CLI_ID("--method", 0, 1, D_METHOD),
+        CLI_OPT_WORD_FOR("--type", eekind, "encircled|ensquared", ee_kinds, "encircled"),
+        CLI_OPT_INT_FOR("--rays", rays, 1, 20000, "encircled"),
+        CLI_OPT_POS_FOR("--max-radius", maxr, "radius", " of micrometres", "encircled"),
+        CLI_OPT_INT_FOR("--image-size", isize, 3, SG_PSF_IMAGE_MAX, "psf"),
+        CLI_OPT_POS_FOR("--image-delta", idelta, "spacing", " of micrometres", "psf"),
+        CLI_OPT_POS_FOR("--through-focus", tfrange, "range", NULL, "mtf"),
+        CLI_OPT_POS_FOR("--frequency", tffreq, "frequency", NULL, "mtf"),
+        CLI_OPT_INT_FOR("--steps", steps, 2, SG_TF_MAX_STEPS, "mtf"),
+        CLI_END
+    };
 
     memset(&m, 0, sizeof m);
     memset(&ee, 0, sizeof ee);
@@ -531,54 +531,6 @@ static int run(int kind, int argc, char **argv)
         case AN_OPT_HELP:
             diff_help(kind, stdout);
             return CLI_EXIT_OK;
-        case D_FIELD:
-            if (cli_int_value("--field", val, 1, SG_MAX_FIELDS, &field1))
-                return CLI_EXIT_USAGE;
-            break;
-        case D_WAVE:
-            if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))
-                return CLI_EXIT_USAGE;
-            break;
-        case D_SAMPLING:
-            if (cli_int_value("--sampling", val, SG_PSF_SAMPLING_MIN, SG_PSF_SAMPLING_MAX,
-                              &sampling))
-                return CLI_EXIT_USAGE;
-            break;
-        case D_MAXFREQ:
-            if (kind != K_MTF)
-                return cli_usage_error(cmd, "--max-frequency is an option of mtf only");
-            if (cli_doubles_value("--max-frequency", val, 1, "frequency", &maxf))
-                return CLI_EXIT_USAGE;
-            if (!(maxf > 0.0))
-                return cli_usage_error(cmd, "--max-frequency: %g is not a positive number "
-                                            "of cycles/mm", maxf);
-            break;
-        case D_TYPE:
-            if (kind != K_EE)
-                return cli_usage_error(cmd, "--type is an option of encircled only");
-            if (strcmp(val, "encircled") == 0)
-                eekind = SG_EE_ENCIRCLED;
-            else if (strcmp(val, "ensquared") == 0)
-                eekind = SG_EE_ENSQUARED;
-            else
-                return cli_usage_error(cmd, "--type: \"%s\" is not encircled or ensquared",
-                                       val);
-            break;
-        case D_RAYS:
-            if (kind != K_EE)
-                return cli_usage_error(cmd, "--rays is an option of encircled only");
-            if (cli_int_value("--rays", val, 1, 20000, &rays))
-                return CLI_EXIT_USAGE;
-            break;
-        case D_MAXRAD:
-            if (kind != K_EE)
-                return cli_usage_error(cmd, "--max-radius is an option of encircled only");
-            if (cli_doubles_value("--max-radius", val, 1, "radius", &maxr))
-                return CLI_EXIT_USAGE;
-            if (!(maxr > 0.0) || !isfinite(maxr))
-                return cli_usage_error(cmd, "--max-radius: %g is not a positive number of "
-                                            "micrometres", maxr);
-            break;
         case D_METHOD:
             /* The diffraction method's names and the trace's are apart. */
             if (strcmp(val, "fft") == 0)
@@ -595,45 +547,6 @@ static int run(int kind, int argc, char **argv)
                                        kind == K_PSF   ? "fft or huygens"
                                        : kind == K_MTF ? "fft or geometric"
                                                        : "one of");
-            break;
-        case D_TF:
-        case D_FREQ:
-        case D_STEPS:
-            if (kind != K_MTF)
-                return cli_usage_error(cmd, "%s is an option of mtf only",
-                                       id == D_TF ? "--through-focus"
-                                       : id == D_FREQ ? "--frequency" : "--steps");
-            if (id == D_STEPS) {
-                if (cli_int_value("--steps", val, 2, SG_TF_MAX_STEPS, &steps))
-                    return CLI_EXIT_USAGE;
-            } else {
-                double v;
-                const char *on = id == D_TF ? "--through-focus" : "--frequency";
-                if (cli_doubles_value(on, val, 1, id == D_TF ? "range" : "frequency", &v))
-                    return CLI_EXIT_USAGE;
-                if (!(v > 0.0) || !isfinite(v))
-                    return cli_usage_error(cmd, "%s: %g is not a positive number", on, v);
-                if (id == D_TF)
-                    tfrange = v;
-                else
-                    tffreq = v;
-            }
-            break;
-        case D_ISIZE:
-        case D_IDELTA:
-            if (kind != K_PSF)
-                return cli_usage_error(cmd, "%s is an option of psf only",
-                                       id == D_ISIZE ? "--image-size" : "--image-delta");
-            if (id == D_ISIZE) {
-                if (cli_int_value("--image-size", val, 3, SG_PSF_IMAGE_MAX, &isize))
-                    return CLI_EXIT_USAGE;
-            } else {
-                if (cli_doubles_value("--image-delta", val, 1, "spacing", &idelta))
-                    return CLI_EXIT_USAGE;
-                if (!(idelta > 0.0) || !isfinite(idelta))
-                    return cli_usage_error(cmd, "--image-delta: %g is not a positive number "
-                                                "of micrometres", idelta);
-            }
             break;
         default:
             return CLI_EXIT_USAGE;

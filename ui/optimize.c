@@ -86,9 +86,9 @@ static void row_params(const sg_system *sys, const sg_merit_row *r, char *buf, s
 enum { ME_HELP = 1, ME_FORMAT };
 
 static const cli_opt merit_opts[] = {
-    { "--help", 'h', 0, ME_HELP },
-    { "--format", 0, 1, ME_FORMAT },
-    { NULL, 0, 0, 0 }
+    CLI_ID("--help", 'h', 0, ME_HELP),
+    CLI_ID("--format", 0, 1, ME_FORMAT),
+    CLI_END
 };
 
 int cmd_merit(int argc, char **argv)
@@ -188,12 +188,12 @@ static int progress(void *ctx, int cycle, double merit, double step, double seco
 enum { OP_HELP = 1, OP_OUTPUT, OP_CYCLES, OP_THREADS, OP_FORCE };
 
 static const cli_opt optimize_opts[] = {
-    { "--help", 'h', 0, OP_HELP },
-    { "--output", 'o', 1, OP_OUTPUT },
-    { "--cycles", 0, 1, OP_CYCLES },
-    { "--threads", 0, 1, OP_THREADS },
-    { "--force", 0, 0, OP_FORCE },
-    { NULL, 0, 0, 0 }
+    CLI_ID("--help", 'h', 0, OP_HELP),
+    CLI_ID("--output", 'o', 1, OP_OUTPUT),
+    CLI_ID("--cycles", 0, 1, OP_CYCLES),
+    CLI_ID("--threads", 0, 1, OP_THREADS),
+    CLI_ID("--force", 0, 0, OP_FORCE),
+    CLI_END
 };
 
 /* Whether a and b name the same file (both exist). */

@@ -28,16 +28,6 @@ static void semidiam_help(FILE *f)
 "  -h, --help               show this help\n", f);
 }
 
-enum { SD_HELP = 1, SD_METHOD, SD_FORMAT, SD_OUTPUT };
-
-static const cli_opt semidiam_opts[] = {
-    { "--help", 'h', 0, SD_HELP },
-    { "--method", 0, 1, SD_METHOD },
-    { "--format", 0, 1, SD_FORMAT },
-    { "--output", 'o', 1, SD_OUTPUT },
-    { NULL, 0, 0, 0 }
-};
-
 /* An automatic semi-diameter in the table: the marginal rays are aimed to
  * 1e-13 of the stop radius, so 12 significant digits are all it has
  * ("1500", not "1500.0000000000002"); positional, as Zemax's editor. */
@@ -52,43 +42,21 @@ static const char *sd_text(double v, char *buf)
 int cmd_semidiam(int argc, char **argv)
 {
     cli_iter it;
-    const char *val, *design = NULL, *output = NULL;
-    int id, rc, fmt = REPORT_TEXT, method = SG_METHOD_PRECISE, i;
+    const char *design = NULL, *output = NULL;
+    int rc, fmt = REPORT_TEXT, method = SG_METHOD_PRECISE, i;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
     sg_semidiam_opts o;
     double *sd = NULL;
     sg_diag d;
     FILE *f;
+    const cli_opt opts[] = {CLI_OPT_HELP, CLI_OPT_METHOD(method), CLI_OPT_FORMAT(fmt),
+                            CLI_OPT_OUTPUT(output), CLI_END};
 
     cli_iter_init(&it, "semidiam", argc, argv);
-    while ((id = cli_next_opt(&it, semidiam_opts, &val)) != -1) {
-        switch (id) {
-        case 0:
-            if (design)
-                return cli_usage_error("semidiam", "unexpected argument \"%s\"", val);
-            design = val;
-            break;
-        case SD_HELP:
-            semidiam_help(stdout);
-            return CLI_EXIT_OK;
-        case SD_METHOD:
-            if (cli_method_value(val, &method))
-                return CLI_EXIT_USAGE;
-            break;
-        case SD_FORMAT:
-            if (cli_format_value(val, 0, &fmt))
-                return CLI_EXIT_USAGE;
-            break;
-        case SD_OUTPUT:
-            output = val;
-            break;
-        default:
-            return -id;
-        }
-    }
-    if (!design)
-        return cli_usage_error("semidiam", "missing DESIGN.json");
+    rc = cli_parse(&it, opts, &design, semidiam_help);
+    if (rc != CLI_EXIT_OK)
+        return rc == CLI_DONE ? CLI_EXIT_OK : rc;
     rc = cli_load_design(design, &cat, &sys);
     if (rc != CLI_EXIT_OK)
         return rc;

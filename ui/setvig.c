@@ -28,66 +28,29 @@ static void setvig_help(FILE *f)
 "  -h, --help               show this help\n", f);
 }
 
-enum { SV_HELP = 1, SV_SAVE, SV_GRID, SV_METHOD, SV_FORMAT, SV_OUTPUT };
-
-static const cli_opt setvig_opts[] = {
-    { "--help", 'h', 0, SV_HELP },
-    { "--save", 0, 1, SV_SAVE },
-    { "--grid", 0, 1, SV_GRID },
-    { "--method", 0, 1, SV_METHOD },
-    { "--format", 0, 1, SV_FORMAT },
-    { "--output", 'o', 1, SV_OUTPUT },
-    { NULL, 0, 0, 0 }
-};
-
-
 int cmd_vignetting(int argc, char **argv)
 {
     cli_iter it;
-    const char *val, *design = NULL, *output = NULL, *save = NULL;
-    int id, rc, fmt = REPORT_TEXT, method = SG_METHOD_PRECISE, i, grid = 64;
+    const char *design = NULL, *output = NULL, *save = NULL;
+    int rc, fmt = REPORT_TEXT, method = SG_METHOD_PRECISE, i, grid = 64;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
     sg_setvig_opts o;
     sg_vigfactors *vf = NULL;
     sg_diag d;
     FILE *f;
+    const cli_opt opts[] = {CLI_OPT_HELP,
+                            CLI_OPT_TEXT("--save", 0, save),
+                            CLI_OPT_INT("--grid", 0, grid, 4, 4096),
+                            CLI_OPT_METHOD(method),
+                            CLI_OPT_FORMAT(fmt),
+                            CLI_OPT_OUTPUT(output),
+                            CLI_END};
 
     cli_iter_init(&it, "vignetting", argc, argv);
-    while ((id = cli_next_opt(&it, setvig_opts, &val)) != -1) {
-        switch (id) {
-        case 0:
-            if (design)
-                return cli_usage_error("vignetting", "unexpected argument \"%s\"", val);
-            design = val;
-            break;
-        case SV_HELP:
-            setvig_help(stdout);
-            return CLI_EXIT_OK;
-        case SV_SAVE:
-            save = val;
-            break;
-        case SV_GRID:
-            if (cli_int_value("--grid", val, 4, 4096, &grid))
-                return CLI_EXIT_USAGE;
-            break;
-        case SV_METHOD:
-            if (cli_method_value(val, &method))
-                return CLI_EXIT_USAGE;
-            break;
-        case SV_FORMAT:
-            if (cli_format_value(val, 0, &fmt))
-                return CLI_EXIT_USAGE;
-            break;
-        case SV_OUTPUT:
-            output = val;
-            break;
-        default:
-            return -id;
-        }
-    }
-    if (!design)
-        return cli_usage_error("vignetting", "missing DESIGN.json");
+    rc = cli_parse(&it, opts, &design, setvig_help);
+    if (rc != CLI_EXIT_OK)
+        return rc == CLI_DONE ? CLI_EXIT_OK : rc;
     rc = cli_load_design(design, &cat, &sys);
     if (rc != CLI_EXIT_OK)
         return rc;

@@ -3,6 +3,7 @@
  * with the TCE each surface took and its radius and thickness before and
  * after. */
 #include <stdio.h>
+#include <math.h>
 #include <stdlib.h>
 
 #include "cli.h"
@@ -26,63 +27,34 @@ static void thermal_help(FILE *f)
 "  -h, --help               show this help\n", f);
 }
 
-enum { TH_HELP = 1, TH_TEMP, TH_PRES, TH_OUTPUT };
-
-static const cli_opt thermal_opts[] = {
-    { "--help", 'h', 0, TH_HELP },
-    { "--temperature", 0, 1, TH_TEMP },
-    { "--pressure", 0, 1, TH_PRES },
-    { "--output", 'o', 1, TH_OUTPUT },
-    { NULL, 0, 0, 0 }
-};
-
 int cmd_thermal(int argc, char **argv)
 {
     cli_iter it;
-    const char *val, *design = NULL, *output = NULL;
-    int id, rc, i, have_t = 0, have_p = 0;
-    double temp = 0.0, pres = 1.0;
+    const char *design = NULL, *output = NULL;
+    int rc, i, have_t, have_p;
+    double temp = NAN, pres = NAN; /* NaN: not given */
     sg_catalog *cat = NULL;
     sg_system *sys = NULL, *hot = NULL;
     sg_thermal_tce *tc = NULL;
     sg_diag d;
+    const cli_opt opts[] = {CLI_OPT_HELP,
+                            CLI_OPT_NUMS("--temperature", &temp, 1, "temperature"),
+                            CLI_OPT_NUMS("--pressure", &pres, 1, "pressure"),
+                            CLI_OPT_OUTPUT(output),
+                            CLI_END};
 
     cli_iter_init(&it, "thermal", argc, argv);
-    while ((id = cli_next_opt(&it, thermal_opts, &val)) != -1) {
-        switch (id) {
-        case 0:
-            if (design)
-                return cli_usage_error("thermal", "unexpected argument \"%s\"", val);
-            design = val;
-            break;
-        case TH_HELP:
-            thermal_help(stdout);
-            return CLI_EXIT_OK;
-        case TH_TEMP:
-            if (cli_doubles_value("--temperature", val, 1, "temperature", &temp))
-                return CLI_EXIT_USAGE;
-            if (!(temp >= SG_TEMP_MIN && temp <= SG_TEMP_MAX))
-                return cli_usage_error("thermal", "--temperature %g: outside %g to %g C", temp,
-                                       SG_TEMP_MIN, SG_TEMP_MAX);
-            have_t = 1;
-            break;
-        case TH_PRES:
-            if (cli_doubles_value("--pressure", val, 1, "pressure", &pres))
-                return CLI_EXIT_USAGE;
-            if (!(pres >= 0.0 && pres <= SG_PRES_MAX))
-                return cli_usage_error("thermal", "--pressure %g: outside 0 to %g atm", pres,
-                                       SG_PRES_MAX);
-            have_p = 1;
-            break;
-        case TH_OUTPUT:
-            output = val;
-            break;
-        default:
-            return -id;
-        }
-    }
-    if (!design)
-        return cli_usage_error("thermal", "missing DESIGN.json");
+    rc = cli_parse(&it, opts, &design, thermal_help);
+    if (rc != CLI_EXIT_OK)
+        return rc == CLI_DONE ? CLI_EXIT_OK : rc;
+    have_t = !isnan(temp);
+    have_p = !isnan(pres);
+    if (have_t && !(temp >= SG_TEMP_MIN && temp <= SG_TEMP_MAX))
+        return cli_usage_error("thermal", "--temperature %g: outside %g to %g C", temp,
+                               SG_TEMP_MIN, SG_TEMP_MAX);
+    if (have_p && !(pres >= 0.0 && pres <= SG_PRES_MAX))
+        return cli_usage_error("thermal", "--pressure %g: outside 0 to %g atm", pres,
+                               SG_PRES_MAX);
     if (!have_t)
         return cli_usage_error("thermal", "missing --temperature");
     if (!output)

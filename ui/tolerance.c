@@ -44,17 +44,17 @@ static void tolerance_help(FILE *f)
 enum { TO_HELP = 1, TO_SENS, TO_MC, TO_SEED, TO_THREADS, TO_METHOD, TO_NOCOMP, TO_FORMAT,
        TO_OUTPUT, TO_FORCE };
 static const cli_opt tolerance_opts[] = {
-    { "--help", 'h', 0, TO_HELP },
-    { "--sensitivity", 0, 0, TO_SENS },
-    { "--monte-carlo", 0, 1, TO_MC },
-    { "--seed", 0, 1, TO_SEED },
-    { "--threads", 0, 1, TO_THREADS },
-    { "--method", 0, 1, TO_METHOD },
-    { "--no-compensators", 0, 0, TO_NOCOMP },
-    { "--format", 0, 1, TO_FORMAT },
-    { "--output", 'o', 1, TO_OUTPUT },
-    { "--force", 0, 0, TO_FORCE },
-    { NULL, 0, 0, 0 }
+    CLI_ID("--help", 'h', 0, TO_HELP),
+    CLI_ID("--sensitivity", 0, 0, TO_SENS),
+    CLI_ID("--monte-carlo", 0, 1, TO_MC),
+    CLI_ID("--seed", 0, 1, TO_SEED),
+    CLI_ID("--threads", 0, 1, TO_THREADS),
+    CLI_ID("--method", 0, 1, TO_METHOD),
+    CLI_ID("--no-compensators", 0, 0, TO_NOCOMP),
+    CLI_ID("--format", 0, 1, TO_FORMAT),
+    CLI_ID("--output", 'o', 1, TO_OUTPUT),
+    CLI_ID("--force", 0, 0, TO_FORCE),
+    CLI_END
 };
 
 static volatile sig_atomic_t stop_flag;

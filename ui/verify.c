@@ -25,6 +25,7 @@
 #include "safetext.h"
 #include "xquant.h"
 
+
 enum { M_PRECISE = 0, M_CLASSIC = 1, M_MPFR = 2, NMETHOD = 3 };
 static const char *const mname[NMETHOD] = { "precise", "classic", "mpfr" };
 static const sg_method mcode[NMETHOD] = { SG_METHOD_PRECISE, SG_METHOD_CLASSIC,
@@ -43,6 +44,7 @@ static const sg_method mcode[NMETHOD] = { SG_METHOD_PRECISE, SG_METHOD_CLASSIC,
 #define MAX_RAY_SURFACES 2000000
 /* Failed rays and disagreements listed in text output; JSON lists all. */
 #define TEXT_LIST_MAX 20
+
 
 static void verify_help(FILE *f)
 {
@@ -78,25 +80,6 @@ static void verify_help(FILE *f)
 "bound is below its actual error, or when it fails a ray the reference\n"
 "traces; see sagitta(1).\n", f);
 }
-
-enum {
-    OPT_HELP = 1, OPT_RAY, OPT_GRID, OPT_BITS, OPT_WAVE, OPT_FORMAT, OPT_OUTPUT,
-    OPT_EXPERIMENT, OPT_COUNT, OPT_SEED
-};
-
-static const cli_opt verify_opts[] = {
-    { "--help", 'h', 0, OPT_HELP },
-    { "--ray", 0, 1, OPT_RAY },
-    { "--grid", 0, 1, OPT_GRID },
-    { "--bits", 0, 1, OPT_BITS },
-    { "--wave", 0, 1, OPT_WAVE },
-    { "--format", 0, 1, OPT_FORMAT },
-    { "--output", 'o', 1, OPT_OUTPUT },
-    { "--experiment", 0, 1, OPT_EXPERIMENT },
-    { "--count", 0, 1, OPT_COUNT },
-    { "--seed", 0, 1, OPT_SEED },
-    { NULL, 0, 0, 0 }
-};
 
 /* ----------------------------------------------------------------- numbers */
 
@@ -2057,78 +2040,49 @@ int cmd_verify(int argc, char **argv)
 {
     cli_iter it;
     const char *val, *design = NULL, *output = NULL, *experiment = NULL;
-    int id, bits = 256, wave1 = 0, grid = 0, count = 0, fmt = REPORT_TEXT;
-    int have_ray = 0, have_seed = 0;
-    long seed = DEFAULT_SEED;
-    double ray4[4] = { 0, 0, 0, 0 };
+    int id, bits = 256, wave1 = 0, grid = 0, count = 0, fmt = REPORT_TEXT, table = -1;
+    int have_ray, have_seed, seed = -1; /* -1: not given */
+    double ray4[4] = {NAN, 0, 0, 0};    /* NaN: not given */
+    const cli_opt opts[] = {CLI_OPT_HELP,
+                            CLI_OPT_NUMS("--ray", ray4, 4, "Hx,Hy,Px,Py"),
+                            CLI_OPT_INT("--grid", 0, grid, 1, 101),
+                            CLI_OPT_INT("--bits", 0, bits, 53, 100000),
+                            CLI_OPT_INT("--wave", 0, wave1, 1, SG_MAX_WAVES),
+                            CLI_OPT_FORMAT(fmt),
+                            CLI_OPT_OUTPUT(output),
+                            CLI_OPT_WORD("--experiment", table, "table1|table2", NULL),
+                            CLI_OPT_INT("--count", 0, count, 1, 10000000),
+                            CLI_OPT_INT("--seed", 0, seed, 0, 2147483647),
+                            CLI_END};
 
     cli_iter_init(&it, "verify", argc, argv);
-    while ((id = cli_next_opt(&it, verify_opts, &val)) != -1) {
-        switch (id) {
-        case 0:
+    while ((id = cli_next_opt(&it, opts, &val)) != -1) {
+        if (id == 0) {
             if (design)
                 return cli_usage_error("verify", "unexpected argument \"%s\"", val);
             design = val;
-            break;
-        case OPT_HELP:
+        } else if (id == CLI_HELP) {
             verify_help(stdout);
             return fflush(stdout) == 0 ? CLI_EXIT_OK : CLI_EXIT_FILE;
-        case OPT_RAY:
-            if (cli_doubles_value("--ray", val, 4, "Hx,Hy,Px,Py", ray4))
-                return CLI_EXIT_USAGE;
-            have_ray = 1;
-            break;
-        case OPT_GRID:
-            if (cli_int_value("--grid", val, 1, 101, &grid))
-                return CLI_EXIT_USAGE;
-            break;
-        case OPT_BITS:
-            if (cli_int_value("--bits", val, 53, 100000, &bits))
-                return CLI_EXIT_USAGE;
-            if (bits < VERIFY_MIN_BITS) {
-                /* The precise method carries 106 bits; a reference with
-                 * fewer than about twice a double's cannot judge it, and
-                 * would report its own error as precise's. */
-                return cli_usage_error("verify",
-                                       "--bits %d: a reference of fewer than %d bits is no "
-                                       "reference for a method that carries 106; use %d "
-                                       "or more", bits, VERIFY_MIN_BITS, VERIFY_MIN_BITS);
-            }
-            break;
-        case OPT_WAVE:
-            if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))
-                return CLI_EXIT_USAGE;
-            break;
-        case OPT_FORMAT:
-            if (cli_format_value(val, 0, &fmt))
-                return CLI_EXIT_USAGE;
-            break;
-        case OPT_OUTPUT:
-            output = val;
-            break;
-        case OPT_EXPERIMENT:
-            if (strcmp(val, "table1") != 0 && strcmp(val, "table2") != 0) {
-                cli_error("--experiment: expected table1 or table2, got \"%s\"", val);
-                return CLI_EXIT_USAGE;
-            }
-            experiment = val;
-            break;
-        case OPT_COUNT:
-            if (cli_int_value("--count", val, 1, 10000000, &count))
-                return CLI_EXIT_USAGE;
-            break;
-        case OPT_SEED:
-            if (args_long(val, 0, 2147483647L, &seed) != ARGS_OK) {
-                cli_error("--seed: expected an integer from 0 to 2147483647, got \"%s\"",
-                          val);
-                return CLI_EXIT_USAGE;
-            }
-            have_seed = 1;
-            break;
-        default:
+        } else {
             return -id;
         }
     }
+    if (bits < VERIFY_MIN_BITS) {
+        /* The precise method carries 106 bits; a reference with fewer
+         * than about twice a double's cannot judge it, and would report
+         * its own error as precise's. */
+        return cli_usage_error("verify",
+                               "--bits %d: a reference of fewer than %d bits is no "
+                               "reference for a method that carries 106; use %d "
+                               "or more", bits, VERIFY_MIN_BITS, VERIFY_MIN_BITS);
+    }
+    have_ray = !isnan(ray4[0]);
+    have_seed = seed >= 0;
+    if (!have_seed)
+        seed = DEFAULT_SEED;
+    if (table >= 0)
+        experiment = table == 0 ? "table1" : "table2";
 
     if (experiment) {
         if (design)

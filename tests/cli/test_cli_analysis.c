@@ -285,7 +285,7 @@ static void test_fan_opd(void **state)
     ct_free(&r);
     ct_run(&r, "spot", d, "--opd", NULL);
     assert_int_equal(r.code, 2);
-    assert_non_null(strstr(r.err, "--opd is for fan"));
+    assert_non_null(strstr(r.err, "--opd is an option of fan only"));
     ct_free(&r);
 }
 
@@ -315,7 +315,7 @@ static void test_bad_options(void **state)
     ct_free(&r);
     ct_run(&r, "fan", d, "--density", "3", NULL);
     assert_int_equal(r.code, 2);
-    assert_non_null(strstr(r.err, "--density is for spot"));
+    assert_non_null(strstr(r.err, "--density is an option of spot only"));
     ct_free(&r);
     /* Hexapolar density beyond its limit is the library's message. */
     ct_run(&r, "spot", d, "--density", "9999", NULL);

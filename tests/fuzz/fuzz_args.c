@@ -160,19 +160,19 @@ enum {
 };
 
 static const cli_opt trace_opts[] = {
-    { "--help", 'h', 0, OPT_HELP },
-    { "--method", 0, 1, OPT_METHOD },
-    { "--bits", 0, 1, OPT_BITS },
-    { "--wave", 0, 1, OPT_WAVE },
-    { "--format", 0, 1, OPT_FORMAT },
-    { "--output", 'o', 1, OPT_OUTPUT },
-    { "--start", 0, 1, OPT_START },
-    { "--dir", 0, 1, OPT_DIR },
-    { "--ray", 0, 1, OPT_RAY },
-    { "--rays", 0, 1, OPT_RAYS },
-    { "--no-clip", 0, 0, OPT_NOCLIP },
-    { "--threads", 0, 1, OPT_THREADS },
-    { NULL, 0, 0, 0 }
+    CLI_ID("--help", 'h', 0, OPT_HELP),
+    CLI_ID("--method", 0, 1, OPT_METHOD),
+    CLI_ID("--bits", 0, 1, OPT_BITS),
+    CLI_ID("--wave", 0, 1, OPT_WAVE),
+    CLI_ID("--format", 0, 1, OPT_FORMAT),
+    CLI_ID("--output", 'o', 1, OPT_OUTPUT),
+    CLI_ID("--start", 0, 1, OPT_START),
+    CLI_ID("--dir", 0, 1, OPT_DIR),
+    CLI_ID("--ray", 0, 1, OPT_RAY),
+    CLI_ID("--rays", 0, 1, OPT_RAYS),
+    CLI_ID("--no-clip", 0, 0, OPT_NOCLIP),
+    CLI_ID("--threads", 0, 1, OPT_THREADS),
+    CLI_END
 };
 
 static void fuzz_cmdline(char *s)
