@@ -564,14 +564,30 @@ static void draw_panel(const plot_panel *src, plot_grid *g, int x0, int y0, int 
         }
     }
     {
-        char yl[80];
-        size_t xl = text_len(p.xlabel);
+        /* "↑ y label" at the left and "x label →" at the right share the
+         * line, cut with an ellipsis so neither overwrites the other: the
+         * x label (it carries the unit of the ticks above it) keeps its
+         * width while the y label keeps 6 columns, else each gets half. */
+        char yl[160], xl[160], fit[160];
+        int yw, xw, room = w - 1;
         snprintf(yl, sizeof yl, "↑ %s", p.ylabel);
-        plot_grid_text_n(g, x0, ay + 2, yl, PLOT_FG, w);
-        if ((int)xl + 2 < w)
-            plot_grid_text(g, x0 + w - (int)xl - 2, ay + 2, p.xlabel, PLOT_FG);
-        if ((int)xl + 4 < w)
-            plot_grid_text(g, x0 + w - 1, ay + 2, "→", PLOT_FG);
+        snprintf(xl, sizeof xl, "%s →", p.xlabel);
+        yw = (int)text_len(yl);
+        xw = (int)text_len(xl);
+        if (yw + xw > room) {
+            if (xw + 6 <= room) {
+                yw = room - xw;
+            } else if (yw <= room / 2) {
+                xw = room - yw;
+            } else {
+                yw = room / 2;
+                xw = room - yw;
+            }
+        }
+        plot_fit_text(yl, yw, fit, sizeof fit);
+        plot_grid_text_n(g, x0, ay + 2, fit, PLOT_FG, yw);
+        plot_fit_text(xl, xw, fit, sizeof fit);
+        plot_grid_text_n(g, x0 + w - (int)text_len(fit), ay + 2, fit, PLOT_FG, xw);
     }
     d.w = W;
     d.h = H;

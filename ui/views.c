@@ -489,7 +489,7 @@ out:
 
 int view_mtf_figure(const sg_system *sys, const sg_mtf *m, plot_figure *f)
 {
-    char title[200], lab[64], leg[48];
+    char title[200], lab[160], leg[48];
     plot_panel *p;
     int k;
     snprintf(title, sizeof title, "%s MTF: %s", m->method == SG_MTF_GEOMETRIC ? "Geometric" : "FFT",
@@ -518,7 +518,7 @@ int view_mtf_figure(const sg_system *sys, const sg_mtf *m, plot_figure *f)
 
 int view_psf_figure(const sg_system *sys, const sg_psf *ps, int n, plot_figure *f)
 {
-    char title[200], lab[64], pt[64];
+    char title[200], lab[160], pt[64];
     int k, rc = -1;
     snprintf(title, sizeof title, "%s PSF cross-sections: %s",
              n > 0 && ps[0].method == SG_PSF_HUYGENS ? "Huygens" : "FFT",
@@ -565,7 +565,7 @@ int view_psf_figure(const sg_system *sys, const sg_psf *ps, int n, plot_figure *
 
 int view_ee_figure(const sg_system *sys, const sg_ee *e, plot_figure *f)
 {
-    char title[200], lab[64], pt[32];
+    char title[200], lab[160], pt[32];
     int k, sq = e->kind == SG_EE_ENSQUARED;
     snprintf(title, sizeof title, "%s energy: %s", sq ? "Ensquared" : "Encircled",
              safe_text(sys->title, lab, sizeof lab));
@@ -592,7 +592,7 @@ int view_ee_figure(const sg_system *sys, const sg_ee *e, plot_figure *f)
 
 int view_tf_figure(const sg_system *sys, const sg_tf *t, plot_figure *f)
 {
-    char title[200], lab[64], pt[32], ax[48];
+    char title[200], lab[160], pt[32], ax[48];
     int k;
     snprintf(title, sizeof title, "Through-focus MTF at %.4g cycles/mm: %s", t->frequency,
              safe_text(sys->title, lab, sizeof lab));

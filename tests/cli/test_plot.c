@@ -307,6 +307,51 @@ static void test_title_cut(void **state)
     }
 }
 
+/* The axis labels share the line under a narrow panel: the x label (with
+ * its unit) whole, the y label cut with an ellipsis, never one written
+ * over the other (the editor's encircled view showed "fraction oradius
+ * (um)"). */
+static void test_axis_labels_narrow(void **state)
+{
+    static const struct {
+        int w;
+        const char *want;
+    } cases[] = {
+        {60, "↑ fraction of encircled energy"}, /* room for both: whole */
+        {26, "↑ fraction…"},
+    };
+    size_t i;
+    (void)state;
+    for (i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        plot_figure f;
+        plot_grid g;
+        plot_panel *p;
+        double x[2] = {0, 40}, y[2] = {0, 1};
+        FILE *t = tmpfile();
+        char buf[8192], *row;
+        size_t n;
+        plot_figure_init(&f, "");
+        p = plot_add_panel(&f, NULL, "radius (um)", "fraction of encircled energy");
+        plot_add_series(p, PLOT_LINES, 0, x, y, 2);
+        assert_int_equal(plot_grid_init(&g, cases[i].w, 12), 0);
+        plot_draw_cells(&f, &g, 0, 0, cases[i].w, 12);
+        assert_int_equal(plot_grid_print(&g, t, 0), 0);
+        rewind(t);
+        n = fread(buf, 1, sizeof buf - 1, t);
+        buf[n] = '\0';
+        row = strstr(buf, "↑");
+        assert_non_null(row);
+        if (strchr(row, '\n'))
+            *strchr(row, '\n') = '\0';
+        print_message("# width %d: \"%s\"\n", cases[i].w, row);
+        assert_non_null(strstr(row, cases[i].want));
+        assert_non_null(strstr(row, "radius (um) →"));
+        fclose(t);
+        plot_grid_free(&g);
+        plot_figure_free(&f);
+    }
+}
+
 /* Every dot of a figure's first panel in dot coordinates (2 across and 4
  * down per cell, from the grid's corner); how many, at most max. */
 static int grid_dots(const plot_grid *g, int (*xy)[2], int max)
@@ -667,6 +712,7 @@ int main(void)
         cmocka_unit_test(test_palette_distinct),
         cmocka_unit_test(test_size_refused),
         cmocka_unit_test(test_fit_text),
+        cmocka_unit_test(test_axis_labels_narrow),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

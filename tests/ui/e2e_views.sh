@@ -1,6 +1,6 @@
 #!/bin/sh
-# e2e_views.sh - the analysis views at 80x24: layout, spot, fan, OPD fan
-# and wavefront map below
+# e2e_views.sh - the analysis views at 80x24: layout, spot, fan, OPD fan,
+# wavefront map, FFT MTF, FFT PSF and encircled energy below
 # the spreadsheet, chosen by the g key, drawn in braille within 80 columns,
 # following an edit, coloured per wavelength (plain under NO_COLOR), and
 # written by export as a PNG.  Output is TAP.
@@ -12,7 +12,7 @@
 
 SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
-tmux_setup 12 views
+tmux_setup 15 views
 
 cp "$ROOT/examples/cooke_triplet.json" "$WORK/cooke.json"
 
@@ -108,6 +108,32 @@ if wait_for "cooke.json" 15 && wait_for "Surf"; then
         sh -c "[ -n '$RW' ] && [ '$RW' = '$EW' ] && [ $(wide_lines) -eq 0 ] &&
                $T capture-pane -p -t =main: | grep -q '█' &&
                $T capture-pane -p -t =main: | grep -q 'OPD .* waves'"
+    # 8a. g: the FFT MTF of every field, with the diffraction limit.
+    keys Escape g
+    wait_for "FFT MTF" >/dev/null
+    sleep 0.3
+    WHY="braille lines $(braille_lines), lines over 80: $(wide_lines)"
+    check "the mtf view draws the FFT MTF with its diffraction limit" \
+        sh -c "$T capture-pane -p -t =main: | grep -q 'diffraction limit' &&
+               $T capture-pane -p -t =main: | grep -q 'cycles/mm' &&
+               [ $(braille_lines) -ge 3 ] && [ $(wide_lines) -eq 0 ]"
+    # 8b. g: the FFT PSF's cross-sections of the ray's field.
+    keys Escape g
+    wait_for "PSF cross-sections" >/dev/null
+    sleep 0.3
+    WHY="braille lines $(braille_lines), lines over 80: $(wide_lines)"
+    check "the psf view draws the PSF's cross-sections" \
+        sh -c "[ $(braille_lines) -ge 3 ] && [ $(wide_lines) -eq 0 ]"
+    # 8c. g: the encircled energy, exported as a PDF.
+    keys Escape g
+    wait_for "Encircled energy" >/dev/null
+    sleep 0.3
+    command_line "export $WORK/ee.pdf"
+    wait_for "exported the encircled view" >/dev/null
+    WHY="braille lines $(braille_lines), lines over 80: $(wide_lines), pdf: $(head -c 5 "$WORK/ee.pdf" 2>/dev/null)"
+    check "the encircled view draws the energy and exports it" \
+        sh -c "[ $(braille_lines) -ge 3 ] && [ $(wide_lines) -eq 0 ] &&
+               [ \"\$(head -c 5 '$WORK/ee.pdf')\" = '%PDF-' ]"
     # 9. view off: the ray table is back.
     command_line "view off"
     wait_for "Surf status" >/dev/null
@@ -121,6 +147,9 @@ else
     not_ok "export"
     not_ok "opd"
     not_ok "wave"
+    not_ok "mtf"
+    not_ok "psf"
+    not_ok "encircled"
     not_ok "view off"
 fi
 

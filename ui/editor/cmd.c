@@ -2392,14 +2392,15 @@ static int c_global(ed *e, args *a)
 
 static int c_view(ed *e, args *a)
 {
-    const char *usage = "view layout|spot|fan|opd|wave|off|next";
+    const char *usage = "view layout|spot|fan|opd|wave|mtf|psf|encircled|off|next";
     int k;
     if (!need(e, a, 0, 1, usage))
         return ED_HANDLED | ED_ERROR;
     if (a->n < 2 || strcasecmp(a->v[1], "next") == 0)
         k = (e->view.kind + 1) % VIEW_COUNT;
     else if ((k = view_parse(a->v[1])) < 0)
-        return fail(e, "view: \"%s\" is not one of layout, spot, fan, opd, wave, off, next", a->v[1]);
+        return fail(e, "view: \"%s\" is not one of layout, spot, fan, opd, wave, mtf, psf, "
+                       "encircled, off, next", a->v[1]);
     e->view.kind = k;
     e->dirty = 1;
     if (k == VIEW_OFF)
@@ -2418,7 +2419,7 @@ static int export_picture(ed *e, args *a, const char *path, int format, int bang
     int err, rc, target;
     if (e->view.kind == VIEW_OFF)
         return fail(e, "export: no view on show to draw; choose one with g or "
-                       ":view layout|spot|fan|opd|wave");
+                       ":view layout|spot|fan|opd|wave|mtf|psf|encircled");
     if (strcmp(path, "-") == 0 && !e->batch)
         return fail(e, "export: \"-\" (standard output) works only in batch mode");
     target = export_target(e, path);
@@ -2601,7 +2602,7 @@ static const command commands[] = {
     {"method", NULL, c_method, "method precise|classic|mpfr [BITS]", "choose the trace method"},
     {"bits", NULL, c_bits, "bits N", "MPFR precision for the mpfr method and digits"},
     {"digits", NULL, c_digits, "digits [on|off]", "show agreement with an MPFR trace"},
-    {"view", NULL, c_view, "view layout|spot|fan|opd|wave|off|next",
+    {"view", NULL, c_view, "view layout|spot|fan|opd|wave|mtf|psf|encircled|off|next",
      "show an analysis below the sheet, live (g: next); export FILE.png|svg|pdf writes it"},
     {"clip", NULL, c_clip, "clip [on|off]", "vignette rays at fixed semi-diameters"},
     {"global", NULL, c_global, "global [on|off|SURFACE]",

@@ -8,7 +8,8 @@
 #include "view.h"
 #include "views.h"
 
-static const char *const names[VIEW_COUNT] = {"off", "layout", "spot", "fan", "opd", "wave"};
+static const char *const names[VIEW_COUNT] = {"off", "layout", "spot", "fan", "opd",
+                                               "wave", "mtf", "psf", "encircled"};
 
 const char *view_name(int kind)
 {
@@ -52,7 +53,7 @@ int edview_update(edview *v, const sg_system *sys, unsigned long id, const sg_ca
         return SG_EOK;
     if (field < 0 || field >= sys->nfield)
         field = sys->nfield - 1;
-    if (v->kind != VIEW_FAN && v->kind != VIEW_OPD && v->kind != VIEW_WAVE)
+    if (v->kind != VIEW_FAN && v->kind != VIEW_OPD && v->kind != VIEW_WAVE && v->kind != VIEW_PSF)
         field = -1;
     if (v->id == id && v->id != 0 && v->built_kind == v->kind && v->field == field &&
         memcmp(&v->opts, o, sizeof *o) == 0)
@@ -90,6 +91,43 @@ int edview_update(edview *v, const sg_system *sys, unsigned long id, const sg_ca
             fr = view_wavefront_figure(sys, &w, &ref, field, sys->wave[wv].um, &v->fig);
             sg_wavefront_free(&w);
         }
+    } else if (v->kind == VIEW_MTF) {
+        sg_mtf m;
+        sg_mtf_opts mo;
+        memset(&m, 0, sizeof m);
+        sg_mtf_opts_init(&mo);
+        mo.trace = *o;
+        mo.wave = o->wave;
+        mo.nthreads = 1;
+        rc = sg_mtf_compute(sys, cat, &mo, &m, &d);
+        if (rc == SG_EOK)
+            fr = view_mtf_figure(sys, &m, &v->fig);
+        sg_mtf_free(&m);
+    } else if (v->kind == VIEW_PSF) {
+        sg_psf p;
+        sg_psf_opts po;
+        memset(&p, 0, sizeof p);
+        sg_psf_opts_init(&po);
+        po.trace = *o;
+        po.wave = o->wave;
+        po.nthreads = 1;
+        po.field = field;
+        rc = sg_psf_compute(sys, cat, &po, &p, &d);
+        if (rc == SG_EOK)
+            fr = view_psf_figure(sys, &p, 1, &v->fig);
+        sg_psf_free(&p);
+    } else if (v->kind == VIEW_EE) {
+        sg_ee e;
+        sg_ee_opts eo;
+        memset(&e, 0, sizeof e);
+        sg_ee_opts_init(&eo);
+        eo.trace = *o;
+        eo.wave = o->wave;
+        eo.nthreads = 1;
+        rc = sg_ee_compute(sys, cat, &eo, &e, &d);
+        if (rc == SG_EOK)
+            fr = view_ee_figure(sys, &e, &v->fig);
+        sg_ee_free(&e);
     } else if (v->kind == VIEW_FAN || v->kind == VIEW_OPD) {
         sg_fan f;
         sg_fan_opts fo;
