@@ -370,11 +370,22 @@ static void draw(ui *u)
     case MODE_SYSDATA: sysdata_draw(u); break;
     case MODE_GLASSES: glasses_draw(u); break;
     case MODE_MESSAGES: messages_draw(u); break;
+    case MODE_MERIT:
+        merit_draw(u);
+        /* The last command's message in place of the keys. */
+        if (u->e->msg[0])
+            status_draw(u);
+        break;
     case MODE_SETTINGS: settings_draw(u); status_draw(u); break;
     case MODE_EXAMPLES: examples_draw(u); status_draw(u); break;
     case MODE_COMMAND:
         if (u->back_mode == MODE_SETTINGS) {
             settings_draw(u);
+            status_draw(u);
+            break;
+        }
+        if (u->back_mode == MODE_MERIT) {
+            merit_draw(u);
             status_draw(u);
             break;
         }
@@ -576,6 +587,7 @@ static int global_key(ui *u, int key)
     case 'm': return ui_run(u, "method %s", methods[e->method % 3]);
     case '#': return ui_run(u, "digits toggle");
     case K_F(3): u->sys_top = 0; u->mode = MODE_SYSDATA; return ED_HANDLED | ED_REDRAW;
+    case K_CTRL('e'): u->mode = MODE_MERIT; return ED_HANDLED | ED_REDRAW;
     case 'v': return ui_run(u, "wave %d", (e->wave + 1) % e->doc.sys->nwave + 1);
     case 'g': return ui_run(u, "view next");
     case 'f':
@@ -634,6 +646,7 @@ static int dispatch(ui *u, int key)
     case MODE_SYSDATA: return sysdata_key(u, key);
     case MODE_GLASSES: return glasses_key(u, key);
     case MODE_MESSAGES: return messages_key(u, key);
+    case MODE_MERIT: return merit_key(u, key);
     default: break;
     }
     /* A fresh key clears the last message; the key's own command may set a
@@ -691,6 +704,8 @@ static int act(ui *u, int f)
         u->sys_top = 0;
         u->mode = MODE_SYSDATA;
     }
+    if (f & ED_SHOW_MERIT)
+        u->mode = MODE_MERIT;
     if (f & ED_SHOW_MESSAGES) {
         u->msg_top = -1;
         u->mode = MODE_MESSAGES;

@@ -461,6 +461,10 @@ static const command commands[] = {
      "set a solve: none, pickup FROM [SCALE [OFFSET]], marginal_height H, chief_height H "
      "or position FROM L (thickness), curvature_pickup FROM [SCALE [OFFSET]], marginal_angle U "
      "or fnum F (radius), variable [MIN MAX] (any)"},
+    {"merit", "mfe", c_merit, "merit [list | insert [ROW] [TYPE] | delete ROW | set ROW COLUMN VALUE | "
+     "default off|centroid|chief [RINGS [ARMS]]]",
+     "the Merit Function Editor (Ctrl-E): its rows, live; insert, delete or set an operand's "
+     "type, int1, int2, hx, hy, px, py, target or weight; the default part"},
     {"var", NULL, c_var, "var SURFACE radius|thickness|conic [MIN MAX]",
      "make a value a variable of the optimizer (V), optionally bounded"},
     {"novar", NULL, c_novar, "novar SURFACE radius|thickness|conic | novar all",

@@ -10,4 +10,13 @@ const char *cmd_name(int i);
 const char *cmd_usage(int i);
 const char *cmd_help(int i);
 
+/* The Merit Function Editor's columns of an operand row (cmd_merit.c), as
+ * "merit set" names them: type, int1, int2, hx, hy, px, py, target, weight. */
+#include "sagitta.h"
+#define MERIT_NCOLS 9
+extern const char *const merit_cols[MERIT_NCOLS];
+int merit_col_parse(const char *s);
+/* The number in column col (1 to 8) of an operand. */
+double merit_col_value(const sg_operand *o, int col);
+
 #endif

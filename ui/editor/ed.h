@@ -31,7 +31,8 @@ enum {
     ED_PROMPT = 1 << 9,        /* open the ':' line with ed.prompt_init */
     ED_SHOW_SYSDATA = 1 << 10, /* the system data (paraxial) view */
     ED_SHOW_GLASSES = 1 << 11, /* the glass picker (ed.glasses) */
-    ED_SHOW_MESSAGES = 1 << 12 /* the message history (ed.hist) */
+    ED_SHOW_MESSAGES = 1 << 12, /* the message history (ed.hist) */
+    ED_SHOW_MERIT = 1 << 13     /* the Merit Function Editor */
 };
 
 /* What a confirmation asks. */

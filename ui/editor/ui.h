@@ -24,7 +24,8 @@ enum {
     MODE_EXAMPLES,
     MODE_SYSDATA,    /* the system data view */
     MODE_GLASSES,    /* the glass picker */
-    MODE_MESSAGES    /* the message history (:messages) */
+    MODE_MESSAGES,   /* the message history (:messages) */
+    MODE_MERIT       /* the Merit Function Editor (Ctrl-E, :merit) */
 };
 
 /* Items of the ray selector. */
@@ -66,6 +67,7 @@ typedef struct ui {
     int sys_top;
     int glass_top;
     int msg_top;         /* the message history's first row; -1: the newest */
+    int mf_sel, mf_top, mf_col; /* the Merit Function Editor's row (0-based), first row shown, column */
     char warn_seen[SG_DIAG_MSG]; /* the design warning last put in the history */
     char fail_seen[SG_DIAG_MSG]; /* the same for why the design cannot be traced */
     int set_sel, set_top;
@@ -129,6 +131,9 @@ int sheet_text_col(int col);
 
 void messages_draw(ui *u);
 int messages_key(ui *u, int key);
+
+void merit_draw(ui *u);
+int merit_key(ui *u, int key);
 
 /* Cuts UTF-8 s to at most w columns, the cut marked with ell; returns
  * nonzero when it cut. */
