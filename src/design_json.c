@@ -1043,14 +1043,10 @@ static int get_merit(jctx *c, const cJSON *v, sg_merit *m)
         idx[O_K1] = idx[O_K2] = idx[O_HX] = idx[O_HY] = idx[O_PX] = idx[O_PY] = -1;
         if (inf->k1) { okeys[nk] = inf->k1; idx[O_K1] = nk++; }
         if (inf->k2) { okeys[nk] = inf->k2; idx[O_K2] = nk++; }
-        if (inf->field) {
-            okeys[nk] = "hx"; idx[O_HX] = nk++;
-            okeys[nk] = "hy"; idx[O_HY] = nk++;
-        }
-        if (inf->pupil) {
-            okeys[nk] = "px"; idx[O_PX] = nk++;
-            okeys[nk] = "py"; idx[O_PY] = nk++;
-        }
+        if (inf->d[0]) { okeys[nk] = inf->d[0]; idx[O_HX] = nk++; }
+        if (inf->d[1]) { okeys[nk] = inf->d[1]; idx[O_HY] = nk++; }
+        if (inf->d[2]) { okeys[nk] = inf->d[2]; idx[O_PX] = nk++; }
+        if (inf->d[3]) { okeys[nk] = inf->d[3]; idx[O_PY] = nk++; }
         okeys[nk] = "target"; idx[O_TARGET] = nk++;
         okeys[nk] = "weight"; idx[O_WEIGHT] = nk++;
         {
@@ -1071,10 +1067,10 @@ static int get_merit(jctx *c, const cJSON *v, sg_merit *m)
         o->weight = 1.0;
         if ((ok[O_K1] && (rc = get_int(c, ok[O_K1], join(at2, sizeof at2, at, inf->k1), &o->i1))) ||
             (ok[O_K2] && (rc = get_int(c, ok[O_K2], join(at2, sizeof at2, at, inf->k2), &o->i2))) ||
-            (ok[O_HX] && (rc = get_finite(c, ok[O_HX], join(at2, sizeof at2, at, "hx"), &o->hx))) ||
-            (ok[O_HY] && (rc = get_finite(c, ok[O_HY], join(at2, sizeof at2, at, "hy"), &o->hy))) ||
-            (ok[O_PX] && (rc = get_finite(c, ok[O_PX], join(at2, sizeof at2, at, "px"), &o->px))) ||
-            (ok[O_PY] && (rc = get_finite(c, ok[O_PY], join(at2, sizeof at2, at, "py"), &o->py))) ||
+            (ok[O_HX] && (rc = get_finite(c, ok[O_HX], join(at2, sizeof at2, at, inf->d[0]), &o->hx))) ||
+            (ok[O_HY] && (rc = get_finite(c, ok[O_HY], join(at2, sizeof at2, at, inf->d[1]), &o->hy))) ||
+            (ok[O_PX] && (rc = get_finite(c, ok[O_PX], join(at2, sizeof at2, at, inf->d[2]), &o->px))) ||
+            (ok[O_PY] && (rc = get_finite(c, ok[O_PY], join(at2, sizeof at2, at, inf->d[3]), &o->py))) ||
             (ok[O_TARGET] &&
              (rc = get_finite(c, ok[O_TARGET], join(at2, sizeof at2, at, "target"), &o->target))) ||
             (ok[O_WEIGHT] &&
@@ -2443,17 +2439,15 @@ static void sb_merit(sbuf *b, const sg_merit *m)
             snprintf(t, sizeof t, ", \"%s\": %d", inf->k2, o->i2);
             sb_puts(b, t);
         }
-        if (inf->field) {
-            sb_puts(b, ", \"hx\": ");
-            sb_num(b, o->hx);
-            sb_puts(b, ", \"hy\": ");
-            sb_num(b, o->hy);
-        }
-        if (inf->pupil) {
-            sb_puts(b, ", \"px\": ");
-            sb_num(b, o->px);
-            sb_puts(b, ", \"py\": ");
-            sb_num(b, o->py);
+        {
+            const double dv[4] = {o->hx, o->hy, o->px, o->py};
+            int k;
+            for (k = 0; k < 4; k++)
+                if (inf->d[k]) {
+                    snprintf(t, sizeof t, ", \"%s\": ", inf->d[k]);
+                    sb_puts(b, t);
+                    sb_num(b, dv[k]);
+                }
         }
         sb_puts(b, ", \"target\": ");
         sb_num(b, o->target);

@@ -482,13 +482,30 @@ typedef enum sg_op_type {
     SG_OP_MXCA, SG_OP_MNCG, SG_OP_MXCG, SG_OP_REAX, SG_OP_REAY, SG_OP_REAZ, SG_OP_TRAX,
     SG_OP_TRAY, SG_OP_TRAR, SG_OP_RSCE, SG_OP_RSCH, SG_OP_SUMM, SG_OP_DIFF, SG_OP_PROD,
     SG_OP_DIVI, SG_OP_CONS, SG_OP_OPGT, SG_OP_OPLT, SG_OP_ABSO,
+    /* first order */
+    SG_OP_PMAG, SG_OP_WFNO, SG_OP_ISFN, SG_OP_EPDI, SG_OP_EXPP, SG_OP_PARX, SG_OP_PARY,
+    SG_OP_PANA,
+    /* edge thickness boundaries */
+    SG_OP_MXET, SG_OP_MNEA, SG_OP_MXEA, SG_OP_MNEG, SG_OP_MXEG,
+    /* real rays */
+    SG_OP_REAR, SG_OP_RANG, SG_OP_TRAC, SG_OP_OPDC, SG_OP_OPDX,
+    /* image quality */
+    SG_OP_RSRE, SG_OP_RSRH, SG_OP_RWCE, SG_OP_RWRE, SG_OP_DIST, SG_OP_DIMX, SG_OP_FCGS,
+    SG_OP_FCGT, SG_OP_ZERN,
+    /* Seidel */
+    SG_OP_SPHA, SG_OP_COMA, SG_OP_ASTI, SG_OP_FCUR, SG_OP_AXCL, SG_OP_LACL,
+    /* arithmetic */
+    SG_OP_SQRT,
+    /* physical optics */
+    SG_OP_MTFT, SG_OP_MTFS, SG_OP_MTFA, SG_OP_GMTT, SG_OP_GMTS, SG_OP_GMTA, SG_OP_STRH,
     SG_OP_NTYPES
 } sg_op_type;
 
 typedef struct sg_operand {
     sg_op_type type;
     int i1, i2;             /* Zemax's Int1 and Int2 (surface, wave, rings, operand) */
-    double hx, hy, px, py;  /* normalized field and pupil */
+    double hx, hy, px, py;  /* Zemax's Data1 to Data4: the normalized field and pupil,
+                             * or the type's own (sg_op_keys) */
     double target, weight;
 } sg_operand;
 
@@ -830,6 +847,9 @@ SG_API int sg_paddr_solve_target(const sg_paddr *a);
  * when unknown. */
 SG_API const char *sg_op_name(sg_op_type t);
 SG_API int sg_op_parse(const char *name);
+/* The JSON names of an operand type's Int1, Int2 and Data1 to Data4
+ * (stored in i1, i2, hx, hy, px, py); NULL where the type has none. */
+SG_API void sg_op_keys(sg_op_type t, const char *keys[6]);
 /* Checks the merit function's rows against sys (surfaces, wavelengths,
  * operand numbers in range): SG_ERANGE naming the row. */
 SG_API int sg_merit_check(const sg_system *sys, sg_diag *d);

@@ -46,39 +46,28 @@ static void optimize_help(FILE *f)
 static void row_params(const sg_system *sys, const sg_merit_row *r, char *buf, size_t n)
 {
     const sg_operand *o;
-    static const char *const k1[SG_OP_NTYPES] = {
-        [SG_OP_TTHI] = "surf1", [SG_OP_CTGT] = "surf", [SG_OP_CTLT] = "surf",
-        [SG_OP_CTVA] = "surf", [SG_OP_ETGT] = "surf", [SG_OP_ETLT] = "surf",
-        [SG_OP_ETVA] = "surf", [SG_OP_MNCT] = "surf1", [SG_OP_MXCT] = "surf1",
-        [SG_OP_MNET] = "surf1", [SG_OP_MNCA] = "surf1", [SG_OP_MXCA] = "surf1",
-        [SG_OP_MNCG] = "surf1", [SG_OP_MXCG] = "surf1", [SG_OP_REAX] = "surf",
-        [SG_OP_REAY] = "surf", [SG_OP_REAZ] = "surf", [SG_OP_RSCE] = "rings",
-        [SG_OP_RSCH] = "rings", [SG_OP_SUMM] = "op1", [SG_OP_DIFF] = "op1",
-        [SG_OP_PROD] = "op1", [SG_OP_DIVI] = "op1", [SG_OP_OPGT] = "op1",
-        [SG_OP_OPLT] = "op1", [SG_OP_ABSO] = "op1"};
-    static const char *const k2[SG_OP_NTYPES] = {
-        [SG_OP_EFFL] = "wave", [SG_OP_TTHI] = "surf2", [SG_OP_MNCT] = "surf2",
-        [SG_OP_MXCT] = "surf2", [SG_OP_MNET] = "surf2", [SG_OP_MNCA] = "surf2",
-        [SG_OP_MXCA] = "surf2", [SG_OP_MNCG] = "surf2", [SG_OP_MXCG] = "surf2",
-        [SG_OP_REAX] = "wave", [SG_OP_REAY] = "wave", [SG_OP_REAZ] = "wave",
-        [SG_OP_TRAX] = "wave", [SG_OP_TRAY] = "wave", [SG_OP_TRAR] = "wave",
-        [SG_OP_RSCE] = "wave", [SG_OP_RSCH] = "wave", [SG_OP_SUMM] = "op2",
-        [SG_OP_DIFF] = "op2", [SG_OP_PROD] = "op2", [SG_OP_DIVI] = "op2"};
+    const char *keys[6];
+    double dv[4];
     size_t m = 0;
+    int k;
     buf[0] = '\0';
     if (r->row > sys->merit.nop) {
         snprintf(buf, n, "default");
         return;
     }
     o = &sys->merit.op[r->row - 1];
-    if (k1[o->type])
-        m += (size_t)snprintf(buf + m, n - m, "%s=%d ", k1[o->type], o->i1);
-    if (m < n && k2[o->type])
-        m += (size_t)snprintf(buf + m, n - m, "%s=%d ", k2[o->type], o->i2);
-    if (m < n && o->type >= SG_OP_REAX && o->type <= SG_OP_RSCH)
-        m += (size_t)snprintf(buf + m, n - m, "hx=%g hy=%g ", o->hx, o->hy);
-    if (m < n && o->type >= SG_OP_REAX && o->type <= SG_OP_TRAR)
-        m += (size_t)snprintf(buf + m, n - m, "px=%g py=%g ", o->px, o->py);
+    sg_op_keys(o->type, keys);
+    dv[0] = o->hx;
+    dv[1] = o->hy;
+    dv[2] = o->px;
+    dv[3] = o->py;
+    if (keys[0])
+        m += (size_t)snprintf(buf + m, n - m, "%s=%d ", keys[0], o->i1);
+    if (m < n && keys[1])
+        m += (size_t)snprintf(buf + m, n - m, "%s=%d ", keys[1], o->i2);
+    for (k = 0; k < 4; k++)
+        if (m < n && keys[2 + k])
+            m += (size_t)snprintf(buf + m, n - m, "%s=%g ", keys[2 + k], dv[k]);
     if (m > 0 && m < n)
         buf[m - 1] = '\0';
 }
