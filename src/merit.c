@@ -847,8 +847,8 @@ static int rms_of(ectx *c, const sg_operand *o, double *out, const char *what, s
             cx = r.x;
             cy = r.y;
         } else {
-            cx /= sw;
-            cy /= sw;
+            cx = cx / sw;
+            cy = cy / sw;
         }
         for (i = 0; i < m; i++)
             s2 += wq[i] * ((v[i] - cx) * (v[i] - cx) + (vy[i] - cy) * (vy[i] - cy));

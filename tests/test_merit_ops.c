@@ -406,7 +406,9 @@ static void distortion(void **state)
     sg_system *sys = singlet(R1, R2, T, bfl, 0, 10, 20, "{\"type\": \"epd\", \"value\": 10}",
                              "{\"type\": \"DIMX\", \"field\": 0, \"wave\": 1},"
                              "{\"type\": \"REAY\", \"surf\": 3, \"wave\": 1, \"hy\": 1},"
-                             "{\"type\": \"DIMX\", \"field\": 0, \"wave\": 1, \"absolute\": 1}");
+                             "{\"type\": \"DIMX\", \"field\": 0, \"wave\": 1, \"absolute\": 1},"
+                             "{\"type\": \"FCGT\", \"wave\": 1, \"hy\": 1},"
+                             "{\"type\": \"FCGS\", \"wave\": 1, \"hy\": 1}");
     sg_system *small = singlet(R1, R2, T, bfl, 0, 1, 20, "{\"type\": \"epd\", \"value\": 10}",
                                "{\"type\": \"DIMX\", \"field\": 2, \"wave\": 1},"
                                "{\"type\": \"DIST\", \"surf\": 0, \"wave\": 1},"
@@ -419,6 +421,20 @@ static void distortion(void **state)
     assert_true(fabs(want) > 0.1);
     near(r.row[0].value, want, 1e-10, "DIMX");
     near(r.row[2].value, fabs(want), 1e-10, "DIMX absolute");
+    {
+        /* FCGT and FCGS beside sg_fieldcurve (sagitta fieldcurve), which
+         * takes its pairs along y and x by its own code: astigmatic here. */
+        sg_fieldcurve_pt fc[2];
+        sg_trace_opts o;
+        sg_diag d;
+        sg_trace_opts_init(&o);
+        sg_diag_clear(&d);
+        if (sg_fieldcurve(sys, NULL, &o, 2, 0.01, fc, &d) != SG_OK)
+            fail_msg("%s", d.msg);
+        assert_true(fabs(fc[1].tan_focus - fc[1].sag_focus) > 0.1);
+        near(r.row[3].value, fc[1].tan_focus, 1e-9, "FCGT");
+        near(r.row[4].value, fc[1].sag_focus, 1e-9, "FCGS");
+    }
     sg_merit_result_free(&r);
     eval(small, NULL, &r);
     near(r.row[1].value, r.row[0].value, 2e-3, "DIST against DIMX at 1 degree");
