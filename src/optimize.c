@@ -286,8 +286,9 @@ static int collect(octx *o, const sg_system *sys, sg_diag *d)
     for (j = 0; j < n; j++) {
         ovar *v = &o->v[j];
         int t = sg_paddr_solve_target(&a[j]);
-        const sg_solve *s = &sys->surf[a[j].index].solve[t];
+        sg_solve bounds, *s = &bounds;
         double p = sg_paddr_get(sys, &a[j]);
+        sg_variable_bounds(sys, &a[j], &bounds.lo, &bounds.hi);
         v->a = a[j];
         v->curv = t == SG_SOLVE_RADIUS;
         v->lo = s->lo;

@@ -380,6 +380,18 @@ typedef struct sg_solve {
     double lo, hi;       /* variable: the bounds, -inf and +inf when not given */
 } sg_solve;
 
+/* A variable on a surface parameter other than radius, thickness and
+ * conic (those are solves of kind variable): a REAL row of the surface
+ * table (an asphere term, a tilt, a toroid's x radius ...) and its element,
+ * with bounds, -inf and inf when free (sagitta-design(5), SOLVES). */
+#define SG_SURF_MAXVARS 16
+struct sg_param;
+typedef struct sg_pvar {
+    const struct sg_param *param;
+    int elem;
+    double lo, hi;
+} sg_pvar;
+
 typedef struct sg_surface {
     sg_surf_type type;
     char comment[SG_COMMENT];
@@ -411,6 +423,8 @@ typedef struct sg_surface {
     sg_frame_change after;
     sg_after_mode after_mode;
     sg_solve solve[SG_SOLVE_NTARGETS]; /* by sg_solve_target; kind 0: none */
+    int nvar;                          /* variables on other parameters */
+    sg_pvar var[SG_SURF_MAXVARS];
     /* Zemax's TCE column, 1e-6/K: the expansion of the mount that holds
      * the surface (the air space after it, a mirror's substrate, a
      * dummy's or coordinate break's placement).  Only sg_thermal reads
@@ -885,6 +899,17 @@ SG_API int sg_merit_rings(int n, double *rho, double *w);
 /* The variables of a design: every solve of kind variable, in surface
  * order (radius, thickness, conic).  Returns the count (at most cap). */
 SG_API int sg_variables(const sg_system *sys, sg_paddr *out, int cap);
+/* Whether a is a variable (a solve of kind variable or a surface's var
+ * entry), with its bounds in lo and hi when it is. */
+SG_API int sg_variable_bounds(const sg_system *sys, const sg_paddr *a, double *lo, double *hi);
+/* Makes parameter key (element elem) of surface surf a variable within
+ * [lo, hi] (on), or not (off): radius, thickness and conic through their
+ * solves, any other REAL row of the surface table through the surface's
+ * var list.  SG_ERANGE naming what is wrong: no such key or element, a
+ * parameter the surface's type does not read, lo above hi, a full list,
+ * or (off) one that is not a variable. */
+SG_API int sg_variable_set(sg_system *sys, int surf, const char *key, int elem, int on,
+                           double lo, double hi, sg_diag *d);
 
 typedef struct sg_opt_opts {
     int cycles;             /* at most this many; 0: until converged (500) */
