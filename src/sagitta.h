@@ -918,6 +918,16 @@ typedef struct sg_opt_opts {
     int (*progress)(void *ctx, int cycle, double merit, double step, double seconds);
     void *ctx;
     volatile int *stop;     /* when set nonzero (a signal), the run stops */
+    /* Global search (sagitta(1), OPTIMIZATION): when global_seconds > 0,
+     * multi-start damped least squares from the points of a Halton set
+     * inside the variables' bounds (every variable needs min and max),
+     * from index seed + 1 on, for global_seconds or global_starts starts
+     * (0: no limit), whichever ends first; the best design is kept.  The
+     * progress callback is then called once a start, with the start's
+     * number and the best merit so far. */
+    double global_seconds;
+    int global_starts;
+    unsigned seed;
 } sg_opt_opts;
 SG_API void sg_opt_opts_init(sg_opt_opts *o);
 

@@ -29,6 +29,7 @@ static void optimize_help(FILE *f)
 {
     fputs(
 "Usage: sagitta optimize DESIGN.json -o OUT.json [--cycles N] [--threads N] [--force]\n"
+"                        [--global SECONDS [--starts N] [--seed N]]\n"
 "Damped least squares (trust-region Levenberg-Marquardt) on the design's\n"
 "variables (solves of type \"variable\") against its merit function; writes\n"
 "the best design to OUT.json, also when stopped by Ctrl-C.  One line per\n"
@@ -39,6 +40,10 @@ static void optimize_help(FILE *f)
 "  --cycles N               at most N cycles (default: until converged, 500)\n"
 "  --threads N              threads for the derivatives (default: every core)\n"
 "  --force                  overwrite OUT.json if it exists\n"
+"  --global SECONDS         multi-start damped least squares from a Halton set\n"
+"                           inside the variables' min and max, keeping the best\n"
+"  --starts N               at most N starts (the design's own the first)\n"
+"  --seed N                 the Halton set from index N + 1 (default 0)\n"
 "  -h, --help               show this help\n", f);
 }
 
@@ -174,7 +179,17 @@ static int progress(void *ctx, int cycle, double merit, double step, double seco
     return 0;
 }
 
-enum { OP_HELP = 1, OP_OUTPUT, OP_CYCLES, OP_THREADS, OP_FORCE };
+/* The global search's line: one a start. */
+static int progress_global(void *ctx, int start, double merit, double step, double seconds)
+{
+    (void)ctx;
+    (void)step;
+    printf("start %4d  best merit %-22.15g  time %.3f s\n", start, merit, seconds);
+    fflush(stdout);
+    return 0;
+}
+
+enum { OP_HELP = 1, OP_OUTPUT, OP_CYCLES, OP_THREADS, OP_FORCE, OP_GLOBAL, OP_STARTS, OP_SEED };
 
 static const cli_opt optimize_opts[] = {
     { "--help", 'h', 0, OP_HELP },
@@ -182,6 +197,9 @@ static const cli_opt optimize_opts[] = {
     { "--cycles", 0, 1, OP_CYCLES },
     { "--threads", 0, 1, OP_THREADS },
     { "--force", 0, 0, OP_FORCE },
+    { "--global", 0, 1, OP_GLOBAL },
+    { "--starts", 0, 1, OP_STARTS },
+    { "--seed", 0, 1, OP_SEED },
     { NULL, 0, 0, 0 }
 };
 
@@ -232,6 +250,26 @@ int cmd_optimize(int argc, char **argv)
         case OP_FORCE:
             force = 1;
             break;
+        case OP_GLOBAL: {
+            char *end;
+            double s = strtod(val, &end);
+            if (end == val || *end || !(s > 0.0 && s <= 1e6))
+                return cli_usage_error("optimize", "--global %s: expected seconds, more than "
+                                       "0 and at most 1e6", val);
+            o.global_seconds = s;
+            break;
+        }
+        case OP_STARTS:
+            if (cli_int_value("--starts", val, 1, 100000000, &o.global_starts))
+                return CLI_EXIT_USAGE;
+            break;
+        case OP_SEED: {
+            int s;
+            if (cli_int_value("--seed", val, 0, 1000000000, &s))
+                return CLI_EXIT_USAGE;
+            o.seed = (unsigned)s;
+            break;
+        }
         default:
             return -id;
         }
@@ -240,6 +278,8 @@ int cmd_optimize(int argc, char **argv)
         return cli_usage_error("optimize", "missing DESIGN.json");
     if (!output)
         return cli_usage_error("optimize", "missing -o OUT.json (the optimized design)");
+    if ((o.global_starts || o.seed) && !(o.global_seconds > 0.0))
+        return cli_usage_error("optimize", "--starts and --seed belong to --global SECONDS");
     if (strcmp(output, design) == 0 || same_file(output, design))
         return cli_usage_error("optimize", "-o %s is the input design; write the result to "
                                "another file", output);
@@ -258,7 +298,7 @@ int cmd_optimize(int argc, char **argv)
     sigaction(SIGINT, &sa, &old);
     stop_flag = 0;
     o.stop = &stop_flag;
-    o.progress = progress;
+    o.progress = o.global_seconds > 0.0 ? progress_global : progress;
     sg_diag_clear(&d);
     rc = sg_optimize(sys, cat, &o, &res, &d);
     sigaction(SIGINT, &old, NULL);
