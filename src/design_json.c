@@ -825,20 +825,93 @@ enum { V_TYPE, V_FROM, V_SCALE, V_OFFSET, V_VALUE, V_MIN, V_MAX, V_N };
 static const char *const solve_keys[V_N] = {"type", "from", "scale", "offset", "value",
                                             "min", "max"};
 
+/* A variable on another row of the surface table: {"type": "variable",
+ * "element": K, "min": A, "max": B}, or an array of them (one an element). */
+static int get_pvars(jctx *c, const cJSON *v, const char *at, const sg_param *p, sg_surface *s)
+{
+    static const char *const keys[] = {"type", "element", "min", "max"};
+    const cJSON *it, *k[4];
+    char at2[160];
+    int rc;
+    if (cJSON_IsArray(v)) {
+        cJSON_ArrayForEach(it, v) {
+            if ((rc = get_pvars(c, it, at, p, s)) != SG_OK)
+                return rc;
+        }
+        return SG_OK;
+    }
+    if ((rc = expect_object(c, v, at)) != SG_OK)
+        return rc;
+    pick_keys(c, v, at, keys, 4, k);
+    {
+        sg_pvar q;
+        memset(&q, 0, sizeof q);
+        q.param = p;
+        q.lo = -INFINITY;
+        q.hi = INFINITY;
+        if (!k[0] || !cJSON_IsString(k[0]) || !k[0]->valuestring ||
+            strcmp(k[0]->valuestring, "variable") != 0)
+            return perr(c, SG_EPARSE, at, "only a \"variable\" can sit on the %s (the other "
+                        "solves sit on radius, thickness and conic)", p->key);
+        if (k[1] && (rc = get_int(c, k[1], join(at2, sizeof at2, at, "element"), &q.elem)) !=
+            SG_OK)
+            return rc;
+        if (q.elem < 0 || q.elem >= p->count)
+            return perr(c, SG_EPARSE, join(at2, sizeof at2, at, "element"), "%d is not 0 to %d",
+                        q.elem, p->count - 1);
+        if ((k[2] && (rc = get_finite(c, k[2], join(at2, sizeof at2, at, "min"), &q.lo)) !=
+                         SG_OK) ||
+            (k[3] && (rc = get_finite(c, k[3], join(at2, sizeof at2, at, "max"), &q.hi)) !=
+                         SG_OK))
+            return rc;
+        if (q.lo > q.hi)
+            return perr(c, SG_EPARSE, at, "the variable's min %.17g is above its max %.17g",
+                        q.lo, q.hi);
+        if (!sg_param_used(p, q.elem, s->type))
+            return perr(c, SG_EPARSE, at, "a %s surface does not use element %d of %s",
+                        sg_param_find(SG_SCOPE_SURFACE, "type")->names[s->type], q.elem,
+                        p->key);
+        if (s->nvar >= SG_SURF_MAXVARS)
+            return perr(c, SG_ERANGE, at, "more than %d variables on one surface",
+                        SG_SURF_MAXVARS);
+        s->var[s->nvar++] = q;
+    }
+    return SG_OK;
+}
+
 static int get_solves(jctx *c, const cJSON *v, const char *where, sg_surface *s)
 {
     const char *kinds[SG_SOLVE_NKINDS];
-    const cJSON *t[SG_SOLVE_NTARGETS], *k[V_N];
-    const char *targets[SG_SOLVE_NTARGETS];
+    const cJSON *t[SG_SOLVE_NTARGETS + 96], *k[V_N];
+    const char *targets[SG_SOLVE_NTARGETS + 96];
+    const sg_param *extra[96];
     char at[96], at2[128];
-    int i, rc, e = 0;
+    int i, rc, e = 0, nk = SG_SOLVE_NTARGETS;
     for (i = 0; i < SG_SOLVE_NKINDS; i++)
         kinds[i] = sg_solve_kind_name((sg_solve_kind)i);
     for (i = 0; i < SG_SOLVE_NTARGETS; i++)
         targets[i] = sg_solve_target_name((sg_solve_target)i);
+    /* Every other real row of the surface table can hold a variable. */
+    for (i = 0; i < sg_param_count(SG_SCOPE_SURFACE) && nk < SG_SOLVE_NTARGETS + 96; i++) {
+        const sg_param *p = sg_param_at(SG_SCOPE_SURFACE, i);
+        int j;
+        if (p->kind != SG_PARAM_REAL)
+            continue;
+        for (j = 0; j < SG_SOLVE_NTARGETS && strcmp(p->key, targets[j]) != 0; j++)
+            ;
+        if (j < SG_SOLVE_NTARGETS)
+            continue;
+        extra[nk - SG_SOLVE_NTARGETS] = p;
+        targets[nk++] = p->key;
+    }
     if ((rc = expect_object(c, v, where)) != SG_OK)
         return rc;
-    pick_keys(c, v, where, targets, SG_SOLVE_NTARGETS, t);
+    pick_keys(c, v, where, targets, nk, t);
+    s->nvar = 0;
+    for (i = SG_SOLVE_NTARGETS; i < nk; i++)
+        if (t[i] && (rc = get_pvars(c, t[i], join(at, sizeof at, where, targets[i]),
+                                    extra[i - SG_SOLVE_NTARGETS], s)) != SG_OK)
+            return rc;
     for (i = 0; i < SG_SOLVE_NTARGETS; i++) {
         sg_solve *o = &s->solve[i];
         if (!t[i])
@@ -1043,14 +1116,10 @@ static int get_merit(jctx *c, const cJSON *v, sg_merit *m)
         idx[O_K1] = idx[O_K2] = idx[O_HX] = idx[O_HY] = idx[O_PX] = idx[O_PY] = -1;
         if (inf->k1) { okeys[nk] = inf->k1; idx[O_K1] = nk++; }
         if (inf->k2) { okeys[nk] = inf->k2; idx[O_K2] = nk++; }
-        if (inf->field) {
-            okeys[nk] = "hx"; idx[O_HX] = nk++;
-            okeys[nk] = "hy"; idx[O_HY] = nk++;
-        }
-        if (inf->pupil) {
-            okeys[nk] = "px"; idx[O_PX] = nk++;
-            okeys[nk] = "py"; idx[O_PY] = nk++;
-        }
+        if (inf->d[0]) { okeys[nk] = inf->d[0]; idx[O_HX] = nk++; }
+        if (inf->d[1]) { okeys[nk] = inf->d[1]; idx[O_HY] = nk++; }
+        if (inf->d[2]) { okeys[nk] = inf->d[2]; idx[O_PX] = nk++; }
+        if (inf->d[3]) { okeys[nk] = inf->d[3]; idx[O_PY] = nk++; }
         okeys[nk] = "target"; idx[O_TARGET] = nk++;
         okeys[nk] = "weight"; idx[O_WEIGHT] = nk++;
         {
@@ -1071,10 +1140,10 @@ static int get_merit(jctx *c, const cJSON *v, sg_merit *m)
         o->weight = 1.0;
         if ((ok[O_K1] && (rc = get_int(c, ok[O_K1], join(at2, sizeof at2, at, inf->k1), &o->i1))) ||
             (ok[O_K2] && (rc = get_int(c, ok[O_K2], join(at2, sizeof at2, at, inf->k2), &o->i2))) ||
-            (ok[O_HX] && (rc = get_finite(c, ok[O_HX], join(at2, sizeof at2, at, "hx"), &o->hx))) ||
-            (ok[O_HY] && (rc = get_finite(c, ok[O_HY], join(at2, sizeof at2, at, "hy"), &o->hy))) ||
-            (ok[O_PX] && (rc = get_finite(c, ok[O_PX], join(at2, sizeof at2, at, "px"), &o->px))) ||
-            (ok[O_PY] && (rc = get_finite(c, ok[O_PY], join(at2, sizeof at2, at, "py"), &o->py))) ||
+            (ok[O_HX] && (rc = get_finite(c, ok[O_HX], join(at2, sizeof at2, at, inf->d[0]), &o->hx))) ||
+            (ok[O_HY] && (rc = get_finite(c, ok[O_HY], join(at2, sizeof at2, at, inf->d[1]), &o->hy))) ||
+            (ok[O_PX] && (rc = get_finite(c, ok[O_PX], join(at2, sizeof at2, at, inf->d[2]), &o->px))) ||
+            (ok[O_PY] && (rc = get_finite(c, ok[O_PY], join(at2, sizeof at2, at, inf->d[3]), &o->py))) ||
             (ok[O_TARGET] &&
              (rc = get_finite(c, ok[O_TARGET], join(at2, sizeof at2, at, "target"), &o->target))) ||
             (ok[O_WEIGHT] &&
@@ -2264,7 +2333,7 @@ static void sb_change(sbuf *b, const sg_frame_change *f)
 static void sb_solves(sbuf *b, const sg_surface *s)
 {
     int t, n = 0;
-    char buf[32];
+    char buf[80];
     for (t = 0; t < SG_SOLVE_NTARGETS; t++) {
         const sg_solve *v = &s->solve[t];
         if (v->kind == SG_SOLVE_NONE)
@@ -2301,6 +2370,41 @@ static void sb_solves(sbuf *b, const sg_surface *s)
             sb_num(b, v->value);
         }
         sb_puts(b, "}");
+    }
+    /* The other variables, an array where one key has several. */
+    for (t = 0; t < s->nvar; t++) {
+        const sg_pvar *v = &s->var[t];
+        int k, same = 0, first = 1;
+        for (k = 0; k < s->nvar; k++)
+            if (s->var[k].param == v->param) {
+                same++;
+                if (k < t)
+                    first = 0;
+            }
+        if (!first)
+            continue;
+        sb_puts(b, n++ ? ", \"" : ",\n      \"solves\": { \"");
+        sb_puts(b, v->param->key);
+        sb_puts(b, same > 1 ? "\": [" : "\": ");
+        for (k = t, same = 0; k < s->nvar; k++) {
+            const sg_pvar *w = &s->var[k];
+            if (w->param != v->param)
+                continue;
+            snprintf(buf, sizeof buf, "%s{\"type\": \"variable\", \"element\": %d",
+                     same++ ? ", " : "", w->elem);
+            sb_puts(b, buf);
+            if (isfinite(w->lo)) {
+                sb_puts(b, ", \"min\": ");
+                sb_num(b, w->lo);
+            }
+            if (isfinite(w->hi)) {
+                sb_puts(b, ", \"max\": ");
+                sb_num(b, w->hi);
+            }
+            sb_puts(b, "}");
+        }
+        if (same > 1)
+            sb_puts(b, "]");
     }
     if (n)
         sb_puts(b, " }");
@@ -2443,17 +2547,15 @@ static void sb_merit(sbuf *b, const sg_merit *m)
             snprintf(t, sizeof t, ", \"%s\": %d", inf->k2, o->i2);
             sb_puts(b, t);
         }
-        if (inf->field) {
-            sb_puts(b, ", \"hx\": ");
-            sb_num(b, o->hx);
-            sb_puts(b, ", \"hy\": ");
-            sb_num(b, o->hy);
-        }
-        if (inf->pupil) {
-            sb_puts(b, ", \"px\": ");
-            sb_num(b, o->px);
-            sb_puts(b, ", \"py\": ");
-            sb_num(b, o->py);
+        {
+            const double dv[4] = {o->hx, o->hy, o->px, o->py};
+            int k;
+            for (k = 0; k < 4; k++)
+                if (inf->d[k]) {
+                    snprintf(t, sizeof t, ", \"%s\": ", inf->d[k]);
+                    sb_puts(b, t);
+                    sb_num(b, dv[k]);
+                }
         }
         sb_puts(b, ", \"target\": ");
         sb_num(b, o->target);
@@ -2554,7 +2656,7 @@ static char *build_json(const sg_system *sys, sg_diag *d, int *rc)
     /* Variables and the merit function came with version 6. */
     for (i = 0; i < sys->nsurf; i++)
         for (k = 0; k < SG_SOLVE_NTARGETS; k++)
-            if (sys->surf[i].solve[k].kind == SG_SOLVE_VARIABLE)
+            if (sys->surf[i].solve[k].kind == SG_SOLVE_VARIABLE || sys->surf[i].nvar)
                 version = version < 6 ? 6 : version;
     if (sys->merit.present)
         version = version < 6 ? 6 : version;

@@ -108,6 +108,8 @@ typedef struct zsurf {
     long scad_line;
 } zsurf;
 
+#define ZMX_MAX_MROWS 4096 /* merit function rows mapped to the design's */
+
 typedef struct zctx {
     const char *name;
     sg_diag *d;
@@ -116,6 +118,11 @@ typedef struct zctx {
     sg_system *sys;
     int cur;             /* current surface, -1 in the header */
     int after;           /* past the surfaces: merit function and tolerances */
+    /* The merit function's rows: Zemax's row number (from 1) to the
+     * design's operand (from 1; 0 left out), and whether it is dropped. */
+    int nmrow, mrow[ZMX_MAX_MROWS + 1], merit_drop;
+    long merit_drop_line;
+    char merit_drop_why[160];
     zsurf zs;
     int nstop, stop;
     long stop_line;
@@ -1748,6 +1755,88 @@ static int config_finish(zctx *c)
     return SG_OK;
 }
 
+
+/* A merit function row after the surfaces, as Zemax writes its Merit
+ * Function Editor: "TYPE int1 int2 data1 data2 data3 data4 target weight
+ * [data5 data6]" (BLNK and DMFS rows as they are).  A row sagitta knows
+ * becomes an operand; another is warned about, with its line, and left
+ * out, and rows that refer to it by number (SUMM ...) with it.  Returns 1
+ * when the line was a merit row, 0 when it is something else. */
+static int merit_line(zctx *c, const zline *l)
+{
+    sg_merit *m = &c->sys->merit;
+    char key[5], buf[ZMX_MAX_NUMBER + 1];
+    double v[8] = {0};
+    int i, t, cur = c->cur, row;
+    memcpy(key, l->t[0].p, 4);
+    key[4] = '\0';
+    if (strcmp(key, "BLNK") != 0) {
+        if (l->n < 9)
+            return 0;
+        for (i = 1; i <= 8; i++) {
+            char *end;
+            if (l->t[i].n >= sizeof buf)
+                return 0;
+            memcpy(buf, l->t[i].p, l->t[i].n);
+            buf[l->t[i].n] = '\0';
+            v[i - 1] = strtod(buf, &end);
+            if (end == buf || *end || !isfinite(v[i - 1]))
+                return 0;
+        }
+    }
+    if (c->nmrow >= ZMX_MAX_MROWS)
+        return 1;
+    row = ++c->nmrow;
+    c->mrow[row] = 0;
+    /* Messages name the line, not the last surface. */
+    c->cur = -1;
+    t = sg_op_parse(key);
+    if (strcmp(key, "DMFS") == 0) {
+        /* The default merit function's start: its rows follow as rows. */
+    } else if (t < 0) {
+        zwarn(c, "merit function row %d: operand %s is not one sagitta knows; it is left out "
+              "of the design's merit function", row, key);
+    } else if (m->nop >= SG_MAX_OPERANDS) {
+        if (!c->merit_drop) {
+            c->merit_drop = 1;
+            c->merit_drop_line = c->line;
+            snprintf(c->merit_drop_why, sizeof c->merit_drop_why, "more than %d rows",
+                     SG_MAX_OPERANDS);
+        }
+    } else {
+        sg_operand *o = &m->op[m->nop];
+        memset(o, 0, sizeof *o);
+        o->type = (sg_op_type)t;
+        o->i1 = (int)v[0];
+        o->i2 = (int)v[1];
+        o->hx = v[2];
+        o->hy = v[3];
+        o->px = v[4];
+        o->py = v[5];
+        o->target = v[6];
+        o->weight = t == SG_OP_BLNK ? 0.0 : v[7];
+        /* Rows named by number follow the design's numbering. */
+        if (t == SG_OP_SUMM || t == SG_OP_DIFF || t == SG_OP_PROD || t == SG_OP_DIVI ||
+            t == SG_OP_OPGT || t == SG_OP_OPLT || t == SG_OP_ABSO || t == SG_OP_SQRT) {
+            int two = t <= SG_OP_DIVI, a = o->i1, b = o->i2;
+            int ra = a >= 1 && a < row ? c->mrow[a] : 0, rb = b >= 1 && b < row ? c->mrow[b] : 0;
+            if (!ra || (two && !rb)) {
+                zwarn(c, "merit function row %d: %s refers to row %d, which is left out; it is "
+                      "left out too", row, key, !ra ? a : b);
+                c->cur = cur;
+                return 1;
+            }
+            o->i1 = ra;
+            if (two)
+                o->i2 = rb;
+        }
+        m->present = 1;
+        c->mrow[row] = ++m->nop;
+    }
+    c->cur = cur;
+    return 1;
+}
+
 static int header_line(zctx *c, const zline *l)
 {
     const ztok *k = &l->t[0];
@@ -1952,6 +2041,8 @@ static int header_line(zctx *c, const zline *l)
     }
     if (c->mnum > 1 && c->after && k->n == 4 && !tok_is(k, "CSUM"))
         return config_line(c, l);
+    if (c->after && !c->mnum && k->n == 4 && merit_line(c, l))
+        return SG_OK;
     if (in_list(k, ignored_header, sizeof ignored_header / sizeof *ignored_header))
         return SG_OK;
     /* After the surfaces come the merit function's operands (EFFL, REAY,
@@ -2124,6 +2215,29 @@ static int finish(zctx *c)
         if (s->field_type == SG_FIELD_ANGLE)
             return zerr(c, SG_EUNSUPPORTED, "FTYP: telecentric object space with angle "
                         "fields; its chief rays are parallel to the axis");
+    }
+    /* The merit function's rows, checked against the design they came
+     * with: one it cannot take leaves the whole merit function out (its
+     * rows refer to each other), with a warning. */
+    if (c->merit_drop) {
+        zwarn(c, "merit function: %s from line %ld; sagitta leaves the merit function out",
+              c->merit_drop_why, c->merit_drop_line);
+        memset(&s->merit, 0, sizeof s->merit);
+    } else if (s->merit.present) {
+        int any = 0;
+        for (i = 0; i < s->merit.nop; i++)
+            any |= s->merit.op[i].type != SG_OP_BLNK;
+        /* Zemax writes an empty editor as one BLNK row: no merit function. */
+        if (!any)
+            memset(&s->merit, 0, sizeof s->merit);
+    }
+    if (s->merit.present) {
+        sg_diag md;
+        sg_diag_clear(&md);
+        if (sg_merit_check(s, &md) != SG_OK) {
+            zwarn(c, "%s; sagitta leaves the merit function out", md.msg);
+            memset(&s->merit, 0, sizeof s->merit);
+        }
     }
     return SG_OK;
 }
@@ -3236,6 +3350,27 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int la
         }
     }
     mpfr_clear(q);
+    /* The merit function, as Zemax's editor rows "TYPE int1 int2 data1 ..
+     * data4 target weight data5 data6": not in the merged save (lax 1),
+     * which keeps the file's own lines. */
+    if (s->merit.present && lax != 1) {
+        char n3[40], n4[40], n5[40], n6[40];
+        for (i = 0; i < s->merit.nop; i++) {
+            const sg_operand *o = &s->merit.op[i];
+            if (o->type == SG_OP_BLNK) {
+                zb_printf(b, "BLNK\n");
+                continue;
+            }
+            num(n1, o->hx);
+            num(n2, o->hy);
+            num(n3, o->px);
+            num(n4, o->py);
+            num(n5, o->target);
+            num(n6, o->weight);
+            zb_printf(b, "%s %d %d %s %s %s %s %s %s 0 0\n", sg_op_name(o->type), o->i1, o->i2,
+                      n1, n2, n3, n4, n5, n6);
+        }
+    }
     /* The configurations, as Zemax's editor rows: not in the merged save
      * (lax 1), which keeps the file's own lines. */
     if (s->configs && lax != 1) {

@@ -5,12 +5,12 @@
 
 #include "sagitta.h"
 
-/* Zemax's columns of an operand: Int1 and Int2 under their JSON names
- * (NULL: unused), and whether it reads Hx, Hy and Px, Py. */
+/* Zemax's columns of an operand: Int1, Int2 and Data1 to Data4 under
+ * their JSON names (NULL: unused). */
 typedef struct sg_op_info {
     const char *name;
     const char *k1, *k2;
-    int field, pupil;
+    const char *d[4];
 } sg_op_info;
 
 const sg_op_info *sg_op_info_of(sg_op_type t);

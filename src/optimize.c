@@ -286,8 +286,9 @@ static int collect(octx *o, const sg_system *sys, sg_diag *d)
     for (j = 0; j < n; j++) {
         ovar *v = &o->v[j];
         int t = sg_paddr_solve_target(&a[j]);
-        const sg_solve *s = &sys->surf[a[j].index].solve[t];
+        sg_solve bounds, *s = &bounds;
         double p = sg_paddr_get(sys, &a[j]);
+        sg_variable_bounds(sys, &a[j], &bounds.lo, &bounds.hi);
         v->a = a[j];
         v->curv = t == SG_SOLVE_RADIUS;
         v->lo = s->lo;
@@ -316,8 +317,114 @@ static int collect(octx *o, const sg_system *sys, sg_diag *d)
     return SG_OK;
 }
 
+/* The k-th point (k >= 1) of the Halton set in base b: the radical
+ * inverse of k. */
+static double halton(unsigned long k, unsigned b)
+{
+    double f = 1.0, r = 0.0;
+    while (k > 0) {
+        f /= b;
+        r += f * (double)(k % b);
+        k /= b;
+    }
+    return r;
+}
+
+static int local_opt(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *opts,
+                     sg_opt_result *res, sg_diag *d);
+
+/* Multi-start damped least squares: the start as given, then the Halton
+ * points inside the variables' boxes (a radius's box taken in curvature),
+ * each run to convergence; the lowest merit wins (the first on a tie). */
+static int global_opt(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *opts,
+                      sg_opt_result *res, sg_diag *d)
+{
+    static const unsigned primes[] = {2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37, 41, 43, 47,
+                                      53, 59, 61, 67, 71, 73, 79, 83, 89, 97, 101, 103, 107,
+                                      109, 113, 127, 131};
+    sg_paddr a[OPT_MAX_VARS];
+    double lo[OPT_MAX_VARS], hi[OPT_MAX_VARS], t0 = now();
+    int n = sg_variables(sys, a, OPT_MAX_VARS), j, rc, k;
+    sg_opt_opts lo_opts = *opts;
+    sg_opt_result r;
+    sg_system *best, *trial;
+    char name[96];
+    if (n > (int)(sizeof primes / sizeof primes[0]))
+        return sg_diag_set(d, SG_ERANGE, "--global: %d variables; the Halton set here has %d "
+                           "dimensions", n, (int)(sizeof primes / sizeof primes[0]));
+    for (j = 0; j < n; j++) {
+        sg_variable_bounds(sys, &a[j], &lo[j], &hi[j]);
+        sg_paddr_name(&a[j], name, sizeof name);
+        if (!isfinite(lo[j]) || !isfinite(hi[j]))
+            return sg_diag_set(d, SG_ERANGE, "%s: a global search needs every variable's min "
+                               "and max", name);
+        if (sg_paddr_solve_target(&a[j]) == SG_SOLVE_RADIUS) {
+            double l = lo[j], h = hi[j];
+            if (!(l > 0.0 || h < 0.0))
+                return sg_diag_set(d, SG_ERANGE, "%s: a radius variable's min and max must not "
+                                   "enclose 0", name);
+            lo[j] = 1.0 / h;
+            hi[j] = 1.0 / l;
+        }
+    }
+    lo_opts.global_seconds = 0.0;
+    lo_opts.progress = NULL;
+    memset(res, 0, sizeof *res);
+    if ((rc = local_opt(sys, cat, &lo_opts, res, d)) != SG_OK)
+        return rc;
+    best = sg_system_clone(sys);
+    trial = sg_system_clone(sys);
+    if (!best || !trial) {
+        sg_system_free(best);
+        sg_system_free(trial);
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    }
+    for (k = 1; opts->global_starts <= 0 || k < opts->global_starts; k++) {
+        sg_diag dd;
+        if ((opts->stop && *opts->stop) || now() - t0 >= opts->global_seconds) {
+            res->stopped = opts->stop && *opts->stop;
+            break;
+        }
+        sg_system_assign(trial, sys);
+        for (j = 0; j < n; j++) {
+            double u = halton((unsigned long)opts->seed + (unsigned long)k, primes[j]);
+            double p = lo[j] + (hi[j] - lo[j]) * u;
+            if (sg_paddr_solve_target(&a[j]) == SG_SOLVE_RADIUS)
+                p = p == 0.0 ? INFINITY : 1.0 / p;
+            sg_paddr_set(trial, &a[j], p);
+        }
+        sg_diag_clear(&dd);
+        /* A start the design cannot take (a ray misses there) is passed. */
+        if (sg_system_apply_solves(trial, cat, &dd) != SG_OK ||
+            local_opt(trial, cat, &lo_opts, &r, &dd) != SG_OK)
+            continue;
+        res->cycles += r.cycles;
+        if (r.merit < res->merit) {
+            res->merit = r.merit;
+            res->converged = r.converged;
+            sg_system_assign(best, trial);
+        }
+        if (opts->progress && opts->progress(opts->ctx, k, res->merit, 0.0, now() - t0)) {
+            res->stopped = 1;
+            break;
+        }
+    }
+    sg_system_assign(sys, best);
+    sg_system_free(best);
+    sg_system_free(trial);
+    return SG_OK;
+}
+
 int sg_optimize(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *opts,
                 sg_opt_result *res, sg_diag *d)
+{
+    if (opts && opts->global_seconds > 0.0)
+        return global_opt(sys, cat, opts, res, d);
+    return local_opt(sys, cat, opts, res, d);
+}
+
+static int local_opt(sg_system *sys, const sg_catalog *cat, const sg_opt_opts *opts,
+                     sg_opt_result *res, sg_diag *d)
 {
     octx o;
     sg_opt_opts def;

@@ -108,8 +108,8 @@ int sg_paddr_solve_target(const sg_paddr *a)
 
 int sg_variables(const sg_system *sys, sg_paddr *out, int cap)
 {
-    int i, t, n = 0;
-    for (i = 0; i < sys->nsurf; i++)
+    int i, t, k, n = 0;
+    for (i = 0; i < sys->nsurf; i++) {
         for (t = 0; t < SG_SOLVE_NTARGETS; t++)
             if (sys->surf[i].solve[t].kind == SG_SOLVE_VARIABLE) {
                 if (n < cap &&
@@ -119,5 +119,96 @@ int sg_variables(const sg_system *sys, sg_paddr *out, int cap)
                     continue;
                 n++;
             }
+        /* The surface's other variables, in the order they were made. */
+        for (k = 0; k < sys->surf[i].nvar; k++) {
+            const sg_pvar *v = &sys->surf[i].var[k];
+            if (n < cap && sg_paddr_make(sys, SG_SCOPE_SURFACE, i, v->param->key, v->elem,
+                                         &out[n], NULL) != SG_OK)
+                continue;
+            n++;
+        }
+    }
     return n;
+}
+
+/* The var entry of surface s for (param, elem), or -1. */
+static int var_index(const sg_surface *s, const sg_param *p, int elem)
+{
+    int k;
+    for (k = 0; k < s->nvar; k++)
+        if (s->var[k].param == p && s->var[k].elem == elem)
+            return k;
+    return -1;
+}
+
+int sg_variable_bounds(const sg_system *sys, const sg_paddr *a, double *lo, double *hi)
+{
+    const sg_surface *s;
+    int t = sg_paddr_solve_target(a), k;
+    if (a->scope != SG_SCOPE_SURFACE || a->index < 0 || a->index >= sys->nsurf)
+        return 0;
+    s = &sys->surf[a->index];
+    if (t >= 0) {
+        if (s->solve[t].kind != SG_SOLVE_VARIABLE)
+            return 0;
+        *lo = s->solve[t].lo;
+        *hi = s->solve[t].hi;
+        return 1;
+    }
+    if ((k = var_index(s, a->param, a->elem)) < 0)
+        return 0;
+    *lo = s->var[k].lo;
+    *hi = s->var[k].hi;
+    return 1;
+}
+
+int sg_variable_set(sg_system *sys, int surf, const char *key, int elem, int on, double lo,
+                    double hi, sg_diag *d)
+{
+    sg_paddr a;
+    sg_surface *s;
+    char name[96];
+    int rc, t, k;
+    if ((rc = sg_paddr_make(sys, SG_SCOPE_SURFACE, surf, key, elem, &a, d)) != SG_OK)
+        return rc;
+    s = &sys->surf[surf];
+    sg_paddr_name(&a, name, sizeof name);
+    t = sg_paddr_solve_target(&a);
+    k = t >= 0 ? -1 : var_index(s, a.param, elem);
+    if (!on) {
+        if (t >= 0 ? s->solve[t].kind != SG_SOLVE_VARIABLE : k < 0)
+            return sg_diag_set(d, SG_ERANGE, "%s is not a variable", name);
+        if (t >= 0) {
+            memset(&s->solve[t], 0, sizeof s->solve[t]);
+        } else {
+            memmove(&s->var[k], &s->var[k + 1], (size_t)(s->nvar - k - 1) * sizeof s->var[0]);
+            s->nvar--;
+        }
+        return SG_OK;
+    }
+    if (!(lo <= hi))
+        return sg_diag_set(d, SG_ERANGE, "%s: the variable's min %g is above its max %g", name,
+                           lo, hi);
+    /* A row the surface's type does not read would vary nothing. */
+    if (!sg_param_used(a.param, elem, s->type))
+        return sg_diag_set(d, SG_ERANGE, "%s: a %s surface does not use it", name,
+                           sg_param_find(SG_SCOPE_SURFACE, "type")->names[s->type]);
+    if (t >= 0) {
+        memset(&s->solve[t], 0, sizeof s->solve[t]);
+        s->solve[t].kind = SG_SOLVE_VARIABLE;
+        s->solve[t].lo = lo;
+        s->solve[t].hi = hi;
+        return SG_OK;
+    }
+    if (k < 0) {
+        if (s->nvar >= SG_SURF_MAXVARS)
+            return sg_diag_set(d, SG_ERANGE, "%s: surface %d has %d variables already, the "
+                               "limit", name, surf, SG_SURF_MAXVARS);
+        k = s->nvar++;
+    }
+    s->var[k].param = a.param;
+    s->var[k].elem = elem;
+    s->var[k].lo = lo;
+    s->var[k].hi = hi;
+    return SG_OK;
 }

@@ -456,6 +456,18 @@ static int same_solves(const sg_solve *a, const sg_solve *b)
     return 1;
 }
 
+static int same_vars(const sg_surface *a, const sg_surface *b)
+{
+    int k;
+    if (a->nvar != b->nvar)
+        return 0;
+    for (k = 0; k < a->nvar; k++)
+        if (a->var[k].param != b->var[k].param || a->var[k].elem != b->var[k].elem ||
+            !same_bits(a->var[k].lo, b->var[k].lo) || !same_bits(a->var[k].hi, b->var[k].hi))
+            return 0;
+    return 1;
+}
+
 int sg_system_equal(const sg_system *a, const sg_system *b)
 {
     int i;
@@ -484,7 +496,8 @@ int sg_system_equal(const sg_system *a, const sg_system *b)
             !same_change(&a->surf[i].before, &b->surf[i].before) ||
             !same_change(&a->surf[i].after, &b->surf[i].after) ||
             a->surf[i].after_mode != b->surf[i].after_mode ||
-            !same_solves(a->surf[i].solve, b->surf[i].solve))
+            !same_solves(a->surf[i].solve, b->surf[i].solve) ||
+            !same_vars(&a->surf[i], &b->surf[i]))
             return 0;
     return 1;
 }

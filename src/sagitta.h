@@ -380,6 +380,18 @@ typedef struct sg_solve {
     double lo, hi;       /* variable: the bounds, -inf and +inf when not given */
 } sg_solve;
 
+/* A variable on a surface parameter other than radius, thickness and
+ * conic (those are solves of kind variable): a REAL row of the surface
+ * table (an asphere term, a tilt, a toroid's x radius ...) and its element,
+ * with bounds, -inf and inf when free (sagitta-design(5), SOLVES). */
+#define SG_SURF_MAXVARS 16
+struct sg_param;
+typedef struct sg_pvar {
+    const struct sg_param *param;
+    int elem;
+    double lo, hi;
+} sg_pvar;
+
 typedef struct sg_surface {
     sg_surf_type type;
     char comment[SG_COMMENT];
@@ -411,6 +423,8 @@ typedef struct sg_surface {
     sg_frame_change after;
     sg_after_mode after_mode;
     sg_solve solve[SG_SOLVE_NTARGETS]; /* by sg_solve_target; kind 0: none */
+    int nvar;                          /* variables on other parameters */
+    sg_pvar var[SG_SURF_MAXVARS];
     /* Zemax's TCE column, 1e-6/K: the expansion of the mount that holds
      * the surface (the air space after it, a mirror's substrate, a
      * dummy's or coordinate break's placement).  Only sg_thermal reads
@@ -482,13 +496,30 @@ typedef enum sg_op_type {
     SG_OP_MXCA, SG_OP_MNCG, SG_OP_MXCG, SG_OP_REAX, SG_OP_REAY, SG_OP_REAZ, SG_OP_TRAX,
     SG_OP_TRAY, SG_OP_TRAR, SG_OP_RSCE, SG_OP_RSCH, SG_OP_SUMM, SG_OP_DIFF, SG_OP_PROD,
     SG_OP_DIVI, SG_OP_CONS, SG_OP_OPGT, SG_OP_OPLT, SG_OP_ABSO,
+    /* first order */
+    SG_OP_PMAG, SG_OP_WFNO, SG_OP_ISFN, SG_OP_EPDI, SG_OP_EXPP, SG_OP_PARX, SG_OP_PARY,
+    SG_OP_PANA,
+    /* edge thickness boundaries */
+    SG_OP_MXET, SG_OP_MNEA, SG_OP_MXEA, SG_OP_MNEG, SG_OP_MXEG,
+    /* real rays */
+    SG_OP_REAR, SG_OP_RANG, SG_OP_TRAC, SG_OP_OPDC, SG_OP_OPDX,
+    /* image quality */
+    SG_OP_RSRE, SG_OP_RSRH, SG_OP_RWCE, SG_OP_RWRE, SG_OP_DIST, SG_OP_DIMX, SG_OP_FCGS,
+    SG_OP_FCGT, SG_OP_ZERN,
+    /* Seidel */
+    SG_OP_SPHA, SG_OP_COMA, SG_OP_ASTI, SG_OP_FCUR, SG_OP_AXCL, SG_OP_LACL,
+    /* arithmetic */
+    SG_OP_SQRT,
+    /* physical optics */
+    SG_OP_MTFT, SG_OP_MTFS, SG_OP_MTFA, SG_OP_GMTT, SG_OP_GMTS, SG_OP_GMTA, SG_OP_STRH,
     SG_OP_NTYPES
 } sg_op_type;
 
 typedef struct sg_operand {
     sg_op_type type;
     int i1, i2;             /* Zemax's Int1 and Int2 (surface, wave, rings, operand) */
-    double hx, hy, px, py;  /* normalized field and pupil */
+    double hx, hy, px, py;  /* Zemax's Data1 to Data4: the normalized field and pupil,
+                             * or the type's own (sg_op_keys) */
     double target, weight;
 } sg_operand;
 
@@ -830,6 +861,9 @@ SG_API int sg_paddr_solve_target(const sg_paddr *a);
  * when unknown. */
 SG_API const char *sg_op_name(sg_op_type t);
 SG_API int sg_op_parse(const char *name);
+/* The JSON names of an operand type's Int1, Int2 and Data1 to Data4
+ * (stored in i1, i2, hx, hy, px, py); NULL where the type has none. */
+SG_API void sg_op_keys(sg_op_type t, const char *keys[6]);
 /* Checks the merit function's rows against sys (surfaces, wavelengths,
  * operand numbers in range): SG_ERANGE naming the row. */
 SG_API int sg_merit_check(const sg_system *sys, sg_diag *d);
@@ -865,6 +899,17 @@ SG_API int sg_merit_rings(int n, double *rho, double *w);
 /* The variables of a design: every solve of kind variable, in surface
  * order (radius, thickness, conic).  Returns the count (at most cap). */
 SG_API int sg_variables(const sg_system *sys, sg_paddr *out, int cap);
+/* Whether a is a variable (a solve of kind variable or a surface's var
+ * entry), with its bounds in lo and hi when it is. */
+SG_API int sg_variable_bounds(const sg_system *sys, const sg_paddr *a, double *lo, double *hi);
+/* Makes parameter key (element elem) of surface surf a variable within
+ * [lo, hi] (on), or not (off): radius, thickness and conic through their
+ * solves, any other REAL row of the surface table through the surface's
+ * var list.  SG_ERANGE naming what is wrong: no such key or element, a
+ * parameter the surface's type does not read, lo above hi, a full list,
+ * or (off) one that is not a variable. */
+SG_API int sg_variable_set(sg_system *sys, int surf, const char *key, int elem, int on,
+                           double lo, double hi, sg_diag *d);
 
 typedef struct sg_opt_opts {
     int cycles;             /* at most this many; 0: until converged (500) */
@@ -873,6 +918,16 @@ typedef struct sg_opt_opts {
     int (*progress)(void *ctx, int cycle, double merit, double step, double seconds);
     void *ctx;
     volatile int *stop;     /* when set nonzero (a signal), the run stops */
+    /* Global search (sagitta(1), OPTIMIZATION): when global_seconds > 0,
+     * multi-start damped least squares from the points of a Halton set
+     * inside the variables' bounds (every variable needs min and max),
+     * from index seed + 1 on, for global_seconds or global_starts starts
+     * (0: no limit), whichever ends first; the best design is kept.  The
+     * progress callback is then called once a start, with the start's
+     * number and the best merit so far. */
+    double global_seconds;
+    int global_starts;
+    unsigned seed;
 } sg_opt_opts;
 SG_API void sg_opt_opts_init(sg_opt_opts *o);
 

@@ -29,6 +29,7 @@ static void optimize_help(FILE *f)
 {
     fputs(
 "Usage: sagitta optimize DESIGN.json -o OUT.json [--cycles N] [--threads N] [--force]\n"
+"                        [--global SECONDS [--starts N] [--seed N]]\n"
 "Damped least squares (trust-region Levenberg-Marquardt) on the design's\n"
 "variables (solves of type \"variable\") against its merit function; writes\n"
 "the best design to OUT.json, also when stopped by Ctrl-C.  One line per\n"
@@ -39,6 +40,10 @@ static void optimize_help(FILE *f)
 "  --cycles N               at most N cycles (default: until converged, 500)\n"
 "  --threads N              threads for the derivatives (default: every core)\n"
 "  --force                  overwrite OUT.json if it exists\n"
+"  --global SECONDS         multi-start damped least squares from a Halton set\n"
+"                           inside the variables' min and max, keeping the best\n"
+"  --starts N               at most N starts (the design's own the first)\n"
+"  --seed N                 the Halton set from index N + 1 (default 0)\n"
 "  -h, --help               show this help\n", f);
 }
 
@@ -46,39 +51,28 @@ static void optimize_help(FILE *f)
 static void row_params(const sg_system *sys, const sg_merit_row *r, char *buf, size_t n)
 {
     const sg_operand *o;
-    static const char *const k1[SG_OP_NTYPES] = {
-        [SG_OP_TTHI] = "surf1", [SG_OP_CTGT] = "surf", [SG_OP_CTLT] = "surf",
-        [SG_OP_CTVA] = "surf", [SG_OP_ETGT] = "surf", [SG_OP_ETLT] = "surf",
-        [SG_OP_ETVA] = "surf", [SG_OP_MNCT] = "surf1", [SG_OP_MXCT] = "surf1",
-        [SG_OP_MNET] = "surf1", [SG_OP_MNCA] = "surf1", [SG_OP_MXCA] = "surf1",
-        [SG_OP_MNCG] = "surf1", [SG_OP_MXCG] = "surf1", [SG_OP_REAX] = "surf",
-        [SG_OP_REAY] = "surf", [SG_OP_REAZ] = "surf", [SG_OP_RSCE] = "rings",
-        [SG_OP_RSCH] = "rings", [SG_OP_SUMM] = "op1", [SG_OP_DIFF] = "op1",
-        [SG_OP_PROD] = "op1", [SG_OP_DIVI] = "op1", [SG_OP_OPGT] = "op1",
-        [SG_OP_OPLT] = "op1", [SG_OP_ABSO] = "op1"};
-    static const char *const k2[SG_OP_NTYPES] = {
-        [SG_OP_EFFL] = "wave", [SG_OP_TTHI] = "surf2", [SG_OP_MNCT] = "surf2",
-        [SG_OP_MXCT] = "surf2", [SG_OP_MNET] = "surf2", [SG_OP_MNCA] = "surf2",
-        [SG_OP_MXCA] = "surf2", [SG_OP_MNCG] = "surf2", [SG_OP_MXCG] = "surf2",
-        [SG_OP_REAX] = "wave", [SG_OP_REAY] = "wave", [SG_OP_REAZ] = "wave",
-        [SG_OP_TRAX] = "wave", [SG_OP_TRAY] = "wave", [SG_OP_TRAR] = "wave",
-        [SG_OP_RSCE] = "wave", [SG_OP_RSCH] = "wave", [SG_OP_SUMM] = "op2",
-        [SG_OP_DIFF] = "op2", [SG_OP_PROD] = "op2", [SG_OP_DIVI] = "op2"};
+    const char *keys[6];
+    double dv[4];
     size_t m = 0;
+    int k;
     buf[0] = '\0';
     if (r->row > sys->merit.nop) {
         snprintf(buf, n, "default");
         return;
     }
     o = &sys->merit.op[r->row - 1];
-    if (k1[o->type])
-        m += (size_t)snprintf(buf + m, n - m, "%s=%d ", k1[o->type], o->i1);
-    if (m < n && k2[o->type])
-        m += (size_t)snprintf(buf + m, n - m, "%s=%d ", k2[o->type], o->i2);
-    if (m < n && o->type >= SG_OP_REAX && o->type <= SG_OP_RSCH)
-        m += (size_t)snprintf(buf + m, n - m, "hx=%g hy=%g ", o->hx, o->hy);
-    if (m < n && o->type >= SG_OP_REAX && o->type <= SG_OP_TRAR)
-        m += (size_t)snprintf(buf + m, n - m, "px=%g py=%g ", o->px, o->py);
+    sg_op_keys(o->type, keys);
+    dv[0] = o->hx;
+    dv[1] = o->hy;
+    dv[2] = o->px;
+    dv[3] = o->py;
+    if (keys[0])
+        m += (size_t)snprintf(buf + m, n - m, "%s=%d ", keys[0], o->i1);
+    if (m < n && keys[1])
+        m += (size_t)snprintf(buf + m, n - m, "%s=%d ", keys[1], o->i2);
+    for (k = 0; k < 4; k++)
+        if (m < n && keys[2 + k])
+            m += (size_t)snprintf(buf + m, n - m, "%s=%g ", keys[2 + k], dv[k]);
     if (m > 0 && m < n)
         buf[m - 1] = '\0';
 }
@@ -185,7 +179,17 @@ static int progress(void *ctx, int cycle, double merit, double step, double seco
     return 0;
 }
 
-enum { OP_HELP = 1, OP_OUTPUT, OP_CYCLES, OP_THREADS, OP_FORCE };
+/* The global search's line: one a start. */
+static int progress_global(void *ctx, int start, double merit, double step, double seconds)
+{
+    (void)ctx;
+    (void)step;
+    printf("start %4d  best merit %-22.15g  time %.3f s\n", start, merit, seconds);
+    fflush(stdout);
+    return 0;
+}
+
+enum { OP_HELP = 1, OP_OUTPUT, OP_CYCLES, OP_THREADS, OP_FORCE, OP_GLOBAL, OP_STARTS, OP_SEED };
 
 static const cli_opt optimize_opts[] = {
     CLI_ID("--help", 'h', 0, OP_HELP),
@@ -193,6 +197,9 @@ static const cli_opt optimize_opts[] = {
     CLI_ID("--cycles", 0, 1, OP_CYCLES),
     CLI_ID("--threads", 0, 1, OP_THREADS),
     CLI_ID("--force", 0, 0, OP_FORCE),
+    CLI_ID("--global", 0, 1, OP_GLOBAL),
+    CLI_ID("--starts", 0, 1, OP_STARTS),
+    CLI_ID("--seed", 0, 1, OP_SEED),
     CLI_END
 };
 
@@ -243,6 +250,26 @@ int cmd_optimize(int argc, char **argv)
         case OP_FORCE:
             force = 1;
             break;
+        case OP_GLOBAL: {
+            char *end;
+            double s = strtod(val, &end);
+            if (end == val || *end || !(s > 0.0 && s <= 1e6))
+                return cli_usage_error("optimize", "--global %s: expected seconds, more than "
+                                       "0 and at most 1e6", val);
+            o.global_seconds = s;
+            break;
+        }
+        case OP_STARTS:
+            if (cli_int_value("--starts", val, 1, 100000000, &o.global_starts))
+                return CLI_EXIT_USAGE;
+            break;
+        case OP_SEED: {
+            int s;
+            if (cli_int_value("--seed", val, 0, 1000000000, &s))
+                return CLI_EXIT_USAGE;
+            o.seed = (unsigned)s;
+            break;
+        }
         default:
             return -id;
         }
@@ -251,6 +278,8 @@ int cmd_optimize(int argc, char **argv)
         return cli_usage_error("optimize", "missing DESIGN.json");
     if (!output)
         return cli_usage_error("optimize", "missing -o OUT.json (the optimized design)");
+    if ((o.global_starts || o.seed) && !(o.global_seconds > 0.0))
+        return cli_usage_error("optimize", "--starts and --seed belong to --global SECONDS");
     if (strcmp(output, design) == 0 || same_file(output, design))
         return cli_usage_error("optimize", "-o %s is the input design; write the result to "
                                "another file", output);
@@ -269,7 +298,7 @@ int cmd_optimize(int argc, char **argv)
     sigaction(SIGINT, &sa, &old);
     stop_flag = 0;
     o.stop = &stop_flag;
-    o.progress = progress;
+    o.progress = o.global_seconds > 0.0 ? progress_global : progress;
     sg_diag_clear(&d);
     rc = sg_optimize(sys, cat, &o, &res, &d);
     sigaction(SIGINT, &old, NULL);

@@ -78,6 +78,23 @@ static void var_opt_undo(void **state)
     assert_true(cmd_exec(e, "var 1 radius 5") & ED_ERROR);
     assert_true(cmd_exec(e, "var 1 material") & ED_ERROR);
     assert_true(cmd_exec(e, "novar 1 radius") & ED_ERROR);
+    /* Any real parameter of the surface table, by its key and element:
+     * a decenter is one, an asphere term of a standard surface is not
+     * read, and novar all clears them with the solves. */
+    ok(e, "var 1 before.dy -1 1");
+    assert_int_equal(e->doc.sys->surf[1].nvar, 1);
+    assert_true(e->doc.sys->surf[1].var[0].hi == 1);
+    assert_true(cmd_exec(e, "var 1 asphere[1]") & ED_ERROR);
+    assert_non_null(strstr(e->msg, "does not use"));
+    assert_true(cmd_exec(e, "var 1 asphere[x]") & ED_ERROR);
+    ok(e, "novar 1 before.dy");
+    assert_int_equal(e->doc.sys->surf[1].nvar, 0);
+    ok(e, "set 1 type EVENASPH");
+    ok(e, "var 1 asphere[1]");
+    cell_text(e->doc.sys, 1, COL_ASPH0 + 1, cell, sizeof cell);
+    assert_non_null(strstr(cell, " V"));
+    ok(e, "novar all");
+    assert_int_equal(e->doc.sys->surf[1].nvar, 0);
     sg_system_free(before);
     fclose(e->out);
     ed_free(e);

@@ -242,6 +242,16 @@ static void mat_text(const sg_material *m, char *buf, size_t n)
 }
 
 /* The solve a parameter can hold, or -1. */
+/* Whether element k of p is one of the surface's other variables. */
+static int is_var(const sg_surface *s, const sg_param *p, int k)
+{
+    int j;
+    for (j = 0; j < s->nvar; j++)
+        if (s->var[j].param == p && s->var[j].elem == k)
+            return 1;
+    return 0;
+}
+
 static int solve_target(const sg_param *p)
 {
     int t;
@@ -280,6 +290,10 @@ static void text(const sg_system *sys, int row, int col, int edit, char *buf, si
             else
                 numfmt_shortest(x, num, sizeof num);
             snprintf(buf, n, "%s %c", num, mark[s->solve[t].kind]);
+        } else if (!edit && t < 0 && is_var(s, p, k)) {
+            /* A variable on another parameter is marked V alike. */
+            numfmt_shortest(x, num, sizeof num);
+            snprintf(buf, n, "%s V", num);
         } else if ((p->flags & SG_PARAM_INF) && !edit && (x == 0.0 || isinf(x))) {
             snprintf(buf, n, "Infinity");
         } else if (col == COL_SEMI) {

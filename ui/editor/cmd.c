@@ -237,68 +237,92 @@ int ec_cancel(ed *e, const char *msg)
     return ec_fail(e, "%s", msg);
 }
 
-/* A solve target by name: radius, thickness or conic. */
-static int parse_target(ed *e, const char *s, int *t)
+/* A parameter's name as var and novar take it: a key of the surface
+ * table, with [ELEMENT] (from 0) for an array, e.g. asphere[1]. */
+static int parse_pname(ed *e, const char *s, char *key, size_t n, int *elem)
 {
-    for (*t = 0; *t < SG_SOLVE_NTARGETS; (*t)++)
-        if (strcasecmp(s, sg_solve_target_name((sg_solve_target)*t)) == 0)
-            return 1;
-    ec_fail(e, "'%s' is not radius, thickness or conic", s);
-    return 0;
+    const char *br = strchr(s, '[');
+    size_t len = br ? (size_t)(br - s) : strlen(s);
+    *elem = 0;
+    if (len == 0 || len >= n)
+        return ec_fail(e, "'%s' is not a parameter name", s), 0;
+    memcpy(key, s, len);
+    key[len] = '\0';
+    if (br) {
+        char *end;
+        long v = strtol(br + 1, &end, 10);
+        if (end == br + 1 || strcmp(end, "]") != 0 || v < 0 || v > 1000)
+            return ec_fail(e, "'%s': expected NAME[ELEMENT], the element a number from 0", s), 0;
+        *elem = (int)v;
+    }
+    return 1;
 }
 
-/* var SURFACE radius|thickness|conic [MIN MAX]: the value becomes a
- * variable of the optimizer, Zemax's V (sagitta-design(5), SOLVES). */
-int c_var(ed *e, args *a)
+/* var SURFACE NAME [MIN MAX]: the value becomes a variable of the
+ * optimizer, Zemax's V (sagitta-design(5), SOLVES); NAME any real
+ * parameter of the surface table (radius, conic, asphere[1], before.tx,
+ * radius_x ...). */
+static int c_var(ed *e, args *a)
 {
-    static const char usage[] = "var SURFACE radius|thickness|conic [MIN MAX]";
-    int row, t;
+    static const char usage[] = "var SURFACE NAME [MIN MAX]";
+    int row, elem;
     double lo = -INFINITY, hi = INFINITY;
-    sg_solve v;
+    char key[64];
+    sg_diag d;
     if (!ec_need(e, a, 2, 4, usage) || a->n == 4)
         return a->n == 4 ? ec_fail(e, "usage: %s", usage) : (ED_HANDLED | ED_ERROR);
-    if (!ec_parse_row(e, a->v[1], 1, e->doc.sys->nsurf - 1, &row) || !parse_target(e, a->v[2], &t))
+    if (!ec_parse_row(e, a->v[1], 1, e->doc.sys->nsurf - 1, &row) ||
+        !parse_pname(e, a->v[2], key, sizeof key, &elem))
         return ED_HANDLED | ED_ERROR;
     if (a->n == 5 && (!ec_parse_num(e, a->v[3], "min", &lo) || !ec_parse_num(e, a->v[4], "max", &hi)))
         return ED_HANDLED | ED_ERROR;
     if (lo > hi)
         return ec_fail(e, "var: min %g is above max %g", lo, hi);
-    memset(&v, 0, sizeof v);
-    v.kind = SG_SOLVE_VARIABLE;
-    v.lo = lo;
-    v.hi = hi;
     if (!ec_begin(e, row))
         return ED_HANDLED | ED_ERROR;
-    e->doc.sys->surf[row].solve[t] = v;
+    sg_diag_clear(&d);
+    if (sg_variable_set(e->doc.sys, row, key, elem, 1, lo, hi, &d) != SG_OK)
+        return ec_cancel(e, d.msg);
     e->row = row;
     return ec_end(e, "surface %d: the %s is a variable", row, a->v[2]);
 }
 
 /* novar SURFACE radius|thickness|conic, or novar all: clears variables. */
-int c_novar(ed *e, args *a)
+static int c_novar(ed *e, args *a)
 {
     sg_system *sys = e->doc.sys;
     int row, t, n = 0;
     if (a->n == 2 && strcasecmp(a->v[1], "all") == 0) {
         if (!ec_begin(e, e->row))
             return ED_HANDLED | ED_ERROR;
-        for (row = 0; row < sys->nsurf; row++)
+        for (row = 0; row < sys->nsurf; row++) {
             for (t = 0; t < SG_SOLVE_NTARGETS; t++)
                 if (sys->surf[row].solve[t].kind == SG_SOLVE_VARIABLE) {
                     memset(&sys->surf[row].solve[t], 0, sizeof sys->surf[row].solve[t]);
                     n++;
                 }
+            n += sys->surf[row].nvar;
+            sys->surf[row].nvar = 0;
+        }
         return ec_end(e, "%d variable%s cleared", n, n == 1 ? "" : "s");
     }
-    if (!ec_need(e, a, 2, 2, "novar SURFACE radius|thickness|conic | novar all"))
+    if (!ec_need(e, a, 2, 2, "novar SURFACE NAME | novar all"))
         return ED_HANDLED | ED_ERROR;
-    if (!ec_parse_row(e, a->v[1], 0, sys->nsurf - 1, &row) || !parse_target(e, a->v[2], &t))
-        return ED_HANDLED | ED_ERROR;
-    if (sys->surf[row].solve[t].kind != SG_SOLVE_VARIABLE)
-        return ec_fail(e, "surface %d: the %s is not a variable", row, a->v[2]);
-    if (!ec_begin(e, row))
-        return ED_HANDLED | ED_ERROR;
-    memset(&e->doc.sys->surf[row].solve[t], 0, sizeof e->doc.sys->surf[row].solve[t]);
+    {
+        char key[64];
+        int elem;
+        sg_paddr pa;
+        double lo, hi;
+        if (!ec_parse_row(e, a->v[1], 0, sys->nsurf - 1, &row) ||
+            !parse_pname(e, a->v[2], key, sizeof key, &elem))
+            return ED_HANDLED | ED_ERROR;
+        if (sg_paddr_make(sys, SG_SCOPE_SURFACE, row, key, elem, &pa, NULL) != SG_OK ||
+            !sg_variable_bounds(sys, &pa, &lo, &hi))
+            return ec_fail(e, "surface %d: the %s is not a variable", row, a->v[2]);
+        if (!ec_begin(e, row))
+            return ED_HANDLED | ED_ERROR;
+        sg_variable_set(e->doc.sys, row, key, elem, 0, 0.0, 0.0, NULL);
+    }
     e->row = row;
     return ec_end(e, "surface %d: the %s is no longer a variable", row, a->v[2]);
 }
@@ -465,9 +489,9 @@ static const command commands[] = {
      "default off|centroid|chief [RINGS [ARMS]]]",
      "the Merit Function Editor (Ctrl-E): its rows, live; insert, delete or set an operand's "
      "type, int1, int2, hx, hy, px, py, target or weight; the default part"},
-    {"var", NULL, c_var, "var SURFACE radius|thickness|conic [MIN MAX]",
+    {"var", NULL, c_var, "var SURFACE NAME [MIN MAX]",
      "make a value a variable of the optimizer (V), optionally bounded"},
-    {"novar", NULL, c_novar, "novar SURFACE radius|thickness|conic | novar all",
+    {"novar", NULL, c_novar, "novar SURFACE NAME | novar all",
      "clear a variable, or every one"},
     {"opt", NULL, c_opt, "opt [CYCLES]",
      "damped least squares on the variables against the merit function (one undo step)"},
