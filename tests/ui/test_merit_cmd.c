@@ -133,7 +133,7 @@ static void merit_edits(void **state)
         assert_non_null(strstr(e->msg, "operand 2"));
         assert_non_null(strstr(e->msg, "nothing changed"));
         assert_true(cmd_exec(e, "merit set 2 weight -1") & ED_ERROR);
-        assert_true(cmd_exec(e, "merit set 1 py 1.5") & ED_ERROR);
+        assert_true(cmd_exec(e, "merit set 1 type TRAY py 1.5") & ED_ERROR);
         assert_true(cmd_exec(e, "merit set 1 type NOPE") & ED_ERROR);
         assert_true(cmd_exec(e, "merit delete 3") & ED_ERROR);
         assert_true(sg_system_equal(e->doc.sys, mid));

@@ -262,7 +262,7 @@ static int parse_pname(ed *e, const char *s, char *key, size_t n, int *elem)
  * optimizer, Zemax's V (sagitta-design(5), SOLVES); NAME any real
  * parameter of the surface table (radius, conic, asphere[1], before.tx,
  * radius_x ...). */
-static int c_var(ed *e, args *a)
+int c_var(ed *e, args *a)
 {
     static const char usage[] = "var SURFACE NAME [MIN MAX]";
     int row, elem;
@@ -288,7 +288,7 @@ static int c_var(ed *e, args *a)
 }
 
 /* novar SURFACE radius|thickness|conic, or novar all: clears variables. */
-static int c_novar(ed *e, args *a)
+int c_novar(ed *e, args *a)
 {
     sg_system *sys = e->doc.sys;
     int row, t, n = 0;

@@ -151,10 +151,6 @@ static int read_pair(ed *e, args *a, int i, int *col, int *iv, double *v)
     } else {
         if (!ec_parse_num(e, a->v[i + 1], a->v[i], v))
             return 0;
-        /* A field or pupil coordinate is normalized, as Zemax's. */
-        if (*col <= 6 && !(*v >= -1.0 && *v <= 1.0))
-            return ec_fail(e, "merit set: %s %g is outside -1 to 1 (normalized)", a->v[i], *v),
-                   0;
         if (*col == 8 && !(*v >= 0.0))
             return ec_fail(e, "merit set: a weight of %g; weights are 0 or more", *v), 0;
     }
@@ -182,6 +178,22 @@ static int merit_set(ed *e, args *a)
     for (k = 0; k < np; k++)
         if (!read_pair(e, a, 3 + 2 * k, &col[k], &iv[k], &v[k]))
             return ED_HANDLED | ED_ERROR;
+    {
+        /* A field or pupil coordinate is normalized, as Zemax's; Data1 to
+         * Data4 of other types (a frequency, a term) are the type's own. */
+        const char *keys[6];
+        int type = m->op[row - 1].type;
+        for (k = 0; k < np; k++)
+            if (col[k] == 0)
+                type = iv[k];
+        sg_op_keys((sg_op_type)type, keys);
+        for (k = 0; k < np; k++)
+            if (col[k] >= 3 && col[k] <= 6 && keys[col[k] - 1] &&
+                strlen(keys[col[k] - 1]) == 2 && strchr("hp", keys[col[k] - 1][0]) &&
+                !(v[k] >= -1.0 && v[k] <= 1.0))
+                return ec_fail(e, "merit set: %s %g is outside -1 to 1 (normalized)",
+                               keys[col[k] - 1], v[k]);
+    }
     if (!ec_begin(e, e->row))
         return ED_HANDLED | ED_ERROR;
     o = &m->op[row - 1];

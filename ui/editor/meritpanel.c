@@ -163,12 +163,23 @@ void merit_draw(ui *u)
         snprintf(line, sizeof line, "the merit function cannot be evaluated: %s", m.why);
     } else if (u->mf_sel < mf->nop) {
         const sg_operand *o = &mf->op[u->mf_sel];
+        const char *keys[6];
         size_t len = 0;
         len += (size_t)snprintf(line + len, sizeof line - len, "row %d %s:", u->mf_sel + 1,
                                 sg_op_name(o->type));
+        /* Each cell by the type's own name for it (Zemax's Int1 "wave" of
+         * EFFL); a cell the type does not read is left out. */
+        sg_op_keys(o->type, keys);
         for (k = 1; k < MERIT_NCOLS; k++) {
+            if (k <= 6 && !keys[k - 1])
+                continue;
             numfmt_shortest(merit_col_value(o, k), buf, sizeof buf);
-            len += (size_t)snprintf(line + len, sizeof line - len, " %s %s", merit_cols[k], buf);
+            if (k <= 6 && strcmp(keys[k - 1], merit_cols[k]) != 0)
+                len += (size_t)snprintf(line + len, sizeof line - len, " %s (%s) %s",
+                                        merit_cols[k], keys[k - 1], buf);
+            else
+                len += (size_t)snprintf(line + len, sizeof line - len, " %s %s", merit_cols[k],
+                                        buf);
         }
         if (u->mf_sel < m.r.nrow) {
             numfmt_shortest(m.r.row[u->mf_sel].value, buf, sizeof buf);
