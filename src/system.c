@@ -187,7 +187,8 @@ int sg_system_delete(sg_system *sys, int at)
 
 double sg_surface_curvature(const sg_surface *s)
 {
-    if (s->type == SG_SURF_COORDBRK || isinf(s->radius) || s->radius == 0.0)
+    if (s->type == SG_SURF_COORDBRK || s->type == SG_SURF_PARAXIAL || isinf(s->radius) ||
+        s->radius == 0.0)
         return 0.0;
     return 1.0 / s->radius;
 }
@@ -492,6 +493,26 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
             return sg_diag_set(d, SG_ERANGE, "surface %d: radius is not a number", i);
         if ((int)s->type < SG_SURF_STANDARD || (int)s->type >= SG_SURF_NTYPES)
             return sg_diag_set(d, SG_ERANGE, "surface %d: type %d is unknown", i, (int)s->type);
+        if (s->type == SG_SURF_PARAXIAL) {
+            /* An ideal lens on a plane (shape_paraxial.c). */
+            if (isfinite(s->radius) && s->radius != 0.0)
+                return sg_diag_set(d, SG_ERANGE, "surface %d: a paraxial surface is flat; its "
+                                   "radius must be inf, not %g", i, s->radius);
+            if (!(s->focal_length != 0.0) || !isfinite(s->focal_length))
+                return sg_diag_set(d, SG_ERANGE, "surface %d: a paraxial surface needs a "
+                                   "nonzero, finite focal length (focal_length is %g)", i,
+                                   s->focal_length);
+            if (!(s->opd_mode == 0.0 || s->opd_mode == 1.0 || s->opd_mode == 2.0 ||
+                  s->opd_mode == 3.0))
+                return sg_diag_set(d, SG_ERANGE, "surface %d: opd_mode %g is not one of "
+                                   "Zemax's OPD modes 0, 1, 2, 3", i, s->opd_mode);
+            if (s->mat.kind == SG_MAT_MIRROR)
+                return sg_diag_set(d, SG_EUNSUPPORTED, "surface %d: a paraxial surface "
+                                   "cannot be a mirror in sagitta", i);
+            if (i == 0 || i == sys->nsurf - 1)
+                return sg_diag_set(d, SG_EUNSUPPORTED, "surface %d: the object and the image "
+                                   "cannot be paraxial surfaces", i);
+        }
         if (sg_shape_ops_of(s->type)) {
             /* What only the shape itself knows: its normalization radius
              * and terms. */

@@ -603,6 +603,17 @@ static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir, vm *unsu
     *unsure = vm_set(0);
     if (sg_sprep_passes(s))
         return;
+    if (__builtin_expect(s->ideal, 0)) {
+        /* A paraxial surface, rare: lane by lane (shape_paraxial.c). */
+        int k;
+        for (k = 0; k < SG_VL; k++) {
+            sg_pray one;
+            sg_vray_get(r, k, &one);
+            sg_ideal_bend_dd(s, &one);
+            sg_vray_put(r, k, &one);
+        }
+        return;
+    }
     if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
         vd gs, ge;
         g = gen_grad_v(s, r->p, &gs, &ge);

@@ -1309,7 +1309,7 @@ static void test_failed_load_keeps_system(void **state)
     sg_diag d;
     (void)state;
     sg_diag_clear(&d);
-    static const char text[] = H S0 "SURF 1\n  TYPE PARAXIAL\n";
+    static const char text[] = H S0 "SURF 1\n  TYPE GRID_SAG\n";
     assert_int_equal(sg_zmx_parse(s, text, strlen(text), "t.zmx", NULL, &d), SG_EUNSUPPORTED);
     after = sg_design_to_json(s);
     assert_string_equal(before, after);
