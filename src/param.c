@@ -162,6 +162,13 @@ static const sg_param surface_params[] = {
     {"opd_mode", "OPD mode", "OPD Mode", "opdm", "PARM", SG_PARAM_REAL,
      SG_PARAM_SHAPE | SG_PARAM_OPTIONAL, offsetof(sg_surface, opd_mode), 0, 1, 0, 0, 0.0, 3.0,
      1.0, NONAMES, 3},
+    /* The diffraction grating: lines per micrometre and the order. */
+    {"grating_lines", "grating lines per um", "Lines/um", "lpum", "PARM", SG_PARAM_REAL,
+     SG_PARAM_SHAPE | SG_PARAM_OPTIONAL, offsetof(sg_surface, grating_lines), 0, 1, 0, 0,
+     -1e6, 1e6, 0.0, NONAMES, 3},
+    {"grating_order", "diffraction order", "Diff Ord", "dorder", "PARM", SG_PARAM_REAL,
+     SG_PARAM_SHAPE | SG_PARAM_OPTIONAL, offsetof(sg_surface, grating_order), 0, 1, 0, 0,
+     -1e6, 1e6, 0.0, NONAMES, 3},
     /* Format version 2: surface apertures and obscurations. */
     {"aperture", "aperture", "Aperture", "aperture", "CLAP|OBSC|SQAP|SQOB|ELAP|ELOB",
      SG_PARAM_ENUM, SG_PARAM_OPTIONAL,

@@ -412,6 +412,12 @@ static int prepare_one(sg_tracer *t, int i, mpfr_t *idx, mpfr_t q, mpfr_t tmp, s
         p->mu = dd_from_mpfr(q, tmp);
         p->mu2 = dd_sqr(p->mu);
     }
+    if (s->type == SG_SURF_DGRATING && i > 0) {
+        /* Its rulings (shape_dgrating.c); m lambda T comes after. */
+        p->grating = 1;
+        p->nb = fabs(t->nsigned[i - 1]);
+        p->na = fabs(t->nsigned[i]);
+    }
     if (s->type == SG_SURF_PARAXIAL && i > 0) {
         /* An ideal lens on its plane (shape_paraxial.c); validation
          * keeps it flat, off mirrors and with a focal length. */
@@ -447,6 +453,10 @@ static void ideal_conjugates(sg_tracer *t)
         sg_sprep *p = &t->sp[i];
         const sg_surface *s = &sys->surf[i];
         double nb = t->nsigned[i - 1], na = t->nsigned[i], phi;
+        /* A grating's m lambda T at this tracer's wavelength, which the
+         * prepared-surface memo does not key. */
+        if (p->grating)
+            p->gk = s->grating_order * sys->wave[t->wave].um * s->grating_lines;
         if (i > 1 || !isinf(sys->surf[0].thickness))
             y += sys->surf[i - 1].thickness * nu / nb;
         phi = p->ideal ? 1.0 / s->focal_length : (na - nb) * sg_surface_curvature(s);

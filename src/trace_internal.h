@@ -66,6 +66,10 @@ typedef struct sg_sprep {
     int ideal;
     double ic, nb, na;
     double pz, qz;
+    /* A diffraction grating (shape_dgrating.c): m lambda T at the tracer's
+     * wavelength (set after the surfaces are prepared); nb, na as above. */
+    int grating;
+    double gk;
 } sg_sprep;
 
 /* The prepared surfaces of the last tracer made with an sg_index_cache,
@@ -97,7 +101,8 @@ static inline int sg_sprep_sphere(const sg_sprep *s)
  * bend is skipped: dummy planes are common in real designs. */
 static inline int sg_sprep_passes(const sg_sprep *s)
 {
-    return s->shape == SHAPE_PLANE && !s->mirror && !s->ideal && fabs(s->mu.hi) == 1.0 &&
+    return s->shape == SHAPE_PLANE && !s->mirror && !s->ideal && !s->grating &&
+           fabs(s->mu.hi) == 1.0 &&
            s->mu.lo == 0.0;
 }
 
@@ -194,6 +199,13 @@ void sg_ideal_bend_d(const sg_sprep *s, const double p[3], double d[3], double *
 void sg_ideal_bend_dd(const sg_sprep *s, sg_pray *r);
 void sg_ideal_bend_mp(const sg_sprep *s, mpfr_srcptr mu, mpfr_ptr P[3], mpfr_ptr D[3],
                       mpfr_ptr opl, mpfr_t *t);
+/* The diffraction grating's bend (shape_dgrating.c) in the same three:
+ * 0, or SG_EEVANESCENT for an order that does not propagate (t: 8
+ * scratch variables). */
+int sg_grating_bend_d(const sg_sprep *s, const double p[3], double d[3], double *opl);
+int sg_grating_bend_dd(const sg_sprep *s, sg_pray *r);
+int sg_grating_bend_mp(const sg_sprep *s, mpfr_srcptr mu, mpfr_srcptr R, mpfr_srcptr k1,
+                       mpfr_ptr P[3], mpfr_ptr D[3], mpfr_ptr opl, mpfr_t *t);
 
 /* The state of SG_VL precise rays between surfaces, lane by lane: what
  * sg_pray holds for one ray. */
