@@ -316,7 +316,8 @@ static void test_reference_values(void **state)
  * ------------------------------------------------------------------------ */
 
 static const char *const doc_order[] = {"SCHOTT", "OHARA", "MISC", "INFRARED",
-                                        "HOYA", "SUMITA", "CDGM", "HIKARI"};
+                                        "HOYA", "SUMITA", "CDGM", "HIKARI",
+                                        "CORNING", "LZOS", "RPO"};
 
 static int doc_rank(const char *catalog)
 {
