@@ -269,8 +269,11 @@ static int check_frames(const sg_system *sys, int i, sg_diag *d)
     if (s->type == SG_SURF_COORDBRK) {
         if (i <= 1 || i == last)
             return sg_diag_set(d, SG_EINVAL,
-                               "surface %d: the %s cannot be a coordinate break", i,
-                               i == 0 ? "object" : i == 1 ? "first surface" : "image");
+                               "surface %d: the %s cannot be a coordinate break%s", i,
+                               i == 0 ? "object" : i == 1 ? "first surface" : "image",
+                               i == 1 ? ": rays start in surface 1's frame, which nothing may "
+                                        "turn or move; insert a dummy plane of thickness 0 "
+                                        "before the break, which changes no ray" : "");
         if (i == sys->stop)
             return sg_diag_set(d, SG_EINVAL,
                                "surface %d: a coordinate break cannot be the stop", i);
@@ -558,7 +561,10 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
         if (i == 0 && !(fabs(s->thickness) > 0.0))
             return sg_diag_set(d, SG_ENONPHYS,
                                "surface 0: the object must lie away from surface 1 "
-                               "(thickness %g)", s->thickness);
+                               "(thickness %g): sagitta launches and aims each ray from the "
+                               "object point, which cannot be on surface 1; insert a dummy "
+                               "plane after the object, give the object a thickness d and "
+                               "the dummy -d, and surface 1 stays in place", s->thickness);
         /* The table's plain numbers: finite, within their limits. */
         for (p = 0; p < sg_param_count(SG_SCOPE_SURFACE); p++) {
             const sg_param *pp = sg_param_at(SG_SCOPE_SURFACE, p);
