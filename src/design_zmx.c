@@ -1010,7 +1010,6 @@ static int zmx_shape(zctx *c, zsurf *z, sg_surface *s)
               s->terms[1]);
     } else {
         const char *what = strcmp(z->type, "BICONIC") == 0      ? "an old biconic"
-                           : strcmp(z->type, "PARAXIAL") == 0   ? "a paraxial surface"
                            : strcmp(z->type, "DGRATING") == 0   ? "a diffraction grating"
                            : strcmp(z->type, "EXTPOLY") == 0    ? "an extended polynomial"
                            : strcmp(z->type, "GRID_SAG") == 0   ? "a grid sag"

@@ -36,7 +36,7 @@ int sg_err_is_ray_status(int err)
     return err == SG_OK || err == SG_EMISS || err == SG_ETIR || err == SG_EVIGNETTED ||
            err == SG_EAPERTURE || err == SG_EOBSCURED ||
            err == SG_ENOCONV || err == SG_EAIM || err == SG_ENOTREACHED || err == SG_EUNCERT ||
-           err == SG_ERANGE;
+           err == SG_ERANGE || err == SG_EEVANESCENT;
 }
 
 int sg_err_is_stopped(int err)

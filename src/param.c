@@ -154,6 +154,21 @@ static const sg_param surface_params[] = {
      NONAMES, 3},
     {"terms", "term %d", "T%d", "t%d", "XDAT", SG_PARAM_REAL, SG_PARAM_SHAPE | SG_PARAM_OPTIONAL,
      offsetof(sg_surface, terms), 0, SG_NTERMS, 1, 1, -INFINITY, INFINITY, 0.0, NONAMES, 3},
+    /* The paraxial surface (Zemax's ideal lens): its focal length, 0 until
+     * set (a paraxial surface needs one), and Zemax's OPD mode. */
+    {"focal_length", "focal length", "Focal", "focal", "PARM", SG_PARAM_REAL,
+     SG_PARAM_SHAPE | SG_PARAM_OPTIONAL, offsetof(sg_surface, focal_length), 0, 1, 0, 0,
+     -SG_MAX_LEN, SG_MAX_LEN, 0.0, NONAMES, 3},
+    {"opd_mode", "OPD mode", "OPD Mode", "opdm", "PARM", SG_PARAM_REAL,
+     SG_PARAM_SHAPE | SG_PARAM_OPTIONAL, offsetof(sg_surface, opd_mode), 0, 1, 0, 0, 0.0, 3.0,
+     1.0, NONAMES, 3},
+    /* The diffraction grating: lines per micrometre and the order. */
+    {"grating_lines", "grating lines per um", "Lines/um", "lpum", "PARM", SG_PARAM_REAL,
+     SG_PARAM_SHAPE | SG_PARAM_OPTIONAL, offsetof(sg_surface, grating_lines), 0, 1, 0, 0,
+     -1e6, 1e6, 0.0, NONAMES, 3},
+    {"grating_order", "diffraction order", "Diff Ord", "dorder", "PARM", SG_PARAM_REAL,
+     SG_PARAM_SHAPE | SG_PARAM_OPTIONAL, offsetof(sg_surface, grating_order), 0, 1, 0, 0,
+     -1e6, 1e6, 0.0, NONAMES, 3},
     /* Format version 2: surface apertures and obscurations. */
     {"aperture", "aperture", "Aperture", "aperture", "CLAP|OBSC|SQAP|SQOB|ELAP|ELOB",
      SG_PARAM_ENUM, SG_PARAM_OPTIONAL,

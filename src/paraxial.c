@@ -158,7 +158,8 @@ static int set_make(pm_set *st, int n, mpfr_prec_t prec)
 {
     int j, k;
     set_clear(st);
-    st->R = calloc((size_t)n, sizeof *st->R);
+    /* R[j] the radius, R[n + j] the focal length of a paraxial surface. */
+    st->R = calloc(2 * (size_t)n, sizeof *st->R);
     st->T = calloc((size_t)n, sizeof *st->T);
     st->ix = calloc((size_t)n, sizeof *st->ix);
     st->trk = calloc((size_t)n, sizeof *st->trk);
@@ -190,7 +191,7 @@ static int set_make(pm_set *st, int n, mpfr_prec_t prec)
     for (j = 0; j < n; j++) {
         mpfr_inits2(prec, st->ix[j], st->trk[j], (mpfr_ptr)0);
         /* A NaN key matches nothing until the surface is seen. */
-        st->R[j] = st->T[j] = NAN;
+        st->R[j] = st->R[n + j] = st->T[j] = NAN;
     }
     for (k = 0; k < PM_SLOTS; k++) {
         mpfr_inits2(prec, st->s[k].y0, st->s[k].w0, (mpfr_ptr)0);
@@ -219,12 +220,20 @@ static int same_d(double a, double b)
     return memcmp(&a, &b, sizeof a) == 0;
 }
 
+/* What a step reads beside the radius: a paraxial surface's focal length
+ * (0 for every other type, whatever its unused field holds). */
+static double focal_key(const sg_surface *s)
+{
+    return s->type == SG_SURF_PARAXIAL ? s->focal_length : 0.0;
+}
+
 /* The first surface whose inputs differ from the set's. */
 static int set_first_change(const pm_set *st, const sg_system *sys, mpfr_t *idx)
 {
     int j, n = st->n < sys->nsurf ? st->n : sys->nsurf;
     for (j = 0; j < n; j++)
         if (!same_d(st->R[j], sys->surf[j].radius) ||
+            !same_d(st->R[st->n + j], focal_key(&sys->surf[j])) ||
             !same_d(st->T[j], sys->surf[j].thickness) || !same_mp(st->ix[j], idx[j]))
             break;
     return j;
@@ -236,6 +245,7 @@ static int set_last_change(const pm_set *st, const sg_system *sys, mpfr_t *idx)
     int j;
     for (j = st->n - 1; j >= 0; j--)
         if (!same_d(st->R[j], sys->surf[j].radius) ||
+            !same_d(st->R[st->n + j], focal_key(&sys->surf[j])) ||
             !same_d(st->T[j], sys->surf[j].thickness) || !same_mp(st->ix[j], idx[j]))
             break;
     return j;
@@ -304,6 +314,7 @@ static void memo_done(pctx *c)
     /* Past kl the keys hold sys's bits already. */
     for (j = c->kf; j <= c->kl && j < st->n; j++) {
         st->R[j] = c->sys->surf[j].radius;
+        st->R[st->n + j] = focal_key(&c->sys->surf[j]);
         st->T[j] = c->sys->surf[j].thickness;
         mpfr_set(st->ix[j], c->idx[j], MPFR_RNDN);
     }
@@ -314,7 +325,11 @@ static mpfr_srcptr phi_of(pctx *c, int j)
     if (!c->phi_ok[j]) {
         double R = c->sys->surf[j].radius;
         mpfr_init2(c->phi[j], c->prec);
-        if (j == 0 || R == 0.0 || isinf(R)) {
+        if (j > 0 && c->sys->surf[j].type == SG_SURF_PARAXIAL) {
+            /* An ideal lens: n' u' = n u - y / f. */
+            mpfr_set_d(c->phi[j], c->sys->surf[j].focal_length, MPFR_RNDN);
+            mpfr_ui_div(c->phi[j], 1, c->phi[j], MPFR_RNDN);
+        } else if (j == 0 || R == 0.0 || isinf(R)) {
             mpfr_set_zero(c->phi[j], 1);
         } else {
             mpfr_sub(c->phi[j], c->idx[j], c->idx[j - 1], MPFR_RNDN);

@@ -69,7 +69,8 @@ extern "C" {
     X(APERTURE, "ray outside the surface aperture")                           \
     X(OBSCURED, "ray stopped by an obscuration")                              \
     X(LOSSY, "the file cannot hold the design faithfully")                   \
-    X(STOPPED, "stopped before the end")
+    X(STOPPED, "stopped before the end")                                     \
+    X(EVANESCENT, "the diffraction order is evanescent")
 
 typedef enum sg_err {
 #define SG_ERR_ENUM_(name, msg) SG_E##name,
@@ -258,7 +259,9 @@ SG_API int sg_model_glass(double nd, double vd, double dpgf, sg_glass *out);
     X(ZERNIKE_FRINGE, "zernike_fringe", "FZERNSAG", zernike_fringe)                \
     X(ZERNIKE_STANDARD, "zernike_standard", "SZERNSAG", zernike_standard)          \
     X(XYPOLY, "xy_polynomial", "XPOLYNOM", xypoly)      /* conic + x^i y^j */ \
-    X(QCON, "q_type_asphere", "QTYPEASP", qcon)         /* conic + Forbes Qcon */
+    X(QCON, "q_type_asphere", "QTYPEASP", qcon)         /* conic + Forbes Qcon */  \
+    X(PARAXIAL, "paraxial", "PARAXIAL", paraxial)       /* ideal thin lens, flat */ \
+    X(DGRATING, "diffraction_grating", "DGRATING", dgrating) /* ruled conic */
 
 /* The values are those of earlier versions: 0 standard ... 8 XY. */
 #define SG_SURF_ENUM_(name, json, zmx, rec) SG_SURF_##name,
@@ -411,6 +414,10 @@ typedef struct sg_surface {
     double terms[SG_NTERMS]; /* Zernike Z1 ...; XY: x, y, x^2, xy, y^2, x^3, ... */
     double zern_dx, zern_dy; /* Zernike: the terms' centre (Zemax's Decenter X, Y);
                               * the conic and r^n terms stay on the vertex */
+    double focal_length;   /* paraxial: the ideal lens's focal length (Zemax's PARM 1) */
+    double opd_mode;       /* paraxial: Zemax's OPD mode 0 to 3 (PARM 2) */
+    double grating_lines;  /* grating: lines per micrometre (Zemax's PARM 1) */
+    double grating_order;  /* grating: the diffraction order (PARM 2) */
     sg_aperture_type aperture; /* the surface aperture or obscuration */
     double ap_rmin, ap_rmax;   /* circular: the annulus's radii */
     double ap_xhalf, ap_yhalf; /* rectangular and elliptical: half widths */

@@ -264,8 +264,10 @@ int sg_seidel_compute(const sg_system *sys, const sg_catalog *cat, sg_seidel *ou
     }
     for (j = 0; j < n; j++)
         phi[j] = j == 0 ? ve_exact(0.0)
-                        : ve_mul(ve_sub(idx[j], idx[j - 1]),
-                                 ve_rounded(sg_surface_curvature(&sys->surf[j])));
+                 : sys->surf[j].type == SG_SURF_PARAXIAL
+                     ? ve_div(ve_exact(1.0), ve_exact(sys->surf[j].focal_length))
+                     : ve_mul(ve_sub(idx[j], idx[j - 1]),
+                              ve_rounded(sg_surface_curvature(&sys->surf[j])));
 
     launch(sys, &p, idx[0], &y0, &w0, &yb0, &wb0);
     hfull = trace_rays(sys, idx, phi, &r, y0, w0, yb0, wb0);
@@ -333,6 +335,11 @@ int sg_seidel_compute(const sg_system *sys, const sg_catalog *cat, sg_seidel *ou
             e = ve_mul(e, y);
             o[SG_SEIDEL_SI] = ve_add(o[SG_SEIDEL_SI], e);
         }
+        /* An ideal lens images every plane onto its conjugate without
+         * aberration or colour (shape_paraxial.c): it adds nothing. */
+        if (s->type == SG_SURF_PARAXIAL)
+            for (k = 0; k < SG_SEIDEL_N; k++)
+                o[k] = ve_exact(0.0);
         for (k = 0; k < SG_SEIDEL_N; k++) {
             o[k].v += 0.0; /* no -0 in a report */
             out->surf[(size_t)j * SG_SEIDEL_N + k] = o[k].v;

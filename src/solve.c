@@ -324,9 +324,17 @@ static int pass(sg_system *sys, mpfr_t *idx, int need_ray, int *changed, sg_diag
                 *changed |= store(&s->radius, a, SG_SOLVE_RADIUS);
             }
         }
-        if (need_ray && s->type != SG_SURF_COORDBRK && isfinite(s->radius) && s->radius != 0.0) {
-            mpfr_sub(a, idx[i], idx[i - 1], MPFR_RNDN);
-            mpfr_div_d(a, a, s->radius, MPFR_RNDN);
+        if (need_ray && ((s->type != SG_SURF_COORDBRK && s->type != SG_SURF_PARAXIAL &&
+                          isfinite(s->radius) && s->radius != 0.0) ||
+                         s->type == SG_SURF_PARAXIAL)) {
+            if (s->type == SG_SURF_PARAXIAL) {
+                /* An ideal lens's power is 1 / f (shape_paraxial.c). */
+                mpfr_set_d(a, s->focal_length, MPFR_RNDN);
+                mpfr_ui_div(a, 1, a, MPFR_RNDN);
+            } else {
+                mpfr_sub(a, idx[i], idx[i - 1], MPFR_RNDN);
+                mpfr_div_d(a, a, s->radius, MPFR_RNDN);
+            }
             mpfr_mul(b, a, cy, MPFR_RNDN);
             mpfr_sub(cw, cw, b, MPFR_RNDN);
             mpfr_mul(a, a, y, MPFR_RNDN);

@@ -187,7 +187,8 @@ int sg_system_delete(sg_system *sys, int at)
 
 double sg_surface_curvature(const sg_surface *s)
 {
-    if (s->type == SG_SURF_COORDBRK || isinf(s->radius) || s->radius == 0.0)
+    if (s->type == SG_SURF_COORDBRK || s->type == SG_SURF_PARAXIAL || isinf(s->radius) ||
+        s->radius == 0.0)
         return 0.0;
     return 1.0 / s->radius;
 }
@@ -268,8 +269,11 @@ static int check_frames(const sg_system *sys, int i, sg_diag *d)
     if (s->type == SG_SURF_COORDBRK) {
         if (i <= 1 || i == last)
             return sg_diag_set(d, SG_EINVAL,
-                               "surface %d: the %s cannot be a coordinate break", i,
-                               i == 0 ? "object" : i == 1 ? "first surface" : "image");
+                               "surface %d: the %s cannot be a coordinate break%s", i,
+                               i == 0 ? "object" : i == 1 ? "first surface" : "image",
+                               i == 1 ? ": rays start in surface 1's frame, which nothing may "
+                                        "turn or move; insert a dummy plane of thickness 0 "
+                                        "before the break, which changes no ray" : "");
         if (i == sys->stop)
             return sg_diag_set(d, SG_EINVAL,
                                "surface %d: a coordinate break cannot be the stop", i);
@@ -492,6 +496,26 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
             return sg_diag_set(d, SG_ERANGE, "surface %d: radius is not a number", i);
         if ((int)s->type < SG_SURF_STANDARD || (int)s->type >= SG_SURF_NTYPES)
             return sg_diag_set(d, SG_ERANGE, "surface %d: type %d is unknown", i, (int)s->type);
+        if (s->type == SG_SURF_PARAXIAL) {
+            /* An ideal lens on a plane (shape_paraxial.c). */
+            if (isfinite(s->radius) && s->radius != 0.0)
+                return sg_diag_set(d, SG_ERANGE, "surface %d: a paraxial surface is flat; its "
+                                   "radius must be inf, not %g", i, s->radius);
+            if (!(s->focal_length != 0.0) || !isfinite(s->focal_length))
+                return sg_diag_set(d, SG_ERANGE, "surface %d: a paraxial surface needs a "
+                                   "nonzero, finite focal length (focal_length is %g)", i,
+                                   s->focal_length);
+            if (!(s->opd_mode == 0.0 || s->opd_mode == 1.0 || s->opd_mode == 2.0 ||
+                  s->opd_mode == 3.0))
+                return sg_diag_set(d, SG_ERANGE, "surface %d: opd_mode %g is not one of "
+                                   "Zemax's OPD modes 0, 1, 2, 3", i, s->opd_mode);
+            if (s->mat.kind == SG_MAT_MIRROR)
+                return sg_diag_set(d, SG_EUNSUPPORTED, "surface %d: a paraxial surface "
+                                   "cannot be a mirror in sagitta", i);
+            if (i == 0 || i == sys->nsurf - 1)
+                return sg_diag_set(d, SG_EUNSUPPORTED, "surface %d: the object and the image "
+                                   "cannot be paraxial surfaces", i);
+        }
         if (sg_shape_ops_of(s->type)) {
             /* What only the shape itself knows: its normalization radius
              * and terms. */
@@ -537,7 +561,10 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
         if (i == 0 && !(fabs(s->thickness) > 0.0))
             return sg_diag_set(d, SG_ENONPHYS,
                                "surface 0: the object must lie away from surface 1 "
-                               "(thickness %g)", s->thickness);
+                               "(thickness %g): sagitta launches and aims each ray from the "
+                               "object point, which cannot be on surface 1; insert a dummy "
+                               "plane after the object, give the object a thickness d and "
+                               "the dummy -d, and surface 1 stays in place", s->thickness);
         /* The table's plain numbers: finite, within their limits. */
         for (p = 0; p < sg_param_count(SG_SCOPE_SURFACE); p++) {
             const sg_param *pp = sg_param_at(SG_SCOPE_SURFACE, p);

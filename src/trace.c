@@ -412,7 +412,65 @@ static int prepare_one(sg_tracer *t, int i, mpfr_t *idx, mpfr_t q, mpfr_t tmp, s
         p->mu = dd_from_mpfr(q, tmp);
         p->mu2 = dd_sqr(p->mu);
     }
+    if (s->type == SG_SURF_DGRATING && i > 0) {
+        /* Its rulings (shape_dgrating.c); m lambda T comes after. */
+        p->grating = 1;
+        p->nb = fabs(t->nsigned[i - 1]);
+        p->na = fabs(t->nsigned[i]);
+    }
+    if (s->type == SG_SURF_PARAXIAL && i > 0) {
+        /* An ideal lens on its plane (shape_paraxial.c); validation
+         * keeps it flat, off mirrors and with a focal length. */
+        p->ideal = 1;
+        p->R = INFINITY;
+        p->c = 0.0;
+        p->shape = SHAPE_PLANE;
+        p->ic = 1.0 / (t->nsigned[i] * s->focal_length);
+        p->nb = fabs(t->nsigned[i - 1]);
+        p->na = fabs(t->nsigned[i]);
+    }
     return SG_OK;
+}
+
+/* The conjugates of each paraxial surface: where the paraxial marginal
+ * ray's lines before and after it cross the axis (Zemax's OPD modes 0, 1
+ * and 3 all make the lens perfect there; mode 2 at infinite conjugates).
+ * A y-nu trace in double from the prepared indices; the methods all read
+ * these same doubles, so they trace one definition. */
+static void ideal_conjugates(sg_tracer *t)
+{
+    const sg_system *sys = t->sys;
+    double y, nu;
+    int i;
+    if (isinf(sys->surf[0].thickness)) {
+        y = 1.0;
+        nu = 0.0;
+    } else {
+        y = 0.0;
+        nu = 1.0;
+    }
+    for (i = 1; i < t->n; i++) {
+        sg_sprep *p = &t->sp[i];
+        const sg_surface *s = &sys->surf[i];
+        double nb = t->nsigned[i - 1], na = t->nsigned[i], phi;
+        /* A grating's m lambda T at this tracer's wavelength, which the
+         * prepared-surface memo does not key. */
+        if (p->grating)
+            p->gk = s->grating_order * sys->wave[t->wave].um * s->grating_lines;
+        if (i > 1 || !isinf(sys->surf[0].thickness))
+            y += sys->surf[i - 1].thickness * nu / nb;
+        phi = p->ideal ? 1.0 / s->focal_length : (na - nb) * sg_surface_curvature(s);
+        if (p->ideal) {
+            if (s->opd_mode == 2.0) {
+                p->pz = INFINITY;
+                p->qz = na * s->focal_length;
+            } else {
+                p->pz = nu == 0.0 ? INFINITY : -y * nb / nu;
+                p->qz = nu - y * phi == 0.0 ? INFINITY : -y * na / (nu - y * phi);
+            }
+        }
+        nu -= y * phi;
+    }
 }
 
 static int same_mp256(mpfr_srcptr a, mpfr_srcptr b)
@@ -473,6 +531,8 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, const uint64_t *gen, sg_d
     }
     mpfr_clear(q);
     mpfr_clear(tmp);
+    if (rc == SG_OK)
+        ideal_conjugates(t);
     return rc;
 }
 

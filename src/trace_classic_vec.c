@@ -365,7 +365,45 @@ void sg_classic_block(const sg_tracer *t, const double (*S)[3], const double (*D
             if ((clipped = sg_past_clip(t, s, o->x, o->y)) != 0)
                 fail_lane(t, out, k, i, clipped, rc, &act);
         }
-        if (i < upto && vm_any(act)) {
+        if (i < upto && vm_any(act) && s->grating) {
+            /* A diffraction grating (shape_dgrating.c), lane by lane. */
+            vd len = vd_sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            for (k = 0; k < nl; k++) {
+                double pk[3] = {x[k], y[k], oz[k]}, dk[3], ok = opl[k];
+                if (!act[k])
+                    continue;
+                for (j = 0; j < 3; j++)
+                    dk[j] = d[j][k] / len[k];
+                if (sg_grating_bend_d(s, pk, dk, &ok) != 0) {
+                    fail_lane(t, out, k, i, SG_EEVANESCENT, rc, &act);
+                    continue;
+                }
+                for (j = 0; j < 3; j++)
+                    d[j][k] = dk[j];
+                opl[k] = ok;
+            }
+            eD = 4.0 * (s->mu.hi + 1.0) * (eD + 2.0 * fmax(1.0, fabs(k1)) * fabs(c) * eP) +
+                 64.0 * U53 * (s->mu.hi + 2.0);
+            eO += 4.0 * U53 * fabs(s->gk) * (vd_abs(y) + 1.0);
+            eD = vsel(vd_isnan(eD), vd_set(INFINITY), eD);
+        } else if (i < upto && vm_any(act) && s->ideal) {
+            /* A paraxial surface (shape_paraxial.c), lane by lane; its
+             * direction errs as a refraction's would. */
+            vd len = vd_sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+            for (k = 0; k < nl; k++) {
+                double pk[3] = {x[k], y[k], oz[k]}, dk[3], ok = opl[k];
+                for (j = 0; j < 3; j++)
+                    dk[j] = d[j][k] / len[k];
+                sg_ideal_bend_d(s, pk, dk, &ok);
+                for (j = 0; j < 3; j++)
+                    d[j][k] = dk[j];
+                opl[k] = ok;
+            }
+            eD = (s->mu.hi + fabs(s->ic) * (vd_abs(x) + vd_abs(y))) * 4.0 * eD +
+                 4.0 * fabs(s->ic) * eP + 24.0 * U53 * (s->mu.hi + 2.0);
+            eO += 16.0 * U53 * (s->nb + s->na) * (vd_abs(x) + vd_abs(y) + 1.0);
+            eD = vsel(vd_isnan(eD), vd_set(INFINITY), eD);
+        } else if (i < upto && vm_any(act)) {
             /* The bend: refraction or reflection of d at the point. */
             vd g[3], gg, cosI, nd[3], len, gsens;
             vm tir = vm_set(0);

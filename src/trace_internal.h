@@ -59,6 +59,17 @@ typedef struct sg_sprep {
     double zg;   /* vertex z in classic's frame (surface 1's until a transfer turns it) */
     const sg_xfer *xf; /* the transfer into this surface, when it turns or moves */
     const sg_shape *shp; /* SHAPE_GEN: the shape and its ops */
+    /* A paraxial surface (shape_paraxial.c): an ideal lens on the plane,
+     * c = 1 / (N' f), |N| and |N'|, and the z of the conjugates its
+     * optical path term is perfect for (inf: at infinity; set after the
+     * surfaces are prepared, from the paraxial marginal ray). */
+    int ideal;
+    double ic, nb, na;
+    double pz, qz;
+    /* A diffraction grating (shape_dgrating.c): m lambda T at the tracer's
+     * wavelength (set after the surfaces are prepared); nb, na as above. */
+    int grating;
+    double gk;
 } sg_sprep;
 
 /* The prepared surfaces of the last tracer made with an sg_index_cache,
@@ -90,7 +101,9 @@ static inline int sg_sprep_sphere(const sg_sprep *s)
  * bend is skipped: dummy planes are common in real designs. */
 static inline int sg_sprep_passes(const sg_sprep *s)
 {
-    return s->shape == SHAPE_PLANE && !s->mirror && fabs(s->mu.hi) == 1.0 && s->mu.lo == 0.0;
+    return s->shape == SHAPE_PLANE && !s->mirror && !s->ideal && !s->grating &&
+           fabs(s->mu.hi) == 1.0 &&
+           s->mu.lo == 0.0;
 }
 
 /* Launch constants of normalized rays, for one precision. */
@@ -178,6 +191,21 @@ typedef struct sg_pray {
     dd opl;    /* optical path so far */
     double eO; /* bound on its error */
 } sg_pray;
+
+/* The paraxial surface's bend and optical path term (shape_paraxial.c),
+ * in the three arithmetics: classic's double, precise's double-double on
+ * one ray (with its bounds), and MPFR (t: 12 scratch variables). */
+void sg_ideal_bend_d(const sg_sprep *s, const double p[3], double d[3], double *opl);
+void sg_ideal_bend_dd(const sg_sprep *s, sg_pray *r);
+void sg_ideal_bend_mp(const sg_sprep *s, mpfr_srcptr mu, mpfr_ptr P[3], mpfr_ptr D[3],
+                      mpfr_ptr opl, mpfr_t *t);
+/* The diffraction grating's bend (shape_dgrating.c) in the same three:
+ * 0, or SG_EEVANESCENT for an order that does not propagate (t: 8
+ * scratch variables). */
+int sg_grating_bend_d(const sg_sprep *s, const double p[3], double d[3], double *opl);
+int sg_grating_bend_dd(const sg_sprep *s, sg_pray *r);
+int sg_grating_bend_mp(const sg_sprep *s, mpfr_srcptr mu, mpfr_srcptr R, mpfr_srcptr k1,
+                       mpfr_ptr P[3], mpfr_ptr D[3], mpfr_ptr opl, mpfr_t *t);
 
 /* The state of SG_VL precise rays between surfaces, lane by lane: what
  * sg_pray holds for one ray. */

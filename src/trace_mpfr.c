@@ -583,6 +583,18 @@ static int bend(sg_tracer *tr, int i)
     const msurf *s = &m->s[i];
     mpfr_t *t = m->t;
     mpfr_ptr gg = t[4], dg = t[5], cosI = t[6], k = t[7], gam = t[8];
+    if (sp->grating) {
+        /* A diffraction grating (shape_dgrating.c). */
+        mpfr_ptr P[3] = {m->P.x, m->P.y, m->P.z}, D[3] = {m->D.x, m->D.y, m->D.z};
+        return sg_grating_bend_mp(sp, s->mu, s->R, s->k1, P, D, m->opl, t + 9) ? SG_EEVANESCENT
+                                                                              : SG_OK;
+    }
+    if (sp->ideal) {
+        /* A paraxial surface (shape_paraxial.c). */
+        mpfr_ptr P[3] = {m->P.x, m->P.y, m->P.z}, D[3] = {m->D.x, m->D.y, m->D.z};
+        sg_ideal_bend_mp(sp, s->mu, P, D, m->opl, t + 9);
+        return SG_OK;
+    }
     if (sp->shape == SHAPE_PLANE) {
         mpfr_set_zero(m->G.x, 1);
         mpfr_set_zero(m->G.y, 1);

@@ -592,7 +592,7 @@ static vdd3 surf_grad_v(const sg_sprep *s, vdd3 p, vd *gsens)
 
 /* Refracts or reflects r->d at the point r->p of surface s, in dd.  Lanes
  * whose normal vanishes go to *nonphys, those reflected totally to *tir. */
-static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir, vm *unsure)
+static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir, vm *unsure, vm *evan)
 {
     vd gsens, gn, cosI, dN, gerr = vd_set(0.0);
     vdd3 g, nd;
@@ -601,8 +601,33 @@ static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir, vm *unsu
     *nonphys = vm_set(0);
     *tir = vm_set(0);
     *unsure = vm_set(0);
+    *evan = vm_set(0);
     if (sg_sprep_passes(s))
         return;
+    if (__builtin_expect(s->grating, 0)) {
+        /* A diffraction grating, rare: lane by lane (shape_dgrating.c). */
+        int k;
+        for (k = 0; k < SG_VL; k++) {
+            sg_pray one;
+            sg_vray_get(r, k, &one);
+            if (sg_grating_bend_dd(s, &one) != 0)
+                (*evan)[k] = -1;
+            else
+                sg_vray_put(r, k, &one);
+        }
+        return;
+    }
+    if (__builtin_expect(s->ideal, 0)) {
+        /* A paraxial surface, rare: lane by lane (shape_paraxial.c). */
+        int k;
+        for (k = 0; k < SG_VL; k++) {
+            sg_pray one;
+            sg_vray_get(r, k, &one);
+            sg_ideal_bend_dd(s, &one);
+            sg_vray_put(r, k, &one);
+        }
+        return;
+    }
     if (__builtin_expect(s->shape == SHAPE_GEN, 0)) {
         vd gs, ge;
         g = gen_grad_v(s, r->p, &gs, &ge);
@@ -854,8 +879,9 @@ static vm leave_v(const sg_sprep *s, int i, int bend, sg_vray *r, sg_ray_surface
 {
     vd bnd;
     if (bend) {
-        vm nonphys, tir, unsure;
-        bend_v(s, r, &nonphys, &tir, &unsure);
+        vm nonphys, tir, unsure, evan;
+        bend_v(s, r, &nonphys, &tir, &unsure, &evan);
+        bad = fail_lanes(bad, evan, live, SG_EEVANESCENT, st);
         bad = fail_lanes(bad, nonphys, live, SG_ENONPHYS, st);
         bad = fail_lanes(bad, tir, live, SG_ETIR, st);
         bad = fail_lanes(bad, unsure, live, SG_EUNCERT, st);

@@ -1172,9 +1172,10 @@ static void test_key_begins(void)
     assert_int_equal(cell_key_begins(COL_COMMENT, '\t'), 0);
     /* Type: the first letters of the names sagitta(1) lists (STANDARD,
      * EVENASPH, COORDBRK or cb, ODDASPHE, TOROIDAL, BICONICX, FZERNSAG,
-     * SZERNSAG, XPOLYNOM, QTYPEASP, asph); d, i, n, u, w, ':' are none. */
+     * SZERNSAG, XPOLYNOM, QTYPEASP, PARAXIAL, DGRATING, asph); i, n, u, w,
+     * ':' are none. */
     {
-        const char *yes = "seEcCotbfzxaq", *no = "dinuwhjkl:0";
+        const char *yes = "seEcCotbfzxaqpd", *no = "inuwhjkl:0";
         for (; *yes; yes++)
             assert_int_equal(cell_key_begins(COL_TYPE, *yes), 1);
         for (; *no; no++)
