@@ -329,7 +329,8 @@ static void test_bad_options(void **state)
 static void test_bench_view(void **state)
 {
     const char *d = ct_design("mirror.json", MIRROR);
-    static const char *const kinds[] = {"layout", "spot", "fan", "opd", "wave"};
+    static const char *const kinds[] = {"layout", "spot", "fan", "opd",
+                                        "wave", "mtf", "psf", "encircled"};
     ct_result r;
     cJSON *j, *v, *ms;
     int k = 0;
@@ -339,8 +340,8 @@ static void test_bench_view(void **state)
     j = cJSON_Parse(r.out);
     assert_non_null(j);
     v = cJSON_GetObjectItemCaseSensitive(j, "views");
-    assert_int_equal(cJSON_GetArraySize(v), 5);
-    for (k = 0; k < 5; k++) {
+    assert_int_equal(cJSON_GetArraySize(v), 8);
+    for (k = 0; k < 8; k++) {
         cJSON *o = cJSON_GetArrayItem(v, k);
         double med, lo, hi;
         assert_string_equal(cJSON_GetObjectItemCaseSensitive(o, "view")->valuestring, kinds[k]);
