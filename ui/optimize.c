@@ -77,46 +77,23 @@ static void row_params(const sg_system *sys, const sg_merit_row *r, char *buf, s
         buf[m - 1] = '\0';
 }
 
-enum { ME_HELP = 1, ME_FORMAT };
-
-static const cli_opt merit_opts[] = {
-    CLI_ID("--help", 'h', 0, ME_HELP),
-    CLI_ID("--format", 0, 1, ME_FORMAT),
-    CLI_END
-};
 
 int cmd_merit(int argc, char **argv)
 {
     cli_iter it;
-    const char *val, *design = NULL;
-    int id, rc, i, fmt = REPORT_TEXT;
+    const char *design = NULL;
+    int rc, i, fmt = REPORT_TEXT;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
     sg_merit_result r;
     sg_diag d;
     char par[128];
+    const cli_opt opts[] = {CLI_OPT_HELP, CLI_OPT_FORMAT_CSV(fmt), CLI_END};
 
     cli_iter_init(&it, "merit", argc, argv);
-    while ((id = cli_next_opt(&it, merit_opts, &val)) != -1) {
-        switch (id) {
-        case 0:
-            if (design)
-                return cli_usage_error("merit", "unexpected argument \"%s\"", val);
-            design = val;
-            break;
-        case ME_HELP:
-            merit_help(stdout);
-            return CLI_EXIT_OK;
-        case ME_FORMAT:
-            if (cli_format_value(val, 1, &fmt))
-                return CLI_EXIT_USAGE;
-            break;
-        default:
-            return -id;
-        }
-    }
-    if (!design)
-        return cli_usage_error("merit", "missing DESIGN.json");
+    rc = cli_parse(&it, opts, &design, merit_help);
+    if (rc != CLI_EXIT_OK)
+        return rc == CLI_DONE ? CLI_EXIT_OK : rc;
     rc = cli_load_design(design, &cat, &sys);
     if (rc != CLI_EXIT_OK)
         return rc;
@@ -189,19 +166,6 @@ static int progress_global(void *ctx, int start, double merit, double step, doub
     return 0;
 }
 
-enum { OP_HELP = 1, OP_OUTPUT, OP_CYCLES, OP_THREADS, OP_FORCE, OP_GLOBAL, OP_STARTS, OP_SEED };
-
-static const cli_opt optimize_opts[] = {
-    CLI_ID("--help", 'h', 0, OP_HELP),
-    CLI_ID("--output", 'o', 1, OP_OUTPUT),
-    CLI_ID("--cycles", 0, 1, OP_CYCLES),
-    CLI_ID("--threads", 0, 1, OP_THREADS),
-    CLI_ID("--force", 0, 0, OP_FORCE),
-    CLI_ID("--global", 0, 1, OP_GLOBAL),
-    CLI_ID("--starts", 0, 1, OP_STARTS),
-    CLI_ID("--seed", 0, 1, OP_SEED),
-    CLI_END
-};
 
 /* Whether a and b name the same file (both exist). */
 static int same_file(const char *a, const char *b)
@@ -214,8 +178,8 @@ static int same_file(const char *a, const char *b)
 int cmd_optimize(int argc, char **argv)
 {
     cli_iter it;
-    const char *val, *design = NULL, *output = NULL;
-    int id, rc, force = 0;
+    const char *design = NULL, *output = NULL;
+    int rc, force = 0;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
     sg_opt_opts o;
@@ -225,57 +189,29 @@ int cmd_optimize(int argc, char **argv)
     sg_diag d;
 
     sg_opt_opts_init(&o);
-    cli_iter_init(&it, "optimize", argc, argv);
-    while ((id = cli_next_opt(&it, optimize_opts, &val)) != -1) {
-        switch (id) {
-        case 0:
-            if (design)
-                return cli_usage_error("optimize", "unexpected argument \"%s\"", val);
-            design = val;
-            break;
-        case OP_HELP:
-            optimize_help(stdout);
-            return CLI_EXIT_OK;
-        case OP_OUTPUT:
-            output = val;
-            break;
-        case OP_CYCLES:
-            if (cli_int_value("--cycles", val, 1, 1000000, &o.cycles))
-                return CLI_EXIT_USAGE;
-            break;
-        case OP_THREADS:
-            if (cli_int_value("--threads", val, 1, 16, &o.nthreads))
-                return CLI_EXIT_USAGE;
-            break;
-        case OP_FORCE:
-            force = 1;
-            break;
-        case OP_GLOBAL: {
-            char *end;
-            double s = strtod(val, &end);
-            if (end == val || *end || !(s > 0.0 && s <= 1e6))
-                return cli_usage_error("optimize", "--global %s: expected seconds, more than "
-                                       "0 and at most 1e6", val);
-            o.global_seconds = s;
-            break;
-        }
-        case OP_STARTS:
-            if (cli_int_value("--starts", val, 1, 100000000, &o.global_starts))
-                return CLI_EXIT_USAGE;
-            break;
-        case OP_SEED: {
-            int s;
-            if (cli_int_value("--seed", val, 0, 1000000000, &s))
-                return CLI_EXIT_USAGE;
-            o.seed = (unsigned)s;
-            break;
-        }
-        default:
-            return -id;
-        }
+    {
+        double gsec = 0.0;
+        int seed = -1;
+        const cli_opt opts[] = {CLI_OPT_HELP,
+                                CLI_OPT_OUTPUT(output),
+                                CLI_OPT_INT("--cycles", 0, o.cycles, 1, 1000000),
+                                CLI_OPT_INT("--threads", 0, o.nthreads, 1, 16),
+                                CLI_OPT_FLAG("--force", 0, force),
+                                CLI_OPT_POS("--global", gsec, "seconds", " of seconds"),
+                                CLI_OPT_INT("--starts", 0, o.global_starts, 1, 100000000),
+                                CLI_OPT_INT("--seed", 0, seed, 0, 1000000000),
+                                CLI_END};
+        cli_iter_init(&it, "optimize", argc, argv);
+        rc = cli_parse(&it, opts, &design, optimize_help);
+        if (rc != CLI_EXIT_OK)
+            return rc == CLI_DONE ? CLI_EXIT_OK : rc;
+        if (gsec > 1e6)
+            return cli_usage_error("optimize", "--global %g: at most 1e6 seconds", gsec);
+        if (gsec > 0.0)
+            o.global_seconds = gsec;
+        if (seed >= 0)
+            o.seed = (unsigned)seed;
     }
-    if (!design)
-        return cli_usage_error("optimize", "missing DESIGN.json");
     if (!output)
         return cli_usage_error("optimize", "missing -o OUT.json (the optimized design)");
     if ((o.global_starts || o.seed) && !(o.global_seconds > 0.0))
