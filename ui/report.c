@@ -1073,8 +1073,88 @@ static void *opd_main(void *arg)
 /* Below this many rays, or without memory for the runs, one thread. */
 #define OPD_PAR_MIN 256
 
+static void opd_block_runs(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
+                           const sg_ray_surface *out, int nsurf, sg_opd *opd, int threads);
+
+/* Fields a block may hold for its rays to be taken field by field. */
+#define OPD_FIELDS 64
+
+/* The block's rays field by field, each field's in their order, into
+ * perm: when the fields (as the sphere's hx, hy compare them) are few
+ * and interleaved, so that each field's sphere is found once a block, not
+ * once a run.  Returns 0 (perm unset) when the rays already come field by
+ * field or the fields are many. */
+static int opd_field_order(const sg_ray_in *rays, size_t n, size_t *perm)
+{
+    double fx[OPD_FIELDS], fy[OPD_FIELDS];
+    size_t count[OPD_FIELDS + 1], r, runs = 0;
+    int nf = 0, f, last = -1;
+    unsigned char *id = malloc(n);
+    if (!id)
+        return 0;
+    for (r = 0; r < n; r++) {
+        for (f = 0; f < nf && !(fx[f] == rays[r].v[0] && fy[f] == rays[r].v[1]); f++)
+            ;
+        if (f == nf) {
+            if (nf == OPD_FIELDS || rays[r].v[0] != rays[r].v[0] ||
+                rays[r].v[1] != rays[r].v[1]) {
+                free(id);
+                return 0;
+            }
+            fx[nf] = rays[r].v[0];
+            fy[nf++] = rays[r].v[1];
+        }
+        runs += f != last;
+        last = f;
+        id[r] = (unsigned char)f;
+    }
+    if (runs == (size_t)nf) {
+        free(id);
+        return 0;
+    }
+    memset(count, 0, sizeof count);
+    for (r = 0; r < n; r++)
+        count[id[r] + 1]++;
+    for (f = 0; f < nf; f++)
+        count[f + 1] += count[f];
+    for (r = 0; r < n; r++)
+        perm[count[id[r]]++] = r;
+    free(id);
+    return 1;
+}
+
 void report_opd_block_mt(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
                          const sg_ray_surface *out, int nsurf, sg_opd *opd, int threads)
+{
+    size_t *perm = n > 1 ? malloc(n * sizeof *perm) : NULL;
+    sg_ray_in *r2 = NULL;
+    sg_ray_surface *img = NULL;
+    sg_opd *o2 = NULL;
+    size_t k;
+    /* A ray's OPD depends on its image row and its field's sphere alone,
+     * so the rays may be taken in any order: field by field, through
+     * copies of their launches and image rows. */
+    if (perm && opd_field_order(rays, n, perm) && (r2 = malloc(n * sizeof *r2)) &&
+        (img = malloc(n * sizeof *img)) && (o2 = malloc(n * sizeof *o2))) {
+        for (k = 0; k < n; k++) {
+            r2[k] = rays[perm[k]];
+            img[k] = out[perm[k] * (size_t)nsurf + (size_t)nsurf - 1];
+        }
+        opd_block_runs(t, ref, r2, n, img, 1, o2, threads);
+        for (k = 0; k < n; k++)
+            opd[perm[k]] = o2[k];
+    } else {
+        opd_block_runs(t, ref, rays, n, out, nsurf, opd, threads);
+    }
+    free(perm);
+    free(r2);
+    free(img);
+    free(o2);
+}
+
+/* The OPD of rays in runs of one field, each run's sphere found once. */
+static void opd_block_runs(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
+                           const sg_ray_surface *out, int nsurf, sg_opd *opd, int threads)
 {
     opd_run *runs = NULL;
     size_t r, nrun = 0, cap = 0;

@@ -205,6 +205,46 @@ static void test_one_ray(void **state)
     ct_free(&sel);
 }
 
+/* The OPD of rays of interleaved fields (taken field by field within a
+ * block) against each ray traced alone with --ray (its own sphere, the
+ * one-ray OPD): the same digits, at blocks of 1000 and of 7 rays. */
+static void test_opd_any_order(void **state)
+{
+    const char *rays = ray_list();
+    static const char *const cols[] = {"opd_waves", "opd_error_bound", "ex", "ey", "x", "y"};
+    const char *blocks[2] = {NULL, "7"};
+    int b, k, c;
+    (void)state;
+    for (b = 0; b < 2; b++) {
+        ct_result list;
+        if (blocks[b])
+            setenv("SAGITTA_RAYS_BLOCK", blocks[b], 1);
+        else
+            unsetenv("SAGITTA_RAYS_BLOCK");
+        ct_run(&list, "trace", example("cassegrain.json"), "--rays", rays, "--format", "csv",
+               "--surface", "IMA", (char *)NULL);
+        assert_int_equal(list.code, 0);
+        for (k = 0; k < 150; k += 13) {
+            char ray[128], want[64], got[64];
+            ct_result one;
+            snprintf(ray, sizeof ray, "0,%.17g,%.17g,%.17g", (k * 7 % 3) / 2.0,
+                     1.2 * sin(k * 0.37), 1.2 * cos(k * 0.53));
+            ct_run(&one, "trace", example("cassegrain.json"), "--ray", ray, "--format", "csv",
+                   "--surface", "IMA", (char *)NULL);
+            assert_int_equal(one.code, 0);
+            for (c = 0; c < 6; c++) {
+                assert_non_null(ct_csv(one.out, 0, cols[c], want, sizeof want));
+                assert_non_null(ct_csv(list.out, k, cols[c], got, sizeof got));
+                if (strcmp(want, got) != 0)
+                    fail_msg("ray %d %s: list %s, alone %s", k, cols[c], got, want);
+            }
+            ct_free(&one);
+        }
+        ct_free(&list);
+    }
+    unsetenv("SAGITTA_RAYS_BLOCK");
+}
+
 /* A bad list: exit status 2, the item named, no output file. */
 static void refused(const char *list, const char *says)
 {
@@ -238,6 +278,7 @@ int main(int argc, char **argv)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_chosen_rows),
         cmocka_unit_test(test_one_ray),
+        cmocka_unit_test(test_opd_any_order),
         cmocka_unit_test(test_bad_lists),
     };
     int rc;
