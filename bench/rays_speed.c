@@ -1,6 +1,6 @@
 /* rays_speed.c - "trace --rays" against the batch trace of the same rays.
  *
- *   rays_speed SAGITTA DESIGN.json RAYS.csv FORMAT|none [REPEAT]
+ *   rays_speed SAGITTA DESIGN.json RAYS.csv FORMAT|none [REPEAT [SURFACES]]
  *
  * Each round traces the rays in memory with sg_batch_trace, in the blocks
  * trace --rays uses, on every core, and then runs SAGITTA trace DESIGN
@@ -8,7 +8,8 @@
  * formats), alternating so both see the same load.  It prints the medians
  * of wall time and of CPU time, and their ratios.  FORMAT none times the
  * batch trace alone (the minimum CPU time is the figure to compare under
- * load). */
+ * load).  SURFACES, when given, is trace's --surface list; the batch then
+ * keeps the same rows. */
 #include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -65,7 +66,8 @@ int main(int argc, char **argv)
     sg_diag d;
 
     if (argc < 5 || nrep < 1 || nrep > 1000) {
-        fprintf(stderr, "usage: rays_speed SAGITTA DESIGN.json RAYS.csv FORMAT|none [REPEAT]\n");
+        fprintf(stderr, "usage: rays_speed SAGITTA DESIGN.json RAYS.csv FORMAT|none [REPEAT "
+                        "[SURFACES]]\n");
         return 2;
     }
     sg_diag_clear(&d);
@@ -119,8 +121,12 @@ int main(int argc, char **argv)
         c0 = children_cpu();
         pid = fork();
         if (pid == 0) {
-            execl(argv[1], argv[1], "trace", argv[2], "--rays", argv[3], "--format", argv[4],
-                  "-o", outpath, (char *)NULL);
+            if (argc > 6)
+                execl(argv[1], argv[1], "trace", argv[2], "--rays", argv[3], "--format", argv[4],
+                      "-o", outpath, "--surface", argv[6], (char *)NULL);
+            else
+                execl(argv[1], argv[1], "trace", argv[2], "--rays", argv[3], "--format", argv[4],
+                      "-o", outpath, (char *)NULL);
             _exit(127);
         }
         if (pid < 0 || waitpid(pid, &ws, 0) < 0 || !WIFEXITED(ws) || WEXITSTATUS(ws) != 0) {
