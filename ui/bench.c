@@ -956,7 +956,7 @@ static void bench_help(FILE *f)
 "                  of the same rays from surface 1, and the batch (every\n"
 "                  thread) on the same rays field-major and in random field\n"
 "                  order, on the designs (default: the Cassegrain, the\n"
-"                  double Gauss); 2e5 rays a field (2e4 with --quick)\n"
+"                  double Gauss); 5e4 rays a field (1e4 with --quick)\n"
 "  --view V        instead: the editor's view V (spot, fan, opd, wave, layout\n"
 "                  or all) rebuilt after an edit, with its default sampling,\n"
 "                  on the designs (default: the double Gauss); --repeat\n"
@@ -1161,7 +1161,7 @@ static int bench_baseline(const bench_cfg *cfg, const char *path, cJSON *arr)
 {
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
-    size_t nray = cfg->quick ? 20000 : 200000, nall, k, nok = 0, lok = 0;
+    size_t nray = cfg->quick ? 10000 : 50000, nall, k, nok = 0, lok = 0;
     int rc = CLI_EXIT_OK, erc = SG_OK, rep, ns, last;
     double *tp = NULL, *tl = NULL, *ts = NULL, *tr = NULL, *lin = NULL, *lrows = NULL;
     double (*pup)[2] = NULL, dmax = 0.0, scale = 0.0, la0, la1;
@@ -1274,6 +1274,7 @@ static int bench_baseline(const bench_cfg *cfg, const char *path, cJSON *arr)
             if (st[k] != SG_OK)
                 continue;
             dmax = fmax(dmax, fmax(fabs(q[0] - o->x), fabs(q[1] - o->y)));
+            scale = fmax(scale, fmax(fabs(o->x), fabs(o->y)));
             j++;
         }
     }
@@ -1321,6 +1322,7 @@ static int bench_baseline(const bench_cfg *cfg, const char *path, cJSON *arr)
                 cJSON_AddItemToObject(p, "seconds", json_stat(&sl));
                 cJSON_AddNumberToObject(p, "rays_reached_image", (double)lok);
                 cJSON_AddNumberToObject(p, "image_max_difference", dmax);
+                cJSON_AddNumberToObject(p, "image_largest_coordinate", scale);
                 cJSON_AddNumberToObject(o, "lean_over_precise", rp > 0.0 ? rl / rp : 0.0);
             }
             p = cJSON_AddObjectToObject(o, "random_field_order");
