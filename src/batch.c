@@ -13,6 +13,7 @@
 #include <stdatomic.h>
 #include <stddef.h>
 #include <stdlib.h>
+#include <string.h>
 #include <unistd.h>
 
 #include "trace_internal.h"
@@ -132,74 +133,142 @@ static void finish(const job *j, const sg_tracer *t, sg_ray_surface *o, size_t r
         j->status[r] = rc;
 }
 
-/* The precise method: up to SG_VL consecutive rays (of one field, when
- * normalized) are launched (and aimed) together, then traced together in
- * vector form. */
-static void run_precise(job *j)
+/* Rays of one field waiting for a full block of the precise trace. */
+typedef struct fgroup {
+    double hx, hy;
+    int n;
+    size_t idx[SG_VL];
+} fgroup;
+
+/* Open groups a thread keeps: rays of up to this many fields wait for
+ * their blocks to fill, so a run of rays in any field order is traced in
+ * full blocks. */
+enum { NGROUP = 8 };
+
+static int same_field(const double *v, const fgroup *g)
+{
+    return memcmp(&v[0], &g->hx, sizeof g->hx) == 0 && memcmp(&v[1], &g->hy, sizeof g->hy) == 0;
+}
+
+/* The precise method on the normalized rays of group g: launched (and
+ * aimed) together, then traced together in vector form. */
+static void precise_group(job *j, fgroup *g)
 {
     sg_tracer *t = j->t;
     sg_vray vs;
     vd p0;
     double pupil[SG_VL][2];
     sg_ray_surface *o[SG_VL];
-    size_t idx[SG_VL], r = j->first, end = j->first + j->count;
-    int rc[SG_VL], start[SG_VL], nl, k;
-    while (r < end) {
+    int rc[SG_VL], start[SG_VL], nl = g->n, k;
+    for (k = 0; k < nl; k++) {
+        pupil[k][0] = j->rays[g->idx[k]].v[2];
+        pupil[k][1] = j->rays[g->idx[k]].v[3];
+        o[k] = rows(j, g->idx[k], k);
+    }
+    sg_launch_precise_block(t, g->hx, g->hy, (const double(*)[2])pupil, nl, o, &vs, &p0, start,
+                            rc);
+    for (k = nl; k < SG_VL; k++)
+        o[k] = o[0];
+    sg_precise_block(t, &vs, p0, o, nl, start, t->n - 1, rc);
+    for (k = 0; k < nl; k++)
+        finish(j, t, o[k], g->idx[k], k, rc[k]);
+    g->n = 0;
+}
+
+/* The precise method on normalized rays: each ray joins the open group of
+ * its field (its Hx and Hy bit for bit), and a group is traced when it
+ * holds SG_VL rays, when its place is needed for another field, or at the
+ * end of the run.  A ray's result does not depend on the rays beside it,
+ * so this order gives every ray the bits of the single-ray call. */
+static void run_precise_normalized(job *j)
+{
+    fgroup g[NGROUP];
+    size_t r, end = j->first + j->count;
+    int ng = 0, i;
+    for (r = j->first; r < end; r++) {
         const double *v = j->rays[r].v;
-        nl = 0;
-        if (j->kind == SG_RAYS_START_DIR) {
-            for (; r < end && nl < SG_VL; r++) {
-                sg_ray_surface *out = rows(j, r, nl);
-                sg_pray pr;
-                int prc = sg_start_precise_prep(t, j->rays[r].v, j->rays[r].v + 3, out, &pr);
-                if (prc != SG_OK) {
-                    keep(j, r, nl);
-                    if (j->status)
-                        j->status[r] = prc;
-                    continue;
-                }
-                sg_vray_put(&vs, nl, &pr);
-                p0[nl] = 0.0;
-                start[nl] = 1;
-                o[nl] = out;
-                idx[nl++] = r;
-            }
-            if (nl == 0)
-                continue;
-            /* Idle lanes repeat lane 0, so they compute on real numbers. */
-            for (k = nl; k < SG_VL; k++) {
-                sg_pray pr;
-                sg_vray_get(&vs, 0, &pr);
-                sg_vray_put(&vs, k, &pr);
-                p0[k] = p0[0];
-            }
-        } else if (!finite4(v)) {
+        if (!finite4(v)) {
             /* The single-ray call reports a bad ray. */
             sg_ray_surface *out = rows(j, r, 0);
-            int prc = sg_trace_normalized(t, v[0], v[1], v[2], v[3], out);
+            int prc = sg_trace_normalized(j->t, v[0], v[1], v[2], v[3], out);
             keep(j, r, 0);
             if (j->status)
                 j->status[r] = prc;
-            r++;
             continue;
-        } else {
-            /* A run of rays of the same field. */
-            while (r < end && nl < SG_VL && finite4(j->rays[r].v) &&
-                   j->rays[r].v[0] == v[0] && j->rays[r].v[1] == v[1]) {
-                pupil[nl][0] = j->rays[r].v[2];
-                pupil[nl][1] = j->rays[r].v[3];
-                o[nl] = rows(j, r, nl);
-                idx[nl++] = r++;
+        }
+        for (i = 0; i < ng && !same_field(v, &g[i]); i++)
+            ;
+        if (i == ng) {
+            if (ng < NGROUP) {
+                ng++;
+            } else {
+                /* The fullest group is traced to make room. */
+                int k;
+                for (i = 0, k = 1; k < NGROUP; k++)
+                    if (g[k].n > g[i].n)
+                        i = k;
+                precise_group(j, &g[i]);
             }
-            sg_launch_precise_block(t, v[0], v[1], (const double(*)[2])pupil, nl, o, &vs, &p0,
-                                    start, rc);
+            g[i].hx = v[0];
+            g[i].hy = v[1];
+            g[i].n = 0;
+        }
+        g[i].idx[g[i].n++] = r;
+        if (g[i].n == SG_VL)
+            precise_group(j, &g[i]);
+    }
+    for (i = 0; i < ng; i++)
+        if (g[i].n > 0)
+            precise_group(j, &g[i]);
+}
+
+/* The precise method: up to SG_VL rays (of one field, when normalized)
+ * are launched (and aimed) together, then traced together in vector
+ * form. */
+static void run_precise(job *j)
+{
+    sg_tracer *t = j->t;
+    sg_vray vs;
+    vd p0;
+    sg_ray_surface *o[SG_VL];
+    size_t idx[SG_VL], r = j->first, end = j->first + j->count;
+    int rc[SG_VL], start[SG_VL], nl, k;
+    if (j->kind == SG_RAYS_NORMALIZED) {
+        run_precise_normalized(j);
+        return;
+    }
+    while (r < end) {
+        nl = 0;
+        for (; r < end && nl < SG_VL; r++) {
+            sg_ray_surface *out = rows(j, r, nl);
+            sg_pray pr;
+            int prc = sg_start_precise_prep(t, j->rays[r].v, j->rays[r].v + 3, out, &pr);
+            if (prc != SG_OK) {
+                keep(j, r, nl);
+                if (j->status)
+                    j->status[r] = prc;
+                continue;
+            }
+            sg_vray_put(&vs, nl, &pr);
+            p0[nl] = 0.0;
+            start[nl] = 1;
+            o[nl] = out;
+            idx[nl++] = r;
+        }
+        if (nl == 0)
+            continue;
+        /* Idle lanes repeat lane 0, so they compute on real numbers. */
+        for (k = nl; k < SG_VL; k++) {
+            sg_pray pr;
+            sg_vray_get(&vs, 0, &pr);
+            sg_vray_put(&vs, k, &pr);
+            p0[k] = p0[0];
         }
         for (k = nl; k < SG_VL; k++)
             o[k] = o[0];
         sg_precise_block(t, &vs, p0, o, nl, start, t->n - 1, rc);
-        for (k = 0; k < nl; k++) {
+        for (k = 0; k < nl; k++)
             finish(j, t, o[k], idx[k], k, rc[k]);
-        }
     }
 }
 

@@ -744,10 +744,14 @@ static int chief_on_image(sg_tracer *t, land_fn land, const dd v[2], osp *o, dou
                           sg_ray_surface *scratch)
 {
     dd q[2];
-    int last = t->n - 1, rc;
+    int last = t->n - 1, rc, clip;
     osp_from_values(t, v[0], v[1], 0, o);
     if (launch_q(t, land, o, 0, 0, q, 0, scratch, NULL) != SG_OK)
         return SG_EAIM;
+    /* A chief ray is a reference ray, traced past every aperture, so a
+     * field does not depend on the landing mode it is first met in. */
+    clip = t->unclipped;
+    t->unclipped = 1;
     if (t->o.method == SG_METHOD_CLASSIC) {
         double S[3], D[3];
         classic_start(o, q, S, D);
@@ -759,6 +763,7 @@ static int chief_on_image(sg_tracer *t, land_fn land, const dd v[2], osp *o, dou
         pray_from(o, q, &r, &p0);
         rc = sg_precise_run_to(t, &r, p0, scratch, last);
     }
+    t->unclipped = clip;
     at[0] = scratch[last].x;
     at[1] = scratch[last].y;
     return rc;
@@ -872,37 +877,77 @@ static dd chief_plane(sg_tracer *t, const osp *o)
     sg_tracer *p = t->prim ? t->prim : t;
     int classic = p->o.method == SG_METHOD_CLASSIC;
     land_fn land = classic ? land_classic : land_precise;
-    dd q[2], zero = dd_from(0.0);
+    dd q[2], zero = dd_from(0.0), plane = zero;
+    int clip, rc;
     if (launch_q(p, land, o, 0.0, 0.0, q, 0, p->scratch, NULL) != SG_OK)
         return zero;
+    /* The chief ray is a reference ray, traced past every aperture (an
+     * obscured surface 1 does not move the plane), so a field does not
+     * depend on the landing mode it is first met in. */
+    clip = p->unclipped;
+    p->unclipped = 1;
     if (classic) {
         double S[3], D[3];
         classic_start(o, q, S, D);
         vd_leave();
-        if (sg_classic_run_to(p, S, D, p->scratch, 1) != SG_OK)
-            return zero;
-        return dd_add(dd_add(dd_two_prod(p->scratch[1].x, o->dir.x.hi),
-                             dd_two_prod(p->scratch[1].y, o->dir.y.hi)),
-                      dd_two_prod(p->scratch[1].z, o->dir.z.hi));
+        rc = sg_classic_run_to(p, S, D, p->scratch, 1);
+        if (rc == SG_OK)
+            plane = dd_add(dd_add(dd_two_prod(p->scratch[1].x, o->dir.x.hi),
+                                  dd_two_prod(p->scratch[1].y, o->dir.y.hi)),
+                           dd_two_prod(p->scratch[1].z, o->dir.z.hi));
     } else {
         sg_pray r;
         double p0;
         pray_from(o, q, &r, &p0);
-        if (sg_precise_run_to(p, &r, p0, p->scratch, 1) != SG_OK)
-            return zero;
-        return dd_add(dd_add(dd_mul(r.p.x, o->dir.x), dd_mul(r.p.y, o->dir.y)),
-                      dd_mul(r.p.z, o->dir.z));
+        rc = sg_precise_run_to(p, &r, p0, p->scratch, 1);
+        if (rc == SG_OK)
+            plane = dd_add(dd_add(dd_mul(r.p.x, o->dir.x), dd_mul(r.p.y, o->dir.y)),
+                           dd_mul(r.p.z, o->dir.z));
     }
+    p->unclipped = clip;
+    return plane;
+}
+
+static int same_bits(double a, double b)
+{
+    return memcmp(&a, &b, sizeof a) == 0;
 }
 
 /* The object-space part of field (hx, hy), cached for the next ray of the
- * same field; on failure every surface is marked. */
+ * same field; on failure every surface is marked.  A field met before
+ * comes back from fmemo with the Jacobian it had gained: a field's data
+ * depend on its Hx and Hy alone (its chief rays are traced past the
+ * apertures, whatever the landing mode), so a kept field has the bits a
+ * fresh computation gives, and rays in any field order pay for a field
+ * once. */
 static int field_cached(sg_tracer *t, land_fn land, double hx, double hy, osp *o,
                         sg_ray_surface *out)
 {
-    if (!t->have_field || t->last_hx != hx || t->last_hy != hy) {
-        int rc;
+    if (!t->have_field || !same_bits(t->last_hx, hx) || !same_bits(t->last_hy, hy)) {
+        int rc, i;
+        sg_field_memo *e;
+        if (t->have_field && t->field_slot >= 0) {
+            /* The Jacobian the current field gained since it was kept. */
+            e = &t->fmemo[t->field_slot];
+            e->have_aimJ = t->have_aimJ;
+            memcpy(e->aimJ, t->aimJ, sizeof e->aimJ);
+        }
+        for (i = 0; i < SG_FIELD_MEMO; i++) {
+            e = &t->fmemo[i];
+            if (e->used && same_bits(e->hx, hx) && same_bits(e->hy, hy)) {
+                t->field = e->field;
+                t->have_aimJ = e->have_aimJ;
+                memcpy(t->aimJ, e->aimJ, sizeof t->aimJ);
+                t->have_field = 1;
+                t->field_slot = i;
+                t->last_hx = hx;
+                t->last_hy = hy;
+                *o = t->field;
+                return SG_OK;
+            }
+        }
         t->have_aimJ = 0;
+        t->field_slot = -1;
         rc = field_osp(t, land, hx, hy, o, t->scratch);
         if (rc != SG_OK) {
             /* A field out of range, or an image height not reached. */
@@ -918,6 +963,15 @@ static int field_cached(sg_tracer *t, land_fn land, double hx, double hy, osp *o
         t->have_aimJ = 0;
         t->last_hx = hx;
         t->last_hy = hy;
+        i = t->fmemo_next;
+        t->fmemo_next = (i + 1) % SG_FIELD_MEMO;
+        e = &t->fmemo[i];
+        e->used = 1;
+        e->hx = hx;
+        e->hy = hy;
+        e->field = *o;
+        e->have_aimJ = 0;
+        t->field_slot = i;
     }
     *o = t->field;
     return SG_OK;

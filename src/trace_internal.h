@@ -142,6 +142,17 @@ typedef struct osp {
     dd plane;
 } osp;
 
+/* A field's launch data as launch.c's field_cached left it, keyed by
+ * (hx, hy) bit for bit; used is 0 for an empty entry. */
+enum { SG_FIELD_MEMO = 16 };
+typedef struct sg_field_memo {
+    int used;
+    double hx, hy;
+    osp field;
+    int have_aimJ;
+    double aimJ[2][2];
+} sg_field_memo;
+
 /* A tracer is two parts.  The prepared model (sys, o, wave, n, sp, xf,
  * shp, nsigned, px, ln, cat) is made once by sg_tracer_open and never
  * changes afterwards, so forks (sg_tracer_fork) share it and a thread
@@ -163,13 +174,18 @@ struct sg_tracer {
     /* Workspace.  While aiming lands rays, apertures do not stop them:
      * unclipped is then set (the options' clip stays as given). */
     int unclipped;
-    /* The last field point's object-space launch, so a grid over the pupil
-     * pays for the field's tangent once. */
+    /* The current field point's object-space launch, so a grid over the
+     * pupil pays for the field's tangent once. */
     int have_field;
     double last_hx, last_hy;
     osp field;
     int have_aimJ;     /* aimJ belongs to the current field */
     double aimJ[2][2]; /* the field's landing Jacobian at its chief ray */
+    /* The fields met before, so rays in any field order pay for each
+     * field once (launch.c, field_cached). */
+    int field_slot;    /* fmemo's entry of the current field, or -1 */
+    int fmemo_next;    /* the entry the next new field takes */
+    sg_field_memo fmemo[SG_FIELD_MEMO];
     sg_ray_surface *scratch; /* nsurf entries for aiming traces */
     const sg_catalog *cat;   /* must outlive the tracer */
     sg_mpfr_ctx *mp;   /* only for the mpfr method */
@@ -395,6 +411,15 @@ int sg_tracer_fork(const sg_tracer *t, sg_tracer **out, sg_diag *d);
 
 /* Launch of normalized rays, in launch.c. */
 int sg_launch_prepare(sg_tracer *t, sg_diag *d);
+/* Forgets every field's launch data (a tracer whose method changes). */
+static inline void sg_field_forget(sg_tracer *t)
+{
+    int i;
+    t->have_field = 0;
+    t->field_slot = -1;
+    for (i = 0; i < SG_FIELD_MEMO; i++)
+        t->fmemo[i].used = 0;
+}
 int sg_launch_precise(sg_tracer *t, double hx, double hy, double px, double py,
                       sg_ray_surface *out);
 /* The launch of the precise method up to surface 1: fills the object row

@@ -1474,10 +1474,10 @@ int sg_mpfr_trace_normalized(sg_tracer *tr, double hx, double hy, double px, dou
         sg_method keep = ft->o.method;
         int rc;
         ft->o.method = SG_METHOD_PRECISE;
-        ft->have_field = 0;
+        sg_field_forget(ft);
         rc = sg_launch_precise(ft, hx, hy, 0.0, 0.0, o0);
         ft->o.method = keep;
-        ft->have_field = 0;
+        sg_field_forget(ft);
         if (rc == SG_EAIM || rc == SG_ERANGE) {
             sg_fail_rest(out, 0, tr->n, rc);
             return rc;

@@ -29,6 +29,7 @@
 #ifdef SG_HAVE_EDITOR
 #include "editor/view.h"
 #endif
+#include "lean.h"
 #include "report.h"
 #include "safetext.h"
 #include "sg_config.h"
@@ -951,6 +952,11 @@ static void bench_help(FILE *f)
 "  --spot          instead: a spot diagram of 1e6 rays (1e5 with --quick) on\n"
 "                  the designs (default: the Cassegrain) against the batch\n"
 "                  trace of the same rays to the image, and their ratio\n"
+"  --baseline      instead: precise (one thread) against a lean double trace\n"
+"                  of the same rays from surface 1, and the batch (every\n"
+"                  thread) on the same rays field-major and in random field\n"
+"                  order, on the designs (default: the Cassegrain, the\n"
+"                  double Gauss); 5e4 rays a field (1e4 with --quick)\n"
 "  --view V        instead: the editor's view V (spot, fan, opd, wave, layout\n"
 "                  or all) rebuilt after an edit, with its default sampling,\n"
 "                  on the designs (default: the double Gauss); --repeat\n"
@@ -971,7 +977,7 @@ static void bench_help(FILE *f)
 }
 
 enum { OPT_HELP = 1, OPT_FORMAT, OPT_REPEAT, OPT_QUICK, OPT_THREADS, OPT_RAYS, OPT_SPOT,
-       OPT_VIEW, OPT_CLOCK, OPT_EDIT_SURF };
+       OPT_VIEW, OPT_CLOCK, OPT_EDIT_SURF, OPT_BASELINE };
 
 static const cli_opt bench_opts[] = {
     CLI_ID("--help", 'h', 0, OPT_HELP),
@@ -981,6 +987,7 @@ static const cli_opt bench_opts[] = {
     CLI_ID("--threads", 0, 1, OPT_THREADS),
     CLI_ID("--rays", 0, 1, OPT_RAYS),
     CLI_ID("--spot", 0, 0, OPT_SPOT),
+    CLI_ID("--baseline", 0, 0, OPT_BASELINE),
     CLI_ID("--view", 0, 1, OPT_VIEW),
     CLI_ID("--clock", 0, 1, OPT_CLOCK),
     CLI_ID("--edit-surface", 0, 1, OPT_EDIT_SURF),
@@ -1115,6 +1122,242 @@ done:
     free(ts);
     free(tb);
     free(ratio);
+    cli_design_free(cat, sys);
+    return rc;
+}
+
+/* ------------------------------------------------------------ baseline mode */
+
+/* The same rays as in bench_spot's set, field-major (Vogel points in each
+ * field), nray a field. */
+static void field_major_rays(const sg_system *sys, size_t nray, double (*pup)[2],
+                             sg_ray_in *rays)
+{
+    size_t cur = 0, k;
+    int f;
+    sg_pupil_fill(SG_PUPIL_VOGEL, (int)nray, &cur, pup, nray);
+    for (f = 0; f < sys->nfield; f++) {
+        double hx, hy;
+        sg_field_normalized(sys, f, &hx, &hy);
+        for (k = 0; k < nray; k++) {
+            sg_ray_in *ri = &rays[(size_t)f * nray + k];
+            memset(ri, 0, sizeof *ri);
+            ri->v[0] = hx;
+            ri->v[1] = hy;
+            ri->v[2] = pup[k][0];
+            ri->v[3] = pup[k][1];
+        }
+    }
+}
+
+/* Precise against two baselines on one design, each pair timed
+ * alternately: (1) the lean double trace (lean.c) of the rays precise
+ * traced, from their points on surface 1, one thread each: ray-surfaces
+ * per second and their ratio, with the largest distance between the two
+ * image points; (2) the batch trace on every thread of the same rays
+ * field-major and in a shuffled order (random field order), with the
+ * design's ray aiming, and their ratio. */
+static int bench_baseline(const bench_cfg *cfg, const char *path, cJSON *arr)
+{
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    size_t nray = cfg->quick ? 10000 : 50000, nall, k, nok = 0, lok = 0;
+    int rc = CLI_EXIT_OK, erc = SG_OK, rep, ns, last;
+    double *tp = NULL, *tl = NULL, *ts = NULL, *tr = NULL, *lin = NULL, *lrows = NULL;
+    double (*pup)[2] = NULL, dmax = 0.0, scale = 0.0, la0, la1;
+    sg_ray_in *rays = NULL, *shuf = NULL;
+    sg_ray_surface *rows = NULL;
+    int *st = NULL;
+    sg_tracer *t = NULL;
+    sg_batch *b1 = NULL, *ball = NULL;
+    lean *L = NULL;
+    sg_trace_opts to;
+    sg_diag d;
+    stat3 sp, sl, ss, sr;
+    unsigned long long lcg = 35;
+
+    rc = cli_load_design(path, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    ns = sys->nsurf;
+    last = ns - 1;
+    nall = nray * (size_t)(sys->nfield > 0 ? sys->nfield : 1);
+    pup = malloc(nray * sizeof *pup);
+    rays = malloc(nall * sizeof *rays);
+    shuf = malloc(nall * sizeof *shuf);
+    rows = malloc(nall * (size_t)ns * sizeof *rows);
+    st = malloc(nall * sizeof *st);
+    lin = malloc(nall * 6 * sizeof *lin);
+    lrows = malloc(nall * (size_t)ns * LEAN_ROW * sizeof *lrows);
+    tp = calloc((size_t)cfg->repeat, sizeof *tp);
+    tl = calloc((size_t)cfg->repeat, sizeof *tl);
+    ts = calloc((size_t)cfg->repeat, sizeof *ts);
+    tr = calloc((size_t)cfg->repeat, sizeof *tr);
+    if (!pup || !rays || !shuf || !rows || !st || !lin || !lrows || !tp || !tl || !ts || !tr) {
+        cli_error("out of memory");
+        rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    field_major_rays(sys, nray, pup, rays);
+    memcpy(shuf, rays, nall * sizeof *rays);
+    for (k = nall - 1; k > 0; k--) {
+        size_t j;
+        sg_ray_in x;
+        lcg = lcg * 6364136223846793005ULL + 1442695040888963407ULL;
+        j = (size_t)((lcg >> 33) % (k + 1));
+        x = shuf[k];
+        shuf[k] = shuf[j];
+        shuf[j] = x;
+    }
+    memset(rows, 0xff, nall * (size_t)ns * sizeof *rows);
+    memset(lrows, 0xff, nall * (size_t)ns * LEAN_ROW * sizeof *lrows);
+    sg_trace_opts_init(&to);
+    sg_diag_clear(&d);
+    t = sg_tracer_new(sys, cat, &to, &d);
+    b1 = t ? sg_batch_new(sys, cat, &to, 1, &d) : NULL;
+    ball = b1 ? sg_batch_new(sys, cat, &to, cfg->threads, &d) : NULL;
+    if (!ball) {
+        erc = d.code ? d.code : SG_ENOMEM;
+        goto failed;
+    }
+    L = lean_new(sys, t);
+    la0 = load_average();
+    for (rep = 0; rep < cfg->repeat; rep++) {
+        double t0 = now_s(1);
+        erc = sg_batch_trace(b1, SG_RAYS_NORMALIZED, rays, nall, NULL, 0, rows, st, &d);
+        tp[rep] = now_s(1) - t0;
+        if (erc != SG_OK)
+            goto failed;
+        if (rep == 0) {
+            /* The lean trace starts where precise met surface 1, with the
+             * direction after it, on the rays precise brought to the image. */
+            for (k = 0; k < nall; k++) {
+                const sg_ray_surface *o = &rows[k * (size_t)ns + 1];
+                if (st[k] != SG_OK)
+                    continue;
+                lin[6 * nok] = o->x;
+                lin[6 * nok + 1] = o->y;
+                lin[6 * nok + 2] = o->z;
+                lin[6 * nok + 3] = o->l;
+                lin[6 * nok + 4] = o->m;
+                lin[6 * nok + 5] = o->n;
+                nok++;
+            }
+        }
+        if (L) {
+            t0 = now_s(1);
+            lok = lean_trace(L, lin, nok, lrows);
+            tl[rep] = now_s(1) - t0;
+        }
+        t0 = now_s(1);
+        erc = sg_batch_trace(ball, SG_RAYS_NORMALIZED, rays, nall, &last, 1, rows, st, &d);
+        ts[rep] = now_s(1) - t0;
+        if (erc != SG_OK)
+            goto failed;
+        t0 = now_s(1);
+        erc = sg_batch_trace(ball, SG_RAYS_NORMALIZED, shuf, nall, &last, 1, rows, st, &d);
+        tr[rep] = now_s(1) - t0;
+        if (erc != SG_OK)
+            goto failed;
+    }
+    la1 = load_average();
+    if (L) {
+        /* The lean image points against precise's (traced again, the rows
+         * above hold the shuffled image rows). */
+        size_t j = 0;
+        erc = sg_batch_trace(b1, SG_RAYS_NORMALIZED, rays, nall, NULL, 0, rows, st, &d);
+        if (erc != SG_OK)
+            goto failed;
+        for (k = 0; k < nall; k++) {
+            const sg_ray_surface *o = &rows[k * (size_t)ns + (size_t)last];
+            const double *q = &lrows[(j * (size_t)ns + (size_t)last) * LEAN_ROW];
+            if (st[k] != SG_OK)
+                continue;
+            dmax = fmax(dmax, fmax(fabs(q[0] - o->x), fabs(q[1] - o->y)));
+            scale = fmax(scale, fmax(fabs(o->x), fabs(o->y)));
+            j++;
+        }
+    }
+    sp = stats(tp, cfg->repeat);
+    sl = stats(tl, cfg->repeat);
+    ss = stats(ts, cfg->repeat);
+    sr = stats(tr, cfg->repeat);
+    {
+        /* Ray-surfaces: precise from the launch through every surface;
+         * lean from surface 1 on. */
+        double wp = (double)nok * (double)(ns - 1), wl = (double)nok * (double)(ns - 2);
+        double rp = sp.min > 0.0 ? wp / sp.min : 0.0, rl = L && sl.min > 0.0 ? wl / sl.min : 0.0;
+        if (cfg->fmt == BENCH_TEXT) {
+            char tt[96];
+            printf("%s\n  %s\n", path, safe_text(sys->title, tt, sizeof tt));
+            printf("  %zu rays (%zu reached the image), %d surfaces, ray aiming %s; CPU time, "
+                   "fastest of %d\n", nall, nok, ns,
+                   sys->aim == SG_AIM_REAL ? "real" : sys->aim == SG_AIM_OFF ? "off" : "paraxial",
+                   cfg->repeat);
+            printf("  precise, 1 thread:      %8.2f M ray-surfaces/s (%.4f s)\n", rp * 1e-6,
+                   sp.min);
+            if (L)
+                printf("  lean double, 1 thread:  %8.2f M ray-surfaces/s (%.4f s), lean/precise "
+                       "%.2f; image points within %.3g of precise's (largest |x|, |y| %.3g)\n",
+                       rl * 1e-6, sl.min, rp > 0.0 ? rl / rp : 0.0, dmax, scale);
+            else
+                printf("  lean double: not measured (a surface it does not trace)\n");
+            printf("  batch, %d threads, image only: field-major %.4f s, random field order "
+                   "%.4f s, random/sorted %.2f\n", cfg->nthr_all, ss.min, sr.min,
+                   ss.min > 0.0 ? sr.min / ss.min : 0.0);
+            printf("  load: %.2f before, %.2f after (1-minute average)\n", la0, la1);
+        } else {
+            cJSON *o = cJSON_CreateObject(), *p;
+            cJSON_AddStringToObject(o, "design", path);
+            cJSON_AddNumberToObject(o, "rays", (double)nall);
+            cJSON_AddNumberToObject(o, "rays_reached_image", (double)nok);
+            cJSON_AddNumberToObject(o, "surfaces", ns);
+            cJSON_AddStringToObject(o, "clock", "cpu");
+            p = cJSON_AddObjectToObject(o, "precise_one_thread");
+            cJSON_AddNumberToObject(p, "ray_surfaces_per_second", rp);
+            cJSON_AddItemToObject(p, "seconds", json_stat(&sp));
+            if (L) {
+                p = cJSON_AddObjectToObject(o, "lean_double_one_thread");
+                cJSON_AddNumberToObject(p, "ray_surfaces_per_second", rl);
+                cJSON_AddItemToObject(p, "seconds", json_stat(&sl));
+                cJSON_AddNumberToObject(p, "rays_reached_image", (double)lok);
+                cJSON_AddNumberToObject(p, "image_max_difference", dmax);
+                cJSON_AddNumberToObject(p, "image_largest_coordinate", scale);
+                cJSON_AddNumberToObject(o, "lean_over_precise", rp > 0.0 ? rl / rp : 0.0);
+            }
+            p = cJSON_AddObjectToObject(o, "random_field_order");
+            cJSON_AddNumberToObject(p, "threads", cfg->nthr_all);
+            cJSON_AddItemToObject(p, "field_major_s", json_stat(&ss));
+            cJSON_AddItemToObject(p, "random_order_s", json_stat(&sr));
+            cJSON_AddNumberToObject(p, "ratio_fastest", ss.min > 0.0 ? sr.min / ss.min : 0.0);
+            cJSON_AddNumberToObject(o, "load_before", la0);
+            cJSON_AddNumberToObject(o, "load_after", la1);
+            cJSON_AddItemToArray(arr, o);
+        }
+    }
+    rc = CLI_EXIT_OK;
+    goto done;
+failed:
+    cli_error("%s: %s", path, d.msg[0] ? d.msg : sg_strerror(erc));
+    rc = cli_exit_for(erc);
+    if (rc == CLI_EXIT_OK)
+        rc = CLI_EXIT_INTERNAL;
+done:
+    lean_free(L);
+    sg_batch_free(b1);
+    sg_batch_free(ball);
+    sg_tracer_free(t);
+    free(pup);
+    free(rays);
+    free(shuf);
+    free(rows);
+    free(st);
+    free(lin);
+    free(lrows);
+    free(tp);
+    free(tl);
+    free(ts);
+    free(tr);
     cli_design_free(cat, sys);
     return rc;
 }
@@ -1268,6 +1511,7 @@ int cmd_bench(int argc, char **argv)
     char **examples = NULL;
     size_t ndesign = 0, nex = 0, k;
     int id, rc = CLI_EXIT_OK, worst = CLI_EXIT_OK, nrays = 0, spot_mode = 0, view_kind = -1;
+    int base_mode = 0;
     bench_cfg cfg;
     design_res *res = NULL;
     cJSON *root = NULL, *arr = NULL;
@@ -1329,6 +1573,9 @@ int cmd_bench(int argc, char **argv)
             break;
         case OPT_SPOT:
             spot_mode = 1;
+            break;
+        case OPT_BASELINE:
+            base_mode = 1;
             break;
         case OPT_VIEW:
 #ifdef SG_HAVE_EDITOR
@@ -1398,6 +1645,42 @@ int cmd_bench(int argc, char **argv)
         goto done;
     }
 #endif
+    if (base_mode) {
+        static char cass[4096], dg[4096];
+        cJSON *barr = NULL;
+        cfg.cores = count_cores();
+        cfg.nthr_all = cfg.threads > 0 ? cfg.threads : cfg.cores;
+        if (ndesign == 0) {
+            example_path("cassegrain.json", cass, sizeof cass);
+            example_path("double_gauss.json", dg, sizeof dg);
+            designs[ndesign++] = cass;
+            designs[ndesign++] = dg;
+        }
+        if (cfg.fmt == BENCH_JSON) {
+            root = cJSON_CreateObject();
+            barr = root ? cJSON_AddArrayToObject(root, "baseline") : NULL;
+            if (!barr) {
+                cli_error("out of memory");
+                rc = CLI_EXIT_INTERNAL;
+                goto done;
+            }
+        }
+        for (k = 0; k < ndesign; k++) {
+            rc = bench_baseline(&cfg, designs[k], barr);
+            if (rc > worst)
+                worst = rc;
+        }
+        if (root) {
+            char *txt = cJSON_Print(root);
+            if (txt)
+                puts(txt);
+            free(txt);
+        }
+        rc = cli_close_output(stdout, NULL);
+        if (rc == CLI_EXIT_OK)
+            rc = worst;
+        goto done;
+    }
     if (spot_mode) {
         static char cass[4096];
         cJSON *sarr = NULL;

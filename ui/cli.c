@@ -563,6 +563,8 @@ static void trace_help(FILE *f)
 "  --no-clip                do not vignette rays outside fixed semi-diameters\n"
 "  --global [S]             rows in the global frame of surface S (default 1),\n"
 "                           Zemax's global coordinate reference surface\n"
+"  --surface LIST           write only these surfaces' rows: numbers, ranges\n"
+"                           A-B, OBJ, STO, IMA, comma-separated (default all)\n"
 "  --threads N              threads for --rays; 0 (default) uses every core\n"
 "  -h, --help               show this help\n"
 "\n"
@@ -572,7 +574,7 @@ static void trace_help(FILE *f)
 
 enum {
     OPT_HELP = 1, OPT_METHOD, OPT_BITS, OPT_WAVE, OPT_FORMAT, OPT_OUTPUT,
-    OPT_START, OPT_DIR, OPT_RAY, OPT_RAYS, OPT_NOCLIP, OPT_THREADS, OPT_GLOBAL
+    OPT_START, OPT_DIR, OPT_RAY, OPT_RAYS, OPT_NOCLIP, OPT_THREADS, OPT_GLOBAL, OPT_SURFACE
 };
 
 static const cli_opt trace_opts[] = {
@@ -589,6 +591,7 @@ static const cli_opt trace_opts[] = {
     CLI_ID("--no-clip", 0, 0, OPT_NOCLIP),
     CLI_ID("--threads", 0, 1, OPT_THREADS),
     CLI_ID("--global", 0, CLI_OPT_NUM, OPT_GLOBAL),
+    CLI_ID("--surface", 0, 1, OPT_SURFACE),
     CLI_END
 };
 
@@ -716,8 +719,33 @@ static int open_rays(const char *path, FILE *spool, csvrays_reader **rd, sg_diag
  * runs on every thread: the reader parses a block's rows in shares
  * (csvrays.c), sg_batch_trace traces it, and report_rays formats it in
  * rounds of shares and writes each round in order (report.c). */
+/* The rows --surface LIST keeps, into *sel (NULL without a list); 0, or
+ * a usage error with the message printed. */
+static int surface_list(const char *design, const char *list, const sg_system *sys, int nsurf,
+                        int **sel, int *nsel)
+{
+    char err[256];
+    *sel = NULL;
+    *nsel = 0;
+    if (!list)
+        return CLI_EXIT_OK;
+    *sel = malloc((size_t)nsurf * sizeof **sel);
+    if (!*sel) {
+        cli_error("out of memory");
+        return CLI_EXIT_INTERNAL;
+    }
+    if (report_parse_surfaces(list, nsurf, sys->stop, *sel, nsel, err, sizeof err) != 0) {
+        cli_error("%s: %s", design, err);
+        free(*sel);
+        *sel = NULL;
+        return CLI_EXIT_USAGE;
+    }
+    return CLI_EXIT_OK;
+}
+
 static int trace_rays(const char *design, const char *rays_path, const char *output, int fmt,
-                      const sg_trace_opts *opts_in, int wave1, int threads, int global)
+                      const sg_trace_opts *opts_in, int wave1, int threads, int global,
+                      const char *surfaces)
 {
     csvrays_reader *rd = NULL;
     FILE *spool = NULL;
@@ -728,7 +756,7 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     sg_trace_opts opts = *opts_in;
     sg_ray_in *rays = NULL;
     sg_ray_surface *out = NULL;
-    int *status = NULL, nsurf, rc, wave0 = 0, multi, opened = 0;
+    int *status = NULL, nsurf, rc, wave0 = 0, multi, opened = 0, *sel = NULL, nsel = 0;
     size_t total = 0, block, cap, n, done = 0;
     sg_opd *opd = NULL;
     sg_opd_ref ref;
@@ -794,6 +822,9 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
         goto done;
     }
     nsurf = sg_tracer_nsurf(t);
+    rc = surface_list(design, surfaces, sys, nsurf, &sel, &nsel);
+    if (rc != CLI_EXIT_OK)
+        goto done;
     /* The tracer stays for the reference spheres of normalized rays. */
     if (csvrays_kind(rd) != SG_RAYS_NORMALIZED) {
         sg_tracer_free(t);
@@ -829,6 +860,8 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     meta.opd = t != NULL;
     meta.global = gf != NULL;
     meta.global_ref = global;
+    meta.surfaces = sel;
+    meta.nsurfaces = nsel;
     /* A CSV row of a normalized ray says which ray it is, as a fan's or
      * grid's export and the JSON's "input" do. */
     meta.csv_inputs = csvrays_kind(rd) == SG_RAYS_NORMALIZED;
@@ -944,6 +977,7 @@ done:
     free(status);
     free(opd);
     free(gf);
+    free(sel);
     sg_tracer_free(t);
     sg_batch_free(b);
     cli_design_free(cat, sys);
@@ -953,7 +987,7 @@ done:
 int cmd_trace(int argc, char **argv)
 {
     cli_iter it;
-    const char *val, *design = NULL, *output = NULL, *rays_path = NULL;
+    const char *val, *design = NULL, *output = NULL, *rays_path = NULL, *surfaces = NULL;
     int id, rc, method = SG_METHOD_PRECISE, bits = 0, wave1 = 0, wave0 = 0;
     int fmt = REPORT_TEXT, clip = 1, threads = 0;
     int have_start = 0, have_dir = 0, have_ray = 0, global = -1;
@@ -967,7 +1001,7 @@ int cmd_trace(int argc, char **argv)
     sg_ray_kind kind = SG_RAYS_NORMALIZED;
     const size_t nray = 1;
     sg_ray_surface *out = NULL;
-    int *status = NULL, nsurf;
+    int *status = NULL, nsurf, *sel = NULL, nsel = 0;
     report_meta meta;
     sg_opd opd1;
     sg_diag d;
@@ -1040,6 +1074,9 @@ int cmd_trace(int argc, char **argv)
             if (cli_int_value("--threads", val, 0, 4096, &threads))
                 return CLI_EXIT_USAGE;
             break;
+        case OPT_SURFACE:
+            surfaces = val;
+            break;
         default:
             return -id;
         }
@@ -1066,7 +1103,8 @@ int cmd_trace(int argc, char **argv)
         if (bits)
             opts.mpfr_bits = bits;
         opts.clip = clip;
-        return trace_rays(design, rays_path, output, fmt, &opts, wave1, threads, global);
+        return trace_rays(design, rays_path, output, fmt, &opts, wave1, threads, global,
+                          surfaces);
     }
     memset(&one, 0, sizeof one);
     if (have_ray) {
@@ -1112,6 +1150,9 @@ int cmd_trace(int argc, char **argv)
     }
     cli_print_warnings(&d, design);
     nsurf = sg_tracer_nsurf(t);
+    rc = surface_list(design, surfaces, sys, nsurf, &sel, &nsel);
+    if (rc != CLI_EXIT_OK)
+        goto done;
 
     out = calloc(nray, (size_t)nsurf * sizeof *out);
     status = calloc(nray, sizeof *status);
@@ -1159,6 +1200,8 @@ int cmd_trace(int argc, char **argv)
     meta.global = gf != NULL;
     meta.global_ref = global;
     meta.sys = sys;
+    meta.surfaces = sel;
+    meta.nsurfaces = nsel;
     /* Its CSV rows begin with the launch, as the editor's export of it. */
     meta.csv_inputs = kind == SG_RAYS_NORMALIZED;
 
@@ -1183,6 +1226,7 @@ done:
     free(out);
     free(status);
     free(gf);
+    free(sel);
     sg_tracer_free(t);
     cli_design_free(cat, sys);
     return rc;

@@ -24,6 +24,9 @@ struct h5rays {
     hid_t file, status_type;
     hid_t ds[C_MAX];
     int nin, nsurf;
+    /* The rows kept of each ray (trace --surface): surfaces sel[0 .. nsel
+     * - 1], or all (sel NULL, nsel = nsurf). */
+    int *sel, nsel;
     int opd; /* the OPD columns (normalized rays) */
     size_t rows, next_ray;
     char path[4096], tmp[4096 + 32];
@@ -134,6 +137,7 @@ void h5rays_abort(h5rays *h)
         outfile_restore_signals(&old);
     }
     free(h->buf);
+    free(h->sel);
     free(h);
 }
 
@@ -174,6 +178,17 @@ h5rays *h5rays_open(const char *path, const report_meta *m, const char *units,
     strcpy(h->path, path);
     snprintf(h->tmp, sizeof h->tmp, "%s.tmp%ld", path, (long)getpid());
     h->nsurf = nsurf;
+    h->nsel = nsurf;
+    if (m && m->surfaces) {
+        h->sel = malloc((size_t)(m->nsurfaces > 0 ? m->nsurfaces : 1) * sizeof *h->sel);
+        if (!h->sel) {
+            free(h);
+            fail(err, errlen, "out of memory");
+            return NULL;
+        }
+        memcpy(h->sel, m->surfaces, (size_t)m->nsurfaces * sizeof *h->sel);
+        h->nsel = m->nsurfaces;
+    }
     h->nin = kind == SG_RAYS_NORMALIZED ? 4 : 6;
     /* The library's own messages would go to stderr unasked. */
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
@@ -303,7 +318,7 @@ static int append(h5rays *h, int col, hid_t memtype, const void *buf, size_t n)
 int h5rays_write(h5rays *h, const sg_ray_surface *out, const int *status, size_t n,
                  const sg_ray_in *rays, const sg_opd *opd, char *err, size_t errlen)
 {
-    size_t rows = n * (size_t)h->nsurf, r, i, j;
+    size_t rows = n * (size_t)h->nsel, r, k2, j;
     size_t nsurf = (size_t)h->nsurf;
     double *col[C_MAX];
     int k;
@@ -327,8 +342,9 @@ int h5rays_write(h5rays *h, const sg_ray_surface *out, const int *status, size_t
         uint64_t *ray = (uint64_t *)col[C_RAY];
         int *surface = (int *)col[C_SURFACE], *st = (int *)col[C_STATUS];
         for (r = 0, j = 0; r < n; r++)
-            for (i = 0; i < nsurf; i++, j++) {
-                const sg_ray_surface *e = &out[j];
+            for (k2 = 0; k2 < (size_t)h->nsel; k2++, j++) {
+                size_t i = h->sel ? (size_t)h->sel[k2] : k2;
+                const sg_ray_surface *e = &out[r * nsurf + i];
                 int c;
                 ray[j] = h->next_ray + r;
                 surface[j] = (int)i;
@@ -402,6 +418,7 @@ int h5rays_close(h5rays *h, char *err, size_t errlen)
         outfile_restore_signals(&old);
     }
     free(h->buf);
+    free(h->sel);
     free(h);
     return rc;
 }

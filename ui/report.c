@@ -9,10 +9,103 @@
 #include <stdio_ext.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <unistd.h>
 
 #include "numfmt.h"
 #include "safetext.h"
+
+/* One end of a --surface item, text [a, b): a number, OBJ, STO or IMA.
+ * Returns the surface, or -1 (err set, naming the item). */
+static int surface_word(const char *a, const char *b, const char *item, int nsurf, int stop,
+                        char *err, size_t errlen)
+{
+    size_t n = (size_t)(b - a);
+    long v = 0;
+    const char *p;
+    if (n == 3 && strncasecmp(a, "IMA", 3) == 0)
+        return nsurf - 1;
+    if (n == 3 && strncasecmp(a, "STO", 3) == 0)
+        return stop;
+    if (n == 3 && strncasecmp(a, "OBJ", 3) == 0)
+        return 0;
+    for (p = a; p < b && *p >= '0' && *p <= '9' && v <= 1000000; p++)
+        v = 10 * v + (*p - '0');
+    if (n == 0 || p < b) {
+        snprintf(err, errlen,
+                 "--surface: \"%s\" is not a surface (a number, a range A-B, OBJ, STO or IMA)",
+                 item);
+        return -1;
+    }
+    if (v > nsurf - 1) {
+        snprintf(err, errlen, "--surface: \"%s\": surface %ld is past the image, surface %d",
+                 item, v, nsurf - 1);
+        return -1;
+    }
+    return (int)v;
+}
+
+int report_parse_surfaces(const char *list, int nsurf, int stop, int *sel, int *nsel,
+                          char *err, size_t errlen)
+{
+    char *keep, item[64];
+    const char *p = list;
+    int i, n = 0;
+    if (!list || nsurf < 1) {
+        snprintf(err, errlen, "--surface: no surfaces");
+        return -1;
+    }
+    keep = calloc((size_t)nsurf, 1);
+    if (!keep) {
+        snprintf(err, errlen, "out of memory");
+        return -1;
+    }
+    for (;;) {
+        const char *end = strchr(p, ','), *dash, *a, *b;
+        size_t len;
+        int lo, hi;
+        if (!end)
+            end = p + strlen(p);
+        /* Blanks around an item are allowed, as around a CSV field. */
+        for (a = p; a < end && (*a == ' ' || *a == '\t'); a++)
+            ;
+        for (b = end; b > a && (b[-1] == ' ' || b[-1] == '\t'); b--)
+            ;
+        len = (size_t)(b - a);
+        snprintf(item, sizeof item, "%.*s%s", (int)(len < 40 ? len : 40), a,
+                 len > 40 ? "..." : "");
+        if (len == 0) {
+            snprintf(err, errlen, "--surface: an empty item in \"%.60s\"", list);
+            free(keep);
+            return -1;
+        }
+        dash = memchr(a, '-', len);
+        lo = surface_word(a, dash ? dash : b, item, nsurf, stop, err, errlen);
+        hi = lo < 0 ? -1 : dash ? surface_word(dash + 1, b, item, nsurf, stop, err, errlen) : lo;
+        if (lo < 0 || hi < 0) {
+            free(keep);
+            return -1;
+        }
+        if (hi < lo) {
+            snprintf(err, errlen, "--surface: \"%s\": the range runs from %d down to %d", item,
+                     lo, hi);
+            free(keep);
+            return -1;
+        }
+        for (i = lo; i <= hi; i++)
+            keep[i] = 1;
+        if (!*end)
+            break;
+        p = end + 1;
+    }
+    /* In surface order, each once. */
+    for (i = 0; i < nsurf; i++)
+        if (keep[i])
+            sel[n++] = i;
+    *nsel = n;
+    free(keep);
+    return 0;
+}
 
 int report_parse_fmt(const char *s)
 {
@@ -57,6 +150,18 @@ static int ray_status(const sg_ray_surface *s, int nsurf, const int *status,
         if (s[i].status != SG_OK)
             return s[i].status;
     return SG_OK;
+}
+
+/* How many rows of a ray a report writes, and the surface of row k: the
+ * chosen surfaces (trace --surface), or every one. */
+static int row_count(const report_meta *m, int nsurf)
+{
+    return m && m->surfaces ? m->nsurfaces : nsurf;
+}
+
+static int row_surface(const report_meta *m, int k)
+{
+    return m && m->surfaces ? m->surfaces[k] : k;
 }
 
 static int first_failure(const sg_ray_surface *s, int nsurf)
@@ -156,12 +261,12 @@ static void text_status_line(FILE *f, const report_meta *m, const sg_ray_surface
 
 static void text_table(FILE *f, const report_meta *m, const sg_ray_surface *s, int nsurf)
 {
-    int i;
+    int i, k, nrow = row_count(m, nsurf);
     fprintf(f, "%4s %23s %23s %23s %23s %23s %23s %10s %10s %23s %24s  %s\n", "Surf",
             "X", "Y", "Z", "L", "M", "N", "Residual", is_estimate(m) ? "ErrEst" : "ErrBound",
             "Path", "OPL", "Status");
-    for (i = 0; i < nsurf; i++) {
-        const sg_ray_surface *e = &s[i];
+    for (k = 0; k < nrow; k++) {
+        const sg_ray_surface *e = &s[i = row_surface(m, k)];
         char label[16], b[10][40];
         if (i == 0)
             strcpy(label, "OBJ");
@@ -427,11 +532,12 @@ static char *csv_row(char *p, const char *ix, size_t nix, int i, int nsurf,
  * at once (eight at a time on AVX-512). */
 #define CSV_GROUP 16
 
-/* Surfaces [i0, i1) of a ray (at most CSV_GROUP) as CSV rows at p, with
- * (i1 - i0) CSV_ROW_MAX bytes of room; returns the end. */
+/* Rows [i0, i1) of a ray (at most CSV_GROUP) as CSV rows at p, with
+ * (i1 - i0) CSV_ROW_MAX bytes of room; returns the end.  Row k is surface
+ * sel[k], or k without a selection. */
 static char *csv_rows(char *p, int multi, size_t index, int i0, int i1, int nsurf,
-                      const sg_ray_surface *s, sg_ray_kind kind, const sg_ray_in *ray,
-                      const sg_opd *opd)
+                      const int *sel, const sg_ray_surface *s, sg_ray_kind kind,
+                      const sg_ray_in *ray, const sg_opd *opd)
 {
     double v[CSV_GROUP * CSV_ROW_NUMS];
     char txt[CSV_GROUP * CSV_ROW_NUMS * NUMFMT_G17_MAX];
@@ -446,8 +552,9 @@ static char *csv_rows(char *p, int multi, size_t index, int i0, int i1, int nsur
     }
     int start[CSV_GROUP], k;
     for (i = i0; i < i1; i++) {
+        int si = sel ? sel[i] : i;
         start[i - i0] = n;
-        n += csv_row_nums(v + n, i, nsurf, &s[i], nin, ray, opd);
+        n += csv_row_nums(v + n, si, nsurf, &s[si], nin, ray, opd);
     }
     if (n > 0)
         numfmt_g17_n(v, (size_t)n, txt, len);
@@ -465,19 +572,23 @@ static char *csv_rows(char *p, int multi, size_t index, int i0, int i1, int nsur
     c.txt = txt;
     c.len = len;
     c.at = 0;
-    for (i = i0; i < i1; i++)
-        p = csv_row(p, ix, nix, i, nsurf, &s[i], nin, opd, &c);
+    for (i = i0; i < i1; i++) {
+        int si = sel ? sel[i] : i;
+        p = csv_row(p, ix, nix, si, nsurf, &s[si], nin, opd, &c);
+    }
     return p;
 }
 
-static void csv_ray(FILE *f, int multi, size_t index, int nsurf, const sg_ray_surface *s,
-                    sg_ray_kind kind, const sg_ray_in *ray, const sg_opd *opd)
+static void csv_ray(FILE *f, const report_meta *m, int multi, size_t index, int nsurf,
+                    const sg_ray_surface *s, sg_ray_kind kind, const sg_ray_in *ray,
+                    const sg_opd *opd)
 {
     char rows[CSV_GROUP * CSV_ROW_MAX];
-    int i;
-    for (i = 0; i < nsurf; i += CSV_GROUP) {
-        int i1 = nsurf - i < CSV_GROUP ? nsurf : i + CSV_GROUP;
-        char *end = csv_rows(rows, multi, index, i, i1, nsurf, s, kind, ray, opd);
+    int i, nrow = row_count(m, nsurf);
+    for (i = 0; i < nrow; i += CSV_GROUP) {
+        int i1 = nrow - i < CSV_GROUP ? nrow : i + CSV_GROUP;
+        char *end = csv_rows(rows, multi, index, i, i1, nsurf, m ? m->surfaces : NULL, s, kind,
+                             ray, opd);
         fwrite(rows, 1, (size_t)(end - rows), f);
     }
 }
@@ -540,10 +651,10 @@ static void json_input(FILE *f, sg_ray_kind kind, const sg_ray_in *ray)
 static void json_surfaces(FILE *f, const report_meta *m, const sg_ray_surface *s, int nsurf,
                           const char *indent)
 {
-    int i;
+    int i, r, nrow = row_count(m, nsurf);
     fputs("[\n", f);
-    for (i = 0; i < nsurf; i++) {
-        const sg_ray_surface *e = &s[i];
+    for (r = 0; r < nrow; r++) {
+        const sg_ray_surface *e = &s[i = row_surface(m, r)];
         const char *const key[9] = { "x", "y", "z", "l", "m", "n",
                                      "residual", bound_key(m), "path" };
         const double v[9] = { e->x, e->y, e->z, e->l, e->m, e->n,
@@ -568,7 +679,7 @@ static void json_surfaces(FILE *f, const report_meta *m, const sg_ray_surface *s
         else
             fputs("null", f);
         fprintf(f, ", \"status\": \"%s\"}%s\n", report_status_name(e->status),
-                i + 1 < nsurf ? "," : "");
+                r + 1 < nrow ? "," : "");
     }
     fprintf(f, "%s]", indent);
 }
@@ -691,7 +802,7 @@ static void write_rays(FILE *f, const report_stream *s, const sg_ray_surface *ou
             text_ray(f, s->m, s->multi, index, s->nsurf, o, st, s->kind, in, opd);
             break;
         case REPORT_CSV:
-            csv_ray(f, s->multi, index, s->nsurf, o, s->kind,
+            csv_ray(f, s->m, s->multi, index, s->nsurf, o, s->kind,
                     s->m && s->m->csv_inputs ? in : NULL, opd);
             break;
         default:
@@ -748,18 +859,18 @@ static void fmt_csv(fmt_job *j)
     const sg_opd none = { SG_EINVAL, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN, NAN };
     const int inputs = s->m && s->m->csv_inputs;
     size_t r;
-    int i;
+    int i, nrow = row_count(s->m, s->nsurf);
     for (r = j->from; r < j->to; r++) {
         const sg_ray_surface *o = j->out + r * (size_t)s->nsurf;
         const sg_ray_in *in = inputs && j->rays ? &j->rays[r] : NULL;
         const sg_opd *opd = s->m && s->m->opd ? (j->opds ? &j->opds[r] : &none) : NULL;
         size_t index = s->next + r;
-        for (i = 0; i < s->nsurf; i += CSV_GROUP) {
-            int i1 = s->nsurf - i < CSV_GROUP ? s->nsurf : i + CSV_GROUP;
+        for (i = 0; i < nrow; i += CSV_GROUP) {
+            int i1 = nrow - i < CSV_GROUP ? nrow : i + CSV_GROUP;
             size_t room = (size_t)(i1 - i) * CSV_ROW_MAX;
             char *end;
             if (j->cap - j->len < room) {
-                size_t cap = j->cap ? 2 * j->cap : 256 * (size_t)s->nsurf * (j->to - j->from);
+                size_t cap = j->cap ? 2 * j->cap : 256 * (size_t)nrow * (j->to - j->from);
                 char *p;
                 if (cap < j->len + room)
                     cap = j->len + room;
@@ -772,8 +883,8 @@ static void fmt_csv(fmt_job *j)
                 j->text = p;
                 j->cap = cap;
             }
-            end = csv_rows(j->text + j->len, s->multi, index, i, i1, s->nsurf, o, s->kind, in,
-                           opd);
+            end = csv_rows(j->text + j->len, s->multi, index, i, i1, s->nsurf,
+                           s->m ? s->m->surfaces : NULL, o, s->kind, in, opd);
             j->len = (size_t)(end - j->text);
         }
     }
@@ -826,7 +937,8 @@ static int write_parallel(report_stream *s, const sg_ray_surface *out, const int
     pthread_t tid[PAR_MAX_THREADS];
     int started[PAR_MAX_THREADS];
     int k, rc = 0;
-    size_t per = PAR_ROUND_ROWS / (size_t)(s->nsurf > 0 ? s->nsurf : 1), at, round;
+    int nrow = row_count(s->m, s->nsurf);
+    size_t per = PAR_ROUND_ROWS / (size_t)(nrow > 0 ? nrow : 1), at, round;
 
     if (per < 16)
         per = 16;
@@ -961,8 +1073,88 @@ static void *opd_main(void *arg)
 /* Below this many rays, or without memory for the runs, one thread. */
 #define OPD_PAR_MIN 256
 
+static void opd_block_runs(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
+                           const sg_ray_surface *out, int nsurf, sg_opd *opd, int threads);
+
+/* Fields a block may hold for its rays to be taken field by field. */
+#define OPD_FIELDS 64
+
+/* The block's rays field by field, each field's in their order, into
+ * perm: when the fields (as the sphere's hx, hy compare them) are few
+ * and interleaved, so that each field's sphere is found once a block, not
+ * once a run.  Returns 0 (perm unset) when the rays already come field by
+ * field or the fields are many. */
+static int opd_field_order(const sg_ray_in *rays, size_t n, size_t *perm)
+{
+    double fx[OPD_FIELDS], fy[OPD_FIELDS];
+    size_t count[OPD_FIELDS + 1], r, runs = 0;
+    int nf = 0, f, last = -1;
+    unsigned char *id = malloc(n);
+    if (!id)
+        return 0;
+    for (r = 0; r < n; r++) {
+        for (f = 0; f < nf && !(fx[f] == rays[r].v[0] && fy[f] == rays[r].v[1]); f++)
+            ;
+        if (f == nf) {
+            if (nf == OPD_FIELDS || rays[r].v[0] != rays[r].v[0] ||
+                rays[r].v[1] != rays[r].v[1]) {
+                free(id);
+                return 0;
+            }
+            fx[nf] = rays[r].v[0];
+            fy[nf++] = rays[r].v[1];
+        }
+        runs += f != last;
+        last = f;
+        id[r] = (unsigned char)f;
+    }
+    if (runs == (size_t)nf) {
+        free(id);
+        return 0;
+    }
+    memset(count, 0, sizeof count);
+    for (r = 0; r < n; r++)
+        count[id[r] + 1]++;
+    for (f = 0; f < nf; f++)
+        count[f + 1] += count[f];
+    for (r = 0; r < n; r++)
+        perm[count[id[r]]++] = r;
+    free(id);
+    return 1;
+}
+
 void report_opd_block_mt(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
                          const sg_ray_surface *out, int nsurf, sg_opd *opd, int threads)
+{
+    size_t *perm = n > 1 ? malloc(n * sizeof *perm) : NULL;
+    sg_ray_in *r2 = NULL;
+    sg_ray_surface *img = NULL;
+    sg_opd *o2 = NULL;
+    size_t k;
+    /* A ray's OPD depends on its image row and its field's sphere alone,
+     * so the rays may be taken in any order: field by field, through
+     * copies of their launches and image rows. */
+    if (perm && opd_field_order(rays, n, perm) && (r2 = malloc(n * sizeof *r2)) &&
+        (img = malloc(n * sizeof *img)) && (o2 = malloc(n * sizeof *o2))) {
+        for (k = 0; k < n; k++) {
+            r2[k] = rays[perm[k]];
+            img[k] = out[perm[k] * (size_t)nsurf + (size_t)nsurf - 1];
+        }
+        opd_block_runs(t, ref, r2, n, img, 1, o2, threads);
+        for (k = 0; k < n; k++)
+            opd[perm[k]] = o2[k];
+    } else {
+        opd_block_runs(t, ref, rays, n, out, nsurf, opd, threads);
+    }
+    free(perm);
+    free(r2);
+    free(img);
+    free(o2);
+}
+
+/* The OPD of rays in runs of one field, each run's sphere found once. */
+static void opd_block_runs(sg_tracer *t, sg_opd_ref *ref, const sg_ray_in *rays, size_t n,
+                           const sg_ray_surface *out, int nsurf, sg_opd *opd, int threads)
 {
     opd_run *runs = NULL;
     size_t r, nrun = 0, cap = 0;

@@ -17,6 +17,14 @@ typedef enum { REPORT_TEXT = 0, REPORT_CSV = 1, REPORT_JSON = 2 } report_fmt;
 /* "text", "csv" or "json"; -1 if unknown. */
 int report_parse_fmt(const char *s);
 
+/* A --surface list of a design of nsurf surfaces (stop: its stop):
+ * comma-separated items, each a surface number, OBJ (0), STO, IMA
+ * (nsurf - 1) or a range A-B of them, into sel (room for nsurf) in
+ * surface order, each once, and *nsel.  Returns 0, or -1 with a message
+ * naming the item in err. */
+int report_parse_surfaces(const char *list, int nsurf, int stop, int *sel, int *nsel,
+                          char *err, size_t errlen);
+
 typedef struct report_meta {
     const char *design; /* file name or title */
     const char *method; /* "precise" | "classic" | "mpfr" */
@@ -32,6 +40,11 @@ typedef struct report_meta {
     int global_ref;
     const sg_system *sys; /* when set, a stopped ray's status names what
                              stopped it (sg_ray_stop_text) */
+    /* When set, the rows written of each ray are those of surfaces
+     * surfaces[0 .. nsurfaces - 1] (increasing), of the nsurf a ray's
+     * rows hold (trace --surface); the status and OPD stay the ray's. */
+    const int *surfaces;
+    int nsurfaces;
 } report_meta;
 
 /* The error column is error_bound (text: ErrBound) for precise and mpfr;

@@ -381,6 +381,54 @@ static void test_bench_view(void **state)
     ct_free(&r);
 }
 
+/* bench --baseline: the lean double trace (a textbook trace written for
+ * the bench, with no code of the methods) lands the precise method's
+ * rays where precise lands them, to double rounding (1e-9 of the image's
+ * size), on the Cassegrain (conic mirrors, a hyperboloid met from far
+ * off its vertex) and the double Gauss (refraction); the random-order
+ * figures are there. */
+static void test_bench_baseline(void **state)
+{
+    char d1[1024], d2[1024];
+    const char *e = getenv("SAGITTA_EXAMPLES");
+    ct_result r;
+    cJSON *j, *arr, *o;
+    int k;
+    (void)state;
+    assert_non_null(e);
+    snprintf(d1, sizeof d1, "%s/cassegrain.json", e);
+    snprintf(d2, sizeof d2, "%s/double_gauss.json", e);
+    ct_run(&r, "bench", d1, d2, "--baseline", "--quick", "--repeat", "1", "--format", "json",
+           NULL);
+    assert_int_equal(r.code, 0);
+    j = cJSON_Parse(r.out);
+    assert_non_null(j);
+    arr = cJSON_GetObjectItemCaseSensitive(j, "baseline");
+    assert_int_equal(cJSON_GetArraySize(arr), 2);
+    for (k = 0; k < 2; k++) {
+        cJSON *lean, *ro;
+        double diff, nok, lok, rays, scale;
+        o = cJSON_GetArrayItem(arr, k);
+        lean = cJSON_GetObjectItemCaseSensitive(o, "lean_double_one_thread");
+        assert_non_null(lean);
+        diff = cJSON_GetObjectItemCaseSensitive(lean, "image_max_difference")->valuedouble;
+        lok = cJSON_GetObjectItemCaseSensitive(lean, "rays_reached_image")->valuedouble;
+        nok = cJSON_GetObjectItemCaseSensitive(o, "rays_reached_image")->valuedouble;
+        rays = cJSON_GetObjectItemCaseSensitive(o, "rays")->valuedouble;
+        /* The image's size, as precise found it: 219 mm and 17.3 mm. */
+        scale = cJSON_GetObjectItemCaseSensitive(lean, "image_largest_coordinate")->valuedouble;
+        assert_true(scale > (k == 0 ? 200.0 : 15.0) && scale < (k == 0 ? 240.0 : 20.0));
+        if (!(diff <= scale * 1e-9))
+            fail_msg("design %d: lean image points %g from precise's", k, diff);
+        assert_true(lok == nok && nok > 0.9 * rays);
+        assert_true(cJSON_GetObjectItemCaseSensitive(o, "lean_over_precise")->valuedouble > 0.0);
+        ro = cJSON_GetObjectItemCaseSensitive(o, "random_field_order");
+        assert_true(cJSON_GetObjectItemCaseSensitive(ro, "ratio_fastest")->valuedouble > 0.0);
+    }
+    cJSON_Delete(j);
+    ct_free(&r);
+}
+
 /* bench --clock: the clock is named in the text and in the JSON
  * settings, the figures stay positive and ordered, and a clock it does
  * not know is a usage error naming the option. */
@@ -569,6 +617,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_pictures),
         cmocka_unit_test(test_bench_view),
         cmocka_unit_test(test_bench_clock),
+        cmocka_unit_test(test_bench_baseline),
         cmocka_unit_test(test_layout_csv),
         cmocka_unit_test(test_wavefront_formats),
         cmocka_unit_test(test_fan_opd),

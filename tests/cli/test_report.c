@@ -69,7 +69,7 @@ __attribute__((noinline)) static char *render(report_fmt fmt, const report_meta 
     return buf;
 }
 
-static const report_meta meta = { "dir/\"odd\" \\name.json", "mpfr", 512, 0.5875618, 2, 0, 0, 0, 0, NULL };
+static const report_meta meta = { "dir/\"odd\" \\name.json", "mpfr", 512, 0.5875618, 2, 0, 0, 0, 0, NULL, NULL, 0 };
 
 static void test_names(void **state)
 {

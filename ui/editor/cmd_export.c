@@ -28,6 +28,9 @@ static void meta_of(ed *e, report_meta *m)
     m->opd = 0;
     m->global = e->global >= 0;
     m->global_ref = e->global;
+    /* Every surface's rows (trace --surface chooses some). */
+    m->surfaces = NULL;
+    m->nsurfaces = 0;
 }
 
 /* The rays of a set, made a block at a time so that a grid of a million
