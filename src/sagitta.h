@@ -1270,6 +1270,17 @@ SG_API int sg_tolerance_run(const sg_system *sys, const sg_catalog *cat, const s
                             int sens, int trials, uint64_t seed, sg_tol_result *out,
                             sg_diag *d);
 SG_API void sg_tol_result_free(sg_tol_result *r);
+/* Monte Carlo in blocks, for a caller that streams the trials (sagitta
+ * tolerance's table, MPI ranks): open compensates the nominal once (its
+ * value in *nominal when not NULL); run evaluates trials first ..
+ * first + n - 1 on o's threads into out[0 .. n-1], each as
+ * sg_tolerance_run gives it, and *done counts those finished in order
+ * from first (fewer than n after o's stop). */
+typedef struct sg_tol_mc sg_tol_mc;
+SG_API int sg_tol_mc_open(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *o,
+                          uint64_t seed, sg_tol_mc **out, sg_tol_value *nominal, sg_diag *d);
+SG_API int sg_tol_mc_run(sg_tol_mc *m, int first, int n, sg_tol_value *out, int *done);
+SG_API void sg_tol_mc_close(sg_tol_mc *m);
 
 /* A prepared system: indices, paraxial data and work buffers, computed
  * once so the per-ray path allocates nothing.  A tracer is used by one

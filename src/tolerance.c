@@ -741,8 +741,9 @@ typedef struct run_ctx {
     const sg_catalog *cat;
     const sg_tol_opts *o;
     int nsensjob, ntrial, njob;
+    int first;              /* the trial of the first Monte Carlo job */
     uint64_t seed;
-    sg_tol_result *r;
+    sg_tol_result *r;       /* mc[i] is trial first + i */
     unsigned char *finished;
     int next, ndone;
     pthread_mutex_t lock;
@@ -763,11 +764,11 @@ static void run_job(run_ctx *c, int job, sg_system *work, int *map)
         delta[job / 2] = job % 2 ? op->max : op->min;
         v = job % 2 ? &c->r->sens[job / 2].at_max : &c->r->sens[job / 2].at_min;
     } else {
-        uint64_t trial = (uint64_t)(job - c->nsensjob);
+        uint64_t trial = (uint64_t)c->first + (uint64_t)(job - c->nsensjob);
         for (k = 0; k < t->nop; k++)
             delta[k] = sg_tol_draw(c->seed, trial, k, t->distribution, t->op[k].min,
                                    t->op[k].max);
-        v = &c->r->mc[trial];
+        v = &c->r->mc[job - c->nsensjob];
     }
     sg_diag_clear(&d);
     rc = sg_tol_apply(c->nom, c->cat, delta, work, map, &d);
@@ -818,25 +819,40 @@ static void *worker_thread(void *arg)
     return NULL;
 }
 
-int sg_tolerance_run(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *opts,
-                     int sens, int trials, uint64_t seed, sg_tol_result *out, sg_diag *d)
+/* c's jobs on o->nthreads threads (the calling one among them). */
+static void run_jobs(run_ctx *c)
 {
-    sg_tol_opts def;
-    sg_system *nom, *ref = NULL;
-    run_ctx c;
     pthread_t th[256];
     int started[256];
-    int nt, i, k, rc;
-    memset(out, 0, sizeof *out);
-    if (!opts) {
-        sg_tol_opts_init(&def);
-        opts = &def;
-    }
+    int nt, i;
+    pthread_mutex_init(&c->lock, NULL);
+    nt = c->o->nthreads > 0 ? c->o->nthreads : (int)sysconf(_SC_NPROCESSORS_ONLN);
+    if (nt < 1)
+        nt = 1;
+    if (nt > 256)
+        nt = 256;
+    if (nt > c->njob)
+        nt = c->njob > 0 ? c->njob : 1;
+    for (i = 1; i < nt; i++)
+        started[i] = pthread_create(&th[i], NULL, worker_thread, c) == 0;
+    worker(c);
+    for (i = 1; i < nt; i++)
+        if (started[i])
+            pthread_join(th[i], NULL);
+    pthread_mutex_destroy(&c->lock);
+}
+
+/* The nominal prepared and compensated (nom), and as given (ref). */
+static int prepare_nominal(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *o,
+                           sg_system **nom_out, sg_system **ref_out, sg_tol_value *nominal,
+                           sg_diag *d)
+{
+    sg_system *nom, *ref = NULL;
+    int rc;
+    *nom_out = *ref_out = NULL;
     if (!sys->tol.present || sys->tol.nop == 0)
         return sg_diag_set(d, SG_ENOSYS, "the design has no tolerance operands (a "
                            "\"tolerances\" object; sagitta-design(5), TOLERANCES)");
-    if (trials < 0)
-        return sg_diag_set(d, SG_ERANGE, "%d Monte Carlo trials", trials);
     nom = sg_system_new();
     if (!nom)
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
@@ -848,12 +864,107 @@ int sg_tolerance_run(const sg_system *sys, const sg_catalog *cat, const sg_tol_o
         rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
         goto fail;
     }
-    if ((rc = sg_tol_compensate(nom, ref, NULL, cat, opts, &out->nominal, d)) != SG_OK) {
+    if ((rc = sg_tol_compensate(nom, ref, NULL, cat, o, nominal, d)) != SG_OK) {
         char msg[SG_DIAG_MSG];
         snprintf(msg, sizeof msg, "%s", d ? d->msg : "");
         rc = sg_diag_set(d, rc, "the nominal design: %s", msg);
         goto fail;
     }
+    *nom_out = nom;
+    *ref_out = ref;
+    return SG_OK;
+fail:
+    sg_system_free(nom);
+    sg_system_free(ref);
+    return rc;
+}
+
+struct sg_tol_mc {
+    sg_system *nom, *ref;
+    const sg_catalog *cat;
+    sg_tol_opts o;
+    uint64_t seed;
+};
+
+int sg_tol_mc_open(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *o,
+                   uint64_t seed, sg_tol_mc **out, sg_tol_value *nominal, sg_diag *d)
+{
+    sg_tol_mc *m;
+    sg_tol_value nv;
+    int rc;
+    *out = NULL;
+    if (!(m = calloc(1, sizeof *m)))
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    if (o)
+        m->o = *o;
+    else
+        sg_tol_opts_init(&m->o);
+    if ((rc = prepare_nominal(sys, cat, &m->o, &m->nom, &m->ref, &nv, d)) != SG_OK) {
+        free(m);
+        return rc;
+    }
+    m->cat = cat;
+    m->seed = seed;
+    if (nominal)
+        *nominal = nv;
+    *out = m;
+    return SG_OK;
+}
+
+int sg_tol_mc_run(sg_tol_mc *m, int first, int n, sg_tol_value *out, int *done)
+{
+    sg_tol_result r;
+    run_ctx c;
+    int k;
+    *done = 0;
+    if (n <= 0)
+        return SG_OK;
+    memset(&r, 0, sizeof r);
+    r.mc = out;
+    memset(&c, 0, sizeof c);
+    c.nom = m->nom;
+    c.ref = m->ref;
+    c.cat = m->cat;
+    c.o = &m->o;
+    c.ntrial = c.njob = n;
+    c.first = first;
+    c.seed = m->seed;
+    c.r = &r;
+    if (!(c.finished = calloc((size_t)n, 1)))
+        return SG_ENOMEM;
+    run_jobs(&c);
+    for (k = 0; k < n && c.finished[k]; k++)
+        ;
+    *done = k;
+    free(c.finished);
+    return SG_OK;
+}
+
+void sg_tol_mc_close(sg_tol_mc *m)
+{
+    if (!m)
+        return;
+    sg_system_free(m->nom);
+    sg_system_free(m->ref);
+    free(m);
+}
+
+int sg_tolerance_run(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *opts,
+                     int sens, int trials, uint64_t seed, sg_tol_result *out, sg_diag *d)
+{
+    sg_tol_opts def;
+    sg_system *nom = NULL, *ref = NULL;
+    run_ctx c;
+    int k, rc;
+    memset(out, 0, sizeof *out);
+    if (!opts) {
+        sg_tol_opts_init(&def);
+        opts = &def;
+    }
+    if (trials < 0)
+        return sg_diag_set(d, SG_ERANGE, "%d Monte Carlo trials", trials);
+    if ((rc = prepare_nominal(sys, cat, opts, &nom, &ref, &out->nominal, d)) != SG_OK)
+        return rc;
     out->trials = trials;
     out->seed = seed;
     out->sens = sens ? calloc((size_t)sys->tol.nop, sizeof *out->sens) : NULL;
@@ -874,21 +985,7 @@ int sg_tolerance_run(const sg_system *sys, const sg_catalog *cat, const sg_tol_o
         rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
         goto fail;
     }
-    pthread_mutex_init(&c.lock, NULL);
-    nt = opts->nthreads > 0 ? opts->nthreads : (int)sysconf(_SC_NPROCESSORS_ONLN);
-    if (nt < 1)
-        nt = 1;
-    if (nt > 256)
-        nt = 256;
-    if (nt > c.njob)
-        nt = c.njob > 0 ? c.njob : 1;
-    for (i = 1; i < nt; i++)
-        started[i] = pthread_create(&th[i], NULL, worker_thread, &c) == 0;
-    worker(&c);
-    for (i = 1; i < nt; i++)
-        if (started[i])
-            pthread_join(th[i], NULL);
-    pthread_mutex_destroy(&c.lock);
+    run_jobs(&c);
     if (opts->stop && *opts->stop)
         out->stopped = 1;
     /* What is done is what a run stopped there keeps: the rows, and the

@@ -13,6 +13,7 @@
 #include "cli.h"
 #include "outfile.h"
 #include "report.h"
+#include "tolmpi.h"
 
 static void tolerance_help(FILE *f)
 {
@@ -70,6 +71,7 @@ static void on_sigint(int sig)
 typedef struct prog {
     int on, shown;
     double t0, last;
+    int base, total; /* Monte Carlo: trials before this block, and all */
 } prog;
 
 static double now_s(void)
@@ -92,6 +94,10 @@ static int progress(void *ctx, int done, int total)
         return 0;
     p->last = t;
     p->shown = 1;
+    if (p->total) {
+        done += p->base;
+        total = p->total;
+    }
     fprintf(stderr, "\rsagitta: tolerance: %d of %d systems, %.0f s", done, total, t - p->t0);
     fflush(stderr);
     return 0;
@@ -151,7 +157,8 @@ static void print_num(FILE *f, double v)
         fprintf(f, "%.17g", v);
 }
 
-static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc)
+static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc,
+                       const double *crit)
 {
     static const char *const pk[5] = {"90", "80", "50", "20", "10"};
     int k, j;
@@ -212,7 +219,7 @@ static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, in
                 : sys->tol.distribution == SG_TOLD_PARABOLIC ? "parabolic" : "normal");
         for (k = 0; k < r->done; k++) {
             fputs(k ? (k % 8 ? ", " : ",\n  ") : "\n  ", f);
-            print_num(f, r->mc[k].status == SG_OK ? r->mc[k].criterion : NAN);
+            print_num(f, crit[k]);
         }
         fprintf(f, "],\n  \"failed\": %d, \"best\": ", r->done - r->stats.n);
         print_num(f, r->stats.best);
@@ -232,7 +239,7 @@ static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, in
     fprintf(f, ",\n\"stopped\": %s}\n", r->stopped ? "true" : "false");
 }
 
-static void write_csv(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc)
+static void write_csv(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens)
 {
     int k;
     char place[64];
@@ -250,11 +257,15 @@ static void write_csv(FILE *f, const sg_system *sys, const sg_tol_result *r, int
                     s->at_max.criterion, status_text(s->at_min.status),
                     status_text(s->at_max.status));
         }
-    if (mc)
-        for (k = 0; k < r->done; k++)
-            fprintf(f, "trial,%d,,,,,%.17g,%.17g,%s,%s\n", k + 1, r->mc[k].criterion,
-                    r->mc[k].criterion, status_text(r->mc[k].status),
-                    status_text(r->mc[k].status));
+}
+
+/* Trials first + 1 .. first + n as the CSV's rows. */
+static void csv_trials(FILE *f, int first, int n, const sg_tol_value *v)
+{
+    int k;
+    for (k = 0; k < n; k++)
+        fprintf(f, "trial,%d,,,,,%.17g,%.17g,%s,%s\n", first + k + 1, v[k].criterion,
+                v[k].criterion, status_text(v[k].status), status_text(v[k].status));
 }
 
 static void write_text(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc)
@@ -327,14 +338,69 @@ static void write_text(FILE *f, const sg_system *sys, const sg_tol_result *r, in
         fprintf(f, "\nStopped: the report holds what was done.\n");
 }
 
-int cmd_tolerance(int argc, char **argv)
+/* Rank 0's end of the Monte Carlo: the trials in order, into the CSV's
+ * rows as they come and the criteria the statistics need. */
+typedef struct mc_sink {
+    FILE *f;
+    int csv;
+    double *crit;   /* the criteria (NaN: failed), for JSON and text; NULL for CSV */
+    int done;
+    prog *p;
+} mc_sink;
+
+static int take_trials(void *ctx, int first, int n, const sg_tol_value *v)
+{
+    mc_sink *s = ctx;
+    int k;
+    if (s->csv) {
+        csv_trials(s->f, first, n, v);
+        /* A killed run keeps the rows written (--resume). */
+        if (fflush(s->f) != 0 || ferror(s->f)) {
+            cli_error("writing the trials: %s", strerror(errno));
+            return CLI_EXIT_FILE;
+        }
+    }
+    if (s->crit)
+        for (k = 0; k < n; k++)
+            s->crit[first + k] = v[k].status == SG_OK ? v[k].criterion : NAN;
+    s->done = first + n;
+    s->p->base = s->done;
+    return 0;
+}
+
+/* The trials on this process alone, in blocks as the ranks take them. */
+static int local_trials(sg_tol_mc *m, int trials, int block, mc_sink *s)
+{
+    sg_tol_value *v = malloc((size_t)block * sizeof *v);
+    int first, rc = 0;
+    if (!v) {
+        cli_error("out of memory");
+        return CLI_EXIT_INTERNAL;
+    }
+    for (first = 0; first < trials && !rc; first += block) {
+        int n = trials - first < block ? trials - first : block, done;
+        if (sg_tol_mc_run(m, first, n, v, &done) != SG_OK) {
+            cli_error("out of memory");
+            rc = CLI_EXIT_INTERNAL;
+            break;
+        }
+        if ((rc = take_trials(s, first, done, v)) == 0 && done < n)
+            rc = 1;
+    }
+    free(v);
+    return rc;
+}
+
+static int tolerance_main(int argc, char **argv)
 {
     cli_iter it;
     const char *val, *design = NULL, *output = NULL;
     int id, rc, force = 0, sens = 0, mc = -1, fmt = REPORT_TEXT, seed_given = 0, m;
+    int rank = tolmpi_rank(), block, nthreads, opened = 0, skip;
     long long seed = 1;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
+    sg_tol_mc *mcx = NULL;
     sg_tol_opts o;
     sg_tol_result r;
     struct sigaction sa, old;
@@ -342,7 +408,10 @@ int cmd_tolerance(int argc, char **argv)
     sg_diag d;
     prog p;
     outfile of;
+    mc_sink sink;
     sg_tol_opts_init(&o);
+    memset(&r, 0, sizeof r);
+    memset(&sink, 0, sizeof sink);
     cli_iter_init(&it, "tolerance", argc, argv);
     while ((id = cli_next_opt(&it, tolerance_opts, &val)) != -1) {
         switch (id) {
@@ -352,7 +421,8 @@ int cmd_tolerance(int argc, char **argv)
             design = val;
             break;
         case TO_HELP:
-            tolerance_help(stdout);
+            if (rank == 0)
+                tolerance_help(stdout);
             return CLI_EXIT_OK;
         case TO_SENS:
             sens = 1;
@@ -401,7 +471,7 @@ int cmd_tolerance(int argc, char **argv)
     }
     if (!design)
         return cli_usage_error("tolerance", "missing DESIGN.json");
-    if (output && strcmp(output, "-") != 0 && !force && stat(output, &st) == 0)
+    if (rank == 0 && output && strcmp(output, "-") != 0 && !force && stat(output, &st) == 0)
         return cli_usage_error("tolerance", "%s exists; use --force to overwrite it", output);
     rc = cli_load_design(design, &cat, &sys);
     if (rc != CLI_EXIT_OK)
@@ -423,7 +493,7 @@ int cmd_tolerance(int argc, char **argv)
     memset(&p, 0, sizeof p);
     {
         const char *ci = getenv("CI");
-        p.on = isatty(STDERR_FILENO) && !(ci && ci[0]);
+        p.on = rank == 0 && isatty(STDERR_FILENO) && !(ci && ci[0]);
     }
     p.t0 = p.last = now_s();
     o.progress = progress;
@@ -436,35 +506,98 @@ int cmd_tolerance(int argc, char **argv)
     stop_int = 0;
     o.stop = &stop_int;
     sg_diag_clear(&d);
-    rc = sg_tolerance_run(sys, cat, &o, sens, mc, (uint64_t)seed, &r, &d);
-    sigaction(SIGINT, &old, NULL);
+    rc = SG_OK;
+    /* Every rank compensates the nominal for its trials; rank 0 alone runs
+     * the sensitivity and writes. */
+    if (mc > 0)
+        rc = sg_tol_mc_open(sys, cat, &o, (uint64_t)seed, &mcx, NULL, &d);
+    if (rc == SG_OK && rank == 0)
+        rc = sg_tolerance_run(sys, cat, &o, sens, 0, (uint64_t)seed, &r, &d);
     if (p.shown)
         fputs("\r\033[K", stderr);
     if (rc != SG_OK) {
         cli_print_diag(design, &d, rc);
         rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
-        goto done;
+        goto restore;
     }
-    if ((rc = outfile_open(&of, output && strcmp(output, "-") != 0 ? output : NULL, stdout))) {
-        cli_error("%s: %s", output, strerror(rc));
-        sg_tol_result_free(&r);
-        rc = CLI_EXIT_FILE;
-        goto done;
+    r.trials = mc;
+    r.seed = (uint64_t)seed;
+    if (rank == 0 && mc > 0 && !r.stopped && fmt != REPORT_CSV &&
+        !(sink.crit = malloc((size_t)mc * sizeof *sink.crit))) {
+        cli_error("out of memory");
+        rc = CLI_EXIT_INTERNAL;
+        goto restore;
     }
-    if (fmt == REPORT_JSON)
-        write_json(of.f, sys, &r, sens, mc > 0);
-    else if (fmt == REPORT_CSV)
-        write_csv(of.f, sys, &r, sens, mc > 0);
-    else
-        write_text(of.f, sys, &r, sens, mc > 0);
-    sg_tol_result_free(&r);
-    if ((rc = outfile_commit(&of))) {
-        cli_error("%s: %s", output ? output : "standard output", strerror(rc));
-        rc = CLI_EXIT_FILE;
-        goto done;
+    if (rank == 0) {
+        if ((rc = outfile_open(&of, output && strcmp(output, "-") != 0 ? output : NULL,
+                               stdout))) {
+            cli_error("%s: %s", output, strerror(rc));
+            rc = CLI_EXIT_FILE;
+            goto restore;
+        }
+        opened = 1;
+        if (fmt == REPORT_CSV)
+            write_csv(of.f, sys, &r, sens);
+    }
+    /* The workers wait here for rank 0's sensitivity; a stop there skips
+     * the trials on every rank. */
+    skip = r.stopped;
+    if ((rc = tolmpi_agree(CLI_EXIT_OK, &skip)) != CLI_EXIT_OK)
+        goto restore;
+    if (mc > 0 && !skip) {
+        nthreads = o.nthreads > 0 ? o.nthreads : (int)sysconf(_SC_NPROCESSORS_ONLN);
+        /* Blocks of a few systems a thread keep the threads busy to the
+         * block's end; the output does not depend on the size. */
+        block = 8 * (nthreads > 0 ? nthreads : 1);
+        sink.f = rank == 0 ? of.f : NULL;
+        sink.csv = fmt == REPORT_CSV;
+        sink.p = &p;
+        p.total = mc;
+        rc = tolmpi_size() > 1 ? tolmpi_trials(mcx, mc, block, take_trials, &sink, &sink.done)
+                               : local_trials(mcx, mc, block, &sink);
+        if (p.shown)
+            fputs("\r\033[K", stderr);
+        if (rc == 1) {
+            r.stopped = 1;
+            rc = 0;
+        }
+        if (rc)
+            goto restore;
+        r.done = sink.done;
+        if (sink.crit && r.done > 0)
+            sg_tol_statistics(sink.crit, r.done, &r.stats);
+    }
+    if (stop_int)
+        r.stopped = 1;
+    if (rank == 0) {
+        if (fmt == REPORT_JSON)
+            write_json(of.f, sys, &r, sens, mc > 0, sink.crit);
+        else if (fmt == REPORT_TEXT)
+            write_text(of.f, sys, &r, sens, mc > 0);
+        opened = 0;
+        if ((rc = outfile_commit(&of))) {
+            cli_error("%s: %s", output ? output : "standard output", strerror(rc));
+            rc = CLI_EXIT_FILE;
+            goto restore;
+        }
     }
     rc = CLI_EXIT_OK;
+restore:
+    sigaction(SIGINT, &old, NULL);
+    if (opened)
+        outfile_abort(&of);
 done:
+    free(sink.crit);
+    sg_tol_result_free(&r);
+    sg_tol_mc_close(mcx);
     cli_design_free(cat, sys);
     return rc;
+}
+
+int cmd_tolerance(int argc, char **argv)
+{
+    int rc = tolmpi_start();
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    return tolmpi_end(tolerance_main(argc, argv));
 }
