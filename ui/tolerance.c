@@ -20,7 +20,7 @@ static void tolerance_help(FILE *f)
     fputs(
 "Usage: sagitta tolerance DESIGN.json [--sensitivity] [--monte-carlo N] [--seed S]\n"
 "                         [--threads N] [--method M] [--format text|json|csv]\n"
-"                         [-o FILE] [--force]\n"
+"                         [-o FILE] [--force] [--resume]\n"
 "Tolerance the design (its \"tolerances\" object): each operand at its min\n"
 "and max with the compensators re-optimized (sensitivity), and N systems\n"
 "with every operand drawn (Monte Carlo), on every core.  Without\n"
@@ -39,11 +39,13 @@ static void tolerance_help(FILE *f)
 "  -o, --output FILE        write the report to FILE (not over an existing file\n"
 "                           without --force)\n"
 "  --force                  overwrite FILE\n"
+"  --resume                 continue the Monte Carlo table in FILE (CSV) from its\n"
+"                           last whole trial\n"
 "  -h, --help               show this help\n", f);
 }
 
 enum { TO_HELP = 1, TO_SENS, TO_MC, TO_SEED, TO_THREADS, TO_METHOD, TO_NOCOMP, TO_FORMAT,
-       TO_OUTPUT, TO_FORCE };
+       TO_OUTPUT, TO_FORCE, TO_RESUME };
 static const cli_opt tolerance_opts[] = {
     { "--help", 'h', 0, TO_HELP },
     { "--sensitivity", 0, 0, TO_SENS },
@@ -55,6 +57,7 @@ static const cli_opt tolerance_opts[] = {
     { "--format", 0, 1, TO_FORMAT },
     { "--output", 'o', 1, TO_OUTPUT },
     { "--force", 0, 0, TO_FORCE },
+    { "--resume", 0, 0, TO_RESUME },
     { NULL, 0, 0, 0 }
 };
 
@@ -369,7 +372,7 @@ static int take_trials(void *ctx, int first, int n, const sg_tol_value *v)
 }
 
 /* The trials on this process alone, in blocks as the ranks take them. */
-static int local_trials(sg_tol_mc *m, int trials, int block, mc_sink *s)
+static int local_trials(sg_tol_mc *m, int start, int trials, int block, mc_sink *s)
 {
     sg_tol_value *v = malloc((size_t)block * sizeof *v);
     int first, rc = 0;
@@ -377,7 +380,7 @@ static int local_trials(sg_tol_mc *m, int trials, int block, mc_sink *s)
         cli_error("out of memory");
         return CLI_EXIT_INTERNAL;
     }
-    for (first = 0; first < trials && !rc; first += block) {
+    for (first = start; first < trials && !rc; first += block) {
         int n = trials - first < block ? trials - first : block, done;
         if (sg_tol_mc_run(m, first, n, v, &done) != SG_OK) {
             cli_error("out of memory");
@@ -391,12 +394,122 @@ static int local_trials(sg_tol_mc *m, int trials, int block, mc_sink *s)
     return rc;
 }
 
+/* The line of f where a and b (n bytes) first differ, 1-based. */
+static int differing_line(const char *a, const char *b, size_t n)
+{
+    size_t i;
+    int line = 1;
+    for (i = 0; i < n && a[i] == b[i]; i++)
+        line += a[i] == '\n';
+    return line;
+}
+
+/* --resume: FILE's head (the header, nominal and sensitivity rows) must be
+ * this run's, byte for byte, and its trial rows 1 .. K in order, the last
+ * whole one the same as this run's trial K computed again (so the seed,
+ * distribution, method and design are the same); a torn last line is
+ * dropped.  FILE is cut after row K and left open to append; *start = K. */
+static int resume_open(const char *path, const sg_system *sys, const sg_tol_result *r,
+                       int sens, sg_tol_mc *m, int trials, FILE **out, int *start)
+{
+    char *head = NULL, *got = NULL, *line = NULL, *last = NULL, *again = NULL;
+    size_t hn = 0, cap = 0, an = 0;
+    FILE *mem, *f = NULL;
+    off_t end;
+    ssize_t len;
+    int k = 0, lineno, nhead = 0, done, rc = CLI_EXIT_FILE;
+    sg_tol_value v;
+    *out = NULL;
+    if (!(mem = open_memstream(&head, &hn)))
+        goto nomem;
+    write_csv(mem, sys, r, sens);
+    if (fclose(mem) != 0 || !(got = malloc(hn + 1)))
+        goto nomem;
+    if (!(f = fopen(path, "r+"))) {
+        cli_error("%s: %s (--resume continues a table written before)", path, strerror(errno));
+        goto out;
+    }
+    if (fread(got, 1, hn, f) != hn || memcmp(got, head, hn) != 0) {
+        cli_error("%s: line %d is not this run's (--resume continues a table of the same "
+                  "design and options)", path, differing_line(got, head, hn));
+        goto out;
+    }
+    for (lineno = 0; lineno < (int)hn; lineno++)
+        nhead += head[lineno] == '\n';
+    end = (off_t)hn;
+    for (lineno = nhead + 1; (len = getline(&line, &cap, f)) > 0; lineno++) {
+        char expect[32];
+        int n = snprintf(expect, sizeof expect, "trial,%d,", k + 1);
+        /* A row cut short by the kill is dropped and computed again. */
+        if (line[len - 1] != '\n')
+            break;
+        if (strncmp(line, expect, (size_t)n) != 0) {
+            cli_error("%s: line %d is not trial %d's row", path, lineno, k + 1);
+            goto out;
+        }
+        free(last);
+        if (!(last = strdup(line)))
+            goto nomem;
+        k++;
+        end += (off_t)len;
+    }
+    if (ferror(f)) {
+        cli_error("%s: %s", path, strerror(errno));
+        goto out;
+    }
+    if (k > trials) {
+        cli_error("%s: holds %d trials, more than the %d asked", path, k, trials);
+        rc = CLI_EXIT_USAGE;
+        goto out;
+    }
+    if (k > 0) {
+        if (sg_tol_mc_run(m, k - 1, 1, &v, &done) != SG_OK || !(mem = open_memstream(&again,
+                                                                                    &an)))
+            goto nomem;
+        if (done == 1)
+            csv_trials(mem, k - 1, 1, &v);
+        if (fclose(mem) != 0)
+            goto nomem;
+        if (done != 1) {
+            cli_error("%s: stopped before its last trial was checked; the file is as it was",
+                      path);
+            goto out;
+        }
+        if (strcmp(again, last) != 0) {
+            cli_error("%s: trial %d is not this run's (another seed, distribution, method or "
+                      "design); --resume continues a table of the same options", path, k);
+            goto out;
+        }
+    }
+    if (fflush(f) != 0 || ftruncate(fileno(f), end) != 0 || fseeko(f, end, SEEK_SET) != 0) {
+        cli_error("%s: %s", path, strerror(errno));
+        goto out;
+    }
+    *out = f;
+    *start = k;
+    f = NULL;
+    rc = CLI_EXIT_OK;
+    goto out;
+nomem:
+    cli_error("out of memory");
+    rc = CLI_EXIT_INTERNAL;
+out:
+    if (f)
+        fclose(f);
+    free(head);
+    free(got);
+    free(line);
+    free(last);
+    free(again);
+    return rc;
+}
+
 static int tolerance_main(int argc, char **argv)
 {
     cli_iter it;
     const char *val, *design = NULL, *output = NULL;
     int id, rc, force = 0, sens = 0, mc = -1, fmt = REPORT_TEXT, seed_given = 0, m;
-    int rank = tolmpi_rank(), block, nthreads, opened = 0, skip;
+    int rank = tolmpi_rank(), block, nthreads, opened = 0, start = 0, resume = 0;
     long long seed = 1;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
@@ -409,6 +522,8 @@ static int tolerance_main(int argc, char **argv)
     prog p;
     outfile of;
     mc_sink sink;
+    FILE *tab = NULL; /* the Monte Carlo table, written in place */
+    int inplace;
     sg_tol_opts_init(&o);
     memset(&r, 0, sizeof r);
     memset(&sink, 0, sizeof sink);
@@ -465,13 +580,20 @@ static int tolerance_main(int argc, char **argv)
         case TO_FORCE:
             force = 1;
             break;
+        case TO_RESUME:
+            resume = 1;
+            break;
         default:
             return -id;
         }
     }
     if (!design)
         return cli_usage_error("tolerance", "missing DESIGN.json");
-    if (rank == 0 && output && strcmp(output, "-") != 0 && !force && stat(output, &st) == 0)
+    if (resume && (!output || strcmp(output, "-") == 0 || fmt != REPORT_CSV))
+        return cli_usage_error("tolerance", "--resume continues a CSV file: give -o FILE and "
+                               "--format csv");
+    if (rank == 0 && output && strcmp(output, "-") != 0 && !force && !resume &&
+        stat(output, &st) == 0)
         return cli_usage_error("tolerance", "%s exists; use --force to overwrite it", output);
     rc = cli_load_design(design, &cat, &sys);
     if (rc != CLI_EXIT_OK)
@@ -510,8 +632,9 @@ static int tolerance_main(int argc, char **argv)
     /* Every rank compensates the nominal for its trials; rank 0 alone runs
      * the sensitivity and writes. */
     if (mc > 0)
-        rc = sg_tol_mc_open(sys, cat, &o, (uint64_t)seed, &mcx, NULL, &d);
-    if (rc == SG_OK && rank == 0)
+        rc = sg_tol_mc_open(sys, cat, &o, (uint64_t)seed, &mcx, &r.nominal, &d);
+    /* The nominal is the same computation there and here. */
+    if (rc == SG_OK && rank == 0 && (sens || !mcx))
         rc = sg_tolerance_run(sys, cat, &o, sens, 0, (uint64_t)seed, &r, &d);
     if (p.shown)
         fputs("\r\033[K", stderr);
@@ -529,32 +652,61 @@ static int tolerance_main(int argc, char **argv)
         goto restore;
     }
     if (rank == 0) {
-        if ((rc = outfile_open(&of, output && strcmp(output, "-") != 0 ? output : NULL,
-                               stdout))) {
-            cli_error("%s: %s", output, strerror(rc));
+        /* A Monte Carlo table written to a file grows there a block at a
+         * time, so a killed run keeps its trials (--resume). */
+        inplace = fmt == REPORT_CSV && mc > 0 && !r.stopped && output &&
+                  strcmp(output, "-") != 0;
+        if (resume && mc == 0) {
+            rc = cli_usage_error("tolerance", "--resume: no Monte Carlo trials to continue");
+            goto restore;
+        }
+        if (resume && r.stopped) {
+            cli_error("%s: stopped before the trials; the file is as it was", output);
             rc = CLI_EXIT_FILE;
             goto restore;
         }
-        opened = 1;
-        if (fmt == REPORT_CSV)
-            write_csv(of.f, sys, &r, sens);
+        if (resume) {
+            if ((rc = resume_open(output, sys, &r, sens, mcx, mc, &tab, &start)) != 0)
+                goto restore;
+        } else if (inplace) {
+            if (!(tab = fopen(output, "w"))) {
+                cli_error("%s: %s", output, strerror(errno));
+                rc = CLI_EXIT_FILE;
+                goto restore;
+            }
+            write_csv(tab, sys, &r, sens);
+        } else {
+            if ((rc = outfile_open(&of, output && strcmp(output, "-") != 0 ? output : NULL,
+                                   stdout))) {
+                cli_error("%s: %s", output, strerror(rc));
+                rc = CLI_EXIT_FILE;
+                goto restore;
+            }
+            opened = 1;
+            if (fmt == REPORT_CSV)
+                write_csv(of.f, sys, &r, sens);
+        }
+        if (r.stopped || start >= mc)
+            start = -1;
     }
-    /* The workers wait here for rank 0's sensitivity; a stop there skips
-     * the trials on every rank. */
-    skip = r.stopped;
-    if ((rc = tolmpi_agree(CLI_EXIT_OK, &skip)) != CLI_EXIT_OK)
+    /* The workers wait here for rank 0's sensitivity and learn the first
+     * trial to run (-1: none, after a stop or with every trial done). */
+    if ((rc = tolmpi_agree(CLI_EXIT_OK, &start)) != CLI_EXIT_OK)
         goto restore;
-    if (mc > 0 && !skip) {
+    if (mc > 0 && start >= 0) {
         nthreads = o.nthreads > 0 ? o.nthreads : (int)sysconf(_SC_NPROCESSORS_ONLN);
         /* Blocks of a few systems a thread keep the threads busy to the
          * block's end; the output does not depend on the size. */
         block = 8 * (nthreads > 0 ? nthreads : 1);
-        sink.f = rank == 0 ? of.f : NULL;
+        sink.f = rank == 0 ? (tab ? tab : of.f) : NULL;
         sink.csv = fmt == REPORT_CSV;
         sink.p = &p;
+        sink.done = start;
         p.total = mc;
-        rc = tolmpi_size() > 1 ? tolmpi_trials(mcx, mc, block, take_trials, &sink, &sink.done)
-                               : local_trials(mcx, mc, block, &sink);
+        p.base = start;
+        rc = tolmpi_size() > 1
+                 ? tolmpi_trials(mcx, start, mc, block, take_trials, &sink, &sink.done)
+                 : local_trials(mcx, start, mc, block, &sink);
         if (p.shown)
             fputs("\r\033[K", stderr);
         if (rc == 1) {
@@ -566,6 +718,8 @@ static int tolerance_main(int argc, char **argv)
         r.done = sink.done;
         if (sink.crit && r.done > 0)
             sg_tol_statistics(sink.crit, r.done, &r.stats);
+    } else if (resume) {
+        r.done = mc;
     }
     if (stop_int)
         r.stopped = 1;
@@ -574,6 +728,20 @@ static int tolerance_main(int argc, char **argv)
             write_json(of.f, sys, &r, sens, mc > 0, sink.crit);
         else if (fmt == REPORT_TEXT)
             write_text(of.f, sys, &r, sens, mc > 0);
+        if (tab) {
+            rc = fclose(tab) != 0 ? errno : 0;
+            tab = NULL;
+            if (rc) {
+                cli_error("%s: %s", output, strerror(rc));
+                rc = CLI_EXIT_FILE;
+                goto restore;
+            }
+            if (resume && start < 0)
+                fprintf(stderr, "sagitta: tolerance: %s holds all %d trials already\n", output,
+                        mc);
+            rc = CLI_EXIT_OK;
+            goto restore;
+        }
         opened = 0;
         if ((rc = outfile_commit(&of))) {
             cli_error("%s: %s", output ? output : "standard output", strerror(rc));
@@ -586,6 +754,13 @@ restore:
     sigaction(SIGINT, &old, NULL);
     if (opened)
         outfile_abort(&of);
+    /* A table that grew in place keeps its whole trials. */
+    if (tab) {
+        fclose(tab);
+        if (rc != CLI_EXIT_OK && mc > 0)
+            fprintf(stderr, "sagitta: tolerance: %s keeps the trials written; --resume "
+                    "continues it\n", output);
+    }
 done:
     free(sink.crit);
     sg_tol_result_free(&r);

@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "cli.h"
@@ -82,7 +83,7 @@ static void captured_text(char *buf, int n)
     buf[got] = '\0';
 }
 
-int tolmpi_agree(int rc, int *skip)
+int tolmpi_agree(int rc, int *start)
 {
     int *all, k, first = -1, out = CLI_EXIT_OK;
     char text[1024];
@@ -113,9 +114,26 @@ int tolmpi_agree(int rc, int *skip)
         }
     }
     free(all);
-    if (skip)
-        MPI_Bcast(skip, 1, MPI_INT, 0, MPI_COMM_WORLD);
+    if (start)
+        MPI_Bcast(start, 1, MPI_INT, 0, MPI_COMM_WORLD);
     return out;
+}
+
+/* Waits for req, sleeping between tests: MPI's own wait spins a core,
+ * which on a machine with more ranks than cores (or a rank's threads on
+ * them) takes it from the trials; a trial lasts milliseconds. */
+static void wait_req(MPI_Request *req)
+{
+    struct timespec ts = {0, 200000};
+    int flag = 0;
+    for (;;) {
+        MPI_Test(req, &flag, MPI_STATUS_IGNORE);
+        if (flag)
+            return;
+        nanosleep(&ts, NULL);
+        if (ts.tv_nsec < 5000000)
+            ts.tv_nsec *= 2;
+    }
 }
 
 /* A block's message: [0] the rank's code (0, or a CLI exit code, the
@@ -132,7 +150,7 @@ static void pack(double *msg, int rc, int n, const sg_tol_value *v)
     }
 }
 
-static int worker(sg_tol_mc *m, int trials, int block, int nblock)
+static int worker(sg_tol_mc *m, int start, int trials, int block, int nblock)
 {
     size_t len = 2 + 2 * (size_t)block;
     double *msg[2];
@@ -143,7 +161,8 @@ static int worker(sg_tol_mc *m, int trials, int block, int nblock)
     msg[0] = malloc(len * sizeof(double));
     msg[1] = malloc(len * sizeof(double));
     for (b = mpi_rank; b < nblock; b += mpi_size) {
-        int first = b * block, n = trials - first < block ? trials - first : block, done = 0;
+        int first = start + b * block, done = 0;
+        int n = trials - first < block ? trials - first : block;
         if (!v || !msg[0] || !msg[1]) {
             cli_error("rank %d: out of memory", mpi_rank);
             rc = CLI_EXIT_INTERNAL;
@@ -157,7 +176,7 @@ static int worker(sg_tol_mc *m, int trials, int block, int nblock)
         /* The previous block must be taken before its buffer is reused
          * two blocks on; the synchronous send keeps this rank one block
          * ahead of rank 0 at most. */
-        MPI_Wait(&req, MPI_STATUS_IGNORE);
+        wait_req(&req);
         if (rc) {
             double head[2] = {rc, 0};
             MPI_Send(head, 2, MPI_DOUBLE, 0, TAG_BLOCK, MPI_COMM_WORLD);
@@ -169,7 +188,7 @@ static int worker(sg_tol_mc *m, int trials, int block, int nblock)
         MPI_Issend(msg[which], 2 + 2 * n, MPI_DOUBLE, 0, TAG_BLOCK, MPI_COMM_WORLD, &req);
         which ^= 1;
     }
-    MPI_Wait(&req, MPI_STATUS_IGNORE);
+    wait_req(&req);
     free(v);
     free(msg[0]);
     free(msg[1]);
@@ -180,16 +199,20 @@ static int worker(sg_tol_mc *m, int trials, int block, int nblock)
     return 0;
 }
 
-int tolmpi_trials(sg_tol_mc *m, int trials, int block, tolmpi_sink sink, void *ctx, int *done)
+int tolmpi_trials(sg_tol_mc *m, int start, int trials, int block, tolmpi_sink sink, void *ctx,
+                  int *done)
 {
-    int nblock = (trials + block - 1) / block, b, rc = 0;
+    int nblock = (trials - start + block - 1) / block, b, rc = 0;
     size_t len = 2 + 2 * (size_t)block;
     double *msg;
     sg_tol_value *v;
     char text[1024];
-    *done = 0;
+    *done = start;
     if (mpi_rank != 0)
-        return worker(m, trials, block, nblock);
+        return worker(m, start, trials, block, nblock);
+    /* Said on standard error, so a cluster's log shows the split. */
+    fprintf(stderr, "sagitta: tolerance: %d trials on %d processes (MPI), in blocks of %d\n",
+            trials - start, mpi_size, block);
     msg = malloc(len * sizeof *msg);
     v = calloc((size_t)block, sizeof *v);
     if (!msg || !v) {
@@ -197,8 +220,8 @@ int tolmpi_trials(sg_tol_mc *m, int trials, int block, tolmpi_sink sink, void *c
         rc = CLI_EXIT_INTERNAL;
     }
     for (b = 0; b < nblock && !rc; b++) {
-        int src = b % mpi_size, first = b * block, n = trials - first < block ? trials - first
-                                                                               : block;
+        int src = b % mpi_size, first = start + b * block;
+        int n = trials - first < block ? trials - first : block;
         int got = n, k;
         if (src == 0) {
             if (sg_tol_mc_run(m, first, n, v, &got) != SG_OK) {
@@ -208,8 +231,19 @@ int tolmpi_trials(sg_tol_mc *m, int trials, int block, tolmpi_sink sink, void *c
             }
         } else {
             MPI_Status st;
-            int count;
-            MPI_Recv(msg, (int)len, MPI_DOUBLE, src, TAG_BLOCK, MPI_COMM_WORLD, &st);
+            MPI_Request req;
+            int count, flag = 0;
+            struct timespec ts = {0, 200000};
+            MPI_Irecv(msg, (int)len, MPI_DOUBLE, src, TAG_BLOCK, MPI_COMM_WORLD, &req);
+            /* As wait_req, keeping the status. */
+            for (;;) {
+                MPI_Test(&req, &flag, &st);
+                if (flag)
+                    break;
+                nanosleep(&ts, NULL);
+                if (ts.tv_nsec < 5000000)
+                    ts.tv_nsec *= 2;
+            }
             MPI_Get_count(&st, MPI_DOUBLE, &count);
             if (msg[0] != 0) {
                 MPI_Recv(text, sizeof text, MPI_CHAR, src, TAG_TEXT, MPI_COMM_WORLD,
@@ -248,12 +282,12 @@ int tolmpi_trials(sg_tol_mc *m, int trials, int block, tolmpi_sink sink, void *c
 
 int tolmpi_end(int rc)
 {
-    int skip = 0;
+    int start = -1;
     if (!mpi_on)
         return rc;
     /* This rank ended before the others learnt whether to run the trials. */
     if (!agreed) {
-        int all = tolmpi_agree(rc, &skip);
+        int all = tolmpi_agree(rc, &start);
         if (rc == CLI_EXIT_OK)
             rc = all;
     }

@@ -44,16 +44,17 @@ int tolmpi_size(void)
     return 1;
 }
 
-int tolmpi_agree(int rc, int *skip)
+int tolmpi_agree(int rc, int *start)
 {
-    (void)skip;
+    (void)start;
     return rc;
 }
 
-int tolmpi_trials(sg_tol_mc *m, int trials, int block, tolmpi_sink sink, void *ctx, int *done)
+int tolmpi_trials(sg_tol_mc *m, int start, int trials, int block, tolmpi_sink sink, void *ctx,
+                  int *done)
 {
     /* tolmpi_size is 1: the caller runs the trials itself. */
-    (void)m, (void)trials, (void)block, (void)sink, (void)ctx;
+    (void)m, (void)start, (void)trials, (void)block, (void)sink, (void)ctx;
     *done = 0;
     return CLI_EXIT_INTERNAL;
 }

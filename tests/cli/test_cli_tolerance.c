@@ -8,6 +8,7 @@
  * writing the trials done, in order, marked stopped.
  */
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -300,6 +301,170 @@ static void interrupted(void **state)
     free(text);
 }
 
+/* Runs cmd through the shell; its exit code (128 + signal when killed). */
+static int shell(const char *cmd)
+{
+    int st = system(cmd);
+    return st == -1 ? -1 : WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+}
+
+/* Monte Carlo under mpirun with 3 processes (more than this machine's
+ * cores, so --oversubscribe; as root where CI runs as root) writes the
+ * bytes one process writes with one thread and with two, in CSV and
+ * JSON; the trials were split (rank 0's note).  A build without MPI
+ * refuses the launch instead, saying so, and writes nothing. */
+static void mpi_same_bytes(void **state)
+{
+    const char *d = doublet("m.json", TOL);
+    const char *ci = getenv("CI");
+    static const char *const fmts[2] = {"csv", "json"}, *const thr[2] = {"1", "2"};
+    char cmd[8192], *err, *a, *b;
+    ct_result r;
+    int k, rc;
+    (void)state;
+    if (shell("mpirun --version >/dev/null 2>&1") != 0) {
+        if (ci && ci[0])
+            fail_msg("mpirun is not installed (Debian openmpi-bin; tools/dev.sh installs it)");
+        print_message("# SKIP mpirun not installed (Debian openmpi-bin)\n");
+        return;
+    }
+    for (k = 0; k < 2; k++) {
+        const char *mout = ct_path(k ? "mpi.json" : "mpi.csv"), *merr = ct_path("mpi.err");
+        const char *one = ct_path(k ? "one.json" : "one.csv");
+        const char *two = ct_path(k ? "two.json" : "two.csv");
+        /* --threads 1: blocks of 8, so the 24 trials take 3 blocks, one a
+         * rank; --threads 2, blocks of 16. */
+        snprintf(cmd, sizeof cmd,
+                 "mpirun --oversubscribe --allow-run-as-root -np 3 '%s' tolerance '%s' "
+                 "--monte-carlo 24 --threads %s --format %s -o '%s' </dev/null >/dev/null "
+                 "2>'%s'",
+                 exe, d, thr[k], fmts[k], mout, merr);
+        rc = shell(cmd);
+        err = ct_read(merr);
+        if (rc != 0 && strstr(err, "built without MPI")) {
+            assert_null(fopen(mout, "r"));
+            free(err);
+            print_message("# SKIP this sagitta was built without MPI (-Dmpi=disabled or no "
+                          "libopenmpi-dev): the launch was refused\n");
+            return;
+        }
+        if (rc != 0)
+            fail_msg("mpirun exit %d: %s", rc, err);
+        if (!strstr(err, "24 trials on 3 processes (MPI)"))
+            fail_msg("no split of the trials reported: %s", err);
+        free(err);
+        ct_run(&r, "tolerance", d, "--monte-carlo", "24", "--threads", "1", "--format",
+               fmts[k], "-o", one, NULL);
+        assert_int_equal(r.code, 0);
+        ct_free(&r);
+        ct_run(&r, "tolerance", d, "--monte-carlo", "24", "--threads", "2", "--format",
+               fmts[k], "-o", two, NULL);
+        assert_int_equal(r.code, 0);
+        ct_free(&r);
+        a = ct_read(mout);
+        b = ct_read(one);
+        assert_string_equal(a, b);
+        free(b);
+        b = ct_read(two);
+        assert_string_equal(a, b);
+        free(a);
+        free(b);
+    }
+}
+
+/* The number of trial rows in text. */
+static int trial_rows(const char *text)
+{
+    int n = 0;
+    const char *p = text;
+    for (; (p = strstr(p, "\ntrial,")) != NULL; p++)
+        n++;
+    return n;
+}
+
+/* A Monte Carlo table killed (SIGKILL) while it grows, its last line torn
+ * as a write cut short leaves it, then --resume: the file an
+ * uninterrupted run writes, byte for byte.  --resume refuses a table of
+ * another seed (its last trial computed again differs) and leaves it as
+ * it was, and wants -o FILE in CSV. */
+static void resume_after_kill(void **state)
+{
+    const char *d = doublet("k.json", TOL), *full = ct_path("full.csv");
+    const char *part = ct_path("part.csv");
+    char *a, *b, torn[64];
+    ct_result r;
+    pid_t pid;
+    int st, k, rows = 0;
+    FILE *f;
+    (void)state;
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--threads", "1", "--format", "csv",
+           "-o", full, NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        int null = open("/dev/null", O_WRONLY);
+        dup2(null, 2);
+        execl(exe, exe, "tolerance", d, "--monte-carlo", "40", "--threads", "1", "--format",
+              "csv", "-o", part, (char *)NULL);
+        _exit(127);
+    }
+    /* Killed once a block of trials is in the file. */
+    for (k = 0; k < 6000 && rows == 0; k++) {
+        struct timespec ts = {0, 20000000};
+        nanosleep(&ts, NULL);
+        if ((f = fopen(part, "r")) != NULL) {
+            fclose(f);
+            a = ct_read(part);
+            rows = trial_rows(a);
+            free(a);
+        }
+    }
+    kill(pid, SIGKILL);
+    waitpid(pid, &st, 0);
+    a = ct_read(part);
+    rows = trial_rows(a);
+    free(a);
+    print_message("# killed after %d of 40 trials\n", rows);
+    assert_true(rows > 0);
+    if (rows < 40) {
+        f = fopen(part, "a");
+        assert_non_null(f);
+        snprintf(torn, sizeof torn, "trial,%d,,,,,0.0", rows + 1);
+        fputs(torn, f);
+        fclose(f);
+    }
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--threads", "2", "--format", "csv",
+           "-o", part, "--resume", NULL);
+    if (r.code != 0)
+        fail_msg("resume: exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    a = ct_read(full);
+    b = ct_read(part);
+    assert_string_equal(a, b);
+    free(b);
+    /* Another seed's trials are refused, the file untouched. */
+    ct_run(&r, "tolerance", d, "--monte-carlo", "41", "--seed", "6", "--format", "csv", "-o",
+           part, "--resume", NULL);
+    assert_int_not_equal(r.code, 0);
+    assert_non_null(strstr(r.err, "trial 40 is not this run's"));
+    ct_free(&r);
+    b = ct_read(part);
+    assert_string_equal(a, b);
+    free(a);
+    free(b);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--format", "json", "-o", part,
+           "--resume", NULL);
+    assert_int_equal(r.code, 2);
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--format", "csv", "-o",
+           ct_path("none.csv"), "--resume", NULL);
+    assert_int_equal(r.code, 3);
+    ct_free(&r);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -309,6 +474,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(threads_same_bytes),
         cmocka_unit_test(refusals),
         cmocka_unit_test(interrupted),
+        cmocka_unit_test(mpi_same_bytes),
+        cmocka_unit_test(resume_after_kill),
     };
     int rc;
     ct_init(argc, argv);
