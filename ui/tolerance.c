@@ -13,13 +13,14 @@
 #include "cli.h"
 #include "outfile.h"
 #include "report.h"
+#include "tolh5.h"
 #include "tolmpi.h"
 
 static void tolerance_help(FILE *f)
 {
     fputs(
 "Usage: sagitta tolerance DESIGN.json [--sensitivity] [--monte-carlo N] [--seed S]\n"
-"                         [--threads N] [--method M] [--format text|json|csv]\n"
+"                         [--threads N] [--method M] [--format text|json|csv|hdf5]\n"
 "                         [-o FILE] [--force] [--resume]\n"
 "Tolerance the design (its \"tolerances\" object): each operand at its min\n"
 "and max with the compensators re-optimized (sensitivity), and N systems\n"
@@ -35,7 +36,8 @@ static void tolerance_help(FILE *f)
 "  --threads N              systems at once (default: every core)\n"
 "  --method M               the criterion's traces: precise (default), classic, mpfr\n"
 "  --no-compensators        leave the compensators at their nominal values\n"
-"  --format FMT             text (default), json or csv\n"
+"  --format FMT             text (default), json, csv or hdf5 (the Monte Carlo\n"
+"                           table, with -o FILE)\n"
 "  -o, --output FILE        write the report to FILE (not over an existing file\n"
 "                           without --force)\n"
 "  --force                  overwrite FILE\n"
@@ -43,6 +45,9 @@ static void tolerance_help(FILE *f)
 "                           last whole trial\n"
 "  -h, --help               show this help\n", f);
 }
+
+/* --format hdf5, beside report.h's formats. */
+#define FMT_HDF5 1000
 
 enum { TO_HELP = 1, TO_SENS, TO_MC, TO_SEED, TO_THREADS, TO_METHOD, TO_NOCOMP, TO_FORMAT,
        TO_OUTPUT, TO_FORCE, TO_RESUME };
@@ -158,6 +163,20 @@ static void print_num(FILE *f, double v)
         fputs("null", f);
     else
         fprintf(f, "%.17g", v);
+}
+
+static const char *crit_key(const sg_system *sys)
+{
+    return sys->tol.criterion == SG_TOLC_MERIT            ? "merit"
+           : sys->tol.criterion == SG_TOLC_RMS_WAVEFRONT ? "rms_wavefront"
+                                                          : "rms_spot";
+}
+
+static const char *dist_key(const sg_system *sys)
+{
+    return sys->tol.distribution == SG_TOLD_UNIFORM     ? "uniform"
+           : sys->tol.distribution == SG_TOLD_PARABOLIC ? "parabolic"
+                                                        : "normal";
 }
 
 static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc,
@@ -346,7 +365,8 @@ static void write_text(FILE *f, const sg_system *sys, const sg_tol_result *r, in
 typedef struct mc_sink {
     FILE *f;
     int csv;
-    double *crit;   /* the criteria (NaN: failed), for JSON and text; NULL for CSV */
+    double *crit;   /* the criteria (NaN: failed), for the statistics; NULL for CSV */
+    tolh5 *h5;
     int done;
     prog *p;
 } mc_sink;
@@ -360,6 +380,13 @@ static int take_trials(void *ctx, int first, int n, const sg_tol_value *v)
         /* A killed run keeps the rows written (--resume). */
         if (fflush(s->f) != 0 || ferror(s->f)) {
             cli_error("writing the trials: %s", strerror(errno));
+            return CLI_EXIT_FILE;
+        }
+    }
+    if (s->h5) {
+        char err[512];
+        if (tolh5_write(s->h5, first, n, v, err, sizeof err) != 0) {
+            cli_error("writing the trials: %s", err);
             return CLI_EXIT_FILE;
         }
     }
@@ -523,8 +550,10 @@ static int tolerance_main(int argc, char **argv)
     outfile of;
     mc_sink sink;
     FILE *tab = NULL; /* the Monte Carlo table, written in place */
+    tolh5 *h5 = NULL;
     int inplace;
     sg_tol_opts_init(&o);
+    memset(&of, 0, sizeof of);
     memset(&r, 0, sizeof r);
     memset(&sink, 0, sizeof sink);
     cli_iter_init(&it, "tolerance", argc, argv);
@@ -571,7 +600,9 @@ static int tolerance_main(int argc, char **argv)
             o.compensate = 0;
             break;
         case TO_FORMAT:
-            if (cli_format_value(val, 1, &fmt))
+            if (strcmp(val, "hdf5") == 0)
+                fmt = FMT_HDF5;
+            else if (cli_format_value(val, 1, &fmt))
                 return CLI_EXIT_USAGE;
             break;
         case TO_OUTPUT:
@@ -589,6 +620,8 @@ static int tolerance_main(int argc, char **argv)
     }
     if (!design)
         return cli_usage_error("tolerance", "missing DESIGN.json");
+    if (fmt == FMT_HDF5 && (!output || strcmp(output, "-") == 0))
+        return cli_usage_error("tolerance", "--format hdf5 needs -o FILE.h5");
     if (resume && (!output || strcmp(output, "-") == 0 || fmt != REPORT_CSV))
         return cli_usage_error("tolerance", "--resume continues a CSV file: give -o FILE and "
                                "--format csv");
@@ -656,6 +689,11 @@ static int tolerance_main(int argc, char **argv)
          * time, so a killed run keeps its trials (--resume). */
         inplace = fmt == REPORT_CSV && mc > 0 && !r.stopped && output &&
                   strcmp(output, "-") != 0;
+        if (fmt == FMT_HDF5 && mc == 0) {
+            rc = cli_usage_error("tolerance", "--format hdf5 writes the Monte Carlo table: "
+                                 "give --monte-carlo N");
+            goto restore;
+        }
         if (resume && mc == 0) {
             rc = cli_usage_error("tolerance", "--resume: no Monte Carlo trials to continue");
             goto restore;
@@ -668,6 +706,14 @@ static int tolerance_main(int argc, char **argv)
         if (resume) {
             if ((rc = resume_open(output, sys, &r, sens, mcx, mc, &tab, &start)) != 0)
                 goto restore;
+        } else if (fmt == FMT_HDF5) {
+            char err[512];
+            if (!(h5 = tolh5_open(output, crit_key(sys), dist_key(sys), r.nominal.criterion,
+                                  (uint64_t)seed, mc, err, sizeof err))) {
+                cli_error("%s: %s", output, err);
+                rc = CLI_EXIT_FILE;
+                goto restore;
+            }
         } else if (inplace) {
             if (!(tab = fopen(output, "w"))) {
                 cli_error("%s: %s", output, strerror(errno));
@@ -700,6 +746,7 @@ static int tolerance_main(int argc, char **argv)
         block = 8 * (nthreads > 0 ? nthreads : 1);
         sink.f = rank == 0 ? (tab ? tab : of.f) : NULL;
         sink.csv = fmt == REPORT_CSV;
+        sink.h5 = h5;
         sink.p = &p;
         sink.done = start;
         p.total = mc;
@@ -723,6 +770,18 @@ static int tolerance_main(int argc, char **argv)
     }
     if (stop_int)
         r.stopped = 1;
+    if (rank == 0 && h5) {
+        char err[512];
+        rc = tolh5_close(h5, r.done, r.stopped, r.done > 0 ? &r.stats : NULL, err, sizeof err);
+        h5 = NULL;
+        if (rc) {
+            cli_error("%s: %s", output, err);
+            rc = CLI_EXIT_FILE;
+            goto restore;
+        }
+        rc = CLI_EXIT_OK;
+        goto restore;
+    }
     if (rank == 0) {
         if (fmt == REPORT_JSON)
             write_json(of.f, sys, &r, sens, mc > 0, sink.crit);
@@ -754,6 +813,7 @@ restore:
     sigaction(SIGINT, &old, NULL);
     if (opened)
         outfile_abort(&of);
+    tolh5_abort(h5);
     /* A table that grew in place keeps its whole trials. */
     if (tab) {
         fclose(tab);
