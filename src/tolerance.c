@@ -884,6 +884,7 @@ struct sg_tol_mc {
     const sg_catalog *cat;
     sg_tol_opts o;
     uint64_t seed;
+    double c0;              /* the compensated nominal's criterion */
 };
 
 int sg_tol_mc_open(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *o,
@@ -905,6 +906,7 @@ int sg_tol_mc_open(const sg_system *sys, const sg_catalog *cat, const sg_tol_opt
     }
     m->cat = cat;
     m->seed = seed;
+    m->c0 = nv.criterion;
     if (nominal)
         *nominal = nv;
     *out = m;
@@ -937,6 +939,172 @@ int sg_tol_mc_run(sg_tol_mc *m, int first, int n, sg_tol_value *out, int *done)
         ;
     *done = k;
     free(c.finished);
+    return SG_OK;
+}
+
+int sg_tol_mc_system(sg_tol_mc *m, int trial, sg_system *out, sg_tol_value *v, sg_diag *d)
+{
+    const sg_tolerances *t = &m->nom->tol;
+    double delta[SG_MAX_TOL_OPERANDS];
+    int *map = malloc((size_t)m->nom->nsurf * sizeof *map), k, rc;
+    if (!map)
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    memset(delta, 0, sizeof delta);
+    /* As run_job draws and builds trial's system. */
+    for (k = 0; k < t->nop; k++)
+        delta[k] = sg_tol_draw(m->seed, (uint64_t)trial, k, t->distribution, t->op[k].min,
+                               t->op[k].max);
+    rc = sg_tol_apply(m->nom, m->cat, delta, out, map, d);
+    if (rc == SG_OK)
+        rc = sg_tol_compensate(out, m->ref, map, m->cat, &m->o, v, d);
+    free(map);
+    return rc;
+}
+
+/* The change of the compensated criterion from the nominal's with
+ * operand k alone at x. */
+static int inv_change(sg_tol_mc *m, sg_system *work, int *map, int k, double x, double c0,
+                      double *change, sg_tol_value *v)
+{
+    double delta[SG_MAX_TOL_OPERANDS];
+    sg_diag d;
+    int rc;
+    memset(delta, 0, sizeof delta);
+    delta[k] = x;
+    sg_diag_clear(&d);
+    rc = sg_tol_apply(m->nom, m->cat, delta, work, map, &d);
+    if (rc == SG_OK)
+        rc = sg_tol_compensate(work, m->ref, map, m->cat, &m->o, v, &d);
+    if (rc == SG_OK && isnan(v->criterion))
+        rc = SG_ERANGE;
+    *change = rc == SG_OK ? v->criterion - c0 : NAN;
+    return rc;
+}
+
+/* One side of operand k: from 0 (change 0) outward along dir, the
+ * bracket [a, b] with change(a) < limit <= change(b) found by doubling
+ * (or halving) from x0, then the Illinois method (regula falsi with the
+ * stuck end's value halved) to a relative width of 1e-12. */
+static void inv_side(sg_tol_mc *m, sg_system *work, int *map, int k, double x0, double c0,
+                     double limit, sg_tol_inv_side *out)
+{
+    double a = 0.0, fa = -limit, b = x0, fb, x, fx;
+    sg_tol_value v;
+    int it, side = 0, rc;
+    memset(out, 0, sizeof *out);
+    out->limit = NAN;
+    out->criterion = NAN;
+    if ((rc = inv_change(m, work, map, k, b, c0, &fb, &v)) != SG_OK) {
+        out->status = rc;
+        return;
+    }
+    fb -= limit;
+    /* Out until the change reaches the limit, in until it does not. */
+    for (it = 0; fb < 0 && it < 40; it++) {
+        a = b;
+        fa = fb;
+        b *= 2.0;
+        if ((rc = inv_change(m, work, map, k, b, c0, &fb, &v)) != SG_OK) {
+            out->status = rc;
+            return;
+        }
+        fb -= limit;
+    }
+    if (fb < 0) {
+        out->status = SG_ERANGE;
+        return;
+    }
+    for (it = 0; a == 0.0 && it < 60; it++) {
+        x = 0.5 * b;
+        if ((rc = inv_change(m, work, map, k, x, c0, &fx, &v)) != SG_OK) {
+            out->status = rc;
+            return;
+        }
+        fx -= limit;
+        if (fx >= 0) {
+            b = x;
+            fb = fx;
+        } else {
+            a = x;
+            fa = fx;
+        }
+    }
+    for (it = 0; it < 200 && fabs(b - a) > 1e-12 * fabs(b); it++) {
+        x = (a * fb - b * fa) / (fb - fa);
+        if (!(x > fmin(a, b) && x < fmax(a, b)))
+            x = 0.5 * (a + b);
+        if ((rc = inv_change(m, work, map, k, x, c0, &fx, &v)) != SG_OK) {
+            out->status = rc;
+            return;
+        }
+        fx -= limit;
+        if (fx == 0) {
+            a = b = x;
+            fb = 0;
+            break;
+        }
+        if (fx > 0) {
+            b = x;
+            fb = fx;
+            if (side == 1)
+                fa *= 0.5;
+            side = 1;
+        } else {
+            a = x;
+            fa = fx;
+            if (side == -1)
+                fb *= 0.5;
+            side = -1;
+        }
+    }
+    /* The end where the change has reached the limit. */
+    out->limit = b;
+    if ((rc = inv_change(m, work, map, k, b, c0, &fx, &v)) != SG_OK) {
+        out->status = rc;
+        return;
+    }
+    out->criterion = v.criterion;
+    out->status = SG_OK;
+}
+
+int sg_tol_inverse(sg_tol_mc *m, double limit, sg_tol_inv *out, int *done, sg_diag *d)
+{
+    const sg_tolerances *t = &m->nom->tol;
+    sg_system *work = sg_system_new();
+    int *map = malloc((size_t)m->nom->nsurf * sizeof *map), k;
+    *done = 0;
+    if (!work || !map) {
+        sg_system_free(work);
+        free(map);
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    }
+    if (!(limit > 0) || !isfinite(limit)) {
+        sg_system_free(work);
+        free(map);
+        return sg_diag_set(d, SG_ERANGE, "the inverse limit %g is not a positive number",
+                           limit);
+    }
+    for (k = 0; k < t->nop; k++) {
+        const sg_tol_operand *op = &t->op[k];
+        double span = fmax(fabs(op->min), fabs(op->max));
+        /* Each side starts at the operand's own limit on it (or the other
+         * side's size when that is 0). */
+        double hi = op->max > 0 ? op->max : span, lo = op->min < 0 ? op->min : -span;
+        if (m->o.stop && *m->o.stop)
+            break;
+        if (span == 0) {
+            memset(&out[k], 0, sizeof out[k]);
+            out[k].at_min.status = out[k].at_max.status = SG_ERANGE;
+            out[k].at_min.limit = out[k].at_max.limit = NAN;
+            out[k].at_min.criterion = out[k].at_max.criterion = NAN;
+            continue;
+        }
+        inv_side(m, work, map, k, lo, m->c0, limit, &out[k].at_min);
+        inv_side(m, work, map, k, hi, m->c0, limit, &out[k].at_max);
+    }
+    sg_system_free(work);
+    free(map);
+    *done = k;
     return SG_OK;
 }
 

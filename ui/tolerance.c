@@ -21,7 +21,7 @@ static void tolerance_help(FILE *f)
     fputs(
 "Usage: sagitta tolerance DESIGN.json [--sensitivity] [--monte-carlo N] [--seed S]\n"
 "                         [--threads N] [--method M] [--format text|json|csv|hdf5]\n"
-"                         [-o FILE] [--force] [--resume]\n"
+"                         [-o FILE] [--force] [--resume] [--save-worst K]\n"
 "Tolerance the design (its \"tolerances\" object): each operand at its min\n"
 "and max with the compensators re-optimized (sensitivity), and N systems\n"
 "with every operand drawn (Monte Carlo), on every core.  Without\n"
@@ -43,14 +43,19 @@ static void tolerance_help(FILE *f)
 "  --force                  overwrite FILE\n"
 "  --resume                 continue the Monte Carlo table in FILE (CSV) from its\n"
 "                           last whole trial\n"
+"  --save-worst K           write the K worst Monte Carlo systems as\n"
+"                           DESIGN-worst1.json ... (not over files without --force)\n"
 "  -h, --help               show this help\n", f);
 }
+
+/* --save-worst's largest K. */
+#define MAX_WORST 100
 
 /* --format hdf5, beside report.h's formats. */
 #define FMT_HDF5 1000
 
 enum { TO_HELP = 1, TO_SENS, TO_MC, TO_SEED, TO_THREADS, TO_METHOD, TO_NOCOMP, TO_FORMAT,
-       TO_OUTPUT, TO_FORCE, TO_RESUME };
+       TO_OUTPUT, TO_FORCE, TO_RESUME, TO_WORST };
 static const cli_opt tolerance_opts[] = {
     { "--help", 'h', 0, TO_HELP },
     { "--sensitivity", 0, 0, TO_SENS },
@@ -63,6 +68,7 @@ static const cli_opt tolerance_opts[] = {
     { "--output", 'o', 1, TO_OUTPUT },
     { "--force", 0, 0, TO_FORCE },
     { "--resume", 0, 0, TO_RESUME },
+    { "--save-worst", 0, 1, TO_WORST },
     { NULL, 0, 0, 0 }
 };
 
@@ -369,6 +375,9 @@ typedef struct mc_sink {
     tolh5 *h5;
     int done;
     prog *p;
+    /* The worst trials (--save-worst), worst first, ties in trial order. */
+    int kworst, nworst, worst_trial[MAX_WORST];
+    double worst_crit[MAX_WORST];
 } mc_sink;
 
 static int take_trials(void *ctx, int first, int n, const sg_tol_value *v)
@@ -390,12 +399,68 @@ static int take_trials(void *ctx, int first, int n, const sg_tol_value *v)
             return CLI_EXIT_FILE;
         }
     }
+    for (k = 0; k < n && s->kworst; k++) {
+        int j;
+        if (v[k].status != SG_OK || isnan(v[k].criterion) ||
+            (s->nworst == s->kworst && !(v[k].criterion > s->worst_crit[s->nworst - 1])))
+            continue;
+        j = s->nworst < s->kworst ? s->nworst++ : s->nworst - 1;
+        for (; j > 0 && v[k].criterion > s->worst_crit[j - 1]; j--) {
+            s->worst_crit[j] = s->worst_crit[j - 1];
+            s->worst_trial[j] = s->worst_trial[j - 1];
+        }
+        s->worst_crit[j] = v[k].criterion;
+        s->worst_trial[j] = first + k;
+    }
     if (s->crit)
         for (k = 0; k < n; k++)
             s->crit[first + k] = v[k].status == SG_OK ? v[k].criterion : NAN;
     s->done = first + n;
     s->p->base = s->done;
     return 0;
+}
+
+/* DESIGN-worstN.json beside DESIGN (its .json, if any, replaced), N = k + 1. */
+static void worst_path(const char *design, int k, char *buf, size_t n)
+{
+    size_t len = strlen(design);
+    if (len > 5 && strcmp(design + len - 5, ".json") == 0)
+        len -= 5;
+    snprintf(buf, n, "%.*s-worst%d.json", (int)len, design, k + 1);
+}
+
+/* --save-worst: each of the worst trials' systems built again, perturbed
+ * and compensated, and saved. */
+static int save_worst(const char *design, sg_tol_mc *m, const mc_sink *s)
+{
+    char path[4096];
+    sg_system *w;
+    sg_tol_value v;
+    sg_diag d;
+    int k, rc;
+    for (k = 0; k < s->nworst; k++) {
+        if (!(w = sg_system_new())) {
+            cli_error("out of memory");
+            return CLI_EXIT_INTERNAL;
+        }
+        worst_path(design, k, path, sizeof path);
+        sg_diag_clear(&d);
+        rc = sg_tol_mc_system(m, s->worst_trial[k], w, &v, &d);
+        /* The tolerance rows name the nominal's surfaces, which the
+         * element operands' coordinate breaks renumber: the built lens is
+         * saved without them. */
+        memset(&w->tol, 0, sizeof w->tol);
+        if (rc == SG_OK)
+            rc = sg_design_save(w, path, &d);
+        sg_system_free(w);
+        if (rc != SG_OK) {
+            cli_print_diag(path, &d, rc);
+            return CLI_EXIT_FILE;
+        }
+        fprintf(stderr, "sagitta: tolerance: %s: trial %d, criterion %.10g\n", path,
+                s->worst_trial[k] + 1, s->worst_crit[k]);
+    }
+    return CLI_EXIT_OK;
 }
 
 /* The trials on this process alone, in blocks as the ranks take them. */
@@ -536,7 +601,9 @@ static int tolerance_main(int argc, char **argv)
     cli_iter it;
     const char *val, *design = NULL, *output = NULL;
     int id, rc, force = 0, sens = 0, mc = -1, fmt = REPORT_TEXT, seed_given = 0, m;
-    int rank = tolmpi_rank(), block, nthreads, opened = 0, start = 0, resume = 0;
+    int rank = tolmpi_rank(), block, nthreads, opened = 0, start = 0, resume = 0, nworst = 0;
+    int k;
+    char wpath[4096];
     long long seed = 1;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
@@ -614,6 +681,10 @@ static int tolerance_main(int argc, char **argv)
         case TO_RESUME:
             resume = 1;
             break;
+        case TO_WORST:
+            if (cli_int_value("--save-worst", val, 1, MAX_WORST, &nworst))
+                return CLI_EXIT_USAGE;
+            break;
         default:
             return -id;
         }
@@ -628,6 +699,15 @@ static int tolerance_main(int argc, char **argv)
     if (rank == 0 && output && strcmp(output, "-") != 0 && !force && !resume &&
         stat(output, &st) == 0)
         return cli_usage_error("tolerance", "%s exists; use --force to overwrite it", output);
+    if (nworst && resume)
+        return cli_usage_error("tolerance", "--save-worst needs every trial: not with --resume");
+    /* The worst systems' files are refused before the run, not after. */
+    for (k = 0; rank == 0 && k < nworst; k++) {
+        worst_path(design, k, wpath, sizeof wpath);
+        if (!force && stat(wpath, &st) == 0)
+            return cli_usage_error("tolerance", "%s exists; use --force to overwrite it",
+                                   wpath);
+    }
     rc = cli_load_design(design, &cat, &sys);
     if (rc != CLI_EXIT_OK)
         return rc;
@@ -694,6 +774,11 @@ static int tolerance_main(int argc, char **argv)
                                  "give --monte-carlo N");
             goto restore;
         }
+        if (nworst && mc == 0) {
+            rc = cli_usage_error("tolerance", "--save-worst keeps Monte Carlo systems: give "
+                                 "--monte-carlo N");
+            goto restore;
+        }
         if (resume && mc == 0) {
             rc = cli_usage_error("tolerance", "--resume: no Monte Carlo trials to continue");
             goto restore;
@@ -747,6 +832,7 @@ static int tolerance_main(int argc, char **argv)
         sink.f = rank == 0 ? (tab ? tab : of.f) : NULL;
         sink.csv = fmt == REPORT_CSV;
         sink.h5 = h5;
+        sink.kworst = rank == 0 ? nworst : 0;
         sink.p = &p;
         sink.done = start;
         p.total = mc;
@@ -770,6 +856,8 @@ static int tolerance_main(int argc, char **argv)
     }
     if (stop_int)
         r.stopped = 1;
+    if (rank == 0 && (rc = save_worst(design, mcx, &sink)) != CLI_EXIT_OK)
+        goto restore;
     if (rank == 0 && h5) {
         char err[512];
         rc = tolh5_close(h5, r.done, r.stopped, r.done > 0 ? &r.stats : NULL, err, sizeof err);

@@ -575,6 +575,79 @@ static void resume_after_kill(void **state)
     ct_free(&r);
 }
 
+/* The doublet's criterion by sagitta spot (per-field RMS about the
+ * centroid, density 4) combined with the field weights 1, 2, 3. */
+static double spot_criterion(const char *design)
+{
+    const double w[3] = {1, 2, 3};
+    double acc = 0.0, wsum = 0.0;
+    ct_result r;
+    cJSON *root, *fields;
+    int k;
+    ct_run(&r, "spot", design, "--reference", "centroid", "--density", "4", "--format", "json",
+           NULL);
+    if (r.code != 0)
+        fail_msg("spot %s: exit %d: %s", design, r.code, r.err);
+    root = cJSON_Parse(r.out);
+    assert_non_null(root);
+    fields = cJSON_GetObjectItem(root, "fields");
+    assert_int_equal(cJSON_GetArraySize(fields), 3);
+    for (k = 0; k < 3; k++) {
+        double c = num(cJSON_GetArrayItem(fields, k), "rms");
+        acc += w[k] * c * c;
+        wsum += w[k];
+    }
+    cJSON_Delete(root);
+    ct_free(&r);
+    return sqrt(acc / wsum);
+}
+
+/* --save-worst 2: the two largest criteria of the CSV (sorted here), and
+ * sagitta spot on each saved design (a perturbed, compensated lens)
+ * gives that criterion; the files are not overwritten without --force,
+ * which the run refuses before it starts. */
+static void save_worst(void **state)
+{
+    const char *d = doublet("s.json", TOL), *w1 = ct_path("s-worst1.json");
+    const char *w2 = ct_path("s-worst2.json"), *csv = ct_path("s.csv");
+    double c[10], top[2] = {-1, -1};
+    int k, it[2] = {-1, -1};
+    ct_result r;
+    char *text, *again;
+    (void)state;
+    ct_run(&r, "tolerance", d, "--monte-carlo", "10", "--format", "csv", "--save-worst", "2",
+           "-o", csv, NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    text = ct_read(csv);
+    for (k = 0; k < 10; k++) {
+        c[k] = ct_csv_num(text, k + 1, "criterion_min");
+        if (c[k] > top[0]) {
+            top[1] = top[0];
+            it[1] = it[0];
+            top[0] = c[k];
+            it[0] = k;
+        } else if (c[k] > top[1]) {
+            top[1] = c[k];
+            it[1] = k;
+        }
+    }
+    free(text);
+    print_message("# worst trials %d and %d\n", it[0] + 1, it[1] + 1);
+    ct_close(spot_criterion(w1), top[0], 1e-13, 0, "worst 1");
+    ct_close(spot_criterion(w2), top[1], 1e-13, 0, "worst 2");
+    text = ct_read(w1);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "10", "--save-worst", "1", NULL);
+    assert_int_equal(r.code, 2);
+    assert_non_null(strstr(r.err, "exists"));
+    ct_free(&r);
+    again = ct_read(w1);
+    assert_string_equal(text, again);
+    free(text);
+    free(again);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -587,6 +660,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(mpi_same_bytes),
         cmocka_unit_test(resume_after_kill),
         cmocka_unit_test(hdf5_table),
+        cmocka_unit_test(save_worst),
     };
     int rc;
     ct_init(argc, argv);
