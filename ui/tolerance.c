@@ -22,6 +22,7 @@ static void tolerance_help(FILE *f)
 "Usage: sagitta tolerance DESIGN.json [--sensitivity] [--monte-carlo N] [--seed S]\n"
 "                         [--threads N] [--method M] [--format text|json|csv|hdf5]\n"
 "                         [-o FILE] [--force] [--resume] [--save-worst K]\n"
+"                         [--inverse LIMIT]\n"
 "Tolerance the design (its \"tolerances\" object): each operand at its min\n"
 "and max with the compensators re-optimized (sensitivity), and N systems\n"
 "with every operand drawn (Monte Carlo), on every core.  Without\n"
@@ -31,6 +32,8 @@ static void tolerance_help(FILE *f)
 "\n"
 "Options:\n"
 "  --sensitivity            each operand at its min and max\n"
+"  --inverse LIMIT          each operand's changes at which the criterion grows\n"
+"                           by LIMIT (inverse sensitivity)\n"
 "  --monte-carlo N          N trials (0: none)\n"
 "  --seed S                 the trials' seed (default: the design's, else 1)\n"
 "  --threads N              systems at once (default: every core)\n"
@@ -48,6 +51,15 @@ static void tolerance_help(FILE *f)
 "  -h, --help               show this help\n", f);
 }
 
+/* --inverse's rows: n of them done, at limit. */
+typedef struct inv_out {
+    sg_tol_inv *v;
+    int n;
+    double limit;
+} inv_out;
+/* This run's, for the writers (NULL: not asked). */
+static const inv_out *inv_report;
+
 /* --save-worst's largest K. */
 #define MAX_WORST 100
 
@@ -55,7 +67,7 @@ static void tolerance_help(FILE *f)
 #define FMT_HDF5 1000
 
 enum { TO_HELP = 1, TO_SENS, TO_MC, TO_SEED, TO_THREADS, TO_METHOD, TO_NOCOMP, TO_FORMAT,
-       TO_OUTPUT, TO_FORCE, TO_RESUME, TO_WORST };
+       TO_OUTPUT, TO_FORCE, TO_RESUME, TO_WORST, TO_INVERSE };
 static const cli_opt tolerance_opts[] = {
     { "--help", 'h', 0, TO_HELP },
     { "--sensitivity", 0, 0, TO_SENS },
@@ -69,6 +81,7 @@ static const cli_opt tolerance_opts[] = {
     { "--force", 0, 0, TO_FORCE },
     { "--resume", 0, 0, TO_RESUME },
     { "--save-worst", 0, 1, TO_WORST },
+    { "--inverse", 0, 1, TO_INVERSE },
     { NULL, 0, 0, 0 }
 };
 
@@ -239,6 +252,30 @@ static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, in
         }
         fprintf(f, "%s],\n\"rss_change\": %.17g", r->nsens ? "\n" : "", r->rss);
     }
+    if (inv_report) {
+        fprintf(f, ",\n\"inverse\": {\"limit\": %.17g, \"rows\": [", inv_report->limit);
+        for (k = 0; k < inv_report->n; k++) {
+            const sg_tol_operand *op = &sys->tol.op[k];
+            const sg_tol_inv *v = &inv_report->v[k];
+            fprintf(f, "%s\n  {\"row\": %d, \"type\": \"%s\", ", k ? "," : "", k + 1,
+                    sg_tol_name(op->type));
+            if (op->type >= SG_TOL_TEDX && op->type <= SG_TOL_TETZ)
+                fprintf(f, "\"first\": %d, \"last\": %d", op->surface, op->last);
+            else
+                fprintf(f, "\"surface\": %d", op->surface);
+            fputs(", \"min\": ", f);
+            print_num(f, v->at_min.limit);
+            fputs(", \"max\": ", f);
+            print_num(f, v->at_max.limit);
+            fputs(", \"criterion_min\": ", f);
+            print_num(f, v->at_min.criterion);
+            fputs(", \"criterion_max\": ", f);
+            print_num(f, v->at_max.criterion);
+            fprintf(f, ", \"status_min\": \"%s\", \"status_max\": \"%s\"}",
+                    status_text(v->at_min.status), status_text(v->at_max.status));
+        }
+        fprintf(f, "%s]}", inv_report->n ? "\n" : "");
+    }
     if (mc) {
         fprintf(f, ",\n\"monte_carlo\": {\"trials\": %d, \"done\": %d, \"seed\": %llu, "
                 "\"distribution\": \"%s\", \"criteria\": [", r->trials, r->done,
@@ -285,6 +322,15 @@ static void write_csv(FILE *f, const sg_system *sys, const sg_tol_result *r, int
                     s->at_max.criterion, status_text(s->at_min.status),
                     status_text(s->at_max.status));
         }
+    for (k = 0; inv_report && k < inv_report->n; k++) {
+        const sg_tol_operand *op = &sys->tol.op[k];
+        const sg_tol_inv *v = &inv_report->v[k];
+        op_place(op, place, sizeof place);
+        fprintf(f, "inverse,%d,%s,%s,%.17g,%.17g,%.17g,%.17g,%s,%s\n", k + 1,
+                sg_tol_name(op->type), place, v->at_min.limit, v->at_max.limit,
+                v->at_min.criterion, v->at_max.criterion, status_text(v->at_min.status),
+                status_text(v->at_max.status));
+    }
 }
 
 /* Trials first + 1 .. first + n as the CSV's rows. */
@@ -348,6 +394,30 @@ static void write_text(FILE *f, const sg_system *sys, const sg_tol_result *r, in
         }
         fprintf(f, "\nEstimated change (RSS): %.6g; estimated criterion %.10g\n", r->rss,
                 r->nominal.criterion + r->rss);
+    }
+    if (inv_report) {
+        fprintf(f, "\nInverse sensitivity (the changes at which the criterion grows by %.6g):\n",
+                inv_report->limit);
+        fprintf(f, "%4s %-5s %-14s %16s %16s %16s %16s\n", "Row", "Type", "Surface", "Min",
+                "Max", "Criterion(min)", "Criterion(max)");
+        for (k = 0; k < inv_report->n; k++) {
+            const sg_tol_operand *op = &sys->tol.op[k];
+            const sg_tol_inv_side *sd[2] = {&inv_report->v[k].at_min, &inv_report->v[k].at_max};
+            op_place(op, place, sizeof place);
+            fprintf(f, "%4d %-5s %-14s", k + 1, sg_tol_name(op->type), place);
+            for (j = 0; j < 2; j++)
+                if (sd[j]->status == SG_OK)
+                    fprintf(f, " %16.10g", sd[j]->limit);
+                else
+                    fprintf(f, " %16s", sd[j]->status == SG_ERANGE ? "not reached"
+                                                                    : sg_err_name(sd[j]->status));
+            for (j = 0; j < 2; j++)
+                if (sd[j]->status == SG_OK)
+                    fprintf(f, " %16.10g", sd[j]->criterion);
+                else
+                    fprintf(f, " %16s", "-");
+            fputc('\n', f);
+        }
     }
     if (mc) {
         fprintf(f, "\nMonte Carlo: %d of %d trials, seed %llu, %s distribution\n", r->done,
@@ -604,6 +674,8 @@ static int tolerance_main(int argc, char **argv)
     int rank = tolmpi_rank(), block, nthreads, opened = 0, start = 0, resume = 0, nworst = 0;
     int k;
     char wpath[4096];
+    double inv_limit = 0;
+    inv_out iv;
     long long seed = 1;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
@@ -681,6 +753,15 @@ static int tolerance_main(int argc, char **argv)
         case TO_RESUME:
             resume = 1;
             break;
+        case TO_INVERSE: {
+            char *end;
+            errno = 0;
+            inv_limit = strtod(val, &end);
+            if (errno || end == val || *end || !(inv_limit > 0) || !isfinite(inv_limit))
+                return cli_usage_error("tolerance", "--inverse: \"%s\" is not a positive "
+                                       "number", val);
+            break;
+        }
         case TO_WORST:
             if (cli_int_value("--save-worst", val, 1, MAX_WORST, &nworst))
                 return CLI_EXIT_USAGE;
@@ -744,7 +825,9 @@ static int tolerance_main(int argc, char **argv)
     rc = SG_OK;
     /* Every rank compensates the nominal for its trials; rank 0 alone runs
      * the sensitivity and writes. */
-    if (mc > 0)
+    memset(&iv, 0, sizeof iv);
+    inv_report = NULL;
+    if (mc > 0 || (inv_limit > 0 && rank == 0))
         rc = sg_tol_mc_open(sys, cat, &o, (uint64_t)seed, &mcx, &r.nominal, &d);
     /* The nominal is the same computation there and here. */
     if (rc == SG_OK && rank == 0 && (sens || !mcx))
@@ -755,6 +838,24 @@ static int tolerance_main(int argc, char **argv)
         cli_print_diag(design, &d, rc);
         rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
         goto restore;
+    }
+    /* Inverse sensitivity, on rank 0 as the sensitivity. */
+    if (rank == 0 && inv_limit > 0 && !r.stopped) {
+        iv.limit = inv_limit;
+        if (!(iv.v = calloc((size_t)sys->tol.nop, sizeof *iv.v))) {
+            cli_error("out of memory");
+            rc = CLI_EXIT_INTERNAL;
+            goto restore;
+        }
+        p.total = 0;
+        if ((rc = sg_tol_inverse(mcx, inv_limit, iv.v, &iv.n, &d)) != SG_OK) {
+            cli_print_diag(design, &d, rc);
+            rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
+            goto restore;
+        }
+        if (iv.n < sys->tol.nop)
+            r.stopped = 1;
+        inv_report = &iv;
     }
     r.trials = mc;
     r.seed = (uint64_t)seed;
@@ -910,6 +1011,8 @@ restore:
                     "continues it\n", output);
     }
 done:
+    free(iv.v);
+    inv_report = NULL;
     free(sink.crit);
     sg_tol_result_free(&r);
     sg_tol_mc_close(mcx);

@@ -648,6 +648,52 @@ static void save_worst(void **state)
     free(again);
 }
 
+/* --inverse on a thin lens (zero thickness, n = 1.5, R1 = 50, R2 = -50,
+ * f = 50) whose criterion is the merit function |EFFL - 50|: TRAD on R1
+ * reaches a change of L = 0.5 where the lensmaker's equation
+ * 1/f = (n - 1)(1/R1 - 1/R2) gives f = 50 +- 0.5, R1 = 1 / (1/((n - 1) f)
+ * + 1/R2). */
+static void inverse_thin_lens(void **state)
+{
+    const char *d = ct_file("thin.json",
+        "{\"format\": \"sagitta-design\", \"units\": \"mm\","
+        "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.5875618, \"weight\": 1}]},"
+        "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0, \"weight\": 1}]},"
+        "\"aperture\": {\"type\": \"epd\", \"value\": 10},"
+        "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+        "{\"radius\": 50, \"thickness\": 0, \"material\": 1.5, \"stop\": true},"
+        "{\"radius\": -50, \"thickness\": 50}, {\"radius\": \"inf\", \"thickness\": 0}],"
+        "\"merit\": {\"operands\": [{\"type\": \"EFFL\", \"wave\": 1, \"target\": 50,"
+        " \"weight\": 1}]},"
+        "\"tolerances\": {\"operands\": [{\"type\": \"TRAD\", \"surface\": 1, \"min\": -1,"
+        " \"max\": 1}], \"criterion\": {\"type\": \"merit\"}}}");
+    const double n1 = 0.5, r2 = -50;
+    double lo = 1.0 / (1.0 / (n1 * 49.5) + 1.0 / r2) - 50;
+    double hi = 1.0 / (1.0 / (n1 * 50.5) + 1.0 / r2) - 50;
+    ct_result r;
+    cJSON *root, *inv, *row;
+    (void)state;
+    ct_run(&r, "tolerance", d, "--inverse", "0.5", "--format", "json", NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    root = cJSON_Parse(r.out);
+    assert_non_null(root);
+    inv = cJSON_GetObjectItem(root, "inverse");
+    assert_non_null(inv);
+    ct_close(num(inv, "limit"), 0.5, 0, 0, "limit");
+    row = cJSON_GetArrayItem(cJSON_GetObjectItem(inv, "rows"), 0);
+    assert_non_null(row);
+    assert_string_equal(cJSON_GetObjectItem(row, "status_min")->valuestring, "ok");
+    ct_close(num(row, "min"), lo, 1e-10, 0, "inverse min");
+    ct_close(num(row, "max"), hi, 1e-10, 0, "inverse max");
+    ct_close(num(row, "criterion_max"), num(root, "nominal") + 0.5, 1e-10, 0, "criterion");
+    cJSON_Delete(root);
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--inverse", "-1", NULL);
+    assert_int_equal(r.code, 2);
+    ct_free(&r);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -661,6 +707,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(resume_after_kill),
         cmocka_unit_test(hdf5_table),
         cmocka_unit_test(save_worst),
+        cmocka_unit_test(inverse_thin_lens),
     };
     int rc;
     ct_init(argc, argv);
