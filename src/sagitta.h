@@ -1332,6 +1332,37 @@ SG_API int sg_tolerance_run(const sg_system *sys, const sg_catalog *cat, const s
                             int sens, int trials, uint64_t seed, sg_tol_result *out,
                             sg_diag *d);
 SG_API void sg_tol_result_free(sg_tol_result *r);
+/* Monte Carlo in blocks, for a caller that streams the trials (sagitta
+ * tolerance's table, MPI ranks): open compensates the nominal once (its
+ * value in *nominal when not NULL); run evaluates trials first ..
+ * first + n - 1 on o's threads into out[0 .. n-1], each as
+ * sg_tolerance_run gives it, and *done counts those finished in order
+ * from first (fewer than n after o's stop). */
+typedef struct sg_tol_mc sg_tol_mc;
+SG_API int sg_tol_mc_open(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *o,
+                          uint64_t seed, sg_tol_mc **out, sg_tol_value *nominal, sg_diag *d);
+SG_API int sg_tol_mc_run(sg_tol_mc *m, int first, int n, sg_tol_value *out, int *done);
+/* Trial trial's system, perturbed and compensated, into out (its
+ * criterion in v), as sg_tol_mc_run evaluates it. */
+SG_API int sg_tol_mc_system(sg_tol_mc *m, int trial, sg_system *out, sg_tol_value *v,
+                            sg_diag *d);
+/* Inverse sensitivity: for each operand alone, on each side of the
+ * nominal, the change at which the compensated criterion exceeds the
+ * nominal's by limit (found by bracketing from the operand's min or max
+ * and the Illinois method to 1e-12 of it); status SG_ERANGE where no
+ * change up to 2^40 times the operand's range reaches it.  out has nop
+ * rows, *done of them filled (fewer when o's stop ended it). */
+typedef struct sg_tol_inv_side {
+    int status;
+    double limit;           /* the operand's change, signed */
+    double criterion;       /* the compensated criterion there */
+} sg_tol_inv_side;
+typedef struct sg_tol_inv {
+    sg_tol_inv_side at_min, at_max;
+} sg_tol_inv;
+SG_API int sg_tol_inverse(sg_tol_mc *m, double limit, sg_tol_inv *out, int *done,
+                          sg_diag *d);
+SG_API void sg_tol_mc_close(sg_tol_mc *m);
 
 /* A prepared system: indices, paraxial data and work buffers, computed
  * once so the per-ray path allocates nothing.  A tracer is used by one

@@ -741,8 +741,9 @@ typedef struct run_ctx {
     const sg_catalog *cat;
     const sg_tol_opts *o;
     int nsensjob, ntrial, njob;
+    int first;              /* the trial of the first Monte Carlo job */
     uint64_t seed;
-    sg_tol_result *r;
+    sg_tol_result *r;       /* mc[i] is trial first + i */
     unsigned char *finished;
     int next, ndone;
     pthread_mutex_t lock;
@@ -763,11 +764,11 @@ static void run_job(run_ctx *c, int job, sg_system *work, int *map)
         delta[job / 2] = job % 2 ? op->max : op->min;
         v = job % 2 ? &c->r->sens[job / 2].at_max : &c->r->sens[job / 2].at_min;
     } else {
-        uint64_t trial = (uint64_t)(job - c->nsensjob);
+        uint64_t trial = (uint64_t)c->first + (uint64_t)(job - c->nsensjob);
         for (k = 0; k < t->nop; k++)
             delta[k] = sg_tol_draw(c->seed, trial, k, t->distribution, t->op[k].min,
                                    t->op[k].max);
-        v = &c->r->mc[trial];
+        v = &c->r->mc[job - c->nsensjob];
     }
     sg_diag_clear(&d);
     rc = sg_tol_apply(c->nom, c->cat, delta, work, map, &d);
@@ -818,25 +819,40 @@ static void *worker_thread(void *arg)
     return NULL;
 }
 
-int sg_tolerance_run(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *opts,
-                     int sens, int trials, uint64_t seed, sg_tol_result *out, sg_diag *d)
+/* c's jobs on o->nthreads threads (the calling one among them). */
+static void run_jobs(run_ctx *c)
 {
-    sg_tol_opts def;
-    sg_system *nom, *ref = NULL;
-    run_ctx c;
     pthread_t th[256];
     int started[256];
-    int nt, i, k, rc;
-    memset(out, 0, sizeof *out);
-    if (!opts) {
-        sg_tol_opts_init(&def);
-        opts = &def;
-    }
+    int nt, i;
+    pthread_mutex_init(&c->lock, NULL);
+    nt = c->o->nthreads > 0 ? c->o->nthreads : (int)sysconf(_SC_NPROCESSORS_ONLN);
+    if (nt < 1)
+        nt = 1;
+    if (nt > 256)
+        nt = 256;
+    if (nt > c->njob)
+        nt = c->njob > 0 ? c->njob : 1;
+    for (i = 1; i < nt; i++)
+        started[i] = pthread_create(&th[i], NULL, worker_thread, c) == 0;
+    worker(c);
+    for (i = 1; i < nt; i++)
+        if (started[i])
+            pthread_join(th[i], NULL);
+    pthread_mutex_destroy(&c->lock);
+}
+
+/* The nominal prepared and compensated (nom), and as given (ref). */
+static int prepare_nominal(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *o,
+                           sg_system **nom_out, sg_system **ref_out, sg_tol_value *nominal,
+                           sg_diag *d)
+{
+    sg_system *nom, *ref = NULL;
+    int rc;
+    *nom_out = *ref_out = NULL;
     if (!sys->tol.present || sys->tol.nop == 0)
         return sg_diag_set(d, SG_ENOSYS, "the design has no tolerance operands (a "
                            "\"tolerances\" object; sagitta-design(5), TOLERANCES)");
-    if (trials < 0)
-        return sg_diag_set(d, SG_ERANGE, "%d Monte Carlo trials", trials);
     nom = sg_system_new();
     if (!nom)
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
@@ -848,12 +864,275 @@ int sg_tolerance_run(const sg_system *sys, const sg_catalog *cat, const sg_tol_o
         rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
         goto fail;
     }
-    if ((rc = sg_tol_compensate(nom, ref, NULL, cat, opts, &out->nominal, d)) != SG_OK) {
+    if ((rc = sg_tol_compensate(nom, ref, NULL, cat, o, nominal, d)) != SG_OK) {
         char msg[SG_DIAG_MSG];
         snprintf(msg, sizeof msg, "%s", d ? d->msg : "");
         rc = sg_diag_set(d, rc, "the nominal design: %s", msg);
         goto fail;
     }
+    *nom_out = nom;
+    *ref_out = ref;
+    return SG_OK;
+fail:
+    sg_system_free(nom);
+    sg_system_free(ref);
+    return rc;
+}
+
+struct sg_tol_mc {
+    sg_system *nom, *ref;
+    const sg_catalog *cat;
+    sg_tol_opts o;
+    uint64_t seed;
+    double c0;              /* the compensated nominal's criterion */
+};
+
+int sg_tol_mc_open(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *o,
+                   uint64_t seed, sg_tol_mc **out, sg_tol_value *nominal, sg_diag *d)
+{
+    sg_tol_mc *m;
+    sg_tol_value nv;
+    int rc;
+    *out = NULL;
+    if (!(m = calloc(1, sizeof *m)))
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    if (o)
+        m->o = *o;
+    else
+        sg_tol_opts_init(&m->o);
+    if ((rc = prepare_nominal(sys, cat, &m->o, &m->nom, &m->ref, &nv, d)) != SG_OK) {
+        free(m);
+        return rc;
+    }
+    m->cat = cat;
+    m->seed = seed;
+    m->c0 = nv.criterion;
+    if (nominal)
+        *nominal = nv;
+    *out = m;
+    return SG_OK;
+}
+
+int sg_tol_mc_run(sg_tol_mc *m, int first, int n, sg_tol_value *out, int *done)
+{
+    sg_tol_result r;
+    run_ctx c;
+    int k;
+    *done = 0;
+    if (n <= 0)
+        return SG_OK;
+    memset(&r, 0, sizeof r);
+    r.mc = out;
+    memset(&c, 0, sizeof c);
+    c.nom = m->nom;
+    c.ref = m->ref;
+    c.cat = m->cat;
+    c.o = &m->o;
+    c.ntrial = c.njob = n;
+    c.first = first;
+    c.seed = m->seed;
+    c.r = &r;
+    if (!(c.finished = calloc((size_t)n, 1)))
+        return SG_ENOMEM;
+    run_jobs(&c);
+    for (k = 0; k < n && c.finished[k]; k++)
+        ;
+    *done = k;
+    free(c.finished);
+    return SG_OK;
+}
+
+int sg_tol_mc_system(sg_tol_mc *m, int trial, sg_system *out, sg_tol_value *v, sg_diag *d)
+{
+    const sg_tolerances *t = &m->nom->tol;
+    double delta[SG_MAX_TOL_OPERANDS];
+    int *map = malloc((size_t)m->nom->nsurf * sizeof *map), k, rc;
+    if (!map)
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    memset(delta, 0, sizeof delta);
+    /* As run_job draws and builds trial's system. */
+    for (k = 0; k < t->nop; k++)
+        delta[k] = sg_tol_draw(m->seed, (uint64_t)trial, k, t->distribution, t->op[k].min,
+                               t->op[k].max);
+    rc = sg_tol_apply(m->nom, m->cat, delta, out, map, d);
+    if (rc == SG_OK)
+        rc = sg_tol_compensate(out, m->ref, map, m->cat, &m->o, v, d);
+    free(map);
+    return rc;
+}
+
+/* The change of the compensated criterion from the nominal's with
+ * operand k alone at x. */
+static int inv_change(sg_tol_mc *m, sg_system *work, int *map, int k, double x, double c0,
+                      double *change, sg_tol_value *v)
+{
+    double delta[SG_MAX_TOL_OPERANDS];
+    sg_diag d;
+    int rc;
+    memset(delta, 0, sizeof delta);
+    delta[k] = x;
+    sg_diag_clear(&d);
+    rc = sg_tol_apply(m->nom, m->cat, delta, work, map, &d);
+    if (rc == SG_OK)
+        rc = sg_tol_compensate(work, m->ref, map, m->cat, &m->o, v, &d);
+    if (rc == SG_OK && isnan(v->criterion))
+        rc = SG_ERANGE;
+    *change = rc == SG_OK ? v->criterion - c0 : NAN;
+    return rc;
+}
+
+/* One side of operand k: from 0 (change 0) outward along dir, the
+ * bracket [a, b] with change(a) < limit <= change(b) found by doubling
+ * (or halving) from x0, then the Illinois method (regula falsi with the
+ * stuck end's value halved) to a relative width of 1e-12. */
+static void inv_side(sg_tol_mc *m, sg_system *work, int *map, int k, double x0, double c0,
+                     double limit, sg_tol_inv_side *out)
+{
+    double a = 0.0, fa = -limit, b = x0, fb, x, fx;
+    sg_tol_value v;
+    int it, side = 0, rc;
+    memset(out, 0, sizeof *out);
+    out->limit = NAN;
+    out->criterion = NAN;
+    if ((rc = inv_change(m, work, map, k, b, c0, &fb, &v)) != SG_OK) {
+        out->status = rc;
+        return;
+    }
+    fb -= limit;
+    /* Out until the change reaches the limit, in until it does not. */
+    for (it = 0; fb < 0 && it < 40; it++) {
+        a = b;
+        fa = fb;
+        b *= 2.0;
+        if ((rc = inv_change(m, work, map, k, b, c0, &fb, &v)) != SG_OK) {
+            out->status = rc;
+            return;
+        }
+        fb -= limit;
+    }
+    if (fb < 0) {
+        out->status = SG_ERANGE;
+        return;
+    }
+    for (it = 0; a == 0.0 && it < 60; it++) {
+        x = 0.5 * b;
+        if ((rc = inv_change(m, work, map, k, x, c0, &fx, &v)) != SG_OK) {
+            out->status = rc;
+            return;
+        }
+        fx -= limit;
+        if (fx >= 0) {
+            b = x;
+            fb = fx;
+        } else {
+            a = x;
+            fa = fx;
+        }
+    }
+    for (it = 0; it < 200 && fabs(b - a) > 1e-12 * fabs(b); it++) {
+        x = (a * fb - b * fa) / (fb - fa);
+        if (!(x > fmin(a, b) && x < fmax(a, b)))
+            x = 0.5 * (a + b);
+        if ((rc = inv_change(m, work, map, k, x, c0, &fx, &v)) != SG_OK) {
+            out->status = rc;
+            return;
+        }
+        fx -= limit;
+        if (fx == 0) {
+            a = b = x;
+            fb = 0;
+            break;
+        }
+        if (fx > 0) {
+            b = x;
+            fb = fx;
+            if (side == 1)
+                fa *= 0.5;
+            side = 1;
+        } else {
+            a = x;
+            fa = fx;
+            if (side == -1)
+                fb *= 0.5;
+            side = -1;
+        }
+    }
+    /* The end where the change has reached the limit. */
+    out->limit = b;
+    if ((rc = inv_change(m, work, map, k, b, c0, &fx, &v)) != SG_OK) {
+        out->status = rc;
+        return;
+    }
+    out->criterion = v.criterion;
+    out->status = SG_OK;
+}
+
+int sg_tol_inverse(sg_tol_mc *m, double limit, sg_tol_inv *out, int *done, sg_diag *d)
+{
+    const sg_tolerances *t = &m->nom->tol;
+    sg_system *work = sg_system_new();
+    int *map = malloc((size_t)m->nom->nsurf * sizeof *map), k;
+    *done = 0;
+    if (!work || !map) {
+        sg_system_free(work);
+        free(map);
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    }
+    if (!(limit > 0) || !isfinite(limit)) {
+        sg_system_free(work);
+        free(map);
+        return sg_diag_set(d, SG_ERANGE, "the inverse limit %g is not a positive number",
+                           limit);
+    }
+    for (k = 0; k < t->nop; k++) {
+        const sg_tol_operand *op = &t->op[k];
+        double span = fmax(fabs(op->min), fabs(op->max));
+        /* Each side starts at the operand's own limit on it (or the other
+         * side's size when that is 0). */
+        double hi = op->max > 0 ? op->max : span, lo = op->min < 0 ? op->min : -span;
+        if (m->o.stop && *m->o.stop)
+            break;
+        if (span == 0) {
+            memset(&out[k], 0, sizeof out[k]);
+            out[k].at_min.status = out[k].at_max.status = SG_ERANGE;
+            out[k].at_min.limit = out[k].at_max.limit = NAN;
+            out[k].at_min.criterion = out[k].at_max.criterion = NAN;
+            continue;
+        }
+        inv_side(m, work, map, k, lo, m->c0, limit, &out[k].at_min);
+        inv_side(m, work, map, k, hi, m->c0, limit, &out[k].at_max);
+    }
+    sg_system_free(work);
+    free(map);
+    *done = k;
+    return SG_OK;
+}
+
+void sg_tol_mc_close(sg_tol_mc *m)
+{
+    if (!m)
+        return;
+    sg_system_free(m->nom);
+    sg_system_free(m->ref);
+    free(m);
+}
+
+int sg_tolerance_run(const sg_system *sys, const sg_catalog *cat, const sg_tol_opts *opts,
+                     int sens, int trials, uint64_t seed, sg_tol_result *out, sg_diag *d)
+{
+    sg_tol_opts def;
+    sg_system *nom = NULL, *ref = NULL;
+    run_ctx c;
+    int k, rc;
+    memset(out, 0, sizeof *out);
+    if (!opts) {
+        sg_tol_opts_init(&def);
+        opts = &def;
+    }
+    if (trials < 0)
+        return sg_diag_set(d, SG_ERANGE, "%d Monte Carlo trials", trials);
+    if ((rc = prepare_nominal(sys, cat, opts, &nom, &ref, &out->nominal, d)) != SG_OK)
+        return rc;
     out->trials = trials;
     out->seed = seed;
     out->sens = sens ? calloc((size_t)sys->tol.nop, sizeof *out->sens) : NULL;
@@ -874,21 +1153,7 @@ int sg_tolerance_run(const sg_system *sys, const sg_catalog *cat, const sg_tol_o
         rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
         goto fail;
     }
-    pthread_mutex_init(&c.lock, NULL);
-    nt = opts->nthreads > 0 ? opts->nthreads : (int)sysconf(_SC_NPROCESSORS_ONLN);
-    if (nt < 1)
-        nt = 1;
-    if (nt > 256)
-        nt = 256;
-    if (nt > c.njob)
-        nt = c.njob > 0 ? c.njob : 1;
-    for (i = 1; i < nt; i++)
-        started[i] = pthread_create(&th[i], NULL, worker_thread, &c) == 0;
-    worker(&c);
-    for (i = 1; i < nt; i++)
-        if (started[i])
-            pthread_join(th[i], NULL);
-    pthread_mutex_destroy(&c.lock);
+    run_jobs(&c);
     if (opts->stop && *opts->stop)
         out->stopped = 1;
     /* What is done is what a run stopped there keeps: the rows, and the

@@ -18,7 +18,7 @@ build=${BUILD_DIR:-build}
 
 packages="gcc meson ninja-build pkg-config libmpfr-dev libgmp-dev libcjson-dev libfftw3-dev libcairo2-dev \
 libcmocka-dev libncurses-dev tmux python3 clang libclang-rt-14-dev valgrind \
-libhdf5-dev hdf5-tools libgsl-dev \
+libhdf5-dev hdf5-tools libgsl-dev openmpi-bin libopenmpi-dev \
 locales"
 
 # A comma-decimal locale, for the test that numbers are read with '.'

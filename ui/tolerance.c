@@ -13,13 +13,16 @@
 #include "cli.h"
 #include "outfile.h"
 #include "report.h"
+#include "tolh5.h"
+#include "tolmpi.h"
 
 static void tolerance_help(FILE *f)
 {
     fputs(
 "Usage: sagitta tolerance DESIGN.json [--sensitivity] [--monte-carlo N] [--seed S]\n"
-"                         [--threads N] [--method M] [--format text|json|csv]\n"
-"                         [-o FILE] [--force]\n"
+"                         [--threads N] [--method M] [--format text|json|csv|hdf5]\n"
+"                         [-o FILE] [--force] [--resume] [--save-worst K]\n"
+"                         [--inverse LIMIT]\n"
 "Tolerance the design (its \"tolerances\" object): each operand at its min\n"
 "and max with the compensators re-optimized (sensitivity), and N systems\n"
 "with every operand drawn (Monte Carlo), on every core.  Without\n"
@@ -29,20 +32,42 @@ static void tolerance_help(FILE *f)
 "\n"
 "Options:\n"
 "  --sensitivity            each operand at its min and max\n"
+"  --inverse LIMIT          each operand's changes at which the criterion grows\n"
+"                           by LIMIT (inverse sensitivity)\n"
 "  --monte-carlo N          N trials (0: none)\n"
 "  --seed S                 the trials' seed (default: the design's, else 1)\n"
 "  --threads N              systems at once (default: every core)\n"
 "  --method M               the criterion's traces: precise (default), classic, mpfr\n"
 "  --no-compensators        leave the compensators at their nominal values\n"
-"  --format FMT             text (default), json or csv\n"
+"  --format FMT             text (default), json, csv or hdf5 (the Monte Carlo\n"
+"                           table, with -o FILE)\n"
 "  -o, --output FILE        write the report to FILE (not over an existing file\n"
 "                           without --force)\n"
 "  --force                  overwrite FILE\n"
+"  --resume                 continue the Monte Carlo table in FILE (CSV) from its\n"
+"                           last whole trial\n"
+"  --save-worst K           write the K worst Monte Carlo systems as\n"
+"                           DESIGN-worst1.json ... (not over files without --force)\n"
 "  -h, --help               show this help\n", f);
 }
 
+/* --inverse's rows: n of them done, at limit. */
+typedef struct inv_out {
+    sg_tol_inv *v;
+    int n;
+    double limit;
+} inv_out;
+/* This run's, for the writers (NULL: not asked). */
+static const inv_out *inv_report;
+
+/* --save-worst's largest K. */
+#define MAX_WORST 100
+
+/* --format hdf5, beside report.h's formats. */
+#define FMT_HDF5 1000
+
 enum { TO_HELP = 1, TO_SENS, TO_MC, TO_SEED, TO_THREADS, TO_METHOD, TO_NOCOMP, TO_FORMAT,
-       TO_OUTPUT, TO_FORCE };
+       TO_OUTPUT, TO_FORCE, TO_RESUME, TO_WORST, TO_INVERSE };
 static const cli_opt tolerance_opts[] = {
     CLI_ID("--help", 'h', 0, TO_HELP),
     CLI_ID("--sensitivity", 0, 0, TO_SENS),
@@ -54,6 +79,9 @@ static const cli_opt tolerance_opts[] = {
     CLI_ID("--format", 0, 1, TO_FORMAT),
     CLI_ID("--output", 'o', 1, TO_OUTPUT),
     CLI_ID("--force", 0, 0, TO_FORCE),
+    CLI_ID("--resume", 0, 0, TO_RESUME),
+    CLI_ID("--save-worst", 0, 1, TO_WORST),
+    CLI_ID("--inverse", 0, 1, TO_INVERSE),
     CLI_END
 };
 
@@ -70,6 +98,7 @@ static void on_sigint(int sig)
 typedef struct prog {
     int on, shown;
     double t0, last;
+    int base, total; /* Monte Carlo: trials before this block, and all */
 } prog;
 
 static double now_s(void)
@@ -92,6 +121,10 @@ static int progress(void *ctx, int done, int total)
         return 0;
     p->last = t;
     p->shown = 1;
+    if (p->total) {
+        done += p->base;
+        total = p->total;
+    }
     fprintf(stderr, "\rsagitta: tolerance: %d of %d systems, %.0f s", done, total, t - p->t0);
     fflush(stderr);
     return 0;
@@ -151,7 +184,22 @@ static void print_num(FILE *f, double v)
         fprintf(f, "%.17g", v);
 }
 
-static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc)
+static const char *crit_key(const sg_system *sys)
+{
+    return sys->tol.criterion == SG_TOLC_MERIT            ? "merit"
+           : sys->tol.criterion == SG_TOLC_RMS_WAVEFRONT ? "rms_wavefront"
+                                                          : "rms_spot";
+}
+
+static const char *dist_key(const sg_system *sys)
+{
+    return sys->tol.distribution == SG_TOLD_UNIFORM     ? "uniform"
+           : sys->tol.distribution == SG_TOLD_PARABOLIC ? "parabolic"
+                                                        : "normal";
+}
+
+static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc,
+                       const double *crit)
 {
     static const char *const pk[5] = {"90", "80", "50", "20", "10"};
     int k, j;
@@ -204,6 +252,30 @@ static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, in
         }
         fprintf(f, "%s],\n\"rss_change\": %.17g", r->nsens ? "\n" : "", r->rss);
     }
+    if (inv_report) {
+        fprintf(f, ",\n\"inverse\": {\"limit\": %.17g, \"rows\": [", inv_report->limit);
+        for (k = 0; k < inv_report->n; k++) {
+            const sg_tol_operand *op = &sys->tol.op[k];
+            const sg_tol_inv *v = &inv_report->v[k];
+            fprintf(f, "%s\n  {\"row\": %d, \"type\": \"%s\", ", k ? "," : "", k + 1,
+                    sg_tol_name(op->type));
+            if (op->type >= SG_TOL_TEDX && op->type <= SG_TOL_TETZ)
+                fprintf(f, "\"first\": %d, \"last\": %d", op->surface, op->last);
+            else
+                fprintf(f, "\"surface\": %d", op->surface);
+            fputs(", \"min\": ", f);
+            print_num(f, v->at_min.limit);
+            fputs(", \"max\": ", f);
+            print_num(f, v->at_max.limit);
+            fputs(", \"criterion_min\": ", f);
+            print_num(f, v->at_min.criterion);
+            fputs(", \"criterion_max\": ", f);
+            print_num(f, v->at_max.criterion);
+            fprintf(f, ", \"status_min\": \"%s\", \"status_max\": \"%s\"}",
+                    status_text(v->at_min.status), status_text(v->at_max.status));
+        }
+        fprintf(f, "%s]}", inv_report->n ? "\n" : "");
+    }
     if (mc) {
         fprintf(f, ",\n\"monte_carlo\": {\"trials\": %d, \"done\": %d, \"seed\": %llu, "
                 "\"distribution\": \"%s\", \"criteria\": [", r->trials, r->done,
@@ -212,7 +284,7 @@ static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, in
                 : sys->tol.distribution == SG_TOLD_PARABOLIC ? "parabolic" : "normal");
         for (k = 0; k < r->done; k++) {
             fputs(k ? (k % 8 ? ", " : ",\n  ") : "\n  ", f);
-            print_num(f, r->mc[k].status == SG_OK ? r->mc[k].criterion : NAN);
+            print_num(f, crit[k]);
         }
         fprintf(f, "],\n  \"failed\": %d, \"best\": ", r->done - r->stats.n);
         print_num(f, r->stats.best);
@@ -232,7 +304,7 @@ static void write_json(FILE *f, const sg_system *sys, const sg_tol_result *r, in
     fprintf(f, ",\n\"stopped\": %s}\n", r->stopped ? "true" : "false");
 }
 
-static void write_csv(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc)
+static void write_csv(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens)
 {
     int k;
     char place[64];
@@ -250,11 +322,24 @@ static void write_csv(FILE *f, const sg_system *sys, const sg_tol_result *r, int
                     s->at_max.criterion, status_text(s->at_min.status),
                     status_text(s->at_max.status));
         }
-    if (mc)
-        for (k = 0; k < r->done; k++)
-            fprintf(f, "trial,%d,,,,,%.17g,%.17g,%s,%s\n", k + 1, r->mc[k].criterion,
-                    r->mc[k].criterion, status_text(r->mc[k].status),
-                    status_text(r->mc[k].status));
+    for (k = 0; inv_report && k < inv_report->n; k++) {
+        const sg_tol_operand *op = &sys->tol.op[k];
+        const sg_tol_inv *v = &inv_report->v[k];
+        op_place(op, place, sizeof place);
+        fprintf(f, "inverse,%d,%s,%s,%.17g,%.17g,%.17g,%.17g,%s,%s\n", k + 1,
+                sg_tol_name(op->type), place, v->at_min.limit, v->at_max.limit,
+                v->at_min.criterion, v->at_max.criterion, status_text(v->at_min.status),
+                status_text(v->at_max.status));
+    }
+}
+
+/* Trials first + 1 .. first + n as the CSV's rows. */
+static void csv_trials(FILE *f, int first, int n, const sg_tol_value *v)
+{
+    int k;
+    for (k = 0; k < n; k++)
+        fprintf(f, "trial,%d,,,,,%.17g,%.17g,%s,%s\n", first + k + 1, v[k].criterion,
+                v[k].criterion, status_text(v[k].status), status_text(v[k].status));
 }
 
 static void write_text(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens, int mc)
@@ -310,6 +395,30 @@ static void write_text(FILE *f, const sg_system *sys, const sg_tol_result *r, in
         fprintf(f, "\nEstimated change (RSS): %.6g; estimated criterion %.10g\n", r->rss,
                 r->nominal.criterion + r->rss);
     }
+    if (inv_report) {
+        fprintf(f, "\nInverse sensitivity (the changes at which the criterion grows by %.6g):\n",
+                inv_report->limit);
+        fprintf(f, "%4s %-5s %-14s %16s %16s %16s %16s\n", "Row", "Type", "Surface", "Min",
+                "Max", "Criterion(min)", "Criterion(max)");
+        for (k = 0; k < inv_report->n; k++) {
+            const sg_tol_operand *op = &sys->tol.op[k];
+            const sg_tol_inv_side *sd[2] = {&inv_report->v[k].at_min, &inv_report->v[k].at_max};
+            op_place(op, place, sizeof place);
+            fprintf(f, "%4d %-5s %-14s", k + 1, sg_tol_name(op->type), place);
+            for (j = 0; j < 2; j++)
+                if (sd[j]->status == SG_OK)
+                    fprintf(f, " %16.10g", sd[j]->limit);
+                else
+                    fprintf(f, " %16s", sd[j]->status == SG_ERANGE ? "not reached"
+                                                                    : sg_err_name(sd[j]->status));
+            for (j = 0; j < 2; j++)
+                if (sd[j]->status == SG_OK)
+                    fprintf(f, " %16.10g", sd[j]->criterion);
+                else
+                    fprintf(f, " %16s", "-");
+            fputc('\n', f);
+        }
+    }
     if (mc) {
         fprintf(f, "\nMonte Carlo: %d of %d trials, seed %llu, %s distribution\n", r->done,
                 r->trials, (unsigned long long)r->seed,
@@ -327,14 +436,250 @@ static void write_text(FILE *f, const sg_system *sys, const sg_tol_result *r, in
         fprintf(f, "\nStopped: the report holds what was done.\n");
 }
 
-int cmd_tolerance(int argc, char **argv)
+/* Rank 0's end of the Monte Carlo: the trials in order, into the CSV's
+ * rows as they come and the criteria the statistics need. */
+typedef struct mc_sink {
+    FILE *f;
+    int csv;
+    double *crit;   /* the criteria (NaN: failed), for the statistics; NULL for CSV */
+    tolh5 *h5;
+    int done;
+    prog *p;
+    /* The worst trials (--save-worst), worst first, ties in trial order. */
+    int kworst, nworst, worst_trial[MAX_WORST];
+    double worst_crit[MAX_WORST];
+} mc_sink;
+
+static int take_trials(void *ctx, int first, int n, const sg_tol_value *v)
+{
+    mc_sink *s = ctx;
+    int k;
+    if (s->csv) {
+        csv_trials(s->f, first, n, v);
+        /* A killed run keeps the rows written (--resume). */
+        if (fflush(s->f) != 0 || ferror(s->f)) {
+            cli_error("writing the trials: %s", strerror(errno));
+            return CLI_EXIT_FILE;
+        }
+    }
+    if (s->h5) {
+        char err[512];
+        if (tolh5_write(s->h5, first, n, v, err, sizeof err) != 0) {
+            cli_error("writing the trials: %s", err);
+            return CLI_EXIT_FILE;
+        }
+    }
+    for (k = 0; k < n && s->kworst; k++) {
+        int j;
+        if (v[k].status != SG_OK || isnan(v[k].criterion) ||
+            (s->nworst == s->kworst && !(v[k].criterion > s->worst_crit[s->nworst - 1])))
+            continue;
+        j = s->nworst < s->kworst ? s->nworst++ : s->nworst - 1;
+        for (; j > 0 && v[k].criterion > s->worst_crit[j - 1]; j--) {
+            s->worst_crit[j] = s->worst_crit[j - 1];
+            s->worst_trial[j] = s->worst_trial[j - 1];
+        }
+        s->worst_crit[j] = v[k].criterion;
+        s->worst_trial[j] = first + k;
+    }
+    if (s->crit)
+        for (k = 0; k < n; k++)
+            s->crit[first + k] = v[k].status == SG_OK ? v[k].criterion : NAN;
+    s->done = first + n;
+    s->p->base = s->done;
+    return 0;
+}
+
+/* DESIGN-worstN.json beside DESIGN (its .json, if any, replaced), N = k + 1. */
+static void worst_path(const char *design, int k, char *buf, size_t n)
+{
+    size_t len = strlen(design);
+    if (len > 5 && strcmp(design + len - 5, ".json") == 0)
+        len -= 5;
+    snprintf(buf, n, "%.*s-worst%d.json", (int)len, design, k + 1);
+}
+
+/* --save-worst: each of the worst trials' systems built again, perturbed
+ * and compensated, and saved. */
+static int save_worst(const char *design, sg_tol_mc *m, const mc_sink *s)
+{
+    char path[4096];
+    sg_system *w;
+    sg_tol_value v;
+    sg_diag d;
+    int k, rc;
+    for (k = 0; k < s->nworst; k++) {
+        if (!(w = sg_system_new())) {
+            cli_error("out of memory");
+            return CLI_EXIT_INTERNAL;
+        }
+        worst_path(design, k, path, sizeof path);
+        sg_diag_clear(&d);
+        rc = sg_tol_mc_system(m, s->worst_trial[k], w, &v, &d);
+        /* The tolerance rows name the nominal's surfaces, which the
+         * element operands' coordinate breaks renumber: the built lens is
+         * saved without them. */
+        memset(&w->tol, 0, sizeof w->tol);
+        if (rc == SG_OK)
+            rc = sg_design_save(w, path, &d);
+        sg_system_free(w);
+        if (rc != SG_OK) {
+            cli_print_diag(path, &d, rc);
+            return CLI_EXIT_FILE;
+        }
+        fprintf(stderr, "sagitta: tolerance: %s: trial %d, criterion %.10g\n", path,
+                s->worst_trial[k] + 1, s->worst_crit[k]);
+    }
+    return CLI_EXIT_OK;
+}
+
+/* The trials on this process alone, in blocks as the ranks take them. */
+static int local_trials(sg_tol_mc *m, int start, int trials, int block, mc_sink *s)
+{
+    sg_tol_value *v = malloc((size_t)block * sizeof *v);
+    int first, rc = 0;
+    if (!v) {
+        cli_error("out of memory");
+        return CLI_EXIT_INTERNAL;
+    }
+    for (first = start; first < trials && !rc; first += block) {
+        int n = trials - first < block ? trials - first : block, done;
+        if (sg_tol_mc_run(m, first, n, v, &done) != SG_OK) {
+            cli_error("out of memory");
+            rc = CLI_EXIT_INTERNAL;
+            break;
+        }
+        if ((rc = take_trials(s, first, done, v)) == 0 && done < n)
+            rc = 1;
+    }
+    free(v);
+    return rc;
+}
+
+/* The line of f where a and b (n bytes) first differ, 1-based. */
+static int differing_line(const char *a, const char *b, size_t n)
+{
+    size_t i;
+    int line = 1;
+    for (i = 0; i < n && a[i] == b[i]; i++)
+        line += a[i] == '\n';
+    return line;
+}
+
+/* --resume: FILE's head (the header, nominal and sensitivity rows) must be
+ * this run's, byte for byte, and its trial rows 1 .. K in order, the last
+ * whole one the same as this run's trial K computed again (so the seed,
+ * distribution, method and design are the same); a torn last line is
+ * dropped.  FILE is cut after row K and left open to append; *start = K. */
+static int resume_open(const char *path, const sg_system *sys, const sg_tol_result *r,
+                       int sens, sg_tol_mc *m, int trials, FILE **out, int *start)
+{
+    char *head = NULL, *got = NULL, *line = NULL, *last = NULL, *again = NULL;
+    size_t hn = 0, cap = 0, an = 0;
+    FILE *mem, *f = NULL;
+    off_t end;
+    ssize_t len;
+    int k = 0, lineno, nhead = 0, done, rc = CLI_EXIT_FILE;
+    sg_tol_value v;
+    *out = NULL;
+    if (!(mem = open_memstream(&head, &hn)))
+        goto nomem;
+    write_csv(mem, sys, r, sens);
+    if (fclose(mem) != 0 || !(got = malloc(hn + 1)))
+        goto nomem;
+    if (!(f = fopen(path, "r+"))) {
+        cli_error("%s: %s (--resume continues a table written before)", path, strerror(errno));
+        goto out;
+    }
+    if (fread(got, 1, hn, f) != hn || memcmp(got, head, hn) != 0) {
+        cli_error("%s: line %d is not this run's (--resume continues a table of the same "
+                  "design and options)", path, differing_line(got, head, hn));
+        goto out;
+    }
+    for (lineno = 0; lineno < (int)hn; lineno++)
+        nhead += head[lineno] == '\n';
+    end = (off_t)hn;
+    for (lineno = nhead + 1; (len = getline(&line, &cap, f)) > 0; lineno++) {
+        char expect[32];
+        int n = snprintf(expect, sizeof expect, "trial,%d,", k + 1);
+        /* A row cut short by the kill is dropped and computed again. */
+        if (line[len - 1] != '\n')
+            break;
+        if (strncmp(line, expect, (size_t)n) != 0) {
+            cli_error("%s: line %d is not trial %d's row", path, lineno, k + 1);
+            goto out;
+        }
+        free(last);
+        if (!(last = strdup(line)))
+            goto nomem;
+        k++;
+        end += (off_t)len;
+    }
+    if (ferror(f)) {
+        cli_error("%s: %s", path, strerror(errno));
+        goto out;
+    }
+    if (k > trials) {
+        cli_error("%s: holds %d trials, more than the %d asked", path, k, trials);
+        rc = CLI_EXIT_USAGE;
+        goto out;
+    }
+    if (k > 0) {
+        if (sg_tol_mc_run(m, k - 1, 1, &v, &done) != SG_OK || !(mem = open_memstream(&again,
+                                                                                    &an)))
+            goto nomem;
+        if (done == 1)
+            csv_trials(mem, k - 1, 1, &v);
+        if (fclose(mem) != 0)
+            goto nomem;
+        if (done != 1) {
+            cli_error("%s: stopped before its last trial was checked; the file is as it was",
+                      path);
+            goto out;
+        }
+        if (strcmp(again, last) != 0) {
+            cli_error("%s: trial %d is not this run's (another seed, distribution, method or "
+                      "design); --resume continues a table of the same options", path, k);
+            goto out;
+        }
+    }
+    if (fflush(f) != 0 || ftruncate(fileno(f), end) != 0 || fseeko(f, end, SEEK_SET) != 0) {
+        cli_error("%s: %s", path, strerror(errno));
+        goto out;
+    }
+    *out = f;
+    *start = k;
+    f = NULL;
+    rc = CLI_EXIT_OK;
+    goto out;
+nomem:
+    cli_error("out of memory");
+    rc = CLI_EXIT_INTERNAL;
+out:
+    if (f)
+        fclose(f);
+    free(head);
+    free(got);
+    free(line);
+    free(last);
+    free(again);
+    return rc;
+}
+
+static int tolerance_main(int argc, char **argv)
 {
     cli_iter it;
     const char *val, *design = NULL, *output = NULL;
     int id, rc, force = 0, sens = 0, mc = -1, fmt = REPORT_TEXT, seed_given = 0, m;
+    int rank = tolmpi_rank(), block, nthreads, opened = 0, start = 0, resume = 0, nworst = 0;
+    int k;
+    char wpath[4096];
+    double inv_limit = 0;
+    inv_out iv;
     long long seed = 1;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
+    sg_tol_mc *mcx = NULL;
     sg_tol_opts o;
     sg_tol_result r;
     struct sigaction sa, old;
@@ -342,7 +687,14 @@ int cmd_tolerance(int argc, char **argv)
     sg_diag d;
     prog p;
     outfile of;
+    mc_sink sink;
+    FILE *tab = NULL; /* the Monte Carlo table, written in place */
+    tolh5 *h5 = NULL;
+    int inplace;
     sg_tol_opts_init(&o);
+    memset(&of, 0, sizeof of);
+    memset(&r, 0, sizeof r);
+    memset(&sink, 0, sizeof sink);
     cli_iter_init(&it, "tolerance", argc, argv);
     while ((id = cli_next_opt(&it, tolerance_opts, &val)) != -1) {
         switch (id) {
@@ -352,7 +704,8 @@ int cmd_tolerance(int argc, char **argv)
             design = val;
             break;
         case TO_HELP:
-            tolerance_help(stdout);
+            if (rank == 0)
+                tolerance_help(stdout);
             return CLI_EXIT_OK;
         case TO_SENS:
             sens = 1;
@@ -386,7 +739,9 @@ int cmd_tolerance(int argc, char **argv)
             o.compensate = 0;
             break;
         case TO_FORMAT:
-            if (cli_format_value(val, 1, &fmt))
+            if (strcmp(val, "hdf5") == 0)
+                fmt = FMT_HDF5;
+            else if (cli_format_value(val, 1, &fmt))
                 return CLI_EXIT_USAGE;
             break;
         case TO_OUTPUT:
@@ -395,14 +750,45 @@ int cmd_tolerance(int argc, char **argv)
         case TO_FORCE:
             force = 1;
             break;
+        case TO_RESUME:
+            resume = 1;
+            break;
+        case TO_INVERSE: {
+            char *end;
+            errno = 0;
+            inv_limit = strtod(val, &end);
+            if (errno || end == val || *end || !(inv_limit > 0) || !isfinite(inv_limit))
+                return cli_usage_error("tolerance", "--inverse: \"%s\" is not a positive "
+                                       "number", val);
+            break;
+        }
+        case TO_WORST:
+            if (cli_int_value("--save-worst", val, 1, MAX_WORST, &nworst))
+                return CLI_EXIT_USAGE;
+            break;
         default:
             return -id;
         }
     }
     if (!design)
         return cli_usage_error("tolerance", "missing DESIGN.json");
-    if (output && strcmp(output, "-") != 0 && !force && stat(output, &st) == 0)
+    if (fmt == FMT_HDF5 && (!output || strcmp(output, "-") == 0))
+        return cli_usage_error("tolerance", "--format hdf5 needs -o FILE.h5");
+    if (resume && (!output || strcmp(output, "-") == 0 || fmt != REPORT_CSV))
+        return cli_usage_error("tolerance", "--resume continues a CSV file: give -o FILE and "
+                               "--format csv");
+    if (rank == 0 && output && strcmp(output, "-") != 0 && !force && !resume &&
+        stat(output, &st) == 0)
         return cli_usage_error("tolerance", "%s exists; use --force to overwrite it", output);
+    if (nworst && resume)
+        return cli_usage_error("tolerance", "--save-worst needs every trial: not with --resume");
+    /* The worst systems' files are refused before the run, not after. */
+    for (k = 0; rank == 0 && k < nworst; k++) {
+        worst_path(design, k, wpath, sizeof wpath);
+        if (!force && stat(wpath, &st) == 0)
+            return cli_usage_error("tolerance", "%s exists; use --force to overwrite it",
+                                   wpath);
+    }
     rc = cli_load_design(design, &cat, &sys);
     if (rc != CLI_EXIT_OK)
         return rc;
@@ -423,7 +809,7 @@ int cmd_tolerance(int argc, char **argv)
     memset(&p, 0, sizeof p);
     {
         const char *ci = getenv("CI");
-        p.on = isatty(STDERR_FILENO) && !(ci && ci[0]);
+        p.on = rank == 0 && isatty(STDERR_FILENO) && !(ci && ci[0]);
     }
     p.t0 = p.last = now_s();
     o.progress = progress;
@@ -436,35 +822,208 @@ int cmd_tolerance(int argc, char **argv)
     stop_int = 0;
     o.stop = &stop_int;
     sg_diag_clear(&d);
-    rc = sg_tolerance_run(sys, cat, &o, sens, mc, (uint64_t)seed, &r, &d);
-    sigaction(SIGINT, &old, NULL);
+    rc = SG_OK;
+    /* Every rank compensates the nominal for its trials; rank 0 alone runs
+     * the sensitivity and writes. */
+    memset(&iv, 0, sizeof iv);
+    inv_report = NULL;
+    if (mc > 0 || (inv_limit > 0 && rank == 0))
+        rc = sg_tol_mc_open(sys, cat, &o, (uint64_t)seed, &mcx, &r.nominal, &d);
+    /* The nominal is the same computation there and here. */
+    if (rc == SG_OK && rank == 0 && (sens || !mcx))
+        rc = sg_tolerance_run(sys, cat, &o, sens, 0, (uint64_t)seed, &r, &d);
     if (p.shown)
         fputs("\r\033[K", stderr);
     if (rc != SG_OK) {
         cli_print_diag(design, &d, rc);
         rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
-        goto done;
+        goto restore;
     }
-    if ((rc = outfile_open(&of, output && strcmp(output, "-") != 0 ? output : NULL, stdout))) {
-        cli_error("%s: %s", output, strerror(rc));
-        sg_tol_result_free(&r);
-        rc = CLI_EXIT_FILE;
-        goto done;
+    /* Inverse sensitivity, on rank 0 as the sensitivity. */
+    if (rank == 0 && inv_limit > 0 && !r.stopped) {
+        iv.limit = inv_limit;
+        if (!(iv.v = calloc((size_t)sys->tol.nop, sizeof *iv.v))) {
+            cli_error("out of memory");
+            rc = CLI_EXIT_INTERNAL;
+            goto restore;
+        }
+        p.total = 0;
+        if ((rc = sg_tol_inverse(mcx, inv_limit, iv.v, &iv.n, &d)) != SG_OK) {
+            cli_print_diag(design, &d, rc);
+            rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
+            goto restore;
+        }
+        if (iv.n < sys->tol.nop)
+            r.stopped = 1;
+        inv_report = &iv;
     }
-    if (fmt == REPORT_JSON)
-        write_json(of.f, sys, &r, sens, mc > 0);
-    else if (fmt == REPORT_CSV)
-        write_csv(of.f, sys, &r, sens, mc > 0);
-    else
-        write_text(of.f, sys, &r, sens, mc > 0);
-    sg_tol_result_free(&r);
-    if ((rc = outfile_commit(&of))) {
-        cli_error("%s: %s", output ? output : "standard output", strerror(rc));
-        rc = CLI_EXIT_FILE;
-        goto done;
+    r.trials = mc;
+    r.seed = (uint64_t)seed;
+    if (rank == 0 && mc > 0 && !r.stopped && fmt != REPORT_CSV &&
+        !(sink.crit = malloc((size_t)mc * sizeof *sink.crit))) {
+        cli_error("out of memory");
+        rc = CLI_EXIT_INTERNAL;
+        goto restore;
+    }
+    if (rank == 0) {
+        /* A Monte Carlo table written to a file grows there a block at a
+         * time, so a killed run keeps its trials (--resume). */
+        inplace = fmt == REPORT_CSV && mc > 0 && !r.stopped && output &&
+                  strcmp(output, "-") != 0;
+        if (fmt == FMT_HDF5 && mc == 0) {
+            rc = cli_usage_error("tolerance", "--format hdf5 writes the Monte Carlo table: "
+                                 "give --monte-carlo N");
+            goto restore;
+        }
+        if (nworst && mc == 0) {
+            rc = cli_usage_error("tolerance", "--save-worst keeps Monte Carlo systems: give "
+                                 "--monte-carlo N");
+            goto restore;
+        }
+        if (resume && mc == 0) {
+            rc = cli_usage_error("tolerance", "--resume: no Monte Carlo trials to continue");
+            goto restore;
+        }
+        if (resume && r.stopped) {
+            cli_error("%s: stopped before the trials; the file is as it was", output);
+            rc = CLI_EXIT_FILE;
+            goto restore;
+        }
+        if (resume) {
+            if ((rc = resume_open(output, sys, &r, sens, mcx, mc, &tab, &start)) != 0)
+                goto restore;
+        } else if (fmt == FMT_HDF5) {
+            char err[512];
+            if (!(h5 = tolh5_open(output, crit_key(sys), dist_key(sys), r.nominal.criterion,
+                                  (uint64_t)seed, mc, err, sizeof err))) {
+                cli_error("%s: %s", output, err);
+                rc = CLI_EXIT_FILE;
+                goto restore;
+            }
+        } else if (inplace) {
+            if (!(tab = fopen(output, "w"))) {
+                cli_error("%s: %s", output, strerror(errno));
+                rc = CLI_EXIT_FILE;
+                goto restore;
+            }
+            write_csv(tab, sys, &r, sens);
+        } else {
+            if ((rc = outfile_open(&of, output && strcmp(output, "-") != 0 ? output : NULL,
+                                   stdout))) {
+                cli_error("%s: %s", output, strerror(rc));
+                rc = CLI_EXIT_FILE;
+                goto restore;
+            }
+            opened = 1;
+            if (fmt == REPORT_CSV)
+                write_csv(of.f, sys, &r, sens);
+        }
+        if (r.stopped || start >= mc)
+            start = -1;
+    }
+    /* The workers wait here for rank 0's sensitivity and learn the first
+     * trial to run (-1: none, after a stop or with every trial done). */
+    if ((rc = tolmpi_agree(CLI_EXIT_OK, &start)) != CLI_EXIT_OK)
+        goto restore;
+    if (mc > 0 && start >= 0) {
+        nthreads = o.nthreads > 0 ? o.nthreads : (int)sysconf(_SC_NPROCESSORS_ONLN);
+        /* Blocks of a few systems a thread keep the threads busy to the
+         * block's end; the output does not depend on the size. */
+        block = 8 * (nthreads > 0 ? nthreads : 1);
+        sink.f = rank == 0 ? (tab ? tab : of.f) : NULL;
+        sink.csv = fmt == REPORT_CSV;
+        sink.h5 = h5;
+        sink.kworst = rank == 0 ? nworst : 0;
+        sink.p = &p;
+        sink.done = start;
+        p.total = mc;
+        p.base = start;
+        rc = tolmpi_size() > 1
+                 ? tolmpi_trials(mcx, start, mc, block, take_trials, &sink, &sink.done)
+                 : local_trials(mcx, start, mc, block, &sink);
+        if (p.shown)
+            fputs("\r\033[K", stderr);
+        if (rc == 1) {
+            r.stopped = 1;
+            rc = 0;
+        }
+        if (rc)
+            goto restore;
+        r.done = sink.done;
+        if (sink.crit && r.done > 0)
+            sg_tol_statistics(sink.crit, r.done, &r.stats);
+    } else if (resume) {
+        r.done = mc;
+    }
+    if (stop_int)
+        r.stopped = 1;
+    if (rank == 0 && (rc = save_worst(design, mcx, &sink)) != CLI_EXIT_OK)
+        goto restore;
+    if (rank == 0 && h5) {
+        char err[512];
+        rc = tolh5_close(h5, r.done, r.stopped, r.done > 0 ? &r.stats : NULL, err, sizeof err);
+        h5 = NULL;
+        if (rc) {
+            cli_error("%s: %s", output, err);
+            rc = CLI_EXIT_FILE;
+            goto restore;
+        }
+        rc = CLI_EXIT_OK;
+        goto restore;
+    }
+    if (rank == 0) {
+        if (fmt == REPORT_JSON)
+            write_json(of.f, sys, &r, sens, mc > 0, sink.crit);
+        else if (fmt == REPORT_TEXT)
+            write_text(of.f, sys, &r, sens, mc > 0);
+        if (tab) {
+            rc = fclose(tab) != 0 ? errno : 0;
+            tab = NULL;
+            if (rc) {
+                cli_error("%s: %s", output, strerror(rc));
+                rc = CLI_EXIT_FILE;
+                goto restore;
+            }
+            if (resume && start < 0)
+                fprintf(stderr, "sagitta: tolerance: %s holds all %d trials already\n", output,
+                        mc);
+            rc = CLI_EXIT_OK;
+            goto restore;
+        }
+        opened = 0;
+        if ((rc = outfile_commit(&of))) {
+            cli_error("%s: %s", output ? output : "standard output", strerror(rc));
+            rc = CLI_EXIT_FILE;
+            goto restore;
+        }
     }
     rc = CLI_EXIT_OK;
+restore:
+    sigaction(SIGINT, &old, NULL);
+    if (opened)
+        outfile_abort(&of);
+    tolh5_abort(h5);
+    /* A table that grew in place keeps its whole trials. */
+    if (tab) {
+        fclose(tab);
+        if (rc != CLI_EXIT_OK && mc > 0)
+            fprintf(stderr, "sagitta: tolerance: %s keeps the trials written; --resume "
+                    "continues it\n", output);
+    }
 done:
+    free(iv.v);
+    inv_report = NULL;
+    free(sink.crit);
+    sg_tol_result_free(&r);
+    sg_tol_mc_close(mcx);
     cli_design_free(cat, sys);
     return rc;
+}
+
+int cmd_tolerance(int argc, char **argv)
+{
+    int rc = tolmpi_start();
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    return tolmpi_end(tolerance_main(argc, argv));
 }

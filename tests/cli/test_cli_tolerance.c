@@ -8,6 +8,7 @@
  * writing the trials done, in order, marked stopped.
  */
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -300,6 +301,405 @@ static void interrupted(void **state)
     free(text);
 }
 
+/* Runs cmd through the shell; its exit code (128 + signal when killed). */
+static int shell(const char *cmd)
+{
+    int st = system(cmd);
+    return st == -1 ? -1 : WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
+}
+
+/* Nonzero when the files at a and b hold the same bytes. */
+static int same_bytes(const char *a, const char *b)
+{
+    FILE *fa = fopen(a, "rb"), *fb = fopen(b, "rb");
+    int ca, cb, same = fa && fb;
+    while (same) {
+        ca = getc(fa);
+        cb = getc(fb);
+        same = ca == cb;
+        if (ca == EOF)
+            break;
+    }
+    if (fa)
+        fclose(fa);
+    if (fb)
+        fclose(fb);
+    return same;
+}
+
+/* Monte Carlo under mpirun with 3 processes (more than this machine's
+ * cores, so --oversubscribe; as root where CI runs as root) writes the
+ * bytes one process writes with one thread and with two, in CSV and
+ * JSON; the trials were split (rank 0's note).  A build without MPI
+ * refuses the launch instead, saying so, and writes nothing. */
+static void mpi_same_bytes(void **state)
+{
+    const char *d = doublet("m.json", TOL);
+    const char *ci = getenv("CI");
+    static const char *const fmts[3] = {"csv", "json", "hdf5"};
+    static const char *const thr[3] = {"1", "2", "1"}, *const ext[3] = {"csv", "json", "h5"};
+    char cmd[8192], *err, name[32];
+    ct_result r;
+    int k, rc;
+    (void)state;
+    if (shell("mpirun --version >/dev/null 2>&1") != 0) {
+        if (ci && ci[0])
+            fail_msg("mpirun is not installed (Debian openmpi-bin; tools/dev.sh installs it)");
+        print_message("# SKIP mpirun not installed (Debian openmpi-bin)\n");
+        return;
+    }
+    for (k = 0; k < 3; k++) {
+        const char *mout, *merr = ct_path("mpi.err"), *one, *two;
+        snprintf(name, sizeof name, "mpi.%s", ext[k]);
+        mout = ct_path(name);
+        snprintf(name, sizeof name, "one.%s", ext[k]);
+        one = ct_path(name);
+        snprintf(name, sizeof name, "two.%s", ext[k]);
+        two = ct_path(name);
+        /* --threads 1: blocks of 8, so the 24 trials take 3 blocks, one a
+         * rank; --threads 2, blocks of 16. */
+        /* Under AddressSanitizer (tools/ci-extra.sh) leak checking is off
+         * for the ranks: Open MPI's runtime keeps memory at exit in its
+         * components, unloaded by then and built without frame pointers,
+         * so LeakSanitizer can neither name nor suppress them.  The
+         * single-process runs here check sagitta's own leaks. */
+        snprintf(cmd, sizeof cmd,
+                 "ASAN_OPTIONS=\"${ASAN_OPTIONS:+$ASAN_OPTIONS:}detect_leaks=0\" "
+                 "mpirun --oversubscribe --allow-run-as-root -np 3 '%s' tolerance '%s' "
+                 "--monte-carlo 24 --threads %s --format %s -o '%s' </dev/null >/dev/null "
+                 "2>'%s'",
+                 exe, d, thr[k], fmts[k], mout, merr);
+        rc = shell(cmd);
+        err = ct_read(merr);
+        if (rc != 0 && strstr(err, "built without MPI")) {
+            assert_null(fopen(mout, "r"));
+            free(err);
+            print_message("# SKIP this sagitta was built without MPI (-Dmpi=disabled or no "
+                          "libopenmpi-dev): the launch was refused\n");
+            return;
+        }
+        if (rc != 0)
+            fail_msg("mpirun exit %d: %s", rc, err);
+        if (!strstr(err, "24 trials on 3 processes (MPI)"))
+            fail_msg("no split of the trials reported: %s", err);
+        free(err);
+        ct_run(&r, "tolerance", d, "--monte-carlo", "24", "--threads", "1", "--format",
+               fmts[k], "-o", one, NULL);
+        assert_int_equal(r.code, 0);
+        ct_free(&r);
+        ct_run(&r, "tolerance", d, "--monte-carlo", "24", "--threads", "2", "--format",
+               fmts[k], "-o", two, NULL);
+        assert_int_equal(r.code, 0);
+        ct_free(&r);
+        if (!same_bytes(mout, one) || !same_bytes(mout, two))
+            fail_msg("--format %s: 3 ranks' file differs from one process's", fmts[k]);
+    }
+}
+
+/* The numbers after "DATA {" in h5dump's text, up to n; their count. */
+static int h5_numbers(const char *text, double *v, int n)
+{
+    const char *p = strstr(text, "DATA {");
+    int k = 0;
+    char *end;
+    if (!p)
+        return 0;
+    p += 6;
+    while (k < n) {
+        while (*p == ' ' || *p == ',' || *p == '\n')
+            p++;
+        if (*p == '}')
+            break;
+        v[k] = strtod(p, &end);
+        if (end == p)
+            break;
+        k++;
+        p = end;
+    }
+    return k;
+}
+
+/* --format hdf5: the Monte Carlo table read back by h5dump (HDF5's own
+ * tool) holds the CSV's criteria, bit for bit (17 digits), trials 1 to N
+ * and the nominal; the same bytes on one and two threads (and ranks, in
+ * mpi_same_bytes).  Without -o it is refused. */
+static void hdf5_table(void **state)
+{
+    const char *d = doublet("h.json", TOL), *h5 = ct_path("t.h5"), *ci = getenv("CI");
+    char cmd[8192], *text;
+    double v[16], t[16];
+    ct_result r;
+    int k, n;
+    (void)state;
+    if (shell("h5dump --version >/dev/null 2>&1") != 0) {
+        if (ci && ci[0])
+            fail_msg("h5dump is not installed (Debian hdf5-tools)");
+        print_message("# SKIP h5dump not installed (hdf5-tools)\n");
+        return;
+    }
+    ct_run(&r, "tolerance", d, "--monte-carlo", "10", "--format", "hdf5", "-o", h5, NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "10", "--format", "csv", NULL);
+    assert_int_equal(r.code, 0);
+    snprintf(cmd, sizeof cmd, "h5dump -d /criterion -m %%.17g -y -w 0 '%s' > '%s'", h5,
+             ct_path("crit.txt"));
+    assert_int_equal(shell(cmd), 0);
+    text = ct_read(ct_path("crit.txt"));
+    n = h5_numbers(text, v, 16);
+    free(text);
+    assert_int_equal(n, 10);
+    for (k = 0; k < 10; k++)
+        if (v[k] != ct_csv_num(r.out, k + 1, "criterion_min"))
+            fail_msg("trial %d: %.17g in HDF5, %.17g in CSV", k + 1, v[k],
+                     ct_csv_num(r.out, k + 1, "criterion_min"));
+    snprintf(cmd, sizeof cmd, "h5dump -d /trial -y -w 0 '%s' > '%s'", h5, ct_path("tr.txt"));
+    assert_int_equal(shell(cmd), 0);
+    text = ct_read(ct_path("tr.txt"));
+    assert_int_equal(h5_numbers(text, t, 16), 10);
+    free(text);
+    for (k = 0; k < 10; k++)
+        assert_true(t[k] == k + 1);
+    snprintf(cmd, sizeof cmd, "h5dump -a /nominal -m %%.17g '%s' > '%s'", h5,
+             ct_path("nom.txt"));
+    assert_int_equal(shell(cmd), 0);
+    text = ct_read(ct_path("nom.txt"));
+    assert_non_null(strstr(text, "(0): "));
+    assert_true(strtod(strstr(text, "(0): ") + 5, NULL) == ct_csv_num(r.out, 0,
+                                                                       "criterion_min"));
+    free(text);
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "10", "--format", "hdf5", NULL);
+    assert_int_equal(r.code, 2);
+    ct_free(&r);
+}
+
+/* The number of trial rows in text. */
+static int trial_rows(const char *text)
+{
+    int n = 0;
+    const char *p = text;
+    for (; (p = strstr(p, "\ntrial,")) != NULL; p++)
+        n++;
+    return n;
+}
+
+/* A Monte Carlo table killed (SIGKILL) while it grows, its last line torn
+ * as a write cut short leaves it, then --resume: the file an
+ * uninterrupted run writes, byte for byte.  --resume refuses a table of
+ * another seed (its last trial computed again differs) and leaves it as
+ * it was, and wants -o FILE in CSV. */
+static void resume_after_kill(void **state)
+{
+    const char *d = doublet("k.json", TOL), *full = ct_path("full.csv");
+    const char *part = ct_path("part.csv");
+    char *a, *b, torn[64];
+    ct_result r;
+    pid_t pid;
+    int st, k, rows = 0;
+    FILE *f;
+    (void)state;
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--threads", "1", "--format", "csv",
+           "-o", full, NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        int null = open("/dev/null", O_WRONLY);
+        dup2(null, 2);
+        execl(exe, exe, "tolerance", d, "--monte-carlo", "40", "--threads", "1", "--format",
+              "csv", "-o", part, (char *)NULL);
+        _exit(127);
+    }
+    /* Killed once a block of trials is in the file. */
+    for (k = 0; k < 6000 && rows == 0; k++) {
+        struct timespec ts = {0, 20000000};
+        nanosleep(&ts, NULL);
+        if ((f = fopen(part, "r")) != NULL) {
+            fclose(f);
+            a = ct_read(part);
+            rows = trial_rows(a);
+            free(a);
+        }
+    }
+    kill(pid, SIGKILL);
+    waitpid(pid, &st, 0);
+    a = ct_read(part);
+    rows = trial_rows(a);
+    free(a);
+    print_message("# killed after %d of 40 trials\n", rows);
+    /* The rows were in the file while the run went on. */
+    assert_true(rows > 0 && rows < 40);
+    if (rows < 40) {
+        f = fopen(part, "a");
+        assert_non_null(f);
+        snprintf(torn, sizeof torn, "trial,%d,,,,,0.0", rows + 1);
+        fputs(torn, f);
+        fclose(f);
+    }
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--threads", "2", "--format", "csv",
+           "-o", part, "--resume", NULL);
+    if (r.code != 0)
+        fail_msg("resume: exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    a = ct_read(full);
+    b = ct_read(part);
+    assert_string_equal(a, b);
+    free(b);
+    /* A whole table with a torn line after it: the line goes. */
+    f = fopen(part, "a");
+    assert_non_null(f);
+    fputs("trial,4", f);
+    fclose(f);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--format", "csv", "-o", part,
+           "--resume", NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    b = ct_read(part);
+    assert_string_equal(a, b);
+    free(b);
+    /* Another seed's trials are refused, the file untouched. */
+    ct_run(&r, "tolerance", d, "--monte-carlo", "41", "--seed", "6", "--format", "csv", "-o",
+           part, "--resume", NULL);
+    assert_int_not_equal(r.code, 0);
+    assert_non_null(strstr(r.err, "trial 40 is not this run's"));
+    ct_free(&r);
+    b = ct_read(part);
+    assert_string_equal(a, b);
+    free(a);
+    free(b);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--format", "json", "-o", part,
+           "--resume", NULL);
+    assert_int_equal(r.code, 2);
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--format", "csv", "-o",
+           ct_path("none.csv"), "--resume", NULL);
+    assert_int_equal(r.code, 3);
+    ct_free(&r);
+}
+
+/* The doublet's criterion by sagitta spot (per-field RMS about the
+ * centroid, density 4) combined with the field weights 1, 2, 3. */
+static double spot_criterion(const char *design)
+{
+    const double w[3] = {1, 2, 3};
+    double acc = 0.0, wsum = 0.0;
+    ct_result r;
+    cJSON *root, *fields;
+    int k;
+    ct_run(&r, "spot", design, "--reference", "centroid", "--density", "4", "--format", "json",
+           NULL);
+    if (r.code != 0)
+        fail_msg("spot %s: exit %d: %s", design, r.code, r.err);
+    root = cJSON_Parse(r.out);
+    assert_non_null(root);
+    fields = cJSON_GetObjectItem(root, "fields");
+    assert_int_equal(cJSON_GetArraySize(fields), 3);
+    for (k = 0; k < 3; k++) {
+        double c = num(cJSON_GetArrayItem(fields, k), "rms");
+        acc += w[k] * c * c;
+        wsum += w[k];
+    }
+    cJSON_Delete(root);
+    ct_free(&r);
+    return sqrt(acc / wsum);
+}
+
+/* --save-worst 2: the two largest criteria of the CSV (sorted here), and
+ * sagitta spot on each saved design (a perturbed, compensated lens)
+ * gives that criterion; the files are not overwritten without --force,
+ * which the run refuses before it starts. */
+static void save_worst(void **state)
+{
+    const char *d = doublet("s.json", TOL), *w1 = ct_path("s-worst1.json");
+    const char *w2 = ct_path("s-worst2.json"), *csv = ct_path("s.csv");
+    double c[10], top[2] = {-1, -1};
+    int k, it[2] = {-1, -1};
+    ct_result r;
+    char *text, *again;
+    (void)state;
+    ct_run(&r, "tolerance", d, "--monte-carlo", "10", "--format", "csv", "--save-worst", "2",
+           "-o", csv, NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    text = ct_read(csv);
+    for (k = 0; k < 10; k++) {
+        c[k] = ct_csv_num(text, k + 1, "criterion_min");
+        if (c[k] > top[0]) {
+            top[1] = top[0];
+            it[1] = it[0];
+            top[0] = c[k];
+            it[0] = k;
+        } else if (c[k] > top[1]) {
+            top[1] = c[k];
+            it[1] = k;
+        }
+    }
+    free(text);
+    print_message("# worst trials %d and %d\n", it[0] + 1, it[1] + 1);
+    ct_close(spot_criterion(w1), top[0], 1e-13, 0, "worst 1");
+    ct_close(spot_criterion(w2), top[1], 1e-13, 0, "worst 2");
+    text = ct_read(w1);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "10", "--save-worst", "1", NULL);
+    assert_int_equal(r.code, 2);
+    assert_non_null(strstr(r.err, "exists"));
+    ct_free(&r);
+    again = ct_read(w1);
+    assert_string_equal(text, again);
+    free(text);
+    free(again);
+}
+
+/* --inverse on a thin lens (zero thickness, n = 1.5, R1 = 50, R2 = -50,
+ * f = 50) whose criterion is the merit function |EFFL - 50|: TRAD on R1
+ * reaches a change of L = 0.5 where the lensmaker's equation
+ * 1/f = (n - 1)(1/R1 - 1/R2) gives f = 50 +- 0.5, R1 = 1 / (1/((n - 1) f)
+ * + 1/R2). */
+static void inverse_thin_lens(void **state)
+{
+    const char *d = ct_file("thin.json",
+        "{\"format\": \"sagitta-design\", \"units\": \"mm\","
+        "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.5875618, \"weight\": 1}]},"
+        "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0, \"weight\": 1}]},"
+        "\"aperture\": {\"type\": \"epd\", \"value\": 10},"
+        "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+        "{\"radius\": 50, \"thickness\": 0, \"material\": 1.5, \"stop\": true},"
+        "{\"radius\": -50, \"thickness\": 50}, {\"radius\": \"inf\", \"thickness\": 0}],"
+        "\"merit\": {\"operands\": [{\"type\": \"EFFL\", \"wave\": 1, \"target\": 50,"
+        " \"weight\": 1}]},"
+        "\"tolerances\": {\"operands\": [{\"type\": \"TRAD\", \"surface\": 1, \"min\": -1,"
+        " \"max\": 1}], \"criterion\": {\"type\": \"merit\"}}}");
+    const double n1 = 0.5, r2 = -50;
+    double lo = 1.0 / (1.0 / (n1 * 49.5) + 1.0 / r2) - 50;
+    double hi = 1.0 / (1.0 / (n1 * 50.5) + 1.0 / r2) - 50;
+    ct_result r;
+    cJSON *root, *inv, *row;
+    (void)state;
+    ct_run(&r, "tolerance", d, "--inverse", "0.5", "--format", "json", NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    root = cJSON_Parse(r.out);
+    assert_non_null(root);
+    inv = cJSON_GetObjectItem(root, "inverse");
+    assert_non_null(inv);
+    ct_close(num(inv, "limit"), 0.5, 0, 0, "limit");
+    row = cJSON_GetArrayItem(cJSON_GetObjectItem(inv, "rows"), 0);
+    assert_non_null(row);
+    assert_string_equal(cJSON_GetObjectItem(row, "status_min")->valuestring, "ok");
+    ct_close(num(row, "min"), lo, 1e-10, 0, "inverse min");
+    ct_close(num(row, "max"), hi, 1e-10, 0, "inverse max");
+    ct_close(num(row, "criterion_max"), num(root, "nominal") + 0.5, 1e-10, 0, "criterion");
+    cJSON_Delete(root);
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--inverse", "-1", NULL);
+    assert_int_equal(r.code, 2);
+    ct_free(&r);
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -309,6 +709,11 @@ int main(int argc, char **argv)
         cmocka_unit_test(threads_same_bytes),
         cmocka_unit_test(refusals),
         cmocka_unit_test(interrupted),
+        cmocka_unit_test(mpi_same_bytes),
+        cmocka_unit_test(resume_after_kill),
+        cmocka_unit_test(hdf5_table),
+        cmocka_unit_test(save_worst),
+        cmocka_unit_test(inverse_thin_lens),
     };
     int rc;
     ct_init(argc, argv);

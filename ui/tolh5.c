@@ -1,0 +1,269 @@
+/* tolh5.c - the Monte Carlo table as HDF5 (tolh5.h), in the manner of
+ * h5rays.c's ray tables. */
+#include "tolh5.h"
+
+#include <errno.h>
+#include <hdf5.h>
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "outfile.h"
+
+enum { D_TRIAL, D_CRIT, D_STATUS, D_MAX };
+
+struct tolh5 {
+    hid_t file, ds[D_MAX], status_type;
+    char path[4096], tmp[4096 + 32];
+    int slot;
+    hsize_t rows;
+};
+
+static int fail(char *err, size_t n, const char *what)
+{
+    snprintf(err, n, "%s", what);
+    return -1;
+}
+
+static herr_t put_attr_str(hid_t obj, const char *name, const char *v)
+{
+    hid_t t = H5Tcopy(H5T_C_S1), sp = H5Screate(H5S_SCALAR), a;
+    herr_t rc = -1;
+    if (t >= 0 && sp >= 0 && H5Tset_size(t, strlen(v) > 0 ? strlen(v) : 1) >= 0) {
+        a = H5Acreate2(obj, name, t, sp, H5P_DEFAULT, H5P_DEFAULT);
+        if (a >= 0) {
+            rc = H5Awrite(a, t, v);
+            H5Aclose(a);
+        }
+    }
+    if (sp >= 0)
+        H5Sclose(sp);
+    if (t >= 0)
+        H5Tclose(t);
+    return rc;
+}
+
+/* n values of type at name (n == 0: a scalar). */
+static herr_t put_attr(hid_t obj, const char *name, hid_t ftype, hid_t mtype, const void *v,
+                       hsize_t n)
+{
+    hid_t sp = n ? H5Screate_simple(1, &n, NULL) : H5Screate(H5S_SCALAR), a;
+    herr_t rc = -1;
+    if (sp < 0)
+        return -1;
+    a = H5Acreate2(obj, name, ftype, sp, H5P_DEFAULT, H5P_DEFAULT);
+    if (a >= 0) {
+        rc = H5Awrite(a, mtype, v);
+        H5Aclose(a);
+    }
+    H5Sclose(sp);
+    return rc;
+}
+
+/* The status is an enumeration of the CSV's words ("ok", "MISS", ...)
+ * with the library's codes as values. */
+static hid_t make_status_type(void)
+{
+    hid_t t = H5Tenum_create(H5T_NATIVE_INT);
+    int code;
+    if (t < 0)
+        return -1;
+    for (code = 0; code < SG_ERRNO_COUNT; code++)
+        if (H5Tenum_insert(t, code == SG_OK ? "ok" : sg_err_name(code), &code) < 0) {
+            H5Tclose(t);
+            return -1;
+        }
+    return t;
+}
+
+static hid_t make_column(hid_t file, const char *name, hid_t type, const char *what)
+{
+    hsize_t dims = 0, maxdims = H5S_UNLIMITED, chunk = 1024;
+    hid_t sp = H5Screate_simple(1, &dims, &maxdims);
+    hid_t pl = H5Pcreate(H5P_DATASET_CREATE), ds = -1;
+    /* No creation or change times: the bytes depend on the data alone. */
+    if (sp >= 0 && pl >= 0 && H5Pset_chunk(pl, 1, &chunk) >= 0 &&
+        H5Pset_obj_track_times(pl, 0) >= 0)
+        ds = H5Dcreate2(file, name, type, sp, H5P_DEFAULT, pl, H5P_DEFAULT);
+    if (pl >= 0)
+        H5Pclose(pl);
+    if (sp >= 0)
+        H5Sclose(sp);
+    if (ds >= 0 && put_attr_str(ds, "description", what) < 0) {
+        H5Dclose(ds);
+        ds = -1;
+    }
+    return ds;
+}
+
+static void close_all(tolh5 *h)
+{
+    int k;
+    for (k = 0; k < D_MAX; k++)
+        if (h->ds[k] > 0)
+            H5Dclose(h->ds[k]);
+    if (h->status_type > 0)
+        H5Tclose(h->status_type);
+    if (h->file > 0)
+        H5Fclose(h->file);
+    memset(h->ds, 0, sizeof h->ds);
+    h->status_type = h->file = 0;
+}
+
+void tolh5_abort(tolh5 *h)
+{
+    sigset_t old;
+    if (!h)
+        return;
+    close_all(h);
+    outfile_block_signals(&old);
+    if (h->tmp[0])
+        unlink(h->tmp);
+    outfile_untrack(h->slot);
+    outfile_restore_signals(&old);
+    free(h);
+}
+
+tolh5 *tolh5_open(const char *path, const char *criterion, const char *distribution,
+                  double nominal, uint64_t seed, int trials, char *err, size_t errlen)
+{
+    tolh5 *h = calloc(1, sizeof *h);
+    unsigned long long sd = seed;
+    hid_t fcpl;
+    sigset_t old;
+    int ok;
+    if (!h) {
+        fail(err, errlen, "out of memory");
+        return NULL;
+    }
+    h->slot = -1;
+    if (strlen(path) >= sizeof h->path) {
+        free(h);
+        fail(err, errlen, "file name too long");
+        return NULL;
+    }
+    strcpy(h->path, path);
+    snprintf(h->tmp, sizeof h->tmp, "%s.tmp%ld", path, (long)getpid());
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+    fcpl = H5Pcreate(H5P_FILE_CREATE);
+    outfile_block_signals(&old);
+    h->slot = outfile_track(h->tmp);
+    h->file = fcpl >= 0 ? H5Fcreate(h->tmp, H5F_ACC_TRUNC, fcpl, H5P_DEFAULT) : -1;
+    outfile_restore_signals(&old);
+    if (fcpl >= 0)
+        H5Pclose(fcpl);
+    if (h->file < 0) {
+        snprintf(err, errlen, "cannot create %s: %s", h->tmp, strerror(errno ? errno : EIO));
+        h->tmp[0] = '\0';
+        tolh5_abort(h);
+        return NULL;
+    }
+    h->status_type = make_status_type();
+    ok = h->status_type >= 0;
+    if (ok)
+        ok = (h->ds[D_TRIAL] = make_column(h->file, "trial", H5T_STD_I32LE,
+                                           "trial number, from 1")) >= 0 &&
+             (h->ds[D_CRIT] = make_column(h->file, "criterion", H5T_IEEE_F64LE,
+                                          "the compensated criterion; NaN where the system "
+                                          "could not be evaluated")) >= 0 &&
+             (h->ds[D_STATUS] = make_column(h->file, "status", h->status_type,
+                                            "ok, or why the system could not be evaluated"))
+                 >= 0;
+    if (ok)
+        ok = put_attr_str(h->file, "criterion", criterion) >= 0 &&
+             put_attr_str(h->file, "distribution", distribution) >= 0 &&
+             put_attr(h->file, "nominal", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &nominal, 0) >= 0 &&
+             put_attr(h->file, "seed", H5T_STD_U64LE, H5T_NATIVE_ULLONG, &sd, 0) >= 0 &&
+             put_attr(h->file, "trials", H5T_STD_I32LE, H5T_NATIVE_INT, &trials, 0) >= 0;
+    if (!ok) {
+        fail(err, errlen, "HDF5 write failed");
+        tolh5_abort(h);
+        return NULL;
+    }
+    return h;
+}
+
+static int append(tolh5 *h, int col, hid_t memtype, const void *buf, hsize_t n)
+{
+    hsize_t start = h->rows, count = n, size = h->rows + n;
+    hid_t fs, ms;
+    herr_t rc;
+    if (H5Dset_extent(h->ds[col], &size) < 0)
+        return -1;
+    fs = H5Dget_space(h->ds[col]);
+    ms = H5Screate_simple(1, &count, NULL);
+    rc = fs >= 0 && ms >= 0 &&
+                 H5Sselect_hyperslab(fs, H5S_SELECT_SET, &start, NULL, &count, NULL) >= 0
+             ? H5Dwrite(h->ds[col], memtype, ms, fs, H5P_DEFAULT, buf)
+             : -1;
+    if (ms >= 0)
+        H5Sclose(ms);
+    if (fs >= 0)
+        H5Sclose(fs);
+    return rc < 0 ? -1 : 0;
+}
+
+int tolh5_write(tolh5 *h, int first, int n, const sg_tol_value *v, char *err, size_t errlen)
+{
+    int *trial, *st, k, rc;
+    double *c;
+    if (n <= 0)
+        return 0;
+    trial = malloc((size_t)n * sizeof *trial);
+    st = malloc((size_t)n * sizeof *st);
+    c = malloc((size_t)n * sizeof *c);
+    rc = trial && st && c ? 0 : fail(err, errlen, "out of memory");
+    for (k = 0; !rc && k < n; k++) {
+        trial[k] = first + k + 1;
+        st[k] = v[k].status;
+        c[k] = v[k].status == SG_OK ? v[k].criterion : NAN;
+    }
+    if (!rc && (append(h, D_TRIAL, H5T_NATIVE_INT, trial, (hsize_t)n) < 0 ||
+                append(h, D_CRIT, H5T_NATIVE_DOUBLE, c, (hsize_t)n) < 0 ||
+                append(h, D_STATUS, h->status_type, st, (hsize_t)n) < 0))
+        rc = fail(err, errlen, "HDF5 write failed");
+    if (!rc)
+        h->rows += (hsize_t)n;
+    free(trial);
+    free(st);
+    free(c);
+    return rc;
+}
+
+int tolh5_close(tolh5 *h, int done, int stopped, const sg_tol_stats *s, char *err,
+                size_t errlen)
+{
+    static const double levels[5] = {90, 80, 50, 20, 10};
+    int rc = 0, failed = s ? done - s->n : 0;
+    sigset_t old;
+    if (put_attr(h->file, "done", H5T_STD_I32LE, H5T_NATIVE_INT, &done, 0) < 0 ||
+        put_attr(h->file, "stopped", H5T_STD_I32LE, H5T_NATIVE_INT, &stopped, 0) < 0 ||
+        put_attr(h->file, "failed", H5T_STD_I32LE, H5T_NATIVE_INT, &failed, 0) < 0)
+        rc = fail(err, errlen, "HDF5 write failed");
+    if (!rc && s && s->n > 0 &&
+        (put_attr(h->file, "best", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &s->best, 0) < 0 ||
+         put_attr(h->file, "worst", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &s->worst, 0) < 0 ||
+         put_attr(h->file, "mean", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &s->mean, 0) < 0 ||
+         put_attr(h->file, "std", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &s->std, 0) < 0 ||
+         put_attr(h->file, "percentile_levels", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, levels, 5) <
+             0 ||
+         put_attr(h->file, "percentiles", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, s->pct, 5) < 0))
+        rc = fail(err, errlen, "HDF5 write failed");
+    if (!rc && H5Fflush(h->file, H5F_SCOPE_GLOBAL) < 0)
+        rc = fail(err, errlen, "HDF5 write failed");
+    close_all(h);
+    outfile_block_signals(&old);
+    if (rc == 0 && rename(h->tmp, h->path) != 0) {
+        snprintf(err, errlen, "%s: %s", h->path, strerror(errno));
+        rc = -1;
+    }
+    if (rc != 0)
+        unlink(h->tmp);
+    outfile_untrack(h->slot);
+    outfile_restore_signals(&old);
+    free(h);
+    return rc;
+}
