@@ -1522,7 +1522,9 @@ int sg_merit_eval(const sg_system *sys, const sg_catalog *cat, sg_merit_result *
     for (i = 0; i < nrow; i++) {
         double e = out->row[i].value - out->row[i].target;
         out->row[i].row = i + 1;
-        if (out->row[i].weight == 0.0)
+        /* A row of weight 0 still shows its value and feeds others: never
+         * a NaN either. */
+        if (out->row[i].weight == 0.0 && isfinite(out->row[i].value))
             continue;
         if (!isfinite(out->row[i].value)) {
             rc = sg_diag_set(d, SG_ENONPHYS, "merit: row %d (%s): the value is not finite", i + 1,

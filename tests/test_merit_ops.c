@@ -557,6 +557,13 @@ static void sqrt_and_failures(void **state)
         {"{\"type\": \"AXCL\", \"wave1\": 1, \"wave2\": 3}", "operand 1 (AXCL): wave1 1"},
         {"{\"type\": \"RSRE\", \"grid\": 0, \"wave\": 1}", "operand 1 (RSRE): grid 0"},
         {"{\"type\": \"DIMX\", \"field\": 3, \"wave\": 1}", "operand 1 (DIMX): field 3"},
+        {"{\"type\": \"FCGT\", \"wave\": 1, \"hy\": 60}", "operand 1 (FCGT)"},
+        {"{\"type\": \"RWCE\", \"rings\": 3, \"wave\": 1, \"hy\": 40}", "operand 1 (RWCE)"},
+        {"{\"type\": \"TRAC\", \"wave\": 1, \"py\": 30}", "operand 1 (TRAC)"},
+        {"{\"type\": \"CONS\"}, {\"type\": \"OPDX\", \"wave\": 1, \"py\": 0.5},"
+         " {\"type\": \"OPDX\", \"wave\": 1, \"py\": 30}", "operand 3 (OPDX)"},
+        {"{\"type\": \"LACL\", \"wave1\": 1, \"wave2\": 2, \"target\": 0},"
+         " {\"type\": \"REAY\", \"surf\": 3, \"wave\": 1, \"py\": 30}", "operand 2 (REAY)"},
     };
     size_t i;
     (void)state;
@@ -592,6 +599,50 @@ static void sqrt_and_failures(void **state)
             fail_msg("case %zu: \"%s\" lacks \"%s\"", i, d.msg, t[i].want);
         sg_system_free(sys);
     }
+}
+
+/* PARY refuses fields given as paraxial image height; WFNO and ISFN of
+ * an afocal system (two confocal mirrors' worth of power: a flat plate)
+ * name their row, never a NaN. */
+static void first_order_refusals(void **state)
+{
+    const char *text =
+        "{\"format\": \"sagitta-design\", \"version\": 6, \"units\": \"mm\","
+        "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.55}]},"
+        "\"fields\": {\"type\": \"paraxial_image_height\", \"list\": [{\"y\": 0}, {\"y\": 1}]},"
+        "\"aperture\": {\"type\": \"epd\", \"value\": 10},"
+        "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+        "{\"radius\": 50, \"thickness\": 6, \"material\": 1.5, \"stop\": true},"
+        "{\"radius\": -80, \"thickness\": 40}, {\"radius\": \"inf\", \"thickness\": 0}],"
+        "\"merit\": {\"operands\": [{\"type\": \"PARY\", \"surf\": 2, \"hy\": 1}]}}";
+    const char *flat =
+        "{\"format\": \"sagitta-design\", \"version\": 6, \"units\": \"mm\","
+        "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.55}]},"
+        "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}]},"
+        "\"aperture\": {\"type\": \"epd\", \"value\": 10},"
+        "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+        "{\"radius\": \"inf\", \"thickness\": 6, \"material\": 1.5, \"stop\": true},"
+        "{\"radius\": \"inf\", \"thickness\": 40}, {\"radius\": \"inf\", \"thickness\": 0}],"
+        "\"merit\": {\"operands\": [{\"type\": \"WFNO\"}]}}";
+    sg_system *sys = sg_system_new();
+    sg_merit_result r;
+    sg_diag d;
+    (void)state;
+    sg_diag_clear(&d);
+    if (sg_design_parse(sys, text, strlen(text), "t", &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_int_not_equal(sg_merit_eval(sys, NULL, &r, &d), SG_OK);
+    assert_non_null(strstr(d.msg, "operand 1 (PARY)"));
+    assert_non_null(strstr(d.msg, "angle or object height"));
+    sg_system_free(sys);
+    sys = sg_system_new();
+    sg_diag_clear(&d);
+    if (sg_design_parse(sys, flat, strlen(flat), "t", &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    sg_diag_clear(&d);
+    assert_int_not_equal(sg_merit_eval(sys, NULL, &r, &d), SG_OK);
+    assert_non_null(strstr(d.msg, "operand 1 (WFNO)"));
+    sg_system_free(sys);
 }
 
 /* The operands' own keys survive a JSON round trip, bit for bit. */
@@ -633,6 +684,7 @@ int main(void)
         cmocka_unit_test(colour),
         cmocka_unit_test(physical_optics),
         cmocka_unit_test(sqrt_and_failures),
+        cmocka_unit_test(first_order_refusals),
         cmocka_unit_test(json_keys),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
