@@ -11,6 +11,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "h5util.h"
 #include "outfile.h"
 
 /* Rows a chunk holds: 64 Ki doubles, 512 KiB, the size HDF5's guide
@@ -34,81 +35,6 @@ struct h5rays {
     void *buf; /* the columns of a block */
     size_t bufrows;
 };
-
-static int fail(char *err, size_t n, const char *what)
-{
-    snprintf(err, n, "%s", what);
-    return -1;
-}
-
-static herr_t put_attr_str(hid_t obj, const char *name, const char *v)
-{
-    hid_t t = H5Tcopy(H5T_C_S1), sp = H5Screate(H5S_SCALAR), a;
-    herr_t rc = -1;
-    if (t >= 0 && sp >= 0 && H5Tset_size(t, strlen(v) > 0 ? strlen(v) : 1) >= 0) {
-        a = H5Acreate2(obj, name, t, sp, H5P_DEFAULT, H5P_DEFAULT);
-        if (a >= 0) {
-            rc = H5Awrite(a, t, v);
-            H5Aclose(a);
-        }
-    }
-    if (sp >= 0)
-        H5Sclose(sp);
-    if (t >= 0)
-        H5Tclose(t);
-    return rc;
-}
-
-static herr_t put_attr_num(hid_t obj, const char *name, hid_t type, const void *v)
-{
-    hid_t sp = H5Screate(H5S_SCALAR), a;
-    herr_t rc = -1;
-    if (sp < 0)
-        return -1;
-    a = H5Acreate2(obj, name, type, sp, H5P_DEFAULT, H5P_DEFAULT);
-    if (a >= 0) {
-        rc = H5Awrite(a, type, v);
-        H5Aclose(a);
-    }
-    H5Sclose(sp);
-    return rc;
-}
-
-/* The status column is an enumeration, so readers see the report's words
- * ("OK", "MISS", ...) with the library's codes as values. */
-static hid_t make_status_type(void)
-{
-    hid_t t = H5Tenum_create(H5T_NATIVE_INT);
-    int code;
-    if (t < 0)
-        return -1;
-    for (code = 0; code < SG_ERRNO_COUNT; code++)
-        if (H5Tenum_insert(t, report_status_name(code), &code) < 0) {
-            H5Tclose(t);
-            return -1;
-        }
-    return t;
-}
-
-static hid_t make_column(hid_t file, const char *name, hid_t type, const char *units,
-                         const char *what, hsize_t chunk)
-{
-    hsize_t dims = 0, maxdims = H5S_UNLIMITED;
-    hid_t sp = H5Screate_simple(1, &dims, &maxdims);
-    hid_t pl = H5Pcreate(H5P_DATASET_CREATE), ds = -1;
-    if (sp >= 0 && pl >= 0 && H5Pset_chunk(pl, 1, &chunk) >= 0)
-        ds = H5Dcreate2(file, name, type, sp, H5P_DEFAULT, pl, H5P_DEFAULT);
-    if (pl >= 0)
-        H5Pclose(pl);
-    if (sp >= 0)
-        H5Sclose(sp);
-    if (ds >= 0 && ((units && put_attr_str(ds, "units", units) < 0) ||
-                    put_attr_str(ds, "description", what) < 0)) {
-        H5Dclose(ds);
-        ds = -1;
-    }
-    return ds;
-}
 
 static void close_all(h5rays *h)
 {
@@ -166,13 +92,13 @@ h5rays *h5rays_open(const char *path, const report_meta *m, const char *units,
 
     h = calloc(1, sizeof *h);
     if (!h) {
-        fail(err, errlen, "out of memory");
+        h5u_fail(err, errlen, "out of memory");
         return NULL;
     }
     h->slot = -1;
     if (strlen(path) >= sizeof h->path) {
         free(h);
-        fail(err, errlen, "file name too long");
+        h5u_fail(err, errlen, "file name too long");
         return NULL;
     }
     strcpy(h->path, path);
@@ -183,7 +109,7 @@ h5rays *h5rays_open(const char *path, const report_meta *m, const char *units,
         h->sel = malloc((size_t)(m->nsurfaces > 0 ? m->nsurfaces : 1) * sizeof *h->sel);
         if (!h->sel) {
             free(h);
-            fail(err, errlen, "out of memory");
+            h5u_fail(err, errlen, "out of memory");
             return NULL;
         }
         memcpy(h->sel, m->surfaces, (size_t)m->nsurfaces * sizeof *h->sel);
@@ -211,22 +137,22 @@ h5rays *h5rays_open(const char *path, const report_meta *m, const char *units,
         h5rays_abort(h);
         return NULL;
     }
-    h->status_type = make_status_type();
+    h->status_type = h5u_status_type(report_status_name);
     ok = h->status_type >= 0;
     if (ok)
-        h->ds[C_RAY] = make_column(h->file, "ray", H5T_STD_U64LE, NULL,
-                                   "ray number, from 0 in the input's order", chunk);
+        h->ds[C_RAY] = h5u_column(h->file, "ray", H5T_STD_U64LE, NULL,
+                                   "ray number, from 0 in the input's order", chunk, 0);
     for (k = 0; ok && k < h->nin; k++) {
         const char *nm = kind == SG_RAYS_NORMALIZED ? norm[k] : sd[k];
         char what[96];
         snprintf(what, sizeof what, "the ray's launch: %s", nm);
-        h->ds[C_IN0 + k] = make_column(h->file, nm, H5T_IEEE_F64LE,
+        h->ds[C_IN0 + k] = h5u_column(h->file, nm, H5T_IEEE_F64LE,
                                        kind == SG_RAYS_NORMALIZED ? "1" : k < 3 ? u : "1",
-                                       what, chunk);
+                                       what, chunk, 0);
     }
     if (ok)
-        h->ds[C_SURFACE] = make_column(h->file, "surface", H5T_STD_I32LE, NULL,
-                                       "surface number, 0 the object", chunk);
+        h->ds[C_SURFACE] = h5u_column(h->file, "surface", H5T_STD_I32LE, NULL,
+                                       "surface number, 0 the object", chunk, 0);
     for (k = 0; ok && k < 11; k++) {
         int est = m && m->method && strcmp(m->method, "classic") == 0;
         const char *nm = k == 7    ? (est ? "error_estimate" : "error_bound")
@@ -237,30 +163,30 @@ h5rays *h5rays_open(const char *path, const report_meta *m, const char *units,
                            : k == 10 ? (est ? "classic's error estimate of opl (not a bound)"
                                             : "bound on opl's error")
                                      : out_what[k];
-        h->ds[C_X + k] = make_column(h->file, nm, H5T_IEEE_F64LE,
-                                     k >= 3 && k <= 5 ? "1" : u, what, chunk);
+        h->ds[C_X + k] = h5u_column(h->file, nm, H5T_IEEE_F64LE,
+                                     k >= 3 && k <= 5 ? "1" : u, what, chunk, 0);
     }
     if (ok)
-        h->ds[C_STATUS] = make_column(h->file, "status", h->status_type, NULL,
-                                      "the ray's state at the surface", chunk);
+        h->ds[C_STATUS] = h5u_column(h->file, "status", h->status_type, NULL,
+                                      "the ray's state at the surface", chunk, 0);
     h->opd = m && m->opd;
     if (ok && h->opd) {
         int est = m->method && strcmp(m->method, "classic") == 0;
         /* As CSV: the ray's OPD and transverse aberration on its image
          * row, NaN on the others. */
-        h->ds[C_OPD] = make_column(h->file, "opd_waves", H5T_IEEE_F64LE, "waves",
+        h->ds[C_OPD] = h5u_column(h->file, "opd_waves", H5T_IEEE_F64LE, "waves",
                                    "OPD against the field's reference sphere, in waves of "
-                                   "the ray's wavelength (image row only)", chunk);
-        h->ds[C_OPDB] = make_column(h->file, est ? "opd_error_estimate" : "opd_error_bound",
+                                   "the ray's wavelength (image row only)", chunk, 0);
+        h->ds[C_OPDB] = h5u_column(h->file, est ? "opd_error_estimate" : "opd_error_bound",
                                     H5T_IEEE_F64LE, "waves",
                                     est ? "classic's error estimate of opd_waves (not a bound)"
-                                        : "bound on opd_waves' error", chunk);
-        h->ds[C_EX] = make_column(h->file, "ex", H5T_IEEE_F64LE, u,
+                                        : "bound on opd_waves' error", chunk, 0);
+        h->ds[C_EX] = h5u_column(h->file, "ex", H5T_IEEE_F64LE, u,
                                   "transverse aberration x: image point minus the primary "
-                                  "chief ray's (image row only)", chunk);
-        h->ds[C_EY] = make_column(h->file, "ey", H5T_IEEE_F64LE, u,
+                                  "chief ray's (image row only)", chunk, 0);
+        h->ds[C_EY] = h5u_column(h->file, "ey", H5T_IEEE_F64LE, u,
                                   "transverse aberration y: image point minus the primary "
-                                  "chief ray's (image row only)", chunk);
+                                  "chief ray's (image row only)", chunk, 0);
     }
     for (k = 0; ok && k < C_MAX; k++)
         if ((k < C_IN0 + h->nin || (k >= C_SURFACE && k <= C_STATUS) || (h->opd && k > C_STATUS)) &&
@@ -269,50 +195,30 @@ h5rays *h5rays_open(const char *path, const report_meta *m, const char *units,
     if (ok) {
         hid_t root = h->file;
         v = nsurf;
-        ok = put_attr_str(root, "design", m && m->design ? m->design : "") >= 0 &&
-             put_attr_str(root, "method", m && m->method ? m->method : "") >= 0 &&
-             put_attr_str(root, "sagitta_version", SG_VERSION_STRING) >= 0 &&
-             put_attr_str(root, "units", u) >= 0 &&
-             put_attr_str(root, "rays", kind == SG_RAYS_NORMALIZED ? "normalized"
+        ok = h5u_attr_str(root, "design", m && m->design ? m->design : "") >= 0 &&
+             h5u_attr_str(root, "method", m && m->method ? m->method : "") >= 0 &&
+             h5u_attr_str(root, "sagitta_version", SG_VERSION_STRING) >= 0 &&
+             h5u_attr_str(root, "units", u) >= 0 &&
+             h5u_attr_str(root, "rays", kind == SG_RAYS_NORMALIZED ? "normalized"
                                                                    : "start_dir") >= 0 &&
-             put_attr_num(root, "surfaces", H5T_NATIVE_INT, &v) >= 0;
+             h5u_attr(root, "surfaces", H5T_NATIVE_INT, H5T_NATIVE_INT, &v, 0) >= 0;
         if (ok && m) {
             w = m->wave_um;
             v = m->wave_index;
-            ok = put_attr_num(root, "wavelength_um", H5T_NATIVE_DOUBLE, &w) >= 0 &&
-                 put_attr_num(root, "wave", H5T_NATIVE_INT, &v) >= 0;
+            ok = h5u_attr(root, "wavelength_um", H5T_NATIVE_DOUBLE, H5T_NATIVE_DOUBLE, &w, 0) >= 0 &&
+                 h5u_attr(root, "wave", H5T_NATIVE_INT, H5T_NATIVE_INT, &v, 0) >= 0;
             if (ok && m->bits > 0) {
                 v = m->bits;
-                ok = put_attr_num(root, "bits", H5T_NATIVE_INT, &v) >= 0;
+                ok = h5u_attr(root, "bits", H5T_NATIVE_INT, H5T_NATIVE_INT, &v, 0) >= 0;
             }
         }
     }
     if (!ok) {
-        fail(err, errlen, "cannot lay out the HDF5 file");
+        h5u_fail(err, errlen, "cannot lay out the HDF5 file");
         h5rays_abort(h);
         return NULL;
     }
     return h;
-}
-
-/* Appends rows [0, n) of buf to one column. */
-static int append(h5rays *h, int col, hid_t memtype, const void *buf, size_t n)
-{
-    hsize_t start = h->rows, count = n, size = h->rows + n;
-    hid_t fs, ms;
-    herr_t rc;
-    if (H5Dset_extent(h->ds[col], &size) < 0)
-        return -1;
-    fs = H5Dget_space(h->ds[col]);
-    ms = H5Screate_simple(1, &count, NULL);
-    rc = fs >= 0 && ms >= 0 &&
-         H5Sselect_hyperslab(fs, H5S_SELECT_SET, &start, NULL, &count, NULL) >= 0
-         ? H5Dwrite(h->ds[col], memtype, ms, fs, H5P_DEFAULT, buf) : -1;
-    if (ms >= 0)
-        H5Sclose(ms);
-    if (fs >= 0)
-        H5Sclose(fs);
-    return rc < 0 ? -1 : 0;
 }
 
 int h5rays_write(h5rays *h, const sg_ray_surface *out, const int *status, size_t n,
@@ -332,7 +238,7 @@ int h5rays_write(h5rays *h, const sg_ray_surface *out, const int *status, size_t
         void *b = rows > SIZE_MAX / (C_MAX * sizeof(double))
                   ? NULL : realloc(h->buf, rows * C_MAX * sizeof(double));
         if (!b)
-            return fail(err, errlen, "out of memory");
+            return h5u_fail(err, errlen, "out of memory");
         h->buf = b;
         h->bufrows = rows;
     }
@@ -389,8 +295,8 @@ int h5rays_write(h5rays *h, const sg_ray_surface *out, const int *status, size_t
              : k == C_SURFACE ? H5T_NATIVE_INT
              : k == C_STATUS  ? h->status_type
                               : H5T_NATIVE_DOUBLE;
-        if (append(h, k, mt, col[k], rows) < 0)
-            return fail(err, errlen, "HDF5 write failed");
+        if (h5u_append(h->ds[k], h->rows, mt, col[k], rows) < 0)
+            return h5u_fail(err, errlen, "HDF5 write failed");
     }
     h->rows += rows;
     h->next_ray += n;
@@ -401,9 +307,9 @@ int h5rays_close(h5rays *h, char *err, size_t errlen)
 {
     unsigned long long nrows = h->rows;
     int rc = 0;
-    if (put_attr_num(h->file, "rows", H5T_NATIVE_ULLONG, &nrows) < 0 ||
+    if (h5u_attr(h->file, "rows", H5T_NATIVE_ULLONG, H5T_NATIVE_ULLONG, &nrows, 0) < 0 ||
         H5Fflush(h->file, H5F_SCOPE_GLOBAL) < 0)
-        rc = fail(err, errlen, "HDF5 write failed");
+        rc = h5u_fail(err, errlen, "HDF5 write failed");
     close_all(h);
     {
         sigset_t old;

@@ -11,6 +11,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "h5util.h"
 #include "outfile.h"
 
 enum { D_TRIAL, D_CRIT, D_STATUS, D_MAX };
@@ -22,81 +23,11 @@ struct tolh5 {
     hsize_t rows;
 };
 
-static int fail(char *err, size_t n, const char *what)
+/* The status words of the CSV ("ok", "MISS", ...), the library's codes as
+ * their values. */
+static const char *status_word(int code)
 {
-    snprintf(err, n, "%s", what);
-    return -1;
-}
-
-static herr_t put_attr_str(hid_t obj, const char *name, const char *v)
-{
-    hid_t t = H5Tcopy(H5T_C_S1), sp = H5Screate(H5S_SCALAR), a;
-    herr_t rc = -1;
-    if (t >= 0 && sp >= 0 && H5Tset_size(t, strlen(v) > 0 ? strlen(v) : 1) >= 0) {
-        a = H5Acreate2(obj, name, t, sp, H5P_DEFAULT, H5P_DEFAULT);
-        if (a >= 0) {
-            rc = H5Awrite(a, t, v);
-            H5Aclose(a);
-        }
-    }
-    if (sp >= 0)
-        H5Sclose(sp);
-    if (t >= 0)
-        H5Tclose(t);
-    return rc;
-}
-
-/* n values of type at name (n == 0: a scalar). */
-static herr_t put_attr(hid_t obj, const char *name, hid_t ftype, hid_t mtype, const void *v,
-                       hsize_t n)
-{
-    hid_t sp = n ? H5Screate_simple(1, &n, NULL) : H5Screate(H5S_SCALAR), a;
-    herr_t rc = -1;
-    if (sp < 0)
-        return -1;
-    a = H5Acreate2(obj, name, ftype, sp, H5P_DEFAULT, H5P_DEFAULT);
-    if (a >= 0) {
-        rc = H5Awrite(a, mtype, v);
-        H5Aclose(a);
-    }
-    H5Sclose(sp);
-    return rc;
-}
-
-/* The status is an enumeration of the CSV's words ("ok", "MISS", ...)
- * with the library's codes as values. */
-static hid_t make_status_type(void)
-{
-    hid_t t = H5Tenum_create(H5T_NATIVE_INT);
-    int code;
-    if (t < 0)
-        return -1;
-    for (code = 0; code < SG_ERRNO_COUNT; code++)
-        if (H5Tenum_insert(t, code == SG_OK ? "ok" : sg_err_name(code), &code) < 0) {
-            H5Tclose(t);
-            return -1;
-        }
-    return t;
-}
-
-static hid_t make_column(hid_t file, const char *name, hid_t type, const char *what)
-{
-    hsize_t dims = 0, maxdims = H5S_UNLIMITED, chunk = 1024;
-    hid_t sp = H5Screate_simple(1, &dims, &maxdims);
-    hid_t pl = H5Pcreate(H5P_DATASET_CREATE), ds = -1;
-    /* No creation or change times: the bytes depend on the data alone. */
-    if (sp >= 0 && pl >= 0 && H5Pset_chunk(pl, 1, &chunk) >= 0 &&
-        H5Pset_obj_track_times(pl, 0) >= 0)
-        ds = H5Dcreate2(file, name, type, sp, H5P_DEFAULT, pl, H5P_DEFAULT);
-    if (pl >= 0)
-        H5Pclose(pl);
-    if (sp >= 0)
-        H5Sclose(sp);
-    if (ds >= 0 && put_attr_str(ds, "description", what) < 0) {
-        H5Dclose(ds);
-        ds = -1;
-    }
-    return ds;
+    return code == SG_OK ? "ok" : sg_err_name(code);
 }
 
 static void close_all(tolh5 *h)
@@ -136,13 +67,13 @@ tolh5 *tolh5_open(const char *path, const char *criterion, const char *distribut
     sigset_t old;
     int ok;
     if (!h) {
-        fail(err, errlen, "out of memory");
+        h5u_fail(err, errlen, "out of memory");
         return NULL;
     }
     h->slot = -1;
     if (strlen(path) >= sizeof h->path) {
         free(h);
-        fail(err, errlen, "file name too long");
+        h5u_fail(err, errlen, "file name too long");
         return NULL;
     }
     strcpy(h->path, path);
@@ -161,49 +92,29 @@ tolh5 *tolh5_open(const char *path, const char *criterion, const char *distribut
         tolh5_abort(h);
         return NULL;
     }
-    h->status_type = make_status_type();
+    h->status_type = h5u_status_type(status_word);
     ok = h->status_type >= 0;
     if (ok)
-        ok = (h->ds[D_TRIAL] = make_column(h->file, "trial", H5T_STD_I32LE,
-                                           "trial number, from 1")) >= 0 &&
-             (h->ds[D_CRIT] = make_column(h->file, "criterion", H5T_IEEE_F64LE,
+        ok = (h->ds[D_TRIAL] = h5u_column(h->file, "trial", H5T_STD_I32LE, NULL,
+                                           "trial number, from 1", 1024, 1)) >= 0 &&
+             (h->ds[D_CRIT] = h5u_column(h->file, "criterion", H5T_IEEE_F64LE, NULL,
                                           "the compensated criterion; NaN where the system "
-                                          "could not be evaluated")) >= 0 &&
-             (h->ds[D_STATUS] = make_column(h->file, "status", h->status_type,
-                                            "ok, or why the system could not be evaluated"))
-                 >= 0;
+                                          "could not be evaluated", 1024, 1)) >= 0 &&
+             (h->ds[D_STATUS] = h5u_column(h->file, "status", h->status_type, NULL,
+                                            "ok, or why the system could not be evaluated",
+                                            1024, 1)) >= 0;
     if (ok)
-        ok = put_attr_str(h->file, "criterion", criterion) >= 0 &&
-             put_attr_str(h->file, "distribution", distribution) >= 0 &&
-             put_attr(h->file, "nominal", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &nominal, 0) >= 0 &&
-             put_attr(h->file, "seed", H5T_STD_U64LE, H5T_NATIVE_ULLONG, &sd, 0) >= 0 &&
-             put_attr(h->file, "trials", H5T_STD_I32LE, H5T_NATIVE_INT, &trials, 0) >= 0;
+        ok = h5u_attr_str(h->file, "criterion", criterion) >= 0 &&
+             h5u_attr_str(h->file, "distribution", distribution) >= 0 &&
+             h5u_attr(h->file, "nominal", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &nominal, 0) >= 0 &&
+             h5u_attr(h->file, "seed", H5T_STD_U64LE, H5T_NATIVE_ULLONG, &sd, 0) >= 0 &&
+             h5u_attr(h->file, "trials", H5T_STD_I32LE, H5T_NATIVE_INT, &trials, 0) >= 0;
     if (!ok) {
-        fail(err, errlen, "HDF5 write failed");
+        h5u_fail(err, errlen, "HDF5 write failed");
         tolh5_abort(h);
         return NULL;
     }
     return h;
-}
-
-static int append(tolh5 *h, int col, hid_t memtype, const void *buf, hsize_t n)
-{
-    hsize_t start = h->rows, count = n, size = h->rows + n;
-    hid_t fs, ms;
-    herr_t rc;
-    if (H5Dset_extent(h->ds[col], &size) < 0)
-        return -1;
-    fs = H5Dget_space(h->ds[col]);
-    ms = H5Screate_simple(1, &count, NULL);
-    rc = fs >= 0 && ms >= 0 &&
-                 H5Sselect_hyperslab(fs, H5S_SELECT_SET, &start, NULL, &count, NULL) >= 0
-             ? H5Dwrite(h->ds[col], memtype, ms, fs, H5P_DEFAULT, buf)
-             : -1;
-    if (ms >= 0)
-        H5Sclose(ms);
-    if (fs >= 0)
-        H5Sclose(fs);
-    return rc < 0 ? -1 : 0;
 }
 
 int tolh5_write(tolh5 *h, int first, int n, const sg_tol_value *v, char *err, size_t errlen)
@@ -215,16 +126,16 @@ int tolh5_write(tolh5 *h, int first, int n, const sg_tol_value *v, char *err, si
     trial = malloc((size_t)n * sizeof *trial);
     st = malloc((size_t)n * sizeof *st);
     c = malloc((size_t)n * sizeof *c);
-    rc = trial && st && c ? 0 : fail(err, errlen, "out of memory");
+    rc = trial && st && c ? 0 : h5u_fail(err, errlen, "out of memory");
     for (k = 0; !rc && k < n; k++) {
         trial[k] = first + k + 1;
         st[k] = v[k].status;
         c[k] = v[k].status == SG_OK ? v[k].criterion : NAN;
     }
-    if (!rc && (append(h, D_TRIAL, H5T_NATIVE_INT, trial, (hsize_t)n) < 0 ||
-                append(h, D_CRIT, H5T_NATIVE_DOUBLE, c, (hsize_t)n) < 0 ||
-                append(h, D_STATUS, h->status_type, st, (hsize_t)n) < 0))
-        rc = fail(err, errlen, "HDF5 write failed");
+    if (!rc && (h5u_append(h->ds[D_TRIAL], h->rows, H5T_NATIVE_INT, trial, (hsize_t)n) < 0 ||
+                h5u_append(h->ds[D_CRIT], h->rows, H5T_NATIVE_DOUBLE, c, (hsize_t)n) < 0 ||
+                h5u_append(h->ds[D_STATUS], h->rows, h->status_type, st, (hsize_t)n) < 0))
+        rc = h5u_fail(err, errlen, "HDF5 write failed");
     if (!rc)
         h->rows += (hsize_t)n;
     free(trial);
@@ -239,21 +150,21 @@ int tolh5_close(tolh5 *h, int done, int stopped, const sg_tol_stats *s, char *er
     static const double levels[5] = {90, 80, 50, 20, 10};
     int rc = 0, failed = s ? done - s->n : 0;
     sigset_t old;
-    if (put_attr(h->file, "done", H5T_STD_I32LE, H5T_NATIVE_INT, &done, 0) < 0 ||
-        put_attr(h->file, "stopped", H5T_STD_I32LE, H5T_NATIVE_INT, &stopped, 0) < 0 ||
-        put_attr(h->file, "failed", H5T_STD_I32LE, H5T_NATIVE_INT, &failed, 0) < 0)
-        rc = fail(err, errlen, "HDF5 write failed");
+    if (h5u_attr(h->file, "done", H5T_STD_I32LE, H5T_NATIVE_INT, &done, 0) < 0 ||
+        h5u_attr(h->file, "stopped", H5T_STD_I32LE, H5T_NATIVE_INT, &stopped, 0) < 0 ||
+        h5u_attr(h->file, "failed", H5T_STD_I32LE, H5T_NATIVE_INT, &failed, 0) < 0)
+        rc = h5u_fail(err, errlen, "HDF5 write failed");
     if (!rc && s && s->n > 0 &&
-        (put_attr(h->file, "best", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &s->best, 0) < 0 ||
-         put_attr(h->file, "worst", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &s->worst, 0) < 0 ||
-         put_attr(h->file, "mean", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &s->mean, 0) < 0 ||
-         put_attr(h->file, "std", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &s->std, 0) < 0 ||
-         put_attr(h->file, "percentile_levels", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, levels, 5) <
+        (h5u_attr(h->file, "best", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &s->best, 0) < 0 ||
+         h5u_attr(h->file, "worst", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &s->worst, 0) < 0 ||
+         h5u_attr(h->file, "mean", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &s->mean, 0) < 0 ||
+         h5u_attr(h->file, "std", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &s->std, 0) < 0 ||
+         h5u_attr(h->file, "percentile_levels", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, levels, 5) <
              0 ||
-         put_attr(h->file, "percentiles", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, s->pct, 5) < 0))
-        rc = fail(err, errlen, "HDF5 write failed");
+         h5u_attr(h->file, "percentiles", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, s->pct, 5) < 0))
+        rc = h5u_fail(err, errlen, "HDF5 write failed");
     if (!rc && H5Fflush(h->file, H5F_SCOPE_GLOBAL) < 0)
-        rc = fail(err, errlen, "HDF5 write failed");
+        rc = h5u_fail(err, errlen, "HDF5 write failed");
     close_all(h);
     outfile_block_signals(&old);
     if (rc == 0 && rename(h->tmp, h->path) != 0) {

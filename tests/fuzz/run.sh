@@ -102,7 +102,7 @@ n=0
 status=0
 for src in "$root"/src/*.c "$root"/ui/args.c "$root"/ui/csvrays.c "$root"/ui/report.c \
            "$root"/ui/outfile.c "$root"/ui/safetext.c "$root"/ui/progress.c \
-           "$root"/ui/numfmt.c "$root"/ui/h5rays.c \
+           "$root"/ui/numfmt.c "$root"/ui/h5rays.c "$root"/ui/h5util.c \
            "$root"/ui/cli.c; do
     dir=$(basename "$(dirname "$src")")
     obj="$build/obj/$dir-$(basename "$src" .c).o"
