@@ -1503,6 +1503,39 @@ done:
 }
 #endif
 
+/* Runs a mode's fn on each design, its JSON rows under key (text: fn
+ * prints); the exit status is the worst of the designs' and the output's. */
+static int each_design(const bench_cfg *cfg, const char **designs, size_t ndesign,
+                       const char *key, int (*fn)(const bench_cfg *, const char *, cJSON *))
+{
+    cJSON *root = NULL, *arr = NULL;
+    size_t k;
+    int rc, worst = CLI_EXIT_OK;
+    if (cfg->fmt == BENCH_JSON) {
+        root = cJSON_CreateObject();
+        arr = root ? cJSON_AddArrayToObject(root, key) : NULL;
+        if (!arr) {
+            cJSON_Delete(root);
+            cli_error("out of memory");
+            return CLI_EXIT_INTERNAL;
+        }
+    }
+    for (k = 0; k < ndesign; k++) {
+        rc = fn(cfg, designs[k], arr);
+        if (rc > worst)
+            worst = rc;
+    }
+    if (root) {
+        char *txt = cJSON_Print(root);
+        if (txt)
+            puts(txt);
+        free(txt);
+        cJSON_Delete(root);
+    }
+    rc = cli_close_output(stdout, NULL);
+    return rc == CLI_EXIT_OK ? worst : rc;
+}
+
 int cmd_bench(int argc, char **argv)
 {
     cli_iter it;
@@ -1647,7 +1680,6 @@ int cmd_bench(int argc, char **argv)
 #endif
     if (base_mode) {
         static char cass[4096], dg[4096];
-        cJSON *barr = NULL;
         cfg.cores = count_cores();
         cfg.nthr_all = cfg.threads > 0 ? cfg.threads : cfg.cores;
         if (ndesign == 0) {
@@ -1656,63 +1688,18 @@ int cmd_bench(int argc, char **argv)
             designs[ndesign++] = cass;
             designs[ndesign++] = dg;
         }
-        if (cfg.fmt == BENCH_JSON) {
-            root = cJSON_CreateObject();
-            barr = root ? cJSON_AddArrayToObject(root, "baseline") : NULL;
-            if (!barr) {
-                cli_error("out of memory");
-                rc = CLI_EXIT_INTERNAL;
-                goto done;
-            }
-        }
-        for (k = 0; k < ndesign; k++) {
-            rc = bench_baseline(&cfg, designs[k], barr);
-            if (rc > worst)
-                worst = rc;
-        }
-        if (root) {
-            char *txt = cJSON_Print(root);
-            if (txt)
-                puts(txt);
-            free(txt);
-        }
-        rc = cli_close_output(stdout, NULL);
-        if (rc == CLI_EXIT_OK)
-            rc = worst;
+        rc = each_design(&cfg, designs, ndesign, "baseline", bench_baseline);
         goto done;
     }
     if (spot_mode) {
         static char cass[4096];
-        cJSON *sarr = NULL;
         cfg.cores = count_cores();
         cfg.nthr_all = cfg.threads > 0 ? cfg.threads : cfg.cores;
         if (ndesign == 0) {
             example_path("cassegrain.json", cass, sizeof cass);
             designs[ndesign++] = cass;
         }
-        if (cfg.fmt == BENCH_JSON) {
-            root = cJSON_CreateObject();
-            sarr = root ? cJSON_AddArrayToObject(root, "spot") : NULL;
-            if (!sarr) {
-                cli_error("out of memory");
-                rc = CLI_EXIT_INTERNAL;
-                goto done;
-            }
-        }
-        for (k = 0; k < ndesign; k++) {
-            rc = bench_spot(&cfg, designs[k], sarr);
-            if (rc > worst)
-                worst = rc;
-        }
-        if (root) {
-            char *txt = cJSON_Print(root);
-            if (txt)
-                puts(txt);
-            free(txt);
-        }
-        rc = cli_close_output(stdout, NULL);
-        if (rc == CLI_EXIT_OK)
-            rc = worst;
+        rc = each_design(&cfg, designs, ndesign, "spot", bench_spot);
         goto done;
     }
     if (ndesign == 0) {
