@@ -66,25 +66,16 @@ static const inv_out *inv_report;
 /* --format hdf5, beside report.h's formats. */
 #define FMT_HDF5 1000
 
-enum { TO_HELP = 1, TO_SENS, TO_MC, TO_SEED, TO_THREADS, TO_METHOD, TO_NOCOMP, TO_FORMAT,
-       TO_OUTPUT, TO_FORCE, TO_RESUME, TO_WORST, TO_INVERSE };
-static const cli_opt tolerance_opts[] = {
-    CLI_ID("--help", 'h', 0, TO_HELP),
-    CLI_ID("--sensitivity", 0, 0, TO_SENS),
-    CLI_ID("--monte-carlo", 0, 1, TO_MC),
-    CLI_ID("--seed", 0, 1, TO_SEED),
-    CLI_ID("--threads", 0, 1, TO_THREADS),
-    CLI_ID("--method", 0, 1, TO_METHOD),
-    CLI_ID("--no-compensators", 0, 0, TO_NOCOMP),
-    CLI_ID("--format", 0, 1, TO_FORMAT),
-    CLI_ID("--output", 'o', 1, TO_OUTPUT),
-    CLI_ID("--force", 0, 0, TO_FORCE),
-    CLI_ID("--resume", 0, 0, TO_RESUME),
-    CLI_ID("--save-worst", 0, 1, TO_WORST),
-    CLI_ID("--inverse", 0, 1, TO_INVERSE),
-    CLI_END
-};
+enum { TO_SEED = 1 };
 
+static const int tol_formats[] = {REPORT_TEXT, REPORT_CSV, REPORT_JSON, FMT_HDF5};
+
+/* Help from rank 0 alone under mpirun. */
+static void tolerance_help_rank0(FILE *f)
+{
+    if (tolmpi_rank() == 0)
+        tolerance_help(f);
+}
 static volatile sig_atomic_t stop_flag;
 static volatile int stop_int;
 
@@ -670,7 +661,7 @@ static int tolerance_main(int argc, char **argv)
 {
     cli_iter it;
     const char *val, *design = NULL, *output = NULL;
-    int id, rc, force = 0, sens = 0, mc = -1, fmt = REPORT_TEXT, seed_given = 0, m;
+    int id, rc, force = 0, sens = 0, mc = -1, fmt = REPORT_TEXT, seed_given = 0;
     int rank = tolmpi_rank(), block, nthreads, opened = 0, start = 0, resume = 0, nworst = 0;
     int k;
     char wpath[4096];
@@ -695,80 +686,48 @@ static int tolerance_main(int argc, char **argv)
     memset(&of, 0, sizeof of);
     memset(&r, 0, sizeof r);
     memset(&sink, 0, sizeof sink);
-    cli_iter_init(&it, "tolerance", argc, argv);
-    while ((id = cli_next_opt(&it, tolerance_opts, &val)) != -1) {
-        switch (id) {
-        case 0:
-            if (design)
-                return cli_usage_error("tolerance", "unexpected argument \"%s\"", val);
-            design = val;
-            break;
-        case TO_HELP:
-            if (rank == 0)
-                tolerance_help(stdout);
-            return CLI_EXIT_OK;
-        case TO_SENS:
-            sens = 1;
-            break;
-        case TO_MC:
-            if (cli_int_value("--monte-carlo", val, 0, 100000000, &mc))
-                return CLI_EXIT_USAGE;
-            break;
-        case TO_SEED: {
-            char *end;
-            errno = 0;
-            seed = strtoll(val, &end, 10);
-            if (errno || end == val || *end || seed < 0 || seed > (1LL << 53))
-                return cli_usage_error("tolerance", "--seed: \"%s\" is not an integer from 0 "
-                                       "to 2^53", val);
-            seed_given = 1;
-            break;
+    {
+        int nocomp = 0, method = o.method;
+        const cli_opt opts[] = {
+            CLI_OPT_HELP,
+            CLI_OPT_FLAG("--sensitivity", 0, sens),
+            CLI_OPT_INT("--monte-carlo", 0, mc, 0, 100000000),
+            /* Up to 2^53: an integer no int holds. */
+            CLI_ID("--seed", 0, 1, TO_SEED),
+            CLI_OPT_INT("--threads", 0, o.nthreads, 1, 256),
+            CLI_OPT_METHOD(method),
+            CLI_OPT_FLAG("--no-compensators", 0, nocomp),
+            CLI_OPT_WORD("--format", fmt, "text|csv|json|hdf5", tol_formats),
+            CLI_OPT_OUTPUT(output),
+            CLI_OPT_FLAG("--force", 0, force),
+            CLI_OPT_FLAG("--resume", 0, resume),
+            CLI_OPT_INT("--save-worst", 0, nworst, 1, MAX_WORST),
+            CLI_OPT_POS("--inverse", inv_limit, "limit", NULL),
+            CLI_END};
+        cli_iter_init(&it, "tolerance", argc, argv);
+        while ((id = cli_next_opt(&it, opts, &val)) != -1) {
+            if (id == 0) {
+                if (design)
+                    return cli_usage_error("tolerance", "unexpected argument \"%s\"", val);
+                design = val;
+            } else if (id == CLI_HELP) {
+                tolerance_help_rank0(stdout);
+                return CLI_EXIT_OK;
+            } else if (id == TO_SEED) {
+                char *end;
+                errno = 0;
+                seed = strtoll(val, &end, 10);
+                if (errno || end == val || *end || seed < 0 || seed > (1LL << 53))
+                    return cli_usage_error("tolerance", "--seed: \"%s\" is not an integer "
+                                           "from 0 to 2^53", val);
+                seed_given = 1;
+            } else {
+                return -id;
+            }
         }
-        case TO_THREADS:
-            if (cli_int_value("--threads", val, 1, 256, &o.nthreads))
-                return CLI_EXIT_USAGE;
-            break;
-        case TO_METHOD:
-            m = sg_method_parse(val);
-            if (m < 0)
-                return cli_usage_error("tolerance", "--method: \"%s\" is not precise, classic "
-                                       "or mpfr", val);
-            o.method = m;
-            break;
-        case TO_NOCOMP:
+        o.method = method;
+        if (nocomp)
             o.compensate = 0;
-            break;
-        case TO_FORMAT:
-            if (strcmp(val, "hdf5") == 0)
-                fmt = FMT_HDF5;
-            else if (cli_format_value(val, 1, &fmt))
-                return CLI_EXIT_USAGE;
-            break;
-        case TO_OUTPUT:
-            output = val;
-            break;
-        case TO_FORCE:
-            force = 1;
-            break;
-        case TO_RESUME:
-            resume = 1;
-            break;
-        case TO_INVERSE: {
-            char *end;
-            errno = 0;
-            inv_limit = strtod(val, &end);
-            if (errno || end == val || *end || !(inv_limit > 0) || !isfinite(inv_limit))
-                return cli_usage_error("tolerance", "--inverse: \"%s\" is not a positive "
-                                       "number", val);
-            break;
-        }
-        case TO_WORST:
-            if (cli_int_value("--save-worst", val, 1, MAX_WORST, &nworst))
-                return CLI_EXIT_USAGE;
-            break;
-        default:
-            return -id;
-        }
     }
     if (!design)
         return cli_usage_error("tolerance", "missing DESIGN.json");
