@@ -38,16 +38,7 @@ struct h5rays {
 
 static void close_all(h5rays *h)
 {
-    int k;
-    for (k = 0; k < C_MAX; k++)
-        if (h->ds[k] > 0)
-            H5Dclose(h->ds[k]);
-    if (h->status_type > 0)
-        H5Tclose(h->status_type);
-    if (h->file > 0)
-        H5Fclose(h->file);
-    memset(h->ds, 0, sizeof h->ds);
-    h->status_type = h->file = 0;
+    h5u_close(h->ds, C_MAX, &h->status_type, &h->file);
 }
 
 void h5rays_abort(h5rays *h)

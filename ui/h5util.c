@@ -102,3 +102,17 @@ int h5u_append(hid_t ds, hsize_t at, hid_t memtype, const void *buf, hsize_t n)
         H5Sclose(fs);
     return rc < 0 ? -1 : 0;
 }
+
+void h5u_close(hid_t *ds, int n, hid_t *type, hid_t *file)
+{
+    int k;
+    for (k = 0; k < n; k++)
+        if (ds[k] > 0)
+            H5Dclose(ds[k]);
+    if (*type > 0)
+        H5Tclose(*type);
+    if (*file > 0)
+        H5Fclose(*file);
+    memset(ds, 0, (size_t)n * sizeof *ds);
+    *type = *file = 0;
+}

@@ -25,6 +25,9 @@ hid_t h5u_status_type(const char *(*name)(int code));
  * alone. */
 hid_t h5u_column(hid_t file, const char *name, hid_t type, const char *units,
                  const char *what, hsize_t chunk, int no_times);
+/* Closes n datasets, a type and a file (each where above 0) and zeroes
+ * them. */
+void h5u_close(hid_t *ds, int n, hid_t *type, hid_t *file);
 /* Writes n values of memtype at rows at to at + n - 1, growing ds; 0 or -1. */
 int h5u_append(hid_t ds, hsize_t at, hid_t memtype, const void *buf, hsize_t n);
 

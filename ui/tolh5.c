@@ -32,16 +32,7 @@ static const char *status_word(int code)
 
 static void close_all(tolh5 *h)
 {
-    int k;
-    for (k = 0; k < D_MAX; k++)
-        if (h->ds[k] > 0)
-            H5Dclose(h->ds[k]);
-    if (h->status_type > 0)
-        H5Tclose(h->status_type);
-    if (h->file > 0)
-        H5Fclose(h->file);
-    memset(h->ds, 0, sizeof h->ds);
-    h->status_type = h->file = 0;
+    h5u_close(h->ds, D_MAX, &h->status_type, &h->file);
 }
 
 void tolh5_abort(tolh5 *h)
