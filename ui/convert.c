@@ -12,15 +12,7 @@
 
 #include "cli.h"
 
-enum { OPT_HELP = 1, OPT_OUTPUT, OPT_SUBST, OPT_NEAREST };
-
-static const cli_opt convert_opts[] = {
-    CLI_ID("--help", 'h', 0, OPT_HELP),
-    CLI_ID("--output", 'o', 1, OPT_OUTPUT),
-    CLI_ID("--substitute", 0, 1, OPT_SUBST),
-    CLI_ID("--substitute-nearest", 0, 0, OPT_NEAREST),
-    CLI_END
-};
+enum { OPT_SUBST = 1 };
 
 #define MAX_SUBST 64
 
@@ -55,34 +47,30 @@ static int convert(int argc, char **argv, int to_zmx)
     int id, rc;
     const char *pairs[MAX_SUBST];
     sg_zmx_subst sub = {0, pairs, 0};
+    const cli_opt opts[] = {CLI_OPT_HELP, CLI_OPT_OUTPUT(out),
+                            CLI_ID("--substitute", 0, 1, OPT_SUBST),
+                            CLI_OPT_FLAG_FOR("--substitute-nearest", sub.nearest, "import"),
+                            CLI_END};
 
     cli_iter_init(&it, cmd, argc, argv);
-    while ((id = cli_next_opt(&it, convert_opts, &val)) != -1) {
+    while ((id = cli_next_opt(&it, opts, &val)) != -1) {
         switch (id) {
         case 0:
             if (in)
                 return cli_usage_error(cmd, "unexpected argument \"%s\"", val);
             in = val;
             break;
-        case OPT_HELP:
+        case CLI_HELP:
             convert_help(stdout, to_zmx);
             return CLI_EXIT_OK;
-        case OPT_OUTPUT:
-            out = val;
-            break;
         case OPT_SUBST:
             if (to_zmx)
-                return cli_usage_error(cmd, "--substitute applies to import");
+                return cli_usage_error(cmd, "--substitute is an option of import only");
             if (!strchr(val, '=') || val[0] == '=' || !strchr(val, '=')[1])
                 return cli_usage_error(cmd, "--substitute \"%s\": give NAME=GLASS", val);
             if (sub.n == MAX_SUBST)
                 return cli_usage_error(cmd, "more than %d --substitute options", MAX_SUBST);
             pairs[sub.n++] = val;
-            break;
-        case OPT_NEAREST:
-            if (to_zmx)
-                return cli_usage_error(cmd, "--substitute-nearest applies to import");
-            sub.nearest = 1;
             break;
         default:
             return -id;
