@@ -974,6 +974,7 @@ int sg_editor_main(int argc, char **argv)
         free(u.hist[i]);
     if (u.ex)
         ed_examples_free(u.ex, u.nex);
+    merit_free(&u);
     ed_free(&e);
     return status;
 }

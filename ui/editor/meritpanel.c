@@ -23,12 +23,6 @@ static const struct {
 #define NCOL ((int)(sizeof col / sizeof col[0]))
 /* Screen column k shows merit_cols[k - 1] for k 1 to 9. */
 
-typedef struct mf_eval {
-    sg_merit_result r;
-    int ok;
-    char why[SG_DIAG_MSG];
-} mf_eval;
-
 /* A line at y, cut with an ellipsis when the screen is narrower. */
 static void put(const ui *u, int y, int style, const char *s)
 {
@@ -55,14 +49,28 @@ static void put2(const ui *u, int y, int style, const char *s)
     put(u, y + 1, style, s + (k < len ? k : len));
 }
 
-static void evaluate(const ui *u, mf_eval *m)
+/* The merit function of the document as it is now: evaluated once per
+ * document state. */
+static void evaluate(ui *u)
 {
     sg_diag d;
-    memset(m, 0, sizeof *m);
+    if (u->mf_id != 0 && u->mf_id == u->e->doc.id)
+        return;
+    merit_free(u);
     sg_diag_clear(&d);
-    m->ok = sg_merit_eval(u->e->doc.sys, u->e->cat, &m->r, &d) == SG_OK;
-    if (!m->ok)
-        snprintf(m->why, sizeof m->why, "%s", d.msg[0] ? d.msg : "cannot be evaluated");
+    u->mf_ok = sg_merit_eval(u->e->doc.sys, u->e->cat, &u->mf_res, &d) == SG_OK;
+    if (!u->mf_ok)
+        snprintf(u->mf_why, sizeof u->mf_why, "%s", d.msg[0] ? d.msg : "cannot be evaluated");
+    u->mf_id = u->e->doc.id;
+}
+
+void merit_free(ui *u)
+{
+    sg_merit_result_free(&u->mf_res);
+    memset(&u->mf_res, 0, sizeof u->mf_res);
+    u->mf_ok = 0;
+    u->mf_why[0] = '\0';
+    u->mf_id = 0;
 }
 
 static void num(double v, int w, const ui *u, char *buf, size_t n)
@@ -71,7 +79,7 @@ static void num(double v, int w, const ui *u, char *buf, size_t n)
 }
 
 /* The text of screen column k for operand i (row in the result r). */
-static void cell(const ui *u, const mf_eval *m, int i, int k, char *buf, size_t n)
+static void cell(const ui *u, int i, int k, char *buf, size_t n)
 {
     const sg_operand *o = &u->e->doc.sys->merit.op[i];
     buf[0] = '\0';
@@ -81,8 +89,9 @@ static void cell(const ui *u, const mf_eval *m, int i, int k, char *buf, size_t 
         snprintf(buf, n, "%s", sg_op_name(o->type));
     else if (k <= 9)
         num(merit_col_value(o, k - 1), col[k].w, u, buf, n);
-    else if (m->ok && i < m->r.nrow)
-        num(k == 10 ? m->r.row[i].value : m->r.row[i].contribution, col[k].w, u, buf, n);
+    else if (u->mf_ok && i < u->mf_res.nrow)
+        num(k == 10 ? u->mf_res.row[i].value : u->mf_res.row[i].contribution, col[k].w, u, buf,
+            n);
     else
         snprintf(buf, n, "-");
 }
@@ -95,10 +104,10 @@ static int shown(const ui *u, int k)
 void merit_draw(ui *u)
 {
     const sg_merit *mf = &u->e->doc.sys->merit;
-    mf_eval m;
+    const sg_merit_result *r = &u->mf_res;
     char line[1024], buf[64], head[96];
     int h = u->rows - 6, y, i, k, x, nrows = mf->nop + 1;
-    evaluate(u, &m);
+    evaluate(u);
     if (u->mf_sel > mf->nop)
         u->mf_sel = mf->nop;
     if (u->mf_sel < 0)
@@ -108,9 +117,9 @@ void merit_draw(ui *u)
     if (u->mf_sel >= u->mf_top + h)
         u->mf_top = u->mf_sel - h + 1;
     term_fill(0, 0, u->cols, T_TITLE);
-    if (m.ok)
-        numfmt_shortest(m.r.merit, buf, sizeof buf);
-    snprintf(head, sizeof head, " Merit Function Editor   MF %s", m.ok ? buf : "-");
+    if (u->mf_ok)
+        numfmt_shortest(r->merit, buf, sizeof buf);
+    snprintf(head, sizeof head, " Merit Function Editor   MF %s", u->mf_ok ? buf : "-");
     put(u, 0, T_TITLE, head);
     /* The headings. */
     term_fill(1, 0, u->cols, T_HEADER);
@@ -128,9 +137,9 @@ void merit_draw(ui *u)
     for (i = u->mf_top, y = 2; i < nrows && y < 2 + h; i++, y++) {
         if (i == mf->nop) {
             double c = 0.0;
-            int j, nd = m.ok ? m.r.nrow - mf->nop : 0;
-            for (j = mf->nop; m.ok && j < m.r.nrow; j++)
-                c += m.r.row[j].contribution;
+            int j, nd = u->mf_ok ? r->nrow - mf->nop : 0;
+            for (j = mf->nop; u->mf_ok && j < r->nrow; j++)
+                c += r->row[j].contribution;
             if (mf->has_default)
                 snprintf(line, sizeof line, "%-4s DMFS  default: spot about the %s, %d x %d: "
                          "%d rows, %.4g %%", "",
@@ -146,7 +155,7 @@ void merit_draw(ui *u)
             int style = T_NORMAL;
             if (!shown(u, k))
                 continue;
-            cell(u, &m, i, k, line, sizeof line);
+            cell(u, i, k, line, sizeof line);
             snprintf(buf, sizeof buf, k <= 1 ? "%-*s" : "%*s", col[k].w, line);
             if (i == u->mf_sel)
                 style = k >= 1 && k <= 9 && k - 1 == u->mf_col ? T_CURSOR : T_ROWSEL;
@@ -159,8 +168,8 @@ void merit_draw(ui *u)
     term_fill(u->rows - 4, 0, u->cols, T_NORMAL);
     term_fill(u->rows - 3, 0, u->cols, T_NORMAL);
     line[0] = '\0';
-    if (!m.ok) {
-        snprintf(line, sizeof line, "the merit function cannot be evaluated: %s", m.why);
+    if (!u->mf_ok) {
+        snprintf(line, sizeof line, "the merit function cannot be evaluated: %s", u->mf_why);
     } else if (u->mf_sel < mf->nop) {
         const sg_operand *o = &mf->op[u->mf_sel];
         const char *keys[6];
@@ -181,14 +190,14 @@ void merit_draw(ui *u)
                 len += (size_t)snprintf(line + len, sizeof line - len, " %s %s", merit_cols[k],
                                         buf);
         }
-        if (u->mf_sel < m.r.nrow) {
-            numfmt_shortest(m.r.row[u->mf_sel].value, buf, sizeof buf);
+        if (u->mf_sel < r->nrow) {
+            numfmt_shortest(r->row[u->mf_sel].value, buf, sizeof buf);
             len += (size_t)snprintf(line + len, sizeof line - len, "; value %s", buf);
-            numfmt_shortest(m.r.row[u->mf_sel].contribution, buf, sizeof buf);
+            numfmt_shortest(r->row[u->mf_sel].contribution, buf, sizeof buf);
             snprintf(line + len, sizeof line - len, ", %s %% of the merit", buf);
         }
     }
-    put2(u, u->rows - 4, m.ok ? T_DIM : T_ERROR, line);
+    put2(u, u->rows - 4, u->mf_ok ? T_DIM : T_ERROR, line);
     term_fill(u->rows - 2, 0, u->cols, T_NORMAL);
     snprintf(line, sizeof line, " %d operand row%s%s; column %s", mf->nop,
              mf->nop == 1 ? "" : "s", mf->has_default ? " and the default part" : "",
@@ -197,7 +206,6 @@ void merit_draw(ui *u)
     term_fill(u->rows - 1, 0, u->cols, T_NORMAL);
     put(u, u->rows - 1, T_NORMAL,
         "Enter edit  i insert  d delete  u undo  r redo  : command  Esc closes");
-    sg_merit_result_free(&m.r);
 }
 
 int merit_key(ui *u, int key)

@@ -68,6 +68,12 @@ typedef struct ui {
     int glass_top;
     int msg_top;         /* the message history's first row; -1: the newest */
     int mf_sel, mf_top, mf_col; /* the Merit Function Editor's row (0-based), first row shown, column */
+    /* Its values, kept for the document state mf_id (0: none), so moving
+     * the cursor redraws without evaluating the merit function again. */
+    sg_merit_result mf_res;
+    int mf_ok;
+    char mf_why[SG_DIAG_MSG];
+    unsigned long mf_id;
     char warn_seen[SG_DIAG_MSG]; /* the design warning last put in the history */
     char fail_seen[SG_DIAG_MSG]; /* the same for why the design cannot be traced */
     int set_sel, set_top;
@@ -134,6 +140,8 @@ int messages_key(ui *u, int key);
 
 void merit_draw(ui *u);
 int merit_key(ui *u, int key);
+/* Frees the Merit Function Editor's kept values. */
+void merit_free(ui *u);
 
 /* Cuts UTF-8 s to at most w columns, the cut marked with ell; returns
  * nonzero when it cut. */
