@@ -43,8 +43,11 @@ if wait_for "lens.json" 15 && wait_for "Surf"; then
     # 2. Right to Target, Enter: the ':' line holds merit set 1 target 70.
     keys Right Right Right Right Right Right Right Enter
     wait_for ":merit set 1 target 70" >/dev/null
-    check "Enter on a cell puts its value on the ':' line" \
-        sh -c "$T capture-pane -p -t =main: | grep -q ':merit set 1 target 70'"
+    # The ':' line opens over the Merit Function Editor, not the sheet.
+    check "Enter on a cell puts its value on the ':' line, over the editor" \
+        sh -c "$T capture-pane -p -t =main: | grep -q ':merit set 1 target 70' &&
+               $T capture-pane -p -t =main: | grep -q 'Merit Function Editor' &&
+               ! $T capture-pane -p -t =main: | grep -q '^ *Surf'"
     # 3. A new target: the row and the merit follow.
     keys BSpace BSpace
     type_text "65"
@@ -52,8 +55,10 @@ if wait_for "lens.json" 15 && wait_for "Surf"; then
     wait_for "merit row 1: target 65" >/dev/null
     sleep 0.3
     WHY="$(screen | grep '^1 *EFFL')"
-    check "the edited target shows in its row" \
-        sh -c "screen() { $T capture-pane -p -t =main:; }; screen | grep -q '^1 *EFFL .* 65 '"
+    # The command's message shows under the editor's rows.
+    check "the edited target shows in its row, and the command's message under it" \
+        sh -c "screen() { $T capture-pane -p -t =main:; }; screen | grep -q '^1 *EFFL .* 65 ' &&
+               screen | grep -q 'merit row 1: target 65'"
     # 4. u undoes the edit, Esc closes, :w saves; the file has target 70.
     keys u
     wait_for "undo" >/dev/null

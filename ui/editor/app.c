@@ -346,8 +346,23 @@ static int wrap_text(int y, int rows, int cols, int style, const char *s)
     return n;
 }
 
+/* The lens data editor's screen: the sheet, the ray selector, and the
+ * analysis view or the results under them. */
+static void main_draw(ui *u)
+{
+    sheet_draw(u);
+    ray_draw(u);
+    if (u->e->view.kind != VIEW_OFF)
+        view_draw(u);
+    else
+        results_draw(u);
+}
+
+static const ui_panel *panel_of(int mode);
+
 static void draw(ui *u)
 {
+    const ui_panel *p;
     term_erase();
     term_cursor(-1, -1);
     ui_layout(u);
@@ -365,40 +380,21 @@ static void draw(ui *u)
         return;
     }
     title_draw(u);
-    switch (u->mode) {
-    case MODE_HELP: help_draw(u); break;
-    case MODE_SYSDATA: sysdata_draw(u); break;
-    case MODE_GLASSES: glasses_draw(u); break;
-    case MODE_MESSAGES: messages_draw(u); break;
-    case MODE_MERIT:
-        merit_draw(u);
-        /* The last command's message in place of the keys. */
-        if (u->e->msg[0])
-            status_draw(u);
-        break;
-    case MODE_SETTINGS: settings_draw(u); status_draw(u); break;
-    case MODE_EXAMPLES: examples_draw(u); status_draw(u); break;
-    case MODE_COMMAND:
-        if (u->back_mode == MODE_SETTINGS) {
-            settings_draw(u);
-            status_draw(u);
-            break;
-        }
-        if (u->back_mode == MODE_MERIT) {
-            merit_draw(u);
-            status_draw(u);
-            break;
-        }
-        /* fall through */
-    default:
-        sheet_draw(u);
-        ray_draw(u);
-        if (u->e->view.kind != VIEW_OFF)
-            view_draw(u);
-        else
-            results_draw(u);
+    p = panel_of(u->mode);
+    if (u->mode == MODE_COMMAND) {
+        /* The ':' line stays over a panel that takes commands, else over
+         * the sheet; the status line carries it. */
+        p = panel_of(u->back_mode);
+        if (!p->cmdline)
+            p = panel_of(MODE_NORMAL);
+        p->draw(u);
         status_draw(u);
-        break;
+    } else {
+        p->draw(u);
+        /* The Merit Function Editor shows the last command's message in
+         * place of its keys. */
+        if (p->status == UI_STATUS_ALWAYS || (p->status == UI_STATUS_MSG && u->e->msg[0]))
+            status_draw(u);
     }
     term_flush();
 }
@@ -558,49 +554,11 @@ static int export_progress(void *ctx, const char *what, size_t done, size_t tota
     return 0;
 }
 
-/* Keys that work whatever has the focus. */
+/* Keys that work whatever has the focus: the table in keys.c. */
 static int global_key(ui *u, int key)
 {
-    static const char *const methods[] = {"classic", "mpfr", "precise"};
-    ed *e = u->e;
-    int f;
-    switch (key) {
-    case K_F(1):
-    case '?': u->mode = MODE_HELP; return ED_HANDLED | ED_REDRAW;
-    case ':': ui_prompt(u, ""); return ED_HANDLED | ED_REDRAW;
-    case 'q':
-    case K_F(10):
-    case K_CTRL('q'):
-    case K_CTRL('c'): return ui_run(u, "quit");
-    case 'u': return ui_run(u, "undo");
-    case 'r':
-    case K_CTRL('r'): return ui_run(u, "redo");
-    case 'w':
-    case K_CTRL('s'): return ui_run(u, "save");
-    case K_CTRL('w'): ui_prompt(u, "save "); return ED_HANDLED | ED_REDRAW;
-    case 'o': ui_prompt(u, "open "); return ED_HANDLED | ED_REDRAW;
-    case 'e': return ui_run(u, "example");
-    case 'n': return ui_run(u, "new");
-    case 'x': ui_prompt(u, "export "); return ED_HANDLED | ED_REDRAW;
-    case 't':
-    case K_F(4): u->mode = MODE_SETTINGS; return ED_HANDLED | ED_REDRAW;
-    case 'm': return ui_run(u, "method %s", methods[e->method % 3]);
-    case '#': return ui_run(u, "digits toggle");
-    case K_F(3): u->sys_top = 0; u->mode = MODE_SYSDATA; return ED_HANDLED | ED_REDRAW;
-    case K_CTRL('e'): u->mode = MODE_MERIT; return ED_HANDLED | ED_REDRAW;
-    case 'v': return ui_run(u, "wave %d", (e->wave + 1) % e->doc.sys->nwave + 1);
-    case 'g': return ui_run(u, "view next");
-    case 'f':
-        u->focus = u->focus == FOCUS_SHEET ? FOCUS_RAY : FOCUS_SHEET;
-        return ED_HANDLED | ED_REDRAW;
-    case K_CTRL('l'): term_repaint(); return ED_HANDLED | ED_REDRAW;
-    case K_CTRL('z'): term_suspend(); return ED_HANDLED | ED_REDRAW;
-    default: break;
-    }
-    f = ray_quick(u, key);
-    if (f)
-        return f;
-    return results_key(u, key);
+    const ui_key *k = ui_key_find(key);
+    return k ? ui_key_run(u, k, key) : 0;
 }
 
 static int mouse(ui *u)
@@ -618,37 +576,10 @@ static int mouse(ui *u)
     return ED_HANDLED;
 }
 
-static int dispatch(ui *u, int key)
+/* A key in the lens data editor's screen itself. */
+static int normal_key(ui *u, int key)
 {
     int f;
-    if (key == K_RESIZE) {
-        /* The old scroll fitted the old width; the cursor's cell stays in
-         * view from a fresh start. */
-        u->left = 0;
-        u->res_left = 0;
-        return ED_HANDLED | ED_REDRAW;
-    }
-    if (u->too_small && u->mode == MODE_NORMAL)
-        return key == 'q' || key == K_CTRL('c') ? ui_run(u, "quit") : ED_HANDLED;
-    switch (u->mode) {
-    case MODE_EDIT_CELL: return key == K_MOUSE ? ED_HANDLED : sheet_edit_key(u, key);
-    case MODE_EDIT_RAY: return key == K_MOUSE ? ED_HANDLED : ray_edit_key(u, key);
-    case MODE_COMMAND: return key == K_MOUSE ? ED_HANDLED : command_key(u, key);
-    case MODE_CONFIRM: return confirm_key(u, key);
-    case MODE_HELP: return help_key(u, key);
-    case MODE_SETTINGS:
-        if (key == ':') {
-            ui_prompt(u, "");
-            return ED_HANDLED | ED_REDRAW;
-        }
-        return settings_key(u, key);
-    case MODE_EXAMPLES: return examples_key(u, key);
-    case MODE_SYSDATA: return sysdata_key(u, key);
-    case MODE_GLASSES: return glasses_key(u, key);
-    case MODE_MESSAGES: return messages_key(u, key);
-    case MODE_MERIT: return merit_key(u, key);
-    default: break;
-    }
     /* A fresh key clears the last message; the key's own command may set a
      * new one. */
     u->e->msg[0] = '\0';
@@ -675,6 +606,60 @@ static int dispatch(ui *u, int key)
     if (f)
         return f;
     return global_key(u, key);
+}
+
+/* The settings take ':' for the command line, as the sheet does. */
+static int settings_panel_key(ui *u, int key)
+{
+    if (key == ':') {
+        ui_prompt(u, "");
+        return ED_HANDLED | ED_REDRAW;
+    }
+    return settings_key(u, key);
+}
+
+/* Each mode's panel, as htop's PanelClass: how it draws, whether the
+ * status line shows under it, what reads its keys, whether the ':' line
+ * may open over it, and whether it ignores the mouse.  The ':' line's own
+ * row draws the panel it opened over (draw()). */
+static const ui_panel panels[] = {
+    [MODE_NORMAL] = {main_draw, UI_STATUS_ALWAYS, normal_key, 0, 0},
+    [MODE_EDIT_CELL] = {main_draw, UI_STATUS_ALWAYS, sheet_edit_key, 0, 1},
+    [MODE_EDIT_RAY] = {main_draw, UI_STATUS_ALWAYS, ray_edit_key, 0, 1},
+    [MODE_COMMAND] = {main_draw, UI_STATUS_ALWAYS, command_key, 0, 1},
+    [MODE_CONFIRM] = {main_draw, UI_STATUS_ALWAYS, confirm_key, 0, 0},
+    [MODE_HELP] = {help_draw, UI_STATUS_NONE, help_key, 0, 0},
+    [MODE_SETTINGS] = {settings_draw, UI_STATUS_ALWAYS, settings_panel_key, 1, 0},
+    [MODE_EXAMPLES] = {examples_draw, UI_STATUS_ALWAYS, examples_key, 0, 0},
+    [MODE_SYSDATA] = {sysdata_draw, UI_STATUS_NONE, sysdata_key, 0, 0},
+    [MODE_GLASSES] = {glasses_draw, UI_STATUS_NONE, glasses_key, 0, 0},
+    [MODE_MESSAGES] = {messages_draw, UI_STATUS_NONE, messages_key, 0, 0},
+    [MODE_MERIT] = {merit_draw, UI_STATUS_MSG, merit_key, 1, 0},
+};
+
+static const ui_panel *panel_of(int mode)
+{
+    return mode >= 0 && mode < (int)(sizeof panels / sizeof panels[0]) && panels[mode].draw
+               ? &panels[mode]
+               : &panels[MODE_NORMAL];
+}
+
+static int dispatch(ui *u, int key)
+{
+    const ui_panel *p;
+    if (key == K_RESIZE) {
+        /* The old scroll fitted the old width; the cursor's cell stays in
+         * view from a fresh start. */
+        u->left = 0;
+        u->res_left = 0;
+        return ED_HANDLED | ED_REDRAW;
+    }
+    if (u->too_small && u->mode == MODE_NORMAL)
+        return key == 'q' || key == K_CTRL('c') ? ui_run(u, "quit") : ED_HANDLED;
+    p = panel_of(u->mode);
+    if (key == K_MOUSE && p->no_mouse)
+        return ED_HANDLED;
+    return p->key(u, key);
 }
 
 /* Acts on what a key or command asked for.  Returns 1 to leave the loop. */

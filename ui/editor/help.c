@@ -8,38 +8,6 @@
 #include "ui.h"
 
 const char *const ui_key_help[] = {
-    "#Anywhere",
-    "F1 ?            this help (Esc or q closes it)",
-    ":               command line, from any cell (Up/Down: history; Esc cancels)",
-    "                (a cell text that begins with ':' is typed after Enter or F2)",
-    "q F10 Ctrl-C    quit (asks first when there are unsaved changes)",
-    "u               undo",
-    "r Ctrl-R        redo",
-    "w Ctrl-S        save (asks for a name when the design has none)",
-    "Ctrl-W          save as",
-    "o               open a design file",
-    "e               open a bundled example",
-    "n               new design",
-    "x               export the ray table (:export FILE [csv|json|text|hdf5] [ray|fan N|xfan N|grid N])",
-    "                or the analysis view on show (:export FILE.png|svg|pdf)",
-    "g               analysis view below the sheet (layout, spot, fan, opd, wave, mtf,",
-    "                psf, encircled; :view NAME|off); it follows every edit",
-    "t F4            system settings: wavelengths, fields, aperture, aiming, method",
-    "m               next trace method (precise, classic, mpfr)",
-    "#               digits of agreement with an MPFR trace, on or off",
-    "F3              system data: pupils, image height, NA, working F/#, magnification",
-    "Ctrl-E          Merit Function Editor: rows and values, live; Enter edits (:merit)",
-    "Esc, then a key run that key's command even in a text cell (Alt-key does the same)",
-    "v               next wavelength for the ray",
-    "c F5            chief ray (Px = Py = 0)",
-    "F6 F7 F8 F9     marginal ray: top, bottom, right, left",
-    "p               next marginal ray",
-    "f               move between the spreadsheet and the ray selector",
-    "{ }             scroll the results left and right",
-    "Ctrl-L          repaint the screen",
-    "Ctrl-Z          suspend",
-    "mouse           click selects a cell or ray item, double-click edits, wheel scrolls",
-    "",
     "#Spreadsheet",
     "arrows hjkl     move",
     "Tab Shift-Tab   next / previous cell",
@@ -111,18 +79,64 @@ const char *const ui_key_help[] = {
     NULL,
 };
 
+/* Lines of the keys that work anywhere: a heading, each row's lines
+ * (its help's '\n' starts another), a blank. */
+static int key_lines(void)
+{
+    const ui_key *k;
+    const char *p;
+    int n = 2;
+    for (k = ui_keys; k->label; k++)
+        for (n++, p = k->help; *p; p++)
+            n += *p == '\n';
+    return n;
+}
+
+/* Line i (below key_lines()) of the keys that work anywhere: the label
+ * padded to 16 columns, then the text; a continuation under the text. */
+static void key_line(int i, char *buf, size_t n)
+{
+    const ui_key *k;
+    if (i == 0) {
+        snprintf(buf, n, "Anywhere");
+        return;
+    }
+    for (i--, k = ui_keys; k->label; k++) {
+        const char *p = k->help, *e;
+        int part;
+        for (part = 0;; part++) {
+            e = p;
+            while (*e && *e != '\n')
+                e++;
+            if (i-- == 0) {
+                snprintf(buf, n, "  %-15s %.*s", part ? "" : k->label, (int)(e - p), p);
+                return;
+            }
+            if (!*e)
+                break;
+            p = e + 1;
+        }
+    }
+    buf[0] = '\0';
+}
+
 static int nlines(void)
 {
     int n = 0;
     while (ui_key_help[n])
         n++;
-    return n + 2 + cmd_count();
+    return key_lines() + n + 2 + cmd_count();
 }
 
 /* Line i of the help text into buf; returns its style. */
 static int line(int i, char *buf, size_t n)
 {
     int k = 0;
+    if (i < key_lines()) {
+        key_line(i, buf, n);
+        return i == 0 ? T_HEADER : T_NORMAL;
+    }
+    i -= key_lines();
     while (ui_key_help[k])
         k++;
     if (i < k) {

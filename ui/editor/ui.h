@@ -28,6 +28,20 @@ enum {
     MODE_MERIT       /* the Merit Function Editor (Ctrl-E, :merit) */
 };
 
+/* A panel that takes the screen in a mode (app.c's table, as htop's
+ * PanelClass): how it draws, when the status line shows under it, what
+ * reads its keys, whether the ':' line may open over it, and whether it
+ * ignores the mouse. */
+enum { UI_STATUS_NONE = 0, UI_STATUS_ALWAYS, UI_STATUS_MSG /* when there is a message */ };
+struct ui;
+typedef struct ui_panel {
+    void (*draw)(struct ui *u);
+    int status;
+    int (*key)(struct ui *u, int key);
+    int cmdline;
+    int no_mouse;
+} ui_panel;
+
 /* Items of the ray selector. */
 enum { RAY_FIELD = 0, RAY_HX, RAY_HY, RAY_PX, RAY_PY, RAY_WAVE, RAY_NITEMS };
 
@@ -163,7 +177,28 @@ void examples_open(ui *u);
 void examples_draw(ui *u);
 int examples_key(ui *u, int key);
 
-/* Text of the help screen, one line per entry; NULL ends. */
+/* Text of the help screen after the keys that work anywhere, one line
+ * per entry; NULL ends. */
 extern const char *const ui_key_help[];
+
+/* The keys that work anywhere (keys.c), in the help screen's order; the
+ * row with a NULL label ends the table.  A row runs a command, opens the
+ * ':' line with a text, or calls an action; a DOC row names keys the
+ * event loop reads before the table (Esc, the mouse). */
+enum { UI_KEY_DOC = 0, UI_KEY_RUN, UI_KEY_PROMPT, UI_KEY_ACT };
+#define UI_KEY_MAX 4
+typedef struct ui_key {
+    int keys[UI_KEY_MAX];  /* key codes; 0 ends the list */
+    const char *label;     /* the keys as the help screen and sagitta(1) name them */
+    const char *help;      /* the help screen's text; '\n' starts a line under it */
+    int kind;
+    const char *text;      /* UI_KEY_RUN: the command; UI_KEY_PROMPT: the ':' line's text */
+    int (*act)(ui *u, int key);
+} ui_key;
+extern const ui_key ui_keys[];
+/* The row that binds key, or NULL. */
+const ui_key *ui_key_find(int key);
+/* Does what row k says for key; its ED_* flags. */
+int ui_key_run(ui *u, const ui_key *k, int key);
 
 #endif
