@@ -572,33 +572,15 @@ static void trace_help(FILE *f)
 "its status is printed and the exit status is 0.  See sagitta(1).\n", f);
 }
 
-enum {
-    OPT_HELP = 1, OPT_METHOD, OPT_BITS, OPT_WAVE, OPT_FORMAT, OPT_OUTPUT,
-    OPT_START, OPT_DIR, OPT_RAY, OPT_RAYS, OPT_NOCLIP, OPT_THREADS, OPT_GLOBAL, OPT_SURFACE
-};
-
-static const cli_opt trace_opts[] = {
-    CLI_ID("--help", 'h', 0, OPT_HELP),
-    CLI_ID("--method", 0, 1, OPT_METHOD),
-    CLI_ID("--bits", 0, 1, OPT_BITS),
-    CLI_ID("--wave", 0, 1, OPT_WAVE),
-    CLI_ID("--format", 0, 1, OPT_FORMAT),
-    CLI_ID("--output", 'o', 1, OPT_OUTPUT),
-    CLI_ID("--start", 0, 1, OPT_START),
-    CLI_ID("--dir", 0, 1, OPT_DIR),
-    CLI_ID("--ray", 0, 1, OPT_RAY),
-    CLI_ID("--rays", 0, 1, OPT_RAYS),
-    CLI_ID("--no-clip", 0, 0, OPT_NOCLIP),
-    CLI_ID("--threads", 0, 1, OPT_THREADS),
-    CLI_ID("--global", 0, CLI_OPT_NUM, OPT_GLOBAL),
-    CLI_ID("--surface", 0, 1, OPT_SURFACE),
-    CLI_END
-};
+/* The options trace's switch reads itself: the ones that go together or
+ * whose value is checked against another. */
+enum { OPT_START = 1, OPT_DIR, OPT_RAY, OPT_GLOBAL };
 
 /* ---- a ray list, streamed ---- */
 
 /* --format hdf5: a ray table only, not one of report.c's text forms. */
 #define FMT_HDF5 100
+static const int trace_format_values[4] = {REPORT_TEXT, REPORT_CSV, REPORT_JSON, FMT_HDF5};
 
 /* The frames of --global, or NULL (with the message printed) when the
  * design refuses the reference surface. */
@@ -1007,6 +989,26 @@ int cmd_trace(int argc, char **argv)
     sg_diag d;
     FILE *f;
 
+    int noclip = 0;
+    /* Its table: the rows with a variable are stored as they are read. */
+    const cli_opt trace_opts[] = {
+        CLI_OPT_HELP,
+        CLI_OPT_METHOD(method),
+        CLI_OPT_INT("--bits", 0, bits, 53, 100000),
+        CLI_OPT_INT("--wave", 0, wave1, 1, SG_MAX_WAVES),
+        CLI_OPT_WORD("--format", fmt, "text|csv|json|hdf5", trace_format_values),
+        CLI_OPT_OUTPUT(output),
+        CLI_ID("--start", 0, 1, OPT_START),
+        CLI_ID("--dir", 0, 1, OPT_DIR),
+        CLI_ID("--ray", 0, 1, OPT_RAY),
+        CLI_OPT_TEXT("--rays", 0, rays_path),
+        CLI_OPT_FLAG("--no-clip", 0, noclip),
+        CLI_OPT_INT("--threads", 0, threads, 0, 4096),
+        CLI_ID("--global", 0, CLI_OPT_NUM, OPT_GLOBAL),
+        CLI_OPT_TEXT("--surface", 0, surfaces),
+        CLI_END
+    };
+
     memset(&opd1, 0, sizeof opd1);
     cli_iter_init(&it, "trace", argc, argv);
     while ((id = cli_next_opt(&it, trace_opts, &val)) != -1) {
@@ -1016,30 +1018,9 @@ int cmd_trace(int argc, char **argv)
                 return cli_usage_error("trace", "unexpected argument \"%s\"", val);
             design = val;
             break;
-        case OPT_HELP:
+        case CLI_HELP:
             trace_help(stdout);
             return CLI_EXIT_OK;
-        case OPT_METHOD:
-            if (cli_method_value(val, &method))
-                return CLI_EXIT_USAGE;
-            break;
-        case OPT_BITS:
-            if (cli_int_value("--bits", val, 53, 100000, &bits))
-                return CLI_EXIT_USAGE;
-            break;
-        case OPT_WAVE:
-            if (cli_int_value("--wave", val, 1, SG_MAX_WAVES, &wave1))
-                return CLI_EXIT_USAGE;
-            break;
-        case OPT_FORMAT:
-            if (strcmp(val, "hdf5") == 0)
-                fmt = FMT_HDF5;
-            else if (cli_format_value(val, 1, &fmt))
-                return CLI_EXIT_USAGE;
-            break;
-        case OPT_OUTPUT:
-            output = val;
-            break;
         case OPT_START:
             if (cli_doubles_value("--start", val, 3, "X,Y,Z", start))
                 return CLI_EXIT_USAGE;
@@ -1059,28 +1040,16 @@ int cmd_trace(int argc, char **argv)
                 return CLI_EXIT_USAGE;
             have_ray = 1;
             break;
-        case OPT_RAYS:
-            rays_path = val;
-            break;
-        case OPT_NOCLIP:
-            clip = 0;
-            break;
         case OPT_GLOBAL:
             global = 1;
             if (val && cli_int_value("--global", val, 0, SG_MAX_SURFACES, &global))
                 return CLI_EXIT_USAGE;
             break;
-        case OPT_THREADS:
-            if (cli_int_value("--threads", val, 0, 4096, &threads))
-                return CLI_EXIT_USAGE;
-            break;
-        case OPT_SURFACE:
-            surfaces = val;
-            break;
         default:
             return -id;
         }
     }
+    clip = !noclip;
     if (!design)
         return cli_usage_error("trace", "missing DESIGN.json");
     if (have_start != have_dir)

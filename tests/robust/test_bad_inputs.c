@@ -794,7 +794,7 @@ static const bad_case cases[] = {
       "--wave 4: @E/singlet.json has 3 wavelengths", NULL, NULL, NULL, 0 },
     { "cli_format_xml", "--format xml",
       NULL, NULL, NULL, NULL, ARGS("trace", "@D", "--ray", "0,0,0,0", "--format", "xml"), 2,
-      "--format: expected text, csv or json, got \"xml\"", NULL, NULL, NULL, 0 },
+      "--format: expected text, csv, json or hdf5, got \"xml\"", NULL, NULL, NULL, 0 },
     { "cli_paraxial_csv", "paraxial has no csv format",
       NULL, NULL, NULL, NULL, ARGS("paraxial", "@D", "--format", "csv"), 2,
       "--format: expected text or json", NULL, NULL, NULL, 0 },
