@@ -976,23 +976,8 @@ static void bench_help(FILE *f)
           f);
 }
 
-enum { OPT_HELP = 1, OPT_FORMAT, OPT_REPEAT, OPT_QUICK, OPT_THREADS, OPT_RAYS, OPT_SPOT,
-       OPT_VIEW, OPT_CLOCK, OPT_EDIT_SURF, OPT_BASELINE };
-
-static const cli_opt bench_opts[] = {
-    CLI_ID("--help", 'h', 0, OPT_HELP),
-    CLI_ID("--format", 0, 1, OPT_FORMAT),
-    CLI_ID("--repeat", 0, 1, OPT_REPEAT),
-    CLI_ID("--quick", 0, 0, OPT_QUICK),
-    CLI_ID("--threads", 0, 1, OPT_THREADS),
-    CLI_ID("--rays", 0, 1, OPT_RAYS),
-    CLI_ID("--spot", 0, 0, OPT_SPOT),
-    CLI_ID("--baseline", 0, 0, OPT_BASELINE),
-    CLI_ID("--view", 0, 1, OPT_VIEW),
-    CLI_ID("--clock", 0, 1, OPT_CLOCK),
-    CLI_ID("--edit-surface", 0, 1, OPT_EDIT_SURF),
-    CLI_END
-};
+/* The option bench's switch reads itself: --view needs the editor. */
+enum { OPT_VIEW = 1 };
 
 /* ------------------------------------------------------------ spot mode */
 
@@ -1557,82 +1542,52 @@ int cmd_bench(int argc, char **argv)
         cli_error("out of memory");
         return CLI_EXIT_INTERNAL;
     }
-    cli_iter_init(&it, "bench", argc, argv);
-    while ((id = cli_next_opt(&it, bench_opts, &val)) != -1) {
-        switch (id) {
-        case 0:
-            designs[ndesign++] = val;
-            break;
-        case OPT_HELP:
-            bench_help(stdout);
-            free(designs);
-            return CLI_EXIT_OK;
-        case OPT_FORMAT: {
-            int f;
-            if (cli_format_value(val, 0, &f)) {
+    {
+        int fmt = REPORT_TEXT;
+        /* Its table: the rows with a variable are stored as they are read. */
+        const cli_opt bench_opts[] = {
+            CLI_OPT_HELP,
+            CLI_OPT_FORMAT(fmt),
+            CLI_OPT_INT("--repeat", 0, cfg.repeat, 1, 1000),
+            CLI_OPT_FLAG("--quick", 0, cfg.quick),
+            CLI_OPT_INT("--threads", 0, cfg.threads, 0, 256),
+            CLI_OPT_INT("--rays", 0, nrays, 1, 1000000000),
+            CLI_OPT_FLAG("--spot", 0, spot_mode),
+            CLI_OPT_FLAG("--baseline", 0, base_mode),
+            CLI_ID("--view", 0, 1, OPT_VIEW),
+            CLI_OPT_WORD("--clock", cfg.cpu_clock, "wall|cpu", NULL),
+            CLI_OPT_INT("--edit-surface", 0, cfg.edit_surf, 1, 1000000),
+            CLI_END
+        };
+        cli_iter_init(&it, "bench", argc, argv);
+        while ((id = cli_next_opt(&it, bench_opts, &val)) != -1) {
+            switch (id) {
+            case 0:
+                designs[ndesign++] = val;
+                break;
+            case CLI_HELP:
+                bench_help(stdout);
                 free(designs);
-                return CLI_EXIT_USAGE;
-            }
-            cfg.fmt = f == REPORT_JSON ? BENCH_JSON : BENCH_TEXT;
-            break;
-        }
-        case OPT_REPEAT:
-            if (cli_int_value("--repeat", val, 1, 1000, &cfg.repeat)) {
-                free(designs);
-                return CLI_EXIT_USAGE;
-            }
-            break;
-        case OPT_QUICK:
-            cfg.quick = 1;
-            break;
-        case OPT_CLOCK:
-            if (strcmp(val, "wall") && strcmp(val, "cpu")) {
-                free(designs);
-                return cli_usage_error("bench", "--clock: expected wall or cpu, got \"%s\"", val);
-            }
-            cfg.cpu_clock = strcmp(val, "cpu") == 0;
-            break;
-        case OPT_EDIT_SURF:
-            if (cli_int_value("--edit-surface", val, 1, 1000000, &cfg.edit_surf)) {
-                free(designs);
-                return CLI_EXIT_USAGE;
-            }
-            break;
-        case OPT_RAYS:
-            if (cli_int_value("--rays", val, 1, 1000000000, &nrays)) {
-                free(designs);
-                return CLI_EXIT_USAGE;
-            }
-            break;
-        case OPT_SPOT:
-            spot_mode = 1;
-            break;
-        case OPT_BASELINE:
-            base_mode = 1;
-            break;
-        case OPT_VIEW:
+                return CLI_EXIT_OK;
+            case OPT_VIEW:
 #ifdef SG_HAVE_EDITOR
-            view_kind = strcmp(val, "all") == 0 ? VIEW_COUNT : view_parse(val);
-            if (view_kind <= VIEW_OFF) {
-                free(designs);
-                return cli_usage_error("bench", "--view: expected spot, fan, opd, wave, "
-                                                "layout or all, got \"%s\"", val);
-            }
-            break;
+                view_kind = strcmp(val, "all") == 0 ? VIEW_COUNT : view_parse(val);
+                if (view_kind <= VIEW_OFF) {
+                    free(designs);
+                    return cli_usage_error("bench", "--view: expected spot, fan, opd, wave, "
+                                                    "layout or all, got \"%s\"", val);
+                }
+                break;
 #else
-            free(designs);
-            return cli_usage_error("bench", "--view: this build has no editor");
-#endif
-        case OPT_THREADS:
-            if (cli_int_value("--threads", val, 0, 256, &cfg.threads)) {
                 free(designs);
-                return CLI_EXIT_USAGE;
+                return cli_usage_error("bench", "--view: this build has no editor");
+#endif
+            default:
+                free(designs);
+                return -id;
             }
-            break;
-        default:
-            free(designs);
-            return -id;
         }
+        cfg.fmt = fmt == REPORT_JSON ? BENCH_JSON : BENCH_TEXT;
     }
 
 #ifdef SG_HAVE_EDITOR
