@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "analysis_internal.h"
+#include "analysis_int.h"
 
 void sg_fan_opts_init(sg_fan_opts *o)
 {

@@ -24,7 +24,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "analysis_internal.h"
+#include "analysis_int.h"
 #include "psf_internal.h"
 
 #define HY_TWO_PI 6.283185307179586476925286766559

@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "analysis_internal.h"
+#include "analysis_int.h"
 #include "shape.h"
 
 void sg_layout_opts_init(sg_layout_opts *o)

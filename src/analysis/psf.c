@@ -19,7 +19,7 @@
 
 #include <fftw3.h>
 
-#include "analysis_internal.h"
+#include "analysis_int.h"
 #include "psf_internal.h"
 
 /* 2 pi, the phase of one wave. */

@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "analysis_internal.h"
+#include "analysis_int.h"
 
 int sg_an_select(int sel, int n, const char *what, int *idx, sg_diag *d)
 {

@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "analysis_internal.h"
+#include "analysis_int.h"
 
 void sg_tf_opts_init(sg_tf_opts *o)
 {

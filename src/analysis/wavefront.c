@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "analysis_internal.h"
+#include "analysis_int.h"
 
 void sg_wavefront_free(sg_wavefront *w)
 {

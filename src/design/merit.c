@@ -15,8 +15,8 @@
 #include <string.h>
 
 #include "internal.h"
-#include "merit.h"
-#include "trace_internal.h"
+#include "design.h"
+#include "trace_int.h"
 
 #define PI 3.14159265358979323846
 

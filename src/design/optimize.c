@@ -24,7 +24,7 @@
 #include <gsl/gsl_vector.h>
 
 #include "internal.h"
-#include "lsq.h"
+#include "design_int.h"
 
 #define OPT_MAX_VARS 256
 #define OPT_DEFAULT_CYCLES 500

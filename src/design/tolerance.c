@@ -16,7 +16,7 @@
 #include <unistd.h>
 
 #include "internal.h"
-#include "lsq.h"
+#include "design_int.h"
 
 static const char *const tol_names[SG_TOL_NTYPES] = {
     "TRAD", "TCUR", "TFRN", "TTHI", "TCON", "TPAR", "TSDX", "TSDY", "TSTX", "TSTY",

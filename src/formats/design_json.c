@@ -26,7 +26,7 @@
 #include <cjson/cJSON.h>
 
 #include "internal.h"
-#include "merit.h"
+#include "design.h"
 
 /* Larger inputs are refused before parsing: a design this big is a mistake,
  * and cJSON's tree would need several times the text's size in memory. */

@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "trace_internal.h"
+#include "trace_int.h"
 
 static const char *const kind_names[SG_SOLVE_NKINDS] = {
     "none", "pickup", "marginal_height", "marginal_angle", "fnum", "chief_height",

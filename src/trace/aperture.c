@@ -7,7 +7,7 @@
 #include <math.h>
 #include <stdio.h>
 
-#include "trace_internal.h"
+#include "trace_int.h"
 
 /* Beyond radius lim: x^2 + y^2 against lim^2 (a few roundings, far below
  * 1e-12) settles every point but those within 1e-12 of the edge, and

@@ -16,7 +16,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "trace_internal.h"
+#include "trace_int.h"
 #include "vdd.h"
 
 _Static_assert(SG_VL <= SG_BATCH_LANES, "a thread's scratch holds SG_BATCH_LANES rays");

@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <unistd.h>
 
-#include "trace_internal.h"
+#include "trace_int.h"
 
 struct sg_batch {
     int nt, nsurf;

@@ -12,7 +12,7 @@
  */
 #ifdef SG_DISPATCH
 
-#include "trace_internal.h"
+#include "trace_int.h"
 
 #define SG_VARIANT(isa)                                                                       \
     int sg_launch_prepare_##isa(sg_tracer *t, sg_diag *d);                                   \

@@ -6,7 +6,7 @@
  * wavelength, so the caller keeps an sg_index_cache and passes it in; an
  * index is computed once per set of inputs.  The key is every number the
  * computation reads, so a hit is the fresh value exactly. */
-#include "trace_internal.h"
+#include "trace_int.h"
 #include "index_cache.h"
 
 #include <stdint.h>

@@ -15,7 +15,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "trace_internal.h"
+#include "trace_int.h"
 #include "vdd.h"
 
 static int inf_object(const sg_tracer *t)

@@ -17,7 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "trace_internal.h"
+#include "trace_int.h"
 
 /* One micrometre in lens units. */
 double sg_um_in_units(const sg_system *sys)

@@ -10,7 +10,7 @@
 #include <math.h>
 #include <string.h>
 
-#include "trace_internal.h"
+#include "trace_int.h"
 #include "vdd.h"
 
 /* Each operation is vdd.h's transcription of dd.h's, and dot3 and the

@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "trace_internal.h"
+#include "trace_int.h"
 
 typedef struct yn {
     mpfr_t y, w; /* height and reduced angle n u */

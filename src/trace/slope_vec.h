@@ -7,7 +7,7 @@
 #ifndef SG_SLOPE_VEC_H
 #define SG_SLOPE_VEC_H
 
-#include "trace_internal.h"
+#include "trace_int.h"
 #include "vdd.h"
 
 /* w = sag'(r) / r and the bound on |dw/dr^2| r^2 for an even asphere;

@@ -26,7 +26,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "trace_internal.h"
+#include "trace_int.h"
 
 
 const char *sg_method_name(sg_method m)

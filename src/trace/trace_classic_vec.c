@@ -25,7 +25,7 @@
 #include "shape_vd.h"
 #include "shape_vdd.h"
 #include "slope_vec.h"
-#include "trace_internal.h"
+#include "trace_int.h"
 
 /* A shape's sag_d on every lane (shape_vd.h): one copy of the shapes'
  * code for the two callers. */

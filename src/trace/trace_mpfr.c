@@ -13,7 +13,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "trace_internal.h"
+#include "trace_int.h"
 
 enum { NT = 48, NA = 16 };
 

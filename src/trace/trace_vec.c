@@ -22,7 +22,7 @@
 #include "shape_vd.h"
 #include "shape_vdd.h"
 #include "slope_vec.h"
-#include "trace_internal.h"
+#include "trace_int.h"
 #include "vdd.h"
 
 /* ------------------------------------------------------------------------
