@@ -24,7 +24,6 @@
 #include <fftw3.h>
 
 #include "analysis_int.h"
-#include "psf_internal.h"
 
 static const double EE_PI = 3.14159265358979323846;
 

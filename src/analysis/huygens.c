@@ -25,7 +25,6 @@
 #include <unistd.h>
 
 #include "analysis_int.h"
-#include "psf_internal.h"
 
 #define HY_TWO_PI 6.283185307179586476925286766559
 

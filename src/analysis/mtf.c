@@ -22,7 +22,6 @@
 #include <fftw3.h>
 
 #include "analysis_int.h"
-#include "psf_internal.h"
 
 #define SG_MTF_PI 3.14159265358979323846
 

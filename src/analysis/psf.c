@@ -20,7 +20,6 @@
 #include <fftw3.h>
 
 #include "analysis_int.h"
-#include "psf_internal.h"
 
 /* 2 pi, the phase of one wave. */
 #define SG_TWO_PI 6.283185307179586476925286766559

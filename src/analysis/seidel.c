@@ -20,7 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "trace_int.h"
+#include "trace.h"
 
 /* Signed indices after every surface at wavelength wave, as doubles. */
 static int indices(const sg_system *sys, const sg_catalog *cat, int wave, double *out,

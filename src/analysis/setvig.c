@@ -18,7 +18,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal.h"
+#include "model.h"
 
 void sg_setvig_opts_init(sg_setvig_opts *o)
 {

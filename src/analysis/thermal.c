@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal.h"
+#include "model.h"
 #include "shape.h"
 
 /* A glass, a model glass or a fixed index: a solid body that expands as

@@ -3,7 +3,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "internal.h"
+#include "core.h"
 
 static const char *const err_msgs[] = {
 #define SG_ERR_MSG_(name, msg) msg,

@@ -1,7 +1,9 @@
-/* merit.h - what the merit function shares with the design reader and
- * writer: each operand type's parameters as JSON names them. */
-#ifndef SG_MERIT_H
-#define SG_MERIT_H
+/* design.h - the interface of design/ (the merit function, the optimizer,
+ * tolerancing) to the other subsystems, beside sagitta.h: what the merit
+ * function shares with the design reader and writer, each operand type's
+ * parameters as JSON names them. */
+#ifndef SG_DESIGN_H
+#define SG_DESIGN_H
 
 #include "sagitta.h"
 

@@ -1,11 +1,13 @@
 /*
- * lsq.h - the optimizer's damped least squares on an objective other than
- * the merit function (the tolerancing's compensators, src/tolerance.c).
+ * design_int.h - what only design/'s own files share: the optimizer's
+ * damped least squares on an objective other than the merit function
+ * (the tolerancing's compensators, tolerance.c).
  */
-#ifndef SG_LSQ_H
-#define SG_LSQ_H
+#ifndef SG_DESIGN_INT_H
+#define SG_DESIGN_INT_H
 
-#include "internal.h"
+#include "design.h"
+#include "model.h"
 
 /* Fills f[0..nres-1] with the residuals at sys (solves applied); their sum
  * of squares is minimized.  Called from several threads at once. */

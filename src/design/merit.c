@@ -14,9 +14,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal.h"
+#include "model.h"
 #include "design.h"
-#include "trace_int.h"
+#include "trace.h"
 
 #define PI 3.14159265358979323846
 

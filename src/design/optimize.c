@@ -23,7 +23,7 @@
 #include <gsl/gsl_multifit_nlinear.h>
 #include <gsl/gsl_vector.h>
 
-#include "internal.h"
+#include "model.h"
 #include "design_int.h"
 
 #define OPT_MAX_VARS 256

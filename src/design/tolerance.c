@@ -15,7 +15,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "internal.h"
+#include "model.h"
 #include "design_int.h"
 
 static const char *const tol_names[SG_TOL_NTYPES] = {

@@ -29,7 +29,7 @@
 #include <gmp.h>
 #include <mpfr.h>
 
-#include "internal.h"
+#include "formats_int.h"
 #include "shape.h"
 
 #define ZMX_MAX_BYTES ((size_t)64 * 1024 * 1024)
@@ -2394,7 +2394,7 @@ typedef struct zoline {
 } zoline;
 
 struct sg_zmx_origin {
-    int refs;
+    sg_origin_head head; /* first: the model counts and frees it (model.h) */
     char *text; /* the file decoded to UTF-8 */
     int enc;
     int nline;
@@ -2406,16 +2406,8 @@ struct sg_zmx_origin {
     sg_zmx_subst sub;
 };
 
-void sg_zmx_origin_retain(struct sg_zmx_origin *o)
+static void zmx_origin_free(struct sg_zmx_origin *o)
 {
-    if (o)
-        __atomic_add_fetch(&o->refs, 1, __ATOMIC_RELAXED);
-}
-
-void sg_zmx_origin_release(struct sg_zmx_origin *o)
-{
-    if (!o || __atomic_sub_fetch(&o->refs, 1, __ATOMIC_ACQ_REL) != 0)
-        return;
     sg_system_free(o->base);
     while (o->pairs && o->sub.n--)
         free(o->pairs[o->sub.n]);
@@ -2796,7 +2788,8 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
     org = calloc(1, sizeof *org);
     if (org) {
         const unsigned char *ub = bytes;
-        org->refs = 1;
+        org->head.refs = 1;
+        org->head.free = zmx_origin_free;
         org->enc = strcmp(enc, "UTF-16LE") == 0     ? ZENC_UTF16LE
                    : strcmp(enc, "ISO-8859-1") == 0 ? ZENC_LATIN1
                    : len >= 3 && ub[0] == 0xEF && ub[1] == 0xBB && ub[2] == 0xBF

@@ -24,7 +24,7 @@
 #include <string.h>
 #include <strings.h>
 
-#include "internal.h"
+#include "formats_int.h"
 
 #define ZAR_MAX_BYTES ((size_t)64 * 1024 * 1024)
 #define ZAR_NAME 256

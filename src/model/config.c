@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal.h"
+#include "model_int.h"
 
 /* The operands sagitta applies: Zemax's names and what they address. */
 typedef enum { CO_SURF, CO_SYS, CO_FIELD, CO_WAVE } co_scope;

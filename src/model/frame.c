@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal.h"
+#include "model_int.h"
 
 int sg_frame_change_is_zero(const sg_frame_change *c)
 {

@@ -42,7 +42,7 @@
 #include <sys/stat.h>
 
 #include "dd.h"
-#include "internal.h"
+#include "model_int.h"
 #include "sg_config.h"
 
 /* Catalog files larger than this are refused: real catalogs are a few

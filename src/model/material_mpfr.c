@@ -9,7 +9,7 @@
 #include <math.h>
 #include <mpfr.h>
 
-#include "internal.h"
+#include "model_int.h"
 
 typedef struct mp_work {
     mpfr_t l2, inv, t, u, v;

@@ -7,7 +7,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "internal.h"
+#include "model_int.h"
 
 static const char *const scope_words[SG_SCOPE_COUNT] = {"system", "wavelength", "field",
                                                          "surface"};

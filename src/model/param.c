@@ -11,7 +11,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "internal.h"
+#include "model_int.h"
 #include "shape.h"
 
 static const char *const units_names[] = {"mm", "cm", "in", "m"};

@@ -3,7 +3,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "internal.h"
+#include "model_int.h"
 #include "shape.h"
 
 void sg_surface_init(sg_surface *s)
@@ -682,4 +682,39 @@ double sg_digits(double a, double b)
     if (e > 17.0)
         e = 17.0;
     return e < 0.0 ? 0.0 : e;
+}
+
+const sg_glass *sg_glass_seen_find(sg_glass_seen *gs, const sg_catalog *cat,
+                                   const sg_material *m)
+{
+    const sg_glass *g;
+    int k;
+    if (!m || m->kind != SG_MAT_GLASS)
+        return sg_material_glass(cat, m);
+    /* Whole arrays, a few instructions: equal arrays hold equal names
+     * (bytes after a name that differ only cost a look-up). */
+    for (k = 0; k < gs->n; k++)
+        if (memcmp(gs->mat[k]->name, m->name, sizeof m->name) == 0 &&
+            memcmp(gs->mat[k]->catalog, m->catalog, sizeof m->catalog) == 0)
+            return gs->g[k];
+    g = sg_material_glass(cat, m);
+    /* Full: the oldest entry goes. */
+    k = gs->n < SG_GLASS_SEEN ? gs->n++ : (gs->next++ % SG_GLASS_SEEN);
+    gs->mat[k] = m;
+    gs->g[k] = g;
+    return g;
+}
+
+void sg_zmx_origin_retain(struct sg_zmx_origin *o)
+{
+    if (o)
+        __atomic_add_fetch(&((sg_origin_head *)o)->refs, 1, __ATOMIC_RELAXED);
+}
+
+void sg_zmx_origin_release(struct sg_zmx_origin *o)
+{
+    sg_origin_head *h = (sg_origin_head *)o;
+    if (!o || __atomic_sub_fetch(&h->refs, 1, __ATOMIC_ACQ_REL) != 0)
+        return;
+    h->free(o);
 }

@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "analysis_int.h"
+#include "num.h"
 #include "dd.h"
 
 int sg_zernike_nm(sg_zernike_kind kind, int j, int *n, int *m)

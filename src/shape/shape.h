@@ -29,10 +29,11 @@
 
 #include "isa.h"
 
+#include <math.h>
 #include <mpfr.h>
 
+#include "core.h"
 #include "dd.h"
-#include "internal.h"
 
 /* Polynomials in u = x / norm and v = y / norm up to this degree (the
  * 37th Fringe Zernike term is of degree 12). */
@@ -202,5 +203,107 @@ extern const sg_shape_ops sg_shape_odd_ops, sg_shape_toroid_ops, sg_shape_biconi
 /* The Zernike term j of kind as a polynomial in u, v: integer
  * coefficients e[SG_P2_N] times sqrt(*nsq) (shape_zernike.c). */
 int sg_zernike_poly(int standard, int j, long long *e, long *nsq);
+
+/* What the methods read of a prepared surface, shared with the shapes'
+ * own bends (shape_paraxial.c, shape_dgrating.c). */
+
+/* Unit roundoff of double. */
+#define U53 1.1102230246251565e-16 /* unit roundoff of double */
+
+/* The plane, conic and even asphere have kernels of their own in each
+ * method; every other shape is SHAPE_GEN, traced through its sg_shape_ops
+ * (shape.h), seeded from its base conic as an asphere is. */
+enum { SHAPE_PLANE = 0, SHAPE_CONIC = 1, SHAPE_ASPH = 2, SHAPE_GEN = 3 };
+
+/* A transfer into a surface's frame that tilts or decenters (frame.c):
+ * p_i = A^T (p_{i-1} - b), d_i = A^T d_{i-1}.  The plain step along z of
+ * an untilted system has none, and keeps its exact subtraction. */
+typedef struct sg_xfer {
+    dd At[3][3];      /* A transposed, each entry rounded from MPFR */
+    dd b[3];
+    double Atd[3][3]; /* the same in double, for classic */
+    double bd[3];
+    double grow;      /* A^T's largest row sum, rounded up */
+} sg_xfer;
+
+/* One surface, reduced to what the per-ray code reads. */
+typedef struct sg_sprep {
+    int shape;
+    double R;    /* vertex radius; inf for a flat base */
+    double c;    /* 1/R rounded, used only for double estimates */
+    dd k1;       /* 1 + conic, exact */
+    double T;    /* vertex distance from the previous surface along z */
+    int nasph;   /* asphere terms in use */
+    double a[SG_NASPH];
+    int mirror;
+    dd mu;       /* |n before| / |n after|, for refraction */
+    dd mu2;      /* mu squared, as the bend would form it */
+    double sd;   /* clip radius, 0 for none */
+    int aper;    /* sg_aperture_type of the surface aperture */
+    double ap_a, ap_b;   /* circular: min and max radius; else x and y half widths */
+    double ap_dx, ap_dy; /* the aperture's decenter */
+    double zg;   /* vertex z in classic's frame (surface 1's until a transfer turns it) */
+    const sg_xfer *xf; /* the transfer into this surface, when it turns or moves */
+    const sg_shape *shp; /* SHAPE_GEN: the shape and its ops */
+    /* A paraxial surface (shape_paraxial.c): an ideal lens on the plane,
+     * c = 1 / (N' f), |N| and |N'|, and the z of the conjugates its
+     * optical path term is perfect for (inf: at infinity; set after the
+     * surfaces are prepared, from the paraxial marginal ray). */
+    int ideal;
+    double ic, nb, na;
+    double pz, qz;
+    /* A diffraction grating (shape_dgrating.c): m lambda T at the tracer's
+     * wavelength (set after the surfaces are prepared); nb, na as above. */
+    int grating;
+    double gk;
+} sg_sprep;
+
+/* 1 + conic is exactly 1 on spheres, where a product by it is the other
+ * factor itself and is skipped. */
+static inline int sg_sprep_sphere(const sg_sprep *s)
+{
+    return s->k1.hi == 1.0 && s->k1.lo == 0.0;
+}
+
+/* A flat surface between equal indices leaves a ray's direction exactly
+ * as it is (the normal is exact and nothing can reflect totally), so the
+ * bend is skipped: dummy planes are common in real designs. */
+static inline int sg_sprep_passes(const sg_sprep *s)
+{
+    return s->shape == SHAPE_PLANE && !s->mirror && !s->ideal && !s->grating &&
+           fabs(s->mu.hi) == 1.0 &&
+           s->mu.lo == 0.0;
+}
+
+/* Ray state of the precise method: position on the current surface in its
+ * frame, unit direction, and running bounds on both errors. */
+typedef struct sg_pray {
+    dd3 p, d;
+    double eP, eD;
+    dd opl;    /* optical path so far */
+    double eO; /* bound on its error */
+} sg_pray;
+
+/* The paraxial surface's bend and optical path term (shape_paraxial.c),
+ * in the three arithmetics: classic's double, precise's double-double on
+ * one ray (with its bounds), and MPFR (t: 12 scratch variables). */
+void sg_ideal_bend_d(const sg_sprep *s, const double p[3], double d[3], double *opl);
+void sg_ideal_bend_dd(const sg_sprep *s, sg_pray *r);
+void sg_ideal_bend_mp(const sg_sprep *s, mpfr_srcptr mu, mpfr_ptr P[3], mpfr_ptr D[3],
+                      mpfr_ptr opl, mpfr_t *t);
+/* The diffraction grating's bend (shape_dgrating.c) in the same three:
+ * 0, or SG_EEVANESCENT for an order that does not propagate (t: 8
+ * scratch variables). */
+int sg_grating_bend_d(const sg_sprep *s, const double p[3], double d[3], double *opl);
+int sg_grating_bend_dd(const sg_sprep *s, sg_pray *r);
+int sg_grating_bend_mp(const sg_sprep *s, mpfr_srcptr mu, mpfr_srcptr R, mpfr_srcptr k1,
+                       mpfr_ptr P[3], mpfr_ptr D[3], mpfr_ptr opl, mpfr_t *t);
+
+/* A bound computed in floating point must not round down past the error
+ * it bounds, so it is nudged up by more than its own rounding. */
+static inline double sg_bound_up(double b)
+{
+    return b * (1.0 + 8.0 * U53);
+}
 
 #endif

@@ -22,7 +22,7 @@
  */
 #include <math.h>
 
-#include "trace_int.h"
+#include "shape.h"
 
 /* The unnormalised normal the methods use: (0, 0, -1) on a plane, (x, y,
  * k1 z - R) on a conic. */

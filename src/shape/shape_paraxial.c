@@ -28,7 +28,7 @@
  */
 #include <math.h>
 
-#include "trace_int.h"
+#include "shape.h"
 
 /* The direction and the optical path's term in double (classic). */
 void sg_ideal_bend_d(const sg_sprep *s, const double p[3], double d[3], double *opl)

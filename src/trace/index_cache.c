@@ -7,7 +7,6 @@
  * index is computed once per set of inputs.  The key is every number the
  * computation reads, so a hit is the fresh value exactly. */
 #include "trace_int.h"
-#include "index_cache.h"
 
 #include <stdint.h>
 #include <stdlib.h>
@@ -365,25 +364,4 @@ int sg_index_cache_glass(sg_index_cache *c, const sg_system *sys, const sg_glass
     e->used = 1;
     c->n++;
     return rc;
-}
-
-const sg_glass *sg_glass_seen_find(sg_glass_seen *gs, const sg_catalog *cat,
-                                   const sg_material *m)
-{
-    const sg_glass *g;
-    int k;
-    if (!m || m->kind != SG_MAT_GLASS)
-        return sg_material_glass(cat, m);
-    /* Whole arrays, a few instructions: equal arrays hold equal names
-     * (bytes after a name that differ only cost a look-up). */
-    for (k = 0; k < gs->n; k++)
-        if (memcmp(gs->mat[k]->name, m->name, sizeof m->name) == 0 &&
-            memcmp(gs->mat[k]->catalog, m->catalog, sizeof m->catalog) == 0)
-            return gs->g[k];
-    g = sg_material_glass(cat, m);
-    /* Full: the oldest entry goes. */
-    k = gs->n < SG_GLASS_SEEN ? gs->n++ : (gs->next++ % SG_GLASS_SEEN);
-    gs->mat[k] = m;
-    gs->g[k] = g;
-    return g;
 }

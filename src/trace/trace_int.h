@@ -1,9 +1,10 @@
 /*
- * trace_internal.h - the prepared system shared by the trace methods,
- * the launch of normalized rays, aiming and the batch driver.
+ * trace_int.h - what only trace/'s own files share: the prepared system
+ * shared by the trace methods, the launch of normalized rays, aiming, the
+ * batch driver, and the engine's side of sg_index_cache (see sagitta.h).
  */
-#ifndef SG_TRACE_INTERNAL_H
-#define SG_TRACE_INTERNAL_H
+#ifndef SG_TRACE_INT_H
+#define SG_TRACE_INT_H
 
 /* First, so that an instruction-set variant renames the declarations of
  * sagitta.h and of this file alike. */
@@ -17,60 +18,10 @@
 #include <string.h>
 
 #include "dd.h"
-#include "index_cache.h"
-#include "internal.h"
+#include "model.h"
 #include "shape.h"
+#include "trace.h"
 #include "vdd.h"
-
-#define U53 1.1102230246251565e-16 /* unit roundoff of double */
-
-/* The plane, conic and even asphere have kernels of their own in each
- * method; every other shape is SHAPE_GEN, traced through its sg_shape_ops
- * (shape.h), seeded from its base conic as an asphere is. */
-enum { SHAPE_PLANE = 0, SHAPE_CONIC = 1, SHAPE_ASPH = 2, SHAPE_GEN = 3 };
-
-/* A transfer into a surface's frame that tilts or decenters (frame.c):
- * p_i = A^T (p_{i-1} - b), d_i = A^T d_{i-1}.  The plain step along z of
- * an untilted system has none, and keeps its exact subtraction. */
-typedef struct sg_xfer {
-    dd At[3][3];      /* A transposed, each entry rounded from MPFR */
-    dd b[3];
-    double Atd[3][3]; /* the same in double, for classic */
-    double bd[3];
-    double grow;      /* A^T's largest row sum, rounded up */
-} sg_xfer;
-
-/* One surface, reduced to what the per-ray code reads. */
-typedef struct sg_sprep {
-    int shape;
-    double R;    /* vertex radius; inf for a flat base */
-    double c;    /* 1/R rounded, used only for double estimates */
-    dd k1;       /* 1 + conic, exact */
-    double T;    /* vertex distance from the previous surface along z */
-    int nasph;   /* asphere terms in use */
-    double a[SG_NASPH];
-    int mirror;
-    dd mu;       /* |n before| / |n after|, for refraction */
-    dd mu2;      /* mu squared, as the bend would form it */
-    double sd;   /* clip radius, 0 for none */
-    int aper;    /* sg_aperture_type of the surface aperture */
-    double ap_a, ap_b;   /* circular: min and max radius; else x and y half widths */
-    double ap_dx, ap_dy; /* the aperture's decenter */
-    double zg;   /* vertex z in classic's frame (surface 1's until a transfer turns it) */
-    const sg_xfer *xf; /* the transfer into this surface, when it turns or moves */
-    const sg_shape *shp; /* SHAPE_GEN: the shape and its ops */
-    /* A paraxial surface (shape_paraxial.c): an ideal lens on the plane,
-     * c = 1 / (N' f), |N| and |N'|, and the z of the conjugates its
-     * optical path term is perfect for (inf: at infinity; set after the
-     * surfaces are prepared, from the paraxial marginal ray). */
-    int ideal;
-    double ic, nb, na;
-    double pz, qz;
-    /* A diffraction grating (shape_dgrating.c): m lambda T at the tracer's
-     * wavelength (set after the surfaces are prepared); nb, na as above. */
-    int grating;
-    double gk;
-} sg_sprep;
 
 /* The prepared surfaces of the last tracer made with an sg_index_cache,
  * for the next one (prepare_surfaces in trace.c).  Surface i's sg_sprep
@@ -88,23 +39,6 @@ typedef struct sg_prep_memo {
     unsigned char *ok, *has_xf;
     unsigned long reused; /* surfaces taken from the memo, for tests */
 } sg_prep_memo;
-
-/* 1 + conic is exactly 1 on spheres, where a product by it is the other
- * factor itself and is skipped. */
-static inline int sg_sprep_sphere(const sg_sprep *s)
-{
-    return s->k1.hi == 1.0 && s->k1.lo == 0.0;
-}
-
-/* A flat surface between equal indices leaves a ray's direction exactly
- * as it is (the normal is exact and nothing can reflect totally), so the
- * bend is skipped: dummy planes are common in real designs. */
-static inline int sg_sprep_passes(const sg_sprep *s)
-{
-    return s->shape == SHAPE_PLANE && !s->mirror && !s->ideal && !s->grating &&
-           fabs(s->mu.hi) == 1.0 &&
-           s->mu.lo == 0.0;
-}
 
 /* Launch constants of normalized rays, for one precision. */
 typedef struct sg_launch {
@@ -198,30 +132,6 @@ struct sg_tracer {
     /* The caller's mpfr ray memo (sg_tracer_use_memo), never a fork's. */
     sg_mpfr_memo *memo;
 };
-
-/* Ray state of the precise method: position on the current surface in its
- * frame, unit direction, and running bounds on both errors. */
-typedef struct sg_pray {
-    dd3 p, d;
-    double eP, eD;
-    dd opl;    /* optical path so far */
-    double eO; /* bound on its error */
-} sg_pray;
-
-/* The paraxial surface's bend and optical path term (shape_paraxial.c),
- * in the three arithmetics: classic's double, precise's double-double on
- * one ray (with its bounds), and MPFR (t: 12 scratch variables). */
-void sg_ideal_bend_d(const sg_sprep *s, const double p[3], double d[3], double *opl);
-void sg_ideal_bend_dd(const sg_sprep *s, sg_pray *r);
-void sg_ideal_bend_mp(const sg_sprep *s, mpfr_srcptr mu, mpfr_ptr P[3], mpfr_ptr D[3],
-                      mpfr_ptr opl, mpfr_t *t);
-/* The diffraction grating's bend (shape_dgrating.c) in the same three:
- * 0, or SG_EEVANESCENT for an order that does not propagate (t: 8
- * scratch variables). */
-int sg_grating_bend_d(const sg_sprep *s, const double p[3], double d[3], double *opl);
-int sg_grating_bend_dd(const sg_sprep *s, sg_pray *r);
-int sg_grating_bend_mp(const sg_sprep *s, mpfr_srcptr mu, mpfr_srcptr R, mpfr_srcptr k1,
-                       mpfr_ptr P[3], mpfr_ptr D[3], mpfr_ptr opl, mpfr_t *t);
 
 /* The state of SG_VL precise rays between surfaces, lane by lane: what
  * sg_pray holds for one ray. */
@@ -362,13 +272,6 @@ static inline double sg_max_abs3(double a, double b, double c)
     return A > m || m != m ? A : m;
 }
 
-/* A bound computed in floating point must not round down past the error
- * it bounds, so it is nudged up by more than its own rounding. */
-static inline double sg_bound_up(double b)
-{
-    return b * (1.0 + 8.0 * U53);
-}
-
 /* The last check of every method: the first row marked OK whose point,
  * direction, bound or path is not finite fails with SG_ERANGE, with the
  * rest not reached (the object row of an object at infinity keeps its
@@ -481,39 +384,6 @@ unsigned long sg_mpfr_rescues(const sg_mpfr_ctx *m);
 int sg_mpfr_rescue_root(sg_mpfr_ctx *m, const sg_sprep *sp, dd3 P, dd3 D, int max_iter,
                         dd *step);
 
-/* Paraxial data at MPFR precision prec, in paraxial.c.  idx holds the
- * signed index after every surface (n entries, at least prec bits). */
-typedef struct sg_parax_mp {
-    mpfr_t efl, bfl, image_dist, epd, enp, exp_diam, exp_pos, image_fnum,
-        working_fnum, object_na, pimg_h, mag, track, stop_r;
-    mpfr_t pimg_slope; /* paraxial image height per unit tan(field) or object height */
-    /* The same at the paraxial image plane (the image surface's when the
-     * image is afocal): Zemax's paraxial-image-height fields are defined
-     * there, while its distortion is referred to the image surface. */
-    mpfr_t pimg_slope_f;
-} sg_parax_mp;
-
-void sg_parax_mp_init(sg_parax_mp *p, mpfr_prec_t prec);
-void sg_parax_mp_clear(sg_parax_mp *p);
-void sg_parax_to_double(const sg_parax_mp *p, sg_paraxial *o);
-/* The axial object point's marginal slope for an object NA or cone angle
- * aperture (paraxial.c). */
-int sg_object_slope_mpfr(const sg_system *sys, const mpfr_t n0, mpfr_t out, sg_diag *d);
-int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
-                     sg_parax_mp *out, sg_diag *d);
-/* The same, resuming each y-nu trace after the last surface whose inputs
- * (radius, thickness, index, and the one before) and the trace's start
- * are those memo last saw: the same bits.  memo may be NULL. */
-typedef struct sg_parax_memo sg_parax_memo;
-int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
-                          sg_parax_mp *out, sg_diag *d, sg_parax_memo *memo);
-sg_parax_memo *sg_parax_memo_new(void);
-void sg_parax_memo_free(sg_parax_memo *memo);
-unsigned long sg_parax_memo_resumes(const sg_parax_memo *memo);
-/* Signed indices after every surface at wavelength wave, into idx[0..n-1]. */
-int sg_indices_mpfr(const sg_system *sys, const sg_catalog *cat, int wave,
-                    mpfr_t *idx, sg_diag *d);
-
 /* n MPFR numbers at precision prec, zero, in one allocation that free()
  * releases: a tracer needs thousands (an index a surface), and one
  * allocation each costs as much as the arithmetic.  Never give them to
@@ -555,5 +425,44 @@ static inline double dd_to_d(dd a)
 {
     return a.hi + a.lo;
 }
+
+/* The engine's side of sg_index_cache (see sagitta.h). */
+
+/* sg_system_glass_index_mpfr(sys, g, out, um), from the cache when it
+ * holds the same inputs (every number of g, um's value, the system's
+ * environment, out's precision), computed and kept otherwise.  The value
+ * is the one a fresh computation gives, bit for bit.  cache may be NULL. */
+int sg_index_cache_glass(sg_index_cache *cache, const sg_system *sys, const sg_glass *g,
+                         mpfr_t out, const mpfr_t um);
+
+/* The cache's paraxial memo (sg_paraxial_mpfr_memo), made on first use;
+ * NULL without a cache or memory. */
+struct sg_parax_memo *sg_index_cache_parax(sg_index_cache *cache);
+
+/* The cache's prepared-surface memo (above) for n surfaces,
+ * made on first use and emptied when n changes; NULL without a cache or
+ * memory. */
+struct sg_prep_memo *sg_index_cache_prep(sg_index_cache *cache, int n);
+
+/* Each surface's generation in sys: a number that changes whenever the
+ * surface's bits differ from those of the last call, and is never
+ * reused, so equal numbers mean equal bits.  n numbers, valid until the
+ * next call; NULL without a cache or memory.  With copy, *copy is
+ * sg_system_clone(sys), made in the same pass (NULL when NULL is
+ * returned). */
+const uint64_t *sg_index_cache_gens(sg_index_cache *cache, const sg_system *sys,
+                                    sg_system **copy);
+
+/* The cache's validation memo (model.h) for n surfaces, as above. */
+sg_valid_memo *sg_index_cache_valid(sg_index_cache *cache, int n);
+
+/* How many surfaces the prepared-surface and validation memos gave so
+ * far (tests check the memos are used). */
+void sg_index_cache_reused(const sg_index_cache *cache, unsigned long *prep,
+                           unsigned long *valid);
+
+/* sg_indices_mpfr (trace.h) with its glass indices from cache. */
+int sg_indices_mpfr_cached(const sg_system *sys, const sg_catalog *cat, int wave,
+                           mpfr_t *idx, sg_index_cache *cache, sg_diag *d);
 
 #endif

@@ -1,27 +1,18 @@
 /*
- * internal.h - declarations shared by the engine's source files.
- * Nothing here is part of the public API.
+ * model.h - the interface of model/ (the system, its parameters, solves'
+ * rules, frames, materials, pupils and configurations) to the other
+ * subsystems, beside what sagitta.h makes public.  The model sits on
+ * core/ and shape/ (a surface's type is a record there).
  */
-#ifndef SG_INTERNAL_H
-#define SG_INTERNAL_H
+#ifndef SG_MODEL_H
+#define SG_MODEL_H
 
 #include <mpfr.h>
 #include <stdint.h>
 
+#include "core.h"
 #include "sagitta.h"
 
-/* Lengths a trace squares (radii, thicknesses, pupil and field sizes) must
- * keep their squares and products inside the doubles. */
-#define SG_MAX_LEN 1e150
-
-/* Index of glass g at wavelength um (both MPFR), with out's precision.
- * Returns SG_OK, or SG_ERANGE when n^2 is not positive, or SG_EINVAL for an
- * unknown formula.  Every coefficient is taken exactly as its double. */
-int sg_glass_index_mpfr(const sg_glass *g, mpfr_t out, const mpfr_t um);
-/* sg_air_index and sg_glass_index_env in MPFR, rounded once into out. */
-int sg_air_index_mpfr(mpfr_t out, const mpfr_t um, double temp, double pres);
-int sg_glass_index_env_mpfr(const sg_glass *g, mpfr_t out, const mpfr_t um, double temp,
-                            double pres);
 /* The index a trace of sys uses for glass g: sg_glass_index_env_mpfr at the
  * system's temperature and pressure when sys->adjust_index is set, else
  * the catalog's sg_glass_index_mpfr. */
@@ -71,21 +62,20 @@ typedef struct sg_glass_seen {
 const sg_glass *sg_glass_seen_find(sg_glass_seen *gs, const sg_catalog *cat,
                                    const sg_material *m);
 
-/* Copies at most n-1 bytes and always terminates. */
-void sg_strlcpy(char *dst, const char *src, size_t n);
 /* For messages: " (catalog X)" after a glass named with its catalog,
  * noting a catalog cat does not hold at all; "" otherwise. */
 void sg_material_where(const sg_catalog *cat, const sg_material *m, char *buf, size_t n);
 
-/* Reads a whole file of at most max bytes into *out (free() it). */
-int sg_read_file(const char *path, size_t max, char **out, size_t *len, sg_diag *d);
-
-/* Writes text atomically: a temporary file beside path, fsync, rename. */
-int sg_save_text_atomic(const char *path, const char *text, size_t len, sg_diag *d);
-
-/* The .zmx file a design was read from (design_zmx.c): counted, since
- * copies of a system share it; NULL is allowed. */
+/* The file a design was read from (sys->zmx, made by formats/design_zmx.c)
+ * begins with this head: copies of a system share it, so it is counted,
+ * and the reader's free function releases it, so the model copies and
+ * frees systems without knowing the format. */
 struct sg_zmx_origin;
+typedef struct sg_origin_head {
+    int refs;
+    void (*free)(struct sg_zmx_origin *o);
+} sg_origin_head;
+/* One more or one fewer holder of o (NULL is allowed); the last frees it. */
 void sg_zmx_origin_retain(struct sg_zmx_origin *o);
 void sg_zmx_origin_release(struct sg_zmx_origin *o);
 
