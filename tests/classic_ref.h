@@ -5,7 +5,7 @@
 #ifndef CLASSIC_REF_H
 #define CLASSIC_REF_H
 
-#include "trace_internal.h"
+#include "trace_int.h"
 
 /* What sg_classic_run_to did for one ray: surfaces 1..upto from S along
  * D, into out[1..upto]; returns the ray's status. */

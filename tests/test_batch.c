@@ -7,7 +7,7 @@
 #include <string.h>
 
 #include "testutil.h"
-#include "trace_internal.h"
+#include "trace_int.h"
 
 /* Every field bit for bit (struct padding is not a result). */
 static void same_rows(const sg_ray_surface *a, const sg_ray_surface *b, size_t n)

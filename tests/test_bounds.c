@@ -27,7 +27,7 @@
 #include <string.h>
 
 #include "testutil.h"
-#include "trace_internal.h"
+#include "trace_int.h"
 
 #define PREC 1024
 #define PI_D 3.14159265358979323846

@@ -18,8 +18,8 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "index_cache.h"
-#include "internal.h"
+#include "trace_int.h"
+#include "model_int.h"
 #include "testutil.h"
 
 static uint64_t rng = UINT64_C(0x2545f4914f6cdd1d);

@@ -20,7 +20,7 @@
 #include <string.h>
 
 #include "testutil.h"
-#include "trace_internal.h"
+#include "trace_int.h"
 
 /* The per-variant batch cores (batch.c, named by src/isa.h). */
 typedef int run_fn(sg_tracer *const *t, int nt, sg_ray_kind kind, const sg_ray_in *rays,

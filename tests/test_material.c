@@ -18,7 +18,7 @@
 
 #include <mpfr.h>
 
-#include "internal.h"
+#include "model_int.h"
 #include "testutil.h"
 
 #define LAMBDA_D "0.5875618"

@@ -43,7 +43,7 @@
 #include "shape_vd.h"
 #include "shape_vdd.h"
 #include "testutil.h"
-#include "trace_internal.h"
+#include "trace_int.h"
 
 #define PREC 512
 

@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "analysis_internal.h"
+#include "num.h"
 #include "testutil.h"
 
 #ifndef M_PI
