@@ -2033,8 +2033,9 @@ SG_API int sg_psf_compute(const sg_system *sys, const sg_catalog *cat, const sg_
 SG_API void sg_psf_free(sg_psf *p);
 
 typedef enum sg_mtf_method {
-    SG_MTF_FFT = 0,      /* the FFT PSF's transform */
-    SG_MTF_GEOMETRIC = 1 /* the transform of the rays' line spread */
+    SG_MTF_FFT = 0,       /* the FFT PSF's transform */
+    SG_MTF_GEOMETRIC = 1, /* the transform of the rays' line spread */
+    SG_MTF_HUYGENS = 2    /* the transform of the Huygens PSF */
 } sg_mtf_method;
 
 typedef struct sg_mtf_opts {
@@ -2046,12 +2047,16 @@ typedef struct sg_mtf_opts {
     double max_frequency; /* cycles/mm; 0: the cutoff 1 / (lambda F#) */
     int nthreads;
     int method;           /* sg_mtf_method */
+    int image_size;       /* Huygens: the PSF's image points across, 0: N */
+    double image_delta_um; /* Huygens: their spacing; 0: the FFT PSF's */
 } sg_mtf_opts;
 
 typedef struct sg_mtf {
     int nfield, npts;
     int sampling;
     int method;           /* sg_mtf_method */
+    int image_size;       /* Huygens: the PSF's image points across */
+    double image_delta_um; /* Huygens: their spacing */
     int *field;           /* nfield 0-based design fields */
     double fnum;          /* the working F/# the frequencies are scaled by */
     double cutoff;        /* 1 / (lambda F#) of the shortest wavelength, cycles/mm */
@@ -2065,7 +2070,10 @@ SG_API void sg_mtf_opts_init(sg_mtf_opts *o);
  * (sagittal), at N frequencies from 0 to the maximum.  With method
  * SG_MTF_GEOMETRIC, |mean of exp(i 2 pi nu y)| over the rays of an N x N
  * square pupil grid (x for sagittal), each wavelength's rays sharing its
- * weight, about the spot's reference; the diffraction limit is the FFT's. */
+ * weight, about the spot's reference; the diffraction limit is the FFT's.
+ * With SG_MTF_HUYGENS, the modulus of the Huygens PSF's (sg_psf_compute)
+ * transform, cut alike, at frequencies up to the image grid's Nyquist
+ * frequency 1 / (2 image_delta), beyond which it refuses. */
 SG_API int sg_mtf_compute(const sg_system *sys, const sg_catalog *cat, const sg_mtf_opts *o,
                           sg_mtf *out, sg_diag *d);
 SG_API void sg_mtf_free(sg_mtf *m);

@@ -858,6 +858,92 @@ static double strip_cos(double x, const double *par)
  * sagittal alike.  With 8.5 waves of defocus the FFT MTF approaches it at
  * low frequencies, as geometrical optics is the limit of diffraction for
  * large aberrations (to 0.053 below 1.5 / D here). */
+/* The Huygens MTF (the Huygens PSF's transform), from closed forms:
+ * the perfect paraboloid's is the circle's, 2/pi (phi - cos phi sin phi);
+ * with 4.25 waves of defocus its low frequencies are the blur disc's
+ * |2 J1(pi D nu) / (pi D nu)|, as the FFT MTF's are (geometric_mtf_defocus);
+ * a frequency past the image grid's Nyquist frequency is refused. */
+static void huygens_mtf(void **state)
+{
+    const double f = 200.0, epd = 20.0, dz = 2.0;
+    sg_system *sys = paraboloid(f, epd, 0.0);
+    sg_catalog *cat = tu_catalog();
+    double lambda_mm = sys->wave[0].um * 1e-3, nuc = 1.0 / (lambda_mm * f / epd);
+    double D = 2.0 * (epd / 2) * dz / (f - (epd / 2) * (epd / 2) / (4.0 * f));
+    double worst = 0.0, low = 0.0;
+    sg_mtf_opts o;
+    sg_mtf m;
+    sg_diag d;
+    int j;
+    (void)state;
+    sg_mtf_opts_init(&o);
+    o.sampling = 64;
+    o.method = SG_MTF_HUYGENS;
+    o.image_size = 128;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_OK);
+    assert_int_equal(m.method, SG_MTF_HUYGENS);
+    assert_int_equal(m.image_size, 128);
+    for (j = 0; j < m.npts; j++) {
+        double want = mtf_circle(m.freq[j] / nuc);
+        worst = fmax(worst, fabs(m.tan[j] - want));
+        worst = fmax(worst, fabs(m.sag[j] - want));
+    }
+    print_message("# Huygens MTF, perfect F/%g, 64 x 64 pupil onto 128 x 128 image points "
+                  "%.4g um apart: largest difference from the circle's %.3g\n", f / epd,
+                  m.image_delta_um, worst);
+    /* The image grid holds the Airy pattern to about 31 lambda F# on each
+     * side; the energy beyond (about 1 / (pi^2 31), 0.003) and the pupil
+     * grid's disk (0.002, perfect_mtf) set the error. */
+    assert_true(worst < 0.006);
+    assert_int_equal(d.nwarn, 0);
+    sg_mtf_free(&m);
+
+    /* Refused: a 3 um grid samples up to 166.67 cycles/mm, just below the
+     * cutoff 1 / (lambda F#) = 170.2. */
+    o.image_size = 0;
+    o.image_delta_um = 3.0;
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_ERANGE);
+    assert_non_null(strstr(d.msg, "samples frequencies up to 166.667 cycles/mm"));
+    /* 2.9 um samples 172.4: answered. */
+    o.image_delta_um = 2.9;
+    o.image_size = 32;
+    o.sampling = 32;
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_OK);
+    sg_mtf_free(&m);
+    o.sampling = 64;
+    sg_system_free(sys);
+
+    sys = paraboloid(f, epd, dz);
+    sg_diag_clear(&d);
+    o.sampling = 96;
+    o.image_size = 128;
+    o.image_delta_um = 4.0;
+    o.max_frequency = 1.5 / D;
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_OK);
+    for (j = 0; j < m.npts; j++) {
+        double x = PI * D * m.freq[j], want = x == 0.0 ? 1.0 : fabs(2.0 * j1(x) / x);
+        low = fmax(low, fabs(m.tan[j] - want));
+        low = fmax(low, fabs(m.sag[j] - want));
+    }
+    print_message("# Huygens MTF, %.4g mm blur disc, below 1.5 / D: largest difference from "
+                  "|2 J1(pi D nu) / (pi D nu)| %.3g\n", D, low);
+    assert_true(low < 0.06);
+    if (d.nwarn)
+        print_message("# warning: %s\n", d.warn[0]);
+    assert_int_equal(d.nwarn, 0);
+    sg_mtf_free(&m);
+    /* A grid 128 um wide cuts the 200 um disc: said, not hidden. */
+    o.image_size = 32;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_mtf_compute(sys, cat, &o, &m, &d), SG_OK);
+    assert_true(d.nwarn >= 1);
+    assert_non_null(strstr(d.warn[d.nwarn - 1], "reaches the edge of its 32 x 32 image grid"));
+    sg_mtf_free(&m);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
 static void geometric_mtf_defocus(void **state)
 {
     const double f = 200.0, epd = 20.0, dz = 2.0;
@@ -1121,6 +1207,7 @@ int main(void)
         cmocka_unit_test(huygens_psf),
         cmocka_unit_test(huygens_coma),
         cmocka_unit_test(geometric_mtf_defocus),
+        cmocka_unit_test(huygens_mtf),
         cmocka_unit_test(through_focus),
         cmocka_unit_test(encircled_airy),
         cmocka_unit_test(ensquared_airy),

@@ -50,7 +50,7 @@ AN_COMMON_HELP
     else if (kind == K_MTF)
         fputs(
 "Usage: sagitta mtf DESIGN.json [OPTIONS]\n"
-"Print the FFT (or geometric) MTF of each field, tangential (along y) and sagittal (along\n"
+"Print the FFT (geometric or Huygens) MTF of each field, tangential (along y) and sagittal (along\n"
 "x), in cycles/mm from 0 to the maximum frequency, with the diffraction\n"
 "limit of the first field's pupil unaberrated.  The MTF is the modulus of\n"
 "the Fourier transform of the FFT PSF (see sagitta psf): the pupil's\n"
@@ -63,9 +63,13 @@ AN_COMMON_HELP
 "  --sampling N       pupil grid points across, 32 to 2048 (default 64)\n"
 "  --max-frequency F  cycles/mm (default: the cutoff 1 / (lambda F#) of\n"
 "                     the shortest wavelength)\n"
-"  --method M         fft (default) or geometric (the rays' MTF, from an\n"
-"                     N x N grid of rays); and the trace: precise (default),\n"
+"  --method M         fft (default), geometric (the rays' MTF, from an\n"
+"                     N x N grid of rays) or huygens (the Huygens PSF's\n"
+"                     transform); and the trace: precise (default),\n"
 "                     classic or mpfr (the option may be given twice)\n"
+"  --image-size K     huygens: image points across, 3 to 1024 (default N)\n"
+"  --image-delta D    huygens: their spacing in um (default: the FFT PSF's,\n"
+"                     which samples up to the cutoff)\n"
 "  --through-focus R  the MTF at --frequency and the Strehl ratio against\n"
 "                     the image plane shifted from -R to +R (lens units)\n"
 "  --frequency F      cycles/mm, with --through-focus\n"
@@ -146,7 +150,9 @@ static void mtf_write(FILE *f, int fmt, const diff_ctx *c)
     int j, k;
     if (fmt == AN_FMT_JSON) {
         fprintf(f, "{\n  \"method\": \"%s\",\n  \"sampling\": ",
-                m->method == SG_MTF_GEOMETRIC ? "geometric" : "fft");
+                m->method == SG_MTF_GEOMETRIC ? "geometric"
+                : m->method == SG_MTF_HUYGENS ? "huygens"
+                                               : "fft");
         fprintf(f, "%d,\n  \"working_fnum\": ", m->sampling);
         num(f, m->fnum, 1);
         fputs(",\n  \"cutoff\": ", f);
@@ -185,7 +191,10 @@ static void mtf_write(FILE *f, int fmt, const diff_ctx *c)
     }
     if (fmt == AN_FMT_TEXT) {
         char t[160];
-        fprintf(f, "%s MTF: %s\n", m->method == SG_MTF_GEOMETRIC ? "Geometric" : "FFT",
+        fprintf(f, "%s MTF: %s\n",
+                m->method == SG_MTF_GEOMETRIC ? "Geometric"
+                : m->method == SG_MTF_HUYGENS ? "Huygens"
+                                               : "FFT",
                 safe_text(sys->title, t, sizeof t));
         fputs("  ", f);
         wave_text(f, sys, c->wave0);
@@ -193,6 +202,11 @@ static void mtf_write(FILE *f, int fmt, const diff_ctx *c)
             fprintf(f, "; %d x %d rays; working F/# %.6g; cutoff %.6g cycles/mm; the "
                        "diffraction limit by FFT\n\n", m->sampling, m->sampling, m->fnum,
                     m->cutoff);
+        else if (m->method == SG_MTF_HUYGENS)
+            fprintf(f, "; sampling %d x %d, onto an image of %d x %d points %.6g um apart; "
+                       "working F/# %.6g; cutoff %.6g cycles/mm; the diffraction limit by "
+                       "FFT\n\n", m->sampling, m->sampling, m->image_size, m->image_size,
+                    m->image_delta_um, m->fnum, m->cutoff);
         else
             fprintf(f, "; sampling %d x %d, padded to %d x %d; working F/# %.6g; cutoff %.6g "
                        "cycles/mm\n\n", m->sampling, m->sampling, 2 * m->sampling,
@@ -512,8 +526,8 @@ static int run(int kind, int argc, char **argv)
         CLI_OPT_WORD_FOR("--type", eekind, "encircled|ensquared", ee_kinds, "encircled"),
         CLI_OPT_INT_FOR("--rays", rays, 1, 20000, "encircled"),
         CLI_OPT_POS_FOR("--max-radius", maxr, "radius", " of micrometres", "encircled"),
-        CLI_OPT_INT_FOR("--image-size", isize, 3, SG_PSF_IMAGE_MAX, "psf"),
-        CLI_OPT_POS_FOR("--image-delta", idelta, "spacing", " of micrometres", "psf"),
+        CLI_OPT_INT_FOR("--image-size", isize, 3, SG_PSF_IMAGE_MAX, "psf mtf"),
+        CLI_OPT_POS_FOR("--image-delta", idelta, "spacing", " of micrometres", "psf mtf"),
         CLI_OPT_POS_FOR("--through-focus", tfrange, "range", NULL, "mtf"),
         CLI_OPT_POS_FOR("--frequency", tffreq, "frequency", NULL, "mtf"),
         CLI_OPT_INT_FOR("--steps", steps, 2, SG_TF_MAX_STEPS, "mtf"),
@@ -539,13 +553,15 @@ static int run(int kind, int argc, char **argv)
                 dmethod = SG_PSF_HUYGENS;
             else if (strcmp(val, "geometric") == 0 && kind == K_MTF)
                 dmethod = SG_MTF_GEOMETRIC;
+            else if (strcmp(val, "huygens") == 0 && kind == K_MTF)
+                dmethod = SG_MTF_HUYGENS;
             else if ((k = sg_method_parse(val)) >= 0)
                 method = k;
             else
                 return cli_usage_error(cmd, "--method: \"%s\" is not %s, or the trace's "
                                             "precise, classic or mpfr", val,
                                        kind == K_PSF   ? "fft or huygens"
-                                       : kind == K_MTF ? "fft or geometric"
+                                       : kind == K_MTF ? "fft, geometric or huygens"
                                                        : "one of");
             break;
         default:
@@ -561,7 +577,8 @@ static int run(int kind, int argc, char **argv)
     if (kind == K_MTF && tfrange > 0.0 && maxf > 0.0)
         return cli_usage_error(cmd, "--max-frequency does not go with --through-focus "
                                     "(--frequency gives its frequency)");
-    if (kind == K_PSF && dmethod != SG_PSF_HUYGENS && (isize || idelta > 0.0))
+    if (((kind == K_PSF && dmethod != SG_PSF_HUYGENS) ||
+         (kind == K_MTF && dmethod != SG_MTF_HUYGENS)) && (isize || idelta > 0.0))
         return cli_usage_error(cmd, "--image-size and --image-delta are options of "
                                     "--method huygens");
     rc = an_cmd_load(&a);
@@ -601,6 +618,8 @@ static int run(int kind, int argc, char **argv)
         o.sampling = sampling;
         o.max_frequency = maxf;
         o.method = dmethod;
+        o.image_size = isize;
+        o.image_delta_um = idelta;
         if (tfrange > 0.0) {
             sg_tf_opts to2;
             sg_tf_opts_init(&to2);

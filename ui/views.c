@@ -492,7 +492,9 @@ int view_mtf_figure(const sg_system *sys, const sg_mtf *m, plot_figure *f)
     char title[200], lab[160], leg[48];
     plot_panel *p;
     int k;
-    snprintf(title, sizeof title, "%s MTF: %s", m->method == SG_MTF_GEOMETRIC ? "Geometric" : "FFT",
+    snprintf(title, sizeof title, "%s MTF: %s", m->method == SG_MTF_GEOMETRIC ? "Geometric"
+             : m->method == SG_MTF_HUYGENS ? "Huygens"
+                                            : "FFT",
              safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
     p = plot_add_panel(f, NULL, "spatial frequency (cycles/mm)", "modulus of the OTF");
