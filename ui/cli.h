@@ -41,6 +41,7 @@ int cmd_optimize(int argc, char **argv); /* optimize.c */
 int cmd_tolerance(int argc, char **argv); /* tolerance.c */
 int cmd_psf(int argc, char **argv);     /* diffraction.c */
 int cmd_mtf(int argc, char **argv);     /* diffraction.c */
+int cmd_throughfocus(int argc, char **argv); /* diffraction.c */
 int cmd_encircled(int argc, char **argv); /* diffraction.c */
 /* Further subcommands live in their own files. */
 int cmd_verify(int argc, char **argv);

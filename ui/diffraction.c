@@ -15,7 +15,8 @@
 #include "views.h"
 
 enum { D_METHOD = 1 };
-enum { K_PSF, K_MTF, K_EE };
+/* throughfocus is mtf --through-focus under Zemax's own name. */
+enum { K_PSF, K_MTF, K_EE, K_TF };
 
 static const int ee_kinds[] = {SG_EE_ENCIRCLED, SG_EE_ENSQUARED};
 
@@ -25,7 +26,27 @@ static const int ee_kinds[] = {SG_EE_ENCIRCLED, SG_EE_ENSQUARED};
 
 static void diff_help(int kind, FILE *f)
 {
-    if (kind == K_EE)
+    if (kind == K_TF)
+        fputs(
+"Usage: sagitta throughfocus DESIGN.json --range R --frequency F [OPTIONS]\n"
+"Print the MTF at F cycles/mm, tangential and sagittal, and the Strehl ratio\n"
+"of each field against a shift of the image plane from -R to +R lens units,\n"
+"as Zemax's Through Focus MTF: the same as sagitta mtf --through-focus R\n"
+"--frequency F.  See sagitta(1), mtf.\n"
+"\n"
+"Options:\n"
+"  --range R          the image plane from -R to +R (lens units)\n"
+"  --frequency F      cycles/mm\n"
+"  --steps K          shifts, 2 to 1001 (default 11)\n"
+"  --field N          one field (default: every field)\n"
+"  --wave N           one wavelength (default: every one, by weight)\n"
+"  --sampling N       pupil grid points across, 32 to 2048 (default 64)\n"
+"  --method M         fft (default) or geometric; and the trace: precise\n"
+"                     (default), classic or mpfr (the option may be given\n"
+"                     twice)\n"
+AN_COMMON_HELP
+"  -h, --help         show this help\n", f);
+    else if (kind == K_EE)
         fputs(
 "Usage: sagitta encircled DESIGN.json [OPTIONS]\n"
 "Print the fraction of each field's energy within a radius of the chief\n"
@@ -502,7 +523,11 @@ static int diff_fig(void *ctx, plot_figure *f)
 
 static int run(int kind, int argc, char **argv)
 {
-    const char *cmd = kind == K_EE ? "encircled" : kind == K_MTF ? "mtf" : "psf", *val;
+    const char *cmd = kind == K_EE    ? "encircled"
+                      : kind == K_MTF ? "mtf"
+                      : kind == K_TF  ? "throughfocus"
+                                      : "psf",
+               *val;
     int id, rc, field1 = 0, wave1 = 0, sampling = 64, method = SG_METHOD_PRECISE, k, nf;
     int eekind = SG_EE_ENCIRCLED, rays = 0, dmethod = 0, isize = 0, steps = 11;
     double maxf = 0.0, maxr = 0.0, idelta = 0.0, tfrange = 0.0, tffreq = 0.0;
@@ -522,6 +547,7 @@ static int run(int kind, int argc, char **argv)
         CLI_OPT_INT("--wave", 0, wave1, 1, SG_MAX_WAVES),
         CLI_OPT_INT("--sampling", 0, sampling, SG_PSF_SAMPLING_MIN, SG_PSF_SAMPLING_MAX),
         CLI_OPT_POS_FOR("--max-frequency", maxf, "frequency", " of cycles/mm", "mtf"),
+        CLI_OPT_POS_FOR("--range", tfrange, "range", NULL, "throughfocus"),
         CLI_ID("--method", 0, 1, D_METHOD),
         CLI_OPT_WORD_FOR("--type", eekind, "encircled|ensquared", ee_kinds, "encircled"),
         CLI_OPT_INT_FOR("--rays", rays, 1, 20000, "encircled"),
@@ -529,8 +555,8 @@ static int run(int kind, int argc, char **argv)
         CLI_OPT_INT_FOR("--image-size", isize, 3, SG_PSF_IMAGE_MAX, "psf mtf"),
         CLI_OPT_POS_FOR("--image-delta", idelta, "spacing", " of micrometres", "psf mtf"),
         CLI_OPT_POS_FOR("--through-focus", tfrange, "range", NULL, "mtf"),
-        CLI_OPT_POS_FOR("--frequency", tffreq, "frequency", NULL, "mtf"),
-        CLI_OPT_INT_FOR("--steps", steps, 2, SG_TF_MAX_STEPS, "mtf"),
+        CLI_OPT_POS_FOR("--frequency", tffreq, "frequency", NULL, "mtf throughfocus"),
+        CLI_OPT_INT_FOR("--steps", steps, 2, SG_TF_MAX_STEPS, "mtf throughfocus"),
         CLI_END
     };
 
@@ -551,7 +577,7 @@ static int run(int kind, int argc, char **argv)
                 dmethod = 0;
             else if (strcmp(val, "huygens") == 0 && kind == K_PSF)
                 dmethod = SG_PSF_HUYGENS;
-            else if (strcmp(val, "geometric") == 0 && kind == K_MTF)
+            else if (strcmp(val, "geometric") == 0 && (kind == K_MTF || kind == K_TF))
                 dmethod = SG_MTF_GEOMETRIC;
             else if (strcmp(val, "huygens") == 0 && kind == K_MTF)
                 dmethod = SG_MTF_HUYGENS;
@@ -562,6 +588,7 @@ static int run(int kind, int argc, char **argv)
                                             "precise, classic or mpfr", val,
                                        kind == K_PSF   ? "fft or huygens"
                                        : kind == K_MTF ? "fft, geometric or huygens"
+                                       : kind == K_TF  ? "fft or geometric"
                                                        : "one of");
             break;
         default:
@@ -570,10 +597,17 @@ static int run(int kind, int argc, char **argv)
     }
     if (id < -1)
         return -id;
+    if (kind == K_TF && !(tfrange > 0.0 && tffreq > 0.0))
+        return cli_usage_error(cmd, "give the focus range with --range R and the frequency "
+                                    "with --frequency F");
+    if (kind == K_TF)
+        kind = K_MTF;
     if (kind == K_MTF && (tfrange > 0.0) != (tffreq > 0.0))
         return cli_usage_error(cmd, "--through-focus and --frequency go together");
     if (kind == K_MTF && tfrange == 0.0 && steps != 11)
         return cli_usage_error(cmd, "--steps is an option of --through-focus");
+    if (kind == K_MTF && tfrange > 0.0 && dmethod == SG_MTF_HUYGENS)
+        return cli_usage_error(cmd, "--through-focus takes --method fft or geometric");
     if (kind == K_MTF && tfrange > 0.0 && maxf > 0.0)
         return cli_usage_error(cmd, "--max-frequency does not go with --through-focus "
                                     "(--frequency gives its frequency)");
@@ -679,6 +713,11 @@ done:
 int cmd_mtf(int argc, char **argv)
 {
     return run(K_MTF, argc, argv);
+}
+
+int cmd_throughfocus(int argc, char **argv)
+{
+    return run(K_TF, argc, argv);
 }
 
 int cmd_psf(int argc, char **argv)

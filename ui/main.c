@@ -43,6 +43,7 @@ static const cli_command commands[] = {
     { "tolerance", cmd_tolerance, "sensitivity and Monte Carlo of the design's tolerances, compensated" },
     { "psf", cmd_psf, "FFT point spread function and Strehl ratio" },
     { "mtf", cmd_mtf, "FFT MTF, tangential and sagittal, with the diffraction limit" },
+    { "throughfocus", cmd_throughfocus, "MTF at one frequency and Strehl ratio against focus" },
     { "encircled", cmd_encircled, "encircled and ensquared energy: diffraction and geometric" },
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])

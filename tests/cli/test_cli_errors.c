@@ -168,7 +168,11 @@ static void test_diffraction(void **state)
     ct_free(&r);
     /* psf --method huygens: the perfect mirror's Strehl ratio is 1; the
      * diffraction methods belong to their commands. */
-    expect(2, ARGS("mtf", path, "--method", "huygens"), "huygens", NULL);
+    expect(2, ARGS("mtf", path, "--image-size", "16"), "--method huygens", NULL);
+    expect(2, ARGS("mtf", path, "--through-focus", "0.1", "--frequency", "20", "--method",
+                   "huygens"), "--through-focus", NULL);
+    expect(2, ARGS("throughfocus", path, "--range", "0.1", "--frequency", "20", "--method",
+                   "huygens"), "fft or geometric", NULL);
     expect(2, ARGS("psf", path, "--method", "geometric"), "geometric", NULL);
     expect(2, ARGS("psf", path, "--image-size", "16"), "--method huygens", NULL);
     ct_run(&r, "psf", mirror, "--method", "huygens", "--method", "classic", "--sampling", "32",
@@ -199,6 +203,20 @@ static void test_diffraction(void **state)
     assert_true(fabs(strtod(p + 1, NULL) -
                      2.0 / 3.14159265358979 * (3.14159265358979 / 3 - sqrt(3.0) / 4)) < 0.004);
     assert_non_null(strstr(r.out, "\"strehl\": ["));
+    /* throughfocus is Zemax's name for the same analysis: the same JSON. */
+    expect(2, ARGS("throughfocus", path, "--frequency", "20"), "--range R", NULL);
+    expect(2, ARGS("mtf", path, "--range", "0.1"), "throughfocus only", NULL);
+    {
+        char fr[32];
+        ct_result t;
+        snprintf(fr, sizeof fr, "%.17g", nuc / 2);
+        ct_run(&t, "throughfocus", mirror, "--range", "0.01", "--frequency", fr, "--steps", "3",
+               "--format", "json", (const char *)NULL);
+        if (t.code != 0)
+            fail_msg("sagitta throughfocus: exit %d: %s", t.code, t.err);
+        assert_string_equal(t.out, r.out);
+        ct_free(&t);
+    }
     ct_free(&r);
     /* encircled: bad options named; the perfect F/10's energy within its
      * first dark ring, v = 3.8317 (1.2197 lambda F#), is Rayleigh's 0.838. */
