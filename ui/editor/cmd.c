@@ -328,7 +328,8 @@ int c_novar(ed *e, args *a)
 }
 
 /* opt [CYCLES]: damped least squares on the variables against the merit
- * function, as one undoable change. */
+ * function, as one undoable change; stopped (e->opt_progress), it keeps
+ * the best design so far, still one change. */
 int c_opt(ed *e, args *a)
 {
     sg_opt_opts o;
@@ -341,12 +342,18 @@ int c_opt(ed *e, args *a)
         return ED_HANDLED | ED_ERROR;
     sg_opt_opts_init(&o);
     o.cycles = cycles;
+    o.progress = e->opt_progress;
+    o.ctx = e->progress_ctx;
     if (!ec_begin(e, e->row))
         return ED_HANDLED | ED_ERROR;
     sg_diag_clear(&d);
     rc = sg_optimize(e->doc.sys, e->cat, &o, &res, &d);
     if (rc != SG_OK)
         return ec_cancel(e, d.msg);
+    if (res.stopped)
+        return ec_end(e, "optimization stopped after %d cycle%s: merit %.6g (from %.6g), the best "
+                      "so far; u undoes it", res.cycles, res.cycles == 1 ? "" : "s", res.merit,
+                      res.merit0);
     return ec_end(e, "optimized: merit %.6g (from %.6g) after %d cycle%s%s", res.merit, res.merit0,
                res.cycles, res.cycles == 1 ? "" : "s", res.converged ? ", converged" : "");
 }
