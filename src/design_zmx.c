@@ -2312,7 +2312,10 @@ static int parse_text(zctx *c, char *text)
             c->sys->surf[n].thickness = 0.0;
             continue;
         }
-        if (c->cur >= 0 && (l->indented || is_surface_kw(&l->t[0]))) {
+        /* An unindented CONF line is the merit function's (Zemax's CONF
+         * operand), not the surface keyword. */
+        if (c->cur >= 0 && (l->indented || (is_surface_kw(&l->t[0]) &&
+                                            !(l->n >= 9 && tok_is(&l->t[0], "CONF"))))) {
             mark_line(c, c->cur);
             if ((rc = surface_line(c, l)) != SG_OK)
                 break;

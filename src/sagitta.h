@@ -519,6 +519,8 @@ typedef enum sg_op_type {
     SG_OP_SQRT,
     /* physical optics */
     SG_OP_MTFT, SG_OP_MTFS, SG_OP_MTFA, SG_OP_GMTT, SG_OP_GMTS, SG_OP_GMTA, SG_OP_STRH,
+    /* multi-configuration: the rows below are configuration i1's */
+    SG_OP_CONF,
     SG_OP_NTYPES
 } sg_op_type;
 
