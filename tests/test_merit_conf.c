@@ -238,6 +238,8 @@ static void conf_zmx(void **state)
     char *z;
     int i;
     (void)state;
+    /* MNUM's second number is the current configuration. */
+    sys->configs->current = 2;
     sg_diag_clear(&d);
     z = sg_zmx_to_text(sys, NULL, &d);
     assert_non_null(z);
@@ -246,6 +248,7 @@ static void conf_zmx(void **state)
     if (sg_zmx_parse(b, z, strlen(z), "z.zmx", NULL, &d) != SG_OK)
         fail_msg("%s", d.msg);
     assert_int_equal(b->merit.nop, 4);
+    assert_int_equal(b->configs->current, 2);
     for (i = 0; i < 4; i++)
         assert_true(b->merit.op[i].type == sys->merit.op[i].type &&
                     b->merit.op[i].i1 == sys->merit.op[i].i1 &&

@@ -127,9 +127,14 @@ void title_draw(ui *u)
     const char *p = doc_path(&e->doc);
     char left[600], right[200];
     const char *base = p ? strrchr(p, '/') : NULL;
+    char conf[48] = "";
+    /* The configuration every panel shows (Zemax's current one). */
+    if (e->doc.sys->configs)
+        snprintf(conf, sizeof conf, "  config %d/%d", e->doc.sys->configs->current,
+                 e->doc.sys->configs->n);
     snprintf(left, sizeof left, " sagitta  %s%s%s%s%s", p ? (base ? base + 1 : p) : "[new design]",
-             doc_modified(&e->doc) ? " [+]" : "", e->doc.sys->title[0] ? "  - " : "",
-             e->doc.sys->title, "");
+             doc_modified(&e->doc) ? " [+]" : "", conf, e->doc.sys->title[0] ? "  - " : "",
+             e->doc.sys->title);
     if (e->method == SG_METHOD_MPFR)
         snprintf(right, sizeof right, "mpfr %d bits  %.2f ms  F1 help ", e->bits, e->cmp.ms_last);
     else
@@ -614,6 +619,7 @@ static int global_key(ui *u, int key)
     case '#': return ui_run(u, "digits toggle");
     case K_F(3): u->sys_top = 0; u->mode = MODE_SYSDATA; return ED_HANDLED | ED_REDRAW;
     case K_CTRL('e'): u->mode = MODE_MERIT; return ED_HANDLED | ED_REDRAW;
+    case K_CTRL('a'): return ui_run(u, "config next");
     case 'v': return ui_run(u, "wave %d", (e->wave + 1) % e->doc.sys->nwave + 1);
     case 'g': return ui_run(u, "view next");
     case 'f':

@@ -29,6 +29,7 @@ const char *const ui_key_help[] = {
     "#               digits of agreement with an MPFR trace, on or off",
     "F3              system data: pupils, image height, NA, working F/#, magnification",
     "Ctrl-E          Merit Function Editor: rows and values, live; Enter edits (:merit)",
+    "Ctrl-A          the next configuration of a multi-configuration design (:config N)",
     "Esc, then a key run that key's command even in a text cell (Alt-key does the same)",
     "v               next wavelength for the ray",
     "c F5            chief ray (Px = Py = 0)",
