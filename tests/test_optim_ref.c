@@ -7,7 +7,7 @@
  * rotational conics (refraction by Snell's law in vector form, mirrors by
  * reflection), rays from infinity at the field angle through the paraxial
  * entrance pupil (ray aiming off, Zemax's default) on a square grid of
- * 24 x 24 across the pupil, the spot's mean squared radius about each
+ * 16 x 16 across the pupil, the spot's mean squared radius about each
  * field's centroid averaged over the fields.  EFLs, paraxial foci and
  * pupils come from this file's own y-nu trace.  Nothing of sagitta but its
  * optimizer's output is read.
@@ -42,7 +42,7 @@
 #endif
 
 #define MAXS 12
-#define GRID 24
+#define GRID 16
 
 /* An independent model: surfaces 1..ns (object at infinity before them),
  * t[i] the distance from surface i to the next (the last one's to the

@@ -12,10 +12,11 @@
 # status line shows each cycle's merit, Esc stops it with the best design
 # so far kept (the file saved then differs from the start), and one u
 # brings back the start (saved again: the radius of the file above).
+# A zoom's title bar names its configuration and Ctrl-A shows the next.
 
 SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
-tmux_setup 8 merit
+tmux_setup 10 merit
 
 cat >"$WORK/lens.json" <<'EOF'
 {"format": "sagitta-design", "version": 6, "units": "mm",
@@ -131,6 +132,39 @@ else
     not_ok "the slow triplet opens"
     not_ok "Esc stops :opt"
     not_ok "one u undoes it"
+fi
+
+cat >"$WORK/zoom.json" <<'EOF'
+{"format": "sagitta-design", "version": 6, "units": "mm",
+ "wavelengths": {"primary": 1, "list": [{"um": 0.5875618}]},
+ "fields": {"type": "angle", "list": [{"y": 0}]},
+ "aperture": {"type": "epd", "value": 8},
+ "surfaces": [{"radius": "inf", "thickness": "inf"},
+  {"radius": 60, "thickness": 4, "material": 1.5, "stop": true},
+  {"radius": -120, "thickness": 10},
+  {"radius": 80, "thickness": 3, "material": 1.6},
+  {"radius": -300, "thickness": 40},
+  {"radius": "inf", "thickness": 0}],
+ "configurations": {"count": 2, "operands": [{"type": "THIC", "surface": 2, "values": [10, 30]}]}}
+EOF
+
+start zoom.json 100 30
+if wait_for "zoom.json" 15 && wait_for "Surf"; then
+    # 9. The title names the configuration; Ctrl-A shows the next, and
+    # the file saved then holds its values and its number.
+    WHY=
+    check "the title bar shows config 1/2" wait_re "zoom.json.*config 1/2" 10
+    keys C-a
+    wait_for "configuration 2 of 2" >/dev/null
+    command_line "w"
+    wait_for "saved" >/dev/null
+    CS=$(python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); print(d["configurations"].get("current"), d["surfaces"][2]["thickness"])' "$WORK/zoom.json")
+    WHY="saved current and thickness: '$CS'"
+    check "Ctrl-A shows configuration 2 (title config 2/2, saved as current 2, thickness 30)" \
+        sh -c "$T capture-pane -p -t =main: | grep -q 'config 2/2' && { [ '$CS' = '2 30' ] || [ '$CS' = '2 30.0' ]; }"
+else
+    not_ok "the title shows the configuration"
+    not_ok "Ctrl-A"
 fi
 
 [ "$N" -eq "$NTESTS" ] || echo "# ran $N of $NTESTS"
