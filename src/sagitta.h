@@ -519,6 +519,8 @@ typedef enum sg_op_type {
     SG_OP_SQRT,
     /* physical optics */
     SG_OP_MTFT, SG_OP_MTFS, SG_OP_MTFA, SG_OP_GMTT, SG_OP_GMTS, SG_OP_GMTA, SG_OP_STRH,
+    /* multi-configuration: the rows below are configuration i1's */
+    SG_OP_CONF,
     SG_OP_NTYPES
 } sg_op_type;
 
@@ -561,6 +563,7 @@ typedef struct sg_config_op {
 typedef struct sg_configs {
     int refs;
     int n;             /* configurations, 2 or more */
+    int current;       /* the one the design's own values are: 1 to n */
     int nop;
     sg_config_op op[SG_MAX_CONFIG_OPS];
 } sg_configs;
@@ -683,6 +686,13 @@ SG_API int sg_configs_equal(const sg_configs *a, const sg_configs *b);
 SG_API int sg_config_count(const sg_system *sys);
 SG_API int sg_config_apply(sg_system *sys, int k, sg_diag *d);
 SG_API int sg_configs_check(const sg_system *sys, const sg_catalog *cat, sg_diag *d);
+/* The editor's switch to configuration k (Zemax's current configuration):
+ * a new table (refs 1) that holds sys's own values of every operand as
+ * configuration current's, so an edit made there is kept, with current
+ * set to k; sys's configs are not changed.  Then sg_config_apply(sys, k)
+ * with the new table shows k.  NULL when out of memory or sys has no
+ * configurations. */
+SG_API sg_configs *sg_configs_switch(const sg_system *sys, int k);
 
 /* What stopped a ray that failed at surface surf with status: for the
  * stopped codes the kind and the surface ("ray stopped by the circular

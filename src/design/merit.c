@@ -98,6 +98,7 @@ static const sg_op_info ops[SG_OP_NTYPES] = {
     [SG_OP_GMTS] = {"GMTS", "sampling", "wave", {"field", "frequency", NULL, NULL}},
     [SG_OP_GMTA] = {"GMTA", "sampling", "wave", {"field", "frequency", NULL, NULL}},
     [SG_OP_STRH] = {"STRH", "sampling", "wave", {"field", NULL, NULL, NULL}},
+    [SG_OP_CONF] = {"CONF", "config", NULL, NO},
 };
 
 const sg_op_info *sg_op_info_of(sg_op_type t)
@@ -252,6 +253,11 @@ int sg_merit_check(const sg_system *sys, sg_diag *d)
             if ((rc = check_surf(sys, row, "surf", o->i1, 1, ns - 1, d)) != SG_OK)
                 return rc;
             break;
+        case SG_OP_CONF:
+            if (o->i1 < 1 || o->i1 > sg_config_count(sys))
+                return sg_diag_set(d, SG_ERANGE, "merit: operand %d (CONF): configuration %d "
+                                   "is not 1 to %d", row, o->i1, sg_config_count(sys));
+            break;
         case SG_OP_RSCE: case SG_OP_RSCH:
             if (o->i1 < 1 || o->i1 > 20)
                 return sg_diag_set(d, SG_ERANGE, "merit: operand %d (%s): rings %d is not 1 to "
@@ -349,7 +355,9 @@ int sg_merit_check(const sg_system *sys, sg_diag *d)
  * ------------------------------------------------------------------------ */
 
 typedef struct ectx {
-    const sg_system *sys;
+    const sg_system *sys;   /* the design the rows read: base or own */
+    const sg_system *base;  /* the design given */
+    sg_system *own;         /* a configuration of it (CONF), or NULL */
     const sg_catalog *cat;
     sg_tracer *tr[SG_MAX_WAVES];
     sg_ray_surface *rows;
@@ -361,6 +369,47 @@ typedef struct ectx {
     int have_seidel;
     sg_seidel seidel;
 } ectx;
+
+/* Drops what was computed on the current design. */
+static void ectx_reset(ectx *c)
+{
+    int i;
+    for (i = 0; i < SG_MAX_WAVES; i++)
+        if (c->tr[i]) {
+            sg_tracer_free(c->tr[i]);
+            c->tr[i] = NULL;
+        }
+    free(c->sd);
+    c->sd = NULL;
+    c->have_sd = 0;
+    if (c->have_seidel)
+        sg_seidel_free(&c->seidel);
+    c->have_seidel = 0;
+}
+
+/* CONF k: the rows that follow read configuration k's design (Zemax's
+ * Multi-Configuration Editor): the design given with configuration k's
+ * values set and its solves recomputed on them.  A design without
+ * configurations is its own configuration 1. */
+static int ectx_config(ectx *c, int k, const char *what, sg_diag *d)
+{
+    sg_diag de;
+    int rc;
+    ectx_reset(c);
+    sg_system_free(c->own);
+    c->own = NULL;
+    c->sys = c->base;
+    if (!c->base->configs)
+        return SG_OK;
+    if (!(c->own = sg_system_clone(c->base)))
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    sg_diag_clear(&de);
+    if ((rc = sg_config_apply(c->own, k, &de)) != SG_OK ||
+        (rc = sg_system_apply_solves(c->own, c->cat, &de)) != SG_OK)
+        return sg_diag_set(d, rc, "%s: configuration %d: %s", what, k, de.msg);
+    c->sys = c->own;
+    return SG_OK;
+}
 
 static int tracer_of(ectx *c, int w, sg_tracer **out, sg_diag *d)
 {
@@ -1229,6 +1278,9 @@ static int eval_operand(ectx *c, int i, const double *val, double *v, sg_diag *d
     case SG_OP_CONS:
         *v = o->type == SG_OP_CONS ? o->target : 0.0;
         return SG_OK;
+    case SG_OP_CONF:
+        *v = o->i1;
+        return ectx_config(c, o->i1, what, d);
     case SG_OP_EFFL: {
         sg_paraxial p;
         sg_diag de;
@@ -1485,7 +1537,7 @@ int sg_merit_eval(const sg_system *sys, const sg_catalog *cat, sg_merit_result *
 {
     const sg_merit *m = &sys->merit;
     ectx c;
-    int i, rc, ndef, nrow;
+    int i, rc, ndef, nrow, nconf;
     double *val = NULL, sum = 0.0, wsum = 0.0;
     memset(out, 0, sizeof *out);
     if (!m->present || (m->nop == 0 && !m->has_default))
@@ -1493,10 +1545,14 @@ int sg_merit_eval(const sg_system *sys, const sg_catalog *cat, sg_merit_result *
                            "MERIT FUNCTION)");
     if ((rc = sg_merit_check(sys, d)) != SG_OK)
         return rc;
+    /* With configurations the default part is each configuration's, after
+     * a CONF row (Zemax's default merit function over all of them). */
+    nconf = sys->configs ? sg_config_count(sys) : 0;
     ndef = m->has_default ? 2 * sys->nfield * sys->nwave * m->rings * m->arms : 0;
-    nrow = m->nop + ndef;
+    nrow = m->nop + (nconf && ndef ? nconf * (1 + ndef) : ndef);
     memset(&c, 0, sizeof c);
     c.sys = sys;
+    c.base = sys;
     c.cat = cat;
     c.rows = malloc((size_t)sys->nsurf * sizeof *c.rows);
     c.gval = calloc((size_t)(m->nop ? m->nop : 1), sizeof *c.gval);
@@ -1515,10 +1571,21 @@ int sg_merit_eval(const sg_system *sys, const sg_catalog *cat, sg_merit_result *
         out->row[i].type = o->type;
         out->row[i].value = val[i];
         out->row[i].target = o->target;
-        out->row[i].weight = o->type == SG_OP_BLNK ? 0.0 : o->weight;
+        out->row[i].weight = o->type == SG_OP_BLNK || o->type == SG_OP_CONF ? 0.0 : o->weight;
     }
-    if (ndef && (rc = eval_default(&c, out, m->nop, d)) != SG_OK)
+    if (ndef && nconf) {
+        int k, at = m->nop;
+        for (k = 1; k <= nconf; k++) {
+            out->row[at].type = SG_OP_CONF;
+            out->row[at].value = k;
+            if ((rc = ectx_config(&c, k, "merit: default", d)) != SG_OK ||
+                (rc = eval_default(&c, out, at + 1, d)) != SG_OK)
+                goto done;
+            at += 1 + ndef;
+        }
+    } else if (ndef && (rc = eval_default(&c, out, m->nop, d)) != SG_OK) {
         goto done;
+    }
     for (i = 0; i < nrow; i++) {
         double e = out->row[i].value - out->row[i].target;
         out->row[i].row = i + 1;
@@ -1546,15 +1613,11 @@ int sg_merit_eval(const sg_system *sys, const sg_catalog *cat, sg_merit_result *
     out->bound = c.bound;
     rc = SG_OK;
 done:
-    for (i = 0; i < SG_MAX_WAVES; i++)
-        if (c.tr[i])
-            sg_tracer_free(c.tr[i]);
+    ectx_reset(&c);
+    sg_system_free(c.own);
     free(c.rows);
-    free(c.sd);
     free(c.gval);
     free(c.gdone);
-    if (c.have_seidel)
-        sg_seidel_free(&c.seidel);
     free(val);
     if (rc != SG_OK)
         sg_merit_result_free(out);

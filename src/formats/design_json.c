@@ -1161,14 +1161,14 @@ static int get_merit(jctx *c, const cJSON *v, sg_merit *m)
  * CONFIGURATIONS). */
 static int get_configs(jctx *c, const cJSON *v, sg_system *sys)
 {
-    static const char *const keys[] = {"count", "operands"};
-    const cJSON *k[2], *it;
+    static const char *const keys[] = {"count", "operands", "current"};
+    const cJSON *k[3], *it;
     sg_configs *cf;
     char at[64], at2[96];
     int rc, n, i = 0;
     if ((rc = expect_object(c, v, "configurations")) != SG_OK)
         return rc;
-    pick_keys(c, v, "configurations", keys, 2, k);
+    pick_keys(c, v, "configurations", keys, 3, k);
     if (!k[0])
         return perr(c, SG_EPARSE, "configurations: count", "required key is missing");
     if ((rc = get_int(c, k[0], "configurations: count", &n)) != SG_OK)
@@ -1183,6 +1183,15 @@ static int get_configs(jctx *c, const cJSON *v, sg_system *sys)
         return perr(c, SG_ENOMEM, "configurations", "out of memory");
     sg_configs_release(sys->configs);
     sys->configs = cf;
+    /* The configuration the design's own values are (the editor's
+     * current one); 1 when not given. */
+    if (k[2]) {
+        if ((rc = get_int(c, k[2], "configurations: current", &cf->current)) != SG_OK)
+            return rc;
+        if (cf->current < 1 || cf->current > n)
+            return perr(c, SG_ERANGE, "configurations: current", "%d is not 1 to %d",
+                        cf->current, n);
+    }
     cJSON_ArrayForEach(it, k[1]) {
         static const char *const okeys[] = {"type", "surface", "field", "wavelength",
                                             "parameter", "values"};
@@ -2405,9 +2414,13 @@ static void sb_configs(sbuf *b, const sg_configs *cf)
     const sg_param *mp = sg_param_find(SG_SCOPE_SURFACE, "material");
     char t[96];
     int i, k;
-    snprintf(t, sizeof t, ",\n  \"configurations\": {\n    \"count\": %d,\n    \"operands\": [\n",
-             cf->n);
+    snprintf(t, sizeof t, ",\n  \"configurations\": {\n    \"count\": %d,\n", cf->n);
     sb_puts(b, t);
+    if (cf->current != 1) {
+        snprintf(t, sizeof t, "    \"current\": %d,\n", cf->current);
+        sb_puts(b, t);
+    }
+    sb_puts(b, "    \"operands\": [\n");
     for (i = 0; i < cf->nop; i++) {
         const sg_config_op *o = &cf->op[i];
         const char *ty = o->type;

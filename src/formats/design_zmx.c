@@ -2036,6 +2036,14 @@ static int header_line(zctx *c, const zline *l)
          * own values; with more, each row is read (config_line). */
         if (n > 1 && !(c->sys->configs = sg_configs_new(n)))
             return zerr(c, SG_ENOMEM, "MNUM: out of memory");
+        /* Its second number is the current configuration, the one the
+         * surfaces' values are (1 when it is not one of them). */
+        if (n > 1 && l->n > 2) {
+            int cur;
+            if ((rc = tok_int(c, l, 2, "current configuration", 0, 1 << 20, &cur)) != SG_OK)
+                return rc;
+            c->sys->configs->current = cur >= 1 && cur <= n ? cur : 1;
+        }
         return SG_OK;
     }
     if (c->mnum > 1 && c->after && k->n == 4 && !tok_is(k, "CSUM"))
@@ -2312,7 +2320,10 @@ static int parse_text(zctx *c, char *text)
             c->sys->surf[n].thickness = 0.0;
             continue;
         }
-        if (c->cur >= 0 && (l->indented || is_surface_kw(&l->t[0]))) {
+        /* An unindented CONF line is the merit function's (Zemax's CONF
+         * operand), not the surface keyword. */
+        if (c->cur >= 0 && (l->indented || (is_surface_kw(&l->t[0]) &&
+                                            !(l->n >= 9 && tok_is(&l->t[0], "CONF"))))) {
             mark_line(c, c->cur);
             if ((rc = surface_line(c, l)) != SG_OK)
                 break;
@@ -3367,7 +3378,7 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int la
      * (lax 1), which keeps the file's own lines. */
     if (s->configs && lax != 1) {
         const sg_configs *cf = s->configs;
-        zb_printf(b, "MNUM %d 1\n", cf->n);
+        zb_printf(b, "MNUM %d %d\n", cf->n, cf->current);
         for (i = 0; i < cf->nop; i++) {
             const sg_config_op *o = &cf->op[i];
             for (k = 0; k < cf->n; k++) {

@@ -44,6 +44,7 @@ sg_configs *sg_configs_new(int n)
         return NULL;
     c->refs = 1;
     c->n = n;
+    c->current = 1;
     return c;
 }
 
@@ -112,7 +113,7 @@ int sg_configs_equal(const sg_configs *a, const sg_configs *b)
     int i, k;
     if (a == b)
         return 1;
-    if (!a || !b || a->n != b->n || a->nop != b->nop)
+    if (!a || !b || a->n != b->n || a->nop != b->nop || a->current != b->current)
         return 0;
     for (i = 0; i < a->nop; i++) {
         const sg_config_op *x = &a->op[i], *y = &b->op[i];
@@ -231,6 +232,74 @@ static int apply_op(sg_system *sys, const sg_config_op *o, int k, sg_diag *d)
         sys->wave[o->num - 1].weight = v;
     }
     return SG_OK;
+}
+
+/* The value sys holds for operand o (apply_op's inverse); 0 where the
+ * operand's target is not in sys (apply_op refuses it). */
+static double read_op(const sg_system *sys, const sg_config_op *o, sg_material *mat)
+{
+    const sg_surface *s = o->num >= 0 && o->num < sys->nsurf ? &sys->surf[o->num] : NULL;
+    int f = o->num >= 1 && o->num <= sys->nfield, w = o->num >= 1 && o->num <= sys->nwave;
+    if (!strcmp(o->type, "APER"))
+        return sys->aper_value;
+    if (!strcmp(o->type, "STPS"))
+        return sys->stop;
+    if (!strcmp(o->type, "TEMP"))
+        return sys->temperature;
+    if (!strcmp(o->type, "PRES"))
+        return sys->pressure;
+    if (!strcmp(o->type, "XFIE") || !strcmp(o->type, "YFIE") || !strcmp(o->type, "FLWT"))
+        return !f ? 0.0 : o->type[0] == 'X' ? sys->field[o->num - 1].x
+                        : o->type[0] == 'Y' ? sys->field[o->num - 1].y
+                                            : sys->field[o->num - 1].weight;
+    if (!strcmp(o->type, "WAVE") || !strcmp(o->type, "WLWT"))
+        return !w ? 0.0 : o->type[1] == 'A' ? sys->wave[o->num - 1].um
+                                            : sys->wave[o->num - 1].weight;
+    if (!s)
+        return 0.0;
+    if (!strcmp(o->type, "THIC"))
+        return s->thickness;
+    if (!strcmp(o->type, "CRVT"))
+        return isinf(s->radius) ? 0.0 : 1.0 / s->radius;
+    if (!strcmp(o->type, "CONI"))
+        return s->conic;
+    if (!strcmp(o->type, "SDIA"))
+        return s->semi_diameter;
+    if (!strcmp(o->type, "GLSS")) {
+        *mat = s->mat;
+        return 0.0;
+    }
+    if (!strcmp(o->type, "PRAM")) {
+        int is_order;
+        double *p = pram_ptr((sg_surface *)s, o->num2, &is_order);
+        return is_order ? s->before.order : p ? *p : 0.0;
+    }
+    return 0.0;
+}
+
+sg_configs *sg_configs_switch(const sg_system *sys, int k)
+{
+    const sg_configs *c = sys ? sys->configs : NULL;
+    sg_configs *n;
+    int i, cur;
+    if (!c || !(n = sg_configs_new(c->n)))
+        return NULL;
+    cur = c->current >= 1 && c->current <= c->n ? c->current : 1;
+    for (i = 0; i < c->nop; i++) {
+        const sg_config_op *o = &c->op[i];
+        sg_config_op *p;
+        if (sg_configs_add(n, o->type, o->num, o->num2, NULL) != SG_OK) {
+            sg_configs_release(n);
+            return NULL;
+        }
+        p = &n->op[i];
+        memcpy(p->value, o->value, (size_t)c->n * sizeof *p->value);
+        if (o->mat)
+            memcpy(p->mat, o->mat, (size_t)c->n * sizeof *p->mat);
+        p->value[cur - 1] = read_op(sys, o, p->mat ? &p->mat[cur - 1] : NULL);
+    }
+    n->current = k;
+    return n;
 }
 
 int sg_config_apply(sg_system *sys, int k, sg_diag *d)

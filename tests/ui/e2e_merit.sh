@@ -8,11 +8,15 @@
 # Independent reference: the lens's focal length from its closed form
 # (a thick lens of index 1.5, R1 60, R2 -80, t 5: f = 69.3975903614...),
 # against the EFFL value the editor shows; the saved file read by Python's
-# json module.
+# json module.  :opt on a slow triplet (a dense default merit): the
+# status line shows each cycle's merit, Esc stops it with the best design
+# so far kept (the file saved then differs from the start), and one u
+# brings back the start (saved again: the radius of the file above).
+# A zoom's title bar names its configuration and Ctrl-A shows the next.
 
 SAGITTA=${1:-$SAGITTA}
 . "$(dirname "$0")/tmuxlib.sh"
-tmux_setup 5 merit
+tmux_setup 10 merit
 
 cat >"$WORK/lens.json" <<'EOF'
 {"format": "sagitta-design", "version": 6, "units": "mm",
@@ -82,6 +86,90 @@ else
     not_ok "target"
     not_ok "undo and save"
     not_ok ":merit and i"
+fi
+
+cat >"$WORK/slow.json" <<'EOF'
+{"format": "sagitta-design", "version": 6, "units": "mm",
+ "wavelengths": {"primary": 1, "list": [{"um": 0.5875618}]},
+ "fields": {"type": "angle", "list": [{"y": 0}, {"y": 5}, {"y": 10}, {"y": 14}, {"y": 17}, {"y": 20}]},
+ "aperture": {"type": "epd", "value": 12.5},
+ "surfaces": [{"radius": "inf", "thickness": "inf"},
+  {"radius": 25, "thickness": 4.831, "material": 1.691, "solves": {"radius": {"type": "variable"}}},
+  {"radius": 7331.288, "thickness": 6.5, "solves": {"radius": {"type": "variable"}}},
+  {"radius": -23, "thickness": 0.975, "material": 1.6727, "stop": true, "solves": {"radius": {"type": "variable"}}},
+  {"radius": 23, "thickness": 4.4, "solves": {"radius": {"type": "variable"}}},
+  {"radius": 80, "thickness": 3.127, "material": 1.691, "solves": {"radius": {"type": "variable"}}},
+  {"radius": -21, "thickness": 41, "solves": {"radius": {"type": "variable"},
+   "thickness": {"type": "marginal_height", "value": 0}}},
+  {"radius": "inf", "thickness": 0}],
+ "merit": {"default": {"criterion": "spot", "reference": "centroid", "rings": 20, "arms": 16},
+           "operands": [{"type": "EFFL", "wave": 1, "target": 50, "weight": 1}]}}
+EOF
+R1() { python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["surfaces"][1]["radius"])' "$WORK/slow.json"; }
+
+start slow.json 100 30
+if wait_for "slow.json" 15 && wait_for "Surf"; then
+    # 6. :opt: the status line shows the cycles and their merit.
+    command_line "opt"
+    check ":opt shows each cycle's merit on the status line" \
+        wait_re "optimizing: cycle [0-9]+, merit [0-9.e+-]+" 60
+    # 7. Esc stops it; the best design so far is the design (saved: the
+    # front radius moved).
+    keys Escape
+    STOPPED=no
+    wait_for "optimization stopped after" 60 >/dev/null && STOPPED=yes
+    command_line "w"
+    wait_for "saved" >/dev/null
+    RS=$(R1)
+    WHY="stopped: $STOPPED; front radius saved after the stop: '$RS'"
+    check "Esc stops :opt and keeps the best design so far" \
+        sh -c "[ $STOPPED = yes ] && [ -n '$RS' ] && [ '$RS' != '25' ] && [ '$RS' != '25.0' ]"
+    # 8. One u is the start again.
+    keys u
+    wait_for "undo" >/dev/null
+    command_line "w"
+    sleep 0.5
+    wait_for "saved" >/dev/null
+    RU=$(R1)
+    WHY="front radius saved after one undo: '$RU'"
+    check "one u undoes the stopped optimization" sh -c "[ '$RU' = '25' ] || [ '$RU' = '25.0' ]"
+else
+    not_ok "the slow triplet opens"
+    not_ok "Esc stops :opt"
+    not_ok "one u undoes it"
+fi
+
+cat >"$WORK/zoom.json" <<'EOF'
+{"format": "sagitta-design", "version": 6, "units": "mm",
+ "wavelengths": {"primary": 1, "list": [{"um": 0.5875618}]},
+ "fields": {"type": "angle", "list": [{"y": 0}]},
+ "aperture": {"type": "epd", "value": 8},
+ "surfaces": [{"radius": "inf", "thickness": "inf"},
+  {"radius": 60, "thickness": 4, "material": 1.5, "stop": true},
+  {"radius": -120, "thickness": 10},
+  {"radius": 80, "thickness": 3, "material": 1.6},
+  {"radius": -300, "thickness": 40},
+  {"radius": "inf", "thickness": 0}],
+ "configurations": {"count": 2, "operands": [{"type": "THIC", "surface": 2, "values": [10, 30]}]}}
+EOF
+
+start zoom.json 100 30
+if wait_for "zoom.json" 15 && wait_for "Surf"; then
+    # 9. The title names the configuration; Ctrl-A shows the next, and
+    # the file saved then holds its values and its number.
+    WHY=
+    check "the title bar shows config 1/2" wait_re "zoom.json.*config 1/2" 10
+    keys C-a
+    wait_for "configuration 2 of 2" >/dev/null
+    command_line "w"
+    wait_for "saved" >/dev/null
+    CS=$(python3 -c 'import json, sys; d = json.load(open(sys.argv[1])); print(d["configurations"].get("current"), d["surfaces"][2]["thickness"])' "$WORK/zoom.json")
+    WHY="saved current and thickness: '$CS'"
+    check "Ctrl-A shows configuration 2 (title config 2/2, saved as current 2, thickness 30)" \
+        sh -c "$T capture-pane -p -t =main: | grep -q 'config 2/2' && { [ '$CS' = '2 30' ] || [ '$CS' = '2 30.0' ]; }"
+else
+    not_ok "the title shows the configuration"
+    not_ok "Ctrl-A"
 fi
 
 [ "$N" -eq "$NTESTS" ] || echo "# ran $N of $NTESTS"

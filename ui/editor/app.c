@@ -127,9 +127,14 @@ void title_draw(ui *u)
     const char *p = doc_path(&e->doc);
     char left[600], right[200];
     const char *base = p ? strrchr(p, '/') : NULL;
+    char conf[48] = "";
+    /* The configuration every panel shows (Zemax's current one). */
+    if (e->doc.sys->configs)
+        snprintf(conf, sizeof conf, "  config %d/%d", e->doc.sys->configs->current,
+                 e->doc.sys->configs->n);
     snprintf(left, sizeof left, " sagitta  %s%s%s%s%s", p ? (base ? base + 1 : p) : "[new design]",
-             doc_modified(&e->doc) ? " [+]" : "", e->doc.sys->title[0] ? "  - " : "",
-             e->doc.sys->title, "");
+             doc_modified(&e->doc) ? " [+]" : "", conf, e->doc.sys->title[0] ? "  - " : "",
+             e->doc.sys->title);
     if (e->method == SG_METHOD_MPFR)
         snprintf(right, sizeof right, "mpfr %d bits  %.2f ms  F1 help ", e->bits, e->cmp.ms_last);
     else
@@ -554,6 +559,32 @@ static int export_progress(void *ctx, const char *what, size_t done, size_t tota
     return 0;
 }
 
+/* Each cycle of :opt on the status line; Esc or Ctrl-C (the key or
+ * SIGINT) stops it, keeping the best design so far.  Another signal stops
+ * it too and is handed to the loop, which then ends as for that signal.
+ * Other keys typed meanwhile are dropped. */
+static int opt_progress(void *ctx, int cycle, double merit, double step, double seconds)
+{
+    ui *u = ctx;
+    char line[ED_MSG];
+    int key;
+    snprintf(line, sizeof line, "optimizing: cycle %d, merit %.6g, step %.3g, %.1f s; Esc stops",
+             cycle, merit, step, seconds);
+    term_text(u->status_y, 0, u->cols, T_EDIT, 1, line);
+    term_flush();
+    while ((key = term_key(0)) != K_NONE) {
+        if (key == K_SIGNAL) {
+            int sig = term_signal();
+            if (sig != SIGINT)
+                u->late_signal = sig;
+            return 1;
+        }
+        if (key == K_ESC || key == K_CTRL('c'))
+            return 1;
+    }
+    return 0;
+}
+
 /* Keys that work whatever has the focus: the table in keys.c. */
 static int global_key(ui *u, int key)
 {
@@ -757,6 +788,10 @@ static int loop(ui *u)
         f = dispatch(u, key);
         if (act(u, f))
             return 0;
+        if (u->late_signal) {
+            rec_sync(u->e, 1);
+            return 128 + u->late_signal;
+        }
     }
 }
 
@@ -938,6 +973,7 @@ int sg_editor_main(int argc, char **argv)
     u.step_exp = 1;
     u.ray_item = RAY_HX;
     e.progress = export_progress;
+    e.opt_progress = opt_progress;
     e.progress_ctx = &u;
     if (term_init() != 0) {
         ed_free(&e);

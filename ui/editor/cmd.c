@@ -328,7 +328,8 @@ int c_novar(ed *e, args *a)
 }
 
 /* opt [CYCLES]: damped least squares on the variables against the merit
- * function, as one undoable change. */
+ * function, as one undoable change; stopped (e->opt_progress), it keeps
+ * the best design so far, still one change. */
 int c_opt(ed *e, args *a)
 {
     sg_opt_opts o;
@@ -341,14 +342,59 @@ int c_opt(ed *e, args *a)
         return ED_HANDLED | ED_ERROR;
     sg_opt_opts_init(&o);
     o.cycles = cycles;
+    o.progress = e->opt_progress;
+    o.ctx = e->progress_ctx;
     if (!ec_begin(e, e->row))
         return ED_HANDLED | ED_ERROR;
     sg_diag_clear(&d);
     rc = sg_optimize(e->doc.sys, e->cat, &o, &res, &d);
     if (rc != SG_OK)
         return ec_cancel(e, d.msg);
+    if (res.stopped)
+        return ec_end(e, "optimization stopped after %d cycle%s: merit %.6g (from %.6g), the best "
+                      "so far; u undoes it", res.cycles, res.cycles == 1 ? "" : "s", res.merit,
+                      res.merit0);
     return ec_end(e, "optimized: merit %.6g (from %.6g) after %d cycle%s%s", res.merit, res.merit0,
                res.cycles, res.cycles == 1 ? "" : "s", res.converged ? ", converged" : "");
+}
+
+/* config [N|next]: shows configuration N of the design's configurations
+ * (Zemax's current configuration, Ctrl-A cycles): the values the design
+ * holds become the configuration left's, so edits made in it are kept,
+ * and configuration N's are set; one undo step.  Without N it names the
+ * current one. */
+static int c_config(ed *e, args *a)
+{
+    sg_system *sys = e->doc.sys;
+    sg_configs *nc;
+    sg_diag d;
+    int n = sg_config_count(sys), cur = sys->configs ? sys->configs->current : 1, k;
+    if (!ec_need(e, a, 0, 1, "config [N|next]"))
+        return ED_HANDLED | ED_ERROR;
+    if (a->n == 1) {
+        ed_msg(e, 0, "configuration %d of %d", cur, n);
+        return ED_HANDLED | ED_REDRAW;
+    }
+    if (strcmp(a->v[1], "next") == 0)
+        k = cur % n + 1;
+    else if (!ec_parse_int(e, a->v[1], "configuration", 1, n, &k))
+        return ED_HANDLED | ED_ERROR;
+    if (!sys->configs || k == cur) {
+        ed_msg(e, 0, "configuration %d of %d", cur, n);
+        return ED_HANDLED | ED_REDRAW;
+    }
+    if (!(nc = sg_configs_switch(sys, k)))
+        return ec_fail(e, "config: out of memory");
+    if (!ec_begin(e, e->row)) {
+        sg_configs_release(nc);
+        return ED_HANDLED | ED_ERROR;
+    }
+    sg_configs_release(e->doc.sys->configs);
+    e->doc.sys->configs = nc;
+    sg_diag_clear(&d);
+    if (sg_config_apply(e->doc.sys, k, &d) != SG_OK)
+        return ec_cancel(e, d.msg);
+    return ec_end(e, "configuration %d of %d", k, n);
 }
 
 /* solve SURFACE radius|thickness|conic TYPE [ARGS]: sets or clears a solve
@@ -495,6 +541,9 @@ static const command commands[] = {
      "clear a variable, or every one"},
     {"opt", NULL, c_opt, "opt [CYCLES]",
      "damped least squares on the variables against the merit function (one undo step)"},
+    {"config", NULL, c_config, "config [N|next]",
+     "show configuration N of the design's configurations (Ctrl-A: the next); edits made in "
+     "one are kept as its values"},
     {"undo", "u", c_undo, "undo [N]", "undo the last change(s)"},
     {"redo", NULL, c_redo, "redo [N]", "redo undone change(s)"},
     {"open", "e", c_open0, "open FILE", "open a design (open! discards changes)"},

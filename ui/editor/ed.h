@@ -101,6 +101,10 @@ typedef struct ed {
      * nonzero return cancels it (Esc).  NULL in batch mode. */
     int (*progress)(void *ctx, const char *what, size_t done, size_t total);
     void *progress_ctx;
+    /* :opt reports each cycle's merit (sg_opt_opts.progress, with
+     * progress_ctx); a nonzero return stops it (Esc, Ctrl-C) and the best
+     * design so far is kept.  NULL in batch mode. */
+    int (*opt_progress)(void *ctx, int cycle, double merit, double step, double seconds);
 } ed;
 
 int ed_init(ed *e);

@@ -108,6 +108,8 @@ const ui_key ui_keys[] = {
      ACT(show_sysdata)},
     {{K_CTRL('e')}, "Ctrl-E", "Merit Function Editor: rows and values, live; Enter edits (:merit)",
      ACT(show_merit)},
+    {{K_CTRL('a')}, "Ctrl-A", "the next configuration of a multi-configuration design (:config N)",
+     RUN("config next")},
     {{0}, "Esc, then a key", "run that key's command even in a text cell (Alt-key does the same)",
      DOC},
     {{'v'}, "v", "next wavelength for the ray", ACT(next_wave)},

@@ -55,6 +55,7 @@ typedef struct ui {
     int cmd_key;         /* Esc was pressed: the next key is a command, even in a text cell */
     int rec_delete;      /* the recovery question asks to confirm deleting the file */
     double prog_t0, prog_last; /* a long export's start and last progress line */
+    int late_signal;     /* a SIGTERM or SIGHUP that stopped :opt, for the loop */
     lineedit le;
     const char *ell;     /* ellipsis */
 
