@@ -129,6 +129,8 @@ typedef struct sg_shape_type {
 SG_SURF_TYPES(SG_SHAPE_DECL_)
 #undef SG_SHAPE_DECL_
 
+/* Whether a type is a phase surface (shape_phase.c). */
+int sg_phase_type(int type);
 /* The record of a surface type, or NULL for a value that is none. */
 const sg_shape_type *sg_shape_type_of(int type);
 /* Whether the type's record lists the parameter key. */

@@ -70,6 +70,12 @@ typedef struct sg_sprep {
      * wavelength (set after the surfaces are prepared); nb, na as above. */
     int grating;
     double gk;
+    /* A phase surface (shape_phase.c): its phase polynomial P in x / norm
+     * and y / norm (radians for order 1), and pk = m lambda / (2 pi),
+     * lambda in lens units at the tracer's wavelength (set after the
+     * surfaces are prepared); nb, na as above. */
+    const sg_shape *phase;
+    double pk;
 } sg_sprep;
 
 /* The prepared surfaces of the last tracer made with an sg_index_cache,
@@ -101,7 +107,7 @@ static inline int sg_sprep_sphere(const sg_sprep *s)
  * bend is skipped: dummy planes are common in real designs. */
 static inline int sg_sprep_passes(const sg_sprep *s)
 {
-    return s->shape == SHAPE_PLANE && !s->mirror && !s->ideal && !s->grating &&
+    return s->shape == SHAPE_PLANE && !s->mirror && !s->ideal && !s->grating && !s->phase &&
            fabs(s->mu.hi) == 1.0 &&
            s->mu.lo == 0.0;
 }
@@ -222,6 +228,21 @@ int sg_grating_bend_d(const sg_sprep *s, const double p[3], double d[3], double 
 int sg_grating_bend_dd(const sg_sprep *s, sg_pray *r);
 int sg_grating_bend_mp(const sg_sprep *s, mpfr_srcptr mu, mpfr_srcptr R, mpfr_srcptr k1,
                        mpfr_ptr P[3], mpfr_ptr D[3], mpfr_ptr opl, mpfr_t *t);
+/* A phase surface's bend (shape_phase.c) in the same three: 0, or
+ * SG_EEVANESCENT; mc the phase's coefficients from sg_phase_mp_coefs, t
+ * 16 scratch variables. */
+int sg_phase_bend_d(const sg_sprep *s, const double p[3], double d[3], double *opl);
+int sg_phase_bend_dd(const sg_sprep *s, sg_pray *r);
+int sg_phase_bend_mp(const sg_sprep *s, mpfr_t *mc, mpfr_srcptr mu, mpfr_srcptr R,
+                     mpfr_srcptr k1, mpfr_ptr P[3], mpfr_ptr D[3], mpfr_ptr opl, mpfr_t *t);
+/* A phase surface's phase polynomial into ph (an
+ * sg_shape of no ops: deg, norm, c, cm), SG_OK or SG_ERANGE naming
+ * surface isurf; its coefficients in MPFR (mc as sg_shape_mp_coefs). */
+int sg_phase_prepare(const sg_surface *f, sg_shape *ph, int isurf, sg_diag *d);
+void sg_phase_mp_coefs(const sg_shape *ph, mpfr_t *mc, mpfr_prec_t prec);
+/* Surface i's paraxial power from its phase at um micrometres: -lambda M
+ * c02 / (pi norm^2), lambda in lens units; 0 for other types. */
+double sg_phase_power(const sg_system *sys, int i, double um);
 
 /* The state of SG_VL precise rays between surfaces, lane by lane: what
  * sg_pray holds for one ray. */
@@ -499,13 +520,13 @@ void sg_parax_to_double(const sg_parax_mp *p, sg_paraxial *o);
 /* The axial object point's marginal slope for an object NA or cone angle
  * aperture (paraxial.c). */
 int sg_object_slope_mpfr(const sg_system *sys, const mpfr_t n0, mpfr_t out, sg_diag *d);
-int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
+int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, int wave, mpfr_prec_t prec,
                      sg_parax_mp *out, sg_diag *d);
 /* The same, resuming each y-nu trace after the last surface whose inputs
  * (radius, thickness, index, and the one before) and the trace's start
  * are those memo last saw: the same bits.  memo may be NULL. */
 typedef struct sg_parax_memo sg_parax_memo;
-int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
+int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, int wave, mpfr_prec_t prec,
                           sg_parax_mp *out, sg_diag *d, sg_parax_memo *memo);
 sg_parax_memo *sg_parax_memo_new(void);
 void sg_parax_memo_free(sg_parax_memo *memo);
