@@ -7,6 +7,11 @@
  * A ring of rays on the pupil's edge finds each surface's highest ray;
  * a golden-section search along the edge then refines each maximum, so the
  * figure does not depend on how finely the ring was sampled.
+ *
+ * Zemax's stored figures are the highest of the four rays at the top,
+ * bottom, left and right of the pupil (o->zemax): where a surface's highest
+ * ray lies between them (sc_vfac1.zmx's stop, pupil angle 40 degrees),
+ * Zemax's figure is below the edge's (tests/test_semidiam.c).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -79,6 +84,19 @@ int sg_semi_diameters(const sg_system *sys, const sg_catalog *cat, const sg_semi
             for (i = 0; i < n; i++) {
                 best[i] = -1.0;
                 besta[i] = 0.0;
+            }
+            if (o->zemax) {
+                /* Zemax's four rays, at exact pupil coordinates. */
+                static const double px[4] = {0.0, 1.0, 0.0, -1.0}, py[4] = {1.0, 0.0, -1.0, 0.0};
+                for (k = 0; k < 4; k++) {
+                    sg_trace_normalized(t, hx, hy, px[k], py[k], row);
+                    for (i = 1; i < n; i++) {
+                        if (row[i].status != SG_OK)
+                            break;
+                        sd[i] = fmax(sd[i], hypot(row[i].x, row[i].y));
+                    }
+                }
+                continue;
             }
             for (k = 0; k < o->ring; k++) {
                 double a = TWO_PI * (double)k / (double)o->ring;
