@@ -1164,9 +1164,11 @@ typedef struct sg_semidiam_opts {
     int ring;            /* rays on the pupil's edge a field and wavelength (64) */
     int refine;          /* golden-section steps refining each surface's
                             highest ray along the edge (40) */
-    int zemax;           /* 1: Zemax's figure, the highest of the four rays
-                            (Px, Py) = (0, +-1), (+-1, 0) alone; 0 (default):
-                            the whole edge, which every ray passes */
+    int zemax;           /* 1: Zemax's figure, the highest of the rays
+                            (Px, Py) = (0, +-1) alone, and (+-1, 0) where a
+                            field is off the y axis or the system is not
+                            rotationally symmetric; 0 (default): the whole
+                            edge, which every ray passes */
 } sg_semidiam_opts;
 SG_API void sg_semidiam_opts_init(sg_semidiam_opts *o);
 /* sd[i] for every surface i: the largest radial height, hypot(x, y) in the

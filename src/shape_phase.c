@@ -8,8 +8,8 @@
  *   Zernike phase:  Phi = M sum_j A_j Z_j(rho, theta), the 37 Fringe terms
  *
  * M the diffraction order, rho = r / the normalization radius; Phi in
- * radians, the Zernike phase's A_j in waves (Phi = 2 pi M sum A_j Z_j), as
- * Zemax's files show (tests/test_phase.c).
+ * radians, the Zernike phase's A_j in waves (Phi = 2 pi M sum A_j Z_j,
+ * theta from the x axis), as Zemax's files show (tests/test_phase.c).
  * Both are expanded once into a polynomial P in u = x / norm, v = y /
  * norm (shape.c's sg_p2_*, as the Zernike sag is), so Phi = M P.  The
  * phase's gradient is the local grating vector: a ray's tangential part

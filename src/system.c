@@ -498,9 +498,8 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
             return sg_diag_set(d, SG_ERANGE, "surface %d: type %d is unknown", i, (int)s->type);
         if (sg_phase_type(s->type)) {
             /* A phase surface (shape_phase.c): its terms within the
-             * polynomial's degree; of the Zernike phase, only the terms
-             * about the axis, the only ones checked against Zemax. */
-            int t, zn, zm, max = s->type == SG_SURF_BINARY_2 ? SG_P2_DEG / 2 : SG_ZERNIKE_FRINGE_MAX;
+             * polynomial's degree. */
+            int t, max = s->type == SG_SURF_BINARY_2 ? SG_P2_DEG / 2 : SG_ZERNIKE_FRINGE_MAX;
             if (!(s->norm_radius > 0.0) || !isfinite(s->norm_radius))
                 return sg_diag_set(d, SG_ERANGE, "surface %d: norm_radius %g must be finite and "
                                    "positive", i, s->norm_radius);
@@ -513,12 +512,6 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
                 if (t >= max)
                     return sg_diag_set(d, SG_EUNSUPPORTED, "surface %d: phase term %d is set; "
                                        "sagitta reads terms 1 to %d of this type", i, t + 1, max);
-                if (s->type == SG_SURF_ZERNIKE_PHASE &&
-                    (sg_zernike_nm(SG_ZERNIKE_FRINGE, t + 1, &zn, &zm) != SG_OK || zm != 0))
-                    return sg_diag_set(d, SG_EUNSUPPORTED, "surface %d: Zernike phase term %d "
-                                       "is not rotationally symmetric; sagitta reads only Z1, "
-                                       "Z4, Z9, Z16, Z25, Z36 and Z37 of a Zernike Fringe phase",
-                                       i, t + 1);
             }
         }
         if (s->type == SG_SURF_PARAXIAL) {

@@ -23,8 +23,9 @@ static void semidiam_help(FILE *f)
 "\n"
 "Options:\n"
 "  --method M               precise (default), classic or mpfr\n"
-"  --zemax                  Zemax's figure: the highest of the four rays at the\n"
-"                           top, bottom, left and right of the pupil's edge\n"
+"  --zemax                  Zemax's figure: the highest of the rays at the top\n"
+"                           and bottom of the pupil's edge (and its sides for a\n"
+"                           field off the axis in a system that is not centred)\n"
 "  --format F               text (default) or json\n"
 "  -o, --output FILE        write to FILE instead of standard output\n"
 "  -h, --help               show this help\n", f);
@@ -104,8 +105,9 @@ int cmd_semidiam(int argc, char **argv)
     } else {
         if (zemax)
             fputs("Automatic semi-diameters as Zemax stores them: the largest height of the\n"
-                  "four rays at the top, bottom, left and right of the pupil's edge over every\n"
-                  "field and wavelength; lengths in lens units.\n", f);
+                  "rays at the top and bottom of the pupil's edge (and its sides, for a field\n"
+                  "off the axis in a system that is not centred) over every field and\n"
+                  "wavelength; lengths in lens units.\n", f);
         else
             fputs("Automatic semi-diameters: the largest height of the rays through the pupil's\n"
                   "edge over every field and wavelength (Zemax's rule); lengths in lens units.\n", f);

@@ -51,7 +51,7 @@ def main():
               "\n".join(bad))
 
     # sc_vfac1.zmx (tests/data/zmx/README.md): Zemax's stop DIAM (line 116)
-    # is the four edge rays' figure, which --zemax gives; the whole edge,
+    # is the top and bottom edge rays' figure, which --zemax gives; the whole edge,
     # the default, reaches 1.3e-3 higher there.
     vf = os.path.join(data, "zmx", "sc_vfac1.zmx")
     four = {}
@@ -63,7 +63,7 @@ def main():
               "sc_vfac1: --zemax gives the stop's DIAM as OpticStudio stored it",
               "%.15g" % four[True][4])
     tap.check(four[False][4] > 3.75135203426 + 1e-3,
-              "sc_vfac1: the whole edge reaches above Zemax's four rays on the stop",
+              "sc_vfac1: the whole edge reaches above Zemax's rays on the stop",
               "%.15g" % four[False][4])
 
     path = os.path.join(data, "sc_dblgauss2.json")
