@@ -179,12 +179,16 @@ static void zemax_one(const char *rel, int surf, double want, double above, doub
 /* US05331467-1.zmx's image (line 353, 12 digits, met to 3.4e-11, as the
  * file's other DIAMs are to 1e-9 or better): the side ray of the full field is
  * higher; thorlabs_lj1598l1.zmx's image (line 118): on axis the side ray
- * of a cylinder lens stands at the full aperture. */
+ * of a cylinder lens stands at the full aperture; and where Zemax does
+ * trace the sides, optiland_flat_transmission_grating.zmx's image (line
+ * 123): the side ray Hx = 1, Px = 1 of its field on the x axis. */
 static void zemax_side_rays(void **state)
 {
     (void)state;
     zemax_one("tests/data/zmx/US05331467-1.zmx", 25, 2.10496048888E+01, 0.07, 1e-10);
     zemax_one("tests/data/zmx/thorlabs_lj1598l1.zmx", 3, 2.336290250042E-1, 1.0, 5e-12);
+    zemax_one("tests/data/zmx/optiland_flat_transmission_grating.zmx", 4, 13.319073572664644,
+              0.5, 1e-13);
 }
 
 /* sc_vfac1.zmx (lines 87 to 145): Zemax's DIAMs are the highest of the
