@@ -261,7 +261,9 @@ SG_API int sg_model_glass(double nd, double vd, double dpgf, sg_glass *out);
     X(XYPOLY, "xy_polynomial", "XPOLYNOM", xypoly)      /* conic + x^i y^j */ \
     X(QCON, "q_type_asphere", "QTYPEASP", qcon)         /* conic + Forbes Qcon */  \
     X(PARAXIAL, "paraxial", "PARAXIAL", paraxial)       /* ideal thin lens, flat */ \
-    X(DGRATING, "diffraction_grating", "DGRATING", dgrating) /* ruled conic */
+    X(DGRATING, "diffraction_grating", "DGRATING", dgrating) /* ruled conic */ \
+    X(BINARY_2, "binary_2", "BINARY_2", binary2)  /* conic + phase in r^2i */      \
+    X(ZERNIKE_PHASE, "zernike_fringe_phase", "FZERNPHA", fzernpha) /* + Zernike phase */
 
 /* The values are those of earlier versions: 0 standard ... 8 XY. */
 #define SG_SURF_ENUM_(name, json, zmx, rec) SG_SURF_##name,
@@ -417,7 +419,8 @@ typedef struct sg_surface {
     double focal_length;   /* paraxial: the ideal lens's focal length (Zemax's PARM 1) */
     double opd_mode;       /* paraxial: Zemax's OPD mode 0 to 3 (PARM 2) */
     double grating_lines;  /* grating: lines per micrometre (Zemax's PARM 1) */
-    double grating_order;  /* grating: the diffraction order (PARM 2) */
+    double grating_order;  /* grating: the diffraction order (PARM 2); binary 2 and
+                            * Zernike phase: their diffraction order (PARM 0) */
     sg_aperture_type aperture; /* the surface aperture or obscuration */
     double ap_rmin, ap_rmax;   /* circular: the annulus's radii */
     double ap_xhalf, ap_yhalf; /* rectangular and elliptical: half widths */
@@ -1171,6 +1174,11 @@ typedef struct sg_semidiam_opts {
     int ring;            /* rays on the pupil's edge a field and wavelength (64) */
     int refine;          /* golden-section steps refining each surface's
                             highest ray along the edge (40) */
+    int zemax;           /* 1: Zemax's figure, the highest of the rays
+                            (Px, Py) = (0, +-1) alone, and (+-1, 0) where a
+                            field is off the y axis or the system is not
+                            rotationally symmetric; 0 (default): the whole
+                            edge, which every ray passes */
 } sg_semidiam_opts;
 SG_API void sg_semidiam_opts_init(sg_semidiam_opts *o);
 /* sd[i] for every surface i: the largest radial height, hypot(x, y) in the

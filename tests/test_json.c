@@ -637,8 +637,8 @@ static const err_case err_cases[] = {
     {"{\"surfaces\": [{}, {\"stop\": true, \"type\": \"toroid\"}, {}]}", SG_EPARSE,
      "t.json: surface 1: type: expected \"standard\", \"even_asphere\", \"coordinate_break\", "
      "\"odd_asphere\", \"toroidal\", \"biconic\", \"zernike_fringe\", \"zernike_standard\", "
-     "\"xy_polynomial\", \"q_type_asphere\", \"paraxial\" or \"diffraction_grating\", got "
-     "string \"toroid\""},
+     "\"xy_polynomial\", \"q_type_asphere\", \"paraxial\", \"diffraction_grating\", "
+     "\"binary_2\" or \"zernike_fringe_phase\", got string \"toroid\""},
     /* Coordinate breaks and tilts: each message names the surface and key. */
     {"{\"surfaces\": [{}, {\"stop\": true}, {\"break\": {\"tilt\": [1, 2, 3]}}, {}]}", SG_EPARSE,
      "t.json: surface 2: break: only a coordinate_break has a break; use \"before\""},

@@ -9,7 +9,13 @@
  * Cases: every bundled example, a folded and tilted system (whose highest
  * rays are not at the top or bottom of the pupil), and Zemax's stored
  * figures for HoO-V2C18Ex03 (tests/data/zmx/README.md), matched to the
- * 13 digits the file holds.
+ * 13 digits the file holds.  Zemax's rule (sg_semidiam_opts.zemax): the
+ * seven DIAMs of its sample sc_vfac1.zmx, whose stop's highest edge ray
+ * lies between the top and the side of the pupil, where Zemax does not
+ * look (the dense ring finds it 1.3e-3 higher); the image DIAM of
+ * US05331467-1.zmx, a centred lens whose side ray reaches 0.08 higher
+ * there, and of thorlabs_lj1598l1.zmx, a cylinder lens on axis, whose side
+ * ray Zemax does not trace either.
  */
 #include <math.h>
 #include <stdio.h>
@@ -144,6 +150,85 @@ static void zemax_stored(void **state)
     sg_catalog_free(cat);
 }
 
+/* One surface's Zemax rule figure against the DIAM a file stores, and
+ * the whole edge at least above by more. */
+static void zemax_one(const char *rel, int surf, double want, double above, double tol)
+{
+    char path[4096];
+    sg_catalog *cat = tu_catalog();
+    sg_system *s = sg_system_new();
+    sg_semidiam_opts o;
+    double sd[64], edge[64];
+    sg_diag d;
+    sg_diag_clear(&d);
+    if (sg_design_load(s, tu_path(rel, path, sizeof path), &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(s->nsurf <= 64);
+    sg_semidiam_opts_init(&o);
+    o.zemax = 1;
+    assert_int_equal(sg_semi_diameters(s, cat, &o, sd, &d), SG_OK);
+    assert_int_equal(sg_semi_diameters(s, cat, NULL, edge, &d), SG_OK);
+    print_message("# %s surface %d: Zemax %.13g, its rule %.13g, the whole edge %.13g\n", rel,
+                  surf, want, sd[surf], edge[surf]);
+    assert_true(fabs(sd[surf] - want) <= tol * want);
+    assert_true(edge[surf] > want + above);
+    sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
+/* US05331467-1.zmx's image (line 353, 12 digits, met to 3.4e-11, as the
+ * file's other DIAMs are to 1e-9 or better): the side ray of the full field is
+ * higher; thorlabs_lj1598l1.zmx's image (line 118): on axis the side ray
+ * of a cylinder lens stands at the full aperture; and where Zemax does
+ * trace the sides, optiland_flat_transmission_grating.zmx's image (line
+ * 123): the side ray Hx = 1, Px = 1 of its field on the x axis. */
+static void zemax_side_rays(void **state)
+{
+    (void)state;
+    zemax_one("tests/data/zmx/US05331467-1.zmx", 25, 2.10496048888E+01, 0.07, 1e-10);
+    zemax_one("tests/data/zmx/thorlabs_lj1598l1.zmx", 3, 2.336290250042E-1, 1.0, 5e-12);
+    zemax_one("tests/data/zmx/optiland_flat_transmission_grating.zmx", 4, 13.319073572664644,
+              0.5, 1e-13);
+}
+
+/* sc_vfac1.zmx (lines 87 to 145): Zemax's DIAMs are the highest of the
+ * rays (Px, Py) = (0, +-1) (a centred system on the y axis); on the stop
+ * (surface 4, line 116) the whole edge reaches higher, as the dense ring
+ * shows. */
+static void zemax_top_bottom(void **state)
+{
+    static const double want[] = {0, 9.158928962469, 8.389204147102, 4.133376390719,
+                                  3.75135203426, 7.148001292926, 7.780276717555,
+                                  1.817649280449E+1};
+    char path[4096];
+    sg_catalog *cat = tu_catalog();
+    sg_system *s = sg_system_new();
+    sg_semidiam_opts o;
+    double sd[8], h[8];
+    sg_diag d;
+    int i;
+    (void)state;
+    sg_diag_clear(&d);
+    if (sg_design_load(s, tu_path("tests/data/zmx/sc_vfac1.zmx", path, sizeof path), &d) !=
+        SG_OK)
+        fail_msg("%s", d.msg);
+    assert_int_equal(s->nsurf, 8);
+    sg_semidiam_opts_init(&o);
+    o.zemax = 1;
+    assert_int_equal(sg_semi_diameters(s, cat, &o, sd, &d), SG_OK);
+    for (i = 1; i <= 7; i++) {
+        double rel = fabs(sd[i] - want[i]) / want[i];
+        print_message("# surface %d: Zemax %.13g, four rays %.13g (%.1e)\n", i, want[i], sd[i],
+                      rel);
+        assert_true(rel <= 5e-13);
+    }
+    dense(s, cat, h);
+    print_message("# stop: the whole edge %.13g\n", h[4]);
+    assert_true(h[4] > want[4] + 1e-3);
+    sg_system_free(s);
+    sg_catalog_free(cat);
+}
+
 static void bad_options(void **state)
 {
     sg_catalog *cat = tu_catalog();
@@ -167,6 +252,8 @@ int main(void)
         cmocka_unit_test(examples),
         cmocka_unit_test(tilted),
         cmocka_unit_test(zemax_stored),
+        cmocka_unit_test(zemax_top_bottom),
+        cmocka_unit_test(zemax_side_rays),
         cmocka_unit_test(bad_options),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

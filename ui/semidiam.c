@@ -23,6 +23,9 @@ static void semidiam_help(FILE *f)
 "\n"
 "Options:\n"
 "  --method M               precise (default), classic or mpfr\n"
+"  --zemax                  Zemax's figure: the highest of the rays at the top\n"
+"                           and bottom of the pupil's edge (and its sides for a\n"
+"                           field off the axis in a system that is not centred)\n"
 "  --format F               text (default) or json\n"
 "  -o, --output FILE        write to FILE instead of standard output\n"
 "  -h, --help               show this help\n", f);
@@ -43,7 +46,7 @@ int cmd_semidiam(int argc, char **argv)
 {
     cli_iter it;
     const char *design = NULL, *output = NULL;
-    int rc, fmt = REPORT_TEXT, method = SG_METHOD_PRECISE, i;
+    int rc, fmt = REPORT_TEXT, method = SG_METHOD_PRECISE, i, zemax = 0;
     sg_catalog *cat = NULL;
     sg_system *sys = NULL;
     sg_semidiam_opts o;
@@ -51,7 +54,7 @@ int cmd_semidiam(int argc, char **argv)
     sg_diag d;
     FILE *f;
     const cli_opt opts[] = {CLI_OPT_HELP, CLI_OPT_METHOD(method), CLI_OPT_FORMAT(fmt),
-                            CLI_OPT_OUTPUT(output), CLI_END};
+                            CLI_OPT_OUTPUT(output), CLI_OPT_FLAG("--zemax", 0, zemax), CLI_END};
 
     cli_iter_init(&it, "semidiam", argc, argv);
     rc = cli_parse(&it, opts, &design, semidiam_help);
@@ -62,6 +65,7 @@ int cmd_semidiam(int argc, char **argv)
         return rc;
     sg_semidiam_opts_init(&o);
     o.trace.method = (sg_method)method;
+    o.zemax = zemax;
     sd = calloc((size_t)sys->nsurf, sizeof *sd);
     if (!sd) {
         cli_error("out of memory");
@@ -99,8 +103,14 @@ int cmd_semidiam(int argc, char **argv)
         }
         fputs("\n  ]\n}\n", f);
     } else {
-        fputs("Automatic semi-diameters: the largest height of the rays through the pupil's\n"
-              "edge over every field and wavelength (Zemax's rule); lengths in lens units.\n", f);
+        if (zemax)
+            fputs("Automatic semi-diameters as Zemax stores them: the largest height of the\n"
+                  "rays at the top and bottom of the pupil's edge (and its sides, for a field\n"
+                  "off the axis in a system that is not centred) over every field and\n"
+                  "wavelength; lengths in lens units.\n", f);
+        else
+            fputs("Automatic semi-diameters: the largest height of the rays through the pupil's\n"
+                  "edge over every field and wavelength (Zemax's rule); lengths in lens units.\n", f);
         fprintf(f, "%-8s %24s %24s  %s\n", "Surface", "Automatic", "Set", "");
         for (i = 1; i < sys->nsurf; i++) {
             const sg_surface *s = &sys->surf[i];

@@ -20,6 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shape.h"
 #include "trace.h"
 
 /* Signed indices after every surface at wavelength wave, as doubles. */
@@ -215,6 +216,14 @@ int sg_seidel_compute(const sg_system *sys, const sg_catalog *cat, sg_seidel *ou
     if (!out)
         return sg_diag_set(d, SG_EINVAL, "seidel: no output");
     memset(out, 0, sizeof *out);
+    /* A phase surface's third-order terms (its r^4 coefficient, the
+     * stop shift of its power) are not in these sums: none rather than
+     * wrong ones. */
+    for (j = 1; j < sys->nsurf; j++)
+        if (sg_phase_type(sys->surf[j].type))
+            return sg_diag_set(d, SG_EUNSUPPORTED,
+                               "surface %d: the Seidel sums of a phase surface are not computed",
+                               j);
     rc = sg_paraxial_compute(sys, cat, -1, &p, d);
     if (rc != SG_OK)
         return rc;

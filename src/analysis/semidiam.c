@@ -7,6 +7,16 @@
  * A ring of rays on the pupil's edge finds each surface's highest ray;
  * a golden-section search along the edge then refines each maximum, so the
  * figure does not depend on how finely the ring was sampled.
+ *
+ * Zemax's stored figures (o->zemax) are the highest of the rays at the top
+ * and bottom of the pupil, and at its sides only for a field off the axis
+ * that lies off the y axis or in a system that is not rotationally
+ * symmetric (zemax_asymmetric): where a surface's highest ray lies between
+ * them (sc_vfac1.zmx's stop, pupil angle 40 degrees) Zemax's figure is
+ * below the edge's, and where a side ray of a centred system is highest
+ * (the image of US05331467-1.zmx), or of the axial field of a cylinder
+ * lens (thorlabs_lj1598l1.zmx), too (tests/test_semidiam.c,
+ * tests/data/zmx/README.md).
  */
 #include <math.h>
 #include <stdlib.h>
@@ -27,6 +37,34 @@ static double height(sg_tracer *t, double hx, double hy, double a, int i, sg_ray
     return hypot(row[i].x, row[i].y);
 }
 
+/* Whether the system is not rotationally symmetric, for Zemax's rays: a
+ * tilt, decenter or coordinate break, or a sag or phase that is not (the
+ * apertures, of which its files say nothing, are left out). */
+static int zemax_asymmetric(const sg_system *sys)
+{
+    int i;
+    for (i = 1; i < sys->nsurf; i++) {
+        const sg_surface *s = &sys->surf[i];
+        switch (s->type) {
+        case SG_SURF_COORDBRK:
+        case SG_SURF_TOROIDAL:
+        case SG_SURF_BICONIC:
+        case SG_SURF_ZERNIKE_FRINGE:
+        case SG_SURF_ZERNIKE_STANDARD:
+        case SG_SURF_XYPOLY:
+        case SG_SURF_DGRATING:
+        case SG_SURF_ZERNIKE_PHASE:
+            return 1;
+        default:
+            break;
+        }
+        if (!sg_frame_change_is_zero(&s->before) ||
+            (s->after_mode == SG_AFTER_EXPLICIT && !sg_frame_change_is_zero(&s->after)))
+            return 1;
+    }
+    return 0;
+}
+
 void sg_semidiam_opts_init(sg_semidiam_opts *o)
 {
     memset(o, 0, sizeof *o);
@@ -40,7 +78,7 @@ int sg_semi_diameters(const sg_system *sys, const sg_catalog *cat, const sg_semi
                       double *sd, sg_diag *d)
 {
     sg_semidiam_opts def;
-    int n, w, f, k, i, rc = SG_OK;
+    int n, w, f, k, i, rc = SG_OK, asym;
     sg_ray_surface *row = NULL;
     double *best = NULL, *besta = NULL;
     if (!o) {
@@ -55,6 +93,7 @@ int sg_semi_diameters(const sg_system *sys, const sg_catalog *cat, const sg_semi
                            "0 to 200", o->refine);
     if ((rc = sg_system_check(sys, cat, d)) != SG_OK)
         return rc;
+    asym = zemax_asymmetric(sys);
     n = sys->nsurf;
     row = malloc((size_t)n * sizeof *row);
     best = malloc((size_t)n * sizeof *best);
@@ -79,6 +118,21 @@ int sg_semi_diameters(const sg_system *sys, const sg_catalog *cat, const sg_semi
             for (i = 0; i < n; i++) {
                 best[i] = -1.0;
                 besta[i] = 0.0;
+            }
+            if (o->zemax) {
+                /* Zemax's rays, at exact pupil coordinates: top and
+                 * bottom, then the sides. */
+                static const double px[4] = {0.0, 0.0, 1.0, -1.0}, py[4] = {1.0, -1.0, 0.0, 0.0};
+                int nr = (hx != 0.0 || (hy != 0.0 && asym)) ? 4 : 2;
+                for (k = 0; k < nr; k++) {
+                    sg_trace_normalized(t, hx, hy, px[k], py[k], row);
+                    for (i = 1; i < n; i++) {
+                        if (row[i].status != SG_OK)
+                            break;
+                        sd[i] = fmax(sd[i], hypot(row[i].x, row[i].y));
+                    }
+                }
+                continue;
             }
             for (k = 0; k < o->ring; k++) {
                 double a = TWO_PI * (double)k / (double)o->ring;

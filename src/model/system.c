@@ -496,6 +496,24 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
             return sg_diag_set(d, SG_ERANGE, "surface %d: radius is not a number", i);
         if ((int)s->type < SG_SURF_STANDARD || (int)s->type >= SG_SURF_NTYPES)
             return sg_diag_set(d, SG_ERANGE, "surface %d: type %d is unknown", i, (int)s->type);
+        if (sg_phase_type(s->type)) {
+            /* A phase surface (shape_phase.c): its terms within the
+             * polynomial's degree. */
+            int t, max = s->type == SG_SURF_BINARY_2 ? SG_P2_DEG / 2 : SG_ZERNIKE_FRINGE_MAX;
+            if (!(s->norm_radius > 0.0) || !isfinite(s->norm_radius))
+                return sg_diag_set(d, SG_ERANGE, "surface %d: norm_radius %g must be finite and "
+                                   "positive", i, s->norm_radius);
+            if (!isfinite(s->grating_order))
+                return sg_diag_set(d, SG_ERANGE, "surface %d: the diffraction order %g must be "
+                                   "finite", i, s->grating_order);
+            for (t = 0; t < SG_NTERMS; t++) {
+                if (s->terms[t] == 0.0)
+                    continue;
+                if (t >= max)
+                    return sg_diag_set(d, SG_EUNSUPPORTED, "surface %d: phase term %d is set; "
+                                       "sagitta reads terms 1 to %d of this type", i, t + 1, max);
+            }
+        }
         if (s->type == SG_SURF_PARAXIAL) {
             /* An ideal lens on a plane (shape_paraxial.c). */
             if (isfinite(s->radius) && s->radius != 0.0)

@@ -130,6 +130,8 @@ typedef struct sg_shape_type {
 SG_SURF_TYPES(SG_SHAPE_DECL_)
 #undef SG_SHAPE_DECL_
 
+/* Whether a type is a phase surface (shape_phase.c). */
+int sg_phase_type(int type);
 /* The record of a surface type, or NULL for a value that is none. */
 const sg_shape_type *sg_shape_type_of(int type);
 /* Whether the type's record lists the parameter key. */
@@ -256,6 +258,12 @@ typedef struct sg_sprep {
      * wavelength (set after the surfaces are prepared); nb, na as above. */
     int grating;
     double gk;
+    /* A phase surface (shape_phase.c): its phase polynomial P in x / norm
+     * and y / norm (radians for order 1), and pk = m lambda / (2 pi),
+     * lambda in lens units at the tracer's wavelength (set after the
+     * surfaces are prepared); nb, na as above. */
+    const sg_shape *phase;
+    double pk;
 } sg_sprep;
 
 /* 1 + conic is exactly 1 on spheres, where a product by it is the other
@@ -270,7 +278,7 @@ static inline int sg_sprep_sphere(const sg_sprep *s)
  * bend is skipped: dummy planes are common in real designs. */
 static inline int sg_sprep_passes(const sg_sprep *s)
 {
-    return s->shape == SHAPE_PLANE && !s->mirror && !s->ideal && !s->grating &&
+    return s->shape == SHAPE_PLANE && !s->mirror && !s->ideal && !s->grating && !s->phase &&
            fabs(s->mu.hi) == 1.0 &&
            s->mu.lo == 0.0;
 }
@@ -298,6 +306,21 @@ int sg_grating_bend_d(const sg_sprep *s, const double p[3], double d[3], double 
 int sg_grating_bend_dd(const sg_sprep *s, sg_pray *r);
 int sg_grating_bend_mp(const sg_sprep *s, mpfr_srcptr mu, mpfr_srcptr R, mpfr_srcptr k1,
                        mpfr_ptr P[3], mpfr_ptr D[3], mpfr_ptr opl, mpfr_t *t);
+/* A phase surface's bend (shape_phase.c) in the same three: 0, or
+ * SG_EEVANESCENT; mc the phase's coefficients from sg_phase_mp_coefs, t
+ * 16 scratch variables. */
+int sg_phase_bend_d(const sg_sprep *s, const double p[3], double d[3], double *opl);
+int sg_phase_bend_dd(const sg_sprep *s, sg_pray *r);
+int sg_phase_bend_mp(const sg_sprep *s, mpfr_t *mc, mpfr_srcptr mu, mpfr_srcptr R,
+                     mpfr_srcptr k1, mpfr_ptr P[3], mpfr_ptr D[3], mpfr_ptr opl, mpfr_t *t);
+/* A phase surface's phase polynomial into ph (an
+ * sg_shape of no ops: deg, norm, c, cm), SG_OK or SG_ERANGE naming
+ * surface isurf; its coefficients in MPFR (mc as sg_shape_mp_coefs). */
+int sg_phase_prepare(const sg_surface *f, sg_shape *ph, int isurf, sg_diag *d);
+void sg_phase_mp_coefs(const sg_shape *ph, mpfr_t *mc, mpfr_prec_t prec);
+/* Surface i's paraxial power from its phase at um micrometres: -lambda M
+ * c02 / (pi norm^2), lambda in lens units; 0 for other types. */
+double sg_phase_power(const sg_system *sys, int i, double um);
 
 /* A bound computed in floating point must not round down past the error
  * it bounds, so it is nudged up by more than its own rounding. */

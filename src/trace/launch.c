@@ -1275,7 +1275,8 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
     sg_parax_mp_init(&p, 128);
     rc = sg_indices_mpfr_cached(sys, t->cat, t->wave, idx, t->icache, d);
     if (rc == SG_OK)
-        rc = sg_paraxial_mpfr_memo(sys, idx, 128, &p, d, sg_index_cache_parax(t->icache));
+        rc = sg_paraxial_mpfr_memo(sys, idx, t->wave, 128, &p, d,
+                                   sg_index_cache_parax(t->icache));
     if (rc == SG_OK && inf_object(t) && sys->field_type == SG_FIELD_OBJECT_HEIGHT)
         rc = sg_diag_set(d, SG_ENONPHYS,
                          "fields: object heights need an object at a finite distance "

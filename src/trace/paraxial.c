@@ -65,6 +65,7 @@ struct sg_parax_memo {
 typedef struct pctx {
     const sg_system *sys;
     mpfr_t *idx;
+    double um; /* the wavelength of idx, for a phase surface's power */
     mpfr_t *phi; /* power of each surface, made when a step needs it */
     char *phi_ok;
     mpfr_prec_t prec;
@@ -222,38 +223,42 @@ static int same_d(double a, double b)
 
 /* What a step reads beside the radius: a paraxial surface's focal length
  * (0 for every other type, whatever its unused field holds). */
-static double focal_key(const sg_surface *s)
+static double focal_key(const sg_system *sys, int j, double um)
 {
+    const sg_surface *s = &sys->surf[j];
+    /* A phase surface's power, at the wavelength the memo's set is for. */
+    if (sg_phase_type(s->type))
+        return sg_phase_power(sys, j, um);
     return s->type == SG_SURF_PARAXIAL ? s->focal_length : 0.0;
 }
 
 /* The first surface whose inputs differ from the set's. */
-static int set_first_change(const pm_set *st, const sg_system *sys, mpfr_t *idx)
+static int set_first_change(const pm_set *st, const sg_system *sys, mpfr_t *idx, double um)
 {
     int j, n = st->n < sys->nsurf ? st->n : sys->nsurf;
     for (j = 0; j < n; j++)
         if (!same_d(st->R[j], sys->surf[j].radius) ||
-            !same_d(st->R[st->n + j], focal_key(&sys->surf[j])) ||
+            !same_d(st->R[st->n + j], focal_key(sys, j, um)) ||
             !same_d(st->T[j], sys->surf[j].thickness) || !same_mp(st->ix[j], idx[j]))
             break;
     return j;
 }
 
 /* The last surface whose inputs differ from the set's (-1: none). */
-static int set_last_change(const pm_set *st, const sg_system *sys, mpfr_t *idx)
+static int set_last_change(const pm_set *st, const sg_system *sys, mpfr_t *idx, double um)
 {
     int j;
     for (j = st->n - 1; j >= 0; j--)
         if (!same_d(st->R[j], sys->surf[j].radius) ||
-            !same_d(st->R[st->n + j], focal_key(&sys->surf[j])) ||
+            !same_d(st->R[st->n + j], focal_key(sys, j, um)) ||
             !same_d(st->T[j], sys->surf[j].thickness) || !same_mp(st->ix[j], idx[j]))
             break;
     return j;
 }
 
 /* Picks the set that shares the most surfaces with sys, or makes one. */
-static pm_set *memo_pick(sg_parax_memo *pm, const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
-                         int *kf, int *kl)
+static pm_set *memo_pick(sg_parax_memo *pm, const sg_system *sys, mpfr_t *idx, double um,
+                         mpfr_prec_t prec, int *kf, int *kl)
 {
     pm_set *best = NULL, *old = NULL;
     int k, bk = 0;
@@ -262,7 +267,7 @@ static pm_set *memo_pick(sg_parax_memo *pm, const sg_system *sys, mpfr_t *idx, m
         if (!old || st->stamp < old->stamp)
             old = st;
         if (st->prec == prec && st->n == sys->nsurf) {
-            int f = set_first_change(st, sys, idx);
+            int f = set_first_change(st, sys, idx, um);
             if (!best || f > bk) {
                 best = st;
                 bk = f;
@@ -277,7 +282,7 @@ static pm_set *memo_pick(sg_parax_memo *pm, const sg_system *sys, mpfr_t *idx, m
     }
     best->stamp = ++pm->clock;
     *kf = bk;
-    *kl = bk < best->n ? set_last_change(best, sys, idx) : -1;
+    *kl = bk < best->n ? set_last_change(best, sys, idx, um) : -1;
     if (bk < best->n) {
         /* Step j reads surface j and the gap before it: a change on
          * surfaces kf..kl reaches steps kf..kl + 1, leaves j - 2. */
@@ -314,7 +319,7 @@ static void memo_done(pctx *c)
     /* Past kl the keys hold sys's bits already. */
     for (j = c->kf; j <= c->kl && j < st->n; j++) {
         st->R[j] = c->sys->surf[j].radius;
-        st->R[st->n + j] = focal_key(&c->sys->surf[j]);
+        st->R[st->n + j] = focal_key(c->sys, j, c->um);
         st->T[j] = c->sys->surf[j].thickness;
         mpfr_set(st->ix[j], c->idx[j], MPFR_RNDN);
     }
@@ -335,6 +340,9 @@ static mpfr_srcptr phi_of(pctx *c, int j)
             mpfr_sub(c->phi[j], c->idx[j], c->idx[j - 1], MPFR_RNDN);
             mpfr_div_d(c->phi[j], c->phi[j], R, MPFR_RNDN);
         }
+        /* A phase surface adds the power of its phase's v^2 term. */
+        if (j > 0 && sg_phase_type(c->sys->surf[j].type))
+            mpfr_add_d(c->phi[j], c->phi[j], sg_phase_power(c->sys, j, c->um), MPFR_RNDN);
         c->phi_ok[j] = 1;
     }
     return c->phi[j];
@@ -595,13 +603,13 @@ static void field_max(const sg_system *sys, mpfr_t out)
     mpfr_clear(t);
 }
 
-int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
+int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, int wave, mpfr_prec_t prec,
                      sg_parax_mp *o, sg_diag *d)
 {
-    return sg_paraxial_mpfr_memo(sys, idx, prec, o, d, NULL);
+    return sg_paraxial_mpfr_memo(sys, idx, wave, prec, o, d, NULL);
 }
 
-int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
+int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, int wave, mpfr_prec_t prec,
                           sg_parax_mp *o, sg_diag *d, sg_parax_memo *memo)
 {
     pctx c;
@@ -617,6 +625,7 @@ int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
 
     c.sys = sys;
     c.idx = idx;
+    c.um = wave >= 0 && wave < sys->nwave ? sys->wave[wave].um : 0.0;
     c.prec = prec;
     c.phi = calloc((size_t)n, sizeof *c.phi);
     c.phi_ok = calloc((size_t)n, 1);
@@ -626,7 +635,7 @@ int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
         return sg_diag_set(d, SG_ENOMEM, "out of memory");
     }
     c.memo = memo;
-    c.pm = memo ? memo_pick(memo, sys, idx, prec, &c.kf, &c.kl) : NULL;
+    c.pm = memo ? memo_pick(memo, sys, idx, c.um, prec, &c.kf, &c.kl) : NULL;
     if (c.pm) {
         /* The track's sums up to the first changed thickness stay. */
         pm_set *st = c.pm;
@@ -1000,7 +1009,7 @@ int sg_paraxial_compute_cached(const sg_system *sys, const sg_catalog *cat, int 
     rc = sg_indices_mpfr_cached(sys, cat, wave, idx, cache, d);
     if (rc == SG_OK) {
         sg_parax_mp_init(&p, 128);
-        rc = sg_paraxial_mpfr_memo(sys, idx, 128, &p, d, sg_index_cache_parax(cache));
+        rc = sg_paraxial_mpfr_memo(sys, idx, wave, 128, &p, d, sg_index_cache_parax(cache));
         if (rc == SG_OK)
             sg_parax_to_double(&p, out);
         sg_parax_mp_clear(&p);

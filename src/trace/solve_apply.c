@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "shape.h"
 #include "trace.h"
 
 /* Passes before the pupil-dependent solves are declared not to settle. */
@@ -115,7 +116,7 @@ static int marginal_launch(const sg_system *sys, mpfr_t *idx, mpfr_t y, mpfr_t w
     double T0 = sys->surf[0].thickness;
     sg_parax_mp_init(&p, SOLVE_PREC);
     mpfr_inits2(SOLVE_PREC, u0, t, (mpfr_ptr)0);
-    rc = sg_paraxial_mpfr(sys, idx, SOLVE_PREC, &p, d);
+    rc = sg_paraxial_mpfr(sys, idx, sys->primary_wave, SOLVE_PREC, &p, d);
     if (rc == SG_OK) {
         if (sys->telecentric && !inf_obj) {
             mpfr_set_ui(cy, 1, MPFR_RNDN);
@@ -217,15 +218,22 @@ static int pass(sg_system *sys, mpfr_t *idx, int need_ray, int *changed, sg_diag
         }
         if (need_ray && ((s->type != SG_SURF_COORDBRK && s->type != SG_SURF_PARAXIAL &&
                           isfinite(s->radius) && s->radius != 0.0) ||
-                         s->type == SG_SURF_PARAXIAL)) {
+                         s->type == SG_SURF_PARAXIAL || sg_phase_type(s->type))) {
             if (s->type == SG_SURF_PARAXIAL) {
                 /* An ideal lens's power is 1 / f (shape_paraxial.c). */
                 mpfr_set_d(a, s->focal_length, MPFR_RNDN);
                 mpfr_ui_div(a, 1, a, MPFR_RNDN);
-            } else {
+            } else if (isfinite(s->radius) && s->radius != 0.0) {
                 mpfr_sub(a, idx[i], idx[i - 1], MPFR_RNDN);
                 mpfr_div_d(a, a, s->radius, MPFR_RNDN);
+            } else {
+                mpfr_set_zero(a, 1);
             }
+            /* A phase surface's own power (shape_phase.c), at the primary
+             * wavelength the solves use. */
+            if (sg_phase_type(s->type))
+                mpfr_add_d(a, a, sg_phase_power(sys, i, sys->wave[sys->primary_wave].um),
+                           MPFR_RNDN);
             mpfr_mul(b, a, cy, MPFR_RNDN);
             mpfr_sub(cw, cw, b, MPFR_RNDN);
             mpfr_mul(a, a, y, MPFR_RNDN);

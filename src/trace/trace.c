@@ -418,6 +418,16 @@ static int prepare_one(sg_tracer *t, int i, mpfr_t *idx, mpfr_t q, mpfr_t tmp, s
         p->nb = fabs(t->nsigned[i - 1]);
         p->na = fabs(t->nsigned[i]);
     }
+    if (sg_phase_type(s->type) && i > 0) {
+        /* Its phase polynomial (shape_phase.c) in the shape slot a type
+         * without ops leaves free; m lambda / (2 pi) comes after. */
+        int rc = sg_phase_prepare(s, &t->shp[i], i, d);
+        if (rc != SG_OK)
+            return rc;
+        p->phase = &t->shp[i];
+        p->nb = fabs(t->nsigned[i - 1]);
+        p->na = fabs(t->nsigned[i]);
+    }
     if (s->type == SG_SURF_PARAXIAL && i > 0) {
         /* An ideal lens on its plane (shape_paraxial.c); validation
          * keeps it flat, off mirrors and with a focal length. */
@@ -457,9 +467,15 @@ static void ideal_conjugates(sg_tracer *t)
          * prepared-surface memo does not key. */
         if (p->grating)
             p->gk = s->grating_order * sys->wave[t->wave].um * s->grating_lines;
+        /* A phase surface's m lambda / (2 pi), lambda in lens units. */
+        if (p->phase)
+            p->pk = s->grating_order * (sys->wave[t->wave].um * 1e-3 / sg_lens_unit_mm(sys)) /
+                    (2.0 * 3.14159265358979323846);
         if (i > 1 || !isinf(sys->surf[0].thickness))
             y += sys->surf[i - 1].thickness * nu / nb;
         phi = p->ideal ? 1.0 / s->focal_length : (na - nb) * sg_surface_curvature(s);
+        if (p->phase)
+            phi += sg_phase_power(sys, i, sys->wave[t->wave].um);
         if (p->ideal) {
             if (s->opd_mode == 2.0) {
                 p->pz = INFINITY;
@@ -511,7 +527,7 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, const uint64_t *gen, sg_d
                     if (i + 1 < t->n)
                         m->ok[i + 1] = 0;
                 }
-                m->ok[i] = !p->shp;
+                m->ok[i] = !p->shp && !p->phase;
                 m->sp[i] = *p;
                 m->sp[i].xf = NULL;
                 m->has_xf[i] = p->xf != NULL;
@@ -647,7 +663,7 @@ static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_tra
             break;
         }
     for (i = 0; i < n; i++)
-        if (sg_shape_ops_of(sys->surf[i].type)) {
+        if (sg_shape_ops_of(sys->surf[i].type) || sg_phase_type(sys->surf[i].type)) {
             t->shp = calloc((size_t)n, sizeof *t->shp);
             if (!t->shp) {
                 sg_diag_set(d, SG_ENOMEM, "out of memory");

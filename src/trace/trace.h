@@ -30,13 +30,13 @@ void sg_parax_to_double(const sg_parax_mp *p, sg_paraxial *o);
 /* The axial object point's marginal slope for an object NA or cone angle
  * aperture (paraxial.c). */
 int sg_object_slope_mpfr(const sg_system *sys, const mpfr_t n0, mpfr_t out, sg_diag *d);
-int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
+int sg_paraxial_mpfr(const sg_system *sys, mpfr_t *idx, int wave, mpfr_prec_t prec,
                      sg_parax_mp *out, sg_diag *d);
 /* The same, resuming each y-nu trace after the last surface whose inputs
  * (radius, thickness, index, and the one before) and the trace's start
  * are those memo last saw: the same bits.  memo may be NULL. */
 typedef struct sg_parax_memo sg_parax_memo;
-int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, mpfr_prec_t prec,
+int sg_paraxial_mpfr_memo(const sg_system *sys, mpfr_t *idx, int wave, mpfr_prec_t prec,
                           sg_parax_mp *out, sg_diag *d, sg_parax_memo *memo);
 sg_parax_memo *sg_parax_memo_new(void);
 void sg_parax_memo_free(sg_parax_memo *memo);

@@ -386,6 +386,35 @@ void sg_classic_block(const sg_tracer *t, const double (*S)[3], const double (*D
                  64.0 * U53 * (s->mu.hi + 2.0);
             eO += 4.0 * U53 * fabs(s->gk) * (vd_abs(y) + 1.0);
             eD = vsel(vd_isnan(eD), vd_set(INFINITY), eD);
+        } else if (i < upto && vm_any(act) && s->phase) {
+            /* A phase surface (shape_phase.c), lane by lane; its
+             * direction errs as the grating's, with the kick's size and
+             * how far it moves with the point. */
+            vd len = vd_sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]), kick = vd_set(0.0),
+               turn = vd_set(0.0), big = vd_set(0.0);
+            double q = fabs(s->pk / s->na);
+            for (k = 0; k < nl; k++) {
+                double pk[3] = {x[k], y[k], oz[k]}, dk[3], ok = opl[k], ph, gr[2], h;
+                if (!act[k])
+                    continue;
+                sg_p2_d(s->phase, x[k], y[k], &ph, gr, &h);
+                kick[k] = q * (fabs(gr[0]) + fabs(gr[1]));
+                turn[k] = q * h;
+                big[k] = fabs(s->pk) * (fabs(ph) + 1.0);
+                for (j = 0; j < 3; j++)
+                    dk[j] = d[j][k] / len[k];
+                if (sg_phase_bend_d(s, pk, dk, &ok) != 0) {
+                    fail_lane(t, out, k, i, SG_EEVANESCENT, rc, &act);
+                    continue;
+                }
+                for (j = 0; j < 3; j++)
+                    d[j][k] = dk[j];
+                opl[k] = ok;
+            }
+            eD = 4.0 * (s->mu.hi + 1.0 + kick) * (eD + 2.0 * fmax(1.0, fabs(k1)) * fabs(c) * eP) +
+                 4.0 * turn * eP + 64.0 * U53 * (s->mu.hi + 2.0 + kick);
+            eO += 4.0 * U53 * big + 2.0 * kick * s->na * eP;
+            eD = vsel(vd_isnan(eD), vd_set(INFINITY), eD);
         } else if (i < upto && vm_any(act) && s->ideal) {
             /* A paraxial surface (shape_paraxial.c), lane by lane; its
              * direction errs as a refraction's would. */

@@ -589,6 +589,13 @@ static int bend(sg_tracer *tr, int i)
         return sg_grating_bend_mp(sp, s->mu, s->R, s->k1, P, D, m->opl, t + 9) ? SG_EEVANESCENT
                                                                               : SG_OK;
     }
+    if (sp->phase) {
+        /* A phase surface (shape_phase.c): its coefficients in s->mc. */
+        mpfr_ptr P[3] = {m->P.x, m->P.y, m->P.z}, D[3] = {m->D.x, m->D.y, m->D.z};
+        return sg_phase_bend_mp(sp, s->mc, s->mu, s->R, s->k1, P, D, m->opl, t + 9)
+                   ? SG_EEVANESCENT
+                   : SG_OK;
+    }
     if (sp->ideal) {
         /* A paraxial surface (shape_paraxial.c). */
         mpfr_ptr P[3] = {m->P.x, m->P.y, m->P.z}, D[3] = {m->D.x, m->D.y, m->D.z};
@@ -1581,13 +1588,17 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             else
                 mpfr_set_d(s->a[k], a, MPFR_RNDN);
         }
-        if (tr->sp[i].shp) {
+        if (tr->sp[i].shp || tr->sp[i].phase) {
             s->mc = malloc(SG_SHAPE_MPC * sizeof *s->mc);
             if (!s->mc) {
                 free(idx);
                 return sg_diag_set(d, SG_ENOMEM, "out of memory");
             }
-            sg_shape_mp_coefs(tr->sp[i].shp, s->mc, prec);
+            /* A shape's sag coefficients, or a phase surface's phase. */
+            if (tr->sp[i].shp)
+                sg_shape_mp_coefs(tr->sp[i].shp, s->mc, prec);
+            else
+                sg_phase_mp_coefs(tr->sp[i].phase, s->mc, prec);
         }
     }
     mpfr_const_pi(m->pi, MPFR_RNDN);
@@ -1623,7 +1634,8 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
             mpfr_set(m->s[i].nb, m->t[0], MPFR_RNDN);
         }
         sg_parax_mp_init(&p, prec);
-        rc = sg_paraxial_mpfr_memo(sys, idx, prec, &p, d, sg_index_cache_parax(tr->icache));
+        rc = sg_paraxial_mpfr_memo(sys, idx, tr->wave, prec, &p, d,
+                                   sg_index_cache_parax(tr->icache));
         if (rc == SG_OK) {
             if (isfinite(sys->surf[0].thickness))
                 mpfr_set_d(m->T0, sys->surf[0].thickness, MPFR_RNDN);

@@ -617,6 +617,19 @@ static void bend_v(const sg_sprep *s, sg_vray *r, vm *nonphys, vm *tir, vm *unsu
         }
         return;
     }
+    if (__builtin_expect(s->phase != NULL, 0)) {
+        /* A phase surface, rare: lane by lane (shape_phase.c). */
+        int k;
+        for (k = 0; k < SG_VL; k++) {
+            sg_pray one;
+            sg_vray_get(r, k, &one);
+            if (sg_phase_bend_dd(s, &one) != 0)
+                (*evan)[k] = -1;
+            else
+                sg_vray_put(r, k, &one);
+        }
+        return;
+    }
     if (__builtin_expect(s->ideal, 0)) {
         /* A paraxial surface, rare: lane by lane (shape_paraxial.c). */
         int k;

@@ -50,6 +50,22 @@ def main():
     tap.check(not bad, "sc_dblgauss2: all 12 automatic semi-diameters as OpticStudio stored them",
               "\n".join(bad))
 
+    # sc_vfac1.zmx (tests/data/zmx/README.md): Zemax's stop DIAM (line 116)
+    # is the top and bottom edge rays' figure, which --zemax gives; the whole edge,
+    # the default, reaches 1.3e-3 higher there.
+    vf = os.path.join(data, "zmx", "sc_vfac1.zmx")
+    four = {}
+    for flag in (["--zemax"], []):
+        p = subprocess.run([exe, "semidiam", vf, "--format", "json"] + flag,
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        four[bool(flag)] = {s["surface"]: s["auto"] for s in json.loads(p.stdout)["surfaces"]}
+    tap.check(abs(four[True][4] - 3.75135203426) <= 1e-12 * 3.76,
+              "sc_vfac1: --zemax gives the stop's DIAM as OpticStudio stored it",
+              "%.15g" % four[True][4])
+    tap.check(four[False][4] > 3.75135203426 + 1e-3,
+              "sc_vfac1: the whole edge reaches above Zemax's rays on the stop",
+              "%.15g" % four[False][4])
+
     path = os.path.join(data, "sc_dblgauss2.json")
     efl = json.loads(subprocess.run([exe, "paraxial", path, "--format", "json"],
                                     stdout=subprocess.PIPE, text=True).stdout)["efl"]
