@@ -692,7 +692,7 @@ SG_API int sg_configs_check(const sg_system *sys, const sg_catalog *cat, sg_diag
 SG_API char *sg_ray_stop_text(const sg_system *sys, int surf, int status, char *buf, size_t len);
 
 /* ------------------------------------------------------------------------
- * Parameters.  One table (src/param.c) describes every parameter of the
+ * Parameters.  One table (src/model/param.c) describes every parameter of the
  * system, its wavelengths, fields and surfaces: its JSON key, the editor's
  * column, its kind, limits, default and .zmx keyword, and where it lives in
  * the struct.  JSON reading and writing, validation, equality and the
@@ -724,7 +724,7 @@ typedef enum sg_param_kind {
 #define SG_PARAM_NESTED 0x40u    /* not a JSON key of its own: design_json.c reads and
                                   * writes it inside a nested object (a frame change) */
 #define SG_PARAM_SHAPE 0x80u     /* a shape's own: read only by the types whose record
-                                  * lists it (src/shape.h, sg_param_used) */
+                                  * lists it (src/shape/shape.h, sg_param_used) */
 
 typedef struct sg_param {
     const char *key;       /* JSON key, e.g. "semi_diameter" */
@@ -861,7 +861,7 @@ SG_API void sg_paddr_name(const sg_paddr *a, char *buf, size_t n);
 SG_API int sg_paddr_solve_target(const sg_paddr *a);
 
 /* ------------------------------------------------------------------------
- * The merit function and optimization (src/merit.c, src/optimize.c;
+ * The merit function and optimization (src/design/merit.c, src/design/optimize.c;
  * sagitta(1), OPTIMIZATION)
  * ------------------------------------------------------------------------ */
 /* Zemax's name of an operand type ("EFFL"), and the type of a name; -1
@@ -1238,7 +1238,7 @@ SG_API int sg_thermal_tces(const sg_system *sys, const sg_catalog *cat, sg_therm
 SG_API int sg_thermal(const sg_system *sys, const sg_catalog *cat, double temp, double pres,
                sg_system *out, sg_diag *d);
 
-/* Tolerancing (src/tolerance.c; sagitta(1), TOLERANCING).  Zemax's names
+/* Tolerancing (src/design/tolerance.c; sagitta(1), TOLERANCING).  Zemax's names
  * of the operand types ("TRAD"), and the type of a name (-1: unknown). */
 SG_API const char *sg_tol_name(sg_tol_type t);
 SG_API int sg_tol_parse(const char *name);

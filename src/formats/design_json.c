@@ -1040,7 +1040,7 @@ static int read_surface(jctx *c, const cJSON *v, int i, int n, sg_surface *s, in
 /* The merit function: {"default": {"criterion": "spot", "reference":
  * "centroid" | "chief", "rings": N, "arms": M}, "operands": [{"type":
  * "EFFL", "wave": 2, "target": T, "weight": W}, ...]} (sagitta-design(5),
- * MERIT FUNCTION); an operand's other keys are its type's (merit.h). */
+ * MERIT FUNCTION); an operand's other keys are its type's (design.h). */
 static int get_merit(jctx *c, const cJSON *v, sg_merit *m)
 {
     enum { M_DEFAULT, M_OPERANDS, M_N };
