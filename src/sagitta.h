@@ -1376,7 +1376,9 @@ typedef struct sg_tracer sg_tracer;
  * sys and opts; cat must outlive it. */
 SG_API int sg_tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
                    sg_tracer **out, sg_diag *d);
-/* sg_tracer_open returning the tracer, or NULL (the code in d). */
+/* sg_tracer_open returning the tracer, or NULL (the code in d, when
+ * given): kept for the library's ABI; new code calls sg_tracer_open,
+ * which returns the code even without a diagnostic. */
 SG_API sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
                          const sg_trace_opts *opts, sg_diag *d);
 
@@ -1399,7 +1401,9 @@ SG_API void sg_index_cache_stats(const sg_index_cache *c, unsigned long *hits,
  * whose start and surfaces up to the first changed one are as before
  * resumes there, with the same bits.  How many have resumed: */
 SG_API unsigned long sg_index_cache_resumes(const sg_index_cache *c);
-/* sg_tracer_new and sg_paraxial_compute with a cache (NULL: none).  With
+/* sg_tracer_new and sg_paraxial_compute with a cache (NULL: none); NULL
+ * on failure with the code in d, when given (the engine's own callers use
+ * a form that returns the code).  With
  * a cache, sg_tracer_new_cached also leaves the validation's warnings (a
  * glass used beyond its range) in d, so its caller need not validate
  * the system a second time for them. */
@@ -1426,7 +1430,8 @@ SG_API void sg_tracer_free(sg_tracer *t);
  * computes the same way, so it gives the bits sg_tracer_new would, and
  * prepares only what the new method adds (glass indices from cache when
  * given).  t must outlive it.  A classic tracer on either side makes a
- * new tracer from t's system instead.  NULL on failure, with d set. */
+ * new tracer from t's system instead.  NULL on failure, with the code in
+ * d when given (the engine's own callers use a form that returns it). */
 SG_API sg_tracer *sg_tracer_new_method(const sg_tracer *t, sg_method method, int mpfr_bits,
                                 sg_index_cache *cache, sg_diag *d);
 typedef struct sg_mpfr_memo sg_mpfr_memo;
@@ -1490,7 +1495,8 @@ SG_API int sg_trace_batch(const sg_system *sys, const sg_catalog *cat,
  * bounded memory without preparing the system again. */
 typedef struct sg_batch sg_batch;
 
-/* nthreads as in sg_trace_batch.  NULL on failure, with d filled. */
+/* nthreads as in sg_trace_batch.  NULL on failure, with the code in d when
+ * given (the engine's own callers use a form that returns it). */
 SG_API sg_batch *sg_batch_new(const sg_system *sys, const sg_catalog *cat,
                        const sg_trace_opts *opts, int nthreads, sg_diag *d);
 SG_API void sg_batch_free(sg_batch *b);
