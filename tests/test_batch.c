@@ -396,7 +396,7 @@ static void analyses_keep_codes(void **state)
     wo.trace = bad;
     wo.field = 0;
     assert_int_equal(sg_wavefront_trace(sys, cat, &wo, &wf, NULL, NULL), SG_ERANGE);
-    assert_int_equal(sg_fieldcurve(sys, cat, &bad, 3, 0.0, fc, NULL), SG_ERANGE);
+    assert_int_equal(sg_fieldcurve(sys, cat, &bad, 3, 0.01, fc, NULL), SG_ERANGE);
     sg_semidiam_opts_init(&sdo);
     sdo.trace = bad;
     assert_int_equal(sg_semi_diameters(sys, cat, &sdo, sd, NULL), SG_ERANGE);
