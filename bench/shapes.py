@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""shapes.py - writes designs whose surfaces are the shapes of src/shape.h,
+"""shapes.py - writes designs whose surfaces are the shapes of src/shape/shape.h,
 for timing their traces.
 
     python3 bench/shapes.py DIR

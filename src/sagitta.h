@@ -705,7 +705,7 @@ SG_API sg_configs *sg_configs_switch(const sg_system *sys, int k);
 SG_API char *sg_ray_stop_text(const sg_system *sys, int surf, int status, char *buf, size_t len);
 
 /* ------------------------------------------------------------------------
- * Parameters.  One table (src/param.c) describes every parameter of the
+ * Parameters.  One table (src/model/param.c) describes every parameter of the
  * system, its wavelengths, fields and surfaces: its JSON key, the editor's
  * column, its kind, limits, default and .zmx keyword, and where it lives in
  * the struct.  JSON reading and writing, validation, equality and the
@@ -737,7 +737,7 @@ typedef enum sg_param_kind {
 #define SG_PARAM_NESTED 0x40u    /* not a JSON key of its own: design_json.c reads and
                                   * writes it inside a nested object (a frame change) */
 #define SG_PARAM_SHAPE 0x80u     /* a shape's own: read only by the types whose record
-                                  * lists it (src/shape.h, sg_param_used) */
+                                  * lists it (src/shape/shape.h, sg_param_used) */
 
 typedef struct sg_param {
     const char *key;       /* JSON key, e.g. "semi_diameter" */
@@ -874,7 +874,7 @@ SG_API void sg_paddr_name(const sg_paddr *a, char *buf, size_t n);
 SG_API int sg_paddr_solve_target(const sg_paddr *a);
 
 /* ------------------------------------------------------------------------
- * The merit function and optimization (src/merit.c, src/optimize.c;
+ * The merit function and optimization (src/design/merit.c, src/design/optimize.c;
  * sagitta(1), OPTIMIZATION)
  * ------------------------------------------------------------------------ */
 /* Zemax's name of an operand type ("EFFL"), and the type of a name; -1
@@ -1256,7 +1256,7 @@ SG_API int sg_thermal_tces(const sg_system *sys, const sg_catalog *cat, sg_therm
 SG_API int sg_thermal(const sg_system *sys, const sg_catalog *cat, double temp, double pres,
                sg_system *out, sg_diag *d);
 
-/* Tolerancing (src/tolerance.c; sagitta(1), TOLERANCING).  Zemax's names
+/* Tolerancing (src/design/tolerance.c; sagitta(1), TOLERANCING).  Zemax's names
  * of the operand types ("TRAD"), and the type of a name (-1: unknown). */
 SG_API const char *sg_tol_name(sg_tol_type t);
 SG_API int sg_tol_parse(const char *name);
@@ -1394,7 +1394,9 @@ typedef struct sg_tracer sg_tracer;
  * sys and opts; cat must outlive it. */
 SG_API int sg_tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
                    sg_tracer **out, sg_diag *d);
-/* sg_tracer_open returning the tracer, or NULL (the code in d). */
+/* sg_tracer_open returning the tracer, or NULL (the code in d, when
+ * given): kept for the library's ABI; new code calls sg_tracer_open,
+ * which returns the code even without a diagnostic. */
 SG_API sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
                          const sg_trace_opts *opts, sg_diag *d);
 
@@ -1417,7 +1419,9 @@ SG_API void sg_index_cache_stats(const sg_index_cache *c, unsigned long *hits,
  * whose start and surfaces up to the first changed one are as before
  * resumes there, with the same bits.  How many have resumed: */
 SG_API unsigned long sg_index_cache_resumes(const sg_index_cache *c);
-/* sg_tracer_new and sg_paraxial_compute with a cache (NULL: none).  With
+/* sg_tracer_new and sg_paraxial_compute with a cache (NULL: none); NULL
+ * on failure with the code in d, when given (the engine's own callers use
+ * a form that returns the code).  With
  * a cache, sg_tracer_new_cached also leaves the validation's warnings (a
  * glass used beyond its range) in d, so its caller need not validate
  * the system a second time for them. */
@@ -1444,7 +1448,8 @@ SG_API void sg_tracer_free(sg_tracer *t);
  * computes the same way, so it gives the bits sg_tracer_new would, and
  * prepares only what the new method adds (glass indices from cache when
  * given).  t must outlive it.  A classic tracer on either side makes a
- * new tracer from t's system instead.  NULL on failure, with d set. */
+ * new tracer from t's system instead.  NULL on failure, with the code in
+ * d when given (the engine's own callers use a form that returns it). */
 SG_API sg_tracer *sg_tracer_new_method(const sg_tracer *t, sg_method method, int mpfr_bits,
                                 sg_index_cache *cache, sg_diag *d);
 typedef struct sg_mpfr_memo sg_mpfr_memo;
@@ -1508,7 +1513,8 @@ SG_API int sg_trace_batch(const sg_system *sys, const sg_catalog *cat,
  * bounded memory without preparing the system again. */
 typedef struct sg_batch sg_batch;
 
-/* nthreads as in sg_trace_batch.  NULL on failure, with d filled. */
+/* nthreads as in sg_trace_batch.  NULL on failure, with the code in d when
+ * given (the engine's own callers use a form that returns it). */
 SG_API sg_batch *sg_batch_new(const sg_system *sys, const sg_catalog *cat,
                        const sg_trace_opts *opts, int nthreads, sg_diag *d);
 SG_API void sg_batch_free(sg_batch *b);

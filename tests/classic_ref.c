@@ -1,7 +1,7 @@
 /*
  * classic_ref.c - the classic method as it was before it became a vector
- * kernel (src/trace_classic_vec.c): the scalar, one-ray trace of
- * src/trace.c at commit 84d7042, copied unchanged but for its name, so
+ * kernel (src/trace/trace_classic_vec.c): the scalar, one-ray trace of
+ * src/trace.c (now src/trace/trace.c) at commit 84d7042, copied unchanged but for its name, so
  * that test_classic_vec can check the kernel against it bit for bit.
  */
 #include <math.h>

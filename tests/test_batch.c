@@ -350,6 +350,80 @@ static void open_returns_codes(void **state)
     sg_system_free(sys);
 }
 
+/* A tracer that cannot be made fails every analysis with the tracer's own
+ * code, SG_ERANGE for a precision outside 53..100000 bits (sagitta.h,
+ * sg_tracer_open), even without a diagnostic: a code rebuilt from the
+ * diagnostic read SG_ENOMEM there.  The internal constructors that share
+ * a model or make a batch return it too. */
+static void analyses_keep_codes(void **state)
+{
+    sg_system *sys = tu_example("singlet.json");
+    sg_catalog *cat = tu_catalog();
+    sg_trace_opts bad;
+    sg_spot_opts so;
+    sg_fan_opts fo;
+    sg_wavefront_opts wo;
+    sg_semidiam_opts sdo;
+    sg_setvig_opts vo;
+    sg_psf_opts po;
+    sg_spot spot;
+    sg_fan fan;
+    sg_wavefront wf;
+    sg_fieldcurve_pt fc[3];
+    sg_vigfactors *vf = calloc((size_t)sys->nfield, sizeof *vf);
+    double *sd = calloc((size_t)sys->nsurf, sizeof *sd);
+    sg_psf psf;
+    sg_tracer *t, *m = NULL;
+    sg_batch *b = (sg_batch *)&bad;
+    (void)state;
+    assert_non_null(vf);
+    assert_non_null(sd);
+    sg_trace_opts_init(&bad);
+    bad.mpfr_bits = 7;
+    memset(&spot, 0, sizeof spot);
+    memset(&fan, 0, sizeof fan);
+    memset(&wf, 0, sizeof wf);
+    memset(&psf, 0, sizeof psf);
+    sg_spot_opts_init(&so);
+    so.trace = bad;
+    assert_int_equal(sg_spot_compute(sys, cat, &so, &spot, NULL), SG_ERANGE);
+    sg_fan_opts_init(&fo);
+    fo.trace = bad;
+    assert_int_equal(sg_fan_compute(sys, cat, &fo, &fan, NULL), SG_ERANGE);
+    fo.opd = 1;
+    assert_int_equal(sg_fan_compute(sys, cat, &fo, &fan, NULL), SG_ERANGE);
+    sg_wavefront_opts_init(&wo);
+    wo.trace = bad;
+    wo.field = 0;
+    assert_int_equal(sg_wavefront_trace(sys, cat, &wo, &wf, NULL, NULL), SG_ERANGE);
+    assert_int_equal(sg_fieldcurve(sys, cat, &bad, 3, 0.01, fc, NULL), SG_ERANGE);
+    sg_semidiam_opts_init(&sdo);
+    sdo.trace = bad;
+    assert_int_equal(sg_semi_diameters(sys, cat, &sdo, sd, NULL), SG_ERANGE);
+    sg_setvig_opts_init(&vo);
+    vo.trace = bad;
+    assert_int_equal(sg_set_vignetting(sys, cat, &vo, vf, NULL), SG_ERANGE);
+    sg_psf_opts_init(&po);
+    po.trace = bad;
+    po.method = SG_PSF_HUYGENS;
+    assert_int_equal(sg_psf_compute(sys, cat, &po, &psf, NULL), SG_ERANGE);
+    assert_int_equal(sg_batch_open(sys, cat, &bad, 2, &b, NULL), SG_ERANGE);
+    assert_null(b);
+    assert_int_equal(sg_tracer_open(sys, cat, NULL, &m, NULL), SG_OK);
+    t = m;
+    assert_int_equal(sg_tracer_open_method(m, SG_METHOD_MPFR, 7, NULL, &t, NULL), SG_ERANGE);
+    assert_null(t);
+    assert_int_equal(sg_tracer_open_method(m, SG_METHOD_MPFR, 128, NULL, &t, NULL), SG_OK);
+    assert_non_null(t);
+    assert_null(sg_tracer_new_method(m, SG_METHOD_MPFR, 7, NULL, NULL));
+    sg_tracer_free(t);
+    sg_tracer_free(m);
+    free(vf);
+    free(sd);
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
 /* A fork shares the prepared model (the same arrays, not copies), keeps
  * the options as given, and traces every ray to the same bits as the
  * tracer it came from, in every method, at another wavelength than the
@@ -530,6 +604,7 @@ int main(void)
         cmocka_unit_test(clip_edge),
         cmocka_unit_test(error_code_without_diag),
         cmocka_unit_test(open_returns_codes),
+        cmocka_unit_test(analyses_keep_codes),
         cmocka_unit_test(fork_shares_model),
         cmocka_unit_test(any_order),
     };

@@ -1,6 +1,6 @@
 /*
  * test_classic_vec.c - the classic method's vector kernel
- * (src/trace_classic_vec.c) gives, lane by lane, the bits of the scalar
+ * (src/trace/trace_classic_vec.c) gives, lane by lane, the bits of the scalar
  * one-ray trace it replaced (tests/classic_ref.c, the code of before), and
  * a ray alone the bits it gets inside a batch.
  *

@@ -2,7 +2,7 @@
  * test_dd.c - the double-double sums, reciprocal, quotient and square root
  * of the precise trace against exact values in MPFR.
  *
- * The error analysis in src/trace_vec.c rests on two claims: the accurate
+ * The error analysis in src/trace/trace_vec.c rests on two claims: the accurate
  * sum vdd_add errs by at most DD_U |a + b|, and the sloppy sum vdd_add_m
  * by at most DD_U (|a| + |b|).  The truth here is the exact sum of the four
  * doubles, which 600 bits hold for the exponents drawn.  The cases lean on

@@ -1,6 +1,6 @@
 /*
  * test_dgrating.c - Zemax's diffraction grating (TYPE DGRATING), the ruled
- * plane or conic of src/shape_dgrating.c.
+ * plane or conic of src/shape/shape_dgrating.c.
  *
  * Expected values, none from sagitta: the grating equation n' sin(theta')
  * = n sin(theta) + m lambda T in the plane of the grating vector, with the

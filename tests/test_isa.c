@@ -1,13 +1,13 @@
 /*
  * test_isa.c - in a build for no one processor, the three instruction-set
- * variants of the vector trace (src/isa.h, src/dispatch.c) give the same
+ * variants of the vector trace (src/num/isa.h, src/trace/dispatch.c) give the same
  * bits.
  *
  * The reference is the baseline (SSE2) variant; the AVX2 and AVX-512 ones
  * are compared with it on every bundled example, for the precise and the
  * classic method, on a grid of rays across field and pupil that includes
  * pupil corners which fail, and on the Cassegrain with its primary made
- * each shape of src/shape.h in turn; the classic kernel alone on hard
+ * each shape of src/shape/shape.h in turn; the classic kernel alone on hard
  * start points and directions; and the OPD of runs of rays (opd_vec.c)
  * against sg_opd_of_ray, the scalar form, with image rows made hard.  A
  * variant this processor cannot run is
@@ -22,7 +22,7 @@
 #include "testutil.h"
 #include "trace_int.h"
 
-/* The per-variant batch cores (batch.c, named by src/isa.h). */
+/* The per-variant batch cores (batch.c, named by src/num/isa.h). */
 typedef int run_fn(sg_tracer *const *t, int nt, sg_ray_kind kind, const sg_ray_in *rays,
                    size_t nray, const int *sel, int nsel, sg_ray_surface *scratch,
                    sg_ray_surface *out, int *status);
@@ -163,7 +163,7 @@ static void same_bits(void **state)
 }
 
 /* The shapes beyond the even asphere, whose double-double sags the
- * vector trace evaluates on all lanes at once (src/shape_vdd.h): the
+ * vector trace evaluates on all lanes at once (src/shape/shape_vdd.h): the
  * Cassegrain's primary made each of them in turn, with terms that move
  * the sag by micrometres to a millimetre at its rim. */
 static void shapes_same_bits(void **state)
@@ -215,7 +215,7 @@ static void shapes_same_bits(void **state)
 }
 
 /* The classic kernel of each variant (trace_classic_vec.c, named by
- * src/isa.h) on start points and directions, hard ones among them, in
+ * src/num/isa.h) on start points and directions, hard ones among them, in
  * blocks of up to four lanes (every variant has at least four). */
 typedef void classic_fn(const sg_tracer *t, const double (*S)[3], const double (*D)[3],
                         sg_ray_surface *const *out, int nl, int upto, int *rc);
@@ -297,7 +297,7 @@ static void classic_blocks(void **state)
     sg_catalog_free(cat);
 }
 
-/* The OPD on lanes (opd_vec.c, named by src/isa.h): every variant, the
+/* The OPD on lanes (opd_vec.c, named by src/num/isa.h): every variant, the
  * baseline too, against sg_opd_of_ray on each example's pupil grid
  * through and beyond the rim, in runs of 1 to 9 rays, and on the same
  * rows with a coordinate made huge, tiny, subnormal, zero or NaN. */

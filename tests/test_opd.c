@@ -7,7 +7,7 @@
  *    through its own conic intersection, reflection and refraction, from
  *    the object point (or the start plane) through the precise method's
  *    double point on surface 1; it builds the reference sphere and the
- *    path differences itself.  Nothing of src/opd.c or the tracers'
+ *    path differences itself.  Nothing of src/trace/opd.c or the tracers'
  *    optical paths is used.  The plain double OPD (the classic method) is
  *    shown to err by about 1e-4 waves on the Cassegrain.
  * 2. A paraboloid mirror on axis with the object at infinity, and an

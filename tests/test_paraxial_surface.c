@@ -1,6 +1,6 @@
 /*
  * test_paraxial_surface.c - Zemax's paraxial surface (TYPE PARAXIAL), the
- * ideal thin lens of src/shape_paraxial.c.
+ * ideal thin lens of src/shape/shape_paraxial.c.
  *
  * Expected values, none from sagitta: the thin-lens (Gauss) equation n' /
  * s' + n / s = 1 / f for the image distance and m = -(n s') / (n' s) for

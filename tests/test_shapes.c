@@ -1,6 +1,6 @@
 /*
  * test_shapes.c - the conformance test of every surface shape behind the
- * surface-kernel interface (src/shape.h), against each shape's definition
+ * surface-kernel interface (src/shape/shape.h), against each shape's definition
  * written here again in 512-bit MPFR.
  *
  * The reference follows the definitions as sagitta-design(5) states them,

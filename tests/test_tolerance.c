@@ -1,5 +1,5 @@
 /*
- * test_tolerance.c - tolerancing (src/tolerance.c): the "tolerances"
+ * test_tolerance.c - tolerancing (src/design/tolerance.c): the "tolerances"
  * object read, checked and written back; each operand's perturbed design
  * against the same design changed by hand (values, surface tilts and
  * decenters, and an element's coordinate breaks, whose global vertices are

@@ -10,7 +10,7 @@
 #  3. the portable build (-Dnative=false, the one valgrind runs, as a
 #     distribution would build it): the whole test suite, which on x86-64
 #     includes tests/test_isa, since such a build carries the vector trace
-#     for three instruction sets (src/isa.h) and the variants this
+#     for three instruction sets (src/num/isa.h) and the variants this
 #     processor can run must give the baseline's bits.
 #
 # Usage: tools/ci-extra.sh [--asan-dir DIR] [--plain-dir DIR] [--jobs N]

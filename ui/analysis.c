@@ -1,6 +1,6 @@
 /*
  * analysis.c - "sagitta spot", "sagitta fan" and "sagitta layout": an
- * analysis of the engine (src/spot.c, fan.c, layout.c) written as text
+ * analysis of the engine (src/analysis/spot.c, fan.c, layout.c) written as text
  * (with a picture on a terminal), CSV, JSON, or a PNG, SVG or PDF picture.
  * Every output goes through outfile, so a file appears whole or not at all.
  */

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "analysis_int.h"
+#include "trace.h"
 
 void sg_fan_opts_init(sg_fan_opts *o)
 {
@@ -287,11 +288,8 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
         sg_trace_opts to = o->trace;
         w = order[k];
         to.wave = waves[w];
-        b = sg_batch_new(sys, cat, &to, o->nthreads, d);
-        if (!b) {
-            rc = d && d->code ? d->code : SG_ENOMEM;
+        if ((rc = sg_batch_open(sys, cat, &to, o->nthreads, &b, d)) != SG_OK)
             goto done;
-        }
         if ((rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, nray, &last, 1, rows, st, d)) !=
             SG_OK)
             goto done;
@@ -314,10 +312,8 @@ int sg_fan_compute(const sg_system *sys, const sg_catalog *cat, const sg_fan_opt
             /* A tracer at this wavelength, for the OPD in its waves; the
              * spheres are the primary wavelength's whichever traces them. */
             sg_tracer_free(tw);
-            if (!(tw = sg_tracer_new(sys, cat, &to, d))) {
-                rc = d && d->code ? d->code : SG_ENOMEM;
+            if ((rc = sg_tracer_open(sys, cat, &to, &tw, d)) != SG_OK)
                 goto done;
-            }
             if (k == 0)
                 for (f = 0; f < nf; f++)
                     if ((rc = sg_opd_reference(tw, out->hx[f], out->hy[f], &ref[f], d)) !=

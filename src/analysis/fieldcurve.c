@@ -96,9 +96,8 @@ int sg_fieldcurve_recipe(const sg_system *sys, const sg_catalog *cat,
                            "fieldcurve: fields given as real image height have no paraxial "
                            "reference for distortion; use angle, object height or "
                            "paraxial image height");
-    t = sg_tracer_new(sys, cat, opts, d);
-    if (!t)
-        return d && d->code != SG_OK ? d->code : SG_ENOMEM;
+    if ((rc = sg_tracer_open(sys, cat, opts, &t, d)) != SG_OK)
+        return rc;
     wave = opts && opts->wave >= 0 ? opts->wave : sys->primary_wave;
     rc = sg_paraxial_compute(sys, cat, wave, &p, d);
     if (rc != SG_OK) {

@@ -25,6 +25,7 @@
 #include <unistd.h>
 
 #include "analysis_int.h"
+#include "trace.h"
 
 #define HY_TWO_PI 6.283185307179586476925286766559
 
@@ -70,8 +71,8 @@ static int hy_trace(const sg_system *sys, const sg_catalog *cat, const sg_psf_op
     memset(h, 0, sizeof *h);
     sg_field_normalized(sys, o->field, &hx, &hy);
     to.wave = wave;
-    if (!(t = sg_tracer_new(sys, cat, &to, d)))
-        return d && d->code ? d->code : SG_ENOMEM;
+    if ((rc = sg_tracer_open(sys, cat, &to, &t, d)) != SG_OK)
+        return rc;
     if ((rc = sg_opd_reference(t, hx, hy, &ref, d)) != SG_OK)
         goto done;
     if (ref.status != SG_OK) {
@@ -105,10 +106,8 @@ static int hy_trace(const sg_system *sys, const sg_catalog *cat, const sg_psf_op
             rays[nr].v[4] = rays[nr].v[5] = 0.0;
             nr++;
         }
-    if (!(b = sg_batch_new(sys, cat, &to, o->nthreads, d))) {
-        rc = d && d->code ? d->code : SG_ENOMEM;
+    if ((rc = sg_batch_open(sys, cat, &to, o->nthreads, &b, d)) != SG_OK)
         goto done;
-    }
     if ((rc = sg_batch_trace(b, SG_RAYS_NORMALIZED, rays, nr, &last, 1, rows, st, d)) != SG_OK)
         goto done;
     sg_opd_of_rays(t, &ref, rows, 1, nr, res);

@@ -108,10 +108,8 @@ int sg_semi_diameters(const sg_system *sys, const sg_catalog *cat, const sg_semi
         sg_trace_opts to = o->trace;
         sg_tracer *t;
         to.wave = w;
-        if (!(t = sg_tracer_new(sys, cat, &to, d))) {
-            rc = d && d->code != SG_OK ? d->code : SG_ENOMEM;
+        if ((rc = sg_tracer_open(sys, cat, &to, &t, d)) != SG_OK)
             goto done;
-        }
         for (f = 0; f < sys->nfield; f++) {
             double hx, hy;
             sg_field_normalized(sys, f, &hx, &hy);

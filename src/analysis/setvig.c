@@ -122,10 +122,8 @@ int sg_set_vignetting(const sg_system *sys, const sg_catalog *cat, const sg_setv
         rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
         goto done;
     }
-    if (!(t = sg_tracer_new(plain, cat, &to, d))) {
-        rc = d && d->code != SG_OK ? d->code : SG_ENOMEM;
+    if ((rc = sg_tracer_open(plain, cat, &to, &t, d)) != SG_OK)
         goto done;
-    }
     for (f = 0; f < plain->nfield; f++) {
         double hx, hy, sx = 0.0, sy = 0.0, cx, cy, top, bot, rgt, lft, w;
         long cnt = 0;

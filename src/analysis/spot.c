@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "analysis_int.h"
+#include "trace.h"
 
 int sg_an_select(int sel, int n, const char *what, int *idx, sg_diag *d)
 {
@@ -257,11 +258,8 @@ int sg_spot_compute(const sg_system *sys, const sg_catalog *cat, const sg_spot_o
         sg_trace_opts to = o->trace;
         w = order[k];
         to.wave = waves[w];
-        b = sg_batch_new(sys, cat, &to, o->nthreads, d);
-        if (!b) {
-            rc = d && d->code ? d->code : SG_ENOMEM;
+        if ((rc = sg_batch_open(sys, cat, &to, o->nthreads, &b, d)) != SG_OK)
             goto done;
-        }
         /* Chief rays of every field at this wavelength, traced past the
          * apertures and obscurations as Zemax's reference is: a central
          * obscuration stops the pupil's centre, not the measure. */

@@ -13,6 +13,7 @@
 #include <string.h>
 
 #include "analysis_int.h"
+#include "trace.h"
 
 void sg_wavefront_free(sg_wavefront *w)
 {
@@ -156,8 +157,8 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
     to = o->trace;
     if (to.wave < 0)
         to.wave = sys->primary_wave;
-    if (!(t = sg_tracer_new(sys, cat, &to, d)))
-        return d && d->code ? d->code : SG_ENOMEM;
+    if ((rc = sg_tracer_open(sys, cat, &to, &t, d)) != SG_OK)
+        return rc;
     if ((rc = sg_opd_reference(t, hx, hy, &ref, d)) != SG_OK)
         goto done;
     if (ref.status != SG_OK) {
@@ -210,10 +211,8 @@ int sg_wavefront_trace(const sg_system *sys, const sg_catalog *cat,
         rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
         goto done;
     }
-    if (!(b = sg_batch_new(sys, cat, &to, o->nthreads, d))) {
-        rc = d && d->code ? d->code : SG_ENOMEM;
+    if ((rc = sg_batch_open(sys, cat, &to, o->nthreads, &b, d)) != SG_OK)
         goto done;
-    }
     last = sys->nsurf - 1;
     /* The grid's points inside the pupil, in blocks, straight into the
      * map; the same pupil coordinates as sg_wavefront_compute. */

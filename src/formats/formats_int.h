@@ -11,6 +11,10 @@
 
 #include "model.h"
 
+/* Writes x in the shortest of %.15g, %.16g and %.17g that reads back to
+ * the same bits, with '.' whatever the locale (json_write.c). */
+void sg_json_fmt_double(char out[40], double x);
+
 /* Reads a whole file of at most max bytes into *out (free() it). */
 int sg_read_file(const char *path, size_t max, char **out, size_t *len, sg_diag *d);
 

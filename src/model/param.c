@@ -517,7 +517,7 @@ int sg_system_equal(const sg_system *a, const sg_system *b)
     return 1;
 }
 
-/* The record of the type (src/shape.h) lists the parameters it reads. */
+/* The record of the type (src/shape/shape.h) lists the parameters it reads. */
 int sg_param_used(const sg_param *p, int k, int type)
 {
     const sg_shape_type *t = sg_shape_type_of(type);

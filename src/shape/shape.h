@@ -73,7 +73,7 @@ typedef struct sg_shape_ops {
 } sg_shape_ops;
 
 /* A parameter a surface type reads beyond those every surface has (the
- * surface table's rows marked SG_PARAM_SHAPE, src/param.c): its key, how
+ * surface table's rows marked SG_PARAM_SHAPE, src/model/param.c): its key, how
  * many of its elements the type reads (0: all), and its thermal rule,
  * the power of lens units its element k is in, p0 + pk k (sg_thermal
  * scales it by s^(p0 + pk k): 1 multiplies by s, 0 keeps it, a negative

@@ -27,15 +27,16 @@ void sg_batch_free(sg_batch *b)
     free(b);
 }
 
-sg_batch *sg_batch_new(const sg_system *sys, const sg_catalog *cat,
-                       const sg_trace_opts *opts, int nthreads, sg_diag *d)
+int sg_batch_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
+                  int nthreads, sg_batch **out, sg_diag *d)
 {
     sg_batch *b;
     int k, nt = nthreads;
-    if (!sys) {
-        sg_diag_set(d, SG_EINVAL, "batch: no system");
-        return NULL;
-    }
+    if (!out)
+        return sg_diag_set(d, SG_EINVAL, "batch: nowhere to put it");
+    *out = NULL;
+    if (!sys)
+        return sg_diag_set(d, SG_EINVAL, "batch: no system");
     if (nt <= 0) {
         long c = sysconf(_SC_NPROCESSORS_ONLN);
         nt = c > 0 ? (int)c : 1;
@@ -47,8 +48,7 @@ sg_batch *sg_batch_new(const sg_system *sys, const sg_catalog *cat,
         b->t = calloc((size_t)nt, sizeof *b->t);
     if (!b || !b->t) {
         sg_batch_free(b);
-        sg_diag_set(d, SG_ENOMEM, "out of memory");
-        return NULL;
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
     }
     b->nt = nt;
     /* One tracer prepares the model (glass indices and paraxial data in
@@ -61,10 +61,21 @@ sg_batch *sg_batch_new(const sg_system *sys, const sg_catalog *cat,
             if (d && d->code == SG_OK)
                 sg_diag_set(d, rc, "%s", sg_strerror(rc));
             sg_batch_free(b);
-            return NULL;
+            return rc;
         }
     }
     b->nsurf = b->t[0]->n;
+    *out = b;
+    return SG_OK;
+}
+
+/* sg_batch_open with the code dropped (d, when given, holds it): the
+ * public header's, kept for the library's ABI. */
+sg_batch *sg_batch_new(const sg_system *sys, const sg_catalog *cat,
+                       const sg_trace_opts *opts, int nthreads, sg_diag *d)
+{
+    sg_batch *b = NULL;
+    (void)sg_batch_open(sys, cat, opts, nthreads, &b, d);
     return b;
 }
 
@@ -142,9 +153,8 @@ int sg_trace_batch(const sg_system *sys, const sg_catalog *cat, const sg_trace_o
     }
     if ((size_t)nthreads > (nray + 63) / 64)
         nthreads = (int)((nray + 63) / 64);
-    b = sg_batch_new(sys, cat, opts, nthreads, d);
-    if (!b)
-        return d->code ? d->code : SG_ENOMEM;
+    if ((rc = sg_batch_open(sys, cat, opts, nthreads, &b, d)) != SG_OK)
+        return rc;
     rc = sg_batch_trace(b, kind, rays, nray, NULL, 0, out, status, d);
     sg_batch_free(b);
     return rc;

@@ -552,38 +552,42 @@ static int prepare_surfaces(sg_tracer *t, mpfr_t *idx, const uint64_t *gen, sg_d
     return rc;
 }
 
+/* The public header's constructors that return the tracer, kept for the
+ * library's ABI: each is its code-returning form with the code dropped
+ * (d, when given, still holds it). */
 sg_tracer *sg_tracer_new(const sg_system *sys, const sg_catalog *cat,
                          const sg_trace_opts *opts, sg_diag *d)
 {
-    return sg_tracer_new_cached(sys, cat, opts, NULL, d);
+    sg_tracer *t = NULL;
+    (void)sg_tracer_open(sys, cat, opts, &t, d);
+    return t;
 }
-
-static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
-                       sg_index_cache *cache, sg_tracer **out, sg_diag *d);
 
 sg_tracer *sg_tracer_new_cached(const sg_system *sys, const sg_catalog *cat,
                                 const sg_trace_opts *opts, sg_index_cache *cache,
                                 sg_diag *d)
 {
     sg_tracer *t = NULL;
-    sg_diag own;
-    /* The code must reach a caller who passed no diagnostic only through
-     * sg_tracer_open; here NULL says it failed. */
-    if (!d) {
-        sg_diag_clear(&own);
-        d = &own;
-    }
-    return tracer_open(sys, cat, opts, cache, &t, d) == SG_OK ? t : NULL;
+    (void)sg_tracer_open_cached(sys, cat, opts, cache, &t, d);
+    return t;
+}
+
+sg_tracer *sg_tracer_new_method(const sg_tracer *m, sg_method method, int mpfr_bits,
+                                sg_index_cache *cache, sg_diag *d)
+{
+    sg_tracer *t = NULL;
+    (void)sg_tracer_open_method(m, method, mpfr_bits, cache, &t, d);
+    return t;
 }
 
 int sg_tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
                    sg_tracer **out, sg_diag *d)
 {
-    return tracer_open(sys, cat, opts, NULL, out, d);
+    return sg_tracer_open_cached(sys, cat, opts, NULL, out, d);
 }
 
-static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
-                       sg_index_cache *cache, sg_tracer **out, sg_diag *d)
+int sg_tracer_open_cached(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
+                          sg_index_cache *cache, sg_tracer **out, sg_diag *d)
 {
     sg_tracer *t;
     mpfr_t *idx = NULL;
@@ -687,10 +691,9 @@ static int tracer_open(const sg_system *sys, const sg_catalog *cat, const sg_tra
         sg_diag pd;
         po.wave = sys->primary_wave;
         sg_diag_clear(&pd);
-        t->prim = sg_tracer_new_cached(sys, cat, &po, cache, &pd);
-        if (!t->prim) {
-            sg_diag_set(d, pd.code != SG_OK ? pd.code : SG_ENOMEM,
-                        "primary wavelength %d, which defines the pupil and fields: %s",
+        rc = sg_tracer_open_cached(sys, cat, &po, cache, &t->prim, &pd);
+        if (rc != SG_OK) {
+            sg_diag_set(d, rc, "primary wavelength %d, which defines the pupil and fields: %s",
                         sys->primary_wave + 1, pd.msg);
             goto fail;
         }
@@ -758,58 +761,62 @@ fail:
     return rc;
 }
 
-sg_tracer *sg_tracer_new_method(const sg_tracer *m, sg_method method, int mpfr_bits,
-                                sg_index_cache *cache, sg_diag *d)
+int sg_tracer_open_method(const sg_tracer *m, sg_method method, int mpfr_bits,
+                          sg_index_cache *cache, sg_tracer **out, sg_diag *d)
 {
-    sg_trace_opts o = m->o;
+    sg_trace_opts o;
     sg_tracer *t;
     sg_diag own;
+    int rc;
+    if (!out)
+        return sg_diag_set(d, SG_EINVAL, "tracer: nowhere to put it");
+    *out = NULL;
+    if (!m)
+        return sg_diag_set(d, SG_EINVAL, "tracer: no tracer to share");
     if (!d) {
         sg_diag_clear(&own);
         d = &own;
     }
+    o = m->o;
     o.method = method;
     o.mpfr_bits = mpfr_bits;
     /* Classic lands the real-aim stop radius its own way (launch.c), and
-     * the precision's range is tracer_open's to check. */
+     * the precision's range is sg_tracer_open_cached's to check. */
     if (m->o.method == SG_METHOD_CLASSIC || method == SG_METHOD_CLASSIC ||
         mpfr_bits < 53 || mpfr_bits > 100000)
-        return sg_tracer_new_cached(m->sys, m->cat, &o, cache, d);
+        return sg_tracer_open_cached(m->sys, m->cat, &o, cache, out, d);
     t = calloc(1, sizeof *t);
-    if (!t) {
-        sg_diag_set(d, SG_ENOMEM, "out of memory");
-        return NULL;
-    }
+    if (!t)
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
     /* The prepared model, shared as a fork shares it; only the options'
      * method and precision differ, which the model does not read. */
     share_model(t, m, &o);
     if (m->prim) {
-        /* Named as tracer_open names the primary wavelength's failure. */
+        /* Named as sg_tracer_open_cached names the primary wavelength's
+         * failure. */
         sg_diag pd;
         sg_diag_clear(&pd);
-        t->prim = sg_tracer_new_method(m->prim, method, mpfr_bits, cache, &pd);
-        if (!t->prim) {
-            sg_diag_set(d, pd.code != SG_OK ? pd.code : SG_ENOMEM,
-                        "primary wavelength %d, which defines the pupil and fields: %s",
+        rc = sg_tracer_open_method(m->prim, method, mpfr_bits, cache, &t->prim, &pd);
+        if (rc != SG_OK) {
+            sg_diag_set(d, rc, "primary wavelength %d, which defines the pupil and fields: %s",
                         t->sys->primary_wave + 1, pd.msg);
             goto fail;
         }
     }
     t->scratch = calloc((size_t)t->n, sizeof *t->scratch);
     if (!t->scratch || !(t->rescue = sg_mpfr_rescue_new())) {
-        sg_diag_set(d, SG_ENOMEM, "out of memory");
+        rc = sg_diag_set(d, SG_ENOMEM, "out of memory");
         goto fail;
     }
     t->icache = cache;
-    if (t->o.method == SG_METHOD_MPFR && sg_mpfr_prepare(t, d) != SG_OK)
+    if (t->o.method == SG_METHOD_MPFR && (rc = sg_mpfr_prepare(t, d)) != SG_OK)
         goto fail;
     t->icache = NULL;
-    return t;
+    *out = t;
+    return SG_OK;
 fail:
-    if (d->code == SG_OK)
-        sg_diag_set(d, SG_ENOMEM, "out of memory");
     sg_tracer_free(t);
-    return NULL;
+    return rc;
 }
 
 void sg_tracer_free(sg_tracer *t)

@@ -45,4 +45,15 @@ unsigned long sg_parax_memo_resumes(const sg_parax_memo *memo);
 int sg_indices_mpfr(const sg_system *sys, const sg_catalog *cat, int wave,
                     mpfr_t *idx, sg_diag *d);
 
+/* The code-returning constructors beside the public sg_tracer_open: *out
+ * and SG_OK, or NULL in *out and the failure's code (also in d when
+ * given).  sg_tracer_new_cached, sg_tracer_new_method and sg_batch_new
+ * (sagitta.h) are these with the code dropped. */
+int sg_tracer_open_cached(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
+                          sg_index_cache *cache, sg_tracer **out, sg_diag *d);
+int sg_tracer_open_method(const sg_tracer *t, sg_method method, int mpfr_bits,
+                          sg_index_cache *cache, sg_tracer **out, sg_diag *d);
+int sg_batch_open(const sg_system *sys, const sg_catalog *cat, const sg_trace_opts *opts,
+                  int nthreads, sg_batch **out, sg_diag *d);
+
 #endif

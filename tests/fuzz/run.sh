@@ -78,9 +78,15 @@ else
     mv "$build/sg_config.h.new" "$build/sg_config.h"
 fi
 
+# The engine's directories are all on the include path, as src/meson.build
+# puts them.
+srcinc=""
+for d in "$root"/src/*/; do
+    srcinc="$srcinc -I${d%/}"
+done
 cflags="-std=c11 -D_POSIX_C_SOURCE=200809L -O1 -g -fno-omit-frame-pointer
  -ffp-contract=off -fno-math-errno -fno-sanitize-recover=all
- -I$build -I$root/src $(for d in "$root"/src/*/; do printf ' -I%s' "${d%/}"; done) -I$root/ui $(pkg-config --cflags hdf5) $(pkg-config --cflags gsl)"
+ -I$build -I$root/src$srcinc -I$root/ui $(pkg-config --cflags hdf5) $(pkg-config --cflags gsl)"
 cflags_lib="$cflags -fsanitize=fuzzer-no-link,address,undefined"
 libs="-lcjson -lfftw3 -lmpfr -lgmp -lm -lpthread $(pkg-config --libs hdf5) $(pkg-config --libs gsl)"
 
@@ -93,7 +99,7 @@ if [ ! -f "$build/numfmt_pow10.h" ] || [ "$root/ui/gen_pow10.c" -nt "$build/numf
     fi
 fi
 
-# Compiles the engine (src/*/*.c) and the command-line modules once, rebuilding an object
+# Compiles src/*/*.c and the command-line modules once, rebuilding an object
 # when its source or any header is newer.
 newest_header=$(ls -t "$root"/src/*.h "$root"/src/*/*.h "$root"/ui/*.h "$build/sg_config.h" | head -n 1)
 objs=""
