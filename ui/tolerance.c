@@ -27,6 +27,7 @@ static void tolerance_help(FILE *f)
 "                         [--threads N] [--method M] [--format text|json|csv|hdf5]\n"
 "                         [-o FILE] [--force] [--resume] [--save-worst K]\n"
 "                         [--inverse LIMIT] [--size WxH] [--plot]\n"
+"                         [--default-tolerances] [--save-tolerances FILE.json]\n"
 "Tolerance the design (its \"tolerances\" object): each operand at its min\n"
 "and max with the compensators re-optimized (sensitivity), and N systems\n"
 "with every operand drawn (Monte Carlo), on every core.  Without\n"
@@ -57,6 +58,11 @@ static void tolerance_help(FILE *f)
 "                           last whole trial\n"
 "  --save-worst K           write the K worst Monte Carlo systems as\n"
 "                           DESIGN-worst1.json ... (not over files without --force)\n"
+"  --default-tolerances     tolerance the default set Zemax's Tolerance Wizard\n"
+"                           makes (radii 1 fringe, thicknesses, decenters and\n"
+"                           tilts 0.2, index 0.001, Abbe 1 %%, back focus\n"
+"                           compensating) instead of the design's operands\n"
+"  --save-tolerances FILE   write the design with that set to FILE.json and stop\n"
 "  -h, --help               show this help\n", f);
 }
 
@@ -731,7 +737,8 @@ static int tolerance_main(int argc, char **argv)
     cli_iter it;
     const char *val, *design = NULL, *output = NULL;
     int id, rc, force = 0, sens = 0, mc = -1, fmt = REPORT_TEXT, seed_given = 0;
-    int pic_w = 1000, pic_h = 750, size_given = 0, plot_text = 0;
+    int pic_w = 1000, pic_h = 750, size_given = 0, plot_text = 0, deftol = 0;
+    const char *save_tol = NULL;
     int rank = tolmpi_rank(), block, nthreads, opened = 0, start = 0, resume = 0, nworst = 0;
     int k;
     char wpath[4096];
@@ -770,6 +777,8 @@ static int tolerance_main(int argc, char **argv)
             CLI_OPT_WORD("--format", fmt, "text|csv|json|hdf5|png|svg|pdf", tol_formats),
             CLI_ID("--size", 0, 1, TO_SIZE),
             CLI_OPT_FLAG("--plot", 0, plot_text),
+            CLI_OPT_FLAG("--default-tolerances", 0, deftol),
+            CLI_OPT_TEXT("--save-tolerances", 0, save_tol),
             CLI_OPT_OUTPUT(output),
             CLI_OPT_FLAG("--force", 0, force),
             CLI_OPT_FLAG("--resume", 0, resume),
@@ -837,9 +846,48 @@ static int tolerance_main(int argc, char **argv)
             return cli_usage_error("tolerance", "%s exists; use --force to overwrite it",
                                    wpath);
     }
+    if (save_tol && !deftol)
+        return cli_usage_error("tolerance", "--save-tolerances writes the default set: give "
+                               "--default-tolerances");
+    if (save_tol && !force && stat(save_tol, &st) == 0)
+        return cli_usage_error("tolerance", "%s exists; use --force to overwrite it", save_tol);
     rc = cli_load_design(design, &cat, &sys);
     if (rc != CLI_EXIT_OK)
         return rc;
+    if (deftol) {
+        sg_tol_defaults dt;
+        sg_tol_defaults_init(&dt);
+        sg_diag_clear(&d);
+        if ((rc = sg_tol_default_set(sys, cat, &dt, &d)) == SG_OK)
+            rc = sg_tol_check(sys, &d);
+        if (rc == SG_OK && save_tol && rank == 0) {
+            if (cli_output_is_input(save_tol) || strcmp(save_tol, design) == 0) {
+                rc = cli_usage_error("tolerance", "--save-tolerances: %s is the design; "
+                                     "write the set to another file", save_tol);
+                goto done;
+            }
+            rc = sg_design_save(sys, save_tol, &d);
+            if (rc != SG_OK) {
+                cli_print_diag(save_tol, &d, rc);
+                rc = CLI_EXIT_FILE;
+                goto done;
+            }
+            fprintf(stderr, "sagitta: tolerance: %s: %d default tolerance rows, %d "
+                    "compensator%s\n", save_tol, sys->tol.nop, sys->tol.ncomp,
+                    sys->tol.ncomp == 1 ? "" : "s");
+            rc = CLI_EXIT_OK;
+            goto done;
+        }
+        if (rc != SG_OK) {
+            cli_print_diag(design, &d, rc);
+            rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
+            goto done;
+        }
+        if (save_tol) {
+            rc = CLI_EXIT_OK;
+            goto done;
+        }
+    }
     if (!sys->tol.present || sys->tol.nop == 0) {
         cli_error("%s: the design has no tolerance operands (a \"tolerances\" object; "
                   "sagitta-design(5), TOLERANCES)", design);

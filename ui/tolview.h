@@ -14,8 +14,9 @@
 /* The series colours: the bars at min and at max, the histogram, the
  * cumulative curve, its marked points and the nominal. */
 enum { TOLV_MIN = 0, TOLV_MAX = 1, TOLV_HIST = 2, TOLV_CUM = 3, TOLV_PCT = 4, TOLV_NOM = 5 };
-/* The most bars a file's chart shows (each one labelled). */
-#define TOLV_FILE_BARS 16
+/* The most bars a file's chart shows (each one labelled: plot_xticks
+ * labels every one of 15 categories). */
+#define TOLV_FILE_BARS 15
 
 /* ord[0 .. r->nsens-1]: the rows worst first, by the larger of the two
  * changes (a side that failed counts as worst), ties in row order. */

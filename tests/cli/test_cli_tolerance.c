@@ -22,6 +22,10 @@
 
 #include "clitest.h"
 
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
 static const char *exe;
 
 /* Two lenses of index 1.5 and 1.6; fields 0, 2 and 3 degrees weighted 1,
@@ -996,6 +1000,177 @@ static void pictures(void **state)
     cJSON_Delete(root);
 }
 
+/* ---- the default tolerance set ------------------------------------------ */
+
+/* The Cooke triplet of examples/cooke_triplet.json (Sasian, OPTI 517):
+ * N-LAK9, N-SF5, N-LAK9 in air, stop on surface 4. */
+static const char *triplet(const char *name)
+{
+    return ct_file(name,
+        "{\"format\": \"sagitta-design\", \"units\": \"mm\","
+        "\"wavelengths\": {\"primary\": 2, \"list\": [{\"um\": 0.4861327, \"weight\": 0.5},"
+        " {\"um\": 0.5875618, \"weight\": 1}, {\"um\": 0.6562725, \"weight\": 0.5}]},"
+        "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}, {\"y\": 14.14}, {\"y\": 20}]},"
+        "\"aperture\": {\"type\": \"epd\", \"value\": 12.5}, \"ray_aiming\": \"off\","
+        "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+        "{\"radius\": 23.713, \"thickness\": 4.831, \"material\": \"N-LAK9\"},"
+        "{\"radius\": 7331.288, \"thickness\": 5.86},"
+        "{\"radius\": -24.456, \"thickness\": 0.975, \"material\": \"N-SF5\", \"stop\": true},"
+        "{\"radius\": 21.896, \"thickness\": 4.822},"
+        "{\"radius\": 86.759, \"thickness\": 3.127, \"material\": \"N-LAK9\"},"
+        "{\"radius\": -20.4942, \"thickness\": 41.2365},"
+        "{\"radius\": \"inf\", \"thickness\": 0}]}");
+}
+
+/* The set Zemax's Tolerance Wizard makes, counted by hand for the
+ * triplet: 6 surfaces with power (TFRN 1 fringe); thicknesses 1 to 5
+ * (6 focuses) at 0.2 mm, each adjusted by the first air space after it
+ * (2, 4, 4, 6, 6); 3 elements (1-2, 3-4, 5-6) with TEDX, TEDY 0.2 mm and
+ * TETX, TETY 0.2 deg; surfaces 2 to 6 with TSDX, TSDY 0.2 mm and TSTX,
+ * TSTY of a 0.2 mm runout across the automatic diameter, atan(0.2 / D);
+ * glasses on 1, 3 and 5 with TIND 0.001 and TABB 1 % of the catalog's
+ * Abbe numbers (Schott: N-LAK9 54.71, N-SF5 32.25); the back focus (41.2365)
+ * compensating within half of it.  49 rows. */
+static void default_tolerances(void **state)
+{
+    const char *d = triplet("tri.json"), *out = ct_path("tri_tol.json");
+    static const int adjust[6] = {0, 2, 4, 4, 6, 6};
+    ct_result r;
+    cJSON *root, *sd, *ops, *comp, *op;
+    double D[8] = {0};
+    int k, n = 0, nfrn = 0, nthi = 0, nel = 0, nsurf = 0, nglass = 0;
+    (void)state;
+    ct_run(&r, "semidiam", d, "--format", "json", NULL);
+    assert_int_equal(r.code, 0);
+    root = cJSON_Parse(r.out);
+    sd = cJSON_GetObjectItem(root, "surfaces");
+    for (k = 0; k < cJSON_GetArraySize(sd); k++) {
+        const cJSON *row = cJSON_GetArrayItem(sd, k);
+        D[(int)num(row, "surface")] = 2 * num(row, "auto");
+    }
+    cJSON_Delete(root);
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--default-tolerances", "--save-tolerances", out, NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    assert_non_null(strstr(r.err, "49 default tolerance rows, 1 compensator"));
+    ct_free(&r);
+    {
+        char *text = ct_read(out);
+        root = cJSON_Parse(text);
+        free(text);
+    }
+    assert_non_null(root);
+    ops = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "tolerances"), "operands");
+    comp = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "tolerances"), "compensators");
+    n = cJSON_GetArraySize(ops);
+    assert_int_equal(n, 49);
+    cJSON_ArrayForEach(op, ops) {
+        const char *t = cJSON_GetObjectItem(op, "type")->valuestring;
+        int s = cJSON_GetObjectItem(op, "surface") ? (int)num(op, "surface")
+                                                   : (int)num(op, "first");
+        double lim = num(op, "max");
+        assert_true(num(op, "min") == -lim);
+        if (strcmp(t, "TFRN") == 0) {
+            assert_int_equal(s, ++nfrn);
+            assert_true(lim == 1);
+        } else if (strcmp(t, "TTHI") == 0) {
+            assert_int_equal(s, ++nthi);
+            assert_int_equal((int)num(op, "adjust"), adjust[s]);
+            assert_true(lim == 0.2);
+        } else if (t[1] == 'E') {
+            /* TEDX, TEDY, TETX, TETY of element 1-2, then 3-4, 5-6. */
+            static const char *const kinds[4] = {"TEDX", "TEDY", "TETX", "TETY"};
+            assert_string_equal(t, kinds[nel % 4]);
+            assert_int_equal(s, 1 + 2 * (nel / 4));
+            assert_int_equal((int)num(op, "last"), 2 + 2 * (nel / 4));
+            assert_true(lim == 0.2);
+            nel++;
+        } else if (t[1] == 'S') {
+            static const char *const kinds[4] = {"TSDX", "TSDY", "TSTX", "TSTY"};
+            assert_string_equal(t, kinds[nsurf % 4]);
+            assert_int_equal(s, 2 + nsurf / 4);
+            if (nsurf % 4 < 2)
+                assert_true(lim == 0.2);
+            else
+                ct_close(lim, atan(0.2 / D[s]) * 180 / M_PI, 1e-12, 0, "surface tilt");
+            nsurf++;
+        } else if (strcmp(t, "TIND") == 0 || strcmp(t, "TABB") == 0) {
+            assert_int_equal(s, 1 + 2 * (nglass / 2));
+            if (t[1] == 'I')
+                assert_true(lim == 0.001);
+            else
+                ct_close(lim, (s == 3 ? 32.25 : 54.71) / 100, 1e-12, 0, "TABB");
+            nglass++;
+        } else {
+            fail_msg("unexpected row %s", t);
+        }
+    }
+    assert_int_equal(nfrn, 6);
+    assert_int_equal(nthi, 5);
+    assert_int_equal(nel, 12);
+    assert_int_equal(nsurf, 20);
+    assert_int_equal(nglass, 6);
+    assert_int_equal(cJSON_GetArraySize(comp), 1);
+    op = cJSON_GetArrayItem(comp, 0);
+    assert_int_equal((int)num(op, "surface"), 6);
+    assert_string_equal(cJSON_GetObjectItem(op, "parameter")->valuestring, "thickness");
+    ct_close(num(op, "max"), 41.2365 / 2, 1e-15, 0, "compensator");
+    cJSON_Delete(root);
+    /* Refused: over the file, or without --default-tolerances. */
+    ct_run(&r, "tolerance", d, "--default-tolerances", "--save-tolerances", out, NULL);
+    assert_int_not_equal(r.code, 0);
+    assert_non_null(strstr(r.err, "exists"));
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--save-tolerances", ct_path("x.json"), NULL);
+    assert_int_not_equal(r.code, 0);
+    assert_non_null(strstr(r.err, "--default-tolerances"));
+    ct_free(&r);
+    /* A cemented doublet is one element, 1-3; the thicknesses 1 and 2
+     * are adjusted by the air space 3, which focuses: TFRN 1-3, TTHI 1-2,
+     * TEDX..TETY 1-3, TSDX..TSTY on 2 and 3, TIND and TABB on 1 and 2. */
+    d = ct_file("cem.json",
+        "{\"format\": \"sagitta-design\", \"units\": \"mm\","
+        "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.5875618}]},"
+        "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}, {\"y\": 2}]},"
+        "\"aperture\": {\"type\": \"epd\", \"value\": 10},"
+        "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+        "{\"radius\": 60, \"thickness\": 4, \"material\": \"N-LAK9\", \"stop\": true},"
+        "{\"radius\": -40, \"thickness\": 2, \"material\": \"N-SF5\"},"
+        "{\"radius\": -200, \"thickness\": 90},"
+        "{\"radius\": \"inf\", \"thickness\": 0}]}");
+    out = ct_path("cem_tol.json");
+    ct_run(&r, "tolerance", d, "--default-tolerances", "--save-tolerances", out, NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    assert_non_null(strstr(r.err, "21 default tolerance rows, 1 compensator"));
+    ct_free(&r);
+    {
+        char *text = ct_read(out);
+        static const char *const want[21] = {
+            "TFRN 1", "TFRN 2", "TFRN 3", "TTHI 1 3", "TTHI 2 3", "TEDX 1-3", "TEDY 1-3",
+            "TETX 1-3", "TETY 1-3", "TSDX 2", "TSDY 2", "TSTX 2", "TSTY 2", "TSDX 3",
+            "TSDY 3", "TSTX 3", "TSTY 3", "TIND 1", "TABB 1", "TIND 2", "TABB 2"};
+        root = cJSON_Parse(text);
+        free(text);
+        ops = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "tolerances"), "operands");
+        assert_int_equal(cJSON_GetArraySize(ops), 21);
+        for (k = 0; k < 21; k++) {
+            char got[32];
+            op = cJSON_GetArrayItem(ops, k);
+            json_label(op, got, sizeof got);
+            if (cJSON_GetObjectItem(op, "adjust"))
+                snprintf(got + strlen(got), sizeof got - strlen(got), " %d",
+                         (int)num(op, "adjust"));
+            assert_string_equal(got, want[k]);
+        }
+        op = cJSON_GetArrayItem(cJSON_GetObjectItem(cJSON_GetObjectItem(root, "tolerances"),
+                                                    "compensators"), 0);
+        assert_int_equal((int)num(op, "surface"), 3);
+        cJSON_Delete(root);
+    }
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -1011,6 +1186,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(save_worst),
         cmocka_unit_test(inverse_thin_lens),
         cmocka_unit_test(pictures),
+        cmocka_unit_test(default_tolerances),
     };
     int rc;
     ct_init(argc, argv);
