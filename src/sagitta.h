@@ -573,7 +573,7 @@ typedef enum sg_tol_type {
     SG_TOL_TRAD = 0, SG_TOL_TCUR, SG_TOL_TFRN, SG_TOL_TTHI, SG_TOL_TCON, SG_TOL_TPAR,
     SG_TOL_TSDX, SG_TOL_TSDY, SG_TOL_TSTX, SG_TOL_TSTY,
     SG_TOL_TEDX, SG_TOL_TEDY, SG_TOL_TETX, SG_TOL_TETY, SG_TOL_TETZ,
-    SG_TOL_TIND, SG_TOL_TABB,
+    SG_TOL_TIND, SG_TOL_TABB, SG_TOL_TIRR,
     SG_TOL_NTYPES
 } sg_tol_type;
 typedef struct sg_tol_operand {
@@ -1372,6 +1372,7 @@ typedef struct sg_tol_defaults {
     double thickness;       /* TTHI on each thickness, the next air space adjusting (0.2) */
     double sdecenter;       /* TSDX, TSDY on each surface with power (0.2) */
     double stilt_tir;       /* TSTX, TSTY: a runout of this across the diameter (0.2) */
+    double irregularity;    /* TIRR on each standard surface with power, fringes (0.2) */
     double edecenter;       /* TEDX, TEDY on each element (0.2) */
     double etilt;           /* TETX, TETY on each element, degrees (0.2) */
     double index;           /* TIND on each glass (0.001) */

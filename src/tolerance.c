@@ -20,7 +20,7 @@
 
 static const char *const tol_names[SG_TOL_NTYPES] = {
     "TRAD", "TCUR", "TFRN", "TTHI", "TCON", "TPAR", "TSDX", "TSDY", "TSTX", "TSTY",
-    "TEDX", "TEDY", "TETX", "TETY", "TETZ", "TIND", "TABB"};
+    "TEDX", "TEDY", "TETX", "TETY", "TETZ", "TIND", "TABB", "TIRR"};
 
 /* Zemax's test wavelength for fringes, in micrometres. */
 #define TOL_FRINGE_UM 0.6328
@@ -176,6 +176,11 @@ int sg_tol_check(const sg_system *sys, sg_diag *d)
                                   "must be the same surfaces or apart", j + 1);
             }
             break;
+        case SG_TOL_TIRR:
+            /* Zemax's TIRR takes a Standard surface alone. */
+            if (s->type != SG_SURF_STANDARD)
+                return op_err(d, k, op, "surface %d is not a standard surface", op->surface);
+            break;
         case SG_TOL_TIND:
         case SG_TOL_TABB:
             if (s->mat.kind == SG_MAT_MODEL || s->mat.kind == SG_MAT_GLASS)
@@ -241,7 +246,7 @@ int sg_tol_nominal(const sg_system *sys, const sg_catalog *cat, sg_system *out, 
     /* Fringes are counted over the clear aperture: an automatic one is
      * found once, on the nominal. */
     for (k = 0; k < sys->tol.nop; k++)
-        if (sys->tol.op[k].type == SG_TOL_TFRN &&
+        if ((sys->tol.op[k].type == SG_TOL_TFRN || sys->tol.op[k].type == SG_TOL_TIRR) &&
             !(out->surf[sys->tol.op[k].surface].semi_diameter > 0.0))
             need_sd = 1;
     if (need_sd) {
@@ -328,6 +333,24 @@ int sg_tol_apply(const sg_system *nom, const sg_catalog *cat, const double *delt
             else
                 s->mat.index += v;
             break;
+        case SG_TOL_TIRR: {
+            /* Zemax's irregularity: v fringes (double pass, at the test
+             * wavelength) at the semi-diameter r, half spherical and half
+             * astigmatism, Zs rho^4 + Za rho_y^2 with Zs = Za = v lambda /
+             * 4 (Zemax's Irregular surface); made an XY polynomial over
+             * x / r and y / r. */
+            double z = v * TOL_FRINGE_UM * um_to_units(nom) / 4.0;
+            if (s->type == SG_SURF_STANDARD) {
+                s->type = SG_SURF_XYPOLY;
+                s->norm_radius = s->semi_diameter;
+                memset(s->terms, 0, sizeof s->terms);
+            }
+            s->terms[4] += z;       /* y^2 */
+            s->terms[9] += z;       /* x^4 */
+            s->terms[11] += 2 * z;  /* x^2 y^2 */
+            s->terms[13] += z;      /* y^4 */
+            break;
+        }
         case SG_TOL_TABB:
             if (s->mat.kind == SG_MAT_GLASS) {
                 /* nd held, n(F) - n(C) = (nd - 1) / vd: the dispersion
@@ -1214,6 +1237,7 @@ void sg_tol_defaults_init(sg_tol_defaults *o)
     o->thickness = 0.2;
     o->sdecenter = 0.2;
     o->stilt_tir = 0.2;
+    o->irregularity = 0.2;
     o->edecenter = 0.2;
     o->etilt = 0.2;
     o->index = 0.001;
@@ -1365,6 +1389,10 @@ int sg_tol_default_set(sg_system *sys, const sg_catalog *cat, const sg_tol_defau
             add_op(t, &n, SG_TOL_TSTY, i, i, -1, deg);
         }
     }
+    /* Irregularity: TIRR, on the standard surfaces Zemax's takes. */
+    for (i = 1; o->irregularity > 0 && i < img; i++)
+        if (sys->surf[i].type == SG_SURF_STANDARD && !same_medium(sys, i))
+            add_op(t, &n, SG_TOL_TIRR, i, i, -1, o->irregularity);
     /* Glasses: the index, and the Abbe number by a percentage of its own. */
     for (i = 1; i < img; i++) {
         const sg_material *m = &sys->surf[i].mat;

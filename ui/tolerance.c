@@ -60,8 +60,9 @@ static void tolerance_help(FILE *f)
 "                           DESIGN-worst1.json ... (not over files without --force)\n"
 "  --default-tolerances     tolerance the default set Zemax's Tolerance Wizard\n"
 "                           makes (radii 1 fringe, thicknesses, decenters and\n"
-"                           tilts 0.2, index 0.001, Abbe 1 %%, back focus\n"
-"                           compensating) instead of the design's operands\n"
+"                           tilts 0.2, irregularity 0.2 fringes, index 0.001,\n"
+"                           Abbe 1 %, the back focus compensating) instead of\n"
+"                           the design's operands\n"
 "  --save-tolerances FILE   write the design with that set to FILE.json and stop\n"
 "  -h, --help               show this help\n", f);
 }

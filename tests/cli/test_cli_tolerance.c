@@ -921,6 +921,10 @@ static void pictures(void **state)
         static const char *const pk[5] = {"90", "80", "50", "20", "10"};
         static const double pv[5] = {90, 80, 50, 20, 10};
         double p0 = num(pct, pk[0]), p4 = num(pct, pk[4]);
+        /* Each a level line to its point, then down to the axis. */
+        for (k = 0; k < 5; k++)
+            assert_true(fabs(lines[k][1] - lines[k][3]) < 0.01 &&
+                        fabs(lines[k][2] - lines[k][4]) < 0.01 && lines[k][5] > lines[k][3]);
         for (k = 1; k < 4; k++) {
             double tx = (lines[k][2] - lines[4][2]) / (lines[0][2] - lines[4][2]);
             double ty = (lines[k][1] - lines[4][1]) / (lines[0][1] - lines[4][1]);
@@ -1028,9 +1032,10 @@ static const char *triplet(const char *name)
  * (2, 4, 4, 6, 6); 3 elements (1-2, 3-4, 5-6) with TEDX, TEDY 0.2 mm and
  * TETX, TETY 0.2 deg; surfaces 2 to 6 with TSDX, TSDY 0.2 mm and TSTX,
  * TSTY of a 0.2 mm runout across the automatic diameter, atan(0.2 / D);
+ * TIRR of 0.2 fringes on the 6 (standard) surfaces with power;
  * glasses on 1, 3 and 5 with TIND 0.001 and TABB 1 % of the catalog's
  * Abbe numbers (Schott: N-LAK9 54.71, N-SF5 32.25); the back focus (41.2365)
- * compensating within half of it.  49 rows. */
+ * compensating within half of it.  55 rows. */
 static void default_tolerances(void **state)
 {
     const char *d = triplet("tri.json"), *out = ct_path("tri_tol.json");
@@ -1038,7 +1043,7 @@ static void default_tolerances(void **state)
     ct_result r;
     cJSON *root, *sd, *ops, *comp, *op;
     double D[8] = {0};
-    int k, n = 0, nfrn = 0, nthi = 0, nel = 0, nsurf = 0, nglass = 0;
+    int k, n = 0, nfrn = 0, nthi = 0, nel = 0, nsurf = 0, nglass = 0, nirr = 0;
     (void)state;
     ct_run(&r, "semidiam", d, "--format", "json", NULL);
     assert_int_equal(r.code, 0);
@@ -1053,7 +1058,7 @@ static void default_tolerances(void **state)
     ct_run(&r, "tolerance", d, "--default-tolerances", "--save-tolerances", out, NULL);
     if (r.code != 0)
         fail_msg("exit %d: %s", r.code, r.err);
-    assert_non_null(strstr(r.err, "49 default tolerance rows, 1 compensator"));
+    assert_non_null(strstr(r.err, "55 default tolerance rows, 1 compensator"));
     ct_free(&r);
     {
         char *text = ct_read(out);
@@ -1064,7 +1069,7 @@ static void default_tolerances(void **state)
     ops = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "tolerances"), "operands");
     comp = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "tolerances"), "compensators");
     n = cJSON_GetArraySize(ops);
-    assert_int_equal(n, 49);
+    assert_int_equal(n, 55);
     cJSON_ArrayForEach(op, ops) {
         const char *t = cJSON_GetObjectItem(op, "type")->valuestring;
         int s = cJSON_GetObjectItem(op, "surface") ? (int)num(op, "surface")
@@ -1078,6 +1083,10 @@ static void default_tolerances(void **state)
             assert_int_equal(s, ++nthi);
             assert_int_equal((int)num(op, "adjust"), adjust[s]);
             assert_true(lim == 0.2);
+        } else if (strcmp(t, "TIRR") == 0) {
+            assert_int_equal(s, ++nirr);
+            assert_true(lim == 0.2);
+            assert_int_equal(nsurf, 20); /* after the surfaces' decenters and tilts */
         } else if (t[1] == 'E') {
             /* TEDX, TEDY, TETX, TETY of element 1-2, then 3-4, 5-6. */
             static const char *const kinds[4] = {"TEDX", "TEDY", "TETX", "TETY"};
@@ -1111,6 +1120,7 @@ static void default_tolerances(void **state)
     assert_int_equal(nel, 12);
     assert_int_equal(nsurf, 20);
     assert_int_equal(nglass, 6);
+    assert_int_equal(nirr, 6);
     assert_int_equal(cJSON_GetArraySize(comp), 1);
     op = cJSON_GetArrayItem(comp, 0);
     assert_int_equal((int)num(op, "surface"), 6);
@@ -1128,7 +1138,8 @@ static void default_tolerances(void **state)
     ct_free(&r);
     /* A cemented doublet is one element, 1-3; the thicknesses 1 and 2
      * are adjusted by the air space 3, which focuses: TFRN 1-3, TTHI 1-2,
-     * TEDX..TETY 1-3, TSDX..TSTY on 2 and 3, TIND and TABB on 1 and 2. */
+     * TEDX..TETY 1-3, TSDX..TSTY on 2 and 3, TIRR 1-3, TIND and TABB on 1
+     * and 2. */
     d = ct_file("cem.json",
         "{\"format\": \"sagitta-design\", \"units\": \"mm\","
         "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.5875618}]},"
@@ -1143,19 +1154,20 @@ static void default_tolerances(void **state)
     ct_run(&r, "tolerance", d, "--default-tolerances", "--save-tolerances", out, NULL);
     if (r.code != 0)
         fail_msg("exit %d: %s", r.code, r.err);
-    assert_non_null(strstr(r.err, "21 default tolerance rows, 1 compensator"));
+    assert_non_null(strstr(r.err, "24 default tolerance rows, 1 compensator"));
     ct_free(&r);
     {
         char *text = ct_read(out);
-        static const char *const want[21] = {
+        static const char *const want[24] = {
             "TFRN 1", "TFRN 2", "TFRN 3", "TTHI 1 3", "TTHI 2 3", "TEDX 1-3", "TEDY 1-3",
             "TETX 1-3", "TETY 1-3", "TSDX 2", "TSDY 2", "TSTX 2", "TSTY 2", "TSDX 3",
-            "TSDY 3", "TSTX 3", "TSTY 3", "TIND 1", "TABB 1", "TIND 2", "TABB 2"};
+            "TSDY 3", "TSTX 3", "TSTY 3", "TIRR 1", "TIRR 2", "TIRR 3", "TIND 1", "TABB 1",
+            "TIND 2", "TABB 2"};
         root = cJSON_Parse(text);
         free(text);
         ops = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "tolerances"), "operands");
-        assert_int_equal(cJSON_GetArraySize(ops), 21);
-        for (k = 0; k < 21; k++) {
+        assert_int_equal(cJSON_GetArraySize(ops), 24);
+        for (k = 0; k < 24; k++) {
             char got[32];
             op = cJSON_GetArrayItem(ops, k);
             json_label(op, got, sizeof got);
