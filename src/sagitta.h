@@ -579,7 +579,7 @@ typedef enum sg_tol_type {
     SG_TOL_TRAD = 0, SG_TOL_TCUR, SG_TOL_TFRN, SG_TOL_TTHI, SG_TOL_TCON, SG_TOL_TPAR,
     SG_TOL_TSDX, SG_TOL_TSDY, SG_TOL_TSTX, SG_TOL_TSTY,
     SG_TOL_TEDX, SG_TOL_TEDY, SG_TOL_TETX, SG_TOL_TETY, SG_TOL_TETZ,
-    SG_TOL_TIND, SG_TOL_TABB,
+    SG_TOL_TIND, SG_TOL_TABB, SG_TOL_TIRR,
     SG_TOL_NTYPES
 } sg_tol_type;
 typedef struct sg_tol_operand {
@@ -1381,6 +1381,31 @@ typedef struct sg_tol_inv {
 SG_API int sg_tol_inverse(sg_tol_mc *m, double limit, sg_tol_inv *out, int *done,
                           sg_diag *d);
 SG_API void sg_tol_mc_close(sg_tol_mc *m);
+/* A default tolerance set, as Zemax's Tolerance Wizard makes one
+ * (sagitta(1), TOLERANCING, Default tolerances); a value of 0 leaves its
+ * rows out. */
+typedef struct sg_tol_defaults {
+    double fringes;         /* TFRN on each surface with power (1 fringe) */
+    double radius;          /* > 0: TRAD in lens units on curved ones instead */
+    double thickness;       /* TTHI on each thickness, the next air space adjusting (0.2) */
+    double sdecenter;       /* TSDX, TSDY on each surface with power (0.2) */
+    double stilt_tir;       /* TSTX, TSTY: a runout of this across the diameter (0.2) */
+    double irregularity;    /* TIRR on each standard surface with power, fringes (0.2) */
+    double edecenter;       /* TEDX, TEDY on each element (0.2) */
+    double etilt;           /* TETX, TETY on each element, degrees (0.2) */
+    double index;           /* TIND on each glass (0.001) */
+    double abbe_pct;        /* TABB on each glass, percent of its Abbe number (1) */
+    int focus;              /* the thickness before the image as compensator (1) */
+} sg_tol_defaults;
+SG_API void sg_tol_defaults_init(sg_tol_defaults *o);
+/* sys->tol's operands replaced by the default set built from the surfaces
+ * (and its compensators, when it has none, by the back focus); the
+ * criterion and Monte Carlo settings kept (or JSON's defaults when the
+ * design had no tolerances).  SG_ERANGE when the set would exceed
+ * SG_MAX_TOL_OPERANDS; the semi-diameters the tilts need from
+ * sg_semi_diameters where not set. */
+SG_API int sg_tol_default_set(sg_system *sys, const sg_catalog *cat, const sg_tol_defaults *o,
+                              sg_diag *d);
 
 /* A prepared system: indices, paraxial data and work buffers, computed
  * once so the per-ray path allocates nothing.  A tracer is used by one

@@ -243,6 +243,51 @@ static void operands_by_hand(void **state)
     sg_system_free(nom);
 }
 
+/* TIRR: W fringes (double pass at 0.6328 um) at the semi-diameter r are
+ * Zemax's Irregular surface's Zs rho^4 + Za rho_y^2 with Zs = Za = W
+ * lambda / 4, half spherical, half astigmatism; against the same
+ * surface typed by hand as an XY polynomial over x / r, y / r
+ * (rho^4 = x^4 + 2 x^2 y^2 + y^4), and the sag at the rim: W half waves
+ * along y, half that along x. */
+static void tirr_by_hand(void **state)
+{
+    const char *tol = "{\"operands\": [{\"type\": \"TIRR\", \"surface\": 3, \"min\": -2,"
+                      " \"max\": 2}]}";
+    sg_system *nom = singlet(tol, 1, NULL, 0), *out = sg_system_new(), *hand;
+    /* lambda in micrometres times 1e-3 mm, as the operand rounds it. */
+    const double W = 2.0, lam = 0.6328e-3, z = W * 0.6328 * 1e-3 / 4;
+    sg_surface *s;
+    sg_diag d;
+    (void)state;
+    nom->surf[3].semi_diameter = 6.0;
+    apply_one(nom, NULL, 0, W, out, NULL);
+    hand = sg_system_clone(nom);
+    s = &hand->surf[3];
+    s->type = SG_SURF_XYPOLY;
+    s->norm_radius = 6.0;
+    s->terms[4] = z;      /* y^2 */
+    s->terms[9] = z;      /* x^4 */
+    s->terms[11] = 2 * z; /* x^2 y^2 */
+    s->terms[13] = z;     /* y^4 */
+    if (!sg_system_equal(out, hand))
+        fail_msg("TIRR: the perturbed design is not the one made by hand");
+    same_traces(out, hand, NULL);
+    assert_true(fabs(sg_surface_sag(&out->surf[3], 0, 6) - sg_surface_sag(&nom->surf[3], 0, 6) -
+                     W * lam / 2) < 1e-15);
+    assert_true(fabs(sg_surface_sag(&out->surf[3], 6, 0) - sg_surface_sag(&nom->surf[3], 6, 0) -
+                     W * lam / 4) < 1e-15);
+    sg_system_free(hand);
+    sg_system_free(out);
+    sg_system_free(nom);
+    /* A surface that is not standard is refused, naming it. */
+    nom = singlet(tol, 1, NULL, 0);
+    nom->surf[3].type = SG_SURF_ODDASPH;
+    sg_diag_clear(&d);
+    assert_int_not_equal(sg_tol_check(nom, &d), SG_OK);
+    assert_non_null(strstr(d.msg, "surface 3 is not a standard surface"));
+    sg_system_free(nom);
+}
+
 /* TIND and TABB on a catalog glass: the traces of a fixed index equal to
  * the catalog's formula changed by hand, n + dn, and n(d) + (n - n(d)) vd
  * / (vd + dv), at the F line. */
@@ -744,6 +789,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(json_roundtrip),
         cmocka_unit_test(operands_by_hand),
+        cmocka_unit_test(tirr_by_hand),
         cmocka_unit_test(glass_changes),
         cmocka_unit_test(element_by_hand),
         cmocka_unit_test(compensated_focus),

@@ -97,20 +97,24 @@ int an_cmd_engine_error(const an_cmd *a, const sg_diag *d, int rc)
     return rc == CLI_EXIT_OK ? CLI_EXIT_INTERNAL : rc;
 }
 
-int an_terminal_picture(const plot_figure *fig, FILE *f, int colour)
+int an_terminal_width(FILE *f)
 {
-    plot_grid g;
     const char *cols = getenv("COLUMNS");
     struct winsize ws;
-    int w = 80, h, rc;
+    int w = 80;
     long c;
     /* COLUMNS first (a user's choice), then the terminal's own width. */
     if (cols && args_long(cols, 40, 1000, &c) == ARGS_OK)
         w = (int)c;
     else if (ioctl(fileno(f), TIOCGWINSZ, &ws) == 0 && ws.ws_col >= 40)
         w = ws.ws_col;
-    if (w > 160)
-        w = 160;
+    return w > 160 ? 160 : w;
+}
+
+int an_terminal_picture(const plot_figure *fig, FILE *f, int colour)
+{
+    plot_grid g;
+    int w = an_terminal_width(f), h, rc;
     h = fig->npanel > 2 ? 40 : 24;
     if (plot_grid_init(&g, w - 1, h))
         return -1;

@@ -67,6 +67,9 @@ typedef struct an_writer {
 int an_cmd_write(const an_cmd *a, const an_writer *w);
 void an_cmd_free(an_cmd *a);
 
+/* The width pictures on f take: COLUMNS, else the terminal's (80 when
+ * neither tells), from 40 to 160. */
+int an_terminal_width(FILE *f);
 /* The braille picture of fig for a terminal of the width COLUMNS or the
  * terminal gives (at most 160), after a blank line; 0, or -1. */
 int an_terminal_picture(const plot_figure *fig, FILE *f, int colour);

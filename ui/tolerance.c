@@ -10,9 +10,13 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "ancmd.h"
+#include "args.h"
 #include "cli.h"
 #include "outfile.h"
 #include "report.h"
+#include "safetext.h"
+#include "tolview.h"
 #include "tolh5.h"
 #include "tolmpi.h"
 
@@ -22,7 +26,8 @@ static void tolerance_help(FILE *f)
 "Usage: sagitta tolerance DESIGN.json [--sensitivity] [--monte-carlo N] [--seed S]\n"
 "                         [--threads N] [--method M] [--format text|json|csv|hdf5]\n"
 "                         [-o FILE] [--force] [--resume] [--save-worst K]\n"
-"                         [--inverse LIMIT]\n"
+"                         [--inverse LIMIT] [--size WxH] [--plot]\n"
+"                         [--default-tolerances] [--save-tolerances FILE.json]\n"
 "Tolerance the design (its \"tolerances\" object): each operand at its min\n"
 "and max with the compensators re-optimized (sensitivity), and N systems\n"
 "with every operand drawn (Monte Carlo), on every core.  Without\n"
@@ -39,8 +44,13 @@ static void tolerance_help(FILE *f)
 "  --threads N              systems at once (default: every core)\n"
 "  --method M               the criterion's traces: precise (default), classic, mpfr\n"
 "  --no-compensators        leave the compensators at their nominal values\n"
-"  --format FMT             text (default), json, csv or hdf5 (the Monte Carlo\n"
-"                           table, with -o FILE)\n"
+"  --format FMT             text (default), json, csv, hdf5 (the Monte Carlo\n"
+"                           table, with -o FILE), or png, svg or pdf (the\n"
+"                           sensitivity chart and the Monte Carlo histogram)\n"
+"  --size WxH               picture size in pixels (png) or points (svg, pdf);\n"
+"                           default 1000x750, grown to hold the bars\n"
+"  --plot                   the pictures after the text also when it does not\n"
+"                           go to a terminal\n"
 "  -o, --output FILE        write the report to FILE (not over an existing file\n"
 "                           without --force)\n"
 "  --force                  overwrite FILE\n"
@@ -48,6 +58,12 @@ static void tolerance_help(FILE *f)
 "                           last whole trial\n"
 "  --save-worst K           write the K worst Monte Carlo systems as\n"
 "                           DESIGN-worst1.json ... (not over files without --force)\n"
+"  --default-tolerances     tolerance the default set Zemax's Tolerance Wizard\n"
+"                           makes (radii 1 fringe, thicknesses, decenters and\n"
+"                           tilts 0.2, irregularity 0.2 fringes, index 0.001,\n"
+"                           Abbe 1 %, the back focus compensating) instead of\n"
+"                           the design's operands\n"
+"  --save-tolerances FILE   write the design with that set to FILE.json and stop\n"
 "  -h, --help               show this help\n", f);
 }
 
@@ -63,12 +79,17 @@ static const inv_out *inv_report;
 /* --save-worst's largest K. */
 #define MAX_WORST 100
 
-/* --format hdf5, beside report.h's formats. */
+/* --format hdf5 and the pictures, beside report.h's formats. */
 #define FMT_HDF5 1000
+#define FMT_PNG 1001
+#define FMT_SVG 1002
+#define FMT_PDF 1003
+#define IS_PICTURE(f) ((f) >= FMT_PNG && (f) <= FMT_PDF)
 
-enum { TO_SEED = 1 };
+enum { TO_SEED = 1, TO_SIZE };
 
-static const int tol_formats[] = {REPORT_TEXT, REPORT_CSV, REPORT_JSON, FMT_HDF5};
+static const int tol_formats[] = {REPORT_TEXT, REPORT_CSV, REPORT_JSON, FMT_HDF5,
+                                  FMT_PNG,     FMT_SVG,    FMT_PDF};
 
 /* Help from rank 0 alone under mpirun. */
 static void tolerance_help_rank0(FILE *f)
@@ -150,21 +171,6 @@ static double worst_change(const sg_tol_sens *s, double c0)
     if (isnan(b))
         return a;
     return a > b ? a : b;
-}
-
-static const sg_tol_result *sort_r;
-static const sg_system *sort_sys;
-
-/* Worst first: the larger change of the two, descending; then by row. */
-static int cmp_worst(const void *x, const void *y)
-{
-    int i = *(const int *)x, j = *(const int *)y;
-    double a = worst_change(&sort_r->sens[i], sort_r->nominal.criterion);
-    double b = worst_change(&sort_r->sens[j], sort_r->nominal.criterion);
-    (void)sort_sys;
-    if (a != b)
-        return a > b ? -1 : 1;
-    return i - j;
 }
 
 static void print_num(FILE *f, double v)
@@ -369,11 +375,7 @@ static void write_text(FILE *f, const sg_system *sys, const sg_tol_result *r, in
                     change(&s->at_max, r->nominal.criterion));
         }
         if (ord) {
-            for (k = 0; k < r->nsens; k++)
-                ord[k] = k;
-            sort_r = r;
-            sort_sys = sys;
-            qsort(ord, (size_t)r->nsens, sizeof *ord, cmp_worst);
+            tolv_worst_order(r, ord);
             fprintf(f, "\nWorst offenders:\n");
             for (k = 0; k < r->nsens && k < 10; k++) {
                 const sg_tol_operand *op = &sys->tol.op[ord[k]];
@@ -425,6 +427,80 @@ static void write_text(FILE *f, const sg_system *sys, const sg_tol_result *r, in
     }
     if (r->stopped)
         fprintf(f, "\nStopped: the report holds what was done.\n");
+}
+
+/* The figure of what ran (what: 1 the sensitivity chart, 2 the Monte
+ * Carlo's panels, 3 both), for a terminal of cols columns or (0) a file. */
+static int tol_figure(const sg_system *sys, const sg_tol_result *r, int what, const double *crit,
+                      int cols, plot_figure *f)
+{
+    char title[256], lab[160];
+    if (sys->title[0])
+        snprintf(title, sizeof title, "Tolerancing: %s", safe_text(sys->title, lab, sizeof lab));
+    else
+        snprintf(title, sizeof title, "Tolerancing");
+    plot_figure_init(f, title);
+    if ((what & 1) && r->nsens > 0 && tolv_sens_panel(sys, r, cols, f))
+        return -1;
+    if ((what & 2) && crit && r->done > 0 && tolv_mc_panels(sys, r, crit, r->done, f))
+        return -1;
+    /* The chart above the histogram and the curve, each the full width. */
+    f->ncol = f->npanel > 2 ? 1 : 0;
+    return 0;
+}
+
+/* After the text: the chart, then the histogram, each its own 24 rows. */
+static int text_pictures(FILE *f, const sg_system *sys, const sg_tol_result *r, int sens,
+                         int mc, const double *crit)
+{
+    int cols = an_terminal_width(f), colour = plot_use_colour(f), k, rc = 0;
+    for (k = 1; k <= 2 && !rc; k++) {
+        plot_figure fig;
+        if ((k == 1 && !sens) || (k == 2 && !mc))
+            continue;
+        rc = tol_figure(sys, r, k, crit, cols, &fig);
+        if (!rc && fig.npanel)
+            rc = an_terminal_picture(&fig, f, colour);
+        plot_figure_free(&fig);
+    }
+    return rc;
+}
+
+/* --format png, svg or pdf: one figure of every panel.  Exit status. */
+static int write_picture(FILE *f, const char *where, int fmt, int width, int height,
+                         int size_given, const sg_system *sys, const sg_tol_result *r, int sens,
+                         int mc, const double *crit)
+{
+    plot_figure fig;
+    char msg[256];
+    int rc = CLI_EXIT_OK;
+    if (tol_figure(sys, r, (sens ? 1 : 0) | (mc ? 2 : 0), crit, 0, &fig)) {
+        cli_error("out of memory");
+        rc = CLI_EXIT_INTERNAL;
+    } else if (fig.npanel == 0) {
+        cli_error("%s: nothing to draw (no sensitivity row and no Monte Carlo trial done)",
+                  where);
+        rc = CLI_EXIT_DESIGN;
+    } else {
+        if (!size_given) {
+            /* Room for every bar's label (about 64 points each), and for
+             * the panels' own minimum. */
+            int bars = r->nsens < TOLV_FILE_BARS ? r->nsens : TOLV_FILE_BARS, mw, mh;
+            if (sens && 74 + 64 * bars > width)
+                width = 74 + 64 * bars;
+            if (fig.npanel > 2 && height < 900)
+                height = 900; /* three panels stacked */
+            plot_min_size(&fig, width, &mw, &mh);
+            width = mw > width ? mw : width;
+            height = mh > height ? mh : height;
+        }
+        if (plot_write(&fig, fmt - FMT_PNG, width, height, f, msg, sizeof msg)) {
+            cli_error("%s: %s", where, msg);
+            rc = CLI_EXIT_FILE;
+        }
+    }
+    plot_figure_free(&fig);
+    return rc;
 }
 
 /* Rank 0's end of the Monte Carlo: the trials in order, into the CSV's
@@ -662,6 +738,8 @@ static int tolerance_main(int argc, char **argv)
     cli_iter it;
     const char *val, *design = NULL, *output = NULL;
     int id, rc, force = 0, sens = 0, mc = -1, fmt = REPORT_TEXT, seed_given = 0;
+    int pic_w = 1000, pic_h = 750, size_given = 0, plot_text = 0, deftol = 0;
+    const char *save_tol = NULL;
     int rank = tolmpi_rank(), block, nthreads, opened = 0, start = 0, resume = 0, nworst = 0;
     int k;
     char wpath[4096];
@@ -697,7 +775,11 @@ static int tolerance_main(int argc, char **argv)
             CLI_OPT_INT("--threads", 0, o.nthreads, 1, 256),
             CLI_OPT_METHOD(method),
             CLI_OPT_FLAG("--no-compensators", 0, nocomp),
-            CLI_OPT_WORD("--format", fmt, "text|csv|json|hdf5", tol_formats),
+            CLI_OPT_WORD("--format", fmt, "text|csv|json|hdf5|png|svg|pdf", tol_formats),
+            CLI_ID("--size", 0, 1, TO_SIZE),
+            CLI_OPT_FLAG("--plot", 0, plot_text),
+            CLI_OPT_FLAG("--default-tolerances", 0, deftol),
+            CLI_OPT_TEXT("--save-tolerances", 0, save_tol),
             CLI_OPT_OUTPUT(output),
             CLI_OPT_FLAG("--force", 0, force),
             CLI_OPT_FLAG("--resume", 0, resume),
@@ -721,6 +803,19 @@ static int tolerance_main(int argc, char **argv)
                     return cli_usage_error("tolerance", "--seed: \"%s\" is not an integer "
                                            "from 0 to 2^53", val);
                 seed_given = 1;
+            } else if (id == TO_SIZE) {
+                const char *x = strchr(val, 'x');
+                char w[32];
+                if (!x || (size_t)(x - val) >= sizeof w)
+                    return cli_usage_error("tolerance", "--size: expected WIDTHxHEIGHT, got "
+                                           "\"%s\"", val);
+                memcpy(w, val, (size_t)(x - val));
+                w[x - val] = '\0';
+                if (args_int(w, 100, 20000, &pic_w) != ARGS_OK ||
+                    args_int(x + 1, 100, 20000, &pic_h) != ARGS_OK)
+                    return cli_usage_error("tolerance", "--size: expected WIDTHxHEIGHT, each "
+                                           "from 100 to 20000, got \"%s\"", val);
+                size_given = 1;
             } else {
                 return -id;
             }
@@ -733,6 +828,10 @@ static int tolerance_main(int argc, char **argv)
         return cli_usage_error("tolerance", "missing DESIGN.json");
     if (fmt == FMT_HDF5 && (!output || strcmp(output, "-") == 0))
         return cli_usage_error("tolerance", "--format hdf5 needs -o FILE.h5");
+    if (IS_PICTURE(fmt) && (!output || strcmp(output, "-") == 0) && isatty(STDOUT_FILENO))
+        return cli_usage_error("tolerance", "a %s picture needs -o FILE (standard output is a "
+                               "terminal)", fmt == FMT_PNG ? "PNG" : fmt == FMT_SVG ? "SVG"
+                                                                                    : "PDF");
     if (resume && (!output || strcmp(output, "-") == 0 || fmt != REPORT_CSV))
         return cli_usage_error("tolerance", "--resume continues a CSV file: give -o FILE and "
                                "--format csv");
@@ -748,9 +847,48 @@ static int tolerance_main(int argc, char **argv)
             return cli_usage_error("tolerance", "%s exists; use --force to overwrite it",
                                    wpath);
     }
+    if (save_tol && !deftol)
+        return cli_usage_error("tolerance", "--save-tolerances writes the default set: give "
+                               "--default-tolerances");
+    if (save_tol && !force && stat(save_tol, &st) == 0)
+        return cli_usage_error("tolerance", "%s exists; use --force to overwrite it", save_tol);
     rc = cli_load_design(design, &cat, &sys);
     if (rc != CLI_EXIT_OK)
         return rc;
+    if (deftol) {
+        sg_tol_defaults dt;
+        sg_tol_defaults_init(&dt);
+        sg_diag_clear(&d);
+        if ((rc = sg_tol_default_set(sys, cat, &dt, &d)) == SG_OK)
+            rc = sg_tol_check(sys, &d);
+        if (rc == SG_OK && save_tol && rank == 0) {
+            if (cli_output_is_input(save_tol) || strcmp(save_tol, design) == 0) {
+                rc = cli_usage_error("tolerance", "--save-tolerances: %s is the design; "
+                                     "write the set to another file", save_tol);
+                goto done;
+            }
+            rc = sg_design_save(sys, save_tol, &d);
+            if (rc != SG_OK) {
+                cli_print_diag(save_tol, &d, rc);
+                rc = CLI_EXIT_FILE;
+                goto done;
+            }
+            fprintf(stderr, "sagitta: tolerance: %s: %d default tolerance rows, %d "
+                    "compensator%s\n", save_tol, sys->tol.nop, sys->tol.ncomp,
+                    sys->tol.ncomp == 1 ? "" : "s");
+            rc = CLI_EXIT_OK;
+            goto done;
+        }
+        if (rc != SG_OK) {
+            cli_print_diag(design, &d, rc);
+            rc = rc == SG_ENOMEM ? CLI_EXIT_INTERNAL : CLI_EXIT_DESIGN;
+            goto done;
+        }
+        if (save_tol) {
+            rc = CLI_EXIT_OK;
+            goto done;
+        }
+    }
     if (!sys->tol.present || sys->tol.nop == 0) {
         cli_error("%s: the design has no tolerance operands (a \"tolerances\" object; "
                   "sagitta-design(5), TOLERANCES)", design);
@@ -765,6 +903,11 @@ static int tolerance_main(int argc, char **argv)
     }
     if (!seed_given)
         seed = (long long)sys->tol.seed;
+    if (IS_PICTURE(fmt) && !sens && mc == 0) {
+        rc = cli_usage_error("tolerance", "the pictures show the sensitivity and the Monte "
+                             "Carlo: give --sensitivity or --monte-carlo N");
+        goto done;
+    }
     memset(&p, 0, sizeof p);
     {
         const char *ci = getenv("CI");
@@ -935,6 +1078,17 @@ static int tolerance_main(int argc, char **argv)
             write_json(of.f, sys, &r, sens, mc > 0, sink.crit);
         else if (fmt == REPORT_TEXT)
             write_text(of.f, sys, &r, sens, mc > 0);
+        if (fmt == REPORT_TEXT && (plot_text || isatty(fileno(of.f))) &&
+            text_pictures(of.f, sys, &r, sens, mc > 0, sink.crit)) {
+            cli_error("out of memory");
+            rc = CLI_EXIT_INTERNAL;
+            goto restore;
+        }
+        if (IS_PICTURE(fmt) &&
+            (rc = write_picture(of.f, output && strcmp(output, "-") ? output : "standard output",
+                                fmt, pic_w, pic_h, size_given, sys, &r, sens, mc > 0,
+                                sink.crit)) != CLI_EXIT_OK)
+            goto restore;
         if (tab) {
             rc = fclose(tab) != 0 ? errno : 0;
             tab = NULL;

@@ -20,7 +20,7 @@
 
 static const char *const tol_names[SG_TOL_NTYPES] = {
     "TRAD", "TCUR", "TFRN", "TTHI", "TCON", "TPAR", "TSDX", "TSDY", "TSTX", "TSTY",
-    "TEDX", "TEDY", "TETX", "TETY", "TETZ", "TIND", "TABB"};
+    "TEDX", "TEDY", "TETX", "TETY", "TETZ", "TIND", "TABB", "TIRR"};
 
 /* Zemax's test wavelength for fringes, in micrometres. */
 #define TOL_FRINGE_UM 0.6328
@@ -176,6 +176,11 @@ int sg_tol_check(const sg_system *sys, sg_diag *d)
                                   "must be the same surfaces or apart", j + 1);
             }
             break;
+        case SG_TOL_TIRR:
+            /* Zemax's TIRR takes a Standard surface alone. */
+            if (s->type != SG_SURF_STANDARD)
+                return op_err(d, k, op, "surface %d is not a standard surface", op->surface);
+            break;
         case SG_TOL_TIND:
         case SG_TOL_TABB:
             if (s->mat.kind == SG_MAT_MODEL || s->mat.kind == SG_MAT_GLASS)
@@ -241,7 +246,7 @@ int sg_tol_nominal(const sg_system *sys, const sg_catalog *cat, sg_system *out, 
     /* Fringes are counted over the clear aperture: an automatic one is
      * found once, on the nominal. */
     for (k = 0; k < sys->tol.nop; k++)
-        if (sys->tol.op[k].type == SG_TOL_TFRN &&
+        if ((sys->tol.op[k].type == SG_TOL_TFRN || sys->tol.op[k].type == SG_TOL_TIRR) &&
             !(out->surf[sys->tol.op[k].surface].semi_diameter > 0.0))
             need_sd = 1;
     if (need_sd) {
@@ -328,6 +333,24 @@ int sg_tol_apply(const sg_system *nom, const sg_catalog *cat, const double *delt
             else
                 s->mat.index += v;
             break;
+        case SG_TOL_TIRR: {
+            /* Zemax's irregularity: v fringes (double pass, at the test
+             * wavelength) at the semi-diameter r, half spherical and half
+             * astigmatism, Zs rho^4 + Za rho_y^2 with Zs = Za = v lambda /
+             * 4 (Zemax's Irregular surface); made an XY polynomial over
+             * x / r and y / r. */
+            double z = v * TOL_FRINGE_UM * um_to_units(nom) / 4.0;
+            if (s->type == SG_SURF_STANDARD) {
+                s->type = SG_SURF_XYPOLY;
+                s->norm_radius = s->semi_diameter;
+                memset(s->terms, 0, sizeof s->terms);
+            }
+            s->terms[4] += z;       /* y^2 */
+            s->terms[9] += z;       /* x^4 */
+            s->terms[11] += 2 * z;  /* x^2 y^2 */
+            s->terms[13] += z;      /* y^4 */
+            break;
+        }
         case SG_TOL_TABB:
             if (s->mat.kind == SG_MAT_GLASS) {
                 /* nd held, n(F) - n(C) = (nd - 1) / vd: the dispersion
@@ -1201,4 +1224,212 @@ void sg_tol_result_free(sg_tol_result *r)
     free(r->mc);
     r->sens = NULL;
     r->mc = NULL;
+}
+
+/* ------------------------------------------------------------------------
+ * The default tolerance set (Zemax's Tolerance Wizard)
+ * ------------------------------------------------------------------------ */
+
+void sg_tol_defaults_init(sg_tol_defaults *o)
+{
+    memset(o, 0, sizeof *o);
+    o->fringes = 1.0;
+    o->thickness = 0.2;
+    o->sdecenter = 0.2;
+    o->stilt_tir = 0.2;
+    o->irregularity = 0.2;
+    o->edecenter = 0.2;
+    o->etilt = 0.2;
+    o->index = 0.001;
+    o->abbe_pct = 1.0;
+    o->focus = 1;
+}
+
+/* The medium after surface i is air (or a fixed index of 1). */
+static int air_after(const sg_system *sys, int i)
+{
+    const sg_material *m = &sys->surf[i].mat;
+    return m->kind == SG_MAT_AIR || (m->kind == SG_MAT_INDEX && m->index == 1.0);
+}
+
+/* The same medium on both sides of surface i: a dummy surface, no power. */
+static int same_medium(const sg_system *sys, int i)
+{
+    const sg_material *a = &sys->surf[i - 1].mat, *b = &sys->surf[i].mat;
+    if (b->kind == SG_MAT_MIRROR)
+        return 0;
+    if (air_after(sys, i - 1) && air_after(sys, i))
+        return 1;
+    if (a->kind != b->kind)
+        return 0;
+    if (a->kind == SG_MAT_GLASS)
+        return strcmp(a->name, b->name) == 0 && strcmp(a->catalog, b->catalog) == 0;
+    return a->index == b->index && a->vd == b->vd;
+}
+
+static int add_op(sg_tolerances *t, int *n, sg_tol_type type, int first, int last, int adjust,
+                  double lim)
+{
+    sg_tol_operand *op;
+    if (*n >= SG_MAX_TOL_OPERANDS) {
+        (*n)++;
+        return 0;
+    }
+    op = &t->op[(*n)++];
+    memset(op, 0, sizeof *op);
+    op->type = type;
+    op->surface = first;
+    op->last = last;
+    op->adjust = adjust;
+    op->min = -lim;
+    op->max = lim;
+    return 1;
+}
+
+int sg_tol_default_set(sg_system *sys, const sg_catalog *cat, const sg_tol_defaults *o,
+                       sg_diag *d)
+{
+    sg_tolerances *t;
+    double *sd = NULL;
+    int img = sys->nsurf - 1, i, j, n = 0, rc = SG_OK, focus;
+    if (!(t = malloc(sizeof *t)))
+        return sg_diag_set(d, SG_ENOMEM, "out of memory");
+    *t = sys->tol;
+    if (!t->present) {
+        /* The settings a "tolerances" object without them has. */
+        memset(t, 0, sizeof *t);
+        t->present = 1;
+        t->pattern = SG_PUPIL_HEXAPOLAR;
+        t->density = 6;
+        t->grid = 64;
+        t->seed = 1.0;
+    }
+    t->nop = 0;
+    if (img < 2) {
+        free(t);
+        return sg_diag_set(d, SG_ERANGE, "tolerances: no surface between the object and the "
+                           "image to tolerance");
+    }
+    /* The thickness before the image focuses (Zemax's paraxial focus
+     * compensator), so it takes no thickness tolerance of its own. */
+    focus = o->focus && isfinite(sys->surf[img - 1].thickness) ? img - 1 : -1;
+    for (i = 1; i < img; i++)
+        if (o->stilt_tir > 0 && !(sys->surf[i].semi_diameter > 0.0))
+            break;
+    if (i < img) {
+        if (!(sd = malloc((size_t)sys->nsurf * sizeof *sd))) {
+            free(t);
+            return sg_diag_set(d, SG_ENOMEM, "out of memory");
+        }
+        if ((rc = sg_semi_diameters(sys, cat, NULL, sd, d)) != SG_OK)
+            goto out;
+    }
+    /* Radii: fringes of power, or lens units on a curved surface. */
+    for (i = 1; i < img; i++) {
+        const sg_surface *s = &sys->surf[i];
+        if (s->type == SG_SURF_COORDBRK || same_medium(sys, i))
+            continue;
+        if (o->radius > 0 && isfinite(s->radius) && s->radius != 0.0)
+            add_op(t, &n, SG_TOL_TRAD, i, i, -1, o->radius);
+        else if (o->fringes > 0)
+            add_op(t, &n, SG_TOL_TFRN, i, i, -1, o->fringes);
+    }
+    /* Thicknesses, the first air space after each taking the change
+     * (Zemax's TTHI adjust), so the surfaces beyond stay put. */
+    for (i = 1; o->thickness > 0 && i < img; i++) {
+        int adj = -1;
+        if (i == focus || sys->surf[i].type == SG_SURF_COORDBRK ||
+            !isfinite(sys->surf[i].thickness))
+            continue;
+        for (j = i + 1; j < img; j++)
+            if (air_after(sys, j) && sys->surf[j].type != SG_SURF_COORDBRK &&
+                isfinite(sys->surf[j].thickness)) {
+                adj = j;
+                break;
+            }
+        add_op(t, &n, SG_TOL_TTHI, i, i, adj, o->thickness);
+    }
+    /* Elements: from a surface with glass after it to the next with air
+     * after it (a cemented group is one element). */
+    for (i = 1; i < img; i++) {
+        int bad;
+        if (air_after(sys, i) || sys->surf[i].mat.kind == SG_MAT_MIRROR ||
+            sys->surf[i].type == SG_SURF_COORDBRK)
+            continue;
+        for (j = i; j < img && !air_after(sys, j); j++)
+            ;
+        if (j < img && element_ok(sys, i, j, &bad)) {
+            if (o->edecenter > 0) {
+                add_op(t, &n, SG_TOL_TEDX, i, j, -1, o->edecenter);
+                add_op(t, &n, SG_TOL_TEDY, i, j, -1, o->edecenter);
+            }
+            if (o->etilt > 0) {
+                add_op(t, &n, SG_TOL_TETX, i, j, -1, o->etilt);
+                add_op(t, &n, SG_TOL_TETY, i, j, -1, o->etilt);
+            }
+        }
+        i = j;
+    }
+    /* Each surface's own decenter and tilt (a runout T across the
+     * diameter D is a tilt of atan(T / D)); from surface 2, as rays
+     * start in surface 1's frame. */
+    for (i = 2; i < img; i++) {
+        const sg_surface *s = &sys->surf[i];
+        double r = s->semi_diameter > 0.0 ? s->semi_diameter : sd ? sd[i] : 0.0;
+        if (s->type == SG_SURF_COORDBRK || same_medium(sys, i) ||
+            sg_surface_moves_frame(s))
+            continue;
+        if (o->sdecenter > 0) {
+            add_op(t, &n, SG_TOL_TSDX, i, i, -1, o->sdecenter);
+            add_op(t, &n, SG_TOL_TSDY, i, i, -1, o->sdecenter);
+        }
+        if (o->stilt_tir > 0 && r > 0.0) {
+            double deg = atan(o->stilt_tir / (2.0 * r)) * (180.0 / 3.14159265358979323846);
+            add_op(t, &n, SG_TOL_TSTX, i, i, -1, deg);
+            add_op(t, &n, SG_TOL_TSTY, i, i, -1, deg);
+        }
+    }
+    /* Irregularity: TIRR, on the standard surfaces Zemax's takes. */
+    for (i = 1; o->irregularity > 0 && i < img; i++)
+        if (sys->surf[i].type == SG_SURF_STANDARD && !same_medium(sys, i))
+            add_op(t, &n, SG_TOL_TIRR, i, i, -1, o->irregularity);
+    /* Glasses: the index, and the Abbe number by a percentage of its own. */
+    for (i = 1; i < img; i++) {
+        const sg_material *m = &sys->surf[i].mat;
+        double vd = 0.0;
+        if (m->kind == SG_MAT_MODEL)
+            vd = m->vd;
+        else if (m->kind == SG_MAT_GLASS) {
+            const sg_glass *g = cat ? sg_material_glass(cat, m) : NULL;
+            vd = g ? g->vd : 0.0;
+        } else if (m->kind != SG_MAT_INDEX || m->index == 1.0)
+            continue; /* air and mirrors; a fixed index takes TIND alone */
+        if (o->index > 0)
+            add_op(t, &n, SG_TOL_TIND, i, i, -1, o->index);
+        if (o->abbe_pct > 0 && vd > 0)
+            add_op(t, &n, SG_TOL_TABB, i, i, -1, o->abbe_pct / 100.0 * vd);
+    }
+    if (n > SG_MAX_TOL_OPERANDS) {
+        rc = sg_diag_set(d, SG_ERANGE, "tolerances: the default set has %d rows, more than "
+                         "the %d a design holds; leave some kinds out", n,
+                         SG_MAX_TOL_OPERANDS);
+        goto out;
+    }
+    t->nop = n;
+    if (t->ncomp == 0 && focus >= 0) {
+        /* Wide enough to refocus: the larger of 1 lens unit and half the
+         * back focus. */
+        double w = fmax(1.0, 0.5 * fabs(sys->surf[focus].thickness));
+        memset(&t->comp[0], 0, sizeof t->comp[0]);
+        t->comp[0].surface = focus;
+        snprintf(t->comp[0].param, sizeof t->comp[0].param, "thickness");
+        t->comp[0].min = -w;
+        t->comp[0].max = w;
+        t->ncomp = 1;
+    }
+    sys->tol = *t;
+out:
+    free(sd);
+    free(t);
+    return rc;
 }

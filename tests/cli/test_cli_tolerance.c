@@ -22,6 +22,10 @@
 
 #include "clitest.h"
 
+#ifndef M_PI
+#define M_PI 3.14159265358979323846
+#endif
+
 static const char *exe;
 
 /* Two lenses of index 1.5 and 1.6; fields 0, 2 and 3 degrees weighted 1,
@@ -700,6 +704,485 @@ static void inverse_thin_lens(void **state)
     ct_free(&r);
 }
 
+/* ---- pictures ---------------------------------------------------------- */
+
+#define TOL8                                                                                   \
+    ", \"tolerances\": {\"operands\": ["                                                        \
+    "{\"type\": \"TRAD\", \"surface\": 1, \"min\": -0.5, \"max\": 0.5},"                       \
+    "{\"type\": \"TEDX\", \"first\": 3, \"last\": 3, \"min\": -0.05, \"max\": 0.05},"          \
+    "{\"type\": \"TSTY\", \"surface\": 2, \"min\": -0.1, \"max\": 0.1},"                       \
+    "{\"type\": \"TTHI\", \"surface\": 1, \"min\": -0.1, \"max\": 0.1},"                       \
+    "{\"type\": \"TRAD\", \"surface\": 2, \"min\": -0.5, \"max\": 0.5},"                       \
+    "{\"type\": \"TEDY\", \"first\": 1, \"last\": 2, \"min\": -0.05, \"max\": 0.05},"          \
+    "{\"type\": \"TRAD\", \"surface\": 3, \"min\": -1, \"max\": 1},"                           \
+    "{\"type\": \"TIND\", \"surface\": 3, \"min\": -0.001, \"max\": 0.001}],"                  \
+    "\"compensators\": [{\"surface\": 4, \"parameter\": \"thickness\", \"min\": -3,"           \
+    " \"max\": 3}],"                                                                           \
+    "\"criterion\": {\"type\": \"rms_spot\", \"reference\": \"centroid\","                     \
+    " \"sampling\": {\"pattern\": \"hexapolar\", \"density\": 4}},"                            \
+    "\"monte_carlo\": {\"trials\": 30, \"seed\": 5, \"distribution\": \"uniform\"}}"
+
+/* The rows of a run's JSON, worst first as Zemax ranks them (the larger
+ * of the two changes, descending; ties in row order): their indices. */
+static int json_worst_order(const cJSON *sens, int *ord)
+{
+    int n = cJSON_GetArraySize(sens), k, j;
+    for (k = 0; k < n; k++) {
+        const cJSON *row = cJSON_GetArrayItem(sens, k);
+        double w = fmax(num(row, "change_min"), num(row, "change_max"));
+        for (j = k; j > 0; j--) {
+            const cJSON *o = cJSON_GetArrayItem(sens, ord[j - 1]);
+            if (!(fmax(num(o, "change_min"), num(o, "change_max")) < w))
+                break;
+            ord[j] = ord[j - 1];
+        }
+        ord[j] = k;
+    }
+    return n;
+}
+
+/* A row's label as the chart prints it: "TRAD 2", "TEDX 3-3". */
+static void json_label(const cJSON *row, char *buf, size_t n)
+{
+    const cJSON *first = cJSON_GetObjectItem(row, "first");
+    const char *type = cJSON_GetObjectItem(row, "type")->valuestring;
+    if (first)
+        snprintf(buf, n, "%s %d-%d", type, (int)num(row, "first"), (int)num(row, "last"));
+    else
+        snprintf(buf, n, "%s %d", type, (int)num(row, "surface"));
+}
+
+/* The filled rectangles and stroked lines of an SVG that cairo wrote, by
+ * colour (its "rgb(R%,G%,B%)"), in drawing order. */
+typedef struct svg_rect {
+    double x0, y0, x1, y1;
+} svg_rect;
+
+static int svg_rects(const char *svg, const char *fill, svg_rect *out, int max)
+{
+    char key[64];
+    const char *p = strstr(svg, "</defs>");
+    int n = 0;
+    snprintf(key, sizeof key, "fill:%s;", fill);
+    for (p = p ? p : svg; (p = strstr(p, "<path style=\"")) != NULL; p++) {
+        const char *end = strchr(p, '>'), *d = strstr(p, " d=\"");
+        svg_rect r;
+        double xb, yb;
+        if (!end || !d || d > end)
+            continue;
+        {
+            char style[256];
+            size_t len = (size_t)(d - p) < sizeof style - 1 ? (size_t)(d - p) : sizeof style - 1;
+            memcpy(style, p, len);
+            style[len] = '\0';
+            if (!strstr(style, key))
+                continue;
+        }
+        if (sscanf(d, " d=\"M %lf %lf L %lf %lf L %lf %lf", &r.x0, &r.y0, &xb, &yb, &r.x1,
+                   &r.y1) == 6 && n < max)
+            out[n++] = r;
+    }
+    return n;
+}
+
+static int svg_lines(const char *svg, const char *stroke, double (*pt)[6], int max)
+{
+    char key[64];
+    const char *p = strstr(svg, "</defs>");
+    int n = 0;
+    snprintf(key, sizeof key, "stroke:%s;", stroke);
+    for (p = p ? p : svg; (p = strstr(p, key)) != NULL; p++) {
+        const char *d = strstr(p, " d=\"");
+        if (d && n < max &&
+            sscanf(d, " d=\"M %lf %lf L %lf %lf L %lf %lf", &pt[n][0], &pt[n][1], &pt[n][2],
+                   &pt[n][3], &pt[n][4], &pt[n][5]) == 6)
+            n++;
+    }
+    return n;
+}
+
+/* A bar's signed height in SVG units (up is positive) about the zero line
+ * at y = zero. */
+static double bar_height(const svg_rect *r, double zero)
+{
+    double a = fmin(r->y0, r->y1), b = fmax(r->y0, r->y1);
+    return fabs(b - zero) < 0.01 ? b - a : -(b - a); /* cairo rounds to 1/256 */
+}
+
+/* The pictures carry the run's own numbers (its JSON): the chart's bars
+ * one pair a row, worst first, their heights proportional to the JSON's
+ * changes at min and max; the histogram's bars the trials' criteria
+ * binned (ceil(sqrt(m)) equal bins, best to worst); the percentile marks
+ * where the JSON's percentiles are.  The colours are plot.c's palette:
+ * blue at min, green at max, red the histogram, magenta the marks.  PNG,
+ * SVG and PDF by their magic; the terminal picture within 80 x 24 with
+ * every shown bar labelled in the JSON's worst-first order. */
+static void pictures(void **state)
+{
+    const char *d = doublet("pic.json", TOL8), *svg = ct_path("pic.svg");
+    const char *png = ct_path("pic.png"), *pdf = ct_path("pic.pdf");
+    ct_result r;
+    cJSON *root, *sens, *mc, *crit, *pct;
+    int ord[16], n, k, nb, nr, m = 0, counts[64] = {0};
+    svg_rect rmin[64], rmax[64], hist[128];
+    double lines[16][6], sc, num_, den, zero, lo = INFINITY, hi = -INFINITY, v[64];
+    char *b, lab[32];
+    (void)state;
+    ct_run(&r, "tolerance", d, "--format", "json", NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    root = cJSON_Parse(r.out);
+    assert_non_null(root);
+    ct_free(&r);
+    sens = cJSON_GetObjectItem(root, "sensitivity");
+    mc = cJSON_GetObjectItem(root, "monte_carlo");
+    crit = cJSON_GetObjectItem(mc, "criteria");
+    pct = cJSON_GetObjectItem(mc, "percentiles");
+    n = json_worst_order(sens, ord);
+    assert_int_equal(n, 8);
+
+    ct_run(&r, "tolerance", d, "--format", "svg", "-o", svg, NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    b = ct_read(svg);
+    assert_true(strncmp(b, "<?xml", 5) == 0 && strstr(b, "</svg>"));
+    /* The legend's square first, then a bar a row. */
+    assert_int_equal(svg_rects(b, "rgb(0%,35%,85%)", rmin, 64), n + 1);
+    assert_int_equal(svg_rects(b, "rgb(0%,60%,20%)", rmax, 64), n + 1);
+    /* The zero line: the edge every bar shares. */
+    zero = fabs(fmin(rmin[1].y0, rmin[1].y1) - fmin(rmin[2].y0, rmin[2].y1)) < 0.01 ||
+                   fabs(fmin(rmin[1].y0, rmin[1].y1) - fmax(rmin[2].y0, rmin[2].y1)) < 0.01
+               ? fmin(rmin[1].y0, rmin[1].y1)
+               : fmax(rmin[1].y0, rmin[1].y1);
+    num_ = den = 0.0;
+    for (k = 0; k < n; k++) {
+        const cJSON *row = cJSON_GetArrayItem(sens, ord[k]);
+        double a = num(row, "change_min"), c = num(row, "change_max");
+        /* Left to right in the JSON's worst-first order. */
+        if (k > 0)
+            assert_true(rmin[k + 1].x0 > rmin[k].x0 && rmax[k + 1].x0 > rmax[k].x0);
+        assert_true(rmin[k + 1].x0 < rmax[k + 1].x0);
+        num_ += bar_height(&rmin[k + 1], zero) * a + bar_height(&rmax[k + 1], zero) * c;
+        den += a * a + c * c;
+    }
+    sc = num_ / den;
+    assert_true(sc > 0);
+    for (k = 0; k < n; k++) {
+        const cJSON *row = cJSON_GetArrayItem(sens, ord[k]);
+        double ha = bar_height(&rmin[k + 1], zero), hc = bar_height(&rmax[k + 1], zero);
+        if (fabs(ha - sc * num(row, "change_min")) > 0.01 ||
+            fabs(hc - sc * num(row, "change_max")) > 0.01)
+            fail_msg("row %d: bars %g, %g against the JSON's %g, %g (scale %g)", ord[k] + 1, ha,
+                     hc, sc * num(row, "change_min"), sc * num(row, "change_max"), sc);
+    }
+    /* The histogram from the JSON's criteria. */
+    for (k = 0; k < cJSON_GetArraySize(crit); k++) {
+        v[m] = cJSON_GetArrayItem(crit, k)->valuedouble;
+        lo = fmin(lo, v[m]);
+        hi = fmax(hi, v[m]);
+        m++;
+    }
+    assert_int_equal(m, 30);
+    nb = (int)ceil(sqrt((double)m));
+    for (k = 0; k < m; k++) {
+        int j = (int)((v[k] - lo) / ((hi - lo) / nb));
+        counts[j >= nb ? nb - 1 : j]++;
+    }
+    nr = svg_rects(b, "rgb(85%,10%,10%)", hist, 128);
+    {
+        int j = 0, top = 0;
+        double htop = 0.0;
+        for (k = 0; k < nb; k++)
+            top = counts[k] > top ? counts[k] : top;
+        for (k = 1; k < nr; k++)
+            htop = fmax(htop, fabs(hist[k].y1 - hist[k].y0));
+        /* Each bar that has height, in order, is the next bin with trials. */
+        for (k = 1; k < nr; k++) {
+            double h = fabs(hist[k].y1 - hist[k].y0);
+            if (h < 1e-6)
+                continue;
+            while (j < nb && counts[j] == 0)
+                j++;
+            assert_true(j < nb);
+            if (fabs(h / htop - (double)counts[j] / top) > 3e-4)
+                fail_msg("bin %d: bar %g of %g, the JSON's %d of %d", j, h, htop, counts[j],
+                         top);
+            j++;
+        }
+        while (j < nb && counts[j] == 0)
+            j++;
+        assert_int_equal(j, nb);
+    }
+    /* The percentile marks: five, at x proportional to the JSON's values
+     * and y to 90 .. 10 % (an affine map on each axis). */
+    assert_int_equal(svg_lines(b, "rgb(65%,20%,70%)", lines, 16), 5);
+    {
+        static const char *const pk[5] = {"90", "80", "50", "20", "10"};
+        static const double pv[5] = {90, 80, 50, 20, 10};
+        double p0 = num(pct, pk[0]), p4 = num(pct, pk[4]);
+        /* Each a level line to its point, then down to the axis. */
+        for (k = 0; k < 5; k++)
+            assert_true(fabs(lines[k][1] - lines[k][3]) < 0.01 &&
+                        fabs(lines[k][2] - lines[k][4]) < 0.01 && lines[k][5] > lines[k][3]);
+        for (k = 1; k < 4; k++) {
+            double tx = (lines[k][2] - lines[4][2]) / (lines[0][2] - lines[4][2]);
+            double ty = (lines[k][1] - lines[4][1]) / (lines[0][1] - lines[4][1]);
+            assert_true(fabs(tx - (num(pct, pk[k]) - p4) / (p0 - p4)) < 5e-4);
+            assert_true(fabs(ty - (pv[k] - 10) / 80) < 5e-4);
+        }
+    }
+    free(b);
+
+    /* PNG and PDF by their magic; the PNG 1000 wide (its bars fit). */
+    ct_run(&r, "tolerance", d, "--format", "png", "-o", png, NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    b = ct_read(png);
+    assert_memory_equal(b, "\x89PNG\r\n\x1a\n", 8);
+    assert_int_equal(((unsigned char)b[16] << 24 | (unsigned char)b[17] << 16 |
+                      (unsigned char)b[18] << 8 | (unsigned char)b[19]), 1000);
+    free(b);
+    ct_run(&r, "tolerance", d, "--format", "pdf", "--size", "800x900", "-o", pdf, NULL);
+    assert_int_equal(r.code, 0);
+    ct_free(&r);
+    b = ct_read(pdf);
+    assert_memory_equal(b, "%PDF-", 5);
+    free(b);
+    /* Too small a size is refused with the size it needs. */
+    ct_run(&r, "tolerance", d, "--format", "png", "--size", "200x200", "-o", ct_path("s.png"),
+           NULL);
+    assert_int_not_equal(r.code, 0);
+    assert_non_null(strstr(r.err, "--size"));
+    ct_free(&r);
+
+    /* The terminal: two pictures of 24 rows in 80 columns. */
+    setenv("COLUMNS", "80", 1);
+    ct_run(&r, "tolerance", d, "--plot", NULL);
+    unsetenv("COLUMNS");
+    assert_int_equal(r.code, 0);
+    {
+        char *pic = strstr(r.out, "Tolerancing\n"), *line, *nl;
+        int rows = 0, shown = 0;
+        const char *title;
+        /* Back to the blank line before the picture's title. */
+        assert_non_null(pic);
+        while (pic > r.out && !(pic[0] == '\n' && pic[-1] == '\n'))
+            pic--;
+        pic--;
+        for (line = pic + 2; *line; line = nl + 1) {
+            size_t w = 0;
+            const unsigned char *u;
+            nl = strchr(line, '\n');
+            assert_non_null(nl);
+            for (u = (const unsigned char *)line; u < (const unsigned char *)nl; u++)
+                w += (*u & 0xC0) != 0x80;
+            assert_true(w <= 80);
+            rows++;
+        }
+        /* 24 rows, a blank line, 24 rows. */
+        assert_int_equal(rows, 49);
+        title = strstr(pic, ": the ");
+        assert_non_null(title);
+        assert_int_equal(sscanf(title, ": the %d worst of 8 operands", &shown), 1);
+        assert_true(shown >= 4 && shown < 8);
+    }
+    {
+        /* The label row names the shown bars in the JSON's order. */
+        const char *p = strstr(r.out, "Tolerancing\n");
+        for (k = 0; k < 8; k++) {
+            const char *at;
+            json_label(cJSON_GetArrayItem(sens, ord[k]), lab, sizeof lab);
+            at = strstr(p, lab);
+            if (k < 4) {
+                assert_non_null(at);
+                p = at;
+            }
+        }
+    }
+    ct_free(&r);
+    cJSON_Delete(root);
+}
+
+/* ---- the default tolerance set ------------------------------------------ */
+
+/* The Cooke triplet of examples/cooke_triplet.json (Sasian, OPTI 517):
+ * N-LAK9, N-SF5, N-LAK9 in air, stop on surface 4. */
+static const char *triplet(const char *name)
+{
+    return ct_file(name,
+        "{\"format\": \"sagitta-design\", \"units\": \"mm\","
+        "\"wavelengths\": {\"primary\": 2, \"list\": [{\"um\": 0.4861327, \"weight\": 0.5},"
+        " {\"um\": 0.5875618, \"weight\": 1}, {\"um\": 0.6562725, \"weight\": 0.5}]},"
+        "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}, {\"y\": 14.14}, {\"y\": 20}]},"
+        "\"aperture\": {\"type\": \"epd\", \"value\": 12.5}, \"ray_aiming\": \"off\","
+        "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+        "{\"radius\": 23.713, \"thickness\": 4.831, \"material\": \"N-LAK9\"},"
+        "{\"radius\": 7331.288, \"thickness\": 5.86},"
+        "{\"radius\": -24.456, \"thickness\": 0.975, \"material\": \"N-SF5\", \"stop\": true},"
+        "{\"radius\": 21.896, \"thickness\": 4.822},"
+        "{\"radius\": 86.759, \"thickness\": 3.127, \"material\": \"N-LAK9\"},"
+        "{\"radius\": -20.4942, \"thickness\": 41.2365},"
+        "{\"radius\": \"inf\", \"thickness\": 0}]}");
+}
+
+/* The set Zemax's Tolerance Wizard makes, counted by hand for the
+ * triplet: 6 surfaces with power (TFRN 1 fringe); thicknesses 1 to 5
+ * (6 focuses) at 0.2 mm, each adjusted by the first air space after it
+ * (2, 4, 4, 6, 6); 3 elements (1-2, 3-4, 5-6) with TEDX, TEDY 0.2 mm and
+ * TETX, TETY 0.2 deg; surfaces 2 to 6 with TSDX, TSDY 0.2 mm and TSTX,
+ * TSTY of a 0.2 mm runout across the automatic diameter, atan(0.2 / D);
+ * TIRR of 0.2 fringes on the 6 (standard) surfaces with power;
+ * glasses on 1, 3 and 5 with TIND 0.001 and TABB 1 % of the catalog's
+ * Abbe numbers (Schott: N-LAK9 54.71, N-SF5 32.25); the back focus (41.2365)
+ * compensating within half of it.  55 rows. */
+static void default_tolerances(void **state)
+{
+    const char *d = triplet("tri.json"), *out = ct_path("tri_tol.json");
+    static const int adjust[6] = {0, 2, 4, 4, 6, 6};
+    ct_result r;
+    cJSON *root, *sd, *ops, *comp, *op;
+    double D[8] = {0};
+    int k, n = 0, nfrn = 0, nthi = 0, nel = 0, nsurf = 0, nglass = 0, nirr = 0;
+    (void)state;
+    ct_run(&r, "semidiam", d, "--format", "json", NULL);
+    assert_int_equal(r.code, 0);
+    root = cJSON_Parse(r.out);
+    sd = cJSON_GetObjectItem(root, "surfaces");
+    for (k = 0; k < cJSON_GetArraySize(sd); k++) {
+        const cJSON *row = cJSON_GetArrayItem(sd, k);
+        D[(int)num(row, "surface")] = 2 * num(row, "auto");
+    }
+    cJSON_Delete(root);
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--default-tolerances", "--save-tolerances", out, NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    assert_non_null(strstr(r.err, "55 default tolerance rows, 1 compensator"));
+    ct_free(&r);
+    {
+        char *text = ct_read(out);
+        root = cJSON_Parse(text);
+        free(text);
+    }
+    assert_non_null(root);
+    ops = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "tolerances"), "operands");
+    comp = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "tolerances"), "compensators");
+    n = cJSON_GetArraySize(ops);
+    assert_int_equal(n, 55);
+    cJSON_ArrayForEach(op, ops) {
+        const char *t = cJSON_GetObjectItem(op, "type")->valuestring;
+        int s = cJSON_GetObjectItem(op, "surface") ? (int)num(op, "surface")
+                                                   : (int)num(op, "first");
+        double lim = num(op, "max");
+        assert_true(num(op, "min") == -lim);
+        if (strcmp(t, "TFRN") == 0) {
+            assert_int_equal(s, ++nfrn);
+            assert_true(lim == 1);
+        } else if (strcmp(t, "TTHI") == 0) {
+            assert_int_equal(s, ++nthi);
+            assert_int_equal((int)num(op, "adjust"), adjust[s]);
+            assert_true(lim == 0.2);
+        } else if (strcmp(t, "TIRR") == 0) {
+            assert_int_equal(s, ++nirr);
+            assert_true(lim == 0.2);
+            assert_int_equal(nsurf, 20); /* after the surfaces' decenters and tilts */
+        } else if (t[1] == 'E') {
+            /* TEDX, TEDY, TETX, TETY of element 1-2, then 3-4, 5-6. */
+            static const char *const kinds[4] = {"TEDX", "TEDY", "TETX", "TETY"};
+            assert_string_equal(t, kinds[nel % 4]);
+            assert_int_equal(s, 1 + 2 * (nel / 4));
+            assert_int_equal((int)num(op, "last"), 2 + 2 * (nel / 4));
+            assert_true(lim == 0.2);
+            nel++;
+        } else if (t[1] == 'S') {
+            static const char *const kinds[4] = {"TSDX", "TSDY", "TSTX", "TSTY"};
+            assert_string_equal(t, kinds[nsurf % 4]);
+            assert_int_equal(s, 2 + nsurf / 4);
+            if (nsurf % 4 < 2)
+                assert_true(lim == 0.2);
+            else
+                ct_close(lim, atan(0.2 / D[s]) * 180 / M_PI, 1e-12, 0, "surface tilt");
+            nsurf++;
+        } else if (strcmp(t, "TIND") == 0 || strcmp(t, "TABB") == 0) {
+            assert_int_equal(s, 1 + 2 * (nglass / 2));
+            if (t[1] == 'I')
+                assert_true(lim == 0.001);
+            else
+                ct_close(lim, (s == 3 ? 32.25 : 54.71) / 100, 1e-12, 0, "TABB");
+            nglass++;
+        } else {
+            fail_msg("unexpected row %s", t);
+        }
+    }
+    assert_int_equal(nfrn, 6);
+    assert_int_equal(nthi, 5);
+    assert_int_equal(nel, 12);
+    assert_int_equal(nsurf, 20);
+    assert_int_equal(nglass, 6);
+    assert_int_equal(nirr, 6);
+    assert_int_equal(cJSON_GetArraySize(comp), 1);
+    op = cJSON_GetArrayItem(comp, 0);
+    assert_int_equal((int)num(op, "surface"), 6);
+    assert_string_equal(cJSON_GetObjectItem(op, "parameter")->valuestring, "thickness");
+    ct_close(num(op, "max"), 41.2365 / 2, 1e-15, 0, "compensator");
+    cJSON_Delete(root);
+    /* Refused: over the file, or without --default-tolerances. */
+    ct_run(&r, "tolerance", d, "--default-tolerances", "--save-tolerances", out, NULL);
+    assert_int_not_equal(r.code, 0);
+    assert_non_null(strstr(r.err, "exists"));
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--save-tolerances", ct_path("x.json"), NULL);
+    assert_int_not_equal(r.code, 0);
+    assert_non_null(strstr(r.err, "--default-tolerances"));
+    ct_free(&r);
+    /* A cemented doublet is one element, 1-3; the thicknesses 1 and 2
+     * are adjusted by the air space 3, which focuses: TFRN 1-3, TTHI 1-2,
+     * TEDX..TETY 1-3, TSDX..TSTY on 2 and 3, TIRR 1-3, TIND and TABB on 1
+     * and 2. */
+    d = ct_file("cem.json",
+        "{\"format\": \"sagitta-design\", \"units\": \"mm\","
+        "\"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.5875618}]},"
+        "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}, {\"y\": 2}]},"
+        "\"aperture\": {\"type\": \"epd\", \"value\": 10},"
+        "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+        "{\"radius\": 60, \"thickness\": 4, \"material\": \"N-LAK9\", \"stop\": true},"
+        "{\"radius\": -40, \"thickness\": 2, \"material\": \"N-SF5\"},"
+        "{\"radius\": -200, \"thickness\": 90},"
+        "{\"radius\": \"inf\", \"thickness\": 0}]}");
+    out = ct_path("cem_tol.json");
+    ct_run(&r, "tolerance", d, "--default-tolerances", "--save-tolerances", out, NULL);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    assert_non_null(strstr(r.err, "24 default tolerance rows, 1 compensator"));
+    ct_free(&r);
+    {
+        char *text = ct_read(out);
+        static const char *const want[24] = {
+            "TFRN 1", "TFRN 2", "TFRN 3", "TTHI 1 3", "TTHI 2 3", "TEDX 1-3", "TEDY 1-3",
+            "TETX 1-3", "TETY 1-3", "TSDX 2", "TSDY 2", "TSTX 2", "TSTY 2", "TSDX 3",
+            "TSDY 3", "TSTX 3", "TSTY 3", "TIRR 1", "TIRR 2", "TIRR 3", "TIND 1", "TABB 1",
+            "TIND 2", "TABB 2"};
+        root = cJSON_Parse(text);
+        free(text);
+        ops = cJSON_GetObjectItem(cJSON_GetObjectItem(root, "tolerances"), "operands");
+        assert_int_equal(cJSON_GetArraySize(ops), 24);
+        for (k = 0; k < 24; k++) {
+            char got[32];
+            op = cJSON_GetArrayItem(ops, k);
+            json_label(op, got, sizeof got);
+            if (cJSON_GetObjectItem(op, "adjust"))
+                snprintf(got + strlen(got), sizeof got - strlen(got), " %d",
+                         (int)num(op, "adjust"));
+            assert_string_equal(got, want[k]);
+        }
+        op = cJSON_GetArrayItem(cJSON_GetObjectItem(cJSON_GetObjectItem(root, "tolerances"),
+                                                    "compensators"), 0);
+        assert_int_equal((int)num(op, "surface"), 3);
+        cJSON_Delete(root);
+    }
+}
+
 int main(int argc, char **argv)
 {
     const struct CMUnitTest tests[] = {
@@ -714,6 +1197,8 @@ int main(int argc, char **argv)
         cmocka_unit_test(hdf5_table),
         cmocka_unit_test(save_worst),
         cmocka_unit_test(inverse_thin_lens),
+        cmocka_unit_test(pictures),
+        cmocka_unit_test(default_tolerances),
     };
     int rc;
     ct_init(argc, argv);
