@@ -316,6 +316,35 @@ static void test_no_write(void **state)
 enum { H_TRUNC_HDR, H_BIG_SIZE, H_BAD_CODE, H_LONGER, H_SHORTER, H_NO_LENS, H_TWO_LENS,
        H_BAD_BYTE, H_EMPTY, H_STORED_SIZE, H_NONAME, H_N };
 
+/* An archive of many members with long names and no lens file: the
+ * refusal lists the names that fit and ends with ", ..." (the list once
+ * wrote past its end: fuzz_zar, under AddressSanitizer). */
+static void test_long_member_list(void **state)
+{
+    arch a = { NULL, 0, 0 };
+    void *out = NULL;
+    size_t outn = 0;
+    char n1[128], n2[64], got[256];
+    sg_diag d;
+    (void)state;
+    /* 100 and 53 characters: the list reaches 155 of its 160 bytes, where
+     * the old ", ..." wrote one byte past the end. */
+    memset(n1, 'M', 96);
+    strcpy(n1 + 96, ".DAT");
+    memset(n2, 'N', 49);
+    strcpy(n2 + 49, ".DAT");
+    add_member(&a, 0xEC, n1, "x", 1);
+    add_member(&a, 0xEC, n2, "x", 1);
+    add_member(&a, 0xEC, "C.DAT", "x", 1);
+    add_member(&a, 0xEC, "D.DAT", "x", 1);
+    sg_diag_clear(&d);
+    assert_int_equal(sg_zar_member(a.p, a.n, "t.zar", NULL, &out, &outn, got, &d), SG_EPARSE);
+    assert_non_null(strstr(d.msg, "(it holds MMMM"));
+    assert_non_null(strstr(d.msg, "M.DAT, ...)"));
+    assert_null(out);
+    free(a.p);
+}
+
 static void test_hostile(void **state)
 {
     static const struct {
@@ -408,6 +437,7 @@ int main(void)
         cmocka_unit_test(test_missing_glass),
         cmocka_unit_test(test_no_write),
         cmocka_unit_test(test_hostile),
+        cmocka_unit_test(test_long_member_list),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

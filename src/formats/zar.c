@@ -294,7 +294,7 @@ int sg_zar_member(const void *bytes, size_t len, const char *path, const char *w
     size_t off = 0, next;
     zar_member m, found;
     char plain[ZAR_NAME], list[160] = "";
-    int nfound = 0, rc;
+    int nfound = 0, rc, cut = 0;
 
     if (!bytes || !out || !outlen)
         return sg_diag_set(d, SG_EINVAL, "archive: no bytes or no output");
@@ -309,11 +309,16 @@ int sg_zar_member(const void *bytes, size_t len, const char *path, const char *w
         if ((rc = member_at(b, len, off, path, &m, &next, d)) != SG_OK)
             return rc;
         plain_name(&m, plain);
-        if (strlen(list) + strlen(plain) + 6 < sizeof list)
-            snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s", list[0] ? ", " : "",
-                     plain);
-        else if (!strstr(list, "..."))
-            strcat(list, ", ...");
+        /* A name goes in while the list keeps room for ", ..." after it;
+         * the first that does not fit ends the list with it. */
+        if (!cut && strlen(list) + 2 + strlen(plain) + sizeof ", ..." <= sizeof list) {
+            snprintf(list + strlen(list), sizeof list - strlen(list), "%s%s",
+                     list[0] ? ", " : "", plain);
+        } else if (!cut) {
+            snprintf(list + strlen(list), sizeof list - strlen(list), "%s",
+                     list[0] ? ", ..." : "...");
+            cut = 1;
+        }
         if (want ? strcasecmp(plain, want) == 0 : ends_with_ci(plain, ".zmx")) {
             if (nfound++ == 0)
                 found = m;
