@@ -496,7 +496,7 @@ static void set_err(short_res *r, int rc, const sg_diag *d)
 static void bench_mpfr_ray(const bench_cfg *cfg, const sg_system *sys, const sg_catalog *cat,
                            short_res *r)
 {
-    int n = cfg->repeat > SHORT_MIN_SAMPLES ? cfg->repeat : SHORT_MIN_SAMPLES, i;
+    int n = cfg->repeat > SHORT_MIN_SAMPLES ? cfg->repeat : SHORT_MIN_SAMPLES, i, rc;
     sg_ray_surface *out = malloc((size_t)sys->nsurf * sizeof *out);
     double *sec = malloc((size_t)n * sizeof *sec);
     sg_trace_opts o;
@@ -512,9 +512,9 @@ static void bench_mpfr_ray(const bench_cfg *cfg, const sg_system *sys, const sg_
     o.method = SG_METHOD_MPFR;
     o.mpfr_bits = 256;
     sg_diag_clear(&d);
-    t = sg_tracer_new(sys, cat, &o, &d);
-    if (!t) {
-        set_err(r, d.code ? d.code : SG_ENOMEM, &d);
+    rc = sg_tracer_open(sys, cat, &o, &t, &d);
+    if (rc != SG_OK) {
+        set_err(r, rc, &d);
         goto done;
     }
     for (i = 0; i < n; i++) {
@@ -1198,11 +1198,13 @@ static int bench_baseline(const bench_cfg *cfg, const char *path, cJSON *arr)
     memset(lrows, 0xff, nall * (size_t)ns * LEAN_ROW * sizeof *lrows);
     sg_trace_opts_init(&to);
     sg_diag_clear(&d);
-    t = sg_tracer_new(sys, cat, &to, &d);
-    b1 = t ? sg_batch_new(sys, cat, &to, 1, &d) : NULL;
+    erc = sg_tracer_open(sys, cat, &to, &t, &d);
+    b1 = erc == SG_OK ? sg_batch_new(sys, cat, &to, 1, &d) : NULL;
     ball = b1 ? sg_batch_new(sys, cat, &to, cfg->threads, &d) : NULL;
     if (!ball) {
-        erc = d.code ? d.code : SG_ENOMEM;
+        /* The batch's constructor has no code of its own to return. */
+        if (erc == SG_OK)
+            erc = d.code ? d.code : SG_ENOMEM;
         goto failed;
     }
     L = lean_new(sys, t);
@@ -1371,9 +1373,8 @@ static void bench_design(const bench_cfg *cfg, const char *path, design_res *r)
         sg_trace_opts_init(&o);
         o.method = s < NMETHOD ? methods[s] : SG_METHOD_MPFR;
         sg_diag_clear(&d);
-        t = sg_tracer_new(sys, cat, &o, &d);
-        if (!t) {
-            r->trace_rc = d.code ? d.code : SG_ENOMEM;
+        r->trace_rc = sg_tracer_open(sys, cat, &o, &t, &d);
+        if (r->trace_rc != SG_OK) {
             snprintf(r->trace_msg, sizeof r->trace_msg, "%s method: %s",
                      sg_method_name(o.method), d.msg[0] ? d.msg : sg_strerror(r->trace_rc));
             cli_design_free(cat, sys);

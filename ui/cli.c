@@ -789,14 +789,16 @@ static int trace_rays(const char *design, const char *rays_path, const char *out
     /* One tracer first, so a design the tracer refuses fails here once
      * and its warnings are printed once, not once a thread. */
     sg_diag_clear(&d);
-    t = sg_tracer_new(sys, cat, &opts, &d);
-    if (t) {
+    rc = sg_tracer_open(sys, cat, &opts, &t, &d);
+    if (rc == SG_OK) {
         cli_print_warnings(&d, design);
         sg_diag_clear(&d);
         b = sg_batch_new(sys, cat, &opts, threads, &d);
+        /* The batch's constructor has no code of its own to return. */
+        if (!b)
+            rc = d.code != SG_OK ? d.code : SG_ENOMEM;
     }
-    if (!t || !b) {
-        rc = d.code != SG_OK ? d.code : SG_ENOMEM;
+    if (rc != SG_OK) {
         cli_print_diag(design, &d, rc);
         rc = cli_exit_for(rc);
         if (rc == CLI_EXIT_OK)
@@ -1108,9 +1110,8 @@ int cmd_trace(int argc, char **argv)
     opts.clip = clip;
 
     sg_diag_clear(&d);
-    t = sg_tracer_new(sys, cat, &opts, &d);
-    if (!t) {
-        rc = d.code != SG_OK ? d.code : SG_ENOMEM;
+    rc = sg_tracer_open(sys, cat, &opts, &t, &d);
+    if (rc != SG_OK) {
         cli_print_diag(design, &d, rc);
         rc = cli_exit_for(rc);
         if (rc == CLI_EXIT_OK)

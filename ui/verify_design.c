@@ -368,9 +368,8 @@ static int vdesign_run(vdesign *v, const sg_catalog *cat)
         o.mpfr_bits = v->bits;
         o.wave = v->wave0;
         sg_diag_clear(&d);
-        t[m] = sg_tracer_new(v->sys, cat, &o, &d);
-        if (!t[m]) {
-            int err = d.code != SG_OK ? d.code : SG_ENOMEM;
+        int err = sg_tracer_open(v->sys, cat, &o, &t[m], &d);
+        if (err != SG_OK) {
             const char *msg = d.msg[0] ? d.msg : sg_strerror(err);
             if (strstr(msg, v->path))
                 cli_error("%s (%s method)", msg, mname[m]);

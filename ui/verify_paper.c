@@ -43,9 +43,8 @@ static int make_tracers(const sg_system *sys, int bits, sg_tracer *t[NMETHOD],
         o.method = mcode[m];
         o.mpfr_bits = bits;
         sg_diag_clear(&d);
-        t[m] = sg_tracer_new(sys, NULL, &o, &d);
-        if (!t[m]) {
-            int err = d.code != SG_OK ? d.code : SG_ENOMEM;
+        int err = sg_tracer_open(sys, NULL, &o, &t[m], &d);
+        if (err != SG_OK) {
             cli_error("verify: %s: %s", what, d.msg[0] ? d.msg : sg_strerror(err));
             /* The experiments' systems are built here, so any refusal is
              * the program's fault, not the user's. */

@@ -3418,15 +3418,16 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int la
     return SG_OK;
 }
 
-char *sg_zmx_to_text(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
+/* The design as sagitta's own .zmx text in *out (malloc'ed); the failure's
+ * code, so a caller without a diagnostic still learns it. */
+static int zmx_text(const sg_system *sys, const sg_catalog *cat, char **out, sg_diag *d)
 {
     zbuf b = {0};
     locale_t cloc, old = (locale_t)0;
     int rc;
-    if (!sys) {
-        sg_diag_set(d, SG_EINVAL, "export: no system");
-        return NULL;
-    }
+    *out = NULL;
+    if (!sys)
+        return sg_diag_set(d, SG_EINVAL, "export: no system");
     cloc = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0);
     if (cloc)
         old = uselocale(cloc);
@@ -3435,11 +3436,20 @@ char *sg_zmx_to_text(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
         uselocale(old);
         freelocale(cloc);
     }
+    if (rc == SG_OK && (b.oom || !b.p))
+        rc = sg_diag_set(d, SG_ENOMEM, "export: out of memory");
     if (rc != SG_OK) {
         free(b.p);
-        return NULL;
+        return rc;
     }
-    return b.p;
+    *out = b.p;
+    return SG_OK;
+}
+
+char *sg_zmx_to_text(const sg_system *sys, const sg_catalog *cat, sg_diag *d)
+{
+    char *t;
+    return zmx_text(sys, cat, &t, d) == SG_OK ? t : NULL;
 }
 
 /* UTF-8 text back into the file's encoding; a character ISO-8859-1 lacks
@@ -3738,10 +3748,10 @@ int sg_zmx_save_flags(const sg_system *sys, const char *path, const sg_catalog *
         sg_diag_warn(d, "%s: written as sagitta's own .zmx text, without the %d lines of the "
                      "original file it does not interpret: %s", path, sys->zmx->nkept, why);
     }
-    text = sg_zmx_to_text(sys, cat, d);
+    rc = zmx_text(sys, cat, &text, d);
     sg_catalog_free(own);
-    if (!text)
-        return d && d->code ? d->code : SG_ENOMEM;
+    if (rc != SG_OK)
+        return rc;
     rc = sg_save_text_atomic(path, text, strlen(text), d);
     free(text);
     return rc;

@@ -28,6 +28,8 @@ static struct {
 
 sg_tracer *fault_tracer_new(const sg_system *sys, const sg_catalog *cat,
                             const sg_trace_opts *opts, sg_diag *d);
+int fault_tracer_open(const sg_system *sys, const sg_catalog *cat,
+                      const sg_trace_opts *opts, sg_tracer **out, sg_diag *d);
 int fault_trace_start(sg_tracer *t, const double start[3], const double dir[3],
                       sg_ray_surface *out);
 int fault_trace_normalized(sg_tracer *t, double hx, double hy, double px, double py,
@@ -46,6 +48,20 @@ sg_tracer *fault_tracer_new(const sg_system *sys, const sg_catalog *cat,
                 break;
             }
     return t;
+}
+
+int fault_tracer_open(const sg_system *sys, const sg_catalog *cat,
+                      const sg_trace_opts *opts, sg_tracer **out, sg_diag *d)
+{
+    int rc = sg_tracer_open(sys, cat, opts, out, d), k;
+    if (rc == SG_OK)
+        for (k = 0; k < MAXT; k++)
+            if (!known[k].t || known[k].t == *out) {
+                known[k].t = *out;
+                known[k].m = opts ? opts->method : SG_METHOD_PRECISE;
+                break;
+            }
+    return rc;
 }
 
 static double ulp1(double x)

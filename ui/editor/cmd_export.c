@@ -203,6 +203,7 @@ int c_export_any(ed *e, args *a, int bang)
     int *status = NULL;
     sg_batch *b = NULL;
     sg_tracer *rt = NULL;
+    int trc;
     sg_opd *opd = NULL;
     sg_opd_ref ref;
     sg_diag d;
@@ -323,9 +324,9 @@ int c_export_any(ed *e, args *a, int bang)
     /* Every ray's OPD, as sagitta trace writes it, from a tracer of the
      * batch's options for the reference spheres. */
     opd = malloc(block * sizeof *opd);
-    rt = sg_tracer_new(e->doc.sys, e->cat, &e->opts, &d);
-    if (!opd || !rt) {
-        flags = ec_fail(e, "export: %s", rt ? "out of memory" : d.msg[0] ? d.msg : sg_strerror(d.code));
+    trc = opd ? sg_tracer_open(e->doc.sys, e->cat, &e->opts, &rt, &d) : SG_ENOMEM;
+    if (trc != SG_OK) {
+        flags = ec_fail(e, "export: %s", d.msg[0] ? d.msg : sg_strerror(trc));
         goto done;
     }
     m.opd = 1;
