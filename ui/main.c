@@ -40,9 +40,9 @@ static const cli_command commands[] = {
     { "thermal", cmd_thermal, "the design as built at another temperature (thermal expansion)" },
     { "merit", cmd_merit, "print every row of the design's merit function and its value" },
     { "optimize", cmd_optimize, "damped least squares on the design's variables" },
-    { "tolerance", cmd_tolerance, "sensitivity and Monte Carlo of the design's tolerances, compensated" },
-    { "psf", cmd_psf, "FFT point spread function and Strehl ratio" },
-    { "mtf", cmd_mtf, "FFT MTF, tangential and sagittal, with the diffraction limit" },
+    { "tolerance", cmd_tolerance, "sensitivity and Monte Carlo of the tolerances, compensated" },
+    { "psf", cmd_psf, "FFT or Huygens point spread function and Strehl ratio" },
+    { "mtf", cmd_mtf, "FFT, Huygens or geometric MTF, with the diffraction limit" },
     { "throughfocus", cmd_throughfocus, "MTF at one frequency and Strehl ratio against focus" },
     { "encircled", cmd_encircled, "encircled and ensquared energy: diffraction and geometric" },
 };
@@ -58,9 +58,9 @@ static void usage(FILE *f)
           "\n"
           "Without a command, or with a design file, sagitta opens the lens data\n"
           "editor.  Commands:\n", f);
-    fprintf(f, "  %-10s %s\n", "edit", "open the lens data editor");
+    fprintf(f, "  %-12s %s\n", "edit", "open the lens data editor");
     for (k = 0; k < NCOMMANDS; k++)
-        fprintf(f, "  %-10s %s\n", commands[k].name, commands[k].summary);
+        fprintf(f, "  %-12s %s\n", commands[k].name, commands[k].summary);
     fputs("\nRun 'sagitta help COMMAND' for a command's options; see sagitta(1).\n", f);
 }
 
