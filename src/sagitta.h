@@ -2170,27 +2170,38 @@ SG_API void sg_ee_free(sg_ee *e);
 /* Through-focus MTF and Strehl ratio (sagitta(1), mtf --through-focus). */
 #define SG_TF_MAX_STEPS 1001
 
+#define SG_TF_MAX_FREQS 8
+
 typedef struct sg_tf_opts {
     sg_mtf_opts mtf;   /* field, wave, sampling, method, trace; its
-                        * max_frequency is set to frequency */
-    double frequency;  /* cycles/mm */
+                        * max_frequency is set to each frequency */
+    double frequency;  /* cycles/mm, when nfrequency is 0 */
     double range;      /* lens units: the image plane from -range to +range */
     int steps;         /* shifts, 2 to SG_TF_MAX_STEPS; default 11 */
+    /* Several frequencies in one run (after the fields above, so that a
+     * caller built against the one-frequency layout keeps its offsets):
+     * 0 takes frequency alone. */
+    int nfrequency;                       /* 0 to SG_TF_MAX_FREQS */
+    double frequencies[SG_TF_MAX_FREQS];  /* cycles/mm */
 } sg_tf_opts;
 
 typedef struct sg_tf {
     int nfield, nsteps;
     int *field;          /* nfield 0-based design fields */
-    double frequency;    /* cycles/mm */
+    double frequency;    /* cycles/mm: the first frequency */
     double *shift;       /* nsteps, lens units, from -range to +range */
-    double *tan, *sag;   /* nfield * nsteps: the MTF at the frequency */
+    double *tan, *sag;   /* nfield * nfreq * nsteps: the MTF of field f at
+                          * frequency q is at [(f * nfreq + q) * nsteps] */
     double *strehl;      /* nfield * nsteps: the FFT PSF's Strehl ratio */
+    int nfreq;           /* 1 to SG_TF_MAX_FREQS */
+    double *freq;        /* nfreq cycles/mm, in the order asked */
 } sg_tf;
 
 SG_API void sg_tf_opts_init(sg_tf_opts *o);
-/* The MTF at one frequency and the Strehl ratio of each field with the
+/* The MTF at each frequency and the Strehl ratio of each field with the
  * image plane shifted along the axis (the gap before it lengthened),
- * at steps shifts from -range to +range. */
+ * at steps shifts from -range to +range.  Each frequency's values are
+ * those of a run at that frequency alone. */
 SG_API int sg_tf_compute(const sg_system *sys, const sg_catalog *cat, const sg_tf_opts *o,
                          sg_tf *out, sg_diag *d);
 SG_API void sg_tf_free(sg_tf *t);

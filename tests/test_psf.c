@@ -1109,6 +1109,59 @@ static void through_focus(void **state)
     sg_system_free(sys);
 }
 
+/* Several frequencies in one run: at each, Hopkins' integral as above,
+ * with s = 2 nu / nu_c (0.25, 0.5 and 0.75 of the cutoff, asked for out
+ * of order); the layout is [(field * nfreq + q) * nsteps + k]. */
+static void through_focus_frequencies(void **state)
+{
+    const double f = 200.0, epd = 20.0, frac[3] = { 0.75, 0.25, 0.5 };
+    sg_system *sys = paraboloid(f, epd, 0.0);
+    sg_catalog *cat = tu_catalog();
+    double lambda_mm = sys->wave[0].um * 1e-3, F = f / epd, nuc = 1.0 / (lambda_mm * F);
+    double worst = 0.0;
+    sg_tf_opts o;
+    sg_tf t;
+    sg_diag d;
+    int k, q;
+    (void)state;
+    sg_tf_opts_init(&o);
+    o.mtf.sampling = 128;
+    o.nfrequency = 3;
+    for (q = 0; q < 3; q++)
+        o.frequencies[q] = frac[q] * nuc;
+    o.range = 8.0 * 1.0 * lambda_mm * F * F;
+    o.steps = 5;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_tf_compute(sys, cat, &o, &t, &d), SG_OK);
+    assert_int_equal(t.nfreq, 3);
+    assert_int_equal(t.nfield, 1);
+    for (q = 0; q < 3; q++) {
+        assert_true(t.freq[q] == frac[q] * nuc);
+        for (k = 0; k < t.nsteps; k++) {
+            double w020 = defocus_w(f, epd, t.shift[k], lambda_mm, 1.0);
+            double par[2] = { 2.0 * frac[q], w020 }, lim = 1.0 - par[0] / 2;
+            double want = fabs(gl_int(defocus_otf_x, par, -lim, lim, 40)) / PI;
+            size_t c = (size_t)q * t.nsteps + k;
+            worst = fmax(worst, fabs(t.tan[c] - want));
+            worst = fmax(worst, fabs(t.sag[c] - want));
+        }
+    }
+    print_message("# through focus at 0.75, 0.25 and 0.5 of the cutoff in one run: MTF against "
+                  "Hopkins' integral: largest difference %.3g\n", worst);
+    assert_true(worst < 0.004);
+    sg_tf_free(&t);
+    /* Too many, and one that is not positive, are refused. */
+    o.nfrequency = SG_TF_MAX_FREQS + 1;
+    assert_int_equal(sg_tf_compute(sys, cat, &o, &t, &d), SG_ERANGE);
+    o.nfrequency = 2;
+    o.frequencies[1] = -1.0;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_tf_compute(sys, cat, &o, &t, &d), SG_ERANGE);
+    assert_non_null(strstr(d.msg, "frequency -1"));
+    sg_catalog_free(cat);
+    sg_system_free(sys);
+}
+
 static void bad_input(void **state)
 {
     sg_system *sys = paraboloid(200.0, 20.0, 0.0);
@@ -1209,6 +1262,7 @@ int main(void)
         cmocka_unit_test(geometric_mtf_defocus),
         cmocka_unit_test(huygens_mtf),
         cmocka_unit_test(through_focus),
+        cmocka_unit_test(through_focus_frequencies),
         cmocka_unit_test(encircled_airy),
         cmocka_unit_test(ensquared_airy),
         cmocka_unit_test(encircled_polychromatic),

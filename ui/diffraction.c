@@ -11,10 +11,12 @@
 #include <string.h>
 
 #include "ancmd.h"
+#include "args.h"
+#include "numfmt.h"
 #include "safetext.h"
 #include "views.h"
 
-enum { D_METHOD = 1 };
+enum { D_METHOD = 1, D_FREQ };
 /* throughfocus is mtf --through-focus under Zemax's own name. */
 enum { K_PSF, K_MTF, K_EE, K_TF };
 
@@ -28,15 +30,15 @@ static void diff_help(int kind, FILE *f)
 {
     if (kind == K_TF)
         fputs(
-"Usage: sagitta throughfocus DESIGN.json --range R --frequency F [OPTIONS]\n"
-"Print the MTF at F cycles/mm, tangential and sagittal, and the Strehl ratio\n"
+"Usage: sagitta throughfocus DESIGN.json --range R --frequency F[,F...] [OPTIONS]\n"
+"Print the MTF at each F cycles/mm, tangential and sagittal, and the Strehl ratio\n"
 "of each field against a shift of the image plane from -R to +R lens units,\n"
 "as Zemax's Through Focus MTF: the same as sagitta mtf --through-focus R\n"
 "--frequency F.  See sagitta(1), mtf.\n"
 "\n"
 "Options:\n"
 "  --range R          the image plane from -R to +R (lens units)\n"
-"  --frequency F      cycles/mm\n"
+"  --frequency F,...  cycles/mm, 1 to 8 of them\n"
 "  --steps K          shifts, 2 to 1001 (default 11)\n"
 "  --field N          one field (default: every field)\n"
 "  --wave N           one wavelength (default: every one, by weight)\n"
@@ -93,7 +95,7 @@ AN_COMMON_HELP
 "                     which samples up to the cutoff)\n"
 "  --through-focus R  the MTF at --frequency and the Strehl ratio against\n"
 "                     the image plane shifted from -R to +R (lens units)\n"
-"  --frequency F      cycles/mm, with --through-focus\n"
+"  --frequency F,...  cycles/mm (1 to 8), with --through-focus\n"
 "  --steps K          shifts, 2 to 1001 (default 11), with --through-focus\n"
 AN_COMMON_HELP
 "  -h, --help         show this help\n", f);
@@ -430,66 +432,123 @@ static void ee_write(FILE *f, int fmt, const diff_ctx *c)
     }
 }
 
+/* The frequencies as "20, 40 and 60" (%.6g each). */
+static void tf_freqs_text(FILE *f, const sg_tf *t)
+{
+    int q;
+    for (q = 0; q < t->nfreq; q++)
+        fprintf(f, "%s%.6g", q == 0 ? "" : q == t->nfreq - 1 ? " and " : ", ", t->freq[q]);
+}
+
 static void tf_write(FILE *f, int fmt, const diff_ctx *c)
 {
     const sg_tf *t = c->tf;
     const sg_system *sys = c->a->sys;
-    int j, k;
+    int j, k, q, nq = t->nfreq;
+    char g[NUMFMT_G17_MAX];
     if (fmt == AN_FMT_JSON) {
         fputs("{\n  \"frequency\": ", f);
         num(f, t->frequency, 1);
-        fprintf(f, ",\n  \"units\": \"%s\",\n  \"fields\": [", sys->units);
+        fputs(",\n  \"frequencies\": [", f);
+        for (q = 0; q < nq; q++) {
+            fputs(q ? ", " : "", f);
+            num(f, t->freq[q], 1);
+        }
+        fprintf(f, "],\n  \"units\": \"%s\",\n  \"fields\": [", sys->units);
         for (k = 0; k < t->nfield; k++) {
-            size_t o = (size_t)k * t->nsteps;
+            size_t o = (size_t)k * nq * t->nsteps;
             fprintf(f, "%s\n    {\"field\": %d, ", k ? "," : "", t->field[k] + 1);
             ee_series(f, "shift", t->shift, t->nsteps);
+            /* The first frequency's, as a one-frequency run writes them. */
             fputs(",\n     ", f);
             ee_series(f, "tangential", t->tan + o, t->nsteps);
             fputs(",\n     ", f);
             ee_series(f, "sagittal", t->sag + o, t->nsteps);
             fputs(",\n     ", f);
-            ee_series(f, "strehl", t->strehl + o, t->nsteps);
-            fputc('}', f);
+            ee_series(f, "strehl", t->strehl + (size_t)k * t->nsteps, t->nsteps);
+            fputs(",\n     \"mtf\": [", f);
+            for (q = 0; q < nq; q++) {
+                size_t oq = ((size_t)k * nq + q) * t->nsteps;
+                fputs(q ? ",\n       {\"frequency\": " : "\n       {\"frequency\": ", f);
+                num(f, t->freq[q], 1);
+                fputs(", ", f);
+                ee_series(f, "tangential", t->tan + oq, t->nsteps);
+                fputs(", ", f);
+                ee_series(f, "sagittal", t->sag + oq, t->nsteps);
+                fputc('}', f);
+            }
+            fputs("]}", f);
         }
         fputs("\n  ]\n}\n", f);
         return;
     }
     if (fmt == AN_FMT_TEXT) {
         char tt[160];
-        fprintf(f, "Through-focus MTF at %.6g cycles/mm and Strehl ratio: %s\n  ", t->frequency,
-                safe_text(sys->title, tt, sizeof tt));
+        fputs("Through-focus MTF at ", f);
+        tf_freqs_text(f, t);
+        fprintf(f, " cycles/mm and Strehl ratio: %s\n  ", safe_text(sys->title, tt, sizeof tt));
         wave_text(f, sys, c->wave0);
-        fprintf(f, "; focus shift of the image plane in %s\n\n", sys->units);
-        fprintf(f, "%14s", "shift");
-        for (k = 0; k < t->nfield; k++)
-            fprintf(f, "  field %-3d T  field %-3d S  field %-3d Strehl", t->field[k] + 1,
-                    t->field[k] + 1, t->field[k] + 1);
-        fputc('\n', f);
-        for (j = 0; j < t->nsteps; j++) {
-            fprintf(f, "%14.6g", t->shift[j]);
-            for (k = 0; k < t->nfield; k++) {
-                size_t o = (size_t)k * t->nsteps + j;
-                fprintf(f, "  %11.6f  %11.6f  %16.6f", t->tan[o], t->sag[o], t->strehl[o]);
-            }
+        fprintf(f, "; focus shift of the image plane in %s\n", sys->units);
+        if (nq == 1) {
+            fprintf(f, "\n%14s", "shift");
+            for (k = 0; k < t->nfield; k++)
+                fprintf(f, "  field %-3d T  field %-3d S  field %-3d Strehl", t->field[k] + 1,
+                        t->field[k] + 1, t->field[k] + 1);
             fputc('\n', f);
+            for (j = 0; j < t->nsteps; j++) {
+                fprintf(f, "%14.6g", t->shift[j]);
+                for (k = 0; k < t->nfield; k++) {
+                    size_t o = (size_t)k * t->nsteps + j;
+                    fprintf(f, "  %11.6f  %11.6f  %16.6f", t->tan[o], t->sag[o], t->strehl[o]);
+                }
+                fputc('\n', f);
+            }
+            return;
+        }
+        /* Several frequencies: a table a field, T and S a frequency. */
+        for (k = 0; k < t->nfield; k++) {
+            fprintf(f, "\nfield %d\n%14s", t->field[k] + 1, "shift");
+            for (q = 0; q < nq; q++)
+                fprintf(f, "  T %-9.6g  S %-9.6g", t->freq[q], t->freq[q]);
+            fprintf(f, "  %11s\n", "Strehl");
+            for (j = 0; j < t->nsteps; j++) {
+                fprintf(f, "%14.6g", t->shift[j]);
+                for (q = 0; q < nq; q++) {
+                    size_t o = ((size_t)k * nq + q) * t->nsteps + j;
+                    fprintf(f, "  %11.6f  %11.6f", t->tan[o], t->sag[o]);
+                }
+                fprintf(f, "  %11.6f\n", t->strehl[(size_t)k * t->nsteps + j]);
+            }
         }
         return;
     }
     fputs("shift", f);
-    for (k = 0; k < t->nfield; k++)
-        fprintf(f, ",field%d_tangential,field%d_sagittal,field%d_strehl", t->field[k] + 1,
-                t->field[k] + 1, t->field[k] + 1);
+    for (k = 0; k < t->nfield; k++) {
+        for (q = 0; q < nq; q++) {
+            /* One frequency keeps its plain names; several are named by
+             * their frequency in full. */
+            if (nq == 1)
+                g[0] = '\0';
+            else
+                numfmt_shortest_f(t->freq[q], g);
+            fprintf(f, ",field%d_tangential%s%s,field%d_sagittal%s%s", t->field[k] + 1,
+                    nq > 1 ? "_" : "", g, t->field[k] + 1, nq > 1 ? "_" : "", g);
+        }
+        fprintf(f, ",field%d_strehl", t->field[k] + 1);
+    }
     fputc('\n', f);
     for (j = 0; j < t->nsteps; j++) {
         num(f, t->shift[j], 0);
         for (k = 0; k < t->nfield; k++) {
-            size_t o = (size_t)k * t->nsteps + j;
+            for (q = 0; q < nq; q++) {
+                size_t o = ((size_t)k * nq + q) * t->nsteps + j;
+                fputc(',', f);
+                num(f, t->tan[o], 0);
+                fputc(',', f);
+                num(f, t->sag[o], 0);
+            }
             fputc(',', f);
-            num(f, t->tan[o], 0);
-            fputc(',', f);
-            num(f, t->sag[o], 0);
-            fputc(',', f);
-            num(f, t->strehl[o], 0);
+            num(f, t->strehl[(size_t)k * t->nsteps + j], 0);
         }
         fputc('\n', f);
     }
@@ -521,6 +580,29 @@ static int diff_fig(void *ctx, plot_figure *f)
     return view_psf_figure(c->a->sys, c->p, c->np, f);
 }
 
+/* --frequency F[,F...]: 1 to SG_TF_MAX_FREQS positive numbers of
+ * cycles/mm. */
+static int freq_list(const char *cmd, const char *s, double *out, int *n)
+{
+    int m = 1, k, bad, rc;
+    const char *p;
+    for (p = s; *p; p++)
+        m += *p == ',';
+    if (m > SG_TF_MAX_FREQS)
+        return cli_usage_error(cmd, "--frequency: %d frequencies; at most %d in one run", m,
+                               SG_TF_MAX_FREQS);
+    rc = args_double_list(s, 0, out, m, &bad);
+    if (rc != ARGS_OK)
+        return cli_usage_error(cmd, "--frequency: \"%s\" is not a comma-separated list of "
+                                    "numbers of cycles/mm (%s)", s, args_strerror(rc));
+    for (k = 0; k < m; k++)
+        if (!(out[k] > 0.0))
+            return cli_usage_error(cmd, "--frequency: %.17g is not a positive number of "
+                                        "cycles/mm", out[k]);
+    *n = m;
+    return CLI_EXIT_OK;
+}
+
 static int run(int kind, int argc, char **argv)
 {
     const char *cmd = kind == K_EE    ? "encircled"
@@ -531,6 +613,8 @@ static int run(int kind, int argc, char **argv)
     int id, rc, field1 = 0, wave1 = 0, sampling = 64, method = SG_METHOD_PRECISE, k, nf;
     int eekind = SG_EE_ENCIRCLED, rays = 0, dmethod = 0, isize = 0, steps = 11;
     double maxf = 0.0, maxr = 0.0, idelta = 0.0, tfrange = 0.0, tffreq = 0.0;
+    double tffreqs[SG_TF_MAX_FREQS];
+    int ntf = 0;
     cli_iter it;
     an_cmd a;
     sg_diag d;
@@ -555,7 +639,8 @@ static int run(int kind, int argc, char **argv)
         CLI_OPT_INT_FOR("--image-size", isize, 3, SG_PSF_IMAGE_MAX, "psf mtf"),
         CLI_OPT_POS_FOR("--image-delta", idelta, "spacing", " of micrometres", "psf mtf"),
         CLI_OPT_POS_FOR("--through-focus", tfrange, "range", NULL, "mtf"),
-        CLI_OPT_POS_FOR("--frequency", tffreq, "frequency", NULL, "mtf throughfocus"),
+        /* A list of frequencies: parsed below. */
+        {"--frequency", 0, 1, D_FREQ, 0, NULL, 0, 0, NULL, NULL, NULL, NULL},
         CLI_OPT_INT_FOR("--steps", steps, 2, SG_TF_MAX_STEPS, "mtf throughfocus"),
         CLI_END
     };
@@ -590,6 +675,13 @@ static int run(int kind, int argc, char **argv)
                                        : kind == K_MTF ? "fft, geometric or huygens"
                                        : kind == K_TF  ? "fft or geometric"
                                                        : "one of");
+            break;
+        case D_FREQ:
+            if (kind != K_MTF && kind != K_TF)
+                return cli_usage_error(cmd, "--frequency is an option of mtf throughfocus only");
+            if ((rc = freq_list(cmd, val, tffreqs, &ntf)) != CLI_EXIT_OK)
+                return rc;
+            tffreq = tffreqs[0];
             break;
         default:
             return CLI_EXIT_USAGE;
@@ -659,6 +751,8 @@ static int run(int kind, int argc, char **argv)
             sg_tf_opts_init(&to2);
             to2.mtf = o;
             to2.frequency = tffreq;
+            to2.nfrequency = ntf;
+            memcpy(to2.frequencies, tffreqs, (size_t)ntf * sizeof *tffreqs);
             to2.range = tfrange;
             to2.steps = steps;
             rc = sg_tf_compute(a.sys, a.cat, &to2, &tf, &d);

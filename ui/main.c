@@ -43,7 +43,7 @@ static const cli_command commands[] = {
     { "tolerance", cmd_tolerance, "sensitivity and Monte Carlo of the tolerances, compensated" },
     { "psf", cmd_psf, "FFT or Huygens point spread function and Strehl ratio" },
     { "mtf", cmd_mtf, "FFT, Huygens or geometric MTF, with the diffraction limit" },
-    { "throughfocus", cmd_throughfocus, "MTF at one frequency and Strehl ratio against focus" },
+    { "throughfocus", cmd_throughfocus, "MTF at chosen frequencies and Strehl ratio against focus" },
     { "encircled", cmd_encircled, "encircled and ensquared energy: diffraction and geometric" },
 };
 #define NCOMMANDS (sizeof commands / sizeof commands[0])

@@ -594,26 +594,48 @@ int view_ee_figure(const sg_system *sys, const sg_ee *e, plot_figure *f)
 
 int view_tf_figure(const sg_system *sys, const sg_tf *t, plot_figure *f)
 {
-    char title[200], lab[160], pt[32], ax[48];
-    int k;
-    snprintf(title, sizeof title, "Through-focus MTF at %.4g cycles/mm: %s", t->frequency,
+    char title[200], lab[160], pt[32], ax[48], fr[96], lg[48];
+    int k, q, nq = t->nfreq > 0 ? t->nfreq : 1;
+    size_t used = 0;
+    fr[0] = '\0';
+    for (q = 0; q < nq && used < sizeof fr; q++)
+        used += (size_t)snprintf(fr + used, sizeof fr - used, "%s%.4g",
+                                 q == 0 ? "" : q == nq - 1 ? " and " : ", ",
+                                 t->freq ? t->freq[q] : t->frequency);
+    snprintf(title, sizeof title, "Through-focus MTF at %s cycles/mm: %s", fr,
              safe_text(sys->title, lab, sizeof lab));
     plot_figure_init(f, title);
     snprintf(ax, sizeof ax, "focus shift (%s)", sys->units);
     for (k = 0; k < t->nfield; k++) {
-        size_t o = (size_t)k * t->nsteps;
         plot_panel *p;
         snprintf(pt, sizeof pt, "field %d", t->field[k] + 1);
         p = plot_add_panel(f, pt, ax, "MTF, Strehl ratio");
-        if (!p ||
-            plot_add_series(p, PLOT_LINES, 0, t->shift, t->tan + o, (size_t)t->nsteps) ||
-            plot_add_series(p, PLOT_LINES, 1, t->shift, t->sag + o, (size_t)t->nsteps) ||
-            plot_add_series(p, PLOT_LINES, PLOT_FG, t->shift, t->strehl + o, (size_t)t->nsteps))
+        if (!p)
+            return -1;
+        /* One frequency keeps its two colours; several take a pair each. */
+        for (q = 0; q < nq; q++) {
+            size_t o = ((size_t)k * nq + q) * t->nsteps;
+            if (plot_add_series(p, PLOT_LINES, 2 * q, t->shift, t->tan + o, (size_t)t->nsteps) ||
+                plot_add_series(p, PLOT_LINES, 2 * q + 1, t->shift, t->sag + o,
+                                (size_t)t->nsteps))
+                return -1;
+        }
+        if (plot_add_series(p, PLOT_LINES, PLOT_FG, t->shift, t->strehl + (size_t)k * t->nsteps,
+                            (size_t)t->nsteps))
             return -1;
         plot_panel_limits(p, 0.0);
     }
-    plot_add_legend(f, 0, "tangential");
-    plot_add_legend(f, 1, "sagittal");
+    for (q = 0; q < nq; q++) {
+        if (nq == 1) {
+            plot_add_legend(f, 0, "tangential");
+            plot_add_legend(f, 1, "sagittal");
+            break;
+        }
+        snprintf(lg, sizeof lg, "T %.4g cycles/mm", t->freq[q]);
+        plot_add_legend(f, 2 * q, lg);
+        snprintf(lg, sizeof lg, "S %.4g cycles/mm", t->freq[q]);
+        plot_add_legend(f, 2 * q + 1, lg);
+    }
     plot_add_legend(f, PLOT_FG, "Strehl ratio");
     return 0;
 }

@@ -218,6 +218,42 @@ static void test_diffraction(void **state)
         ct_free(&t);
     }
     ct_free(&r);
+    /* Several frequencies in one run: in focus each is the circle's
+     * 2/pi (acos s - s sqrt(1 - s^2)) at s = nu / nu_c; bad lists named. */
+    expect(2, ARGS("throughfocus", path, "--range", "0.1", "--frequency", "20,abc"),
+           "--frequency", NULL);
+    expect(2, ARGS("throughfocus", path, "--range", "0.1", "--frequency", "20,-1"),
+           "not a positive", NULL);
+    expect(2, ARGS("throughfocus", path, "--range", "0.1", "--frequency", "1,2,3,4,5,6,7,8,9"),
+           "at most 8", NULL);
+    expect(2, ARGS("psf", path, "--frequency", "20"), "mtf throughfocus only", NULL);
+    {
+        char fr[80];
+        const double sv[2] = { 0.25, 0.5 };
+        int q;
+        snprintf(fr, sizeof fr, "%.17g,%.17g", nuc * sv[0], nuc * sv[1]);
+        ct_run(&r, "throughfocus", mirror, "--range", "0.01", "--frequency", fr, "--steps", "3",
+               "--format", "json", (const char *)NULL);
+        if (r.code != 0)
+            fail_msg("sagitta throughfocus, two frequencies: exit %d: %s", r.code, r.err);
+        assert_non_null(strstr(r.out, "\"frequencies\": ["));
+        p = strstr(r.out, "\"mtf\": [");
+        assert_non_null(p);
+        for (q = 0; q < 2; q++) {
+            double s = sv[q], want = 2.0 / 3.14159265358979 * (acos(s) - s * sqrt(1.0 - s * s));
+            p = strstr(p, "\"tangential\": [");
+            assert_non_null(p);
+            p = strchr(p, ',');
+            assert_true(fabs(strtod(p + 1, NULL) - want) < 0.004);
+        }
+        ct_free(&r);
+        ct_run(&r, "throughfocus", mirror, "--range", "0.01", "--frequency", "20,40", "--steps",
+               "3", "--format", "csv", (const char *)NULL);
+        assert_int_equal(r.code, 0);
+        assert_non_null(strstr(r.out, "shift,field1_tangential_20,field1_sagittal_20,"
+                                      "field1_tangential_40,field1_sagittal_40,field1_strehl"));
+    }
+    ct_free(&r);
     /* encircled: bad options named; the perfect F/10's energy within its
      * first dark ring, v = 3.8317 (1.2197 lambda F#), is Rayleigh's 0.838. */
     expect(2, ARGS("encircled", path, "--type", "round"), "--type", NULL);
