@@ -784,6 +784,9 @@ SG_API void sg_param_cell(const sg_param *p, int k, char *buf, size_t n);
 /* Whether a surface of type reads element k of surface parameter p (each
  * shape reads only its own; the editor shows the rest dim). */
 SG_API int sg_param_used(const sg_param *p, int k, int type);
+/* Whether p is a part of the material (a model glass's nd or vd,
+ * "material.nd" and "material.vd"), which only a model glass has. */
+SG_API int sg_param_material_part(const sg_param *p);
 /* Every parameter of obj at its default. */
 SG_API void sg_param_defaults(sg_param_scope scope, void *obj);
 /* Nonzero when every parameter of a and b is the same, bit for bit. */

@@ -185,6 +185,121 @@ static void bad(void **state)
     }
 }
 
+/* A singlet of model glass whose nd is varied for an EFL of 45: the
+ * thick lens' 1/f = (n - 1) (c1 - c2 + (n - 1) t c1 c2 / n), solved for
+ * n by bisection here, at the d line, where the model's index is nd. */
+static void model_glass_nd(void **state)
+{
+    const char *text =
+        "{\"units\": \"mm\", \"wavelengths\": {\"primary\": 1, \"list\": [{\"um\": 0.5875618}]},"
+        "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}]},"
+        "\"aperture\": {\"type\": \"epd\", \"value\": 5},"
+        "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+        "{\"radius\": 50, \"thickness\": 5, \"stop\": true, \"material\": {\"nd\": 1.6, "
+        "\"vd\": 50}, \"solves\": {\"material.nd\": {\"type\": \"variable\"}}},"
+        "{\"radius\": -50, \"thickness\": 40},"
+        "{\"radius\": \"inf\", \"thickness\": 0}],"
+        "\"merit\": {\"operands\": [{\"type\": \"EFFL\", \"wave\": 1, \"target\": 45}]}}";
+    sg_system *sys = parse(text), *b;
+    sg_opt_result res;
+    sg_paddr v[4];
+    double c1 = 1.0 / 50, c2 = -1.0 / 50, t = 5, lo = 1.0, hi = 4.0, n, vlo, vhi;
+    char name[96], *out;
+    int k;
+    (void)state;
+    assert_int_equal(sg_variables(sys, v, 4), 1);
+    sg_paddr_name(&v[0], name, sizeof name);
+    assert_string_equal(name, "surface 1 model glass nd");
+    /* No min or max: the model's own limits. */
+    assert_true(sg_variable_bounds(sys, &v[0], &vlo, &vhi) && vlo == 1.0 && vhi == 4.0);
+    for (k = 0; k < 200; k++) {
+        double m = 0.5 * (lo + hi);
+        double p = (m - 1) * (c1 - c2 + (m - 1) * t * c1 * c2 / m);
+        if (p < 1.0 / 45)
+            lo = m;
+        else
+            hi = m;
+    }
+    n = 0.5 * (lo + hi);
+    out = sg_design_to_json(sys);
+    assert_non_null(out);
+    b = parse(out);
+    assert_true(sg_system_equal(sys, b));
+    optimize(sys, &res);
+    print_message("# model glass nd varied to EFL 45: %.15g, the thick lens' %.15g\n",
+                  sys->surf[1].mat.index, n);
+    assert_true(fabs(sys->surf[1].mat.index - n) < 1e-9);
+    assert_true(sys->surf[1].mat.vd == 50.0);
+    free(out);
+    sg_system_free(b);
+    sg_system_free(sys);
+}
+
+/* A thin achromat in contact, every thickness 0, of two model glasses:
+ * the flint's vd varied for zero axial colour between F and C.  The
+ * model gives n(F) - n(C) = (nd - 1) / vd exactly, so the powers match
+ * at F and C where (nd1 - 1) K1 / V1 + (nd2 - 1) K2 / V2 = 0. */
+static void model_glass_vd(void **state)
+{
+    const char *text =
+        "{\"units\": \"mm\", \"wavelengths\": {\"primary\": 2, \"list\": [{\"um\": 0.4861327},"
+        " {\"um\": 0.5875618}, {\"um\": 0.6562725}]},"
+        "\"fields\": {\"type\": \"angle\", \"list\": [{\"y\": 0}]},"
+        "\"aperture\": {\"type\": \"epd\", \"value\": 5},"
+        "\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+        "{\"radius\": 50, \"thickness\": 0, \"stop\": true, \"material\": {\"nd\": 1.5168, "
+        "\"vd\": 64.17}},"
+        "{\"radius\": -50, \"thickness\": 0, \"material\": {\"nd\": 1.62, \"vd\": 40},"
+        " \"solves\": {\"material.vd\": {\"type\": \"variable\", \"min\": 1, \"max\": 300}}},"
+        "{\"radius\": -200, \"thickness\": 80},"
+        "{\"radius\": \"inf\", \"thickness\": 0}],"
+        "\"merit\": {\"operands\": [{\"type\": \"AXCL\", \"wave1\": 1, \"wave2\": 3, "
+        "\"target\": 0}]}}";
+    sg_system *sys = parse(text);
+    sg_opt_result res;
+    sg_paddr v[4];
+    double k1 = 1.0 / 50 + 1.0 / 50, k2 = -1.0 / 50 + 1.0 / 200, lo, hi;
+    double want = -(1.62 - 1) * k2 * 64.17 / ((1.5168 - 1) * k1);
+    sg_diag d;
+    (void)state;
+    /* min 1 and max 300 are narrowed to the model's 5 to 200. */
+    assert_int_equal(sg_variables(sys, v, 4), 1);
+    assert_true(sg_variable_bounds(sys, &v[0], &lo, &hi) && lo == 5.0 && hi == 200.0);
+    optimize(sys, &res);
+    print_message("# model glass vd varied for no axial colour: %.15g, the thin achromat's "
+                  "%.15g\n", sys->surf[2].mat.vd, want);
+    assert_true(fabs(sys->surf[2].mat.vd - want) < 1e-7 * want);
+    assert_true(sys->surf[2].mat.index == 1.62);
+    /* Made a variable through the API, within the model's limits too. */
+    sg_diag_clear(&d);
+    assert_int_equal(sg_variable_set(sys, 1, "material.nd", 0, 1, 0.5, 9, &d), SG_OK);
+    assert_int_equal(sg_variables(sys, v, 4), 2);
+    assert_true(sg_variable_bounds(sys, &v[0], &lo, &hi) && lo == 1.0 && hi == 4.0);
+    /* On a material that is not a model glass they are refused. */
+    sg_diag_clear(&d);
+    assert_int_equal(sg_variable_set(sys, 3, "material.nd", 0, 1, -INFINITY, INFINITY, &d),
+                     SG_ERANGE);
+    assert_non_null(strstr(d.msg, "not a model glass"));
+    sys->surf[2].mat.kind = SG_MAT_INDEX;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_system_validate(sys, NULL, &d), SG_ERANGE);
+    assert_non_null(strstr(d.msg, "surface 2: its model glass vd is a variable"));
+    sg_system_free(sys);
+    {
+        const char *bad =
+            "{\"surfaces\": [{\"radius\": \"inf\", \"thickness\": \"inf\"},"
+            "{\"radius\": 50, \"thickness\": 5, \"stop\": true, \"material\": \"N-BK7\","
+            " \"solves\": {\"material.nd\": {\"type\": \"variable\"}}},"
+            "{\"radius\": \"inf\", \"thickness\": 0}]}";
+        sg_system *x = sg_system_new();
+        sg_diag_clear(&d);
+        assert_int_not_equal(sg_design_parse(x, bad, strlen(bad), "t", &d), SG_OK);
+        assert_non_null(strstr(d.msg, "surface 1: solves: material.nd"));
+        assert_non_null(strstr(d.msg, "not a model glass"));
+        sg_system_free(x);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -192,6 +307,8 @@ int main(void)
         cmocka_unit_test(tilt),
         cmocka_unit_test(round_trip),
         cmocka_unit_test(bad),
+        cmocka_unit_test(model_glass_nd),
+        cmocka_unit_test(model_glass_vd),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -835,6 +835,17 @@ static int get_pvars(jctx *c, const cJSON *v, const char *at, const sg_param *p,
             return perr(c, SG_EPARSE, at, "a %s surface does not use element %d of %s",
                         sg_param_find(SG_SCOPE_SURFACE, "type")->names[s->type], q.elem,
                         p->key);
+        /* As sg_variable_set: on a model glass alone, within its limits. */
+        if (sg_param_material_part(p)) {
+            if (s->mat.kind != SG_MAT_MODEL)
+                return perr(c, SG_EPARSE, at, "the material is not a model glass, which "
+                            "alone has %s", p->key);
+            q.lo = q.lo > p->min ? q.lo : p->min;
+            q.hi = q.hi < p->max ? q.hi : p->max;
+            if (!(q.lo <= q.hi))
+                return perr(c, SG_EPARSE, at, "min and max lie outside the model's %g to %g",
+                            p->min, p->max);
+        }
         if (s->nvar >= SG_SURF_MAXVARS)
             return perr(c, SG_ERANGE, at, "more than %d variables on one surface",
                         SG_SURF_MAXVARS);

@@ -57,6 +57,10 @@ int sg_paddr_make(const sg_system *sys, sg_param_scope scope, int index, const c
     if (elem < 0 || elem >= p->count)
         return sg_diag_set(d, SG_ERANGE, "%s %d: %s has no element %d (0 to %d)",
                            scope_words[scope], index, key, elem, p->count - 1);
+    /* A model glass's nd and vd exist on a model glass alone. */
+    if (sg_param_material_part(p) && sys->surf[index].mat.kind != SG_MAT_MODEL)
+        return sg_diag_set(d, SG_ERANGE, "surface %d: %s: the material is not a model glass",
+                           index, p->label);
     a->scope = scope;
     a->index = index;
     a->param = p;
@@ -193,6 +197,15 @@ int sg_variable_set(sg_system *sys, int surf, const char *key, int elem, int on,
     if (!sg_param_used(a.param, elem, s->type))
         return sg_diag_set(d, SG_ERANGE, "%s: a %s surface does not use it", name,
                            sg_param_find(SG_SCOPE_SURFACE, "type")->names[s->type]);
+    /* A model glass's nd and vd vary within the model's limits, outside
+     * which it has no index. */
+    if (sg_param_material_part(a.param)) {
+        lo = lo > a.param->min ? lo : a.param->min;
+        hi = hi < a.param->max ? hi : a.param->max;
+        if (!(lo <= hi))
+            return sg_diag_set(d, SG_ERANGE, "%s: min and max lie outside the model's %g to %g",
+                               name, a.param->min, a.param->max);
+    }
     if (t >= 0) {
         memset(&s->solve[t], 0, sizeof s->solve[t]);
         s->solve[t].kind = SG_SOLVE_VARIABLE;

@@ -207,6 +207,16 @@ static const sg_param surface_params[] = {
      * alone (sagitta-design(5), THERMAL EXPANSION); the .zmx line TCED. */
     {"tce", "TCE", "TCE", "tce", "TCED", SG_PARAM_REAL, SG_PARAM_OPTIONAL,
      offsetof(sg_surface, tce), 0, 1, 0, 0, -SG_TCE_MAX, SG_TCE_MAX, 0.0, NONAMES, 3},
+    /* A model glass's nd and vd, inside the material's own object in
+     * JSON (hence nested, with no column): rows so that a variable or a
+     * tolerance can address them, on a model glass alone
+     * (sg_param_material_part). */
+    {"material.nd", "model glass nd", NULL, NULL, NULL, SG_PARAM_REAL, SG_PARAM_NESTED,
+     offsetof(sg_surface, mat.index), 0, 1, 0, 0, SG_MODEL_ND_MIN, SG_MODEL_ND_MAX, 0.0,
+     NONAMES, 2},
+    {"material.vd", "model glass vd", NULL, NULL, NULL, SG_PARAM_REAL, SG_PARAM_NESTED,
+     offsetof(sg_surface, mat.vd), 0, 1, 0, 0, SG_MODEL_VD_MIN, SG_MODEL_VD_MAX, 0.0, NONAMES,
+     2},
 };
 
 #define NROWS(a) ((int)(sizeof(a) / sizeof((a)[0])))
@@ -518,6 +528,11 @@ int sg_system_equal(const sg_system *a, const sg_system *b)
 }
 
 /* The record of the type (src/shape/shape.h) lists the parameters it reads. */
+int sg_param_material_part(const sg_param *p)
+{
+    return p && p->kind == SG_PARAM_REAL && strncmp(p->key, "material.", 9) == 0;
+}
+
 int sg_param_used(const sg_param *p, int k, int type)
 {
     const sg_shape_type *t = sg_shape_type_of(type);

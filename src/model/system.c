@@ -636,6 +636,11 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
                                i, s->mat.index, s->mat.vd, s->mat.dpgf, SG_MODEL_ND_MIN,
                                SG_MODEL_ND_MAX, SG_MODEL_VD_MIN, SG_MODEL_VD_MAX,
                                SG_MODEL_DPGF_MAX);
+        for (k = 0; k < s->nvar; k++)
+            if (sg_param_material_part(s->var[k].param) && s->mat.kind != SG_MAT_MODEL)
+                return sg_diag_set(d, SG_ERANGE, "surface %d: its %s is a variable, but its "
+                                   "material is not a model glass (novar %d %s clears it)", i,
+                                   s->var[k].param->label, i, s->var[k].param->key);
     warnings:
         if (s->mat.kind == SG_MAT_MODEL)
             for (k = 0; k < sys->nwave; k++)

@@ -241,13 +241,14 @@ static void mat_text(const sg_material *m, char *buf, size_t n)
     }
 }
 
-/* The solve a parameter can hold, or -1. */
-/* Whether element k of p is one of the surface's other variables. */
+/* Whether element k of p is one of the surface's other variables; the
+ * material cell is marked when its model glass's nd or vd is. */
 static int is_var(const sg_surface *s, const sg_param *p, int k)
 {
     int j;
     for (j = 0; j < s->nvar; j++)
-        if (s->var[j].param == p && s->var[j].elem == k)
+        if ((s->var[j].param == p && s->var[j].elem == k) ||
+            (p->kind == SG_PARAM_MATERIAL && sg_param_material_part(s->var[j].param)))
             return 1;
     return 0;
 }
@@ -277,7 +278,11 @@ static void text(const sg_system *sys, int row, int col, int edit, char *buf, si
             snprintf(buf, n, "%s", p->shown ? p->shown[v] : p->names[v]);
         break;
     case SG_PARAM_TEXT: snprintf(buf, n, "%s", (const char *)sg_param_cptr(p, s)); break;
-    case SG_PARAM_MATERIAL: mat_text(sg_param_cptr(p, s), buf, n); break;
+    case SG_PARAM_MATERIAL:
+        mat_text(sg_param_cptr(p, s), buf, n);
+        if (!edit && is_var(s, p, 0) && strlen(buf) + 2 < n)
+            strcat(buf, " V");
+        break;
     case SG_PARAM_BOOL: snprintf(buf, n, "%s", sg_param_get(p, s, 0) != 0.0 ? "on" : "off"); break;
     case SG_PARAM_REAL: {
         double x = sg_param_get(p, s, k);
