@@ -54,8 +54,8 @@ static void tolerance_help(FILE *f)
 "  -o, --output FILE        write the report to FILE (not over an existing file\n"
 "                           without --force)\n"
 "  --force                  overwrite FILE\n"
-"  --resume                 continue the Monte Carlo table in FILE (CSV) from its\n"
-"                           last whole trial\n"
+"  --resume                 continue the Monte Carlo table in FILE (CSV: from its\n"
+"                           last whole trial; HDF5: a run stopped by Ctrl-C)\n"
 "  --save-worst K           write the K worst Monte Carlo systems as\n"
 "                           DESIGN-worst1.json ... (not over files without --force)\n"
 "  --default-tolerances     tolerance the default set Zemax's Tolerance Wizard\n"
@@ -733,6 +733,65 @@ out:
     return rc;
 }
 
+/* --resume --format hdf5: FILE must be this run's table (its settings,
+ * trials 1 .. K, trial K computed again equal to its row, status and
+ * criterion bit for bit).  HDF5 is not written in place: a new table is
+ * made beside FILE, its K rows copied and their criteria put in crit,
+ * and the run goes on from K (*start); FILE is replaced when the run
+ * ends, and stays as it was on any error.  With all trials there,
+ * *start is trials and nothing is opened. */
+static int resume_h5(const char *path, const sg_system *sys, const sg_tol_result *r,
+                     sg_tol_mc *m, int trials, uint64_t seed, double *crit, tolh5 **h5,
+                     int *start)
+{
+    char err[512];
+    sg_tol_value last, again;
+    int k = 0, k2 = 0, done = 0, rc;
+    *h5 = NULL;
+    rc = tolh5_resume(path, crit_key(sys), dist_key(sys), r->nominal.criterion, seed, trials,
+                      NULL, NULL, &k, &last, err, sizeof err);
+    if (rc != 0) {
+        cli_error("%s: %s; --resume continues a table of the same design and options", path,
+                  err);
+        return CLI_EXIT_FILE;
+    }
+    if (k > 0) {
+        if (sg_tol_mc_run(m, k - 1, 1, &again, &done) != SG_OK) {
+            cli_error("out of memory");
+            return CLI_EXIT_INTERNAL;
+        }
+        if (done != 1) {
+            cli_error("%s: stopped before its last trial was checked; the file is as it was",
+                      path);
+            return CLI_EXIT_FILE;
+        }
+        /* NaN is stored for a failed system, whatever it computed. */
+        if (again.status != last.status ||
+            (again.status == SG_OK &&
+             memcmp(&again.criterion, &last.criterion, sizeof last.criterion) != 0)) {
+            cli_error("%s: trial %d is not this run's (another seed, distribution, method or "
+                      "design); --resume continues a table of the same options", path, k);
+            return CLI_EXIT_FILE;
+        }
+    }
+    *start = k;
+    if (k >= trials)
+        return CLI_EXIT_OK;
+    if (!(*h5 = tolh5_open(path, crit_key(sys), dist_key(sys), r->nominal.criterion, seed,
+                           trials, err, sizeof err))) {
+        cli_error("%s: %s", path, err);
+        return CLI_EXIT_FILE;
+    }
+    if (tolh5_resume(path, crit_key(sys), dist_key(sys), r->nominal.criterion, seed, trials,
+                     *h5, crit, &k2, &last, err, sizeof err) != 0 || k2 != k) {
+        cli_error("%s: %s", path, k2 != k ? "changed while it was read" : err);
+        tolh5_abort(*h5);
+        *h5 = NULL;
+        return CLI_EXIT_FILE;
+    }
+    return CLI_EXIT_OK;
+}
+
 static int tolerance_main(int argc, char **argv)
 {
     cli_iter it;
@@ -832,9 +891,10 @@ static int tolerance_main(int argc, char **argv)
         return cli_usage_error("tolerance", "a %s picture needs -o FILE (standard output is a "
                                "terminal)", fmt == FMT_PNG ? "PNG" : fmt == FMT_SVG ? "SVG"
                                                                                     : "PDF");
-    if (resume && (!output || strcmp(output, "-") == 0 || fmt != REPORT_CSV))
-        return cli_usage_error("tolerance", "--resume continues a CSV file: give -o FILE and "
-                               "--format csv");
+    if (resume && (!output || strcmp(output, "-") == 0 ||
+                   (fmt != REPORT_CSV && fmt != FMT_HDF5)))
+        return cli_usage_error("tolerance", "--resume continues a CSV or HDF5 file: give -o "
+                               "FILE and --format csv or hdf5");
     if (rank == 0 && output && strcmp(output, "-") != 0 && !force && !resume &&
         stat(output, &st) == 0)
         return cli_usage_error("tolerance", "%s exists; use --force to overwrite it", output);
@@ -991,7 +1051,17 @@ static int tolerance_main(int argc, char **argv)
             rc = CLI_EXIT_FILE;
             goto restore;
         }
-        if (resume) {
+        if (resume && fmt == FMT_HDF5) {
+            if ((rc = resume_h5(output, sys, &r, mcx, mc, (uint64_t)seed, sink.crit, &h5,
+                                &start)) != 0)
+                goto restore;
+            if (start >= mc) {
+                fprintf(stderr, "sagitta: tolerance: %s holds all %d trials already\n", output,
+                        mc);
+                rc = CLI_EXIT_OK;
+                goto restore;
+            }
+        } else if (resume) {
             if ((rc = resume_open(output, sys, &r, sens, mcx, mc, &tab, &start)) != 0)
                 goto restore;
         } else if (fmt == FMT_HDF5) {

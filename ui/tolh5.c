@@ -169,3 +169,175 @@ int tolh5_close(tolh5 *h, int done, int stopped, const sg_tol_stats *s, char *er
     free(h);
     return rc;
 }
+
+/* A string attribute of the root group into buf; -1 when absent. */
+static int attr_text(hid_t file, const char *name, char *buf, size_t n)
+{
+    hid_t a = H5Aopen(file, name, H5P_DEFAULT), t = -1, m = -1;
+    int rc = -1;
+    size_t sz;
+    if (a < 0)
+        return -1;
+    t = H5Aget_type(a);
+    sz = t >= 0 ? H5Tget_size(t) : 0;
+    if (sz > 0 && sz < n && (m = H5Tcopy(H5T_C_S1)) >= 0 && H5Tset_size(m, sz) >= 0 &&
+        H5Aread(a, m, buf) >= 0) {
+        buf[sz] = '\0';
+        rc = 0;
+    }
+    if (m >= 0)
+        H5Tclose(m);
+    if (t >= 0)
+        H5Tclose(t);
+    H5Aclose(a);
+    return rc;
+}
+
+/* A scalar attribute of memory type mtype into v; -1 when absent. */
+static int attr_num(hid_t file, const char *name, hid_t mtype, void *v)
+{
+    hid_t a = H5Aopen(file, name, H5P_DEFAULT);
+    int rc;
+    if (a < 0)
+        return -1;
+    rc = H5Aread(a, mtype, v) >= 0 ? 0 : -1;
+    H5Aclose(a);
+    return rc;
+}
+
+/* The extent of a one-dimensional dataset, or -1. */
+static long long extent(hid_t ds)
+{
+    hid_t sp = H5Dget_space(ds);
+    hsize_t n = 0;
+    long long r = -1;
+    if (sp >= 0 && H5Sget_simple_extent_ndims(sp) == 1 &&
+        H5Sget_simple_extent_dims(sp, &n, NULL) == 1)
+        r = (long long)n;
+    if (sp >= 0)
+        H5Sclose(sp);
+    return r;
+}
+
+/* Rows at .. at + n - 1 of a one-dimensional dataset, as memory type m. */
+static int read_rows(hid_t ds, hid_t m, hsize_t at, hsize_t n, void *buf)
+{
+    hid_t fs = H5Dget_space(ds), ms = H5Screate_simple(1, &n, NULL);
+    int rc = -1;
+    if (fs >= 0 && ms >= 0 &&
+        H5Sselect_hyperslab(fs, H5S_SELECT_SET, &at, NULL, &n, NULL) >= 0 &&
+        H5Dread(ds, m, ms, fs, H5P_DEFAULT, buf) >= 0)
+        rc = 0;
+    if (ms >= 0)
+        H5Sclose(ms);
+    if (fs >= 0)
+        H5Sclose(fs);
+    return rc;
+}
+
+enum { RESUME_BLOCK = 4096 };
+
+int tolh5_resume(const char *path, const char *criterion, const char *distribution,
+                 double nominal, uint64_t seed, int trials, tolh5 *to, double *crit, int *k,
+                 sg_tol_value *last, char *err, size_t errlen)
+{
+    hid_t file, ds[D_MAX] = {-1, -1, -1}, st = -1;
+    char text[256];
+    unsigned long long sd = 0;
+    double nom = 0, *c = NULL;
+    int tr = 0, rc = -1, i, *trial = NULL, *status = NULL;
+    long long n = -1, n1, n2, at;
+    sg_tol_value *v = NULL;
+    *k = 0;
+    memset(last, 0, sizeof *last);
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+    if ((file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT)) < 0) {
+        snprintf(err, errlen, "cannot be opened as HDF5 (--resume continues a table written "
+                 "before)");
+        return -1;
+    }
+    /* The run's settings: the same, or another run's table. */
+    rc = 1;
+    if (attr_text(file, "criterion", text, sizeof text) != 0 || strcmp(text, criterion) != 0) {
+        snprintf(err, errlen, "its criterion is not this run's %s", criterion);
+        goto out;
+    }
+    if (attr_text(file, "distribution", text, sizeof text) != 0 ||
+        strcmp(text, distribution) != 0) {
+        snprintf(err, errlen, "its distribution is not this run's %s", distribution);
+        goto out;
+    }
+    if (attr_num(file, "nominal", H5T_NATIVE_DOUBLE, &nom) != 0 ||
+        memcmp(&nom, &nominal, sizeof nom) != 0) {
+        snprintf(err, errlen, "its nominal criterion %.17g is not this run's %.17g (another "
+                 "design or method)", nom, nominal);
+        goto out;
+    }
+    if (attr_num(file, "seed", H5T_NATIVE_ULLONG, &sd) != 0 || sd != (unsigned long long)seed) {
+        snprintf(err, errlen, "its seed %llu is not this run's %llu", sd,
+                 (unsigned long long)seed);
+        goto out;
+    }
+    if (attr_num(file, "trials", H5T_NATIVE_INT, &tr) != 0 || tr != trials) {
+        snprintf(err, errlen, "it is a table of %d trials, not this run's %d", tr, trials);
+        goto out;
+    }
+    ds[D_TRIAL] = H5Dopen2(file, "trial", H5P_DEFAULT);
+    ds[D_CRIT] = H5Dopen2(file, "criterion", H5P_DEFAULT);
+    ds[D_STATUS] = H5Dopen2(file, "status", H5P_DEFAULT);
+    if (ds[D_TRIAL] >= 0 && ds[D_CRIT] >= 0 && ds[D_STATUS] >= 0) {
+        n = extent(ds[D_TRIAL]);
+        n1 = extent(ds[D_CRIT]);
+        n2 = extent(ds[D_STATUS]);
+        if (n != n1 || n != n2)
+            n = -1;
+    }
+    if (n < 0 || n > trials) {
+        snprintf(err, errlen, "its trial, criterion and status columns are not one table of "
+                 "at most %d rows", trials);
+        goto out;
+    }
+    rc = -1;
+    trial = malloc(RESUME_BLOCK * sizeof *trial);
+    status = malloc(RESUME_BLOCK * sizeof *status);
+    c = malloc(RESUME_BLOCK * sizeof *c);
+    v = malloc(RESUME_BLOCK * sizeof *v);
+    st = h5u_status_type(status_word);
+    if (!trial || !status || !c || !v || st < 0) {
+        snprintf(err, errlen, "out of memory");
+        goto out;
+    }
+    for (at = 0; at < n; at += RESUME_BLOCK) {
+        int m = (int)(n - at < RESUME_BLOCK ? n - at : RESUME_BLOCK);
+        if (read_rows(ds[D_TRIAL], H5T_NATIVE_INT, (hsize_t)at, (hsize_t)m, trial) != 0 ||
+            read_rows(ds[D_CRIT], H5T_NATIVE_DOUBLE, (hsize_t)at, (hsize_t)m, c) != 0 ||
+            read_rows(ds[D_STATUS], st, (hsize_t)at, (hsize_t)m, status) != 0) {
+            snprintf(err, errlen, "its columns cannot be read");
+            goto out;
+        }
+        memset(v, 0, (size_t)m * sizeof *v);
+        for (i = 0; i < m; i++) {
+            if (trial[i] != at + i + 1) {
+                snprintf(err, errlen, "row %lld holds trial %d", at + i + 1, trial[i]);
+                rc = 1;
+                goto out;
+            }
+            v[i].status = status[i];
+            v[i].criterion = c[i];
+            if (crit)
+                crit[at + i] = status[i] == SG_OK ? c[i] : NAN;
+        }
+        if (to && tolh5_write(to, (int)at, m, v, err, errlen) != 0)
+            goto out;
+        *last = v[m - 1];
+    }
+    *k = (int)n;
+    rc = 0;
+out:
+    free(trial);
+    free(status);
+    free(c);
+    free(v);
+    h5u_close(ds, D_MAX, &st, &file);
+    return rc;
+}

@@ -29,5 +29,14 @@ int tolh5_close(tolh5 *h, int done, int stopped, const sg_tol_stats *s, char *er
                 size_t errlen);
 /* Closes and removes the temporary; the handle is freed. */
 void tolh5_abort(tolh5 *h);
+/* --resume: path's table must be this run's (its criterion, distribution,
+ * nominal bit for bit, seed and trials; else 1, with what differs in err)
+ * with its trial column 1 .. K.  Copies its K rows into the new table to
+ * (when not NULL), a block at a time so memory stays bounded, their
+ * criteria (NaN: failed) into crit (when not NULL), the last row into
+ * *last; K into *k.  0, 1, or -1 when it cannot be read (err says why). */
+int tolh5_resume(const char *path, const char *criterion, const char *distribution,
+                 double nominal, uint64_t seed, int trials, tolh5 *to, double *crit, int *k,
+                 sg_tol_value *last, char *err, size_t errlen);
 
 #endif

@@ -585,6 +585,128 @@ static void resume_after_kill(void **state)
     ct_free(&r);
 }
 
+/* A file's bytes and their count (the file must exist). */
+static char *ct_read_n(const char *path, size_t *n)
+{
+    FILE *f = fopen(path, "rb");
+    char *b;
+    long len;
+    assert_non_null(f);
+    assert_int_equal(fseek(f, 0, SEEK_END), 0);
+    len = ftell(f);
+    rewind(f);
+    b = malloc((size_t)len + 1);
+    assert_non_null(b);
+    *n = fread(b, 1, (size_t)len, f);
+    fclose(f);
+    return b;
+}
+
+/* --resume --format hdf5: a run stopped by Ctrl-C (SIGINT) closes its
+ * table with the trials done; resumed on another thread count it is the
+ * file an uninterrupted run writes, byte for byte.  A table of another
+ * seed or trial count is refused and left as it was; a whole one is left
+ * as it was. */
+static void resume_hdf5(void **state)
+{
+    const char *d = doublet("r5.json", TOL), *full = ct_path("full.h5");
+    const char *part = ct_path("part.h5"), *ci = getenv("CI");
+    char tmp[4096], cmd[8192], *a, *b;
+    size_t na, nb;
+    ct_result r;
+    pid_t pid;
+    int st, k;
+    FILE *f;
+    struct timespec t0, t1;
+    double half;
+    (void)state;
+    if (shell("h5dump --version >/dev/null 2>&1") != 0) {
+        if (ci && ci[0])
+            fail_msg("h5dump is not installed (Debian hdf5-tools)");
+        print_message("# SKIP h5dump not installed (hdf5-tools)\n");
+        return;
+    }
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--threads", "1", "--format", "hdf5",
+           "-o", full, NULL);
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    if (r.code != 0)
+        fail_msg("exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    /* Stopped halfway through the uninterrupted run's time, which grows
+     * under a sanitizer or a loaded machine alike. */
+    half = 0.5 * ((double)(t1.tv_sec - t0.tv_sec) + 1e-9 * (double)(t1.tv_nsec - t0.tv_nsec));
+    pid = fork();
+    assert_true(pid >= 0);
+    if (pid == 0) {
+        int null = open("/dev/null", O_WRONLY);
+        dup2(null, 2);
+        execl(exe, exe, "tolerance", d, "--monte-carlo", "40", "--threads", "1", "--format",
+              "hdf5", "-o", part, (char *)NULL);
+        _exit(127);
+    }
+    /* Stopped once the trials run (the table is made after the nominal). */
+    snprintf(tmp, sizeof tmp, "%s.tmp%ld", part, (long)pid);
+    for (k = 0; k < 6000; k++) {
+        struct timespec ts = {0, 10000000};
+        nanosleep(&ts, NULL);
+        if ((f = fopen(tmp, "r")) != NULL) {
+            fclose(f);
+            break;
+        }
+    }
+    {
+        struct timespec ts = {(time_t)half, (long)(1e9 * (half - floor(half)))};
+        nanosleep(&ts, NULL);
+    }
+    kill(pid, SIGINT);
+    waitpid(pid, &st, 0);
+    assert_true(WIFEXITED(st) && WEXITSTATUS(st) == 0);
+    snprintf(cmd, sizeof cmd, "h5dump -a /done '%s' > '%s'", part, ct_path("done.txt"));
+    assert_int_equal(shell(cmd), 0);
+    a = ct_read(ct_path("done.txt"));
+    assert_non_null(strstr(a, "(0): "));
+    k = atoi(strstr(a, "(0): ") + 5);
+    free(a);
+    print_message("# stopped after %d of 40 trials (SIGINT after %.2f s)\n", k, half);
+    assert_true(k < 40);
+    /* Another seed, or another trial count: refused, the file as it was. */
+    a = ct_read_n(part, &na);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--seed", "6", "--format", "hdf5", "-o",
+           part, "--resume", NULL);
+    assert_int_equal(r.code, 3);
+    assert_non_null(strstr(r.err, "its seed"));
+    ct_free(&r);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "61", "--format", "hdf5", "-o", part,
+           "--resume", NULL);
+    assert_int_equal(r.code, 3);
+    assert_non_null(strstr(r.err, "not this run's 61"));
+    ct_free(&r);
+    b = ct_read_n(part, &nb);
+    assert_true(na == nb && memcmp(a, b, na) == 0);
+    free(a);
+    free(b);
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--threads", "2", "--format", "hdf5",
+           "-o", part, "--resume", NULL);
+    if (r.code != 0)
+        fail_msg("resume: exit %d: %s", r.code, r.err);
+    ct_free(&r);
+    a = ct_read_n(full, &na);
+    b = ct_read_n(part, &nb);
+    assert_true(na == nb && memcmp(a, b, na) == 0);
+    free(b);
+    /* Whole: left as it was. */
+    ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--format", "hdf5", "-o", part,
+           "--resume", NULL);
+    assert_int_equal(r.code, 0);
+    assert_non_null(strstr(r.err, "holds all 40 trials"));
+    ct_free(&r);
+    b = ct_read_n(part, &nb);
+    assert_true(na == nb && memcmp(a, b, na) == 0);
+    free(a);
+    free(b);
+}
+
 /* The doublet's criterion by sagitta spot (per-field RMS about the
  * centroid, density 4) combined with the field weights 1, 2, 3. */
 static double spot_criterion(const char *design)
@@ -1194,6 +1316,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(interrupted),
         cmocka_unit_test(mpi_same_bytes),
         cmocka_unit_test(resume_after_kill),
+        cmocka_unit_test(resume_hdf5),
         cmocka_unit_test(hdf5_table),
         cmocka_unit_test(save_worst),
         cmocka_unit_test(inverse_thin_lens),
@@ -1203,6 +1326,9 @@ int main(int argc, char **argv)
     int rc;
     ct_init(argc, argv);
     exe = argv[1];
+    /* CT_ONLY=resume_hdf5 runs the tests so named (a mutant's check). */
+    if (getenv("CT_ONLY"))
+        cmocka_set_test_filter(getenv("CT_ONLY"));
     rc = cmocka_run_group_tests(tests, NULL, NULL);
     ct_cleanup();
     return rc;
