@@ -602,6 +602,15 @@ static char *ct_read_n(const char *path, size_t *n)
     return b;
 }
 
+/* That path holds the n bytes a. */
+static void assert_file_is(const char *path, const char *a, size_t n)
+{
+    size_t nb;
+    char *b = ct_read_n(path, &nb);
+    assert_true(nb == n && memcmp(a, b, n) == 0);
+    free(b);
+}
+
 /* --resume --format hdf5: a run stopped by Ctrl-C (SIGINT) closes its
  * table with the trials done; resumed on another thread count it is the
  * file an uninterrupted run writes, byte for byte.  A table of another
@@ -611,8 +620,8 @@ static void resume_hdf5(void **state)
 {
     const char *d = doublet("r5.json", TOL), *full = ct_path("full.h5");
     const char *part = ct_path("part.h5"), *ci = getenv("CI");
-    char tmp[4096], cmd[8192], *a, *b;
-    size_t na, nb;
+    char tmp[4096], cmd[8192], *a;
+    size_t na;
     ct_result r;
     pid_t pid;
     int st, k;
@@ -682,29 +691,23 @@ static void resume_hdf5(void **state)
     assert_int_equal(r.code, 3);
     assert_non_null(strstr(r.err, "not this run's 61"));
     ct_free(&r);
-    b = ct_read_n(part, &nb);
-    assert_true(na == nb && memcmp(a, b, na) == 0);
+    assert_file_is(part, a, na);
     free(a);
-    free(b);
     ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--threads", "2", "--format", "hdf5",
            "-o", part, "--resume", NULL);
     if (r.code != 0)
         fail_msg("resume: exit %d: %s", r.code, r.err);
     ct_free(&r);
     a = ct_read_n(full, &na);
-    b = ct_read_n(part, &nb);
-    assert_true(na == nb && memcmp(a, b, na) == 0);
-    free(b);
+    assert_file_is(part, a, na);
     /* Whole: left as it was. */
     ct_run(&r, "tolerance", d, "--monte-carlo", "40", "--format", "hdf5", "-o", part,
            "--resume", NULL);
     assert_int_equal(r.code, 0);
     assert_non_null(strstr(r.err, "holds all 40 trials"));
     ct_free(&r);
-    b = ct_read_n(part, &nb);
-    assert_true(na == nb && memcmp(a, b, na) == 0);
+    assert_file_is(part, a, na);
     free(a);
-    free(b);
 }
 
 /* The doublet's criterion by sagitta spot (per-field RMS about the
