@@ -957,6 +957,9 @@ static void bench_help(FILE *f)
 "                  thread) on the same rays field-major and in random field\n"
 "                  order, on the designs (default: the Cassegrain, the\n"
 "                  double Gauss); 5e4 rays a field (1e4 with --quick)\n"
+"  --merit         instead: the merit function's evaluations per second (the\n"
+"                  design's, or Zemax's default RMS spot one) on the designs\n"
+"                  (default: every example), the optimizer's evaluation\n"
 "  --view V        instead: the editor's view V (spot, fan, opd, wave, layout\n"
 "                  or all) rebuilt after an edit, with its default sampling,\n"
 "                  on the designs (default: the double Gauss); --repeat\n"
@@ -1107,6 +1110,82 @@ done:
     free(ts);
     free(tb);
     free(ratio);
+    cli_design_free(cat, sys);
+    return rc;
+}
+
+/* --------------------------------------------------------------- merit mode */
+
+/* The merit function's evaluations per second: the design's own, or
+ * Zemax's default one (RMS spot about the centroid, 3 rings, 6 arms) for a
+ * design with none, evaluated --repeat times (at least 5) on the
+ * optimizer's path (sg_merit_eval: the rays traced and every row). */
+static int bench_merit(const bench_cfg *cfg, const char *path, cJSON *arr)
+{
+    sg_catalog *cat = NULL;
+    sg_system *sys = NULL;
+    int rc, rep, n = cfg->repeat < 5 ? 5 : cfg->repeat, nrow = 0, own;
+    double *t = NULL, merit = 0.0;
+    sg_diag d;
+    stat3 a;
+
+    rc = cli_load_design(path, &cat, &sys);
+    if (rc != CLI_EXIT_OK)
+        return rc;
+    own = sys->merit.present;
+    if (!own) {
+        sys->merit.present = 1;
+        sys->merit.has_default = 1;
+        sys->merit.reference = SG_MERIT_CENTROID;
+        sys->merit.rings = 3;
+        sys->merit.arms = 6;
+    }
+    if (!(t = calloc((size_t)n, sizeof *t))) {
+        cli_error("out of memory");
+        rc = CLI_EXIT_INTERNAL;
+        goto done;
+    }
+    for (rep = 0; rep < n; rep++) {
+        sg_merit_result mr;
+        double t0;
+        sg_diag_clear(&d);
+        memset(&mr, 0, sizeof mr);
+        t0 = now_s(cfg->cpu_clock);
+        rc = sg_merit_eval(sys, cat, &mr, &d);
+        t[rep] = now_s(cfg->cpu_clock) - t0;
+        nrow = mr.nrow;
+        merit = mr.merit;
+        sg_merit_result_free(&mr);
+        if (rc != SG_OK) {
+            cli_error("%s: %s", path, d.msg[0] ? d.msg : sg_strerror(rc));
+            rc = cli_exit_for(rc);
+            goto done;
+        }
+    }
+    a = stats(t, n);
+    if (cfg->fmt == BENCH_TEXT) {
+        char tt[96];
+        printf("%s\n  %s\n", path, safe_text(sys->title, tt, sizeof tt));
+        printf("  merit function: %s, %d rows, MF %.6g\n",
+               own ? "the design's" : "default (RMS spot, centroid, 3 rings, 6 arms)", nrow,
+               merit);
+        printf("  %.6f s an evaluation (min %.6f, max %.6f): %.1f evaluations/s; clock %s\n",
+               a.med, a.min, a.max, a.min > 0 ? 1.0 / a.min : 0.0,
+               cfg->cpu_clock ? "cpu" : "wall");
+    } else {
+        cJSON *o = cJSON_CreateObject();
+        cJSON_AddStringToObject(o, "design", path);
+        cJSON_AddStringToObject(o, "merit", own ? "design" : "default");
+        cJSON_AddNumberToObject(o, "rows", nrow);
+        cJSON_AddNumberToObject(o, "value", merit);
+        cJSON_AddItemToObject(o, "evaluation_s", json_stat(&a));
+        cJSON_AddNumberToObject(o, "evaluations_per_s", a.min > 0 ? 1.0 / a.min : 0.0);
+        cJSON_AddStringToObject(o, "clock", cfg->cpu_clock ? "cpu" : "wall");
+        cJSON_AddItemToArray(arr, o);
+    }
+    rc = CLI_EXIT_OK;
+done:
+    free(t);
     cli_design_free(cat, sys);
     return rc;
 }
@@ -1530,7 +1609,7 @@ int cmd_bench(int argc, char **argv)
     char **examples = NULL;
     size_t ndesign = 0, nex = 0, k;
     int id, rc = CLI_EXIT_OK, worst = CLI_EXIT_OK, nrays = 0, spot_mode = 0, view_kind = -1;
-    int base_mode = 0;
+    int base_mode = 0, merit_mode = 0;
     bench_cfg cfg;
     design_res *res = NULL;
     cJSON *root = NULL, *arr = NULL;
@@ -1555,6 +1634,7 @@ int cmd_bench(int argc, char **argv)
             CLI_OPT_INT("--rays", 0, nrays, 1, 1000000000),
             CLI_OPT_FLAG("--spot", 0, spot_mode),
             CLI_OPT_FLAG("--baseline", 0, base_mode),
+            CLI_OPT_FLAG("--merit", 0, merit_mode),
             CLI_ID("--view", 0, 1, OPT_VIEW),
             CLI_OPT_WORD("--clock", cfg.cpu_clock, "wall|cpu", NULL),
             CLI_OPT_INT("--edit-surface", 0, cfg.edit_surf, 1, 1000000),
@@ -1645,6 +1725,17 @@ int cmd_bench(int argc, char **argv)
             designs[ndesign++] = dg;
         }
         rc = each_design(&cfg, designs, ndesign, "baseline", bench_baseline);
+        goto done;
+    }
+    if (merit_mode) {
+        if (ndesign == 0) {
+            rc = find_examples(&examples, &nex);
+            if (rc != CLI_EXIT_OK)
+                goto done;
+            for (k = 0; k < nex; k++)
+                designs[ndesign++] = examples[k];
+        }
+        rc = each_design(&cfg, designs, ndesign, "merit", bench_merit);
         goto done;
     }
     if (spot_mode) {

@@ -375,6 +375,25 @@ static void test_bench_view(void **state)
                     cJSON_GetObjectItemCaseSensitive(v, "ratio"), "median")->valuedouble > 0.0);
     cJSON_Delete(j);
     ct_free(&r);
+    /* The merit mode: a design with no merit function gets Zemax's
+     * default, TRAX and TRAY for 3 rings x 6 arms of each of the 2 fields
+     * at the 1 wavelength: 72 rows. */
+    ct_run(&r, "bench", d, "--merit", "--repeat", "5", "--clock", "cpu", "--format", "json",
+           NULL);
+    assert_int_equal(r.code, 0);
+    j = cJSON_Parse(r.out);
+    assert_non_null(j);
+    v = cJSON_GetArrayItem(cJSON_GetObjectItemCaseSensitive(j, "merit"), 0);
+    assert_non_null(v);
+    assert_string_equal(cJSON_GetObjectItemCaseSensitive(v, "merit")->valuestring, "default");
+    assert_int_equal(cJSON_GetObjectItemCaseSensitive(v, "rows")->valueint, 72);
+    assert_true(cJSON_GetObjectItemCaseSensitive(v, "value")->valuedouble > 0.0);
+    ms = cJSON_GetObjectItemCaseSensitive(v, "evaluation_s");
+    assert_true(cJSON_GetObjectItemCaseSensitive(ms, "min")->valuedouble <=
+                cJSON_GetObjectItemCaseSensitive(ms, "median")->valuedouble);
+    assert_true(cJSON_GetObjectItemCaseSensitive(v, "evaluations_per_s")->valuedouble > 0.0);
+    cJSON_Delete(j);
+    ct_free(&r);
     ct_run(&r, "bench", d, "--view", "nope", NULL);
     assert_int_equal(r.code, 2);
     assert_non_null(strstr(r.err, "--view"));
