@@ -781,6 +781,12 @@ _Static_assert(offsetof(sg_ray_surface, y) == 1 * sizeof(double) &&
                    offsetof(sg_ray_surface, residual) == 6 * sizeof(double) &&
                    offsetof(sg_ray_surface, error_bound) == 7 * sizeof(double),
                "sg_ray_surface begins with eight doubles, x to error_bound");
+/* And path to opl_error_bound, after dir_error_bound, are four more. */
+_Static_assert(offsetof(sg_ray_surface, path) == 9 * sizeof(double) &&
+                   offsetof(sg_ray_surface, opl) == 10 * sizeof(double) &&
+                   offsetof(sg_ray_surface, opl_lo) == 11 * sizeof(double) &&
+                   offsetof(sg_ray_surface, opl_error_bound) == 12 * sizeof(double),
+               "path, opl, opl_lo and opl_error_bound follow dir_error_bound");
 
 /* Writes row i of the lanes in ok: every column when pt is given, else
  * (the stop of an aimed ray, whose point a landing wrote) the direction's.
@@ -829,6 +835,36 @@ static void put_rows(sg_ray_surface *const *out, int i, const vrow *pt, const sg
                     o->opl = pt->opl.hi[k];
                     o->opl_lo = pt->opl.lo[k];
                     o->opl_error_bound = pt->eO[k];
+                    o->status = SG_OK;
+                }
+            return;
+        }
+#elif SG_VL == 4 && defined(__AVX__)
+        {
+            /* Four lanes: columns 0-3, 4-7 and 9-12 each as one 4 x 4
+             * transpose, three 32-byte stores a row. */
+            __m256d c[12] = {pt->x,       pt->y,       pt->z,     r->d.x.hi,
+                             r->d.y.hi,   r->d.z.hi,   pt->residual, pt->bound,
+                             pt->path,    pt->opl.hi,  pt->opl.lo, pt->eO};
+            __m256d row[3][4];
+            int g;
+            for (g = 0; g < 3; g++) {
+                __m256d t0 = _mm256_unpacklo_pd(c[4 * g], c[4 * g + 1]);
+                __m256d t1 = _mm256_unpackhi_pd(c[4 * g], c[4 * g + 1]);
+                __m256d t2 = _mm256_unpacklo_pd(c[4 * g + 2], c[4 * g + 3]);
+                __m256d t3 = _mm256_unpackhi_pd(c[4 * g + 2], c[4 * g + 3]);
+                row[g][0] = _mm256_permute2f128_pd(t0, t2, 0x20);
+                row[g][1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+                row[g][2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+                row[g][3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+            }
+            for (k = 0; k < SG_VL; k++)
+                if (ok[k]) {
+                    sg_ray_surface *o = &out[k][i];
+                    _mm256_storeu_pd(&o->x, row[0][k]);
+                    _mm256_storeu_pd(&o->m, row[1][k]);
+                    o->dir_error_bound = dbound[k];
+                    _mm256_storeu_pd(&o->path, row[2][k]);
                     o->status = SG_OK;
                 }
             return;
