@@ -86,14 +86,17 @@ static int finite4(const double *v)
 
 /* Whether the rows after the object row that are marked OK hold only
  * finite numbers, SG_VL of a row's thirteen at a time (x .. opl_error_bound lie first and
- * in order): 0 * v is NaN exactly for an infinity or NaN.  The common,
- * finite ray costs a few vector operations a row; sg_guard_rows then
- * looks only at a ray that fails here, and checks its object row. */
+ * in order).  The rows are summed lane by lane and the sum tested once:
+ * an infinity or NaN in any row makes its lane of the sum an infinity or
+ * NaN, and 0 * v is NaN exactly for those.  A sum of finite numbers that
+ * overflows fails too, which only sends the ray to sg_guard_rows, whose
+ * exact test of every row decides; so the common, finite ray costs a load
+ * and an add per vector of a row. */
 _Static_assert(offsetof(sg_ray_surface, opl_error_bound) == 12 * sizeof(double),
                "a row's thirteen doubles come first, in order");
 static int rows_finite(const sg_ray_surface *out, int n)
 {
-    vm bad = vm_set(0);
+    vd acc = vd_set(0.0);
     int i, off;
     for (i = 1; i < n && out[i].status == SG_OK; i++) {
         const char *row = (const char *)&out[i];
@@ -101,11 +104,11 @@ static int rows_finite(const sg_ray_surface *out, int n)
             vd v;
             int at = off + SG_VL <= 13 ? off : 13 - SG_VL;
             memcpy(&v, row + (size_t)at * sizeof(double), sizeof v);
-            v = v * 0.0;
-            bad |= (vm)(v != v);
+            acc += v;
         }
     }
-    return !vm_any(bad);
+    acc = acc * 0.0;
+    return !vm_any((vm)(acc != acc));
 }
 
 /* The object row: finite, but for the infinite point of an object at

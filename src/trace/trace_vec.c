@@ -241,8 +241,10 @@ __attribute__((noinline)) static void gen_normal_v(const sg_sprep *s, const vd p
     g[2] = vd_set(1.0);
 }
 
-/* |Z - f(X, Y)| of the reported point, in double-double. */
-__attribute__((noinline)) static vd gen_resid_v(const sg_sprep *s, vdd3 p)
+/* |Z - f(X, Y)| of the reported point, in double-double.  The point comes
+ * by address: a vdd3 by value is copied to the stack before the caller
+ * even knows it has a shape of its own. */
+__attribute__((noinline)) static vd gen_resid_v(const sg_sprep *s, const vdd3 *p)
 {
     vd r;
     int k;
@@ -250,18 +252,18 @@ __attribute__((noinline)) static vd gen_resid_v(const sg_sprep *s, vdd3 p)
         vdd f, g[2], df;
         vd ez, eg;
         vm bad;
-        gen_sag_v(s->shp, vdd_from(p.x.hi), vdd_from(p.y.hi), &f, g, &ez, &eg, &bad);
-        df = vdd_sub(vdd_from(p.z.hi), f);
+        gen_sag_v(s->shp, vdd_from(p->x.hi), vdd_from(p->y.hi), &f, g, &ez, &eg, &bad);
+        df = vdd_sub(vdd_from(p->z.hi), f);
         return vsel(bad, vd_set(NAN), vd_abs(df.hi + df.lo));
     }
     for (k = 0; k < SG_VL; k++) {
         dd f, g[2];
         double ez, eg;
-        if (!s->shp->ops->sag_dd(s->shp, dd_from(p.x.hi[k]), dd_from(p.y.hi[k]), &f, g, &ez,
+        if (!s->shp->ops->sag_dd(s->shp, dd_from(p->x.hi[k]), dd_from(p->y.hi[k]), &f, g, &ez,
                                  &eg))
             r[k] = NAN;
         else
-            r[k] = fabs(dd_to_d(dd_sub(dd_from(p.z.hi[k]), f)));
+            r[k] = fabs(dd_to_d(dd_sub(dd_from(p->z.hi[k]), f)));
     }
     return r;
 }
@@ -296,15 +298,15 @@ vdd sg_sag_xy_v(const sg_sprep *s, vdd x, vdd y, vm *bad)
  * so the residual is what the rounding moved the point off the surface:
  * to first order w (x lo_x + y lo_y) - lo_z, with w = sag'(r) / r, and the
  * rest is of the order of DD_U times the point. */
-static inline __attribute__((always_inline)) vd resid_v(const sg_sprep *s, vdd3 p)
+static inline __attribute__((always_inline)) vd resid_v(const sg_sprep *s, const vdd3 *p)
 {
-    vd x = p.x.hi, y = p.y.hi, w, dw;
+    vd x = p->x.hi, y = p->y.hi, w, dw;
     if (s->shape == SHAPE_PLANE)
-        return vd_abs(p.z.hi);
+        return vd_abs(p->z.hi);
     if (__builtin_expect(s->shape == SHAPE_GEN, 0))
         return gen_resid_v(s, p);
     slope_v(s, x * x + y * y, &w, &dw);
-    return vd_abs(w * (x * p.x.lo + y * p.y.lo) - p.z.lo);
+    return vd_abs(w * (x * p->x.lo + y * p->y.lo) - p->z.lo);
 }
 
 /* A point at the rim of a conic's vertex sheet, where the sag's slope is
@@ -779,6 +781,12 @@ _Static_assert(offsetof(sg_ray_surface, y) == 1 * sizeof(double) &&
                    offsetof(sg_ray_surface, residual) == 6 * sizeof(double) &&
                    offsetof(sg_ray_surface, error_bound) == 7 * sizeof(double),
                "sg_ray_surface begins with eight doubles, x to error_bound");
+/* And path to opl_error_bound, after dir_error_bound, are four more. */
+_Static_assert(offsetof(sg_ray_surface, path) == 9 * sizeof(double) &&
+                   offsetof(sg_ray_surface, opl) == 10 * sizeof(double) &&
+                   offsetof(sg_ray_surface, opl_lo) == 11 * sizeof(double) &&
+                   offsetof(sg_ray_surface, opl_error_bound) == 12 * sizeof(double),
+               "path, opl, opl_lo and opl_error_bound follow dir_error_bound");
 
 /* Writes row i of the lanes in ok: every column when pt is given, else
  * (the stop of an aimed ray, whose point a landing wrote) the direction's.
@@ -827,6 +835,36 @@ static void put_rows(sg_ray_surface *const *out, int i, const vrow *pt, const sg
                     o->opl = pt->opl.hi[k];
                     o->opl_lo = pt->opl.lo[k];
                     o->opl_error_bound = pt->eO[k];
+                    o->status = SG_OK;
+                }
+            return;
+        }
+#elif SG_VL == 4 && defined(__AVX__)
+        {
+            /* Four lanes: columns 0-3, 4-7 and 9-12 each as one 4 x 4
+             * transpose, three 32-byte stores a row. */
+            __m256d c[12] = {pt->x,       pt->y,       pt->z,     r->d.x.hi,
+                             r->d.y.hi,   r->d.z.hi,   pt->residual, pt->bound,
+                             pt->path,    pt->opl.hi,  pt->opl.lo, pt->eO};
+            __m256d row[3][4];
+            int g;
+            for (g = 0; g < 3; g++) {
+                __m256d t0 = _mm256_unpacklo_pd(c[4 * g], c[4 * g + 1]);
+                __m256d t1 = _mm256_unpackhi_pd(c[4 * g], c[4 * g + 1]);
+                __m256d t2 = _mm256_unpacklo_pd(c[4 * g + 2], c[4 * g + 3]);
+                __m256d t3 = _mm256_unpackhi_pd(c[4 * g + 2], c[4 * g + 3]);
+                row[g][0] = _mm256_permute2f128_pd(t0, t2, 0x20);
+                row[g][1] = _mm256_permute2f128_pd(t1, t3, 0x20);
+                row[g][2] = _mm256_permute2f128_pd(t0, t2, 0x31);
+                row[g][3] = _mm256_permute2f128_pd(t1, t3, 0x31);
+            }
+            for (k = 0; k < SG_VL; k++)
+                if (ok[k]) {
+                    sg_ray_surface *o = &out[k][i];
+                    _mm256_storeu_pd(&o->x, row[0][k]);
+                    _mm256_storeu_pd(&o->m, row[1][k]);
+                    o->dir_error_bound = dbound[k];
+                    _mm256_storeu_pd(&o->path, row[2][k]);
                     o->status = SG_OK;
                 }
             return;
@@ -1219,7 +1257,7 @@ static __attribute__((noinline)) vm surface_v(const sg_tracer *t, int i, int upt
     row.x = pd[0];
     row.y = pd[1];
     row.z = pd[2];
-    row.residual = resid_v(s, r->p);
+    row.residual = resid_v(s, &r->p);
     if (__builtin_expect(vm_any(~vd_isfinite(row.residual) & live & ~bad), 0))
         row.residual = resid_rim(s, row.residual, pd, live & ~bad);
     row.bound = bound_v(r->eP, pd[0], pd[1], pd[2]);
