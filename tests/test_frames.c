@@ -14,7 +14,8 @@
  * Checked: the sign conventions against hand values; the inverse of a
  * break; a fold mirror built two ways and against the unfolded lens; an
  * off-axis parabola's focus (closed form); random tilted, decentred and
- * folded systems of conics, lenses and mirrors, where precise and mpfr
+ * folded systems of conics, lenses and mirrors (surface 1 a break or
+ * tilted in some), where precise and mpfr
  * must lie within their bounds and agree with the reference on every
  * status; the global frames; and the design format's round trip.
  */
@@ -636,6 +637,10 @@ static void off_axis_parabola(void **state)
     sg_catalog_free(cat);
 }
 
+/* Whether random_system changes the frame on surface 1 (a set of its
+ * own, so that the other sets keep their systems). */
+static int change_s1;
+
 /* A random system: lenses, mirrors and breaks, with tilts and decenters
  * before and after, both orders and "reverse". */
 static sg_system *random_system(double L, double T)
@@ -648,6 +653,20 @@ static sg_system *random_system(double L, double T)
     sys->surf[1].thickness = 4.0 * L;
     sys->surf[1].mat.kind = SG_MAT_INDEX;
     sys->surf[1].mat.index = 1.5 + 0.2 * urand();
+    /* Surface 1 may turn or move what follows it (Zemax's coordinate break
+     * or tilt on surface 1): rays start at its place before the change. */
+    if (change_s1) {
+        double u = urand();
+        if (u < 0.25) {
+            sys->surf[1].type = SG_SURF_COORDBRK;
+            sys->surf[1].radius = INFINITY;
+            sys->surf[1].mat.kind = SG_MAT_AIR;
+            sys->surf[1].thickness = L * (urand() < 0.3 ? 0.0 : 5.0 * urand());
+        }
+        if (u < 0.6)
+            set_change(&sys->surf[1].before, L * srand1(2.0), L * srand1(2.0), srand1(T),
+                       srand1(T), srand1(2.5 * T), urand() < 0.5);
+    }
     for (i = 2; i < n - 1; i++) {
         sg_surface *s = &sys->surf[i];
         double u = urand();
@@ -687,6 +706,9 @@ static sg_system *random_system(double L, double T)
                        srand1(T / 2), srand1(20.0), urand() < 0.5);
         s->thickness = dir * L * (s->mat.kind == SG_MAT_INDEX ? 3.0 + 3.0 * urand() : 8.0 + 20.0 * urand());
     }
+    /* A break is no stop: the first surface that is not one. */
+    while (sys->surf[sys->stop].type == SG_SURF_COORDBRK)
+        sys->stop++;
     /* The image may be tilted too. */
     if (urand() < 0.5)
         set_change(&sys->surf[n - 1].before, L * srand1(1.0), L * srand1(1.0), srand1(T),
@@ -864,6 +886,16 @@ static void random_systems(void **state)
     run_random(120, 1.0, 12.0, 3.0, 0.04, 0x7117edULL, 1);
 }
 
+/* Surface 1 a break or tilted: the reference turns the frame at surface
+ * 1's place, as Zemax does, and so must every method. */
+static void surface1_changes(void **state)
+{
+    (void)state;
+    change_s1 = 1;
+    run_random(120, 1.0, 12.0, 3.0, 0.04, 0x5115ULL, 1);
+    change_s1 = 0;
+}
+
 /* Where it is hard: steep tilts, wide and steep rays that graze and miss,
  * and lengths from 1e-3 to 1e4 mm. */
 static void hard_systems(void **state)
@@ -873,6 +905,71 @@ static void hard_systems(void **state)
     (void)state;
     for (j = 0; j < 3; j++)
         run_random(60, scale[j], 45.0, 12.0, 0.3, 0xbad5eedULL + (uint64_t)j, 0);
+}
+
+/* Zemax's samples with a coordinate break as surface 1 (UTF-16LE, as
+ * Zemax 13 wrote them; tests/data/zmx/README.md): each surface's
+ * automatic semi-diameter against the DIAM Zemax stored (line numbers of
+ * the UTF-8 text), and the .zmx written back traces to the same bits in
+ * each method. */
+static void zemax_break_first(void **state)
+{
+    static const struct {
+        const char *rel;
+        int surf[2];
+        double diam[2], dx, dy;
+    } fs[] = {
+        /* Offner relay: the break decentres y by -3 (PARM 2, line 76); the
+         * mirrors' DIAMs, lines 92 and 114. */
+        {"tests/data/zmx/offner_relay.zmx", {2, 4}, {4.686823252472, 4.676393457068}, 0.0, -3.0},
+        /* Bi-ocular lens, configuration 1: x by 25 (PARM 1, line 75); the
+         * stop's and the image's DIAMs, lines 92 and 198. */
+        {"tests/data/zmx/biocular_lens.zmx", {2, 11}, {2.500000000011, 12.58899446594}, 25.0, 0.0},
+    };
+    sg_catalog *cat = tu_catalog();
+    size_t f;
+    (void)state;
+    for (f = 0; f < sizeof fs / sizeof fs[0]; f++) {
+        sg_system *sys = sg_system_new(), *back = sg_system_new();
+        char path[4096];
+        double sd[64];
+        sg_diag d;
+        char *z;
+        int k, meth;
+        sg_diag_clear(&d);
+        if (sg_design_load(sys, tu_path(fs[f].rel, path, sizeof path), &d) != SG_OK)
+            fail_msg("%s: %s", fs[f].rel, d.msg);
+        assert_int_equal(sys->surf[1].type, SG_SURF_COORDBRK);
+        assert_true(sys->surf[1].before.dx == fs[f].dx && sys->surf[1].before.dy == fs[f].dy);
+        assert_int_equal(sg_semi_diameters(sys, cat, NULL, sd, &d), SG_OK);
+        for (k = 0; k < 2; k++) {
+            double want = fs[f].diam[k], got = sd[fs[f].surf[k]];
+            print_message("# %s surface %d: %.13g, Zemax %.13g\n", fs[f].rel, fs[f].surf[k],
+                          got, want);
+            /* Zemax prints 13 significant digits. */
+            assert_true(fabs(got - want) <= 1e-11 * want);
+        }
+        z = sg_zmx_to_text(sys, cat, &d);
+        assert_non_null(z);
+        assert_int_equal(sg_zmx_parse(back, z, strlen(z), "back.zmx", cat, &d), SG_OK);
+        assert_int_equal(back->surf[1].type, SG_SURF_COORDBRK);
+        for (meth = 0; meth < 3; meth++) {
+            sg_tracer *a = tu_tracer(sys, cat, (sg_method)meth),
+                      *b = tu_tracer(back, cat, (sg_method)meth);
+            sg_ray_surface ra[64], rb[64];
+            int im = sys->nsurf - 1;
+            assert_int_equal(sg_trace_normalized(a, 0, 1, 0.3, 0.9, ra), SG_OK);
+            assert_int_equal(sg_trace_normalized(b, 0, 1, 0.3, 0.9, rb), SG_OK);
+            assert_true(ra[im].x == rb[im].x && ra[im].y == rb[im].y && ra[im].m == rb[im].m &&
+                        ra[im].opl == rb[im].opl);
+            sg_tracer_free(a);
+            sg_tracer_free(b);
+        }
+        free(z);
+        sg_system_free(back);
+        sg_system_free(sys);
+    }
+    sg_catalog_free(cat);
 }
 
 /* The design format keeps every frame change bit for bit, writes version
@@ -938,8 +1035,6 @@ static void refusals(void **state)
         const char *msg;
     } cs[] = {
         {0, SG_SURF_STANDARD, 0, {1, 0, 0, 0, 0}, 0, "surface 0: the object cannot be tilted"},
-        {1, SG_SURF_STANDARD, 0, {0, 0, 1, 0, 0}, 0, "surface 1: rays start in surface 1's frame"},
-        {1, SG_SURF_COORDBRK, 0, {0, 0, 1, 0, 0}, 0, "surface 1: the first surface cannot be a coordinate break"},
         {4, SG_SURF_COORDBRK, 0, {0, 0, 1, 0, 0}, 0, "surface 4: the image cannot be a coordinate break"},
         {4, SG_SURF_STANDARD, 1, {0, 0, 1, 0, 0}, 0, "surface 4: nothing follows the image"},
         {2, SG_SURF_STANDARD, 0, {0, 0, 361, 0, 0}, 0, "surface 2: before tilt about x 361 is beyond 360 degrees"},
@@ -997,6 +1092,8 @@ int main(void)
         cmocka_unit_test(fold_two_ways),
         cmocka_unit_test(off_axis_parabola),
         cmocka_unit_test(random_systems),
+        cmocka_unit_test(surface1_changes),
+        cmocka_unit_test(zemax_break_first),
         cmocka_unit_test(hard_systems),
         cmocka_unit_test(design_round_trip),
         cmocka_unit_test(refusals),

@@ -1334,7 +1334,7 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
     }
     /* The stop's vertex in surface 1's frame, and whether the surfaces
      * before it leave a ray straight. */
-    t->ln.straight = 1;
+    t->ln.straight = !t->sp[1].xf;
     t->ln.zstop = dd_from(0.0);
     for (i = 1; i < sys->stop; i++) {
         t->ln.straight = t->ln.straight && sg_sprep_passes(&t->sp[i]);

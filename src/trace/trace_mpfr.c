@@ -777,6 +777,10 @@ static int run_from(sg_tracer *tr, sg_ray_surface *out, int from, int upto, doub
             else
                 mpfr_sub(m->P.z, m->P.z, m->s[i].T, MPFR_RNDN);
             mpfr_set_zero(m->path, 1);
+        } else if (m->s[i].xf) {
+            /* From the launch frame through surface 1's own change; the
+             * path from the object keeps running. */
+            xfer_m(m, &m->s[i]);
         }
         rc = onto_surface(m, sp, &m->s[i], tr->o.max_iter);
         if (rc != SG_OK) {

@@ -145,17 +145,13 @@ int cell_numeric(int col)
 }
 
 /* Where a frame change may not stand (as sg_system_validate says): the
- * object moves nothing, rays start in surface 1's frame, and nothing
- * follows the image.  NULL where it may. */
+ * object moves nothing and nothing follows the image.  NULL where it may. */
 static const char *frame_refused(const sg_system *sys, int row, const sg_param *p)
 {
     if (!(p->flags & SG_PARAM_NESTED))
         return NULL;
     if (row == 0)
         return "the object cannot be tilted or decentered";
-    if (row == 1 && strncmp(p->key, "before.", 7) == 0)
-        return "rays start in surface 1's frame, which cannot be tilted or decentered before "
-               "it; tilt after it, or from surface 2 on";
     if (row == sys->nsurf - 1 && strncmp(p->key, "after.", 6) == 0)
         return "nothing follows the image, so it takes no after change";
     return NULL;
