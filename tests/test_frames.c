@@ -907,68 +907,155 @@ static void hard_systems(void **state)
         run_random(60, scale[j], 45.0, 12.0, 0.3, 0xbad5eedULL + (uint64_t)j, 0);
 }
 
-/* Zemax's samples with a coordinate break as surface 1 (UTF-16LE, as
- * Zemax 13 wrote them; tests/data/zmx/README.md): each surface's
- * automatic semi-diameter against the DIAM Zemax stored (line numbers of
- * the UTF-8 text), and the .zmx written back traces to the same bits in
- * each method. */
+/* A Zemax file (UTF-16LE, as Zemax 13 wrote them; tests/data/zmx/
+ * README.md): each listed surface's automatic semi-diameter against the
+ * DIAM Zemax stored, and the .zmx written back traces to the same bits in
+ * each method.  Returns the design for more checks. */
+static sg_system *zemax_diams(sg_catalog *cat, const char *rel, const int *surf,
+                              const double *diam, int n)
+{
+    sg_system *sys = sg_system_new(), *back = sg_system_new();
+    char path[4096];
+    double sd[64];
+    sg_diag d;
+    char *z;
+    int k, meth;
+    sg_diag_clear(&d);
+    if (sg_design_load(sys, tu_path(rel, path, sizeof path), &d) != SG_OK)
+        fail_msg("%s: %s", rel, d.msg);
+    assert_int_equal(sg_semi_diameters(sys, cat, NULL, sd, &d), SG_OK);
+    for (k = 0; k < n; k++) {
+        print_message("# %s surface %d: %.13g, Zemax %.13g\n", rel, surf[k], sd[surf[k]],
+                      diam[k]);
+        /* Zemax prints 13 significant digits. */
+        assert_true(fabs(sd[surf[k]] - diam[k]) <= 1e-11 * diam[k]);
+    }
+    z = sg_zmx_to_text(sys, cat, &d);
+    assert_non_null(z);
+    assert_int_equal(sg_zmx_parse(back, z, strlen(z), "back.zmx", cat, &d), SG_OK);
+    assert_true(back->surf[0].thickness == sys->surf[0].thickness);
+    assert_int_equal(back->surf[1].type, sys->surf[1].type);
+    for (meth = 0; meth < 3; meth++) {
+        sg_tracer *a = tu_tracer(sys, cat, (sg_method)meth),
+                  *b = tu_tracer(back, cat, (sg_method)meth);
+        sg_ray_surface ra[64], rb[64];
+        int im = sys->nsurf - 1;
+        /* A ray inside every fixed semi-diameter of the files. */
+        assert_int_equal(sg_trace_normalized(a, 0, 0.6, 0.2, 0.5, ra), SG_OK);
+        assert_int_equal(sg_trace_normalized(b, 0, 0.6, 0.2, 0.5, rb), SG_OK);
+        assert_true(ra[im].x == rb[im].x && ra[im].y == rb[im].y && ra[im].m == rb[im].m &&
+                    ra[im].opl == rb[im].opl);
+        sg_tracer_free(a);
+        sg_tracer_free(b);
+    }
+    free(z);
+    sg_system_free(back);
+    return sys;
+}
+
+/* Zemax's samples with a coordinate break as surface 1 (line numbers of
+ * the UTF-8 text). */
 static void zemax_break_first(void **state)
 {
-    static const struct {
-        const char *rel;
-        int surf[2];
-        double diam[2], dx, dy;
-    } fs[] = {
-        /* Offner relay: the break decentres y by -3 (PARM 2, line 76); the
-         * mirrors' DIAMs, lines 92 and 114. */
-        {"tests/data/zmx/offner_relay.zmx", {2, 4}, {4.686823252472, 4.676393457068}, 0.0, -3.0},
-        /* Bi-ocular lens, configuration 1: x by 25 (PARM 1, line 75); the
-         * stop's and the image's DIAMs, lines 92 and 198. */
-        {"tests/data/zmx/biocular_lens.zmx", {2, 11}, {2.500000000011, 12.58899446594}, 25.0, 0.0},
-    };
+    /* Offner relay: the break decentres y by -3 (PARM 2, line 76); the
+     * mirrors' DIAMs, lines 92 and 114.  Bi-ocular lens, configuration
+     * 1: x by 25 (PARM 1, line 75); the stop's and the image's DIAMs,
+     * lines 92 and 198. */
+    static const int os[2] = {2, 4}, bs[2] = {2, 11};
+    static const double od[2] = {4.686823252472, 4.676393457068},
+                        bd[2] = {2.500000000011, 12.58899446594};
     sg_catalog *cat = tu_catalog();
-    size_t f;
+    sg_system *o = zemax_diams(cat, "tests/data/zmx/offner_relay.zmx", os, od, 2),
+              *b = zemax_diams(cat, "tests/data/zmx/biocular_lens.zmx", bs, bd, 2);
     (void)state;
-    for (f = 0; f < sizeof fs / sizeof fs[0]; f++) {
-        sg_system *sys = sg_system_new(), *back = sg_system_new();
-        char path[4096];
-        double sd[64];
-        sg_diag d;
-        char *z;
-        int k, meth;
-        sg_diag_clear(&d);
-        if (sg_design_load(sys, tu_path(fs[f].rel, path, sizeof path), &d) != SG_OK)
-            fail_msg("%s: %s", fs[f].rel, d.msg);
-        assert_int_equal(sys->surf[1].type, SG_SURF_COORDBRK);
-        assert_true(sys->surf[1].before.dx == fs[f].dx && sys->surf[1].before.dy == fs[f].dy);
-        assert_int_equal(sg_semi_diameters(sys, cat, NULL, sd, &d), SG_OK);
-        for (k = 0; k < 2; k++) {
-            double want = fs[f].diam[k], got = sd[fs[f].surf[k]];
-            print_message("# %s surface %d: %.13g, Zemax %.13g\n", fs[f].rel, fs[f].surf[k],
-                          got, want);
-            /* Zemax prints 13 significant digits. */
-            assert_true(fabs(got - want) <= 1e-11 * want);
-        }
-        z = sg_zmx_to_text(sys, cat, &d);
-        assert_non_null(z);
-        assert_int_equal(sg_zmx_parse(back, z, strlen(z), "back.zmx", cat, &d), SG_OK);
-        assert_int_equal(back->surf[1].type, SG_SURF_COORDBRK);
-        for (meth = 0; meth < 3; meth++) {
-            sg_tracer *a = tu_tracer(sys, cat, (sg_method)meth),
-                      *b = tu_tracer(back, cat, (sg_method)meth);
-            sg_ray_surface ra[64], rb[64];
-            int im = sys->nsurf - 1;
-            assert_int_equal(sg_trace_normalized(a, 0, 1, 0.3, 0.9, ra), SG_OK);
-            assert_int_equal(sg_trace_normalized(b, 0, 1, 0.3, 0.9, rb), SG_OK);
-            assert_true(ra[im].x == rb[im].x && ra[im].y == rb[im].y && ra[im].m == rb[im].m &&
-                        ra[im].opl == rb[im].opl);
-            sg_tracer_free(a);
-            sg_tracer_free(b);
-        }
-        free(z);
-        sg_system_free(back);
-        sg_system_free(sys);
+    assert_int_equal(o->surf[1].type, SG_SURF_COORDBRK);
+    assert_true(o->surf[1].before.dx == 0.0 && o->surf[1].before.dy == -3.0);
+    assert_int_equal(b->surf[1].type, SG_SURF_COORDBRK);
+    assert_true(b->surf[1].before.dx == 25.0 && b->surf[1].before.dy == 0.0);
+    sg_system_free(o);
+    sg_system_free(b);
+    sg_catalog_free(cat);
+}
+
+/* Zemax's samples with the object on surface 1's place (DISZ 0): "Example
+ * 1, A singlet eyepiece" (object heights to 11.5: surface 1's DIAM, line
+ * 82, is the field; the image's, line 122) and the short course's
+ * POP_Coupling (the image's DIAM, line 133). */
+static void zemax_object_on_surface1(void **state)
+{
+    static const int es[2] = {1, 5}, ps[1] = {6};
+    static const double ed[2] = {11.5, 582.7803973772}, pd[1] = {1.650196169345e-2};
+    sg_catalog *cat = tu_catalog();
+    sg_system *e = zemax_diams(cat, "tests/data/zmx/singlet_eyepiece.zmx", es, ed, 2),
+              *p = zemax_diams(cat, "tests/data/zmx/pop_coupling.zmx", ps, pd, 1);
+    (void)state;
+    assert_true(e->surf[0].thickness == 0.0 && p->surf[0].thickness == 0.0);
+    sg_system_free(e);
+    sg_system_free(p);
+    sg_catalog_free(cat);
+}
+
+/* A point on surface 1's place at the centre of a spherical mirror: every
+ * ray comes back to it, after an optical path of twice the radius, in
+ * each method (closed form). */
+static void object_on_surface1_sphere(void **state)
+{
+    const double R = 50.0;
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = base_system(4);
+    sg_diag d;
+    int meth, k;
+    (void)state;
+    sys->surf[0].thickness = 0.0;
+    sys->surf[1].thickness = R;
+    sys->surf[2].radius = -R;
+    sys->surf[2].mat.kind = SG_MAT_MIRROR;
+    sys->surf[2].thickness = -R;
+    sys->stop = 2;
+    sys->aper_type = SG_APER_EPD;
+    sys->aper_value = 60.0;
+    sys->field_type = SG_FIELD_OBJECT_HEIGHT;
+    sys->aim = SG_AIM_OFF;
+    sg_diag_clear(&d);
+    if (sg_system_validate(sys, cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    {
+        /* The object and surface 1 at one place; the mirror R on. */
+        sg_frame gf[4];
+        assert_int_equal(sg_global_frames(sys, 1, gf, &d), SG_OK);
+        assert_true(gf[0].o[2] == 0.0 && gf[1].o[2] == 0.0 && gf[2].o[2] == R &&
+                    gf[3].o[2] == 0.0);
     }
+    for (meth = 0; meth < 3; meth++) {
+        sg_tracer *t = tu_tracer(sys, cat, (sg_method)meth);
+        for (k = 0; k < 40; k++) {
+            double px = srand1(0.7), py = srand1(0.7);
+            sg_ray_surface out[8];
+            double tol = meth == SG_METHOD_CLASSIC ? 1e-12 : 0.0;
+            assert_int_equal(sg_trace_normalized(t, 0, 0, px, py, out), SG_OK);
+            if (!(fabs(out[3].x) <= out[3].error_bound + tol &&
+                  fabs(out[3].y) <= out[3].error_bound + tol &&
+                  fabs(out[3].opl - 2.0 * R) <= out[3].opl_error_bound + 2e-13))
+                fail_msg("method %d pupil %g %g: image (%.17g, %.17g), OPL %.17g (bounds %.3g, "
+                         "%.3g)", meth, px, py, out[3].x, out[3].y, out[3].opl,
+                         out[3].error_bound, out[3].opl_error_bound);
+            /* The ray leaves the object point itself, towards its point
+             * of the entrance pupil, the mirror's vertex plane R on, of
+             * radius 30 (aiming off). */
+            assert_true(fabs(out[1].x) <= out[1].error_bound + tol &&
+                        fabs(out[1].y) <= out[1].error_bound + tol);
+            {
+                double len = sqrt(900.0 * (px * px + py * py) + R * R);
+                if (!(fabs(out[1].l - 30.0 * px / len) <= out[1].dir_error_bound + 1e-15 &&
+                      fabs(out[1].m - 30.0 * py / len) <= out[1].dir_error_bound + 1e-15))
+                    fail_msg("method %d pupil %g %g: direction (%.17g, %.17g), want (%.17g, "
+                             "%.17g)", meth, px, py, out[1].l, out[1].m, 30.0 * px / len,
+                             30.0 * py / len);
+            }
+        }
+        sg_tracer_free(t);
+    }
+    sg_system_free(sys);
     sg_catalog_free(cat);
 }
 
@@ -1094,6 +1181,8 @@ int main(void)
         cmocka_unit_test(random_systems),
         cmocka_unit_test(surface1_changes),
         cmocka_unit_test(zemax_break_first),
+        cmocka_unit_test(zemax_object_on_surface1),
+        cmocka_unit_test(object_on_surface1_sphere),
         cmocka_unit_test(hard_systems),
         cmocka_unit_test(design_round_trip),
         cmocka_unit_test(refusals),

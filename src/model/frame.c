@@ -168,15 +168,23 @@ static void compose_z(mxf *m, double t, mpfr_t *tmp)
     }
 }
 
+double sg_launch_step(const sg_system *sys)
+{
+    return sys->surf[0].thickness == 0.0 ? 1.0 : 0.0;
+}
+
 /* The transfer into surface i (i >= 1) from surface i-1's frame.  Into
  * surface 1 it is from the launch frame, at surface 1's place before its
- * own change (rays are launched there, launch.c): that change only, as
+ * own change (rays are launched there, launch.c; sg_launch_step beyond it
+ * for an object on that place): back that step, then that change, as
  * Zemax's coordinate break or tilt on surface 1 turns what follows the
  * object, not the object. */
 static void xfer(const sg_system *sys, int i, mxf *m, mpfr_t *tmp)
 {
     const sg_surface *p = &sys->surf[i - 1], *s = &sys->surf[i];
     if (i == 1) {
+        if (sg_launch_step(sys) != 0.0)
+            compose_z(m, -sg_launch_step(sys), tmp);
         compose_change(m, &s->before, 0, tmp);
         return;
     }
@@ -196,7 +204,7 @@ int sg_xfer_moves(const sg_system *sys, int i)
     if (!sg_frame_change_is_zero(&s->before))
         return 1;
     if (i == 1)
-        return 0;
+        return sg_launch_step(sys) != 0.0;
     if (p->type == SG_SURF_COORDBRK)
         return 0;
     if (p->after_mode == SG_AFTER_REVERSE)
@@ -259,11 +267,13 @@ int sg_global_frames(const sg_system *sys, int ref, sg_frame *out, sg_diag *d)
         }
         xfer(sys, i, &g[i], tmp);
     }
+    /* The object and surface 1's place, in the launch frame. */
+    mxf_init(&lf, prec);
+    mpfr_set_d(lf.b[2], -sg_launch_step(sys), MPFR_RNDN);
     if (isfinite(sys->surf[0].thickness))
-        mpfr_set_d(g[0].b[2], -sys->surf[0].thickness, MPFR_RNDN);
+        mpfr_sub_d(g[0].b[2], lf.b[2], sys->surf[0].thickness, MPFR_RNDN);
     else
         mpfr_set_inf(g[0].b[2], -1);
-    mxf_init(&lf, prec);
     for (i = 0; i < n; i++) {
         const mxf *r = ref == 1 ? &lf : &g[ref];
         for (j = 0; j < 3; j++) {

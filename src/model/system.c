@@ -568,13 +568,6 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
             return sg_diag_set(d, SG_ERANGE, "surface %d: thickness must be finite", i);
         if (i == 0 && isnan(s->thickness))
             return sg_diag_set(d, SG_ERANGE, "surface 0: thickness is not a number");
-        if (i == 0 && !(fabs(s->thickness) > 0.0))
-            return sg_diag_set(d, SG_ENONPHYS,
-                               "surface 0: the object must lie away from surface 1 "
-                               "(thickness %g): sagitta launches and aims each ray from the "
-                               "object point, which cannot be on surface 1; insert a dummy "
-                               "plane after the object, give the object a thickness d and "
-                               "the dummy -d, and surface 1 stays in place", s->thickness);
         /* The table's plain numbers: finite, within their limits. */
         for (p = 0; p < sg_param_count(SG_SCOPE_SURFACE); p++) {
             const sg_param *pp = sg_param_at(SG_SCOPE_SURFACE, p);

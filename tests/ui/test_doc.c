@@ -440,7 +440,7 @@ static void test_bad_values(void **state)
     static const char *const bad[] = {
         "set 1 radius abc",       "set 1 radius 1.5x",      "set 1 radius nan",
         "set 1 radius",           "set 1 radius 1e999",     "set 1 thickness inf",
-        "set 1 thickness -inf",   "set 0 thickness 0",      "set 1 semi -1",
+        "set 1 thickness -inf",   "set 0 thickness nan",    "set 1 semi -1",
         "set 1 semi nan",         "set 1 semi 5 X",         "set 1 conic inf",
         "set 1 a4 NaN",           "set 1 material NOT-A-GLASS-XYZ",
         "set 0 material mirror",  "set ima material mirror", "set 1 material 0",

@@ -596,11 +596,6 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
                 col, &v, err, errn);
     if (rc != SG_EOK)
         return rc;
-    if ((p->flags & SG_PARAM_OBJ_INF) && row == 0 && v == 0.0) {
-        snprintf(err, errn, "surface 0 thickness: the object must lie away from "
-                 "surface 1 (use Infinity for an object at infinity)");
-        return SG_ENONPHYS;
-    }
     if ((p->flags & SG_PARAM_NONNEG) && v < 0.0) {
         snprintf(err, errn, "surface %d %s: %s is negative", row, cell_name(col), buf);
         return SG_ERANGE;
