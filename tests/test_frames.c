@@ -14,7 +14,8 @@
  * Checked: the sign conventions against hand values; the inverse of a
  * break; a fold mirror built two ways and against the unfolded lens; an
  * off-axis parabola's focus (closed form); random tilted, decentred and
- * folded systems of conics, lenses and mirrors, where precise and mpfr
+ * folded systems of conics, lenses and mirrors (surface 1 a break or
+ * tilted in some), where precise and mpfr
  * must lie within their bounds and agree with the reference on every
  * status; the global frames; and the design format's round trip.
  */
@@ -636,6 +637,10 @@ static void off_axis_parabola(void **state)
     sg_catalog_free(cat);
 }
 
+/* Whether random_system changes the frame on surface 1 (a set of its
+ * own, so that the other sets keep their systems). */
+static int change_s1;
+
 /* A random system: lenses, mirrors and breaks, with tilts and decenters
  * before and after, both orders and "reverse". */
 static sg_system *random_system(double L, double T)
@@ -648,6 +653,20 @@ static sg_system *random_system(double L, double T)
     sys->surf[1].thickness = 4.0 * L;
     sys->surf[1].mat.kind = SG_MAT_INDEX;
     sys->surf[1].mat.index = 1.5 + 0.2 * urand();
+    /* Surface 1 may turn or move what follows it (Zemax's coordinate break
+     * or tilt on surface 1): rays start at its place before the change. */
+    if (change_s1) {
+        double u = urand();
+        if (u < 0.25) {
+            sys->surf[1].type = SG_SURF_COORDBRK;
+            sys->surf[1].radius = INFINITY;
+            sys->surf[1].mat.kind = SG_MAT_AIR;
+            sys->surf[1].thickness = L * (urand() < 0.3 ? 0.0 : 5.0 * urand());
+        }
+        if (u < 0.6)
+            set_change(&sys->surf[1].before, L * srand1(2.0), L * srand1(2.0), srand1(T),
+                       srand1(T), srand1(2.5 * T), urand() < 0.5);
+    }
     for (i = 2; i < n - 1; i++) {
         sg_surface *s = &sys->surf[i];
         double u = urand();
@@ -687,6 +706,9 @@ static sg_system *random_system(double L, double T)
                        srand1(T / 2), srand1(20.0), urand() < 0.5);
         s->thickness = dir * L * (s->mat.kind == SG_MAT_INDEX ? 3.0 + 3.0 * urand() : 8.0 + 20.0 * urand());
     }
+    /* A break is no stop: the first surface that is not one. */
+    while (sys->surf[sys->stop].type == SG_SURF_COORDBRK)
+        sys->stop++;
     /* The image may be tilted too. */
     if (urand() < 0.5)
         set_change(&sys->surf[n - 1].before, L * srand1(1.0), L * srand1(1.0), srand1(T),
@@ -864,6 +886,16 @@ static void random_systems(void **state)
     run_random(120, 1.0, 12.0, 3.0, 0.04, 0x7117edULL, 1);
 }
 
+/* Surface 1 a break or tilted: the reference turns the frame at surface
+ * 1's place, as Zemax does, and so must every method. */
+static void surface1_changes(void **state)
+{
+    (void)state;
+    change_s1 = 1;
+    run_random(120, 1.0, 12.0, 3.0, 0.04, 0x5115ULL, 1);
+    change_s1 = 0;
+}
+
 /* Where it is hard: steep tilts, wide and steep rays that graze and miss,
  * and lengths from 1e-3 to 1e4 mm. */
 static void hard_systems(void **state)
@@ -873,6 +905,158 @@ static void hard_systems(void **state)
     (void)state;
     for (j = 0; j < 3; j++)
         run_random(60, scale[j], 45.0, 12.0, 0.3, 0xbad5eedULL + (uint64_t)j, 0);
+}
+
+/* A Zemax file (UTF-16LE, as Zemax 13 wrote them; tests/data/zmx/
+ * README.md): each listed surface's automatic semi-diameter against the
+ * DIAM Zemax stored, and the .zmx written back traces to the same bits in
+ * each method.  Returns the design for more checks. */
+static sg_system *zemax_diams(sg_catalog *cat, const char *rel, const int *surf,
+                              const double *diam, int n)
+{
+    sg_system *sys = sg_system_new(), *back = sg_system_new();
+    char path[4096];
+    double sd[64];
+    sg_diag d;
+    char *z;
+    int k, meth;
+    sg_diag_clear(&d);
+    if (sg_design_load(sys, tu_path(rel, path, sizeof path), &d) != SG_OK)
+        fail_msg("%s: %s", rel, d.msg);
+    assert_int_equal(sg_semi_diameters(sys, cat, NULL, sd, &d), SG_OK);
+    for (k = 0; k < n; k++) {
+        print_message("# %s surface %d: %.13g, Zemax %.13g\n", rel, surf[k], sd[surf[k]],
+                      diam[k]);
+        /* Zemax prints 13 significant digits. */
+        assert_true(fabs(sd[surf[k]] - diam[k]) <= 1e-11 * diam[k]);
+    }
+    z = sg_zmx_to_text(sys, cat, &d);
+    assert_non_null(z);
+    assert_int_equal(sg_zmx_parse(back, z, strlen(z), "back.zmx", cat, &d), SG_OK);
+    assert_true(back->surf[0].thickness == sys->surf[0].thickness);
+    assert_int_equal(back->surf[1].type, sys->surf[1].type);
+    for (meth = 0; meth < 3; meth++) {
+        sg_tracer *a = tu_tracer(sys, cat, (sg_method)meth),
+                  *b = tu_tracer(back, cat, (sg_method)meth);
+        sg_ray_surface ra[64], rb[64];
+        int im = sys->nsurf - 1;
+        /* A ray inside every fixed semi-diameter of the files. */
+        assert_int_equal(sg_trace_normalized(a, 0, 0.6, 0.2, 0.5, ra), SG_OK);
+        assert_int_equal(sg_trace_normalized(b, 0, 0.6, 0.2, 0.5, rb), SG_OK);
+        assert_true(ra[im].x == rb[im].x && ra[im].y == rb[im].y && ra[im].m == rb[im].m &&
+                    ra[im].opl == rb[im].opl);
+        sg_tracer_free(a);
+        sg_tracer_free(b);
+    }
+    free(z);
+    sg_system_free(back);
+    return sys;
+}
+
+/* Zemax's samples with a coordinate break as surface 1 (line numbers of
+ * the UTF-8 text). */
+static void zemax_break_first(void **state)
+{
+    /* Offner relay: the break decentres y by -3 (PARM 2, line 76); the
+     * mirrors' DIAMs, lines 92 and 114.  Bi-ocular lens, configuration
+     * 1: x by 25 (PARM 1, line 75); the stop's and the image's DIAMs,
+     * lines 92 and 198. */
+    static const int os[2] = {2, 4}, bs[2] = {2, 11};
+    static const double od[2] = {4.686823252472, 4.676393457068},
+                        bd[2] = {2.500000000011, 12.58899446594};
+    sg_catalog *cat = tu_catalog();
+    sg_system *o = zemax_diams(cat, "tests/data/zmx/offner_relay.zmx", os, od, 2),
+              *b = zemax_diams(cat, "tests/data/zmx/biocular_lens.zmx", bs, bd, 2);
+    (void)state;
+    assert_int_equal(o->surf[1].type, SG_SURF_COORDBRK);
+    assert_true(o->surf[1].before.dx == 0.0 && o->surf[1].before.dy == -3.0);
+    assert_int_equal(b->surf[1].type, SG_SURF_COORDBRK);
+    assert_true(b->surf[1].before.dx == 25.0 && b->surf[1].before.dy == 0.0);
+    sg_system_free(o);
+    sg_system_free(b);
+    sg_catalog_free(cat);
+}
+
+/* Zemax's samples with the object on surface 1's place (DISZ 0): "Example
+ * 1, A singlet eyepiece" (object heights to 11.5: surface 1's DIAM, line
+ * 82, is the field; the image's, line 122) and the short course's
+ * POP_Coupling (the image's DIAM, line 133). */
+static void zemax_object_on_surface1(void **state)
+{
+    static const int es[2] = {1, 5}, ps[1] = {6};
+    static const double ed[2] = {11.5, 582.7803973772}, pd[1] = {1.650196169345e-2};
+    sg_catalog *cat = tu_catalog();
+    sg_system *e = zemax_diams(cat, "tests/data/zmx/singlet_eyepiece.zmx", es, ed, 2),
+              *p = zemax_diams(cat, "tests/data/zmx/pop_coupling.zmx", ps, pd, 1);
+    (void)state;
+    assert_true(e->surf[0].thickness == 0.0 && p->surf[0].thickness == 0.0);
+    sg_system_free(e);
+    sg_system_free(p);
+    sg_catalog_free(cat);
+}
+
+/* A point on surface 1's place at the centre of a spherical mirror: every
+ * ray comes back to it, after an optical path of twice the radius, in
+ * each method (closed form). */
+static void object_on_surface1_sphere(void **state)
+{
+    const double R = 50.0;
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = base_system(4);
+    sg_diag d;
+    int meth, k;
+    (void)state;
+    sys->surf[0].thickness = 0.0;
+    sys->surf[1].thickness = R;
+    sys->surf[2].radius = -R;
+    sys->surf[2].mat.kind = SG_MAT_MIRROR;
+    sys->surf[2].thickness = -R;
+    sys->stop = 2;
+    sys->aper_type = SG_APER_EPD;
+    sys->aper_value = 60.0;
+    sys->field_type = SG_FIELD_OBJECT_HEIGHT;
+    sys->aim = SG_AIM_OFF;
+    sg_diag_clear(&d);
+    if (sg_system_validate(sys, cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    {
+        /* The object and surface 1 at one place; the mirror R on. */
+        sg_frame gf[4];
+        assert_int_equal(sg_global_frames(sys, 1, gf, &d), SG_OK);
+        assert_true(gf[0].o[2] == 0.0 && gf[1].o[2] == 0.0 && gf[2].o[2] == R &&
+                    gf[3].o[2] == 0.0);
+    }
+    for (meth = 0; meth < 3; meth++) {
+        sg_tracer *t = tu_tracer(sys, cat, (sg_method)meth);
+        for (k = 0; k < 40; k++) {
+            double px = srand1(0.7), py = srand1(0.7);
+            sg_ray_surface out[8];
+            double tol = meth == SG_METHOD_CLASSIC ? 1e-12 : 0.0;
+            assert_int_equal(sg_trace_normalized(t, 0, 0, px, py, out), SG_OK);
+            if (!(fabs(out[3].x) <= out[3].error_bound + tol &&
+                  fabs(out[3].y) <= out[3].error_bound + tol &&
+                  fabs(out[3].opl - 2.0 * R) <= out[3].opl_error_bound + 2e-13))
+                fail_msg("method %d pupil %g %g: image (%.17g, %.17g), OPL %.17g (bounds %.3g, "
+                         "%.3g)", meth, px, py, out[3].x, out[3].y, out[3].opl,
+                         out[3].error_bound, out[3].opl_error_bound);
+            /* The ray leaves the object point itself, towards its point
+             * of the entrance pupil, the mirror's vertex plane R on, of
+             * radius 30 (aiming off). */
+            assert_true(fabs(out[1].x) <= out[1].error_bound + tol &&
+                        fabs(out[1].y) <= out[1].error_bound + tol);
+            {
+                double len = sqrt(900.0 * (px * px + py * py) + R * R);
+                if (!(fabs(out[1].l - 30.0 * px / len) <= out[1].dir_error_bound + 1e-15 &&
+                      fabs(out[1].m - 30.0 * py / len) <= out[1].dir_error_bound + 1e-15))
+                    fail_msg("method %d pupil %g %g: direction (%.17g, %.17g), want (%.17g, "
+                             "%.17g)", meth, px, py, out[1].l, out[1].m, 30.0 * px / len,
+                             30.0 * py / len);
+            }
+        }
+        sg_tracer_free(t);
+    }
+    sg_system_free(sys);
+    sg_catalog_free(cat);
 }
 
 /* The design format keeps every frame change bit for bit, writes version
@@ -938,8 +1122,6 @@ static void refusals(void **state)
         const char *msg;
     } cs[] = {
         {0, SG_SURF_STANDARD, 0, {1, 0, 0, 0, 0}, 0, "surface 0: the object cannot be tilted"},
-        {1, SG_SURF_STANDARD, 0, {0, 0, 1, 0, 0}, 0, "surface 1: rays start in surface 1's frame"},
-        {1, SG_SURF_COORDBRK, 0, {0, 0, 1, 0, 0}, 0, "surface 1: the first surface cannot be a coordinate break"},
         {4, SG_SURF_COORDBRK, 0, {0, 0, 1, 0, 0}, 0, "surface 4: the image cannot be a coordinate break"},
         {4, SG_SURF_STANDARD, 1, {0, 0, 1, 0, 0}, 0, "surface 4: nothing follows the image"},
         {2, SG_SURF_STANDARD, 0, {0, 0, 361, 0, 0}, 0, "surface 2: before tilt about x 361 is beyond 360 degrees"},
@@ -997,6 +1179,10 @@ int main(void)
         cmocka_unit_test(fold_two_ways),
         cmocka_unit_test(off_axis_parabola),
         cmocka_unit_test(random_systems),
+        cmocka_unit_test(surface1_changes),
+        cmocka_unit_test(zemax_break_first),
+        cmocka_unit_test(zemax_object_on_surface1),
+        cmocka_unit_test(object_on_surface1_sphere),
         cmocka_unit_test(hard_systems),
         cmocka_unit_test(design_round_trip),
         cmocka_unit_test(refusals),

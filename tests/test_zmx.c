@@ -648,7 +648,7 @@ static void test_bad_inputs(void **state)
         {"tilt number", H S0 "SURF 1\n  STOP\n  SCBD 1 0 0 0 0 9x 0 0\n" S2 S3, 0, SG_EPARSE, "t.zmx:9: surface 1: tilt about x: not a number"},
         {"tilt extra", H S0 "SURF 1\n  STOP\n  SCBD 1 0 0 0 0 9 0 0 1\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: SCBD: more than 8 values"},
         {"tilt twice", H S0 S1 "SURF 2\n  SCBD 1 0 0 0 0 5 0 0\n  SCBD 1 0 0 0 0 7 0 0\n" S3, 0, SG_EPARSE, "t.zmx:14: surface 2: SCBD: a second line for the before side in one surface (line 13)"},
-        {"tilt surface 1", H S0 "SURF 1\n  STOP\n  SCBD 1 0 0 0 0 5 0 0\n" S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:9: surface 1: SCBD: a tilt or decenter before surface 1"},
+        {"tilt object", "MODE SEQ\nENPD 10\nWAVM 1 0.55 1\nPWAV 1\nSURF 0\n  DISZ 10\n  SCBD 1 0 0 0 0 5 0 0\n" S1 S2 S3, 0, SG_EUNSUPPORTED, "t.zmx:7: surface 0: SCBD: a tilt or decenter before the object"},
         {"tilt on break", H S0 S1 "SURF 2\n  TYPE COORDBRK\n  SCBD 1 0 0 1 0 0 0 0\n" S3, 0, SG_EUNSUPPORTED, "t.zmx:14: surface 2: SCBD: a tilt or decenter on a coordinate break"},
         {"floating annulus", H S0 "SURF 1\n  FLAP 1 5 0\n", 0, SG_EUNSUPPORTED,
          "t.zmx:8: surface 1: FLAP: a floating aperture with a minimum radius"},

@@ -1157,12 +1157,10 @@ static int end_surface(zctx *c)
         if (s->type == SG_SURF_COORDBRK)
             return zerr(c, SG_EUNSUPPORTED, "SCBD: a tilt or decenter on a coordinate break; "
                         "its parameters are the break");
-        /* sagitta's rays start in surface 1's frame, in front of the object. */
-        if (c->cur < 2)
-            return zerr(c, SG_EUNSUPPORTED, "SCBD: a tilt or decenter before surface %d; "
-                        "sagitta's rays start in surface 1's frame, so the object and surface 1 "
-                        "cannot be moved (in Zemax, add a dummy surface and tilt from surface "
-                        "2 on)", c->cur);
+        /* Rays start on the object's axis, which nothing moves. */
+        if (c->cur < 1)
+            return zerr(c, SG_EUNSUPPORTED, "SCBD: a tilt or decenter before the object; "
+                        "sagitta starts rays on the object's axis, which nothing moves");
         s->before = z->scbd;
     }
     if (z->scad_line) {
@@ -3169,13 +3167,12 @@ static int write_text(zbuf *b, const sg_system *s, const sg_catalog *cat, int la
         /* A tilt or decenter before or after a surface goes out as Zemax's
          * SCBD lines (side 1 and 2), which the reader checks. */
         if (f->type != SG_SURF_COORDBRK &&
-            ((i < 2 && !sg_frame_change_is_zero(&f->before)) ||
+            ((i < 1 && !sg_frame_change_is_zero(&f->before)) ||
              (i == 0 && f->after_mode == SG_AFTER_EXPLICIT &&
               !sg_frame_change_is_zero(&f->after))))
             return sg_diag_set(d, SG_EUNSUPPORTED, "export: surface %d: a tilt or decenter "
-                               "before surface 1 or around the object, which sagitta's .zmx "
-                               "reader does not take (its rays start in surface 1's frame); "
-                               "use coordinate breaks", i);
+                               "around the object, which sagitta's .zmx reader does not take "
+                               "(its rays start on the object's axis)", i);
         /* A shape whose record has no .zmx map (sagitta does not know
          * Zemax's layout of it) cannot be written. */
         if (sg_shape_ops_of(f->type) && !sg_shape_type_of(f->type)->zmx)

@@ -168,10 +168,26 @@ static void compose_z(mxf *m, double t, mpfr_t *tmp)
     }
 }
 
-/* The transfer into surface i (i >= 1) from surface i-1's frame. */
+double sg_launch_step(const sg_system *sys)
+{
+    return sys->surf[0].thickness == 0.0 ? 1.0 : 0.0;
+}
+
+/* The transfer into surface i (i >= 1) from surface i-1's frame.  Into
+ * surface 1 it is from the launch frame, at surface 1's place before its
+ * own change (rays are launched there, launch.c; sg_launch_step beyond it
+ * for an object on that place): back that step, then that change, as
+ * Zemax's coordinate break or tilt on surface 1 turns what follows the
+ * object, not the object. */
 static void xfer(const sg_system *sys, int i, mxf *m, mpfr_t *tmp)
 {
     const sg_surface *p = &sys->surf[i - 1], *s = &sys->surf[i];
+    if (i == 1) {
+        if (sg_launch_step(sys) != 0.0)
+            compose_z(m, -sg_launch_step(sys), tmp);
+        compose_change(m, &s->before, 0, tmp);
+        return;
+    }
     if (p->type != SG_SURF_COORDBRK) {
         if (p->after_mode == SG_AFTER_REVERSE)
             compose_change(m, &p->before, 1, tmp);
@@ -187,6 +203,8 @@ int sg_xfer_moves(const sg_system *sys, int i)
     const sg_surface *p = &sys->surf[i - 1], *s = &sys->surf[i];
     if (!sg_frame_change_is_zero(&s->before))
         return 1;
+    if (i == 1)
+        return sg_launch_step(sys) != 0.0;
     if (p->type == SG_SURF_COORDBRK)
         return 0;
     if (p->after_mode == SG_AFTER_REVERSE)
@@ -218,7 +236,7 @@ int sg_xfer_mpfr(const sg_system *sys, int i, mpfr_t A[3][3], mpfr_t b[3])
 int sg_global_frames(const sg_system *sys, int ref, sg_frame *out, sg_diag *d)
 {
     const mpfr_prec_t prec = 256;
-    mxf *g;
+    mxf *g, lf;
     mpfr_t tmp[4];
     int i, j, k, n = sys->nsurf;
     if (ref < 0 || ref >= n)
@@ -227,7 +245,9 @@ int sg_global_frames(const sg_system *sys, int ref, sg_frame *out, sg_diag *d)
     if (ref == 0 && !isfinite(sys->surf[0].thickness))
         return sg_diag_set(d, SG_ERANGE,
                            "global reference surface 0: the object is at infinity");
-    if (sys->surf[ref].type == SG_SURF_COORDBRK)
+    /* Surface 1 as the reference is the launch frame, at its place before
+     * its own change: the object's axis, also where surface 1 is a break. */
+    if (sys->surf[ref].type == SG_SURF_COORDBRK && ref != 1)
         return sg_diag_set(d, SG_ERANGE,
                            "global reference surface %d is a coordinate break", ref);
     g = calloc((size_t)n, sizeof *g);
@@ -237,8 +257,9 @@ int sg_global_frames(const sg_system *sys, int ref, sg_frame *out, sg_diag *d)
         mpfr_init2(tmp[j], prec);
     for (i = 0; i < n; i++)
         mxf_init(&g[i], prec);
-    /* Relative to surface 1 first: G_i = G_{i-1} o X_i. */
-    for (i = 2; i < n; i++) {
+    /* Relative to the launch frame first (surface 1's, unless surface 1
+     * turns or moves what follows it): G_i = G_{i-1} o X_i. */
+    for (i = sg_xfer_moves(sys, 1) ? 1 : 2; i < n; i++) {
         for (j = 0; j < 3; j++) {
             for (k = 0; k < 3; k++)
                 mpfr_set(g[i].A[j][k], g[i - 1].A[j][k], MPFR_RNDN);
@@ -246,12 +267,15 @@ int sg_global_frames(const sg_system *sys, int ref, sg_frame *out, sg_diag *d)
         }
         xfer(sys, i, &g[i], tmp);
     }
+    /* The object and surface 1's place, in the launch frame. */
+    mxf_init(&lf, prec);
+    mpfr_set_d(lf.b[2], -sg_launch_step(sys), MPFR_RNDN);
     if (isfinite(sys->surf[0].thickness))
-        mpfr_set_d(g[0].b[2], -sys->surf[0].thickness, MPFR_RNDN);
+        mpfr_sub_d(g[0].b[2], lf.b[2], sys->surf[0].thickness, MPFR_RNDN);
     else
         mpfr_set_inf(g[0].b[2], -1);
     for (i = 0; i < n; i++) {
-        const mxf *r = &g[ref];
+        const mxf *r = ref == 1 ? &lf : &g[ref];
         for (j = 0; j < 3; j++) {
             double o;
             /* Relative to ref: R_ref^T (R_i p + o_i - o_ref). */
@@ -273,6 +297,7 @@ int sg_global_frames(const sg_system *sys, int ref, sg_frame *out, sg_diag *d)
     }
     for (i = 0; i < n; i++)
         mxf_clear(&g[i]);
+    mxf_clear(&lf);
     for (j = 0; j < 4; j++)
         mpfr_clear(tmp[j]);
     free(g);

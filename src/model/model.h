@@ -42,6 +42,11 @@ typedef struct sg_valid_memo {
 int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag *d,
                             sg_valid_memo *m);
 
+/* Where rays are launched, after the object along its axis: at surface
+ * 1's place, or, for an object on that place (thickness 0, which Zemax
+ * allows), this many lens units beyond it, so that a ray's launch point
+ * is not its object point; the transfer into surface 1 steps back. */
+double sg_launch_step(const sg_system *sys);
 /* Whether the transfer into surface i (i >= 1) from surface i-1's frame
  * is more than the thickness along z. */
 int sg_xfer_moves(const sg_system *sys, int i);

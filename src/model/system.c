@@ -248,9 +248,10 @@ static int check_change(const sg_frame_change *c, int i, const char *which, sg_d
     return SG_OK;
 }
 
-/* Where frame changes may stand: rays start in surface 1's frame, so
- * nothing may move the object or surface 1 itself; the image has nothing
- * after it; a coordinate break is a plane in the medium before it. */
+/* Where frame changes may stand: nothing may move the object (rays start
+ * in its axis's frame, and a change on surface 1 turns what follows);
+ * the image has nothing after it; a coordinate break is a plane in the
+ * medium before it. */
 static int check_frames(const sg_system *sys, int i, sg_diag *d)
 {
     const sg_surface *s = &sys->surf[i];
@@ -267,13 +268,9 @@ static int check_frames(const sg_system *sys, int i, sg_diag *d)
                            "surface %d: after: \"reverse\" undoes the before change and takes "
                            "no values of its own", i);
     if (s->type == SG_SURF_COORDBRK) {
-        if (i <= 1 || i == last)
-            return sg_diag_set(d, SG_EINVAL,
-                               "surface %d: the %s cannot be a coordinate break%s", i,
-                               i == 0 ? "object" : i == 1 ? "first surface" : "image",
-                               i == 1 ? ": rays start in surface 1's frame, which nothing may "
-                                        "turn or move; insert a dummy plane of thickness 0 "
-                                        "before the break, which changes no ray" : "");
+        if (i == 0 || i == last)
+            return sg_diag_set(d, SG_EINVAL, "surface %d: the %s cannot be a coordinate break",
+                               i, i == 0 ? "object" : "image");
         if (i == sys->stop)
             return sg_diag_set(d, SG_EINVAL,
                                "surface %d: a coordinate break cannot be the stop", i);
@@ -298,11 +295,6 @@ static int check_frames(const sg_system *sys, int i, sg_diag *d)
     if (i == 0 && sg_surface_moves_frame(s))
         return sg_diag_set(d, SG_EINVAL,
                            "surface 0: the object cannot be tilted or decentered");
-    if (i == 1 && !sg_frame_change_is_zero(&s->before))
-        return sg_diag_set(d, SG_EINVAL,
-                           "surface 1: rays start in surface 1's frame, which cannot be "
-                           "tilted or decentered before it; tilt after it, or from surface 2 "
-                           "on");
     if (i == last && (s->after_mode == SG_AFTER_REVERSE ? 0 : !sg_frame_change_is_zero(&s->after)))
         return sg_diag_set(d, SG_EINVAL,
                            "surface %d: nothing follows the image, so it takes no after change",
@@ -576,13 +568,6 @@ int sg_system_validate_memo(const sg_system *sys, const sg_catalog *cat, sg_diag
             return sg_diag_set(d, SG_ERANGE, "surface %d: thickness must be finite", i);
         if (i == 0 && isnan(s->thickness))
             return sg_diag_set(d, SG_ERANGE, "surface 0: thickness is not a number");
-        if (i == 0 && !(fabs(s->thickness) > 0.0))
-            return sg_diag_set(d, SG_ENONPHYS,
-                               "surface 0: the object must lie away from surface 1 "
-                               "(thickness %g): sagitta launches and aims each ray from the "
-                               "object point, which cannot be on surface 1; insert a dummy "
-                               "plane after the object, give the object a thickness d and "
-                               "the dummy -d, and surface 1 stays in place", s->thickness);
         /* The table's plain numbers: finite, within their limits. */
         for (p = 0; p < sg_param_count(SG_SCOPE_SURFACE); p++) {
             const sg_param *pp = sg_param_at(SG_SCOPE_SURFACE, p);

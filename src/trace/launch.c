@@ -1284,11 +1284,15 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
     if (rc == SG_OK) {
         sg_parax_to_double(&p, &t->px);
         t->ln.obj_inf = inf_object(t);
+        /* Distances from the launch plane (sg_launch_step after surface
+         * 1's place), exact sums of doubles in 128 bits. */
         if (!t->ln.obj_inf) {
             mpfr_set_d(v, sys->surf[0].thickness, MPFR_RNDN);
+            mpfr_add_d(v, v, sg_launch_step(sys), MPFR_RNDN);
             t->ln.T0 = dd_from_mpfr(v, tmp);
         }
-        t->ln.enp = dd_from_mpfr(p.enp, tmp);
+        mpfr_sub_d(v, p.enp, sg_launch_step(sys), MPFR_RNDN);
+        t->ln.enp = dd_from_mpfr(v, tmp);
         mpfr_div_2ui(v, p.epd, 1, MPFR_RNDN);
         t->ln.epr = dd_from_mpfr(v, tmp);
         t->ln.tele = sys->telecentric && !t->ln.obj_inf;
@@ -1334,7 +1338,7 @@ int sg_launch_prepare(sg_tracer *t, sg_diag *d)
     }
     /* The stop's vertex in surface 1's frame, and whether the surfaces
      * before it leave a ray straight. */
-    t->ln.straight = 1;
+    t->ln.straight = !t->sp[1].xf;
     t->ln.zstop = dd_from(0.0);
     for (i = 1; i < sys->stop; i++) {
         t->ln.straight = t->ln.straight && sg_sprep_passes(&t->sp[i]);

@@ -401,7 +401,7 @@ static int prepare_one(sg_tracer *t, int i, mpfr_t *idx, mpfr_t q, mpfr_t tmp, s
                   ? s->ap_rmax : s->ap_yhalf;
     p->ap_dx = s->ap_xdec;
     p->ap_dy = s->ap_ydec;
-    p->xf = i >= 2 && sg_xfer_moves(sys, i) ? prepare_xfer(t, i) : NULL;
+    p->xf = i >= 1 && sg_xfer_moves(sys, i) ? prepare_xfer(t, i) : NULL;
     t->nsigned[i] = mpfr_get_d(idx[i], MPFR_RNDN);
     if (i > 0) {
         mpfr_abs(q, idx[i - 1], MPFR_RNDN);
@@ -656,7 +656,7 @@ int sg_tracer_open_cached(const sg_system *sys, const sg_catalog *cat, const sg_
         free(idx);
         goto fail;
     }
-    for (i = 2; i < n; i++)
+    for (i = 1; i < n; i++)
         if (sg_xfer_moves(sys, i)) {
             t->xf = calloc((size_t)n, sizeof *t->xf);
             if (!t->xf) {

@@ -777,6 +777,10 @@ static int run_from(sg_tracer *tr, sg_ray_surface *out, int from, int upto, doub
             else
                 mpfr_sub(m->P.z, m->P.z, m->s[i].T, MPFR_RNDN);
             mpfr_set_zero(m->path, 1);
+        } else if (m->s[i].xf) {
+            /* From the launch frame through surface 1's own change; the
+             * path from the object keeps running. */
+            xfer_m(m, &m->s[i]);
         }
         rc = onto_surface(m, sp, &m->s[i], tr->o.max_iter);
         if (rc != SG_OK) {
@@ -1637,9 +1641,12 @@ int sg_mpfr_prepare(sg_tracer *tr, sg_diag *d)
         rc = sg_paraxial_mpfr_memo(sys, idx, tr->wave, prec, &p, d,
                                    sg_index_cache_parax(tr->icache));
         if (rc == SG_OK) {
-            if (isfinite(sys->surf[0].thickness))
+            /* From the launch plane, as the precise launch. */
+            if (isfinite(sys->surf[0].thickness)) {
                 mpfr_set_d(m->T0, sys->surf[0].thickness, MPFR_RNDN);
-            mpfr_set(m->enp, p.enp, MPFR_RNDN);
+                mpfr_add_d(m->T0, m->T0, sg_launch_step(sys), MPFR_RNDN);
+            }
+            mpfr_sub_d(m->enp, p.enp, sg_launch_step(sys), MPFR_RNDN);
             mpfr_div_2ui(m->epr, p.epd, 1, MPFR_RNDN);
             mpfr_set(m->stop_r, p.stop_r, MPFR_RNDN);
             /* Only paraxial-image-height fields use it: at the paraxial

@@ -136,7 +136,7 @@ static void bad_frames(void **state)
     static const char *const bad[][2] = {
         {"    {\"thickness\": \"inf\"},\n    {\"type\": \"coordinate_break\", \"stop\": true},\n"
          "    {}",
-         "surface 1: the first surface cannot be a coordinate break"},
+         "surface 1: a coordinate break cannot be the stop"},
         {"    {\"thickness\": \"inf\"},\n    {\"stop\": true, \"thickness\": 5},\n"
          "    {\"type\": \"coordinate_break\", \"break\": {\"tilt\": [0, 400, 0]}},\n    {}",
          "surface 2: break tilt about y 400 is beyond 360 degrees"},

@@ -145,17 +145,13 @@ int cell_numeric(int col)
 }
 
 /* Where a frame change may not stand (as sg_system_validate says): the
- * object moves nothing, rays start in surface 1's frame, and nothing
- * follows the image.  NULL where it may. */
+ * object moves nothing and nothing follows the image.  NULL where it may. */
 static const char *frame_refused(const sg_system *sys, int row, const sg_param *p)
 {
     if (!(p->flags & SG_PARAM_NESTED))
         return NULL;
     if (row == 0)
         return "the object cannot be tilted or decentered";
-    if (row == 1 && strncmp(p->key, "before.", 7) == 0)
-        return "rays start in surface 1's frame, which cannot be tilted or decentered before "
-               "it; tilt after it, or from surface 2 on";
     if (row == sys->nsurf - 1 && strncmp(p->key, "after.", 6) == 0)
         return "nothing follows the image, so it takes no after change";
     return NULL;
@@ -605,11 +601,6 @@ int cell_set(sg_system *sys, const sg_catalog *cat, int row, int col,
                 col, &v, err, errn);
     if (rc != SG_EOK)
         return rc;
-    if ((p->flags & SG_PARAM_OBJ_INF) && row == 0 && v == 0.0) {
-        snprintf(err, errn, "surface 0 thickness: the object must lie away from "
-                 "surface 1 (use Infinity for an object at infinity)");
-        return SG_ENONPHYS;
-    }
     if ((p->flags & SG_PARAM_NONNEG) && v < 0.0) {
         snprintf(err, errn, "surface %d %s: %s is negative", row, cell_name(col), buf);
         return SG_ERANGE;
