@@ -137,28 +137,6 @@ static int rs_arms(int rings)
     return 2 * rings + 4;
 }
 
-static int same_bits(double a, double b)
-{
-    return memcmp(&a, &b, sizeof a) == 0;
-}
-
-int sg_merit_equal(const sg_merit *a, const sg_merit *b)
-{
-    int i;
-    if (a->present != b->present || a->has_default != b->has_default ||
-        a->reference != b->reference || a->rings != b->rings || a->arms != b->arms ||
-        a->nop != b->nop)
-        return 0;
-    for (i = 0; i < a->nop; i++) {
-        const sg_operand *x = &a->op[i], *y = &b->op[i];
-        if (x->type != y->type || x->i1 != y->i1 || x->i2 != y->i2 || !same_bits(x->hx, y->hx) ||
-            !same_bits(x->hy, y->hy) || !same_bits(x->px, y->px) || !same_bits(x->py, y->py) ||
-            !same_bits(x->target, y->target) || !same_bits(x->weight, y->weight))
-            return 0;
-    }
-    return 1;
-}
-
 int sg_merit_rings(int n, double *rho, double *w)
 {
     int i, k;

@@ -546,3 +546,22 @@ int sg_param_used(const sg_param *p, int k, int type)
     }
     return !t->only && !(p->flags & SG_PARAM_SHAPE);
 }
+
+/* The merit function is data of the design: its equality lives with the
+ * rest of sg_system_equal, below the optimizer that evaluates it. */
+int sg_merit_equal(const sg_merit *a, const sg_merit *b)
+{
+    int i;
+    if (a->present != b->present || a->has_default != b->has_default ||
+        a->reference != b->reference || a->rings != b->rings || a->arms != b->arms ||
+        a->nop != b->nop)
+        return 0;
+    for (i = 0; i < a->nop; i++) {
+        const sg_operand *x = &a->op[i], *y = &b->op[i];
+        if (x->type != y->type || x->i1 != y->i1 || x->i2 != y->i2 || !same_bits(x->hx, y->hx) ||
+            !same_bits(x->hy, y->hy) || !same_bits(x->px, y->px) || !same_bits(x->py, y->py) ||
+            !same_bits(x->target, y->target) || !same_bits(x->weight, y->weight))
+            return 0;
+    }
+    return 1;
+}
