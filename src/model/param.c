@@ -500,7 +500,7 @@ int sg_system_equal(const sg_system *a, const sg_system *b)
     if (!same_bits(a->temperature, b->temperature) || !same_bits(a->pressure, b->pressure) ||
         a->adjust_index != b->adjust_index)
         return 0;
-    /* The merit function is its own object (merit.c). */
+    /* The merit function is its own object (sg_merit_equal, below). */
     if (!sg_merit_equal(&a->merit, &b->merit))
         return 0;
     /* So are the configurations (config.c). */
