@@ -2487,6 +2487,169 @@ static void test_lossless_renumber(void **state)
     rmdir(dir);
 }
 
+/* Token k of a text line as a number; NAN when it has none. */
+static double tok_num_at(const tline *l, int k)
+{
+    ztoks z;
+    char *end;
+    double v;
+    toks_of(l->p, l->n, &z);
+    if (k >= z.n)
+        return NAN;
+    v = strtod(z.t[k], &end);
+    return *end ? NAN : v;
+}
+
+/* Whether lines a and b have the same tokens but k (-1: all the same). */
+static int same_but(const tline *a, const tline *b, int k)
+{
+    ztoks x, y;
+    int i;
+    toks_of(a->p, a->n, &x);
+    toks_of(b->p, b->n, &y);
+    if (x.n != y.n)
+        return 0;
+    for (i = 0; i < x.n; i++)
+        if (i != k && strcmp(x.t[i], y.t[i]) != 0)
+            return 0;
+    return 1;
+}
+
+/* Merit function edits into an opened .zmx (issue 32): the rows are the
+ * file's TRAR lines (tilted_object.zmx, lines 108 on, Zemax's layout
+ * "TRAR Int1 Int2 Hx Hy Px Py target weight ..."), found here by their
+ * keyword. */
+static void test_lossless_merit_edit(void **state)
+{
+    static rawline ra[4096], rb[4096];
+    static tline la[4096], lb[4096];
+    char dir[256] = "", src[1024], *ta, *tb;
+    unsigned char *a, *b;
+    size_t na, nb;
+    int ka, kb, k, diff = -1, ndiff = 0, first = -1, nrow = 0, third = -1;
+    sg_diag d;
+    sg_system *s = must_load("tilted_object.zmx"), *r = sg_system_new();
+    const char *out = tmp_zmx(dir, sizeof dir, "merit.zmx");
+    (void)state;
+    tu_path("tests/data/zmx/tilted_object.zmx", src, sizeof src);
+    a = slurp(src, &na);
+    ka = raw_lines(a, na, ra, 4096);
+    assert_int_equal(text_lines(src, &ta, la, 4096), ka);
+    for (k = 0; k < ka; k++)
+        if (la[k].n > 5 && !memcmp(la[k].p, "TRAR ", 5)) {
+            if (first < 0)
+                first = k;
+            if (++nrow == 3)
+                third = k;
+        }
+    assert_int_equal(first, 107);
+    assert_int_equal(s->merit.nop, nrow);
+
+    /* One target: only its line changes, and only its target token. */
+    assert_int_equal(s->merit.op[2].type, SG_OP_TRAR);
+    s->merit.op[2].target = 0.25;
+    sg_diag_clear(&d);
+    if (sg_design_save(s, out, &d) != SG_OK)
+        fail_msg("target: %s", d.msg);
+    b = slurp(out, &nb);
+    kb = raw_lines(b, nb, rb, 4096);
+    assert_int_equal(kb, ka);
+    for (k = 0; k < ka; k++)
+        if (ra[k].n != rb[k].n || memcmp(ra[k].p, rb[k].p, ra[k].n) != 0) {
+            diff = k;
+            ndiff++;
+        }
+    assert_int_equal(ndiff, 1);
+    assert_int_equal(diff, third);
+    assert_int_equal(text_lines(out, &tb, lb, 4096), kb);
+    assert_true(same_but(&la[third], &lb[third], 7));
+    assert_true(tok_num_at(&lb[third], 7) == 0.25);
+    assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(r, s));
+    free(b);
+    free(tb);
+
+    /* The first row dropped: the file less that line. */
+    memmove(&s->merit.op[0], &s->merit.op[1], (size_t)(s->merit.nop - 1) * sizeof s->merit.op[0]);
+    s->merit.nop--;
+    sg_diag_clear(&d);
+    if (sg_design_save(s, out, &d) != SG_OK)
+        fail_msg("delete: %s", d.msg);
+    assert_int_equal(text_lines(out, &tb, lb, 4096), ka - 1);
+    for (k = 0; k < ka - 1; k++)
+        assert_true(same_but(&la[k < first ? k : k + 1], &lb[k], k + 1 == third ? 7 : -1));
+    assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(r, s));
+    free(tb);
+
+    /* A new operand at the end: EFFL at wavelength 1, target 50, weight 2,
+     * one line in Zemax's layout after the last row. */
+    memset(&s->merit.op[s->merit.nop], 0, sizeof s->merit.op[0]);
+    s->merit.op[s->merit.nop].type = SG_OP_EFFL;
+    s->merit.op[s->merit.nop].i2 = 1;
+    s->merit.op[s->merit.nop].target = 50;
+    s->merit.op[s->merit.nop].weight = 2;
+    s->merit.nop++;
+    sg_diag_clear(&d);
+    if (sg_design_save(s, out, &d) != SG_OK)
+        fail_msg("append: %s", d.msg);
+    assert_int_equal(text_lines(out, &tb, lb, 4096), ka);
+    k = first + nrow - 1;
+    assert_true(lb[k].n > 5 && !memcmp(lb[k].p, "EFFL ", 5));
+    assert_true(tok_num_at(&lb[k], 1) == 0 && tok_num_at(&lb[k], 2) == 1 &&
+                tok_num_at(&lb[k], 3) == 0 && tok_num_at(&lb[k], 6) == 0 &&
+                tok_num_at(&lb[k], 7) == 50 && tok_num_at(&lb[k], 8) == 2);
+    assert_true(same_but(&la[k + 1], &lb[k + 1], -1));
+    assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(r, s));
+    free(tb);
+    free(ta);
+    free(a);
+    unlink(out);
+    sg_system_free(s);
+
+    /* Rows named by number (SC_Tol_Cooke's OPGT 2, 4, 7, 9 name the MTFA
+     * rows before them): an operand put first moves every row down one,
+     * and each OPGT line's Int1 follows. */
+    s = must_load("sc_tol_cooke.zmx");
+    tu_path("tests/data/zmx/sc_tol_cooke.zmx", src, sizeof src);
+    ka = text_lines(src, &ta, la, 4096);
+    memmove(&s->merit.op[1], &s->merit.op[0], (size_t)s->merit.nop * sizeof s->merit.op[0]);
+    s->merit.nop++;
+    memset(&s->merit.op[0], 0, sizeof s->merit.op[0]);
+    s->merit.op[0].type = SG_OP_TOTR;
+    s->merit.op[0].target = 100;
+    s->merit.op[0].weight = 1;
+    for (k = 1; k < s->merit.nop; k++)
+        if (s->merit.op[k].type == SG_OP_OPGT)
+            s->merit.op[k].i1++;
+    sg_diag_clear(&d);
+    if (sg_design_save(s, out, &d) != SG_OK)
+        fail_msg("sc_tol_cooke: %s", d.msg);
+    kb = text_lines(out, &tb, lb, 4096);
+    assert_int_equal(kb, ka + 1);
+    for (k = 0, first = -1; k < ka; k++)
+        if (la[k].n >= 4 && !memcmp(la[k].p, "BLNK", 4) && first < 0 && k > 100)
+            first = k;
+    assert_true(lb[first].n > 5 && !memcmp(lb[first].p, "TOTR ", 5));
+    for (k = first, nrow = 0; k < ka; k++) {
+        int opgt = la[k].n > 5 && !memcmp(la[k].p, "OPGT ", 5);
+        nrow += opgt;
+        assert_true(same_but(&la[k], &lb[k + 1], opgt ? 1 : -1));
+        if (opgt)
+            assert_true(tok_num_at(&lb[k + 1], 1) == tok_num_at(&la[k], 1) + 1);
+    }
+    assert_int_equal(nrow, 4);
+    assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(r, s));
+    free(ta);
+    free(tb);
+    unlink(out);
+    sg_system_free(s);
+    sg_system_free(r);
+    rmdir(dir);
+}
+
 /* Encodings: UTF-8 with a byte-order mark comes back with it; a character
  * ISO-8859-1 holds is written in it, one it lacks refuses the save. */
 static void test_lossless_encodings(void **state)
@@ -2844,6 +3007,7 @@ int main(void)
         cmocka_unit_test(test_lossless_edit_radius),
         cmocka_unit_test(test_lossless_insert_delete),
         cmocka_unit_test(test_lossless_renumber),
+        cmocka_unit_test(test_lossless_merit_edit),
         cmocka_unit_test(test_lossless_encodings),
         cmocka_unit_test(test_lossless_refusal),
         cmocka_unit_test(test_subnormal_radius),

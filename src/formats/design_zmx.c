@@ -160,6 +160,9 @@ typedef struct zctx {
      * the surfaces, else the surface whose block holds it. */
     int *lsect;
     int nlsect;
+    /* Each merit function row's operand (from 1), -1 for a row that is
+     * none (DMFS, an operand left out), 0 for other lines. */
+    int *lmop;
     const sg_zmx_subst *sub; /* glasses to substitute, or NULL */
     int nzero_kw[ZMX_NZERO_KW]; /* zero_surface lines kept */
     /* The configurations (MNUM n, n > 1) and, per operand, its first
@@ -1787,6 +1790,8 @@ static int merit_line(zctx *c, const zline *l)
         return 1;
     row = ++c->nmrow;
     c->mrow[row] = 0;
+    if (c->lmop && c->line >= 1 && c->line <= c->nlsect)
+        c->lmop[c->line - 1] = -1;
     /* Messages name the line, not the last surface. */
     c->cur = -1;
     t = sg_op_parse(key);
@@ -1831,6 +1836,8 @@ static int merit_line(zctx *c, const zline *l)
         }
         m->present = 1;
         c->mrow[row] = ++m->nop;
+        if (c->lmop && c->line >= 1 && c->line <= c->nlsect)
+            c->lmop[c->line - 1] = m->nop;
     }
     c->cur = cur;
     return 1;
@@ -2402,6 +2409,7 @@ enum { ZENC_UTF8, ZENC_UTF8_BOM, ZENC_LATIN1, ZENC_UTF16LE };
 typedef struct zoline {
     size_t off, len, tlen; /* the text, and its line ending's bytes */
     int sect;              /* -1 header, -2 after the surfaces, else the surface */
+    int mop;               /* a merit row's operand (from 1), -1 another merit row, 0 */
 } zoline;
 
 struct sg_zmx_origin {
@@ -2460,6 +2468,7 @@ static zoline *split_lines(const char *t, int *n)
         v[k].len = len;
         v[k].tlen = all - len;
         v[k].sect = -1;
+        v[k].mop = 0;
         k++;
         p += all;
     }
@@ -3063,7 +3072,8 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
         return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
     }
     c->lsect = malloc(((size_t)org->nline + 1) * sizeof *c->lsect);
-    c->nlsect = c->lsect ? org->nline : 0;
+    c->lmop = calloc((size_t)org->nline + 1, sizeof *c->lmop);
+    c->nlsect = c->lsect && c->lmop ? org->nline : 0;
     /* The header keeps sg_system_new's values until the file sets them;
      * the surfaces are appended as their SURF lines come. */
     tmp->nsurf = 0;
@@ -3120,14 +3130,14 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
     }
     if (sub)
         org->sub.nearest = sub->nearest;
-    if (rc == SG_OK && c->lsect) {
+    if (rc == SG_OK && c->lsect && c->lmop) {
         /* Each surface knows its block in the file; the design as read is
          * what a save compares with to find the lines an edit changed. */
         int i;
         for (i = 0; i < tmp->nsurf; i++)
             tmp->surf[i].zmx_src = i + 1;
         for (i = 0; i < org->nline; i++)
-            org->line[i].sect = c->lsect[i];
+            org->line[i].sect = c->lsect[i], org->line[i].mop = c->lmop[i];
         org->base = sg_system_clone(tmp);
         if (org->base) {
             org->nkept = count_kept(org, cat);
@@ -3144,6 +3154,7 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
     for (rc2 = 0; rc2 < SG_MAX_CONFIG_OPS; rc2++)
         free(c->mfill[rc2]);
     free(c->lsect);
+    free(c->lmop);
     sg_system_free(tmp);
     sg_catalog_free(own);
     free(c);
@@ -3725,6 +3736,214 @@ static int encode(const char *t, size_t n, int enc, zbuf *out, char *why, size_t
     return SG_OK;
 }
 
+/* ------------------------------------------------------------------------
+ * The merit function written into the file's rows (issue 32): each row
+ * whose operand the design still has unchanged keeps its line byte for
+ * byte; a changed operand's row gets only its changed fields; new
+ * operands are written in Zemax's layout "TYPE Int1 Int2 Data1 Data2
+ * Data3 Data4 target weight Data5 Data6" after the row before them; rows
+ * of operands the design dropped are dropped.  Rows sagitta does not read
+ * as operands (DMFS, operands it does not know) stay.
+ * ------------------------------------------------------------------------ */
+
+/* Operands whose Int1 (and Int2, the first four) are rows, as merit_line
+ * reads them. */
+static int op_rows(sg_op_type t)
+{
+    return t == SG_OP_SUMM || t == SG_OP_DIFF || t == SG_OP_PROD || t == SG_OP_DIVI ? 2
+           : t == SG_OP_OPGT || t == SG_OP_OPLT || t == SG_OP_ABSO || t == SG_OP_SQRT ? 1
+                                                                                      : 0;
+}
+
+static int op_same(const sg_operand *a, const sg_operand *b)
+{
+    return a->type == b->type && a->i1 == b->i1 && a->i2 == b->i2 &&
+           !memcmp(&a->hx, &b->hx, sizeof a->hx) && !memcmp(&a->hy, &b->hy, sizeof a->hy) &&
+           !memcmp(&a->px, &b->px, sizeof a->px) && !memcmp(&a->py, &b->py, sizeof a->py) &&
+           !memcmp(&a->target, &b->target, sizeof a->target) &&
+           !memcmp(&a->weight, &b->weight, sizeof a->weight);
+}
+
+/* The row's eight numbers as the file holds them: row references are the
+ * file's rows (drow, from 1) of the operands named. */
+static void op_fields(const sg_operand *o, const int *drow, int nd, double f[8])
+{
+    int r = op_rows(o->type);
+    f[0] = o->i1, f[1] = o->i2, f[2] = o->hx, f[3] = o->hy, f[4] = o->px, f[5] = o->py;
+    f[6] = o->target, f[7] = o->weight;
+    if (r >= 1 && o->i1 >= 1 && o->i1 <= nd)
+        f[0] = drow[o->i1 - 1];
+    if (r == 2 && o->i2 >= 1 && o->i2 <= nd)
+        f[1] = drow[o->i2 - 1];
+}
+
+/* A merit row's text for operand o: the file's line (p, n; NULL for a new
+ * row) with the fields whose value differs replaced, else a new line. */
+static void merit_row(zbuf *out, const char *p, size_t n, const sg_operand *o, const double f[8])
+{
+    const char *name = sg_op_name(o->type);
+    size_t to[12], tn[12], i = 0, last = 0;
+    int nt = 0, k;
+    char nb[40];
+    while (p && i < n && nt < 12) {
+        while (i < n && (p[i] == ' ' || p[i] == '\t'))
+            i++;
+        if (i == n)
+            break;
+        to[nt] = i;
+        while (i < n && p[i] != ' ' && p[i] != '\t')
+            i++;
+        tn[nt] = i - to[nt];
+        nt++;
+    }
+    if (o->type == SG_OP_BLNK) {
+        /* A blank row's text is its comment. */
+        if (p && nt && tn[0] == 4 && !memcmp(p + to[0], "BLNK", 4))
+            zb_add(out, p, n);
+        else
+            zb_add(out, "BLNK", 4);
+        return;
+    }
+    if (!p || nt < 9 || tn[0] != 4 || memcmp(p + to[0], name, 4) != 0) {
+        zb_printf(out, "%s %d %d", name, (int)f[0], (int)f[1]);
+        for (k = 2; k < 8; k++)
+            zb_printf(out, " %s", num(nb, f[k]));
+        zb_add(out, " 0 0", 4);
+        return;
+    }
+    for (k = 1; k <= 8; k++) {
+        char buf[48], *end;
+        double v;
+        int same;
+        if (tn[k] >= sizeof buf)
+            same = 0;
+        else {
+            memcpy(buf, p + to[k], tn[k]);
+            buf[tn[k]] = '\0';
+            v = strtod(buf, &end);
+            same = !*end && (k <= 2 ? (int)v == (int)f[k - 1] : v == f[k - 1]);
+        }
+        if (same)
+            continue;
+        zb_add(out, p + last, to[k] - last);
+        if (k <= 2)
+            zb_printf(out, "%d", (int)f[k - 1]);
+        else
+            zb_printf(out, "%s", num(nb, f[k - 1]));
+        last = to[k] + tn[k];
+    }
+    zb_add(out, p + last, n - last);
+}
+
+/* The lines after the surfaces with the design's merit function in the
+ * rows (see above); ren renumbers the other kept lines. */
+static int merit_after(zbuf *out, const struct sg_zmx_origin *o, const sg_system *sys,
+                       zren *ren, const char *term, size_t nterm)
+{
+    const sg_merit *B = &o->base->merit, *D = &sys->merit;
+    int nb = B->nop, nd = D->present ? D->nop : 0, i, j, pass, lastm = -1, firsta = -1;
+    int *L = calloc((size_t)(nb + 1) * (size_t)(nd + 1), sizeof *L);
+    int *match = malloc(((size_t)nb + 1) * sizeof *match);
+    int *taken = calloc((size_t)nd + 1, sizeof *taken);
+    int *drow = calloc((size_t)nd + 1, sizeof *drow);
+    if (!L || !match || !taken || !drow) {
+        free(L), free(match), free(taken), free(drow);
+        return SG_ENOMEM;
+    }
+    /* The longest common subsequence of the rows as read and as now: those
+     * keep their lines. */
+#define LL(a, b) L[(size_t)(a) * (size_t)(nd + 1) + (size_t)(b)]
+    for (i = nb - 1; i >= 0; i--)
+        for (j = nd - 1; j >= 0; j--)
+            LL(i, j) = op_same(&B->op[i], &D->op[j]) ? LL(i + 1, j + 1) + 1
+                       : LL(i + 1, j) > LL(i, j + 1) ? LL(i + 1, j)
+                                                     : LL(i, j + 1);
+    for (i = 0; i < nb; i++)
+        match[i] = -1;
+    for (i = 0, j = 0; i < nb && j < nd;) {
+        if (op_same(&B->op[i], &D->op[j]) && LL(i, j) == LL(i + 1, j + 1) + 1) {
+            match[i] = j, taken[j] = 1;
+            i++, j++;
+        } else if (LL(i + 1, j) >= LL(i, j + 1)) {
+            i++;
+        } else {
+            j++;
+        }
+    }
+#undef LL
+    for (i = 0; i < o->nline; i++)
+        if (o->line[i].sect == -2) {
+            if (firsta < 0)
+                firsta = i;
+            if (o->line[i].mop)
+                lastm = i;
+        }
+    /* Pass 0 numbers the file's rows; pass 1 writes them. */
+    for (pass = 0; pass < 2; pass++) {
+        int row = 0, dj = 0;
+        zbuf *w = pass ? out : NULL;
+        double f[8];
+#define NEWROW(k)                                                              \
+    do {                                                                       \
+        drow[k] = ++row;                                                       \
+        if (w) {                                                               \
+            op_fields(&D->op[k], drow, nd, f);                                 \
+            merit_row(w, NULL, 0, &D->op[k], f);                               \
+            zb_add(w, term, nterm);                                            \
+        }                                                                      \
+    } while (0)
+        if (lastm < 0)
+            for (; dj < nd; dj++)
+                NEWROW(dj);
+        for (i = 0; i < o->nline; i++) {
+            const zoline *z = &o->line[i];
+            const char *p = o->text + z->off;
+            int bi = z->mop - 1;
+            if (z->sect != -2)
+                continue;
+            if (z->mop > 0 && bi < nb && match[bi] >= 0) {
+                for (; dj < match[bi]; dj++)
+                    NEWROW(dj);
+                drow[dj] = ++row;
+                if (w) {
+                    op_fields(&D->op[dj], drow, nd, f);
+                    merit_row(w, p, z->len, &D->op[dj], f);
+                    zb_add(w, p + z->len, z->tlen);
+                }
+                dj++;
+            } else if (z->mop > 0) {
+                /* A row the design changed (its next new operand takes
+                 * the line) or dropped. */
+                if (dj < nd && !taken[dj]) {
+                    drow[dj] = ++row;
+                    if (w) {
+                        op_fields(&D->op[dj], drow, nd, f);
+                        merit_row(w, p, z->len, &D->op[dj], f);
+                        zb_add(w, p + z->len, z->tlen);
+                    }
+                    dj++;
+                }
+            } else {
+                row += z->mop < 0;
+                if (w) {
+                    size_t rn_n = 0;
+                    char *r = ren_line(ren, p, z->len, -2, (long)i + 1, &rn_n);
+                    zb_add(w, r ? r : p, r ? rn_n : z->len);
+                    zb_add(w, p + z->len, z->tlen);
+                    free(r);
+                }
+            }
+            if (i == lastm)
+                for (; dj < nd; dj++)
+                    NEWROW(dj);
+        }
+#undef NEWROW
+    }
+    (void)firsta;
+    free(L), free(match), free(taken), free(drow);
+    return out->oom ? SG_ENOMEM : SG_OK;
+}
+
 /* The file the design was read from with only the lines its edits concern
  * changed, in the file's encoding (merge_sec).  *structural is set where
  * surfaces were inserted, deleted or moved. */
@@ -3825,6 +4044,12 @@ static int zmx_merged(const sg_system *sys, const sg_catalog *cat, zbuf *bytes,
     }
     /* After the surfaces: the merit function, tolerances and the rest, as
      * they are. */
+    if (!sg_merit_equal(&sys->merit, &o->base->merit)) {
+        if ((rc = merit_after(&out, o, sys, ren, term, nterm)) != SG_OK) {
+            snprintf(why, nwhy, "out of memory");
+            goto done;
+        }
+    } else
     for (i = 0; i < o->nline; i++)
         if (o->line[i].sect == -2) {
             const zoline *z = &o->line[i];
