@@ -2646,6 +2646,22 @@ static void test_lossless_merit_edit(void **state)
     free(tb);
     unlink(out);
     sg_system_free(s);
+
+    /* US08011793-1's 412 rows exceed what sagitta reads, so its merit
+     * function was left out: a merit function given to the design is not
+     * written over those rows, nor are they dropped; the save asks. */
+    s = must_load("US08011793-1.zmx");
+    assert_int_equal(s->merit.nop, 0);
+    s->merit.present = 1;
+    s->merit.nop = 1;
+    memset(&s->merit.op[0], 0, sizeof s->merit.op[0]);
+    s->merit.op[0].type = SG_OP_TOTR;
+    s->merit.op[0].weight = 1;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_save(s, out, &d), SG_ELOSSY);
+    assert_non_null(strstr(d.msg, "the file's own was not read"));
+    assert_int_equal(access(out, F_OK), -1);
+    sg_system_free(s);
     sg_system_free(r);
     rmdir(dir);
 }

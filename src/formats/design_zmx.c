@@ -2744,6 +2744,7 @@ typedef struct zren {
     int nold;
     int nbad;
     char bad[480];
+    int merit_unread; /* the file's merit rows were not read as operands */
 } zren;
 
 static void ren_bad(zren *r, const char *p, size_t n, long line, const char *why)
@@ -4044,7 +4045,11 @@ static int zmx_merged(const sg_system *sys, const sg_catalog *cat, zbuf *bytes,
     }
     /* After the surfaces: the merit function, tolerances and the rest, as
      * they are. */
-    if (!sg_merit_equal(&sys->merit, &o->base->merit)) {
+    /* A merit function the import left out (a row it could not take, or
+     * an empty editor's one BLNK row) cannot take the design's rows. */
+    for (i = 0; i < o->nline; i++)
+        rn->merit_unread |= o->line[i].mop > o->base->merit.nop;
+    if (!sg_merit_equal(&sys->merit, &o->base->merit) && !rn->merit_unread) {
         if ((rc = merit_after(&out, o, sys, ren, term, nterm)) != SG_OK) {
             snprintf(why, nwhy, "out of memory");
             goto done;
@@ -4163,7 +4168,11 @@ int sg_zmx_save_flags(const sg_system *sys, const char *path, const sg_catalog *
                 back = 0;
             } else if (!sg_system_equal(r, sys)) {
                 char *a = sg_design_to_json(sys), *b = sg_design_to_json(r);
-                if (a && b)
+                if (rn.merit_unread && !sg_merit_equal(&r->merit, &sys->merit))
+                    snprintf(why, sizeof why, "the merit function changed, and the file's own "
+                             "was not read (the import's warning says why), so the design's "
+                             "cannot be written into its rows");
+                else if (a && b)
                     first_diff(a, b, why, sizeof why);
                 else
                     snprintf(why, sizeof why, "the file would read back as another design");
