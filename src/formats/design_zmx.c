@@ -3842,7 +3842,7 @@ static int merit_after(zbuf *out, const struct sg_zmx_origin *o, const sg_system
                        zren *ren, const char *term, size_t nterm)
 {
     const sg_merit *B = &o->base->merit, *D = &sys->merit;
-    int nb = B->nop, nd = D->present ? D->nop : 0, i, j, pass, lastm = -1, firsta = -1;
+    int nb = B->nop, nd = D->present ? D->nop : 0, i, j, pass, lastm = -1;
     int *L = calloc((size_t)(nb + 1) * (size_t)(nd + 1), sizeof *L);
     int *match = malloc(((size_t)nb + 1) * sizeof *match);
     int *taken = calloc((size_t)nd + 1, sizeof *taken);
@@ -3873,12 +3873,8 @@ static int merit_after(zbuf *out, const struct sg_zmx_origin *o, const sg_system
     }
 #undef LL
     for (i = 0; i < o->nline; i++)
-        if (o->line[i].sect == -2) {
-            if (firsta < 0)
-                firsta = i;
-            if (o->line[i].mop)
-                lastm = i;
-        }
+        if (o->line[i].sect == -2 && o->line[i].mop)
+            lastm = i;
     /* Pass 0 numbers the file's rows; pass 1 writes them. */
     for (pass = 0; pass < 2; pass++) {
         int row = 0, dj = 0;
@@ -3940,7 +3936,6 @@ static int merit_after(zbuf *out, const struct sg_zmx_origin *o, const sg_system
         }
 #undef NEWROW
     }
-    (void)firsta;
     free(L), free(match), free(taken), free(drow);
     return out->oom ? SG_ENOMEM : SG_OK;
 }
