@@ -887,6 +887,12 @@ SG_API int sg_op_parse(const char *name);
 /* The JSON names of an operand type's Int1, Int2 and Data1 to Data4
  * (stored in i1, i2, hx, hy, px, py); NULL where the type has none. */
 SG_API void sg_op_keys(sg_op_type t, const char *keys[6]);
+/* After inserting (dir 1) or deleting (dir -1) surface at: the operands'
+ * surface numbers (sg_op_keys "surf", "surf1", "surf2") naming later
+ * surfaces follow them, as Zemax renumbers its Merit Function Editor; one
+ * naming the deleted surface keeps its number (sg_system_insert and
+ * sg_system_delete call it). */
+SG_API void sg_merit_renumber(sg_merit *m, int at, int dir);
 /* Checks the merit function's rows against sys (surfaces, wavelengths,
  * operand numbers in range): SG_ERANGE naming the row. */
 SG_API int sg_merit_check(const sg_system *sys, sg_diag *d);

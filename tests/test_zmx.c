@@ -2158,20 +2158,509 @@ static void test_lossless_insert_delete(void **state)
     free(a);
     unlink(out);
 
-    /* tilted_object.zmx has merit function operands (TRAR) after its
-     * surfaces: an insert is refused, nothing written, unless allowed. */
-    s = must_load("tilted_object.zmx");
-    assert_int_equal(sg_system_insert(s, 1), SG_OK);
+    /* SC_Tol_Cooke's tolerance rows name surface 2 (TRAD, TTHI, the
+     * element TEDX ... 1 2, TIRR): deleting it is refused, nothing
+     * written, unless allowed; then those lines stay as they are. */
+    s = must_load("sc_tol_cooke.zmx");
+    assert_int_equal(sg_system_delete(s, 2), SG_OK);
     sg_diag_clear(&d);
     assert_int_equal(sg_design_save(s, out, &d), SG_ELOSSY);
-    assert_non_null(strstr(d.msg, "renumber"));
+    assert_non_null(strstr(d.msg, "TOL TRAD (line 171, it names a deleted surface)"));
+    assert_non_null(strstr(d.msg, "TOL TEDX (line 182,"));
     assert_int_equal(access(out, F_OK), -1);
     sg_diag_clear(&d);
     assert_int_equal(sg_design_save_flags(s, out, SG_ZMX_ALLOW_LOSS, &d), SG_OK);
     assert_true(has_warning(&d, "written all the same", NULL));
     assert_int_equal(sg_design_load(r, out, &d), SG_OK);
     assert_true(sg_system_equal(r, s));
+    b = slurp(out, &nb);
+    assert_non_null(strstr((char *)b, "TOL TRAD   2   0           -0.2            0.2   0 0 0\r\n"));
+    free(b);
     unlink(out);
+    sg_system_free(s);
+    sg_system_free(r);
+    rmdir(dir);
+}
+
+/* ------------------------------------------------------------------------
+ * Renumbering on insert and delete (issue 30 item 1).  The expectation is
+ * this test's own table of Zemax's operand layouts (OpticStudio's Merit
+ * Function, Tolerance and Multi-Configuration operand lists): the fields
+ * that hold surface numbers, counted from the keyword (token 0); a TOL
+ * row's operand is its token 1.
+ * ------------------------------------------------------------------------ */
+static const struct {
+    const char *key;
+    int f1, f2; /* token indices of surface numbers; 0 none */
+} zemax_layout[] = {
+    {"REAX", 1, 0}, {"REAY", 1, 0}, {"REAR", 1, 0}, {"RAID", 1, 0}, {"CTGT", 1, 0},
+    {"EFLY", 1, 2}, {"TTHI", 1, 2}, {"MNCA", 1, 2}, {"MXCA", 1, 2}, {"MNEA", 1, 2},
+    {"THIC", 1, 0}, {"CRVT", 1, 0}, {"GLSS", 1, 0}, {"SDIA", 1, 0}, {"PRAM", 1, 0},
+    {"TOL TRAD", 2, 0}, {"TOL TTHI", 2, 3}, {"TOL TEDX", 2, 3}, {"TOL TEDY", 2, 3},
+    {"TOL TETX", 2, 3}, {"TOL TETY", 2, 3}, {"TOL TSDX", 2, 0}, {"TOL TSDY", 2, 0},
+    {"TOL TIRR", 2, 0}, {"TOL TIND", 2, 0}, {"TOL TABB", 2, 0}, {"TOL COMP", 2, 0},
+};
+
+#define MAXTOK 24
+typedef struct ztoks {
+    char t[MAXTOK][48];
+    int n;
+} ztoks;
+
+static void toks_of(const char *p, size_t n, ztoks *z)
+{
+    size_t i = 0;
+    z->n = 0;
+    while (i < n && z->n < MAXTOK) {
+        size_t k = 0;
+        while (i < n && (p[i] == ' ' || p[i] == '\t' || p[i] == '\r'))
+            i++;
+        if (i == n)
+            break;
+        while (i < n && p[i] != ' ' && p[i] != '\t' && p[i] != '\r' && k < 47)
+            z->t[z->n][k++] = p[i++];
+        z->t[z->n][k] = '\0';
+        while (i < n && p[i] != ' ' && p[i] != '\t' && p[i] != '\r')
+            i++;
+        z->n++;
+    }
+}
+
+/* The surface fields of a line after the surfaces, by zemax_layout. */
+static void layout_of(const ztoks *z, int *f1, int *f2)
+{
+    char key[24];
+    size_t i;
+    *f1 = *f2 = 0;
+    if (z->n == 0)
+        return;
+    snprintf(key, sizeof key, "%.8s", z->t[0]);
+    if (!strcmp(key, "TOL") && z->n > 1)
+        snprintf(key, sizeof key, "TOL %.8s", z->t[1]);
+    for (i = 0; i < sizeof zemax_layout / sizeof *zemax_layout; i++)
+        if (!strcmp(zemax_layout[i].key, key)) {
+            *f1 = zemax_layout[i].f1;
+            *f2 = zemax_layout[i].f2;
+        }
+}
+
+/* A file as text lines: UTF-16LE's zero bytes and the line ends dropped
+ * (the lens files are ASCII and ISO-8859-1 characters). */
+typedef struct tline {
+    char *p;
+    size_t n;
+} tline;
+
+static int text_lines(const char *path, char **buf, tline *l, int cap)
+{
+    size_t n, i, j = 0;
+    unsigned char *b = slurp(path, &n);
+    int k = 0;
+    char *t;
+    assert_non_null(b);
+    t = malloc(n + 1);
+    assert_non_null(t);
+    for (i = 0; i < n; i++)
+        if (b[i])
+            t[j++] = (char)b[i];
+    t[j] = '\0';
+    free(b);
+    for (i = 0; i < j;) {
+        size_t e = i;
+        while (e < j && t[e] != '\n')
+            e++;
+        assert_true(k < cap);
+        l[k].p = t + i;
+        l[k].n = e - i;
+        if (l[k].n && t[e - 1] == '\r')
+            l[k].n--;
+        k++;
+        i = e + 1;
+    }
+    *buf = t;
+    return k;
+}
+
+/* The first line after the surfaces' blocks: an unindented line that is
+ * not a surface keyword, after the last SURF. */
+static int after_start(const tline *l, int k)
+{
+    static const char *const surf_kw[] = {
+        "TYPE", "CURV", "DISZ", "GLAS", "CONI", "PARM", "XDAT", "DIAM", "STOP", "CLAP", "FLAP",
+        "OBDC", "OBSC", "SQAP", "ELAP", "SQOB", "ELOB", "COMM", "SCBD", "SCAD", "PZUP", "PKUP",
+        "PPAR", "MAZH", "CHZH", "EDGE", "TCED", "TOLE", "SPID", "USAP", "FSVY", "HIDE", "MIRR",
+        "SLAB", "POPS", "MEMA", "COAT", "VDSZ", "VCUR", "VCON", "VPAR", "VXDT", "PXDT", "CCON",
+        "FIMP", "CURS", "BLNK", "OEMA", "IGNR", "DMFS", "SQOB"};
+    int i, last = -1;
+    for (i = 0; i < k; i++)
+        if (l[i].n >= 5 && !memcmp(l[i].p, "SURF ", 5))
+            last = i;
+    assert_true(last >= 0);
+    for (i = last + 1; i < k; i++) {
+        size_t j;
+        int kw = 0;
+        if (!l[i].n || l[i].p[0] == ' ' || l[i].p[0] == '\t')
+            continue;
+        for (j = 0; j < sizeof surf_kw / sizeof *surf_kw; j++)
+            kw |= l[i].n >= 4 && !memcmp(l[i].p, surf_kw[j], 4) &&
+                  strcmp(surf_kw[j], "BLNK") && strcmp(surf_kw[j], "DMFS");
+        if (!kw)
+            return i;
+    }
+    return k;
+}
+
+/* Whether line b is line a with each surface field n >= from moved by
+ * dir (tokens compared one by one). */
+static int renumbered_as(const tline *a, const tline *b, int from, int dir)
+{
+    ztoks x, y;
+    int f1, f2, i;
+    toks_of(a->p, a->n, &x);
+    toks_of(b->p, b->n, &y);
+    if (x.n != y.n)
+        return 0;
+    layout_of(&x, &f1, &f2);
+    for (i = 0; i < x.n; i++) {
+        if ((i == f1 || i == f2) && i > 0) {
+            char *end;
+            double v = strtod(x.t[i], &end);
+            long want = (long)v + (v >= from ? dir : 0);
+            if (*end || v != floor(v) || v < 0)
+                return 0;
+            if (v < 1)
+                want = (long)v; /* 0: all surfaces, or none */
+            if (strtol(y.t[i], &end, 10) != want || *end)
+                return 0;
+        } else if (strcmp(x.t[i], y.t[i]) != 0) {
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* Every row's value (each configuration's, the configurations applied):
+ * the merit function's rows, or where it has none of nonzero weight,
+ * each configuration's paraxial focal length, image distance and track. */
+static int physical_values(const sg_system *s, const sg_catalog *cat, double *v, int cap)
+{
+    int k, n = 0, nc = sg_config_count(s), i;
+    for (k = 1; k <= nc; k++) {
+        sg_system *c = sg_system_clone(s);
+        sg_merit_result r;
+        sg_paraxial px;
+        sg_diag d;
+        assert_non_null(c);
+        sg_diag_clear(&d);
+        if (s->configs)
+            assert_int_equal(sg_config_apply(c, k, &d), SG_OK);
+        if (sg_paraxial_compute(c, cat, c->primary_wave, &px, &d) == SG_OK) {
+            assert_true(n + 3 <= cap);
+            v[n++] = px.efl;
+            v[n++] = px.image_dist;
+            v[n++] = px.total_track;
+        }
+        sg_diag_clear(&d);
+        if (k == 1 && c->merit.present && sg_merit_eval(s, cat, &r, &d) == SG_OK) {
+            for (i = 0; i < r.nrow; i++) {
+                assert_true(n < cap);
+                v[n++] = r.row[i].value;
+            }
+            sg_merit_result_free(&r);
+        }
+        sg_system_free(c);
+    }
+    return n;
+}
+
+static const char *const renumber_files[] = {
+    "HoO-V2C18Ex03.zmx", "US00583336-2-scaled.zmx", "US05331467-1.zmx", "US05831776-1.zmx",
+    "US08011793-1.zmx", "beamsplitter_cube.zmx", "binary2_achromatic_singlet.zmx",
+    "binary2_sc_diffract2.zmx", "fold_mirror_pre_post_tilts.zmx",
+    "fzernpha_test_astigmatism.zmx", "fzernpha_test_coma.zmx", "fzernpha_test_spherical.zmx",
+    "lens1.zmx", "lens2.zmx", "lens_thorlabs_iso_8859_1.zmx",
+    "optiland_curved_reflective_grating.zmx", "optiland_curved_transmission_grating.zmx",
+    "optiland_flat_transmission_grating.zmx", "paraxial_telecentric.zmx", "sc_abin2.zmx",
+    "sc_tol_cooke.zmx", "sc_vfac1.zmx", "thorlabs_lj1598l1.zmx", "tilted_object.zmx",
+    "zmax_37992.zmx", "zmax_55278.zmx", "zoom_lens.zmx", "zospy_jonesmat.zmx"};
+
+/* Every file: a dummy surface (no thickness, the object's medium) inserted
+ * before surface 1, as the editor inserts and edits it, is saved; every
+ * line after the surfaces is the file's with its surface numbers one up
+ * (by zemax_layout), and the file read back gives every merit row, and
+ * each configuration's first-order data, as before: the renumbered rows
+ * still address the surfaces they did.  Then a surface that no line names
+ * is deleted: the numbers above it go one down. */
+static void test_lossless_renumber(void **state)
+{
+    static tline la[8192], lb[8192];
+    static double v0[8192], v1[8192];
+    char dir[256] = "", rel[256], src[1024];
+    sg_catalog *cat = tu_catalog();
+    size_t i;
+    int renumbered = 0, deleted = 0;
+    (void)state;
+    for (i = 0; i < sizeof renumber_files / sizeof *renumber_files; i++) {
+        sg_system *s = must_load(renumber_files[i]), *r = sg_system_new();
+        const char *out = tmp_zmx(dir, sizeof dir, "renum.zmx");
+        char *ta, *tb, named[4096] = {0};
+        int ka, kb, a0, b0, j, n0, n1, del = -1;
+        sg_diag d;
+        snprintf(rel, sizeof rel, "tests/data/zmx/%s", renumber_files[i]);
+        ka = text_lines(tu_path(rel, src, sizeof src), &ta, la, 8192);
+        a0 = after_start(la, ka);
+        n0 = physical_values(s, cat, v0, 8192);
+        assert_int_equal(sg_system_insert(s, 1), SG_OK);
+        s->surf[1].mat = s->surf[0].mat;
+        s->surf[1].thickness = 0.0;
+        sg_diag_clear(&d);
+        if (sg_design_save(s, out, &d) != SG_OK)
+            fail_msg("%s: insert: %s", renumber_files[i], d.msg);
+        kb = text_lines(out, &tb, lb, 8192);
+        b0 = after_start(lb, kb);
+        assert_int_equal(ka - a0, kb - b0);
+        for (j = 0; j < ka - a0; j++) {
+            if (!renumbered_as(&la[a0 + j], &lb[b0 + j], 1, 1))
+                fail_msg("%s: line %d '%.*s' became '%.*s'", renumber_files[i], a0 + j + 1,
+                         (int)la[a0 + j].n, la[a0 + j].p, (int)lb[b0 + j].n, lb[b0 + j].p);
+            renumbered += la[a0 + j].n != lb[b0 + j].n ||
+                          memcmp(la[a0 + j].p, lb[b0 + j].p, la[a0 + j].n) != 0;
+        }
+        sg_diag_clear(&d);
+        assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+        n1 = physical_values(r, cat, v1, 8192);
+        assert_int_equal(n0, n1);
+        for (j = 0; j < n0; j++)
+            if (!(v0[j] == v1[j] || fabs(v0[j] - v1[j]) <= 1e-9 * (1.0 + fabs(v0[j]))))
+                fail_msg("%s: value %d: %.17g before the dummy, %.17g after",
+                         renumber_files[i], j, v0[j], v1[j]);
+        free(tb);
+        /* The design as read, less the first surface in 2 .. nsurf-2 that
+         * no kept line names (nor a surface pickup). */
+        sg_system_free(s);
+        s = must_load(renumber_files[i]);
+        for (j = a0; j < ka; j++) {
+            ztoks z;
+            int f1, f2;
+            toks_of(la[j].p, la[j].n, &z);
+            layout_of(&z, &f1, &f2);
+            if (f1 && f1 < z.n && atoi(z.t[f1]) >= 0 && atoi(z.t[f1]) < 4096)
+                named[atoi(z.t[f1])] = 1;
+            if (f2 && f2 < z.n && atoi(z.t[f2]) >= 0 && atoi(z.t[f2]) < 4096)
+                named[atoi(z.t[f2])] = 1;
+        }
+        for (j = 2; j <= s->nsurf - 2 && del < 0; j++) {
+            int t, pick = 0, k2;
+            for (k2 = 0; k2 < s->nsurf; k2++)
+                for (t = 0; t < SG_SOLVE_NTARGETS; t++)
+                    pick |= sg_solve_has_from(s->surf[k2].solve[t].kind) &&
+                            s->surf[k2].solve[t].from == j;
+            if (!named[j] && !pick && j != s->stop)
+                del = j;
+        }
+        if (del > 0 && ka - a0 > 0) {
+            assert_int_equal(sg_system_delete(s, del), SG_OK);
+            sg_diag_clear(&d);
+            if (sg_design_save(s, out, &d) != SG_OK)
+                fail_msg("%s: delete %d: %s", renumber_files[i], del, d.msg);
+            kb = text_lines(out, &tb, lb, 8192);
+            b0 = after_start(lb, kb);
+            assert_int_equal(ka - a0, kb - b0);
+            for (j = 0; j < ka - a0; j++)
+                if (!renumbered_as(&la[a0 + j], &lb[b0 + j], del, -1))
+                    fail_msg("%s: delete %d: line %d '%.*s' became '%.*s'", renumber_files[i],
+                             del, a0 + j + 1, (int)la[a0 + j].n, la[a0 + j].p,
+                             (int)lb[b0 + j].n, lb[b0 + j].p);
+            deleted++;
+            free(tb);
+        }
+        free(ta);
+        unlink(out);
+        sg_system_free(r);
+        sg_system_free(s);
+    }
+    /* Lines were renumbered (EFLY, REAY, RAID, THIC, CRVT, GLSS, SDIA,
+     * TOL ...), and deletes were checked on most files. */
+    if (renumbered < 70 || deleted < 20)
+        fail_msg("%d lines renumbered, %d deletes", renumbered, deleted);
+    sg_catalog_free(cat);
+    rmdir(dir);
+}
+
+/* Token k of a text line as a number; NAN when it has none. */
+static double tok_num_at(const tline *l, int k)
+{
+    ztoks z;
+    char *end;
+    double v;
+    toks_of(l->p, l->n, &z);
+    if (k >= z.n)
+        return NAN;
+    v = strtod(z.t[k], &end);
+    return *end ? NAN : v;
+}
+
+/* Whether lines a and b have the same tokens but k (-1: all the same). */
+static int same_but(const tline *a, const tline *b, int k)
+{
+    ztoks x, y;
+    int i;
+    toks_of(a->p, a->n, &x);
+    toks_of(b->p, b->n, &y);
+    if (x.n != y.n)
+        return 0;
+    for (i = 0; i < x.n; i++)
+        if (i != k && strcmp(x.t[i], y.t[i]) != 0)
+            return 0;
+    return 1;
+}
+
+/* Merit function edits into an opened .zmx (issue 32): the rows are the
+ * file's TRAR lines (tilted_object.zmx, lines 108 on, Zemax's layout
+ * "TRAR Int1 Int2 Hx Hy Px Py target weight ..."), found here by their
+ * keyword. */
+static void test_lossless_merit_edit(void **state)
+{
+    static rawline ra[4096], rb[4096];
+    static tline la[4096], lb[4096];
+    char dir[256] = "", src[1024], *ta, *tb;
+    unsigned char *a, *b;
+    size_t na, nb;
+    int ka, kb, k, diff = -1, ndiff = 0, first = -1, nrow = 0, third = -1;
+    sg_diag d;
+    sg_system *s = must_load("tilted_object.zmx"), *r = sg_system_new();
+    const char *out = tmp_zmx(dir, sizeof dir, "merit.zmx");
+    (void)state;
+    tu_path("tests/data/zmx/tilted_object.zmx", src, sizeof src);
+    a = slurp(src, &na);
+    ka = raw_lines(a, na, ra, 4096);
+    assert_int_equal(text_lines(src, &ta, la, 4096), ka);
+    for (k = 0; k < ka; k++)
+        if (la[k].n > 5 && !memcmp(la[k].p, "TRAR ", 5)) {
+            if (first < 0)
+                first = k;
+            if (++nrow == 3)
+                third = k;
+        }
+    assert_int_equal(first, 107);
+    assert_int_equal(s->merit.nop, nrow);
+
+    /* One target: only its line changes, and only its target token. */
+    assert_int_equal(s->merit.op[2].type, SG_OP_TRAR);
+    s->merit.op[2].target = 0.25;
+    sg_diag_clear(&d);
+    if (sg_design_save(s, out, &d) != SG_OK)
+        fail_msg("target: %s", d.msg);
+    b = slurp(out, &nb);
+    kb = raw_lines(b, nb, rb, 4096);
+    assert_int_equal(kb, ka);
+    for (k = 0; k < ka; k++)
+        if (ra[k].n != rb[k].n || memcmp(ra[k].p, rb[k].p, ra[k].n) != 0) {
+            diff = k;
+            ndiff++;
+        }
+    assert_int_equal(ndiff, 1);
+    assert_int_equal(diff, third);
+    assert_int_equal(text_lines(out, &tb, lb, 4096), kb);
+    assert_true(same_but(&la[third], &lb[third], 7));
+    assert_true(tok_num_at(&lb[third], 7) == 0.25);
+    assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(r, s));
+    free(b);
+    free(tb);
+
+    /* The first row dropped: the file less that line. */
+    memmove(&s->merit.op[0], &s->merit.op[1], (size_t)(s->merit.nop - 1) * sizeof s->merit.op[0]);
+    s->merit.nop--;
+    sg_diag_clear(&d);
+    if (sg_design_save(s, out, &d) != SG_OK)
+        fail_msg("delete: %s", d.msg);
+    assert_int_equal(text_lines(out, &tb, lb, 4096), ka - 1);
+    for (k = 0; k < ka - 1; k++)
+        assert_true(same_but(&la[k < first ? k : k + 1], &lb[k], k + 1 == third ? 7 : -1));
+    assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(r, s));
+    free(tb);
+
+    /* A new operand at the end: EFFL at wavelength 1, target 50, weight 2,
+     * one line in Zemax's layout after the last row. */
+    memset(&s->merit.op[s->merit.nop], 0, sizeof s->merit.op[0]);
+    s->merit.op[s->merit.nop].type = SG_OP_EFFL;
+    s->merit.op[s->merit.nop].i2 = 1;
+    s->merit.op[s->merit.nop].target = 50;
+    s->merit.op[s->merit.nop].weight = 2;
+    s->merit.nop++;
+    sg_diag_clear(&d);
+    if (sg_design_save(s, out, &d) != SG_OK)
+        fail_msg("append: %s", d.msg);
+    assert_int_equal(text_lines(out, &tb, lb, 4096), ka);
+    k = first + nrow - 1;
+    assert_true(lb[k].n > 5 && !memcmp(lb[k].p, "EFFL ", 5));
+    assert_true(tok_num_at(&lb[k], 1) == 0 && tok_num_at(&lb[k], 2) == 1 &&
+                tok_num_at(&lb[k], 3) == 0 && tok_num_at(&lb[k], 6) == 0 &&
+                tok_num_at(&lb[k], 7) == 50 && tok_num_at(&lb[k], 8) == 2);
+    assert_true(same_but(&la[k + 1], &lb[k + 1], -1));
+    assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(r, s));
+    free(tb);
+    free(ta);
+    free(a);
+    unlink(out);
+    sg_system_free(s);
+
+    /* Rows named by number (SC_Tol_Cooke's OPGT 2, 4, 7, 9 name the MTFA
+     * rows before them): an operand put first moves every row down one,
+     * and each OPGT line's Int1 follows. */
+    s = must_load("sc_tol_cooke.zmx");
+    tu_path("tests/data/zmx/sc_tol_cooke.zmx", src, sizeof src);
+    ka = text_lines(src, &ta, la, 4096);
+    memmove(&s->merit.op[1], &s->merit.op[0], (size_t)s->merit.nop * sizeof s->merit.op[0]);
+    s->merit.nop++;
+    memset(&s->merit.op[0], 0, sizeof s->merit.op[0]);
+    s->merit.op[0].type = SG_OP_TOTR;
+    s->merit.op[0].target = 100;
+    s->merit.op[0].weight = 1;
+    for (k = 1; k < s->merit.nop; k++)
+        if (s->merit.op[k].type == SG_OP_OPGT)
+            s->merit.op[k].i1++;
+    sg_diag_clear(&d);
+    if (sg_design_save(s, out, &d) != SG_OK)
+        fail_msg("sc_tol_cooke: %s", d.msg);
+    kb = text_lines(out, &tb, lb, 4096);
+    assert_int_equal(kb, ka + 1);
+    for (k = 0, first = -1; k < ka; k++)
+        if (la[k].n >= 4 && !memcmp(la[k].p, "BLNK", 4) && first < 0 && k > 100)
+            first = k;
+    assert_true(lb[first].n > 5 && !memcmp(lb[first].p, "TOTR ", 5));
+    for (k = first, nrow = 0; k < ka; k++) {
+        int opgt = la[k].n > 5 && !memcmp(la[k].p, "OPGT ", 5);
+        nrow += opgt;
+        assert_true(same_but(&la[k], &lb[k + 1], opgt ? 1 : -1));
+        if (opgt)
+            assert_true(tok_num_at(&lb[k + 1], 1) == tok_num_at(&la[k], 1) + 1);
+    }
+    assert_int_equal(nrow, 4);
+    assert_int_equal(sg_design_load(r, out, &d), SG_OK);
+    assert_true(sg_system_equal(r, s));
+    free(ta);
+    free(tb);
+    unlink(out);
+    sg_system_free(s);
+
+    /* US08011793-1's 412 rows exceed what sagitta reads, so its merit
+     * function was left out: a merit function given to the design is not
+     * written over those rows, nor are they dropped; the save asks. */
+    s = must_load("US08011793-1.zmx");
+    assert_int_equal(s->merit.nop, 0);
+    s->merit.present = 1;
+    s->merit.nop = 1;
+    memset(&s->merit.op[0], 0, sizeof s->merit.op[0]);
+    s->merit.op[0].type = SG_OP_TOTR;
+    s->merit.op[0].weight = 1;
+    sg_diag_clear(&d);
+    assert_int_equal(sg_design_save(s, out, &d), SG_ELOSSY);
+    assert_non_null(strstr(d.msg, "the file's own was not read"));
+    assert_int_equal(access(out, F_OK), -1);
     sg_system_free(s);
     sg_system_free(r);
     rmdir(dir);
@@ -2533,6 +3022,8 @@ int main(void)
         cmocka_unit_test(test_lossless_files),
         cmocka_unit_test(test_lossless_edit_radius),
         cmocka_unit_test(test_lossless_insert_delete),
+        cmocka_unit_test(test_lossless_renumber),
+        cmocka_unit_test(test_lossless_merit_edit),
         cmocka_unit_test(test_lossless_encodings),
         cmocka_unit_test(test_lossless_refusal),
         cmocka_unit_test(test_subnormal_radius),

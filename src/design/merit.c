@@ -116,6 +116,24 @@ void sg_op_keys(sg_op_type t, const char *keys[6])
         keys[2 + k] = inf->d[k];
 }
 
+static int is_surf_key(const char *k)
+{
+    return k && (!strcmp(k, "surf") || !strcmp(k, "surf1") || !strcmp(k, "surf2"));
+}
+
+void sg_merit_renumber(sg_merit *m, int at, int dir)
+{
+    int i;
+    for (i = 0; m && i < m->nop; i++) {
+        sg_operand *o = &m->op[i];
+        const sg_op_info *inf = sg_op_info_of(o->type);
+        if (is_surf_key(inf->k1) && o->i1 >= at + (dir < 0))
+            o->i1 += dir;
+        if (is_surf_key(inf->k2) && o->i2 >= at + (dir < 0))
+            o->i2 += dir;
+    }
+}
+
 const char *sg_op_name(sg_op_type t)
 {
     return (int)t >= 0 && t < SG_OP_NTYPES ? ops[t].name : NULL;

@@ -160,6 +160,9 @@ typedef struct zctx {
      * the surfaces, else the surface whose block holds it. */
     int *lsect;
     int nlsect;
+    /* Each merit function row's operand (from 1), -1 for a row that is
+     * none (DMFS, an operand left out), 0 for other lines. */
+    int *lmop;
     const sg_zmx_subst *sub; /* glasses to substitute, or NULL */
     int nzero_kw[ZMX_NZERO_KW]; /* zero_surface lines kept */
     /* The configurations (MNUM n, n > 1) and, per operand, its first
@@ -1785,6 +1788,8 @@ static int merit_line(zctx *c, const zline *l)
         return 1;
     row = ++c->nmrow;
     c->mrow[row] = 0;
+    if (c->lmop && c->line >= 1 && c->line <= c->nlsect)
+        c->lmop[c->line - 1] = -1;
     /* Messages name the line, not the last surface. */
     c->cur = -1;
     t = sg_op_parse(key);
@@ -1829,6 +1834,8 @@ static int merit_line(zctx *c, const zline *l)
         }
         m->present = 1;
         c->mrow[row] = ++m->nop;
+        if (c->lmop && c->line >= 1 && c->line <= c->nlsect)
+            c->lmop[c->line - 1] = m->nop;
     }
     c->cur = cur;
     return 1;
@@ -2400,6 +2407,7 @@ enum { ZENC_UTF8, ZENC_UTF8_BOM, ZENC_LATIN1, ZENC_UTF16LE };
 typedef struct zoline {
     size_t off, len, tlen; /* the text, and its line ending's bytes */
     int sect;              /* -1 header, -2 after the surfaces, else the surface */
+    int mop;               /* a merit row's operand (from 1), -1 another merit row, 0 */
 } zoline;
 
 struct sg_zmx_origin {
@@ -2458,6 +2466,7 @@ static zoline *split_lines(const char *t, int *n)
         v[k].len = len;
         v[k].tlen = all - len;
         v[k].sect = -1;
+        v[k].mop = 0;
         k++;
         p += all;
     }
@@ -2618,10 +2627,225 @@ static int group_same(const csec *b, const csec *c, const char *g)
     }
 }
 
+/* Whether a line after the surfaces may name a surface by number: any
+ * but the blank, BLNK, the configuration count (MNUM), the empty
+ * configuration operand (MOFF) and the tolerances' header (TOL TOFF). */
+static int may_name_surface(const char *p, size_t n)
+{
+    char key[48];
+    line_key(p, n, key);
+    if (!key[0] || !strcmp(key, "BLNK") || !strcmp(key, "MNUM") || !strcmp(key, "MOFF"))
+        return 0;
+    if (!strcmp(key, "TOL")) {
+        size_t i = 3;
+        while (i < n && (p[i] == ' ' || p[i] == '\t'))
+            i++;
+        return !(n - i >= 4 && strncmp(p + i, "TOFF", 4) == 0);
+    }
+    return 1;
+}
+
+/* Renumbering a kept line when surfaces were inserted, deleted or moved:
+ * Zemax renumbers every field that names a surface.  The one table of
+ * those fields: a keyword after the surfaces (merit function rows
+ * "OPER Int1 Int2 ...", tolerance rows "TOL OPER Int1 Int2 ...",
+ * configuration rows "OPER surface config value ...") and the bits of its
+ * tokens (0 the keyword) that are surface numbers; 0 for a row that names
+ * none.  From Zemax's Merit Function, Tolerance and Multi-Configuration
+ * operand lists; a keyword not here is one whose fields sagitta cannot
+ * tell, and a structural save refuses naming it. */
+#define ZT(k) (1u << (k))
+static const struct {
+    const char *key;
+    unsigned surf;
+} zmx_surf_fields[] = {
+    /* Merit rows whose Int1 is a surface. */
+    {"CTGT", ZT(1)}, {"CTLT", ZT(1)}, {"CTVA", ZT(1)}, {"ETGT", ZT(1)}, {"ETLT", ZT(1)},
+    {"ETVA", ZT(1)}, {"CVGT", ZT(1)}, {"CVLT", ZT(1)}, {"CVVA", ZT(1)}, {"COGT", ZT(1)},
+    {"COLT", ZT(1)}, {"COVA", ZT(1)}, {"DMGT", ZT(1)}, {"DMLT", ZT(1)}, {"DMVA", ZT(1)},
+    {"REAX", ZT(1)}, {"REAY", ZT(1)}, {"REAZ", ZT(1)}, {"REAR", ZT(1)}, {"REAA", ZT(1)},
+    {"REAB", ZT(1)}, {"REAC", ZT(1)}, {"RENA", ZT(1)}, {"RENB", ZT(1)}, {"RENC", ZT(1)},
+    {"RANG", ZT(1)}, {"RAID", ZT(1)}, {"RAED", ZT(1)}, {"PARX", ZT(1)}, {"PARY", ZT(1)},
+    {"PARZ", ZT(1)}, {"PARR", ZT(1)}, {"PARA", ZT(1)}, {"PARB", ZT(1)}, {"PARC", ZT(1)},
+    {"PANA", ZT(1)}, {"PANB", ZT(1)}, {"PANC", ZT(1)}, {"OPTH", ZT(1)}, {"DIST", ZT(1)},
+    {"SPHA", ZT(1)}, {"COMA", ZT(1)}, {"ASTI", ZT(1)}, {"FCUR", ZT(1)},
+    /* Merit rows whose Int1 and Int2 are a range of surfaces. */
+    {"TTHI", ZT(1) | ZT(2)}, {"MNCT", ZT(1) | ZT(2)}, {"MXCT", ZT(1) | ZT(2)},
+    {"MNET", ZT(1) | ZT(2)}, {"MXET", ZT(1) | ZT(2)}, {"MNCA", ZT(1) | ZT(2)},
+    {"MXCA", ZT(1) | ZT(2)}, {"MNEA", ZT(1) | ZT(2)}, {"MXEA", ZT(1) | ZT(2)},
+    {"MNCG", ZT(1) | ZT(2)}, {"MXCG", ZT(1) | ZT(2)}, {"MNEG", ZT(1) | ZT(2)},
+    {"MXEG", ZT(1) | ZT(2)}, {"EFLX", ZT(1) | ZT(2)}, {"EFLY", ZT(1) | ZT(2)},
+    /* Merit rows that name no surface: first order, rays at the image,
+     * image quality, arithmetic (Int1 an operand row), headings. */
+    {"BLNK", 0}, {"DMFS", 0}, {"CONF", 0}, {"CONS", 0}, {"EFFL", 0}, {"PMAG", 0},
+    {"AMAG", 0}, {"WFNO", 0}, {"ISFN", 0}, {"ISNA", 0}, {"EPDI", 0}, {"EXPP", 0},
+    {"ENPP", 0}, {"TOTR", 0}, {"TRAX", 0}, {"TRAY", 0}, {"TRAR", 0}, {"TRAC", 0},
+    {"OPDC", 0}, {"OPDX", 0}, {"OPDM", 0}, {"RSCE", 0}, {"RSCH", 0}, {"RSRE", 0},
+    {"RSRH", 0}, {"RWCE", 0}, {"RWCH", 0}, {"RWRE", 0}, {"RWRH", 0}, {"DIMX", 0},
+    {"FCGS", 0}, {"FCGT", 0}, {"ZERN", 0}, {"AXCL", 0}, {"LACL", 0}, {"SUMM", 0},
+    {"DIFF", 0}, {"PROD", 0}, {"DIVI", 0}, {"OPGT", 0}, {"OPLT", 0}, {"ABSO", 0},
+    {"SQRT", 0}, {"ACOS", 0}, {"ASIN", 0}, {"ATAN", 0}, {"COSI", 0}, {"SINE", 0},
+    {"TANG", 0}, {"ABGT", 0}, {"ABLT", 0}, {"EQUA", 0}, {"MTFT", 0}, {"MTFS", 0},
+    {"MTFA", 0}, {"GMTT", 0}, {"GMTS", 0}, {"GMTA", 0}, {"STRH", 0}, {"ANAC", 0},
+    {"ANAR", 0}, {"ANAX", 0}, {"ANAY", 0}, {"ANCX", 0}, {"ANCY", 0}, {"LINV", 0},
+    {"USYM", 0}, {"CSUM", 0},
+    /* Configuration rows: the surface, or (STPS) each value a surface. */
+    {"THIC", ZT(1)}, {"CRVT", ZT(1)}, {"CONI", ZT(1)}, {"SDIA", ZT(1)}, {"GLSS", ZT(1)},
+    {"PRAM", ZT(1)}, {"APMN", ZT(1)}, {"APMX", ZT(1)}, {"EDVA", ZT(1)}, {"STPS", ZT(3)},
+    {"MNUM", 0}, {"MOFF", 0}, {"CWGT", 0}, {"MCOM", 0}, {"LTTL", 0}, {"APER", 0},
+    {"TEMP", 0}, {"PRES", 0}, {"XFIE", 0}, {"YFIE", 0}, {"FLWT", 0}, {"WAVE", 0},
+    {"WLWT", 0},
+    /* Tolerance rows (tokens 2 and 3 are Int1 and Int2). */
+    {"TOL TRAD", ZT(2)}, {"TOL TCUR", ZT(2)}, {"TOL TFRN", ZT(2)}, {"TOL TCON", ZT(2)},
+    {"TOL TPAR", ZT(2)}, {"TOL TEDV", ZT(2)}, {"TOL TIND", ZT(2)}, {"TOL TABB", ZT(2)},
+    {"TOL TSDX", ZT(2)}, {"TOL TSDY", ZT(2)}, {"TOL TSTX", ZT(2)}, {"TOL TSTY", ZT(2)},
+    {"TOL TIRR", ZT(2)}, {"TOL TIRX", ZT(2)}, {"TOL TIRY", ZT(2)}, {"TOL TEXI", ZT(2)},
+    {"TOL TEZI", ZT(2)}, {"TOL TTHI", ZT(2) | ZT(3)}, {"TOL TEDX", ZT(2) | ZT(3)},
+    {"TOL TEDY", ZT(2) | ZT(3)}, {"TOL TETX", ZT(2) | ZT(3)}, {"TOL TETY", ZT(2) | ZT(3)},
+    {"TOL TETZ", ZT(2) | ZT(3)}, {"TOL COMP", ZT(2)}, {"TOL TWAV", 0}, {"TOL TOFF", 0},
+    {"TCMM", 0},
+};
+
+/* The surface fields of a line (its section: a surface's block, or -1 and
+ * -2); -1 when they cannot be told. */
+static long zmx_fields_of(const char *p, size_t n, int sect, const size_t *to, const size_t *tn,
+                          int nt)
+{
+    char key[16];
+    size_t i;
+    /* The header's lines name no surface. */
+    if (nt == 0 || sect == -1)
+        return 0;
+    snprintf(key, sizeof key, "%.*s", (int)(tn[0] < 8 ? tn[0] : 8), p + to[0]);
+    if (sect >= 0) {
+        /* In a surface's block: pickups (CURV c 4 from ..., PZUP from and
+         * PKUP from); a parameter pickup's layout is not read. */
+        if (!strcmp(key, "CURV"))
+            return nt > 3 && tn[2] == 1 && p[to[2]] == '4' ? (long)ZT(3) : 0;
+        if (!strcmp(key, "PZUP") || !strcmp(key, "PKUP"))
+            return ZT(1);
+        return strcmp(key, "PPAR") == 0 ? -1 : 0;
+    }
+    if (!strcmp(key, "TOL") && nt > 1)
+        snprintf(key, sizeof key, "TOL %.*s", (int)(tn[1] < 8 ? tn[1] : 8), p + to[1]);
+    for (i = 0; i < sizeof zmx_surf_fields / sizeof *zmx_surf_fields; i++)
+        if (!strcmp(zmx_surf_fields[i].key, key))
+            return (long)zmx_surf_fields[i].surf;
+    return may_name_surface(p, n) ? -1 : 0;
+}
+
+/* What a structural save does to the lines it keeps: map[k] is the new
+ * number of the file's surface k (-1: deleted); lines it cannot renumber
+ * are listed in bad. */
+typedef struct zren {
+    const int *map;
+    int nold;
+    int nbad;
+    char bad[480];
+    int merit_unread; /* the file's merit rows were not read as operands */
+} zren;
+
+static void ren_bad(zren *r, const char *p, size_t n, long line, const char *why)
+{
+    char key[16];
+    size_t i = 0, j = 0, len = strlen(r->bad);
+    while (i < n && (p[i] == ' ' || p[i] == '\t'))
+        i++;
+    while (i < n && p[i] != ' ' && p[i] != '\t' && j < 8)
+        key[j++] = p[i++];
+    key[j] = '\0';
+    if (!strcmp(key, "TOL")) {
+        while (i < n && (p[i] == ' ' || p[i] == '\t'))
+            i++;
+        key[j++] = ' ';
+        while (i < n && p[i] != ' ' && p[i] != '\t' && j < 13)
+            key[j++] = p[i++];
+        key[j] = '\0';
+    }
+    if (r->nbad++ < 8 && len + 80 < sizeof r->bad)
+        snprintf(r->bad + len, sizeof r->bad - len, "%s%s (line %ld, %s)", len ? ", " : "", key,
+                 line, why);
+}
+
+/* Line `line` (from 1) of the file renumbered: NULL when it stays as it
+ * is (nothing moves, or it is listed in r->bad), else a malloc'ed copy
+ * with only its surface numbers changed. */
+static char *ren_line(zren *r, const char *p, size_t n, int sect, long line, size_t *outn)
+{
+    size_t to[16], tn[16], i = 0, last = 0;
+    int nt = 0, k, change = 0;
+    long m;
+    int newv[16];
+    zbuf b = {0};
+    if (!r)
+        return NULL;
+    while (i < n && nt < 16) {
+        while (i < n && (p[i] == ' ' || p[i] == '\t'))
+            i++;
+        if (i == n)
+            break;
+        to[nt] = i;
+        while (i < n && p[i] != ' ' && p[i] != '\t')
+            i++;
+        tn[nt] = i - to[nt];
+        nt++;
+    }
+    m = zmx_fields_of(p, n, sect, to, tn, nt);
+    if (m < 0) {
+        ren_bad(r, p, n, line, "its fields' meaning is unknown");
+        return NULL;
+    }
+    for (k = 1; k < nt && k < 16; k++) {
+        char buf[40], *end;
+        double v;
+        newv[k] = -1;
+        if (!(m & (long)ZT(k)) || tn[k] >= sizeof buf)
+            continue;
+        memcpy(buf, p + to[k], tn[k]);
+        buf[tn[k]] = '\0';
+        v = strtod(buf, &end);
+        /* Not a surface of the file (0 sums over all in SPHA ...). */
+        if (*end || !(v >= 1 && v < r->nold) || v != floor(v))
+            continue;
+        if (r->map[(int)v] < 0) {
+            ren_bad(r, p, n, line, "it names a deleted surface");
+            return NULL;
+        }
+        if (r->map[(int)v] != (int)v) {
+            newv[k] = r->map[(int)v];
+            change = 1;
+        }
+    }
+    if (!change)
+        return NULL;
+    for (k = 1; k < nt; k++) {
+        char num[16];
+        if (newv[k] < 0)
+            continue;
+        zb_add(&b, p + last, to[k] - last);
+        snprintf(num, sizeof num, "%d", newv[k]);
+        /* A right-aligned field keeps its width where it can. */
+        if (strlen(num) > tn[k] && b.len && b.p[b.len - 1] == ' ' && to[k] >= 2 &&
+            p[to[k] - 2] == ' ')
+            b.len--;
+        zb_add(&b, num, strlen(num));
+        last = to[k] + tn[k];
+    }
+    zb_add(&b, p + last, n - last);
+    if (b.oom) {
+        free(b.p);
+        ren_bad(r, p, n, line, "out of memory");
+        return NULL;
+    }
+    *outn = b.len;
+    return b.p;
+}
+
 typedef struct mline {
     const char *pre, *p, *term;
     size_t npre, n, nterm;
-    int cidx; /* the line of sagitta's text it stands for, or -1 */
+    int cidx;  /* the line of sagitta's text it stands for, or -1 */
+    char *own; /* p when the line was renumbered (ren_line) */
 } mline;
 
 /* One section of the file: its lines (ol, on) as the design was read (B,
@@ -2631,7 +2855,8 @@ typedef struct mline {
  * before them in C.  The header's older lists go where their group
  * changed. */
 static int merge_sec(zbuf *out, const struct sg_zmx_origin *o, const int *ol, int on,
-                     const csec *B, const csec *C, int header, const char *term, size_t nterm)
+                     const csec *B, const csec *C, int header, const char *term, size_t nterm,
+                     zren *rn)
 {
     static const csec none = {NULL, 0, 0};
     mline *m;
@@ -2652,7 +2877,7 @@ static int merge_sec(zbuf *out, const struct sg_zmx_origin *o, const int *ol, in
         const char *p = o->text + z->off;
         char key[56];
         int occ = 0, bi, ci;
-        mline e = {"", p, p + z->len, 0, z->len, z->tlen, -1};
+        mline e = {"", p, p + z->len, 0, z->len, z->tlen, -1, NULL};
         line_key(p, z->len, key);
         if (!key[0]) {
             m[nm++] = e;
@@ -2674,9 +2899,14 @@ static int merge_sec(zbuf *out, const struct sg_zmx_origin *o, const int *ol, in
         ci = canon_find(C, key);
         if (ci >= 0)
             used[ci] = 1;
-        if (bi < 0 && ci < 0) {
-            m[nm++] = e;
-        } else if (ci >= 0 && bi >= 0 && cline_same(&B->l[bi], &C->l[ci])) {
+        if ((bi < 0 && ci < 0) || (ci >= 0 && bi >= 0 && cline_same(&B->l[bi], &C->l[ci]))) {
+            /* The file's own line, its surface numbers renumbered. */
+            size_t rn_n = 0;
+            e.own = ren_line(rn, p, z->len, z->sect, (long)ol[i] + 1, &rn_n);
+            if (e.own) {
+                e.p = e.own;
+                e.n = rn_n;
+            }
             e.cidx = ci;
             m[nm++] = e;
         } else if (ci >= 0) {
@@ -2712,12 +2942,14 @@ static int merge_sec(zbuf *out, const struct sg_zmx_origin *o, const int *ol, in
         m[at].term = term;
         m[at].nterm = nterm;
         m[at].cidx = j;
+        m[at].own = NULL;
         nm++;
     }
     for (i = 0; i < nm; i++) {
         zb_add(out, m[i].pre, m[i].npre);
         zb_add(out, m[i].p, m[i].n);
         zb_add(out, m[i].term, m[i].nterm);
+        free(m[i].own);
     }
     free(m);
     free(used);
@@ -2839,7 +3071,8 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
         return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", name);
     }
     c->lsect = malloc(((size_t)org->nline + 1) * sizeof *c->lsect);
-    c->nlsect = c->lsect ? org->nline : 0;
+    c->lmop = calloc((size_t)org->nline + 1, sizeof *c->lmop);
+    c->nlsect = c->lsect && c->lmop ? org->nline : 0;
     /* The header keeps sg_system_new's values until the file sets them;
      * the surfaces are appended as their SURF lines come. */
     tmp->nsurf = 0;
@@ -2896,14 +3129,14 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
     }
     if (sub)
         org->sub.nearest = sub->nearest;
-    if (rc == SG_OK && c->lsect) {
+    if (rc == SG_OK && c->lsect && c->lmop) {
         /* Each surface knows its block in the file; the design as read is
          * what a save compares with to find the lines an edit changed. */
         int i;
         for (i = 0; i < tmp->nsurf; i++)
             tmp->surf[i].zmx_src = i + 1;
         for (i = 0; i < org->nline; i++)
-            org->line[i].sect = c->lsect[i];
+            org->line[i].sect = c->lsect[i], org->line[i].mop = c->lmop[i];
         org->base = sg_system_clone(tmp);
         if (org->base) {
             org->nkept = count_kept(org, cat);
@@ -2920,6 +3153,7 @@ int sg_zmx_parse_subst(sg_system *sys, const void *bytes, size_t len, const char
     for (rc2 = 0; rc2 < SG_MAX_CONFIG_OPS; rc2++)
         free(c->mfill[rc2]);
     free(c->lsect);
+    free(c->lmop);
     sg_system_free(tmp);
     sg_catalog_free(own);
     free(c);
@@ -3500,17 +3734,221 @@ static int encode(const char *t, size_t n, int enc, zbuf *out, char *why, size_t
     return SG_OK;
 }
 
+/* ------------------------------------------------------------------------
+ * The merit function written into the file's rows (issue 32): each row
+ * whose operand the design still has unchanged keeps its line byte for
+ * byte; a changed operand's row gets only its changed fields; new
+ * operands are written in Zemax's layout "TYPE Int1 Int2 Data1 Data2
+ * Data3 Data4 target weight Data5 Data6" after the row before them; rows
+ * of operands the design dropped are dropped.  Rows sagitta does not read
+ * as operands (DMFS, operands it does not know) stay.
+ * ------------------------------------------------------------------------ */
+
+/* Operands whose Int1 (and Int2, the first four) are rows, as merit_line
+ * reads them. */
+static int op_rows(sg_op_type t)
+{
+    return t == SG_OP_SUMM || t == SG_OP_DIFF || t == SG_OP_PROD || t == SG_OP_DIVI ? 2
+           : t == SG_OP_OPGT || t == SG_OP_OPLT || t == SG_OP_ABSO || t == SG_OP_SQRT ? 1
+                                                                                      : 0;
+}
+
+static int op_same(const sg_operand *a, const sg_operand *b)
+{
+    return a->type == b->type && a->i1 == b->i1 && a->i2 == b->i2 &&
+           !memcmp(&a->hx, &b->hx, sizeof a->hx) && !memcmp(&a->hy, &b->hy, sizeof a->hy) &&
+           !memcmp(&a->px, &b->px, sizeof a->px) && !memcmp(&a->py, &b->py, sizeof a->py) &&
+           !memcmp(&a->target, &b->target, sizeof a->target) &&
+           !memcmp(&a->weight, &b->weight, sizeof a->weight);
+}
+
+/* The row's eight numbers as the file holds them: row references are the
+ * file's rows (drow, from 1) of the operands named. */
+static void op_fields(const sg_operand *o, const int *drow, int nd, double f[8])
+{
+    int r = op_rows(o->type);
+    f[0] = o->i1, f[1] = o->i2, f[2] = o->hx, f[3] = o->hy, f[4] = o->px, f[5] = o->py;
+    f[6] = o->target, f[7] = o->weight;
+    if (r >= 1 && o->i1 >= 1 && o->i1 <= nd)
+        f[0] = drow[o->i1 - 1];
+    if (r == 2 && o->i2 >= 1 && o->i2 <= nd)
+        f[1] = drow[o->i2 - 1];
+}
+
+/* A merit row's text for operand o: the file's line (p, n; NULL for a new
+ * row) with the fields whose value differs replaced, else a new line. */
+static void merit_row(zbuf *out, const char *p, size_t n, const sg_operand *o, const double f[8])
+{
+    const char *name = sg_op_name(o->type);
+    size_t to[12], tn[12], i = 0, last = 0;
+    int nt = 0, k;
+    char nb[40];
+    while (p && i < n && nt < 12) {
+        while (i < n && (p[i] == ' ' || p[i] == '\t'))
+            i++;
+        if (i == n)
+            break;
+        to[nt] = i;
+        while (i < n && p[i] != ' ' && p[i] != '\t')
+            i++;
+        tn[nt] = i - to[nt];
+        nt++;
+    }
+    if (o->type == SG_OP_BLNK) {
+        /* A blank row's text is its comment. */
+        if (p && nt && tn[0] == 4 && !memcmp(p + to[0], "BLNK", 4))
+            zb_add(out, p, n);
+        else
+            zb_add(out, "BLNK", 4);
+        return;
+    }
+    if (!p || nt < 9 || tn[0] != 4 || memcmp(p + to[0], name, 4) != 0) {
+        zb_printf(out, "%s %d %d", name, (int)f[0], (int)f[1]);
+        for (k = 2; k < 8; k++)
+            zb_printf(out, " %s", num(nb, f[k]));
+        zb_add(out, " 0 0", 4);
+        return;
+    }
+    for (k = 1; k <= 8; k++) {
+        char buf[48], *end;
+        double v;
+        int same;
+        if (tn[k] >= sizeof buf)
+            same = 0;
+        else {
+            memcpy(buf, p + to[k], tn[k]);
+            buf[tn[k]] = '\0';
+            v = strtod(buf, &end);
+            same = !*end && (k <= 2 ? (int)v == (int)f[k - 1] : v == f[k - 1]);
+        }
+        if (same)
+            continue;
+        zb_add(out, p + last, to[k] - last);
+        if (k <= 2)
+            zb_printf(out, "%d", (int)f[k - 1]);
+        else
+            zb_printf(out, "%s", num(nb, f[k - 1]));
+        last = to[k] + tn[k];
+    }
+    zb_add(out, p + last, n - last);
+}
+
+/* The lines after the surfaces with the design's merit function in the
+ * rows (see above); ren renumbers the other kept lines. */
+static int merit_after(zbuf *out, const struct sg_zmx_origin *o, const sg_system *sys,
+                       zren *ren, const char *term, size_t nterm)
+{
+    const sg_merit *B = &o->base->merit, *D = &sys->merit;
+    int nb = B->nop, nd = D->present ? D->nop : 0, i, j, pass, lastm = -1;
+    int *L = calloc((size_t)(nb + 1) * (size_t)(nd + 1), sizeof *L);
+    int *match = malloc(((size_t)nb + 1) * sizeof *match);
+    int *taken = calloc((size_t)nd + 1, sizeof *taken);
+    int *drow = calloc((size_t)nd + 1, sizeof *drow);
+    if (!L || !match || !taken || !drow) {
+        free(L), free(match), free(taken), free(drow);
+        return SG_ENOMEM;
+    }
+    /* The longest common subsequence of the rows as read and as now: those
+     * keep their lines. */
+#define LL(a, b) L[(size_t)(a) * (size_t)(nd + 1) + (size_t)(b)]
+    for (i = nb - 1; i >= 0; i--)
+        for (j = nd - 1; j >= 0; j--)
+            LL(i, j) = op_same(&B->op[i], &D->op[j]) ? LL(i + 1, j + 1) + 1
+                       : LL(i + 1, j) > LL(i, j + 1) ? LL(i + 1, j)
+                                                     : LL(i, j + 1);
+    for (i = 0; i < nb; i++)
+        match[i] = -1;
+    for (i = 0, j = 0; i < nb && j < nd;) {
+        if (op_same(&B->op[i], &D->op[j]) && LL(i, j) == LL(i + 1, j + 1) + 1) {
+            match[i] = j, taken[j] = 1;
+            i++, j++;
+        } else if (LL(i + 1, j) >= LL(i, j + 1)) {
+            i++;
+        } else {
+            j++;
+        }
+    }
+#undef LL
+    for (i = 0; i < o->nline; i++)
+        if (o->line[i].sect == -2 && o->line[i].mop)
+            lastm = i;
+    /* Pass 0 numbers the file's rows; pass 1 writes them. */
+    for (pass = 0; pass < 2; pass++) {
+        int row = 0, dj = 0;
+        zbuf *w = pass ? out : NULL;
+        double f[8];
+#define NEWROW(k)                                                              \
+    do {                                                                       \
+        drow[k] = ++row;                                                       \
+        if (w) {                                                               \
+            op_fields(&D->op[k], drow, nd, f);                                 \
+            merit_row(w, NULL, 0, &D->op[k], f);                               \
+            zb_add(w, term, nterm);                                            \
+        }                                                                      \
+    } while (0)
+        if (lastm < 0)
+            for (; dj < nd; dj++)
+                NEWROW(dj);
+        for (i = 0; i < o->nline; i++) {
+            const zoline *z = &o->line[i];
+            const char *p = o->text + z->off;
+            int bi = z->mop - 1;
+            if (z->sect != -2)
+                continue;
+            if (z->mop > 0 && bi < nb && match[bi] >= 0) {
+                for (; dj < match[bi]; dj++)
+                    NEWROW(dj);
+                drow[dj] = ++row;
+                if (w) {
+                    op_fields(&D->op[dj], drow, nd, f);
+                    merit_row(w, p, z->len, &D->op[dj], f);
+                    zb_add(w, p + z->len, z->tlen);
+                }
+                dj++;
+            } else if (z->mop > 0) {
+                /* A row the design changed (its next new operand takes
+                 * the line) or dropped. */
+                if (dj < nd && !taken[dj]) {
+                    drow[dj] = ++row;
+                    if (w) {
+                        op_fields(&D->op[dj], drow, nd, f);
+                        merit_row(w, p, z->len, &D->op[dj], f);
+                        zb_add(w, p + z->len, z->tlen);
+                    }
+                    dj++;
+                }
+            } else {
+                row += z->mop < 0;
+                if (w) {
+                    size_t rn_n = 0;
+                    char *r = ren_line(ren, p, z->len, -2, (long)i + 1, &rn_n);
+                    zb_add(w, r ? r : p, r ? rn_n : z->len);
+                    zb_add(w, p + z->len, z->tlen);
+                    free(r);
+                }
+            }
+            if (i == lastm)
+                for (; dj < nd; dj++)
+                    NEWROW(dj);
+        }
+#undef NEWROW
+    }
+    free(L), free(match), free(taken), free(drow);
+    return out->oom ? SG_ENOMEM : SG_OK;
+}
+
 /* The file the design was read from with only the lines its edits concern
  * changed, in the file's encoding (merge_sec).  *structural is set where
  * surfaces were inserted, deleted or moved. */
 static int zmx_merged(const sg_system *sys, const sg_catalog *cat, zbuf *bytes,
-                      int *structural, char *why, size_t nwhy)
+                      int *structural, zren *rn, char *why, size_t nwhy)
 {
     const struct sg_zmx_origin *o = sys->zmx;
     zbuf bt = {0}, ct = {0}, out = {0};
     csec *B = NULL, *C = NULL;
     sg_diag scratch;
-    int nb = 0, nc = 0, rc = SG_OK, i, j, *ol = NULL, on, *taken = NULL;
+    int nb = 0, nc = 0, rc = SG_OK, i, j, *ol = NULL, on, *taken = NULL, *map = NULL;
+    zren *ren = NULL;
     const char *term = "\n";
     size_t nterm = 1;
     char sl[40];
@@ -3527,11 +3965,27 @@ static int zmx_merged(const sg_system *sys, const sg_catalog *cat, zbuf *bytes,
     C = canon_split(ct.p, &nc);
     ol = malloc(((size_t)o->nline + 1) * sizeof *ol);
     taken = calloc((size_t)o->base->nsurf + 1, sizeof *taken);
-    if (!B || !C || !ol || !taken) {
+    map = malloc(((size_t)o->base->nsurf + 1) * sizeof *map);
+    if (!B || !C || !ol || !taken || !map) {
         rc = SG_ENOMEM;
         snprintf(why, nwhy, "out of memory");
         goto done;
     }
+    /* Where each of the file's surfaces went: kept lines that name
+     * surfaces are renumbered when any moved. */
+    for (i = 0; i < o->base->nsurf; i++)
+        map[i] = -1;
+    for (j = 0; j < sys->nsurf; j++) {
+        int t = sys->surf[j].zmx_src;
+        if (t >= 1 && t <= o->base->nsurf && map[t - 1] < 0)
+            map[t - 1] = j;
+    }
+    for (i = 0; i < o->base->nsurf; i++)
+        *structural |= map[i] != i;
+    memset(rn, 0, sizeof *rn);
+    rn->map = map;
+    rn->nold = o->base->nsurf;
+    ren = *structural ? rn : NULL;
     if (o->nline && o->line[0].tlen) {
         term = o->text + o->line[0].off + o->line[0].len;
         nterm = o->line[0].tlen;
@@ -3540,7 +3994,7 @@ static int zmx_merged(const sg_system *sys, const sg_catalog *cat, zbuf *bytes,
     for (on = 0, i = 0; i < o->nline; i++)
         if (o->line[i].sect == -1)
             ol[on++] = i;
-    if ((rc = merge_sec(&out, o, ol, on, &B[0], &C[0], 1, term, nterm)) != SG_OK)
+    if ((rc = merge_sec(&out, o, ol, on, &B[0], &C[0], 1, term, nterm, ren)) != SG_OK)
         goto done;
     /* The surfaces: each with its block of the file, a new one (or a
      * second copy of one) with sagitta's lines. */
@@ -3551,7 +4005,7 @@ static int zmx_merged(const sg_system *sys, const sg_catalog *cat, zbuf *bytes,
             snprintf(sl, sizeof sl, "SURF %d", j);
             zb_add(&out, sl, strlen(sl));
             zb_add(&out, term, nterm);
-            if ((rc = merge_sec(&out, o, ol, 0, NULL, &C[j + 1], 0, term, nterm)) != SG_OK)
+            if ((rc = merge_sec(&out, o, ol, 0, NULL, &C[j + 1], 0, term, nterm, ren)) != SG_OK)
                 goto done;
             continue;
         }
@@ -3578,14 +4032,34 @@ static int zmx_merged(const sg_system *sys, const sg_catalog *cat, zbuf *bytes,
             }
         }
         if ((rc = merge_sec(&out, o, ol + 1, on ? on - 1 : 0, &B[t], &C[j + 1], 0, term,
-                            nterm)) != SG_OK)
+                            nterm, ren)) != SG_OK)
             goto done;
     }
     /* After the surfaces: the merit function, tolerances and the rest, as
      * they are. */
+    /* A merit function the import left out (a row it could not take, or
+     * an empty editor's one BLNK row) cannot take the design's rows. */
     for (i = 0; i < o->nline; i++)
-        if (o->line[i].sect == -2)
-            zb_add(&out, o->text + o->line[i].off, o->line[i].len + o->line[i].tlen);
+        rn->merit_unread |= o->line[i].mop > o->base->merit.nop;
+    if (!sg_merit_equal(&sys->merit, &o->base->merit) && !rn->merit_unread) {
+        if ((rc = merit_after(&out, o, sys, ren, term, nterm)) != SG_OK) {
+            snprintf(why, nwhy, "out of memory");
+            goto done;
+        }
+    } else
+    for (i = 0; i < o->nline; i++)
+        if (o->line[i].sect == -2) {
+            const zoline *z = &o->line[i];
+            size_t rn_n = 0;
+            char *r = ren_line(ren, o->text + z->off, z->len, -2, (long)i + 1, &rn_n);
+            if (r) {
+                zb_add(&out, r, rn_n);
+                zb_add(&out, o->text + z->off + z->len, z->tlen);
+                free(r);
+            } else {
+                zb_add(&out, o->text + z->off, z->len + z->tlen);
+            }
+        }
     if (out.oom) {
         rc = SG_ENOMEM;
         snprintf(why, nwhy, "out of memory");
@@ -3602,27 +4076,11 @@ done:
     free(out.p);
     free(ol);
     free(taken);
+    free(map);
+    rn->map = NULL;
     canon_free(B);
     canon_free(C);
     return rc;
-}
-
-/* Whether a line after the surfaces may name a surface by number: any
- * but the blank, BLNK, the configuration count (MNUM), the empty
- * configuration operand (MOFF) and the tolerances' header (TOL TOFF). */
-static int may_name_surface(const char *p, size_t n)
-{
-    char key[48];
-    line_key(p, n, key);
-    if (!key[0] || !strcmp(key, "BLNK") || !strcmp(key, "MNUM") || !strcmp(key, "MOFF"))
-        return 0;
-    if (!strcmp(key, "TOL")) {
-        size_t i = 3;
-        while (i < n && (p[i] == ' ' || p[i] == '\t'))
-            i++;
-        return !(n - i >= 4 && strncmp(p + i, "TOFF", 4) == 0);
-    }
-    return 1;
 }
 
 /* The first line where two JSON texts differ, as "KEY: A, not B", for
@@ -3664,7 +4122,8 @@ int sg_zmx_save_flags(const sg_system *sys, const char *path, const sg_catalog *
 {
     sg_catalog *own = NULL;
     char *text = NULL, why[600] = "";
-    int rc, structural = 0, after = 0, back = 1, i;
+    int rc, structural = 0, back = 1;
+    zren rn;
     zbuf bytes = {0};
     if (!sys || !path || !path[0])
         return sg_diag_set(d, SG_EINVAL, "save: no system or no path");
@@ -3682,7 +4141,8 @@ int sg_zmx_save_flags(const sg_system *sys, const char *path, const sg_catalog *
         locale_t cloc = newlocale(LC_NUMERIC_MASK, "C", (locale_t)0), old = (locale_t)0;
         if (cloc)
             old = uselocale(cloc);
-        rc = zmx_merged(sys, cat, &bytes, &structural, why, sizeof why);
+        memset(&rn, 0, sizeof rn);
+        rc = zmx_merged(sys, cat, &bytes, &structural, &rn, why, sizeof why);
         if (cloc) {
             uselocale(old);
             freelocale(cloc);
@@ -3700,7 +4160,11 @@ int sg_zmx_save_flags(const sg_system *sys, const char *path, const sg_catalog *
                 back = 0;
             } else if (!sg_system_equal(r, sys)) {
                 char *a = sg_design_to_json(sys), *b = sg_design_to_json(r);
-                if (a && b)
+                if (rn.merit_unread && !sg_merit_equal(&r->merit, &sys->merit))
+                    snprintf(why, sizeof why, "the merit function changed, and the file's own "
+                             "was not read (the import's warning says why), so the design's "
+                             "cannot be written into its rows");
+                else if (a && b)
                     first_diff(a, b, why, sizeof why);
                 else
                     snprintf(why, sizeof why, "the file would read back as another design");
@@ -3717,14 +4181,10 @@ int sg_zmx_save_flags(const sg_system *sys, const char *path, const sg_catalog *
             free(bytes.p);
             return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", path);
         }
-        for (i = 0; i < sys->zmx->nline; i++)
-            after += sys->zmx->line[i].sect == -2 &&
-                     may_name_surface(sys->zmx->text + sys->zmx->line[i].off,
-                                      sys->zmx->line[i].len);
-        if (back && rc == SG_OK && structural && after)
-            snprintf(why, sizeof why, "surfaces were inserted, deleted or moved, and the %d "
-                     "lines after the surfaces (merit function, tolerances, configurations) "
-                     "may name surfaces by number, which sagitta does not renumber", after);
+        if (back && rc == SG_OK && structural && rn.nbad)
+            snprintf(why, sizeof why, "surfaces were inserted, deleted or moved, and %d kept "
+                     "line%s cannot be renumbered: %s%s", rn.nbad, rn.nbad == 1 ? "" : "s",
+                     rn.bad, rn.nbad > 8 ? ", ..." : "");
         if (rc != SG_OK && back)
             back = 0;
         if (why[0] && !(flags & SG_ZMX_ALLOW_LOSS)) {

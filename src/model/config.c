@@ -99,6 +99,58 @@ void sg_configs_release(sg_configs *c)
     free(c);
 }
 
+/* The table after inserting (dir 1) or deleting (dir -1) surface at, as
+ * Zemax renumbers its Multi-Configuration Editor: a surface operand (and
+ * each STPS value) naming a later surface follows it; an operand of the
+ * deleted surface goes with it.  A new table in *out (refs 1), or NULL
+ * when nothing names a surface that moves. */
+int sg_configs_renumbered(const sg_configs *c, int at, int dir, sg_configs **out)
+{
+    sg_configs *n;
+    int i, k, moves = 0;
+    *out = NULL;
+    if (!c)
+        return SG_OK;
+    for (i = 0; i < c->nop; i++) {
+        const sg_config_op *o = &c->op[i];
+        if (co_types[co_find(o->type)].scope == CO_SURF && o->num >= at)
+            moves = 1;
+        if (!strcmp(o->type, "STPS"))
+            for (k = 0; k < c->n; k++)
+                moves |= o->value[k] >= at;
+    }
+    if (!moves)
+        return SG_OK;
+    if (!(n = sg_configs_new(c->n)))
+        return SG_ENOMEM;
+    n->current = c->current;
+    for (i = 0; i < c->nop; i++) {
+        const sg_config_op *o = &c->op[i];
+        sg_config_op *p;
+        int num = o->num;
+        if (co_types[co_find(o->type)].scope == CO_SURF) {
+            if (dir < 0 && num == at)
+                continue;
+            if (num >= at + (dir < 0))
+                num += dir;
+        }
+        if (sg_configs_add(n, o->type, num, o->num2, NULL) != SG_OK) {
+            sg_configs_release(n);
+            return SG_ENOMEM;
+        }
+        p = &n->op[n->nop - 1];
+        memcpy(p->value, o->value, (size_t)c->n * sizeof *p->value);
+        if (o->mat)
+            memcpy(p->mat, o->mat, (size_t)c->n * sizeof *p->mat);
+        if (!strcmp(o->type, "STPS"))
+            for (k = 0; k < c->n; k++)
+                if (p->value[k] >= at + (dir < 0))
+                    p->value[k] += dir;
+    }
+    *out = n;
+    return SG_OK;
+}
+
 static int mat_same(const sg_material *a, const sg_material *b)
 {
     return a->kind == b->kind && strcmp(a->name, b->name) == 0 &&

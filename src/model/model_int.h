@@ -19,4 +19,8 @@ int sg_air_index_mpfr(mpfr_t out, const mpfr_t um, double temp, double pres);
 int sg_glass_index_env_mpfr(const sg_glass *g, mpfr_t out, const mpfr_t um, double temp,
                             double pres);
 
+/* Configurations renumbered for an inserted (dir 1) or deleted (dir -1)
+ * surface at (config.c); *out NULL when nothing moves. */
+int sg_configs_renumbered(const sg_configs *c, int at, int dir, sg_configs **out);
+
 #endif

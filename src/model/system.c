@@ -149,12 +149,26 @@ static void renumber_pickups(sg_system *sys, int at, int dir)
         }
 }
 
+/* The configurations and the merit function follow the surfaces they
+ * name, as Zemax's editors do (sagitta-design(5), ZEMAX FILES). */
+static void renumber_rest(sg_system *sys, int at, int dir, sg_configs *cf)
+{
+    if (cf) {
+        sg_configs_release(sys->configs);
+        sys->configs = cf;
+    }
+    sg_merit_renumber(&sys->merit, at, dir);
+}
+
 int sg_system_insert(sg_system *sys, int at)
 {
+    sg_configs *cf = NULL;
     int rc;
     if (at < 1 || at > sys->nsurf - 1)
         return SG_EINVAL;
     rc = grow(sys, sys->nsurf + 1);
+    if (rc == SG_OK)
+        rc = sg_configs_renumbered(sys->configs, at, 1, &cf);
     if (rc != SG_OK)
         return rc;
     memmove(&sys->surf[at + 1], &sys->surf[at],
@@ -163,6 +177,7 @@ int sg_system_insert(sg_system *sys, int at)
     sys->nsurf++;
     /* A pickup follows its source surface. */
     renumber_pickups(sys, at, 1);
+    renumber_rest(sys, at, 1, cf);
     /* The stop is a property of a physical surface, so it follows it. */
     if (sys->stop >= at)
         sys->stop++;
@@ -171,12 +186,16 @@ int sg_system_insert(sg_system *sys, int at)
 
 int sg_system_delete(sg_system *sys, int at)
 {
+    sg_configs *cf = NULL;
     if (at < 1 || at > sys->nsurf - 2 || sys->nsurf <= 3)
         return SG_EINVAL;
+    if (sg_configs_renumbered(sys->configs, at, -1, &cf) != SG_OK)
+        return SG_ENOMEM;
     memmove(&sys->surf[at], &sys->surf[at + 1],
             (size_t)(sys->nsurf - at - 1) * sizeof *sys->surf);
     sys->nsurf--;
     renumber_pickups(sys, at, -1);
+    renumber_rest(sys, at, -1, cf);
     /* Deleting the stop leaves the stop on the surface that took its row. */
     if (sys->stop > at)
         sys->stop--;
