@@ -615,6 +615,7 @@ typedef struct sg_tolerances {
     int trials;             /* Monte Carlo trials (0: none given) */
     double seed;            /* an integer from 0 to 2^53 */
     int distribution;       /* sg_tol_dist */
+    double test_wave;       /* TFRN's and TIRR's test wavelength, um (0: Zemax's 0.6328) */
 } sg_tolerances;
 
 typedef struct sg_system {

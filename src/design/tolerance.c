@@ -22,7 +22,7 @@ static const char *const tol_names[SG_TOL_NTYPES] = {
     "TRAD", "TCUR", "TFRN", "TTHI", "TCON", "TPAR", "TSDX", "TSDY", "TSTX", "TSTY",
     "TEDX", "TEDY", "TETX", "TETY", "TETZ", "TIND", "TABB", "TIRR"};
 
-/* Zemax's test wavelength for fringes, in micrometres. */
+/* Zemax's default test wavelength for fringes, in micrometres (TWAV). */
 #define TOL_FRINGE_UM 0.6328
 
 const char *sg_tol_name(sg_tol_type t)
@@ -54,6 +54,13 @@ static double um_to_units(const sg_system *sys)
     if (strcmp(sys->units, "m") == 0)
         return 1e-6;
     return 1e-3;
+}
+
+/* The test wavelength of fringes in lens units. */
+static double fringe_wave(const sg_system *sys)
+{
+    double w = sys->tol.test_wave > 0.0 ? sys->tol.test_wave : TOL_FRINGE_UM;
+    return w * um_to_units(sys);
 }
 
 void sg_tol_opts_init(sg_tol_opts *o)
@@ -107,6 +114,9 @@ int sg_tol_check(const sg_system *sys, sg_diag *d)
     const sg_tolerances *t = &sys->tol;
     int k, j, bad;
     int last_img = sys->nsurf - 1;
+    if (!(t->test_wave == 0.0 || (t->test_wave >= 0.1 && t->test_wave <= 100.0)))
+        return sg_diag_set(d, SG_ERANGE, "tolerances: test_wavelength: %.17g um is not 0.1 to "
+                           "100 um", t->test_wave);
     for (k = 0; k < t->nop; k++) {
         const sg_tol_operand *op = &t->op[k];
         const sg_surface *s;
@@ -298,7 +308,7 @@ int sg_tol_apply(const sg_system *nom, const sg_catalog *cat, const double *delt
             /* N fringes of power over the semi-diameter r: a sag change of
              * N half waves at r, dc = N lambda / r^2. */
             double r = s->semi_diameter;
-            double c = sg_surface_curvature(s) + v * TOL_FRINGE_UM * um_to_units(nom) / (r * r);
+            double c = sg_surface_curvature(s) + v * fringe_wave(nom) / (r * r);
             s->radius = c == 0.0 ? INFINITY : 1.0 / c;
             break;
         }
@@ -339,7 +349,7 @@ int sg_tol_apply(const sg_system *nom, const sg_catalog *cat, const double *delt
              * astigmatism, Zs rho^4 + Za rho_y^2 with Zs = Za = v lambda /
              * 4 (Zemax's Irregular surface); made an XY polynomial over
              * x / r and y / r. */
-            double z = v * TOL_FRINGE_UM * um_to_units(nom) / 4.0;
+            double z = v * fringe_wave(nom) / 4.0;
             if (s->type == SG_SURF_STANDARD) {
                 s->type = SG_SURF_XYPOLY;
                 s->norm_radius = s->semi_diameter;
@@ -447,6 +457,19 @@ int sg_tol_apply(const sg_system *nom, const sg_catalog *cat, const double *delt
                 if (map[i] >= at)
                     map[i]++;
             }
+    }
+    /* Rays start in surface 1's frame, which nothing may move: a surface
+     * decenter or tilt there (TSDX ... TSTY) gets a plane of the object's
+     * medium in front, at its vertex, as an element there does. */
+    if (out->nsurf > 2 && !sg_frame_change_is_zero(&out->surf[1].before)) {
+        if ((rc = sg_system_insert(out, 1)) != SG_OK)
+            return sg_diag_set(d, rc, "out of memory");
+        out->surf[1].mat = out->surf[0].mat;
+        out->surf[1].thickness = 0.0;
+        if (map)
+            for (i = 0; i < nom->nsurf; i++)
+                if (map[i] >= 1)
+                    map[i]++;
     }
     return SG_OK;
 }

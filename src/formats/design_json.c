@@ -1245,8 +1245,9 @@ static int get_limits(jctx *c, const cJSON *kmin, const cJSON *kmax, const char 
  * surfaces. */
 static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
 {
-    enum { K_OPS, K_COMPS, K_CRIT, K_MC, K_N };
-    static const char *const keys[K_N] = {"operands", "compensators", "criterion", "monte_carlo"};
+    enum { K_OPS, K_COMPS, K_CRIT, K_MC, K_TWAV, K_N };
+    static const char *const keys[K_N] = {"operands", "compensators", "criterion", "monte_carlo",
+                                          "test_wavelength"};
     static const char *const crits[] = {"rms_spot", "merit", "rms_wavefront"};
     static const char *const refs[] = {"chief", "centroid"};
     static const char *const dists[] = {"normal", "uniform", "parabolic"};
@@ -1262,6 +1263,14 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
     if ((rc = expect_object(c, v, "tolerances")) != SG_OK)
         return rc;
     pick_keys(c, v, "tolerances", keys, K_N, k);
+    /* Zemax's TWAV: the wavelength fringes are counted at. */
+    if (k[K_TWAV]) {
+        if ((rc = get_finite(c, k[K_TWAV], "tolerances: test_wavelength", &t->test_wave)))
+            return rc;
+        if (!(t->test_wave >= 0.1 && t->test_wave <= 100.0))
+            return perr(c, SG_ERANGE, "tolerances: test_wavelength", "%.17g um is not 0.1 to "
+                        "100 um", t->test_wave);
+    }
     if (k[K_OPS]) {
         if (!cJSON_IsArray(k[K_OPS]))
             return perr(c, SG_EPARSE, "tolerances: operands", "expected an array of operand "

@@ -472,7 +472,13 @@ static void sb_tolerances(sbuf *b, const sg_tolerances *t)
     static const char *const dists[] = {"normal", "uniform", "parabolic"};
     char x[200];
     int i;
-    sb_puts(b, ",\n  \"tolerances\": {\n    \"operands\": [");
+    sb_puts(b, ",\n  \"tolerances\": {\n");
+    if (t->test_wave > 0.0) {
+        sb_puts(b, "    \"test_wavelength\": ");
+        sb_num(b, t->test_wave);
+        sb_puts(b, ",\n");
+    }
+    sb_puts(b, "    \"operands\": [");
     for (i = 0; i < t->nop; i++) {
         const sg_tol_operand *o = &t->op[i];
         sb_puts(b, i ? ",\n      {\"type\": \"" : "\n      {\"type\": \"");
