@@ -307,6 +307,111 @@ static void tirr_by_hand(void **state)
     sg_system_free(nom);
 }
 
+/* Nodes and weights of Gauss-Legendre on [0, 1], by Newton on P_n. */
+static void gauss_legendre01(int n, double *x, double *w)
+{
+    int i, k;
+    for (i = 0; i < n; i++) {
+        double z = cos(M_PI * (i + 0.75) / (n + 0.5)), p0, p1, dp;
+        for (k = 0; k < 100; k++) {
+            int j;
+            double dz;
+            p0 = 1.0;
+            p1 = z;
+            for (j = 2; j <= n; j++) {
+                double p2 = ((2 * j - 1) * z * p1 - (j - 1) * p0) / j;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n * (z * p1 - p0) / (z * z - 1.0);
+            dz = p1 / dp;
+            z -= dz;
+            if (fabs(dz) < 1e-16)
+                break;
+        }
+        p0 = 1.0;
+        p1 = z;
+        for (k = 2; k <= n; k++) {
+            double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
+            p0 = p1;
+            p1 = p2;
+        }
+        dp = n * (z * p1 - p0) / (z * z - 1.0);
+        x[i] = 0.5 * (1.0 - z);
+        w[i] = 1.0 / ((1.0 - z * z) * dp * dp);
+    }
+}
+
+/* TEZI (Zemax's manual: Int1 the surface, Int2 the last and Int3 the
+ * first Standard Zernike term, max the RMS of the surface error): the
+ * surface as a Zernike Standard Sag over its semi-diameter with every
+ * term the same coefficient, against the same surface typed by hand, and
+ * the sag's change integrated over the disc (Gauss-Legendre in r, exact
+ * for the polynomial, uniform in theta) has the RMS max, the closed form
+ * of Noll's unit-RMS orthogonal terms. */
+static void tezi_by_hand(void **state)
+{
+    const char *tol = "{\"operands\": [{\"type\": \"TEZI\", \"surface\": 3, \"max_term\": 11,"
+                      " \"min_term\": 4, \"min\": -1e-4, \"max\": 1e-4}]}";
+    sg_system *nom = singlet(tol, 1, NULL, 0), *out = sg_system_new(), *hand;
+    const double rms = 1e-4, r0 = 6.0;
+    double xr[16], wr[16], sum = 0.0, area = 0.0, got;
+    sg_surface *s;
+    sg_diag d;
+    int j, i, t;
+    (void)state;
+    assert_int_equal(nom->tol.op[0].zmin, 4);
+    assert_int_equal(nom->tol.op[0].zmax, 11);
+    nom->surf[3].semi_diameter = r0;
+    apply_one(nom, NULL, 0, -rms, out, NULL);
+    hand = sg_system_clone(nom);
+    s = &hand->surf[3];
+    s->type = SG_SURF_ZERNIKE_STANDARD;
+    s->norm_radius = r0;
+    for (j = 4; j <= 11; j++)
+        s->terms[j - 1] = -rms / sqrt(8.0);
+    if (!sg_system_equal(out, hand))
+        fail_msg("TEZI: the perturbed design is not the one made by hand");
+    same_traces(out, hand, NULL);
+    gauss_legendre01(16, xr, wr);
+    for (i = 0; i < 16; i++)
+        for (t = 0; t < 64; t++) {
+            double r = r0 * xr[i], th = 2 * M_PI * t / 64.0, x = r * cos(th), y = r * sin(th);
+            double dz = sg_surface_sag(&out->surf[3], x, y) - sg_surface_sag(&nom->surf[3], x, y);
+            sum += wr[i] * xr[i] * dz * dz;
+            area += wr[i] * xr[i];
+        }
+    got = sqrt(sum / area);
+    if (!(fabs(got - rms) < 1e-9 * rms))
+        fail_msg("TEZI: the sag's RMS over the disc is %.17g, not %.17g", got, rms);
+    sg_system_free(hand);
+    sg_system_free(out);
+    sg_system_free(nom);
+    /* min_term defaults to 2, Zemax's lowest; bad rows are refused. */
+    nom = singlet("{\"operands\": [{\"type\": \"TEZI\", \"surface\": 3, \"max_term\": 6, "
+                  "\"min\": -1e-4, \"max\": 1e-4}]}", 1, NULL, 0);
+    assert_int_equal(nom->tol.op[0].zmin, 2);
+    nom->tol.op[0].zmax = 67;
+    sg_diag_clear(&d);
+    assert_int_not_equal(sg_tol_check(nom, &d), SG_OK);
+    assert_non_null(strstr(d.msg, "terms 2 to 67"));
+    nom->tol.op[0].zmax = 6;
+    nom->tol.op[0].min = -2e-4;
+    sg_diag_clear(&d);
+    assert_int_not_equal(sg_tol_check(nom, &d), SG_OK);
+    assert_non_null(strstr(d.msg, "min must be -max"));
+    nom->tol.op[0].min = -1e-4;
+    nom->surf[3].type = SG_SURF_ODDASPH;
+    sg_diag_clear(&d);
+    assert_int_not_equal(sg_tol_check(nom, &d), SG_OK);
+    assert_non_null(strstr(d.msg, "not a standard or even asphere"));
+    sg_system_free(nom);
+    must_say("{\"operands\": [{\"type\": \"TEZI\", \"surface\": 3, \"min\": -1, \"max\": 1}]}",
+             "TEZI needs a \"max_term\"");
+    must_say("{\"operands\": [{\"type\": \"TRAD\", \"surface\": 3, \"max_term\": 5, \"min\": -1,"
+             " \"max\": 1}]}", "only TEZI takes");
+}
+
 /* TIND and TABB on a catalog glass: the traces of a fixed index equal to
  * the catalog's formula changed by hand, n + dn, and n(d) + (n - n(d)) vd
  * / (vd + dv), at the F line. */
@@ -985,6 +1090,7 @@ int main(void)
         cmocka_unit_test(json_roundtrip),
         cmocka_unit_test(operands_by_hand),
         cmocka_unit_test(tirr_by_hand),
+        cmocka_unit_test(tezi_by_hand),
         cmocka_unit_test(glass_changes),
         cmocka_unit_test(element_by_hand),
         cmocka_unit_test(compensated_focus),

@@ -20,7 +20,7 @@
 
 static const char *const tol_names[SG_TOL_NTYPES] = {
     "TRAD", "TCUR", "TFRN", "TTHI", "TCON", "TPAR", "TSDX", "TSDY", "TSTX", "TSTY",
-    "TEDX", "TEDY", "TETX", "TETY", "TETZ", "TIND", "TABB", "TIRR"};
+    "TEDX", "TEDY", "TETX", "TETY", "TETZ", "TIND", "TABB", "TIRR", "TEZI"};
 
 /* Zemax's default test wavelength for fringes, in micrometres (TWAV). */
 #define TOL_FRINGE_UM 0.6328
@@ -191,6 +191,20 @@ int sg_tol_check(const sg_system *sys, sg_diag *d)
             if (s->type != SG_SURF_STANDARD)
                 return op_err(d, k, op, "surface %d is not a standard surface", op->surface);
             break;
+        case SG_TOL_TEZI:
+            /* Zemax's TEZI: a Standard or Even Asphere surface becomes a
+             * Zernike Standard Sag; terms 2 (no piston) up to sagitta's. */
+            if (s->type != SG_SURF_STANDARD && s->type != SG_SURF_EVENASPH)
+                return op_err(d, k, op, "surface %d is not a standard or even asphere "
+                              "surface", op->surface);
+            if (!(op->zmin >= 2 && op->zmin <= op->zmax && op->zmax <= SG_NTERMS))
+                return op_err(d, k, op, "terms %d to %d: the first must be 2 or more, the last "
+                              "not below it nor above %d (Zernike Standard terms to radial "
+                              "order 10)", op->zmin, op->zmax, SG_NTERMS);
+            if (op->min != -op->max)
+                return op_err(d, k, op, "min must be -max: the RMS is max, and min gives the "
+                              "terms their other sign, as Zemax sets it");
+            break;
         case SG_TOL_TIND:
         case SG_TOL_TABB:
             if (s->mat.kind == SG_MAT_MODEL || s->mat.kind == SG_MAT_GLASS)
@@ -256,7 +270,8 @@ int sg_tol_nominal(const sg_system *sys, const sg_catalog *cat, sg_system *out, 
     /* Fringes are counted over the clear aperture: an automatic one is
      * found once, on the nominal. */
     for (k = 0; k < sys->tol.nop; k++)
-        if ((sys->tol.op[k].type == SG_TOL_TFRN || sys->tol.op[k].type == SG_TOL_TIRR) &&
+        if ((sys->tol.op[k].type == SG_TOL_TFRN || sys->tol.op[k].type == SG_TOL_TIRR ||
+             sys->tol.op[k].type == SG_TOL_TEZI) &&
             !(out->surf[sys->tol.op[k].surface].semi_diameter > 0.0))
             need_sd = 1;
     if (need_sd) {
@@ -359,6 +374,23 @@ int sg_tol_apply(const sg_system *nom, const sg_catalog *cat, const double *delt
             s->terms[9] += z;       /* x^4 */
             s->terms[11] += 2 * z;  /* x^2 y^2 */
             s->terms[13] += z;      /* y^4 */
+            break;
+        }
+        case SG_TOL_TEZI: {
+            /* Zemax's TEZI: the surface as a Zernike Standard Sag over its
+             * semi-diameter, every term zmin..zmax the same coefficient,
+             * v / sqrt(N), so the sag's RMS over the disc is |v| (Noll's
+             * terms have unit RMS and are orthogonal). */
+            int j, nt = op->zmax - op->zmin + 1;
+            double a = v / sqrt((double)nt);
+            if (s->type == SG_SURF_STANDARD || s->type == SG_SURF_EVENASPH) {
+                s->type = SG_SURF_ZERNIKE_STANDARD;
+                s->norm_radius = s->semi_diameter;
+                memset(s->terms, 0, sizeof s->terms);
+                s->zern_dx = s->zern_dy = 0.0;
+            }
+            for (j = op->zmin; j <= op->zmax; j++)
+                s->terms[j - 1] += a;
             break;
         }
         case SG_TOL_TABB:

@@ -1280,10 +1280,11 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
             return perr(c, SG_ERANGE, "tolerances: operands", "%d given; the limit is %d", n,
                         SG_MAX_TOL_OPERANDS);
         cJSON_ArrayForEach(it, k[K_OPS]) {
-            enum { O_TYPE, O_SURF, O_FIRST, O_LAST, O_ADJ, O_PAR, O_ELEM, O_MIN, O_MAX, O_N };
+            enum { O_TYPE, O_SURF, O_FIRST, O_LAST, O_ADJ, O_PAR, O_ELEM, O_MIN, O_MAX,
+                   O_ZMAX, O_ZMIN, O_N };
             static const char *const okeys[O_N] = {"type", "surface", "first", "last",
                                                    "adjust", "parameter", "element", "min",
-                                                   "max"};
+                                                   "max", "max_term", "min_term"};
             const cJSON *ok[O_N];
             sg_tol_operand *o = &t->op[t->nop];
             int ty, elem;
@@ -1322,6 +1323,17 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
                 return perr(c, SG_EPARSE, at, "only TPAR takes \"parameter\" and \"element\"");
             if (ty == SG_TOL_TPAR && !ok[O_PAR])
                 return perr(c, SG_EPARSE, at, "TPAR needs a \"parameter\" (a surface key)");
+            if (ty != SG_TOL_TEZI && (ok[O_ZMAX] || ok[O_ZMIN]))
+                return perr(c, SG_EPARSE, at, "only TEZI takes \"max_term\" and \"min_term\"");
+            if (ty == SG_TOL_TEZI && !ok[O_ZMAX])
+                return perr(c, SG_EPARSE, at, "TEZI needs a \"max_term\" (Zemax's Int2, the "
+                            "last Standard Zernike term)");
+            o->zmin = ty == SG_TOL_TEZI ? 2 : 0;
+            if ((ok[O_ZMAX] && (rc = get_int(c, ok[O_ZMAX], join(at2, sizeof at2, at,
+                                                                 "max_term"), &o->zmax))) ||
+                (ok[O_ZMIN] && (rc = get_int(c, ok[O_ZMIN], join(at2, sizeof at2, at,
+                                                                 "min_term"), &o->zmin))))
+                return rc;
             if (!ok[O_MIN] || !ok[O_MAX])
                 return perr(c, SG_EPARSE, at, "the operand needs \"min\" and \"max\"");
             if ((ok[O_SURF] && (rc = get_int(c, ok[O_SURF], join(at2, sizeof at2, at, "surface"),

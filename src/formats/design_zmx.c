@@ -1913,10 +1913,13 @@ static int tol_line(zctx *c, const zline *l)
             o->max = v[3];
             c->comp_line[t->ncomp++] = c->line;
         }
-    } else if (ty < 0 || ty == SG_TOL_TPAR) {
+    } else if (ty < 0 || ty == SG_TOL_TPAR || ty == SG_TOL_TEZI) {
         zwarn(c, "TOL %s: %s; it is left out of the design's tolerances", type,
-              ty < 0 ? "not a tolerance operand sagitta knows"
-                     : "Zemax's TPAR numbers the parameter columns, which sagitta does not map");
+              ty < 0                ? "not a tolerance operand sagitta knows"
+              : ty == SG_TOL_TPAR ? "Zemax's TPAR numbers the parameter columns, which sagitta "
+                                    "does not map"
+                                  : "no file at hand shows where the TOL line keeps TEZI's "
+                                    "Int3 (its first term)");
     } else if (t->nop >= SG_MAX_TOL_OPERANDS) {
         zwarn(c, "TOL %s: more than %d tolerance operands; the row is left out", type,
               SG_MAX_TOL_OPERANDS);

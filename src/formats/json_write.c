@@ -492,6 +492,10 @@ static void sb_tolerances(sbuf *b, const sg_tolerances *t)
             snprintf(x, sizeof x, ", \"adjust\": %d", o->adjust);
             sb_puts(b, x);
         }
+        if (o->type == SG_TOL_TEZI) {
+            snprintf(x, sizeof x, ", \"max_term\": %d, \"min_term\": %d", o->zmax, o->zmin);
+            sb_puts(b, x);
+        }
         if (o->type == SG_TOL_TPAR) {
             sb_puts(b, ", \"parameter\": ");
             sb_str(b, o->param);

@@ -498,6 +498,7 @@ static int same_tol(const sg_tolerances *a, const sg_tolerances *b)
         const sg_tol_operand *x = &a->op[k], *y = &b->op[k];
         if (x->type != y->type || x->surface != y->surface || x->last != y->last ||
             x->adjust != y->adjust || strcmp(x->param, y->param) != 0 || x->elem != y->elem ||
+            x->zmin != y->zmin || x->zmax != y->zmax ||
             !same_bits(x->min, y->min) || !same_bits(x->max, y->max))
             return 0;
     }
