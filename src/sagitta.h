@@ -579,7 +579,7 @@ typedef enum sg_tol_type {
     SG_TOL_TRAD = 0, SG_TOL_TCUR, SG_TOL_TFRN, SG_TOL_TTHI, SG_TOL_TCON, SG_TOL_TPAR,
     SG_TOL_TSDX, SG_TOL_TSDY, SG_TOL_TSTX, SG_TOL_TSTY,
     SG_TOL_TEDX, SG_TOL_TEDY, SG_TOL_TETX, SG_TOL_TETY, SG_TOL_TETZ,
-    SG_TOL_TIND, SG_TOL_TABB, SG_TOL_TIRR,
+    SG_TOL_TIND, SG_TOL_TABB, SG_TOL_TIRR, SG_TOL_TEZI,
     SG_TOL_NTYPES
 } sg_tol_type;
 typedef struct sg_tol_operand {
@@ -589,6 +589,7 @@ typedef struct sg_tol_operand {
     int adjust;             /* TTHI: the surface whose thickness takes the opposite change, or -1 */
     char param[32];         /* TPAR: the parameter table's key */
     int elem;               /* TPAR: its element */
+    int zmin, zmax;         /* TEZI: the Standard Zernike terms (Noll's j) it spans */
     double min, max;
 } sg_tol_operand;
 typedef struct sg_tol_comp {
@@ -615,6 +616,7 @@ typedef struct sg_tolerances {
     int trials;             /* Monte Carlo trials (0: none given) */
     double seed;            /* an integer from 0 to 2^53 */
     int distribution;       /* sg_tol_dist */
+    double test_wave;       /* TFRN's and TIRR's test wavelength, um (0: Zemax's 0.6328) */
 } sg_tolerances;
 
 typedef struct sg_system {

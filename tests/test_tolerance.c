@@ -18,6 +18,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "testutil.h"
 
@@ -138,6 +139,20 @@ static void json_roundtrip(void **state)
              "\"thickness\", \"min\": 0}]}", "tolerances: compensator 1: a compensator needs");
     must_say("{\"monte_carlo\": {\"seed\": -1}}", "tolerances: monte_carlo: seed");
     must_say("{\"criterion\": {\"type\": \"mtf\"}}", "tolerances: criterion: type");
+    must_say("{\"test_wavelength\": 0.01}", "tolerances: test_wavelength");
+    {
+        sg_system *ta = singlet("{\"test_wavelength\": 0.55}", 1, NULL, 0), *tb;
+        char *j = sg_design_to_json(ta);
+        assert_true(ta->tol.test_wave == 0.55);
+        assert_non_null(strstr(j, "\"test_wavelength\": 0.55"));
+        tb = parse(j, 1, NULL, 0);
+        assert_true(sg_system_equal(ta, tb));
+        tb->tol.test_wave = 0.6328;
+        assert_false(sg_system_equal(ta, tb));
+        free(j);
+        sg_system_free(ta);
+        sg_system_free(tb);
+    }
 }
 
 /* Every image row of the two systems' traces, bit for bit, over a few
@@ -239,6 +254,10 @@ static void operands_by_hand(void **state)
     hand->surf[3].semi_diameter = 6.0;
     assert_true(sg_system_equal(nom, hand));
     sg_system_free(hand);
+    /* Zemax's TWAV: fringes counted at another test wavelength. */
+    nom->tol.test_wave = 0.55;
+    apply_one(nom, NULL, 10, 2.0, out, NULL);
+    assert_true(out->surf[3].radius == 1.0 / (1.0 / 80.0 + 2 * (0.55 * 1e-3) / 36.0));
     sg_system_free(out);
     sg_system_free(nom);
 }
@@ -286,6 +305,111 @@ static void tirr_by_hand(void **state)
     assert_int_not_equal(sg_tol_check(nom, &d), SG_OK);
     assert_non_null(strstr(d.msg, "surface 3 is not a standard surface"));
     sg_system_free(nom);
+}
+
+/* Nodes and weights of Gauss-Legendre on [0, 1], by Newton on P_n. */
+static void gauss_legendre01(int n, double *x, double *w)
+{
+    int i, k;
+    for (i = 0; i < n; i++) {
+        double z = cos(M_PI * (i + 0.75) / (n + 0.5)), p0, p1, dp;
+        for (k = 0; k < 100; k++) {
+            int j;
+            double dz;
+            p0 = 1.0;
+            p1 = z;
+            for (j = 2; j <= n; j++) {
+                double p2 = ((2 * j - 1) * z * p1 - (j - 1) * p0) / j;
+                p0 = p1;
+                p1 = p2;
+            }
+            dp = n * (z * p1 - p0) / (z * z - 1.0);
+            dz = p1 / dp;
+            z -= dz;
+            if (fabs(dz) < 1e-16)
+                break;
+        }
+        p0 = 1.0;
+        p1 = z;
+        for (k = 2; k <= n; k++) {
+            double p2 = ((2 * k - 1) * z * p1 - (k - 1) * p0) / k;
+            p0 = p1;
+            p1 = p2;
+        }
+        dp = n * (z * p1 - p0) / (z * z - 1.0);
+        x[i] = 0.5 * (1.0 - z);
+        w[i] = 1.0 / ((1.0 - z * z) * dp * dp);
+    }
+}
+
+/* TEZI (Zemax's manual: Int1 the surface, Int2 the last and Int3 the
+ * first Standard Zernike term, max the RMS of the surface error): the
+ * surface as a Zernike Standard Sag over its semi-diameter with every
+ * term the same coefficient, against the same surface typed by hand, and
+ * the sag's change integrated over the disc (Gauss-Legendre in r, exact
+ * for the polynomial, uniform in theta) has the RMS max, the closed form
+ * of Noll's unit-RMS orthogonal terms. */
+static void tezi_by_hand(void **state)
+{
+    const char *tol = "{\"operands\": [{\"type\": \"TEZI\", \"surface\": 3, \"max_term\": 11,"
+                      " \"min_term\": 4, \"min\": -1e-4, \"max\": 1e-4}]}";
+    sg_system *nom = singlet(tol, 1, NULL, 0), *out = sg_system_new(), *hand;
+    const double rms = 1e-4, r0 = 6.0;
+    double xr[16], wr[16], sum = 0.0, area = 0.0, got;
+    sg_surface *s;
+    sg_diag d;
+    int j, i, t;
+    (void)state;
+    assert_int_equal(nom->tol.op[0].zmin, 4);
+    assert_int_equal(nom->tol.op[0].zmax, 11);
+    nom->surf[3].semi_diameter = r0;
+    apply_one(nom, NULL, 0, -rms, out, NULL);
+    hand = sg_system_clone(nom);
+    s = &hand->surf[3];
+    s->type = SG_SURF_ZERNIKE_STANDARD;
+    s->norm_radius = r0;
+    for (j = 4; j <= 11; j++)
+        s->terms[j - 1] = -rms / sqrt(8.0);
+    if (!sg_system_equal(out, hand))
+        fail_msg("TEZI: the perturbed design is not the one made by hand");
+    same_traces(out, hand, NULL);
+    gauss_legendre01(16, xr, wr);
+    for (i = 0; i < 16; i++)
+        for (t = 0; t < 64; t++) {
+            double r = r0 * xr[i], th = 2 * M_PI * t / 64.0, x = r * cos(th), y = r * sin(th);
+            double dz = sg_surface_sag(&out->surf[3], x, y) - sg_surface_sag(&nom->surf[3], x, y);
+            sum += wr[i] * xr[i] * dz * dz;
+            area += wr[i] * xr[i];
+        }
+    got = sqrt(sum / area);
+    if (!(fabs(got - rms) < 1e-9 * rms))
+        fail_msg("TEZI: the sag's RMS over the disc is %.17g, not %.17g", got, rms);
+    sg_system_free(hand);
+    sg_system_free(out);
+    sg_system_free(nom);
+    /* min_term defaults to 2, Zemax's lowest; bad rows are refused. */
+    nom = singlet("{\"operands\": [{\"type\": \"TEZI\", \"surface\": 3, \"max_term\": 6, "
+                  "\"min\": -1e-4, \"max\": 1e-4}]}", 1, NULL, 0);
+    assert_int_equal(nom->tol.op[0].zmin, 2);
+    nom->tol.op[0].zmax = 67;
+    sg_diag_clear(&d);
+    assert_int_not_equal(sg_tol_check(nom, &d), SG_OK);
+    assert_non_null(strstr(d.msg, "terms 2 to 67"));
+    nom->tol.op[0].zmax = 6;
+    nom->tol.op[0].min = -2e-4;
+    sg_diag_clear(&d);
+    assert_int_not_equal(sg_tol_check(nom, &d), SG_OK);
+    assert_non_null(strstr(d.msg, "min must be -max"));
+    nom->tol.op[0].min = -1e-4;
+    nom->surf[3].type = SG_SURF_ODDASPH;
+    sg_diag_clear(&d);
+    assert_int_not_equal(sg_tol_check(nom, &d), SG_OK);
+    assert_non_null(strstr(d.msg, "not a standard or even asphere"));
+    sg_system_free(nom);
+    must_say("{\"operands\": [{\"type\": \"TEZI\", \"surface\": 3, \"min\": -1, \"max\": 1}]}",
+             "TEZI needs a \"max_term\"");
+    must_say("{\"operands\": [{\"type\": \"TRAD\", \"surface\": 3, \"max_term\": 5, \"min\": -1,"
+             " \"max\": 1}]}", "only TEZI takes");
 }
 
 /* TIND and TABB on a catalog glass: the traces of a fixed index equal to
@@ -784,12 +908,189 @@ static void cassegrain_mpfr(void **state)
     sg_catalog_free(cat);
 }
 
+/* Zemax's own tolerance rows: sc_tol_cooke.zmx (tests/data/zmx/README.md),
+ * its TOL lines 165-221 as they read by hand: the compensator on surface
+ * 6's thickness (code 0, the back focus of its comment) from -2 to 2, the
+ * test wavelength 0.6328, then 41 operands.  TTHI's Int2 equals Int1, so
+ * no surface adjusts; the element operands are Int1..Int2. */
+static void zmx_tol_rows(void **state)
+{
+    static const struct {
+        const char *type;
+        int first, last;
+        double lim;
+    } want[] = {
+        {"TRAD", 1, 1, 0.2}, {"TRAD", 2, 2, 0.2}, {"TRAD", 3, 3, 0.2}, {"TRAD", 4, 4, 0.2},
+        {"TRAD", 5, 5, 0.2}, {"TRAD", 6, 6, 0.2}, {"TTHI", 1, 1, 0.2}, {"TTHI", 2, 2, 0.2},
+        {"TTHI", 3, 3, 0.2}, {"TTHI", 4, 4, 0.2}, {"TTHI", 5, 5, 0.2}, {"TEDX", 1, 2, 0.2},
+        {"TEDY", 1, 2, 0.2}, {"TETX", 1, 2, 0.2}, {"TETY", 1, 2, 0.2}, {"TEDX", 3, 4, 0.2},
+        {"TEDY", 3, 4, 0.2}, {"TETX", 3, 4, 0.2}, {"TETY", 3, 4, 0.2}, {"TEDX", 5, 6, 0.2},
+        {"TEDY", 5, 6, 0.2}, {"TETX", 5, 6, 0.2}, {"TETY", 5, 6, 0.2}, {"TSDX", 1, 1, 0.2},
+        {"TSDY", 1, 1, 0.2}, {"TSDX", 3, 3, 0.2}, {"TSDY", 3, 3, 0.2}, {"TSDX", 5, 5, 0.2},
+        {"TSDY", 5, 5, 0.2}, {"TIRR", 1, 1, 0.2}, {"TIRR", 2, 2, 0.2}, {"TIRR", 3, 3, 0.2},
+        {"TIRR", 4, 4, 0.2}, {"TIRR", 5, 5, 0.2}, {"TIRR", 6, 6, 0.2}, {"TIND", 1, 1, 0.0002},
+        {"TIND", 3, 3, 0.0002}, {"TIND", 5, 5, 0.0002}, {"TABB", 1, 1, 0.01},
+        {"TABB", 3, 3, 0.01}, {"TABB", 5, 5, 0.01}};
+    /* Rows with a sensitivity run below: one of each kind. */
+    static const int pick[] = {3, 6, 12, 13, 23, 25, 31, 35, 38};
+    const int npick = (int)(sizeof pick / sizeof *pick);
+    char path[1024];
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = sg_system_new(), *sub;
+    sg_tol_opts o;
+    sg_tol_result r;
+    sg_diag d;
+    int k;
+    (void)state;
+    sg_diag_clear(&d);
+    if (sg_zmx_load(sys, tu_path("tests/data/zmx/sc_tol_cooke.zmx", path, sizeof path), cat,
+                    &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_true(sys->tol.present);
+    assert_int_equal(sys->tol.nop, (int)(sizeof want / sizeof *want));
+    for (k = 0; k < sys->tol.nop; k++) {
+        const sg_tol_operand *op = &sys->tol.op[k];
+        int elem = strcmp(want[k].type, "TE") > 0 && strncmp(want[k].type, "TE", 2) == 0;
+        if (strcmp(sg_tol_name(op->type), want[k].type) != 0 || op->surface != want[k].first ||
+            (elem && op->last != want[k].last) || op->adjust != -1 ||
+            op->min != -want[k].lim || op->max != want[k].lim)
+            fail_msg("row %d: %s %d..%d adjust %d, %.17g to %.17g; the file has %s %d %d", k + 1,
+                     sg_tol_name(op->type), op->surface, op->last, op->adjust, op->min, op->max,
+                     want[k].type, want[k].first, want[k].last);
+    }
+    assert_int_equal(sys->tol.ncomp, 1);
+    assert_int_equal(sys->tol.comp[0].surface, 6);
+    assert_string_equal(sys->tol.comp[0].param, "thickness");
+    assert_true(sys->tol.comp[0].min == -2.0 && sys->tol.comp[0].max == 2.0);
+    assert_true(sys->tol.test_wave == 0.6328);
+    /* A sensitivity run on one row of each kind, compensated by the back
+     * focus: every system is evaluated (TSDX on surface 1, where rays
+     * start, too), and a decenter's min and max give the same criterion
+     * within rounding, since the lens and its fields (0, +-8.63, +-12.2
+     * in y, weighted alike) are symmetric under x -> -x and y -> -y. */
+    sub = sg_system_clone(sys);
+    sub->tol.nop = npick;
+    for (k = 0; k < npick; k++)
+        sub->tol.op[k] = sys->tol.op[pick[k]];
+    sg_tol_opts_init(&o);
+    sg_diag_clear(&d);
+    if (sg_tolerance_run(sub, cat, &o, 1, 0, 1, &r, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    assert_int_equal(r.nsens, npick);
+    assert_int_equal(r.nominal.status, SG_OK);
+    for (k = 0; k < npick; k++) {
+        const sg_tol_sens *e = &r.sens[k];
+        sg_tol_type t = sub->tol.op[k].type;
+        if (e->at_min.status != SG_OK || e->at_max.status != SG_OK ||
+            !isfinite(e->at_min.criterion) || !isfinite(e->at_max.criterion))
+            fail_msg("row %d (%s %d): status %d / %d", pick[k] + 1, sg_tol_name(t),
+                     sub->tol.op[k].surface, e->at_min.status, e->at_max.status);
+        if ((t == SG_TOL_TEDX || t == SG_TOL_TEDY || t == SG_TOL_TSDX || t == SG_TOL_TSDY) &&
+            !(fabs(e->at_min.criterion - e->at_max.criterion) <= 1e-9 * e->at_max.criterion))
+            fail_msg("row %d (%s): %.17g at min, %.17g at max", pick[k] + 1, sg_tol_name(t),
+                     e->at_min.criterion, e->at_max.criterion);
+        /* A decenter of 0.2 mm degrades a lens in focus. */
+        if ((t == SG_TOL_TEDY || t == SG_TOL_TSDX) &&
+            !(e->at_max.criterion > r.nominal.criterion))
+            fail_msg("row %d (%s): no change", pick[k] + 1, sg_tol_name(t));
+    }
+    sg_tol_result_free(&r);
+    sg_system_free(sub);
+    sg_system_free(sys);
+}
+
+/* A TOL row sagitta cannot take is warned about with its line and left
+ * out; the rest are read; the lossless save keeps every line and refuses
+ * to drop an edit of the tolerances. */
+static void zmx_tol_refusals(void **state)
+{
+    const char *text =
+        "VERS 190513 80 123457\nMODE SEQ\nUNIT MM X W X CM MR CPMM\nENPD 10\n"
+        "FTYP 0 0 1 1 0 0 0\nXFLN 0\nYFLN 0\nFWGN 1\nWAVM 1 0.55 1\nPWAV 1\n"
+        "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  CURV 0.02\n  DISZ 4\n  GLAS N-BK7 0 0 "
+        "1.5168 64.17\nSURF 2\n  CURV 0.0\n  DISZ 95\nSURF 3\n  DISZ 0\n"
+        "TOL TOFF   0   0              0              0   0 0 0\n"
+        "TOL TWAV   0   0          0.55              0   0 0 0\n"
+        "TOL COMP   2   0             -1              1   0 0 0\n"
+        "TOL COMP   1   1           -0.1            0.1   0 0 0\n"
+        "TOL TRAD   1   0           -0.5            0.5   0 0 0\n"
+        "TOL TRAD   2   0           -0.5            0.5   0 0 0\n"
+        "TOL TXYZ   1   0             -1              1   0 0 0\n"
+        "TOL TTHI   1   2           -0.1            0.1   0 0 0\n"
+        "TOL TEDX   1   7           -0.1            0.1   0 0 0\n"
+        "TOL TPAR   1   3           -0.1            0.1   0 0 0\n"
+        "TOL TIND   1   0          -1e-3           1e-3   0 0 0\n";
+    sg_catalog *cat = tu_catalog();
+    sg_system *sys = sg_system_new();
+    sg_diag d;
+    int i, k;
+    static const char *const warned[][2] = {
+        {"t.zmx:26:", "compensator code 1"},
+        {"t.zmx:28:", "TRAD: tolerances: operand 2 (TRAD): surface 2 is flat"},
+        {"t.zmx:29:", "TXYZ: not a tolerance operand sagitta knows"},
+        {"t.zmx:31:", "TEDX: tolerances: operand 3 (TEDX): last: surface 7"},
+        {"t.zmx:32:", "TPAR: Zemax's TPAR numbers the parameter columns"}};
+    (void)state;
+    sg_diag_clear(&d);
+    if (sg_zmx_parse(sys, text, strlen(text), "t.zmx", cat, &d) != SG_OK)
+        fail_msg("%s", d.msg);
+    for (k = 0; k < (int)(sizeof warned / sizeof *warned); k++) {
+        int found = 0;
+        for (i = 0; i < d.nwarn && i < SG_DIAG_MAXWARN; i++)
+            found |= strstr(d.warn[i], warned[k][0]) && strstr(d.warn[i], warned[k][1]);
+        if (!found)
+        {
+            for (i = 0; i < d.nwarn && i < SG_DIAG_MAXWARN; i++)
+                fprintf(stderr, "warning: %s\n", d.warn[i]);
+            fail_msg("no warning \"%s ... %s\"", warned[k][0], warned[k][1]);
+        }
+    }
+    assert_true(sys->tol.present);
+    assert_true(sys->tol.test_wave == 0.55);
+    assert_int_equal(sys->tol.ncomp, 1);
+    assert_int_equal(sys->tol.comp[0].surface, 2);
+    assert_int_equal(sys->tol.nop, 3);
+    assert_int_equal(sys->tol.op[0].type, SG_TOL_TRAD);
+    assert_int_equal(sys->tol.op[1].type, SG_TOL_TTHI);
+    assert_int_equal(sys->tol.op[1].adjust, 2);
+    assert_int_equal(sys->tol.op[2].type, SG_TOL_TIND);
+    assert_true(sys->tol.op[2].min == -1e-3 && sys->tol.op[2].max == 1e-3);
+    {
+        char dir[] = "/tmp/sg_tolzmxXXXXXX", file[64];
+        FILE *f;
+        char buf[4096];
+        size_t n;
+        assert_non_null(mkdtemp(dir));
+        snprintf(file, sizeof file, "%s/t.zmx", dir);
+        /* No edit: the same bytes, every TOL line kept. */
+        sg_diag_clear(&d);
+        if (sg_zmx_save(sys, file, cat, &d) != SG_OK)
+            fail_msg("%s", d.msg);
+        f = fopen(file, "rb");
+        assert_non_null(f);
+        n = fread(buf, 1, sizeof buf, f);
+        fclose(f);
+        assert_int_equal(n, strlen(text));
+        assert_memory_equal(buf, text, n);
+        /* An edited tolerance is not lost silently. */
+        sys->tol.op[0].max = 0.25;
+        sg_diag_clear(&d);
+        assert_int_equal(sg_zmx_save(sys, file, cat, &d), SG_ELOSSY);
+        if (!strstr(d.msg, "cannot be written faithfully") || !strstr(d.msg, "0.25"))
+            fail_msg("%s", d.msg);
+        unlink(file);
+        rmdir(dir);
+    }
+    sg_system_free(sys);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(json_roundtrip),
         cmocka_unit_test(operands_by_hand),
         cmocka_unit_test(tirr_by_hand),
+        cmocka_unit_test(tezi_by_hand),
         cmocka_unit_test(glass_changes),
         cmocka_unit_test(element_by_hand),
         cmocka_unit_test(compensated_focus),
@@ -797,6 +1098,8 @@ int main(void)
         cmocka_unit_test(sampler_statistics),
         cmocka_unit_test(threads_identical),
         cmocka_unit_test(cassegrain_mpfr),
+        cmocka_unit_test(zmx_tol_rows),
+        cmocka_unit_test(zmx_tol_refusals),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -20,9 +20,9 @@
 
 static const char *const tol_names[SG_TOL_NTYPES] = {
     "TRAD", "TCUR", "TFRN", "TTHI", "TCON", "TPAR", "TSDX", "TSDY", "TSTX", "TSTY",
-    "TEDX", "TEDY", "TETX", "TETY", "TETZ", "TIND", "TABB", "TIRR"};
+    "TEDX", "TEDY", "TETX", "TETY", "TETZ", "TIND", "TABB", "TIRR", "TEZI"};
 
-/* Zemax's test wavelength for fringes, in micrometres. */
+/* Zemax's default test wavelength for fringes, in micrometres (TWAV). */
 #define TOL_FRINGE_UM 0.6328
 
 const char *sg_tol_name(sg_tol_type t)
@@ -54,6 +54,13 @@ static double um_to_units(const sg_system *sys)
     if (strcmp(sys->units, "m") == 0)
         return 1e-6;
     return 1e-3;
+}
+
+/* The test wavelength of fringes in lens units. */
+static double fringe_wave(const sg_system *sys)
+{
+    double w = sys->tol.test_wave > 0.0 ? sys->tol.test_wave : TOL_FRINGE_UM;
+    return w * um_to_units(sys);
 }
 
 void sg_tol_opts_init(sg_tol_opts *o)
@@ -107,6 +114,9 @@ int sg_tol_check(const sg_system *sys, sg_diag *d)
     const sg_tolerances *t = &sys->tol;
     int k, j, bad;
     int last_img = sys->nsurf - 1;
+    if (!(t->test_wave == 0.0 || (t->test_wave >= 0.1 && t->test_wave <= 100.0)))
+        return sg_diag_set(d, SG_ERANGE, "tolerances: test_wavelength: %.17g um is not 0.1 to "
+                           "100 um", t->test_wave);
     for (k = 0; k < t->nop; k++) {
         const sg_tol_operand *op = &t->op[k];
         const sg_surface *s;
@@ -181,6 +191,20 @@ int sg_tol_check(const sg_system *sys, sg_diag *d)
             if (s->type != SG_SURF_STANDARD)
                 return op_err(d, k, op, "surface %d is not a standard surface", op->surface);
             break;
+        case SG_TOL_TEZI:
+            /* Zemax's TEZI: a Standard or Even Asphere surface becomes a
+             * Zernike Standard Sag; terms 2 (no piston) up to sagitta's. */
+            if (s->type != SG_SURF_STANDARD && s->type != SG_SURF_EVENASPH)
+                return op_err(d, k, op, "surface %d is not a standard or even asphere "
+                              "surface", op->surface);
+            if (!(op->zmin >= 2 && op->zmin <= op->zmax && op->zmax <= SG_NTERMS))
+                return op_err(d, k, op, "terms %d to %d: the first must be 2 or more, the last "
+                              "not below it nor above %d (Zernike Standard terms to radial "
+                              "order 10)", op->zmin, op->zmax, SG_NTERMS);
+            if (op->min != -op->max)
+                return op_err(d, k, op, "min must be -max: the RMS is max, and min gives the "
+                              "terms their other sign, as Zemax sets it");
+            break;
         case SG_TOL_TIND:
         case SG_TOL_TABB:
             if (s->mat.kind == SG_MAT_MODEL || s->mat.kind == SG_MAT_GLASS)
@@ -246,7 +270,8 @@ int sg_tol_nominal(const sg_system *sys, const sg_catalog *cat, sg_system *out, 
     /* Fringes are counted over the clear aperture: an automatic one is
      * found once, on the nominal. */
     for (k = 0; k < sys->tol.nop; k++)
-        if ((sys->tol.op[k].type == SG_TOL_TFRN || sys->tol.op[k].type == SG_TOL_TIRR) &&
+        if ((sys->tol.op[k].type == SG_TOL_TFRN || sys->tol.op[k].type == SG_TOL_TIRR ||
+             sys->tol.op[k].type == SG_TOL_TEZI) &&
             !(out->surf[sys->tol.op[k].surface].semi_diameter > 0.0))
             need_sd = 1;
     if (need_sd) {
@@ -298,7 +323,7 @@ int sg_tol_apply(const sg_system *nom, const sg_catalog *cat, const double *delt
             /* N fringes of power over the semi-diameter r: a sag change of
              * N half waves at r, dc = N lambda / r^2. */
             double r = s->semi_diameter;
-            double c = sg_surface_curvature(s) + v * TOL_FRINGE_UM * um_to_units(nom) / (r * r);
+            double c = sg_surface_curvature(s) + v * fringe_wave(nom) / (r * r);
             s->radius = c == 0.0 ? INFINITY : 1.0 / c;
             break;
         }
@@ -339,7 +364,7 @@ int sg_tol_apply(const sg_system *nom, const sg_catalog *cat, const double *delt
              * astigmatism, Zs rho^4 + Za rho_y^2 with Zs = Za = v lambda /
              * 4 (Zemax's Irregular surface); made an XY polynomial over
              * x / r and y / r. */
-            double z = v * TOL_FRINGE_UM * um_to_units(nom) / 4.0;
+            double z = v * fringe_wave(nom) / 4.0;
             if (s->type == SG_SURF_STANDARD) {
                 s->type = SG_SURF_XYPOLY;
                 s->norm_radius = s->semi_diameter;
@@ -349,6 +374,23 @@ int sg_tol_apply(const sg_system *nom, const sg_catalog *cat, const double *delt
             s->terms[9] += z;       /* x^4 */
             s->terms[11] += 2 * z;  /* x^2 y^2 */
             s->terms[13] += z;      /* y^4 */
+            break;
+        }
+        case SG_TOL_TEZI: {
+            /* Zemax's TEZI: the surface as a Zernike Standard Sag over its
+             * semi-diameter, every term zmin..zmax the same coefficient,
+             * v / sqrt(N), so the sag's RMS over the disc is |v| (Noll's
+             * terms have unit RMS and are orthogonal). */
+            int j, nt = op->zmax - op->zmin + 1;
+            double a = v / sqrt((double)nt);
+            if (s->type == SG_SURF_STANDARD || s->type == SG_SURF_EVENASPH) {
+                s->type = SG_SURF_ZERNIKE_STANDARD;
+                s->norm_radius = s->semi_diameter;
+                memset(s->terms, 0, sizeof s->terms);
+                s->zern_dx = s->zern_dy = 0.0;
+            }
+            for (j = op->zmin; j <= op->zmax; j++)
+                s->terms[j - 1] += a;
             break;
         }
         case SG_TOL_TABB:
@@ -447,6 +489,19 @@ int sg_tol_apply(const sg_system *nom, const sg_catalog *cat, const double *delt
                 if (map[i] >= at)
                     map[i]++;
             }
+    }
+    /* Rays start in surface 1's frame, which nothing may move: a surface
+     * decenter or tilt there (TSDX ... TSTY) gets a plane of the object's
+     * medium in front, at its vertex, as an element there does. */
+    if (out->nsurf > 2 && !sg_frame_change_is_zero(&out->surf[1].before)) {
+        if ((rc = sg_system_insert(out, 1)) != SG_OK)
+            return sg_diag_set(d, rc, "out of memory");
+        out->surf[1].mat = out->surf[0].mat;
+        out->surf[1].thickness = 0.0;
+        if (map)
+            for (i = 0; i < nom->nsurf; i++)
+                if (map[i] >= 1)
+                    map[i]++;
     }
     return SG_OK;
 }

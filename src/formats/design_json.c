@@ -1256,8 +1256,9 @@ static int get_limits(jctx *c, const cJSON *kmin, const cJSON *kmax, const char 
  * surfaces. */
 static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
 {
-    enum { K_OPS, K_COMPS, K_CRIT, K_MC, K_N };
-    static const char *const keys[K_N] = {"operands", "compensators", "criterion", "monte_carlo"};
+    enum { K_OPS, K_COMPS, K_CRIT, K_MC, K_TWAV, K_N };
+    static const char *const keys[K_N] = {"operands", "compensators", "criterion", "monte_carlo",
+                                          "test_wavelength"};
     static const char *const crits[] = {"rms_spot", "merit", "rms_wavefront"};
     static const char *const refs[] = {"chief", "centroid"};
     static const char *const dists[] = {"normal", "uniform", "parabolic"};
@@ -1273,6 +1274,14 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
     if ((rc = expect_object(c, v, "tolerances")) != SG_OK)
         return rc;
     pick_keys(c, v, "tolerances", keys, K_N, k);
+    /* Zemax's TWAV: the wavelength fringes are counted at. */
+    if (k[K_TWAV]) {
+        if ((rc = get_finite(c, k[K_TWAV], "tolerances: test_wavelength", &t->test_wave)))
+            return rc;
+        if (!(t->test_wave >= 0.1 && t->test_wave <= 100.0))
+            return perr(c, SG_ERANGE, "tolerances: test_wavelength", "%.17g um is not 0.1 to "
+                        "100 um", t->test_wave);
+    }
     if (k[K_OPS]) {
         if (!cJSON_IsArray(k[K_OPS]))
             return perr(c, SG_EPARSE, "tolerances: operands", "expected an array of operand "
@@ -1282,10 +1291,11 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
             return perr(c, SG_ERANGE, "tolerances: operands", "%d given; the limit is %d", n,
                         SG_MAX_TOL_OPERANDS);
         cJSON_ArrayForEach(it, k[K_OPS]) {
-            enum { O_TYPE, O_SURF, O_FIRST, O_LAST, O_ADJ, O_PAR, O_ELEM, O_MIN, O_MAX, O_N };
+            enum { O_TYPE, O_SURF, O_FIRST, O_LAST, O_ADJ, O_PAR, O_ELEM, O_MIN, O_MAX,
+                   O_ZMAX, O_ZMIN, O_N };
             static const char *const okeys[O_N] = {"type", "surface", "first", "last",
                                                    "adjust", "parameter", "element", "min",
-                                                   "max"};
+                                                   "max", "max_term", "min_term"};
             const cJSON *ok[O_N];
             sg_tol_operand *o = &t->op[t->nop];
             int ty, elem;
@@ -1324,6 +1334,17 @@ static int get_tolerances(jctx *c, const cJSON *v, sg_tolerances *t)
                 return perr(c, SG_EPARSE, at, "only TPAR takes \"parameter\" and \"element\"");
             if (ty == SG_TOL_TPAR && !ok[O_PAR])
                 return perr(c, SG_EPARSE, at, "TPAR needs a \"parameter\" (a surface key)");
+            if (ty != SG_TOL_TEZI && (ok[O_ZMAX] || ok[O_ZMIN]))
+                return perr(c, SG_EPARSE, at, "only TEZI takes \"max_term\" and \"min_term\"");
+            if (ty == SG_TOL_TEZI && !ok[O_ZMAX])
+                return perr(c, SG_EPARSE, at, "TEZI needs a \"max_term\" (Zemax's Int2, the "
+                            "last Standard Zernike term)");
+            o->zmin = ty == SG_TOL_TEZI ? 2 : 0;
+            if ((ok[O_ZMAX] && (rc = get_int(c, ok[O_ZMAX], join(at2, sizeof at2, at,
+                                                                 "max_term"), &o->zmax))) ||
+                (ok[O_ZMIN] && (rc = get_int(c, ok[O_ZMIN], join(at2, sizeof at2, at,
+                                                                 "min_term"), &o->zmin))))
+                return rc;
             if (!ok[O_MIN] || !ok[O_MAX])
                 return perr(c, SG_EPARSE, at, "the operand needs \"min\" and \"max\"");
             if ((ok[O_SURF] && (rc = get_int(c, ok[O_SURF], join(at2, sizeof at2, at, "surface"),

@@ -50,7 +50,7 @@ static const char *const ignored_header[] = {
     "GFAC", "GLRS", "GSTD", "RGLA", /* glass substitution for optimisation */
     "SDMA", "OMMA", "ROPD", "PICB", "HYPR", "EERA", "IWDP", "STUD", "RCMF",
     /* semi-diameter margins, OPD reference, display settings */
-    "TOL", "MOFF", "TCMM", /* tolerances; multi-configuration rows of MNUM 1 */
+    "MOFF", "TCMM", /* multi-configuration rows of MNUM 1; a tolerance row's comment */
 };
 /* Surface keywords whose fields Zemax does not publish, met in public
  * files: kept as they are, with a note, when every number is 0 (nothing
@@ -123,6 +123,8 @@ typedef struct zctx {
     int nmrow, mrow[ZMX_MAX_MROWS + 1], merit_drop;
     long merit_drop_line;
     char merit_drop_why[160];
+    /* The tolerance rows read (TOL lines) and their lines. */
+    long tol_line[SG_MAX_TOL_OPERANDS], comp_line[SG_MAX_COMPENSATORS];
     zsurf zs;
     int nstop, stop;
     long stop_line;
@@ -1841,6 +1843,111 @@ static int merit_line(zctx *c, const zline *l)
     return 1;
 }
 
+/* A number of a TOL row, or 0 with *ok cleared. */
+static double tol_num(const ztok *t, int *ok)
+{
+    char buf[ZMX_MAX_NUMBER + 1], *end;
+    double v;
+    if (t->n == 0 || t->n >= sizeof buf) {
+        *ok = 0;
+        return 0.0;
+    }
+    memcpy(buf, t->p, t->n);
+    buf[t->n] = '\0';
+    v = strtod(buf, &end);
+    if (end == buf || *end || !isfinite(v))
+        *ok = 0;
+    return v;
+}
+
+/* A row of Zemax's Tolerance Data Editor, after the surfaces: "TOL TYPE
+ * int1 int2 min max 0 0 0" (sagitta-design(5), ZEMAX FILES, Tolerances).
+ * TOFF is an empty row, TWAV the test wavelength (in the min column),
+ * COMP a compensator (int1 the surface, int2 the code: 0 the thickness);
+ * an operand sagitta knows becomes a row of the design's tolerances,
+ * checked against the design at the end.  Any other row is warned about
+ * with its line and left out of the design; the lossless save keeps every
+ * TOL line as it is. */
+static int tol_line(zctx *c, const zline *l)
+{
+    sg_tolerances *t = &c->sys->tol;
+    char type[8];
+    double v[4] = {0};
+    int i, ok = 1, ty, cur = c->cur;
+    c->cur = -1;
+    if (l->n < 6 || l->t[1].n < 1 || l->t[1].n > 4) {
+        zwarn(c, "TOL: a tolerance row needs a type and four numbers; it is left out of the "
+              "design's tolerances");
+        c->cur = cur;
+        return SG_OK;
+    }
+    memcpy(type, l->t[1].p, l->t[1].n);
+    type[l->t[1].n] = '\0';
+    for (i = 0; i < 4; i++)
+        v[i] = tol_num(&l->t[2 + i], &ok);
+    /* Surface numbers and codes are small whole numbers. */
+    for (i = 0; i < 2; i++)
+        if (!(v[i] >= 0.0 && v[i] <= 1e6 && floor(v[i]) == v[i]))
+            ok = 0;
+    ty = sg_tol_parse(type);
+    if (!ok) {
+        zwarn(c, "TOL %s: a field is not a number (or Int1, Int2 not a whole number); the row "
+              "is left out of the design's tolerances", type);
+    } else if (strcmp(type, "TOFF") == 0) {
+        /* An empty row of the editor. */
+    } else if (strcmp(type, "TWAV") == 0) {
+        if (v[2] >= 0.1 && v[2] <= 100.0)
+            t->test_wave = v[2];
+        else
+            zwarn(c, "TOL TWAV: a test wavelength of %.17g um is not 0.1 to 100 um; fringes "
+                  "stay at 0.6328 um", v[2]);
+    } else if (strcmp(type, "COMP") == 0) {
+        if (v[1] != 0.0)
+            zwarn(c, "TOL COMP: compensator code %g on surface %g is not one sagitta maps "
+                  "(0, the thickness, is); it is left out of the design's tolerances", v[1],
+                  v[0]);
+        else if (t->ncomp >= SG_MAX_COMPENSATORS)
+            zwarn(c, "TOL COMP: more than %d compensators; the row is left out",
+                  SG_MAX_COMPENSATORS);
+        else {
+            sg_tol_comp *o = &t->comp[t->ncomp];
+            memset(o, 0, sizeof *o);
+            o->surface = (int)v[0];
+            snprintf(o->param, sizeof o->param, "thickness");
+            o->min = v[2];
+            o->max = v[3];
+            c->comp_line[t->ncomp++] = c->line;
+        }
+    } else if (ty < 0 || ty == SG_TOL_TPAR || ty == SG_TOL_TEZI) {
+        zwarn(c, "TOL %s: %s; it is left out of the design's tolerances", type,
+              ty < 0                ? "not a tolerance operand sagitta knows"
+              : ty == SG_TOL_TPAR ? "Zemax's TPAR numbers the parameter columns, which sagitta "
+                                    "does not map"
+                                  : "no file at hand shows where the TOL line keeps TEZI's "
+                                    "Int3 (its first term)");
+    } else if (t->nop >= SG_MAX_TOL_OPERANDS) {
+        zwarn(c, "TOL %s: more than %d tolerance operands; the row is left out", type,
+              SG_MAX_TOL_OPERANDS);
+    } else {
+        sg_tol_operand *o = &t->op[t->nop];
+        memset(o, 0, sizeof *o);
+        o->type = (sg_tol_type)ty;
+        o->surface = (int)v[0];
+        o->adjust = -1;
+        /* An element is int1..int2; TTHI's int2 is the surface that takes
+         * the opposite change, none when it is int1 itself. */
+        if (ty >= SG_TOL_TEDX && ty <= SG_TOL_TETZ)
+            o->last = (int)v[1];
+        else if (ty == SG_TOL_TTHI && (int)v[1] != o->surface)
+            o->adjust = (int)v[1];
+        o->min = v[2];
+        o->max = v[3];
+        c->tol_line[t->nop++] = c->line;
+    }
+    c->cur = cur;
+    return SG_OK;
+}
+
 static int header_line(zctx *c, const zline *l)
 {
     const ztok *k = &l->t[0];
@@ -2051,6 +2158,8 @@ static int header_line(zctx *c, const zline *l)
         }
         return SG_OK;
     }
+    if (tok_is(k, "TOL"))
+        return tol_line(c, l);
     if (c->mnum > 1 && c->after && k->n == 4 && !tok_is(k, "CSUM"))
         return config_line(c, l);
     if (c->after && !c->mnum && k->n == 4 && merit_line(c, l))
@@ -2069,6 +2178,58 @@ static int header_line(zctx *c, const zline *l)
 /* ------------------------------------------------------------------------
  * Resolving the header at the end
  * ------------------------------------------------------------------------ */
+
+/* The TOL rows read, checked against the design row by row in the
+ * file's order: a row the design cannot take (a surface out of range, a
+ * flat surface's TRAD) is warned about with its line and left out, the
+ * others kept with sagitta's defaults for the rest (criterion, Monte
+ * Carlo), which Zemax keeps in its tolerancing dialog, not in the file. */
+static int tol_finish(zctx *c)
+{
+    sg_system *s = c->sys;
+    sg_tolerances *all;
+    sg_diag md;
+    int k, n = 0;
+    long cline = c->line;
+    if (!s->tol.nop && !s->tol.ncomp) {
+        memset(&s->tol, 0, sizeof s->tol);
+        return SG_OK;
+    }
+    if (!(all = malloc(sizeof *all)))
+        return zerr(c, SG_ENOMEM, "out of memory");
+    *all = s->tol;
+    s->tol.present = 1;
+    s->tol.pattern = SG_PUPIL_HEXAPOLAR;
+    s->tol.density = 6;
+    s->tol.grid = 64;
+    s->tol.seed = 1.0;
+    s->tol.nop = s->tol.ncomp = 0;
+    c->cur = -1;
+    for (k = 0; k < all->nop + all->ncomp; k++) {
+        int op = k < all->nop;
+        sg_diag_clear(&md);
+        if (op)
+            s->tol.op[s->tol.nop++] = all->op[k];
+        else
+            s->tol.comp[s->tol.ncomp++] = all->comp[k - all->nop];
+        if (sg_tol_check(s, &md) == SG_OK) {
+            n++;
+            continue;
+        }
+        if (op)
+            s->tol.nop--;
+        else
+            s->tol.ncomp--;
+        c->line = op ? c->tol_line[k] : c->comp_line[k - all->nop];
+        zwarn(c, "TOL %s: %s; the row is left out", op ? sg_tol_name(all->op[k].type) : "COMP",
+              md.msg);
+    }
+    c->line = cline;
+    free(all);
+    if (!n)
+        memset(&s->tol, 0, sizeof s->tol);
+    return SG_OK;
+}
 
 static int finish(zctx *c)
 {
@@ -2251,7 +2412,7 @@ static int finish(zctx *c)
             memset(&s->merit, 0, sizeof s->merit);
         }
     }
-    return SG_OK;
+    return tol_finish(c);
 }
 
 /* Keywords of a SURF block, recognised in files that do not indent them. */

@@ -472,7 +472,13 @@ static void sb_tolerances(sbuf *b, const sg_tolerances *t)
     static const char *const dists[] = {"normal", "uniform", "parabolic"};
     char x[200];
     int i;
-    sb_puts(b, ",\n  \"tolerances\": {\n    \"operands\": [");
+    sb_puts(b, ",\n  \"tolerances\": {\n");
+    if (t->test_wave > 0.0) {
+        sb_puts(b, "    \"test_wavelength\": ");
+        sb_num(b, t->test_wave);
+        sb_puts(b, ",\n");
+    }
+    sb_puts(b, "    \"operands\": [");
     for (i = 0; i < t->nop; i++) {
         const sg_tol_operand *o = &t->op[i];
         sb_puts(b, i ? ",\n      {\"type\": \"" : "\n      {\"type\": \"");
@@ -484,6 +490,10 @@ static void sb_tolerances(sbuf *b, const sg_tolerances *t)
         sb_puts(b, x);
         if (o->type == SG_TOL_TTHI && o->adjust >= 0) {
             snprintf(x, sizeof x, ", \"adjust\": %d", o->adjust);
+            sb_puts(b, x);
+        }
+        if (o->type == SG_TOL_TEZI) {
+            snprintf(x, sizeof x, ", \"max_term\": %d, \"min_term\": %d", o->zmax, o->zmin);
             sb_puts(b, x);
         }
         if (o->type == SG_TOL_TPAR) {

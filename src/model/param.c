@@ -493,6 +493,34 @@ static int same_vars(const sg_surface *a, const sg_surface *b)
     return 1;
 }
 
+/* The tolerances are their own object (design_json.c reads them), so a
+ * save that would lose an edit of them is noticed. */
+static int same_tol(const sg_tolerances *a, const sg_tolerances *b)
+{
+    int k;
+    if (a->present != b->present || a->nop != b->nop || a->ncomp != b->ncomp ||
+        a->criterion != b->criterion || a->reference != b->reference ||
+        a->pattern != b->pattern || a->density != b->density || a->grid != b->grid ||
+        a->trials != b->trials || !same_bits(a->seed, b->seed) ||
+        a->distribution != b->distribution || !same_bits(a->test_wave, b->test_wave))
+        return 0;
+    for (k = 0; k < a->nop; k++) {
+        const sg_tol_operand *x = &a->op[k], *y = &b->op[k];
+        if (x->type != y->type || x->surface != y->surface || x->last != y->last ||
+            x->adjust != y->adjust || strcmp(x->param, y->param) != 0 || x->elem != y->elem ||
+            x->zmin != y->zmin || x->zmax != y->zmax ||
+            !same_bits(x->min, y->min) || !same_bits(x->max, y->max))
+            return 0;
+    }
+    for (k = 0; k < a->ncomp; k++) {
+        const sg_tol_comp *x = &a->comp[k], *y = &b->comp[k];
+        if (x->surface != y->surface || strcmp(x->param, y->param) != 0 || x->elem != y->elem ||
+            !same_bits(x->min, y->min) || !same_bits(x->max, y->max))
+            return 0;
+    }
+    return 1;
+}
+
 int sg_system_equal(const sg_system *a, const sg_system *b)
 {
     int i;
@@ -505,6 +533,8 @@ int sg_system_equal(const sg_system *a, const sg_system *b)
         return 0;
     /* So are the configurations (config.c). */
     if (!sg_configs_equal(a->configs, b->configs))
+        return 0;
+    if (!same_tol(&a->tol, &b->tol))
         return 0;
     if (!sg_param_equal(SG_SCOPE_SYSTEM, a, b) || a->nwave != b->nwave ||
         a->primary_wave != b->primary_wave || a->nfield != b->nfield || a->stop != b->stop ||

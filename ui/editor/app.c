@@ -3,6 +3,7 @@
  * hand it to the panel that owns it, act on the flags it returns.
  */
 #include <errno.h>
+#include <pthread.h>
 #include <signal.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -585,6 +586,34 @@ static int opt_progress(void *ctx, int cycle, double merit, double step, double 
     return 0;
 }
 
+/* :tol's systems on the status line, drawn and Esc read by the loop's
+ * own thread only (the run's other threads report into it, as curses is
+ * not theirs); Esc or Ctrl-C stops the run, which keeps the rows done. */
+static pthread_t loop_thread;
+static int tol_progress(void *ctx, int done, int total)
+{
+    ui *u = ctx;
+    char line[ED_MSG];
+    int key;
+    if (!pthread_equal(pthread_self(), loop_thread))
+        return 0;
+    snprintf(line, sizeof line, "tolerancing: %d of %d systems; Esc stops, keeping the rows done",
+             done, total);
+    term_text(u->status_y, 0, u->cols, T_EDIT, 1, line);
+    term_flush();
+    while ((key = term_key(0)) != K_NONE) {
+        if (key == K_SIGNAL) {
+            int sig = term_signal();
+            if (sig != SIGINT)
+                u->late_signal = sig;
+            return 1;
+        }
+        if (key == K_CTRL('c') || key == K_ESC)
+            return 1;
+    }
+    return 0;
+}
+
 /* Keys that work whatever has the focus: the table in keys.c. */
 static int global_key(ui *u, int key)
 {
@@ -666,6 +695,7 @@ static const ui_panel panels[] = {
     [MODE_GLASSES] = {glasses_draw, UI_STATUS_NONE, glasses_key, 0, 0},
     [MODE_MESSAGES] = {messages_draw, UI_STATUS_NONE, messages_key, 0, 0},
     [MODE_MERIT] = {merit_draw, UI_STATUS_MSG, merit_key, 1, 0},
+    [MODE_TOL] = {tol_draw, UI_STATUS_MSG, tol_key, 1, 0},
 };
 
 static const ui_panel *panel_of(int mode)
@@ -722,6 +752,8 @@ static int act(ui *u, int f)
     }
     if (f & ED_SHOW_MERIT)
         u->mode = MODE_MERIT;
+    if (f & ED_SHOW_TOL)
+        u->mode = MODE_TOL;
     if (f & ED_SHOW_MESSAGES) {
         u->msg_top = -1;
         u->mode = MODE_MESSAGES;
@@ -974,6 +1006,8 @@ int sg_editor_main(int argc, char **argv)
     u.ray_item = RAY_HX;
     e.progress = export_progress;
     e.opt_progress = opt_progress;
+    e.tol_progress = tol_progress;
+    loop_thread = pthread_self();
     e.progress_ctx = &u;
     if (term_init() != 0) {
         ed_free(&e);

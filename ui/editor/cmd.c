@@ -535,6 +535,11 @@ static const command commands[] = {
      "default off|centroid|chief [RINGS [ARMS]]]",
      "the Merit Function Editor (Ctrl-E): its rows, live; insert, delete or set an operand's "
      "type, int1, int2, hx, hy, px, py, target or weight; the default part"},
+    {"tol", NULL, c_tol, "tol [show | list | insert [ROW] [TYPE] | delete ROW | set ROW COLUMN "
+     "VALUE]",
+     "the sensitivity analysis of the design's tolerances, shown in the Tolerance Data Editor "
+     "(Ctrl-T; Esc stops it, keeping the rows done); show opens the editor; insert, delete or "
+     "set a row's type, int1, int2, int3, min or max"},
     {"var", NULL, c_var, "var SURFACE NAME [MIN MAX]",
      "make a value a variable of the optimizer (V), optionally bounded"},
     {"novar", NULL, c_novar, "novar SURFACE NAME | novar all",

@@ -18,5 +18,12 @@ extern const char *const merit_cols[MERIT_NCOLS];
 int merit_col_parse(const char *s);
 /* The number in column col (1 to 8) of an operand. */
 double merit_col_value(const sg_operand *o, int col);
+/* The Tolerance Data Editor's columns (cmd_tol.c), as "tol set" names
+ * them: type, int1, int2, int3, min, max. */
+#define TOL_NCOLS 6
+extern const char *const tol_cols[TOL_NCOLS];
+int tol_col_parse(const char *s);
+int tol_col_used(const sg_tol_operand *o, int col);
+double tol_col_value(const sg_tol_operand *o, int col);
 
 #endif

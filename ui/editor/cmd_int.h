@@ -118,5 +118,6 @@ int c_view(ed *e, args *a);
 int c_goto(ed *e, args *a);
 int c_bench(ed *e, args *a);
 int c_merit(ed *e, args *a);
+int c_tol(ed *e, args *a);
 
 #endif

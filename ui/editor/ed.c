@@ -54,6 +54,9 @@ void ed_free(ed *e)
     compute_free(&e->cmp);
     edview_free(&e->view);
     gp_free(&e->glasses);
+    if (e->tol_have)
+        sg_tol_result_free(&e->tol_res);
+    e->tol_have = 0;
     doc_free(&e->doc);
     sg_catalog_free(e->cat);
     e->cat = NULL;

@@ -32,7 +32,8 @@ enum {
     ED_SHOW_SYSDATA = 1 << 10, /* the system data (paraxial) view */
     ED_SHOW_GLASSES = 1 << 11, /* the glass picker (ed.glasses) */
     ED_SHOW_MESSAGES = 1 << 12, /* the message history (ed.hist) */
-    ED_SHOW_MERIT = 1 << 13     /* the Merit Function Editor */
+    ED_SHOW_MERIT = 1 << 13,    /* the Merit Function Editor */
+    ED_SHOW_TOL = 1 << 14       /* the Tolerance Data Editor */
 };
 
 /* What a confirmation asks. */
@@ -105,6 +106,14 @@ typedef struct ed {
      * progress_ctx); a nonzero return stops it (Esc, Ctrl-C) and the best
      * design so far is kept.  NULL in batch mode. */
     int (*opt_progress)(void *ctx, int cycle, double merit, double step, double seconds);
+    /* :tol reports systems done of total (sg_tol_opts.progress, with
+     * progress_ctx, from the threads that run them); a nonzero return
+     * stops it and the rows done are kept.  NULL in batch mode. */
+    int (*tol_progress)(void *ctx, int done, int total);
+    /* The last :tol run and the document state it was made on. */
+    sg_tol_result tol_res;
+    int tol_have;
+    unsigned long tol_id;
 } ed;
 
 int ed_init(ed *e);

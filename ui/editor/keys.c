@@ -39,6 +39,13 @@ static int show_merit(ui *u, int key)
     return ED_HANDLED | ED_REDRAW;
 }
 
+static int show_tol(ui *u, int key)
+{
+    (void)key;
+    u->mode = MODE_TOL;
+    return ED_HANDLED | ED_REDRAW;
+}
+
 /* The method and the wavelength step from the current ones. */
 static int next_method(ui *u, int key)
 {
@@ -108,6 +115,8 @@ const ui_key ui_keys[] = {
      ACT(show_sysdata)},
     {{K_CTRL('e')}, "Ctrl-E", "Merit Function Editor: rows and values, live; Enter edits (:merit)",
      ACT(show_merit)},
+    {{K_CTRL('t')}, "Ctrl-T", "Tolerance Data Editor: rows and the last :tol run; s runs it (:tol)",
+     ACT(show_tol)},
     {{K_CTRL('a')}, "Ctrl-A", "the next configuration of a multi-configuration design (:config N)",
      RUN("config next")},
     {{0}, "Esc, then a key", "run that key's command even in a text cell (Alt-key does the same)",

@@ -25,7 +25,8 @@ enum {
     MODE_SYSDATA,    /* the system data view */
     MODE_GLASSES,    /* the glass picker */
     MODE_MESSAGES,   /* the message history (:messages) */
-    MODE_MERIT       /* the Merit Function Editor (Ctrl-E, :merit) */
+    MODE_MERIT,      /* the Merit Function Editor (Ctrl-E, :merit) */
+    MODE_TOL         /* the Tolerance Data Editor (Ctrl-T, :tol) */
 };
 
 /* A panel that takes the screen in a mode (app.c's table, as htop's
@@ -83,6 +84,7 @@ typedef struct ui {
     int glass_top;
     int msg_top;         /* the message history's first row; -1: the newest */
     int mf_sel, mf_top, mf_col; /* the Merit Function Editor's row (0-based), first row shown, column */
+    int tol_sel, tol_top, tol_col; /* the same for the Tolerance Data Editor */
     /* Its values, kept for the document state mf_id (0: none), so moving
      * the cursor redraws without evaluating the merit function again. */
     sg_merit_result mf_res;
@@ -157,6 +159,9 @@ void merit_draw(ui *u);
 int merit_key(ui *u, int key);
 /* Frees the Merit Function Editor's kept values. */
 void merit_free(ui *u);
+
+void tol_draw(ui *u);
+int tol_key(ui *u, int key);
 
 /* Cuts UTF-8 s to at most w columns, the cut marked with ell; returns
  * nonzero when it cut. */
