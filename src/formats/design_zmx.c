@@ -4331,7 +4331,11 @@ int sg_zmx_save_flags(const sg_system *sys, const char *path, const sg_catalog *
                     snprintf(why, sizeof why, "the file would read back as another design");
                 free(a);
                 free(b);
-                back = 0;
+                /* Lines that could not be renumbered read back as they
+                 * were, which is the difference: they are named below,
+                 * and a save allowed to lose keeps them as they are. */
+                if (!(structural && rn.nbad))
+                    back = 0;
             }
             sg_system_free(r);
         } else if (rc == SG_ELOSSY) {
@@ -4342,7 +4346,7 @@ int sg_zmx_save_flags(const sg_system *sys, const char *path, const sg_catalog *
             free(bytes.p);
             return sg_diag_set(d, SG_ENOMEM, "%s: out of memory", path);
         }
-        if (back && rc == SG_OK && structural && rn.nbad)
+        if (rc == SG_OK && structural && rn.nbad)
             snprintf(why, sizeof why, "surfaces were inserted, deleted or moved, and %d kept "
                      "line%s cannot be renumbered: %s%s", rn.nbad, rn.nbad == 1 ? "" : "s",
                      rn.bad, rn.nbad > 8 ? ", ..." : "");

@@ -149,15 +149,33 @@ static void renumber_pickups(sg_system *sys, int at, int dir)
         }
 }
 
-/* The configurations and the merit function follow the surfaces they
- * name, as Zemax's editors do (sagitta-design(5), ZEMAX FILES). */
+/* A surface number after an insert (dir 1) or a delete (dir -1) at at:
+ * one on the deleted surface keeps its number, as a merit operand does,
+ * so that a .zmx save can name it; unused fields (0, -1) stay. */
+static int renumbered(int n, int at, int dir)
+{
+    return n >= at + (dir < 0) ? n + dir : n;
+}
+
+/* The configurations, the merit function and the tolerances follow the
+ * surfaces they name, as Zemax's editors do (sagitta-design(5), ZEMAX
+ * FILES). */
 static void renumber_rest(sg_system *sys, int at, int dir, sg_configs *cf)
 {
+    int k;
     if (cf) {
         sg_configs_release(sys->configs);
         sys->configs = cf;
     }
     sg_merit_renumber(&sys->merit, at, dir);
+    for (k = 0; k < sys->tol.nop; k++) {
+        sg_tol_operand *o = &sys->tol.op[k];
+        o->surface = renumbered(o->surface, at, dir);
+        o->last = renumbered(o->last, at, dir);
+        o->adjust = renumbered(o->adjust, at, dir);
+    }
+    for (k = 0; k < sys->tol.ncomp; k++)
+        sys->tol.comp[k].surface = renumbered(sys->tol.comp[k].surface, at, dir);
 }
 
 int sg_system_insert(sg_system *sys, int at)
