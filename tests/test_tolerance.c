@@ -997,6 +997,7 @@ static void zmx_tol_rows(void **state)
     sg_tol_result_free(&r);
     sg_system_free(sub);
     sg_system_free(sys);
+    sg_catalog_free(cat);
 }
 
 /* A TOL row sagitta cannot take is warned about with its line and left
@@ -1082,6 +1083,7 @@ static void zmx_tol_refusals(void **state)
         rmdir(dir);
     }
     sg_system_free(sys);
+    sg_catalog_free(cat);
 }
 
 int main(void)
