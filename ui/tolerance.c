@@ -739,31 +739,37 @@ out:
  * made beside FILE, its K rows copied and their criteria put in crit,
  * and the run goes on from K (*start); FILE is replaced when the run
  * ends, and stays as it was on any error.  With all trials there,
- * *start is trials and nothing is opened. */
+ * *start is trials and the new table is dropped (*h5 NULL). */
 static int resume_h5(const char *path, const sg_system *sys, const sg_tol_result *r,
                      sg_tol_mc *m, int trials, uint64_t seed, double *crit, tolh5 **h5,
                      int *start)
 {
     char err[512];
     sg_tol_value last, again;
-    int k = 0, k2 = 0, done = 0, rc;
-    *h5 = NULL;
-    rc = tolh5_resume(path, crit_key(sys), dist_key(sys), r->nominal.criterion, seed, trials,
-                      NULL, NULL, &k, &last, err, sizeof err);
-    if (rc != 0) {
+    int k = 0, done = 0, rc = CLI_EXIT_FILE;
+    /* One pass: the rows are checked as they are copied into the new
+     * table, which is dropped (FILE untouched) on any refusal. */
+    if (!(*h5 = tolh5_open(path, crit_key(sys), dist_key(sys), r->nominal.criterion, seed,
+                           trials, err, sizeof err))) {
+        cli_error("%s: %s", path, err);
+        return CLI_EXIT_FILE;
+    }
+    if (tolh5_resume(path, crit_key(sys), dist_key(sys), r->nominal.criterion, seed, trials,
+                     *h5, crit, &k, &last, err, sizeof err) != 0) {
         cli_error("%s: %s; --resume continues a table of the same design and options", path,
                   err);
-        return CLI_EXIT_FILE;
+        goto fail;
     }
     if (k > 0) {
         if (sg_tol_mc_run(m, k - 1, 1, &again, &done) != SG_OK) {
             cli_error("out of memory");
-            return CLI_EXIT_INTERNAL;
+            rc = CLI_EXIT_INTERNAL;
+            goto fail;
         }
         if (done != 1) {
             cli_error("%s: stopped before its last trial was checked; the file is as it was",
                       path);
-            return CLI_EXIT_FILE;
+            goto fail;
         }
         /* NaN is stored for a failed system, whatever it computed. */
         if (again.status != last.status ||
@@ -771,25 +777,20 @@ static int resume_h5(const char *path, const sg_system *sys, const sg_tol_result
              memcmp(&again.criterion, &last.criterion, sizeof last.criterion) != 0)) {
             cli_error("%s: trial %d is not this run's (another seed, distribution, method or "
                       "design); --resume continues a table of the same options", path, k);
-            return CLI_EXIT_FILE;
+            goto fail;
         }
     }
     *start = k;
-    if (k >= trials)
-        return CLI_EXIT_OK;
-    if (!(*h5 = tolh5_open(path, crit_key(sys), dist_key(sys), r->nominal.criterion, seed,
-                           trials, err, sizeof err))) {
-        cli_error("%s: %s", path, err);
-        return CLI_EXIT_FILE;
-    }
-    if (tolh5_resume(path, crit_key(sys), dist_key(sys), r->nominal.criterion, seed, trials,
-                     *h5, crit, &k2, &last, err, sizeof err) != 0 || k2 != k) {
-        cli_error("%s: %s", path, k2 != k ? "changed while it was read" : err);
+    /* A whole table is left as it was. */
+    if (k >= trials) {
         tolh5_abort(*h5);
         *h5 = NULL;
-        return CLI_EXIT_FILE;
     }
     return CLI_EXIT_OK;
+fail:
+    tolh5_abort(*h5);
+    *h5 = NULL;
+    return rc;
 }
 
 static int tolerance_main(int argc, char **argv)
